@@ -1,0 +1,154 @@
+"""Assembly of element quantities into model vectors and matrices.
+
+Each function evaluates every element group at once and scatters the result into the model's
+coordinate (NX) and deformation (NE) numbering. Dense matrices: the models this code serves
+have tens to a few hundred coordinates.
+"""
+
+import numpy as np
+
+
+def deformations(model, x):
+    """All deformations e (NE,) at coordinates x (NX,), in m (or as the element defines)."""
+    e = np.zeros(len(model.deformation_names))
+    for group in model.groups:
+        (local,) = group.kind.deformations(group.local(x), group.reference, order=0)
+        e[group.deformation_index] = local
+    return e
+
+
+def deformation_jacobian(model, x):
+    """Deformations e (NE,) and their Jacobian De = de/dx (NE, NX)."""
+    e = np.zeros(len(model.deformation_names))
+    De = np.zeros((e.size, model.nx))
+    for group in model.groups:
+        local_e, local_De = group.kind.deformations(group.local(x), group.reference, order=1)
+        e[group.deformation_index] = local_e
+        rows = group.deformation_index[:, :, None]
+        cols = group.coordinate_index[:, None, :]
+        np.add.at(De, (rows, cols), local_De)
+    return e, De
+
+
+def deformation_hessians(model, x):
+    """Per group: (group, D2e (n, k, m, m)), the second derivatives of the deformations."""
+    return [
+        (group, group.kind.deformations(group.local(x), group.reference, order=2)[2])
+        for group in model.groups
+    ]
+
+
+def weighted_hessian(model, hessians, weights):
+    """sum_i weights_i d2e_i/dx2 as an (NX, NX) matrix; weights (NE,)."""
+    result = np.zeros((model.nx, model.nx))
+    for group, D2e in hessians:
+        local = np.einsum("nk,nkij->nij", weights[group.deformation_index], D2e)
+        idx = group.coordinate_index
+        np.add.at(result, (idx[:, :, None], idx[:, None, :]), local)
+    return result
+
+
+def hessian_quadratic_forms(model, hessians, v):
+    """v^T (d2e_i/dx2) v for every deformation i (NE,); v (NX,) or (NX, r) -> (NE, r)."""
+    single = v.ndim == 1
+    v2 = v[:, None] if single else v
+    result = np.zeros((len(model.deformation_names), v2.shape[1]))
+    for group, D2e in hessians:
+        local_v = v2[group.coordinate_index]  # (n, m, r)
+        result[group.deformation_index] = np.einsum("nkij,nir,njr->nkr", D2e, local_v, local_v)
+    return result[:, 0] if single else result
+
+
+def stiffness_and_damping(model):
+    """Block-diagonal deformation stiffness S and damping D (NE, NE), N/m and N s/m."""
+    size = len(model.deformation_names)
+    S = np.zeros((size, size))
+    D = np.zeros((size, size))
+    for group in model.groups:
+        idx = group.deformation_index
+        rows, cols = idx[:, :, None], idx[:, None, :]
+        S[rows, cols] = group.kind.stiffness(group.reference, group.properties)
+        D[rows, cols] = group.kind.damping(group.reference, group.properties)
+    return S, D
+
+
+class Inertia:
+    """The mass of a model: lumped masses plus the elements' consistent masses.
+
+    Element mass acts through inertia points p(x) with a constant mass matrix Mp, so that
+    the kinetic energy is 1/2 pdot^T Mp pdot with pdot = Dp xdot.
+    """
+
+    def __init__(self, model):
+        self.model = model
+        self.lumped = model.lumped_mass
+        self.groups = [
+            (group, group.kind.inertia_matrix(group.reference, group.properties))
+            for group in model.groups
+            if np.any(group.properties.get("rho_A", 0.0))
+        ]
+
+    def mass_matrix(self, x):
+        """M(x) (NX, NX) in kg (kg m on translation-rotation, kg m^2 on rotations)."""
+        M = np.diag(self.lumped).astype(float)
+        for group, Mp in self.groups:
+            _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
+            local = np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp)
+            idx = group.coordinate_index
+            np.add.at(M, (idx[:, :, None], idx[:, None, :]), local)
+        return M
+
+    def convective_force(self, x, v):
+        """The velocity-dependent inertia force sum Dp^T Mp (D2p v) v (NX,), in N."""
+        result = np.zeros(self.model.nx)
+        for group, Mp in self.groups:
+            local_v = v[group.coordinate_index]
+            _, Dp, D2p = group.kind.inertia_points(group.local(x), group.reference, order=2)
+            accel = np.einsum("npij,ni,nj->np", D2p, local_v, local_v)
+            np.add.at(result, group.coordinate_index, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
+        return result
+
+    def gravity_force(self, x):
+        """Generalised gravity force (NX,) in N: lumped masses and distributed element mass."""
+        model = self.model
+        g = model.gravity
+        result = np.zeros(model.nx)
+        if not np.any(g):
+            return result
+        result += self.lumped * self._translation_gravity(g)
+        for group, Mp in self.groups:
+            _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
+            g_points = _point_gravity(group, g)
+            np.add.at(result, group.coordinate_index, np.einsum("npi,npr,r->ni", Dp, Mp, g_points))
+        return result
+
+    def gravity_stiffness(self, x):
+        """d(gravity force)/dx (NX, NX): non-zero where element mass hangs on a rotation."""
+        model = self.model
+        result = np.zeros((model.nx, model.nx))
+        if not np.any(model.gravity):
+            return result
+        for group, Mp in self.groups:
+            _, _, D2p = group.kind.inertia_points(group.local(x), group.reference, order=2)
+            weights = Mp @ _point_gravity(group, model.gravity)
+            local = np.einsum("np,npij->nij", weights, D2p)
+            idx = group.coordinate_index
+            np.add.at(result, (idx[:, :, None], idx[:, None, :]), local)
+        return result
+
+    def _translation_gravity(self, g):
+        """g spread over the coordinates: component d of g on every coordinate named '.x' etc."""
+        axes = "xyz"[: self.model.dimension]
+        per_coordinate = np.zeros(self.model.nx)
+        for i, name in enumerate(self.model.coordinate_names):
+            axis = name.rsplit(".", 1)[1]
+            if axis in axes:
+                per_coordinate[i] = g[axes.index(axis)]
+        return per_coordinate
+
+
+def _point_gravity(group, g):
+    """Gravity on the inertia points: g on position points, zero on tangent points."""
+    return np.concatenate(
+        [g if kind == "position" else np.zeros_like(g) for kind in group.kind.inertia_point_kinds]
+    )

@@ -1,0 +1,105 @@
+"""The exact-constraint check: DOF count and the rank of the constraint Jacobian.
+
+A model is exactly constrained when its declared DOFs number NDOF = NX - NXO - NEO and the
+constraint Jacobian J (free coordinates x free coordinates: rigid deformations, DOF
+deformations, DOF coordinates) is regular. Otherwise, following the exact-constraint-design
+check of the seed chapter:
+
+- over-constrained: the rows of the rigid deformations are linearly dependent; the redundant
+  constraints are named (each could be released to remove one over-constraint);
+- under-constrained: some motion of the free coordinates changes no rigid deformation and no
+  DOF; the coordinates of that motion are named (a mechanism, or a missing DOF).
+
+Rank decisions use an SVD with the rotation columns scaled by the model's length scale, and a
+relative threshold of 1e-9 on the singular values.
+"""
+
+import numpy as np
+
+from . import assembly
+from .errors import ConstraintError
+from .kinematics import Kinematics
+
+RANK_TOLERANCE = 1e-9
+
+
+def check_exact_constraint(model, x=None):
+    """Raise ConstraintError unless `model` is exactly constrained at coordinates x.
+
+    The message names the DOF counts, the redundant constraints (element deformations) and the
+    free coordinates, as far as they apply. Returns the model's dof_count() when it passes.
+    """
+    kin = Kinematics(model)
+    if x is None:
+        x = model.initial_coordinates
+    problems = []
+    if model.declared_dof_count != model.ndof:
+        declared = ", ".join(model.dof_names) or "none"
+        problems.append(
+            f"NDOF = NX - NXO - NEO = {model.nx} - {model.nxo} - {model.neo} = {model.ndof}, "
+            f"but the scene declares {model.declared_dof_count} DOF(s): {declared}"
+        )
+    _, De = assembly.deformation_jacobian(model, x)
+    scale = _column_scale(model, kin.length_scale)[kin.free]
+    rigid_rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
+    for dependency in _dependent_row_sets(rigid_rows):
+        names = [model.deformation_names[model.rigid_deformations[i]] for i in dependency]
+        problems.append(
+            "over-constrained: the prescribed deformations "
+            + ", ".join(names)
+            + " are mutually dependent, so one of them is redundant; release one of them "
+            "(or remove a support)"
+        )
+    rows = De[np.ix_(kin.constraint_rows, kin.free)] * scale
+    dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
+    dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
+    full = np.vstack([rows, dof_rows])
+    for motion in _free_motions(full):
+        moving = [
+            model.coordinate_names[kin.free[i]]
+            for i in np.flatnonzero(np.abs(motion) > 1e-6 * np.abs(motion).max())
+        ]
+        problems.append(
+            "under-constrained: the coordinates "
+            + ", ".join(moving)
+            + " can move without changing any prescribed deformation or DOF; prescribe a "
+            "released deformation zero, fix a coordinate or declare a DOF"
+        )
+    if problems:
+        raise ConstraintError(
+            f"{model.source}: model {model.name!r} is not exactly constrained:\n  - "
+            + "\n  - ".join(problems)
+        )
+    return model.dof_count()
+
+
+def _column_scale(model, length_scale):
+    """Scale rotation coordinates (rad) by a length so every column is in metres."""
+    scale = np.ones(model.nx)
+    for i, name in enumerate(model.coordinate_names):
+        if name.rsplit(".", 1)[1] not in ("x", "y", "z"):
+            scale[i] = length_scale
+    return scale
+
+
+def _dependent_row_sets(rows):
+    """For each left null-space vector of `rows`, the indices of the rows taking part."""
+    if rows.shape[0] == 0:
+        return []
+    u, s, _ = np.linalg.svd(rows)
+    top = max(s.max(initial=0.0), 1e-300)
+    rank = int(np.sum(s > RANK_TOLERANCE * top))
+    sets = []
+    for vector in u[:, rank:].T:
+        sets.append(list(np.flatnonzero(np.abs(vector) > 1e-6 * np.abs(vector).max())))
+    return sets
+
+
+def _free_motions(matrix):
+    """Right null-space vectors of `matrix` (rows x free coordinates)."""
+    if matrix.shape[1] == 0:
+        return []
+    _, s, vt = np.linalg.svd(matrix)
+    top = max(s.max(initial=0.0), 1e-300)
+    rank = int(np.sum(s > RANK_TOLERANCE * top))
+    return list(vt[rank:])

@@ -1,0 +1,87 @@
+"""PLTRUSS: the planar truss element (SPACAR), one deformation: the elongation.
+
+Nodal coordinates of one element, in this order (m):
+
+    x = [x^p, y^p, x^q, y^q]
+
+Deformation (m):
+
+    e1 = |l| - l0,   l = r^q - r^p
+
+Stress resultant: the normal force sigma1 = EA / l0 * e1 + EdA / l0 * e1dot (N).
+Distributed mass: the position is interpolated linearly between p and q, which gives the
+consistent mass rho A l0 [[1/3, 1/6], [1/6, 1/3]] on the two nodal positions.
+
+Every function works on all elements of this type at once: arrays shaped (n_elements, ...).
+"""
+
+import numpy as np
+
+type_name = "PLTRUSS"
+dimension = 2
+node_kinds = ("translational", "translational")
+node_roles = ("p", "q")
+deformation_names = ("e1",)
+deformation_stiffness = {"e1": "EA"}  # property per deformation
+coordinates_per_element = 4
+inertia_point_kinds = ("position", "position")
+properties = ("EA", "EdA", "rho_A")  # section properties used
+
+_DL = np.array([[-1.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 1.0]])  # d l / d x
+
+
+def reference(x0):
+    """Reference data from the initial nodal coordinates x0 (n, 4): the length l0 (m)."""
+    l_vec = x0 @ _DL.T
+    return {"l0": np.linalg.norm(l_vec, axis=1)}
+
+
+def deformations(x, ref, order=2):
+    """Elongation e (n, 1) m, its first (n, 1, 4) and second (n, 1, 4, 4) derivatives.
+
+    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e).
+    """
+    l_vec = x @ _DL.T
+    length = np.linalg.norm(l_vec, axis=1)
+    e = (length - ref["l0"])[:, None]
+    if order == 0:
+        return (e,)
+    unit = l_vec / length[:, None]
+    De = (unit @ _DL)[:, None, :]
+    if order == 1:
+        return e, De
+    projector = (np.eye(2)[None] - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
+    D2e = np.einsum("ai,nab,bj->nij", _DL, projector, _DL)[:, None]
+    return e, De, D2e
+
+
+def stiffness(ref, props):
+    """Deformation stiffness (n, 1, 1): EA / l0 in N/m."""
+    return (props["EA"] / ref["l0"])[:, None, None]
+
+
+def damping(ref, props):
+    """Deformation damping (n, 1, 1): EdA / l0 in N s/m."""
+    return (props["EdA"] / ref["l0"])[:, None, None]
+
+
+def inertia_points(x, ref, order=2):
+    """The points whose motion carries the element's mass: the two nodal positions.
+
+    Returns p (n, 4), Dp (n, 4, 4) and D2p (n, 4, 4, 4) (zero: the map is linear).
+    """
+    n = x.shape[0]
+    p = x.copy()
+    if order == 0:
+        return (p,)
+    Dp = np.broadcast_to(np.eye(4), (n, 4, 4))
+    if order == 1:
+        return p, Dp
+    return p, Dp, np.zeros((n, 4, 4, 4))
+
+
+def inertia_matrix(ref, props):
+    """Consistent mass on the inertia points (n, 4, 4) in kg: linear interpolation."""
+    shape = np.array([[1.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 3.0]])
+    mass = props["rho_A"] * ref["l0"]
+    return mass[:, None, None] * np.kron(shape, np.eye(2))[None]

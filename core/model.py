@@ -1,0 +1,122 @@
+"""The model: nodal coordinates, element groups, masses, loads, inputs and outputs.
+
+A `Model` is a plain container built by `flexure.core.scene`; it holds only what a scene
+declares. Coordinates are numbered in node order ("3.x", "4.phi"); deformations in element
+order ("leaf_left.e2"). Each coordinate is fixed, dependent or a DOF; each deformation is
+zero (prescribed), released or a DOF. The DOF vector q lists the DOF coordinates first, then
+the DOF deformations, each in model order.
+"""
+
+from dataclasses import dataclass, field
+from types import ModuleType
+
+import numpy as np
+
+FIXED, DEPENDENT, DOF = "fixed", "dependent", "dof"
+ZERO, RELEASED = "zero", "released"
+
+
+@dataclass(frozen=True)
+class ElementGroup:
+    """All elements of one type: their coordinate and deformation indices and properties.
+
+    coordinate_index (n, m) and deformation_index (n, k) map each element's local coordinates
+    and deformations into the model's vectors; `reference` and `properties` hold arrays (n,).
+    """
+
+    kind: ModuleType
+    names: tuple[str, ...]
+    coordinate_index: np.ndarray
+    deformation_index: np.ndarray
+    reference: dict
+    properties: dict
+
+    def local(self, vector):
+        """The element-local slices (n, m) of a model coordinate vector."""
+        return vector[self.coordinate_index]
+
+
+@dataclass(frozen=True)
+class Port:
+    """A named input force or output on one model coordinate (SPACAR's INPUTF / OUTX)."""
+
+    name: str
+    coordinate: int
+    quantity: str = "force"  # "force" for inputs; "position" or "velocity" for outputs
+    unit: str = "N"
+
+
+@dataclass
+class Model:
+    """A flexible multibody model in the SPACAR formulation. SI units throughout."""
+
+    name: str
+    dimension: int
+    coordinate_names: list[str]
+    initial_coordinates: np.ndarray
+    coordinate_status: np.ndarray
+    deformation_names: list[str]
+    deformation_status: np.ndarray
+    groups: list[ElementGroup]
+    lumped_mass: np.ndarray  # (NX,) kg on translations, kg m^2 on rotations
+    loads: np.ndarray  # (NX,) constant nodal forces, N and N m
+    gravity: np.ndarray  # (dimension,) m/s^2
+    inputs: list[Port] = field(default_factory=list)
+    outputs: list[Port] = field(default_factory=list)
+    buckling_loads: np.ndarray | None = None  # (NX,) reference load of the buckling analysis
+    source: str = "<dict>"
+
+    def __post_init__(self):
+        status = self.coordinate_status
+        self.fixed_coordinates = np.flatnonzero(status == FIXED)
+        self.free_coordinates = np.flatnonzero(status != FIXED)
+        self.dof_coordinates = np.flatnonzero(status == DOF)
+        dstatus = self.deformation_status
+        self.rigid_deformations = np.flatnonzero(dstatus == ZERO)
+        self.released_deformations = np.flatnonzero(dstatus == RELEASED)
+        self.dof_deformations = np.flatnonzero(dstatus == DOF)
+        # Deformations that carry a constitutive stress: released ones and DOF ones.
+        self.stressed_deformations = np.flatnonzero(dstatus != ZERO)
+
+    @property
+    def nx(self):
+        """NX: the number of nodal coordinates."""
+        return len(self.coordinate_names)
+
+    @property
+    def nxo(self):
+        """NXO: the number of fixed coordinates (absolute constraints)."""
+        return self.fixed_coordinates.size
+
+    @property
+    def neo(self):
+        """NEO: the number of deformations prescribed zero (relative constraints)."""
+        return self.rigid_deformations.size
+
+    @property
+    def ndof(self):
+        """NDOF = NX - NXO - NEO."""
+        return self.nx - self.nxo - self.neo
+
+    @property
+    def dof_names(self):
+        """Names of the DOFs, in the order of q."""
+        return [self.coordinate_names[i] for i in self.dof_coordinates] + [
+            self.deformation_names[i] for i in self.dof_deformations
+        ]
+
+    @property
+    def declared_dof_count(self):
+        """The number of DOFs the scene declares (coordinates plus deformations)."""
+        return self.dof_coordinates.size + self.dof_deformations.size
+
+    def dof_count(self):
+        """The SPACAR count as a dict: nx, nxo, neo, ndof."""
+        return {"nx": self.nx, "nxo": self.nxo, "neo": self.neo, "ndof": self.ndof}
+
+    def coordinate_index(self, name):
+        """Index of the coordinate "NODE.COORD" (KeyError naming it if absent)."""
+        try:
+            return self.coordinate_names.index(name)
+        except ValueError:
+            raise KeyError(f"model {self.name!r} has no coordinate {name!r}") from None

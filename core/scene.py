@@ -1,0 +1,339 @@
+"""Scenes: TOML files (or dicts) that declare a model, validated on load.
+
+A scene has the tables [scene], [sections.NAME], [nodes.NAME], [elements.NAME] and the
+optional [inputs.NAME], [outputs.NAME] and [buckling]; README.md documents every key. Every
+problem is reported as a SceneError that names the file, the key and what is wrong; the
+exact-constraint check then refuses an over- or under-constrained model (ConstraintError).
+"""
+
+import importlib.resources
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from .constraints import check_exact_constraint
+from .elements import ELEMENT_TYPES
+from .errors import SceneError
+from .model import DEPENDENT, DOF, FIXED, RELEASED, ZERO, ElementGroup, Model, Port
+
+TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
+ROTATION_AXES = {2: ("phi",)}
+SECTION_KEYS = {"EA", "EI", "EdA", "EdI", "rho_A", "E", "rho", "width", "height"}
+OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
+
+
+def builtin_scenes():
+    """Names of the scenes that ship with flexure (usable without a checkout)."""
+    folder = importlib.resources.files("flexure.scenes")
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def scene_path(name_or_path):
+    """The path of a scene file: an existing path, or the name of a built-in scene."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    stem = path.name[:-5] if path.name.endswith(".toml") else path.name
+    builtin = importlib.resources.files("flexure.scenes") / f"{stem}.toml"
+    if builtin.is_file():
+        return Path(str(builtin))
+    raise SceneError(
+        f"{name_or_path}: no such scene file, and no built-in scene of that name "
+        f"(built in: {', '.join(builtin_scenes())})"
+    )
+
+
+def load_scene(name_or_path, *, check=True):
+    """Load and validate a scene file or built-in scene name into a `Model`."""
+    path = scene_path(name_or_path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as error:
+        raise SceneError(f"{path}: not valid TOML: {error}") from None
+    return build_model(data, source=str(path), default_name=path.stem, check=check)
+
+
+def build_model(data, *, source="<dict>", default_name="scene", check=True):
+    """Build a `Model` from a scene dictionary, validating every key."""
+    return _SceneBuilder(data, source, default_name).build(check=check)
+
+
+class _SceneBuilder:
+    def __init__(self, data, source, default_name):
+        self.data = data
+        self.source = source
+        self.default_name = default_name
+
+    def fail(self, key, message):
+        raise SceneError(f"{self.source}: {key}: {message}")
+
+    def table(self, key, value):
+        if not isinstance(value, dict):
+            self.fail(key, f"expected a table, got {type(value).__name__}")
+        return value
+
+    def number(self, key, value, *, minimum=None, positive=False):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(key, f"expected a number, got {value!r}")
+        if not math.isfinite(value):
+            self.fail(key, f"expected a finite number, got {value!r}")
+        if positive and value <= 0:
+            self.fail(key, f"expected a value > 0, got {value!r}")
+        if minimum is not None and value < minimum:
+            self.fail(key, f"expected a value >= {minimum}, got {value!r}")
+        return float(value)
+
+    def vector(self, key, value, length):
+        if not isinstance(value, list) or len(value) != length:
+            self.fail(key, f"expected a list of {length} numbers, got {value!r}")
+        return [self.number(f"{key}[{i}]", v) for i, v in enumerate(value)]
+
+    def names(self, key, value, allowed):
+        if isinstance(value, str):
+            value = [value]
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            self.fail(key, f"expected a list of names, got {value!r}")
+        for v in value:
+            if v not in allowed:
+                self.fail(key, f"unknown name {v!r}; expected one of {', '.join(allowed)}")
+        return list(value)
+
+    def check_keys(self, key, table, allowed):
+        for k in table:
+            if k not in allowed:
+                self.fail(f"{key}.{k}", f"unknown key; expected one of {', '.join(sorted(allowed))}")
+
+    # -- the scene --------------------------------------------------------------------------
+
+    def build(self, *, check):
+        data = self.table("scene file", self.data)
+        self.check_keys("scene file", data, {
+            "scene", "sections", "nodes", "elements", "inputs", "outputs", "buckling"})
+        header = self.table("scene", data.get("scene", {}))
+        self.check_keys("scene", header, {"name", "description", "dimension", "gravity"})
+        name = header.get("name", self.default_name)
+        if not isinstance(name, str) or not name.isidentifier():
+            self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
+        dimension = header.get("dimension", 2)
+        if dimension not in ROTATION_AXES:
+            self.fail("scene.dimension", f"expected 2 (planar), got {dimension!r}")
+        gravity = np.array(self.vector("scene.gravity", header.get("gravity", [0.0] * dimension),
+                                       dimension))
+        self.dimension = dimension
+        self.sections = self.build_sections(self.table("sections", data.get("sections", {})))
+        self.build_nodes(self.table("nodes", data.get("nodes", {})))
+        groups, deformation_names, deformation_status = self.build_elements(
+            self.table("elements", data.get("elements", {})))
+        inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
+        buckling = self.build_buckling(data.get("buckling"))
+        model = Model(
+            name=name,
+            dimension=dimension,
+            coordinate_names=self.coordinate_names,
+            initial_coordinates=np.array(self.initial),
+            coordinate_status=np.array(self.status),
+            deformation_names=deformation_names,
+            deformation_status=np.array(deformation_status, dtype=object),
+            groups=groups,
+            lumped_mass=np.array(self.mass),
+            loads=np.array(self.loads),
+            gravity=gravity,
+            inputs=inputs,
+            outputs=outputs,
+            buckling_loads=buckling,
+            source=self.source,
+        )
+        if check:
+            check_exact_constraint(model)
+        return model
+
+    def build_sections(self, sections):
+        result = {}
+        for name, section in sections.items():
+            key = f"sections.{name}"
+            section = self.table(key, section)
+            self.check_keys(key, section, SECTION_KEYS)
+            values = {k: self.number(f"{key}.{k}", v, minimum=0.0) for k, v in section.items()}
+            dims = {"E", "width", "height"}
+            if dims & values.keys():
+                missing = dims - values.keys()
+                if missing:
+                    self.fail(key, f"a rectangle needs E, width and height; missing {sorted(missing)}")
+                area = values["width"] * values["height"]
+                values.setdefault("EA", values["E"] * area)
+                values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
+                if "rho" in values:
+                    values.setdefault("rho_A", values["rho"] * area)
+            result[name] = values
+        return result
+
+    def build_nodes(self, nodes):
+        if not nodes:
+            self.fail("nodes", "a scene needs at least one node")
+        self.node_kind, self.node_coordinates = {}, {}
+        self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
+        for name, node in nodes.items():
+            key = f"nodes.{name}"
+            node = self.table(key, node)
+            if ("position" in node) == ("angle" in node):
+                self.fail(key, "expected exactly one of 'position' (a translational node) or "
+                               "'angle' (a rotational node)")
+            translational = "position" in node
+            if translational:
+                self.check_keys(key, node, {"position", "fixed", "dof", "mass", "force"})
+                axes = TRANSLATION_AXES[self.dimension]
+                values = self.vector(f"{key}.position", node["position"], len(axes))
+                mass = self.number(f"{key}.mass", node.get("mass", 0.0), minimum=0.0)
+                force = self.vector(f"{key}.force", node.get("force", [0.0] * len(axes)), len(axes))
+                masses = [mass] * len(axes)
+            else:
+                self.check_keys(key, node, {"angle", "fixed", "dof", "inertia", "moment"})
+                axes = ROTATION_AXES[self.dimension]
+                values = [self.number(f"{key}.angle", node["angle"])]
+                # A lumped rotational inertia may be negative: SPACAR's lumped model of a bar
+                # puts m/2 at both ends with J = -m l^2 / 12 each (the total stays positive).
+                masses = [self.number(f"{key}.inertia", node.get("inertia", 0.0))]
+                force = [self.number(f"{key}.moment", node.get("moment", 0.0))]
+            fixed = self.names(f"{key}.fixed", node.get("fixed", []), axes)
+            dofs = self.names(f"{key}.dof", node.get("dof", []), axes)
+            for both in set(fixed) & set(dofs):
+                self.fail(key, f"coordinate {both!r} is both fixed and a DOF")
+            self.node_kind[name] = "translational" if translational else "rotational"
+            self.node_coordinates[name] = {}
+            for axis, value, mass_value, load in zip(axes, values, masses, force, strict=True):
+                self.node_coordinates[name][axis] = len(self.coordinate_names)
+                self.coordinate_names.append(f"{name}.{axis}")
+                self.initial.append(value)
+                self.status.append(FIXED if axis in fixed else DOF if axis in dofs else DEPENDENT)
+                self.mass.append(mass_value)
+                self.loads.append(load)
+
+    def node(self, key, name, kind=None):
+        name = str(name)
+        if name not in self.node_kind:
+            self.fail(key, f"unknown node {name!r}")
+        if kind is not None and self.node_kind[name] != kind:
+            self.fail(key, f"node {name!r} is {self.node_kind[name]}, expected a {kind} node")
+        return name
+
+    def build_elements(self, elements):
+        by_type = {}
+        deformation_names, deformation_status = [], []
+        for name, element in elements.items():
+            key = f"elements.{name}"
+            element = self.table(key, element)
+            self.check_keys(key, element, {"type", "nodes", "section", "released", "dof"})
+            type_name = element.get("type")
+            if not isinstance(type_name, str) or type_name.upper() not in ELEMENT_TYPES:
+                self.fail(f"{key}.type", f"unknown element type {type_name!r}; expected one of "
+                                         f"{', '.join(ELEMENT_TYPES)}")
+            kind = ELEMENT_TYPES[type_name.upper()]
+            if kind.dimension != self.dimension:
+                self.fail(f"{key}.type", f"{kind.type_name} is a {kind.dimension}-D element in a "
+                                         f"{self.dimension}-D scene")
+            nodes = element.get("nodes")
+            if not isinstance(nodes, list) or len(nodes) != len(kind.node_kinds):
+                self.fail(f"{key}.nodes", f"{kind.type_name} expects {len(kind.node_kinds)} nodes "
+                                          f"({', '.join(kind.node_kinds)}), got {nodes!r}")
+            nodes = [self.node(f"{key}.nodes[{i}]", n, k)
+                     for i, (n, k) in enumerate(zip(nodes, kind.node_kinds, strict=True))]
+            index = [i for n in nodes for i in self.node_coordinates[n].values()]
+            section_name = element.get("section")
+            if section_name is None:
+                self.fail(key, "element without a section: add section = \"NAME\"")
+            if section_name not in self.sections:
+                self.fail(f"{key}.section", f"unknown section {section_name!r}")
+            section = self.sections[section_name]
+            released = self.names(f"{key}.released", element.get("released", []),
+                                  kind.deformation_names)
+            dofs = self.names(f"{key}.dof", element.get("dof", []), kind.deformation_names)
+            for both in set(released) & set(dofs):
+                self.fail(key, f"deformation {both!r} is both released and a DOF")
+            for deformation in released:
+                needed = kind.deformation_stiffness[deformation]
+                if section.get(needed, 0.0) <= 0.0:
+                    self.fail(f"{key}.released", f"released deformation {deformation!r} needs a "
+                                                 f"stiffness: section {section_name!r} has no {needed} > 0")
+            entry = by_type.setdefault(kind.type_name, {"kind": kind, "names": [], "coords": [],
+                                                        "defs": [], "props": []})
+            entry["names"].append(name)
+            entry["coords"].append(index)
+            entry["defs"].append(list(range(len(deformation_names),
+                                            len(deformation_names) + len(kind.deformation_names))))
+            entry["props"].append({p: section.get(p, 0.0) for p in kind.properties})
+            for deformation in kind.deformation_names:
+                deformation_names.append(f"{name}.{deformation}")
+                deformation_status.append(
+                    DOF if deformation in dofs else RELEASED if deformation in released else ZERO)
+        groups = []
+        for entry in by_type.values():
+            kind = entry["kind"]
+            coords = np.array(entry["coords"], dtype=int)
+            reference = kind.reference(np.array(self.initial)[coords])
+            for element_name, length in zip(entry["names"], reference["l0"], strict=True):
+                if length <= 1e-12:
+                    self.fail(f"elements.{element_name}.nodes",
+                              f"zero-length element: its end nodes coincide (length {length:.3g} m)")
+            props = {p: np.array([v[p] for v in entry["props"]]) for p in kind.properties}
+            groups.append(ElementGroup(kind=kind, names=tuple(entry["names"]),
+                                       coordinate_index=coords,
+                                       deformation_index=np.array(entry["defs"], dtype=int),
+                                       reference=reference, properties=props))
+        return groups, deformation_names, deformation_status
+
+    def coordinate(self, key, table):
+        node = self.node(f"{key}.node", table.get("node"))
+        axis = table.get("coordinate")
+        if axis not in self.node_coordinates[node]:
+            self.fail(f"{key}.coordinate", f"node {node!r} has no coordinate {axis!r}; expected one "
+                                           f"of {', '.join(self.node_coordinates[node])}")
+        return self.node_coordinates[node][axis]
+
+    def build_ports(self, section, table, *, is_input):
+        ports = []
+        for name, port in self.table(section, table).items():
+            key = f"{section}.{name}"
+            port = self.table(key, port)
+            if not name.isidentifier():
+                self.fail(key, "a port name must be an identifier (letters, digits, _)")
+            if is_input:
+                self.check_keys(key, port, {"node", "coordinate"})
+                ports.append(Port(name, self.coordinate(key, port), "force",
+                                  "N" if self._is_translation(port) else "N.m"))
+            else:
+                self.check_keys(key, port, {"node", "coordinate", "quantity"})
+                quantity = port.get("quantity", "position")
+                if quantity not in OUTPUT_QUANTITIES:
+                    self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
+                                                 f"got {quantity!r}")
+                unit = OUTPUT_QUANTITIES[quantity]
+                if not self._is_translation(port):
+                    unit = unit.replace("m", "rad")
+                ports.append(Port(name, self.coordinate(key, port), quantity, unit))
+        return ports
+
+    def _is_translation(self, port):
+        return port.get("coordinate") in TRANSLATION_AXES[self.dimension]
+
+    def build_buckling(self, table):
+        if table is None:
+            return None
+        table = self.table("buckling", table)
+        self.check_keys("buckling", table, {"forces"})
+        forces = table.get("forces")
+        if not isinstance(forces, list) or not forces:
+            self.fail("buckling.forces", "expected a list of {node, force} tables")
+        loads = np.zeros(len(self.coordinate_names))
+        for i, entry in enumerate(forces):
+            key = f"buckling.forces[{i}]"
+            entry = self.table(key, entry)
+            self.check_keys(key, entry, {"node", "force"})
+            node = self.node(f"{key}.node", entry.get("node"), "translational")
+            axes = list(self.node_coordinates[node])
+            for axis, value in zip(axes, self.vector(f"{key}.force", entry.get("force"), len(axes)),
+                                   strict=True):
+                loads[self.node_coordinates[node][axis]] += value
+        return loads
