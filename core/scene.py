@@ -103,7 +103,8 @@ class _SceneBuilder:
     def check_keys(self, key, table, allowed):
         for k in table:
             if k not in allowed:
-                self.fail(f"{key}.{k}", f"unknown key; expected one of {', '.join(sorted(allowed))}")
+                self.fail(f"{key}.{k}",
+                          f"unknown key; expected one of {', '.join(sorted(allowed))}")
 
     # -- the scene --------------------------------------------------------------------------
 
@@ -161,7 +162,8 @@ class _SceneBuilder:
             if dims & values.keys():
                 missing = dims - values.keys()
                 if missing:
-                    self.fail(key, f"a rectangle needs E, width and height; missing {sorted(missing)}")
+                    self.fail(key, "a rectangle needs E, width and height; "
+                                   f"missing {sorted(missing)}")
                 area = values["width"] * values["height"]
                 values.setdefault("EA", values["E"] * area)
                 values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
@@ -255,8 +257,9 @@ class _SceneBuilder:
             for deformation in released:
                 needed = kind.deformation_stiffness[deformation]
                 if section.get(needed, 0.0) <= 0.0:
-                    self.fail(f"{key}.released", f"released deformation {deformation!r} needs a "
-                                                 f"stiffness: section {section_name!r} has no {needed} > 0")
+                    self.fail(f"{key}.released",
+                              f"released deformation {deformation!r} needs a stiffness: "
+                              f"section {section_name!r} has no {needed} > 0")
             entry = by_type.setdefault(kind.type_name, {"kind": kind, "names": [], "coords": [],
                                                         "defs": [], "props": []})
             entry["names"].append(name)
@@ -275,8 +278,8 @@ class _SceneBuilder:
             reference = kind.reference(np.array(self.initial)[coords])
             for element_name, length in zip(entry["names"], reference["l0"], strict=True):
                 if length <= 1e-12:
-                    self.fail(f"elements.{element_name}.nodes",
-                              f"zero-length element: its end nodes coincide (length {length:.3g} m)")
+                    self.fail(f"elements.{element_name}.nodes", "zero-length element: its end "
+                                                            f"nodes coincide ({length:.3g} m)")
             props = {p: np.array([v[p] for v in entry["props"]]) for p in kind.properties}
             groups.append(ElementGroup(kind=kind, names=tuple(entry["names"]),
                                        coordinate_index=coords,
@@ -288,8 +291,9 @@ class _SceneBuilder:
         node = self.node(f"{key}.node", table.get("node"))
         axis = table.get("coordinate")
         if axis not in self.node_coordinates[node]:
-            self.fail(f"{key}.coordinate", f"node {node!r} has no coordinate {axis!r}; expected one "
-                                           f"of {', '.join(self.node_coordinates[node])}")
+            self.fail(f"{key}.coordinate",
+                      f"node {node!r} has no coordinate {axis!r}; expected one of "
+                      f"{', '.join(self.node_coordinates[node])}")
         return self.node_coordinates[node][axis]
 
     def build_ports(self, section, table, *, is_input):

@@ -2,8 +2,8 @@
 
 An element module defines `type_name`, `dimension`, `node_kinds`, `node_roles`,
 `deformation_names`, `deformation_stiffness` (the section property behind each deformation),
-`coordinates_per_element`, `inertia_point_kinds`, `properties` (the section properties used) and the pure
-functions `reference`, `deformations`, `stiffness`, `damping`, `inertia_points` and
+`coordinates_per_element`, `inertia_point_kinds`, `properties` (the section properties used)
+and the pure functions `reference`, `deformations`, `stiffness`, `damping`, `inertia_points` and
 `inertia_matrix`, each working on all elements of the type at once.
 """
 

@@ -1,0 +1,107 @@
+"""`flexure analyze SCENE`: DOF count, static equilibrium, modes, buckling, state space."""
+
+import json
+
+import numpy as np
+
+from .linearization import linearize
+from .mechanics import Mechanics
+from .modal import buckling_load_factors, natural_frequencies
+from .scene import load_scene
+from .statespace import state_space
+from .statics import static_equilibrium
+from .tables import format_table, jsonable
+
+
+def register(subparsers):
+    """Add the `analyze` subcommand."""
+    parser = subparsers.add_parser(
+        "analyze", help="static, modal, buckling and state-space analyses of a scene",
+        description="Analyse a scene (a TOML file or the name of a built-in scene). Without an "
+                    "analysis option, --static and --modes are run.")
+    parser.add_argument("scene", help="scene file or built-in scene name")
+    parser.add_argument("--static", action="store_true", help="static equilibrium under the loads")
+    parser.add_argument("--modes", nargs="?", type=int, const=-1, metavar="N",
+                        help="the lowest N (default all) natural frequencies")
+    parser.add_argument("--buckling", nargs="?", type=int, const=-1, metavar="N",
+                        help="the lowest N (default all) buckling load factors")
+    parser.add_argument("--state-space", action="store_true",
+                        help="state-space matrices of the declared inputs and outputs")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(run=run)
+
+
+def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False):
+    """Run the requested analyses; returns the dict that `--json` prints (SI units)."""
+    result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names}
+    mech = Mechanics(model)
+    needs_equilibrium = static or modes is not None or with_state_space
+    solution = static_equilibrium(model, mechanics=mech) if needs_equilibrium else None
+    if static:
+        result["static"] = {"coordinates": solution.coordinates(),
+                            "stress_resultants": solution.stresses()}
+    lin = linearize(model, solution, mechanics=mech) if (modes is not None
+                                                          or with_state_space) else None
+    if modes is not None:
+        found = natural_frequencies(model, None if modes < 0 else modes, linear_model=lin)
+        result["modes"] = {"frequencies_hz": found.frequencies_hz,
+                           "mass_matrix": lin.M0, "stiffness_matrix": lin.K,
+                           "damping_matrix": lin.C0,
+                           "shapes": found.shapes}
+    if buckling is not None:
+        factors = buckling_load_factors(model, None if buckling < 0 else buckling)
+        result["buckling"] = {"load_factors": factors}
+    if with_state_space:
+        sys = state_space(model, linear_model=lin)
+        result["state_space"] = {"A": sys.A, "B": sys.B, "C": sys.C, "D": sys.D,
+                                 "inputs": [p.name for p in model.inputs],
+                                 "outputs": [p.name for p in model.outputs],
+                                 "states": list(sys.state_labels)}
+    return jsonable(result)
+
+
+def run(args):
+    model = load_scene(args.scene)
+    static, modes = args.static, args.modes
+    if not (static or modes is not None or args.buckling is not None or args.state_space):
+        static, modes = True, -1
+    result = analyze(model, static=static, modes=modes, buckling=args.buckling,
+                     with_state_space=args.state_space)
+    if args.json:
+        print(json.dumps(result, indent=1))
+    else:
+        print(render(result))
+    return 0
+
+
+def render(result):
+    """The analyses of `analyze` as readable tables."""
+    count = result["dof_count"]
+    parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} "
+             f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])})"]
+    if "static" in result:
+        static = result["static"]
+        parts.append(format_table(["coordinate", "value (m, rad)"],
+                                  list(static["coordinates"].items()),
+                                  title="\nstatic equilibrium: coordinates"))
+        parts.append(format_table(["deformation", "stress resultant (N)"],
+                                  list(static["stress_resultants"].items()),
+                                  title="\nstatic equilibrium: stress resultants"))
+    if "modes" in result:
+        freqs = result["modes"]["frequencies_hz"]
+        parts.append(format_table(["mode", "frequency (Hz)"],
+                                  [(i + 1, f) for i, f in enumerate(freqs)],
+                                  title="\nnatural frequencies (at the static equilibrium)"))
+    if "buckling" in result:
+        factors = result["buckling"]["load_factors"]
+        parts.append(format_table(["mode", "load factor"],
+                                  [(i + 1, f) for i, f in enumerate(factors)],
+                                  title="\nbuckling load factors eig(-K0, G0)"))
+    if "state_space" in result:
+        ss = result["state_space"]
+        with np.printoptions(precision=6, linewidth=100):
+            for key in "ABCD":
+                parts.append(f"\n{key} =\n{np.array(ss[key])}")
+        parts.append(f"\ninputs: {', '.join(ss['inputs'])}   outputs: {', '.join(ss['outputs'])}"
+                     f"   states: {', '.join(ss['states'])}")
+    return "\n".join(parts)
