@@ -7,6 +7,8 @@ have tens to a few hundred coordinates.
 
 import numpy as np
 
+from .rotary_inertia import RotaryInertia
+
 
 def deformations(model, x):
     """All deformations e (NE,) at coordinates x (NX,), in m (or as the element defines)."""
@@ -76,7 +78,8 @@ class Inertia:
     """The mass of a model: lumped masses plus the elements' consistent masses.
 
     Element mass acts through inertia points p(x) with a constant mass matrix Mp, so that
-    the kinetic energy is 1/2 pdot^T Mp pdot with pdot = Dp xdot.
+    the kinetic energy is 1/2 pdot^T Mp pdot with pdot = Dp xdot. Rigid-body inertias on
+    3-D rotational nodes (Euler parameters) are added by `RotaryInertia`.
     """
 
     def __init__(self, model):
@@ -87,6 +90,7 @@ class Inertia:
             for group in model.groups
             if np.any(group.properties.get("rho_A", 0.0))
         ]
+        self.rotary = RotaryInertia(model)
 
     def mass_matrix(self, x):
         """M(x) (NX, NX) in kg (kg m on translation-rotation, kg m^2 on rotations)."""
@@ -96,6 +100,8 @@ class Inertia:
             local = np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp)
             idx = group.coordinate_index
             np.add.at(M, (idx[:, :, None], idx[:, None, :]), local)
+        if self.rotary:
+            M += self.rotary.mass_matrix(x)
         return M
 
     def convective_force(self, x, v):
@@ -106,6 +112,8 @@ class Inertia:
             _, Dp, D2p = group.kind.inertia_points(group.local(x), group.reference, order=2)
             accel = np.einsum("npij,ni,nj->np", D2p, local_v, local_v)
             np.add.at(result, group.coordinate_index, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
+        if self.rotary:
+            result += self.rotary.convective_force(x, v)
         return result
 
     def gravity_force(self, x):

@@ -35,8 +35,10 @@ def check_exact_constraint(model, x=None):
     problems = []
     if model.declared_dof_count != model.ndof:
         declared = ", ".join(model.dof_names) or "none"
+        count = model.dof_count()  # the course notes' count (3 per 3-D rotational node)
         problems.append(
-            f"NDOF = NX - NXO - NEO = {model.nx} - {model.nxo} - {model.neo} = {model.ndof}, "
+            f"NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} - {count['neo']} = "
+            f"{count['ndof']}, "
             f"but the scene declares {model.declared_dof_count} DOF(s): {declared}"
         )
     _, De = assembly.deformation_jacobian(model, x)

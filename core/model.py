@@ -65,6 +65,9 @@ class Model:
     outputs: list[Port] = field(default_factory=list)
     buckling_loads: np.ndarray | None = None  # (NX,) reference load of the buckling analysis
     source: str = "<dict>"
+    # 3-D: rigid-body inertias of rotational nodes, [(Euler parameter indices (4,), J (3, 3)
+    # kg m^2 in the node's body frame)], see flexure.core.rotary_inertia
+    node_inertias: list = field(default_factory=list)
 
     def __post_init__(self):
         status = self.coordinate_status
@@ -111,8 +114,21 @@ class Model:
         return self.dof_coordinates.size + self.dof_deformations.size
 
     def dof_count(self):
-        """The SPACAR count as a dict: nx, nxo, neo, ndof."""
-        return {"nx": self.nx, "nxo": self.nxo, "neo": self.neo, "ndof": self.ndof}
+        """The SPACAR count as a dict: nx, nxo, neo, ndof, in the course notes' convention.
+
+        A 3-D rotational node has four Euler parameters and, when free, one normalisation
+        constraint (a rigid deformation "NODE.norm"); the course notes count it as three
+        coordinates and no constraint. So here NX counts 3 per rotational node, NXO 3 per
+        fixed one and NEO leaves the normalisation constraints out; NDOF is the same either
+        way: (NX - n) - (NXO - n_fixed) - (NEO - n_free) = NX - NXO - NEO. The internal counts
+        are the properties nx, nxo, neo.
+        """
+        euler = [i for i, name in enumerate(self.coordinate_names) if name.endswith(".lambda0")]
+        fixed = sum(1 for i in euler if self.coordinate_status[i] == FIXED)
+        norms = sum(1 for i in self.rigid_deformations
+                    if self.deformation_names[i].endswith(".norm"))
+        return {"nx": self.nx - len(euler), "nxo": self.nxo - fixed, "neo": self.neo - norms,
+                "ndof": self.ndof}
 
     def coordinate_index(self, name):
         """Index of the coordinate "NODE.COORD" (KeyError naming it if absent)."""

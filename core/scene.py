@@ -4,6 +4,15 @@ A scene has the tables [scene], [sections.NAME], [nodes.NAME], [elements.NAME] a
 optional [inputs.NAME], [outputs.NAME] and [buckling]; README.md documents every key. Every
 problem is reported as a SceneError that names the file, the key and what is wrong; the
 exact-constraint check then refuses an over- or under-constrained model (ConstraintError).
+
+Spatial scenes (dimension = 3): translational nodes have position = [x, y, z]; a rotational
+node has rotation = [rx, ry, rz] (its initial orientation as a rotation vector, rad), is
+either fixed as a whole (fixed = true) or free, and may carry a rigid-body inertia
+(inertia = [Jx, Jy, Jz] or a 3 x 3 list, kg m^2, in its body frame). Its coordinates are the
+four Euler parameters "NODE.lambda0" ... "NODE.lambda3" (see flexure.core.rotations); the
+builder adds the normalisation constraint "NODE.norm" of every free rotational node. A BEAM
+needs y_axis = [.., .., ..], its principal y' axis; sections of spatial elements take the keys
+of flexure.core.sections.beam_properties.
 """
 
 import importlib.resources
@@ -14,13 +23,18 @@ from pathlib import Path
 import numpy as np
 
 from .constraints import check_exact_constraint
-from .elements import ELEMENT_TYPES
+from .elements import ELEMENT_TYPES, euler
 from .errors import SceneError
 from .model import DEPENDENT, DOF, FIXED, RELEASED, ZERO, ElementGroup, Model, Port
+from .rotations import from_rotation_vector
+from .sections import beam_properties
 
 TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
-ROTATION_AXES = {2: ("phi",)}
+ROTATION_AXES = {2: ("phi",), 3: ("lambda0", "lambda1", "lambda2", "lambda3")}
 SECTION_KEYS = {"EA", "EI", "EdA", "EdI", "rho_A", "E", "rho", "width", "height"}
+SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
+                   "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
+                   "diameter", "beta"}
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
 
 
@@ -119,7 +133,7 @@ class _SceneBuilder:
             self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
         dimension = header.get("dimension", 2)
         if dimension not in ROTATION_AXES:
-            self.fail("scene.dimension", f"expected 2 (planar), got {dimension!r}")
+            self.fail("scene.dimension", f"expected 2 (planar) or 3 (spatial), got {dimension!r}")
         gravity = np.array(self.vector("scene.gravity", header.get("gravity", [0.0] * dimension),
                                        dimension))
         self.dimension = dimension
@@ -127,6 +141,8 @@ class _SceneBuilder:
         self.build_nodes(self.table("nodes", data.get("nodes", {})))
         groups, deformation_names, deformation_status = self.build_elements(
             self.table("elements", data.get("elements", {})))
+        if dimension == 3:
+            self.add_normalisation(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         buckling = self.build_buckling(data.get("buckling"))
@@ -146,6 +162,7 @@ class _SceneBuilder:
             outputs=outputs,
             buckling_loads=buckling,
             source=self.source,
+            node_inertias=self.node_inertias,
         )
         if check:
             check_exact_constraint(model)
@@ -156,6 +173,9 @@ class _SceneBuilder:
         for name, section in sections.items():
             key = f"sections.{name}"
             section = self.table(key, section)
+            if self.dimension == 3:
+                result[name] = self.spatial_section(key, section)
+                continue
             self.check_keys(key, section, SECTION_KEYS)
             values = {k: self.number(f"{key}.{k}", v, minimum=0.0) for k, v in section.items()}
             dims = {"E", "width", "height"}
@@ -172,14 +192,26 @@ class _SceneBuilder:
             result[name] = values
         return result
 
+    def spatial_section(self, key, section):
+        self.check_keys(key, section, SECTION_KEYS_3D)
+        values = {k: self.number(f"{key}.{k}", v, minimum=0.0) for k, v in section.items()}
+        try:
+            return beam_properties(values)
+        except ValueError as error:
+            self.fail(key, str(error))
+
     def build_nodes(self, nodes):
         if not nodes:
             self.fail("nodes", "a scene needs at least one node")
         self.node_kind, self.node_coordinates = {}, {}
         self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
+        self.node_inertias = []
         for name, node in nodes.items():
             key = f"nodes.{name}"
             node = self.table(key, node)
+            if self.dimension == 3 and "position" not in node:
+                self.spatial_rotational_node(key, name, node)
+                continue
             if ("position" in node) == ("angle" in node):
                 self.fail(key, "expected exactly one of 'position' (a translational node) or "
                                "'angle' (a rotational node)")
@@ -213,6 +245,63 @@ class _SceneBuilder:
                 self.mass.append(mass_value)
                 self.loads.append(load)
 
+    def spatial_rotational_node(self, key, name, node):
+        """A 3-D rotational node: four Euler parameters, fixed as a whole or free."""
+        if "rotation" not in node:
+            self.fail(key, "expected exactly one of 'position' (a translational node) or "
+                           "'rotation' (a rotational node: a rotation vector, rad)")
+        self.check_keys(key, node, {"rotation", "fixed", "inertia"})
+        lam = from_rotation_vector(np.array(self.vector(f"{key}.rotation", node["rotation"], 3)))
+        fixed = node.get("fixed", False)
+        if fixed in (["rotation"], "rotation"):
+            fixed = True
+        if not isinstance(fixed, bool):
+            self.fail(f"{key}.fixed", "a 3-D rotational node is fixed as a whole: expected true "
+                                      f"or false, got {fixed!r}")
+        inertia = node.get("inertia")
+        index = []
+        self.node_kind[name] = "rotational"
+        self.node_coordinates[name] = {}
+        for axis, value in zip(ROTATION_AXES[3], lam, strict=True):
+            index.append(len(self.coordinate_names))
+            self.node_coordinates[name][axis] = index[-1]
+            self.coordinate_names.append(f"{name}.{axis}")
+            self.initial.append(float(value))
+            self.status.append(FIXED if fixed else DEPENDENT)
+            self.mass.append(0.0)
+            self.loads.append(0.0)
+        if inertia is not None:
+            if isinstance(inertia, list) and len(inertia) == 3 and all(
+                    isinstance(row, list) for row in inertia):
+                J = np.array([self.vector(f"{key}.inertia[{i}]", row, 3)
+                              for i, row in enumerate(inertia)])
+                if not np.allclose(J, J.T):
+                    self.fail(f"{key}.inertia", "the inertia tensor must be symmetric")
+            else:
+                J = np.diag(self.vector(f"{key}.inertia", inertia, 3))
+            if not fixed:
+                self.node_inertias.append((np.array(index), J))
+
+    def add_normalisation(self, groups, deformation_names, deformation_status):
+        """One EULER pseudo-element (lambda . lambda = 1) per free 3-D rotational node."""
+        names, coords = [], []
+        for name, kind in self.node_kind.items():
+            index = list(self.node_coordinates[name].values())
+            if kind == "rotational" and self.status[index[0]] != FIXED:
+                names.append(name)
+                coords.append(index)
+        if not names:
+            return
+        start = len(deformation_names)
+        for name in names:
+            deformation_names.append(f"{name}.norm")
+            deformation_status.append(ZERO)
+        coords = np.array(coords, dtype=int)
+        groups.append(ElementGroup(
+            kind=euler, names=tuple(names), coordinate_index=coords,
+            deformation_index=np.arange(start, start + len(names))[:, None],
+            reference=euler.reference(np.array(self.initial)[coords]), properties={}))
+
     def node(self, key, name, kind=None):
         name = str(name)
         if name not in self.node_kind:
@@ -227,7 +316,8 @@ class _SceneBuilder:
         for name, element in elements.items():
             key = f"elements.{name}"
             element = self.table(key, element)
-            self.check_keys(key, element, {"type", "nodes", "section", "released", "dof"})
+            allowed = {"type", "nodes", "section", "released", "dof"}
+            self.check_keys(key, element, allowed | ({"y_axis"} if self.dimension == 3 else set()))
             type_name = element.get("type")
             if not isinstance(type_name, str) or type_name.upper() not in ELEMENT_TYPES:
                 self.fail(f"{key}.type", f"unknown element type {type_name!r}; expected one of "
@@ -261,7 +351,14 @@ class _SceneBuilder:
                               f"released deformation {deformation!r} needs a stiffness: "
                               f"section {section_name!r} has no {needed} > 0")
             entry = by_type.setdefault(kind.type_name, {"kind": kind, "names": [], "coords": [],
-                                                        "defs": [], "props": []})
+                                                        "defs": [], "props": [], "axes": []})
+            if getattr(kind, "needs_orientation", False):
+                if "y_axis" not in element:
+                    self.fail(key, f"a {kind.type_name} needs its principal axis: add "
+                                   "y_axis = [x, y, z]")
+                entry["axes"].append(self.vector(f"{key}.y_axis", element["y_axis"], 3))
+            elif "y_axis" in element:
+                self.fail(f"{key}.y_axis", f"a {kind.type_name} has no principal axis")
             entry["names"].append(name)
             entry["coords"].append(index)
             entry["defs"].append(list(range(len(deformation_names),
@@ -275,7 +372,15 @@ class _SceneBuilder:
         for entry in by_type.values():
             kind = entry["kind"]
             coords = np.array(entry["coords"], dtype=int)
-            reference = kind.reference(np.array(self.initial)[coords])
+            x0 = np.array(self.initial)[coords]
+            if entry["axes"]:
+                try:
+                    reference = kind.reference(x0, y_axis=np.array(entry["axes"]))
+                except ValueError:
+                    reference = kind.reference(x0, y_axis=None)
+                    self._parallel_axis(entry, reference)
+            else:
+                reference = kind.reference(x0)
             for element_name, length in zip(entry["names"], reference["l0"], strict=True):
                 if length <= 1e-12:
                     self.fail(f"elements.{element_name}.nodes", "zero-length element: its end "
@@ -286,6 +391,21 @@ class _SceneBuilder:
                                        deformation_index=np.array(entry["defs"], dtype=int),
                                        reference=reference, properties=props))
         return groups, deformation_names, deformation_status
+
+    def _parallel_axis(self, entry, reference):
+        """Name the first beam whose y' axis lies along it (reference raised ValueError)."""
+        for name, axis, length in zip(entry["names"], entry["axes"], reference["l0"],
+                                      strict=True):
+            index = entry["names"].index(name)
+            coords = np.array(entry["coords"][index])
+            r = np.array(self.initial)[coords]
+            l_vec = r[7:10] - r[0:3]
+            axis = np.array(axis)
+            if length <= 1e-12 or np.linalg.norm(np.cross(axis, l_vec)) <= 1e-9 * np.linalg.norm(
+                    axis) * length:
+                self.fail(f"elements.{name}.y_axis", f"the principal axis {axis.tolist()} lies "
+                                                     "along the beam (or is zero)")
+        self.fail("elements", "a principal axis lies along its beam")
 
     def coordinate(self, key, table):
         node = self.node(f"{key}.node", table.get("node"))
@@ -303,6 +423,11 @@ class _SceneBuilder:
             port = self.table(key, port)
             if not name.isidentifier():
                 self.fail(key, "a port name must be an identifier (letters, digits, _)")
+            if self.dimension == 3 and not self._is_translation(port) and isinstance(
+                    port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
+                self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
+                                               "3-D rotational node are not supported; use a "
+                                               "translational coordinate")
             if is_input:
                 self.check_keys(key, port, {"node", "coordinate"})
                 ports.append(Port(name, self.coordinate(key, port), "force",
