@@ -5,6 +5,7 @@
     natural_frequencies(model).frequencies_hz        # Hz, at the static equilibrium
 """
 
+from .blas import limit_blas_threads
 from .constraints import check_exact_constraint
 from .errors import ConstraintError, ConvergenceError, FlexureError, SceneError, SimulationError
 from .kinematics import Kinematics
@@ -15,6 +16,8 @@ from .model import Model
 from .scene import build_model, builtin_scenes, load_scene, scene_path
 from .statespace import state_space
 from .statics import StaticSolution, static_equilibrium
+
+limit_blas_threads()  # small matrices: one BLAS thread is fastest (see core/blas.py)
 
 __version__ = "0.1.0"
 
