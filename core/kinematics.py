@@ -48,8 +48,12 @@ class Kinematics:
         self.dof_positions = np.searchsorted(self.free, model.dof_coordinates)
         self.length_scale = _length_scale(model)
         n_free, ndof = self.free.size, model.declared_dof_count
-        self.selector = np.zeros((n_free, ndof))  # right-hand side [0; I] of J DF = [0; I]
-        self.selector[n_free - ndof + np.arange(ndof), np.arange(ndof)] = 1.0
+        # Right-hand side [0; I] of J DF = [0; I]: the rows of J are (rigid deformations, DOF
+        # deformations, DOF coordinates) while q lists the DOF coordinates first.
+        n_xdof, n_edof = model.dof_coordinates.size, model.dof_deformations.size
+        self.selector = np.zeros((n_free, ndof))
+        self.selector[self.n_rigid + np.arange(n_edof), n_xdof + np.arange(n_edof)] = 1.0
+        self.selector[self.n_rigid + n_edof + np.arange(n_xdof), np.arange(n_xdof)] = 1.0
 
     def dofs_of(self, x):
         """The DOF values q (NDOF,) of coordinates x."""
