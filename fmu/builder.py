@@ -1,0 +1,270 @@
+"""Build FMI 2.0 co-simulation FMUs with pythonfmu: any slave script, or a scene.
+
+How an FMU carries "the code it needs"
+-------------------------------------
+A pythonfmu FMU runs in the host's Python (or, in a non-Python host, in the libpython that is
+preloaded), so numpy, scipy, scikit-sundae and python-control must be installed there anyway
+(`flexure fmu env` prints what a host needs). flexure itself is *bundled*: the FMU's
+resources hold a copy of the flexure packages it uses (`core`, the runtime part of `fmu`, and
+on request `controllers`) under the package name `_flexure_<hash>`, where the hash is taken
+over the bundled sources. The slave script's `flexure` imports are rewritten to that name.
+So:
+
+- an FMU does not depend on the flexure version installed in the host, and keeps giving the
+  results it was built (and regression-tested) with;
+- FMUs built from the same flexure sources share one bundled package in a process (same name,
+  same code: harmless), FMUs built from different sources get different names and do not mix;
+- every slave script is a module of its own name (a scene FMU's is `<scene>_<hash>`), because
+  pythonfmu imports the script by name and Python caches modules per process: two FMUs with
+  the same script name would silently share the first one's class.
+
+The model identifier is the slave class name (pythonfmu's rule); for a scene it is the scene
+name, so FMUs of different scenes coexist in one process.
+"""
+
+import hashlib
+import importlib.util
+import re
+import shutil
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+from flexure.core import FlexureError
+
+from .model_description import fix_model_description
+
+# The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
+FMU_RUNTIME_MODULES = ("slave.py", "scene_slave.py")
+FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
+
+from .slave import SafeSlave, UnitReal, escape_log
+
+__all__ = ["SafeSlave", "UnitReal", "escape_log"]
+'''
+
+
+def _package_dir(name):
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        raise ImportError(f"cannot find the package {name!r} to bundle")
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def _bundle_sources(parts):
+    """{relative path: source text} of the flexure packages in `parts` (before renaming)."""
+    sources = {"__init__.py": '"""A copy of flexure bundled in an FMU."""\n'}
+    for part in parts:
+        if part == "fmu":
+            folder = Path(__file__).parent
+            sources["fmu/__init__.py"] = FMU_RUNTIME_INIT
+            for name in FMU_RUNTIME_MODULES:
+                sources[f"fmu/{name}"] = (folder / name).read_text()
+            continue
+        folder = _package_dir(f"flexure.{part}")
+        for path in sorted(folder.rglob("*.py")):
+            if "__pycache__" not in path.parts:
+                sources[f"{part}/{path.relative_to(folder).as_posix()}"] = path.read_text()
+    return sources
+
+
+def _rewrite_imports(text, package):
+    """Point `import flexure...` / `from flexure... import` at the bundled package."""
+    return re.sub(r"^(\s*)(from|import)(\s+)flexure\b", rf"\1\2\3{package}", text,
+                  flags=re.MULTILINE)
+
+
+def bundle_name(parts=("core", "fmu")):
+    """The package name `_flexure_<hash>` a bundle of `parts` gets (hash of its sources)."""
+    digest = hashlib.sha256()
+    for path, text in sorted(_bundle_sources(parts).items()):
+        digest.update(path.encode() + b"\0" + text.encode() + b"\0")
+    return f"_flexure_{digest.hexdigest()[:12]}"
+
+
+def write_bundle(folder, parts=("core", "fmu")):
+    """Write the bundled flexure package into `folder`; returns its directory."""
+    package = bundle_name(parts)
+    root = Path(folder) / package
+    for path, text in _bundle_sources(parts).items():
+        target = root / path
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(_rewrite_imports(text, package))
+    return root
+
+
+def build_slave_fmu(script_path, dest, *, project_files=(), bundle=("core", "fmu"),
+                    validate=True, **options):
+    """Build an FMI 2.0 co-simulation FMU from a pythonfmu slave script.
+
+    Parameters
+    ----------
+    script_path : str or Path
+        A Python file with one `Fmi2Slave` subclass (usually a `flexure.fmu.slave.SafeSlave`
+        subclass). Its class name is the model identifier; give the file a name no other
+        FMU in the same process uses. Its `flexure` imports are rewritten to the bundle.
+    dest : str or Path
+        The .fmu file to write, or a directory (the file is then `<class name>.fmu`).
+    project_files : iterable of path, optional
+        More files or folders to ship in resources/ (pythonfmu's project_files).
+    bundle : tuple of str, optional
+        Which flexure packages to bundle: any of "core", "fmu", "controllers"; () for none
+        (then the host's Python must have flexure installed).
+    validate : bool, optional
+        Run fmpy's validation and raise `FMUBuildError` listing the problems.
+    **options
+        pythonfmu's CoSimulation flags; state get/set and serialisation default to True.
+
+    Returns
+    -------
+    Path
+        The FMU written.
+    """
+    from pythonfmu import FmuBuilder
+
+    script_path = Path(script_path)
+    options.setdefault("canGetAndSetFMUstate", True)
+    options.setdefault("canSerializeFMUstate", True)
+    modules_before = set(sys.modules)
+    path_before = list(sys.path)
+    with tempfile.TemporaryDirectory(prefix="flexure_fmu_") as temp:
+        source = Path(temp) / "src"
+        source.mkdir()
+        files = [Path(p) for p in project_files]
+        package = None
+        if bundle:
+            package_dir = write_bundle(source, tuple(bundle))
+            package = package_dir.name
+            files.append(package_dir)
+        text = script_path.read_text()
+        script = source / script_path.name
+        script.write_text(_rewrite_imports(text, package) if package else text)
+        try:
+            built = Path(FmuBuilder.build_FMU(script, dest=dest, project_files=files,
+                                              **options))
+        finally:
+            # pythonfmu imported the script and the bundle from the temporary folder and
+            # left that folder on sys.path: forget both, so a later import finds the FMU's
+            # own resources instead.
+            for name in set(sys.modules) - modules_before:
+                module = sys.modules[name]
+                if str(getattr(module, "__file__", "") or "").startswith(temp) or (
+                        package and name.startswith(package)):
+                    del sys.modules[name]
+            sys.path[:] = path_before
+    _patch_model_description(built)
+    if validate:
+        problems = validate_fmu_file(built)
+        if problems:
+            raise FMUBuildError(f"{built}: fmpy validate reports: " + "; ".join(problems))
+    return built
+
+
+def validate_fmu_file(path):
+    """fmpy's validation problems of an FMU (an empty list when it is valid)."""
+    from fmpy.validation import validate_fmu
+
+    return [str(p) for p in validate_fmu(str(path))]
+
+
+def _patch_model_description(path):
+    """Rewrite the FMU zip with a completed modelDescription.xml."""
+    path = Path(path)
+    temporary = path.with_suffix(".fmu.tmp")
+    with zipfile.ZipFile(path) as source, zipfile.ZipFile(
+            temporary, "w", compression=zipfile.ZIP_DEFLATED) as target:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = fix_model_description(data)
+            target.writestr(item, data)
+    shutil.move(temporary, path)
+
+
+class FMUBuildError(FlexureError):
+    """An FMU could not be built or does not validate."""
+
+
+def default_tunable(scene):
+    """The scene keys a scene FMU exposes as parameters by default.
+
+    Damping (EdA, EdI of every section that declares it) and the lumped masses and inertias
+    the scene declares on nodes: the values a user tunes against measurements.
+    """
+    keys = []
+    for name, section in scene.get("sections", {}).items():
+        keys += [f"sections.{name}.{k}" for k in ("EdA", "EdI") if k in section]
+    for name, node in scene.get("nodes", {}).items():
+        keys += [f"nodes.{name}.{k}" for k in ("mass", "inertia") if k in node]
+    return keys
+
+
+def build_scene_fmu(scene, dest=None, *, tunable=None, validate=True):
+    """Build the co-simulation FMU of a scene.
+
+    Parameters
+    ----------
+    scene : str or Path
+        A scene file or the name of a built-in scene.
+    dest : str or Path, optional
+        The .fmu file to write, or a directory; default `<scene name>.fmu` here.
+    tunable : iterable of str, optional
+        Dotted scene keys to expose as parameters (each must be a number the scene file
+        declares, e.g. "sections.leaf.EdA", "nodes.3.mass"); default `default_tunable`.
+    validate : bool, optional
+        Run fmpy's validation on the result.
+
+    Returns
+    -------
+    Path
+        The FMU written; its model identifier is the scene name.
+    """
+    import keyword
+    import tomllib
+
+    from flexure.core import build_model, scene_path
+
+    from .scene_slave import scene_value
+
+    path = scene_path(scene)
+    text = path.read_text()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise FMUBuildError(f"{path}: not valid TOML: {error}") from None
+    model = build_model(data, source=str(path), default_name=path.stem)
+    name = model.name
+    if keyword.iskeyword(name) or name.startswith("_"):
+        raise FMUBuildError(f"{path}: scene.name: {name!r} cannot be an FMU model identifier "
+                            "(a Python keyword or a leading underscore); rename the scene")
+    tunable = default_tunable(data) if tunable is None else list(tunable)
+    for key in tunable:
+        try:
+            value = scene_value(data, key)
+        except KeyError:
+            raise FMUBuildError(f"{path}: tunable key {key!r}: the scene does not declare it "
+                                f"(expected e.g. {', '.join(default_tunable(data)) or 'none'})"
+                                ) from None
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise FMUBuildError(f"{path}: tunable key {key!r}: expected a number, got "
+                                f"{value!r}")
+    package = bundle_name(("core", "fmu"))
+    digest = hashlib.sha256(
+        f"{package}\0{text}\0{tunable}\0{name}".encode()).hexdigest()[:10]
+    dest = Path(f"{name}.fmu") if dest is None else Path(dest)
+    with tempfile.TemporaryDirectory(prefix="flexure_scene_") as temp:
+        script = Path(temp) / f"{name}_{digest}.py"
+        script.write_text(_scene_script(name, text, tunable))
+        return build_slave_fmu(script, dest, validate=validate)
+
+
+def _scene_script(name, text, tunable):
+    # A scene without [scene] name takes the class name (the file's stem) as its name.
+    return (
+        f'"""FMU slave of the flexure scene {name} (generated by flexure fmu build)."""\n\n'
+        "from flexure.fmu.scene_slave import SceneSlave\n\n\n"
+        f"class {name}(SceneSlave):\n"
+        f"    scene_toml = {text!r}\n"
+        f"    tunable = {tuple(tunable)!r}\n"
+    )

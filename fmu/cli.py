@@ -1,0 +1,55 @@
+"""`flexure fmu build SCENE -o NAME.fmu` and `flexure fmu env`.
+
+    flexure fmu build stage_planar_3dof -o stage.fmu [--tunable sections.leaf.EdA ...]
+    flexure fmu env [--json | --env]      # what a JVM / Rust / C host needs
+"""
+
+from .builder import build_scene_fmu, default_tunable
+from .env import fmu_environment, format_environment
+
+
+def register(subparsers):
+    """Add the `fmu` command (entry point of the group "flexure.commands")."""
+    parser = subparsers.add_parser(
+        "fmu", help="build a scene's FMI 2.0 co-simulation FMU; print a host's environment",
+        description="Build FMI 2.0 co-simulation FMUs of scenes (pythonfmu).")
+    commands = parser.add_subparsers(dest="fmu_command", metavar="ACTION", required=True)
+
+    build = commands.add_parser("build", help="build the FMU of a scene",
+                                description="Build the co-simulation FMU of a scene; its model "
+                                            "identifier is the scene name.")
+    build.add_argument("scene", help="scene file or built-in scene name")
+    build.add_argument("-o", "--output", help="the .fmu to write (default: SCENE_NAME.fmu)")
+    build.add_argument("--tunable", action="append", metavar="KEY",
+                       help="a dotted scene key to expose as a parameter (repeatable; default: "
+                            "the damping EdA/EdI of the sections and the node masses)")
+    build.add_argument("--no-tunable", action="store_true",
+                       help="expose no scene keys (only the integrator parameters)")
+    build.add_argument("--no-validate", action="store_true",
+                       help="skip fmpy's validation of the result")
+    build.set_defaults(run=run_build)
+
+    env = commands.add_parser("env", help="print the environment a non-Python host needs",
+                              description="Print LD_PRELOAD, PYTHONHOME and PYTHONPATH for a "
+                                          "JVM, Rust or C host of flexure's FMUs.")
+    style = env.add_mutually_exclusive_group()
+    style.add_argument("--json", action="store_const", const="json", dest="style")
+    style.add_argument("--env", action="store_const", const="env", dest="style",
+                       help="one line of NAME=VALUE for `env ... host`")
+    env.set_defaults(run=run_env, style="sh")
+
+
+def run_build(args):
+    tunable = [] if args.no_tunable else args.tunable
+    path = build_scene_fmu(args.scene, args.output, tunable=tunable,
+                           validate=not args.no_validate)
+    print(path)
+    return 0
+
+
+def run_env(args):
+    print(format_environment(fmu_environment(), style=args.style))
+    return 0
+
+
+__all__ = ["register", "default_tunable"]

@@ -1,0 +1,52 @@
+"""The environment a host outside Python needs to run a pythonfmu FMU.
+
+A pythonfmu FMU's binary calls into libpython but does not link it, and it runs the Python
+code in whatever interpreter it finds. So a JVM, Rust or C host must:
+
+- preload libpython, so its symbols are in the global scope (`LD_PRELOAD`);
+- point the embedded interpreter at its standard library (`PYTHONHOME`, the base prefix)
+  and at the packages the FMU imports: numpy, scipy, scikit-sundae, python-control
+  (`PYTHONPATH`, the site-packages of the Python that built the FMU).
+
+flexure itself travels inside the FMU (see `flexure.fmu.builder`). A Python host (fmpy,
+libcosimpy) needs none of this: the FMU then uses the host's own interpreter.
+"""
+
+import json
+import site
+import sys
+import sysconfig
+from pathlib import Path
+
+from flexure.core import FlexureError
+
+
+def libpython_path():
+    """The shared libpython of this interpreter (FlexureError if it was built static)."""
+    libdir = Path(sysconfig.get_config_var("LIBDIR") or "")
+    for name in (sysconfig.get_config_var("INSTSONAME"), sysconfig.get_config_var("LDLIBRARY")):
+        if name and (libdir / name).is_file() and ".so" in name:
+            return libdir / name
+    raise FlexureError(
+        f"{sys.executable}: this Python has no shared libpython in {libdir}; a host outside "
+        "Python needs one (build Python with --enable-shared, e.g. PYTHON_CONFIGURE_OPTS="
+        "--enable-shared pyenv install 3.11)")
+
+
+def fmu_environment():
+    """{variable: value} a non-Python host needs to run flexure's FMUs on this machine."""
+    paths = [p for p in site.getsitepackages() if Path(p).is_dir()]
+    return {
+        "LD_PRELOAD": str(libpython_path()),
+        "PYTHONHOME": sys.base_prefix,
+        "PYTHONPATH": ":".join(paths),
+    }
+
+
+def format_environment(environment, *, style="sh"):
+    """The environment as `export` lines ("sh"), JSON ("json") or `env` arguments ("env")."""
+    if style == "json":
+        return json.dumps(environment, indent=2)
+    if style == "env":
+        return " ".join(f"{k}={v}" for k, v in environment.items())
+    return "\n".join(f"export {k}='{v}'" for k, v in environment.items())

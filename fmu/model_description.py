@@ -1,0 +1,119 @@
+"""Complete the modelDescription.xml that pythonfmu 0.7.0 writes, so `fmpy validate` is clean.
+
+pythonfmu leaves out what FMI 2.0 asks for beyond the variable list: units (it has no unit
+attribute; `UnitReal` adds one), <UnitDefinitions>, <ModelStructure><InitialUnknowns>, and
+default variabilities and initials. `fix_model_description` adds them:
+
+- <UnitDefinitions> with one <Unit> (and its SI <BaseUnit> exponents where known) for every
+  unit a <Real> uses, placed right after <CoSimulation> as the schema orders it;
+- variability: parameters "fixed", Real inputs/outputs/locals "continuous", others "discrete";
+- initial: "exact" on parameters;
+- <InitialUnknowns>: every output whose initial is approx or calculated (or absent), and every
+  calculatedParameter, in value-reference order (FMI 2.0 section 2.2.8);
+- variableNamingConvention "flat": flexure's variable names follow the scene's keys
+  ("sections.leaf.EdA", "nodes.3.mass"), which the structured grammar rejects.
+"""
+
+import xml.etree.ElementTree as ET
+
+# SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the units flexure declares.
+BASE_UNITS = {
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "s": {"s": 1},
+    "1/s": {"s": -1},
+    "kg": {"kg": 1},
+    "kg.m2": {"kg": 1, "m": 2},
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "N.s": {"kg": 1, "m": 1, "s": -1},
+    "N.m2.s": {"kg": 1, "m": 3, "s": -1},
+    "N/m": {"kg": 1, "s": -2},
+    "N.s/m": {"kg": 1, "s": -1},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+    "kg/m": {"kg": 1, "m": -1},
+    "1": {},
+}
+
+# The element order of fmiModelDescription (FMI 2.0, fmi2ModelDescription.xsd).
+_ORDER = ["ModelExchange", "CoSimulation", "UnitDefinitions", "TypeDefinitions",
+          "LogCategories", "DefaultExperiment", "VendorAnnotations", "ModelVariables",
+          "ModelStructure"]
+
+
+def fix_model_description(xml_text):
+    """Return the completed modelDescription.xml text (see the module docstring).
+
+    Parameters
+    ----------
+    xml_text : str or bytes
+        The modelDescription.xml pythonfmu wrote.
+
+    Returns
+    -------
+    bytes
+        UTF-8 XML with declaration.
+    """
+    root = ET.fromstring(xml_text)
+    root.set("variableNamingConvention", "flat")
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    units = []
+    for variable in variables:
+        causality = variable.get("causality", "local")
+        kind = next(iter(variable))
+        if variable.get("variability") is None:
+            if causality in ("parameter", "calculatedParameter"):
+                variability = "fixed"
+            elif kind.tag == "Real":
+                variability = "continuous"
+            else:
+                variability = "discrete"
+            variable.set("variability", variability)
+        if causality == "parameter" and variable.get("initial") is None:
+            variable.set("initial", "exact")
+        unit = kind.get("unit")
+        if unit and unit not in units:
+            units.append(unit)
+
+    for old in root.findall("UnitDefinitions"):
+        root.remove(old)
+    if units:
+        definitions = ET.Element("UnitDefinitions")
+        for unit in units:
+            element = ET.SubElement(definitions, "Unit", name=unit)
+            if unit in BASE_UNITS:
+                ET.SubElement(element, "BaseUnit",
+                              {k: str(v) for k, v in BASE_UNITS[unit].items()})
+        _insert_in_order(root, definitions)
+
+    structure = root.find("ModelStructure")
+    if structure is None:
+        structure = ET.SubElement(root, "ModelStructure")
+    for old in structure.findall("InitialUnknowns"):
+        structure.remove(old)
+    initial_unknowns = [
+        index for index, variable in enumerate(variables, start=1)
+        if (variable.get("causality") == "output"
+            and variable.get("initial") in (None, "approx", "calculated"))
+        or variable.get("causality") == "calculatedParameter"
+    ]
+    if initial_unknowns:
+        element = ET.Element("InitialUnknowns")
+        for index in initial_unknowns:
+            ET.SubElement(element, "Unknown", index=str(index))
+        # Schema order inside ModelStructure: Outputs, Derivatives, InitialUnknowns.
+        structure.append(element)
+    ET.indent(root, space="  ")
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True)
+
+
+def _insert_in_order(root, element):
+    rank = _ORDER.index(element.tag)
+    for position, child in enumerate(root):
+        if child.tag in _ORDER and _ORDER.index(child.tag) > rank:
+            root.insert(position, element)
+            return
+    root.append(element)

@@ -1,0 +1,164 @@
+"""The co-simulation slave of a scene: its variables, and a do_step that is one core call.
+
+A generated script (see `flexure.fmu.builder.build_scene_fmu`) subclasses `SceneSlave` with
+the scene's TOML text and the scene keys a user may tune:
+
+    class stage_planar_3dof(SceneSlave):
+        scene_toml = '''...'''
+        tunable = ("sections.leaf.EdA", "sections.leaf.EdI")
+
+Variables (only what the scene has):
+
+- one input per scene input (force N or moment N.m, start 0), held over each step;
+- one output per scene output (position m / rad, velocity m/s / rad/s);
+- parameters "integrator.method" (String: cvode-bdf, cvode-adams, ida),
+  "integrator.rtol" (1) and "integrator.atol" (0 means the simulator's default);
+- one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
+  by rebuilding the model from the scene with the new value when initialization ends.
+
+`advance(t, h)` is `simulator.set_inputs(u); simulator.advance(t + h)`: the simulator picks its
+own internal steps; any h works. A `SimulationError` (non-finite input, integrator or Newton
+failure) leaves the simulator at its last good state and the step is answered with
+fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs,
+parameters and outputs.
+"""
+
+import copy
+import tomllib
+
+import numpy as np
+from flexure.core import Simulator, build_model
+from pythonfmu import DefaultExperiment
+
+from .slave import SafeSlave
+
+METHODS = ("cvode-bdf", "cvode-adams", "ida")
+
+# The unit of a tunable scene key, by its last part.
+TUNABLE_UNITS = {
+    "EA": "N", "EI": "N.m2", "EdA": "N.s", "EdI": "N.m2.s", "rho_A": "kg/m", "rho": "kg/m3",
+    "E": "Pa", "mass": "kg", "inertia": "kg.m2",
+}
+
+
+def scene_value(scene, key):
+    """The value at a dotted scene key ("sections.leaf.EdA"); KeyError if absent."""
+    node = scene
+    for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            raise KeyError(key)
+        node = node[part]
+    return node
+
+
+def set_scene_value(scene, key, value):
+    """Set the value at a dotted scene key in place."""
+    *path, last = key.split(".")
+    node = scene
+    for part in path:
+        node = node[part]
+    node[last] = value
+
+
+class SceneSlave(SafeSlave):
+    """Base class of a scene's slave; subclasses set `scene_toml` and `tunable`."""
+
+    scene_toml = ""
+    tunable = ()
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-3)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.scene = tomllib.loads(self.scene_toml)
+        header = self.scene.get("scene", {})
+        self.scene_name = header.get("name", type(self).__name__)
+        self.description = header.get("description", f"flexure scene {self.scene_name}")
+        self.author = "flexure"
+        self.method = METHODS[0]
+        self.rtol = 1e-8
+        self.atol = 0.0
+        self.parameters = {key: float(scene_value(self.scene, key)) for key in self.tunable}
+        self.simulator = None
+        self._build()
+        model = self._model
+        self.inputs = np.zeros(len(model.inputs))
+        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+
+        for i, port in enumerate(model.inputs):
+            self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
+                          description=f"{port.quantity} on coordinate "
+                                      f"{model.coordinate_names[port.coordinate]}",
+                          getter=lambda i=i: float(self.inputs[i]),
+                          setter=lambda value, i=i: self.inputs.__setitem__(i, value))
+        for j, port in enumerate(model.outputs):
+            self.add_real(port.name, causality="output", unit=port.unit,
+                          description=f"{port.quantity} of coordinate "
+                                      f"{model.coordinate_names[port.coordinate]}",
+                          getter=lambda j=j: float(self.outputs[j]))
+        self.add_string("integrator.method", start=self.method,
+                        description="integration method: " + ", ".join(METHODS),
+                        getter=lambda: self.method,
+                        setter=lambda value: setattr(self, "method", str(value)))
+        self.add_real("integrator.rtol", causality="parameter", unit="1", start=self.rtol,
+                      description="relative tolerance of the integrator",
+                      getter=lambda: self.rtol,
+                      setter=lambda value: setattr(self, "rtol", value))
+        self.add_real("integrator.atol", causality="parameter", unit="1", start=self.atol,
+                      description="absolute tolerance on q and qdot (0: the simulator's "
+                                  "default, scaled from rtol)",
+                      getter=lambda: self.atol,
+                      setter=lambda value: setattr(self, "atol", value))
+        for key in self.tunable:
+            self.add_real(key, causality="parameter",
+                          unit=TUNABLE_UNITS.get(key.rsplit(".", 1)[-1]),
+                          start=self.parameters[key], description=f"scene key {key}",
+                          getter=lambda key=key: self.parameters[key],
+                          setter=lambda value, key=key: self.parameters.__setitem__(key, value))
+
+    # -- the model -----------------------------------------------------------------------------
+
+    def _settings(self):
+        return (self.method, float(self.rtol), float(self.atol),
+                tuple(sorted(self.parameters.items())))
+
+    def _build(self):
+        """(Re)build the model and the simulator from the scene and the parameters."""
+        scene = copy.deepcopy(self.scene)
+        for key, value in self.parameters.items():
+            set_scene_value(scene, key, float(value))
+        self._model = build_model(scene, source=f"{self.scene_name}.fmu (embedded scene)",
+                                  default_name=self.scene_name)
+        self.simulator = Simulator(self._model, method=self.method, rtol=float(self.rtol),
+                                   atol=float(self.atol) if self.atol > 0 else None)
+        self.simulator.reset(t0=self.start_time)
+        self._built_with = self._settings()
+
+    def initialize(self, start_time):
+        if self._settings() != self._built_with:
+            self._build()
+        self.simulator.reset(t0=start_time)
+        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+
+    def advance(self, t, h):
+        self.simulator.set_inputs(self.inputs)
+        self.simulator.advance(t + h)
+        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+
+    def last_good_time(self):
+        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        return self.simulator.time
+
+    # -- state ---------------------------------------------------------------------------------
+
+    def save_state(self):
+        return {"settings": self._built_with, "simulator": self.simulator.get_state(),
+                "outputs": self.outputs.copy()}
+
+    def load_state(self, state):
+        method, rtol, atol, parameters = state["settings"]
+        self.method, self.rtol, self.atol = method, rtol, atol
+        self.parameters = dict(parameters)
+        if self._built_with != state["settings"]:
+            self._build()
+        self.simulator.set_state(state["simulator"])
+        self.outputs = np.asarray(state["outputs"], dtype=float).copy()
