@@ -51,9 +51,10 @@ class Kinematics:
         # Right-hand side [0; I] of J DF = [0; I]: the rows of J are (rigid deformations, DOF
         # deformations, DOF coordinates) while q lists the DOF coordinates first.
         n_xdof, n_edof = model.dof_coordinates.size, model.dof_deformations.size
-        self.selector = np.zeros((n_free, ndof))
+        self.selector = np.zeros((max(n_free, self.n_rigid + ndof), ndof))
         self.selector[self.n_rigid + np.arange(n_edof), n_xdof + np.arange(n_edof)] = 1.0
         self.selector[self.n_rigid + n_edof + np.arange(n_xdof), np.arange(n_xdof)] = 1.0
+        self.selector = self.selector[:n_free]  # J is square only in an exactly counted model
 
     def dofs_of(self, x):
         """The DOF values q (NDOF,) of coordinates x."""

@@ -1,0 +1,88 @@
+"""Kinematics: Newton on the constraints, and DF, D2F against finite differences."""
+
+import numpy as np
+import pytest
+
+from flexure.core import Kinematics, Mechanics, load_scene, static_equilibrium
+from flexure.core.assembly import deformations
+
+
+@pytest.fixture(params=["stage_planar_1dof", "stage_planar_3dof", "truss_1dof_e"])
+def model(request):
+    return load_scene(request.param)
+
+
+def deformed_configuration(model, kin):
+    rng = np.random.default_rng(7)
+    q0 = kin.dofs_of(model.initial_coordinates)
+    q = q0 + rng.normal(scale=2e-3, size=q0.size)
+    return kin.solve(q, model.initial_coordinates)
+
+
+def test_solve_satisfies_constraints_and_dofs(model):
+    kin = Kinematics(model)
+    config = deformed_configuration(model, kin)
+    e = deformations(model, config.x)
+    assert np.max(np.abs(e[model.rigid_deformations]), initial=0.0) < 1e-14
+    np.testing.assert_allclose(kin.dofs_of(config.x), config.q, atol=1e-14)
+    fixed = model.fixed_coordinates
+    np.testing.assert_array_equal(config.x[fixed], model.initial_coordinates[fixed])
+
+
+def test_first_order_transfer_function(model):
+    kin = Kinematics(model)
+    config = deformed_configuration(model, kin)
+    h = 1e-6
+    for j in range(config.q.size):
+        step = np.zeros_like(config.q)
+        step[j] = h
+        plus = kin.solve(config.q + step, config.x).x
+        minus = kin.solve(config.q - step, config.x).x
+        np.testing.assert_allclose(config.DF[:, j], (plus - minus) / (2 * h), atol=1e-8)
+
+
+def test_second_order_transfer_function(model):
+    kin = Kinematics(model)
+    config = deformed_configuration(model, kin)
+    D2F = kin.second_order(config)
+    h = 1e-6
+    for j in range(config.q.size):
+        step = np.zeros_like(config.q)
+        step[j] = h
+        plus = kin.solve(config.q + step, config.x).DF
+        minus = kin.solve(config.q - step, config.x).DF
+        np.testing.assert_allclose(D2F[:, :, j], (plus - minus) / (2 * h), atol=1e-6)
+    qdot = np.linspace(0.3, -0.2, config.q.size)
+    np.testing.assert_allclose(kin.convective_acceleration(config, qdot),
+                               np.einsum("ajk,j,k->a", D2F, qdot, qdot), atol=1e-12)
+
+
+def test_tangent_stiffness_is_the_derivative_of_the_generalised_force(model):
+    """K0 + G0 = -dQ/dq, checked by finite differences in a loaded, deformed state."""
+    mech = Mechanics(model)
+    kin = mech.kinematics
+    loads = np.zeros(model.nx)
+    loads[model.coordinate_index(model.coordinate_names[model.free_coordinates[0]])] = 3.0
+    config = deformed_configuration(model, kin)
+    _, _, sigma = mech.static_balance(config, 1.0, loads)
+    K = mech.structural_stiffness(config) + mech.geometric_stiffness(config, sigma)
+    h = 1e-7
+    for j in range(config.q.size):
+        step = np.zeros_like(config.q)
+        step[j] = h
+        plus = mech.static_balance(kin.solve(config.q + step, config.x), 1.0, loads)[0]
+        minus = mech.static_balance(kin.solve(config.q - step, config.x), 1.0, loads)[0]
+        np.testing.assert_allclose(K[:, j], -(plus - minus) / (2 * h),
+                                   rtol=1e-5, atol=1e-5 * np.abs(K).max())
+
+
+def test_static_equilibrium_balances_forces():
+    model = load_scene("stage_planar_3dof")
+    loads = np.zeros(model.nx)
+    loads[model.coordinate_index("3.x")] = 20.0  # N sideways: about 2 cm, 20 % of the spring
+    solution = static_equilibrium(model, loads=loads)
+    mech = Mechanics(model)
+    Q, _, _ = mech.static_balance(solution.config, 1.0, loads)
+    assert np.max(np.abs(Q)) < 1e-8
+    x = solution.coordinates()["3.x"]
+    assert 0.015 < x < 0.0212  # stiffening makes it less than the linear 20/945 m

@@ -1,0 +1,177 @@
+"""Every malformed scene gives a clear error naming the file, the key and what is wrong."""
+
+import copy
+import tomllib
+
+import pytest
+
+from flexure.core import ConstraintError, SceneError, build_model, load_scene, scene_path
+from flexure.core.cli import main
+
+BASE = tomllib.loads(scene_path("stage_planar_1dof").read_text())
+
+
+def scene(edit):
+    data = copy.deepcopy(BASE)
+    edit(data)
+    return data
+
+
+def write(tmp_path, data_or_text):
+    path = tmp_path / "broken.toml"
+    if isinstance(data_or_text, str):
+        path.write_text(data_or_text)
+    else:
+        import io
+
+        path.write_text(_to_toml(data_or_text, io.StringIO()))
+    return path
+
+
+def _to_toml(data, out, prefix=""):
+    """A small TOML writer for the test scenes (tables, numbers, strings, lists)."""
+    def value(v):
+        if isinstance(v, str):
+            return f'"{v}"'
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f'{k} = {value(x)}' for k, x in v.items()) + "}"
+        return repr(v)
+
+    scalars = {k: v for k, v in data.items() if not isinstance(v, dict)}
+    if prefix:
+        out.write(f"[{prefix}]\n")
+    for k, v in scalars.items():
+        out.write(f"{k} = {value(v)}\n")
+    for k, v in data.items():
+        if isinstance(v, dict):
+            _to_toml(v, out, f"{prefix}.{k}" if prefix else f'"{k}"' if not k.isidentifier()
+                     else k)
+    return out.getvalue()
+
+
+CASES = {
+    "unknown node": (lambda d: d["elements"]["bar"].update(nodes=["3", "4", "99", "6"]),
+                     ["elements.bar.nodes[2]", "unknown node '99'"]),
+    "element without a section": (lambda d: d["elements"]["bar"].pop("section"),
+                                  ["elements.bar", "without a section"]),
+    "unknown section": (lambda d: d["elements"]["bar"].update(section="steel"),
+                        ["elements.bar.section", "unknown section 'steel'"]),
+    "zero-length element": (lambda d: d["nodes"]["5"].update(position=[0.0, 0.1]),
+                            ["elements.bar.nodes", "zero-length element"]),
+    "negative mass": (lambda d: d["nodes"]["3"].update(mass=-0.2),
+                      ["nodes.3.mass", "expected a value >= 0.0, got -0.2"]),
+    "released deformation without stiffness": (
+        lambda d: d["elements"]["bar"].update(released=["e2"]),
+        ["elements.bar.released", "released deformation 'e2' needs a stiffness",
+         "no EI > 0"]),
+    "unknown key": (lambda d: d["nodes"]["3"].update(mas=1.0),
+                    ["nodes.3.mas", "unknown key"]),
+    "unknown element type": (lambda d: d["elements"]["bar"].update(type="PLBEEM"),
+                             ["elements.bar.type", "unknown element type 'PLBEEM'"]),
+    "wrong node kind": (lambda d: d["elements"]["bar"].update(nodes=["3", "5", "4", "6"]),
+                        ["elements.bar.nodes[1]", "node '5' is translational"]),
+    "wrong number of nodes": (lambda d: d["elements"]["bar"].update(nodes=["3", "4"]),
+                              ["elements.bar.nodes", "PLBEAM expects 4 nodes"]),
+    "unknown deformation": (lambda d: d["elements"]["leaf_left"].update(released=["e7"]),
+                            ["elements.leaf_left.released", "unknown name 'e7'"]),
+    "fixed and dof": (lambda d: d["nodes"]["3"].update(fixed=["x"]),
+                      ["nodes.3", "both fixed and a DOF"]),
+    "position of wrong length": (lambda d: d["nodes"]["3"].update(position=[0.0]),
+                                 ["nodes.3.position", "expected a list of 2 numbers"]),
+    "not a number": (lambda d: d["sections"]["leaf"].update(E="steel"),
+                     ["sections.leaf.E", "expected a number, got 'steel'"]),
+    "node without position or angle": (lambda d: d["nodes"]["3"].pop("position"),
+                                       ["nodes.3", "exactly one of 'position'"]),
+    "input on unknown coordinate": (lambda d: d["inputs"]["F"].update(coordinate="z"),
+                                    ["inputs.F.coordinate", "no coordinate 'z'"]),
+    "output quantity": (lambda d: d["outputs"]["x"].update(quantity="acceleration"),
+                        ["outputs.x.quantity", "acceleration"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_malformed_scene_is_refused_with_a_clear_message(case, tmp_path):
+    edit, fragments = CASES[case]
+    path = write(tmp_path, scene(edit))
+    with pytest.raises(SceneError) as error:
+        load_scene(path)
+    message = str(error.value)
+    assert message.startswith(str(path))
+    for fragment in fragments:
+        assert fragment in message
+
+
+def test_ndof_mismatch_names_the_counts():
+    data = scene(lambda d: d["nodes"]["4"].update(dof=["phi"]))
+    with pytest.raises(ConstraintError) as error:
+        build_model(data)
+    assert "NDOF = NX - NXO - NEO = 12 - 6 - 5 = 1" in str(error.value)
+    assert "declares 2 DOF(s): 3.x, 4.phi" in str(error.value)
+
+
+def test_invalid_toml_names_the_file_and_line(tmp_path):
+    path = write(tmp_path, "[scene]\nname = \n")
+    with pytest.raises(SceneError, match=r"broken\.toml: not valid TOML.*line 2"):
+        load_scene(path)
+
+
+def test_missing_scene_file_lists_the_builtin_scenes():
+    with pytest.raises(SceneError, match="no_such_scene.*built in: .*stage_planar_1dof"):
+        load_scene("no_such_scene.toml")
+
+
+def collinear_trusses(dof=None):
+    """A node held by two rigid collinear trusses: over- and under-constrained at once."""
+    nodes = {"A": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+             "B": {"position": [2.0, 0.0], "fixed": ["x", "y"]},
+             "C": {"position": [1.0, 0.0], "mass": 1.0}}
+    if dof:
+        nodes["C"]["dof"] = [dof]
+    return {"scene": {"name": "collinear"}, "sections": {"s": {"EA": 1.0}}, "nodes": nodes,
+            "elements": {"AC": {"type": "PLTRUSS", "nodes": ["A", "C"], "section": "s"},
+                         "CB": {"type": "PLTRUSS", "nodes": ["C", "B"], "section": "s"}}}
+
+
+def test_over_and_under_constrained_parts_are_named():
+    with pytest.raises(ConstraintError) as error:
+        build_model(collinear_trusses())
+    message = str(error.value)
+    assert "over-constrained: the prescribed deformations AC.e1, CB.e1 are mutually dependent" \
+        in message
+    assert "under-constrained: the coordinates C.y can move" in message
+
+
+def test_a_mechanism_without_enough_dofs_is_under_constrained():
+    """The planar stage with the bending of one spring released but no DOF declared."""
+    data = scene(lambda d: d["nodes"]["3"].pop("dof"))
+    with pytest.raises(ConstraintError) as error:
+        build_model(data)
+    message = str(error.value)
+    assert "declares 0 DOF(s)" in message
+    assert "under-constrained: the coordinates" in message and "3.x" in message
+
+
+def test_an_exactly_constrained_model_passes():
+    model = build_model(collinear_trusses().copy() | {
+        "nodes": {**collinear_trusses()["nodes"],
+                  "B": {"position": [1.0, 1.0], "fixed": ["x", "y"]}}})
+    assert model.dof_count()["ndof"] == 0
+
+
+def test_cli_reports_a_scene_error_without_traceback(tmp_path, capsys):
+    path = write(tmp_path, scene(lambda d: d["nodes"]["3"].update(mass=-1.0)))
+    assert main(["analyze", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "flexure analyze: error:" in err and "nodes.3.mass" in err
+    assert "Traceback" not in err
+
+
+def test_cli_reports_a_constraint_error_without_traceback(tmp_path, capsys):
+    path = write(tmp_path, scene(lambda d: d["elements"]["leaf_right"].update(released=["e2"])))
+    assert main(["analyze", str(path), "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "not exactly constrained" in err and "Traceback" not in err
