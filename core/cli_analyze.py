@@ -4,12 +4,14 @@ import json
 
 import numpy as np
 
+from .errors import SceneError
 from .linearization import linearize
 from .mechanics import Mechanics
 from .modal import buckling_load_factors, natural_frequencies
 from .scene import load_scene
 from .statespace import state_space
 from .statics import static_equilibrium
+from .stresses import beam_stresses, plot_beam_stresses
 from .tables import format_table, jsonable
 
 
@@ -28,6 +30,9 @@ def register(subparsers):
     parser.add_argument("--state-space", action="store_true",
                         help="state-space matrices of the declared inputs and outputs")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--plot", metavar="PNG",
+                        help="plot the von Mises stresses along the beams at the static "
+                             "equilibrium to this PNG file (spatial beams with a section)")
     parser.set_defaults(run=run)
 
 
@@ -40,6 +45,9 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if static:
         result["static"] = {"coordinates": solution.coordinates(),
                             "stress_resultants": solution.stresses()}
+        stresses = beam_stresses(model, solution.x, solution.stress_resultants)
+        if stresses.names:
+            result["static"]["von_mises_pa"] = stresses.as_dict()
     lin = linearize(model, solution, mechanics=mech) if (modes is not None
                                                           or with_state_space) else None
     if modes is not None:
@@ -65,13 +73,25 @@ def run(args):
     static, modes = args.static, args.modes
     if not (static or modes is not None or args.buckling is not None or args.state_space):
         static, modes = True, -1
-    result = analyze(model, static=static, modes=modes, buckling=args.buckling,
-                     with_state_space=args.state_space)
+    result = analyze(model, static=static or bool(args.plot), modes=modes,
+                     buckling=args.buckling, with_state_space=args.state_space)
+    if args.plot:
+        plot_stresses(model, args.plot)
     if args.json:
         print(json.dumps(result, indent=1))
     else:
         print(render(result))
     return 0
+
+
+def plot_stresses(model, path):
+    """Plot the von Mises stresses at the static equilibrium to `path` (PNG)."""
+    solution = static_equilibrium(model)
+    stresses = beam_stresses(model, solution.x, solution.stress_resultants)
+    if not stresses.names:
+        raise SceneError(f"{model.source}: --plot: no beam with section dimensions (A) in "
+                         f"{model.name!r}, so no stresses to plot")
+    plot_beam_stresses(model, stresses, path)
 
 
 def render(result):
@@ -87,6 +107,11 @@ def render(result):
         parts.append(format_table(["deformation", "stress resultant (N)"],
                                   list(static["stress_resultants"].items()),
                                   title="\nstatic equilibrium: stress resultants"))
+        if "von_mises_pa" in static:
+            parts.append(format_table(
+                ["element", "von Mises at p (MPa)", "von Mises at q (MPa)"],
+                [(name, p / 1e6, q / 1e6) for name, (p, q) in static["von_mises_pa"].items()],
+                title="\nstatic equilibrium: von Mises stresses (largest over the section)"))
     if "modes" in result:
         freqs = result["modes"]["frequencies_hz"]
         parts.append(format_table(["mode", "frequency (Hz)"],
