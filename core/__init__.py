@@ -14,6 +14,7 @@ from .mechanics import Mechanics
 from .modal import Modes, buckling_load_factors, natural_frequencies
 from .model import Model
 from .scene import build_model, builtin_scenes, load_scene, scene_path
+from .simulation import SimulationResult, Simulator, default_atol, simulate
 from .statespace import state_space
 from .statics import StaticSolution, static_equilibrium
 
@@ -23,7 +24,8 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel",
-    "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "StaticSolution",
+    "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
+    "Simulator", "StaticSolution", "default_atol", "simulate",
     "buckling_load_factors", "build_model", "builtin_scenes", "check_exact_constraint",
     "linearize", "load_scene", "natural_frequencies", "scene_path", "state_space",
     "static_equilibrium",

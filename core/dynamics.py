@@ -1,0 +1,262 @@
+"""The reduced nonlinear equations of motion on the DOFs, and their tangent.
+
+For DOFs q and velocities qdot the constraints are solved away at every evaluation
+(x = F(q) by Newton's method, warm-started from a first-order prediction of the previous
+solution; never integrated), and the DOF accelerations follow from
+
+    M_bar(q) qddot = DF^T (f - M (D2F qdot) qdot - g_conv(x, xdot)) - (De_s DF)^T sigma_s
+
+with M_bar = DF^T M DF (kg), f = loads + gravity + B u the nodal forces (N, N m) with the
+inputs u on their coordinates, g_conv the velocity-dependent inertia force of the element
+masses and sigma_s = S e_s + D edot_s the stress resultants of the stressed deformations.
+
+The tangent used for the integrators' Newton iterations is the model's own linearisation in
+the current state: mass M_bar, damping C0 = (De_s DF)^T D (De_s DF) and stiffness K0 + G0,
+where G0 is evaluated with the stress resultants of the full dynamic balance (multipliers of
+r - M xddot), so that it is exact at rest and a good approximation in motion. For the
+first-order state y = [q, qdot]:
+
+    dydot/dy = [[0, I], [-M_bar^-1 (K0 + G0), -M_bar^-1 C0]]
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .errors import ConvergenceError, SimulationError
+from .mechanics import Mechanics
+
+
+@dataclass
+class Evaluation:
+    """One evaluation of the equations of motion; arrays in SI units."""
+
+    q: np.ndarray  # (NDOF,)
+    qdot: np.ndarray  # (NDOF,)
+    qddot: np.ndarray  # (NDOF,)
+    x: np.ndarray  # (NX,) coordinates
+    xdot: np.ndarray  # (NX,) coordinate velocities
+    config: object  # kinematics Configuration
+    mass: np.ndarray  # M_bar (NDOF, NDOF)
+    coordinate_mass: np.ndarray  # M (NX, NX)
+    force_balance: np.ndarray  # r (NX,) without the term M DF qddot
+    sigma_c: np.ndarray  # (NE,) constitutive stress resultants
+    hessians: list | None  # per group (group, D2e) or None when not needed
+
+
+class Dynamics:
+    """The equations of motion of one model; keeps the kinematic warm start between calls.
+
+    Parameters
+    ----------
+    model : Model
+        The model (its inputs are forces on their coordinates).
+    mechanics : Mechanics, optional
+        A prebuilt Mechanics of the model.
+    """
+
+    def __init__(self, model, *, mechanics=None):
+        self.model = model
+        self.mech = mechanics or Mechanics(model)
+        self.kin = self.mech.kinematics
+        self.inertia = self.mech.inertia
+        self.ndof = model.declared_dof_count
+        self.input_matrix = np.zeros((model.nx, len(model.inputs)))
+        for j, port in enumerate(model.inputs):
+            self.input_matrix[port.coordinate, j] = 1.0
+        self.has_gravity = bool(np.any(model.gravity))
+        self.constant_mass = None if self.inertia.groups else np.diag(model.lumped_mass)
+        self.constant_force = model.loads.astype(float).copy()
+        if self.has_gravity and not self.inertia.groups:
+            self.constant_force += self.inertia.gravity_force(model.initial_coordinates)
+        self.stressed = self.mech.stressed
+        self.reset_warm_start()
+
+    # -- kinematics -------------------------------------------------------------------------
+    def reset_warm_start(self, x=None):
+        """Start the next kinematic solution from x (NX,) (default: the scene's coordinates)."""
+        x = self.model.initial_coordinates if x is None else x
+        self._x = np.array(x, dtype=float)
+        self._q = self.kin.dofs_of(self._x)
+        self._DF = None
+
+    def solve(self, q):
+        """The kinematic Configuration for DOFs q, from a first-order prediction."""
+        x_start = self._x
+        if self._DF is not None:
+            x_start = self._x + self._DF @ (q - self._q)
+        config = self.kin.solve(q, x_start)
+        self._x, self._q, self._DF = config.x, config.q, config.DF
+        return config
+
+    def configuration(self, q):
+        """Like `solve`, but a failure becomes a SimulationError naming the cause."""
+        try:
+            return self.solve(q)
+        except ConvergenceError as error:
+            raise SimulationError(f"constraints cannot be solved: {error}") from None
+
+    # -- equations of motion ------------------------------------------------------------------
+    def evaluate(self, q, qdot, u, *, hessians=False):
+        """Solve the equations of motion at (q, qdot) with inputs u; an `Evaluation`."""
+        mech, kin, inertia = self.mech, self.kin, self.inertia
+        config = self.configuration(q)
+        x, DF, De = config.x, config.DF, config.De
+        xdot = DF @ qdot
+        moving = bool(np.any(qdot))
+        hess = None
+        if moving or hessians:
+            hess = _hessians(self.model, x)
+        edot = De @ xdot if mech.has_damping else None
+        sigma_c = mech.constitutive_stress(config, edot)
+        if self.constant_mass is not None:
+            M = self.constant_mass
+            f = self.constant_force.copy()
+        else:
+            M = inertia.mass_matrix(x)
+            f = self.constant_force.copy()
+            if self.has_gravity:
+                f += inertia.gravity_force(x)
+        if u is not None and u.size:
+            f += self.input_matrix @ u
+        r = f - De.T @ sigma_c
+        if moving:
+            r -= M @ kin.convective_acceleration(config, qdot, hess)
+            if inertia.groups:
+                r -= inertia.convective_force(x, xdot)
+        mass = DF.T @ M @ DF
+        with np.errstate(all="ignore"):
+            try:
+                qddot = np.linalg.solve(mass, DF.T @ r)
+            except np.linalg.LinAlgError:
+                raise SimulationError(
+                    "the reduced mass matrix M_bar is singular (a DOF without mass)") from None
+        return Evaluation(q=q, qdot=qdot, qddot=qddot, x=x, xdot=xdot, config=config, mass=mass,
+                          coordinate_mass=M, force_balance=r, sigma_c=sigma_c, hessians=hess)
+
+    def accelerations(self, q, qdot, u):
+        """qddot (NDOF,) at (q, qdot) with inputs u (n_inputs,) in N."""
+        return self.evaluate(q, qdot, u).qddot
+
+    def tangent(self, q, qdot, u, *, qddot=None):
+        """(M_bar, C, K): tangent mass, damping and stiffness (NDOF, NDOF) in the state.
+
+        qddot: the accelerations used in the dynamic balance (default: those of the state);
+        IDA passes its own iterate.
+        """
+        ev = self.evaluate(q, qdot, u, hessians=True)
+        return self.tangent_of(ev, qddot)
+
+    def tangent_of(self, ev, qddot=None):
+        """The tangent (M_bar, C, K) of an evaluation made with hessians=True."""
+        mech, config = self.mech, ev.config
+        acc = ev.qddot if qddot is None else qddot
+        r_full = ev.force_balance - ev.coordinate_mass @ (config.DF @ acc)
+        sigma = mech.stress_resultants(config, r_full, ev.sigma_c)
+        K = mech.structural_stiffness(config) + mech.geometric_stiffness(
+            config, sigma, 1.0, hessians=ev.hessians)
+        C = mech.damping_matrix(config)
+        return ev.mass, C, K
+
+    def outputs(self, ev, ports=None):
+        """The declared outputs (n_outputs,) of an evaluation: positions m, velocities m/s."""
+        ports = self.model.outputs if ports is None else ports
+        return np.array([ev.xdot[p.coordinate] if p.quantity == "velocity" else ev.x[p.coordinate]
+                         for p in ports])
+
+
+class FirstOrderSystem:
+    """ydot = f(t, y), y = [q, qdot], and its Jacobian, for the integrators.
+
+    The inputs come from `input_function(t)` (n_inputs,) N. Each evaluation checks that the
+    state and the accelerations are finite and raises SimulationError naming the time.
+    """
+
+    def __init__(self, dynamics, input_function):
+        self.dynamics = dynamics
+        self.n = dynamics.ndof
+        self.input_function = input_function
+        self.rhs_count = 0
+        self.jacobian_count = 0
+
+    def _inputs(self, t):
+        return self.input_function(t)
+
+    def _evaluate(self, t, y, *, hessians=False):
+        n = self.n
+        if not np.all(np.isfinite(y)):
+            raise SimulationError(f"t = {t:.9g} s: the state became non-finite "
+                                  f"({_first_bad(y, self.dynamics.model, n)})")
+        try:
+            ev = self.dynamics.evaluate(y[:n], y[n:], self._inputs(t), hessians=hessians)
+        except SimulationError as error:
+            raise SimulationError(f"t = {t:.9g} s: {error}") from None
+        if not np.all(np.isfinite(ev.qddot)):
+            raise SimulationError(f"t = {t:.9g} s: non-finite accelerations (a singular "
+                                  "configuration or a non-finite force)")
+        return ev
+
+    def rhs(self, t, y, yp):
+        """CVODE right-hand side: fills yp = [qdot, qddot]."""
+        self.rhs_count += 1
+        n = self.n
+        ev = self._evaluate(t, y)
+        yp[:n] = y[n:]
+        yp[n:] = ev.qddot
+
+    def derivative(self, t, y):
+        """ydot (2 NDOF,) as a new array."""
+        yp = np.empty_like(y)
+        self.rhs(t, y, yp)
+        return yp
+
+    def jacobian(self, t, y, yp, JJ):
+        """CVODE Jacobian: fills every entry of JJ = d ydot / d y from the tangent."""
+        self.jacobian_count += 1
+        n = self.n
+        ev = self._evaluate(t, y, hessians=True)
+        mass, C, K = self.dynamics.tangent_of(ev)
+        JJ[:, :] = 0.0
+        JJ[:n, n:] = np.eye(n)
+        lu = scipy.linalg.lu_factor(mass, check_finite=False)
+        JJ[n:, :n] = -scipy.linalg.lu_solve(lu, K, check_finite=False)
+        JJ[n:, n:] = -scipy.linalg.lu_solve(lu, C, check_finite=False)
+
+    def jacobian_matrix(self, t, y):
+        """d ydot / d y (2 NDOF, 2 NDOF) as a new array."""
+        JJ = np.empty((2 * self.n, 2 * self.n))
+        self.jacobian(t, y, None, JJ)
+        return JJ
+
+    # -- implicit form for IDA: res = [qp - v, M_bar vp - M_bar qddot(q, v)] -----------------
+    def residual(self, t, y, yp, res):
+        """IDA residual of the implicit form (fills res)."""
+        self.rhs_count += 1
+        n = self.n
+        ev = self._evaluate(t, y)
+        res[:n] = yp[:n] - y[n:]
+        res[n:] = ev.mass @ (yp[n:] - ev.qddot)
+
+    def residual_jacobian(self, t, y, yp, res, cj, JJ):
+        """IDA Jacobian d res / d y + cj d res / d yp (fills every entry of JJ)."""
+        self.jacobian_count += 1
+        n = self.n
+        ev = self._evaluate(t, y, hessians=True)
+        mass, C, K = self.dynamics.tangent_of(ev, yp[n:])
+        JJ[:n, :n] = cj * np.eye(n)
+        JJ[:n, n:] = -np.eye(n)
+        JJ[n:, :n] = K
+        JJ[n:, n:] = C + cj * mass
+
+
+def _hessians(model, x):
+    from . import assembly
+
+    return assembly.deformation_hessians(model, x)
+
+
+def _first_bad(y, model, n):
+    names = model.dof_names
+    i = int(np.flatnonzero(~np.isfinite(y))[0])
+    return f"{names[i % n]}{'' if i < n else ' velocity'} = {y[i]}"
