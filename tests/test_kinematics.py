@@ -86,3 +86,35 @@ def test_static_equilibrium_balances_forces():
     assert np.max(np.abs(Q)) < 1e-8
     x = solution.coordinates()["3.x"]
     assert 0.015 < x < 0.0212  # stiffening makes it less than the linear 20/945 m
+
+
+def test_tangent_stiffness_with_gravity_on_distributed_mass():
+    """Gravity on the beams' consistent mass depends on their rotations: its derivative
+    enters the tangent stiffness, checked by differences in a rotated configuration."""
+    model = load_scene("stage_planar_3dof")
+    model.gravity[:] = [3.0, -9.81]
+    mech = Mechanics(model)
+    kin = mech.kinematics
+    config = kin.solve(kin.dofs_of(model.initial_coordinates) + [0.01, -0.002, 0.3],
+                       model.initial_coordinates)
+    _, _, sigma = mech.static_balance(config)
+    K = mech.structural_stiffness(config) + mech.geometric_stiffness(config, sigma)
+    h = 1e-7
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = h
+        plus = mech.static_balance(kin.solve(config.q + step, config.x))[0]
+        minus = mech.static_balance(kin.solve(config.q - step, config.x))[0]
+        np.testing.assert_allclose(K[:, j], -(plus - minus) / (2 * h),
+                                   rtol=1e-5, atol=1e-6 * np.abs(K).max())
+
+
+def test_static_sag_under_gravity():
+    """The bar and the upper halves of the springs (consistent load) hang on 2 EA / l0."""
+    model = load_scene("stage_planar_3dof")
+    model.gravity[:] = [0.0, -9.81]
+    solution = static_equilibrium(model)
+    weight = 9.81 * (0.206 + 2 * 0.07065 * 0.1 / 2)  # N
+    sag = weight / (2 * 1.89e6 / 0.1)  # m
+    assert solution.coordinates()["3.y"] - 0.1 == pytest.approx(-sag, rel=1e-6)
+    assert abs(solution.coordinates()["3.x"]) < 1e-15
