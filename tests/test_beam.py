@@ -1,0 +1,336 @@
+"""The spatial BEAM element: torsion, geometrically nonlinear 3-D benchmarks, large rotations.
+
+References:
+- Pure torsion: Saint-Venant, torque stiffness GIt / l.
+- The 45-degree bend: K.-J. Bathe and S. Bolourchi, "Large displacement analysis of
+  three-dimensional beam structures", Int. J. Numer. Meth. Engng 14 (1979) 961-986: a
+  cantilever bent on a radius of 100 in through 45 degrees in a plane, 1 in x 1 in section,
+  E = 1e7 psi, tip load 600 lb normal to that plane. Published tip displacement
+  (13.4 in toward the centre, 23.5 in back along the initial tangent, 53.4 in out of plane),
+  as quoted with EA = 1e7 lb, EI = 8.333e5 lb in^2, GJ = 8.333e5 lb in^2 in the Kynema
+  test documentation ("Static bending of a curved beam"); J. C. Simo and L. Vu-Quoc, "A
+  three-dimensional finite-strain rod model. Part II", Comput. Meth. Appl. Mech. Engng 58
+  (1986) 79-116, give the tip at (47.23, 15.79, 53.37) in for the same problem.
+- The elastica of a cantilever under a tip load (K. Mattiasson, "Numerical results from large
+  deflection beam and frame problems analysed by means of elliptic integrals", Int. J. Numer.
+  Meth. Engng 17 (1981) 145-153), computed here independently with scipy's BVP solver.
+"""
+
+import numpy as np
+import pytest
+import scipy.integrate
+
+from flexure.core import Kinematics, build_model, linearize, static_equilibrium
+from flexure.core.rotary_inertia import RotaryInertia
+from flexure.core.rotations import (
+    body_rates_matrix,
+    compose,
+    from_rotation_vector,
+    normalized,
+    rotation_matrix,
+    to_rotation_vector,
+)
+
+
+def chain(points, *, section, y_axis, released=(), dof=(), tip_force=None, extra=None):
+    """A scene dict: BEAMs through `points`, clamped at the first; tip force on the last."""
+    nodes, elements = {}, {}
+    for i, point in enumerate(points):
+        nodes[f"t{i}"] = {"position": [float(v) for v in point]}
+        nodes[f"r{i}"] = {"rotation": [0.0, 0.0, 0.0]}
+    nodes["t0"]["fixed"] = ["x", "y", "z"]
+    nodes["r0"]["fixed"] = True
+    if tip_force is not None:
+        nodes[f"t{len(points) - 1}"]["force"] = [float(v) for v in tip_force]
+    for i in range(len(points) - 1):
+        elements[f"b{i}"] = {"type": "BEAM", "nodes": [f"t{i}", f"r{i}", f"t{i + 1}", f"r{i + 1}"],
+                             "section": "s", "y_axis": [float(v) for v in y_axis],
+                             "released": list(released), "dof": list(dof)}
+    data = {"scene": {"name": "chain", "dimension": 3}, "sections": {"s": section},
+            "nodes": nodes, "elements": elements}
+    if extra:
+        extra(data)
+    return data
+
+
+# -- torsion ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("elements", [1, 4])
+def test_pure_torsion_gives_git_over_l(elements):
+    """A rigid arm of length a on the tip of a straight beam along a skew axis, a force on the
+    arm's end normal to beam and arm: the stiffness at the arm's end is GIt / (l a^2)."""
+    length, arm, git = 0.3, 0.05, 12.5
+    axis = normalized(np.array([1.0, 2.0, 2.0]))
+    side = normalized(np.cross(axis, [0.0, 0.0, 1.0]))
+    normal = np.cross(axis, side)
+    points = [axis * length * k / elements for k in range(elements + 1)]
+
+    def add_arm(data):
+        tip = points[-1] + arm * side
+        data["nodes"]["arm"] = {"position": tip.tolist()}
+        data["nodes"]["arm_r"] = {"rotation": [0.0, 0.0, 0.0]}
+        data["elements"]["arm"] = {"type": "BEAM", "nodes": [f"t{elements}", f"r{elements}",
+                                                             "arm", "arm_r"],
+                                   "section": "rigid", "y_axis": axis.tolist()}
+        data["sections"]["rigid"] = {"rho_A": 0.0}
+    data = chain(points, section={"EA": 1e9, "GIt": git, "EIy": 1e3, "EIz": 1e3,
+                                  "rho_A": 1.0}, y_axis=side, released=["e2"], extra=add_arm)
+    # every element's torsion is a DOF (a serial chain), the rest is rigid
+    for k in range(elements):
+        data["elements"][f"b{k}"]["released"] = []
+        data["elements"][f"b{k}"]["dof"] = ["e2"]
+    model = build_model(data)
+    lin = linearize(model)
+    # compliance at the arm's end for a force F normal to beam and arm: a^2 l / GIt
+    rows = [model.coordinate_index(f"arm.{c}") for c in "xyz"]
+    generalized = lin.DF[rows].T @ normal
+    displacement = lin.DF[rows] @ np.linalg.solve(lin.K, generalized)
+    np.testing.assert_allclose(displacement, normal * arm**2 * length / git, rtol=1e-12,
+                               atol=1e-15)
+    torque_stiffness = arm**2 / (displacement @ normal)  # N m / rad
+    np.testing.assert_allclose(torque_stiffness, git / length, rtol=1e-12)
+
+
+# -- the 45-degree bend ----------------------------------------------------------------------
+
+def bend(elements, *, load=600.0):
+    radius = 100.0
+    phi = np.linspace(0.0, np.pi / 4, elements + 1)
+    points = np.stack([radius * np.sin(phi), radius * (1 - np.cos(phi)), 0 * phi], axis=1)
+    data = chain(points, section={"EA": 1e7, "EIy": 1e7 / 12, "EIz": 1e7 / 12, "GIt": 8.333e5},
+                 y_axis=[0.0, 0.0, 1.0], dof=["e1", "e2", "e3", "e4", "e5", "e6"],
+                 tip_force=[0.0, 0.0, load])
+    model = build_model(data)
+    solution = static_equilibrium(model, load_steps=10)
+    tip = [model.coordinate_index(f"t{elements}.{c}") for c in "xyz"]
+    return solution.x[tip]
+
+
+def test_45_degree_bend_converges_to_the_published_tip_position():
+    tips = {n: bend(n) for n in (4, 8, 16, 32)}
+    # quadratic convergence under refinement: each halving cuts the change by about 4
+    changes = [np.linalg.norm(tips[2 * n] - tips[n]) for n in (4, 8, 16)]
+    assert changes[1] < changes[0] / 3.5 and changes[2] < changes[1] / 3.5
+    start = np.array([100 * np.sin(np.pi / 4), 100 * (1 - np.cos(np.pi / 4)), 0.0])
+    bathe_bolourchi = start + np.array([-23.5, -13.4, 53.4])
+    simo_vu_quoc = np.array([47.23, 15.79, 53.37])
+    # published solutions differ by up to 0.11 in between them; 0.3 in is 0.3 % of R
+    np.testing.assert_allclose(tips[32], bathe_bolourchi, atol=0.3)
+    np.testing.assert_allclose(tips[32], simo_vu_quoc, atol=0.3)
+
+
+def elastica(alpha):
+    """Tip (u / L, w / L) of a cantilever under a tip load P normal to it, alpha = P L^2 / EI:
+    theta'' = -alpha cos(theta), theta(0) = 0, theta'(1) = 0, by scipy's BVP solver."""
+    s = np.linspace(0.0, 1.0, 201)
+
+    def rhs(s, y):
+        return np.vstack([y[1], -alpha * np.cos(y[0]), np.cos(y[0]), np.sin(y[0])])
+
+    def bc(a, b):
+        return np.array([a[0], b[1], a[2], a[3]])
+
+    guess = np.zeros((4, s.size))
+    guess[2] = s
+    sol = scipy.integrate.solve_bvp(rhs, bc, s, guess, tol=1e-10, max_nodes=100000)
+    assert sol.success
+    return 1.0 - sol.y[2, -1], sol.y[3, -1]
+
+
+@pytest.mark.parametrize("alpha", [2.0, 10.0])
+def test_straight_cantilever_under_a_skew_tip_load_follows_the_elastica(alpha):
+    """A square-section cantilever along a skew axis, loaded at the tip in a direction in no
+    principal plane of its section (y' and the load 35 degrees apart): the bending plane is
+    that of the load and the tip follows the planar elastica (Mattiasson 1981: for alpha = 2,
+    u / L = 0.16064, w / L = 0.49346; for alpha = 10, 0.55500, 0.81061). Converges with the
+    element size squared (errors 1e-2 L with 4 elements, 2e-3 L to 3e-3 L with 16 at
+    alpha = 2 and 10); 16 elements are within 0.5 % of the tip deflection w."""
+    length, ei = 1.0, 2.0
+    axis = normalized(np.array([2.0, -1.0, 3.0]))
+    normal_a = normalized(np.cross(axis, [0.0, 0.0, 1.0]))
+    normal_b = np.cross(axis, normal_a)
+    angle = np.radians(35.0)
+    load_direction = np.cos(angle) * normal_a + np.sin(angle) * normal_b
+    u_ref, w_ref = elastica(alpha)
+    if alpha == 2.0:
+        np.testing.assert_allclose([u_ref, w_ref], [0.16064, 0.49346], atol=1e-5)
+    else:
+        np.testing.assert_allclose([u_ref, w_ref], [0.55500, 0.81061], atol=1e-5)
+    errors = []
+    for elements in (8, 16):
+        points = [axis * length * k / elements for k in range(elements + 1)]
+        data = chain(points, section={"EA": 1e9, "EIy": ei, "EIz": ei, "GIt": 1.5},
+                     y_axis=normal_a, dof=["e1", "e2", "e3", "e4", "e5", "e6"],
+                     tip_force=alpha * ei / length**2 * load_direction)
+        model = build_model(data)
+        solution = static_equilibrium(model, load_steps=20)
+        tip = [model.coordinate_index(f"t{elements}.{c}") for c in "xyz"]
+        displacement = solution.x[tip] - points[-1]
+        u, w = -displacement @ axis, displacement @ load_direction
+        out_of_plane = displacement @ np.cross(axis, load_direction)
+        assert abs(out_of_plane) < 1e-9
+        errors.append(np.hypot(u - u_ref, w - w_ref))
+    assert errors[1] < 5e-3 * w_ref
+    assert errors[1] < errors[0] / 3.5
+
+
+# -- large rotations -------------------------------------------------------------------------
+
+def test_a_node_turning_more_than_a_full_turn_about_a_skew_axis_loses_no_accuracy():
+    """A chain of 16 BEAMs along a skew axis, its bending e5 = e6 prescribed (the DOFs): every
+    element then is the chord of a circular arc, each node turned by 2 alpha more than the
+    last with sin(alpha) = e5 / |l| and |l| = l0 - e5^2 / (6 l0) from e1 = 0. Driven in 60
+    steps to 2 pi + 1 rad at the tip about the skew axis n_z'. Tip orientation and position
+    match the exact polygon to 1e-12, and so does every node's normalisation."""
+    n, l0 = 16, 0.1
+    axis = normalized(np.array([1.0, -2.0, 0.5]))
+    y_axis = normalized(np.cross(axis, [1.0, 1.0, 1.0]))
+    z_axis = np.cross(axis, y_axis)
+    points = [axis * l0 * k for k in range(n + 1)]
+    data = chain(points, section={"EA": 1.0, "EIy": 1.0, "EIz": 1.0, "GIt": 1.0},
+                 y_axis=y_axis, dof=["e5", "e6"])
+    model = build_model(data)
+    kin = Kinematics(model)
+    x = model.initial_coordinates.copy()
+    total = 2 * np.pi + 1.0
+    for fraction in np.linspace(0.0, 1.0, 61)[1:]:
+        alpha = fraction * total / (2 * n)
+        chord = l0
+        for _ in range(100):  # |l| and e5 from e1 = 0: a fixed point, converges fast
+            e5 = chord * np.sin(alpha)
+            chord = l0 - e5**2 / (6 * l0)
+        q = np.full(2 * n, e5)
+        config = kin.solve(q, x)
+        x = config.x
+    tip_lambda = x[[model.coordinate_index(f"r{n}.lambda{k}") for k in range(4)]]
+    exact = rotation_matrix(from_rotation_vector(total * z_axis))
+    np.testing.assert_allclose(rotation_matrix(tip_lambda), exact, atol=1e-12)
+    angles = (2 * np.arange(n) + 1) * alpha
+    chords = chord * (np.cos(angles)[:, None] * axis + np.sin(angles)[:, None] * y_axis)
+    tip = x[[model.coordinate_index(f"t{n}.{c}") for c in "xyz"]]
+    np.testing.assert_allclose(tip, chords.sum(axis=0), atol=1e-12 * n * l0)
+    for k in range(1, n + 1):
+        lam = x[[model.coordinate_index(f"r{k}.lambda{i}") for i in range(4)]]
+        assert abs(lam @ lam - 1.0) < 1e-14
+
+
+def test_rotations_module_round_trips_and_composes():
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        phi = rng.normal(size=3)
+        phi *= rng.uniform(0.0, 3.0) / np.linalg.norm(phi)
+        lam = from_rotation_vector(phi)
+        R = rotation_matrix(lam)
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
+        np.testing.assert_allclose(to_rotation_vector(lam), phi, atol=1e-12)
+        other = from_rotation_vector(rng.normal(size=3))
+        np.testing.assert_allclose(rotation_matrix(compose(lam, other)),
+                                   R @ rotation_matrix(other), atol=1e-14)
+    # many small steps through several full turns about a skew axis stay exact
+    axis = normalized(np.array([0.3, -0.4, 0.866]))
+    step = from_rotation_vector(axis * (5.3 * 2 * np.pi / 1000))
+    lam = np.array([1.0, 0.0, 0.0, 0.0])
+    for _ in range(1000):
+        lam = compose(step, lam)
+    np.testing.assert_allclose(rotation_matrix(lam),
+                               rotation_matrix(from_rotation_vector(axis * 5.3 * 2 * np.pi)),
+                               atol=1e-12)
+
+
+# -- rotational inertia ----------------------------------------------------------------------
+
+class _Node:
+    """A model-like object with one free rotational node carrying an inertia tensor."""
+
+    def __init__(self, J):
+        self.nx = 4
+        self.groups = []
+        self.node_inertias = [(np.arange(4), J)]
+
+
+def test_rotary_inertia_reproduces_eulers_equations():
+    """M lambda'' + h = mu lambda with lambda . lambda'' = -|lambda'|^2 (the normalisation)
+    must give J omega'_dot = -omega' x J omega' (torque-free rigid body)."""
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(3, 3))
+    J = A @ A.T + np.eye(3)
+    inertia = RotaryInertia(_Node(J))
+    lam = normalized(rng.normal(size=4))
+    omega = rng.normal(size=3)
+    lam_dot = 0.5 * body_rates_matrix(lam).T @ omega
+    M = inertia.mass_matrix(lam)
+    h = inertia.convective_force(lam, lam_dot)
+    system = np.zeros((5, 5))
+    system[:4, :4] = M
+    system[:4, 4] = -lam
+    system[4, :4] = lam
+    solution = np.linalg.solve(system, np.concatenate([-h, [-lam_dot @ lam_dot]]))
+    omega_dot = 2 * body_rates_matrix(lam) @ solution[:4]
+    np.testing.assert_allclose(J @ omega_dot, -np.cross(omega, J @ omega), rtol=1e-12,
+                               atol=1e-12)
+    # and the kinetic energy 1/2 omega'^T J omega' = 1/2 lambda_dot^T M lambda_dot
+    np.testing.assert_allclose(0.5 * lam_dot @ M @ lam_dot, 0.5 * omega @ J @ omega,
+                               rtol=1e-13)
+
+
+def test_rotary_inertia_convective_force_is_the_lagrangian_term():
+    """h = d/dt(dT/d lambda_dot) - dT/d lambda - M lambda'', by central differences of T."""
+    rng = np.random.default_rng(4)
+    J = np.diag([1.0, 2.0, 3.5])
+    inertia = RotaryInertia(_Node(J))
+    lam, lam_dot = rng.normal(size=4), rng.normal(size=4)
+
+    def energy(a, b):
+        return 0.5 * b @ inertia.mass_matrix(a) @ b
+
+    step = 1e-6
+    eye = np.eye(4)
+    dT_dlam = np.array([(energy(lam + step * e, lam_dot) - energy(lam - step * e, lam_dot))
+                        / (2 * step) for e in eye])
+    # d/dt (M(lambda) lambda_dot) at zero lambda'' = (dM/dlambda . lambda_dot) lambda_dot
+    dM = (inertia.mass_matrix(lam + step * lam_dot)
+          - inertia.mass_matrix(lam - step * lam_dot)) / (2 * step)
+    expected = dM @ lam_dot - dT_dlam
+    np.testing.assert_allclose(inertia.convective_force(lam, lam_dot), expected, rtol=1e-7,
+                               atol=1e-7)
+
+
+def test_rigid_rotation_of_the_whole_stage_changes_nothing():
+    """The 1-DOF stage turned as a whole by 2 pi + 0.7 rad about a skew axis (nodes, node
+    orientations, principal axes and the 30 N load): same deformations and stresses to 1e-12
+    relative, the deflection turned with it."""
+    import copy
+    import tomllib
+
+    from flexure.core import scene_path
+
+    base = tomllib.loads(scene_path("stage_spatial_1dof").read_text())
+    base["nodes"]["3"]["dof"] = []
+    base["elements"]["leaf_left"]["released"] = ["e6"]
+    base["elements"]["leaf_left"]["dof"] = ["e5"]
+    base["nodes"]["3"]["force"] = [30.0, 0.0, 0.0]
+
+    def turned(angle):
+        rotvec = normalized(np.array([1.0, 2.0, 3.0])) * angle
+        R = rotation_matrix(from_rotation_vector(rotvec))
+        data = copy.deepcopy(base)
+        for node in data["nodes"].values():
+            if "position" in node:
+                node["position"] = (R @ node["position"]).tolist()
+                if "force" in node:
+                    node["force"] = (R @ node["force"]).tolist()
+            else:
+                node["rotation"] = rotvec.tolist()
+        for element in data["elements"].values():
+            element["y_axis"] = (R @ element["y_axis"]).tolist()
+        model = build_model(data)
+        return model, static_equilibrium(model), R
+
+    model0, reference, _ = turned(0.0)
+    model, solution, R = turned(2 * np.pi + 0.7)
+    np.testing.assert_allclose(solution.config.e, reference.config.e, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(solution.stress_resultants, reference.stress_resultants,
+                               rtol=1e-10, atol=1e-10)
+    tip = [model.coordinate_index(f"3.{c}") for c in "xyz"]
+    np.testing.assert_allclose(solution.x[tip], R @ reference.x[tip], rtol=0, atol=1e-13)
+    assert abs(reference.x[tip][0]) > 0.02  # a large deflection
