@@ -1,0 +1,84 @@
+"""`flexure loop [SCENE]`: the closed loop on a scene, its tracking error against 0.1 %.
+
+    flexure loop                                   # stage_planar_1dof, 1 mm in 1 s, 4 kHz
+    flexure loop stage_planar_3dof --stroke 0.01 --plant libcosim --json
+"""
+
+import json
+
+from flexure.core.tables import format_table, jsonable
+
+from .runner import PLANTS, run_loop
+
+
+def register(subparsers):
+    """Add the `loop` subcommand."""
+    parser = subparsers.add_parser(
+        "loop", help="closed-loop tracking of a third-order move (PID + feedforward)",
+        description="Design a PID-like controller for the requested cross-over on the "
+                    "scene's linear model, add the feedforward of its low-frequency model, "
+                    "and track a third-order move on the nonlinear plant. Reports the "
+                    "largest tracking error against the target of 0.1 %% of the stroke.")
+    parser.add_argument("scene", nargs="?", default="stage_planar_1dof",
+                        help="scene file or built-in scene name (default stage_planar_1dof)")
+    parser.add_argument("--stroke", type=float, default=1e-3, metavar="S",
+                        help="stroke of the move in m (default 0.001)")
+    parser.add_argument("--duration", type=float, default=1.0, metavar="T",
+                        help="duration of the move in s (default 1)")
+    parser.add_argument("--fs", type=float, default=4000.0, metavar="HZ",
+                        help="sample rate of the controller in Hz (default 4000)")
+    parser.add_argument("--crossover", type=float, default=300.0, metavar="RAD_S",
+                        help="cross-over of the feedback in rad/s (default 300)")
+    parser.add_argument("--settle", type=float, default=0.25, metavar="T",
+                        help="time simulated after the move in s (default 0.25)")
+    parser.add_argument("--no-feedforward", action="store_true",
+                        help="feedback alone")
+    parser.add_argument("--plant", choices=PLANTS, default="inprocess",
+                        help="in-process simulation, the scene FMU under fmpy, or the "
+                             "controller and scene FMUs in libcosim (default inprocess)")
+    parser.add_argument("--plot", default="loop.png", metavar="PNG",
+                        help="write reference, position, error and force (default loop.png)")
+    parser.add_argument("--no-plot", action="store_true", help="write no plot")
+    parser.add_argument("--workdir", default=None,
+                        help="folder for the FMUs (default: a temporary folder)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(run=run)
+
+
+def run(args):
+    result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
+                      crossover=args.crossover, feedforward=not args.no_feedforward,
+                      plant=args.plant, settle=args.settle, workdir=args.workdir)
+    summary = result.summary()
+    if not args.no_plot and args.plot:
+        result.plot(args.plot)
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(jsonable(summary), indent=1))
+    else:
+        print(render(summary))
+    return 0
+
+
+def render(s):
+    """The summary as a short table and a verdict."""
+    rows = [
+        ("scene", s["scene"]), ("plant", s["plant"]),
+        ("controller", "feedback + feedforward" if s["feedforward"] else "feedback alone"),
+        ("stroke (m)", s["stroke"]), ("duration (s)", s["duration"]),
+        ("sample rate (Hz)", s["sample_rate_hz"]),
+        ("cross-over (rad/s)", s["crossover_rad_s"]),
+        ("phase margin (deg)", s["phase_margin_deg"]), ("gain margin", s["gain_margin"]),
+        ("modulus margin", s["modulus_margin"]),
+        ("max |error| (m)", s["max_abs_error"]),
+        ("error / stroke", s["error_ratio"]), ("target", s["target"]),
+        ("wall time (s)", s["wall_time_s"]),
+    ]
+    verdict = (f"tracking error {100 * s['error_ratio']:.3g} % of the stroke against the "
+               f"target {100 * s['target']:g} %: {'PASSED' if s['passed'] else 'FAILED'}")
+    text = format_table(["quantity", "value"], rows) + "\n" + verdict
+    if "plot" in s:
+        text += f"\nplot written to {s['plot']}"
+    return text
+
+

@@ -1,0 +1,109 @@
+"""The third plant: the controller FMU and the scene FMU connected in libcosim (libcosimpy).
+
+    scene FMU  --- x (m) --->  controller FMU
+               <-- F (N) ----
+
+libcosim's fixed-step algorithm steps both FMUs over each macro step [t_k, t_k+1] (h = 1 / fs,
+an integer number of nanoseconds) after transferring the connected values: the controller
+reads y_k, the plant gets the force the controller computed during the previous step. That is
+the loop timing of runner.py (one sample of computation delay), so the co-simulation
+reproduces the in-process loop. The samples are read back with time-series observers: after
+macro step k+1 the plant's output is y_k+1 and its input the force it held on [t_k, t_k+1).
+"""
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from flexure.core import SimulationError
+
+NS = 1_000_000_000
+
+
+def _scene_source(scene, model):
+    if isinstance(scene, (str, Path)):
+        return scene
+    return model.source
+
+
+def scene_fmu(scene, model, workdir=None):
+    """The scene's FMU in `workdir` (built once; rebuilt when absent)."""
+    from flexure.fmu import build_scene_fmu
+
+    folder = Path(workdir) if workdir is not None else Path(
+        tempfile.mkdtemp(prefix="flexure_loop_"))
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{model.name}.fmu"
+    if not path.exists():
+        build_scene_fmu(_scene_source(scene, model), path)
+    return path
+
+
+def step_nanoseconds(fs):
+    """The macro step 1 / fs in integer nanoseconds; SimulationError if not exact."""
+    step = int(round(NS / fs))
+    if abs(step * fs - NS) > 1e-6 * NS:
+        raise SimulationError(f"libcosim counts time in nanoseconds: 1 / fs = {1 / fs!r} s "
+                              "is not a whole number of nanoseconds; choose fs dividing 1e9")
+    return step
+
+
+def run_cosimulation(model, scene, controller, design, *, rtol=1e-8, workdir=None):
+    """Run the loop in libcosim; returns t, reference, position, force like simulate_loop."""
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    from .controller_fmu import build_controller_fmu
+
+    log_output_level(CosimLogLevel.WARNING)
+    folder = Path(workdir) if workdir is not None else Path(
+        tempfile.mkdtemp(prefix="flexure_loop_"))
+    plant_path = scene_fmu(scene, model, folder)
+    controller_path = build_controller_fmu(controller, design, model,
+                                           folder / "flexure_controller.fmu")
+    N, fs = controller.samples, controller.fs
+    step = step_nanoseconds(fs)
+    ex = CosimExecution.from_step_size(step_size=step)
+    plant = ex.add_local_slave(CosimLocalSlave(fmu_path=str(plant_path), instance_name="plant"))
+    ctrl = ex.add_local_slave(CosimLocalSlave(fmu_path=str(controller_path),
+                                              instance_name="controller"))
+    vr = {(s, v.name.decode()): v.reference
+          for s in (plant, ctrl) for v in ex.slave_variables(s)}
+    if not ex.real_initial_value(plant, vr[(plant, "integrator.rtol")], float(rtol)):
+        raise SimulationError("libcosim: cannot set the plant's integrator.rtol")
+    for pair in design.pairs:
+        out, inp = pair.output_name, pair.input_name
+        if ex.connect_real_variables(plant, vr[(plant, out)], ctrl, vr[(ctrl, out)]) != 0 or \
+                ex.connect_real_variables(ctrl, vr[(ctrl, inp)], plant, vr[(plant, inp)]) != 0:
+            raise SimulationError(f"libcosim: cannot connect loop {inp} -> {out}")
+    series = CosimObserver.create_time_series()
+    ex.add_observer(observer=series)
+    watched = [(plant, p.output_name) for p in design.pairs] + [
+        (plant, p.input_name) for p in design.pairs]
+    for slave, name in watched:
+        series.start_time_series(slave, vr[(slave, name)], CosimVariableType.REAL)
+    if not ex.simulate_until(target_time=N * step):
+        from libcosimpy._internal import get_last_error_message
+
+        raise SimulationError(f"libcosim stopped at t = {ex.status().current_time / NS:.9g} "
+                              f"s: {get_last_error_message()}")
+    n = len(design.pairs)
+    position = np.empty((N + 1, n))
+    force = np.empty((N + 1, n))
+    for i, pair in enumerate(design.pairs):
+        position[0, i] = controller.offsets[i]
+        _, steps, y = series.time_series_real_samples(
+            plant, vr[(plant, pair.output_name)], from_step=1, sample_count=N)
+        _, _, u = series.time_series_real_samples(
+            plant, vr[(plant, pair.input_name)], from_step=1, sample_count=N)
+        if len(y) != N or len(u) != N:
+            raise SimulationError(f"libcosim: expected {N} samples, got {len(y)}")
+        position[1:, i] = y
+        force[:N, i] = u
+        force[N, i] = u[-1]
+    t = np.arange(N + 1) / fs
+    return t, controller.reference[: N + 1].copy(), position, force

@@ -1,0 +1,181 @@
+"""Feedforward: a stable inverse of the low-frequency model applied to the motion profile.
+
+Low-frequency model. With n actuated inputs, the n lowest modes of the linearised model (the
+suspension modes the actuators drive; the parasitic modes lie above the cross-over) give,
+in modal coordinates eta with mass-normalised shapes Phi (unit modal mass),
+
+    eta'' + Phi^T C0 Phi eta' + diag(w^2) eta = Phi^T DF^T b u,     y = DF_y Phi eta
+
+so that for a desired output motion y(t) of the colocated sensors the forces are
+
+    u = M_ff y'' + C_ff y' + K_ff y,   M_ff = B_r^-1 C_r^-1,  C_ff = B_r^-1 (Phi^T C0 Phi) C_r^-1,
+                                       K_ff = B_r^-1 diag(w^2) C_r^-1
+
+with B_r = Phi^T DF^T b and C_r = DF_y Phi. For one DOF this is u = m a + c v + k x with the
+modal mass m = 1 / phi_x^2, the modal damping and the modal stiffness: the inverse of
+1 / (m s^2 + c s + k), a polynomial in s and so stable, with no poles at all.
+
+Zero-order hold. The force u_k is held over [t_k, t_k + Ts); it should equal the mean of the
+continuous feedforward over that interval, not its value at t_k (which lags by half a sample).
+`forces` therefore uses the exact interval means of the profile's position, velocity and
+acceleration (profiles.interval_average).
+
+Models with zeros. A general (e.g. non-colocated) SISO model P(z) = z^-d B(z) / A(z) has
+zeros that cannot be inverted stably: outside the unit circle (non-minimum phase), or close
+to it (lightly damped). `StableInverse` is the zero-phase-error tracking inverse (Tomizuka,
+1987): the acceptable zeros are inverted, each unacceptable factor (1 - b z^-1) is replaced
+by its zero-phase mirror (1 - b z)(1 - b z^-1) / (1 - b)^2 evaluated with preview of the
+known profile, so the phase error is zero and the DC gain exact. Zeros well outside the unit
+circle are inverted exactly by a filter run backwards in time over the known profile (the
+non-causal stable inversion); the inputs then start before the motion, by a few time
+constants of those zeros.
+"""
+
+from dataclasses import dataclass, replace
+
+import control
+import numpy as np
+
+from flexure.core import linearize, natural_frequencies
+
+from .feedback import ControlDesignError, colocated_pairs
+
+
+@dataclass(frozen=True)
+class LowFrequencyModel:
+    """u = mass @ y'' + damping @ y' + stiffness @ y on the colocated outputs of the loops.
+
+    Units: kg, N s/m, N/m (square matrices, one row and column per loop).
+    """
+
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+    frequencies_hz: np.ndarray  # the modes it keeps
+
+    def scaled(self, *, mass=1.0, damping=1.0, stiffness=1.0):
+        """The same model with its matrices multiplied by factors (a model error study)."""
+        return replace(self, mass=self.mass * mass, damping=self.damping * damping,
+                       stiffness=self.stiffness * stiffness)
+
+    def force(self, position, velocity, acceleration):
+        """The forces (N), arrays (..., n_loops), for the output motion (m, m/s, m/s^2)."""
+        p, v, a = (np.asarray(x, float) for x in (position, velocity, acceleration))
+        return a @ self.mass.T + v @ self.damping.T + p @ self.stiffness.T
+
+    def to_dict(self):
+        return {k: np.asarray(getattr(self, k)).tolist()
+                for k in ("mass", "damping", "stiffness", "frequencies_hz")}
+
+    @classmethod
+    def from_dict(cls, data):
+        return cls(**{k: np.asarray(v, float) for k, v in data.items()})
+
+
+def low_frequency_model(model, *, linear_model=None):
+    """The low-frequency model of `model` on its colocated loops (see the module docstring)."""
+    pairs = colocated_pairs(model)
+    lin = linear_model or linearize(model)
+    modes = natural_frequencies(model, linear_model=lin)
+    r = len(pairs)
+    phi = modes.shapes[:, :r]
+    omega = 2 * np.pi * modes.frequencies_hz[:r]
+    b = np.zeros((model.nx, r))
+    for k, pair in enumerate(pairs):
+        b[model.inputs[pair.input_index].coordinate, k] = 1.0
+    B_r = phi.T @ lin.DF.T @ b
+    C_r = lin.DF[[model.outputs[p.output_index].coordinate for p in pairs]] @ phi
+    if np.linalg.cond(B_r) > 1e12 or np.linalg.cond(C_r) > 1e12:
+        raise ControlDesignError(
+            f"{model.name}: the {r} lowest mode(s) are not driven or not seen by the loops "
+            f"({', '.join(p.input_name for p in pairs)}); no low-frequency inverse")
+    left, right = np.linalg.inv(B_r), np.linalg.inv(C_r)
+    return LowFrequencyModel(
+        mass=left @ right,
+        damping=left @ (phi.T @ lin.C0 @ phi) @ right,
+        stiffness=left @ np.diag(omega**2) @ right,
+        frequencies_hz=modes.frequencies_hz[:r].copy(),
+    )
+
+
+def forces(lf_model, profile, t0, t1, *, direction=None):
+    """Feedforward forces (N), (n_samples, n_loops), held over the intervals [t0, t1).
+
+    The profile moves the loops along `direction` (n_loops,), default the first loop only.
+    """
+    n = lf_model.mass.shape[0]
+    direction = np.eye(n)[0] if direction is None else np.asarray(direction, float)
+    p, v, a = profile.interval_average(t0, t1)
+    return lf_model.force(np.outer(p, direction), np.outer(v, direction),
+                          np.outer(a, direction))
+
+
+class StableInverse:
+    """Zero-phase-error tracking (approximate) inverse of a discrete SISO model.
+
+    Parameters
+    ----------
+    plant : control.TransferFunction or StateSpace, discrete (dt = Ts)
+        The model from force (N) to position (m).
+    min_damping : float
+        Zeros inside the unit circle with a damping ratio below this (as poles of the inverse)
+        count as lightly damped and are not inverted; nor are zeros at |z| >= 1.
+    """
+
+    def __init__(self, plant, *, min_damping=0.05, radius=0.999):
+        tf = control.tf(plant)
+        if not tf.isdtime(strict=True) or tf.ninputs != 1 or tf.noutputs != 1:
+            raise ControlDesignError("StableInverse needs a discrete SISO model")
+        num = np.trim_zeros(np.asarray(tf.num[0][0], float), "f")
+        den = np.asarray(tf.den[0][0], float)
+        self.dt = tf.dt
+        self.delay = len(den) - len(num)  # relative degree d: P = z^-d B(z^-1) / A(z^-1)
+        gain, zeros = num[0], np.roots(num)
+        damped = np.array([_damping(z, tf.dt) >= min_damping for z in zeros], bool)
+        outside = (np.abs(zeros) > 1.0 / radius) & damped
+        bad = ~damped | ((np.abs(zeros) >= radius) & ~outside)
+        self.zeros_inverted = zeros[~bad & ~outside]  # stable: a causal filter
+        self.zeros_anticausal = zeros[outside]  # non-minimum phase: inverted backwards in time
+        self.zeros_mirrored = zeros[bad]  # on or near the unit circle, lightly damped: ZPETC
+        self.gain = gain
+        self.den = den  # A(z^-1): the denominator coefficients read in powers of z^-1
+        self.good = np.atleast_1d(np.real(np.poly(self.zeros_inverted)))  # B_a(z^-1), monic
+        self.bad = np.atleast_1d(np.real(np.poly(self.zeros_mirrored)))  # B_u(z^-1), monic
+        self.bad_dc = float(np.sum(self.bad))
+        self.dc_gain = float(np.sum(num) / np.sum(den))
+
+    def apply(self, reference):
+        """The inputs u_k (N) such that the model output follows `reference` (m).
+
+        `reference` holds r at the samples k = 0..N-1, at rest at r_0 before and held at its
+        last value after; u_k uses the samples up to k + d + m (preview, m mirrored zeros):
+
+            u = A(z^-1) B_u(z) z^d r / (b_0 B_a(z^-1) B_u(1)^2)
+        """
+        from scipy.signal import lfilter, lfilter_zi
+
+        r = np.asarray(reference, float)
+        r0, x, n, m = r[0], r - r[0], len(r), len(self.bad) - 1
+        ext = np.concatenate([x, np.full(self.delay + m, x[-1])])
+        preview = sum(self.bad[j] * ext[self.delay + j: self.delay + j + n]
+                      for j in range(m + 1))
+        v = lfilter(self.den, [1.0], preview)
+        u = lfilter([1.0], self.good, v) / (self.gain * self.bad_dc**2)
+        b = self.zeros_anticausal  # prod 1/(1 - b z^-1) = prod(-1/b) z^k / prod(1 - z/b)
+        if b.size:
+            a = np.real(np.poly(1.0 / b))  # 1 / prod(1 - z/b), run backwards in time
+            reverse = np.concatenate([u, np.full(n, u[-1])])[::-1]
+            back = lfilter([1.0], a, reverse, zi=lfilter_zi([1.0], a) * reverse[0])[0][::-1]
+            u = np.real(np.prod(-1.0 / b)) * back[b.size: b.size + n]
+        return u + r0 / self.dc_gain
+
+
+def _damping(z, dt):
+    """The damping ratio of a zero z (or of its mirror 1/z* outside the unit circle)."""
+    z = complex(z)
+    if abs(z) > 1:
+        z = 1 / np.conj(z)
+    if abs(z) == 0:
+        return 1.0
+    s = np.log(z) / dt
+    return 1.0 if abs(s) == 0 else float(-np.real(s) / abs(s))

@@ -1,0 +1,140 @@
+"""Plants of the closed-loop runner: the same tiny interface around three simulators.
+
+    plant.reset() -> outputs at t0;  plant.set_input(u);  plant.advance(t_end);
+    plant.output() -> outputs (n_outputs,);  plant.close()
+
+- `InProcessPlant`: flexure.core's Simulator in this process.
+- `FmuPlant`: the scene's co-simulation FMU (flexure.fmu.build_scene_fmu) stepped by fmpy.
+
+Both integrate the same nonlinear model with the same integrator and tolerances (the FMU runs
+flexure's Simulator too, from its bundled copy of the same sources), and both hold the input
+over each step, so for the same inputs they give the same outputs to within the integrator's
+tolerance. The third plant, the controller FMU and this FMU connected in libcosim, is a whole
+co-simulation rather than a plant; it lives in `cosim.py`.
+"""
+
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from flexure.core import SimulationError, Simulator
+
+
+class InProcessPlant:
+    """The scene's nonlinear model integrated by flexure.core.Simulator in this process."""
+
+    kind = "inprocess"
+
+    def __init__(self, model, *, method="cvode-bdf", rtol=1e-8):
+        self.model = model
+        self.simulator = Simulator(model, method=method, rtol=rtol)
+        self.input_names = list(self.simulator.input_names)
+        self.output_names = list(self.simulator.output_names)
+
+    def reset(self):
+        self.simulator.reset(t0=0.0)
+        return self.output()
+
+    def set_input(self, u):
+        self.simulator.set_inputs(u)
+
+    def advance(self, t_end):
+        self.simulator.advance(t_end)
+
+    def output(self):
+        return np.asarray(self.simulator.outputs(), float)
+
+    @property
+    def statistics(self):
+        return self.simulator.statistics
+
+    def close(self):
+        pass
+
+
+class FmuPlant:
+    """A scene FMU (co-simulation, FMI 2.0) stepped by fmpy with the held input.
+
+    Parameters
+    ----------
+    fmu_path : str or Path
+        The scene's FMU (`flexure.fmu.build_scene_fmu`).
+    method, rtol : str, float
+        Set on the FMU's parameters "integrator.method" and "integrator.rtol".
+    """
+
+    kind = "fmu"
+
+    def __init__(self, fmu_path, *, method="cvode-bdf", rtol=1e-8):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.path = Path(fmu_path)
+        md = read_model_description(str(self.path))
+        variables = {v.name: v for v in md.modelVariables}
+        self.input_names = [v.name for v in md.modelVariables if v.causality == "input"]
+        self.output_names = [v.name for v in md.modelVariables if v.causality == "output"]
+        self._in = [variables[n].valueReference for n in self.input_names]
+        self._out = [variables[n].valueReference for n in self.output_names]
+        self._dir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix="flexure_plant_"))
+        self._fmu = FMU2Slave(guid=md.guid, unzipDirectory=self._dir,
+                              modelIdentifier=md.coSimulation.modelIdentifier,
+                              instanceName="plant")
+        self._fmu.instantiate(loggingOn=False)
+        self._method_vr = variables["integrator.method"].valueReference
+        self._rtol_vr = variables["integrator.rtol"].valueReference
+        self._settings = (method, float(rtol))
+        self._initialized = False
+        self.time = 0.0
+
+    def reset(self):
+        from fmpy.fmi1 import FMICallException
+
+        if self._initialized:
+            self._fmu.reset()
+        method, rtol = self._settings
+        try:
+            self._fmu.setupExperiment(startTime=0.0)
+            self._fmu.enterInitializationMode()
+            self._fmu.setString([self._method_vr], [method])
+            self._fmu.setReal([self._rtol_vr], [rtol])
+            self._fmu.exitInitializationMode()
+        except FMICallException as error:
+            raise SimulationError(f"{self.path}: initialization failed: {error}") from None
+        self._initialized = True
+        self.time = 0.0
+        return self.output()
+
+    def set_input(self, u):
+        self._fmu.setReal(self._in, [float(v) for v in np.atleast_1d(u)])
+
+    def advance(self, t_end):
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            self._fmu.doStep(currentCommunicationPoint=self.time,
+                             communicationStepSize=t_end - self.time)
+        except FMICallException as error:
+            raise SimulationError(f"{self.path}: doStep at t = {self.time:.9g} s failed: "
+                                  f"{error}") from None
+        self.time = t_end
+
+    def output(self):
+        return np.asarray(self._fmu.getReal(self._out), float)
+
+    def close(self):
+        if self._fmu is not None:
+            try:
+                self._fmu.terminate()
+            finally:
+                self._fmu.freeInstance()
+                self._fmu = None
+                shutil.rmtree(self._dir, ignore_errors=True)
+
+    def __del__(self):  # pragma: no cover - a safety net; close() is the normal way
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001
+            pass

@@ -1,0 +1,317 @@
+"""The closed loop: a sampled controller (feedback plus feedforward) around a plant.
+
+One loop, whatever the plant. At the samples t_k = k / fs (k = 0 .. N):
+
+    y_k   = plant output (the colocated positions of the loops), measured at t_k
+    e_k   = r_k - y_k                         r: the profile plus the initial positions
+    u_k+1 = C(z) e_k + u_ff,k+1               computed at t_k, applied on [t_k+1, t_k+2)
+    plant: u_k held over [t_k, t_k+1)         (zero-order hold)
+
+so the force is computed from a measurement one sample older than the interval it acts on:
+one sample of computation delay, as in a real-time controller that writes its output at the
+next clock tick. That is also exactly the timing of a co-simulation master that transfers
+the values between the FMUs once per macro step (libcosim's fixed-step algorithm: the
+controller FMU reads y_k at the start of its step over [t_k, t_k+1] and its new output reaches
+the plant at the start of the next step), so the in-process loop, the loop around the fmpy
+FMU and the libcosim co-simulation all compute the same sequence. The design (feedback.py)
+includes that delay and the hold in its margins. u_0 = u_ff,0 (nothing measured yet).
+
+u_ff,k is the mean over [t_k, t_k+1) of the continuous feedforward (feedforward.py), so the
+held force carries no half-sample lag. The error reported is max_k |e_k| over the samples,
+during the move and a settling time after it.
+"""
+
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexure.core import FlexureError, load_scene
+
+from .feedback import DiscreteController, design_feedback
+from .feedforward import LowFrequencyModel, forces, low_frequency_model
+from .profiles import ThirdOrderProfile
+
+TARGET = 1e-3  # the tracking target: max |error| / stroke
+PLANTS = ("inprocess", "fmu", "libcosim")
+
+
+class LoopError(FlexureError, ValueError):
+    """A closed-loop run was asked for with impossible settings."""
+
+
+class LoopController:
+    """Feedback plus feedforward at one sample rate; the same object runs in the FMU.
+
+    Parameters
+    ----------
+    controller : DiscreteController
+        The discrete feedback C(z) from errors (m) to forces (N), one channel per loop.
+    profile : ThirdOrderProfile
+        The motion of the loop `axis`; the other loops hold their initial position.
+    fs : float
+        Sample rate (Hz).
+    samples : int
+        The number of intervals N (the run ends at N / fs).
+    offsets : array (n_loops,)
+        The initial positions of the loops (m): the reference is offsets + profile.
+    feedforward : LowFrequencyModel or None
+        The model whose inverse gives the feedforward; None for feedback alone.
+    """
+
+    def __init__(self, controller, profile, *, fs, samples, offsets, feedforward=None, axis=0):
+        self.controller, self.profile = controller, profile
+        self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
+        self.offsets = np.asarray(offsets, float).reshape(-1)
+        self.feedforward_model = feedforward
+        n = self.offsets.size
+        direction = np.eye(n)[self.axis]
+        k = np.arange(self.samples + 2)
+        t = k / self.fs
+        self.reference = self.offsets + np.outer(profile.position(t), direction)
+        if feedforward is None:
+            self.feedforward = np.zeros((k.size, n))
+        else:
+            self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
+                                      direction=direction)
+
+    def reset(self):
+        self.controller.reset()
+
+    def initial_output(self):
+        """u_0 (N): the force on [t_0, t_1), before anything is measured."""
+        return self.feedforward[0].copy()
+
+    def step(self, k, y):
+        """u_k+1 (N) from the measurement y_k (m) at sample k; also returns e_k."""
+        k = min(int(k), self.samples)  # past the end: the reference and force are held
+        e = self.reference[k] - np.asarray(y, float)
+        return self.controller.step(e) + self.feedforward[k + 1], e
+
+    # -- serialisation (the controller FMU is configured by this dictionary) ---------------
+    def to_dict(self):
+        p = self.profile
+        return {
+            "controller": self.controller.to_dict(),
+            "profile": {"stroke": p.stroke, "duration": p.duration, "jerk_time": p.jerk_time,
+                        "acceleration_time": p.acceleration_time, "start": p.start},
+            "fs": self.fs, "samples": self.samples, "offsets": self.offsets.tolist(),
+            "axis": self.axis,
+            "feedforward": (None if self.feedforward_model is None
+                            else self.feedforward_model.to_dict()),
+        }
+
+    @classmethod
+    def from_dict(cls, data):
+        ff = data["feedforward"]
+        return cls(DiscreteController.from_dict(data["controller"]),
+                   ThirdOrderProfile(**data["profile"]), fs=data["fs"],
+                   samples=data["samples"], offsets=data["offsets"], axis=data["axis"],
+                   feedforward=None if ff is None else LowFrequencyModel.from_dict(ff))
+
+
+@dataclass
+class LoopResult:
+    """The samples of a closed-loop run and its summary.
+
+    t (N+1,) s; reference, position, error (N+1, n_loops) m; force, feedforward
+    (N+1, n_loops) N, the force held from t_k (the last row repeats the one before).
+    """
+
+    t: np.ndarray
+    reference: np.ndarray
+    position: np.ndarray
+    force: np.ndarray
+    feedforward: np.ndarray
+    stroke: float
+    design: dict
+    settings: dict = field(default_factory=dict)
+    wall_time_s: float = 0.0
+
+    @property
+    def error(self):
+        return self.reference - self.position
+
+    @property
+    def max_abs_error(self):
+        return float(np.max(np.abs(self.error)))
+
+    def summary(self):
+        """The dictionary `flexure loop --json` prints (SI units)."""
+        ratio = self.max_abs_error / abs(self.stroke)
+        axis = self.settings.get("axis", 0)
+        return {
+            "scene": self.settings.get("scene"), "plant": self.settings.get("plant"),
+            "feedforward": self.settings.get("feedforward"),
+            "max_abs_error": self.max_abs_error, "stroke": self.stroke,
+            "error_ratio": ratio, "target": TARGET, "passed": bool(ratio <= TARGET),
+            "max_abs_error_during_move": float(np.max(np.abs(
+                self.error[self.t <= self.settings.get("move_end", np.inf), axis]))),
+            "final_error": float(np.max(np.abs(self.error[-1]))),
+            "max_abs_force": float(np.max(np.abs(self.force))),
+            "phase_margin_deg": self.design["phase_margin_deg"],
+            "gain_margin": self.design["gain_margin"],
+            "modulus_margin": self.design["modulus_margin"],
+            "crossover_rad_s": self.design["crossover_rad_s"],
+            "sample_rate_hz": self.design["sample_rate_hz"],
+            "closed_loop_spectral_radius": self.design["closed_loop_spectral_radius"],
+            "loops": self.design["loops"],
+            "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
+            "wall_time_s": self.wall_time_s,
+        }
+
+    def plot(self, path, *, title=None):
+        """Reference, position, error and force against time, saved as a PNG."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        axis = self.settings.get("axis", 0)
+        fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+        axes[0].plot(self.t, self.reference[:, axis] * 1e3, label="reference")
+        axes[0].plot(self.t, self.position[:, axis] * 1e3, "--", label="position")
+        axes[0].set_ylabel("position (mm)")
+        axes[0].legend(loc="lower right")
+        band = TARGET * abs(self.stroke) * 1e6
+        axes[1].plot(self.t, self.error[:, axis] * 1e6, label="error r - y")
+        axes[1].axhline(band, color="r", lw=0.8, ls=":", label=f"target +-{band:.3g} um")
+        axes[1].axhline(-band, color="r", lw=0.8, ls=":")
+        axes[1].set_ylabel("error (um)")
+        axes[1].legend(loc="upper right")
+        axes[2].step(self.t, self.force[:, axis], where="post", label="total force")
+        axes[2].step(self.t, self.feedforward[:, axis], where="post", ls="--",
+                     label="feedforward")
+        axes[2].set_ylabel("force (N)")
+        axes[2].set_xlabel("time (s)")
+        axes[2].legend(loc="upper right")
+        s = self.summary()
+        fig.suptitle(title or (
+            f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} mm, "
+            f"max |e| = {s['max_abs_error'] * 1e6:.3g} um = {100 * s['error_ratio']:.3g} % "
+            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"), fontsize=10)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path
+
+
+def build_loop(model, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
+               feedforward=True, settle=0.25, axis=0, feedforward_model=None,
+               **design_options):
+    """Design the feedback and the feedforward of `model`; returns (LoopController, design).
+
+    `feedforward_model` replaces the low-frequency model derived from `model` (e.g. a
+    deliberately wrong one, `low_frequency_model(model).scaled(mass=1.1, stiffness=1.1)`).
+    """
+    for name, value in (("stroke", stroke), ("duration", duration), ("fs", fs),
+                        ("settle", settle)):
+        if not np.isfinite(value) or (value <= 0 if name != "settle" else value < 0):
+            raise LoopError(f"{name} must be a positive finite number, got {value}")
+    design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
+    n = len(design.pairs)
+    if not 0 <= axis < n:
+        raise LoopError(f"axis {axis} out of range: {model.name} has {n} loop(s)")
+    profile = ThirdOrderProfile(stroke, duration)
+    samples = int(round((duration + settle) * fs))
+    offsets = [model.initial_coordinates[model.outputs[p.output_index].coordinate]
+               for p in design.pairs]
+    lf = None
+    if feedforward:
+        lf = feedforward_model if feedforward_model is not None else low_frequency_model(model)
+    controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
+                                samples=samples, offsets=offsets, feedforward=lf, axis=axis)
+    return controller, design
+
+
+def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
+             feedforward=True, plant="inprocess", settle=0.25, axis=0, rtol=1e-8,
+             feedforward_model=None, workdir=None, **design_options):
+    """Run the closed loop on a scene (a model, a file or a built-in name).
+
+    Parameters
+    ----------
+    scene : Model or str
+    stroke, duration : float
+        The third-order move (m, s).
+    fs : float
+        Sample rate (Hz) of the controller and communication step of the plant.
+    crossover : float
+        The requested cross-over (rad/s).
+    feedforward : bool
+        Add the feedforward of the low-frequency model.
+    plant : "inprocess", "fmu" or "libcosim"
+    settle : float
+        Time (s) simulated after the move.
+    rtol : float
+        Relative tolerance of the plant's integrator (every plant uses the same).
+    feedforward_model : LowFrequencyModel, optional
+        Use this model for the feedforward instead of the scene's own.
+    workdir : path, optional
+        Where the FMUs are built (default: a temporary folder).
+
+    Returns
+    -------
+    LoopResult
+    """
+    if plant not in PLANTS:
+        raise LoopError(f"unknown plant {plant!r}; expected one of {', '.join(PLANTS)}")
+    model = load_scene(scene) if isinstance(scene, (str, bytes)) or hasattr(
+        scene, "__fspath__") else scene
+    controller, design = build_loop(
+        model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
+        feedforward=feedforward, settle=settle, axis=axis,
+        feedforward_model=feedforward_model, **design_options)
+    settings = {"scene": model.name, "plant": plant, "feedforward": bool(feedforward),
+                "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
+                "rtol": rtol}
+    start = _time.perf_counter()
+    if plant == "libcosim":
+        from .cosim import run_cosimulation
+
+        t, reference, position, force = run_cosimulation(
+            model, scene, controller, design, rtol=rtol, workdir=workdir)
+    else:
+        from .plants import FmuPlant, InProcessPlant
+
+        if plant == "inprocess":
+            adapter = InProcessPlant(model, rtol=rtol)
+        else:
+            from .cosim import scene_fmu
+
+            adapter = FmuPlant(scene_fmu(scene, model, workdir), rtol=rtol)
+        try:
+            t, reference, position, force = simulate_loop(adapter, controller, design)
+        finally:
+            adapter.close()
+    wall = _time.perf_counter() - start
+    return LoopResult(t=t, reference=reference, position=position, force=force,
+                      feedforward=controller.feedforward[: len(t)].copy(), stroke=stroke,
+                      design=design.summary(), settings=settings, wall_time_s=wall)
+
+
+def simulate_loop(plant, controller, design):
+    """Step `plant` (plants.py interface) under `controller`; returns t, r, y, u arrays."""
+    pairs = design.pairs
+    n_inputs = len(plant.input_names)
+    inputs = [p.input_index for p in pairs]
+    outputs = [p.output_index for p in pairs]
+    N, fs = controller.samples, controller.fs
+    position = np.empty((N + 1, len(pairs)))
+    force = np.empty((N + 1, len(pairs)))
+    controller.reset()
+    y = plant.reset()[outputs]
+    u = controller.initial_output()
+    full = np.zeros(n_inputs)
+    for k in range(N):
+        position[k] = y
+        force[k] = u
+        u_next, _ = controller.step(k, y)
+        full[inputs] = u
+        plant.set_input(full)
+        plant.advance((k + 1) / fs)
+        y = plant.output()[outputs]
+        u = u_next
+    position[N], force[N] = y, force[N - 1]
+    t = np.arange(N + 1) / fs
+    return t, controller.reference[: N + 1].copy(), position, force
