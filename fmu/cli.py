@@ -2,10 +2,12 @@
 
     flexure fmu build stage_planar_3dof -o stage.fmu [--tunable sections.leaf.EdA ...]
     flexure fmu env [--json | --env]      # what a JVM / Rust / C host needs
+    flexure fmu check NAME.fmu NAME_in.csv NAME_ref.csv [--update]   # regression test
 """
 
 from .builder import build_scene_fmu, default_tunable
 from .env import fmu_environment, format_environment
+from .regression import DEFAULT_ATOL, DEFAULT_INTERVAL, DEFAULT_RTOL, check_fmu, write_reference
 
 
 def register(subparsers):
@@ -38,6 +40,23 @@ def register(subparsers):
                        help="one line of NAME=VALUE for `env ... host`")
     env.set_defaults(run=run_env, style="sh")
 
+    check = commands.add_parser(
+        "check", help="regression-test an FMU against a reference CSV (FMI cross-check style)",
+        description="Simulate FMU with fmpy driven by INPUT_CSV on the grid of REFERENCE_CSV "
+                    "and compare: |y - y_ref| <= rtol * range(y_ref) + atol at every sample.")
+    check.add_argument("fmu")
+    check.add_argument("input_csv")
+    check.add_argument("reference_csv")
+    check.add_argument("--rtol", type=float, default=DEFAULT_RTOL,
+                       help=f"of each signal's range (default {DEFAULT_RTOL:g})")
+    check.add_argument("--atol", type=float, default=DEFAULT_ATOL,
+                       help=f"absolute (default {DEFAULT_ATOL:g})")
+    check.add_argument("--update", action="store_true",
+                       help="write the reference instead of checking against it")
+    check.add_argument("--interval", type=float, default=DEFAULT_INTERVAL,
+                       help="communication step of a reference written with --update (s)")
+    check.set_defaults(run=run_check)
+
 
 def run_build(args):
     tunable = [] if args.no_tunable else args.tunable
@@ -45,6 +64,21 @@ def run_build(args):
                            validate=not args.no_validate)
     print(path)
     return 0
+
+
+def run_check(args):
+    if args.update:
+        path = write_reference(args.fmu, args.input_csv, args.reference_csv,
+                               output_interval=args.interval)
+        print(f"wrote {path}")
+        return 0
+    problems = check_fmu(args.fmu, args.input_csv, args.reference_csv, rtol=args.rtol,
+                         atol=args.atol)
+    for problem in problems:
+        print(f"{args.fmu}: {problem}")
+    if not problems:
+        print(f"{args.fmu}: matches {args.reference_csv}")
+    return 1 if problems else 0
 
 
 def run_env(args):

@@ -27,8 +27,9 @@ import copy
 import tomllib
 
 import numpy as np
-from flexure.core import Simulator, build_model
 from pythonfmu import DefaultExperiment
+
+from flexure.core import Simulator, build_model
 
 from .slave import SafeSlave
 
@@ -103,7 +104,7 @@ class SceneSlave(SafeSlave):
                       description="relative tolerance of the integrator",
                       getter=lambda: self.rtol,
                       setter=lambda value: setattr(self, "rtol", value))
-        self.add_real("integrator.atol", causality="parameter", unit="1", start=self.atol,
+        self.add_real("integrator.atol", causality="parameter", start=self.atol,
                       description="absolute tolerance on q and qdot (0: the simulator's "
                                   "default, scaled from rtol)",
                       getter=lambda: self.atol,

@@ -49,6 +49,24 @@ from pythonfmu.enums import Fmi2Status
 TIME_TOLERANCE = 1e-9
 
 
+# pythonfmu 0.7.0's binary finds the slave class by importing the script module, executing the
+# script once more in the module's namespace, and then releasing one reference to that
+# namespace it never owned (findClass in PySlaveInstance.cpp: Py_DECREF on the borrowed
+# PyModule_GetDict). The first instance frees the module's __dict__; the next instantiation of
+# the same FMU in the process then fails ("module has no attribute ...") or reads garbage.
+_SCRIPT_NAMESPACES = []
+
+
+def keep_script_namespace(namespace):
+    """Take one reference to a slave script's namespace; call as `(globals())` at module level.
+
+    The script runs once on import and once more per instantiation, so every release by
+    pythonfmu's binary is matched by one reference here (kept for the life of the process).
+    `build_slave_fmu` appends the call to every script it builds.
+    """
+    _SCRIPT_NAMESPACES.append(namespace)
+
+
 class UnitReal(Real):
     """A pythonfmu `Real` that also declares its unit (pythonfmu 0.7.0 has no unit attribute).
 
@@ -154,12 +172,20 @@ class SafeSlave(Fmi2Slave):
         self.log(escape_log(message), status=status)
 
     def _fail(self, what, error):
-        """Mark the instance broken after an unexpected exception, log it."""
-        detail = "".join(traceback.format_exception_only(type(error), error)).strip()
-        self.broken = f"{what} failed unexpectedly: {detail}"
-        self.log_message(
-            f"{self.instance_name}: {self.broken}; this instance cannot go on until "
-            f"fmi2Reset or a restored state\n{traceback.format_exc()}", Fmi2Status.error)
+        """Mark the instance broken (it cannot go on) and log why.
+
+        A model error (FlexureError) is reported by its message; anything else is a bug and
+        is logged with its traceback.
+        """
+        if _is_model_error(error):
+            self.broken = f"{what} failed: {error}"
+            detail = ""
+        else:
+            exception = "".join(traceback.format_exception_only(type(error), error)).strip()
+            self.broken = f"{what} failed unexpectedly: {exception}"
+            detail = "\n" + traceback.format_exc()
+        self.log_message(f"{self.instance_name}: {self.broken}; this instance cannot go on "
+                         f"until fmi2Reset or a restored state{detail}", Fmi2Status.error)
 
     # -- FMI calls ---------------------------------------------------------------------------
 
@@ -196,7 +222,8 @@ class SafeSlave(Fmi2Slave):
             try:
                 self.time = float(self.last_good_time())
             except Exception as inner:  # noqa: BLE001
-                self._fail("recovering the last good time", inner)
+                self._fail(f"doStep from t = {current_time!r} s over h = {step_size!r} s "
+                           f"({error}); then recovering the last good state", inner)
                 return False
             self.log_message(f"{self.instance_name}: doStep from t = {current_time!r} s "
                              f"over h = {step_size!r} s discarded: {error}; the instance "
