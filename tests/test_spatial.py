@@ -233,3 +233,14 @@ def test_spatial_scene_errors_name_the_key():
     assert "inputs.M.coordinate" in msg and "Euler parameters" in msg
     msg = broken(lambda d: d["scene"].update(dimension=4))
     assert "scene.dimension" in msg and "3 (spatial)" in msg
+
+
+def test_spatial_speed_benchmark_runs():
+    import benchmark_spatial
+
+    rows = benchmark_spatial.benchmark(t_end=0.05, scenes=("stage_spatial_19dof",),
+                                       rtols=(1e-6,))
+    assert [row[1] for row in rows] == ["cvode-bdf", "ida"]
+    for row in rows:
+        assert row[3] > 0 and row[6] > 0
+        assert 1.0 < row[7] < 1.2  # mm: the bar has started to move from 1.058 mm
