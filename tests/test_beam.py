@@ -334,3 +334,61 @@ def test_rigid_rotation_of_the_whole_stage_changes_nothing():
     tip = [model.coordinate_index(f"3.{c}") for c in "xyz"]
     np.testing.assert_allclose(solution.x[tip], R @ reference.x[tip], rtol=0, atol=1e-13)
     assert abs(reference.x[tip][0]) > 0.02  # a large deflection
+
+
+def test_torsional_pendulum_with_a_lumped_node_inertia():
+    """A rigid disc (inertia J about the beam axis, given in the scene) on a beam whose only
+    released deformation is its torsion: f = sqrt(GIt / (l J)) / (2 pi)."""
+    from flexure.core import natural_frequencies
+
+    length, git, j_axis = 0.2, 3.0, 2e-4
+    axis = normalized(np.array([1.0, 1.0, 0.0]))
+
+    def disc(data):
+        # principal axes of the disc: along the beam (J) and two others (J / 2)
+        turn = from_rotation_vector(np.array([0.0, 0.0, np.pi / 4]))  # body x along the beam
+        data["nodes"]["r1"]["rotation"] = to_rotation_vector(turn).tolist()
+        data["nodes"]["r1"]["inertia"] = [j_axis, j_axis / 2, j_axis / 2]
+
+    data = chain([np.zeros(3), axis * length], section={"GIt": git, "EIy": 1.0, "EIz": 1.0,
+                                                         "EA": 1.0},
+                 y_axis=[0.0, 0.0, 1.0], dof=["e2"], extra=disc)
+    frequency = natural_frequencies(build_model(data)).frequencies_hz
+    np.testing.assert_allclose(frequency, [np.sqrt(git / (length * j_axis)) / (2 * np.pi)],
+                               rtol=1e-12)
+
+
+def test_beam_derivatives_at_large_rotations():
+    """Analytic first and second derivatives of the BEAM deformations and inertia points
+    against central differences, at nodes turned by up to 3 rad (the registry-wide check of
+    tests/test_elements.py uses smaller perturbations)."""
+    from flexure.core.elements import ELEMENT_TYPES, beam
+
+    assert ELEMENT_TYPES["BEAM"] is beam and "TRUSS" in ELEMENT_TYPES
+    rng = np.random.default_rng(11)
+    x0, _ = beam.random_coordinates(rng, 4)
+    ref = beam.reference(x0, y_axis=rng.normal(size=(4, 3)))
+    x = x0.copy()
+    for cols in (slice(3, 7), slice(10, 14)):
+        x[:, cols] = compose(from_rotation_vector(rng.uniform(-1.7, 1.7, (4, 3))), x0[:, cols])
+    x[:, 7:10] += rng.normal(scale=0.05, size=(4, 3))
+    h = 1e-6
+
+    def jacobian(f):
+        columns = []
+        for k in range(14):
+            dx = np.zeros_like(x)
+            dx[:, k] = h
+            columns.append((f(x + dx) - f(x - dx)) / (2 * h))
+        return np.stack(columns, axis=-1)
+
+    _, De, D2e = beam.deformations(x, ref, order=2)
+    np.testing.assert_allclose(De, jacobian(lambda y: beam.deformations(y, ref, 0)[0]),
+                               rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(D2e, jacobian(lambda y: beam.deformations(y, ref, 1)[1]),
+                               rtol=1e-6, atol=1e-7)
+    _, Dp, D2p = beam.inertia_points(x, ref, order=2)
+    np.testing.assert_allclose(D2p, jacobian(lambda y: beam.inertia_points(y, ref, 1)[1]),
+                               rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(Dp, jacobian(lambda y: beam.inertia_points(y, ref, 0)[0]),
+                               rtol=1e-6, atol=1e-8)
