@@ -441,3 +441,17 @@ def test_regression_tolerance_catches_a_one_percent_change(scene_fmus):
                       start_values={"nodes.2.mass": 1.01 * mass})
     (problem,) = compare(result, read_csv(folder / f"{scene}_ref.csv"))
     assert problem.startswith("x: max |error|")
+
+
+def test_fmu_benchmark_example_runs():
+    """examples/fmu_benchmark.py on 10 ms: every part timed, the FMU equal to in-process."""
+    examples = str(scene_path("stage_planar_3dof").parent.parent)
+    sys.path.insert(0, examples)
+    try:
+        import fmu_benchmark
+    finally:
+        sys.path.remove(examples)
+    result = fmu_benchmark.benchmark(duration=0.01, repeats=1)
+    assert result["steps"] == 10 and result["same_outputs"]
+    assert all(v > 0 for v in result["per_step_ms"].values())
+    assert "overhead beyond our integrator" in fmu_benchmark.report(result)
