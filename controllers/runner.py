@@ -149,6 +149,7 @@ class LoopResult:
                 self.error[self.t <= self.settings.get("move_end", np.inf), axis]))),
             "final_error": float(np.max(np.abs(self.error[-1]))),
             "max_abs_force": float(np.max(np.abs(self.force))),
+            "max_abs_feedback_force": float(np.max(np.abs(self.force - self.feedforward))),
             "phase_margin_deg": self.design["phase_margin_deg"],
             "gain_margin": self.design["gain_margin"],
             "modulus_margin": self.design["modulus_margin"],
@@ -204,8 +205,9 @@ def build_loop(model, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
     `feedforward_model` replaces the low-frequency model derived from `model` (e.g. a
     deliberately wrong one, `low_frequency_model(model).scaled(mass=1.1, stiffness=1.1)`).
     """
-    for name, value in (("stroke", stroke), ("duration", duration), ("fs", fs),
-                        ("settle", settle)):
+    if not np.isfinite(stroke) or stroke == 0:
+        raise LoopError(f"stroke must be a finite, non-zero distance (m), got {stroke}")
+    for name, value in (("duration", duration), ("fs", fs), ("settle", settle)):
         if not np.isfinite(value) or (value <= 0 if name != "settle" else value < 0):
             raise LoopError(f"{name} must be a positive finite number, got {value}")
     design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
