@@ -7,7 +7,7 @@ have tens to a few hundred coordinates.
 
 import numpy as np
 
-from .rotary_inertia import RotaryInertia
+from .rotary_inertia import node_inertia_groups
 
 
 def deformations(model, x):
@@ -79,7 +79,8 @@ class Inertia:
 
     Element mass acts through inertia points p(x) with a constant mass matrix Mp, so that
     the kinetic energy is 1/2 pdot^T Mp pdot with pdot = Dp xdot. Rigid-body inertias on
-    3-D rotational nodes (Euler parameters) are added by `RotaryInertia`.
+    3-D rotational nodes (Euler parameters) take the same form (`rotary_inertia`) and are one
+    more entry of `groups`.
     """
 
     def __init__(self, model):
@@ -90,7 +91,7 @@ class Inertia:
             for group in model.groups
             if np.any(group.properties.get("rho_A", 0.0))
         ]
-        self.rotary = RotaryInertia(model)
+        self.groups += node_inertia_groups(model)
 
     def mass_matrix(self, x):
         """M(x) (NX, NX) in kg (kg m on translation-rotation, kg m^2 on rotations)."""
@@ -100,8 +101,6 @@ class Inertia:
             local = np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp)
             idx = group.coordinate_index
             np.add.at(M, (idx[:, :, None], idx[:, None, :]), local)
-        if self.rotary:
-            M += self.rotary.mass_matrix(x)
         return M
 
     def convective_force(self, x, v):
@@ -112,8 +111,6 @@ class Inertia:
             _, Dp, D2p = group.kind.inertia_points(group.local(x), group.reference, order=2)
             accel = np.einsum("npij,ni,nj->np", D2p, local_v, local_v)
             np.add.at(result, group.coordinate_index, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
-        if self.rotary:
-            result += self.rotary.convective_force(x, v)
         return result
 
     def gravity_force(self, x):

@@ -1,68 +1,89 @@
-"""Rotational inertia of 3-D rotational nodes described by Euler parameters.
+"""Rotational inertia of 3-D rotational nodes (Euler parameters) as inertia points.
 
 A rigid body attached to a rotational node, with inertia tensor J (kg m^2) constant in the
-node's body frame, has the kinetic energy
+node's body frame, has the kinetic energy T = 1/2 omega'^T J omega'. It is carried here by
+three points fixed to the node, p_k = R(lambda) b_k (unit vectors b_k in the body frame), with
+"masses" s_k: since |d/dt (R b)|^2 = |omega' x b|^2,
 
-    T = 1/2 omega'^T J omega',     omega' = 2 G(lambda) lambda_dot     (body frame)
+    1/2 sum_k s_k |p_k_dot|^2 = 1/2 omega'^T (tr(S) I - S) omega',   S = sum_k s_k b_k b_k^T,
 
-which is not of the form 1/2 pdot^T Mp pdot with a constant Mp that `assembly.Inertia` uses
-for element mass, hence this extension. On the node's four Euler parameters:
+which is T for S = tr(J) / 2 I - J: b_k and s_k are the eigenvectors and eigenvalues of S
+(s_k >= 0 for a physical J, by the triangle inequality of its principal moments; an idealised
+J, e.g. an inertia about one axis only, gives a negative s_k, which the algebra does not mind).
+This is the form 1/2 pdot^T Mp pdot with a constant Mp that `assembly.Inertia` uses for the
+element masses (and that the planar PLBEAM uses for its end tangents), so the mass matrix,
+the convective force (D2p v) v, and every consumer of `Inertia.groups` treat it like an
+element mass; the points are "tangent" points, so gravity does not act on them.
 
-    mass matrix            M(lambda) = 4 G(lambda)^T J G(lambda)
-    convective force       h = d/dt(dT/d lambda_dot) - dT/d lambda - M lambda_ddot
-                             = 4 G(lambda_dot)^T J omega'
+Off the normalisation constraint R(lambda) scales with |lambda|^2, so this kinetic energy
+differs from 1/2 omega'^T J omega' with omega' = 2 G(lambda) lambda_dot there; the
+constrained motion depends only on the kinetic energy on the constraint (Hamilton's principle
+over constrained paths), where both agree (tested against Euler's equations).
 
-(G is linear in its argument, G(a) a = 0, so dG/dt lambda_dot = G(lambda_dot) lambda_dot = 0
-and dT/d lambda = -2 G(lambda_dot)^T J omega'). The parts of M and h along lambda are taken
-by the normalisation constraint's multiplier; projected on the DOFs they give Euler's
-equations J omega_dot' + omega' x J omega' = moment. The sources of J: lumped node inertias of
-the scene (`Model.node_inertias`) and the section inertia of spatial beams, half at each end
-(`node_inertias` of the element module). Rotational inertia carries no gravity.
+Sources of J: lumped node inertias of the scene (`Model.node_inertias`) and the section
+inertia of spatial beams, half at each end (`node_inertias` of the element module).
 """
 
 import numpy as np
 
-from .rotations import body_rates_matrix
+from .model import ElementGroup
+from .rotations import rotate
+
+type_name = "NODE_INERTIA"
+inertia_point_kinds = ("tangent", "tangent", "tangent")
 
 
-class RotaryInertia:
-    """All rigid-body inertias on 3-D rotational nodes of a model: indices (m, 4), J (m, 3, 3)."""
+def inertia_points(x, ref, order=2):
+    """The points [R b_1, R b_2, R b_3] (n, 9) of the nodes' Euler parameters x (n, 4)."""
+    parts = [rotate(x, ref["axes"][:, :, k], order) for k in range(3)]
+    p = np.concatenate([part[0] for part in parts], axis=1)
+    if order == 0:
+        return (p,)
+    Dp = np.concatenate([part[1] for part in parts], axis=1)
+    if order == 1:
+        return p, Dp
+    return p, Dp, np.concatenate([part[2] for part in parts], axis=1)
 
-    def __init__(self, model):
-        self.nx = model.nx
-        indices, tensors = [], []
-        for index, J in getattr(model, "node_inertias", ()):
-            indices.append(np.asarray(index, int)[None])
-            tensors.append(np.asarray(J, float)[None])
-        for group in model.groups:
-            inertias = getattr(group.kind, "node_inertias", None)
-            if inertias is None:
-                continue
-            J = inertias(group.reference, group.properties)  # (n, nodes, 3, 3)
-            for node, slot in enumerate(group.kind.rotation_slots):
-                indices.append(group.coordinate_index[:, slot])
-                tensors.append(J[:, node])
-        self.index = np.concatenate(indices) if indices else np.zeros((0, 4), int)
-        self.J = np.concatenate(tensors) if tensors else np.zeros((0, 3, 3))
-        keep = np.any(self.J != 0.0, axis=(1, 2))
-        self.index, self.J = self.index[keep], self.J[keep]
 
-    def __bool__(self):
-        return bool(self.J.shape[0])
+def point_masses(J):
+    """(s (n, 3) kg m^2, b (n, 3, 3) columns in the body frame) for inertia tensors J (n, 3, 3)."""
+    J = 0.5 * (J + np.swapaxes(J, 1, 2))
+    trace = np.trace(J, axis1=1, axis2=2)
+    S = 0.5 * trace[:, None, None] * np.eye(3)[None] - J
+    return np.linalg.eigh(S)
 
-    def mass_matrix(self, x):
-        """M (NX, NX) in kg m^2 on the Euler parameters: 4 G^T J G per node."""
-        M = np.zeros((self.nx, self.nx))
-        G = body_rates_matrix(x[self.index])
-        local = 4.0 * np.einsum("nai,nab,nbj->nij", G, self.J, G)
-        np.add.at(M, (self.index[:, :, None], self.index[:, None, :]), local)
-        return M
 
-    def convective_force(self, x, v):
-        """h (NX,) in N m: 4 G(lambda_dot)^T J omega' per node."""
-        result = np.zeros(self.nx)
-        lam, lam_dot = x[self.index], v[self.index]
-        omega = 2.0 * np.einsum("nai,ni->na", body_rates_matrix(lam), lam_dot)
-        local = 4.0 * np.einsum("nai,nab,nb->ni", body_rates_matrix(lam_dot), self.J, omega)
-        np.add.at(result, self.index, local)
-        return result
+def node_inertia_groups(model):
+    """[(ElementGroup, Mp (n, 9, 9))]: every rigid-body inertia on a 3-D rotational node."""
+    indices, tensors = [], []
+    for index, J in getattr(model, "node_inertias", ()):
+        indices.append(np.asarray(index, int)[None])
+        tensors.append(np.asarray(J, float)[None])
+    for group in model.groups:
+        inertias = getattr(group.kind, "node_inertias", None)
+        if inertias is None or not np.any(group.properties.get("rho_Iy", 0.0)) and not np.any(
+                group.properties.get("rho_Iz", 0.0)):
+            continue
+        J = inertias(group.reference, group.properties)  # (n, nodes, 3, 3)
+        for node, slot in enumerate(group.kind.rotation_slots):
+            indices.append(group.coordinate_index[:, slot])
+            tensors.append(J[:, node])
+    if not indices:
+        return []
+    index, J = np.concatenate(indices), np.concatenate(tensors)
+    keep = np.any(J != 0.0, axis=(1, 2))
+    if not np.any(keep):
+        return []
+    index, J = index[keep], J[keep]
+    masses, axes = point_masses(J)
+    Mp = np.einsum("nk,kl,ab->nkalb", masses, np.eye(3), np.eye(3)).reshape(-1, 9, 9)
+    group = ElementGroup(kind=_self(), names=tuple(f"inertia{i}" for i in range(len(index))),
+                         coordinate_index=index, deformation_index=np.zeros((len(index), 0), int),
+                         reference={"axes": axes}, properties={})
+    return [(group, Mp)]
+
+
+def _self():
+    import sys
+
+    return sys.modules[__name__]

@@ -21,7 +21,6 @@ import pytest
 import scipy.integrate
 
 from flexure.core import Kinematics, build_model, linearize, static_equilibrium
-from flexure.core.rotary_inertia import RotaryInertia
 from flexure.core.rotations import (
     body_rates_matrix,
     compose,
@@ -240,59 +239,67 @@ def test_rotations_module_round_trips_and_composes():
 # -- rotational inertia ----------------------------------------------------------------------
 
 class _Node:
-    """A model-like object with one free rotational node carrying an inertia tensor."""
+    """A model-like object: one free rotational node (Euler parameters) with inertia J."""
 
     def __init__(self, J):
-        self.nx = 4
+        self.nx, self.dimension = 4, 3
         self.groups = []
         self.node_inertias = [(np.arange(4), J)]
+        self.lumped_mass = np.zeros(4)
+        self.gravity = np.array([0.0, -9.81, 0.0])
+        self.coordinate_names = [f"n.lambda{k}" for k in range(4)]
 
 
-def test_rotary_inertia_reproduces_eulers_equations():
-    """M lambda'' + h = mu lambda with lambda . lambda'' = -|lambda'|^2 (the normalisation)
-    must give J omega'_dot = -omega' x J omega' (torque-free rigid body)."""
-    rng = np.random.default_rng(3)
-    A = rng.normal(size=(3, 3))
-    J = A @ A.T + np.eye(3)
-    inertia = RotaryInertia(_Node(J))
-    lam = normalized(rng.normal(size=4))
-    omega = rng.normal(size=3)
-    lam_dot = 0.5 * body_rates_matrix(lam).T @ omega
-    M = inertia.mass_matrix(lam)
-    h = inertia.convective_force(lam, lam_dot)
+def _constrained_acceleration(M, h, lam, lam_dot):
+    """lambda'' from M lambda'' + h = mu lambda and lambda . lambda'' = -|lambda'|^2."""
     system = np.zeros((5, 5))
     system[:4, :4] = M
     system[:4, 4] = -lam
     system[4, :4] = lam
-    solution = np.linalg.solve(system, np.concatenate([-h, [-lam_dot @ lam_dot]]))
-    omega_dot = 2 * body_rates_matrix(lam) @ solution[:4]
-    np.testing.assert_allclose(J @ omega_dot, -np.cross(omega, J @ omega), rtol=1e-12,
-                               atol=1e-12)
-    # and the kinetic energy 1/2 omega'^T J omega' = 1/2 lambda_dot^T M lambda_dot
+    return np.linalg.solve(system, np.concatenate([-h, [-lam_dot @ lam_dot]]))[:4]
+
+
+@pytest.mark.parametrize("seed", [3, 5])
+def test_rotary_inertia_reproduces_eulers_equations(seed):
+    """The node inertia as `Inertia` assembles it, under the normalisation constraint, gives
+    J omega'_dot = -omega' x J omega' (a torque-free rigid body), and so does the classical
+    Euler-parameter form M = 4 G^T J G, h = 4 G(lambda_dot)^T J omega' (an independent
+    derivation). No gravity on rotational inertia."""
+    from flexure.core.assembly import Inertia
+
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(3, 3))
+    J = A @ A.T + 0.1 * np.eye(3)
+    inertia = Inertia(_Node(J))
+    lam = normalized(rng.normal(size=4))
+    omega = rng.normal(size=3)
+    G = body_rates_matrix(lam)
+    lam_dot = 0.5 * G.T @ omega
+    M = inertia.mass_matrix(lam)
+    h = inertia.convective_force(lam, lam_dot)
     np.testing.assert_allclose(0.5 * lam_dot @ M @ lam_dot, 0.5 * omega @ J @ omega,
                                rtol=1e-13)
+    expected = -np.linalg.solve(J, np.cross(omega, J @ omega))
+    classical = (4 * G.T @ J @ G, 4 * body_rates_matrix(lam_dot).T @ J @ omega)
+    for mass, force in ((M, h), classical):
+        lam_ddot = _constrained_acceleration(mass, force, lam, lam_dot)
+        np.testing.assert_allclose(2 * G @ lam_ddot, expected, rtol=1e-11, atol=1e-11)
+    assert not np.any(inertia.gravity_force(lam))
 
 
-def test_rotary_inertia_convective_force_is_the_lagrangian_term():
-    """h = d/dt(dT/d lambda_dot) - dT/d lambda - M lambda'', by central differences of T."""
-    rng = np.random.default_rng(4)
-    J = np.diag([1.0, 2.0, 3.5])
-    inertia = RotaryInertia(_Node(J))
-    lam, lam_dot = rng.normal(size=4), rng.normal(size=4)
+def test_node_inertia_with_an_idealised_tensor():
+    """An inertia about one body axis only (J = diag(j, 0, 0), negative point mass) still
+    gives the right kinetic energy for any angular velocity."""
+    from flexure.core.assembly import Inertia
 
-    def energy(a, b):
-        return 0.5 * b @ inertia.mass_matrix(a) @ b
-
-    step = 1e-6
-    eye = np.eye(4)
-    dT_dlam = np.array([(energy(lam + step * e, lam_dot) - energy(lam - step * e, lam_dot))
-                        / (2 * step) for e in eye])
-    # d/dt (M(lambda) lambda_dot) at zero lambda'' = (dM/dlambda . lambda_dot) lambda_dot
-    dM = (inertia.mass_matrix(lam + step * lam_dot)
-          - inertia.mass_matrix(lam - step * lam_dot)) / (2 * step)
-    expected = dM @ lam_dot - dT_dlam
-    np.testing.assert_allclose(inertia.convective_force(lam, lam_dot), expected, rtol=1e-7,
-                               atol=1e-7)
+    J = np.diag([2.0, 0.0, 0.0])
+    inertia = Inertia(_Node(J))
+    rng = np.random.default_rng(9)
+    lam = normalized(rng.normal(size=4))
+    for omega in rng.normal(size=(5, 3)):
+        lam_dot = 0.5 * body_rates_matrix(lam).T @ omega
+        np.testing.assert_allclose(lam_dot @ inertia.mass_matrix(lam) @ lam_dot,
+                                   omega @ J @ omega, rtol=1e-12, atol=1e-14)
 
 
 def test_rigid_rotation_of_the_whole_stage_changes_nothing():
