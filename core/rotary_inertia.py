@@ -20,8 +20,9 @@ differs from 1/2 omega'^T J omega' with omega' = 2 G(lambda) lambda_dot there; t
 constrained motion depends only on the kinetic energy on the constraint (Hamilton's principle
 over constrained paths), where both agree (tested against Euler's equations).
 
-Sources of J: lumped node inertias of the scene (`Model.node_inertias`) and the section
-inertia of spatial beams, half at each end (`node_inertias` of the element module).
+The source of J: the lumped node inertias of a scene (`Model.node_inertias`). The spatial
+BEAM carries its section's rotational inertia in the same way, with its own inertia points
+(the section axes, see flexure.core.elements.beam).
 """
 
 import numpy as np
@@ -59,15 +60,6 @@ def node_inertia_groups(model):
     for index, J in getattr(model, "node_inertias", ()):
         indices.append(np.asarray(index, int)[None])
         tensors.append(np.asarray(J, float)[None])
-    for group in model.groups:
-        inertias = getattr(group.kind, "node_inertias", None)
-        if inertias is None or not np.any(group.properties.get("rho_Iy", 0.0)) and not np.any(
-                group.properties.get("rho_Iz", 0.0)):
-            continue
-        J = inertias(group.reference, group.properties)  # (n, nodes, 3, 3)
-        for node, slot in enumerate(group.kind.rotation_slots):
-            indices.append(group.coordinate_index[:, slot])
-            tensors.append(J[:, node])
     if not indices:
         return []
     index, J = np.concatenate(indices), np.concatenate(tensors)

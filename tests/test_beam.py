@@ -399,3 +399,24 @@ def test_beam_derivatives_at_large_rotations():
                                rtol=1e-6, atol=1e-7)
     np.testing.assert_allclose(Dp, jacobian(lambda y: beam.inertia_points(y, ref, 0)[0]),
                                rtol=1e-6, atol=1e-8)
+
+
+def test_torsional_vibration_of_a_shaft_converges_to_the_continuous_frequency():
+    """A clamped-free shaft of circular section in BEAMs with only their torsion free: the
+    consistent rotational inertia of the section gives the first torsional frequency
+    f = sqrt(G It / (rho Ip)) / (4 L) (It = Ip for a circle) from above, with the error
+    falling as the element size squared."""
+    from flexure.core import natural_frequencies
+
+    length, E, G, rho, d = 0.5, 2.1e11, 8.0e10, 7850.0, 0.01
+    axis = normalized(np.array([1.0, 2.0, -1.0]))
+    exact = np.sqrt(G / rho) / (4 * length)
+    errors = []
+    for elements in (4, 8):
+        points = [axis * length * k / elements for k in range(elements + 1)]
+        data = chain(points, section={"E": E, "G": G, "rho": rho, "diameter": d},
+                     y_axis=np.cross(axis, [0.0, 0.0, 1.0]), dof=["e2"])
+        frequency = natural_frequencies(build_model(data)).frequencies_hz[0]
+        errors.append(frequency / exact - 1.0)
+    assert 0 < errors[1] < 2e-3
+    np.testing.assert_allclose(errors[0] / errors[1], 4.0, rtol=0.05)

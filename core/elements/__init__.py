@@ -4,11 +4,11 @@ An element module defines `type_name`, `dimension`, `node_kinds`, `node_roles`,
 `deformation_names`, `deformation_stiffness` (the section property behind each deformation),
 `coordinates_per_element`, `inertia_point_kinds`, `properties` (the section properties used)
 and the pure functions `reference`, `deformations`, `stiffness`, `damping`, `inertia_points` and
-`inertia_matrix`, each working on all elements of the type at once. Spatial elements with
-rotational nodes also define `rotation_slots` and `node_inertias` (the section's rotational
-inertia, see flexure.core.rotary_inertia) and may set `needs_orientation` (the scene gives
-a principal axis). The normalisation constraint of 3-D rotational nodes (`euler`) follows
-the same interface but is not registered: the scene builder adds it, a scene cannot name it.
+`inertia_matrix`, each working on all elements of the type at once. Elements may set
+`needs_orientation` (the scene gives a principal axis: reference(x0, y_axis)) and define
+`random_coordinates(rng, count)` for the derivative tests. The normalisation constraint of
+3-D rotational nodes (`euler`) follows the same interface but is not registered: the scene
+builder adds it, a scene cannot name it.
 """
 
 from . import beam, plbeam, pltruss, truss

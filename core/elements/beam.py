@@ -34,11 +34,13 @@ planar motion in the x'y' plane is the planar PLBEAM with EI = EIz'.
 Distributed mass: the position along the beam is the cubic Hermite interpolation between r^p,
 r^q and the end tangents l0 n_x'^p, l0 n_x'^q, which gives the consistent mass
 rho A l0 / 420 [[156, 22, 54, -13], ...] on those four points (3 components each), as PLBEAM.
-Rotational inertia of the section (rho Iy', rho Iz' and rho (Iy' + Iz') about the axis, per
-unit length): half the beam's at each end node, as a rigid-body inertia of that node in its
-body frame (`node_inertias`; see flexure.core.rotary_inertia). Lumped, not consistent: for
-the slender beams this element serves the section's rotational inertia is a small part of the
-kinetic energy, and a lumped inertia keeps the node-inertia form that Euler parameters need.
+Rotational inertia of the section, rho (Iy' + Iz') about x', rho Iy' about y' and rho Iz'
+about z' per unit length: the section's kinetic energy 1/2 omega^T J omega equals
+1/2 (rho Iz' |n_y'_dot|^2 + rho Iy' |n_z'_dot|^2) (as |omega x n|^2 sums to it), so with the
+section axes n_y', n_z' interpolated linearly between the nodes it is the consistent mass
+l0 [[1/3, 1/6], [1/6, 1/3]] times rho Iz' on (n_y'^p, n_y'^q) and times rho Iy' on
+(n_z'^p, n_z'^q): four more inertia points (linearly interpolated rotations: the classical
+consistent torsional inertia rho Ip l0 / 6 [[2, 1], [1, 2]]).
 
 Every function works on all elements of this type at once: arrays shaped (n_elements, ...).
 """
@@ -56,11 +58,11 @@ deformation_names = ("e1", "e2", "e3", "e4", "e5", "e6")
 deformation_stiffness = {"e1": "EA", "e2": "GIt", "e3": "EIy", "e4": "EIy", "e5": "EIz",
                          "e6": "EIz"}
 coordinates_per_element = 14
-inertia_point_kinds = ("position", "tangent", "position", "tangent")
+inertia_point_kinds = ("position", "tangent", "position", "tangent",  # Hermite
+                       "tangent", "tangent", "tangent", "tangent")  # n_y'^p n_z'^p n_y'^q n_z'^q
 properties = ("EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
               "rho_Iz", "A", "Wy", "Wz", "Wt", "circular")
 needs_orientation = True  # the scene gives the principal y' axis of every beam
-rotation_slots = (slice(3, 7), slice(10, 14))  # the Euler parameters of p and q
 
 _P, _LP, _Q, _LQ = slice(0, 3), slice(3, 7), slice(7, 10), slice(10, 14)
 _DL = np.zeros((3, 14))
@@ -206,50 +208,55 @@ def _constitutive(l0, axial, torsional, flexural_y, flexural_z):
     return matrix
 
 
+# The inertia points: (coordinate slice, body vector, scaled by l0?) after r^p and r^q.
+_ROTATED_POINTS = (("ax_p", _LP, True), ("ax_q", _LQ, True), ("ay_p", _LP, False),
+                   ("az_p", _LP, False), ("ay_q", _LQ, False), ("az_q", _LQ, False))
+_POINT_ROWS = {"ax_p": 3, "ax_q": 9, "ay_p": 12, "az_p": 15, "ay_q": 18, "az_q": 21}
+
+
 def inertia_points(x, ref, order=2):
-    """The Hermite points [r^p, l0 t^p, r^q, l0 t^q] (n, 12) and their derivatives."""
+    """The inertia points (n, 24) and their derivatives (n, 24, 14), (n, 24, 14, 14):
+
+    [r^p, l0 n_x'^p, r^q, l0 n_x'^q] (the Hermite points) and [n_y'^p, n_z'^p, n_y'^q, n_z'^q]
+    (the section axes, for the rotational inertia).
+    """
     l0 = ref["l0"]
     n = x.shape[0]
-    t_p = rotate(x[:, _LP], ref["ax_p"], order)
-    t_q = rotate(x[:, _LQ], ref["ax_q"], order)
-    p = np.concatenate([x[:, _P], l0[:, None] * t_p[0], x[:, _Q], l0[:, None] * t_q[0]], axis=1)
-    if order == 0:
-        return (p,)
-    Dp = np.zeros((n, 12, 14))
-    Dp[:, 0:3, _P] = np.eye(3)
-    Dp[:, 6:9, _Q] = np.eye(3)
-    Dp[:, 3:6, _LP] = l0[:, None, None] * t_p[1]
-    Dp[:, 9:12, _LQ] = l0[:, None, None] * t_q[1]
-    if order == 1:
-        return p, Dp
-    D2p = np.zeros((n, 12, 14, 14))
-    D2p[:, 3:6, _LP, _LP] = l0[:, None, None, None] * t_p[2]
-    D2p[:, 9:12, _LQ, _LQ] = l0[:, None, None, None] * t_q[2]
-    return p, Dp, D2p
+    p = np.zeros((n, 24))
+    p[:, 0:3], p[:, 6:9] = x[:, _P], x[:, _Q]
+    Dp = np.zeros((n, 24, 14)) if order >= 1 else None
+    D2p = np.zeros((n, 24, 14, 14)) if order >= 2 else None
+    if order >= 1:
+        Dp[:, 0:3, _P] = np.eye(3)
+        Dp[:, 6:9, _Q] = np.eye(3)
+    for key, cols, scaled in _ROTATED_POINTS:
+        rows = slice(_POINT_ROWS[key], _POINT_ROWS[key] + 3)
+        u = rotate(x[:, cols], ref[key], order)
+        scale = l0 if scaled else np.ones_like(l0)
+        p[:, rows] = scale[:, None] * u[0]
+        if order >= 1:
+            Dp[:, rows, cols] = scale[:, None, None] * u[1]
+        if order >= 2:
+            D2p[:, rows, cols, cols] = scale[:, None, None, None] * u[2]
+    return (p,) if order == 0 else (p, Dp) if order == 1 else (p, Dp, D2p)
 
 
 def inertia_matrix(ref, props):
-    """Consistent mass (n, 12, 12) in kg on the inertia points of `inertia_points`."""
-    mass = props["rho_A"] * ref["l0"]
-    return mass[:, None, None] * np.kron(HERMITE_MASS, np.eye(3))[None]
-
-
-def node_inertias(ref, props):
-    """The section's rotational inertia lumped at p and q (n, 2, 3, 3), kg m^2, body frames.
-
-    Half the beam's at each end: l0 / 2 [rho (Iy' + Iz') a_x a_x^T + rho Iy' a_y a_y^T +
-    rho Iz' a_z a_z^T] with a the element frame in the node's body frame.
-    """
-    half = 0.5 * ref["l0"]
-    rho_iy, rho_iz = props["rho_Iy"], props["rho_Iz"]
-    result = []
-    for node in ("p", "q"):
-        J = np.zeros((half.size, 3, 3))
-        for axis, value in (("x", rho_iy + rho_iz), ("y", rho_iy), ("z", rho_iz)):
-            a = ref[f"a{axis}_{node}"]
-            J += (half * value)[:, None, None] * a[:, :, None] * a[:, None, :]
-        result.append(J)
-    return np.stack(result, axis=1)
+    """Consistent mass (n, 24, 24) on the inertia points of `inertia_points`: the Hermite mass
+    rho A l0 on the first 12 (kg), the linear-interpolation mass of the section axes,
+    l0 [[1/3, 1/6], [1/6, 1/3]] times rho Iz' on n_y' and rho Iy' on n_z' (kg m^2)."""
+    l0 = ref["l0"]
+    n = l0.size
+    matrix = np.zeros((n, 24, 24))
+    matrix[:, :12, :12] = (props["rho_A"] * l0)[:, None, None] * np.kron(HERMITE_MASS, np.eye(3))
+    linear = np.array([[1.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 3.0]])
+    for first, second, inertia in (("ay_p", "ay_q", props["rho_Iz"]),
+                                   ("az_p", "az_q", props["rho_Iy"])):
+        rows = [_POINT_ROWS[first] + k for k in range(3)] + [_POINT_ROWS[second] + k
+                                                              for k in range(3)]
+        block = (inertia * l0)[:, None, None] * np.kron(linear, np.eye(3))[None]
+        matrix[:, np.array(rows)[:, None], np.array(rows)[None, :]] = block
+    return matrix
 
 
 def section_forces(e, sigma, ref):
