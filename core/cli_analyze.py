@@ -43,8 +43,11 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     needs_equilibrium = static or modes is not None or with_state_space
     solution = static_equilibrium(model, mechanics=mech) if needs_equilibrium else None
     if static:
+        # the multipliers of the Euler-parameter normalisation ("NODE.norm") are no output
+        resultants = {name: value for name, value in solution.stresses().items()
+                      if not name.endswith(".norm")}
         result["static"] = {"coordinates": solution.coordinates(),
-                            "stress_resultants": solution.stresses()}
+                            "stress_resultants": resultants}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
