@@ -244,3 +244,43 @@ def test_spatial_speed_benchmark_runs():
     for row in rows:
         assert row[3] > 0 and row[6] > 0
         assert 1.0 < row[7] < 1.2  # mm: the bar has started to move from 1.058 mm
+
+
+@pytest.mark.parametrize("direction", [[1.0, 0.0, 0.0], [1.0, -2.0, 2.0]])
+def test_spatial_truss_model_gives_the_truss_figures(direction):
+    """pf1dtrx as a spatial TRUSS: 10.6584 Hz and x = 0.1 + 1 / 945 under 1 N (figures.md).
+
+    Along x the sideways coordinates of node 2 are fixed (exactly the planar model, to 1e-9).
+    Along a skew axis two rigid massless 10 m TRUSS guides, normal to it, hold node 2 on its
+    line; they let it leave the line by (1 mm)^2 / 20 m = 5e-8 m, hence the looser tolerance.
+    """
+    axis = np.array(direction) / np.linalg.norm(direction)
+    data = scene_data("truss_1dof_x")
+    data["scene"]["dimension"] = 3
+    data["nodes"]["1"].update(position=[0.0, 0.0, 0.0], fixed=["x", "y", "z"])
+    data["nodes"]["2"].update(position=(0.1 * axis).tolist(), force=axis.tolist())
+    data["elements"]["spring"]["type"] = "TRUSS"
+    skew = direction != [1.0, 0.0, 0.0]
+    if skew:
+        normal = np.cross(axis, [0.0, 0.0, 1.0])
+        normal /= np.linalg.norm(normal)
+        binormal = np.cross(axis, normal)
+        del data["nodes"]["2"]["fixed"], data["nodes"]["2"]["dof"]
+        data["elements"]["spring"].update(dof=["e1"], released=[])
+        data["sections"]["rigid"] = {"EA": 0.0}
+        for name, vector in (("n", normal), ("b", binormal)):
+            data["nodes"][name] = {"position": (0.1 * axis + 10.0 * vector).tolist(),
+                                   "fixed": ["x", "y", "z"]}
+            data["elements"][f"guide_{name}"] = {"type": "TRUSS", "nodes": ["2", name],
+                                                 "section": "rigid"}
+        del data["inputs"], data["outputs"]
+    else:
+        data["nodes"]["2"]["fixed"] = ["y", "z"]
+    model = build_model(data)
+    assert model.dof_count()["ndof"] == 1
+    tolerance = 1e-7 if skew else 1e-9
+    np.testing.assert_allclose(natural_frequencies(model).frequencies_hz, [10.65843552],
+                               rtol=tolerance)
+    solution = static_equilibrium(model)
+    tip = solution.x[[model.coordinate_index(f"2.{c}") for c in "xyz"]]
+    np.testing.assert_allclose(tip, (0.1 + 1.0 / 945.0) * axis, rtol=0, atol=tolerance)
