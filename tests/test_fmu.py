@@ -8,7 +8,6 @@ answer every failure with fmi2Discard and a logged message instead of taking the
 
 import json
 import shutil
-import subprocess
 import sys
 import tomllib
 import zipfile
@@ -386,30 +385,45 @@ def test_build_rejects_an_unknown_tunable_key(tmp_path):
                         tunable=["sections.leaf.EdX"])
 
 
-def test_cli_build_check_and_env(tmp_path):
-    flexure = [sys.executable, "-m", "flexure.core.cli"]
+def test_cli_build_check_and_env(tmp_path, capsys):
+    from flexure.core.cli import main
+
     fmu = tmp_path / "truss.fmu"
-    done = subprocess.run([*flexure, "fmu", "build", "truss_1dof_x", "-o", str(fmu),
-                           "--no-tunable"], capture_output=True, text=True, check=True)
-    assert str(fmu) in done.stdout
+    assert main(["fmu", "build", "truss_1dof_x", "-o", str(fmu), "--no-tunable"]) == 0
+    assert str(fmu) in capsys.readouterr().out
     md = read_model_description(str(fmu))
     assert [v.name for v in md.modelVariables if v.causality == "parameter"] == [
         "integrator.method", "integrator.rtol", "integrator.atol"]
     scenes = scene_path("truss_1dof_x").parent
-    done = subprocess.run([*flexure, "fmu", "check", str(fmu), str(scenes / "truss_1dof_x_in.csv"),
-                           str(scenes / "truss_1dof_x_ref.csv")], capture_output=True, text=True)
-    assert done.returncode == 0, done.stdout + done.stderr
-    bad = subprocess.run([*flexure, "fmu", "build", "truss_1dof_x", "-o", str(fmu),
-                          "--tunable", "nodes.9.mass"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "nodes.9.mass" in bad.stderr and "Traceback" not in bad.stderr
-    env = subprocess.run([*flexure, "fmu", "env", "--json"], capture_output=True, text=True,
-                         check=True)
-    values = json.loads(env.stdout)
+    inputs, reference = scenes / "truss_1dof_x_in.csv", scenes / "truss_1dof_x_ref.csv"
+    assert main(["fmu", "check", str(fmu), str(inputs), str(reference)]) == 0
+    assert "matches" in capsys.readouterr().out
+    changed = tmp_path / "changed_ref.csv"
+    changed.write_text(_shifted_reference(reference))
+    assert main(["fmu", "check", str(fmu), str(inputs), str(changed)]) == 1
+    assert "x: max |error|" in capsys.readouterr().out
+    assert main(["fmu", "build", "truss_1dof_x", "-o", str(fmu), "--tunable",
+                 "nodes.9.mass"]) == 2
+    error = capsys.readouterr().err
+    assert "nodes.9.mass" in error and "Traceback" not in error
+    assert main(["fmu", "env", "--json"]) == 0
+    values = json.loads(capsys.readouterr().out)
     assert "libpython3" in values["LD_PRELOAD"] and "site-packages" in values["PYTHONPATH"]
+    # The printed environment is what a shell (and the JVM test) uses.
+    assert main(["fmu", "env"]) == 0
+    assert capsys.readouterr().out.startswith("export LD_PRELOAD=")
     with zipfile.ZipFile(fmu) as archive:  # flexure travels inside, under a hashed name
         names = archive.namelist()
     assert any(n.startswith("resources/_flexure_") and n.endswith("core/simulation.py")
                for n in names)
+
+
+def _shifted_reference(path):
+    """The reference CSV with x moved by 1 mm at the last sample."""
+    lines = path.read_text().splitlines()
+    time, value = lines[-1].split(",")
+    lines[-1] = f"{time},{float(value) + 1e-3!r}"
+    return "\n".join(lines) + "\n"
 
 
 # -- regression references -------------------------------------------------------------------
