@@ -243,8 +243,17 @@ class SafeSlave(Fmi2Slave):
         for variable in self.vars.values():
             if variable.setter is not None:
                 values[variable.name] = copy.deepcopy(variable.getter())
-        return {"variables": values, "time": self.time, "start_time": self.start_time,
-                "broken": self.broken, "model": copy.deepcopy(self.save_state())}
+        state = {"variables": values, "time": self.time, "start_time": self.start_time,
+                 "broken": self.broken, "model": None}
+        try:
+            state["model"] = copy.deepcopy(self.save_state())
+        except Exception as error:  # noqa: BLE001 -- a raise here would be fmi2Fatal
+            # The state is still returned (pythonfmu cannot answer an error here); restoring
+            # it breaks the instance with the reason instead of continuing from garbage.
+            self._fail("getting the FMU state", error)
+            state["broken"] = self.broken
+            self.broken = ""
+        return state
 
     def _set_fmu_state(self, state):
         state = copy.deepcopy(state)
@@ -255,7 +264,8 @@ class SafeSlave(Fmi2Slave):
             self.time = state["time"]
             self.start_time = state["start_time"]
             self.broken = state["broken"]
-            self.load_state(state["model"])
+            if not self.broken:
+                self.load_state(state["model"])
         except Exception as error:  # noqa: BLE001
             self._fail("restoring an FMU state", error)
 

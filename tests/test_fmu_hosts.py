@@ -132,11 +132,16 @@ class percent_slave(SafeSlave):
         self.add_real("y", causality="output", unit="m")
 
     def advance(self, t, h):
-        if self.mode == 1:
+        if self.mode in (1, 3):
             raise SimulationError("100% off at %s %d %n")
         if self.mode == 2:
             raise ZeroDivisionError("a bug, %s")
         self.y += h
+
+    def last_good_time(self):
+        if self.mode == 3:
+            raise SimulationError("no last good state either")
+        return self.time
 
     def save_state(self):
         return self.y
@@ -176,12 +181,20 @@ fmu.exitInitializationMode()
 fmu.setReal([vr["mode"]], [0.0])
 fmu.doStep(0.0, 0.5)
 print("after reset", fmu.getReal([vr["y"]])[0], flush=True)
+for mode in (3.0, 0.0):
+    fmu.setReal([vr["mode"]], [mode])
+    try:
+        fmu.doStep(0.5, 0.25)
+        print("status ok", flush=True)
+    except FMICallException as error:
+        print("status", error, flush=True)
 '''
 
 
 def test_generic_slave_failures_are_discards_with_escaped_messages(tmp_path):
     """build_slave_fmu on a SafeSlave script: a model error and a bug are fmi2Discard (the
-    bug breaks the instance until reset), messages with '%s %d %n' reach fmpy's printf-style
+    bug, or a model that cannot report its last good state, breaks the instance until
+    reset), messages with '%s %d %n' reach fmpy's printf-style
     logger intact (unescaped they crash the process), and the process survives."""
     script = tmp_path / "percent_slave_test.py"
     script.write_text(textwrap.dedent(GENERIC_SLAVE))
@@ -196,8 +209,12 @@ def test_generic_slave_failures_are_discards_with_escaped_messages(tmp_path):
                           text=True, timeout=120)
     assert done.returncode == 0, done.stdout + done.stderr
     out = done.stdout
-    assert out.count("status fmi2DoStep failed with status 2 (discard)") == 3, out
+    assert out.count("status fmi2DoStep failed with status 2 (discard)") == 5, out
+    assert "status ok" not in out
     assert "100% off at %s %d %n" in out
     assert "a bug, %s" in out and "ZeroDivisionError" in out
     assert "step refused" in out  # the bug broke the instance: mode 0 is refused too
     assert "y 0.25" in out and "after reset 0.5" in out
+    # mode 3: the model cannot report its last good state either: the instance is broken.
+    assert "then recovering the last good state failed: no last good state either" in out
+    assert out.count("step refused") == 2
