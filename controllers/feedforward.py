@@ -43,15 +43,19 @@ from .feedback import ControlDesignError, colocated_pairs
 
 @dataclass(frozen=True)
 class LowFrequencyModel:
-    """u = mass @ y'' + damping @ y' + stiffness @ y on the colocated outputs of the loops.
+    """u = mass @ y'' + damping @ y' + stiffness @ (y - equilibrium) on the loops' outputs.
 
-    Units: kg, N s/m, N/m (square matrices, one row and column per loop).
+    Units: kg, N s/m, N/m (square matrices, one row and column per loop); `equilibrium` (m)
+    holds the outputs at the static equilibrium under the scene's constant loads (the
+    linearisation point), so the feedforward also carries those loads: a scene that starts
+    away from its equilibrium is held where it starts.
     """
 
     mass: np.ndarray
     damping: np.ndarray
     stiffness: np.ndarray
     frequencies_hz: np.ndarray  # the modes it keeps
+    equilibrium: np.ndarray = None  # (n_loops,) m; None means zeros
 
     def scaled(self, *, mass=1.0, damping=1.0, stiffness=1.0):
         """The same model with its matrices multiplied by factors (a model error study)."""
@@ -61,11 +65,13 @@ class LowFrequencyModel:
     def force(self, position, velocity, acceleration):
         """The forces (N), arrays (..., n_loops), for the output motion (m, m/s, m/s^2)."""
         p, v, a = (np.asarray(x, float) for x in (position, velocity, acceleration))
-        return a @ self.mass.T + v @ self.damping.T + p @ self.stiffness.T
+        eq = 0.0 if self.equilibrium is None else np.asarray(self.equilibrium, float)
+        return a @ self.mass.T + v @ self.damping.T + (p - eq) @ self.stiffness.T
 
     def to_dict(self):
         return {k: np.asarray(getattr(self, k)).tolist()
-                for k in ("mass", "damping", "stiffness", "frequencies_hz")}
+                for k in ("mass", "damping", "stiffness", "frequencies_hz", "equilibrium")
+                if getattr(self, k) is not None}
 
     @classmethod
     def from_dict(cls, data):
@@ -84,7 +90,8 @@ def low_frequency_model(model, *, linear_model=None):
     for k, pair in enumerate(pairs):
         b[model.inputs[pair.input_index].coordinate, k] = 1.0
     B_r = phi.T @ lin.DF.T @ b
-    C_r = lin.DF[[model.outputs[p.output_index].coordinate for p in pairs]] @ phi
+    coordinates = [model.outputs[p.output_index].coordinate for p in pairs]
+    C_r = lin.DF[coordinates] @ phi
     if np.linalg.cond(B_r) > 1e12 or np.linalg.cond(C_r) > 1e12:
         raise ControlDesignError(
             f"{model.name}: the {r} lowest mode(s) are not driven or not seen by the loops "
@@ -95,18 +102,22 @@ def low_frequency_model(model, *, linear_model=None):
         damping=left @ (phi.T @ lin.C0 @ phi) @ right,
         stiffness=left @ np.diag(omega**2) @ right,
         frequencies_hz=modes.frequencies_hz[:r].copy(),
+        equilibrium=lin.solution.config.x[coordinates].copy(),
     )
 
 
-def forces(lf_model, profile, t0, t1, *, direction=None):
+def forces(lf_model, profile, t0, t1, *, direction=None, offsets=None):
     """Feedforward forces (N), (n_samples, n_loops), held over the intervals [t0, t1).
 
-    The profile moves the loops along `direction` (n_loops,), default the first loop only.
+    The profile moves the loops along `direction` (n_loops,), default the first loop only,
+    from the output positions `offsets` (m, default: the equilibrium, no static force).
     """
     n = lf_model.mass.shape[0]
     direction = np.eye(n)[0] if direction is None else np.asarray(direction, float)
+    if offsets is None:
+        offsets = np.zeros(n) if lf_model.equilibrium is None else lf_model.equilibrium
     p, v, a = profile.interval_average(t0, t1)
-    return lf_model.force(np.outer(p, direction), np.outer(v, direction),
+    return lf_model.force(offsets + np.outer(p, direction), np.outer(v, direction),
                           np.outer(a, direction))
 
 

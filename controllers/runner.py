@@ -73,7 +73,7 @@ class LoopController:
             self.feedforward = np.zeros((k.size, n))
         else:
             self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
-                                      direction=direction)
+                                      direction=direction, offsets=self.offsets)
 
     def reset(self):
         self.controller.reset()

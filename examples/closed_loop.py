@@ -14,7 +14,7 @@ max_k |r_k - y_k| (during the move and 0.25 s after it) is compared with 0.1 % o
    libcosim): their difference in the tracking error, relative to the stroke.
 
 Run `python examples/closed_loop.py` (about 10 minutes: each sample is an integrator call)
-for the table of the README; `--quick` runs every case over a 0.05 s move (the tests do).
+for the table of the README; `--quick` runs every case over a 0.02 s move (the tests do).
 """
 
 import argparse
@@ -59,7 +59,7 @@ def cases(*, quick=False):
 
 def main(*, quick=False, plot=None, workdir=None):
     """Run every case; returns (rows, results by label) and prints the markdown tables."""
-    timing = {"duration": 0.05, "settle": 0.01} if quick else {"duration": 1.0, "settle": 0.25}
+    timing = {"duration": 0.02, "settle": 0.01} if quick else {"duration": 1.0, "settle": 0.25}
     workdir = workdir or tempfile.mkdtemp(prefix="flexure_closed_loop_")
     rows, results = [], {}
     for label, scene, options in cases(quick=quick):
@@ -93,7 +93,7 @@ def main(*, quick=False, plot=None, workdir=None):
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="0.05 s moves (seconds, not minutes)")
+    parser.add_argument("--quick", action="store_true", help="0.02 s moves (seconds, not minutes)")
     parser.add_argument("--plot", default=None, help="plot of the first case (PNG)")
     args = parser.parse_args()
     main(quick=args.quick, plot=args.plot)

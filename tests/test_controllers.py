@@ -210,3 +210,15 @@ def test_stable_inverse_tracks_with_bounded_input(zeros, tolerance):
         assert inverse.zeros_anticausal.size == 1
     if zeros == "light":
         assert inverse.zeros_mirrored.size == 2
+
+
+def test_feedforward_holds_a_loaded_scene_where_it_starts():
+    """stage_spatial_19dof carries a constant 1 N on 3.x: the feedforward at rest cancels it."""
+    model = load_scene("stage_spatial_19dof")
+    lf = low_frequency_model(model)
+    assert lf.equilibrium[0] == pytest.approx(1.0 / lf.stiffness[0, 0], rel=2e-3)
+    p = ThirdOrderProfile(1e-3, 1.0)
+    u = forces(lf, p, np.array([0.0]), np.array([1e-3]), offsets=np.array([0.0]))
+    assert u[0, 0] == pytest.approx(-1.0, rel=2e-3)
+    again = type(lf).from_dict(lf.to_dict())
+    assert np.array_equal(again.equilibrium, lf.equilibrium)

@@ -189,3 +189,16 @@ def test_runner_errors(stage1):
         build_loop(stage1, axis=2, **SHORT)
     with pytest.raises(ControlDesignError, match="unstable"):
         build_loop(stage1, fs=600.0, **SHORT)
+
+
+def test_closed_loop_example_runs(tmp_path, capsys):
+    import closed_loop
+
+    rows, results, agreement = closed_loop.main(quick=True, workdir=tmp_path)
+    assert len(rows) == len(closed_loop.cases(quick=True))
+    assert results["feedback + feedforward"].summary()["passed"]
+    assert (results["feedback alone"].max_abs_error
+            > 10 * results["feedback + feedforward"].max_abs_error)
+    for _, position_difference, error_difference in agreement:
+        assert position_difference < 1e-6 and error_difference < 1e-6
+    assert "| feedback alone |" in capsys.readouterr().out
