@@ -136,6 +136,16 @@ def build_slave_fmu(script_path, dest, *, project_files=(), bundle=("core", "fmu
     script_path = Path(script_path)
     options.setdefault("canGetAndSetFMUstate", True)
     options.setdefault("canSerializeFMUstate", True)
+    bundle = tuple(bundle)
+    for part in bundle:
+        if part not in ("core", "fmu", "controllers"):
+            raise FMUBuildError(f"bundle: unknown flexure package {part!r}; expected core, "
+                                "fmu or controllers")
+    if bundle and "fmu" not in bundle:  # the slave base and the namespace workaround
+        bundle += ("fmu",)
+    # pythonfmu imports the script by its name to find the class: a module of that name
+    # already loaded in this process (another FMU's) would be taken instead. Set it aside.
+    shadowed = sys.modules.pop(script_path.stem, None)
     modules_before = set(sys.modules)
     path_before = list(sys.path)
     with tempfile.TemporaryDirectory(prefix="flexure_fmu_") as temp:
@@ -163,6 +173,8 @@ def build_slave_fmu(script_path, dest, *, project_files=(), bundle=("core", "fmu
                         package and name.startswith(package)):
                     del sys.modules[name]
             sys.path[:] = path_before
+            if shadowed is not None:
+                sys.modules[script_path.stem] = shadowed
     _patch_model_description(built)
     if validate:
         problems = validate_fmu_file(built)

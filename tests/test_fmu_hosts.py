@@ -17,7 +17,13 @@ import pytest
 from fmpy import read_model_description
 from test_fmu import Slave
 
-from flexure.fmu import build_scene_fmu, build_slave_fmu, fmu_environment, validate_fmu_file
+from flexure.fmu import (
+    FMUBuildError,
+    build_scene_fmu,
+    build_slave_fmu,
+    fmu_environment,
+    validate_fmu_file,
+)
 
 HOSTS = Path(__file__).parent / "hosts"
 NS = 1_000_000_000
@@ -218,3 +224,21 @@ def test_generic_slave_failures_are_discards_with_escaped_messages(tmp_path):
     # mode 3: the model cannot report its last good state either: the instance is broken.
     assert "then recovering the last good state failed: no last good state either" in out
     assert out.count("step refused") == 2
+
+
+def test_build_is_not_fooled_by_a_loaded_module_of_the_same_name(tmp_path):
+    """A slave script named like a module this process already runs (another FMU's) still
+    builds its own class, and unknown bundle parts are refused."""
+    script = tmp_path / "same_name_slave.py"
+    script.write_text(textwrap.dedent(GENERIC_SLAVE))
+    first = build_slave_fmu(script, tmp_path / "first.fmu")
+    running = Slave(first, "running")  # loads the module `same_name_slave`
+    script.write_text(textwrap.dedent(GENERIC_SLAVE).replace('"y"', '"z"').replace(
+        "class percent_slave", "class other_slave"))
+    second = build_slave_fmu(script, tmp_path / "second.fmu")
+    running.close()
+    md = read_model_description(str(second))
+    assert md.coSimulation.modelIdentifier == "other_slave"
+    assert [v.name for v in md.modelVariables] == ["mode", "z"]
+    with pytest.raises(FMUBuildError, match="unknown flexure package 'plots'"):
+        build_slave_fmu(script, tmp_path / "third.fmu", bundle=("core", "plots"))
