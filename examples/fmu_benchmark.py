@@ -146,11 +146,14 @@ def benchmark(*, duration=1.0, repeats=3, folder=None):
         script.write_text(textwrap.dedent(NULL_SLAVE))
         null = build_slave_fmu(script, folder / "null_stage.fmu")
         fmu, core, null_fmpy, null_raw = [], [], [], []
-        for _ in range(repeats):
-            seconds, y_fmu = run_fmpy(stage, forces)
-            fmu.append(seconds)
-            seconds, statistics, y_core = run_in_process(forces)
-            core.append(seconds)
+        for repeat in range(repeats):  # alternate which of the two long runs goes first
+            for first in ((True, False) if repeat % 2 == 0 else (False, True)):
+                if first:
+                    seconds, y_fmu = run_fmpy(stage, forces)
+                    fmu.append(seconds)
+                else:
+                    seconds, statistics, y_core = run_in_process(forces)
+                    core.append(seconds)
             null_fmpy.append(run_fmpy(null, forces)[0])
             null_raw.append(run_ctypes(null, forces))
     per_step = {name: 1e3 * min(times) / steps for name, times in
