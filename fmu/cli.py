@@ -5,6 +5,10 @@
     flexure fmu check NAME.fmu NAME_in.csv NAME_ref.csv [--update]   # regression test
 """
 
+from pathlib import Path
+
+from flexure.core import FlexureError
+
 from .builder import build_scene_fmu, default_tunable
 from .env import fmu_environment, format_environment
 from .regression import DEFAULT_ATOL, DEFAULT_INTERVAL, DEFAULT_RTOL, check_fmu, write_reference
@@ -67,6 +71,10 @@ def run_build(args):
 
 
 def run_check(args):
+    needed = [args.fmu, args.input_csv] + ([] if args.update else [args.reference_csv])
+    for path in needed:
+        if not Path(path).is_file():
+            raise FlexureError(f"{path}: no such file")
     if args.update:
         path = write_reference(args.fmu, args.input_csv, args.reference_csv,
                                output_interval=args.interval)

@@ -406,6 +406,8 @@ def test_cli_build_check_and_env(tmp_path, capsys):
                  "nodes.9.mass"]) == 2
     error = capsys.readouterr().err
     assert "nodes.9.mass" in error and "Traceback" not in error
+    assert main(["fmu", "check", str(fmu), str(tmp_path / "none_in.csv"), str(reference)]) == 2
+    assert "none_in.csv: no such file" in capsys.readouterr().err
     assert main(["fmu", "env", "--json"]) == 0
     values = json.loads(capsys.readouterr().out)
     assert "libpython3" in values["LD_PRELOAD"] and "site-packages" in values["PYTHONPATH"]
