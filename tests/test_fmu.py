@@ -477,3 +477,34 @@ def test_fmu_benchmark_example_runs():
     assert result["steps"] == 10 and result["same_outputs"]
     assert all(v > 0 for v in result["per_step_ms"].values())
     assert "overhead beyond our integrator" in fmu_benchmark.report(result)
+
+
+def test_velocity_and_rotation_ports_get_their_units(tmp_path):
+    """A scene of our own: a moment input (N.m), a rotation output (rad) and a velocity output
+    (m/s), no [scene] name (the file's stem names the FMU)."""
+    text = scene_path("stage_planar_3dof").read_text().replace(
+        'name = "stage_planar_3dof"\n', "")
+    text += ('\n[inputs.M]\nnode = "4"\ncoordinate = "phi"\n'
+             '\n[outputs.phi]\nnode = "4"\ncoordinate = "phi"\n'
+             '\n[outputs.v]\nnode = "3"\ncoordinate = "x"\nquantity = "velocity"\n')
+    scene = tmp_path / "my_stage.toml"
+    scene.write_text(text)
+    path = build_scene_fmu(scene, tmp_path / "my_stage.fmu")
+    md = read_model_description(str(path))
+    assert md.coSimulation.modelIdentifier == "my_stage"
+    units = {v.name: v.unit for v in md.modelVariables if v.causality in ("input", "output")}
+    assert units == {"F": "N", "M": "N.m", "x": "m", "y": "m", "phi": "rad", "v": "m/s"}
+    definitions = {u.name: u for u in md.unitDefinitions}
+    speed, angle = definitions["m/s"].baseUnit, definitions["rad"].baseUnit
+    assert (speed.m, speed.s, speed.kg, angle.rad) == (1, -1, 0, 1)
+    slave = Slave(path)
+    sim = Simulator(load_scene(scene))
+    sim.reset()
+    for k in range(5):
+        slave.set([1.0, 0.01])
+        sim.set_inputs([1.0, 0.01])
+        sim.advance((k + 1) * 1e-3)
+        np.testing.assert_allclose(slave.step(k * 1e-3, 1e-3), sim.outputs(), rtol=0,
+                                   atol=1e-12)
+    slave.close()
+    assert sim.outputs()[3] > 0  # the bar moves along x: a positive velocity
