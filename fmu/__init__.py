@@ -10,6 +10,8 @@ any flexure slave as one.
 - `SafeSlave`, `UnitReal`: the base of a slave whose failures become FMI statuses.
 - `fix_model_description(xml)`: units, UnitDefinitions, InitialUnknowns, variabilities.
 - `fmu_environment()`: what a non-Python host needs (`flexure fmu env`).
+- `check_fmu(fmu, in_csv, ref_csv)`, `write_reference(...)`: FMI cross-check style regression
+  tests (`flexure fmu check`).
 """
 
 from .builder import (
@@ -22,10 +24,11 @@ from .builder import (
 )
 from .env import fmu_environment
 from .model_description import fix_model_description
+from .regression import check_fmu, write_reference
 from .slave import SafeSlave, UnitReal, escape_log
 
 __all__ = [
     "FMUBuildError", "SafeSlave", "UnitReal", "build_scene_fmu", "build_slave_fmu",
-    "bundle_name", "default_tunable", "escape_log", "fix_model_description", "fmu_environment",
-    "validate_fmu_file",
+    "bundle_name", "check_fmu", "default_tunable", "escape_log", "fix_model_description",
+    "fmu_environment", "validate_fmu_file", "write_reference",
 ]
