@@ -175,9 +175,14 @@ class LoopResult:
         axes[0].set_ylabel("position (mm)")
         axes[0].legend(loc="lower right")
         band = TARGET * abs(self.stroke) * 1e6
-        axes[1].plot(self.t, self.error[:, axis] * 1e6, label="error r - y")
-        axes[1].axhline(band, color="r", lw=0.8, ls=":", label=f"target +-{band:.3g} um")
-        axes[1].axhline(-band, color="r", lw=0.8, ls=":")
+        error = self.error[:, axis] * 1e6
+        axes[1].plot(self.t, error, label="error r - y")
+        if np.max(np.abs(error)) > 0.05 * band:  # the target band would flatten the error
+            axes[1].axhline(band, color="r", lw=0.8, ls=":", label=f"target +-{band:.3g} um")
+            axes[1].axhline(-band, color="r", lw=0.8, ls=":")
+        else:
+            axes[1].text(0.01, 0.04, f"target +-{band:.3g} um: far off this scale",
+                         transform=axes[1].transAxes, va="bottom", fontsize=9, color="r")
         axes[1].set_ylabel("error (um)")
         axes[1].legend(loc="upper right")
         axes[2].step(self.t, self.force[:, axis], where="post", label="total force")

@@ -30,8 +30,9 @@ from flexure.core.tables import markdown_table
 warnings.filterwarnings("ignore", module="scipy.signal")
 
 HEADERS = ["case", "scene", "plant", "controller", "stroke (mm)", "max abs error (m)",
-           "error / stroke (%)", "target 0.1 %", "phase margin (deg)", "gain margin",
-           "modulus margin", "wall time (s)"]
+           "error / stroke (%)", "target 0.1 %", "max feedback force (N)", "max force (N)",
+           "phase margin (deg)", "gain margin", "modulus margin", "closed-loop max abs(pole)",
+           "wall time (s)"]
 
 
 def cases(*, quick=False):
@@ -70,8 +71,9 @@ def main(*, quick=False, plot=None, workdir=None):
         rows.append((label, scene, s["plant"],
                      "feedback + feedforward" if s["feedforward"] else "feedback alone",
                      s["stroke"] * 1e3, s["max_abs_error"], 100 * s["error_ratio"],
-                     "passed" if s["passed"] else "failed", s["phase_margin_deg"],
-                     s["gain_margin"], s["modulus_margin"], s["wall_time_s"]))
+                     "passed" if s["passed"] else "failed", s["max_abs_feedback_force"],
+                     s["max_abs_force"], s["phase_margin_deg"], s["gain_margin"],
+                     s["modulus_margin"], s["closed_loop_spectral_radius"], s["wall_time_s"]))
         print(f"{label}: max |e| = {s['max_abs_error']:.4g} m "
               f"({100 * s['error_ratio']:.4g} %), {s['wall_time_s']:.1f} s", flush=True)
     print()
