@@ -17,6 +17,7 @@ from .scene import build_model, builtin_scenes, load_scene, scene_path
 from .simulation import SimulationResult, Simulator, default_atol, simulate
 from .statespace import state_space
 from .statics import StaticSolution, static_equilibrium
+from .stresses import beam_stresses, stresses_along
 
 limit_blas_threads()  # small matrices: one BLAS thread is fastest (see core/blas.py)
 
@@ -25,8 +26,8 @@ __version__ = "0.1.0"
 __all__ = [
     "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel",
     "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
-    "Simulator", "StaticSolution", "default_atol", "simulate",
-    "buckling_load_factors", "build_model", "builtin_scenes", "check_exact_constraint",
-    "linearize", "load_scene", "natural_frequencies", "scene_path", "state_space",
-    "static_equilibrium",
+    "Simulator", "StaticSolution", "beam_stresses", "buckling_load_factors", "build_model",
+    "builtin_scenes", "check_exact_constraint", "default_atol", "linearize", "load_scene",
+    "natural_frequencies", "scene_path", "simulate", "state_space", "static_equilibrium",
+    "stresses_along",
 ]
