@@ -31,6 +31,9 @@ def register(subparsers):
                             "the damping EdA/EdI of the sections and the node masses)")
     build.add_argument("--no-tunable", action="store_true",
                        help="expose no scene keys (only the integrator parameters)")
+    build.add_argument("--von-mises", action="store_true",
+                       help="add the output von_mises_max (Pa): the largest von Mises stress "
+                            "at the beam ends (scenes with spatial beams of given section)")
     build.add_argument("--no-validate", action="store_true",
                        help="skip fmpy's validation of the result")
     build.set_defaults(run=run_build)
@@ -65,7 +68,7 @@ def register(subparsers):
 def run_build(args):
     tunable = [] if args.no_tunable else args.tunable
     path = build_scene_fmu(args.scene, args.output, tunable=tunable,
-                           validate=not args.no_validate)
+                           von_mises=args.von_mises, validate=not args.no_validate)
     print(path)
     return 0
 

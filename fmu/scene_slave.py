@@ -11,6 +11,9 @@ Variables (only what the scene has):
 
 - one input per scene input (force N or moment N.m, start 0), held over each step;
 - one output per scene output (position m / rad, velocity m/s / rad/s);
+- on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
+  stress at the ends of the scene's beams with a cross-section, in the current state
+  (`flexure.core.stresses_along`);
 - parameters "integrator.method" (String: cvode-bdf, cvode-adams, ida),
   "integrator.rtol" (1) and "integrator.atol" (0 means the simulator's default);
 - one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
@@ -29,7 +32,7 @@ import tomllib
 import numpy as np
 from pythonfmu import DefaultExperiment
 
-from flexure.core import Simulator, build_model
+from flexure.core import Mechanics, Simulator, build_model, stresses_along
 
 from .slave import SafeSlave
 
@@ -66,6 +69,7 @@ class SceneSlave(SafeSlave):
 
     scene_toml = ""
     tunable = ()
+    von_mises = False  # report the largest von Mises stress as the output "von_mises_max"
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-3)
 
     def __init__(self, **kwargs):
@@ -83,7 +87,7 @@ class SceneSlave(SafeSlave):
         self._build()
         model = self._model
         self.inputs = np.zeros(len(model.inputs))
-        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self._refresh()
 
         for i, port in enumerate(model.inputs):
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
@@ -96,6 +100,10 @@ class SceneSlave(SafeSlave):
                           description=f"{port.quantity} of coordinate "
                                       f"{model.coordinate_names[port.coordinate]}",
                           getter=lambda j=j: float(self.outputs[j]))
+        if self.von_mises:
+            self.add_real("von_mises_max", causality="output", unit="Pa",
+                          description="largest von Mises stress at the ends of the beams",
+                          getter=lambda: self.stress)
         self.add_string("integrator.method", start=self.method,
                         description="integration method: " + ", ".join(METHODS),
                         getter=lambda: self.method,
@@ -132,28 +140,39 @@ class SceneSlave(SafeSlave):
         self.simulator = Simulator(self._model, method=self.method, rtol=float(self.rtol),
                                    atol=float(self.atol) if self.atol > 0 else None)
         self.simulator.reset(t0=self.start_time)
+        self._mechanics = Mechanics(self._model) if self.von_mises else None
         self._built_with = self._settings()
+
+    def _refresh(self):
+        """Read the outputs (and the stress) from the simulator's current state."""
+        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self.stress = float("nan")
+        if self.von_mises:
+            state = np.concatenate([self.simulator.q, self.simulator.qdot])
+            _, stresses = stresses_along(self._model, [state], inputs=[self.inputs],
+                                         mechanics=self._mechanics)
+            self.stress = float(np.nanmax(stresses))
 
     def initialize(self, start_time):
         if self._settings() != self._built_with:
             self._build()
         self.simulator.reset(t0=start_time)
-        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self._refresh()
 
     def advance(self, t, h):
         self.simulator.set_inputs(self.inputs)
         self.simulator.advance(t + h)
-        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self._refresh()
 
     def last_good_time(self):
-        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self._refresh()
         return self.simulator.time
 
     # -- state ---------------------------------------------------------------------------------
 
     def save_state(self):
         return {"settings": self._built_with, "simulator": self.simulator.get_state(),
-                "outputs": self.outputs.copy()}
+                "outputs": self.outputs.copy(), "stress": self.stress}
 
     def load_state(self, state):
         method, rtol, atol, parameters = state["settings"]
@@ -163,3 +182,4 @@ class SceneSlave(SafeSlave):
             self._build()
         self.simulator.set_state(state["simulator"])
         self.outputs = np.asarray(state["outputs"], dtype=float).copy()
+        self.stress = state["stress"]

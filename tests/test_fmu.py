@@ -508,3 +508,33 @@ def test_velocity_and_rotation_ports_get_their_units(tmp_path):
                                    atol=1e-12)
     slave.close()
     assert sim.outputs()[3] > 0  # the bar moves along x: a positive velocity
+
+
+def test_von_mises_output_on_request(tmp_path):
+    """--von-mises adds von_mises_max (Pa): the largest stress of flexure.core's
+    stresses_along in the state after each step; refused for a scene without beam sections."""
+    from flexure.core import stresses_along
+
+    scene = "stage_spatial_1dof"
+    path = build_scene_fmu(scene, tmp_path / "spatial.fmu", von_mises=True)
+    md = read_model_description(str(path))
+    stress = next(v for v in md.modelVariables if v.name == "von_mises_max")
+    assert (stress.causality, stress.unit) == ("output", "Pa")
+    assert validate_fmu_file(path) == []
+    model = load_scene(scene)
+    slave = Slave(path)
+    sim = Simulator(model)
+    sim.reset()
+    for k in range(3):
+        slave.set(0.5)
+        y = slave.step(k * 1e-3, 1e-3)
+        sim.set_inputs([0.5])
+        sim.advance((k + 1) * 1e-3)
+        _, expected = stresses_along(model, [np.concatenate([sim.q, sim.qdot])],
+                                     inputs=[[0.5]])
+        assert y[slave.outputs.index("von_mises_max")] == pytest.approx(
+            np.nanmax(expected), rel=1e-12)
+    slave.close()
+    assert np.nanmax(expected) > 0
+    with pytest.raises(FMUBuildError, match="no beams with a cross-section"):
+        build_scene_fmu("stage_planar_1dof", tmp_path / "planar.fmu", von_mises=True)
