@@ -19,12 +19,16 @@ first-order state y = [q, qdot]:
     dydot/dy = [[0, I], [-M_bar^-1 (K0 + G0), -M_bar^-1 C0]]
 """
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
 
+from . import assembly
+from .assembly import _point_gravity
 from .errors import ConvergenceError, SimulationError
+from .kinematics import Configuration
 from .mechanics import Mechanics
 
 
@@ -71,6 +75,10 @@ class Dynamics:
         if self.has_gravity and not self.inertia.groups:
             self.constant_force += self.inertia.gravity_force(model.initial_coordinates)
         self.stressed = self.mech.stressed
+        self.chord_iterations = 6
+        # constraint tolerance relative to the length scale: near round-off, because a
+        # residual feeds the stiff (kHz) modes with noise the integrator then resolves
+        self.tolerance = 1e-14
         self.reset_warm_start()
 
     # -- kinematics -------------------------------------------------------------------------
@@ -80,14 +88,55 @@ class Dynamics:
         self._x = np.array(x, dtype=float)
         self._q = self.kin.dofs_of(self._x)
         self._DF = None
+        self._lu = None
+        self._hessians = None
 
     def solve(self, q):
-        """The kinematic Configuration for DOFs q, from a first-order prediction."""
-        x_start = self._x
-        if self._DF is not None:
-            x_start = self._x + self._DF @ (q - self._q)
-        config = self.kin.solve(q, x_start)
-        self._x, self._q, self._DF = config.x, config.q, config.DF
+        """The kinematic Configuration for DOFs q, and the deformation Hessians there.
+
+        Start from the first-order prediction x_prev + DF_prev (q - q_prev); when the
+        constraints are then violated by more than the kinematic tolerance, correct with the
+        previous constraint Jacobian (chord Newton, converging at a rate of order |dq| / L);
+        fall back to full Newton (`Kinematics.solve`) when that does not converge. Typically
+        one evaluation of the deformations and one of their derivatives per call.
+        """
+        kin, model = self.kin, self.model
+        q = np.array(q, dtype=float)
+        if self._DF is None:
+            config = kin.solve(q, self._x)
+            return self._store(q, config.x)
+        x = self._x + self._DF @ (q - self._q)
+        tolerance = self.tolerance * kin.length_scale
+        free, lu = kin.free, self._lu
+        for _ in range(self.chord_iterations):
+            e = assembly.deformations(model, x)
+            g = kin.residual(x, e, q)
+            if np.max(np.abs(g)) <= tolerance:
+                break
+            dx = scipy.linalg.lu_solve(lu, g, check_finite=False)
+            if not np.all(np.isfinite(dx)):
+                break
+            x[free] -= dx
+            if np.max(np.abs(dx)) <= tolerance:
+                break
+        else:
+            x = kin.solve(q, x).x
+        return self._store(q, x)
+
+    def _store(self, q, x):
+        """First- and second-order kinematics at a solved x; keeps them as the next start."""
+        kin, model = self.kin, self.model
+        e, De, hessians = _deformations_order2(model, x)
+        lu = scipy.linalg.lu_factor(kin.constraint_jacobian(De), check_finite=False)
+        DF = np.zeros((model.nx, kin.selector.shape[1]))
+        DF[kin.free] = scipy.linalg.lu_solve(lu, kin.selector, check_finite=False)
+        if not np.all(np.isfinite(DF)):
+            raise ConvergenceError(
+                f"kinematics of {model.name!r}: the constraint Jacobian is singular at "
+                f"q = {np.array2string(q, precision=6)} (a singular configuration)")
+        config = Configuration(q=q, x=x, e=e, De=De, lu=lu, DF=DF)
+        self._x, self._q, self._DF, self._lu = x, q, DF, lu
+        self._hessians = hessians
         return config
 
     def configuration(self, q):
@@ -105,26 +154,18 @@ class Dynamics:
         x, DF, De = config.x, config.DF, config.De
         xdot = DF @ qdot
         moving = bool(np.any(qdot))
-        hess = None
-        if moving or hessians:
-            hess = _hessians(self.model, x)
+        hess = self._hessians
         edot = De @ xdot if mech.has_damping else None
         sigma_c = mech.constitutive_stress(config, edot)
-        if self.constant_mass is not None:
-            M = self.constant_mass
-            f = self.constant_force.copy()
-        else:
-            M = inertia.mass_matrix(x)
-            f = self.constant_force.copy()
-            if self.has_gravity:
-                f += inertia.gravity_force(x)
+        f = self.constant_force.copy()
+        if self.has_gravity and inertia.groups:
+            f += inertia.gravity_force(x)
         if u is not None and u.size:
             f += self.input_matrix @ u
+        M, inertia_force = self._inertia(x, xdot, moving)
         r = f - De.T @ sigma_c
         if moving:
-            r -= M @ kin.convective_acceleration(config, qdot, hess)
-            if inertia.groups:
-                r -= inertia.convective_force(x, xdot)
+            r -= M @ kin.convective_acceleration(config, qdot, hess) + inertia_force
         mass = DF.T @ M @ DF
         with np.errstate(all="ignore"):
             try:
@@ -134,6 +175,25 @@ class Dynamics:
                     "the reduced mass matrix M_bar is singular (a DOF without mass)") from None
         return Evaluation(q=q, qdot=qdot, qddot=qddot, x=x, xdot=xdot, config=config, mass=mass,
                           coordinate_mass=M, force_balance=r, sigma_c=sigma_c, hessians=hess)
+
+    def _inertia(self, x, xdot, moving):
+        """M(x) (NX, NX) and the convective inertia force (NX,) in one pass per group."""
+        if self.constant_mass is not None:
+            return self.constant_mass, 0.0
+        M = np.diag(self.model.lumped_mass)
+        force = np.zeros(self.model.nx)
+        for group, Mp in self.inertia.groups:
+            idx = group.coordinate_index
+            points = group.kind.inertia_points(group.local(x), group.reference,
+                                               order=2 if moving else 1)
+            Dp = points[1]
+            np.add.at(M, (idx[:, :, None], idx[:, None, :]),
+                      np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp))
+            if moving:
+                v = xdot[idx]
+                accel = np.einsum("npij,ni,nj->np", points[2], v, v)
+                np.add.at(force, idx, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
+        return M, force
 
     def accelerations(self, q, qdot, u):
         """qddot (NDOF,) at (q, qdot) with inputs u (n_inputs,) in N."""
@@ -159,6 +219,26 @@ class Dynamics:
         C = mech.damping_matrix(config)
         return ev.mass, C, K
 
+    def mechanical_energy(self, q, qdot, u=None):
+        """Kinetic plus potential energy (J): 1/2 qdot^T M_bar qdot + 1/2 e_s^T S e_s minus
+        the work potential of the constant loads, the inputs u and gravity."""
+        config = self.configuration(q)
+        x = config.x
+        M, _ = self._inertia(x, config.DF @ qdot, False)
+        mass = config.DF.T @ M @ config.DF
+        e_s = config.e[self.stressed]
+        energy = 0.5 * qdot @ mass @ qdot + 0.5 * e_s @ self.mech.S @ e_s
+        f = self.model.loads + (self.input_matrix @ u if u is not None and u.size else 0.0)
+        energy -= f @ x
+        if self.has_gravity:
+            energy -= self.model.lumped_mass * self.inertia._translation_gravity(
+                self.model.gravity) @ x
+            for group, Mp in self.inertia.groups:
+                (p,) = group.kind.inertia_points(group.local(x), group.reference, order=0)
+                weights = Mp @ _point_gravity(group, self.model.gravity)
+                energy -= np.einsum("np,np->", weights, p)
+        return float(energy)
+
     def outputs(self, ev, ports=None):
         """The declared outputs (n_outputs,) of an evaluation: positions m, velocities m/s."""
         ports = self.model.outputs if ports is None else ports
@@ -179,12 +259,15 @@ class FirstOrderSystem:
         self.input_function = input_function
         self.rhs_count = 0
         self.jacobian_count = 0
+        self.deadline = None  # time.perf_counter() value past which an evaluation fails
 
     def _inputs(self, t):
         return self.input_function(t)
 
     def _evaluate(self, t, y, *, hessians=False):
         n = self.n
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            raise SimulationError(f"t = {t:.9g} s: the time limit of the run is over")
         if not np.all(np.isfinite(y)):
             raise SimulationError(f"t = {t:.9g} s: the state became non-finite "
                                   f"({_first_bad(y, self.dynamics.model, n)})")
@@ -250,10 +333,19 @@ class FirstOrderSystem:
         JJ[n:, n:] = C + cj * mass
 
 
-def _hessians(model, x):
-    from . import assembly
-
-    return assembly.deformation_hessians(model, x)
+def _deformations_order2(model, x):
+    """e (NE,), De (NE, NX) and per group (group, D2e) in one pass over the elements."""
+    e = np.zeros(len(model.deformation_names))
+    De = np.zeros((e.size, model.nx))
+    hessians = []
+    for group in model.groups:
+        local_e, local_De, D2e = group.kind.deformations(group.local(x), group.reference,
+                                                         order=2)
+        e[group.deformation_index] = local_e
+        # every (deformation, coordinate) pair belongs to one element: plain assignment
+        De[group.deformation_index[:, :, None], group.coordinate_index[:, None, :]] = local_De
+        hessians.append((group, D2e))
+    return e, De, hessians
 
 
 def _first_bad(y, model, n):

@@ -50,11 +50,13 @@ class CvodeIntegrator(_Sundials):
     """CVODE on ydot = f(t, y) with BDF (stiff) or Adams (non-stiff) formulas."""
 
     def __init__(self, system, *, method="BDF", rtol, atol, max_step=None,
-                 jacobian="analytic"):
+                 jacobian="analytic", max_order=None):
         self.system = system
         self.label = f"CVODE {method}"
         options = dict(method=method, rtol=rtol, atol=atol, max_num_steps=1_000_000,
                        max_step=max_step or 0.0, linsolver="dense")
+        if max_order is not None:
+            options["max_order"] = int(max_order)
         if jacobian == "analytic":
             options["jacfn"] = system.jacobian
         self.solver = CVODE(system.rhs, **options)
@@ -70,11 +72,14 @@ class CvodeIntegrator(_Sundials):
 class IdaIntegrator(_Sundials):
     """IDA on the implicit form res(t, y, yp) = 0 (variable-order BDF)."""
 
-    def __init__(self, system, *, rtol, atol, max_step=None, jacobian="analytic"):
+    def __init__(self, system, *, rtol, atol, max_step=None, jacobian="analytic",
+                 max_order=None):
         self.system = system
         self.label = "IDA"
         options = dict(rtol=rtol, atol=atol, max_num_steps=1_000_000, max_step=max_step or 0.0,
                        linsolver="dense")
+        if max_order is not None:
+            options["max_order"] = int(max_order)
         if jacobian == "analytic":
             options["jacfn"] = system.residual_jacobian
         self.solver = IDA(system.residual, **options)
@@ -89,17 +94,23 @@ class IdaIntegrator(_Sundials):
             raise SimulationError(f"t = {t:.9g} s: IDA could not start: {result.message}")
 
 
-def make_integrator(system, method, *, rtol, atol, max_step=None, jacobian="analytic"):
-    """The back-end for `method` ("cvode-bdf", "cvode-adams" or "ida")."""
+def make_integrator(system, method, *, rtol, atol, max_step=None, jacobian="analytic",
+                    max_order=None):
+    """The back-end for `method` ("cvode-bdf", "cvode-adams" or "ida").
+
+    max_order: the largest order of the multistep formulas (None: SUNDIALS' default, 5 for
+    BDF and IDA, 12 for Adams).
+    """
     if jacobian not in JACOBIANS:
         raise SimulationError(f"unknown jacobian {jacobian!r}; expected one of "
                               f"{', '.join(JACOBIANS)}")
     if method == "cvode-bdf":
         return CvodeIntegrator(system, method="BDF", rtol=rtol, atol=atol, max_step=max_step,
-                               jacobian=jacobian)
+                               jacobian=jacobian, max_order=max_order)
     if method == "cvode-adams":
         return CvodeIntegrator(system, method="Adams", rtol=rtol, atol=atol, max_step=max_step,
-                               jacobian=jacobian)
+                               jacobian=jacobian, max_order=max_order)
     if method == "ida":
-        return IdaIntegrator(system, rtol=rtol, atol=atol, max_step=max_step, jacobian=jacobian)
+        return IdaIntegrator(system, rtol=rtol, atol=atol, max_step=max_step, jacobian=jacobian,
+                             max_order=max_order)
     raise SimulationError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")

@@ -43,10 +43,12 @@ class Simulator:
         Largest step (s); None for no limit.
     jacobian : str
         "analytic" (the model's tangent, default) or "finite-difference" (SUNDIALS').
+    max_order : int, optional
+        Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA).
     """
 
     def __init__(self, model, *, method="cvode-bdf", rtol=1e-8, atol=None, max_step=None,
-                 jacobian="analytic"):
+                 jacobian="analytic", max_order=None):
         if method not in METHODS:
             raise SimulationError(f"unknown method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}")
@@ -68,7 +70,8 @@ class Simulator:
         self._input_functions = {}  # index -> callable(t), used by `simulate`
         self.system = FirstOrderSystem(self.dynamics, self._inputs_at)
         self.integrator = make_integrator(self.system, method, rtol=rtol, atol=self.atol,
-                                          max_step=max_step, jacobian=jacobian)
+                                          max_step=max_step, jacobian=jacobian,
+                                          max_order=max_order)
         self._output_dynamics = Dynamics(model, mechanics=self.dynamics.mech)
         self.reset()
 
@@ -286,7 +289,8 @@ class SimulationResult:
 
 
 def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=None,
-             max_step=None, output_times=None, jacobian="analytic", q0=None, qdot0=None):
+             max_step=None, output_times=None, jacobian="analytic", max_order=None, q0=None,
+             qdot0=None, deadline=None):
     """Simulate `model` from rest (or q0, qdot0) at t = 0 to t_end (s).
 
     Parameters
@@ -297,6 +301,8 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
         Unnamed inputs are zero.
     output_times : array, optional
         Times (s) at which to record; default every accepted integrator step.
+    deadline : float, optional
+        A `time.perf_counter()` value after which the run stops with a SimulationError.
 
     Returns
     -------
@@ -305,8 +311,9 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
     if not (np.isfinite(t_end) and t_end > 0):
         raise SimulationError(f"t_end must be a positive time (s), got {t_end!r}")
     sim = Simulator(model, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                    jacobian=jacobian)
+                    jacobian=jacobian, max_order=max_order)
     sim.reset(q0=q0, qdot0=qdot0)
+    sim.system.deadline = deadline
     constants, functions, samples = _classify_inputs(sim, inputs or {})
     u0 = np.zeros(len(sim.input_names))
     for i, value in constants.items():

@@ -1,0 +1,150 @@
+"""Work-precision study: the error against a tight reference, and the wall time, per method
+and tolerance.
+
+Every method integrates the same right-hand side (`dynamics.FirstOrderSystem`): SUNDIALS
+CVODE (BDF, Adams) and IDA through `simulate`, and scipy's Radau, BDF and DOP853
+(`scipy.integrate.solve_ivp`, the implicit ones with the same model Jacobian) as the peer
+baseline. The error is the largest deviation of any declared output (m) from the reference
+at equally spaced sample times; the reference is CVODE Adams at a tight tolerance.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.integrate
+
+from .errors import FlexureError, SimulationError
+from .simulation import Simulator, _classify_inputs, _outputs_along, simulate
+from .tables import format_table, markdown_table
+
+SUNDIALS_METHODS = ("cvode-bdf", "cvode-adams", "ida")
+SCIPY_METHODS = {"scipy-radau": "Radau", "scipy-bdf": "BDF", "scipy-dop853": "DOP853"}
+ALL_METHODS = SUNDIALS_METHODS + tuple(SCIPY_METHODS)
+HEADERS = ["method", "rtol", "max output error (m)", "wall time (s)", "rhs evaluations",
+           "steps", "status"]
+
+
+@dataclass
+class WorkPrecision:
+    """The rows of a work-precision study and how it was made."""
+
+    scene: str
+    t_end: float
+    reference_rtol: float
+    reference_time_s: float
+    rows: list = field(default_factory=list)  # dicts with the HEADERS' quantities
+
+    def table_rows(self):
+        return [(r["method"], f"{r['rtol']:.0e}",
+                 "" if r["error"] is None else f"{r['error']:.2e}", f"{r['wall_time_s']:.3f}",
+                 r["rhs_evaluations"], r["steps"], r["status"]) for r in self.rows]
+
+    def text(self):
+        return format_table(HEADERS, self.table_rows(),
+                            title=f"work-precision: {self.scene}, {self.t_end:g} s "
+                                  f"(reference: cvode-adams at rtol {self.reference_rtol:g})")
+
+    def markdown(self):
+        return markdown_table(HEADERS, self.table_rows())
+
+    def to_csv(self, path):
+        lines = ["method,rtol,max_output_error_m,wall_time_s,rhs_evaluations,steps,status"]
+        for r in self.rows:
+            error = "" if r["error"] is None else f"{r['error']:.6e}"
+            lines.append(f"{r['method']},{r['rtol']:.3e},{error},{r['wall_time_s']:.6f},"
+                         f"{r['rhs_evaluations']},{r['steps']},{r['status']}")
+        with open(path, "w") as handle:
+            handle.write("\n".join(lines) + "\n")
+
+    def plot(self, path):
+        """Log-log plot of the error against the wall time, one line per method (PNG)."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for method in dict.fromkeys(r["method"] for r in self.rows):
+            points = [(r["wall_time_s"], r["error"]) for r in self.rows
+                      if r["method"] == method and r["error"] is not None and r["error"] > 0]
+            if points:
+                ax.loglog(*zip(*points, strict=True), "o-", label=method)
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("max output error (m)")
+        ax.set_title(f"{self.scene}: {self.t_end:g} s")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+
+
+def work_precision(model, t_end, *, inputs=None, methods=ALL_METHODS,
+                   rtols=(1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8), reference_rtol=1e-11,
+                   samples=101, time_limit=60.0, progress=None):
+    """Run every method at every rtol against a tight reference; a `WorkPrecision`.
+
+    inputs: {name: constant N or callable(t)}. time_limit (s) stops a single run that takes
+    longer (its row says so). progress: optional callable(row) after each run.
+    """
+    times = np.linspace(0.0, t_end, samples)
+    for method in methods:
+        if method not in ALL_METHODS:
+            raise SimulationError(f"unknown method {method!r}; expected one of "
+                                  f"{', '.join(ALL_METHODS)}")
+    start = time.perf_counter()
+    reference = simulate(model, t_end, inputs=inputs, method="cvode-adams", rtol=reference_rtol,
+                         output_times=times).output_array
+    study = WorkPrecision(model.name, t_end, reference_rtol, time.perf_counter() - start)
+    for method in methods:
+        for rtol in rtols:
+            row = _run(model, t_end, inputs, method, rtol, times, reference, time_limit)
+            study.rows.append(row)
+            if progress:
+                progress(row)
+    return study
+
+
+def _run(model, t_end, inputs, method, rtol, times, reference, time_limit):
+    row = {"method": method, "rtol": rtol, "error": None, "wall_time_s": 0.0,
+           "rhs_evaluations": 0, "steps": 0, "status": "ok"}
+    start = time.perf_counter()
+    try:
+        if method in SCIPY_METHODS:
+            outputs, stats = _scipy_run(model, t_end, inputs, SCIPY_METHODS[method], rtol,
+                                        times, start + time_limit)
+        else:
+            result = simulate(model, t_end, inputs=inputs, method=method, rtol=rtol,
+                              output_times=times, deadline=start + time_limit)
+            outputs, stats = result.output_array, result.statistics
+        row["error"] = float(np.max(np.abs(outputs - reference)))
+        row["rhs_evaluations"], row["steps"] = stats["rhs_evaluations"], stats["steps"]
+    except FlexureError as error:
+        row["status"] = "time limit" if "time limit" in str(error) else f"failed: {error}"
+    row["wall_time_s"] = time.perf_counter() - start
+    return row
+
+
+def _scipy_run(model, t_end, inputs, method, rtol, times, deadline):
+    """scipy.integrate.solve_ivp on the same right-hand side (and Jacobian for the implicit)."""
+    sim = Simulator(model, rtol=rtol)
+    constants, functions, samples = _classify_inputs(sim, inputs or {})
+    if samples:
+        raise SimulationError("the scipy baseline takes constant or callable inputs only")
+    u = np.zeros(len(sim.input_names))
+    for i, value in constants.items():
+        u[i] = value
+    sim.set_inputs(u)
+    sim._input_functions = functions
+    system = sim.system
+    system.deadline = deadline
+    options = {"jac": system.jacobian_matrix} if method in ("Radau", "BDF") else {}
+    solution = scipy.integrate.solve_ivp(system.derivative, (0.0, t_end), sim._y.copy(),
+                                         method=method, t_eval=times, rtol=rtol,
+                                         atol=sim.atol, **options)
+    if not solution.success:
+        raise SimulationError(f"scipy {method}: {solution.message}")
+    outputs = _outputs_along(sim, solution.y.T)
+    # solve_ivp does not report its number of steps when t_eval is given
+    return outputs, {"rhs_evaluations": system.rhs_count, "steps": "-"}

@@ -1,0 +1,254 @@
+"""Nonlinear time-domain simulation against analytic solutions and independent computations.
+
+Scenes: truss_1dof_x (a linear mass-spring-damper), stage_planar_1dof / _3dof (leaf-spring
+stages), and two pendulums built here from dicts.
+"""
+
+import pickle
+import tomllib
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.special
+
+from flexure.core import (
+    Simulator,
+    build_model,
+    linearize,
+    load_scene,
+    scene_path,
+    simulate,
+    static_equilibrium,
+)
+from flexure.core.dynamics import Dynamics
+
+
+def scene_dict(name):
+    return tomllib.loads(scene_path(name).read_text())
+
+
+def undamped(name):
+    data = scene_dict(name)
+    for section in data["sections"].values():
+        section.pop("EdA", None)
+        section.pop("EdI", None)
+    return build_model(data, source=f"{name} (undamped)")
+
+
+def pendulum(length=0.5, mass=2.0):
+    """A rigid pendulum: a PLBEAM with all deformations prescribed zero, the angle of its
+    hinge node the DOF (a coordinate DOF of a truss would be singular at 90 degrees or at
+    the bottom), a point mass at its end, gravity."""
+    return build_model({
+        "scene": {"name": "pendulum", "gravity": [0.0, -9.81]},
+        "sections": {"rod": {"EA": 1.0}},
+        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "2": {"angle": 0.0, "dof": ["phi"]},
+                  "3": {"position": [length, 0.0], "mass": mass},
+                  "4": {"angle": 0.0}},
+        "elements": {"rod": {"type": "PLBEAM", "nodes": ["1", "2", "3", "4"],
+                             "section": "rod"}},
+        "outputs": {"phi": {"node": "2", "coordinate": "phi"},
+                    "y": {"node": "3", "coordinate": "y"}},
+    })
+
+
+def truss_pendulum(length=0.5):
+    """A truss pendulum with its elongation prescribed zero and the mass's y as the DOF: the
+    constraint Jacobian is singular where the truss hangs vertically."""
+    return build_model({
+        "scene": {"name": "truss_pendulum", "gravity": [0.0, -9.81]},
+        "sections": {"rod": {"EA": 1.0}},
+        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "2": {"position": [length, 0.0], "mass": 1.0, "dof": ["y"]}},
+        "elements": {"rod": {"type": "PLTRUSS", "nodes": ["1", "2"], "section": "rod"}},
+        "outputs": {"y": {"node": "2", "coordinate": "y"}},
+    })
+
+
+# -- accuracy --------------------------------------------------------------------------------
+@pytest.mark.parametrize("method", ["cvode-bdf", "cvode-adams"])
+@pytest.mark.parametrize("rtol", [1e-6, 1e-8])
+def test_linear_one_dof_step_response_matches_the_analytic_solution(method, rtol):
+    """Over one period of the step response, the error stays within 10 rtol of the solution
+    (the DOF is the absolute x of the mass, about 0.1 m: the magnitude rtol applies to)."""
+    model = load_scene("truss_1dof_x")  # its scene load: 1 N sideways from t = 0
+    m = 0.206 + 0.1413 * 0.1 / 3.0
+    k, c, force = 94.5 / 0.1, 0.0036494 / 0.1, 1.0
+    wn = np.sqrt(k / m)
+    zeta = c / (2 * np.sqrt(k * m))
+    wd = wn * np.sqrt(1 - zeta**2)
+    period = 2 * np.pi / wd
+    times = np.linspace(0.0, period, 101)
+    result = simulate(model, period, method=method, rtol=rtol, output_times=times)
+    exact = 0.1 + force / k * (1 - np.exp(-zeta * wn * times) * (
+        np.cos(wd * times) + zeta / np.sqrt(1 - zeta**2) * np.sin(wd * times)))
+    error = np.max(np.abs(result.outputs["x"] - exact))
+    assert error <= 10 * rtol * np.max(np.abs(exact))
+    assert np.max(exact) - 0.1 > 2e-3  # the step response overshoots to twice 1/k
+
+
+def released_from_a_modal_load(model, force=1.0):
+    """DOFs (NDOF,) of the static equilibrium under the load M0 phi_1 (1 N sideways): let go,
+    the stage vibrates in its first mode, with the stiff modes excited only by the
+    nonlinearity."""
+    lin = linearize(model)
+    _, shapes = scipy.linalg.eigh(lin.K, lin.M0)
+    f = lin.M0 @ shapes[:, 0]
+    loads = model.loads.copy()
+    loads[model.dof_coordinates] = force * f / abs(f[0])
+    return static_equilibrium(model, loads=loads).q
+
+
+def test_undamped_3dof_stage_conserves_energy():
+    """Free vibration at rtol 1e-9: the relative energy drift stays below 1e-6. The test
+    runs 0.5 s (CPU time); examples/energy_drift.py runs the full 10 s of the issue."""
+    model = undamped("stage_planar_3dof")
+    dyn = Dynamics(model)
+    q0 = released_from_a_modal_load(model)
+    sim = Simulator(model, method="cvode-adams", rtol=1e-9)
+    sim.reset(q0=q0)
+    e0 = dyn.mechanical_energy(q0, np.zeros(3))
+    drift, lowest = 0.0, q0[0]
+    for t in np.linspace(0.05, 0.5, 10):
+        sim.advance(t)
+        drift = max(drift, abs(dyn.mechanical_energy(sim.q, sim.qdot) - e0) / e0)
+        lowest = min(lowest, sim.q[0])
+    assert drift < 1e-6
+    assert lowest < 0.0  # it did swing through the rest position
+
+
+def test_rigid_pendulum_period_matches_the_elliptic_integral():
+    length, g = 0.5, 9.81
+    model = pendulum(length)
+    exact = 4 * np.sqrt(length / g) * scipy.special.ellipk(np.sin(np.pi / 4) ** 2)
+    sim = Simulator(model, method="cvode-bdf", rtol=1e-11)
+    crossings, previous = [], (0.0, sim.q[0], sim.qdot[0])
+    while len(crossings) < 2:  # the angle passes -90 degrees at T/4 and 3T/4
+        sim.advance(sim.time + 2e-3)
+        t, phi, w = sim.time, sim.q[0], sim.qdot[0]
+        if (previous[1] + np.pi / 2) * (phi + np.pi / 2) < 0:
+            crossings.append(_hermite_root(previous, (t, phi, w), -np.pi / 2))
+        previous = (t, phi, w)
+    period = 2 * (crossings[1] - crossings[0])
+    assert abs(period - exact) / exact < 1e-6
+
+
+def _hermite_root(a, b, level):
+    """Time where the cubic Hermite interpolant of (t, value, slope) a -> b reaches level."""
+    (t0, y0, d0), (t1, y1, d1) = a, b
+    h = t1 - t0
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        s = 0.5 * (lo + hi)
+        value = ((2 * s**3 - 3 * s**2 + 1) * y0 + (s**3 - 2 * s**2 + s) * h * d0
+                 + (-2 * s**3 + 3 * s**2) * y1 + (s**3 - s**2) * h * d1)
+        if (value - level) * (y0 - level) > 0:
+            lo = s
+        else:
+            hi = s
+    return t0 + 0.5 * (lo + hi) * h
+
+
+def test_cvode_and_ida_agree_on_the_same_scene_and_input():
+    model = load_scene("stage_planar_1dof")
+    times = np.linspace(0.0, 0.3, 31)
+    inputs = {"F": lambda t: 2.0 * np.sin(20.0 * t)}
+    a = simulate(model, 0.3, inputs=inputs, method="cvode-bdf", rtol=1e-10,
+                 output_times=times)
+    b = simulate(model, 0.3, inputs=inputs, method="ida", rtol=1e-10, output_times=times)
+    assert np.max(np.abs(a.output_array - b.output_array)) < 1e-7
+    assert np.max(np.abs(a.outputs["x"])) > 1e-3  # a real motion was compared
+
+
+def test_slow_force_ramp_follows_the_nonlinear_static_solution():
+    """A smooth 8 N ramp over 3 s (30 periods of the stage): the motion stays within 5e-4
+    of the stroke from the static solution, and the parasitic vertical motion of the bar
+    (of second order in the stroke, absent from a linear model) within 1e-3 of its value."""
+    model = load_scene("stage_planar_1dof")
+    port = model.inputs[0].coordinate
+    F_max, T = 8.0, 3.0
+    ramp = lambda t: F_max * 0.5 * (1 - np.cos(np.pi * min(t, T) / T))  # noqa: E731
+    times = np.array([0.25, 0.5, 0.75, 1.0]) * T
+    result = simulate(model, T, inputs={"F": ramp}, rtol=1e-8, output_times=times)
+    x0, y0 = model.initial_coordinates[[port, port + 1]]
+    statics = []
+    for t in times:
+        loads = model.loads.copy()
+        loads[port] += ramp(t)
+        static = static_equilibrium(model, loads=loads)
+        statics.append((static.x[port] - x0, static.x[port + 1] - y0))
+    dx, dy = np.array(statics).T
+    assert dx[-1] > 8e-3 and dy[-1] < -4e-4
+    assert np.all(np.abs(result.outputs["x"] - x0 - dx) < 5e-4 * dx[-1])
+    assert np.all(np.abs(result.outputs["y"] - y0 - dy) < 1e-3 * abs(dy[-1]))
+
+
+# -- Jacobian, statistics, state -------------------------------------------------------------
+def test_model_jacobian_matches_finite_differences_at_an_equilibrium_in_motion():
+    model = load_scene("stage_planar_3dof")
+    sim = Simulator(model)
+    sim.set_inputs([3.0])
+    loads = model.loads.copy()
+    loads[model.inputs[0].coordinate] += 3.0
+    q = static_equilibrium(model, loads=loads).q
+    system = sim.system
+    for qdot in (np.zeros(3), np.array([0.02, 1e-4, 1e-3])):
+        y = np.concatenate([q, qdot])
+        analytic = system.jacobian_matrix(0.0, y)
+        numeric = np.zeros_like(analytic)
+        steps = np.array([1e-7, 1e-8, 1e-7, 1e-4, 1e-5, 1e-4])
+        for j, h in enumerate(steps):
+            up, down = y.copy(), y.copy()
+            up[j] += h
+            down[j] -= h
+            numeric[:, j] = (system.derivative(0.0, up) - system.derivative(0.0, down)) / (2 * h)
+        scale = np.max(np.abs(numeric), axis=1, keepdims=True)
+        tolerance = 1e-5 if not np.any(qdot) else 1e-3  # exact at rest, close in motion
+        assert np.all(np.abs(analytic - numeric) <= tolerance * scale)
+
+
+def test_finite_difference_jacobian_gives_the_same_motion():
+    model = load_scene("stage_planar_1dof")
+    times = np.linspace(0, 0.1, 11)
+    a = simulate(model, 0.1, inputs={"F": 1.0}, rtol=1e-9, output_times=times)
+    b = simulate(model, 0.1, inputs={"F": 1.0}, rtol=1e-9, output_times=times,
+                 jacobian="finite-difference")
+    assert np.max(np.abs(a.output_array - b.output_array)) < 1e-9
+    assert a.statistics["jacobian_evaluations"] > 0 and b.statistics["jacobian_evaluations"] > 0
+
+
+def test_restored_state_continues_bit_for_bit():
+    model = load_scene("stage_planar_1dof")
+    sim = Simulator(model, rtol=1e-7)
+    sim.set_inputs([1.0])
+    sim.advance(0.05)
+    state = pickle.loads(pickle.dumps(sim.get_state()))
+    sim.advance(0.1)
+    sim.set_inputs([-0.5])
+    sim.advance(0.15)
+    first = (sim.q, sim.qdot, sim.outputs())
+    other = Simulator(model, rtol=1e-7)
+    other.set_state(state)
+    other.advance(0.1)
+    other.set_inputs([-0.5])
+    other.advance(0.15)
+    assert other.time == sim.time
+    for a, b in zip(first, (other.q, other.qdot, other.outputs()), strict=True):
+        assert np.array_equal(a, b)
+    stats = sim.statistics
+    assert stats["steps"] > 0 and stats["rhs_evaluations"] >= stats["steps"]
+    assert stats["wall_time_s"] > 0
+
+
+def test_zero_order_hold_samples_equal_manual_set_inputs():
+    model = load_scene("stage_planar_1dof")
+    times, values = np.array([0.0, 0.02, 0.05]), np.array([1.0, -2.0, 0.5])
+    result = simulate(model, 0.08, inputs={"F": (times, values)}, rtol=1e-8,
+                      output_times=[0.08])
+    sim = Simulator(model, rtol=1e-8)
+    for _t, u, t_next in zip(times, values, [0.02, 0.05, 0.08], strict=True):
+        sim.set_inputs([u])
+        sim.advance(t_next)
+    assert np.allclose(result.outputs["x"][-1], sim.outputs()[0], atol=1e-12, rtol=0)
