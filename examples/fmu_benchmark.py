@@ -2,20 +2,20 @@
 
 The VCM force rises smoothly from 0 to 1 N over 0.5 s and holds (the same smooth step as
 examples/benchmark_spatial.py). A master step is setReal(F), doStep(t, 1 ms), getReal(x, y).
-The time per step is split by measuring four runs on the same grid:
+One run of fmpy's FMU2Slave on the scene's FMU is split by the clocks inside it:
 
-- `fmu`: fmpy's FMU2Slave on the scene's FMU (what a user pays);
-- `in-process`: the same steps on flexure's Simulator directly (set_inputs, advance,
-  outputs): our integrator and model, nothing else;
-- `null fmpy`: FMU2Slave on a SafeSlave FMU with the same variables whose step does nothing:
-  the master plus the pythonfmu layer;
-- `null ctypes`: the same null FMU called through fmpy's raw ctypes functions, without
-  FMU2Slave's Python wrapper: the pythonfmu layer alone (C++ wrapper, GIL, Python call).
+- our integrator: the simulator's own wall time inside `advance` (its statistics);
+- our model's inputs and outputs: `Simulator.set_inputs` and `Simulator.outputs` (a
+  kinematics solve), which an in-process master calls as well (timed by wrapping them);
+- flexure's slave glue: the slave's time in do_step (SafeSlave counts it) minus the above:
+  the FMI checks and copies;
+- the pythonfmu layer and the master: the rest of the loop. They are told apart with a null
+  FMU (a SafeSlave with the same variables whose step does nothing) stepped once through
+  FMU2Slave and once through fmpy's raw ctypes functions: the difference is the master's
+  (FMU2Slave's Python wrapper) cost per step.
 
-master = null fmpy - null ctypes; pythonfmu layer = null ctypes; flexure's slave glue =
-fmu - in-process - null fmpy (small, so it shows the timing noise); overhead beyond our
-integrator = (fmu - in-process) / in-process, and, free of that noise, null fmpy /
-in-process; target < 20 %. Each figure is the best of `repeats` interleaved runs.
+The overhead beyond our integrator is (total - core calls) / core calls; target < 20 %. The
+same steps on flexure's Simulator in-process check that the FMU gives the same outputs.
 
 Run `python examples/fmu_benchmark.py [--duration S]`; the target lives here, not in tests.
 """
@@ -125,7 +125,7 @@ def run_ctypes(path, forces):
 
 def run_in_process(forces):
     """Seconds for the same steps on flexure's Simulator; its statistics; the outputs."""
-    sim = Simulator(load_scene(SCENE), method="cvode-bdf", rtol=1e-8)
+    sim = Simulator(load_scene(SCENE), method="cvode-bdf", rtol=1e-8)  # the FMU's defaults
     sim.reset(t0=0.0)
     clock = time.perf_counter()
     for k, force in enumerate(forces):
@@ -135,8 +135,53 @@ def run_in_process(forces):
     return time.perf_counter() - clock, sim.statistics, y
 
 
+def slave_instance(model_identifier):
+    """The live Python slave of an FMU in this process (fmpy loads it here)."""
+    import gc
+
+    found = [o for o in gc.get_objects()
+             if type(o).__name__ == model_identifier and hasattr(o, "step_seconds")]
+    return found[-1]
+
+
+class Timed:
+    """A bound method wrapped to add its wall time (s) to `seconds`."""
+
+    def __init__(self, method):
+        self.method, self.seconds = method, 0.0
+
+    def __call__(self, *args, **kwargs):
+        clock = time.perf_counter()
+        try:
+            return self.method(*args, **kwargs)
+        finally:
+            self.seconds += time.perf_counter() - clock
+
+
+def run_fmu_split(path, forces):
+    """One FMU2Slave run: seconds in total, in the slave's do_step, in the core's calls."""
+    master = Master(path)
+    fmu, inputs, outputs = master.fmu, master.inputs, master.outputs
+    slave = slave_instance(SCENE)
+    simulator = slave.simulator
+    simulator.outputs = read = Timed(simulator.outputs)  # this instance only
+    simulator.set_inputs = write = Timed(simulator.set_inputs)
+    clock = time.perf_counter()
+    for k, force in enumerate(forces):
+        fmu.setReal(inputs, [force])
+        fmu.doStep(currentCommunicationPoint=k * STEP, communicationStepSize=STEP)
+        y = fmu.getReal(outputs)
+    total = time.perf_counter() - clock
+    split = {"total": total, "in_slave": slave.step_seconds,
+             "advance": simulator.statistics["wall_time_s"],
+             "io": read.seconds + write.seconds, "statistics": dict(simulator.statistics),
+             "y": y}
+    master.close()
+    return split
+
+
 def benchmark(*, duration=1.0, repeats=3, folder=None):
-    """Milliseconds per doStep of each run (best of `repeats`) and the split; a dict."""
+    """Milliseconds per doStep of each part (best run of `repeats`) and the overhead."""
     steps = int(round(duration / STEP))
     forces = [vcm(k * STEP) for k in range(steps)]
     with tempfile.TemporaryDirectory(prefix="flexure_bench_") as temp:
@@ -145,55 +190,51 @@ def benchmark(*, duration=1.0, repeats=3, folder=None):
         script = folder / "null_stage_bench.py"
         script.write_text(textwrap.dedent(NULL_SLAVE))
         null = build_slave_fmu(script, folder / "null_stage.fmu")
-        fmu, core, null_fmpy, null_raw = [], [], [], []
-        for repeat in range(repeats):  # alternate which of the two long runs goes first
-            for first in ((True, False) if repeat % 2 == 0 else (False, True)):
-                if first:
-                    seconds, y_fmu = run_fmpy(stage, forces)
-                    fmu.append(seconds)
-                else:
-                    seconds, statistics, y_core = run_in_process(forces)
-                    core.append(seconds)
-            null_fmpy.append(run_fmpy(null, forces)[0])
-            null_raw.append(run_ctypes(null, forces))
-    per_step = {name: 1e3 * min(times) / steps for name, times in
-                (("fmu", fmu), ("in-process", core), ("null fmpy", null_fmpy),
-                 ("null ctypes", null_raw))}
+        runs = [run_fmu_split(stage, forces) for _ in range(repeats)]
+        null_fmpy = min(run_fmpy(null, forces)[0] for _ in range(repeats))
+        null_raw = min(run_ctypes(null, forces) for _ in range(repeats))
+        _, _, y_core = run_in_process(forces)
+    run = min(runs, key=lambda run: run["total"])
+    per_step = 1e3 / steps  # s in total -> ms per step
+    master = max(null_fmpy - null_raw, 0.0) * per_step
+    core = run["advance"] + run["io"]
     return {
         "steps": steps,
-        "per_step_ms": per_step,
-        "master_ms": per_step["null fmpy"] - per_step["null ctypes"],
-        "pythonfmu_ms": per_step["null ctypes"],
-        "glue_ms": per_step["fmu"] - per_step["in-process"] - per_step["null fmpy"],
-        "integrator_ms": per_step["in-process"],
-        "overhead": (per_step["fmu"] - per_step["in-process"]) / per_step["in-process"],
-        "overhead_null": per_step["null fmpy"] / per_step["in-process"],
-        "statistics": statistics,
-        "same_outputs": bool(np.max(np.abs(np.subtract(y_fmu, y_core))) <= 1e-12),
+        "total_ms": run["total"] * per_step,
+        "integrator_ms": run["advance"] * per_step,
+        "model_io_ms": run["io"] * per_step,
+        "glue_ms": (run["in_slave"] - core) * per_step,
+        "master_ms": master,
+        "pythonfmu_ms": (run["total"] - run["in_slave"]) * per_step - master,
+        "overhead": (run["total"] - core) / core,
+        "overhead_advance": (run["total"] - run["advance"]) / run["advance"],
+        "statistics": run["statistics"],
+        "same_outputs": bool(np.max(np.abs(np.subtract(run["y"], y_core))) <= 1e-12),
     }
 
 
 def report(result):
     """The benchmark as a text table."""
-    rows = [
+    parts = [
         ("fmpy master (FMU2Slave wrapper)", result["master_ms"]),
-        ("pythonfmu layer (ctypes, C++, Python call)", result["pythonfmu_ms"]),
-        ("flexure slave glue (checks, copies)", result["glue_ms"]),
-        ("our integrator + model (in-process)", result["integrator_ms"]),
-        ("total per doStep (fmpy on the FMU)", result["per_step_ms"]["fmu"]),
+        ("pythonfmu layer (ctypes, C++, getters/setters)", result["pythonfmu_ms"]),
+        ("flexure slave glue (FMI checks, copies)", result["glue_ms"]),
+        ("our model: Simulator.set_inputs + outputs", result["model_io_ms"]),
+        ("our integrator: Simulator.advance", result["integrator_ms"]),
     ]
+    rows = [(name, ms, 100 * ms / result["total_ms"]) for name, ms in parts]
+    rows.append(("total per doStep (fmpy on the FMU)", result["total_ms"], 100.0))
     stats = result["statistics"]
     title = (f"{SCENE}: {result['steps']} doSteps of {STEP * 1e3:g} ms; integrator: "
              f"{stats['steps']} steps, {stats['rhs_evaluations']} rhs, "
              f"{stats['jacobian_evaluations']} Jacobians")
-    table = format_table(["part", "ms per doStep"], rows, title=title)
-    verdict = "meets" if max(result["overhead"], result["overhead_null"]) < 0.2 else "MISSES"
-    return (f"{table}\noverhead beyond our integrator: measured (fmu - in-process) "
-            f"{100 * result['overhead']:.2f} %, from the null FMU (master + pythonfmu + "
-            f"SafeSlave checks) {100 * result['overhead_null']:.2f} %: {verdict} the 20 % "
-            "target.\nThe glue row is a difference of two runs of ~the same length, so it "
-            "carries their timing noise (other processes on the machine).\nFMU outputs "
-            f"equal the in-process ones to 1e-12: {result['same_outputs']}")
+    table = format_table(["part", "ms per doStep", "% of total"], rows, title=title)
+    verdict = "meets" if result["overhead"] < 0.2 else "MISSES"
+    return (f"{table}\noverhead beyond our integrator and model (the core calls an "
+            f"in-process master makes too): {100 * result['overhead']:.2f} % "
+            f"({verdict} the 20 % target); beyond Simulator.advance alone: "
+            f"{100 * result['overhead_advance']:.1f} %\nFMU outputs equal the in-process "
+            f"ones to 1e-12: {result['same_outputs']}")
 
 
 def main(argv=None):

@@ -39,6 +39,7 @@ checked by the subclass when it steps.
 import copy
 import math
 import pickle
+import time as _time
 import traceback
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real, String
@@ -104,6 +105,7 @@ class SafeSlave(Fmi2Slave):
         self.time = 0.0  # s, the current communication point
         self.start_time = 0.0  # s
         self.broken = ""  # why this instance cannot go on ("" while it can)
+        self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
 
     # -- to override -------------------------------------------------------------------------
 
@@ -200,6 +202,13 @@ class SafeSlave(Fmi2Slave):
             self._fail("initialization", error)
 
     def do_step(self, current_time, step_size):
+        start = _time.perf_counter()
+        try:
+            return self._do_step(current_time, step_size)
+        finally:
+            self.step_seconds += _time.perf_counter() - start
+
+    def _do_step(self, current_time, step_size):
         if self.broken:
             self.log_message(f"{self.instance_name}: step refused: {self.broken}",
                              Fmi2Status.error)
