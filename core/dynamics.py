@@ -79,6 +79,9 @@ class Dynamics:
         # constraint tolerance relative to the length scale: near round-off, because a
         # residual feeds the stiff (kHz) modes with noise the integrator then resolves
         self.tolerance = 1e-14
+        # smallest ratio of the LU pivots of the constraint Jacobian before a configuration
+        # counts as singular (a well-posed stage: 1e-2 .. 1)
+        self.singular_ratio = 1e-6
         self.reset_warm_start()
 
     # -- kinematics -------------------------------------------------------------------------
@@ -128,12 +131,15 @@ class Dynamics:
         kin, model = self.kin, self.model
         e, De, hessians = _deformations_order2(model, x)
         lu = scipy.linalg.lu_factor(kin.constraint_jacobian(De), check_finite=False)
+        pivots = np.abs(np.diag(lu[0]))
+        if not pivots.min() > self.singular_ratio * pivots.max():
+            raise ConvergenceError(
+                f"kinematics of {model.name!r}: a singular configuration at "
+                f"q = {np.array2string(q, precision=6)} (constraint Jacobian pivot ratio "
+                f"{pivots.min() / pivots.max():.1e} < {self.singular_ratio:g}): the DOFs "
+                "cannot describe the motion through it")
         DF = np.zeros((model.nx, kin.selector.shape[1]))
         DF[kin.free] = scipy.linalg.lu_solve(lu, kin.selector, check_finite=False)
-        if not np.all(np.isfinite(DF)):
-            raise ConvergenceError(
-                f"kinematics of {model.name!r}: the constraint Jacobian is singular at "
-                f"q = {np.array2string(q, precision=6)} (a singular configuration)")
         config = Configuration(q=q, x=x, e=e, De=De, lu=lu, DF=DF)
         self._x, self._q, self._DF, self._lu = x, q, DF, lu
         self._hessians = hessians

@@ -54,19 +54,6 @@ def pendulum(length=0.5, mass=2.0):
     })
 
 
-def truss_pendulum(length=0.5):
-    """A truss pendulum with its elongation prescribed zero and the mass's y as the DOF: the
-    constraint Jacobian is singular where the truss hangs vertically."""
-    return build_model({
-        "scene": {"name": "truss_pendulum", "gravity": [0.0, -9.81]},
-        "sections": {"rod": {"EA": 1.0}},
-        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
-                  "2": {"position": [length, 0.0], "mass": 1.0, "dof": ["y"]}},
-        "elements": {"rod": {"type": "PLTRUSS", "nodes": ["1", "2"], "section": "rod"}},
-        "outputs": {"y": {"node": "2", "coordinate": "y"}},
-    })
-
-
 # -- accuracy --------------------------------------------------------------------------------
 @pytest.mark.parametrize("method", ["cvode-bdf", "cvode-adams"])
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8])

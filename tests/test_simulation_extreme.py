@@ -1,0 +1,155 @@
+"""Stiff and extreme cases of the nonlinear simulation: each runs stably or stops with a
+clear SimulationError that names the time and the cause (no hang, no NaN in the output)."""
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from flexure.core import (
+    SimulationError,
+    Simulator,
+    build_model,
+    linearize,
+    load_scene,
+    natural_frequencies,
+    scene_path,
+    simulate,
+    static_equilibrium,
+)
+
+
+def truss_pendulum(length=0.5):
+    """A truss pendulum with its elongation prescribed zero and the mass's y as the DOF: the
+    constraint Jacobian is singular where the truss hangs vertically (y = -length)."""
+    return build_model({
+        "scene": {"name": "truss_pendulum", "gravity": [0.0, -9.81]},
+        "sections": {"rod": {"EA": 1.0}},
+        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "2": {"position": [length, 0.0], "mass": 1.0, "dof": ["y"]}},
+        "elements": {"rod": {"type": "PLTRUSS", "nodes": ["1", "2"], "section": "rod"}},
+        "outputs": {"y": {"node": "2", "coordinate": "y"}},
+    })
+
+
+def test_stiffness_ratio_above_1e5_with_bdf():
+    model = load_scene("stage_planar_3dof")
+    f = natural_frequencies(model).frequencies_hz
+    assert (f[-1] / f[0]) ** 2 > 1e5
+    times = np.linspace(0.0, 0.05, 26)
+    bdf = simulate(model, 0.05, inputs={"F": 1.0}, method="cvode-bdf", rtol=1e-6,
+                   output_times=times)
+    reference = simulate(model, 0.05, inputs={"F": 1.0}, method="cvode-adams", rtol=1e-10,
+                         output_times=times)
+    assert np.all(np.isfinite(bdf.output_array))
+    stroke = np.max(np.abs(reference.outputs["x"]))
+    assert np.max(np.abs(bdf.outputs["x"] - reference.outputs["x"])) < 2e-3 * stroke
+    assert bdf.statistics["steps"] < reference.statistics["steps"]
+
+
+def test_large_stroke_over_20_percent_of_the_spring_length():
+    model = load_scene("stage_planar_1dof")
+    port = model.inputs[0].coordinate
+    F_max, T = 19.0, 1.5
+    ramp = lambda t: F_max * 0.5 * (1 - np.cos(np.pi * min(t, T) / T))  # noqa: E731
+    result = simulate(model, T, inputs={"F": ramp}, rtol=1e-7, output_times=[T])
+    loads = model.loads.copy()
+    loads[port] += F_max
+    static = static_equilibrium(model, loads=loads)
+    x, y = result.outputs["x"][-1], result.outputs["y"][-1]
+    assert x > 0.2 * 0.1  # 20 % of the 0.1 m leaf springs
+    assert abs(x - static.x[port]) < 2e-3 * x
+    assert abs(y - static.x[port + 1]) < 2e-3 * abs(static.x[port + 1] - 0.1)
+
+
+def test_vertical_preload_at_95_percent_of_the_buckling_load():
+    data = tomllib.loads(scene_path("stage_planar_1dof").read_text())
+    data["nodes"]["3"]["force"] = [0.0, -0.95 * 78.75]
+    model = build_model(data, source="stage_planar_1dof + preload")
+    lin = linearize(model)
+    k_eff, mass = lin.K[0, 0], lin.M0[0, 0]
+    assert k_eff < 0.06 * 945.0  # 5 % of the unloaded stiffness remains
+    x_static = lin.solution.x[model.inputs[0].coordinate]
+    sim = Simulator(model, rtol=1e-9)
+    sim.reset(q0=lin.solution.q)  # at rest in the preloaded equilibrium
+    sim.set_inputs([0.02])  # then a 20 mN sideways step
+    period = 2 * np.pi * np.sqrt(mass / k_eff)
+    xs = []
+    for t in np.linspace(0, period, 41)[1:]:
+        sim.advance(t)
+        xs.append(sim.outputs()[0] - x_static)
+    xs = np.array(xs)
+    # the step response of the softened stage: 0 .. 2 F / k_eff and back within one period
+    assert np.all(np.isfinite(xs))
+    assert abs(np.max(xs) - 2 * 0.02 / k_eff) < 0.03 * 2 * 0.02 / k_eff
+    assert abs(xs[-1]) < 0.03 * 2 * 0.02 / k_eff
+
+
+def test_100_seconds_undamped():
+    data = tomllib.loads(scene_path("truss_1dof_x").read_text())
+    data["sections"]["springs"].pop("EdA")
+    model = build_model(data, source="truss_1dof_x (undamped)")
+    m, k = 0.206 + 0.1413 * 0.1 / 3.0, 945.0
+    w = np.sqrt(k / m)
+    times = np.linspace(99.0, 100.0, 51)
+    result = simulate(model, 100.0, method="cvode-adams", rtol=1e-9, output_times=times)
+    exact = 0.1 + (1 - np.cos(w * times)) / k
+    assert np.all(np.isfinite(result.output_array))
+    assert np.max(np.abs(result.outputs["x"] - exact)) < 0.01 * (2 / k)
+
+
+def test_tolerances_from_1e_3_to_1e_12():
+    model = load_scene("stage_planar_1dof")
+    times = np.linspace(0.0, 0.05, 11)
+    reference = simulate(model, 0.05, inputs={"F": 1.0}, method="cvode-adams", rtol=1e-13,
+                         output_times=times).outputs["x"]
+    errors = []
+    for rtol in (1e-3, 1e-6, 1e-9, 1e-12):
+        result = simulate(model, 0.05, inputs={"F": 1.0}, rtol=rtol, output_times=times)
+        assert np.all(np.isfinite(result.output_array))
+        errors.append(np.max(np.abs(result.outputs["x"] - reference)))
+    assert errors[0] < 0.05 * np.max(np.abs(reference))
+    assert errors[0] > errors[1] > errors[2] > errors[3]
+    assert errors[3] < 1e-11
+
+
+def test_a_singular_configuration_stops_with_the_time_and_the_cause():
+    model = truss_pendulum()
+    sim = Simulator(model, rtol=1e-8)
+    with pytest.raises(SimulationError, match=r"t = 0\.\d+ s.*singular") as error:
+        sim.advance(1.0)
+    assert "truss_pendulum" in str(error.value)
+    # left at the last good state: finite, before the bottom (y = -0.5 m) at t ~ 0.37 s
+    assert 0.3 < sim.time < 0.45
+    assert np.all(np.isfinite(sim.q)) and np.all(np.isfinite(sim.qdot))
+    assert -0.5 < sim.q[0] < -0.45
+
+
+def test_non_finite_inputs_are_refused_with_the_input_and_the_time():
+    model = load_scene("stage_planar_1dof")
+    sim = Simulator(model)
+    sim.advance(0.01)
+    for bad in (np.nan, np.inf):
+        with pytest.raises(SimulationError, match=r"t = 0\.01 s: input 'F' is not finite"):
+            sim.set_inputs([bad])
+    sim.advance(0.02)  # still usable
+    with pytest.raises(SimulationError, match=r"t = 0\.0[34]\d* s: input 'F' is not finite"):
+        simulate(model, 0.1, inputs={"F": lambda t: 1.0 if t < 0.03 else np.nan})
+    with pytest.raises(SimulationError, match=r"t = 0\.02 s: input 'F' is not finite"):
+        simulate(model, 0.1, inputs={"F": ([0.0, 0.02], [1.0, np.inf])})
+    with pytest.raises(SimulationError, match="unknown input 'G'.*inputs: F"):
+        simulate(model, 0.1, inputs={"G": 1.0})
+
+
+def test_simulator_misuse_is_a_clear_error():
+    model = load_scene("stage_planar_1dof")
+    with pytest.raises(SimulationError, match="unknown method 'rk4'"):
+        Simulator(model, method="rk4")
+    sim = Simulator(model)
+    sim.advance(0.01)
+    with pytest.raises(SimulationError, match="expected a finite time after"):
+        sim.advance(0.005)
+    with pytest.raises(SimulationError, match="expected 1 inputs"):
+        sim.set_inputs([1.0, 2.0])
+    with pytest.raises(SimulationError, match="atol"):
+        Simulator(model, atol=[1.0, 2.0, 3.0])
