@@ -135,13 +135,12 @@ def run_in_process(forces):
     return time.perf_counter() - clock, sim.statistics, y
 
 
-def slave_instance(model_identifier):
-    """The live Python slave of an FMU in this process (fmpy loads it here)."""
+def slave_instances(model_identifier):
+    """The live Python slaves of an FMU in this process (fmpy loads them here)."""
     import gc
 
-    found = [o for o in gc.get_objects()
-             if type(o).__name__ == model_identifier and hasattr(o, "step_seconds")]
-    return found[-1]
+    return [o for o in gc.get_objects()
+            if type(o).__name__ == model_identifier and hasattr(o, "step_seconds")]
 
 
 class Timed:
@@ -160,9 +159,10 @@ class Timed:
 
 def run_fmu_split(path, forces):
     """One FMU2Slave run: seconds in total, in the slave's do_step, in the core's calls."""
+    before = {id(o) for o in slave_instances(SCENE)}
     master = Master(path)
     fmu, inputs, outputs = master.fmu, master.inputs, master.outputs
-    slave = slave_instance(SCENE)
+    (slave,) = [o for o in slave_instances(SCENE) if id(o) not in before]
     simulator = slave.simulator
     simulator.outputs = read = Timed(simulator.outputs)  # this instance only
     simulator.set_inputs = write = Timed(simulator.set_inputs)
