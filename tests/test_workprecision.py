@@ -1,0 +1,80 @@
+"""The work-precision study, the simulate/bench commands and the example scripts, run small."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import energy_drift
+import numpy as np
+import speed_benchmark
+import work_precision
+
+from flexure.core import load_scene
+from flexure.core.workprecision import work_precision as study_of
+
+FLEXURE = str(Path(sys.executable).with_name("flexure"))
+
+
+def test_work_precision_errors_fall_with_the_tolerance():
+    study = study_of(load_scene("stage_planar_1dof"), 0.1, inputs={"F": 1.0},
+                     methods=["cvode-bdf", "scipy-radau"], rtols=[1e-4, 1e-7],
+                     reference_rtol=1e-10, samples=21)
+    assert [r["status"] for r in study.rows] == ["ok"] * 4
+    for method in ("cvode-bdf", "scipy-radau"):
+        loose, tight = [r["error"] for r in study.rows if r["method"] == method]
+        assert tight < loose < 1e-3
+    assert study.markdown().startswith("| method | rtol |")
+
+
+def test_work_precision_example_writes_table_and_plot(tmp_path):
+    study = work_precision.main(["--scene", "stage_planar_1dof", "--t-end", "0.05",
+                                 "--rtols", "1e-5", "--reference-rtol", "1e-9",
+                                 "--out", str(tmp_path)])
+    assert len(study.rows) == 6 and all(r["status"] == "ok" for r in study.rows)
+    for name in ("work_precision.csv", "work_precision.md", "work_precision.png"):
+        assert (tmp_path / name).stat().st_size > 100
+    assert (tmp_path / "work_precision.csv").read_text().startswith("method,rtol,")
+
+
+def test_speed_benchmark_example_prints_its_table(capsys):
+    rows = speed_benchmark.main(["--t-end", "0.01", "--scenes", "truss_1dof_x,stage_planar_1dof"])
+    assert [r["scene"] for r in rows] == ["truss_1dof_x", "stage_planar_1dof"]
+    assert all(r["rhs"] >= r["steps"] > 0 and r["us_per_rhs"] > 0 for r in rows)
+    assert "x real time" in capsys.readouterr().out
+
+
+def test_energy_drift_example_runs_short():
+    worst = energy_drift.main(["--t-end", "0.05", "--interval", "0.025", "--rtol", "1e-8"])
+    assert worst < 1e-5
+
+
+def test_simulate_command_writes_csv_with_units_and_plot(tmp_path):
+    samples = tmp_path / "force.csv"
+    samples.write_text("time,F\n0.0,0.0\n0.01,2.0\n")
+    out, png = tmp_path / "r.csv", tmp_path / "r.png"
+    run = subprocess.run([FLEXURE, "simulate", "stage_planar_1dof", "--t-end", "0.03",
+                          "--input", f"F={samples}", "--samples", "30", "--out", str(out),
+                          "--plot", str(png)], capture_output=True, text=True, check=True)
+    assert "steps" in run.stdout
+    lines = out.read_text().splitlines()
+    assert lines[0] == "time [s],x [m],y [m]"
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert data.shape == (31, 3) and abs(data[10, 1]) < 1e-15 and data[-1, 1] > 1e-5
+    assert png.stat().st_size > 1000
+
+
+def test_simulate_command_reports_a_bad_input_without_traceback():
+    run = subprocess.run([FLEXURE, "simulate", "stage_planar_1dof", "--t-end", "0.1",
+                          "--input", "F=inf"], capture_output=True, text=True)
+    assert run.returncode == 2
+    assert "input 'F' is not finite" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_bench_command_prints_the_table(tmp_path):
+    md = tmp_path / "wp.md"
+    run = subprocess.run([FLEXURE, "bench", "stage_planar_1dof", "--t-end", "0.02",
+                          "--methods", "cvode-bdf,scipy-dop853", "--rtols", "1e-5",
+                          "--reference-rtol", "1e-9", "--markdown", str(md)],
+                         capture_output=True, text=True, check=True)
+    assert "cvode-bdf" in run.stdout and "scipy-dop853" in run.stdout
+    assert md.read_text().count("\n") == 4
