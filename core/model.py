@@ -68,6 +68,8 @@ class Model:
     # 3-D: rigid-body inertias of rotational nodes, [(Euler parameter indices (4,), J (3, 3)
     # kg m^2 in the node's body frame)], see flexure.core.rotary_inertia
     node_inertias: list = field(default_factory=list)
+    # Scene keys a user may tune without rebuilding the scene ("nodes.3.mass"), [scene] tunable
+    tunable: list = field(default_factory=list)
 
     def __post_init__(self):
         status = self.coordinate_status

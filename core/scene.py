@@ -127,7 +127,8 @@ class _SceneBuilder:
         self.check_keys("scene file", data, {
             "scene", "sections", "nodes", "elements", "inputs", "outputs", "buckling"})
         header = self.table("scene", data.get("scene", {}))
-        self.check_keys("scene", header, {"name", "description", "dimension", "gravity"})
+        self.check_keys("scene", header,
+                        {"name", "description", "dimension", "gravity", "tunable"})
         name = header.get("name", self.default_name)
         if not isinstance(name, str) or not name.isidentifier():
             self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
@@ -146,6 +147,7 @@ class _SceneBuilder:
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         buckling = self.build_buckling(data.get("buckling"))
+        tunable = self.build_tunable(data, header.get("tunable", []))
         model = Model(
             name=name,
             dimension=dimension,
@@ -163,10 +165,26 @@ class _SceneBuilder:
             buckling_loads=buckling,
             source=self.source,
             node_inertias=self.node_inertias,
+            tunable=tunable,
         )
         if check:
             check_exact_constraint(model)
         return model
+
+    def build_tunable(self, data, keys):
+        """The scene keys marked tunable: each must name a number the scene declares."""
+        if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
+            self.fail("scene.tunable", f"expected a list of scene keys such as "
+                                       f"\"nodes.3.mass\", got {keys!r}")
+        for key in keys:
+            value = data
+            for part in key.split("."):
+                if not isinstance(value, dict) or part not in value:
+                    self.fail("scene.tunable", f"{key!r} is not a key this scene declares")
+                value = value[part]
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                self.fail("scene.tunable", f"{key!r} is not a number (got {value!r})")
+        return list(keys)
 
     def build_sections(self, sections):
         result = {}

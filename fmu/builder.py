@@ -211,15 +211,14 @@ class FMUBuildError(FlexureError):
 def default_tunable(scene):
     """The scene keys a scene FMU exposes as parameters by default.
 
-    Damping (EdA, EdI of every section that declares it) and the lumped masses and inertias
-    the scene declares on nodes: the values a user tunes against measurements.
+    Damping (EdA, EdI of every section that declares it), which a user fits to measurements,
+    and every key the scene marks tunable in `[scene] tunable` (e.g. a payload mass).
     """
     keys = []
     for name, section in scene.get("sections", {}).items():
         keys += [f"sections.{name}.{k}" for k in ("EdA", "EdI") if k in section]
-    for name, node in scene.get("nodes", {}).items():
-        keys += [f"nodes.{name}.{k}" for k in ("mass", "inertia") if k in node]
-    return keys
+    marked = scene.get("scene", {}).get("tunable", [])
+    return keys + [key for key in marked if key not in keys]
 
 
 def build_scene_fmu(scene, dest=None, *, tunable=None, von_mises=False, validate=True):

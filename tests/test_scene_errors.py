@@ -175,3 +175,19 @@ def test_cli_reports_a_constraint_error_without_traceback(tmp_path, capsys):
     assert main(["analyze", str(path), "--json"]) == 2
     err = capsys.readouterr().err
     assert "not exactly constrained" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("keys, fragment", [
+    (["nodes.3.mas"], "'nodes.3.mas' is not a key this scene declares"),
+    (["elements.bar.type"], "'elements.bar.type' is not a number"),
+    ("nodes.3.mass", "expected a list of scene keys"),
+])
+def test_tunable_keys_must_name_numbers_of_the_scene(keys, fragment):
+    data = scene(lambda d: d["scene"].update(tunable=keys))
+    with pytest.raises(SceneError, match="scene.tunable") as error:
+        build_model(data)
+    assert fragment in str(error.value)
+
+
+def test_tunable_keys_reach_the_model():
+    assert load_scene("stage_planar_1dof").tunable == ["sections.bar.rho_A"]
