@@ -33,6 +33,10 @@ def register(subparsers):
                         help="time simulated after the move in s (default 0.25)")
     parser.add_argument("--no-feedforward", action="store_true",
                         help="feedback alone")
+    parser.add_argument("--feedforward", choices=("modal", "inverse"), default="modal",
+                        help="modal: m a + c v + k x of the low-frequency model (default); "
+                             "inverse: the stable approximate inverse (ZPETC) of the full "
+                             "sampled linear model")
     parser.add_argument("--plant", choices=PLANTS, default="inprocess",
                         help="in-process simulation, the scene FMU under fmpy, or the "
                              "controller and scene FMUs in libcosim (default inprocess)")
@@ -46,9 +50,10 @@ def register(subparsers):
 
 
 def run(args):
+    feedforward = False if args.no_feedforward else args.feedforward
     result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
-                      crossover=args.crossover, feedforward=not args.no_feedforward,
-                      plant=args.plant, settle=args.settle, workdir=args.workdir)
+                      crossover=args.crossover, feedforward=feedforward, plant=args.plant,
+                      settle=args.settle, workdir=args.workdir)
     summary = result.summary()
     if not args.no_plot and args.plot:
         result.plot(args.plot)
@@ -64,7 +69,8 @@ def render(s):
     """The summary as a short table and a verdict."""
     rows = [
         ("scene", s["scene"]), ("plant", s["plant"]),
-        ("controller", "feedback + feedforward" if s["feedforward"] else "feedback alone"),
+        ("controller", f"feedback + {s['feedforward_kind']} feedforward" if s["feedforward"]
+         else "feedback alone"),
         ("stroke (m)", s["stroke"]), ("duration (s)", s["duration"]),
         ("sample rate (Hz)", s["sample_rate_hz"]),
         ("cross-over (rad/s)", s["crossover_rad_s"]),

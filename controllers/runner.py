@@ -57,9 +57,13 @@ class LoopController:
         The initial positions of the loops (m): the reference is offsets + profile.
     feedforward : LowFrequencyModel or None
         The model whose inverse gives the feedforward; None for feedback alone.
+    feedforward_forces : array (samples + 2, n_loops), optional
+        Precomputed feedforward forces (N) held from each sample, instead of `feedforward`
+        (e.g. from a `StableInverse` of the full linear model).
     """
 
-    def __init__(self, controller, profile, *, fs, samples, offsets, feedforward=None, axis=0):
+    def __init__(self, controller, profile, *, fs, samples, offsets, feedforward=None, axis=0,
+                 feedforward_forces=None):
         self.controller, self.profile = controller, profile
         self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
         self.offsets = np.asarray(offsets, float).reshape(-1)
@@ -69,7 +73,10 @@ class LoopController:
         k = np.arange(self.samples + 2)
         t = k / self.fs
         self.reference = self.offsets + np.outer(profile.position(t), direction)
-        if feedforward is None:
+        self.explicit_forces = feedforward_forces is not None
+        if self.explicit_forces:
+            self.feedforward = np.asarray(feedforward_forces, float).reshape(k.size, n)
+        elif feedforward is None:
             self.feedforward = np.zeros((k.size, n))
         else:
             self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
@@ -99,6 +106,8 @@ class LoopController:
             "axis": self.axis,
             "feedforward": (None if self.feedforward_model is None
                             else self.feedforward_model.to_dict()),
+            "feedforward_forces": (self.feedforward.tolist() if self.explicit_forces
+                                   else None),
         }
 
     @classmethod
@@ -107,7 +116,8 @@ class LoopController:
         return cls(DiscreteController.from_dict(data["controller"]),
                    ThirdOrderProfile(**data["profile"]), fs=data["fs"],
                    samples=data["samples"], offsets=data["offsets"], axis=data["axis"],
-                   feedforward=None if ff is None else LowFrequencyModel.from_dict(ff))
+                   feedforward=None if ff is None else LowFrequencyModel.from_dict(ff),
+                   feedforward_forces=data.get("feedforward_forces"))
 
 
 @dataclass
@@ -143,6 +153,7 @@ class LoopResult:
         return {
             "scene": self.settings.get("scene"), "plant": self.settings.get("plant"),
             "feedforward": self.settings.get("feedforward"),
+            "feedforward_kind": self.settings.get("feedforward_kind"),
             "max_abs_error": self.max_abs_error, "stroke": self.stroke,
             "error_ratio": ratio, "target": TARGET, "passed": bool(ratio <= TARGET),
             "max_abs_error_during_move": float(np.max(np.abs(
@@ -207,6 +218,9 @@ def build_loop(model, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
                **design_options):
     """Design the feedback and the feedforward of `model`; returns (LoopController, design).
 
+    `feedforward` is True or "modal" (the inverse of the low-frequency model, m a + c v + k x),
+    "inverse" (the stable approximate inverse of the full linear model sampled with a
+    zero-order hold, `StableInverse`: one loop only), or False for feedback alone.
     `feedforward_model` replaces the low-frequency model derived from `model` (e.g. a
     deliberately wrong one, `low_frequency_model(model).scaled(mass=1.1, stiffness=1.1)`).
     """
@@ -223,12 +237,49 @@ def build_loop(model, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
     samples = int(round((duration + settle) * fs))
     offsets = [model.initial_coordinates[model.outputs[p.output_index].coordinate]
                for p in design.pairs]
-    lf = None
-    if feedforward:
+    kind = _feedforward_kind(feedforward)
+    lf, explicit = None, None
+    if kind == "modal":
         lf = feedforward_model if feedforward_model is not None else low_frequency_model(model)
+    elif kind == "inverse":
+        explicit = _inverse_forces(model, design, profile, fs, samples, offsets)
     controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
-                                samples=samples, offsets=offsets, feedforward=lf, axis=axis)
+                                samples=samples, offsets=offsets, feedforward=lf, axis=axis,
+                                feedforward_forces=explicit)
     return controller, design
+
+
+def _feedforward_kind(feedforward):
+    if feedforward is True or feedforward == "modal":
+        return "modal"
+    if feedforward is False or feedforward is None or feedforward == "none":
+        return None
+    if feedforward == "inverse":
+        return "inverse"
+    raise LoopError(f"feedforward must be 'modal', 'inverse' or False, got {feedforward!r}")
+
+
+def _inverse_forces(model, design, profile, fs, samples, offsets):
+    """Feedforward from the stable inverse of the sampled full linear model (one loop)."""
+    import control
+
+    from flexure.core import linearize, state_space
+
+    from .feedforward import StableInverse
+
+    if len(design.pairs) != 1:
+        raise LoopError(f"{model.name}: the 'inverse' feedforward handles one loop, the scene "
+                        f"has {len(design.pairs)}; use the 'modal' feedforward")
+    pair = design.pairs[0]
+    lin = linearize(model)
+    plant = state_space(model, linear_model=lin)[pair.output_index, pair.input_index]
+    inverse = StableInverse(control.c2d(plant, 1.0 / fs, method="zoh"))
+    equilibrium = lin.solution.config.x[model.outputs[pair.output_index].coordinate]
+    k = np.arange(samples + 2)
+    # u_k, held on [t_k, t_k+1), makes the sampled linear output follow r_k (deviations
+    # from the linearisation point, which carries the scene's constant loads).
+    reference = offsets[0] - equilibrium + profile.position(k / fs)
+    return inverse.apply(reference)[:, None]
 
 
 def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
@@ -245,8 +296,9 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
         Sample rate (Hz) of the controller and communication step of the plant.
     crossover : float
         The requested cross-over (rad/s).
-    feedforward : bool
-        Add the feedforward of the low-frequency model.
+    feedforward : bool or str
+        True or "modal": the inverse of the low-frequency model; "inverse": the stable
+        approximate inverse of the full linear model (see `build_loop`); False: none.
     plant : "inprocess", "fmu" or "libcosim"
     settle : float
         Time (s) simulated after the move.
@@ -269,7 +321,9 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
         model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
         feedforward=feedforward, settle=settle, axis=axis,
         feedforward_model=feedforward_model, **design_options)
-    settings = {"scene": model.name, "plant": plant, "feedforward": bool(feedforward),
+    kind = _feedforward_kind(feedforward)
+    settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
+                "feedforward_kind": kind or "none",
                 "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
                 "rtol": rtol}
     start = _time.perf_counter()
