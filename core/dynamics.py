@@ -126,6 +126,31 @@ class Dynamics:
             x = kin.solve(q, x).x
         return self._store(q, x)
 
+    def positions(self, q):
+        """Coordinates x (NX,) for DOFs q by chord iterations from the stored solution only
+        (no derivatives of the deformations); falls back to `solve` when they slow down."""
+        if self._DF is None:
+            return self.solve(q).x
+        kin = self.kin
+        q = np.array(q, dtype=float)
+        x = self._x + self._DF @ (q - self._q)
+        tolerance = self.tolerance * kin.length_scale
+        converged = False
+        for _ in range(2):
+            g = kin.residual(x, assembly.deformations(self.model, x), q)
+            if np.max(np.abs(g)) <= tolerance:
+                converged = True
+                break
+            dx = scipy.linalg.lu_solve(self._lu, g, check_finite=False)
+            x[kin.free] -= dx
+            if np.max(np.abs(dx)) <= tolerance:
+                converged = True
+                break
+        if not converged or not np.all(np.isfinite(x)):  # slow: refresh DF and the LU
+            return self.configuration(q).x
+        self._x, self._q = x, q
+        return x
+
     def _store(self, q, x):
         """First- and second-order kinematics at a solved x; keeps them as the next start."""
         kin, model = self.kin, self.model

@@ -375,6 +375,11 @@ def _outputs_along(sim, states):
     ports = sim.model.outputs
     result = np.zeros((len(states), len(ports)))
     n = sim.ndof
+    if all(p.quantity == "position" for p in ports):
+        index = [p.coordinate for p in ports]
+        for k, y in enumerate(states):
+            result[k] = dyn.positions(y[:n])[index]
+        return result
     for k, y in enumerate(states):
         config = dyn.configuration(y[:n])
         xdot = config.DF @ y[n:]
