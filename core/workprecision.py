@@ -124,9 +124,17 @@ def _run(model, t_end, inputs, method, rtol, times, reference, time_limit):
         row["error"] = float(np.max(np.abs(outputs - reference)))
         row["rhs_evaluations"], row["steps"] = stats["rhs_evaluations"], stats["steps"]
     except FlexureError as error:
-        row["status"] = "time limit" if "time limit" in str(error) else f"failed: {error}"
+        row["status"] = "time limit" if "time limit" in str(error) else _short(error)
     row["wall_time_s"] = time.perf_counter() - start
     return row
+
+
+def _short(error):
+    """A one-line status for a failed run: the cause and the time, without commas."""
+    text = str(error)
+    cause = "singular configuration" if "singular" in text else text.split(": ")[-1][:50]
+    time_part = text.split(": ")[0] if text.startswith("t = ") else ""
+    return f"failed at {time_part}: {cause}".replace(",", ";")
 
 
 def _sampled_outputs(model, result, times):
