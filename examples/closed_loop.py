@@ -8,7 +8,8 @@ max_k |r_k - y_k| (during the move and 0.25 s after it) is compared with 0.1 % o
 
 1. stage_planar_1dof, 1 mm in 1 s, feedback + feedforward, and feedback alone beside it;
 2. 10 mm, where the nonlinear plant departs from the linear model of the feedforward;
-3. stage_planar_3dof and stage_spatial_19dof: the parasitic modes are in the loop;
+3. stage_planar_3dof and stage_spatial_19dof: the parasitic modes are in the loop (and the
+   3-DOF stage with the stable approximate inverse of its full model as feedforward);
 4. the feedforward from a model with 10 % mass and stiffness error, on the true plant;
 5. the three plants (in-process, the scene FMU under fmpy, controller and scene FMUs in
    libcosim): their difference in the tracking error, relative to the stroke.
@@ -46,6 +47,7 @@ def cases(*, quick=False):
         ("10 mm stroke, feedback alone", "stage_planar_1dof",
          {"stroke": 10e-3, "feedforward": False}),
         ("3 DOF, parasitic modes", "stage_planar_3dof", {}),
+        ("3 DOF, inverse (ZPETC) feedforward", "stage_planar_3dof", {"feedforward": "inverse"}),
         ("feedforward model +10 % m, k", "stage_planar_1dof",
          {"feedforward_model": lf.scaled(mass=1.1, stiffness=1.1)}),
         ("feedforward model -10 % m, k", "stage_planar_1dof",
@@ -69,7 +71,8 @@ def main(*, quick=False, plot=None, workdir=None):
         s = result.summary()
         results[label] = result
         rows.append((label, scene, s["plant"],
-                     "feedback + feedforward" if s["feedforward"] else "feedback alone",
+                     f"feedback + {s['feedforward_kind']} feedforward" if s["feedforward"]
+                     else "feedback alone",
                      s["stroke"] * 1e3, s["max_abs_error"], 100 * s["error_ratio"],
                      "passed" if s["passed"] else "failed", s["max_abs_feedback_force"],
                      s["max_abs_force"], s["phase_margin_deg"], s["gain_margin"],
