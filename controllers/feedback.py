@@ -144,7 +144,7 @@ def design_feedback(model, *, crossover=300.0, fs=4000.0, delay_samples=1, linea
     closed = control.feedback(loop, np.eye(len(pairs)))
     poles = closed.poles()
     first = _siso(plant_d, 0, 0) * _siso(delays, 0, 0) * _siso(controller, 0, 0)
-    gm, pm, sm = _margins(first, crossover)
+    gm, pm, sm = _margins(first, crossover, resonances=plant_d.poles())
     design = FeedbackDesign(
         pairs=pairs, crossover_rad_s=float(crossover), sample_rate_hz=float(fs),
         delay_samples=int(delay_samples), continuous=continuous, controller=controller,
@@ -159,16 +159,26 @@ def design_feedback(model, *, crossover=300.0, fs=4000.0, delay_samples=1, linea
     return design
 
 
-def _margins(loop, crossover):
+def _margins(loop, crossover, *, resonances=()):
     """Gain margin, phase margin (deg) and modulus margin of a discrete SISO loop gain.
 
-    Evaluated by python-control on a dense logarithmic grid up to the Nyquist frequency
-    (its 'frd' method), which copes with the lightly damped modes of the plant.
+    Evaluated by python-control on a frequency grid up to the Nyquist frequency (its 'frd'
+    method, robust with the lightly damped modes of the plant): logarithmic, dense around the
+    cross-over, and refined across the half-power band of every plant pole `resonances` (z),
+    so that a narrow parasitic peak is not stepped over.
     """
-    nyquist = np.pi / loop.dt
-    omega = np.unique(np.concatenate([
-        np.geomspace(crossover * 1e-3, nyquist * 0.999999, 3000),
-        np.linspace(crossover * 0.5, crossover * 2.0, 501)]))
+    Ts = loop.dt
+    nyquist = np.pi / Ts
+    parts = [np.geomspace(crossover * 1e-3, nyquist * 0.999999, 3000),
+             np.linspace(crossover * 0.5, crossover * 2.0, 501)]
+    for z in np.atleast_1d(resonances):
+        if abs(z) == 0:
+            continue
+        s = np.log(complex(z)) / Ts
+        w, width = abs(s.imag), max(abs(s.real), 1e-6 * abs(s))
+        if 0 < w < nyquist:
+            parts.append(np.clip(w + width * np.linspace(-20, 20, 201), w * 0.5, nyquist))
+    omega = np.unique(np.concatenate(parts))
     response = control.frd(loop, omega)
     gm, pm, sm, *_ = control.stability_margins(response, method="frd")
     return gm, pm, sm
@@ -192,7 +202,7 @@ def _delay_power(delays, n, count):
 class DiscreteController:
     """A discrete state-space controller stepped one sample at a time (plain numpy).
 
-    `output(e)` gives u_k = C x_k + D e_k; `update(e)` then moves to x_(k+1) = A x_k + B e_k.
+    `step(e_k)` returns u_k = C x_k + D e_k and moves to x_(k+1) = A x_k + B e_k.
     """
 
     def __init__(self, sys):
@@ -211,14 +221,15 @@ class DiscreteController:
         return u
 
     def to_dict(self):
-        return {k: getattr(self, k).tolist() for k in "ABCD"}
+        """The matrices as nested lists (JSON), with the shape of each."""
+        return {k: {"shape": list(getattr(self, k).shape),
+                    "values": getattr(self, k).ravel().tolist()} for k in "ABCD"}
 
     @classmethod
     def from_dict(cls, data):
+        """The controller of `to_dict` (at its zero initial state)."""
         obj = cls.__new__(cls)
         for k in "ABCD":
-            setattr(obj, k, np.asarray(data[k], float).reshape(
-                np.asarray(data[k], float).shape))
-        obj.A = obj.A.reshape(len(obj.A), -1) if obj.A.size else np.zeros((0, 0))
+            setattr(obj, k, np.asarray(data[k]["values"], float).reshape(data[k]["shape"]))
         obj.x = np.zeros(obj.A.shape[0])
         return obj
