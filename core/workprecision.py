@@ -133,8 +133,8 @@ def _short(error):
     """A one-line status for a failed run: the cause and the time, without commas."""
     text = str(error)
     cause = "singular configuration" if "singular" in text else text.split(": ")[-1][:50]
-    time_part = text.split(": ")[0] if text.startswith("t = ") else ""
-    return f"failed at {time_part}: {cause}".replace(",", ";")
+    where = f" at {text.split(': ')[0]}" if text.startswith("t = ") else ""
+    return f"failed{where}: {cause}".replace(",", ";")
 
 
 def _sampled_outputs(model, result, times):
@@ -159,7 +159,19 @@ def _scipy_run(model, t_end, inputs, method, rtol, times, deadline):
     system = sim.system
     system.deadline = deadline
     options = {"jac": system.jacobian_matrix} if method in ("Radau", "BDF") else {}
-    solution = scipy.integrate.solve_ivp(system.derivative, (0.0, t_end), sim._y.copy(),
+
+    def derivative(t, y):
+        # a trial stage that leaves the mechanism's range (kinematics unsolvable) is answered
+        # with an infinite derivative, so that scipy rejects the step and shrinks it (SUNDIALS
+        # gets the same through a restart in Simulator.advance)
+        try:
+            return system.derivative(t, y)
+        except SimulationError as error:
+            if "time limit" in str(error):
+                raise
+            return np.full_like(y, np.inf)
+
+    solution = scipy.integrate.solve_ivp(derivative, (0.0, t_end), sim._y.copy(),
                                          method=method, t_eval=times, rtol=rtol,
                                          atol=sim.atol, **options)
     if not solution.success:
