@@ -21,6 +21,8 @@ held force carries no half-sample lag. The error reported is max_k |e_k| over th
 during the move and a settling time after it.
 """
 
+import contextlib
+import tempfile
 import time as _time
 from dataclasses import dataclass, field
 
@@ -307,7 +309,7 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
     feedforward_model : LowFrequencyModel, optional
         Use this model for the feedforward instead of the scene's own.
     workdir : path, optional
-        Where the FMUs are built (default: a temporary folder).
+        Where the FMUs are built and kept (default: a temporary folder, removed after).
 
     Returns
     -------
@@ -327,28 +329,35 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
                 "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
                 "rtol": rtol}
     start = _time.perf_counter()
-    if plant == "libcosim":
-        from .cosim import run_cosimulation
-
-        t, reference, position, force = run_cosimulation(
-            model, scene, controller, design, rtol=rtol, workdir=workdir)
-    else:
-        from .plants import FmuPlant, InProcessPlant
-
-        if plant == "inprocess":
-            adapter = InProcessPlant(model, rtol=rtol)
-        else:
-            from .cosim import scene_fmu
-
-            adapter = FmuPlant(scene_fmu(scene, model, workdir), rtol=rtol)
-        try:
-            t, reference, position, force = simulate_loop(adapter, controller, design)
-        finally:
-            adapter.close()
+    with contextlib.ExitStack() as stack:
+        if workdir is None and plant != "inprocess":  # FMUs built for this run only
+            workdir = stack.enter_context(tempfile.TemporaryDirectory(
+                prefix="flexure_loop_", ignore_cleanup_errors=True))
+        t, reference, position, force = _run_plant(plant, model, scene, controller, design,
+                                                   rtol=rtol, workdir=workdir)
     wall = _time.perf_counter() - start
     return LoopResult(t=t, reference=reference, position=position, force=force,
                       feedforward=controller.feedforward[: len(t)].copy(), stroke=stroke,
                       design=design.summary(), settings=settings, wall_time_s=wall)
+
+
+def _run_plant(plant, model, scene, controller, design, *, rtol, workdir):
+    if plant == "libcosim":
+        from .cosim import run_cosimulation
+
+        return run_cosimulation(model, scene, controller, design, rtol=rtol, workdir=workdir)
+    from .plants import FmuPlant, InProcessPlant
+
+    if plant == "inprocess":
+        adapter = InProcessPlant(model, rtol=rtol)
+    else:
+        from .cosim import scene_fmu
+
+        adapter = FmuPlant(scene_fmu(scene, model, workdir), rtol=rtol)
+    try:
+        return simulate_loop(adapter, controller, design)
+    finally:
+        adapter.close()
 
 
 def simulate_loop(plant, controller, design):
