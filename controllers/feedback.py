@@ -50,7 +50,8 @@ class FeedbackDesign:
 
     `controller` is a discrete control.StateSpace (dt = 1/fs) from the errors r - y (m) of
     the loops to their forces (N); `continuous` the controllers C(s) before discretisation
-    (one per loop); the margins are the worst over the loops.
+    (one per loop); the margins are the worst over the loops, each taken with the other
+    loops open (the closed-loop poles are those of all loops closed together).
     """
 
     pairs: list
@@ -143,8 +144,12 @@ def design_feedback(model, *, crossover=300.0, fs=4000.0, delay_samples=1, linea
     loop = plant_d * delays * controller
     closed = control.feedback(loop, np.eye(len(pairs)))
     poles = closed.poles()
-    first = _siso(plant_d, 0, 0) * _siso(delays, 0, 0) * _siso(controller, 0, 0)
-    gm, pm, sm = _margins(first, crossover, resonances=plant_d.poles())
+    # margins per loop with the other loops open; the worst of each is reported
+    gains = [_siso(plant_d, k, k) * _siso(delays, k, k) * _siso(controller, k, k)
+             for k in range(len(pairs))]
+    margins = np.array([_margins(g, crossover, resonances=plant_d.poles()) for g in gains])
+    gm, pm, sm = margins.min(axis=0)
+    first = gains[0]
     design = FeedbackDesign(
         pairs=pairs, crossover_rad_s=float(crossover), sample_rate_hz=float(fs),
         delay_samples=int(delay_samples), continuous=continuous, controller=controller,

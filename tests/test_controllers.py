@@ -222,3 +222,29 @@ def test_feedforward_holds_a_loaded_scene_where_it_starts():
     assert u[0, 0] == pytest.approx(-1.0, rel=2e-3)
     again = type(lf).from_dict(lf.to_dict())
     assert np.array_equal(again.equilibrium, lf.equilibrium)
+
+
+def test_a_second_loop_on_the_stiff_vertical_axis_is_refused():
+    """Two loops (3.x and 3.y): the 300 rad/s PID on the 3.8e7 N/m vertical spring, whose
+    2129 Hz mode folds back below the 2 kHz Nyquist frequency, would be unstable."""
+    import tomllib
+
+    from flexure.core import build_model, scene_path
+
+    data = tomllib.loads(scene_path("stage_planar_3dof").read_text())
+    data["inputs"]["Fy"] = {"node": "3", "coordinate": "y"}
+    model = build_model(data, source="two-input stage")
+    with pytest.raises(ControlDesignError, match="unstable: pole z"):
+        design_feedback(model, crossover=300.0, fs=4000.0)
+
+
+def test_an_input_without_a_colocated_output_is_refused():
+    import tomllib
+
+    from flexure.core import build_model, scene_path
+
+    data = tomllib.loads(scene_path("stage_planar_1dof").read_text())
+    del data["outputs"]["x"]
+    model = build_model(data, source="no-x stage")
+    with pytest.raises(ControlDesignError, match="no position output"):
+        design_feedback(model)
