@@ -12,7 +12,8 @@ Stress resultant: the normal force sigma1 = EA / l0 * e1 + EdA / l0 * e1dot (N).
 Distributed mass: the position is interpolated linearly between p and q, which gives the
 consistent mass rho A l0 [[1/3, 1/6], [1/6, 1/3]] on the two nodal positions.
 
-Every function works on all elements of this type at once: arrays shaped (n_elements, ...).
+Every function works on all elements of this type at once: arrays shaped (n_elements, ...),
+and in any dimension (the spatial TRUSS uses them as they are).
 """
 
 import numpy as np
@@ -27,13 +28,18 @@ coordinates_per_element = 4
 inertia_point_kinds = ("position", "position")
 properties = ("EA", "EdA", "rho_A")  # section properties used
 
-_DL = np.array([[-1.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 1.0]])  # d l / d x
+
+
+def _difference(x):
+    """d l / d x (d, 2 d) for nodal coordinates x (n, 2 d): l = r^q - r^p."""
+    eye = np.eye(x.shape[1] // 2)
+    return np.hstack([-eye, eye])
 
 
 def reference(x0):
-    """Reference data from the initial nodal coordinates x0 (n, 4): the length l0 (m)."""
-    l_vec = x0 @ _DL.T
-    return {"l0": np.linalg.norm(l_vec, axis=1)}
+    """Reference data from the initial nodal coordinates x0 (n, 4): the length l0 (m) and the
+    dimension of the space (2; 3 for the spatial TRUSS)."""
+    return {"l0": np.linalg.norm(x0 @ _difference(x0).T, axis=1), "dimension": x0.shape[1] // 2}
 
 
 def deformations(x, ref, order=2):
@@ -41,17 +47,19 @@ def deformations(x, ref, order=2):
 
     order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e).
     """
-    l_vec = x @ _DL.T
+    DL = _difference(x)
+    l_vec = x @ DL.T
     length = np.linalg.norm(l_vec, axis=1)
     e = (length - ref["l0"])[:, None]
     if order == 0:
         return (e,)
     unit = l_vec / length[:, None]
-    De = (unit @ _DL)[:, None, :]
+    De = (unit @ DL)[:, None, :]
     if order == 1:
         return e, De
-    projector = (np.eye(2)[None] - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
-    D2e = np.einsum("ai,nab,bj->nij", _DL, projector, _DL)[:, None]
+    projector = (np.eye(DL.shape[0])[None] - unit[:, :, None] * unit[:, None, :]) / length[
+        :, None, None]
+    D2e = np.einsum("ai,nab,bj->nij", DL, projector, DL)[:, None]
     return e, De, D2e
 
 
@@ -70,18 +78,18 @@ def inertia_points(x, ref, order=2):
 
     Returns p (n, 4), Dp (n, 4, 4) and D2p (n, 4, 4, 4) (zero: the map is linear).
     """
-    n = x.shape[0]
+    n, m = x.shape
     p = x.copy()
     if order == 0:
         return (p,)
-    Dp = np.broadcast_to(np.eye(4), (n, 4, 4))
+    Dp = np.broadcast_to(np.eye(m), (n, m, m))
     if order == 1:
         return p, Dp
-    return p, Dp, np.zeros((n, 4, 4, 4))
+    return p, Dp, np.zeros((n, m, m, m))
 
 
 def inertia_matrix(ref, props):
     """Consistent mass on the inertia points (n, 4, 4) in kg: linear interpolation."""
     shape = np.array([[1.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 3.0]])
     mass = props["rho_A"] * ref["l0"]
-    return mass[:, None, None] * np.kron(shape, np.eye(2))[None]
+    return mass[:, None, None] * np.kron(shape, np.eye(ref["dimension"]))[None]
