@@ -86,21 +86,22 @@ def _column_scale(model, length_scale):
 
 def _dependent_row_sets(rows):
     """For each left null-space vector of `rows`, the indices of the rows taking part."""
-    if rows.shape[0] == 0:
-        return []
-    u, s, _ = np.linalg.svd(rows)
-    top = max(s.max(initial=0.0), 1e-300)
-    rank = int(np.sum(s > RANK_TOLERANCE * top))
-    sets = []
-    for vector in u[:, rank:].T:
-        sets.append(list(np.flatnonzero(np.abs(vector) > 1e-6 * np.abs(vector).max())))
-    return sets
+    return [list(np.flatnonzero(np.abs(v) > 1e-6 * np.abs(v).max()))
+            for v in _null_space(rows.T)]
 
 
 def _free_motions(matrix):
     """Right null-space vectors of `matrix` (rows x free coordinates)."""
+    return _null_space(matrix)
+
+
+def _null_space(matrix):
+    """An orthonormal basis (list of vectors) of the null space of `matrix`, by SVD with the
+    relative rank threshold RANK_TOLERANCE."""
     if matrix.shape[1] == 0:
         return []
+    if matrix.shape[0] == 0:
+        return list(np.eye(matrix.shape[1]))
     _, s, vt = np.linalg.svd(matrix)
     top = max(s.max(initial=0.0), 1e-300)
     rank = int(np.sum(s > RANK_TOLERANCE * top))
