@@ -6,6 +6,7 @@
 
 import json
 
+from flexure.core.progress import Progress
 from flexure.core.tables import format_table, jsonable
 
 from .runner import PLANTS, run_loop
@@ -53,7 +54,8 @@ def run(args):
     feedforward = False if args.no_feedforward else args.feedforward
     result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
                       crossover=args.crossover, feedforward=feedforward, plant=args.plant,
-                      settle=args.settle, workdir=args.workdir)
+                      settle=args.settle, workdir=args.workdir,
+                      progress=Progress(f"flexure loop ({args.plant})"))
     summary = result.summary()
     if not args.no_plot and args.plot:
         result.plot(args.plot)

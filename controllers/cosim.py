@@ -49,8 +49,13 @@ def step_nanoseconds(fs):
     return step
 
 
-def run_cosimulation(model, scene, controller, design, *, rtol=1e-8, workdir=None):
-    """Run the loop in libcosim; returns t, reference, position, force like simulate_loop."""
+def run_cosimulation(model, scene, controller, design, *, rtol=1e-8, workdir=None,
+                     progress=None):
+    """Run the loop in libcosim; returns t, reference, position, force like simulate_loop.
+
+    `progress`, if given, is called with the fraction done: the run is then advanced in
+    (about 100) chunks of whole macro steps, which libcosim continues seamlessly.
+    """
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -86,11 +91,16 @@ def run_cosimulation(model, scene, controller, design, *, rtol=1e-8, workdir=Non
         (plant, p.input_name) for p in design.pairs]
     for slave, name in watched:
         series.start_time_series(slave, vr[(slave, name)], CosimVariableType.REAL)
-    if not ex.simulate_until(target_time=N * step):
-        from libcosimpy._internal import get_last_error_message
+    chunk = N if progress is None else max(1, N // 100)
+    for done in range(chunk, N + chunk, chunk):
+        if not ex.simulate_until(target_time=min(done, N) * step):
+            from libcosimpy._internal import get_last_error_message
 
-        raise SimulationError(f"libcosim stopped at t = {ex.status().current_time / NS:.9g} "
-                              f"s: {get_last_error_message()}")
+            raise SimulationError(f"libcosim stopped at t = "
+                                  f"{ex.status().current_time / NS:.9g} s: "
+                                  f"{get_last_error_message()}")
+        if progress is not None:
+            progress(min(done, N) / N)
     n = len(design.pairs)
     position = np.empty((N + 1, n))
     force = np.empty((N + 1, n))

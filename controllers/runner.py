@@ -286,7 +286,7 @@ def _inverse_forces(model, design, profile, fs, samples, offsets):
 
 def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
              feedforward=True, plant="inprocess", settle=0.25, axis=0, rtol=1e-8,
-             feedforward_model=None, workdir=None, **design_options):
+             feedforward_model=None, workdir=None, progress=None, **design_options):
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
     Parameters
@@ -310,6 +310,9 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
         Use this model for the feedforward instead of the scene's own.
     workdir : path, optional
         Where the FMUs are built and kept (default: a temporary folder, removed after).
+    progress : callable, optional
+        Called with the fraction of the samples done (0 to 1) as the loop runs, e.g. a
+        `flexure.core.progress.Progress`.
 
     Returns
     -------
@@ -334,18 +337,20 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
             workdir = stack.enter_context(tempfile.TemporaryDirectory(
                 prefix="flexure_loop_", ignore_cleanup_errors=True))
         t, reference, position, force = _run_plant(plant, model, scene, controller, design,
-                                                   rtol=rtol, workdir=workdir)
+                                                   rtol=rtol, workdir=workdir,
+                                                   progress=progress)
     wall = _time.perf_counter() - start
     return LoopResult(t=t, reference=reference, position=position, force=force,
                       feedforward=controller.feedforward[: len(t)].copy(), stroke=stroke,
                       design=design.summary(), settings=settings, wall_time_s=wall)
 
 
-def _run_plant(plant, model, scene, controller, design, *, rtol, workdir):
+def _run_plant(plant, model, scene, controller, design, *, rtol, workdir, progress):
     if plant == "libcosim":
         from .cosim import run_cosimulation
 
-        return run_cosimulation(model, scene, controller, design, rtol=rtol, workdir=workdir)
+        return run_cosimulation(model, scene, controller, design, rtol=rtol, workdir=workdir,
+                                progress=progress)
     from .plants import FmuPlant, InProcessPlant
 
     if plant == "inprocess":
@@ -355,13 +360,16 @@ def _run_plant(plant, model, scene, controller, design, *, rtol, workdir):
 
         adapter = FmuPlant(scene_fmu(scene, model, workdir), rtol=rtol)
     try:
-        return simulate_loop(adapter, controller, design)
+        return simulate_loop(adapter, controller, design, progress=progress)
     finally:
         adapter.close()
 
 
-def simulate_loop(plant, controller, design):
-    """Step `plant` (plants.py interface) under `controller`; returns t, r, y, u arrays."""
+def simulate_loop(plant, controller, design, *, progress=None):
+    """Step `plant` (plants.py interface) under `controller`; returns t, r, y, u arrays.
+
+    `progress`, if given, is called with the fraction of samples done, about 100 times.
+    """
     pairs = design.pairs
     n_inputs = len(plant.input_names)
     inputs = [p.input_index for p in pairs]
@@ -373,7 +381,10 @@ def simulate_loop(plant, controller, design):
     y = plant.reset()[outputs]
     u = controller.initial_output()
     full = np.zeros(n_inputs)
+    report_every = max(1, N // 100)
     for k in range(N):
+        if progress is not None and k % report_every == 0:
+            progress(k / N)
         position[k] = y
         force[k] = u
         u_next, _ = controller.step(k, y)
@@ -382,6 +393,8 @@ def simulate_loop(plant, controller, design):
         plant.advance((k + 1) / fs)
         y = plant.output()[outputs]
         u = u_next
+    if progress is not None:
+        progress(1.0)
     position[N], force[N] = y, force[N - 1]
     t = np.arange(N + 1) / fs
     return t, controller.reference[: N + 1].copy(), position, force

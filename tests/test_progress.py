@@ -1,0 +1,51 @@
+"""Progress of long runs: the reporter, and the closed loop reporting through it."""
+
+import io
+
+import numpy as np
+
+from flexure.controllers import run_loop
+from flexure.core.progress import Progress
+
+
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_log_gets_one_line_per_tenth():
+    stream = io.StringIO()
+    report = Progress("run", stream=stream)
+    for fraction in np.linspace(0.0, 1.0, 1001):
+        report(fraction)
+    lines = stream.getvalue().splitlines()
+    assert [line.split(" (")[0] for line in lines] == [f"run: {10 * i} %" for i in range(11)]
+
+
+def test_a_terminal_gets_one_line_rewritten_in_place():
+    stream = Terminal()
+    report = Progress("run", stream=stream)
+    for fraction in (0.0, 0.5, 0.5, 1.0):
+        report(fraction)
+    text = stream.getvalue()
+    assert text.count("\r") == 3 and text.endswith("\n") and text.count("\n") == 1
+    assert "run:  50 %" in text
+
+
+def test_chunked_libcosim_run_with_progress_equals_the_plain_run():
+    """Reporting progress advances libcosim in chunks; the loop must not change."""
+    options = dict(duration=0.04, settle=0.01, fs=2000.0, plant="libcosim")
+    fractions = []
+    reported = run_loop("stage_planar_1dof", progress=fractions.append, **options)
+    plain = run_loop("stage_planar_1dof", **options)
+    np.testing.assert_array_equal(reported.position, plain.position)
+    np.testing.assert_array_equal(reported.force, plain.force)
+    assert fractions[-1] == 1.0 and len(fractions) >= 50
+    assert fractions == sorted(fractions)
+
+
+def test_inprocess_loop_reports_progress():
+    fractions = []
+    run_loop("stage_planar_1dof", duration=0.04, settle=0.01, fs=2000.0,
+             progress=fractions.append)
+    assert fractions[0] == 0.0 and fractions[-1] == 1.0 and len(fractions) >= 50
