@@ -221,12 +221,11 @@ class Dynamics:
             points = group.kind.inertia_points(group.local(x), group.reference,
                                                order=2 if moving else 1)
             Dp = points[1]
-            np.add.at(M, (idx[:, :, None], idx[:, None, :]),
-                      np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp))
+            assembly.scatter_matrix(M, group, np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp))
             if moving:
                 v = xdot[idx]
                 accel = np.einsum("npij,ni,nj->np", points[2], v, v)
-                np.add.at(force, idx, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
+                assembly.scatter_vector(force, group, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
         return M, force
 
     def accelerations(self, q, qdot, u):
@@ -281,7 +280,11 @@ class Dynamics:
 
 
 class FirstOrderSystem:
-    """ydot = f(t, y), y = [q, qdot], and its Jacobian, for the integrators.
+    """ydot = f(t, y), y = [q - q_ref, qdot], and its Jacobian, for the integrators.
+
+    q_ref (NDOF,) is the reference configuration the state is taken from (the Simulator
+    sets it; zeros by default, then y = [q, qdot]). The derivative and the Jacobian do not
+    depend on it: d(q - q_ref)/dt = qdot.
 
     The inputs come from `input_function(t)` (n_inputs,) N. Each evaluation checks that the
     state and the accelerations are finite and raises SimulationError naming the time.
@@ -291,6 +294,7 @@ class FirstOrderSystem:
         self.dynamics = dynamics
         self.n = dynamics.ndof
         self.input_function = input_function
+        self.q_ref = np.zeros(self.n)
         self.rhs_count = 0
         self.jacobian_count = 0
         self.deadline = None  # time.perf_counter() value past which an evaluation fails
@@ -306,7 +310,8 @@ class FirstOrderSystem:
             raise SimulationError(f"t = {t:.9g} s: the state became non-finite "
                                   f"({_first_bad(y, self.dynamics.model, n)})")
         try:
-            ev = self.dynamics.evaluate(y[:n], y[n:], self._inputs(t), hessians=hessians)
+            ev = self.dynamics.evaluate(self.q_ref + y[:n], y[n:], self._inputs(t),
+                                        hessians=hessians)
         except SimulationError as error:
             raise SimulationError(f"t = {t:.9g} s: {error}") from None
         if not np.all(np.isfinite(ev.qddot)):

@@ -6,6 +6,21 @@ Every back-end offers the same three calls on the first-order state y = [q, qdot
 `statistics()`. CVODE integrates ydot = f(t, y) (BDF or Adams); IDA the implicit form
 res(t, y, yp) = 0. The Jacobian is the model's tangent (`FirstOrderSystem.jacobian`) or, with
 jacobian="finite-difference", SUNDIALS' own difference quotients.
+
+Largest order. BDF of order 3 to 5 is not A-stable: on a lightly damped mode (eigenvalues
+near the imaginary axis, such as the 2.1 and 3.6 kHz modes of stage_planar_3dof with a damping
+ratio of about 1e-3) it is stable only for steps well below the mode's period, and CVODE's
+stability limit detection, which would lower the order there, is not offered by
+scikit-sundae (1.2: no option for it). max_order=2 (BDF2, A-stable) removes that step limit
+but keeps the order low. Measured on 1 s of a 1 N step on stage_planar_3dof with the
+deviation state (README, work-precision table): BDF2 takes 4 to 10 times fewer steps, but its
+error is 200 to 4000 rtol times the motion at every tolerance (the 10.6 Hz motion's phase
+error builds up over thousands of small steps), while order 5 reaches 0.1 to 0.2 rtol from
+rtol 1e-5 down; to the same error order 5 is faster, and on a smooth scene (truss_1dof_x)
+order 5 is 8 times cheaper at rtol 1e-6 and 100 times more accurate. IDA behaves the same way.
+So the default stays SUNDIALS' (5); `max_order=2` is for a quick look at a loose tolerance.
+(Before the deviation state, BDF2 looked better: with atol = rtol x 0.1 m the kHz modes were
+below the tolerance and order 5 spent 14 900 steps on them for an error of 2 % of the stroke.)
 """
 
 import numpy as np

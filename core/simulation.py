@@ -1,7 +1,12 @@
 """Nonlinear time-domain simulation: a stepping `Simulator` and the one-call `simulate`.
 
-The state is y = [q, qdot] on the DOFs (m, rad, m/s, rad/s); the constraints are solved away
-at every evaluation (`flexure.core.dynamics`) and never integrated. Inputs are forces on the
+The integrator's state is y = [q - q_ref, qdot] on the DOFs (m, rad, m/s, rad/s): the
+deviation from a reference configuration q_ref, the DOFs where the run started (`reset`),
+and the velocities. A flexure moves micrometres to millimetres away from a configuration
+whose coordinates are centimetres (the 3-DOF stage: y = 0.1 m, moving 2 mm in x), so
+integrating the absolute DOFs would let rtol act on 0.1 m; on the deviation it acts on the
+motion. The constraints are solved away at every evaluation (`flexure.core.dynamics`) and
+never integrated. Inputs are forces on the
 scene's input coordinates, held constant between `set_inputs` calls (zero-order hold); a
 change of input is a discontinuity, so the integrator restarts there (order 1, new step).
 
@@ -23,7 +28,7 @@ from .dynamics import Dynamics, FirstOrderSystem
 from .errors import ConvergenceError, FlexureError, SimulationError
 from .integrators import METHODS, make_integrator
 
-STATE_VERSION = 1
+STATE_VERSION = 2
 
 
 class Simulator:
@@ -44,7 +49,9 @@ class Simulator:
     jacobian : str
         "analytic" (the model's tangent, default) or "finite-difference" (SUNDIALS').
     max_order : int, optional
-        Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA).
+        Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA, 12
+        for Adams). 2 makes BDF A-stable; measured, that is not the better default, see
+        `flexure.core.integrators`.
     """
 
     def __init__(self, model, *, method="cvode-bdf", rtol=1e-8, atol=None, max_step=None,
@@ -92,8 +99,11 @@ class Simulator:
             raise SimulationError(f"t = {t0:.9g} s: the initial DOFs q0 cannot be "
                                   f"assembled: {error}") from None
         self._t = float(t0)
-        self._y = np.concatenate([q, qdot])
+        self._q_ref = q.copy()
+        self.system.q_ref = self._q_ref
+        self._y = np.concatenate([np.zeros(self.ndof), qdot])
         self._x = config.x.copy()
+        self._outputs_cache = None
         self._needs_init = True
         self.system.rhs_count = self.system.jacobian_count = 0
         self.integrator.steps = 0
@@ -107,7 +117,18 @@ class Simulator:
     @property
     def q(self):
         """The current DOFs (NDOF,) m, rad (a copy)."""
-        return self._y[: self.ndof].copy()
+        return self._q_ref + self._y[: self.ndof]
+
+    @property
+    def q_ref(self):
+        """The reference DOFs (NDOF,) m, rad the integrator's state is taken from (a copy)."""
+        return self._q_ref.copy()
+
+    def absolute(self, y):
+        """States [q, qdot] (..., 2 NDOF) of integrator states [q - q_ref, qdot] (a copy)."""
+        y = np.array(y, dtype=float)
+        y[..., : self.ndof] += self._q_ref
+        return y
 
     @property
     def qdot(self):
@@ -138,22 +159,34 @@ class Simulator:
         """A picklable snapshot of the whole state; the next `advance` restarts from it."""
         self._needs_init = True
         return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
-                "y": self._y.copy(), "u": self._u.copy(), "x": self._x.copy()}
+                "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
+                "x": self._x.copy()}
 
     def set_state(self, state):
-        """Restore a snapshot of `get_state` (of a simulator of the same model)."""
+        """Restore a snapshot of `get_state` (of a simulator of the same model).
+
+        A version-1 snapshot (absolute y = [q, qdot]) is taken from the configuration it
+        holds."""
         try:
             y = np.array(state["y"], dtype=float)
+            q_ref = np.array(state["q_ref"] if state.get("version", 1) >= 2 else
+                             y[: y.size // 2], dtype=float)
             u = np.array(state["u"], dtype=float)
             x = np.array(state["x"], dtype=float)
             t = float(state["t"])
         except (KeyError, TypeError, ValueError) as error:
             raise SimulationError(f"not a simulator state: {error}") from None
-        if state.get("model") != self.model.name or y.size != 2 * self.ndof:
+        if (state.get("model") != self.model.name or y.size != 2 * self.ndof
+                or q_ref.size != self.ndof):
             raise SimulationError(f"the state is of model {state.get('model')!r} with "
                                   f"{y.size} states; expected {self.model.name!r} with "
                                   f"{2 * self.ndof}")
+        if state.get("version", 1) < 2:
+            y[: self.ndof] = 0.0
         self._t, self._y, self._u, self._x = t, y, u, x
+        self._q_ref = q_ref
+        self.system.q_ref = q_ref
+        self._outputs_cache = None
         self._needs_init = True
 
     @property
@@ -215,23 +248,40 @@ class Simulator:
                 self._t = t
                 self._y = np.array(y, dtype=float)
                 self._x = self.dynamics._x.copy()
+                self._outputs_cache = None
                 if _record is not None:
                     _record(t, self._y)
         finally:
             self._wall += _time.perf_counter() - start
 
     def outputs(self):
-        """The declared outputs at the current state (n_outputs,): positions m, velocities m/s."""
-        return self._output_dynamics_outputs(self._y)[0]
+        """The declared outputs at the current state (n_outputs,): positions m, velocities m/s.
 
-    def _output_dynamics_outputs(self, y):
-        dyn = self._output_dynamics
-        dyn.reset_warm_start(self._x)
-        config = dyn.configuration(y[: self.ndof])
-        xdot = config.DF @ y[self.ndof:]
-        values = np.array([xdot[p.coordinate] if p.quantity == "velocity" else config.x[
-            p.coordinate] for p in self.model.outputs])
-        return values, config.x
+        Computed once per state (`advance`, `reset` and `set_state` start a new one), from the
+        kinematics of the integrator's last evaluation: chord iterations on its constraint
+        Jacobian, positions only unless a velocity is asked for."""
+        if self._outputs_cache is None:
+            self._outputs_cache = self._outputs_now()
+        return self._outputs_cache.copy()
+
+    def _outputs_now(self):
+        dyn, source = self._output_dynamics, self.dynamics
+        if source._DF is not None:  # share the last evaluation's kinematics as warm start
+            dyn._x, dyn._q, dyn._DF, dyn._lu = source._x, source._q, source._DF, source._lu
+            dyn._hessians = None
+        else:
+            dyn.reset_warm_start(self._x)
+        ports = self.model.outputs
+        try:
+            x = dyn.positions(self.q)
+            if any(p.quantity == "velocity" for p in ports):
+                config = dyn.kin.configuration(self.q, x.copy())
+                xdot = config.DF @ self._y[self.ndof:]
+                return np.array([xdot[p.coordinate] if p.quantity == "velocity" else
+                                 x[p.coordinate] for p in ports])
+        except ConvergenceError as error:
+            raise SimulationError(f"t = {self._t:.9g} s: outputs: {error}") from None
+        return x[[p.coordinate for p in ports]]
 
 
 @dataclass
@@ -330,11 +380,11 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
         grid = np.asarray(output_times, dtype=float)
         if grid.ndim != 1 or np.any(np.diff(grid) <= 0) or grid[0] < 0 or grid[-1] > t_end:
             raise SimulationError("output_times must increase strictly within [0, t_end]")
-    times, states, held = [0.0], [sim._y.copy()], [sim._inputs_at(0.0).copy()]
+    times, states, held = [0.0], [sim.absolute(sim._y)], [sim._inputs_at(0.0).copy()]
 
     def record(t, y):
         times.append(t)
-        states.append(y.copy())
+        states.append(sim.absolute(y))
         held.append(sim._inputs_at(t).copy())
 
     stops = sorted(set(breaks) | {float(t_end)} | (set(grid.tolist()) if grid is not None
@@ -369,7 +419,8 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
 
 
 def _outputs_along(sim, states):
-    """Outputs (n, n_outputs) along a trajectory, solving the kinematics point by point."""
+    """Outputs (n, n_outputs) along a trajectory of absolute states [q, qdot], solving the
+    kinematics point by point."""
     dyn = sim._output_dynamics
     dyn.reset_warm_start()
     ports = sim.model.outputs
@@ -430,17 +481,29 @@ def _vector(value, size, name):
     return v
 
 
+# the smallest motion, as a fraction of the model's length scale, that rtol controls
+MOTION_FRACTION = 1e-3
+
+
 def default_atol(model, rtol, *, dynamics=None):
     """Per-state absolute tolerance (2 NDOF,) from rtol and the model's scales.
 
-    Lengths: rtol times the model's length scale L (m); rotations: rtol (rad). Velocities:
-    those times a reference angular frequency, the lowest natural frequency of the initial
-    configuration (or sqrt(g / L) for a structure that only gravity holds, or 1 rad/s).
+    The integrator's state is the deviation from the start configuration, and its local
+    error test is |err_i| <= rtol |y_i| + atol_i: rtol controls the error of a motion
+    larger than atol_i / rtol, atol the error of smaller ones. The default makes rtol the
+    controlling tolerance for any motion larger than `MOTION_FRACTION` (1e-3) of the model's
+    length scale L (0.1 mm on a 0.1 m leaf spring; flexure strokes are 1e-3 L to 0.1 L):
+    lengths rtol 1e-3 L (m), rotations rtol 1e-3 (rad). Velocities: those times a reference
+    angular frequency, the lowest natural frequency of the initial configuration (or
+    sqrt(g / L) for a structure that only gravity holds, or 1 rad/s), the velocity of that
+    smallest motion in the slowest mode. (Until 2026-11 the default was rtol L on the
+    absolute DOFs: 1e-7 m at rtol 1e-6, 5 % of a 2 mm stroke's tolerance was spent on it.)
     """
     dyn = dynamics or Dynamics(model)
     L = dyn.kin.length_scale
     names = model.dof_names
-    position = np.array([rtol if name.endswith(".phi") else rtol * L for name in names])
+    position = MOTION_FRACTION * np.array([rtol if name.endswith(".phi") else rtol * L
+                                           for name in names])
     return np.concatenate([position, position * _reference_frequency(dyn)])
 
 

@@ -114,8 +114,12 @@ def test_tolerances_from_1e_3_to_1e_12():
 
 
 def test_a_singular_configuration_stops_with_the_time_and_the_cause():
+    """y turns around at the bottom, where the DOF is singular: whether a run comes within
+    the singular tolerance there depends on its steps. At rtol 1e-6 it does (t = 0.4186 s);
+    at rtol 1e-8 with the default atol (since the deviation state) it turns 1.2e-4 m (in x)
+    before it and goes on: y(t) is the same on either branch of x."""
     model = truss_pendulum()
-    sim = Simulator(model, rtol=1e-8)
+    sim = Simulator(model, rtol=1e-6)
     with pytest.raises(SimulationError, match=r"t = 0\.\d+ s.*singular") as error:
         sim.advance(1.0)
     assert "truss_pendulum" in str(error.value)
