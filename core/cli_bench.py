@@ -13,7 +13,7 @@ from pathlib import Path
 from .cli_simulate import parse_inputs
 from .errors import SimulationError
 from .scene import load_scene
-from .workprecision import ALL_METHODS, work_precision
+from .workprecision import ALL_METHODS, DEFAULT_METHODS, work_precision
 
 
 def register(subparsers):
@@ -27,8 +27,9 @@ def register(subparsers):
     parser.add_argument("--t-end", type=float, default=1.0, metavar="T", help="end time (s)")
     parser.add_argument("--input", action="append", default=[], metavar="NAME=VALUE",
                         help="a constant input force (N); default F=1 if the scene has F")
-    parser.add_argument("--methods", default=",".join(ALL_METHODS),
-                        help=f"comma-separated subset of {','.join(ALL_METHODS)}")
+    parser.add_argument("--methods", default=",".join(DEFAULT_METHODS),
+                        help=f"comma-separated subset of {','.join(ALL_METHODS)}; a SUNDIALS "
+                             "method may end in :ORDER, its largest order (cvode-bdf:2)")
     parser.add_argument("--rtols", default="1e-3,1e-4,1e-5,1e-6,1e-7,1e-8",
                         help="comma-separated relative tolerances")
     parser.add_argument("--reference-rtol", type=float, default=1e-11)

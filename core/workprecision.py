@@ -6,6 +6,9 @@ CVODE (BDF, Adams) and IDA through `simulate`, and scipy's Radau, BDF and DOP853
 (`scipy.integrate.solve_ivp`, the implicit ones with the same model Jacobian) as the peer
 baseline. The error is the largest deviation of any declared output (m) from the reference
 at equally spaced sample times; the reference is CVODE Adams at a tight tolerance.
+
+A SUNDIALS method may carry a largest order, "cvode-bdf:2" or "ida:2" (max_order 2, the
+A-stable BDF2), so that the study compares the order limit with the default.
 """
 
 import time
@@ -22,6 +25,8 @@ from .tables import format_table, markdown_table
 SUNDIALS_METHODS = ("cvode-bdf", "cvode-adams", "ida")
 SCIPY_METHODS = {"scipy-radau": "Radau", "scipy-bdf": "BDF", "scipy-dop853": "DOP853"}
 ALL_METHODS = SUNDIALS_METHODS + tuple(SCIPY_METHODS)
+DEFAULT_METHODS = ("cvode-bdf", "cvode-bdf:2", "cvode-adams", "ida", "ida:2",
+                   *SCIPY_METHODS)
 HEADERS = ["method", "rtol", "max output error (m)", "wall time (s)", "rhs evaluations",
            "steps", "status"]
 
@@ -81,19 +86,18 @@ class WorkPrecision:
         plt.close(fig)
 
 
-def work_precision(model, t_end, *, inputs=None, methods=ALL_METHODS,
+def work_precision(model, t_end, *, inputs=None, methods=DEFAULT_METHODS,
                    rtols=(1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8), reference_rtol=1e-11,
                    samples=101, time_limit=60.0, progress=None):
     """Run every method at every rtol against a tight reference; a `WorkPrecision`.
 
-    inputs: {name: constant N or callable(t)}. time_limit (s) stops a single run that takes
-    longer (its row says so). progress: optional callable(row) after each run.
+    inputs: {name: constant N or callable(t)}. methods: names of `ALL_METHODS`, a SUNDIALS
+    one optionally with ":ORDER" (its largest order). time_limit (s) stops a single run that
+    takes longer (its row says so). progress: optional callable(row) after each run.
     """
     times = np.linspace(0.0, t_end, samples)
     for method in methods:
-        if method not in ALL_METHODS:
-            raise SimulationError(f"unknown method {method!r}; expected one of "
-                                  f"{', '.join(ALL_METHODS)}")
+        parse_method(method)
     start = time.perf_counter()
     reference = simulate(model, t_end, inputs=inputs, method="cvode-adams", rtol=reference_rtol,
                          output_times=times).output_array
@@ -107,19 +111,31 @@ def work_precision(model, t_end, *, inputs=None, methods=ALL_METHODS,
     return study
 
 
+def parse_method(method):
+    """(name, max_order or None) of a study method "NAME" or "NAME:ORDER"."""
+    name, _, order = method.partition(":")
+    if name not in ALL_METHODS or (order and (name not in SUNDIALS_METHODS
+                                              or not order.isdigit())):
+        raise SimulationError(f"unknown method {method!r}; expected one of "
+                              f"{', '.join(ALL_METHODS)}, a SUNDIALS one optionally with "
+                              "':ORDER' (e.g. cvode-bdf:2)")
+    return name, int(order) if order else None
+
+
 def _run(model, t_end, inputs, method, rtol, times, reference, time_limit):
     row = {"method": method, "rtol": rtol, "error": None, "wall_time_s": 0.0,
            "rhs_evaluations": 0, "steps": 0, "status": "ok"}
     start = time.perf_counter()
+    name, max_order = parse_method(method)
     try:
-        if method in SCIPY_METHODS:
-            outputs, stats = _scipy_run(model, t_end, inputs, SCIPY_METHODS[method], rtol,
+        if name in SCIPY_METHODS:
+            outputs, stats = _scipy_run(model, t_end, inputs, SCIPY_METHODS[name], rtol,
                                         times, start + time_limit)
         else:
             # every accepted step, interpolated to the sample times afterwards (as scipy's
             # dense output): stopping at each sample would cap the step size
-            result = simulate(model, t_end, inputs=inputs, method=method, rtol=rtol,
-                              deadline=start + time_limit)
+            result = simulate(model, t_end, inputs=inputs, method=name, rtol=rtol,
+                              max_order=max_order, deadline=start + time_limit)
             outputs, stats = _sampled_outputs(model, result, times), result.statistics
         row["error"] = float(np.max(np.abs(outputs - reference)))
         row["rhs_evaluations"], row["steps"] = stats["rhs_evaluations"], stats["steps"]
@@ -176,6 +192,6 @@ def _scipy_run(model, t_end, inputs, method, rtol, times, deadline):
                                          atol=sim.atol, **options)
     if not solution.success:
         raise SimulationError(f"scipy {method}: {solution.message}")
-    outputs = _outputs_along(sim, solution.y.T)
+    outputs = _outputs_along(sim, sim.absolute(solution.y.T))
     # solve_ivp does not report its number of steps when t_eval is given
     return outputs, {"rhs_evaluations": system.rhs_count, "steps": "-"}

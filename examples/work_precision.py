@@ -13,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from flexure.core import load_scene
-from flexure.core.workprecision import ALL_METHODS, work_precision
+from flexure.core.workprecision import DEFAULT_METHODS, work_precision
 
 
 def main(argv=None):
@@ -21,7 +21,7 @@ def main(argv=None):
     parser.add_argument("--scene", default="stage_planar_3dof")
     parser.add_argument("--t-end", type=float, default=1.0)
     parser.add_argument("--rtols", default="1e-3,1e-4,1e-5,1e-6,1e-7,1e-8")
-    parser.add_argument("--methods", default=",".join(ALL_METHODS))
+    parser.add_argument("--methods", default=",".join(DEFAULT_METHODS))
     parser.add_argument("--reference-rtol", type=float, default=1e-11)
     parser.add_argument("--time-limit", type=float, default=120.0)
     parser.add_argument("--out", type=Path, default=Path("."))
