@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+from scipy.linalg import lapack
 
 from . import assembly
 from .assembly import _point_gravity
@@ -116,7 +117,7 @@ class Dynamics:
             g = kin.residual(x, e, q)
             if np.max(np.abs(g)) <= tolerance:
                 break
-            dx = scipy.linalg.lu_solve(lu, g, check_finite=False)
+            dx = _lu_solve(lu, g)
             if not np.all(np.isfinite(dx)):
                 break
             x[free] -= dx
@@ -141,7 +142,7 @@ class Dynamics:
             if np.max(np.abs(g)) <= tolerance:
                 converged = True
                 break
-            dx = scipy.linalg.lu_solve(self._lu, g, check_finite=False)
+            dx = _lu_solve(self._lu, g)
             x[kin.free] -= dx
             if np.max(np.abs(dx)) <= tolerance:
                 converged = True
@@ -155,7 +156,7 @@ class Dynamics:
         """First- and second-order kinematics at a solved x; keeps them as the next start."""
         kin, model = self.kin, self.model
         e, De, hessians = _deformations_order2(model, x)
-        lu = scipy.linalg.lu_factor(kin.constraint_jacobian(De), check_finite=False)
+        lu = _lu_factor(kin.constraint_jacobian(De))
         pivots = np.abs(np.diag(lu[0]))
         if not pivots.min() > self.singular_ratio * pivots.max():
             raise ConvergenceError(
@@ -164,7 +165,7 @@ class Dynamics:
                 f"{pivots.min() / pivots.max():.1e} < {self.singular_ratio:g}): the DOFs "
                 "cannot describe the motion through it")
         DF = np.zeros((model.nx, kin.selector.shape[1]))
-        DF[kin.free] = scipy.linalg.lu_solve(lu, kin.selector, check_finite=False)
+        DF[kin.free] = _lu_solve(lu, kin.selector)
         config = Configuration(q=q, x=x, e=e, De=De, lu=lu, DF=DF)
         self._x, self._q, self._DF, self._lu = x, q, DF, lu
         self._hessians = hessians
@@ -183,7 +184,7 @@ class Dynamics:
 
         The deformation Hessians come with every kinematic solution, so the evaluation always
         carries them (`hessians` is accepted for callers that need them)."""
-        mech, kin, inertia = self.mech, self.kin, self.inertia
+        mech, inertia = self.mech, self.inertia
         config = self.configuration(q)
         x, DF, De = config.x, config.DF, config.De
         xdot = DF @ qdot
@@ -199,16 +200,26 @@ class Dynamics:
         M, inertia_force = self._inertia(x, xdot, moving)
         r = f - De.T @ sigma_c
         if moving:
-            r -= M @ kin.convective_acceleration(config, qdot, hess) + inertia_force
+            r -= M @ self._convective_acceleration(config, xdot, hess) + inertia_force
         mass = DF.T @ M @ DF
-        with np.errstate(all="ignore"):
-            try:
-                qddot = np.linalg.solve(mass, DF.T @ r)
-            except np.linalg.LinAlgError:
-                raise SimulationError(
-                    "the reduced mass matrix M_bar is singular (a DOF without mass)") from None
+        _, _, qddot, info = lapack.dgesv(mass, DF.T @ r)
+        if info > 0:
+            raise SimulationError(
+                "the reduced mass matrix M_bar is singular (a DOF without mass)")
         return Evaluation(q=q, qdot=qdot, qddot=qddot, x=x, xdot=xdot, config=config, mass=mass,
                           coordinate_mass=M, force_balance=r, sigma_c=sigma_c, hessians=hess)
+
+    def _convective_acceleration(self, config, xdot, hessians):
+        """(D2F qdot) qdot (NX,) for xdot = DF qdot: `Kinematics.convective_acceleration`
+        with LAPACK's getrs called directly (scipy's lu_solve costs 9 times more on these
+        small systems)."""
+        kin = self.kin
+        quad = assembly.hessian_quadratic_forms(self.model, hessians, xdot)
+        rhs = np.zeros(kin.free.size)
+        rhs[: kin.constraint_rows.size] = quad[kin.constraint_rows]
+        result = np.zeros(self.model.nx)
+        result[kin.free] = -_lu_solve(config.lu, rhs)
+        return result
 
     def _inertia(self, x, xdot, moving):
         """M(x) (NX, NX) and the convective inertia force (NX,) in one pass per group."""
@@ -385,6 +396,19 @@ def _deformations_order2(model, x):
         De[group.deformation_index[:, :, None], group.coordinate_index[:, None, :]] = local_De
         hessians.append((group, D2e))
     return e, De, hessians
+
+
+def _lu_factor(matrix):
+    """LU factors (lu, piv) as `scipy.linalg.lu_factor` returns them, without its checks
+    (a singular matrix is caught by the caller's pivot test)."""
+    lu, piv, _ = lapack.dgetrf(matrix)
+    return lu, piv
+
+
+def _lu_solve(lu, b):
+    """`scipy.linalg.lu_solve(lu, b)` by LAPACK getrs directly: the same numbers, a ninth of
+    the call overhead on these small systems."""
+    return lapack.dgetrs(lu[0], lu[1], b)[0]
 
 
 def _first_bad(y, model, n):
