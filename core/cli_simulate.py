@@ -31,10 +31,14 @@ def register(subparsers):
                         help="an input force: a constant (N) or a CSV file time,value "
                              "(zero-order hold); repeat for several inputs")
     parser.add_argument("--method", choices=METHODS, default="cvode-bdf")
+    parser.add_argument("--max-order", type=int, default=None,
+                        help="largest order of the multistep formulas (default SUNDIALS': 5 "
+                             "for BDF and IDA)")
     parser.add_argument("--rtol", type=float, default=1e-8, help="relative tolerance")
     parser.add_argument("--atol", type=float, default=None,
-                        help="absolute tolerance (default: per state from rtol and the "
-                             "model's length scale)")
+                        help="absolute tolerance on the deviation from the start "
+                             "configuration (default: per state, rtol x 1e-3 x the model's "
+                             "length scale on lengths, see default_atol)")
     parser.add_argument("--max-step", type=float, default=None, help="largest step (s)")
     parser.add_argument("--samples", type=int, default=0, metavar="N",
                         help="record N + 1 equally spaced times (default: every solver step)")
@@ -92,7 +96,8 @@ def run(args):
     output_times = (np.linspace(0.0, args.t_end, args.samples + 1) if args.samples > 0
                     else None)
     result = simulate(model, args.t_end, inputs=inputs, method=args.method, rtol=args.rtol,
-                      atol=args.atol, max_step=args.max_step, output_times=output_times)
+                      atol=args.atol, max_step=args.max_step, output_times=output_times,
+                      max_order=args.max_order)
     print(render(result))
     if args.out:
         result.to_csv(args.out)

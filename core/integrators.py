@@ -120,6 +120,11 @@ def make_integrator(system, method, *, rtol, atol, max_step=None, jacobian="anal
     max_order: the largest order of the multistep formulas (None: SUNDIALS' default, 5 for
     BDF and IDA, 12 for Adams).
     """
+    if max_order is not None:
+        top = 12 if method == "cvode-adams" else 5
+        if not (isinstance(max_order, (int, np.integer)) and 1 <= max_order <= top):
+            raise SimulationError(f"max_order: expected an integer from 1 to {top} for "
+                                  f"{method}, got {max_order!r}")
     if jacobian not in JACOBIANS:
         raise SimulationError(f"unknown jacobian {jacobian!r}; expected one of "
                               f"{', '.join(JACOBIANS)}")

@@ -157,3 +157,10 @@ def test_simulator_misuse_is_a_clear_error():
         sim.set_inputs([1.0, 2.0])
     with pytest.raises(SimulationError, match="atol"):
         Simulator(model, atol=[1.0, 2.0, 3.0])
+    with pytest.raises(SimulationError, match="max_order: expected an integer from 1 to 5 "
+                                              "for cvode-bdf, got 6"):
+        Simulator(model, max_order=6)
+    with pytest.raises(SimulationError, match="max_order.*1 to 12 for cvode-adams"):
+        Simulator(model, method="cvode-adams", max_order=0)
+    with pytest.raises(SimulationError, match="state is of model"):
+        sim.set_state(dict(sim.get_state(), q_ref=[0.0, 0.0]))

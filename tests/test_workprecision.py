@@ -78,3 +78,19 @@ def test_bench_command_prints_the_table(tmp_path):
                          capture_output=True, text=True, check=True)
     assert "cvode-bdf" in run.stdout and "scipy-dop853" in run.stdout
     assert md.read_text().count("\n") == 4
+
+
+def test_order_limits_in_the_study_and_the_commands():
+    study = study_of(load_scene("truss_1dof_x"), 0.05, methods=["ida", "ida:2"],
+                     rtols=[1e-6], reference_rtol=1e-10, samples=11)
+    assert [r["method"] for r in study.rows] == ["ida", "ida:2"]
+    assert all(r["status"] == "ok" and r["error"] < 1e-6 for r in study.rows)
+    assert study.rows[1]["steps"] > study.rows[0]["steps"]  # order 2 needs smaller steps
+    for argv, message in (
+            (["simulate", "truss_1dof_x", "--t-end", "0.01", "--max-order", "9"],
+             "max_order: expected an integer from 1 to 5 for cvode-bdf, got 9"),
+            (["bench", "truss_1dof_x", "--t-end", "0.01", "--methods", "scipy-bdf:2"],
+             "unknown method 'scipy-bdf:2'")):
+        run = subprocess.run([FLEXURE, *argv], capture_output=True, text=True)
+        assert run.returncode == 2
+        assert message in run.stderr and "Traceback" not in run.stderr
