@@ -76,6 +76,14 @@ class Dynamics:
         if self.has_gravity and not self.inertia.groups:
             self.constant_force += self.inertia.gravity_force(model.initial_coordinates)
         self.stressed = self.mech.stressed
+        # the constraint Jacobian J (free x free) as `Kinematics.constraint_jacobian` builds
+        # it, from precomputed flat indices: the unit rows of the DOF coordinates are fixed
+        kin = self.kin
+        n_def = kin.constraint_rows.size
+        self._J_template = kin.constraint_jacobian(np.zeros((len(model.deformation_names),
+                                                             model.nx)))
+        self._J_take = (kin.constraint_rows[:, None] * model.nx + kin.free[None, :]).ravel()
+        self._J_rows = n_def
         self.chord_iterations = 6
         # constraint tolerance relative to the length scale: near round-off, so that the
         # kinematic error stays below the tightest integrator tolerance (rtol 1e-12 on 0.1 m)
@@ -156,7 +164,9 @@ class Dynamics:
         """First- and second-order kinematics at a solved x; keeps them as the next start."""
         kin, model = self.kin, self.model
         e, De, hessians = _deformations_order2(model, x)
-        lu = _lu_factor(kin.constraint_jacobian(De))
+        J = self._J_template.copy()
+        J[: self._J_rows] = De.take(self._J_take).reshape(self._J_rows, J.shape[1])
+        lu = _lu_factor(J)
         pivots = np.abs(np.diag(lu[0]))
         if not pivots.min() > self.singular_ratio * pivots.max():
             raise ConvergenceError(
