@@ -497,7 +497,7 @@ def default_atol(model, rtol, *, dynamics=None):
     angular frequency, the lowest natural frequency of the initial configuration (or
     sqrt(g / L) for a structure that only gravity holds, or 1 rad/s), the velocity of that
     smallest motion in the slowest mode. (Until 2026-11 the default was rtol L on the
-    absolute DOFs: 1e-7 m at rtol 1e-6, 5 % of a 2 mm stroke's tolerance was spent on it.)
+    absolute DOFs: 1e-7 m at rtol 1e-6, 50 times rtol times a 2 mm stroke.)
     """
     dyn = dynamics or Dynamics(model)
     L = dyn.kin.length_scale

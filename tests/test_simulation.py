@@ -89,8 +89,9 @@ def released_from_a_modal_load(model, force=1.0):
 
 
 def test_undamped_3dof_stage_conserves_energy():
-    """Free vibration at rtol 1e-9: the relative energy drift stays below 1e-6. The test
-    runs 0.5 s (CPU time); examples/energy_drift.py runs the full 10 s of the issue."""
+    """Free vibration at rtol 1e-9: the relative energy drift stays below 1e-8 (2.4e-10
+    measured with the deviation state). The test runs 0.5 s (CPU time);
+    examples/energy_drift.py runs the full 10 s of the issue."""
     model = undamped("stage_planar_3dof")
     dyn = Dynamics(model)
     q0 = released_from_a_modal_load(model)
@@ -102,7 +103,7 @@ def test_undamped_3dof_stage_conserves_energy():
         sim.advance(t)
         drift = max(drift, abs(dyn.mechanical_energy(sim.q, sim.qdot) - e0) / e0)
         lowest = min(lowest, sim.q[0])
-    assert drift < 1e-6
+    assert drift < 1e-8
     assert lowest < 0.0  # it did swing through the rest position
 
 
