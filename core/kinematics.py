@@ -14,6 +14,7 @@ First order: DF = dx/dq solves J DF = [0; I].  Second order: with the constraint
 H_i = d2 g_i / dx2, (D2F qdot) qdot = -J^-1 [ (DF qdot)^T H_i (DF qdot) ]_i.
 """
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,7 +92,9 @@ class Kinematics:
             e, De = assembly.deformation_jacobian(self.model, x)
             g = self.residual(x, e, q)
             J = self.constraint_jacobian(De)
-            with np.errstate(all="ignore"):
+            # A singular J is answered below with a ConvergenceError of our own.
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
                 lu = scipy.linalg.lu_factor(J, check_finite=False)
                 dx = scipy.linalg.lu_solve(lu, g, check_finite=False)
             if not np.all(np.isfinite(dx)):
