@@ -6,9 +6,9 @@ and the velocities. A flexure moves micrometres to millimetres away from a confi
 whose coordinates are centimetres (the 3-DOF stage: y = 0.1 m, moving 2 mm in x), so
 integrating the absolute DOFs would let rtol act on 0.1 m; on the deviation it acts on the
 motion. The constraints are solved away at every evaluation (`flexure.core.dynamics`) and
-never integrated. Inputs are forces on the
-scene's input coordinates, held constant between `set_inputs` calls (zero-order hold); a
-change of input is a discontinuity, so the integrator restarts there (order 1, new step).
+never integrated. Inputs are forces on the scene's input coordinates, held constant between
+`set_inputs` calls (zero-order hold); a change of input is a discontinuity, so the
+integrator restarts there (order 1, new step).
 
     sim = Simulator(model, method="cvode-bdf", rtol=1e-8)
     sim.set_inputs([1.0])            # N
