@@ -9,7 +9,6 @@ import tomllib
 
 import numpy as np
 import pytest
-import scipy.linalg
 import scipy.special
 from energy_drift import modal_release
 
