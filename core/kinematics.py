@@ -109,7 +109,8 @@ class Kinematics:
             raise ConvergenceError(
                 f"kinematics of {self.model.name!r}: Newton did not converge in "
                 f"{self.max_iterations} iterations at q = {np.array2string(q, precision=6)} "
-                f"(last correction {np.max(np.abs(dx)):.3e} m)"
+                f"(last correction {np.max(np.abs(dx)):.3e} m): these DOF values lie beyond "
+                "the reach of the mechanism or at a singular configuration"
             )
         return self.configuration(q, x)
 

@@ -118,3 +118,17 @@ def test_static_sag_under_gravity():
     sag = weight / (2 * 1.89e6 / 0.1)  # m
     assert solution.coordinates()["3.y"] - 0.1 == pytest.approx(-sag, rel=1e-6)
     assert abs(solution.coordinates()["3.x"]) < 1e-15
+
+
+def test_dofs_beyond_the_reach_of_the_mechanism_are_a_clear_error():
+    """One PLBEAM per spring with a rigid elongation reaches about 92 mm sideways (a limit
+    point); asking for 95 mm is refused, naming the DOF values."""
+    from flexure.core import ConvergenceError
+
+    model = load_scene("stage_planar_1dof")
+    kin = Kinematics(model)
+    x = model.initial_coordinates.copy()
+    for q in np.linspace(0.0, -0.09, 19):  # follow the branch to 90 mm
+        x = kin.solve(np.array([q]), x).x
+    with pytest.raises(ConvergenceError, match=r"q = \[-0\.095\].*beyond the reach"):
+        kin.solve(np.array([-0.095]), x)
