@@ -6,10 +6,11 @@ from pathlib import Path
 
 import energy_drift
 import numpy as np
+import solver_floor
 import speed_benchmark
 import work_precision
 
-from flexure.core import load_scene
+from flexure.core import load_scene, natural_frequencies
 from flexure.core.workprecision import work_precision as study_of
 
 FLEXURE = str(Path(sys.executable).with_name("flexure"))
@@ -41,6 +42,33 @@ def test_speed_benchmark_example_prints_its_table(capsys):
     assert [r["scene"] for r in rows] == ["truss_1dof_x", "stage_planar_1dof"]
     assert all(r["rhs"] >= r["steps"] > 0 and r["us_per_rhs"] > 0 for r in rows)
     assert "x real time" in capsys.readouterr().out
+
+
+def test_solver_floor_surrogate_is_the_exact_linear_stage():
+    """The zero-cost surrogate of examples/solver_floor.py is the stage's linearisation: its
+    exact step response settles on the static deflection -A^-1 b, agrees with the matrix
+    exponential, and its free vibrations have the stage's natural frequencies."""
+    A, b, C, model = solver_floor.surrogate("stage_planar_3dof")
+    exact = solver_floor.ExactStep(A, b)
+    assert exact.check(0.3) < 1e-9
+    static = -np.linalg.solve(A, b)  # by t = 1000 s: the 10.6 Hz mode decays as e^(-0.087 t)
+    np.testing.assert_allclose(exact(np.array([1000.0]))[0], static, rtol=1e-9,
+                               atol=1e-12 * np.max(np.abs(static)))
+    frequencies = [m[0] for m in exact.free_vibration()]
+    np.testing.assert_allclose(frequencies, natural_frequencies(model).frequencies_hz,
+                               rtol=1e-6)
+
+
+def test_solver_floor_example_prints_its_tables(capsys):
+    rows = solver_floor.main(["--t-end", "0.01", "--rtols", "1e-6"])
+    out = capsys.readouterr().out
+    assert "s above atol" in out and "x real time" in out
+    assert [r["method"] for r in rows] == [*solver_floor.METHODS, "cvode-bdf"]
+    assert rows[-1]["model"] == "nonlinear" and rows[-1]["steps"] > 0
+    rows, _, stroke = solver_floor.measure(t_end=0.01, nonlinear=False)
+    assert 2e-4 < stroke < 3e-4  # F t^2 / (2 m0): 4.7459 m/s^2 N (figures.md) x 1e-4 s^2 / 2
+    for row in rows:  # every back-end on the exact linear response: within 10 rtol
+        assert row["error"] < 10 * 1e-6 * stroke, row
 
 
 def test_energy_drift_example_runs_short():
