@@ -81,13 +81,19 @@ def weighted_hessian(model, hessians, weights):
 
 def hessian_quadratic_forms(model, hessians, v):
     """v^T (d2e_i/dx2) v for every deformation i (NE,); v (NX,) or (NX, r) -> (NE, r)."""
-    single = v.ndim == 1
-    v2 = v[:, None] if single else v
-    result = np.zeros((len(model.deformation_names), v2.shape[1]))
+    if v.ndim == 1:  # on every evaluation of the equations of motion: batched matrix products
+        result = np.zeros(len(model.deformation_names))
+        for group, D2e in hessians:
+            n, k, m, _ = D2e.shape
+            local_v = v[group.coordinate_index]
+            vv = (local_v[:, :, None] * local_v[:, None, :]).reshape(n, m * m, 1)
+            result[group.deformation_index] = (D2e.reshape(n, k, m * m) @ vv)[:, :, 0]
+        return result
+    result = np.zeros((len(model.deformation_names), v.shape[1]))
     for group, D2e in hessians:
-        local_v = v2[group.coordinate_index]  # (n, m, r)
+        local_v = v[group.coordinate_index]  # (n, m, r)
         result[group.deformation_index] = np.einsum("nkij,nir,njr->nkr", D2e, local_v, local_v)
-    return result[:, 0] if single else result
+    return result
 
 
 def stiffness_and_damping(model):

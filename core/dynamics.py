@@ -76,6 +76,16 @@ class Dynamics:
         if self.has_gravity and not self.inertia.groups:
             self.constant_force += self.inertia.gravity_force(model.initial_coordinates)
         self.stressed = self.mech.stressed
+        # flat positions of each group's (deformation, coordinate) entries in De (NE, NX)
+        nx = model.nx
+        self._De_index = [(group, (group.deformation_index[:, :, None] * nx
+                                   + group.coordinate_index[:, None, :]).ravel())
+                          for group in model.groups]
+        self._lumped = np.diag(model.lumped_mass).astype(float)
+        self._mass_groups = [
+            (group, Mp, (group.coordinate_index[:, :, None] * nx
+                         + group.coordinate_index[:, None, :]).ravel())
+            for group, Mp in self.inertia.groups]
         # the constraint Jacobian J (free x free) as `Kinematics.constraint_jacobian` builds
         # it, from precomputed flat indices: the unit rows of the DOF coordinates are fixed
         kin = self.kin
@@ -163,7 +173,7 @@ class Dynamics:
     def _store(self, q, x):
         """First- and second-order kinematics at a solved x; keeps them as the next start."""
         kin, model = self.kin, self.model
-        e, De, hessians = _deformations_order2(model, x)
+        e, De, hessians = self._deformations_order2(x)
         J = self._J_template.copy()
         J[: self._J_rows] = De.take(self._J_take).reshape(self._J_rows, J.shape[1])
         lu = _lu_factor(J)
@@ -232,22 +242,46 @@ class Dynamics:
         return result
 
     def _inertia(self, x, xdot, moving):
-        """M(x) (NX, NX) and the convective inertia force (NX,) in one pass per group."""
+        """M(x) (NX, NX) and the convective inertia force (NX,) in one pass per group.
+
+        Per element: Dp^T Mp Dp and Dp^T Mp (D2p xdot) xdot as batched matrix products (the
+        element arrays are a few entries each: the number of numpy calls sets the time)."""
         if self.constant_mass is not None:
             return self.constant_mass, 0.0
-        M = np.diag(self.model.lumped_mass)
-        force = np.zeros(self.model.nx)
-        for group, Mp in self.inertia.groups:
-            idx = group.coordinate_index
+        nx = self.model.nx
+        M = self._lumped.copy()
+        force = np.zeros(nx)
+        for group, Mp, pairs in self._mass_groups:
             points = group.kind.inertia_points(group.local(x), group.reference,
                                                order=2 if moving else 1)
             Dp = points[1]
-            assembly.scatter_matrix(M, group, np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp))
+            DpT_Mp = np.swapaxes(Dp, 1, 2) @ Mp  # (n, m, P)
+            M += np.bincount(pairs, weights=(DpT_Mp @ Dp).ravel(),
+                             minlength=nx * nx).reshape(nx, nx)
             if moving:
-                v = xdot[idx]
-                accel = np.einsum("npij,ni,nj->np", points[2], v, v)
-                assembly.scatter_vector(force, group, np.einsum("npi,npr,nr->ni", Dp, Mp, accel))
+                D2p = points[2]
+                n, P, m = Dp.shape
+                v = xdot[group.coordinate_index]
+                vv = (v[:, :, None] * v[:, None, :]).reshape(n, m * m, 1)
+                accel = D2p.reshape(n, P, m * m) @ vv  # (D2p v) v, (n, P, 1)
+                force += np.bincount(group.coordinate_index.ravel(),
+                                     weights=(DpT_Mp @ accel).ravel(), minlength=nx)
         return M, force
+
+    def _deformations_order2(self, x):
+        """e (NE,), De (NE, NX) and per group (group, D2e) in one pass over the elements."""
+        model = self.model
+        e = np.zeros(len(model.deformation_names))
+        De = np.zeros(e.size * model.nx)
+        hessians = []
+        for group, flat in self._De_index:
+            local_e, local_De, D2e = group.kind.deformations(group.local(x), group.reference,
+                                                             order=2)
+            e[group.deformation_index] = local_e
+            # every (deformation, coordinate) pair belongs to one element: plain assignment
+            De[flat] = local_De.ravel()
+            hessians.append((group, D2e))
+        return e, De.reshape(e.size, model.nx), hessians
 
     def accelerations(self, q, qdot, u):
         """qddot (NDOF,) at (q, qdot) with inputs u (n_inputs,) in N."""
@@ -391,21 +425,6 @@ class FirstOrderSystem:
         JJ[:n, n:] = -np.eye(n)
         JJ[n:, :n] = K
         JJ[n:, n:] = C + cj * mass
-
-
-def _deformations_order2(model, x):
-    """e (NE,), De (NE, NX) and per group (group, D2e) in one pass over the elements."""
-    e = np.zeros(len(model.deformation_names))
-    De = np.zeros((e.size, model.nx))
-    hessians = []
-    for group in model.groups:
-        local_e, local_De, D2e = group.kind.deformations(group.local(x), group.reference,
-                                                         order=2)
-        e[group.deformation_index] = local_e
-        # every (deformation, coordinate) pair belongs to one element: plain assignment
-        De[group.deformation_index[:, :, None], group.coordinate_index[:, None, :]] = local_De
-        hessians.append((group, D2e))
-    return e, De, hessians
 
 
 def _lu_factor(matrix):

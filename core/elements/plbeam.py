@@ -38,80 +38,102 @@ properties = ("EA", "EI", "EdA", "EdI", "rho_A")  # section properties used
 
 _DL = np.array([[-1.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0, 1.0, 0.0]])
 _PHI_P, _PHI_Q = 2, 5
+_SIGN = np.array([-1.0, 1.0])  # e2 = -(n_y^p . l), e3 = +(n_y^q . l)
+_BEND_MIX = np.array([[4.0, 1.0], [1.0, 4.0]])  # 2 e2^2 + e2 e3 + 2 e3^2 = 1/2 b^T W b
 HERMITE_MASS = np.array(
     [[156.0, 22.0, 54.0, -13.0], [22.0, 4.0, 13.0, -3.0], [54.0, 13.0, 156.0, -22.0],
      [-13.0, -3.0, -22.0, 4.0]]
 ) / 420.0
+_DP_TRANSLATION = np.zeros((8, 6))  # d p / d x of the position points: constant
+_DP_TRANSLATION[[0, 1, 4, 5], [0, 1, 3, 4]] = 1.0
 
 
 def reference(x0):
     """Reference data from the initial coordinates x0 (n, 6).
 
     l0 (m); offset_p, offset_q (rad): the angle of the element's initial x axis minus the
-    initial node angle, so that the current x axis at a node has angle phi + offset.
+    initial node angle, so that the current x axis at a node has angle phi + offset;
+    offsets (n, 2): [offset_p, offset_q]; c = 1 / (30 l0) (1/m), the factor of the
+    second-order terms in e1.
     """
     l_vec = x0 @ _DL.T
     angle = np.arctan2(l_vec[:, 1], l_vec[:, 0])
-    return {
-        "l0": np.linalg.norm(l_vec, axis=1),
-        "offset_p": angle - x0[:, _PHI_P],
-        "offset_q": angle - x0[:, _PHI_Q],
-    }
+    l0 = np.linalg.norm(l_vec, axis=1)
+    offsets = angle[:, None] - x0[:, _PHI_P::3]  # the node angles are columns 2 and 5
+    with np.errstate(divide="ignore"):  # a zero-length element is refused by the scene loader
+        c = 1.0 / (30.0 * l0)
+    return {"l0": l0, "offset_p": offsets[:, 0], "offset_q": offsets[:, 1], "offsets": offsets,
+            "c": c}
 
 
-def _unit(angle):
-    return np.stack([np.cos(angle), np.sin(angle)], axis=1)
-
-
-def _bending(x, l_vec, angle, sign, phi_index, order):
-    """One bending deformation e = sign * (n_y . l), n_y = unit(angle + pi/2), as (e, De, D2e)."""
-    n_y = _unit(angle + 0.5 * np.pi)
-    dn_y = -_unit(angle)  # d n_y / d phi
-    e = sign * np.einsum("na,na->n", n_y, l_vec)
-    if order == 0:
-        return e, None, None
-    De = sign * (n_y @ _DL)
-    De[:, phi_index] += sign * np.einsum("na,na->n", dn_y, l_vec)
-    if order == 1:
-        return e, De, None
-    n = x.shape[0]
-    D2e = np.zeros((n, 6, 6))
-    cross = sign * (dn_y @ _DL)
-    D2e[:, phi_index, :] += cross
-    D2e[:, :, phi_index] += cross
-    D2e[:, phi_index, phi_index] += -e  # d2 n_y / d phi2 = -n_y
-    return e, De, D2e
+def _angles(x, ref):
+    """The current angles (n, 2) of the element's x axis at [p, q] (rad)."""
+    return x[:, _PHI_P::3] + ref["offsets"]  # the node angles are columns 2 and 5
 
 
 def deformations(x, ref, order=2):
-    """Deformations e (n, 3) m, first (n, 3, 6) and second (n, 3, 6, 6) derivatives."""
-    l0 = ref["l0"]
-    l_vec = x @ _DL.T
-    length = np.linalg.norm(l_vec, axis=1)
-    e2, De2, D2e2 = _bending(x, l_vec, x[:, _PHI_P] + ref["offset_p"], -1.0, _PHI_P, order)
-    e3, De3, D2e3 = _bending(x, l_vec, x[:, _PHI_Q] + ref["offset_q"], 1.0, _PHI_Q, order)
-    c = 1.0 / (30.0 * l0)
-    e1 = length - l0 + c * (2 * e2**2 + e2 * e3 + 2 * e3**2)
-    e = np.stack([e1, e2, e3], axis=1)
+    """Deformations e (n, 3) m, first (n, 3, 6) and second (n, 3, 6, 6) derivatives.
+
+    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e). The arrays are written column by
+    column: these functions run at every evaluation of the equations of motion on a handful
+    of elements, where the number of numpy calls, not the arithmetic, sets the time.
+    """
+    n = x.shape[0]
+    l_vec = x[:, 3:5] - x[:, 0:2]
+    lx, ly = l_vec[:, 0:1], l_vec[:, 1:2]
+    length = np.sqrt(lx * lx + ly * ly)  # (n, 1)
+    angle = _angles(x, ref)
+    normal = angle + 0.5 * np.pi
+    ny_x, ny_y = np.cos(normal), np.sin(normal)  # n_y at [p, q]
+    c = ref["c"]
+    e = np.empty((n, 3))
+    bend = e[:, 1:]  # [e2, e3] = sign * (n_y . l)
+    np.multiply(ny_x * lx + ny_y * ly, _SIGN, out=bend)
+    e2, e3 = bend[:, 0], bend[:, 1]
+    e[:, 0] = length[:, 0] - ref["l0"] + c * (2 * e2**2 + e2 * e3 + 2 * e3**2)
     if order == 0:
         return (e,)
-    unit = l_vec / length[:, None]
-    de1_de2 = c * (4 * e2 + e3)
-    de1_de3 = c * (e2 + 4 * e3)
-    De1 = unit @ _DL + de1_de2[:, None] * De2 + de1_de3[:, None] * De3
-    De = np.stack([De1, De2, De3], axis=1)
+    # bending: d e / d x = sign n_y^T dl/dx, plus sign (d n_y / d phi . l) on the node angle,
+    # d n_y / d phi = -t = -(cos, sin)
+    cos, sin = np.cos(angle), np.sin(angle)
+    De = np.zeros((n, 3, 6))
+    np.multiply(ny_x, _SIGN, out=De[:, 1:, 3])
+    np.multiply(ny_y, _SIGN, out=De[:, 1:, 4])
+    np.negative(De[:, 1:, 3:5], out=De[:, 1:, 0:2])
+    np.multiply(-cos * lx - sin * ly, _SIGN, out=De.reshape(n, 18)[:, 8::9])  # (1,2), (2,5)
+    # elongation: d|l|/dx = u^T dl/dx, plus d e1 / d[e2, e3] = c W [e2, e3] times De2, De3
+    unit = l_vec / length
+    slopes = np.empty((n, 2))
+    slopes[:, 0] = c * (4 * e2 + e3)
+    slopes[:, 1] = c * (e2 + 4 * e3)
+    De[:, 0, 3:5] = unit
+    De[:, 0, 0:2] = -unit
+    De[:, 0] += slopes[:, 0:1] * De[:, 1]
+    De[:, 0] += slopes[:, 1:2] * De[:, 2]
     if order == 1:
         return e, De
-    projector = (np.eye(2)[None] - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
-    outer = lambda a, b: a[:, :, None] * b[:, None, :]  # noqa: E731
-    D2e1 = (
-        np.einsum("ai,nab,bj->nij", _DL, projector, _DL)
-        + c[:, None, None]
-        * (4 * outer(De2, De2) + outer(De2, De3) + outer(De3, De2) + 4 * outer(De3, De3))
-        + de1_de2[:, None, None] * D2e2
-        + de1_de3[:, None, None] * D2e3
-    )
-    return e, De, np.stack([D2e1, D2e2, D2e3], axis=1)
+    # bending: d2 e / d x d phi = sign (d n_y / d phi)^T dl/dx, d2 e / d phi2 = -e
+    D2e = np.zeros((n, 3, 6, 6))
+    rows = np.empty((n, 2, 6))
+    np.multiply(cos, _SIGN, out=rows[:, :, 0])  # sign (d n_y / d phi)^T dl/dx
+    np.multiply(sin, _SIGN, out=rows[:, :, 1])
+    np.negative(rows[:, :, 0:2], out=rows[:, :, 3:5])
+    rows[:, :, 2] = rows[:, :, 5] = 0.0
+    D2e[:, 1, _PHI_P, :] = D2e[:, 1, :, _PHI_P] = rows[:, 0]
+    D2e[:, 2, _PHI_Q, :] = D2e[:, 2, :, _PHI_Q] = rows[:, 1]
+    D2e[:, 1, _PHI_P, _PHI_P] = -e2
+    D2e[:, 2, _PHI_Q, _PHI_Q] = -e3
+    # elongation: D2|l| = dl/dx^T (I - u u^T) / |l| dl/dx, plus the bending terms of e1
+    projector = (np.eye(2) - unit[:, :, None] * unit[:, None, :]) / length[:, :, None]
+    bend_De = De[:, 1:]
+    D2e1 = np.swapaxes(bend_De, 1, 2) @ (c[:, None, None] * (_BEND_MIX @ bend_De))
+    D2e1 += (slopes[:, None, :] @ D2e[:, 1:].reshape(n, 2, 36)).reshape(n, 6, 6)
+    D2e1[:, 0:2, 0:2] += projector
+    D2e1[:, 3:5, 3:5] += projector
+    D2e1[:, 0:2, 3:5] -= projector
+    D2e1[:, 3:5, 0:2] -= projector
+    D2e[:, 0] = D2e1
+    return e, De, D2e
 
 
 def stiffness(ref, props):
@@ -133,24 +155,30 @@ def _constitutive(l0, axial, flexural):
 
 def inertia_points(x, ref, order=2):
     """The Hermite interpolation points [r^p, l0 t^p, r^q, l0 t^q] (n, 8) and derivatives."""
-    l0 = ref["l0"]
-    t_p = _unit(x[:, _PHI_P] + ref["offset_p"])
-    t_q = _unit(x[:, _PHI_Q] + ref["offset_q"])
-    p = np.concatenate([x[:, 0:2], l0[:, None] * t_p, x[:, 3:5], l0[:, None] * t_q], axis=1)
+    n = x.shape[0]
+    angle = _angles(x, ref)
+    cos, sin = np.cos(angle), np.sin(angle)
+    l0 = ref["l0"][:, None]
+    l_cos, l_sin = l0 * cos, l0 * sin  # (n, 2): the tangent points at [p, q]
+    p = np.empty((n, 8))
+    p.reshape(n, 2, 4)[:, :, 0:2] = x.reshape(n, 2, 3)[:, :, 0:2]
+    p[:, 2::4] = l_cos
+    p[:, 3::4] = l_sin
     if order == 0:
         return (p,)
-    n = x.shape[0]
-    Dp = np.zeros((n, 8, 6))
-    Dp[:, 0:2, 0:2] = np.eye(2)
-    Dp[:, 4:6, 3:5] = np.eye(2)
-    perp = lambda t: np.stack([-t[:, 1], t[:, 0]], axis=1)  # noqa: E731
-    Dp[:, 2:4, _PHI_P] = l0[:, None] * perp(t_p)
-    Dp[:, 6:8, _PHI_Q] = l0[:, None] * perp(t_q)
+    Dp = np.empty((n, 8, 6))
+    Dp[:] = _DP_TRANSLATION
+    Dp[:, 2, _PHI_P] = -l_sin[:, 0]  # d (l0 t) / d phi = l0 (-sin, cos)
+    Dp[:, 3, _PHI_P] = l_cos[:, 0]
+    Dp[:, 6, _PHI_Q] = -l_sin[:, 1]
+    Dp[:, 7, _PHI_Q] = l_cos[:, 1]
     if order == 1:
         return p, Dp
-    D2p = np.zeros((n, 8, 6, 6))
-    D2p[:, 2:4, _PHI_P, _PHI_P] = -l0[:, None] * t_p
-    D2p[:, 6:8, _PHI_Q, _PHI_Q] = -l0[:, None] * t_q
+    D2p = np.zeros((n, 8, 6, 6))  # d2 (l0 t) / d phi2 = -l0 t
+    D2p[:, 2, _PHI_P, _PHI_P] = -l_cos[:, 0]
+    D2p[:, 3, _PHI_P, _PHI_P] = -l_sin[:, 0]
+    D2p[:, 6, _PHI_Q, _PHI_Q] = -l_cos[:, 1]
+    D2p[:, 7, _PHI_Q, _PHI_Q] = -l_sin[:, 1]
     return p, Dp, D2p
 
 
