@@ -29,37 +29,37 @@ inertia_point_kinds = ("position", "position")
 properties = ("EA", "EdA", "rho_A")  # section properties used
 
 
-
-def _difference(x):
-    """d l / d x (d, 2 d) for nodal coordinates x (n, 2 d): l = r^q - r^p."""
-    eye = np.eye(x.shape[1] // 2)
-    return np.hstack([-eye, eye])
-
-
 def reference(x0):
     """Reference data from the initial nodal coordinates x0 (n, 4): the length l0 (m) and the
     dimension of the space (2; 3 for the spatial TRUSS)."""
-    return {"l0": np.linalg.norm(x0 @ _difference(x0).T, axis=1), "dimension": x0.shape[1] // 2}
+    d = x0.shape[1] // 2
+    return {"l0": np.linalg.norm(x0[:, d:] - x0[:, :d], axis=1), "dimension": d}
 
 
 def deformations(x, ref, order=2):
     """Elongation e (n, 1) m, its first (n, 1, 4) and second (n, 1, 4, 4) derivatives.
 
-    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e).
+    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e). With l = r^q - r^p and the unit
+    vector u = l / |l|: De = [-u, u], D2e = [[P, -P], [-P, P]], P = (I - u u^T) / |l|.
     """
-    DL = _difference(x)
-    l_vec = x @ DL.T
-    length = np.linalg.norm(l_vec, axis=1)
+    n, m = x.shape
+    d = m // 2
+    l_vec = x[:, d:] - x[:, :d]
+    length = np.sqrt(np.add.reduce(l_vec * l_vec, axis=1))
     e = (length - ref["l0"])[:, None]
     if order == 0:
         return (e,)
     unit = l_vec / length[:, None]
-    De = (unit @ DL)[:, None, :]
+    De = np.empty((n, 1, m))
+    De[:, 0, d:] = unit
+    np.negative(unit, out=De[:, 0, :d])
     if order == 1:
         return e, De
-    projector = (np.eye(DL.shape[0])[None] - unit[:, :, None] * unit[:, None, :]) / length[
-        :, None, None]
-    D2e = np.einsum("ai,nab,bj->nij", DL, projector, DL)[:, None]
+    projector = (np.identity(d) - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
+    D2e = np.empty((n, 1, m, m))
+    D2e[:, 0, :d, :d] = D2e[:, 0, d:, d:] = projector
+    np.negative(projector, out=D2e[:, 0, :d, d:])
+    D2e[:, 0, d:, :d] = D2e[:, 0, :d, d:]
     return e, De, D2e
 
 
