@@ -74,7 +74,8 @@ def weighted_hessian(model, hessians, weights):
     """sum_i weights_i d2e_i/dx2 as an (NX, NX) matrix; weights (NE,)."""
     result = np.zeros((model.nx, model.nx))
     for group, D2e in hessians:
-        local = np.einsum("nk,nkij->nij", weights[group.deformation_index], D2e)
+        n, k, m, _ = D2e.shape
+        local = weights[group.deformation_index][:, None, :] @ D2e.reshape(n, k, m * m)
         scatter_matrix(result, group, local)
     return result
 

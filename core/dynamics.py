@@ -23,7 +23,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 from scipy.linalg import lapack
 
 from . import assembly
@@ -133,13 +132,13 @@ class Dynamics:
         for _ in range(self.chord_iterations):
             e = assembly.deformations(model, x)
             g = kin.residual(x, e, q)
-            if np.max(np.abs(g)) <= tolerance:
+            if np.abs(g).max() <= tolerance:
                 break
             dx = _lu_solve(lu, g)
-            if not np.all(np.isfinite(dx)):
+            if not np.isfinite(dx).all():
                 break
             x[free] -= dx
-            if np.max(np.abs(dx)) <= tolerance:
+            if np.abs(dx).max() <= tolerance:
                 break
         else:
             x = kin.solve(q, x).x
@@ -177,7 +176,7 @@ class Dynamics:
         J = self._J_template.copy()
         J[: self._J_rows] = De.take(self._J_take).reshape(self._J_rows, J.shape[1])
         lu = _lu_factor(J)
-        pivots = np.abs(np.diag(lu[0]))
+        pivots = np.abs(lu[0].diagonal())
         if not pivots.min() > self.singular_ratio * pivots.max():
             raise ConvergenceError(
                 f"kinematics of {model.name!r}: a singular configuration at "
@@ -208,7 +207,7 @@ class Dynamics:
         config = self.configuration(q)
         x, DF, De = config.x, config.DF, config.De
         xdot = DF @ qdot
-        moving = bool(np.any(qdot))
+        moving = bool(qdot.any())
         hess = self._hessians
         edot = De @ xdot if mech.has_damping else None
         sigma_c = mech.constitutive_stress(config, edot)
@@ -361,7 +360,7 @@ class FirstOrderSystem:
         n = self.n
         if self.deadline is not None and time.perf_counter() > self.deadline:
             raise SimulationError(f"t = {t:.9g} s: the time limit of the run is over")
-        if not np.all(np.isfinite(y)):
+        if not np.isfinite(y).all():
             raise SimulationError(f"t = {t:.9g} s: the state became non-finite "
                                   f"({_first_bad(y, self.dynamics.model, n)})")
         try:
@@ -369,7 +368,7 @@ class FirstOrderSystem:
                                         hessians=hessians)
         except SimulationError as error:
             raise SimulationError(f"t = {t:.9g} s: {error}") from None
-        if not np.all(np.isfinite(ev.qddot)):
+        if not np.isfinite(ev.qddot).all():
             raise SimulationError(f"t = {t:.9g} s: non-finite accelerations (a singular "
                                   "configuration or a non-finite force)")
         return ev
@@ -396,9 +395,10 @@ class FirstOrderSystem:
         mass, C, K = self.dynamics.tangent_of(ev)
         JJ[:, :] = 0.0
         JJ[:n, n:] = np.eye(n)
-        lu = scipy.linalg.lu_factor(mass, check_finite=False)
-        JJ[n:, :n] = -scipy.linalg.lu_solve(lu, K, check_finite=False)
-        JJ[n:, n:] = -scipy.linalg.lu_solve(lu, C, check_finite=False)
+        # M_bar is regular here: `evaluate` has solved with it (dgesv) or raised
+        lu = _lu_factor(mass)
+        JJ[n:, :n] = -_lu_solve(lu, K)
+        JJ[n:, n:] = -_lu_solve(lu, C)
 
     def jacobian_matrix(self, t, y):
         """d ydot / d y (2 NDOF, 2 NDOF) as a new array."""

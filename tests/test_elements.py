@@ -113,3 +113,51 @@ def test_mass_matrices_are_symmetric_positive_semidefinite(element):
     Mp = element.inertia_matrix(ref, props)
     np.testing.assert_allclose(Mp, np.swapaxes(Mp, 1, 2), atol=1e-15)
     assert np.all(np.linalg.eigvalsh(Mp) > -1e-14)
+
+
+def test_plbeam_matches_its_textbook_formulas_element_by_element():
+    """The column-wise PLBEAM against a plain loop over the docstring's formulas."""
+    from flexure.core.elements import plbeam
+
+    rng = np.random.default_rng(7)
+    x0, x = random_configuration(plbeam, rng, count=4)
+    ref = plbeam.reference(x0)
+    (e,) = plbeam.deformations(x, ref, order=0)
+    (p,) = plbeam.inertia_points(x, ref, order=0)
+    for i in range(x.shape[0]):
+        r_p, r_q = x[i, 0:2], x[i, 3:5]
+        l_vec, l0 = r_q - r_p, ref["l0"][i]
+        t_p = np.array([np.cos(x[i, 2] + ref["offset_p"][i]), np.sin(x[i, 2] + ref["offset_p"][i])])
+        t_q = np.array([np.cos(x[i, 5] + ref["offset_q"][i]), np.sin(x[i, 5] + ref["offset_q"][i])])
+        n_p, n_q = np.array([-t_p[1], t_p[0]]), np.array([-t_q[1], t_q[0]])
+        e2, e3 = -(n_p @ l_vec), n_q @ l_vec
+        e1 = np.linalg.norm(l_vec) - l0 + (2 * e2**2 + e2 * e3 + 2 * e3**2) / (30 * l0)
+        np.testing.assert_allclose(e[i], [e1, e2, e3], rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(p[i], np.concatenate([r_p, l0 * t_p, r_q, l0 * t_q]),
+                                   rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("scene", ["stage_planar_3dof", "truss_1dof_x"])
+def test_fast_dynamics_assembly_matches_the_einsum_forms(scene):
+    """Dynamics' batched mass, convective force and Hessian forms against assembly's einsums."""
+    from flexure.core import assembly, load_scene
+    from flexure.core.dynamics import Dynamics
+
+    model = load_scene(scene)
+    dynamics = Dynamics(model)
+    rng = np.random.default_rng(8)
+    x = model.initial_coordinates + rng.normal(scale=1e-3, size=model.nx)
+    v = rng.normal(size=model.nx)
+    M, force = dynamics._inertia(x, v, True)
+    inertia = dynamics.inertia
+    np.testing.assert_allclose(M, inertia.mass_matrix(x), rtol=1e-12, atol=1e-15 * np.abs(M).max())
+    if inertia.groups:
+        expected = inertia.convective_force(x, v)
+        np.testing.assert_allclose(force, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    e, De, hessians = dynamics._deformations_order2(x)
+    e_ref, De_ref = assembly.deformation_jacobian(model, x)
+    np.testing.assert_array_equal(e, e_ref)
+    np.testing.assert_array_equal(De, De_ref)
+    forms = assembly.hessian_quadratic_forms(model, hessians, v)
+    columns = assembly.hessian_quadratic_forms(model, hessians, v[:, None])[:, 0]
+    np.testing.assert_allclose(forms, columns, rtol=1e-12, atol=1e-12 * np.abs(columns).max())

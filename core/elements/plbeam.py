@@ -44,6 +44,11 @@ HERMITE_MASS = np.array(
     [[156.0, 22.0, 54.0, -13.0], [22.0, 4.0, 13.0, -3.0], [54.0, 13.0, 156.0, -22.0],
      [-13.0, -3.0, -22.0, 4.0]]
 ) / 420.0
+_EYE2 = np.eye(2)
+# z = [l_x, l_y, phi^p, phi^q] = _Z_OF_X x; a Hessian H in z is _Z_OF_X^T H _Z_OF_X in x
+_Z_OF_X = np.array([[-1.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
+_HESSIAN_Z_TO_X = np.einsum("ai,bj->abij", _Z_OF_X, _Z_OF_X).reshape(16, 36)
 _DP_TRANSLATION = np.zeros((8, 6))  # d p / d x of the position points: constant
 _DP_TRANSLATION[[0, 1, 4, 5], [0, 1, 3, 4]] = 1.0
 
@@ -74,9 +79,11 @@ def _angles(x, ref):
 def deformations(x, ref, order=2):
     """Deformations e (n, 3) m, first (n, 3, 6) and second (n, 3, 6, 6) derivatives.
 
-    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e). The arrays are written column by
-    column: these functions run at every evaluation of the equations of motion on a handful
-    of elements, where the number of numpy calls, not the arithmetic, sets the time.
+    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e). The deformations depend on x only
+    through z = [l, phi^p, phi^q] (4), with dz/dx = _Z_OF_X constant: the derivatives are
+    written in z, column by column, and mapped to x by one product (every x column is one z
+    column, with its sign: exact). These functions run at every evaluation of the equations of
+    motion on a handful of elements, where the number of numpy calls sets the time.
     """
     n = x.shape[0]
     l_vec = x[:, 3:5] - x[:, 0:2]
@@ -93,46 +100,38 @@ def deformations(x, ref, order=2):
     e[:, 0] = length[:, 0] - ref["l0"] + c * (2 * e2**2 + e2 * e3 + 2 * e3**2)
     if order == 0:
         return (e,)
-    # bending: d e / d x = sign n_y^T dl/dx, plus sign (d n_y / d phi . l) on the node angle,
-    # d n_y / d phi = -t = -(cos, sin)
+    # bending: d e / d l = sign n_y, d e / d phi = sign (d n_y / d phi . l), d n_y / d phi = -t
     cos, sin = np.cos(angle), np.sin(angle)
-    De = np.zeros((n, 3, 6))
-    np.multiply(ny_x, _SIGN, out=De[:, 1:, 3])
-    np.multiply(ny_y, _SIGN, out=De[:, 1:, 4])
-    np.negative(De[:, 1:, 3:5], out=De[:, 1:, 0:2])
-    np.multiply(-cos * lx - sin * ly, _SIGN, out=De.reshape(n, 18)[:, 8::9])  # (1,2), (2,5)
-    # elongation: d|l|/dx = u^T dl/dx, plus d e1 / d[e2, e3] = c W [e2, e3] times De2, De3
+    Dz = np.zeros((n, 3, 4))
+    np.multiply(ny_x, _SIGN, out=Dz[:, 1:, 0])
+    np.multiply(ny_y, _SIGN, out=Dz[:, 1:, 1])
+    np.multiply(-cos * lx - sin * ly, _SIGN, out=Dz.reshape(n, 12)[:, 6::5])  # (1,2), (2,3)
+    # elongation: d|l|/dl = u, plus d e1 / d[e2, e3] = c W [e2, e3] times De2, De3
     unit = l_vec / length
-    slopes = np.empty((n, 2))
-    slopes[:, 0] = c * (4 * e2 + e3)
-    slopes[:, 1] = c * (e2 + 4 * e3)
-    De[:, 0, 3:5] = unit
-    De[:, 0, 0:2] = -unit
-    De[:, 0] += slopes[:, 0:1] * De[:, 1]
-    De[:, 0] += slopes[:, 1:2] * De[:, 2]
+    slopes = c[:, None] * (4 * bend + bend[:, ::-1])  # c [4 e2 + e3, e2 + 4 e3]
+    terms = slopes[:, :, None] * Dz[:, 1:]
+    Dz[:, 0, 0:2] = unit
+    Dz[:, 0] += terms[:, 0]
+    Dz[:, 0] += terms[:, 1]
+    De = Dz @ _Z_OF_X
     if order == 1:
         return e, De
-    # bending: d2 e / d x d phi = sign (d n_y / d phi)^T dl/dx, d2 e / d phi2 = -e
-    D2e = np.zeros((n, 3, 6, 6))
-    rows = np.empty((n, 2, 6))
-    np.multiply(cos, _SIGN, out=rows[:, :, 0])  # sign (d n_y / d phi)^T dl/dx
-    np.multiply(sin, _SIGN, out=rows[:, :, 1])
-    np.negative(rows[:, :, 0:2], out=rows[:, :, 3:5])
-    rows[:, :, 2] = rows[:, :, 5] = 0.0
-    D2e[:, 1, _PHI_P, :] = D2e[:, 1, :, _PHI_P] = rows[:, 0]
-    D2e[:, 2, _PHI_Q, :] = D2e[:, 2, :, _PHI_Q] = rows[:, 1]
-    D2e[:, 1, _PHI_P, _PHI_P] = -e2
-    D2e[:, 2, _PHI_Q, _PHI_Q] = -e3
-    # elongation: D2|l| = dl/dx^T (I - u u^T) / |l| dl/dx, plus the bending terms of e1
-    projector = (np.eye(2) - unit[:, :, None] * unit[:, None, :]) / length[:, :, None]
-    bend_De = De[:, 1:]
-    D2e1 = np.swapaxes(bend_De, 1, 2) @ (c[:, None, None] * (_BEND_MIX @ bend_De))
-    D2e1 += (slopes[:, None, :] @ D2e[:, 1:].reshape(n, 2, 36)).reshape(n, 6, 6)
-    D2e1[:, 0:2, 0:2] += projector
-    D2e1[:, 3:5, 3:5] += projector
-    D2e1[:, 0:2, 3:5] -= projector
-    D2e1[:, 3:5, 0:2] -= projector
-    D2e[:, 0] = D2e1
+    # bending: d2 e / dl dphi = -sign t, d2 e / dphi2 = -e (every other entry zero)
+    Hz = np.zeros((n, 3, 4, 4))
+    t = np.empty((n, 2, 2))  # -sign t at [p, q]
+    np.multiply(cos, -_SIGN, out=t[:, :, 0])
+    np.multiply(sin, -_SIGN, out=t[:, :, 1])
+    Hz[:, 1, 2, 0:2] = Hz[:, 1, 0:2, 2] = t[:, 0]
+    Hz[:, 2, 3, 0:2] = Hz[:, 2, 0:2, 3] = t[:, 1]
+    Hz[:, 1, 2, 2] = -e2
+    Hz[:, 2, 3, 3] = -e3
+    # elongation: d2|l|/dl2 = (I - u u^T) / |l|, plus the bending terms of e1
+    bend_Dz = Dz[:, 1:]
+    Hz1 = np.swapaxes(bend_Dz, 1, 2) @ (c[:, None, None] * (_BEND_MIX @ bend_Dz))
+    Hz1 += (slopes[:, None, :] @ Hz[:, 1:].reshape(n, 2, 16)).reshape(n, 4, 4)
+    Hz1[:, 0:2, 0:2] += (_EYE2 - unit[:, :, None] * unit[:, None, :]) / length[:, :, None]
+    Hz[:, 0] = Hz1
+    D2e = (Hz.reshape(3 * n, 16) @ _HESSIAN_Z_TO_X).reshape(n, 3, 6, 6)
     return e, De, D2e
 
 
