@@ -171,7 +171,7 @@ class LoopResult:
             "closed_loop_spectral_radius": self.design["closed_loop_spectral_radius"],
             "loops": self.design["loops"],
             "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
-            "wall_time_s": self.wall_time_s,
+            "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
         }
 
     def plot(self, path, *, title=None):
@@ -320,6 +320,8 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
     """
     if plant not in PLANTS:
         raise LoopError(f"unknown plant {plant!r}; expected one of {', '.join(PLANTS)}")
+    if not (np.isfinite(rtol) and 0 < rtol < 1):
+        raise LoopError(f"rtol must be a number between 0 and 1, got {rtol}")
     model = load_scene(scene) if isinstance(scene, (str, bytes)) or hasattr(
         scene, "__fspath__") else scene
     controller, design = build_loop(

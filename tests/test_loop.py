@@ -205,6 +205,20 @@ def test_loop_cli_json_and_plot(tmp_path, capsys):
     assert png.stat().st_size > 10_000
 
 
+def test_loop_cli_rtol_reaches_the_plant(capsys):
+    """--rtol is the plant integrator's: the same short move at 1e-6 and 1e-9 differs by about
+    the looser tolerance's error: not zero, and within 10 rtol of the 1 mm stroke (measured
+    2.6e-9 m)."""
+    errors = {}
+    for rtol in ("1e-6", "1e-9"):
+        assert main(["loop", "--duration", "0.05", "--settle", "0.01", "--json", "--no-plot",
+                     "--rtol", rtol]) == 0
+        s = json.loads(capsys.readouterr().out)
+        assert s["rtol"] == float(rtol) and s["passed"] is True
+        errors[rtol] = s["max_abs_error"]
+    assert 0 < abs(errors["1e-6"] - errors["1e-9"]) < 10 * 1e-6 * 1e-3
+
+
 def test_loop_cli_text(capsys):
     assert main(["loop", "--duration", "0.05", "--settle", "0.01", "--no-plot",
                  "--no-feedforward", "--fs", "5000"]) == 0
@@ -216,6 +230,8 @@ def test_loop_cli_text(capsys):
     (["--crossover", "300", "--fs", "600"], "unstable"),
     (["--crossover", "5000", "--fs", "1000"], "Nyquist"),
     (["--stroke", "0"], "stroke must be"),
+    (["--rtol", "0"], "rtol must be"),
+    (["--rtol", "nan"], "rtol must be"),
     (["no_such_scene"], "no_such_scene"),
 ])
 def test_loop_cli_errors_are_messages(argv, message, capsys):
