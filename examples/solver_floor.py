@@ -45,23 +45,28 @@ class LinearSurrogate:
         self.rhs_count = self.jacobian_count = 0
 
     def rhs(self, t, y, yp):
+        """CVODE right-hand side: fills yp (m/s, m/s^2) at the state y (m, m/s)."""
         self.rhs_count += 1
         yp[:] = self.A @ y + self.b
 
     def derivative(self, t, y):
+        """ydot as a new array (scipy's call)."""
         yp = np.empty_like(y)
         self.rhs(t, y, yp)
         return yp
 
     def jacobian(self, t, y, yp, JJ):
+        """CVODE Jacobian: d ydot / d y = A."""
         self.jacobian_count += 1
         JJ[:, :] = self.A
 
-    def residual(self, t, y, yp, res):  # IDA: res = yp - (A y + b)
+    def residual(self, t, y, yp, res):
+        """IDA residual res = yp - (A y + b)."""
         self.rhs_count += 1
         res[:] = yp - self.A @ y - self.b
 
     def residual_jacobian(self, t, y, yp, res, cj, JJ):
+        """IDA Jacobian d res / d y + cj d res / d yp = cj I - A."""
         self.jacobian_count += 1
         JJ[:, :] = cj * np.eye(self.A.shape[0]) - self.A
 
@@ -184,6 +189,7 @@ def measure(scene="stage_planar_3dof", *, t_end=1.0, rtols=(1e-6,), methods=METH
 
 
 def table(rows, stroke):
+    """The method table as text; the error also relative to the stroke (m)."""
     return format_table(
         ["model", "method", "rtol", "steps", "rhs evals", "Jacobians", "wall s", "us / rhs",
          "x real time", "error (m)", "error / stroke"],
@@ -194,6 +200,7 @@ def table(rows, stroke):
 
 
 def main(argv=None):
+    """Print both tables; return the rows of the method table."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="stage_planar_3dof")
     parser.add_argument("--t-end", type=float, default=1.0)
