@@ -6,6 +6,7 @@ from pathlib import Path
 
 import energy_drift
 import numpy as np
+import pytest
 import solver_floor
 import speed_benchmark
 import work_precision
@@ -69,6 +70,18 @@ def test_solver_floor_example_prints_its_tables(capsys):
     assert 2e-4 < stroke < 3e-4  # F t^2 / (2 m0): 4.7459 m/s^2 N (figures.md) x 1e-4 s^2 / 2
     for row in rows:  # every back-end on the exact linear response: within 10 rtol
         assert row["error"] < 10 * 1e-6 * stroke, row
+
+
+def test_solver_floor_refuses_what_it_cannot_solve_exactly(capsys):
+    """A mode without stiffness has no exact step response of this form: a clear error; an
+    unknown scene: exit 2 with the scene's name, no traceback."""
+    with pytest.raises(ValueError, match="zero eigenvalue"):
+        solver_floor.ExactStep(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([0.0, 1.0]))
+    with pytest.raises(SystemExit) as stop:
+        solver_floor.main(["--scene", "no_such_scene", "--t-end", "0.01"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "no_such_scene" in err and "Traceback" not in err
 
 
 def test_energy_drift_example_runs_short():
