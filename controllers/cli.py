@@ -43,7 +43,7 @@ def register(subparsers):
                              "controller and scene FMUs in libcosim (default inprocess)")
     parser.add_argument("--rtol", type=float, default=1e-8, metavar="R",
                         help="relative tolerance of the plant's integrator (default 1e-8; "
-                             "1e-6 halves the run time of the default move)")
+                             "1e-6 takes about a quarter less time on the default move)")
     parser.add_argument("--plot", default="loop.png", metavar="PNG",
                         help="write reference, position, error and force (default loop.png)")
     parser.add_argument("--no-plot", action="store_true", help="write no plot")

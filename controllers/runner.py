@@ -320,8 +320,8 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
     """
     if plant not in PLANTS:
         raise LoopError(f"unknown plant {plant!r}; expected one of {', '.join(PLANTS)}")
-    if not (np.isfinite(rtol) and 0 < rtol < 1):
-        raise LoopError(f"rtol must be a number between 0 and 1, got {rtol}")
+    if not (isinstance(rtol, (int, float, np.floating)) and np.isfinite(rtol) and 0 < rtol < 1):
+        raise LoopError(f"rtol must be a number between 0 and 1, got {rtol!r}")
     model = load_scene(scene) if isinstance(scene, (str, bytes)) or hasattr(
         scene, "__fspath__") else scene
     controller, design = build_loop(

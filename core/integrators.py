@@ -26,9 +26,10 @@ SUNDIALS' (5); `max_order=2` is for a quick look at a loose tolerance. The step 
 formulas' own, not the model's: on the stage's exact linearisation with a right-hand side of one
 matrix product (examples/solver_floor.py) CVODE BDF takes the same 43 500 steps at rtol 1e-6 (2
 times real time with a free model), orders 3 and 4 take 126 000 and 65 000, and CVODE's
-stability limit detection, switched on once through a throwaway ctypes probe of scikit-sundae's
-private solver memory (not committed), takes 59 000 steps instead of 43 500 at rtol 1e-5, 1e-6
-and 1e-7: it does not help here either.
+stability limit detection did not help either in a single observation the repository cannot
+reproduce (a throwaway ctypes probe of scikit-sundae's private solver memory, not committed):
+53 014, 58 955 and 58 673 steps instead of 42 070, 43 500 and 43 752 at rtol 1e-5, 1e-6 and
+1e-7.
 (Before the deviation state BDF2 looked better: with atol = rtol x 0.1 m the kHz modes were
 under the tolerance, and order 5 spent 14 900 steps on them for a 2 % error.)
 """

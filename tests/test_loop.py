@@ -243,6 +243,8 @@ def test_loop_cli_errors_are_messages(argv, message, capsys):
 def test_runner_errors(stage1):
     with pytest.raises(LoopError, match="unknown plant"):
         run_loop(stage1, plant="hardware", **SHORT)
+    with pytest.raises(LoopError, match="rtol must be"):
+        run_loop(stage1, rtol="1e-6", **SHORT)
     with pytest.raises(LoopError, match="axis"):
         build_loop(stage1, axis=2, **SHORT)
     with pytest.raises(ControlDesignError, match="unstable"):
