@@ -82,7 +82,7 @@ def weighted_hessian(model, hessians, weights):
 
 def hessian_quadratic_forms(model, hessians, v):
     """v^T (d2e_i/dx2) v for every deformation i (NE,); v (NX,) or (NX, r) -> (NE, r)."""
-    if v.ndim == 1:  # on every evaluation of the equations of motion: batched matrix products
+    if v.ndim == 1:  # the convective term of every moving evaluation: batched matrix products
         result = np.zeros(len(model.deformation_names))
         for group, D2e in hessians:
             n, k, m, _ = D2e.shape

@@ -137,7 +137,7 @@ def test_plbeam_matches_its_textbook_formulas_element_by_element():
                                    rtol=1e-12, atol=1e-15)
 
 
-@pytest.mark.parametrize("scene", ["stage_planar_3dof", "truss_1dof_x"])
+@pytest.mark.parametrize("scene", ["stage_planar_3dof", "truss_1dof_x", "stage_spatial_19dof"])
 def test_fast_dynamics_assembly_matches_the_einsum_forms(scene):
     """Dynamics' batched mass, convective force and Hessian forms against assembly's einsums."""
     from flexure.core import assembly, load_scene

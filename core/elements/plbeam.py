@@ -105,7 +105,9 @@ def deformations(x, ref, order=2):
     Dz = np.zeros((n, 3, 4))
     np.multiply(ny_x, _SIGN, out=Dz[:, 1:, 0])
     np.multiply(ny_y, _SIGN, out=Dz[:, 1:, 1])
-    np.multiply(-cos * lx - sin * ly, _SIGN, out=Dz.reshape(n, 12)[:, 6::5])  # (1,2), (2,3)
+    bend_by_angle = (-cos * lx - sin * ly) * _SIGN  # (n, 2): d e2 / d phi^p, d e3 / d phi^q
+    Dz[:, 1, 2] = bend_by_angle[:, 0]
+    Dz[:, 2, 3] = bend_by_angle[:, 1]
     # elongation: d|l|/dl = u, plus d e1 / d[e2, e3] = c W [e2, e3] times De2, De3
     unit = l_vec / length
     slopes = c[:, None] * (4 * bend + bend[:, ::-1])  # c [4 e2 + e3, e2 + 4 e3]
@@ -118,11 +120,11 @@ def deformations(x, ref, order=2):
         return e, De
     # bending: d2 e / dl dphi = -sign t, d2 e / dphi2 = -e (every other entry zero)
     Hz = np.zeros((n, 3, 4, 4))
-    t = np.empty((n, 2, 2))  # -sign t at [p, q]
-    np.multiply(cos, -_SIGN, out=t[:, :, 0])
-    np.multiply(sin, -_SIGN, out=t[:, :, 1])
-    Hz[:, 1, 2, 0:2] = Hz[:, 1, 0:2, 2] = t[:, 0]
-    Hz[:, 2, 3, 0:2] = Hz[:, 2, 0:2, 3] = t[:, 1]
+    minus_sign_t = np.empty((n, 2, 2))  # -sign t at [p, q], t = (cos, sin)
+    np.multiply(cos, -_SIGN, out=minus_sign_t[:, :, 0])
+    np.multiply(sin, -_SIGN, out=minus_sign_t[:, :, 1])
+    Hz[:, 1, 2, 0:2] = Hz[:, 1, 0:2, 2] = minus_sign_t[:, 0]
+    Hz[:, 2, 3, 0:2] = Hz[:, 2, 0:2, 3] = minus_sign_t[:, 1]
     Hz[:, 1, 2, 2] = -e2
     Hz[:, 2, 3, 3] = -e3
     # elongation: d2|l|/dl2 = (I - u u^T) / |l|, plus the bending terms of e1
@@ -159,8 +161,9 @@ def inertia_points(x, ref, order=2):
     cos, sin = np.cos(angle), np.sin(angle)
     l0 = ref["l0"][:, None]
     l_cos, l_sin = l0 * cos, l0 * sin  # (n, 2): the tangent points at [p, q]
-    p = np.empty((n, 8))
-    p.reshape(n, 2, 4)[:, :, 0:2] = x.reshape(n, 2, 3)[:, :, 0:2]
+    p = np.empty((n, 8))  # [r^p, l0 t^p, r^q, l0 t^q]
+    p[:, 0:2] = x[:, 0:2]
+    p[:, 4:6] = x[:, 3:5]
     p[:, 2::4] = l_cos
     p[:, 3::4] = l_sin
     if order == 0:
