@@ -119,7 +119,9 @@ class Dynamics:
         constraints are then violated by more than the kinematic tolerance, correct with the
         previous constraint Jacobian (chord Newton, converging at a rate of order |dq| / L);
         fall back to full Newton (`Kinematics.solve`) when that does not converge. Typically
-        one evaluation of the deformations and one of their derivatives per call.
+        one evaluation of the deformations (at the prediction) and one with their derivatives
+        (at the corrected x, whose deformations serve both the convergence test and the
+        stored kinematics).
         """
         kin, model = self.kin, self.model
         q = np.array(q, dtype=float)
@@ -129,20 +131,19 @@ class Dynamics:
         x = self._x + self._DF @ (q - self._q)
         tolerance = self.tolerance * kin.length_scale
         free, lu = kin.free, self._lu
+        g = kin.residual(x, assembly.deformations(model, x), q)
+        if np.abs(g).max() <= tolerance:
+            return self._store(q, x)
         for _ in range(self.chord_iterations):
-            e = assembly.deformations(model, x)
-            g = kin.residual(x, e, q)
-            if np.abs(g).max() <= tolerance:
-                break
             dx = _lu_solve(lu, g)
             if not np.isfinite(dx).all():
-                break
+                return self._store(q, x)
             x[free] -= dx
-            if np.abs(dx).max() <= tolerance:
-                break
-        else:
-            x = kin.solve(q, x).x
-        return self._store(q, x)
+            derivatives = self._deformations_order2(x)
+            g = kin.residual(x, derivatives[0], q)
+            if np.abs(g).max() <= tolerance or np.abs(dx).max() <= tolerance:
+                return self._store(q, x, derivatives)
+        return self._store(q, kin.solve(q, x).x)
 
     def positions(self, q):
         """Coordinates x (NX,) for DOFs q by chord iterations from the stored solution only
@@ -169,10 +170,12 @@ class Dynamics:
         self._x, self._q = x, q
         return x
 
-    def _store(self, q, x):
-        """First- and second-order kinematics at a solved x; keeps them as the next start."""
+    def _store(self, q, x, derivatives=None):
+        """First- and second-order kinematics at a solved x; keeps them as the next start.
+
+        derivatives: (e, De, hessians) already evaluated at x, if any."""
         kin, model = self.kin, self.model
-        e, De, hessians = self._deformations_order2(x)
+        e, De, hessians = derivatives or self._deformations_order2(x)
         J = self._J_template.copy()
         J[: self._J_rows] = De.take(self._J_take).reshape(self._J_rows, J.shape[1])
         lu = _lu_factor(J)
