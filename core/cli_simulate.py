@@ -13,6 +13,7 @@ import numpy as np
 
 from .errors import SimulationError
 from .integrators import METHODS
+from .progress import Progress
 from .scene import load_scene
 from .simulation import simulate
 from .tables import format_table
@@ -97,7 +98,8 @@ def run(args):
                     else None)
     result = simulate(model, args.t_end, inputs=inputs, method=args.method, rtol=args.rtol,
                       atol=args.atol, max_step=args.max_step, output_times=output_times,
-                      max_order=args.max_order)
+                      max_order=args.max_order,
+                      progress=Progress(f"flexure simulate {model.name}", after=1.0))
     print(render(result))
     if args.out:
         result.to_csv(args.out)

@@ -9,10 +9,13 @@ import time
 
 
 class Progress:
-    """A callable that takes the fraction done (0 to 1) and reports it to `stream`."""
+    """A callable that takes the fraction done (0 to 1) and reports it to `stream`.
 
-    def __init__(self, label, *, stream=None):
+    With `after` (s) a run that ends sooner reports nothing (a short `flexure simulate`)."""
+
+    def __init__(self, label, *, stream=None, after=0.0):
         self.label = label
+        self.after = after  # s: say nothing before the run has taken this long
         self.stream = stream if stream is not None else sys.stderr
         self.interactive = getattr(self.stream, "isatty", lambda: False)()
         self.start = time.perf_counter()
@@ -22,6 +25,8 @@ class Progress:
     def __call__(self, fraction):
         percent = int(100 * min(max(fraction, 0.0), 1.0))
         elapsed = time.perf_counter() - self.start
+        if elapsed < self.after:
+            return
         if self.interactive:
             if percent != self.last_percent:
                 end = "\n" if percent == 100 else ""

@@ -340,7 +340,7 @@ class SimulationResult:
 
 def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=None,
              max_step=None, output_times=None, jacobian="analytic", max_order=None, q0=None,
-             qdot0=None, deadline=None):
+             qdot0=None, deadline=None, progress=None):
     """Simulate `model` from rest (or q0, qdot0) at t = 0 to t_end (s).
 
     Parameters
@@ -353,6 +353,9 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
         Times (s) at which to record; default every accepted integrator step.
     deadline : float, optional
         A `time.perf_counter()` value after which the run stops with a SimulationError.
+    progress : callable, optional
+        Called with the fraction of t_end reached (0 to 1) after every accepted step, e.g. a
+        `flexure.core.progress.Progress`.
 
     Returns
     -------
@@ -387,12 +390,18 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
         states.append(sim.absolute(y))
         held.append(sim._inputs_at(t).copy())
 
+    def on_step(t, y):
+        if grid is None:
+            record(t, y)
+        if progress is not None:
+            progress(t / t_end)
+
     stops = sorted(set(breaks) | {float(t_end)} | (set(grid.tolist()) if grid is not None
                                                     else set()))
     for stop in stops:
         if stop <= sim.time:
             continue
-        sim.advance(stop, _record=record if grid is None else None)
+        sim.advance(stop, _record=on_step if grid is None or progress is not None else None)
         if grid is not None and np.any(grid == stop):
             record(stop, sim._y)
         if stop in breaks:

@@ -5,6 +5,7 @@ import io
 import numpy as np
 
 from flexure.controllers import run_loop
+from flexure.core import load_scene, simulate
 from flexure.core.progress import Progress
 
 
@@ -30,6 +31,24 @@ def test_a_terminal_gets_one_line_rewritten_in_place():
     text = stream.getvalue()
     assert text.count("\r") == 3 and text.endswith("\n") and text.count("\n") == 1
     assert "run:  50 %" in text
+
+
+def test_a_short_run_says_nothing_with_after():
+    stream = io.StringIO()
+    report = Progress("run", stream=stream, after=3600.0)
+    for fraction in (0.0, 0.5, 1.0):
+        report(fraction)
+    assert stream.getvalue() == ""
+
+
+def test_simulate_reports_the_fraction_of_t_end_at_every_step():
+    fractions = []
+    for grid in (None, np.linspace(0.0, 0.02, 5)):
+        fractions.clear()
+        result = simulate(load_scene("stage_planar_1dof"), 0.02, inputs={"F": 1.0},
+                          output_times=grid, progress=fractions.append)
+        assert len(fractions) == result.statistics["steps"]
+        assert np.all(np.diff(fractions) > 0) and fractions[-1] == 1.0
 
 
 def test_chunked_libcosim_run_with_progress_equals_the_plain_run():
