@@ -17,7 +17,9 @@ from .rotary_inertia import node_inertia_groups
 _PAIRS = {}  # id(group) -> (group, nx, flat indices of its (coordinate, coordinate) pairs)
 
 
-def _pair_index(group, nx):
+def pair_index(group, nx):
+    """Flat indices (n m m,) into an (NX, NX) matrix of each element's (coordinate, coordinate)
+    pairs of `group`, in the order of its element matrices (n, m, m); cached per group."""
     hit = _PAIRS.get(id(group))
     if hit is None or hit[0] is not group or hit[1] != nx:
         idx = group.coordinate_index
@@ -29,7 +31,7 @@ def _pair_index(group, nx):
 def scatter_matrix(result, group, local):
     """Add the element matrices local (n, m, m) of `group` into result (NX, NX) in place."""
     nx = result.shape[0]
-    result += np.bincount(_pair_index(group, nx), weights=local.ravel(),
+    result += np.bincount(pair_index(group, nx), weights=local.ravel(),
                           minlength=nx * nx).reshape(nx, nx)
     return result
 

@@ -81,10 +81,8 @@ class Dynamics:
                                    + group.coordinate_index[:, None, :]).ravel())
                           for group in model.groups]
         self._lumped = np.diag(model.lumped_mass).astype(float)
-        self._mass_groups = [
-            (group, Mp, (group.coordinate_index[:, :, None] * nx
-                         + group.coordinate_index[:, None, :]).ravel())
-            for group, Mp in self.inertia.groups]
+        self._mass_groups = [(group, Mp, assembly.pair_index(group, nx))
+                             for group, Mp in self.inertia.groups]
         # the constraint Jacobian J (free x free) as `Kinematics.constraint_jacobian` builds
         # it, from precomputed flat indices: the unit rows of the DOF coordinates are fixed
         kin = self.kin
