@@ -14,22 +14,21 @@ detection, which lowers the order there, is not offered by scikit-sundae (1.2.0 
 for it), and measured (below) it would not help. max_order=2 (BDF2, A-stable) removes that step
 limit but keeps the order low. Measured on 1 s of a 1 N step on stage_planar_3dof with the
 deviation state (README, work-precision table, 2026-11-21): order 5 is stability-limited at
-every tolerance (20 000 to 46 000 steps, 11 to 19 s) and its error is 0.06 to 0.3 rtol times the
-2.1 mm motion from rtol 1e-5 down; BDF2 takes 28 to 1.7 times fewer steps down to rtol 1e-7, but
-its error is 170 to 4000 rtol times the motion (the 10.6 Hz motion's phase error builds up over
-thousands of second-order steps): at rtol 1e-8 it spends 26 s for 8e-8 m, where order 5 reaches
-6e-12 m in 19 s. So BDF2 is the faster choice only for errors above about 1e-7 m, and never
-keeps the rtol contract; on a smooth scene (truss_1dof_x, 5 periods at rtol 1e-6) order 5 takes
-8 times fewer steps and is 100 times more accurate. IDA behaves the same way (IDA of order 5 is
-as fast as or faster than order 2 at loose tolerances too). The default therefore stays
+every tolerance (17 000 to 44 000 steps, 4 to 9 s) and its error is 0.07 to 0.3 rtol times the
+2.1 mm motion from rtol 1e-5 down; BDF2 takes 23 to 1.6 times fewer steps down to rtol 1e-7, but
+its error is 170 to 3700 rtol times the motion (the 10.6 Hz motion's phase error builds up over
+thousands of second-order steps): at rtol 1e-8 it spends 12 s for 7.8e-8 m, where order 5
+reaches 5.7e-12 m in 9.1 s. So BDF2 is the faster choice only for errors above about 1e-7 m, and
+never keeps the rtol contract; on a smooth scene (truss_1dof_x, 5 periods at rtol 1e-6) order 5
+takes 8 times fewer steps and is 100 times more accurate. IDA behaves the same way (IDA of order
+5 is as fast as or faster than order 2 at loose tolerances too). The default therefore stays
 SUNDIALS' (5); `max_order=2` is for a quick look at a loose tolerance. The step count is the
 formulas' own, not the model's: on the stage's exact linearisation with a right-hand side of one
 matrix product (examples/solver_floor.py) CVODE BDF takes the same 43 500 steps at rtol 1e-6 (2
 times real time with a free model), orders 3 and 4 take 126 000 and 65 000, and CVODE's
 stability limit detection did not help either in a single observation the repository cannot
-reproduce (a throwaway ctypes probe of scikit-sundae's private solver memory, not committed):
-53 014, 58 955 and 58 673 steps instead of 42 070, 43 500 and 43 752 at rtol 1e-5, 1e-6 and
-1e-7.
+reproduce (a throwaway ctypes probe of scikit-sundae's private solver memory, not committed): 53
+014, 58 955 and 58 673 steps instead of 42 070, 43 500 and 43 752 at rtol 1e-5, 1e-6 and 1e-7.
 (Before the deviation state BDF2 looked better: with atol = rtol x 0.1 m the kHz modes were
 under the tolerance, and order 5 spent 14 900 steps on them for a 2 % error.)
 """
