@@ -60,6 +60,16 @@ def rotation_matrix(lam):
     return np.einsum("kmij,...i,...j->...km", ROTATION_TENSOR, lam, lam)
 
 
+def vector_tensor(body_vector):
+    """C (..., 3, 4, 4) of body vectors a (..., 3): R(lambda) a = C lambda lambda.
+
+    C_kij = T_kmij a_m, symmetric in i, j: the first derivative of R(lambda) a is 2 C lambda,
+    the second 2 C. For a body vector fixed to its node C is a constant the element functions
+    compute once, in their reference data.
+    """
+    return np.einsum("kmij,...m->...kij", ROTATION_TENSOR, body_vector)
+
+
 def rotate(lam, body_vector, order=2):
     """u = R(lambda) a and its derivatives with respect to lambda.
 
@@ -72,7 +82,7 @@ def rotate(lam, body_vector, order=2):
     Returns (u,), (u, Du) or (u, Du, D2u) shaped (n, 3), (n, 3, 4), (n, 3, 4, 4); D2u does not
     depend on lambda.
     """
-    C = np.einsum("kmij,nm->nkij", ROTATION_TENSOR, body_vector)
+    C = vector_tensor(body_vector)
     Cl = np.einsum("nkij,nj->nki", C, lam)
     u = np.einsum("nki,ni->nk", Cl, lam)
     if order == 0:

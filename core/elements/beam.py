@@ -47,7 +47,7 @@ Every function works on all elements of this type at once: arrays shaped (n_elem
 
 import numpy as np
 
-from ..rotations import from_rotation_vector, rotate, rotation_matrix
+from ..rotations import from_rotation_vector, rotation_matrix, vector_tensor
 from .plbeam import HERMITE_MASS
 
 type_name = "BEAM"
@@ -69,6 +69,45 @@ _DL = np.zeros((3, 14))
 _DL[:, _P] = -np.eye(3)
 _DL[:, _Q] = np.eye(3)
 
+# The deformations depend on x only through z = [l (3), lambda^p (4), lambda^q (4)]; every x
+# column is one z column with a sign (l = r^q - r^p), so De = Dz[..., _Z_OF_X] * _Z_SIGN and
+# the Hessian likewise, exactly (a product with +-1).
+_Z_OF_X = np.array([0, 1, 2, 3, 4, 5, 6, 0, 1, 2, 7, 8, 9, 10])
+_Z_SIGN = np.array([-1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+_HESSIAN_TAKE = (11 * _Z_OF_X[:, None] + _Z_OF_X[None, :]).ravel()  # into a flat 11 x 11
+_HESSIAN_SIGN = np.outer(_Z_SIGN, _Z_SIGN).ravel()
+_ZL, _ZP, _ZQ = slice(0, 3), slice(3, 7), slice(7, 11)
+
+# The node vectors of the deformations, in the order [n_z'^p, n_z'^q, n_y'^p, n_y'^q]: then
+# [e3, e4, e5, e6] = _BEND_SIGN (n_i . l), and the torsion pairs each vector with the one in
+# the reversed order, e2 = l0 / 2 (n_0 . n_3 - n_2 . n_1), whose derivative with respect to
+# the rotation of n_i is l0 / 2 _TWIST_SIGN_i n_(3-i)^T Dn_i. Even i: node p, odd i: node q.
+_BEND_AXES = ("az_p", "az_q", "ay_p", "ay_q")
+_BEND_SIGN = np.array([-1.0, 1.0, 1.0, -1.0])
+_TWIST_SIGN = np.array([1.0, -1.0, -1.0, 1.0])
+_BEND_LAMBDA = np.array([[3, 4, 5, 6], [10, 11, 12, 13]] * 2)  # x columns of each one's node
+# c (2 e3^2 + e3 e4 + 2 e4^2 + 2 e5^2 + e5 e6 + 2 e6^2) = c / 2 b^T _BEND_MIX b, b = e3 ... e6
+_BEND_MIX = np.kron(np.eye(2), np.array([[4.0, 1.0], [1.0, 4.0]]))
+# e1 sums the same terms one by one (b_first b_second weight), in the order written above, and
+# its slopes d e1 / d b = c _BEND_MIX b as c (4 b + b[_BEND_PARTNER]): e and De round as the
+# plain formulas do, so the kinematic iterates are those of the straightforward code
+_QUAD_FIRST = np.array([0, 0, 1, 2, 2, 3])
+_QUAD_SECOND = np.array([0, 1, 1, 2, 3, 3])
+_QUAD_WEIGHT = np.array([2.0, 1.0, 2.0, 2.0, 1.0, 2.0])
+_BEND_PARTNER = np.array([1, 0, 3, 2])
+_EYE3 = np.eye(3)
+
+# The inertia points: the rotated vectors [ax_p, ay_p, az_p, ax_q, ay_q, az_q] (the first of
+# each node times l0), their rows in p (n, 24) and the x columns of their node's lambda.
+_POINT_ROWS = {"ax_p": 3, "ax_q": 9, "ay_p": 12, "az_p": 15, "ay_q": 18, "az_q": 21}
+_INERTIA_AXES = ("ax_p", "ay_p", "az_p", "ax_q", "ay_q", "az_q")
+_INERTIA_ROWS = np.array([_POINT_ROWS[key] + k for key in _INERTIA_AXES for k in range(3)])
+_INERTIA_LAMBDA = np.array([[3, 4, 5, 6]] * 3 + [[10, 11, 12, 13]] * 3)
+_INERTIA_COLUMNS = np.repeat(_INERTIA_LAMBDA, 3, axis=0)  # (18, 4) per row of p
+_DP_TRANSLATION = np.zeros((24, 14))  # d p / d x of r^p and r^q: constant
+_DP_TRANSLATION[0:3, _P] = np.eye(3)
+_DP_TRANSLATION[6:9, _Q] = np.eye(3)
+
 
 def default_y_axis(l_vec):
     """A y' axis normal to l when the scene gives none: the global axis least along l."""
@@ -79,8 +118,13 @@ def default_y_axis(l_vec):
 def reference(x0, y_axis=None):
     """Reference data from the initial coordinates x0 (n, 14) and the y' axes (n, 3).
 
-    l0 (m) and the element frame in the body frames of p and q: ax_p, ay_p, az_p, ax_q, ay_q,
-    az_q (n, 3). Raises ValueError when a y' axis is along the beam.
+    l0 (m); c = 1 / (30 l0) (1/m), the factor of the second-order terms in e1; the element
+    frame in the body frames of p and q: ax_p, ay_p, az_p, ax_q, ay_q, az_q (n, 3). Constant
+    tensors of the rotated vectors (`rotations.vector_tensor`, R(lambda) a = C lambda lambda):
+    bend_tensors (n, 4, 3, 4, 4) of [az_p, az_q, ay_p, ay_q]; inertia_tensors (n, 6, 3, 4, 4)
+    of [ax_p, ay_p, az_p, ax_q, ay_q, az_q] with inertia_scale (n, 6, 1) = [l0, 1, 1, l0, 1, 1]
+    (m, dimensionless); inertia_hessian (n, 24, 14, 14), the second derivative of the inertia
+    points, which is constant (read-only). Raises ValueError when a y' axis is along the beam.
     """
     l_vec = x0 @ _DL.T
     l0 = np.linalg.norm(l_vec, axis=1)
@@ -92,11 +136,23 @@ def reference(x0, y_axis=None):
         raise ValueError("the y' axis of a beam must not lie along the beam")
     n_y = y / size[:, None]
     n_z = np.cross(n_x, n_y)
-    ref = {"l0": l0}
+    with np.errstate(divide="ignore"):  # a zero-length element is refused by the scene loader
+        ref = {"l0": l0, "c": 1.0 / (30.0 * l0)}
     for node, cols in (("p", _LP), ("q", _LQ)):
         R = rotation_matrix(x0[:, cols])
         for axis, vector in (("x", n_x), ("y", n_y), ("z", n_z)):
             ref[f"a{axis}_{node}"] = np.einsum("nkm,nk->nm", R, vector)
+    ref["bend_tensors"] = vector_tensor(np.stack([ref[key] for key in _BEND_AXES], axis=1))
+    tensors = vector_tensor(np.stack([ref[key] for key in _INERTIA_AXES], axis=1))
+    scale = np.ones((l0.size, 6, 1))
+    scale[:, 0::3, 0] = l0[:, None]
+    hessian = np.zeros((l0.size, 24, 14, 14))
+    for k, (rows, cols) in enumerate(zip(_INERTIA_ROWS.reshape(6, 3), _INERTIA_LAMBDA,
+                                         strict=True)):
+        hessian[:, rows[:, None, None], cols[:, None], cols] = scale[:, k, :, None, None] * (
+            2.0 * tensors[:, k])
+    hessian.flags.writeable = False
+    ref.update(inertia_tensors=tensors, inertia_scale=scale, inertia_hessian=hessian)
     return ref
 
 
@@ -110,82 +166,90 @@ def random_coordinates(rng, count):
     return x0, x0 + rng.normal(scale=0.02, size=x0.shape)
 
 
-def _node_vector(x, body, cols, order):
-    """u = R(lambda) a of one node with its Jacobian (n, 3, 14) and Hessian (n, 3, 14, 14)."""
-    result = rotate(x[:, cols], body, order)
-    if order == 0:
-        return result[0], None, None
-    n = x.shape[0]
-    U = np.zeros((n, 3, 14))
-    U[:, :, cols] = result[1]
-    if order == 1:
-        return result[0], U, None
-    U2 = np.zeros((n, 3, 14, 14))
-    U2[:, :, cols, cols] = result[2]
-    return result[0], U, U2
+def _rotated(tensors, lam):
+    """(u (n, k, 3), Du (n, k, 3, 4)) of u = C lambda lambda, C (n, k, 3, 4, 4), lambda (n, k, 4).
 
-
-def _dot(a, b, order):
-    """(u . v, its gradient (n, 14), its Hessian (n, 14, 14)) of two vector fields."""
-    u, U, U2 = a
-    v, V, V2 = b
-    e = np.einsum("nk,nk->n", u, v)
-    if order == 0:
-        return e, None, None
-    De = np.einsum("nk,nki->ni", u, V) + np.einsum("nk,nki->ni", v, U)
-    if order == 1:
-        return e, De, None
-    cross = np.einsum("nki,nkj->nij", U, V)
-    D2e = cross + np.swapaxes(cross, 1, 2)
-    for w, W2 in ((u, V2), (v, U2)):
-        if W2 is not None:
-            D2e += np.einsum("nk,nkij->nij", w, W2)
-    return e, De, D2e
+    Du = 2 C lambda; the second derivative is the constant 2 C."""
+    n, k = lam.shape[:2]
+    half_Du = (tensors.reshape(n, k, 12, 4) @ lam[..., None]).reshape(n, k, 3, 4)
+    return (half_Du @ lam[..., None])[..., 0], 2.0 * half_Du
 
 
 def deformations(x, ref, order=2):
-    """Deformations e (n, 6) m, first (n, 6, 14) and second (n, 6, 14, 14) derivatives."""
+    """Deformations e (n, 6) m, first (n, 6, 14) and second (n, 6, 14, 14) derivatives.
+
+    order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e). The derivatives are written in
+    z = [l, lambda^p, lambda^q] (11), block by block, and mapped to x at the end (see _Z_OF_X).
+    With u = C lambda lambda for each node vector: d(w . u) / d lambda = 2 w^T C lambda =
+    w^T Du, d2(w . u) / d lambda2 = 2 w . C. These functions run at every evaluation of the
+    equations of motion on a handful of elements, where the number of numpy calls sets the time.
+    """
     n = x.shape[0]
-    l0 = ref["l0"]
-    l_vec = x @ _DL.T
-    line = (l_vec, np.broadcast_to(_DL, (n, 3, 14)), None)
-    ny_p = _node_vector(x, ref["ay_p"], _LP, order)
-    nz_p = _node_vector(x, ref["az_p"], _LP, order)
-    ny_q = _node_vector(x, ref["ay_q"], _LQ, order)
-    nz_q = _node_vector(x, ref["az_q"], _LQ, order)
-    twist_a, twist_b = _dot(nz_p, ny_q, order), _dot(ny_p, nz_q, order)
+    l0, c = ref["l0"], ref["c"]
     half = 0.5 * l0
-    torsion = tuple(None if a is None else half.reshape((-1,) + (1,) * (a.ndim - 1)) * (a - b)
-                    for a, b in zip(twist_a, twist_b, strict=True))
-    flip = lambda terms: tuple(None if t is None else -t for t in terms)  # noqa: E731
-    bend = [torsion, flip(_dot(nz_p, line, order)), _dot(nz_q, line, order),
-            _dot(ny_p, line, order), flip(_dot(ny_q, line, order))]  # e2 ... e6
-    (e2, e3, e4, e5, e6) = (b[0] for b in bend)
-    length = np.linalg.norm(l_vec, axis=1)
-    c = 1.0 / (30.0 * l0)
-    e1 = length - l0 + c * (2 * e3**2 + e3 * e4 + 2 * e4**2 + 2 * e5**2 + e5 * e6 + 2 * e6**2)
-    e = np.stack([e1, e2, e3, e4, e5, e6], axis=1)
+    l_vec = x[:, _Q] - x[:, _P]
+    axes, D_axes = _rotated(ref["bend_tensors"], x[:, _BEND_LAMBDA])  # (n, 4, 3), (n, 4, 3, 4)
+    # The dot products as einsums, whose summation order the kinematic iterates were computed
+    # with (a matmul or sum rounds differently): e and De stay those of the straightforward code
+    e = np.empty((n, 6))
+    bend = e[:, 2:]  # [e3, e4, e5, e6]
+    np.multiply(np.einsum("nvk,nk->nv", axes, l_vec), _BEND_SIGN, out=bend)
+    pairs = np.einsum("nvk,nvk->nv", axes, axes[:, ::-1])  # [n_0 . n_3, n_1 . n_2, ...]
+    e[:, 1] = half * (pairs[:, 0] - pairs[:, 2])
+    length = np.sqrt((l_vec * l_vec).sum(axis=1))
+    quadratic = (bend[:, _QUAD_FIRST] * bend[:, _QUAD_SECOND] * _QUAD_WEIGHT).sum(axis=1)
+    e[:, 0] = length - l0 + c * quadratic
     if order == 0:
         return (e,)
-    unit = l_vec / length[:, None]
-    slopes = {3: c * (4 * e3 + e4), 4: c * (e3 + 4 * e4), 5: c * (4 * e5 + e6),
-              6: c * (e5 + 4 * e6)}
-    De_bend = [b[1] for b in bend]
-    De1 = unit @ _DL + sum(slopes[k][:, None] * De_bend[k - 2] for k in (3, 4, 5, 6))
-    De = np.stack([De1, *De_bend], axis=1)
+    # per node vector i the two vectors it is dotted with: l (bending), n_(3-i) (torsion)
+    partners = np.empty((n, 4, 2, 3))
+    partners[:, :, 0] = l_vec[:, None]
+    partners[:, :, 1] = axes[:, ::-1]
+    by_lambda = np.einsum("nvjk,nvki->nvji", partners, D_axes)  # [l^T Dn_i, n_(3-i)^T Dn_i]
+    Dz = np.zeros((n, 6, 11))
+    Dz[:, 2:, _ZL] = _BEND_SIGN[:, None] * axes
+    bend_by_lambda = _BEND_SIGN[:, None] * by_lambda[:, :, 0]
+    Dz[:, 2::2, _ZP] = bend_by_lambda[:, 0::2]  # e3, e5: the vectors of node p
+    Dz[:, 3::2, _ZQ] = bend_by_lambda[:, 1::2]  # e4, e6: node q
+    twist = by_lambda[:, :, 1]
+    Dz[:, 1, _ZP] = half[:, None] * (twist[:, 0] - twist[:, 2])
+    Dz[:, 1, _ZQ] = half[:, None] * (twist[:, 3] - twist[:, 1])
+    Dz[:, 0, _ZL] = l_vec / length[:, None]
+    slopes = c[:, None] * (4.0 * bend + bend[:, _BEND_PARTNER])  # d e1 / d[e3 ... e6]
+    terms = slopes[:, :, None] * Dz[:, 2:]  # added in order, as the einsum-free formula does
+    Dz[:, 0] += ((terms[:, 0] + terms[:, 1]) + terms[:, 2]) + terms[:, 3]
+    De = Dz[:, :, _Z_OF_X] * _Z_SIGN
     if order == 1:
         return e, De
-    D2_bend = [b[2] for b in bend]
-    projector = (np.eye(3)[None] - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
-    outer = lambda a, b: a[:, :, None] * b[:, None, :]  # noqa: E731
-    D2e1 = np.einsum("ai,nab,bj->nij", _DL, projector, _DL)
-    for i, j in ((3, 4), (5, 6)):
-        Di, Dj = De_bend[i - 2], De_bend[j - 2]
-        D2e1 += c[:, None, None] * (4 * outer(Di, Di) + outer(Di, Dj) + outer(Dj, Di)
-                                    + 4 * outer(Dj, Dj))
-    for k in (3, 4, 5, 6):
-        D2e1 += slopes[k][:, None, None] * D2_bend[k - 2]
-    return e, De, np.stack([D2e1, *D2_bend], axis=1)
+    Hz = np.zeros((n, 6, 11, 11))
+    # bending: d2 / dl dlambda = sign Dn_i, d2 / dlambda2 = 2 sign l . C_i
+    bend_D = _BEND_SIGN[:, None, None] * D_axes
+    for rows, block, i in ((slice(2, None, 2), _ZP, slice(0, None, 2)),
+                           (slice(3, None, 2), _ZQ, slice(1, None, 2))):
+        Hz[:, rows, _ZL, block] = bend_D[:, i]
+        Hz[:, rows, block, _ZL] = np.swapaxes(bend_D[:, i], 2, 3)
+    partner_C = (partners @ ref["bend_tensors"].reshape(n, 4, 3, 16)).reshape(n, 4, 2, 4, 4)
+    bend_C = (2.0 * _BEND_SIGN)[:, None, None] * partner_C[:, :, 0]
+    Hz[:, 2::2, _ZP, _ZP] = bend_C[:, 0::2]
+    Hz[:, 3::2, _ZQ, _ZQ] = bend_C[:, 1::2]
+    # torsion: d2 / dlambda_i2 = l0 sign n_(3-i) . C_i, d2 / dlambda^p dlambda^q from Dn^T Dn
+    twist_C = (l0[:, None] * _TWIST_SIGN)[:, :, None, None] * partner_C[:, :, 1]
+    Hz[:, 1, _ZP, _ZP] = twist_C[:, 0] + twist_C[:, 2]
+    Hz[:, 1, _ZQ, _ZQ] = twist_C[:, 1] + twist_C[:, 3]
+    cross = np.swapaxes(D_axes[:, 0::2], 2, 3) @ D_axes[:, 3::-2]  # [Dn_0^T Dn_3, Dn_2^T Dn_1]
+    mixed = half[:, None, None] * (cross[:, 0] - cross[:, 1])
+    Hz[:, 1, _ZP, _ZQ] = mixed
+    Hz[:, 1, _ZQ, _ZP] = np.swapaxes(mixed, 1, 2)
+    # elongation: d2|l|/dl2 = (I - u u^T) / |l|, plus the second-order terms' c Db^T W Db and
+    # sum_k slope_k D2e_k
+    bend_Dz = Dz[:, 2:]
+    H1 = np.swapaxes(bend_Dz, 1, 2) @ (c[:, None, None] * (_BEND_MIX @ bend_Dz))
+    H1 += (slopes[:, None, :] @ Hz[:, 2:].reshape(n, 4, 121)).reshape(n, 11, 11)
+    unit = l_vec / length[:, None]
+    H1[:, _ZL, _ZL] += (_EYE3 - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
+    Hz[:, 0] = H1
+    D2e = (Hz.reshape(6 * n, 121).take(_HESSIAN_TAKE, axis=1) * _HESSIAN_SIGN)
+    return e, De, D2e.reshape(n, 6, 14, 14)
 
 
 def stiffness(ref, props):
@@ -208,37 +272,28 @@ def _constitutive(l0, axial, torsional, flexural_y, flexural_z):
     return matrix
 
 
-# The inertia points: (coordinate slice, body vector, scaled by l0?) after r^p and r^q.
-_ROTATED_POINTS = (("ax_p", _LP, True), ("ax_q", _LQ, True), ("ay_p", _LP, False),
-                   ("az_p", _LP, False), ("ay_q", _LQ, False), ("az_q", _LQ, False))
-_POINT_ROWS = {"ax_p": 3, "ax_q": 9, "ay_p": 12, "az_p": 15, "ay_q": 18, "az_q": 21}
-
-
 def inertia_points(x, ref, order=2):
     """The inertia points (n, 24) and their derivatives (n, 24, 14), (n, 24, 14, 14):
 
     [r^p, l0 n_x'^p, r^q, l0 n_x'^q] (the Hermite points) and [n_y'^p, n_z'^p, n_y'^q, n_z'^q]
-    (the section axes, for the rotational inertia).
+    (the section axes, for the rotational inertia). p is quadratic in x, so the second
+    derivative is the constant ref["inertia_hessian"], returned as is (read-only).
     """
-    l0 = ref["l0"]
     n = x.shape[0]
-    p = np.zeros((n, 24))
+    scale = ref["inertia_scale"]
+    vectors, D_vectors = _rotated(ref["inertia_tensors"], x[:, _INERTIA_LAMBDA])
+    p = np.empty((n, 24))
     p[:, 0:3], p[:, 6:9] = x[:, _P], x[:, _Q]
-    Dp = np.zeros((n, 24, 14)) if order >= 1 else None
-    D2p = np.zeros((n, 24, 14, 14)) if order >= 2 else None
-    if order >= 1:
-        Dp[:, 0:3, _P] = np.eye(3)
-        Dp[:, 6:9, _Q] = np.eye(3)
-    for key, cols, scaled in _ROTATED_POINTS:
-        rows = slice(_POINT_ROWS[key], _POINT_ROWS[key] + 3)
-        u = rotate(x[:, cols], ref[key], order)
-        scale = l0 if scaled else np.ones_like(l0)
-        p[:, rows] = scale[:, None] * u[0]
-        if order >= 1:
-            Dp[:, rows, cols] = scale[:, None, None] * u[1]
-        if order >= 2:
-            D2p[:, rows, cols, cols] = scale[:, None, None, None] * u[2]
-    return (p,) if order == 0 else (p, Dp) if order == 1 else (p, Dp, D2p)
+    p[:, _INERTIA_ROWS] = (scale * vectors).reshape(n, 18)
+    if order == 0:
+        return (p,)
+    Dp = np.empty((n, 24, 14))
+    Dp[:] = _DP_TRANSLATION
+    Dp[:, _INERTIA_ROWS[:, None], _INERTIA_COLUMNS] = (
+        scale[..., None] * D_vectors).reshape(n, 18, 4)
+    if order == 1:
+        return p, Dp
+    return p, Dp, ref["inertia_hessian"]
 
 
 def inertia_matrix(ref, props):

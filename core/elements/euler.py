@@ -22,6 +22,7 @@ deformation_stiffness = {"norm": "none"}
 coordinates_per_element = 4
 inertia_point_kinds = ()
 properties = ()
+_EYE4 = np.eye(4)
 
 
 def reference(x0):
@@ -37,7 +38,9 @@ def deformations(x, ref, order=2):
     De = x[:, None, :].copy()
     if order == 1:
         return e, De
-    return e, De, np.broadcast_to(np.eye(4), (x.shape[0], 1, 4, 4)).copy()
+    D2e = np.empty((x.shape[0], 1, 4, 4))
+    D2e[:] = _EYE4
+    return e, De, D2e
 
 
 def stiffness(ref, props):
