@@ -420,3 +420,57 @@ def test_torsional_vibration_of_a_shaft_converges_to_the_continuous_frequency():
         errors.append(frequency / exact - 1.0)
     assert 0 < errors[1] < 2e-3
     np.testing.assert_allclose(errors[0] / errors[1], 4.0, rtol=0.05)
+
+
+def _rotation(lam):
+    """R(lambda) written out from the rotations module's docstring (any |lambda|)."""
+    l0, lv = lam[0], lam[1:]
+    skew = np.array([[0.0, -lv[2], lv[1]], [lv[2], 0.0, -lv[0]], [-lv[1], lv[0], 0.0]])
+    return (l0 * l0 - lv @ lv) * np.eye(3) + 2.0 * np.outer(lv, lv) + 2.0 * l0 * skew
+
+
+def test_beam_matches_its_textbook_formulas_element_by_element():
+    """The column-wise BEAM (deformations and inertia points, all orders) against a plain loop
+    over the module docstring's formulas, off the normalisation constraint too."""
+    from flexure.core.elements import beam
+
+    rng = np.random.default_rng(5)
+    count = 5
+    x0, x = beam.random_coordinates(rng, count)
+    x[:, 3:7] *= 1.1  # |lambda| != 1: the quadratic form holds there as well
+    y_axis = rng.normal(size=(count, 3))
+    ref = beam.reference(x0, y_axis=y_axis)
+    (e,) = beam.deformations(x, ref, order=0)
+    (p,) = beam.inertia_points(x, ref, order=0)
+    for i in range(count):
+        l_ref = x0[i, 7:10] - x0[i, 0:3]
+        l0 = np.linalg.norm(l_ref)
+        n_x = l_ref / l0
+        n_y = y_axis[i] - (y_axis[i] @ n_x) * n_x
+        n_y /= np.linalg.norm(n_y)
+        frame = np.array([n_x, n_y, np.cross(n_x, n_y)])  # rows n_x', n_y', n_z'
+        now = {}
+        for node, cols in (("p", slice(3, 7)), ("q", slice(10, 14))):
+            # the frame carried by the node: R(lambda) R(lambda_0)^T n
+            turn = _rotation(x[i, cols]) @ _rotation(x0[i, cols]).T
+            now[node] = frame @ turn.T  # rows: the current n_x', n_y', n_z' of that node
+        (_, ny_p, nz_p), (_, ny_q, nz_q) = now["p"], now["q"]
+        l_vec = x[i, 7:10] - x[i, 0:3]
+        e2 = l0 / 2 * (nz_p @ ny_q - ny_p @ nz_q)
+        e3, e4, e5, e6 = -(nz_p @ l_vec), nz_q @ l_vec, ny_p @ l_vec, -(ny_q @ l_vec)
+        e1 = np.linalg.norm(l_vec) - l0 + (2 * e3**2 + e3 * e4 + 2 * e4**2 + 2 * e5**2
+                                           + e5 * e6 + 2 * e6**2) / (30 * l0)
+        np.testing.assert_allclose(e[i], [e1, e2, e3, e4, e5, e6], rtol=1e-12, atol=1e-15)
+        points = np.concatenate([x[i, 0:3], l0 * now["p"][0], x[i, 7:10], l0 * now["q"][0],
+                                 ny_p, nz_p, ny_q, nz_q])
+        np.testing.assert_allclose(p[i], points, rtol=1e-12, atol=1e-15)
+    # the orders agree with each other; the constant D2p cannot be written to by a caller
+    for order in (1, 2):
+        np.testing.assert_array_equal(beam.deformations(x, ref, order)[0], e)
+        np.testing.assert_array_equal(beam.inertia_points(x, ref, order)[0], p)
+    np.testing.assert_array_equal(beam.deformations(x, ref, 1)[1],
+                                  beam.deformations(x, ref, 2)[1])
+    D2p = beam.inertia_points(x, ref, 2)[2]
+    assert not D2p.flags.writeable
+    with pytest.raises(ValueError):
+        D2p[0, 0, 0, 0] = 1.0
