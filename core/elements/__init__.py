@@ -9,6 +9,10 @@ and the pure functions `reference`, `deformations`, `stiffness`, `damping`, `ine
 `random_coordinates(rng, count)` for the derivative tests. The normalisation constraint of
 3-D rotational nodes (`euler`) follows the same interface but is not registered: the scene
 builder adds it, a scene cannot name it.
+
+The arrays these functions return may be shared between calls (a constant second derivative
+of the inertia points is returned from the reference data, read-only): callers read them and
+never modify them in place.
 """
 
 from . import beam, plbeam, pltruss, truss
