@@ -36,6 +36,13 @@ SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rh
                    "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
                    "diameter", "beta"}
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
+# Every number of a scene is in SI units; none of a compliant mechanism comes near 1e20 (steel's
+# E is 2.1e11 Pa). The bound keeps products of scene numbers (E w h^3, masses times lengths
+# squared, ...) finite, so an absurd value is refused here instead of as inf or NaN later.
+MAX_MAGNITUDE = 1e20
+# An initial angle or rotation vector beyond this (rad, about 160 turns) is a mistake: its
+# sine and cosine would carry no significant digits.
+MAX_ANGLE = 1e3
 
 
 def builtin_scenes():
@@ -62,11 +69,32 @@ def scene_path(name_or_path):
 def load_scene(name_or_path, *, check=True):
     """Load and validate a scene file or built-in scene name into a `Model`."""
     path = scene_path(name_or_path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as error:
-        raise SceneError(f"{path}: not valid TOML: {error}") from None
+    data = parse_toml(path)
     return build_model(data, source=str(path), default_name=path.stem, check=check)
+
+
+def read_scene_text(path):
+    """The text of a scene file (UTF-8); SceneError on an unreadable file or invalid bytes."""
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as error:
+        raise SceneError(f"{path}: cannot read the scene file: {error.strerror}") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = raw.count(b"\n", 0, error.start) + 1
+        raise SceneError(f"{path}: line {line}: not UTF-8 text: byte "
+                         f"0x{raw[error.start]:02x} at offset {error.start} ({error.reason}); "
+                         "TOML files must be UTF-8") from None
+
+
+def parse_toml(path):
+    """The dictionary of a scene file; SceneError on invalid bytes or invalid TOML."""
+    text = read_scene_text(path)
+    try:
+        return tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, ValueError) as error:  # ValueError: an int too long
+        raise SceneError(f"{path}: not valid TOML: {error}") from None
 
 
 def build_model(data, *, source="<dict>", default_name="scene", check=True):
@@ -88,31 +116,51 @@ class _SceneBuilder:
             self.fail(key, f"expected a table, got {type(value).__name__}")
         return value
 
-    def number(self, key, value, *, minimum=None, positive=False):
+    def number(self, key, value, *, minimum=None, positive=False, limit=MAX_MAGNITUDE):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(key, f"expected a number, got {value!r}")
-        if not math.isfinite(value):
+            self.fail(key, f"expected a number, got {_show(value)}")
+        if isinstance(value, float) and not math.isfinite(value):
             self.fail(key, f"expected a finite number, got {value!r}")
+        if abs(value) > limit:
+            unit = "rad" if limit == MAX_ANGLE else "(SI units)"
+            self.fail(key, f"expected a magnitude <= {limit:g} {unit}, got {_show(value)}")
         if positive and value <= 0:
             self.fail(key, f"expected a value > 0, got {value!r}")
         if minimum is not None and value < minimum:
             self.fail(key, f"expected a value >= {minimum}, got {value!r}")
         return float(value)
 
-    def vector(self, key, value, length):
+    def vector(self, key, value, length, *, limit=MAX_MAGNITUDE):
         if not isinstance(value, list) or len(value) != length:
-            self.fail(key, f"expected a list of {length} numbers, got {value!r}")
-        return [self.number(f"{key}[{i}]", v) for i, v in enumerate(value)]
+            self.fail(key, f"expected a list of {length} numbers, got {_show(value)}")
+        return [self.number(f"{key}[{i}]", v, limit=limit) for i, v in enumerate(value)]
+
+    def string(self, key, value, what="a string"):
+        if not isinstance(value, str):
+            self.fail(key, f"expected {what}, got {_show(value)}")
+        return value
 
     def names(self, key, value, allowed):
         if isinstance(value, str):
             value = [value]
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            self.fail(key, f"expected a list of names, got {value!r}")
+            self.fail(key, f"expected a list of names, got {_show(value)}")
         for v in value:
             if v not in allowed:
                 self.fail(key, f"unknown name {v!r}; expected one of {', '.join(allowed)}")
+        for v in set(value):
+            if value.count(v) > 1:
+                self.fail(key, f"{v!r} is listed {value.count(v)} times; list each name once")
         return list(value)
+
+    def check_unique(self, what, names):
+        """Refuse a name that appears twice (say, a node "a.x" beside node "a")."""
+        seen = set()
+        for name in names:
+            if name in seen:
+                self.fail(f"{what} {name!r}", f"two {what}s of the scene have this name; rename "
+                                              "one of the nodes or elements")
+            seen.add(name)
 
     def check_keys(self, key, table, allowed):
         for k in table:
@@ -133,8 +181,10 @@ class _SceneBuilder:
         if not isinstance(name, str) or not name.isidentifier():
             self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
         dimension = header.get("dimension", 2)
-        if dimension not in ROTATION_AXES:
-            self.fail("scene.dimension", f"expected 2 (planar) or 3 (spatial), got {dimension!r}")
+        if isinstance(dimension, bool) or dimension not in (2, 3):
+            self.fail("scene.dimension",
+                      f"expected 2 (planar) or 3 (spatial), got {_show(dimension)}")
+        dimension = int(dimension)
         gravity = np.array(self.vector("scene.gravity", header.get("gravity", [0.0] * dimension),
                                        dimension))
         self.dimension = dimension
@@ -146,6 +196,12 @@ class _SceneBuilder:
             self.add_normalisation(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
+        for port in outputs:
+            if port.name in {p.name for p in inputs}:
+                self.fail(f"outputs.{port.name}", f"the input inputs.{port.name} has the same "
+                                                  "name; inputs and outputs need distinct names")
+        self.check_unique("coordinate", self.coordinate_names)
+        self.check_unique("deformation", deformation_names)
         buckling = self.build_buckling(data.get("buckling"))
         tunable = self.build_tunable(data, header.get("tunable", []))
         model = Model(
@@ -176,6 +232,10 @@ class _SceneBuilder:
         if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
             self.fail("scene.tunable", f"expected a list of scene keys such as "
                                        f"\"nodes.3.mass\", got {keys!r}")
+        for key in set(keys):
+            if keys.count(key) > 1:
+                self.fail("scene.tunable", f"{key!r} is listed {keys.count(key)} times; list "
+                                           "each key once")
         for key in keys:
             value = data
             for part in key.split("."):
@@ -195,7 +255,7 @@ class _SceneBuilder:
                 result[name] = self.spatial_section(key, section)
                 continue
             self.check_keys(key, section, SECTION_KEYS)
-            values = {k: self.number(f"{key}.{k}", v, minimum=0.0) for k, v in section.items()}
+            values = self.section_values(key, section)
             dims = {"E", "width", "height"}
             if dims & values.keys():
                 missing = dims - values.keys()
@@ -207,16 +267,31 @@ class _SceneBuilder:
                 values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
                 if "rho" in values:
                     values.setdefault("rho_A", values["rho"] * area)
-            result[name] = values
+            result[name] = self.finite_section(key, values)
         return result
+
+    def section_values(self, key, section):
+        """The numbers of a section: none negative, dimensions (width, ...) positive."""
+        return {k: self.number(f"{key}.{k}", v, minimum=0.0,
+                               positive=k in ("width", "height", "diameter"))
+                for k, v in section.items()}
+
+    def finite_section(self, key, values):
+        """Refuse a section whose derived properties (EA = E w h, ...) over- or underflow."""
+        for k, v in values.items():
+            if not math.isfinite(v):
+                self.fail(key, f"the section's {k} comes out as {v!r} from its numbers; check "
+                               "their magnitudes (SI units)")
+        return values
 
     def spatial_section(self, key, section):
         self.check_keys(key, section, SECTION_KEYS_3D)
-        values = {k: self.number(f"{key}.{k}", v, minimum=0.0) for k, v in section.items()}
+        values = self.section_values(key, section)
         try:
-            return beam_properties(values)
+            properties = beam_properties(values)
         except ValueError as error:
             self.fail(key, str(error))
+        return self.finite_section(key, properties)
 
     def build_nodes(self, nodes):
         if not nodes:
@@ -244,7 +319,7 @@ class _SceneBuilder:
             else:
                 self.check_keys(key, node, {"angle", "fixed", "dof", "inertia", "moment"})
                 axes = ROTATION_AXES[self.dimension]
-                values = [self.number(f"{key}.angle", node["angle"])]
+                values = [self.number(f"{key}.angle", node["angle"], limit=MAX_ANGLE)]
                 # A lumped rotational inertia may be negative: SPACAR's lumped model of a bar
                 # puts m/2 at both ends with J = -m l^2 / 12 each (the total stays positive).
                 masses = [self.number(f"{key}.inertia", node.get("inertia", 0.0))]
@@ -269,7 +344,11 @@ class _SceneBuilder:
             self.fail(key, "expected exactly one of 'position' (a translational node) or "
                            "'rotation' (a rotational node: a rotation vector, rad)")
         self.check_keys(key, node, {"rotation", "fixed", "inertia"})
-        lam = from_rotation_vector(np.array(self.vector(f"{key}.rotation", node["rotation"], 3)))
+        rotation = np.array(self.vector(f"{key}.rotation", node["rotation"], 3, limit=MAX_ANGLE))
+        if np.linalg.norm(rotation) > MAX_ANGLE:
+            self.fail(f"{key}.rotation", f"expected a rotation vector of magnitude <= "
+                                         f"{MAX_ANGLE:g} rad, got {rotation.tolist()!r}")
+        lam = from_rotation_vector(rotation)
         fixed = node.get("fixed", False)
         if fixed in (["rotation"], "rotation"):
             fixed = True
@@ -354,8 +433,9 @@ class _SceneBuilder:
             section_name = element.get("section")
             if section_name is None:
                 self.fail(key, "element without a section: add section = \"NAME\"")
-            if section_name not in self.sections:
-                self.fail(f"{key}.section", f"unknown section {section_name!r}")
+            if not isinstance(section_name, str) or section_name not in self.sections:
+                self.fail(f"{key}.section", f"unknown section {_show(section_name)}; expected one "
+                                            f"of {', '.join(self.sections) or 'none declared'}")
             section = self.sections[section_name]
             released = self.names(f"{key}.released", element.get("released", []),
                                   kind.deformation_names)
@@ -428,9 +508,9 @@ class _SceneBuilder:
     def coordinate(self, key, table):
         node = self.node(f"{key}.node", table.get("node"))
         axis = table.get("coordinate")
-        if axis not in self.node_coordinates[node]:
+        if not isinstance(axis, str) or axis not in self.node_coordinates[node]:
             self.fail(f"{key}.coordinate",
-                      f"node {node!r} has no coordinate {axis!r}; expected one of "
+                      f"node {node!r} has no coordinate {_show(axis)}; expected one of "
                       f"{', '.join(self.node_coordinates[node])}")
         return self.node_coordinates[node][axis]
 
@@ -453,9 +533,9 @@ class _SceneBuilder:
             else:
                 self.check_keys(key, port, {"node", "coordinate", "quantity"})
                 quantity = port.get("quantity", "position")
-                if quantity not in OUTPUT_QUANTITIES:
+                if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
                     self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
-                                                 f"got {quantity!r}")
+                                                 f"got {_show(quantity)}")
                 unit = OUTPUT_QUANTITIES[quantity]
                 if not self._is_translation(port):
                     unit = unit.replace("m", "rad")
@@ -484,3 +564,11 @@ class _SceneBuilder:
                                    strict=True):
                 loads[self.node_coordinates[node][axis]] += value
         return loads
+
+
+def _show(value, width=60):
+    """repr(value), shortened to about `width` characters for a one-line message."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        return f"an integer of {int(value.bit_length() * 0.30103) + 1} digits"
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 4] + " ..."
