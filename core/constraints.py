@@ -44,28 +44,30 @@ def check_exact_constraint(model, x=None):
     _, De = assembly.deformation_jacobian(model, x)
     scale = _column_scale(model, kin.length_scale)[kin.free]
     rigid_rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
-    for dependency in _dependent_row_sets(rigid_rows):
+    # Several null-space vectors may involve the same rows: one line per set, with its count.
+    for dependency, count in _counted(_dependent_row_sets(rigid_rows)):
         names = [model.deformation_names[model.rigid_deformations[i]] for i in dependency]
+        redundant = "one of them is" if count == 1 else f"{count} of them are"
+        release = "one of them" if count == 1 else f"{count} of them"
         problems.append(
             "over-constrained: the prescribed deformations "
             + ", ".join(names)
-            + " are mutually dependent, so one of them is redundant; release one of them "
+            + f" are mutually dependent, so {redundant} redundant; release {release} "
             "(or remove a support)"
         )
     rows = De[np.ix_(kin.constraint_rows, kin.free)] * scale
     dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
     dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
     full = np.vstack([rows, dof_rows])
-    for motion in _free_motions(full):
-        moving = [
-            model.coordinate_names[kin.free[i]]
-            for i in np.flatnonzero(np.abs(motion) > 1e-6 * np.abs(motion).max())
-        ]
+    motions = [tuple(np.flatnonzero(np.abs(motion) > 1e-6 * np.abs(motion).max()))
+               for motion in _free_motions(full)]
+    for moving, count in _counted(motions):
+        names = ", ".join(model.coordinate_names[kin.free[i]] for i in moving)
+        ways = "" if count == 1 else f" in {count} independent ways"
         problems.append(
-            "under-constrained: the coordinates "
-            + ", ".join(moving)
-            + " can move without changing any prescribed deformation or DOF; prescribe a "
-            "released deformation zero, fix a coordinate or declare a DOF"
+            f"under-constrained: the coordinates {names} can move{ways} without changing any "
+            "prescribed deformation or DOF; prescribe a released deformation zero, fix a "
+            "coordinate or declare a DOF"
         )
     if problems:
         raise ConstraintError(
@@ -73,6 +75,15 @@ def check_exact_constraint(model, x=None):
             + "\n  - ".join(problems)
         )
     return model.dof_count()
+
+
+def _counted(index_sets):
+    """(index set, how many times it occurs) in order of first occurrence."""
+    counts = {}
+    for indices in index_sets:
+        key = tuple(int(i) for i in indices)
+        counts[key] = counts.get(key, 0) + 1
+    return list(counts.items())
 
 
 def _column_scale(model, length_scale):
