@@ -23,12 +23,16 @@ over constrained paths), where both agree (tested against Euler's equations).
 The source of J: the lumped node inertias of a scene (`Model.node_inertias`). The spatial
 BEAM carries its section's rotational inertia in the same way, with its own inertia points
 (the section axes, see flexure.core.elements.beam).
+
+`inertia_kernel` evaluates the same points for one node, from its row of `pack_reference`, for
+the compiled evaluation engine.
 """
 
 import numpy as np
+from numba import njit
 
 from .model import ElementGroup
-from .rotations import rotate
+from .rotations import rotate, vector_tensor
 
 type_name = "NODE_INERTIA"
 inertia_point_kinds = ("tangent", "tangent", "tangent")
@@ -79,3 +83,50 @@ def _self():
     import sys
 
     return sys.modules[__name__]
+
+
+# -- compiled kernel (one node per call) -------------------------------------------------------
+# `inertia_points` for one node, for the compiled evaluation engine, with scalar loops and no
+# allocation. The packed reference row holds the tensors C_k (3 x 4 x 4) of the three body
+# vectors b_k (`rotations.vector_tensor`, R(lambda) b_k = C_k lambda lambda), C_k at
+# ref[48 k + 16 m + 4 i + j] = (C_k)_mij.
+
+REFERENCE_WIDTH = 3 * 48  # 144 floats
+
+
+def pack_reference(ref):
+    """(n, REFERENCE_WIDTH) float64, C-contiguous, of the reference {"axes": (n, 3, 3)} (the
+    body vectors b_k as columns)."""
+    axes = np.asarray(ref["axes"], float)
+    tensors = vector_tensor(np.swapaxes(axes, 1, 2))  # (n, 3 vectors, 3, 4, 4)
+    return np.ascontiguousarray(tensors.reshape(axes.shape[0], REFERENCE_WIDTH))
+
+
+@njit(cache=True, error_model="numpy")
+def inertia_kernel(x, v, ref, order, p, Dp, acc):
+    """p (9,), Dp (9, 4) if order >= 1, acc = (D2p v) v (9,) if order >= 2 of one node: its
+    Euler parameters x (4,) and their rates v (4,), ref its packed reference row. Overwrites
+    every entry it fills; no allocation. With C the tensor of a point's component: p = (C
+    lambda) . lambda, Dp = 2 C lambda, D2p = 2 C."""
+    m0, m1, m2, m3 = x[0], x[1], x[2], x[3]  # as scalars: indexing x in the loop is slower
+    for row in range(9):
+        base = 16 * row  # 48 k + 16 m for component m of point k, row 3 k + m
+        h0 = ref[base] * m0 + ref[base + 1] * m1 + ref[base + 2] * m2 + ref[base + 3] * m3
+        h1 = ref[base + 4] * m0 + ref[base + 5] * m1 + ref[base + 6] * m2 + ref[base + 7] * m3
+        h2 = ref[base + 8] * m0 + ref[base + 9] * m1 + ref[base + 10] * m2 + ref[base + 11] * m3
+        h3 = (ref[base + 12] * m0 + ref[base + 13] * m1 + ref[base + 14] * m2
+              + ref[base + 15] * m3)
+        p[row] = h0 * m0 + h1 * m1 + h2 * m2 + h3 * m3
+        if order >= 1:
+            Dp[row, 0] = 2.0 * h0
+            Dp[row, 1] = 2.0 * h1
+            Dp[row, 2] = 2.0 * h2
+            Dp[row, 3] = 2.0 * h3
+        if order >= 2:
+            rate = 0.0
+            for i in range(4):
+                half = 0.0
+                for j in range(4):
+                    half += ref[base + 4 * i + j] * v[j]
+                rate += half * v[i]
+            acc[row] = 2.0 * rate

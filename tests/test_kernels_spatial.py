@@ -1,0 +1,159 @@
+"""The compiled one-element kernels of the spatial BEAM and of the rigid-body node inertia
+against the numpy functions of the same modules (the reference implementation): equal to
+round-off, every entry of the arrays they fill overwritten, nothing touched beyond the order.
+"""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from numba import njit
+from numpy.testing import assert_allclose
+
+from flexure.core import rotary_inertia
+from flexure.core.elements import beam
+from flexure.core.rotations import from_rotation_vector
+
+COUNT = 12
+
+
+def close(actual, desired):
+    """Equal to round-off: rtol 1e-12, atol 1e-12 times the array's scale; and all filled."""
+    assert np.all(np.isfinite(actual))
+    scale = max(np.abs(desired).max(), 1e-300)
+    assert_allclose(actual, desired, rtol=1e-12, atol=1e-12 * scale)
+
+
+@pytest.fixture(scope="module", params=["default_axis", "given_axis"])
+def beams(request):
+    rng = np.random.default_rng(20240611)
+    x0, x = beam.random_coordinates(rng, COUNT)
+    y_axis = None if request.param == "default_axis" else rng.normal(size=(COUNT, 3))
+    ref = beam.reference(x0, y_axis)
+    v = rng.normal(size=x.shape)
+    return x, v, ref, beam.pack_reference(ref)
+
+
+@pytest.fixture(scope="module")
+def nodes():
+    rng = np.random.default_rng(7)
+    lam = from_rotation_vector(rng.uniform(-3.0, 3.0, (COUNT, 3)))
+    A = rng.normal(size=(COUNT, 3, 3))
+    J = A @ np.swapaxes(A, 1, 2) + 0.1 * np.eye(3)  # symmetric positive definite
+    model = SimpleNamespace(node_inertias=[(np.arange(4) + 4 * k, J[k]) for k in range(COUNT)])
+    ((group, _),) = rotary_inertia.node_inertia_groups(model)
+    v = rng.normal(size=lam.shape)
+    return lam, v, group.reference, rotary_inertia.pack_reference(group.reference)
+
+
+def nan(*shape):
+    return np.full(shape, np.nan)
+
+
+def python(kernel):
+    """The kernel as plain Python, where indexing is bounds-checked (already so without JIT)."""
+    return getattr(kernel, "py_func", kernel)
+
+
+def test_pack_reference_layout(beams, nodes):
+    for module, packed, n in ((beam, beams[3], COUNT), (rotary_inertia, nodes[3], COUNT)):
+        assert packed.shape == (n, module.REFERENCE_WIDTH)
+        assert packed.dtype == np.float64 and packed.flags.c_contiguous
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_beam_deformations_kernel(beams, order):
+    x, _, ref, packed = beams
+    expected = beam.deformations(x, ref, order)
+    for n in range(COUNT):
+        e, De, D2e = nan(6), nan(6, 14), nan(6, 14, 14)
+        beam.deformations_kernel(x[n], packed[n], order, e, De, D2e)
+        close(e, expected[0][n])
+        if order >= 1:
+            close(De, expected[1][n])
+        else:
+            assert np.all(np.isnan(De))
+        if order >= 2:
+            close(D2e, expected[2][n])
+        else:
+            assert np.all(np.isnan(D2e))
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_beam_inertia_kernel(beams, order):
+    x, v, ref, packed = beams
+    expected = beam.inertia_points(x, ref, 2)
+    acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
+    for n in range(COUNT):
+        p, Dp, acc = nan(24), nan(24, 14), nan(24)
+        beam.inertia_kernel(x[n], v[n], packed[n], order, p, Dp, acc)
+        close(p, expected[0][n])
+        if order >= 1:
+            close(Dp, expected[1][n])
+        else:
+            assert np.all(np.isnan(Dp))
+        if order >= 2:
+            close(acc, acc_expected[n])
+        else:
+            assert np.all(np.isnan(acc))
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_node_inertia_kernel(nodes, order):
+    lam, v, ref, packed = nodes
+    expected = rotary_inertia.inertia_points(lam, ref, 2)
+    acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
+    for n in range(COUNT):
+        p, Dp, acc = nan(9), nan(9, 4), nan(9)
+        rotary_inertia.inertia_kernel(lam[n], v[n], packed[n], order, p, Dp, acc)
+        close(p, expected[0][n])
+        if order >= 1:
+            close(Dp, expected[1][n])
+        else:
+            assert np.all(np.isnan(Dp))
+        if order >= 2:
+            close(acc, acc_expected[n])
+        else:
+            assert np.all(np.isnan(acc))
+
+
+def test_lower_orders_do_not_index_the_higher_arrays(beams, nodes):
+    """The plain-Python kernels (bounds-checked) with empty arrays for what the order skips."""
+    x, v, ref, packed = beams
+    e = nan(6)
+    python(beam.deformations_kernel)(x[0], packed[0], 0, e, nan(0, 0), nan(0, 0, 0))
+    close(e, beam.deformations(x, ref, 0)[0][0])
+    De = nan(6, 14)
+    python(beam.deformations_kernel)(x[0], packed[0], 1, e, De, nan(0, 0, 0))
+    close(De, beam.deformations(x, ref, 1)[1][0])
+    p = nan(24)
+    python(beam.inertia_kernel)(x[0], v[0], packed[0], 0, p, nan(0, 0), nan(0))
+    Dp = nan(24, 14)
+    python(beam.inertia_kernel)(x[0], v[0], packed[0], 1, p, Dp, nan(0))
+    close(Dp, beam.inertia_points(x, ref, 1)[1][0])
+    lam, v, ref, packed = nodes
+    p, Dp = nan(9), nan(9, 4)
+    python(rotary_inertia.inertia_kernel)(lam[0], v[0], packed[0], 0, p, nan(0, 0), nan(0))
+    python(rotary_inertia.inertia_kernel)(lam[0], v[0], packed[0], 1, p, Dp, nan(0))
+    close(Dp, rotary_inertia.inertia_points(lam, ref, 1)[1][0])
+
+
+@njit
+def _all_beams(x, v, ref, order, e, De, D2e, p, Dp, acc):
+    for n in range(x.shape[0]):
+        beam.deformations_kernel(x[n], ref[n], order, e[n], De[n], D2e[n])
+        beam.inertia_kernel(x[n], v[n], ref[n], order, p[n], Dp[n], acc[n])
+
+
+def test_kernels_called_from_compiled_code(beams):
+    """As the engine calls them: from a compiled loop over the rows of stacked buffers."""
+    x, v, ref, packed = beams
+    e, De, D2e = nan(COUNT, 6), nan(COUNT, 6, 14), nan(COUNT, 6, 14, 14)
+    p, Dp, acc = nan(COUNT, 24), nan(COUNT, 24, 14), nan(COUNT, 24)
+    _all_beams(x, v, packed, 2, e, De, D2e, p, Dp, acc)
+    for actual, desired in zip((e, De, D2e), beam.deformations(x, ref, 2), strict=True):
+        close(actual, desired)
+    expected = beam.inertia_points(x, ref, 2)
+    close(p, expected[0])
+    close(Dp, expected[1])
+    close(acc, np.einsum("npij,ni,nj->np", expected[2], v, v))
