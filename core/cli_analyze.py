@@ -1,9 +1,8 @@
 """`flexure analyze SCENE`: DOF count, static equilibrium, modes, buckling, state space."""
 
-import json
-
 import numpy as np
 
+from .cli import PLOT_SUFFIXES, atomic_output, count, output_file
 from .errors import SceneError
 from .linearization import linearize
 from .mechanics import Mechanics
@@ -12,7 +11,7 @@ from .scene import load_scene
 from .statespace import state_space
 from .statics import static_equilibrium
 from .stresses import beam_stresses, plot_beam_stresses
-from .tables import format_table, jsonable
+from .tables import format_table, jsonable, print_json
 
 
 def register(subparsers):
@@ -23,14 +22,14 @@ def register(subparsers):
                     "analysis option, --static and --modes are run.")
     parser.add_argument("scene", help="scene file or built-in scene name")
     parser.add_argument("--static", action="store_true", help="static equilibrium under the loads")
-    parser.add_argument("--modes", nargs="?", type=int, const=-1, metavar="N",
+    parser.add_argument("--modes", nargs="?", type=count, const=-1, metavar="N",
                         help="the lowest N (default all) natural frequencies")
-    parser.add_argument("--buckling", nargs="?", type=int, const=-1, metavar="N",
+    parser.add_argument("--buckling", nargs="?", type=count, const=-1, metavar="N",
                         help="the lowest N (default all) buckling load factors")
     parser.add_argument("--state-space", action="store_true",
                         help="state-space matrices of the declared inputs and outputs")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--plot", metavar="PNG",
+    parser.add_argument("--plot", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the von Mises stresses along the beams at the static "
                              "equilibrium to this PNG file (spatial beams with a section)")
     parser.set_defaults(run=run)
@@ -81,7 +80,7 @@ def run(args):
     if args.plot:
         plot_stresses(model, args.plot)
     if args.json:
-        print(json.dumps(result, indent=1))
+        print_json(result, command="flexure analyze")
     else:
         print(render(result))
     return 0
@@ -94,7 +93,8 @@ def plot_stresses(model, path):
     if not stresses.names:
         raise SceneError(f"{model.source}: --plot: no beam with section dimensions (A) in "
                          f"{model.name!r}, so no stresses to plot")
-    plot_beam_stresses(model, stresses, path)
+    with atomic_output(path, "--plot") as temporary:
+        plot_beam_stresses(model, stresses, temporary)
 
 
 def render(result):

@@ -23,3 +23,11 @@ class ConvergenceError(FlexureError, RuntimeError):
 
 class SimulationError(FlexureError, RuntimeError):
     """A time-domain simulation cannot go on: non-finite input, singular configuration, ..."""
+
+
+class UsageError(FlexureError, ValueError):
+    """A command-line option or an output path cannot be used (checked before a run)."""
+
+
+class OutputError(FlexureError, OSError):
+    """A result could not be written (the file system refused it)."""

@@ -1,5 +1,9 @@
 """Plain-text tables for the command line, and JSON-safe conversion of arrays."""
 
+import json
+import math
+import sys
+
 import numpy as np
 
 
@@ -34,6 +38,44 @@ def jsonable(value):
     if isinstance(value, np.generic):
         return value.item()
     return value
+
+
+def json_text(value, *, indent=1):
+    """(text, replaced): `value` as strict JSON, and where it held NaN or +-Infinity.
+
+    JSON has no NaN or Infinity (json.dumps would write the invalid tokens NaN and Infinity):
+    each non-finite number is written as null, and `replaced` lists its place ("modes.
+    frequencies_hz[2] = inf") so that the caller can say so.
+    """
+    value = jsonable(value)
+    try:
+        return json.dumps(value, indent=indent, allow_nan=False), []
+    except ValueError:
+        pass
+    replaced = []
+
+    def clean(item, where):
+        if isinstance(item, dict):
+            return {k: clean(v, f"{where}.{k}" if where else str(k)) for k, v in item.items()}
+        if isinstance(item, list):
+            return [clean(v, f"{where}[{i}]") for i, v in enumerate(item)]
+        if isinstance(item, float) and not math.isfinite(item):
+            replaced.append(f"{where} = {item}")
+            return None
+        return item
+
+    return json.dumps(clean(value, ""), indent=indent, allow_nan=False), replaced
+
+
+def print_json(value, *, command, indent=1):
+    """Print `value` as strict JSON; a note on stderr names each non-finite number (null)."""
+    text, replaced = json_text(value, indent=indent)
+    print(text)
+    if replaced:
+        shown = ", ".join(replaced[:5]) + (f" and {len(replaced) - 5} more"
+                                           if len(replaced) > 5 else "")
+        print(f"{command}: note: {len(replaced)} non-finite number(s) written as null (JSON has "
+              f"no NaN or Infinity): {shown}", file=sys.stderr)
 
 
 def _cell(value):
