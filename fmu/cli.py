@@ -5,9 +5,15 @@
     flexure fmu check NAME.fmu NAME_in.csv NAME_ref.csv [--update]   # regression test
 """
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 from flexure.core import FlexureError
+from flexure.core.cli import (check_output, nonnegative, number, positive,
+                              refuse_overwriting_inputs)
+from flexure.core.errors import OutputError, UsageError
 
 from .builder import build_scene_fmu, default_tunable
 from .env import fmu_environment, format_environment
@@ -54,21 +60,55 @@ def register(subparsers):
     check.add_argument("fmu")
     check.add_argument("input_csv")
     check.add_argument("reference_csv")
-    check.add_argument("--rtol", type=float, default=DEFAULT_RTOL,
+    check.add_argument("--rtol", type=number(0.0, 1.0, low_open=False), default=DEFAULT_RTOL,
                        help=f"of each signal's range (default {DEFAULT_RTOL:g})")
-    check.add_argument("--atol", type=float, default=DEFAULT_ATOL,
+    check.add_argument("--atol", type=nonnegative, default=DEFAULT_ATOL,
                        help=f"absolute (default {DEFAULT_ATOL:g})")
     check.add_argument("--update", action="store_true",
                        help="write the reference instead of checking against it")
-    check.add_argument("--interval", type=float, default=DEFAULT_INTERVAL,
+    check.add_argument("--interval", type=positive, default=DEFAULT_INTERVAL,
                        help="communication step of a reference written with --update (s)")
     check.set_defaults(run=run_check)
 
 
 def run_build(args):
+    from flexure.core.scene import parse_toml, scene_path
+
     tunable = [] if args.no_tunable else args.tunable
-    path = build_scene_fmu(args.scene, args.output, tunable=tunable,
-                           von_mises=args.von_mises, validate=not args.no_validate)
+    for key in set(tunable or []):
+        if tunable.count(key) > 1:
+            raise UsageError(f"--tunable {key}: given {tunable.count(key)} times; give each "
+                             "key once")
+    output = args.output
+    if output is not None and not Path(output).is_dir():
+        check_output(output, suffixes=(".fmu",), option="-o")
+    folder = Path(output) if output is not None and Path(output).is_dir() else (
+        Path(output).parent if output is not None else Path("."))
+    if output is None or Path(output).is_dir():
+        check_output(folder / "scene.fmu", option="-o" if output else "the current folder")
+    source = scene_path(args.scene)
+    parse_toml(source)  # a SceneError for invalid bytes or TOML, before the build
+    refuse_overwriting_inputs([("-o", output)], [source])
+    # built in a temporary folder beside the destination, then moved in one step: a failed
+    # build or validation leaves no file, and never half of one
+    try:
+        temporary = tempfile.mkdtemp(dir=folder, prefix=".flexure_fmu_")
+    except OSError as error:
+        raise OutputError(f"-o {output or '.'}: cannot write in {folder}: "
+                          f"{error.strerror}") from None
+    try:
+        built = build_scene_fmu(source, temporary, tunable=tunable, von_mises=args.von_mises,
+                                validate=not args.no_validate)
+        path = (folder / built.name if output is None or Path(output).is_dir()
+                else Path(output))
+        if path.is_dir():
+            raise UsageError(f"-o {output or '.'}: {path} is a folder; expected a file name")
+        try:
+            os.replace(built, path)
+        except OSError as error:
+            raise OutputError(f"{path}: cannot write: {error.strerror}") from None
+    finally:
+        shutil.rmtree(temporary, ignore_errors=True)
     print(path)
     return 0
 
@@ -77,8 +117,12 @@ def run_check(args):
     needed = [args.fmu, args.input_csv] + ([] if args.update else [args.reference_csv])
     for path in needed:
         if not Path(path).is_file():
-            raise FlexureError(f"{path}: no such file")
+            raise FlexureError(f"{path}: " + ("not a file" if Path(path).exists()
+                                              else "no such file"))
     if args.update:
+        check_output(args.reference_csv, option="REFERENCE_CSV")
+        refuse_overwriting_inputs([("REFERENCE_CSV", args.reference_csv)],
+                                  [args.fmu, args.input_csv])
         path = write_reference(args.fmu, args.input_csv, args.reference_csv,
                                output_interval=args.interval)
         print(f"wrote {path}")

@@ -18,20 +18,93 @@ by 6e-5 m, 1 % more bending damping in the stage's leaves by 1.5e-7 m; both are 
     flexure fmu check stage.fmu stage_in.csv stage_ref.csv --update   # (re)write the reference
 """
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
+
+from flexure.core.cli import atomic_output
+from flexure.core.errors import FlexureError
 
 DEFAULT_INTERVAL = 1e-3  # s, the communication step of a new reference
 DEFAULT_RTOL = 1e-5  # of each signal's range
 DEFAULT_ATOL = 1e-8  # in the signal's unit (10 nm on a position)
 
 
-def read_csv(path):
-    """A cross-check CSV as a structured array (first column "time")."""
+class FMUCheckError(FlexureError, ValueError):
+    """An FMU or a cross-check CSV that cannot be used, or a simulation that failed."""
+
+
+def read_csv(path, *, min_rows=1, steps_allowed=True):
+    """A cross-check CSV as a structured array (first column "time"), validated.
+
+    Raises FMUCheckError naming the file, the row or the column when it is not a header
+    line "time,NAME,..." over at least `min_rows` rows of finite numbers with times that never
+    decrease (or, without `steps_allowed`, strictly increase).
+    """
     from fmpy.util import read_csv as fmpy_read_csv
 
-    return fmpy_read_csv(str(path))
+    expected = 'a header line "time,NAME,..." and rows of numbers'
+    try:
+        signals = fmpy_read_csv(str(path))
+    except OSError as error:
+        raise FMUCheckError(f"{path}: cannot read: {error.strerror}") from None
+    except UnicodeDecodeError as error:
+        raise FMUCheckError(f"{path}: not UTF-8 text ({error.reason} at byte {error.start}); "
+                            f"expected {expected}") from None
+    except IndexError:  # fmpy reads the header line and the first row unchecked
+        raise FMUCheckError(f"{path}: expected {expected}; the file has no rows of samples"
+                            ) from None
+    except (ValueError, TypeError) as error:
+        raise FMUCheckError(f"{path}: expected {expected}: {error or type(error).__name__}"
+                            ) from None
+    names = signals.dtype.names or ()
+    if not names or names[0] != "time":
+        raise FMUCheckError(f"{path}: expected the first column \"time\", got "
+                            f"{names[0] if names else 'no columns'!r}")
+    signals = np.atleast_1d(signals)
+    if len(signals) < min_rows:
+        raise FMUCheckError(f"{path}: expected at least {min_rows} rows of samples, got "
+                            f"{len(signals)}")
+    for name in names:
+        if signals.dtype[name].shape:
+            raise FMUCheckError(f"{path}: column {name!r}: expected one number per cell")
+        bad = np.flatnonzero(~np.isfinite(signals[name]))
+        if bad.size:
+            raise FMUCheckError(f"{path}: column {name!r}, row {bad[0] + 2}: expected a finite "
+                                f"number, got {signals[name][bad[0]]}")
+    times = signals["time"]
+    back = np.flatnonzero(np.diff(times) < 0 if steps_allowed else np.diff(times) <= 0)
+    if back.size:
+        raise FMUCheckError(f"{path}: row {back[0] + 3}: time {times[back[0] + 1]:g} s after "
+                            f"{times[back[0]]:g} s; expected times that "
+                            f"{'never decrease' if steps_allowed else 'increase'}")
+    if times[0] < 0:
+        raise FMUCheckError(f"{path}: expected times from 0 s, got {times[0]:g} s")
+    return signals
+
+
+def model_description(fmu):
+    """fmpy's model description of `fmu`; FMUCheckError if it is not a readable FMU."""
+    from fmpy import read_model_description
+
+    if not zipfile.is_zipfile(fmu):
+        raise FMUCheckError(f"{fmu}: not an FMU (not a zip archive)")
+    try:
+        return read_model_description(str(fmu))
+    except Exception as error:  # fmpy raises plain Exceptions, KeyError, XML errors, ...
+        raise FMUCheckError(f"{fmu}: not a valid FMU: {type(error).__name__}: {error}"
+                            ) from None
+
+
+def check_inputs(fmu, input_csv, signals):
+    """FMUCheckError unless every column of the input file is an input of the FMU."""
+    description = model_description(fmu)
+    inputs = [v.name for v in description.modelVariables if v.causality == "input"]
+    for name in signals.dtype.names[1:]:
+        if name not in inputs:
+            raise FMUCheckError(f"{input_csv}: column {name!r} is not an input of {fmu} "
+                                f"(its inputs: {', '.join(inputs) or 'none'})")
 
 
 def simulate(fmu, input_csv, *, output_interval=DEFAULT_INTERVAL, stop_time=None,
@@ -43,11 +116,19 @@ def simulate(fmu, input_csv, *, output_interval=DEFAULT_INTERVAL, stop_time=None
     from fmpy import simulate_fmu
 
     signals = read_csv(input_csv)
+    check_inputs(fmu, input_csv, signals)
     if stop_time is None:
         stop_time = float(signals["time"][-1])
-    return simulate_fmu(str(fmu), start_time=0.0, stop_time=stop_time,
-                        output_interval=output_interval, input=signals,
-                        start_values=start_values or {})
+    if not stop_time > 0:
+        raise FMUCheckError(f"{input_csv}: the samples span no time (last time {stop_time:g} "
+                            "s); expected a last time > 0")
+    try:
+        return simulate_fmu(str(fmu), start_time=0.0, stop_time=stop_time,
+                            output_interval=output_interval, input=signals,
+                            start_values=start_values or {})
+    except Exception as error:  # fmpy reports a failed FMI call as a plain Exception
+        raise FMUCheckError(f"{fmu}: the simulation failed: {type(error).__name__}: "
+                            f"{error}") from None
 
 
 def write_reference(fmu, input_csv, reference_csv, *, output_interval=DEFAULT_INTERVAL):
@@ -55,7 +136,9 @@ def write_reference(fmu, input_csv, reference_csv, *, output_interval=DEFAULT_IN
     from fmpy.util import write_csv
 
     result = simulate(fmu, input_csv, output_interval=output_interval)
-    write_csv(str(reference_csv), result)
+    # atomically: an interrupted or failed write leaves the previous reference as it was
+    with atomic_output(reference_csv) as temporary:
+        write_csv(temporary, result)
     return Path(reference_csv)
 
 
@@ -82,7 +165,7 @@ def compare(result, reference, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
 
 def check_fmu(fmu, input_csv, reference_csv, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
     """Simulate `fmu` on the reference's grid and compare; returns the list of problems."""
-    reference = read_csv(reference_csv)
+    reference = read_csv(reference_csv, min_rows=2, steps_allowed=False)
     interval = float(reference["time"][1] - reference["time"][0])
     result = simulate(fmu, input_csv, output_interval=interval,
                       stop_time=float(reference["time"][-1]))
