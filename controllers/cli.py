@@ -4,12 +4,34 @@
     flexure loop stage_planar_3dof --stroke 0.01 --plant libcosim --json
 """
 
-import json
+import argparse
+import os
+from pathlib import Path
 
+from flexure.core.cli import (
+    PLOT_SUFFIXES,
+    check_output,
+    fraction,
+    nonnegative,
+    number,
+    positive,
+    write_outputs,
+)
+from flexure.core.errors import UsageError
 from flexure.core.progress import Progress
-from flexure.core.tables import format_table, jsonable
+from flexure.core.tables import format_table, print_json
 
 from .runner import PLANTS, run_loop
+
+_finite = number()
+
+
+def stroke(text):
+    """argparse type of --stroke: a finite length (m), not zero."""
+    value = _finite(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected a nonzero length (m), got {text!r}")
+    return value
 
 
 def register(subparsers):
@@ -22,15 +44,15 @@ def register(subparsers):
                     "largest tracking error against the target of 0.1 %% of the stroke.")
     parser.add_argument("scene", nargs="?", default="stage_planar_1dof",
                         help="scene file or built-in scene name (default stage_planar_1dof)")
-    parser.add_argument("--stroke", type=float, default=1e-3, metavar="S",
+    parser.add_argument("--stroke", type=stroke, default=1e-3, metavar="S",
                         help="stroke of the move in m (default 0.001)")
-    parser.add_argument("--duration", type=float, default=1.0, metavar="T",
+    parser.add_argument("--duration", type=positive, default=1.0, metavar="T",
                         help="duration of the move in s (default 1)")
-    parser.add_argument("--fs", type=float, default=4000.0, metavar="HZ",
+    parser.add_argument("--fs", type=positive, default=4000.0, metavar="HZ",
                         help="sample rate of the controller in Hz (default 4000)")
-    parser.add_argument("--crossover", type=float, default=300.0, metavar="RAD_S",
+    parser.add_argument("--crossover", type=positive, default=300.0, metavar="RAD_S",
                         help="cross-over of the feedback in rad/s (default 300)")
-    parser.add_argument("--settle", type=float, default=0.25, metavar="T",
+    parser.add_argument("--settle", type=nonnegative, default=0.25, metavar="T",
                         help="time simulated after the move in s (default 0.25)")
     parser.add_argument("--no-feedforward", action="store_true",
                         help="feedback alone")
@@ -41,7 +63,7 @@ def register(subparsers):
     parser.add_argument("--plant", choices=PLANTS, default="inprocess",
                         help="in-process simulation, the scene FMU under fmpy, or the "
                              "controller and scene FMUs in libcosim (default inprocess)")
-    parser.add_argument("--rtol", type=float, default=1e-8, metavar="R",
+    parser.add_argument("--rtol", type=fraction, default=1e-8, metavar="R",
                         help="relative tolerance of the plant's integrator (default 1e-8; "
                              "1e-6 takes about a quarter less time on the default move)")
     parser.add_argument("--plot", default="loop.png", metavar="PNG",
@@ -55,19 +77,36 @@ def register(subparsers):
 
 def run(args):
     feedforward = False if args.no_feedforward else args.feedforward
+    plot = None if args.no_plot or not args.plot else check_output(
+        args.plot, suffixes=PLOT_SUFFIXES, option="--plot")
+    if args.workdir is not None:
+        check_workdir(args.workdir)
     result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
                       crossover=args.crossover, feedforward=feedforward, plant=args.plant,
                       settle=args.settle, rtol=args.rtol, workdir=args.workdir,
                       progress=Progress(f"flexure loop ({args.plant})"))
     summary = result.summary()
-    if not args.no_plot and args.plot:
-        result.plot(args.plot)
-        summary["plot"] = args.plot
+    code = write_outputs("flexure loop", [("--plot", plot, result.plot)],
+                         announce=False) if plot else 0
+    if plot and code == 0:
+        summary["plot"] = str(plot)
     if args.json:
-        print(json.dumps(jsonable(summary), indent=1))
+        print_json(summary, command="flexure loop")
     else:
         print(render(summary))
-    return 0
+    return code
+
+
+def check_workdir(workdir):
+    """UsageError unless `workdir` is (or can be made as) a writable folder."""
+    path = Path(workdir)
+    existing = path
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise UsageError(f"--workdir {workdir}: {existing} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise UsageError(f"--workdir {workdir}: the folder {existing} is not writable")
 
 
 def render(s):

@@ -11,13 +11,19 @@ CVODE Adams reference at equally spaced times.
 import argparse
 from pathlib import Path
 
-from .cli import (PLOT_SUFFIXES, distinct_outputs, fraction, number, output_file, positive,
-                  write_outputs)
+from .cli import (
+    PLOT_SUFFIXES,
+    distinct_outputs,
+    fraction,
+    number,
+    output_file,
+    positive,
+    write_outputs,
+)
 from .cli_simulate import parse_inputs
 from .errors import SimulationError
 from .scene import load_scene
 from .workprecision import ALL_METHODS, DEFAULT_METHODS, work_precision
-
 
 SAMPLES = number(2, 1_000_000, integer=True, low_open=False, high_open=False)
 TOP_ORDER = {"cvode-adams": 12, "cvode-bdf": 5, "ida": 5}

@@ -11,15 +11,23 @@ from pathlib import Path
 
 import numpy as np
 
-from .cli import (PLOT_SUFFIXES, count, distinct_outputs, fraction, number, output_file,
-                  positive, refuse_overwriting_inputs, write_outputs)
+from .cli import (
+    PLOT_SUFFIXES,
+    count,
+    distinct_outputs,
+    fraction,
+    number,
+    output_file,
+    positive,
+    refuse_overwriting_inputs,
+    write_outputs,
+)
 from .errors import SimulationError, UsageError
 from .integrators import METHODS
 from .progress import Progress
 from .scene import load_scene
 from .simulation import simulate
 from .tables import format_table
-
 
 SAMPLES = number(1, 10_000_000, integer=True, low_open=False, high_open=False)
 

@@ -11,8 +11,7 @@ import tempfile
 from pathlib import Path
 
 from flexure.core import FlexureError
-from flexure.core.cli import (check_output, nonnegative, number, positive,
-                              refuse_overwriting_inputs)
+from flexure.core.cli import check_output, nonnegative, number, positive, refuse_overwriting_inputs
 from flexure.core.errors import OutputError, UsageError
 
 from .builder import build_scene_fmu, default_tunable

@@ -165,6 +165,7 @@ def compare(result, reference, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
 
 def check_fmu(fmu, input_csv, reference_csv, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
     """Simulate `fmu` on the reference's grid and compare; returns the list of problems."""
+    model_description(fmu)  # not an FMU: say so before reading the CSV files
     reference = read_csv(reference_csv, min_rows=2, steps_allowed=False)
     interval = float(reference["time"][1] - reference["time"][0])
     result = simulate(fmu, input_csv, output_interval=interval,
