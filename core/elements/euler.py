@@ -12,6 +12,7 @@ It has no stiffness, damping or mass.
 """
 
 import numpy as np
+from numba import njit
 
 type_name = "EULER"
 dimension = 3
@@ -51,3 +52,28 @@ def stiffness(ref, props):
 def damping(ref, props):
     """No damping."""
     return stiffness(ref, props)
+
+
+# -- compiled kernel ------------------------------------------------------------------------
+
+REFERENCE_WIDTH = 1  # nothing is needed; one placeholder so that every group has a row
+
+
+def pack_reference(ref):
+    """(n, 1) float64 of ones (the constraint is the same for each node)."""
+    return np.ascontiguousarray(np.asarray(ref["ones"], float)[:, None])
+
+
+@njit(cache=True, error_model="numpy")
+def deformations_kernel(x, ref, order, e, De, D2e):
+    """One node: norm (1,) and, by order, D norm = lambda (1, 4), D2 norm = I (1, 4, 4)."""
+    e[0] = 0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3] - 1.0)
+    if order == 0:
+        return
+    for i in range(4):
+        De[0, i] = x[i]
+    if order == 1:
+        return
+    for i in range(4):
+        for j in range(4):
+            D2e[0, i, j] = 1.0 if i == j else 0.0

@@ -25,6 +25,7 @@ Every function works on all elements of this type at once: arrays shaped (n_elem
 """
 
 import numpy as np
+from numba import njit
 
 type_name = "PLBEAM"
 dimension = 2
@@ -188,3 +189,115 @@ def inertia_matrix(ref, props):
     """Consistent mass (n, 8, 8) in kg on the inertia points of `inertia_points`."""
     mass = props["rho_A"] * ref["l0"]
     return mass[:, None, None] * np.kron(HERMITE_MASS, np.eye(2))[None]
+
+
+# -- compiled kernel: one element, the formulas above in scalars ----------------------------
+
+REFERENCE_WIDTH = 4  # [l0, offset_p, offset_q, c]
+
+
+def pack_reference(ref):
+    """(n, 4) float64: l0 (m), offset_p, offset_q (rad), c (1/m) per element."""
+    return np.ascontiguousarray(np.column_stack(
+        [ref["l0"], ref["offset_p"], ref["offset_q"], ref["c"]]), dtype=float)
+
+
+# x column of each z = [l_x, l_y, phi^p, phi^q] entry, twice where l = r^q - r^p, with sign
+_KX = np.array([0, 1, 2, 3, 4, 5])
+_KZ = np.array([0, 1, 2, 0, 1, 3])
+_KS = np.array([-1.0, -1.0, 1.0, 1.0, 1.0, 1.0])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bending_hessian(k, a, b, cp, sp, cq, sq, e2, e3):
+    """d2 e_k / dz_a dz_b of the bending deformations (k = 1: e2, k = 2: e3) in z."""
+    if k == 1:  # d2 e2 / dl dphi^p = t^p = (cos, sin), d2 e2 / dphi^p2 = -e2
+        if (a == 0 and b == 2) or (a == 2 and b == 0):
+            return cp
+        if (a == 1 and b == 2) or (a == 2 and b == 1):
+            return sp
+        return -e2 if a == 2 and b == 2 else 0.0
+    if (a == 0 and b == 3) or (a == 3 and b == 0):  # e3: -t^q and -e3
+        return -cq
+    if (a == 1 and b == 3) or (a == 3 and b == 1):
+        return -sq
+    return -e3 if a == 3 and b == 3 else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def deformations_kernel(x, ref, order, e, De, D2e):
+    """One element: e (3,) and, by order, De (3, 6) and D2e (3, 6, 6), every entry written.
+
+    x (6,) local coordinates, ref (4,) from `pack_reference`; the formulas of the module
+    docstring, with the derivatives written in z = [l_x, l_y, phi^p, phi^q] and mapped to x
+    (x column i is z column _KZ[i] with sign _KS[i]). No allocation."""
+    lx = x[3] - x[0]
+    ly = x[4] - x[1]
+    length = np.sqrt(lx * lx + ly * ly)
+    ap = x[2] + ref[1]
+    aq = x[5] + ref[2]
+    cp, sp = np.cos(ap), np.sin(ap)
+    cq, sq = np.cos(aq), np.sin(aq)
+    c = ref[3]
+    e2 = sp * lx - cp * ly  # -(n_y^p . l) with n_y = (-sin, cos)
+    e3 = -sq * lx + cq * ly  # +(n_y^q . l)
+    e[1] = e2
+    e[2] = e3
+    e[0] = length - ref[0] + c * (2.0 * e2 * e2 + e2 * e3 + 2.0 * e3 * e3)
+    if order == 0:
+        return
+    s2 = c * (4.0 * e2 + e3)  # d e1 / d e2
+    s3 = c * (e2 + 4.0 * e3)  # d e1 / d e3
+    ux, uy = lx / length, ly / length
+    # the bending rows in z: e2 on (l, phi^p), e3 on (l, phi^q)
+    d2 = (sp, -cp, cp * lx + sp * ly, 0.0)
+    d3 = (-sq, cq, 0.0, -(cq * lx + sq * ly))
+    d1 = (ux + s2 * d2[0] + s3 * d3[0], uy + s2 * d2[1] + s3 * d3[1], s2 * d2[2], s3 * d3[3])
+    for i in range(6):
+        z, sign = _KZ[i], _KS[i]
+        De[0, i] = sign * d1[z]
+        De[1, i] = sign * d2[z]
+        De[2, i] = sign * d3[z]
+    if order == 1:
+        return
+    for i in range(6):
+        a, si = _KZ[i], _KS[i]
+        for j in range(6):
+            b, sign = _KZ[j], si * _KS[j]
+            h2 = _bending_hessian(1, a, b, cp, sp, cq, sq, e2, e3)
+            h3 = _bending_hessian(2, a, b, cp, sp, cq, sq, e2, e3)
+            # elongation: c Db^T [[4, 1], [1, 4]] Db + s2 H2 + s3 H3 + (I - u u^T) / |l|
+            h1 = (c * (4.0 * d2[a] * d2[b] + d2[a] * d3[b] + d3[a] * d2[b]
+                       + 4.0 * d3[a] * d3[b]) + s2 * h2 + s3 * h3)
+            if a < 2 and b < 2:
+                ua = ux if a == 0 else uy
+                ub = ux if b == 0 else uy
+                h1 += ((1.0 if a == b else 0.0) - ua * ub) / length
+            D2e[0, i, j] = sign * h1
+            D2e[1, i, j] = sign * h2
+            D2e[2, i, j] = sign * h3
+
+
+@njit(cache=True, error_model="numpy")
+def inertia_kernel(x, v, ref, order, p, Dp, acc):
+    """One element: the points p (8,) of `inertia_points` and, by order, Dp (8, 6) and
+    acc = (D2p v) v (8,) for the local velocity v (6,)."""
+    l0 = ref[0]
+    ap = x[2] + ref[1]
+    aq = x[5] + ref[2]
+    lcp, lsp = l0 * np.cos(ap), l0 * np.sin(ap)
+    lcq, lsq = l0 * np.cos(aq), l0 * np.sin(aq)
+    p[0], p[1], p[2], p[3] = x[0], x[1], lcp, lsp
+    p[4], p[5], p[6], p[7] = x[3], x[4], lcq, lsq
+    if order == 0:
+        return
+    Dp[:, :] = 0.0
+    Dp[0, 0] = Dp[1, 1] = Dp[4, 3] = Dp[5, 4] = 1.0
+    Dp[2, 2], Dp[3, 2] = -lsp, lcp
+    Dp[6, 5], Dp[7, 5] = -lsq, lcq
+    if order == 1:
+        return
+    wp, wq = v[2] * v[2], v[5] * v[5]
+    acc[0] = acc[1] = acc[4] = acc[5] = 0.0
+    acc[2], acc[3] = -lcp * wp, -lsp * wp
+    acc[6], acc[7] = -lcq * wq, -lsq * wq

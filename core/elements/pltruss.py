@@ -17,6 +17,7 @@ and in any dimension (the spatial TRUSS uses them as they are).
 """
 
 import numpy as np
+from numba import njit
 
 type_name = "PLTRUSS"
 dimension = 2
@@ -93,3 +94,57 @@ def inertia_matrix(ref, props):
     shape = np.array([[1.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 3.0]])
     mass = props["rho_A"] * ref["l0"]
     return mass[:, None, None] * np.kron(shape, np.eye(ref["dimension"]))[None]
+
+
+# -- compiled kernel: one element, the formulas above in scalars (any dimension) ----------
+
+REFERENCE_WIDTH = 1  # [l0]
+
+
+def pack_reference(ref):
+    """(n, 1) float64: l0 (m) per element."""
+    return np.ascontiguousarray(np.asarray(ref["l0"], float)[:, None])
+
+
+@njit(cache=True, error_model="numpy")
+def deformations_kernel(x, ref, order, e, De, D2e):
+    """One element: e (1,) and, by order, De (1, 2d) and D2e (1, 2d, 2d), every entry written.
+
+    x (2d,) local coordinates [r^p, r^q], ref (1,) = [l0]. No allocation."""
+    d = x.size // 2
+    length2 = 0.0
+    for a in range(d):
+        la = x[d + a] - x[a]
+        length2 += la * la
+    length = np.sqrt(length2)
+    e[0] = length - ref[0]
+    if order == 0:
+        return
+    for a in range(d):
+        u = (x[d + a] - x[a]) / length
+        De[0, a] = -u
+        De[0, d + a] = u
+    if order == 1:
+        return
+    for a in range(d):
+        for b in range(d):
+            proj = ((1.0 if a == b else 0.0) - De[0, d + a] * De[0, d + b]) / length
+            D2e[0, a, b] = D2e[0, d + a, d + b] = proj
+            D2e[0, a, d + b] = D2e[0, d + a, b] = -proj
+
+
+@njit(cache=True, error_model="numpy")
+def inertia_kernel(x, v, ref, order, p, Dp, acc):
+    """One element: the points p = x (2d,), Dp = I and acc = (D2p v) v = 0 (linear map)."""
+    m = x.size
+    for i in range(m):
+        p[i] = x[i]
+    if order == 0:
+        return
+    for i in range(m):
+        for j in range(m):
+            Dp[i, j] = 1.0 if i == j else 0.0
+    if order == 1:
+        return
+    for i in range(m):
+        acc[i] = 0.0

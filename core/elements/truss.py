@@ -11,7 +11,18 @@ The planar PLTRUSS in three dimensions: its functions work in any dimension, so 
 them as they are; every function works on all elements at once.
 """
 
-from .pltruss import damping, deformations, inertia_matrix, inertia_points, reference, stiffness
+from .pltruss import (
+    REFERENCE_WIDTH,
+    damping,
+    deformations,
+    deformations_kernel,
+    inertia_kernel,
+    inertia_matrix,
+    inertia_points,
+    pack_reference,
+    reference,
+    stiffness,
+)
 
 type_name = "TRUSS"
 dimension = 3
@@ -23,5 +34,5 @@ coordinates_per_element = 6
 inertia_point_kinds = ("position", "position")
 properties = ("EA", "EdA", "rho_A", "A")  # section properties used
 
-__all__ = ["damping", "deformations", "inertia_matrix", "inertia_points", "reference",
-           "stiffness"]
+__all__ = ["REFERENCE_WIDTH", "damping", "deformations", "deformations_kernel", "inertia_kernel",
+           "inertia_matrix", "inertia_points", "pack_reference", "reference", "stiffness"]

@@ -1,0 +1,210 @@
+"""A model packed for compiled code: two tuples of flat arrays, and their address table.
+
+The compiled evaluation engine (`flexure.core.engine`) and the SUNDIALS callbacks
+(`flexure.core.sundials`) take no Python objects: everything they read or write is one of the
+flat arrays built here, float64 arrays in `floats` and int64 arrays in `ints`, in the fixed
+order of the slot names below. The same arrays reach a C callback through one address: `table`
+lists (address, length) of every array, and `engine.unpack` rebuilds the two tuples from it.
+
+Per element group (all elements of one type) the engine needs its kernel code, the local
+coordinate and deformation indices, the packed reference rows of the element module
+(`pack_reference`) and, for groups with mass, the constant mass Mp of the inertia points and
+gravity on those points. Workspace arrays (warm start of the kinematics, the last
+evaluation, scratch) live here too, so the engine never allocates in an evaluation.
+
+Units: SI throughout (m, rad, kg, N, s), as the model's.
+"""
+
+import numpy as np
+
+from . import assembly
+from .elements import beam, euler, plbeam, pltruss, truss
+from .model import DOF, FIXED
+
+# kernel codes; TRUSS uses PLTRUSS's dimension-generic kernel
+KERNELS = {pltruss: 0, truss: 0, plbeam: 1, beam: 2, euler: 3}
+NODE_INERTIA = 4  # rigid-body inertia of a 3-D rotational node: inertia points only
+
+# int64 slots (`ints`)
+INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformations",
+             "dof_positions", "stressed", "input_coordinates", "groups", "coordinate_index",
+             "deformation_index", "row_of_deformation", "column_of_coordinate", "pivots",
+             "mass_pivots", "counters")
+# float64 slots (`floats`)
+FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
+               "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
+               "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
+               "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start")
+
+# dims entries
+(NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
+ MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, DIMS_SIZE) = range(20)
+# per-group row of `groups`
+(G_KERNEL, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
+ G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_WIDTH) = range(14)
+# settings entries
+TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
+# counters entries
+RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, COUNTERS_SIZE = range(4)
+# status codes written by the engine (dims[STATUS]) and read by `engine.status_message`
+OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT = \
+    range(6)
+
+
+class EngineData:
+    """The flat arrays of one model for the compiled engine; one instance per integrator.
+
+    Parameters
+    ----------
+    model : Model
+        The model; its inputs are forces (N, N m) on their coordinates.
+    tolerance : float
+        Kinematic tolerance relative to the length scale (default 1e-14: near round-off, so
+        the kinematic error stays below the tightest integrator tolerance).
+    singular_ratio : float
+        Smallest ratio of the constraint Jacobian's LU pivots before a configuration counts
+        as singular (a well-posed stage: 1e-2 to 1).
+    """
+
+    def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6):
+        from .kinematics import _length_scale
+
+        self.model = model
+        nx, ne = model.nx, len(model.deformation_names)
+        ndof = model.declared_dof_count
+        free = model.free_coordinates
+        rows = np.concatenate([model.rigid_deformations, model.dof_deformations])
+        if free.size != rows.size + model.dof_coordinates.size:
+            raise ValueError(f"model {model.name!r} is not exactly counted: {free.size} free "
+                             f"coordinates, {rows.size + model.dof_coordinates.size} "
+                             "constraints and DOFs")
+        stressed = model.stressed_deformations
+        mech_S, mech_D = assembly.stiffness_and_damping(model)
+        S = mech_S[np.ix_(stressed, stressed)]
+        D = mech_D[np.ix_(stressed, stressed)]
+        groups, coord_index, def_index, data = [], [], [], []
+        de_size = d2e_size = 0
+        inertia_groups = assembly.Inertia(model).groups
+        inertia = {id(group): Mp for group, Mp in inertia_groups}
+        all_groups = list(model.groups) + [group for group, _ in inertia_groups
+                                           if group.kind.type_name == "NODE_INERTIA"]
+        offsets = {"coord": 0, "def": 0, "data": 0}
+        max_m = max_k = max_p = 1
+        for group in all_groups:
+            kind = group.kind
+            node_inertia = kind.type_name == "NODE_INERTIA"
+            code = NODE_INERTIA if node_inertia else KERNELS[kind]
+            n, m = group.coordinate_index.shape
+            k = group.deformation_index.shape[1]
+            packed = kind.pack_reference(group.reference)
+            Mp = inertia.get(id(group))
+            P = 0 if Mp is None else Mp.shape[1]
+            row = np.zeros(G_WIDTH, dtype=np.int64)
+            row[[G_KERNEL, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH]] = (code, n, m, k, P,
+                                                                  packed.shape[1])
+            row[G_COORD_OFFSET] = offsets["coord"]
+            row[G_DEF_OFFSET] = offsets["def"]
+            row[G_DATA_OFFSET] = offsets["data"]
+            pieces = [packed.ravel()]
+            size = packed.size
+            row[G_MASS_OFFSET] = row[G_GRAVITY_OFFSET] = -1
+            if Mp is not None:
+                row[G_MASS_OFFSET] = offsets["data"] + size
+                pieces.append(np.ascontiguousarray(Mp, float).ravel())
+                size += Mp.size
+                row[G_GRAVITY_OFFSET] = offsets["data"] + size
+                pieces.append(assembly._point_gravity(group, model.gravity).astype(float))
+                size += P
+            row[G_DE_OFFSET], row[G_D2E_OFFSET] = de_size, d2e_size
+            de_size += n * k * m
+            d2e_size += n * k * m * m
+            groups.append(row)
+            coord_index.append(group.coordinate_index.astype(np.int64).ravel())
+            def_index.append(group.deformation_index.astype(np.int64).ravel())
+            data.extend(pieces)
+            offsets["coord"] += n * m
+            offsets["def"] += n * k
+            offsets["data"] += size
+            max_m, max_k, max_p = max(max_m, m), max(max_k, k), max(max_p, P)
+        row_of_def = np.full(ne, -1, dtype=np.int64)
+        row_of_def[rows] = np.arange(rows.size)
+        col_of_coord = np.full(nx, -1, dtype=np.int64)
+        col_of_coord[free] = np.arange(free.size)
+        input_coords = np.array([port.coordinate for port in model.inputs], dtype=np.int64)
+        lumped = model.lumped_mass.astype(float)
+        constant_force = model.loads.astype(float).copy()
+        if np.any(model.gravity):
+            per_coordinate = assembly.Inertia(model)._translation_gravity(model.gravity)
+            constant_force += lumped * per_coordinate
+        dims = np.zeros(DIMS_SIZE, dtype=np.int64)
+        dims[[NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS]] = (
+            nx, ne, ndof, free.size, model.rigid_deformations.size, model.dof_coordinates.size,
+            model.dof_deformations.size, len(model.inputs), stressed.size, len(groups))
+        dims[HAS_DAMPING] = int(np.any(D))
+        dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
+        dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
+        settings = np.zeros(SETTINGS_SIZE)
+        settings[TOLERANCE] = tolerance * _length_scale(model)
+        settings[SINGULAR_RATIO] = singular_ratio
+        # scratch of one evaluation: the largest of the element-local buffers the engine's
+        # functions lay out one after the other (see engine._inertia, tangent, _mass_times),
+        # plus the absolute DOFs at the end
+        scratch = (2 * ndof + max_m * max_m + max_m * ndof + 2 * max_m + 3 * max_p
+                   + max_p * max_m + max_p * ndof + max_k + ndof + max(nx, ne, 2 * ndof))
+        ints = {
+            "dims": dims, "free": free.astype(np.int64), "constraint_rows": rows.astype(np.int64),
+            "dof_coordinates": model.dof_coordinates.astype(np.int64),
+            "dof_deformations": model.dof_deformations.astype(np.int64),
+            "dof_positions": np.searchsorted(free, model.dof_coordinates).astype(np.int64),
+            "stressed": stressed.astype(np.int64), "input_coordinates": input_coords,
+            "groups": np.concatenate(groups) if groups else np.zeros(0, np.int64),
+            "coordinate_index": _concat_int(coord_index), "deformation_index": _concat_int(
+                def_index),
+            "row_of_deformation": row_of_def, "column_of_coordinate": col_of_coord,
+            "pivots": np.zeros(free.size, np.int64), "mass_pivots": np.zeros(ndof, np.int64),
+            "counters": np.zeros(COUNTERS_SIZE, np.int64),
+        }
+        floats = {
+            "settings": settings, "S": np.ascontiguousarray(S).ravel(),
+            "D": np.ascontiguousarray(D).ravel(), "lumped": lumped,
+            "constant_force": constant_force,
+            "group_data": np.concatenate(data) if data else np.zeros(0),
+            "inputs": np.zeros(len(model.inputs)), "q_ref": np.zeros(ndof),
+            "x": model.initial_coordinates.astype(float).copy(), "q": np.zeros(ndof),
+            "DF": np.zeros(nx * ndof), "lu": np.zeros(free.size * free.size),
+            "e": np.zeros(ne), "De": np.zeros(de_size), "D2e": np.zeros(d2e_size),
+            "x_trial": np.zeros(nx), "g": np.zeros(free.size), "dx": np.zeros(free.size),
+            "xdot": np.zeros(nx), "edot": np.zeros(ne), "sigma": np.zeros(ne),
+            "force": np.zeros(nx), "mass": np.zeros(ndof * ndof),
+            "mass_lu": np.zeros(ndof * ndof), "reduced_force": np.zeros(ndof),
+            "qddot": np.zeros(ndof), "conv": np.zeros(nx), "local": np.zeros(scratch),
+            "DeF": np.zeros(ne * ndof), "stiffness": np.zeros(ndof * ndof),
+            "damping": np.zeros(ndof * ndof), "jacobian_cache": np.zeros(4 * ndof * ndof),
+            "x_start": model.initial_coordinates.astype(float).copy(),
+        }
+        self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)
+        self.floats = tuple(np.ascontiguousarray(floats[name], dtype=float)
+                            for name in FLOAT_SLOTS)
+        arrays = self.ints + self.floats
+        self.table = np.array([value for a in arrays for value in (a.ctypes.data, a.size)],
+                              dtype=np.int64)
+
+    def float_array(self, name):
+        """The float64 array of slot `name` (a view: writing to it changes the engine's)."""
+        return self.floats[FLOAT_SLOTS.index(name)]
+
+    def int_array(self, name):
+        """The int64 array of slot `name` (a view)."""
+        return self.ints[INT_SLOTS.index(name)]
+
+    @property
+    def address(self):
+        """The address of the table (for a C callback's user data)."""
+        return self.table.ctypes.data
+
+
+def _concat_int(parts):
+    return np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)
+
+
+__all__ = ["EngineData", "DOF", "FIXED"]

@@ -1,0 +1,126 @@
+"""Pointer casts and C calls for compiled (numba) code: the glue between flexure's kernels and
+the SUNDIALS C library.
+
+Compiled callbacks receive SUNDIALS' vectors and our model data as raw addresses, and the
+compiled sampled loop calls CVODE's C functions through their addresses. numba has no
+built-in for either, so these intrinsics emit the few LLVM instructions needed. Every
+function here takes addresses as int64 arguments (never as compile-time constants), so the
+compiled code that uses them can be cached on disk and reused by any process.
+
+The layout of a serial N_Vector is SUNDIALS' (7.x): `N_Vector` points to a struct whose first
+member is the `content` pointer; the serial content is {sunindextype length; sunbooleantype
+own_data; sunrealtype *data}. `flexure.core.sundials` checks the data offset against
+N_VGetArrayPointer when it loads the library, so a build with another layout is refused there
+instead of being read wrongly here.
+"""
+
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
+
+NVECTOR_DATA_OFFSET = 8  # bytes: int32 length + int32 own_data (scikit-sundae's build)
+
+_I8P = ir.IntType(8).as_pointer()
+_I32 = ir.IntType(32)
+_DOUBLE = ir.DoubleType()
+
+
+def _cast(builder, value, pointer_type):
+    """An address (an integer, or a pointer such as void*) as a pointer of pointer_type."""
+    if isinstance(value.type, ir.PointerType):
+        return builder.bitcast(value, pointer_type)
+    return builder.inttoptr(value, pointer_type)
+
+
+@intrinsic
+def as_float_pointer(typingctx, address):
+    """A float64 pointer (for numba.carray) from an address (int64 or void*)."""
+    sig = types.CPointer(types.float64)(address)
+
+    def codegen(context, builder, signature, args):
+        return _cast(builder, args[0], _DOUBLE.as_pointer())
+
+    return sig, codegen
+
+
+@intrinsic
+def as_int_pointer(typingctx, address):
+    """An int64 pointer (for numba.carray) from an address (int64 or void*)."""
+    sig = types.CPointer(types.int64)(address)
+
+    def codegen(context, builder, signature, args):
+        return _cast(builder, args[0], ir.IntType(64).as_pointer())
+
+    return sig, codegen
+
+
+@intrinsic
+def nvector_data(typingctx, vector):
+    """The sunrealtype* data of a serial N_Vector given as a void pointer."""
+    sig = types.CPointer(types.float64)(vector)
+
+    def codegen(context, builder, signature, args):
+        content = builder.load(builder.bitcast(args[0], _I8P.as_pointer()))
+        field = builder.gep(content, [ir.Constant(ir.IntType(64), NVECTOR_DATA_OFFSET)])
+        return builder.load(builder.bitcast(field, _DOUBLE.as_pointer().as_pointer()))
+
+    return sig, codegen
+
+
+@intrinsic
+def dense_matrix_data(typingctx, matrix):
+    """The column-major sunrealtype* data of a dense SUNMatrix given as a void pointer.
+
+    SUNMatrix -> content -> {M, N (sunindextype), data, ...}: data follows two int32."""
+    sig = types.CPointer(types.float64)(matrix)
+
+    def codegen(context, builder, signature, args):
+        content = builder.load(builder.bitcast(args[0], _I8P.as_pointer()))
+        field = builder.gep(content, [ir.Constant(ir.IntType(64), 8)])
+        return builder.load(builder.bitcast(field, _DOUBLE.as_pointer().as_pointer()))
+
+    return sig, codegen
+
+
+@intrinsic
+def call_solve(typingctx, function, memory, tout, vector, tret, task):
+    """int CVode(void *mem, sunrealtype tout, N_Vector yout, sunrealtype *tret, int itask)
+    through its address; memory, vector and tret are addresses (int64)."""
+    sig = types.int32(function, memory, tout, vector, tret, task)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(_I32, [_I8P, _DOUBLE, _I8P, _DOUBLE.as_pointer(), _I32])
+        callee = builder.inttoptr(args[0], fnty.as_pointer())
+        return builder.call(callee, [builder.inttoptr(args[1], _I8P), args[2],
+                                     builder.inttoptr(args[3], _I8P),
+                                     builder.inttoptr(args[4], _DOUBLE.as_pointer()),
+                                     builder.trunc(args[5], _I32)])
+
+    return sig, codegen
+
+
+@intrinsic
+def call_with_time(typingctx, function, memory, t):
+    """int f(void *mem, sunrealtype t) (CVodeSetStopTime, CVodeSetInitStep) by address."""
+    sig = types.int32(function, memory, t)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(_I32, [_I8P, _DOUBLE])
+        callee = builder.inttoptr(args[0], fnty.as_pointer())
+        return builder.call(callee, [builder.inttoptr(args[1], _I8P), args[2]])
+
+    return sig, codegen
+
+
+@intrinsic
+def call_reinit(typingctx, function, memory, t, vector):
+    """int CVodeReInit(void *mem, sunrealtype t0, N_Vector y0) by address."""
+    sig = types.int32(function, memory, t, vector)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(_I32, [_I8P, _DOUBLE, _I8P])
+        callee = builder.inttoptr(args[0], fnty.as_pointer())
+        return builder.call(callee, [builder.inttoptr(args[1], _I8P), args[2],
+                                     builder.inttoptr(args[3], _I8P)])
+
+    return sig, codegen

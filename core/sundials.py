@@ -1,0 +1,536 @@
+"""SUNDIALS CVODE and IDA through their C interface, with compiled callbacks.
+
+The integrators call the model through C function pointers of numba `cfunc`s: the right-hand
+side, the residual and their Jacobians run compiled, with no Python call per evaluation (the
+callbacks' user data is the address table of `engine_data.EngineData`). The libraries are the
+SUNDIALS 7.9 shared libraries that scikit-sundae's wheel ships; they are loaded with ctypes.
+
+Why this route (measured on this machine, 2026-11-22, stage_planar_3dof): scikit-sundae's
+Python callbacks cost 8-10 us per evaluation on top of the model, more than the whole compiled
+evaluation (about 1 us); sundials4py, SUNDIALS' own binding, needs Python 3.12 or later and
+still calls Python per evaluation. The C interface plus a compiled callback costs nothing per
+evaluation beyond the model and SUNDIALS' own step (about 0.3 us per step on a 2-state
+problem).
+
+Status: a callback returns 0, 1 (recoverable: CVODE and IDA retry with a smaller step; a
+kinematics that does not converge at a trial state) or -1 (unrecoverable: a non-finite state).
+The engine's status code of the last failure is kept, so an error names its cause.
+"""
+
+import ctypes
+import glob
+import os
+
+import numpy as np
+from numba import carray, cfunc, types
+
+from . import engine, engine_data as ed
+from .errors import SimulationError
+from .native import NVECTOR_DATA_OFFSET, dense_matrix_data, nvector_data
+
+_VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
+CV_BDF, CV_ADAMS = 2, 1
+NORMAL, ONE_STEP = 1, 2
+METHODS = ("cvode-bdf", "cvode-adams", "ida")
+JACOBIANS = ("analytic", "finite-difference")
+
+STATUS_MESSAGES = {
+    ed.NOT_CONVERGED: "the constraints could not be solved (Newton did not converge: the DOFs "
+                      "may lie beyond the mechanism's reach or at a singular configuration)",
+    ed.SINGULAR_CONSTRAINTS: "a singular configuration: the constraint Jacobian is singular, "
+                             "the DOFs cannot describe the motion through it",
+    ed.SINGULAR_MASS: "the reduced mass matrix M_bar is singular (a DOF without mass)",
+    ed.NONFINITE_STATE: "the state became non-finite",
+    ed.NONFINITE_RESULT: "non-finite accelerations (a singular configuration or a non-finite "
+                         "force)",
+}
+
+
+# -- the libraries ---------------------------------------------------------------------------
+def _library_folder():
+    import sksundae
+
+    site = os.path.dirname(os.path.dirname(sksundae.__file__))
+    for folder in (os.path.join(site, "scikit_sundae.libs"), os.path.join(site, "sksundae")):
+        if glob.glob(os.path.join(folder, "libsundials_cvode*")):
+            return folder
+    raise ImportError("scikit-sundae's SUNDIALS libraries were not found next to sksundae "
+                      f"({site})")
+
+
+def _load(folder, name):
+    paths = sorted(glob.glob(os.path.join(folder, f"libsundials_{name}*.so*")) +
+                   glob.glob(os.path.join(folder, f"libsundials_{name}*.dylib")) +
+                   glob.glob(os.path.join(folder, f"sundials_{name}*.dll")))
+    if not paths:
+        raise ImportError(f"SUNDIALS library {name!r} not found in {folder}")
+    return ctypes.CDLL(paths[0], mode=ctypes.RTLD_GLOBAL)
+
+
+class _Libraries:
+    """The SUNDIALS functions flexure calls, with their C prototypes."""
+
+    def __init__(self):
+        folder = _library_folder()
+        self.core = _load(folder, "core")
+        self.nvec = _load(folder, "nvecserial")
+        self.matrix = _load(folder, "sunmatrixdense")
+        self.linsol = _load(folder, "sunlinsoldense")
+        self.cvode = _load(folder, "cvode")
+        self.ida = _load(folder, "ida")
+        proto = _prototype
+        proto(self.core.SUNContext_Create, _INT, [_INT, ctypes.POINTER(_VP)])
+        proto(self.core.SUNContext_Free, _INT, [ctypes.POINTER(_VP)])
+        proto(self.core.SUNContext_ClearErrHandlers, _INT, [_VP])
+        proto(self.nvec.N_VNew_Serial, _VP, [_INT, _VP])
+        proto(self.nvec.N_VGetArrayPointer, _VP, [_VP])
+        proto(self.nvec.N_VDestroy, None, [_VP])
+        proto(self.matrix.SUNDenseMatrix, _VP, [_INT, _INT, _VP])
+        proto(self.matrix.SUNDenseMatrix_Data, _VP, [_VP])
+        proto(self.matrix.SUNMatDestroy, None, [_VP])
+        proto(self.linsol.SUNLinSol_Dense, _VP, [_VP, _VP, _VP])
+        proto(self.linsol.SUNLinSolFree, _INT, [_VP])
+        cv = self.cvode
+        proto(cv.CVodeCreate, _VP, [_INT, _VP])
+        proto(cv.CVodeInit, _INT, [_VP, _VP, _D, _VP])
+        proto(cv.CVodeReInit, _INT, [_VP, _D, _VP])
+        proto(cv.CVodeSVtolerances, _INT, [_VP, _D, _VP])
+        for name in ("CVodeSetUserData", "CVodeSetJacFn"):
+            proto(getattr(cv, name), _INT, [_VP, _VP])
+        proto(cv.CVodeSetLinearSolver, _INT, [_VP, _VP, _VP])
+        proto(cv.CVodeSetMaxNumSteps, _INT, [_VP, _LONG])
+        for name in ("CVodeSetMaxStep", "CVodeSetStopTime", "CVodeSetInitStep"):
+            proto(getattr(cv, name), _INT, [_VP, _D])
+        for name in ("CVodeSetMaxOrd", "CVodeSetMaxNonlinIters", "CVodeSetStabLimDet"):
+            proto(getattr(cv, name), _INT, [_VP, _INT])
+        proto(cv.CVode, _INT, [_VP, _D, _VP, ctypes.POINTER(_D), _INT])
+        for name in ("CVodeGetNumSteps", "CVodeGetNumRhsEvals", "CVodeGetNumJacEvals",
+                     "CVodeGetNumErrTestFails", "CVodeGetNumNonlinSolvIters"):
+            proto(getattr(cv, name), _INT, [_VP, ctypes.POINTER(_LONG)])
+        proto(cv.CVodeGetLastStep, _INT, [_VP, ctypes.POINTER(_D)])
+        proto(cv.CVodeGetReturnFlagName, ctypes.c_char_p, [_LONG])
+        proto(cv.CVodeFree, None, [ctypes.POINTER(_VP)])
+        ida = self.ida
+        proto(ida.IDACreate, _VP, [_VP])
+        proto(ida.IDAInit, _INT, [_VP, _VP, _D, _VP, _VP])
+        proto(ida.IDAReInit, _INT, [_VP, _D, _VP, _VP])
+        proto(ida.IDASVtolerances, _INT, [_VP, _D, _VP])
+        for name in ("IDASetUserData", "IDASetJacFn"):
+            proto(getattr(ida, name), _INT, [_VP, _VP])
+        proto(ida.IDASetLinearSolver, _INT, [_VP, _VP, _VP])
+        proto(ida.IDASetMaxNumSteps, _INT, [_VP, _LONG])
+        for name in ("IDASetMaxStep", "IDASetStopTime"):
+            proto(getattr(ida, name), _INT, [_VP, _D])
+        proto(ida.IDASetMaxOrd, _INT, [_VP, _INT])
+        proto(ida.IDASolve, _INT, [_VP, _D, ctypes.POINTER(_D), _VP, _VP, _INT])
+        for name in ("IDAGetNumSteps", "IDAGetNumResEvals", "IDAGetNumJacEvals"):
+            proto(getattr(ida, name), _INT, [_VP, ctypes.POINTER(_LONG)])
+        proto(ida.IDAGetReturnFlagName, ctypes.c_char_p, [_LONG])
+        proto(ida.IDAFree, None, [ctypes.POINTER(_VP)])
+        self._check_layout()
+
+    def _check_layout(self):
+        """The compiled callbacks read a vector's and a dense matrix's data pointer from the
+        structs directly (`native`); refuse a library whose layout differs."""
+        context = _VP()
+        self.core.SUNContext_Create(0, ctypes.byref(context))
+        vector = self.nvec.N_VNew_Serial(3, context)
+        matrix = self.matrix.SUNDenseMatrix(3, 3, context)
+        try:
+            content = ctypes.cast(vector, ctypes.POINTER(_VP))[0]
+            data = ctypes.cast(content + NVECTOR_DATA_OFFSET, ctypes.POINTER(_VP))[0]
+            m_content = ctypes.cast(matrix, ctypes.POINTER(_VP))[0]
+            m_data = ctypes.cast(m_content + 8, ctypes.POINTER(_VP))[0]
+            if (data != self.nvec.N_VGetArrayPointer(vector)
+                    or m_data != self.matrix.SUNDenseMatrix_Data(matrix)):
+                raise ImportError("this SUNDIALS build lays out its serial vectors or dense "
+                                  "matrices differently from what flexure's callbacks read")
+        finally:
+            self.matrix.SUNMatDestroy(matrix)
+            self.nvec.N_VDestroy(vector)
+            self.core.SUNContext_Free(ctypes.byref(context))
+
+
+def _prototype(function, restype, argtypes):
+    function.restype = restype
+    function.argtypes = argtypes
+
+
+_LIBRARIES = None
+
+
+def libraries():
+    """The loaded SUNDIALS libraries (loaded once per process)."""
+    global _LIBRARIES
+    if _LIBRARIES is None:
+        _LIBRARIES = _Libraries()
+    return _LIBRARIES
+
+
+def function_address(function):
+    """The address (int) of a ctypes function, for compiled code that calls it."""
+    return ctypes.cast(function, _VP).value
+
+
+# -- compiled callbacks ---------------------------------------------------------------------------
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)
+def cvode_rhs(t, y, ydot, user_data):
+    """CVRhsFn: ydot = f(t, y) by the engine."""
+    ints, floats = engine.unpack(user_data)
+    n = 2 * ints[0][ed.NDOF]
+    counters = ints[engine._COUNTERS]
+    counters[ed.RHS_COUNT] += 1
+    status = engine.first_order_rhs(ints, floats, carray(nvector_data(y), (n,)),
+                                    carray(nvector_data(ydot), (n,)))
+    if status == ed.OK:
+        return 0
+    counters[ed.FAILED_STATUS] = status
+    return -1 if status == ed.NONFINITE_STATE else 1
+
+
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr,
+                  types.voidptr, types.voidptr, types.voidptr), cache=True)
+def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
+    """CVLsJacFn: the dense d f / d y from the model's tangent. After a restart of a sampled
+    loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once instead."""
+    ints, floats = engine.unpack(user_data)
+    dims = ints[0]
+    n = 2 * dims[ed.NDOF]
+    J = carray(dense_matrix_data(matrix), (n * n,))
+    cache = floats[engine._JAC_CACHE]
+    if dims[ed.JACOBIAN_REUSE] == 1:
+        dims[ed.JACOBIAN_REUSE] = 0
+        J[:] = cache
+        return 0
+    counters = ints[engine._COUNTERS]
+    counters[ed.JACOBIAN_COUNT] += 1
+    status = engine.first_order_jacobian(ints, floats, carray(nvector_data(y), (n,)), J, True)
+    if status == ed.OK:
+        cache[:] = J
+        return 0
+    counters[ed.FAILED_STATUS] = status
+    return -1 if status == ed.NONFINITE_STATE else 1
+
+
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
+       cache=True)
+def ida_residual(t, y, yp, res, user_data):
+    """IDAResFn: the implicit form's residual by the engine."""
+    ints, floats = engine.unpack(user_data)
+    n = 2 * ints[0][ed.NDOF]
+    counters = ints[engine._COUNTERS]
+    counters[ed.RHS_COUNT] += 1
+    status = engine.implicit_residual(ints, floats, carray(nvector_data(y), (n,)),
+                                      carray(nvector_data(yp), (n,)),
+                                      carray(nvector_data(res), (n,)))
+    if status == ed.OK:
+        return 0
+    counters[ed.FAILED_STATUS] = status
+    return -1 if status == ed.NONFINITE_STATE else 1
+
+
+@cfunc(types.intc(types.double, types.double, types.voidptr, types.voidptr, types.voidptr,
+                  types.voidptr, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
+       cache=True)
+def ida_jacobian(t, cj, y, yp, res, matrix, user_data, tmp1, tmp2, tmp3):
+    """IDALsJacFn: d res / d y + cj d res / d yp from the model's tangent."""
+    ints, floats = engine.unpack(user_data)
+    n = 2 * ints[0][ed.NDOF]
+    counters = ints[engine._COUNTERS]
+    counters[ed.JACOBIAN_COUNT] += 1
+    status = engine.implicit_jacobian(ints, floats, carray(nvector_data(y), (n,)),
+                                      carray(nvector_data(yp), (n,)), cj,
+                                      carray(dense_matrix_data(matrix), (n * n,)))
+    if status == ed.OK:
+        return 0
+    counters[ed.FAILED_STATUS] = status
+    return -1 if status == ed.NONFINITE_STATE else 1
+
+
+_CV_RHS = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP)
+_CV_JAC = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP)
+_IDA_RES = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP, _VP)
+_IDA_JAC = ctypes.CFUNCTYPE(_INT, _D, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP, _VP)
+
+
+# -- the integrators ----------------------------------------------------------------------------
+class _Solver:
+    """What CVODE and IDA share: the context, the vectors, the dense linear solver, and the
+    Python callbacks used instead of the compiled ones when an input varies within an
+    interval (`input_function(t)` -> inputs (N), set before each compiled evaluation)."""
+
+    def __init__(self, data, *, rtol, atol, input_function=None):
+        lib = libraries()
+        self.lib, self.data = lib, data
+        self.n = 2 * int(data.int_array("dims")[ed.NDOF])
+        self.context = _VP()
+        _check(lib.core.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
+        lib.core.SUNContext_ClearErrHandlers(self.context)  # errors come back as our messages
+        self.y = lib.nvec.N_VNew_Serial(self.n, self.context)
+        self.yp = lib.nvec.N_VNew_Serial(self.n, self.context)
+        self.atol = lib.nvec.N_VNew_Serial(self.n, self.context)
+        self.y_array = _vector_array(lib, self.y, self.n)
+        self.yp_array = _vector_array(lib, self.yp, self.n)
+        _vector_array(lib, self.atol, self.n)[:] = atol
+        self.matrix = lib.matrix.SUNDenseMatrix(self.n, self.n, self.context)
+        self.linear_solver = lib.linsol.SUNLinSol_Dense(self.y, self.matrix, self.context)
+        self.rtol = float(rtol)
+        self.tret = _D(0.0)
+        self.counters = data.int_array("counters")
+        self.input_function = input_function
+        self.input_error = None
+        self._totals = {"steps": 0, "solver_rhs_evaluations": 0,
+                        "solver_jacobian_evaluations": 0}
+
+    def _with_inputs(self, compiled, prototype):
+        """A ctypes callback that sets the inputs at time t, then calls the compiled one."""
+        inputs, function = self.data.float_array("inputs"), self.input_function
+
+        def callback(t, *args):
+            try:
+                inputs[:] = function(t)
+            except SimulationError as error:
+                self.input_error = error
+                return -1
+            return compiled(t, *args)
+
+        return prototype(callback)
+
+    def _accumulate(self):
+        """Add the counts since the last (re)start to the totals (ReInit zeroes SUNDIALS')."""
+        for key, value in self._current().items():
+            self._totals[key] += value
+
+    def statistics(self):
+        """{"steps", "solver_rhs_evaluations", "solver_jacobian_evaluations"} since the
+        solver was made."""
+        return {key: self._totals[key] + value for key, value in self._current().items()}
+
+    def failure(self, flag, t):
+        """A SimulationError for a failed call, naming the time and the engine's cause."""
+        if self.input_error is not None:
+            error, self.input_error = self.input_error, None
+            return error
+        cause = STATUS_MESSAGES.get(int(self.counters[ed.FAILED_STATUS]))
+        name = self.flag_name(flag)
+        detail = f" ({cause})" if cause else ""
+        return SimulationError(f"t = {t:.9g} s: {self.label} failed with {name}{detail}")
+
+    def _free_common(self):
+        lib = self.lib
+        if self.linear_solver:
+            lib.linsol.SUNLinSolFree(self.linear_solver)
+            lib.matrix.SUNMatDestroy(self.matrix)
+            for vector in (self.y, self.yp, self.atol):
+                lib.nvec.N_VDestroy(vector)
+            lib.core.SUNContext_Free(ctypes.byref(self.context))
+            self.linear_solver = None
+
+
+class Cvode(_Solver):
+    """CVODE (BDF or Adams) on ydot = f(t, y), y = [q - q_ref, qdot], with the engine.
+
+    Parameters
+    ----------
+    data : EngineData
+        The packed model; its inputs array holds the forces (N) of the current interval.
+    method : str
+        "BDF" or "Adams".
+    rtol : float
+        Relative tolerance.
+    atol : array (2 NDOF,)
+        Absolute tolerances (m, rad, m/s, rad/s).
+    max_step : float or None
+        Largest step (s).
+    jacobian : str
+        "analytic" (the model's tangent) or "finite-difference" (SUNDIALS').
+    max_order : int or None
+        Largest order (SUNDIALS' default: 5 for BDF, 12 for Adams).
+    """
+
+    def __init__(self, data, *, method="BDF", rtol, atol, max_step=None, jacobian="analytic",
+                 max_order=None, input_function=None):
+        super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
+        cv = self.lib.cvode
+        self.label = f"CVODE {method}"
+        rhs, jac = cvode_rhs.address, cvode_jacobian.address
+        if input_function is not None:
+            self._callbacks = (self._with_inputs(cvode_rhs.ctypes, _CV_RHS),
+                               self._with_inputs(cvode_jacobian.ctypes, _CV_JAC))
+            rhs, jac = (ctypes.cast(c, _VP).value for c in self._callbacks)
+        self.memory = cv.CVodeCreate(CV_BDF if method == "BDF" else CV_ADAMS, self.context)
+        _check(cv.CVodeInit(self.memory, rhs, 0.0, self.y), "CVodeInit")
+        _check(cv.CVodeSVtolerances(self.memory, self.rtol, self.atol), "CVodeSVtolerances")
+        _check(cv.CVodeSetUserData(self.memory, data.address), "CVodeSetUserData")
+        _check(cv.CVodeSetLinearSolver(self.memory, self.linear_solver, self.matrix),
+               "CVodeSetLinearSolver")
+        if jacobian == "analytic":
+            _check(cv.CVodeSetJacFn(self.memory, jac), "CVodeSetJacFn")
+        _check(cv.CVodeSetMaxNumSteps(self.memory, 1_000_000), "CVodeSetMaxNumSteps")
+        # up to 10 Newton iterations (SUNDIALS' default is 3): with the lightly damped kHz
+        # modes of a stage, 3 iterations on a reused Jacobian often fail and each failure cuts
+        # the step (stage_planar_3dof, 0.3 s of a 1 N step at rtol 1e-6: 2731 steps with 3,
+        # 159 with 10)
+        _check(cv.CVodeSetMaxNonlinIters(self.memory, 10), "CVodeSetMaxNonlinIters")
+        if max_step:
+            _check(cv.CVodeSetMaxStep(self.memory, float(max_step)), "CVodeSetMaxStep")
+        if max_order is not None:
+            _check(cv.CVodeSetMaxOrd(self.memory, int(max_order)), "CVodeSetMaxOrd")
+        self.addresses = {
+            "solve": function_address(cv.CVode), "reinit": function_address(cv.CVodeReInit),
+            "stop": function_address(cv.CVodeSetStopTime), "memory": self.memory,
+            "y": self.y, "tret": ctypes.addressof(self.tret)}
+
+    def flag_name(self, flag):
+        return self.lib.cvode.CVodeGetReturnFlagName(flag).decode()
+
+    def reset(self, t, y):
+        """(Re)start at time t (s) from y (2 NDOF,): order 1, a new initial step."""
+        self._accumulate()
+        self.y_array[:] = y
+        self.counters[ed.FAILED_STATUS] = 0
+        _check(self.lib.cvode.CVodeReInit(self.memory, float(t), self.y), "CVodeReInit")
+
+    def advance(self, t_stop, *, one_step=False):
+        """Integrate to t_stop (s), never past it (one step only with one_step); returns t and
+        a view of y (valid until the next call). Raises SimulationError on failure."""
+        cv = self.lib.cvode
+        cv.CVodeSetStopTime(self.memory, float(t_stop))
+        flag = cv.CVode(self.memory, float(t_stop), self.y, ctypes.byref(self.tret),
+                        ONE_STEP if one_step else NORMAL)
+        if flag < 0:
+            raise self.failure(flag, self.tret.value)
+        t = self.tret.value
+        return (t_stop if flag == 1 else t), self.y_array
+
+    def _current(self):
+        cv = self.lib.cvode
+        return {"steps": _get_long(cv.CVodeGetNumSteps, self.memory),
+                "solver_rhs_evaluations": _get_long(cv.CVodeGetNumRhsEvals, self.memory),
+                "solver_jacobian_evaluations": _get_long(cv.CVodeGetNumJacEvals, self.memory)}
+
+    def close(self):
+        """Free the SUNDIALS objects (idempotent)."""
+        if getattr(self, "memory", None):
+            memory = _VP(self.memory)
+            self.lib.cvode.CVodeFree(ctypes.byref(memory))
+            self.memory = None
+        if getattr(self, "linear_solver", None):
+            self._free_common()
+
+    def __del__(self):
+        self.close()
+
+
+class Ida(_Solver):
+    """IDA on the implicit form res(t, y, yp) = 0 with the engine; arguments as `Cvode`."""
+
+    def __init__(self, data, *, rtol, atol, max_step=None, jacobian="analytic", max_order=None,
+                 input_function=None):
+        super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
+        ida = self.lib.ida
+        self.label = "IDA"
+        residual, jac = ida_residual.address, ida_jacobian.address
+        if input_function is not None:
+            self._callbacks = (self._with_inputs(ida_residual.ctypes, _IDA_RES),
+                               self._with_inputs(ida_jacobian.ctypes, _IDA_JAC))
+            residual, jac = (ctypes.cast(c, _VP).value for c in self._callbacks)
+        self.memory = ida.IDACreate(self.context)
+        _check(ida.IDAInit(self.memory, residual, 0.0, self.y, self.yp), "IDAInit")
+        _check(ida.IDASVtolerances(self.memory, self.rtol, self.atol), "IDASVtolerances")
+        _check(ida.IDASetUserData(self.memory, data.address), "IDASetUserData")
+        _check(ida.IDASetLinearSolver(self.memory, self.linear_solver, self.matrix),
+               "IDASetLinearSolver")
+        if jacobian == "analytic":
+            _check(ida.IDASetJacFn(self.memory, jac), "IDASetJacFn")
+        _check(ida.IDASetMaxNumSteps(self.memory, 1_000_000), "IDASetMaxNumSteps")
+        if max_step:
+            _check(ida.IDASetMaxStep(self.memory, float(max_step)), "IDASetMaxStep")
+        if max_order is not None:
+            _check(ida.IDASetMaxOrd(self.memory, int(max_order)), "IDASetMaxOrd")
+        self._ydot = np.zeros(self.n)
+
+    def flag_name(self, flag):
+        return self.lib.ida.IDAGetReturnFlagName(flag).decode()
+
+    def reset(self, t, y):
+        """(Re)start at t from y with the consistent yp = f(t, y) (both halves differential)."""
+        I, F = self.data.ints, self.data.floats
+        if self.input_function is not None:
+            self.data.float_array("inputs")[:] = self.input_function(t)
+        status = engine.first_order_rhs(I, F, np.ascontiguousarray(y, float), self._ydot)
+        if status != ed.OK:
+            raise SimulationError(f"t = {t:.9g} s: IDA could not start: "
+                                  f"{STATUS_MESSAGES.get(status, status)}")
+        self._accumulate()
+        self.y_array[:] = y
+        self.yp_array[:] = self._ydot
+        self.counters[ed.FAILED_STATUS] = 0
+        _check(self.lib.ida.IDAReInit(self.memory, float(t), self.y, self.yp), "IDAReInit")
+
+    def advance(self, t_stop, *, one_step=False):
+        """As `Cvode.advance`."""
+        ida = self.lib.ida
+        ida.IDASetStopTime(self.memory, float(t_stop))
+        flag = ida.IDASolve(self.memory, float(t_stop), ctypes.byref(self.tret), self.y,
+                            self.yp, ONE_STEP if one_step else NORMAL)
+        if flag < 0:
+            raise self.failure(flag, self.tret.value)
+        t = self.tret.value
+        return (t_stop if flag == 1 else t), self.y_array
+
+    def _current(self):
+        ida = self.lib.ida
+        return {"steps": _get_long(ida.IDAGetNumSteps, self.memory),
+                "solver_rhs_evaluations": _get_long(ida.IDAGetNumResEvals, self.memory),
+                "solver_jacobian_evaluations": _get_long(ida.IDAGetNumJacEvals, self.memory)}
+
+    def close(self):
+        if getattr(self, "memory", None):
+            memory = _VP(self.memory)
+            self.lib.ida.IDAFree(ctypes.byref(memory))
+            self.memory = None
+        if getattr(self, "linear_solver", None):
+            self._free_common()
+
+    def __del__(self):
+        self.close()
+
+
+def make_solver(data, method, *, rtol, atol, max_step=None, jacobian="analytic",
+                max_order=None, input_function=None):
+    """The integrator for `method` ("cvode-bdf", "cvode-adams" or "ida") on packed data.
+
+    max_order: the largest order of the multistep formulas (None: SUNDIALS' default, 5 for
+    BDF and IDA, 12 for Adams)."""
+    if method not in METHODS:
+        raise SimulationError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    if max_order is not None:
+        top = 12 if method == "cvode-adams" else 5
+        if not (isinstance(max_order, (int, np.integer)) and 1 <= max_order <= top):
+            raise SimulationError(f"max_order: expected an integer from 1 to {top} for "
+                                  f"{method}, got {max_order!r}")
+    if jacobian not in JACOBIANS:
+        raise SimulationError(f"unknown jacobian {jacobian!r}; expected one of "
+                              f"{', '.join(JACOBIANS)}")
+    options = dict(rtol=rtol, atol=atol, max_step=max_step, jacobian=jacobian,
+                   max_order=max_order, input_function=input_function)
+    if method == "ida":
+        return Ida(data, **options)
+    return Cvode(data, method="BDF" if method == "cvode-bdf" else "Adams", **options)
+
+
+def _vector_array(lib, vector, n):
+    pointer = lib.nvec.N_VGetArrayPointer(vector)
+    return np.ctypeslib.as_array(ctypes.cast(pointer, ctypes.POINTER(_D)), (n,))
+
+
+def _get_long(function, memory):
+    value = _LONG(0)
+    function(memory, ctypes.byref(value))
+    return int(value.value)
+
+
+def _check(flag, what):
+    if flag is not None and flag < 0:
+        raise SimulationError(f"SUNDIALS {what} failed (flag {flag})")
