@@ -6,15 +6,21 @@ random bytes inserted or flipped; the command line gets random option values. Ei
 input is accepted, or the project's own error (FlexureError) or argparse's exit (SystemExit
 with a message on stderr) answers it: any other exception is a failure.
 
+Cases per run: 700 scene dictionaries, 300 scene texts, 400 command lines (about 10 s); the
+hypothesis database is off, so every run draws new cases and a failure prints its example.
+
 The command-line cases replace the long runs (simulation, work-precision study, closed loop,
 FMU build and check) by stubs: what is fuzzed is the validation of the options and of the
 output paths, which all happens before those runs.
 """
 
 import datetime
+import json
 import math
 import tomllib
+from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -129,3 +135,184 @@ def test_mutated_scene_bytes(tmp_path_factory, text):
 @pytest.mark.parametrize("name", sorted(SCENES))
 def test_the_shipped_scenes_still_load(name):
     load_scene(name)
+
+
+# -- the command line --------------------------------------------------------------------------
+
+NUMBER_TEXTS = st.one_of(
+    st.sampled_from(["0", "-0", "1", "-1", "-5", "2", "5", "13", "0.5", "1e-9", "1e300", "-1e300",
+                     "1e-320", "nan", "inf", "-inf", "1e400", "x", "", " ", "1,2", "0x10",
+                     "1_000", "10000000000000000000000"]),
+    st.floats().map(repr), st.integers(-10**6, 10**6).map(str), st.text(max_size=5))
+PATH_TEXTS = st.sampled_from([
+    "out.csv", "out.png", "out.PNG", "out.pdf", "out.jpg", "out", "folder", "folder/x.png",
+    "folder/x.csv", "missing/x.csv", "missing/deeper/x.png", "file", "file/x.png", "/dev/full",
+    "/dev/null", ".", "..", "", "/", "x.fmu", "folder/x.fmu", "ref.csv", "in.csv", "scene.toml"])
+INPUT_TEXTS = st.one_of(NUMBER_TEXTS.map(lambda v: f"F={v}"),
+                        st.sampled_from(["F", "=1", "G=1", "F=in.csv", "F=bad.csv", "F=folder",
+                                         "F=scene.toml", "F=missing.csv"]))
+FLAG = None
+COMMANDS = {
+    "simulate": {"--t-end": NUMBER_TEXTS, "--input": INPUT_TEXTS,
+                 "--method": st.sampled_from(["cvode-bdf", "ida", "euler"]),
+                 "--max-order": NUMBER_TEXTS, "--rtol": NUMBER_TEXTS, "--atol": NUMBER_TEXTS,
+                 "--max-step": NUMBER_TEXTS, "--samples": NUMBER_TEXTS, "--out": PATH_TEXTS,
+                 "--plot": PATH_TEXTS},
+    "analyze": {"--static": FLAG, "--modes": NUMBER_TEXTS, "--buckling": NUMBER_TEXTS,
+                "--state-space": FLAG, "--json": FLAG, "--plot": PATH_TEXTS},
+    "bench": {"--t-end": NUMBER_TEXTS, "--input": INPUT_TEXTS, "--rtols": NUMBER_TEXTS,
+              "--methods": st.sampled_from(["ida", "ida,ida", "cvode-bdf:2", "cvode-bdf:9",
+                                            "scipy-bdf:2", "foo", "", "ida,scipy-dop853"]),
+              "--reference-rtol": NUMBER_TEXTS, "--samples": NUMBER_TEXTS,
+              "--time-limit": NUMBER_TEXTS, "--csv": PATH_TEXTS, "--markdown": PATH_TEXTS,
+              "--plot": PATH_TEXTS},
+    "loop": {"--stroke": NUMBER_TEXTS, "--duration": NUMBER_TEXTS, "--fs": NUMBER_TEXTS,
+             "--crossover": NUMBER_TEXTS, "--settle": NUMBER_TEXTS, "--rtol": NUMBER_TEXTS,
+             "--plot": PATH_TEXTS, "--no-plot": FLAG, "--json": FLAG, "--workdir": PATH_TEXTS},
+    "fmu build": {"-o": PATH_TEXTS, "--tunable": st.sampled_from(
+        ["nodes.2.mass", "sections.springs.EdA", "nodes", "x.y"]), "--no-tunable": FLAG},
+    "fmu check": {"--rtol": NUMBER_TEXTS, "--atol": NUMBER_TEXTS, "--update": FLAG,
+                  "--interval": NUMBER_TEXTS},
+}
+SCENE_ARGS = st.sampled_from(["truss_1dof_x", "truss_1dof_x", "no_such_scene", "scene.toml",
+                              "bad.toml", "folder", ""])
+CSV_TEXTS = st.one_of(
+    st.sampled_from(["time,F\n0,0\n0.1,1\n", "time,x\n0,0.1\n0.001,0.1\n", "", "time,F\n",
+                     "time,F\n0,a\n", "t,F\n0,0\n", "time,F\n1,0\n0,0\n", "time,F,F\n0,0,0\n"]),
+    st.text(alphabet="time,Fx0123456789.-e\n\" ", max_size=40))
+
+
+@st.composite
+def command_lines(draw):
+    command = draw(st.sampled_from(sorted(COMMANDS)))
+    argv = command.split()
+    if command == "fmu check":
+        argv += [draw(st.sampled_from(["m.fmu", "notzip.fmu", "missing.fmu", "folder"])),
+                 draw(st.sampled_from(["in.csv", "fuzz_in.csv", "missing.csv"])),
+                 draw(st.sampled_from(["ref.csv", "fuzz_ref.csv", "new_ref.csv", "folder"]))]
+    elif command != "loop" or draw(st.booleans()):
+        argv.append(draw(SCENE_ARGS))
+    if command == "simulate" and draw(st.booleans()):
+        argv += ["--t-end", "0.1"]
+    options = COMMANDS[command]
+    for option in draw(st.lists(st.sampled_from(sorted(options)), max_size=4)):
+        argv.append(option)
+        if options[option] is not None:
+            argv.append(draw(options[option]))
+    return argv, draw(CSV_TEXTS), draw(CSV_TEXTS)
+
+
+class _Result:
+    """What the stubbed simulation, study and loop return (a few samples, all ok)."""
+
+    model_name, method, rtol = "truss_1dof_x", "cvode-bdf", 1e-8
+    times = np.array([0.0, 0.1])
+    output_names, output_units = ["x"], ["m"]
+    output_array = np.array([[0.1], [0.2]])
+    statistics = {"steps": 1, "rhs_evaluations": 2, "jacobian_evaluations": 1,
+                  "wall_time_s": 0.0}
+    rows = [{"method": "ida", "rtol": 1e-3, "status": "ok"}]
+
+    def to_csv(self, path):
+        Path(path).write_text("time,x\n0,0.1\n")
+
+    def plot(self, path, **kwargs):
+        Path(path).write_bytes(b"png")
+
+    def text(self):
+        return "table"
+
+    def markdown(self):
+        return "| table |"
+
+    def summary(self):
+        keys = ("stroke", "duration", "sample_rate_hz", "crossover_rad_s", "phase_margin_deg",
+                "modulus_margin", "max_abs_error", "error_ratio", "target", "wall_time_s")
+        return {**dict.fromkeys(keys, 1e-3), "scene": "truss_1dof_x", "plant": "inprocess",
+                "feedforward": True, "feedforward_kind": "modal", "passed": True,
+                "gain_margin": math.inf}
+
+
+def _fake_build(scene, dest, **kwargs):
+    built = Path(dest) / "truss_1dof_x.fmu"
+    built.write_bytes(b"PK")
+    return built
+
+
+@pytest.fixture(scope="module")
+def cli_folder(tmp_path_factory):
+    import zipfile
+
+    from test_cli_abuse import MODEL_DESCRIPTION
+
+    folder = tmp_path_factory.mktemp("cli_fuzz")
+    (folder / "folder").mkdir()
+    (folder / "file").write_text("a file")
+    (folder / "scene.toml").write_bytes(SCENES["truss_1dof_x"])
+    (folder / "bad.toml").write_bytes(SCENES["truss_1dof_x"].replace(b"springs", b"spr\xffngs"))
+    (folder / "in.csv").write_text("time,F\n0,0\n0.1,1\n")
+    (folder / "ref.csv").write_text('"time","x"\n0,0.1\n0.05,0.1\n0.1,0.1\n')
+    (folder / "bad.csv").write_text("time,F\n0,a\n")
+    (folder / "notzip.fmu").write_text("not a zip")
+    with zipfile.ZipFile(folder / "m.fmu", "w") as archive:
+        archive.writestr("modelDescription.xml", MODEL_DESCRIPTION)
+    return folder
+
+
+def _run_cli(argv):
+    """(exit code, stderr) of main(argv) in this process; any other exception propagates."""
+    import contextlib
+    import io
+
+    from flexure.core.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as stop:
+            code = stop.code
+    return code, out.getvalue(), err.getvalue()
+
+
+@settings(FAST, max_examples=400)
+@given(command_lines())
+def test_random_command_lines(cli_folder, case):
+    import flexure.controllers.cli as loop_cli
+    import flexure.core.cli_bench as cli_bench
+    import flexure.core.simulation as simulation
+    import flexure.fmu.cli as fmu_cli
+
+    argv, input_text, reference_text = case
+    (cli_folder / "fuzz_in.csv").write_text(input_text)
+    (cli_folder / "fuzz_ref.csv").write_text(reference_text)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(cli_folder)
+        patch.setattr(simulation, "simulate", lambda *a, **k: _Result())
+        patch.setattr(cli_bench, "work_precision", lambda *a, **k: _Result())
+        patch.setattr(loop_cli, "run_loop", lambda *a, **k: _Result())
+        patch.setattr(fmu_cli, "build_scene_fmu", _fake_build)
+        patch.setattr(fmu_cli, "write_reference", lambda fmu, i, ref, **k: Path(ref))
+        code, out, err = _run_cli(argv)
+    assert "Traceback" not in out + err
+    assert code in (0, 1, 2), (argv, code, err)
+    if code == 2:
+        assert "error:" in err, (argv, err)
+    if code == 0 and "--json" in argv:
+        json.loads(out, parse_constant=lambda token: pytest.fail(f"{token} in the JSON"))
+
+
+def test_a_few_command_lines_through_the_console_script(cli_folder):
+    """The installed script, end to end, on misuses that stop before any run."""
+    import subprocess
+    import sys
+
+    flexure = str(Path(sys.executable).with_name("flexure"))
+    for argv in (["simulate", "bad.toml", "--t-end", "1"],
+                 ["simulate", "truss_1dof_x", "--t-end", "1", "--plot", "folder"],
+                 ["bench", "truss_1dof_x", "--rtols", "1e300"],
+                 ["fmu", "check", "notzip.fmu", "in.csv", "ref.csv"]):
+        completed = subprocess.run([flexure, *argv], capture_output=True, text=True,
+                                   cwd=cli_folder)
+        assert completed.returncode == 2, (argv, completed.stderr)
+        assert "error:" in completed.stderr and "Traceback" not in completed.stderr
