@@ -86,7 +86,11 @@ def run_build(args):
     if output is None or Path(output).is_dir():
         check_output(folder / "scene.fmu", option="-o" if output else "the current folder")
     source = scene_path(args.scene)
-    parse_toml(source)  # a SceneError for invalid bytes or TOML, before the build
+    data = parse_toml(source)  # a SceneError for invalid bytes or TOML, before the build
+    outputs = data.get("outputs")
+    if args.von_mises and isinstance(outputs, dict) and "von_mises_max" in outputs:
+        raise UsageError(f"{source}: outputs.von_mises_max: --von-mises adds an output of that "
+                         "name; rename the scene's output")
     refuse_overwriting_inputs([("-o", output)], [source])
     # built in a temporary folder beside the destination, then moved in one step: a failed
     # build or validation leaves no file, and never half of one

@@ -456,3 +456,11 @@ def test_console_script_answers_in_one_line(argv, says):
     assert says in completed.stderr and "Traceback" not in completed.stderr
     errors = [line for line in completed.stderr.splitlines() if "error:" in line]
     assert len(errors) == 1 and says in errors[0]  # after argparse's usage lines, if any
+
+
+def test_fmu_build_refuses_an_output_named_like_the_von_mises_output(capsys, places, no_run):
+    data = scene_path("stage_spatial_1dof").read_text().replace("[outputs.x]",
+                                                                "[outputs.von_mises_max]")
+    (places / "s.toml").write_text(data)
+    refused(capsys, "fmu", "build", "s.toml", "--von-mises",
+            says="outputs.von_mises_max: --von-mises adds an output of that name")
