@@ -206,7 +206,7 @@ def _file_mode(path):
         return 0o666 & ~umask
 
 
-def write_outputs(command, outputs):
+def write_outputs(command, outputs, *, announce=True):
     """Write each result, atomically; returns the exit code (2 if any could not be written).
 
     `outputs` holds (option, path or None, write(temporary_path)). A file that cannot be
@@ -223,7 +223,8 @@ def write_outputs(command, outputs):
             print(f"{command}: error: {error}", file=sys.stderr)
             failed = True
         else:
-            print(f"wrote {path}")
+            if announce:
+                print(f"wrote {path}")
     return 2 if failed else 0
 
 
