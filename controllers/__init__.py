@@ -16,13 +16,36 @@
 Only flexure.core's public API is used: no physics here.
 """
 
-from .feedback import ControlDesignError, DiscreteController, FeedbackDesign, design_feedback
-from .feedforward import LowFrequencyModel, StableInverse, low_frequency_model
-from .profiles import ProfileError, ThirdOrderProfile
-from .runner import TARGET, LoopController, LoopError, LoopResult, build_loop, run_loop
+import importlib
+
+# public name -> the submodule that defines it, imported on first use (PEP 562): importing
+# flexure.controllers loads neither python-control nor the models
+_LAZY = {
+    "ControlDesignError": "feedback", "DiscreteController": "feedback",
+    "FeedbackDesign": "feedback", "design_feedback": "feedback",
+    "LowFrequencyModel": "feedforward", "StableInverse": "feedforward",
+    "low_frequency_model": "feedforward",
+    "ProfileError": "profiles", "ThirdOrderProfile": "profiles",
+    "TARGET": "runner", "LoopController": "runner", "LoopError": "runner",
+    "LoopResult": "runner", "build_loop": "runner", "run_loop": "runner",
+}
 
 __all__ = [
     "TARGET", "ControlDesignError", "DiscreteController", "FeedbackDesign", "LoopController",
     "LoopError", "LoopResult", "LowFrequencyModel", "ProfileError", "StableInverse",
     "ThirdOrderProfile", "build_loop", "design_feedback", "low_frequency_model", "run_loop",
 ]
+
+
+def __getattr__(name):
+    """Import the submodule of a public name on first use, and keep the name (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

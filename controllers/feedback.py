@@ -23,11 +23,14 @@ closed loop has a pole on or outside the unit circle.
 """
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
-from flexure.core import FlexureError, state_space
+from flexure.core import FlexureError
+
+if TYPE_CHECKING:  # python-control takes 0.5 s to import: imported where it is used
+    import control
 
 
 class ControlDesignError(FlexureError, ValueError):
@@ -59,8 +62,8 @@ class FeedbackDesign:
     sample_rate_hz: float
     delay_samples: int
     continuous: list
-    controller: control.StateSpace
-    loop_gain: control.StateSpace  # L(z) of the first loop, the others open
+    controller: "control.StateSpace"
+    loop_gain: "control.StateSpace"  # L(z) of the first loop, the others open
     phase_margin_deg: float
     gain_margin: float
     modulus_margin: float
@@ -101,6 +104,8 @@ def pid_lowpass(crossover, *, gain=1.0, integral_ratio=10.0, lead_ratio=3.0,
     """The continuous PID-like controller C(s) (N/m) around `crossover` (rad/s)."""
     wc = float(crossover)
     wi, wz, wp, wlp = wc / integral_ratio, wc / lead_ratio, wc * lead_ratio, wc * lowpass_ratio
+    import control
+
     s = control.tf("s")
     return (gain * (s + wi) / s * (s / wz + 1) / (s / wp + 1)
             * wlp**2 / (s**2 + 2 * lowpass_damping * wlp * s + wlp**2))
@@ -114,12 +119,16 @@ def design_feedback(model, *, crossover=300.0, fs=4000.0, delay_samples=1, linea
     inputs and outputs); `shape` passes integral_ratio, lead_ratio, lowpass_ratio and
     lowpass_damping to `pid_lowpass`. Raises ControlDesignError for an unstable closed loop.
     """
+    import control  # python-control takes 0.5 s to import: only where it is used
+
     if not (np.isfinite(fs) and fs > 0):
         raise ControlDesignError(f"sample rate must be a positive number of Hz, got {fs}")
     if not (np.isfinite(crossover) and 0 < crossover < np.pi * fs):
         raise ControlDesignError(
             f"cross-over must lie between 0 and the Nyquist frequency pi fs = {np.pi * fs:g} "
             f"rad/s, got {crossover}")
+    from flexure.core import state_space  # the models (numba, scipy) on first use
+
     pairs = colocated_pairs(model)
     full = plant if plant is not None else state_space(model, linear_model=linear_model)
     Ts = 1.0 / fs
@@ -172,6 +181,8 @@ def _margins(loop, crossover, *, resonances=()):
     cross-over, and refined across the half-power band of every plant pole `resonances` (z),
     so that a narrow parasitic peak is not stepped over.
     """
+    import control
+
     Ts = loop.dt
     nyquist = np.pi / Ts
     parts = [np.geomspace(crossover * 1e-3, nyquist * 0.999999, 3000),
@@ -190,10 +201,14 @@ def _margins(loop, crossover, *, resonances=()):
 
 
 def _siso(sys, i, j):
+    import control
+
     return control.ss(sys.A, sys.B[:, [j]], sys.C[[i], :], sys.D[[i], [j]], sys.dt)
 
 
 def _delay_power(delays, n, count):
+    import control
+
     if n < 0:
         raise ControlDesignError(f"delay_samples must be >= 0, got {n}")
     if n == 0:

@@ -33,10 +33,7 @@ constants of those zeros.
 
 from dataclasses import dataclass, replace
 
-import control
 import numpy as np
-
-from flexure.core import linearize, natural_frequencies
 
 from .feedback import ControlDesignError, colocated_pairs
 
@@ -80,6 +77,8 @@ class LowFrequencyModel:
 
 def low_frequency_model(model, *, linear_model=None):
     """The low-frequency model of `model` on its colocated loops (see the module docstring)."""
+    from flexure.core import linearize, natural_frequencies  # the models on first use
+
     pairs = colocated_pairs(model)
     lin = linear_model or linearize(model)
     modes = natural_frequencies(model, linear_model=lin)
@@ -134,6 +133,8 @@ class StableInverse:
     """
 
     def __init__(self, plant, *, min_damping=0.05, radius=0.999):
+        import control  # 0.5 s to import: only where it is used
+
         tf = control.tf(plant)
         if not tf.isdtime(strict=True) or tf.ninputs != 1 or tf.noutputs != 1:
             raise ControlDesignError("StableInverse needs a discrete SISO model")

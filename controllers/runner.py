@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from flexure.core import FlexureError, load_scene
+from flexure.core import FlexureError
 
 from .feedback import DiscreteController, design_feedback
 from .feedforward import LowFrequencyModel, forces, low_frequency_model
@@ -322,6 +322,8 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
         raise LoopError(f"unknown plant {plant!r}; expected one of {', '.join(PLANTS)}")
     if not (isinstance(rtol, (int, float, np.floating)) and np.isfinite(rtol) and 0 < rtol < 1):
         raise LoopError(f"rtol must be a number between 0 and 1, got {rtol!r}")
+    from flexure.core import load_scene  # the models (numba, scipy) on first use
+
     model = load_scene(scene) if isinstance(scene, (str, bytes)) or hasattr(
         scene, "__fspath__") else scene
     controller, design = build_loop(

@@ -3,25 +3,38 @@
     from flexure.core import load_scene, static_equilibrium, natural_frequencies
     model = load_scene("stage_planar_3dof")          # a file path or a built-in scene name
     natural_frequencies(model).frequencies_hz        # Hz, at the static equilibrium
+
+The public names are imported on first use (PEP 562): `import flexure.core` loads neither
+numpy, scipy, the element modules nor SUNDIALS, so that a command such as `flexure --help`
+and a package that only needs the exceptions start fast. `from flexure.core import X` and
+`flexure.core.X` work for every name of `__all__`, and `dir(flexure.core)` lists them.
 """
 
+import importlib
+
 from .blas import limit_blas_threads
-from .constraints import check_exact_constraint
 from .errors import ConstraintError, ConvergenceError, FlexureError, SceneError, SimulationError
-from .kinematics import Kinematics
-from .linearization import LinearModel, linearize
-from .mechanics import Mechanics
-from .modal import Modes, buckling_load_factors, natural_frequencies
-from .model import Model
-from .scene import build_model, builtin_scenes, load_scene, scene_path
-from .simulation import SimulationResult, Simulator, default_atol, simulate
-from .statespace import state_space
-from .statics import StaticSolution, static_equilibrium
-from .stresses import beam_stresses, stresses_along
 
 limit_blas_threads()  # small matrices: one BLAS thread is fastest (see core/blas.py)
 
 __version__ = "0.1.0"
+
+# public name -> the submodule that defines it (imported by __getattr__ on first use)
+_LAZY = {
+    "check_exact_constraint": "constraints",
+    "Kinematics": "kinematics",
+    "LinearModel": "linearization", "linearize": "linearization",
+    "Mechanics": "mechanics",
+    "Modes": "modal", "buckling_load_factors": "modal", "natural_frequencies": "modal",
+    "Model": "model",
+    "build_model": "scene", "builtin_scenes": "scene", "load_scene": "scene",
+    "scene_path": "scene",
+    "SimulationResult": "simulation", "Simulator": "simulation", "default_atol": "simulation",
+    "simulate": "simulation",
+    "state_space": "statespace",
+    "StaticSolution": "statics", "static_equilibrium": "statics",
+    "beam_stresses": "stresses", "stresses_along": "stresses",
+}
 
 __all__ = [
     "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel",
@@ -31,3 +44,17 @@ __all__ = [
     "natural_frequencies", "scene_path", "simulate", "state_space", "static_equilibrium",
     "stresses_along",
 ]
+
+
+def __getattr__(name):
+    """Import the submodule of a public name on first use, and keep the name (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -4,13 +4,6 @@ import numpy as np
 
 from .cli import PLOT_SUFFIXES, atomic_output, count, output_file
 from .errors import SceneError
-from .linearization import linearize
-from .mechanics import Mechanics
-from .modal import buckling_load_factors, natural_frequencies
-from .scene import load_scene
-from .statespace import state_space
-from .statics import static_equilibrium
-from .stresses import beam_stresses, plot_beam_stresses
 from .tables import format_table, jsonable, print_json
 
 
@@ -37,6 +30,13 @@ def register(subparsers):
 
 def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False):
     """Run the requested analyses; returns the dict that `--json` prints (SI units)."""
+    from .linearization import linearize
+    from .mechanics import Mechanics
+    from .modal import buckling_load_factors, natural_frequencies
+    from .statespace import state_space
+    from .statics import static_equilibrium
+    from .stresses import beam_stresses
+
     result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names}
     mech = Mechanics(model)
     needs_equilibrium = static or modes is not None or with_state_space
@@ -71,6 +71,8 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
 
 
 def run(args):
+    from .scene import load_scene
+
     model = load_scene(args.scene)
     static, modes = args.static, args.modes
     if not (static or modes is not None or args.buckling is not None or args.state_space):
@@ -88,6 +90,9 @@ def run(args):
 
 def plot_stresses(model, path):
     """Plot the von Mises stresses at the static equilibrium to `path` (PNG)."""
+    from .statics import static_equilibrium
+    from .stresses import beam_stresses, plot_beam_stresses
+
     solution = static_equilibrium(model)
     stresses = beam_stresses(model, solution.x, solution.stress_resultants)
     if not stresses.names:

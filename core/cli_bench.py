@@ -22,7 +22,6 @@ from .cli import (
 )
 from .cli_simulate import parse_inputs
 from .errors import SimulationError
-from .scene import load_scene
 from .workprecision import ALL_METHODS, DEFAULT_METHODS, work_precision
 
 SAMPLES = number(2, 1_000_000, integer=True, low_open=False, high_open=False)
@@ -92,6 +91,8 @@ def register(subparsers):
 
 
 def run(args):
+    from .scene import load_scene
+
     model = load_scene(args.scene)
     inputs = parse_inputs(args.input)
     if not args.input and "F" in [p.name for p in model.inputs]:

@@ -25,8 +25,6 @@ from .cli import (
 from .errors import SimulationError, UsageError
 from .integrators import METHODS
 from .progress import Progress
-from .scene import load_scene
-from .simulation import simulate
 from .tables import format_table
 
 SAMPLES = number(1, 10_000_000, integer=True, low_open=False, high_open=False)
@@ -124,6 +122,9 @@ def _is_number(text):
 
 
 def run(args):
+    from .scene import load_scene
+    from .simulation import simulate
+
     # --max-order above the method's largest order: refused by make_integrator, before the run
     outputs = [("--out", args.out), ("--plot", args.plot)]
     distinct_outputs(*outputs)

@@ -9,7 +9,6 @@ where b holds a unit force on the coordinate of each input (SPACAR's INPUTF) and
 of DF of each output coordinate (OUTX). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
 """
 
-import control
 import numpy as np
 
 from .errors import SceneError
@@ -18,6 +17,8 @@ from .linearization import linearize
 
 def state_space(model, *, linear_model=None):
     """The linearised model as a control.StateSpace with named inputs, outputs and states."""
+    import control  # 0.5 s to import (scipy.signal, matplotlib): only where it is used
+
     if not model.inputs or not model.outputs:
         raise SceneError(
             f"{model.source}: a state-space model needs [inputs] and [outputs]; "

@@ -15,11 +15,8 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.integrate
-import scipy.interpolate
 
 from .errors import FlexureError, SimulationError
-from .simulation import Simulator, _classify_inputs, _outputs_along, simulate
 from .tables import format_table, markdown_table
 
 SUNDIALS_METHODS = ("cvode-bdf", "cvode-adams", "ida")
@@ -95,6 +92,8 @@ def work_precision(model, t_end, *, inputs=None, methods=DEFAULT_METHODS,
     one optionally with ":ORDER" (its largest order). time_limit (s) stops a single run that
     takes longer (its row says so). progress: optional callable(row) after each run.
     """
+    from .simulation import simulate  # the models and SUNDIALS on first use (cheap `--help`)
+
     times = np.linspace(0.0, t_end, samples)
     for method in methods:
         parse_method(method)
@@ -123,6 +122,8 @@ def parse_method(method):
 
 
 def _run(model, t_end, inputs, method, rtol, times, reference, time_limit):
+    from .simulation import simulate
+
     row = {"method": method, "rtol": rtol, "error": None, "wall_time_s": 0.0,
            "rhs_evaluations": 0, "steps": 0, "status": "ok"}
     start = time.perf_counter()
@@ -155,6 +156,10 @@ def _short(error):
 
 def _sampled_outputs(model, result, times):
     """Outputs at `times` from the cubic Hermite interpolant of (q, qdot) over the steps."""
+    import scipy.interpolate  # 0.05 s to import: only where it is used
+
+    from .simulation import Simulator, _outputs_along
+
     spline = scipy.interpolate.CubicHermiteSpline(result.times, result.q, result.qdot)
     states = np.hstack([spline(times), spline.derivative()(times)])
     sim = Simulator(model)
@@ -163,6 +168,10 @@ def _sampled_outputs(model, result, times):
 
 def _scipy_run(model, t_end, inputs, method, rtol, times, deadline):
     """scipy.integrate.solve_ivp on the same right-hand side (and Jacobian for the implicit)."""
+    import scipy.integrate  # 0.05 s to import: only where it is used
+
+    from .simulation import Simulator, _classify_inputs, _outputs_along
+
     sim = Simulator(model, rtol=rtol)
     constants, functions, samples = _classify_inputs(sim, inputs or {})
     if samples:

@@ -14,21 +14,35 @@ any flexure slave as one.
   tests (`flexure fmu check`).
 """
 
-from .builder import (
-    FMUBuildError,
-    build_scene_fmu,
-    build_slave_fmu,
-    bundle_name,
-    default_tunable,
-    validate_fmu_file,
-)
-from .env import fmu_environment
-from .model_description import fix_model_description
-from .regression import check_fmu, write_reference
-from .slave import SafeSlave, UnitReal, escape_log
+import importlib
+
+# public name -> the submodule that defines it, imported on first use (PEP 562): importing
+# flexure.fmu loads neither pythonfmu nor fmpy
+_LAZY = {
+    "FMUBuildError": "builder", "build_scene_fmu": "builder", "build_slave_fmu": "builder",
+    "bundle_name": "builder", "default_tunable": "builder", "validate_fmu_file": "builder",
+    "fmu_environment": "env",
+    "fix_model_description": "model_description",
+    "check_fmu": "regression", "write_reference": "regression",
+    "SafeSlave": "slave", "UnitReal": "slave", "escape_log": "slave",
+}
 
 __all__ = [
     "FMUBuildError", "SafeSlave", "UnitReal", "build_scene_fmu", "build_slave_fmu",
     "bundle_name", "check_fmu", "default_tunable", "escape_log", "fix_model_description",
     "fmu_environment", "validate_fmu_file", "write_reference",
 ]
+
+
+def __getattr__(name):
+    """Import the submodule of a public name on first use, and keep the name (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

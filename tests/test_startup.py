@@ -1,0 +1,77 @@
+"""Start-up: `import flexure.core` (and of flexure.controllers, flexure.fmu) stays cheap.
+
+The heavy packages (python-control and matplotlib 0.5 s each, numba 0.3 s, scikit-sundae,
+fmpy, libcosimpy) are imported where they are used, and the public names of each package on
+first use (PEP 562). These are structural checks in a fresh interpreter, not timings.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("control", "matplotlib", "fmpy", "libcosimpy", "numba", "sksundae")
+
+
+def loaded_after(code):
+    """The top-level packages of HEAVY (and numpy, scipy) in sys.modules after `code`."""
+    probe = (f"{code}\nimport json, sys\n"
+             f"print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & "
+             f"{set(HEAVY) | {'numpy', 'scipy'}!r})))")
+    completed = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                               check=True)
+    return set(json.loads(completed.stdout.splitlines()[-1]))
+
+
+def test_import_core_loads_no_heavy_package():
+    loaded = loaded_after("import flexure.core")
+    assert not loaded & set(HEAVY), f"import flexure.core imported {sorted(loaded)}"
+    assert not loaded & {"numpy", "scipy"}, f"import flexure.core imported {sorted(loaded)}"
+
+
+@pytest.mark.parametrize("package", ["flexure.controllers", "flexure.fmu"])
+def test_import_subpackages_loads_no_heavy_package(package):
+    loaded = loaded_after(f"import {package}")
+    assert not loaded & set(HEAVY), f"import {package} imported {sorted(loaded)}"
+
+
+def test_analysis_loads_no_control_matplotlib_or_fmu():
+    loaded = loaded_after("from flexure.core import load_scene, natural_frequencies\n"
+                          "natural_frequencies(load_scene('truss_1dof_x'))")
+    assert not loaded & {"control", "matplotlib", "fmpy", "libcosimpy"}, sorted(loaded)
+
+
+@pytest.mark.parametrize("package", ["flexure.core", "flexure.controllers", "flexure.fmu"])
+def test_every_public_name_resolves_and_is_listed(package):
+    module = __import__(package, fromlist=["__all__"])
+    assert set(module.__all__) <= set(dir(module))
+    for name in module.__all__:
+        assert getattr(module, name) is not None, name
+    namespace = {}
+    exec(f"from {package} import *", namespace)
+    assert set(module.__all__) <= set(namespace)
+    with pytest.raises(AttributeError):
+        module.no_such_name  # noqa: B018
+
+
+def test_submodules_still_import_through_the_package():
+    from flexure.core import assembly, elements
+
+    assert hasattr(assembly, "__file__") and hasattr(elements, "ELEMENT_TYPES")
+
+
+def test_blas_limited_for_libraries_loaded_after_import():
+    """The BLAS thread limit also reaches the libraries loaded after `import flexure.core`."""
+    code = ("import flexure.core\nfrom flexure.core import simulate\n"
+            "import flexure.core.simulation\n"
+            "from threadpoolctl import threadpool_info\n"
+            "import json\n"
+            "print(json.dumps(sorted({i['num_threads'] for i in threadpool_info() "
+            "if i['user_api'] == 'blas'})))")
+    env = {**os.environ, "FLEXURE_BLAS_THREADS": "1"}
+    env.pop("OPENBLAS_NUM_THREADS", None)
+    completed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                               check=True, env=env)
+    assert json.loads(completed.stdout.splitlines()[-1]) == [1]
