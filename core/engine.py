@@ -34,11 +34,11 @@ nothing raises inside compiled code.
 """
 
 import numpy as np
-from numba import carray, njit
+from numba import carray, types
 
 from . import engine_data as ed
-from .elements import beam, euler, plbeam, pltruss
-from .native import as_float_pointer, as_int_pointer
+from .jit import entry, kernel
+from .native import as_float_pointer, as_int_pointer, call_deformations, call_inertia
 
 # slot indices as compile-time constants
 (_DIMS, _FREE, _ROWS, _DOF_COORDS, _DOF_DEFS, _DOF_POS, _STRESSED, _INPUT_COORDS, _GROUPS,
@@ -49,11 +49,10 @@ from .native import as_float_pointer, as_int_pointer
  _REDUCED_FORCE, _QDDOT, _CONV, _LOCAL, _DEF, _STIFFNESS, _DAMPING, _JAC_CACHE,
  _X_START) = range(len(ed.FLOAT_SLOTS))
 _N_INT, _N_FLOAT = len(ed.INT_SLOTS), len(ed.FLOAT_SLOTS)
-_NODE_INERTIA = ed.NODE_INERTIA
 
 
 # -- from a C callback's user data to the arrays -----------------------------------------------
-@njit(cache=True, error_model="numpy")
+@kernel
 def unpack(user_data):
     """(ints, floats) tuples of the arrays whose (address, length) table is at user_data."""
     table = carray(as_int_pointer(user_data), (2 * (_N_INT + _N_FLOAT),))
@@ -78,18 +77,18 @@ def unpack(user_data):
     return ints, floats
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _ints(table, slot):
     return carray(as_int_pointer(table[2 * slot]), (table[2 * slot + 1],))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _floats(table, slot):
     return carray(as_float_pointer(table[2 * slot]), (table[2 * slot + 1],))
 
 
 # -- dense linear algebra on small matrices (row-major, in place) --------------------------------
-@njit(cache=True, error_model="numpy")
+@kernel
 def lu_factor(a, n, piv):
     """LU with partial pivoting of the (n, n) row-major a, in place; returns the ratio of the
     smallest to the largest pivot magnitude (0 for an exactly singular matrix)."""
@@ -117,7 +116,7 @@ def lu_factor(a, n, piv):
     return smallest / largest if largest > 0.0 else 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def lu_solve(a, n, piv, b):
     """Solve A z = b in place (b (n,)) with the factors of `lu_factor`."""
     for k in range(n):
@@ -136,7 +135,7 @@ def lu_solve(a, n, piv, b):
         b[i] = s / a[i * n + i]
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def lu_solve_transposed(a, n, piv, b):
     """Solve A^T z = b in place with the factors of `lu_factor` (A = P^T L U)."""
     for i in range(n):  # U^T w = b
@@ -155,124 +154,76 @@ def lu_solve_transposed(a, n, piv, b):
             b[k], b[p] = b[p], b[k]
 
 
-# -- element kernels by code --------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def _element_deformations(code, x, ref, order, e, De, D2e):
-    if code == 0:
-        pltruss.deformations_kernel(x, ref, order, e, De, D2e)
-    elif code == 1:
-        plbeam.deformations_kernel(x, ref, order, e, De, D2e)
-    elif code == 2:
-        beam.deformations_kernel(x, ref, order, e, De, D2e)
-    elif code == 3:
-        euler.deformations_kernel(x, ref, order, e, De, D2e)
-
-
-@njit(cache=True, error_model="numpy")
-def _element_inertia(code, x, v, ref, order, p, Dp, acc):
-    if code == 0:
-        pltruss.inertia_kernel(x, v, ref, order, p, Dp, acc)
-    elif code == 1:
-        plbeam.inertia_kernel(x, v, ref, order, p, Dp, acc)
-    elif code == 2:
-        beam.inertia_kernel(x, v, ref, order, p, Dp, acc)
-    elif code == _NODE_INERTIA:
-        _node_inertia_kernel(x, v, ref, order, p, Dp, acc)
-
-
-def _bind_node_inertia():
-    from . import rotary_inertia
-
-    return rotary_inertia.inertia_kernel
-
-
-_node_inertia_kernel = _bind_node_inertia()
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _view2(a, offset, n0, n1):
-    """a[offset:].reshape(n0, n1) as a view without the reshape machinery (a hot path)."""
-    return carray(as_float_pointer(a.ctypes.data + 8 * offset), (n0, n1))
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _view3(a, offset, n0, n1, n2):
-    return carray(as_float_pointer(a.ctypes.data + 8 * offset), (n0, n1, n2))
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _view4(a, offset, n0, n1, n2, n3):
-    return carray(as_float_pointer(a.ctypes.data + 8 * offset), (n0, n1, n2, n3))
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _group(I, g):
-    groups = I[_GROUPS]
+@kernel(inline="always")
+def _group(ints, g):
+    groups = ints[_GROUPS]
     return groups[g * ed.G_WIDTH: (g + 1) * ed.G_WIDTH]
 
 
 # -- deformations of every element ---------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def deformations(I, F, x, order):
+@kernel
+def deformations(ints, floats, x, order):
     """e (NE,) into F[_E] and, by order, each element's De, D2e into F[_DE], F[_D2E]."""
-    dims = I[_DIMS]
-    e = F[_E]
-    local = F[_LOCAL]
-    max_m, max_k = dims[ed.MAX_M], dims[ed.MAX_K]
+    dims = ints[_DIMS]
+    e = floats[_E]
+    local = floats[_LOCAL]
+    max_m = dims[ed.MAX_M]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
-        code, n, m, k = row[ed.G_KERNEL], row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
+        row = _group(ints, g)
+        n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
         if k == 0:
             continue
-        width = row[ed.G_REF_WIDTH]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = I[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        refs = _view2(F[_GROUP_DATA], row[ed.G_DATA_OFFSET], n, width)
-        De = _view3(F[_DE], row[ed.G_DE_OFFSET], n, k, m)
-        D2e = _view4(F[_D2E], row[ed.G_D2E_OFFSET], n, k, m, m)
+        width, function = row[ed.G_REF_WIDTH], row[ed.G_DEFORMATIONS_ENTRY]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        refs = floats[_GROUP_DATA].ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+        De = floats[_DE].ctypes.data + 8 * row[ed.G_DE_OFFSET]
+        D2e = floats[_D2E].ctypes.data + 8 * row[ed.G_D2E_OFFSET]
         xl = local[:m]
         el = local[max_m: max_m + k]
         for i in range(n):
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
-            _element_deformations(code, xl, refs[i], order, el, De[i], D2e[i])
+            call_deformations(function, xl.ctypes.data, refs + 8 * i * width, order,
+                              el.ctypes.data, De + 8 * i * k * m, D2e + 8 * i * k * m * m,
+                              m, k, width)
             for b in range(k):
                 e[defs[i * k + b]] = el[b]
 
 
 # -- kinematics -----------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def _residual(I, F, x, q, g):
+@kernel
+def _residual(ints, floats, x, q, g):
     """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in F[_E]."""
-    dims = I[_DIMS]
-    e = F[_E]
+    dims = ints[_DIMS]
+    e = floats[_E]
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
-    rows = I[_ROWS]
+    rows = ints[_ROWS]
     worst = 0.0
     for j in range(n_rigid):
         g[j] = e[rows[j]]
     for j in range(n_edof):
         g[n_rigid + j] = e[rows[n_rigid + j]] - q[n_xdof + j]
     for j in range(n_xdof):
-        g[n_rigid + n_edof + j] = x[I[_DOF_COORDS][j]] - q[j]
+        g[n_rigid + n_edof + j] = x[ints[_DOF_COORDS][j]] - q[j]
     for j in range(g.size):
         worst = max(worst, abs(g[j]))
     return worst
 
 
-@njit(cache=True, error_model="numpy")
-def _constraint_jacobian(I, F, J):
+@kernel
+def _constraint_jacobian(ints, floats, J):
     """J (n_free, n_free) row-major into J from the elements' De in F[_DE]."""
-    dims = I[_DIMS]
+    dims = ints[_DIMS]
     nf = dims[ed.NFREE]
     J[:] = 0.0
-    row_of_def, col_of_coord = I[_ROW_OF_DEF], I[_COL_OF_COORD]
+    row_of_def, col_of_coord = ints[_ROW_OF_DEF], ints[_COL_OF_COORD]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
+        row = _group(ints, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = I[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = F[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
         for i in range(n):
             for b in range(k):
                 r = row_of_def[defs[i * k + b]]
@@ -283,24 +234,24 @@ def _constraint_jacobian(I, F, J):
                     if c >= 0:
                         J[r * nf + c] = De[(i * k + b) * m + a]
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
-    positions = I[_DOF_POS]
+    positions = ints[_DOF_POS]
     for j in range(dims[ed.NXDOF]):
         J[(n_def + j) * nf + positions[j]] = 1.0
 
 
-@njit(cache=True, error_model="numpy")
-def _store(I, F, q, x):
+@kernel
+def _store(ints, floats, q, x):
     """Factor J at the solved x (deformations of order 2 in F), DF, and keep both as the next
     warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is singular."""
-    dims = I[_DIMS]
+    dims = ints[_DIMS]
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    lu, piv = F[_LU], I[_PIVOTS]
-    _constraint_jacobian(I, F, lu)
+    lu, piv = floats[_LU], ints[_PIVOTS]
+    _constraint_jacobian(ints, floats, lu)
     ratio = lu_factor(lu, nf, piv)
-    if not ratio > F[_SETTINGS][ed.SINGULAR_RATIO]:
+    if not ratio > floats[_SETTINGS][ed.SINGULAR_RATIO]:
         return ed.SINGULAR_CONSTRAINTS
-    DF, column = F[_DF], F[_DX]
-    free = I[_FREE]
+    DF, column = floats[_DF], floats[_DX]
+    free = ints[_FREE]
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
     DF[:] = 0.0
     for j in range(ndof):  # J DF = [0; I]: DOF coordinates first in q, last in the rows of J
@@ -312,32 +263,32 @@ def _store(I, F, q, x):
         lu_solve(lu, nf, piv, column)
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
-    F[_X][:nx] = x[:nx]
-    F[_Q][:] = q
+    floats[_X][:nx] = x[:nx]
+    floats[_Q][:] = q
     dims[ed.WARM] = 1
     return ed.OK
 
 
-@njit(cache=True, error_model="numpy")
-def solve_kinematics(I, F, q):
+@kernel
+def solve_kinematics(ints, floats, q):
     """x = F(q) into F[_X], with e, De, D2e, the LU of J and DF there; a status code."""
-    dims = I[_DIMS]
+    dims = ints[_DIMS]
     nx, nf = dims[ed.NX], dims[ed.NFREE]
-    tolerance = F[_SETTINGS][ed.TOLERANCE]
-    x, g, dx, free = F[_X_TRIAL], F[_G], F[_DX], I[_FREE]
-    lu, piv = F[_LU], I[_PIVOTS]
+    tolerance = floats[_SETTINGS][ed.TOLERANCE]
+    x, g, dx, free = floats[_X_TRIAL], floats[_G], floats[_DX], ints[_FREE]
+    lu, piv = floats[_LU], ints[_PIVOTS]
     if dims[ed.WARM] == 1:
-        DF, x_prev, q_prev = F[_DF], F[_X], F[_Q]
+        DF, x_prev, q_prev = floats[_DF], floats[_X], floats[_Q]
         ndof = dims[ed.NDOF]
         for a in range(nx):
             s = x_prev[a]
             for j in range(ndof):
                 s += DF[a * ndof + j] * (q[j] - q_prev[j])
             x[a] = s
-        deformations(I, F, x, 0)
-        if _residual(I, F, x, q, g) <= tolerance:
-            deformations(I, F, x, 2)
-            return _store(I, F, q, x)
+        deformations(ints, floats, x, 0)
+        if _residual(ints, floats, x, q, g) <= tolerance:
+            deformations(ints, floats, x, 2)
+            return _store(ints, floats, q, x)
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             dx[:] = g
             lu_solve(lu, nf, piv, dx)
@@ -347,17 +298,17 @@ def solve_kinematics(I, F, q):
                 step = max(step, abs(dx[a]))
             if not np.isfinite(step):
                 break
-            deformations(I, F, x, 2)
-            if _residual(I, F, x, q, g) <= tolerance or step <= tolerance:
-                return _store(I, F, q, x)
+            deformations(ints, floats, x, 2)
+            if _residual(ints, floats, x, q, g) <= tolerance or step <= tolerance:
+                return _store(ints, floats, q, x)
     else:
-        x[:] = F[_X_START]
+        x[:] = floats[_X_START]
     if not np.all(np.isfinite(x)):
-        x[:] = F[_X]
+        x[:] = floats[_X]
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton
-        deformations(I, F, x, 1)
-        _residual(I, F, x, q, g)
-        _constraint_jacobian(I, F, lu)
+        deformations(ints, floats, x, 1)
+        _residual(ints, floats, x, q, g)
+        _constraint_jacobian(ints, floats, lu)
         if not lu_factor(lu, nf, piv) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         dx[:] = g
@@ -369,32 +320,32 @@ def solve_kinematics(I, F, q):
         if not np.isfinite(step):
             return ed.NOT_CONVERGED
         if step <= tolerance:
-            deformations(I, F, x, 2)
-            return _store(I, F, q, x)
+            deformations(ints, floats, x, 2)
+            return _store(ints, floats, q, x)
     return ed.NOT_CONVERGED
 
 
-@njit(cache=True, error_model="numpy")
-def positions(I, F, q, out):
+@kernel
+def positions(ints, floats, q, out):
     """Coordinates x (NX,) for q into out (the kinematics of `solve_kinematics`); status."""
-    status = solve_kinematics(I, F, q)
-    out[:] = F[_X]
+    status = solve_kinematics(ints, floats, q)
+    out[:] = floats[_X]
     return status
 
 
 # -- equations of motion ------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def evaluate(I, F, q, qdot):
+@kernel
+def evaluate(ints, floats, q, qdot):
     """qddot (NDOF,) into F[_QDDOT] for DOFs q, velocities qdot and the inputs in F[_INPUTS].
 
     Leaves in F what the tangent needs: the kinematics, the constitutive stress resultants
     (F[_SIGMA]), the coordinate force balance r (F[_FORCE]) and M_bar (F[_MASS]); a status."""
-    status = solve_kinematics(I, F, q)
+    status = solve_kinematics(ints, floats, q)
     if status != ed.OK:
         return status
-    dims = I[_DIMS]
-    nx, ne, ndof, nf = dims[ed.NX], dims[ed.NE], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x, xdot = F[_DF], F[_X], F[_XDOT]
+    dims = ints[_DIMS]
+    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
+    DF, x, xdot = floats[_DF], floats[_X], floats[_XDOT]
     moving = False
     for j in range(ndof):
         if qdot[j] != 0.0:
@@ -404,10 +355,11 @@ def evaluate(I, F, q, qdot):
         for j in range(ndof):
             s += DF[a * ndof + j] * qdot[j]
         xdot[a] = s
-    _element_rates(I, F, xdot, moving)  # edot (stressed rows) and, if moving, the quad forms
+    # edot and, if moving, the quadratic forms of the constraint rows
+    _element_rates(ints, floats, xdot, moving)
     # sigma_c = S e_s + D edot_s
-    sigma, e, edot = F[_SIGMA], F[_E], F[_EDOT]
-    stressed, S, D = I[_STRESSED], F[_S], F[_D]
+    sigma, e, edot = floats[_SIGMA], floats[_E], floats[_EDOT]
+    stressed, S, D = ints[_STRESSED], floats[_S], floats[_D]
     ns = stressed.size
     sigma[:] = 0.0
     damped = dims[ed.HAS_DAMPING] == 1
@@ -419,54 +371,54 @@ def evaluate(I, F, q, qdot):
                 s += D[a * ns + b] * edot[stressed[b]]
         sigma[stressed[a]] = s
     # coordinate force r = f - De^T sigma_c (- inertia terms below)
-    r = F[_FORCE]
-    r[:] = F[_CONST_FORCE]
-    inputs, input_coords = F[_INPUTS], I[_INPUT_COORDS]
+    r = floats[_FORCE]
+    r[:] = floats[_CONST_FORCE]
+    inputs, input_coords = floats[_INPUTS], ints[_INPUT_COORDS]
     for j in range(inputs.size):
         r[input_coords[j]] += inputs[j]
-    _scatter_stress(I, F, sigma, r)
-    conv = F[_CONV]
+    _scatter_stress(ints, floats, sigma, r)
+    conv = floats[_CONV]
     if moving:  # (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot on the constraint rows]
-        dx = F[_DX]
+        dx = floats[_DX]
         for a in range(nf):
-            dx[a] = F[_G][a]  # the quadratic forms, left in g by _element_rates
-        lu_solve(F[_LU], nf, I[_PIVOTS], dx)
+            dx[a] = floats[_G][a]  # the quadratic forms, left in g by _element_rates
+        lu_solve(floats[_LU], nf, ints[_PIVOTS], dx)
         conv[:] = 0.0
-        free = I[_FREE]
+        free = ints[_FREE]
         for a in range(nf):
             conv[free[a]] = -dx[a]
-    _inertia(I, F, x, xdot, conv, moving, r)
+    _inertia(ints, floats, x, xdot, conv, moving, r)
     # M_bar qddot = DF^T r
-    rq, qddot = F[_REDUCED_FORCE], F[_QDDOT]
+    rq, qddot = floats[_REDUCED_FORCE], floats[_QDDOT]
     for j in range(ndof):
         s = 0.0
         for a in range(nx):
             s += DF[a * ndof + j] * r[a]
         rq[j] = s
-    mass_lu = F[_MASS_LU]
-    mass_lu[:] = F[_MASS]
-    if not lu_factor(mass_lu, ndof, I[_MASS_PIVOTS]) > 0.0:
+    mass_lu = floats[_MASS_LU]
+    mass_lu[:] = floats[_MASS]
+    if not lu_factor(mass_lu, ndof, ints[_MASS_PIVOTS]) > 0.0:
         return ed.SINGULAR_MASS
     qddot[:] = rq
-    lu_solve(mass_lu, ndof, I[_MASS_PIVOTS], qddot)
+    lu_solve(mass_lu, ndof, ints[_MASS_PIVOTS], qddot)
     return ed.OK
 
 
-@njit(cache=True, error_model="numpy")
-def _element_rates(I, F, xdot, moving):
+@kernel
+def _element_rates(ints, floats, xdot, moving):
     """edot = De xdot (F[_EDOT]) and, if moving, xdot^T D2e_i xdot of the constraint rows
     into F[_G] (n_free,: zero on the unit rows of the DOF coordinates)."""
-    dims = I[_DIMS]
-    edot, quad = F[_EDOT], F[_G]
-    row_of_def = I[_ROW_OF_DEF]
+    dims = ints[_DIMS]
+    edot, quad = floats[_EDOT], floats[_G]
+    row_of_def = ints[_ROW_OF_DEF]
     quad[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
+        row = _group(ints, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = I[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = F[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
-        D2e = F[_D2E][row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        D2e = floats[_D2E][row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
         for i in range(n):
             for b in range(k):
                 s = 0.0
@@ -489,16 +441,16 @@ def _element_rates(I, F, xdot, moving):
                     quad[r] = h
 
 
-@njit(cache=True, error_model="numpy")
-def _scatter_stress(I, F, sigma, r):
+@kernel
+def _scatter_stress(ints, floats, sigma, r):
     """r -= De^T sigma, element by element."""
-    dims = I[_DIMS]
+    dims = ints[_DIMS]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
+        row = _group(ints, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = I[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = F[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
         for i in range(n):
             for b in range(k):
                 s = sigma[defs[i * k + b]]
@@ -509,13 +461,13 @@ def _scatter_stress(I, F, sigma, r):
                     r[coords[i * m + a]] -= De[base + a] * s
 
 
-@njit(cache=True, error_model="numpy")
-def _inertia(I, F, x, xdot, conv, moving, r):
+@kernel
+def _inertia(ints, floats, x, xdot, conv, moving, r):
     """M_bar = DF^T M DF into F[_MASS]; gravity on the element masses into r; and, if moving,
     r -= M conv + g_conv. Element by element through the inertia points."""
-    dims = I[_DIMS]
+    dims = ints[_DIMS]
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
-    DF, mass, lumped = F[_DF], F[_MASS], F[_LUMPED]
+    DF, mass, lumped = floats[_DF], floats[_MASS], floats[_LUMPED]
     mass[:] = 0.0
     for a in range(nx):  # the lumped masses
         la = lumped[a]
@@ -529,24 +481,25 @@ def _inertia(I, F, x, xdot, conv, moving, r):
                 continue
             for j in range(ndof):
                 mass[i * ndof + j] += di * DF[a * ndof + j]
-    local = F[_LOCAL]
+    local = floats[_LOCAL]
     max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
+        row = _group(ints, g)
         P = row[ed.G_P]
         if P == 0:
             continue
-        code, n, m, width = row[ed.G_KERNEL], row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        data = F[_GROUP_DATA]
-        refs = data[row[ed.G_DATA_OFFSET]: row[ed.G_DATA_OFFSET] + n * width]
-        # scratch: x, v (m), p, acc, w (P), Dp (P m), B = Dp DF_e (P ndof)
+        n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
+        function = row[ed.G_INERTIA_ENTRY]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        data = floats[_GROUP_DATA]
+        refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+        # scratch: x, v (m), p, acc, w (P), Dp (P, m), B = Dp DF_e (P, ndof)
         xl, vl = local[:max_m], local[max_m: 2 * max_m]
         o = 2 * max_m
         pl, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
             local[o + 2 * max_p: o + 3 * max_p]
         o += 3 * max_p
-        Dp = local[o: o + max_p * max_m].reshape((max_p, max_m))
+        Dp = local[o: o + P * m].reshape((P, m))
         o += max_p * max_m
         B = local[o: o + max_p * ndof]
         gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
@@ -555,8 +508,9 @@ def _inertia(I, F, x, xdot, conv, moving, r):
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
                 vl[a] = xdot[coords[i * m + a]]
-            _element_inertia(code, xl[:m], vl[:m], refs[i * width: (i + 1) * width],
-                             2 if moving else 1, pl[:P], Dp[:P, :m], acc[:P])
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
+                         2 if moving else 1, pl.ctypes.data, Dp.ctypes.data, acc.ctypes.data,
+                         m, P, width)
             # B = Dp DF_e (P, ndof)
             for pp in range(P):
                 for j in range(ndof):
@@ -595,46 +549,46 @@ def _inertia(I, F, x, xdot, conv, moving, r):
                             mass[a * ndof + b] += ba * B[qq * ndof + b]
 
 
-# -- tangent ----------------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def tangent(I, F, qddot):
+# -- tangent ----------------------------------------------------------------------------------
+@kernel
+def tangent(ints, floats, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into F[_STIFFNESS], F[_DAMPING] at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot."""
-    dims = I[_DIMS]
-    nx, ne, ndof, nf = dims[ed.NX], dims[ed.NE], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x = F[_DF], F[_X]
+    dims = ints[_DIMS]
+    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
+    DF, x = floats[_DF], floats[_X]
     # r_full = r - M DF qddot, then the multipliers J^-T r_full on the free coordinates
-    acc = F[_CONV]
+    acc = floats[_CONV]
     for a in range(nx):
         s = 0.0
         for j in range(ndof):
             s += DF[a * ndof + j] * qddot[j]
         acc[a] = s
-    r_full = F[_X_TRIAL]
-    r_full[:] = F[_FORCE]
-    _mass_times(I, F, x, acc, r_full)
-    free, lam = I[_FREE], F[_DX]
+    r_full = floats[_X_TRIAL]
+    r_full[:] = floats[_FORCE]
+    _mass_times(ints, floats, x, acc, r_full)
+    free, lam = ints[_FREE], floats[_DX]
     for a in range(nf):
         lam[a] = r_full[free[a]]
-    lu_solve_transposed(F[_LU], nf, I[_PIVOTS], lam)
-    sigma = F[_EDOT]  # reused: the full stress resultants
-    sigma[:] = F[_SIGMA]
-    rows = I[_ROWS]
+    lu_solve_transposed(floats[_LU], nf, ints[_PIVOTS], lam)
+    sigma = floats[_EDOT]  # reused: the full stress resultants
+    sigma[:] = floats[_SIGMA]
+    rows = ints[_ROWS]
     for j in range(rows.size):
         sigma[rows[j]] += lam[j]
     # DeF = De DF (NE, NDOF) and G0 = sum DF_e^T (sum_i sigma_i D2e_i) DF_e
-    DeF, K, C = F[_DEF], F[_STIFFNESS], F[_DAMPING]
+    DeF, K, C = floats[_DEF], floats[_STIFFNESS], floats[_DAMPING]
     K[:] = 0.0
     C[:] = 0.0
     DeF[:] = 0.0
-    local = F[_LOCAL]
+    local = floats[_LOCAL]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
+        row = _group(ints, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = I[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = F[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
-        D2e = F[_D2E][row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        D2e = floats[_D2E][row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
         H = local[: m * m]
         HD = local[m * m: m * m + m * ndof]
         for i in range(n):
@@ -668,7 +622,7 @@ def tangent(I, F, qddot):
                     for j2 in range(ndof):
                         K[j1 * ndof + j2] += dfa * HD[a * ndof + j2]
     # K0 = DeF_s^T S DeF_s, C0 = DeF_s^T D DeF_s
-    stressed, S, D = I[_STRESSED], F[_S], F[_D]
+    stressed, S, D = ints[_STRESSED], floats[_S], floats[_D]
     ns = stressed.size
     damped = dims[ed.HAS_DAMPING] == 1
     SD = local[: ndof]
@@ -694,26 +648,27 @@ def tangent(I, F, qddot):
                     C[i * ndof + j] += v * DD[j]
 
 
-@njit(cache=True, error_model="numpy")
-def _mass_times(I, F, x, v, out):
+@kernel
+def _mass_times(ints, floats, x, v, out):
     """out -= M(x) v for a coordinate vector v (NX,): lumped plus element masses."""
-    dims = I[_DIMS]
+    dims = ints[_DIMS]
     nx = dims[ed.NX]
-    lumped = F[_LUMPED]
+    lumped = floats[_LUMPED]
     for a in range(nx):
         out[a] -= lumped[a] * v[a]
-    local = F[_LOCAL]
+    local = floats[_LOCAL]
     max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
-    data = F[_GROUP_DATA]
+    data = floats[_GROUP_DATA]
     ndof = dims[ed.NDOF]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(I, g)
+        row = _group(ints, g)
         P = row[ed.G_P]
         if P == 0:
             continue
-        code, n, m, width = row[ed.G_KERNEL], row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
-        coords = I[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        refs = data[row[ed.G_DATA_OFFSET]: row[ed.G_DATA_OFFSET] + n * width]
+        n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
+        function = row[ed.G_INERTIA_ENTRY]
+        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
         # scratch after the first 2 ndof entries, which `tangent` keeps for itself
         o = 2 * ndof + max_m * max_m + max_m * ndof
         xl, vl = local[o: o + max_m], local[o + max_m: o + 2 * max_m]
@@ -721,13 +676,13 @@ def _mass_times(I, F, x, v, out):
         pl, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
             local[o + 2 * max_p: o + 3 * max_p]
         o += 3 * max_p
-        Dp = local[o: o + max_p * max_m].reshape((max_p, max_m))
+        Dp = local[o: o + P * m].reshape((P, m))
         for i in range(n):
             Mp = data[row[ed.G_MASS_OFFSET] + i * P * P: row[ed.G_MASS_OFFSET] + (i + 1) * P * P]
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
-            _element_inertia(code, xl[:m], vl[:m], refs[i * width: (i + 1) * width], 1,
-                             pl[:P], Dp[:P, :m], acc[:P])
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width, 1,
+                         pl.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
             for pp in range(P):
                 s = 0.0
                 for a in range(m):
@@ -746,24 +701,24 @@ def _mass_times(I, F, x, v, out):
 
 
 # -- first-order form for the integrators ---------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def first_order_rhs(I, F, y, ydot):
+@kernel
+def first_order_rhs(ints, floats, y, ydot):
     """ydot = [qdot, qddot] for the state y = [q - q_ref, qdot]; a status code.
 
     The absolute DOFs are formed in the last NDOF entries of the scratch array, which no
     other part of an evaluation uses."""
-    n = I[_DIMS][ed.NDOF]
+    n = ints[_DIMS][ed.NDOF]
     for j in range(2 * n):
         if not np.isfinite(y[j]):
             return ed.NONFINITE_STATE
-    q_abs = F[_LOCAL][F[_LOCAL].size - n:]
-    q_ref = F[_Q_REF]
+    q_abs = floats[_LOCAL][floats[_LOCAL].size - n:]
+    q_ref = floats[_Q_REF]
     for j in range(n):
         q_abs[j] = q_ref[j] + y[j]
-    status = evaluate(I, F, q_abs, y[n: 2 * n])
+    status = evaluate(ints, floats, q_abs, y[n: 2 * n])
     if status != ed.OK:
         return status
-    qddot = F[_QDDOT]
+    qddot = floats[_QDDOT]
     for j in range(n):
         if not np.isfinite(qddot[j]):
             return ed.NONFINITE_RESULT
@@ -774,17 +729,17 @@ def first_order_rhs(I, F, y, ydot):
     return ed.OK
 
 
-@njit(cache=True, error_model="numpy")
-def first_order_jacobian(I, F, y, J, column_major):
+@kernel
+def first_order_jacobian(ints, floats, y, J, column_major):
     """d ydot / d y (2n, 2n) into J (flat; column-major for SUNDIALS' dense matrix):
     [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at y; a status code."""
-    status = first_order_rhs(I, F, y, F[_DX][: 0])
+    status = first_order_rhs(ints, floats, y, floats[_DX][: 0])
     if status != ed.OK:
         return status
-    n = I[_DIMS][ed.NDOF]
-    tangent(I, F, F[_QDDOT])
-    K, C, mass_lu, piv = F[_STIFFNESS], F[_DAMPING], F[_MASS_LU], I[_MASS_PIVOTS]
-    column = F[_REDUCED_FORCE]
+    n = ints[_DIMS][ed.NDOF]
+    tangent(ints, floats, floats[_QDDOT])
+    K, C, mass_lu, piv = floats[_STIFFNESS], floats[_DAMPING], floats[_MASS_LU], ints[_MASS_PIVOTS]
+    column = floats[_REDUCED_FORCE]
     N = 2 * n
     J[:] = 0.0
     for j in range(n):
@@ -803,7 +758,7 @@ def first_order_jacobian(I, F, y, J, column_major):
     return ed.OK
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _put(J, N, i, j, value, column_major):
     if column_major:
         J[j * N + i] = value
@@ -811,14 +766,14 @@ def _put(J, N, i, j, value, column_major):
         J[i * N + j] = value
 
 
-@njit(cache=True, error_model="numpy")
-def implicit_residual(I, F, y, yp, res):
+@kernel
+def implicit_residual(ints, floats, y, yp, res):
     """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot))]; a status code."""
-    status = first_order_rhs(I, F, y, F[_DX][: 0])
+    status = first_order_rhs(ints, floats, y, floats[_DX][: 0])
     if status != ed.OK:
         return status
-    n = I[_DIMS][ed.NDOF]
-    mass, qddot = F[_MASS], F[_QDDOT]
+    n = ints[_DIMS][ed.NDOF]
+    mass, qddot = floats[_MASS], floats[_QDDOT]
     for i in range(n):
         res[i] = yp[i] - y[n + i]
         s = 0.0
@@ -828,16 +783,16 @@ def implicit_residual(I, F, y, yp, res):
     return ed.OK
 
 
-@njit(cache=True, error_model="numpy")
-def implicit_jacobian(I, F, y, yp, cj, J):
+@kernel
+def implicit_jacobian(ints, floats, y, yp, cj, J):
     """IDA's d res / d y + cj d res / d yp, column-major (2n, 2n): [[cj I, -I], [K, C + cj
     M_bar]] with the tangent's dynamic balance at qddot = yp[n:]; a status code."""
-    status = first_order_rhs(I, F, y, F[_DX][: 0])
+    status = first_order_rhs(ints, floats, y, floats[_DX][: 0])
     if status != ed.OK:
         return status
-    n = I[_DIMS][ed.NDOF]
-    tangent(I, F, yp[n: 2 * n])
-    K, C, mass = F[_STIFFNESS], F[_DAMPING], F[_MASS]
+    n = ints[_DIMS][ed.NDOF]
+    tangent(ints, floats, yp[n: 2 * n])
+    K, C, mass = floats[_STIFFNESS], floats[_DAMPING], floats[_MASS]
     N = 2 * n
     J[:] = 0.0
     for i in range(n):
@@ -847,3 +802,62 @@ def implicit_jacobian(I, F, y, yp, cj, J):
             J[j * N + n + i] = K[i * n + j]
             J[(n + j) * N + n + i] = C[i * n + j] + cj * mass[i * n + j]
     return ed.OK
+
+
+# -- the one entry point: every operation through one compiled C function ---------------------
+(OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
+ OP_EVALUATE, OP_TANGENT) = range(8)
+# (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number
+ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.voidptr,
+                           types.voidptr, types.voidptr, types.float64)
+
+
+@entry(ENGINE_ENTRY)
+def engine_entry(op, user_data, t, a, b, c, s):
+    """Every operation of the engine on the packed model at user_data (an address table):
+
+    OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major), OP_RESIDUAL (y, yp, res),
+    OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q), OP_DEFORMATIONS (x; s =
+    order), OP_EVALUATE (q, qdot), OP_TANGENT (qddot). Returns the status code."""
+    ints, floats = unpack(user_data)
+    dims = ints[_DIMS]
+    nx, ndof = dims[ed.NX], dims[ed.NDOF]
+    n = 2 * ndof
+    f8 = np.float64
+    if op == OP_RHS:
+        return first_order_rhs(ints, floats, carray(a, (n,), f8), carray(b, (n,), f8))
+    if op == OP_JACOBIAN:
+        return first_order_jacobian(ints, floats, carray(a, (n,), f8), carray(b, (n * n,), f8),
+                                    s != 0.0)
+    if op == OP_RESIDUAL:
+        return implicit_residual(ints, floats, carray(a, (n,), f8), carray(b, (n,), f8),
+                                 carray(c, (n,), f8))
+    if op == OP_RESIDUAL_JACOBIAN:
+        return implicit_jacobian(ints, floats, carray(a, (n,), f8), carray(b, (n,), f8), s,
+                                 carray(c, (n * n,), f8))
+    if op == OP_KINEMATICS:
+        return solve_kinematics(ints, floats, carray(a, (ndof,), f8))
+    if op == OP_DEFORMATIONS:
+        deformations(ints, floats, carray(a, (nx,), f8), int(s))
+        return ed.OK
+    if op == OP_EVALUATE:
+        return evaluate(ints, floats, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
+    if op == OP_TANGENT:
+        tangent(ints, floats, carray(a, (ndof,), f8))
+        return ed.OK
+    return -1
+
+
+def call(data, op, a=None, b=None, c=None, s=0.0, t=0.0):
+    """Run one engine operation from Python (a ctypes call, about 1 us): data an
+    `EngineData`, a, b, c contiguous float64 arrays of the operation. Returns the status."""
+    return engine_entry.ctypes(op, data.address, t, _address(a), _address(b), _address(c),
+                               float(s))
+
+
+def _address(array):
+    if array is None:
+        return None
+    if not (array.dtype == np.float64 and array.flags.c_contiguous):
+        raise TypeError("engine arrays must be C-contiguous float64")
+    return array.ctypes.data

@@ -6,11 +6,13 @@ flat arrays built here, float64 arrays in `floats` and int64 arrays in `ints`, i
 order of the slot names below. The same arrays reach a C callback through one address: `table`
 lists (address, length) of every array, and `engine.unpack` rebuilds the two tuples from it.
 
-Per element group (all elements of one type) the engine needs its kernel code, the local
-coordinate and deformation indices, the packed reference rows of the element module
-(`pack_reference`) and, for groups with mass, the constant mass Mp of the inertia points and
-gravity on those points. Workspace arrays (warm start of the kinematics, the last
-evaluation, scratch) live here too, so the engine never allocates in an evaluation.
+Per element group (all elements of one type) the engine needs the addresses of the element
+module's compiled entry points (`deformations_entry`, `inertia_entry`), the local coordinate
+and deformation indices, the packed reference rows (`pack_reference`) and, for groups with
+mass, the constant mass Mp of the inertia points and gravity on those points. An element
+module that defines these plugs into the engine without the engine naming it. Workspace
+arrays (warm start of the kinematics, the last evaluation, scratch) live here too, so the
+engine never allocates in an evaluation.
 
 Units: SI throughout (m, rad, kg, N, s), as the model's.
 """
@@ -18,12 +20,6 @@ Units: SI throughout (m, rad, kg, N, s), as the model's.
 import numpy as np
 
 from . import assembly
-from .elements import beam, euler, plbeam, pltruss, truss
-from .model import DOF, FIXED
-
-# kernel codes; TRUSS uses PLTRUSS's dimension-generic kernel
-KERNELS = {pltruss: 0, truss: 0, plbeam: 1, beam: 2, euler: 3}
-NODE_INERTIA = 4  # rigid-body inertia of a 3-D rotational node: inertia points only
 
 # int64 slots (`ints`)
 INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformations",
@@ -38,10 +34,11 @@ FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
- MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, DIMS_SIZE) = range(20)
+ MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, ENGINE, DIMS_SIZE) = range(21)
 # per-group row of `groups`
-(G_KERNEL, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
- G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_WIDTH) = range(14)
+(G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
+ G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
+ G_INERTIA_ENTRY, G_WIDTH) = range(16)
 # settings entries
 TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
 # counters entries
@@ -92,16 +89,17 @@ class EngineData:
         max_m = max_k = max_p = 1
         for group in all_groups:
             kind = group.kind
-            node_inertia = kind.type_name == "NODE_INERTIA"
-            code = NODE_INERTIA if node_inertia else KERNELS[kind]
             n, m = group.coordinate_index.shape
             k = group.deformation_index.shape[1]
             packed = kind.pack_reference(group.reference)
             Mp = inertia.get(id(group))
             P = 0 if Mp is None else Mp.shape[1]
             row = np.zeros(G_WIDTH, dtype=np.int64)
-            row[[G_KERNEL, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH]] = (code, n, m, k, P,
-                                                                  packed.shape[1])
+            row[[G_COUNT, G_M, G_K, G_P, G_REF_WIDTH]] = n, m, k, P, packed.shape[1]
+            if k:
+                row[G_DEFORMATIONS_ENTRY] = kind.deformations_entry.address
+            if P:
+                row[G_INERTIA_ENTRY] = kind.inertia_entry.address
             row[G_COORD_OFFSET] = offsets["coord"]
             row[G_DEF_OFFSET] = offsets["def"]
             row[G_DATA_OFFSET] = offsets["data"]
@@ -143,6 +141,9 @@ class EngineData:
         dims[HAS_DAMPING] = int(np.any(D))
         dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
         dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
+        from .engine import engine_entry  # the engine imports this module's constants
+
+        dims[ENGINE] = engine_entry.address  # for callbacks that call the engine
         settings = np.zeros(SETTINGS_SIZE)
         settings[TOLERANCE] = tolerance * _length_scale(model)
         settings[SINGULAR_RATIO] = singular_ratio
@@ -207,4 +208,4 @@ def _concat_int(parts):
     return np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)
 
 
-__all__ = ["EngineData", "DOF", "FIXED"]
+__all__ = ["EngineData"]

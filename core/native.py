@@ -124,3 +124,65 @@ def call_reinit(typingctx, function, memory, t, vector):
                                      builder.inttoptr(args[3], _I8P)])
 
     return sig, codegen
+
+
+def _address_arguments(builder, values, kinds):
+    """LLVM values for a C call: 'p' double* (from an address or a pointer), 'v' void*,
+    'i' int64, 'd' double."""
+    converted = []
+    for value, kind in zip(values, kinds, strict=True):
+        if kind == "p":
+            converted.append(_cast(builder, value, _DOUBLE.as_pointer()))
+        elif kind == "v":
+            converted.append(_cast(builder, value, _I8P))
+        elif kind == "i":
+            converted.append(value if value.type == ir.IntType(64)
+                             else builder.sext(value, ir.IntType(64)))
+        else:
+            converted.append(value)
+    return converted
+
+
+_LLVM_KINDS = {"p": _DOUBLE.as_pointer(), "v": _I8P, "i": ir.IntType(64), "d": _DOUBLE}
+
+
+def _call_by_address(builder, address, values, kinds, result):
+    fnty = ir.FunctionType(result, [_LLVM_KINDS[k] for k in kinds])
+    callee = builder.inttoptr(address, fnty.as_pointer())
+    return builder.call(callee, _address_arguments(builder, values, kinds))
+
+
+@intrinsic
+def call_deformations(typingctx, address, x, ref, order, e, De, D2e, m, k, width):
+    """An element's `deformations_entry` (jit.DEFORMATIONS_ENTRY) through its address; the
+    arrays are given by their addresses."""
+    sig = types.void(address, x, ref, order, e, De, D2e, m, k, width)
+
+    def codegen(context, builder, signature, args):
+        _call_by_address(builder, args[0], args[1:], "ppippiiii", ir.VoidType())
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def call_inertia(typingctx, address, x, v, ref, order, p, Dp, acc, m, P, width):
+    """An element's `inertia_entry` (jit.INERTIA_ENTRY) through its address."""
+    sig = types.void(address, x, v, ref, order, p, Dp, acc, m, P, width)
+
+    def codegen(context, builder, signature, args):
+        _call_by_address(builder, args[0], args[1:], "pppipppiii", ir.VoidType())
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def call_engine(typingctx, address, op, user_data, t, a, b, c, s):
+    """The engine's entry point (engine.ENGINE_ENTRY) through its address; int32 status."""
+    sig = types.int32(address, op, user_data, t, a, b, c, s)
+
+    def codegen(context, builder, signature, args):
+        return _call_by_address(builder, args[0], args[1:], "ivdvvvd", _I32)
+
+    return sig, codegen

@@ -29,8 +29,9 @@ the compiled evaluation engine.
 """
 
 import numpy as np
-from numba import njit
+from numba import carray
 
+from .jit import INERTIA_ENTRY, entry, kernel
 from .model import ElementGroup
 from .rotations import rotate, vector_tensor
 
@@ -102,7 +103,7 @@ def pack_reference(ref):
     return np.ascontiguousarray(tensors.reshape(axes.shape[0], REFERENCE_WIDTH))
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def inertia_kernel(x, v, ref, order, p, Dp, acc):
     """p (9,), Dp (9, 4) if order >= 1, acc = (D2p v) v (9,) if order >= 2 of one node: its
     Euler parameters x (4,) and their rates v (4,), ref its packed reference row. Overwrites
@@ -130,3 +131,10 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
                     half += ref[base + 4 * i + j] * v[j]
                 rate += half * v[i]
             acc[row] = 2.0 * rate
+
+
+@entry(INERTIA_ENTRY)
+def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
+    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
+    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
+                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))

@@ -25,7 +25,8 @@ import time as _time
 
 import numpy as np
 
-from . import engine, engine_data as ed
+from . import engine
+from . import engine_data as ed
 from .engine_data import EngineData
 from .errors import SimulationError
 from .sundials import METHODS, STATUS_MESSAGES, make_solver
@@ -100,7 +101,7 @@ class Simulator:
         q = self._initial_dofs() if q0 is None else _vector(q0, self.ndof, "q0")
         qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
         self._start_kinematics(self.model.initial_coordinates)
-        status = engine.solve_kinematics(self.data.ints, self.data.floats, q)
+        status = engine.call(self.data, engine.OP_KINEMATICS, q)
         if status != ed.OK:
             raise SimulationError(f"t = {t0:.9g} s: the initial DOFs q0 cannot be assembled: "
                                   f"{STATUS_MESSAGES[status]} (q0 = {np.array2string(q)})")
@@ -119,7 +120,7 @@ class Simulator:
         return np.concatenate([x0[self.model.dof_coordinates], e[self.model.dof_deformations]])
 
     def _deformations(self, x):
-        engine.deformations(self.data.ints, self.data.floats, np.asarray(x, float), 0)
+        engine.call(self.data, engine.OP_DEFORMATIONS, np.ascontiguousarray(x, float), s=0)
         return self.data.float_array("e").copy()
 
     def _start_kinematics(self, x, data=None):
@@ -267,7 +268,8 @@ class Simulator:
                                   "a finite time after the current one")
         start = _time.perf_counter()
         steps_before = self._counts()["steps"]
-        one_step = _record is not None or self.deadline is not None or max_steps is not None
+        one_step = (_record is not None or _progress is not None or self.deadline is not None
+                    or max_steps is not None)
         retried_at = None
         try:
             while self._t < t_end:
@@ -277,6 +279,11 @@ class Simulator:
                     t, y = self.integrator.advance(t_end, one_step=one_step)
                 except SimulationError as error:
                     self._needs_init = True
+                    t_good, y_good = getattr(error, "last_good", (self._t, None))
+                    if y_good is not None and self._t < t_good < t_end:
+                        self._t, self._y = t_good, y_good
+                        self._x = self.data.float_array("x").copy()
+                        self._outputs_cache = None
                     if retried_at == self._t:  # failed again from the same good state
                         raise SimulationError(
                             f"simulation of {self.model.name!r} stopped at t = {self._t:.9g} s "
@@ -326,7 +333,7 @@ class Simulator:
         n = self.ndof
         x, DF = data.float_array("x"), data.float_array("DF").reshape(self.model.nx, n)
         for k, y in enumerate(np.asarray(states, float)):
-            status = engine.solve_kinematics(data.ints, data.floats, np.ascontiguousarray(y[:n]))
+            status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
             if status != ed.OK:
                 raise SimulationError(f"t = {self._t:.9g} s: outputs: "
                                       f"{STATUS_MESSAGES[status]}")
@@ -341,8 +348,8 @@ class Simulator:
         SimulationError when the state cannot be evaluated."""
         self._prepare(t)
         ydot = np.empty(2 * self.ndof)
-        status = engine.first_order_rhs(self.data.ints, self.data.floats,
-                                        np.ascontiguousarray(y, dtype=float), ydot)
+        status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
+                             ydot)
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
         return ydot
@@ -351,8 +358,8 @@ class Simulator:
         """d ydot / d y (2 NDOF, 2 NDOF) from the model's tangent at (t, y)."""
         self._prepare(t)
         J = np.empty(4 * self.ndof ** 2)
-        status = engine.first_order_jacobian(self.data.ints, self.data.floats,
-                                             np.ascontiguousarray(y, dtype=float), J, False)
+        status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
+                             J, s=0.0)
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
         return J.reshape(2 * self.ndof, 2 * self.ndof)

@@ -13,7 +13,8 @@ evaluation beyond the model and SUNDIALS' own step (about 0.3 us per step on a 2
 problem).
 
 Status: a callback returns 0, 1 (recoverable: CVODE and IDA retry with a smaller step; a
-kinematics that does not converge at a trial state) or -1 (unrecoverable: a non-finite state).
+kinematics that does not converge at a trial state) or -1 (unrecoverable: a non-finite state,
+or a singular configuration, through which the DOFs cannot describe the motion).
 The engine's status code of the last failure is kept, so an error names its cause.
 """
 
@@ -24,9 +25,22 @@ import os
 import numpy as np
 from numba import carray, cfunc, types
 
-from . import engine, engine_data as ed
+from . import engine
+from . import engine_data as ed
 from .errors import SimulationError
-from .native import NVECTOR_DATA_OFFSET, dense_matrix_data, nvector_data
+from .jit import kernel
+from .native import (
+    NVECTOR_DATA_OFFSET,
+    as_float_pointer,
+    as_int_pointer,
+    call_engine,
+    dense_matrix_data,
+    nvector_data,
+)
+
+_DIMS_SLOT = ed.INT_SLOTS.index("dims")
+_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
+_JACOBIAN_CACHE_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("jacobian_cache")
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
@@ -173,60 +187,58 @@ def function_address(function):
 
 
 # -- compiled callbacks ---------------------------------------------------------------------------
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)
-def cvode_rhs(t, y, ydot, user_data):
-    """CVRhsFn: ydot = f(t, y) by the engine."""
-    ints, floats = engine.unpack(user_data)
-    n = 2 * ints[0][ed.NDOF]
-    counters = ints[engine._COUNTERS]
-    counters[ed.RHS_COUNT] += 1
-    status = engine.first_order_rhs(ints, floats, carray(nvector_data(y), (n,)),
-                                    carray(nvector_data(ydot), (n,)))
+@kernel(inline="always")
+def _table_array(user_data, slot):
+    """The int64 array of `slot` in the address table at user_data."""
+    table = carray(as_int_pointer(user_data), (2 * slot + 2,))
+    return carray(as_int_pointer(table[2 * slot]), (table[2 * slot + 1],))
+
+
+@kernel(inline="always")
+def _callback(op, user_data, t, a, b, c, s, counter):
+    """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
+    1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
+    dims = _table_array(user_data, _DIMS_SLOT)
+    counters = _table_array(user_data, _COUNTERS_SLOT)
+    counters[counter] += 1
+    status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
     if status == ed.OK:
         return 0
     counters[ed.FAILED_STATUS] = status
-    return -1 if status == ed.NONFINITE_STATE else 1
+    return -1 if status in (ed.NONFINITE_STATE, ed.SINGULAR_CONSTRAINTS) else 1
+
+
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)
+def cvode_rhs(t, y, ydot, user_data):
+    """CVRhsFn: ydot = f(t, y) by the engine."""
+    return _callback(engine.OP_RHS, user_data, t, nvector_data(y), nvector_data(ydot),
+                     nvector_data(y), 0.0, ed.RHS_COUNT)
 
 
 @cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr,
                   types.voidptr, types.voidptr, types.voidptr), cache=True)
 def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
-    """CVLsJacFn: the dense d f / d y from the model's tangent. After a restart of a sampled
-    loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once instead."""
-    ints, floats = engine.unpack(user_data)
-    dims = ints[0]
-    n = 2 * dims[ed.NDOF]
-    J = carray(dense_matrix_data(matrix), (n * n,))
-    cache = floats[engine._JAC_CACHE]
+    """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent. After a restart
+    in a sampled loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once."""
+    dims = _table_array(user_data, _DIMS_SLOT)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
+        n = 2 * dims[ed.NDOF]
+        table = carray(as_int_pointer(user_data), (2 * _JACOBIAN_CACHE_SLOT + 2,))
+        cache = carray(as_float_pointer(table[2 * _JACOBIAN_CACHE_SLOT]), (n * n,))
+        J = carray(dense_matrix_data(matrix), (n * n,))
         J[:] = cache
         return 0
-    counters = ints[engine._COUNTERS]
-    counters[ed.JACOBIAN_COUNT] += 1
-    status = engine.first_order_jacobian(ints, floats, carray(nvector_data(y), (n,)), J, True)
-    if status == ed.OK:
-        cache[:] = J
-        return 0
-    counters[ed.FAILED_STATUS] = status
-    return -1 if status == ed.NONFINITE_STATE else 1
+    return _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
+                     dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
 
 
 @cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
        cache=True)
 def ida_residual(t, y, yp, res, user_data):
     """IDAResFn: the implicit form's residual by the engine."""
-    ints, floats = engine.unpack(user_data)
-    n = 2 * ints[0][ed.NDOF]
-    counters = ints[engine._COUNTERS]
-    counters[ed.RHS_COUNT] += 1
-    status = engine.implicit_residual(ints, floats, carray(nvector_data(y), (n,)),
-                                      carray(nvector_data(yp), (n,)),
-                                      carray(nvector_data(res), (n,)))
-    if status == ed.OK:
-        return 0
-    counters[ed.FAILED_STATUS] = status
-    return -1 if status == ed.NONFINITE_STATE else 1
+    return _callback(engine.OP_RESIDUAL, user_data, t, nvector_data(y), nvector_data(yp),
+                     nvector_data(res), 0.0, ed.RHS_COUNT)
 
 
 @cfunc(types.intc(types.double, types.double, types.voidptr, types.voidptr, types.voidptr,
@@ -234,17 +246,8 @@ def ida_residual(t, y, yp, res, user_data):
        cache=True)
 def ida_jacobian(t, cj, y, yp, res, matrix, user_data, tmp1, tmp2, tmp3):
     """IDALsJacFn: d res / d y + cj d res / d yp from the model's tangent."""
-    ints, floats = engine.unpack(user_data)
-    n = 2 * ints[0][ed.NDOF]
-    counters = ints[engine._COUNTERS]
-    counters[ed.JACOBIAN_COUNT] += 1
-    status = engine.implicit_jacobian(ints, floats, carray(nvector_data(y), (n,)),
-                                      carray(nvector_data(yp), (n,)), cj,
-                                      carray(dense_matrix_data(matrix), (n * n,)))
-    if status == ed.OK:
-        return 0
-    counters[ed.FAILED_STATUS] = status
-    return -1 if status == ed.NONFINITE_STATE else 1
+    return _callback(engine.OP_RESIDUAL_JACOBIAN, user_data, t, nvector_data(y),
+                     nvector_data(yp), dense_matrix_data(matrix), cj, ed.JACOBIAN_COUNT)
 
 
 _CV_RHS = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP)
@@ -307,7 +310,13 @@ class _Solver:
         return {key: self._totals[key] + value for key, value in self._current().items()}
 
     def failure(self, flag, t):
-        """A SimulationError for a failed call, naming the time and the engine's cause."""
+        """A SimulationError for a failed call, naming the time and the engine's cause; its
+        `last_good` is (t, y) of the last successful step, which SUNDIALS returns."""
+        error = self._failure(flag, t)
+        error.last_good = (t, self.y_array.copy())
+        return error
+
+    def _failure(self, flag, t):
         if self.input_error is not None:
             error, self.input_error = self.input_error, None
             return error
@@ -455,10 +464,10 @@ class Ida(_Solver):
 
     def reset(self, t, y):
         """(Re)start at t from y with the consistent yp = f(t, y) (both halves differential)."""
-        I, F = self.data.ints, self.data.floats
         if self.input_function is not None:
             self.data.float_array("inputs")[:] = self.input_function(t)
-        status = engine.first_order_rhs(I, F, np.ascontiguousarray(y, float), self._ydot)
+        status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, float),
+                             self._ydot)
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: IDA could not start: "
                                   f"{STATUS_MESSAGES.get(status, status)}")

@@ -158,30 +158,29 @@ def _sampled_outputs(model, result, times):
     """Outputs at `times` from the cubic Hermite interpolant of (q, qdot) over the steps."""
     import scipy.interpolate  # 0.05 s to import: only where it is used
 
-    from .simulation import Simulator, _outputs_along
+    from .simulator import Simulator
 
     spline = scipy.interpolate.CubicHermiteSpline(result.times, result.q, result.qdot)
     states = np.hstack([spline(times), spline.derivative()(times)])
-    sim = Simulator(model)
-    return _outputs_along(sim, states)
+    return Simulator(model).outputs_along(states)
 
 
 def _scipy_run(model, t_end, inputs, method, rtol, times, deadline):
     """scipy.integrate.solve_ivp on the same right-hand side (and Jacobian for the implicit)."""
     import scipy.integrate  # 0.05 s to import: only where it is used
 
-    from .simulation import Simulator, _classify_inputs, _outputs_along
+    from .simulation import split_inputs
+    from .simulator import Simulator
 
-    sim = Simulator(model, rtol=rtol)
-    constants, functions, samples = _classify_inputs(sim, inputs or {})
+    constants, functions, samples = split_inputs(model, inputs or {})
     if samples:
         raise SimulationError("the scipy baseline takes constant or callable inputs only")
+    sim = Simulator(model, rtol=rtol, input_functions=functions)
     u = np.zeros(len(sim.input_names))
     for i, value in constants.items():
         u[i] = value
     sim.set_inputs(u)
-    sim._input_functions = functions
-    system = sim.system
+    system = sim  # the first-order system the SUNDIALS runs integrate
     system.deadline = deadline
     options = {"jac": system.jacobian_matrix} if method in ("Radau", "BDF") else {}
 
@@ -196,11 +195,11 @@ def _scipy_run(model, t_end, inputs, method, rtol, times, deadline):
                 raise
             return np.full_like(y, np.inf)
 
-    solution = scipy.integrate.solve_ivp(derivative, (0.0, t_end), sim._y.copy(),
+    solution = scipy.integrate.solve_ivp(derivative, (0.0, t_end), sim.state,
                                          method=method, t_eval=times, rtol=rtol,
                                          atol=sim.atol, **options)
     if not solution.success:
         raise SimulationError(f"scipy {method}: {solution.message}")
-    outputs = _outputs_along(sim, sim.absolute(solution.y.T))
+    outputs = sim.outputs_along(sim.absolute(solution.y.T))
     # solve_ivp does not report its number of steps when t_eval is given
     return outputs, {"rhs_evaluations": system.rhs_count, "steps": "-"}

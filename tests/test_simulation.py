@@ -168,7 +168,7 @@ def test_model_jacobian_matches_finite_differences_at_an_equilibrium_in_motion()
     loads = model.loads.copy()
     loads[model.inputs[0].coordinate] += 3.0
     q = static_equilibrium(model, loads=loads).q
-    system = sim.system
+    system = sim  # the first-order system the integrators see
     for qdot in (np.zeros(3), np.array([0.02, 1e-4, 1e-3])):
         y = np.concatenate([q - sim.q_ref, qdot])  # the integrator's (deviation) state
         analytic = system.jacobian_matrix(0.0, y)

@@ -49,8 +49,9 @@ compiled evaluation engine.
 """
 
 import numpy as np
-from numba import njit
+from numba import carray
 
+from ..jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
 from ..rotations import from_rotation_vector, rotation_matrix, vector_tensor
 from .plbeam import HERMITE_MASS
 
@@ -368,13 +369,13 @@ def pack_reference(ref):
 
 # The Euler parameters are read once into scalars m0 ... m3 and passed as such: indexing x
 # inside the helpers made the kernels two to three times slower.
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _row(ref, start, m0, m1, m2, m3):
     """(C lambda)_i of the row C_i. = ref[start:start + 4], lambda = [m0, m1, m2, m3]."""
     return ref[start] * m0 + ref[start + 1] * m1 + ref[start + 2] * m2 + ref[start + 3] * m3
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _quadratic(ref, start, m0, m1, m2, m3):
     """(C lambda) . lambda of the 4 x 4 block C = ref[start:start + 16]."""
     return (_row(ref, start, m0, m1, m2, m3) * m0 + _row(ref, start + 4, m0, m1, m2, m3) * m1
@@ -382,14 +383,14 @@ def _quadratic(ref, start, m0, m1, m2, m3):
             + _row(ref, start + 12, m0, m1, m2, m3) * m3)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _rotated_vector(ref, base, m0, m1, m2, m3):
     """u = C lambda lambda (three components) of the tensor C at ref[base:base + 48]."""
     return (_quadratic(ref, base, m0, m1, m2, m3), _quadratic(ref, base + 16, m0, m1, m2, m3),
             _quadratic(ref, base + 32, m0, m1, m2, m3))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _derivative_column(ref, base, i, m0, m1, m2, m3):
     """Column i of Du = 2 C lambda (three components) of the tensor C at ref[base:base + 48]."""
     start = base + 4 * i
@@ -397,14 +398,14 @@ def _derivative_column(ref, base, i, m0, m1, m2, m3):
             2.0 * _row(ref, start + 32, m0, m1, m2, m3))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _contracted(ref, base, w0, w1, w2, i, j):
     """(w . C)_ij = sum_k w_k C_kij of the tensor C at ref[base:base + 48]."""
     offset = base + 4 * i + j
     return w0 * ref[offset] + w1 * ref[offset + 16] + w2 * ref[offset + 32]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _store_mixed(D2e, row, col, v0, v1, v2):
     """D2e[row] between x column col and the translations: v (the l part) at r^q, -v at r^p."""
     D2e[row, _XQ, col] = D2e[row, col, _XQ] = v0
@@ -415,7 +416,7 @@ def _store_mixed(D2e, row, col, v0, v1, v2):
     D2e[row, _XP + 2, col] = D2e[row, col, _XP + 2] = -v2
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def deformations_kernel(x, ref, order, e, De, D2e):
     """e (6,), De (6, 14) if order >= 1, D2e (6, 14, 14) if order >= 2 of one element: x (14,),
     ref its packed reference row. Overwrites every entry of the arrays it fills; no allocation.
@@ -558,7 +559,7 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             D2e[0, _XP + k, _XQ + m] -= value
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def inertia_kernel(x, v, ref, order, p, Dp, acc):
     """p (24,), Dp (24, 14) if order >= 1, acc = (D2p v) v (24,) if order >= 2 of one element:
     x, v (14,), ref its packed reference row. Overwrites every entry it fills; no allocation."""
@@ -589,7 +590,7 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
     _inertia_vector(v, ref, order, p, Dp, acc, 21, _XLQ, 1.0, base + 240, m0, m1, m2, m3)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _inertia_vector(v, ref, order, p, Dp, acc, row, col, scale, base, m0, m1, m2, m3):
     """The rows row ... row + 2 of p, Dp, acc of the inertia point scale C lambda lambda, C the
     tensor at ref[base:base + 48], lambda = [m0, m1, m2, m3] = x[col:col + 4]: scale 2 C lambda,
@@ -609,3 +610,17 @@ def _inertia_vector(v, ref, order, p, Dp, acc, row, col, scale, base, m0, m1, m2
         if order >= 2:
             acc[row + k] = scale * (2.0 * _quadratic(ref, start, v[col], v[col + 1], v[col + 2],
                                                      v[col + 3]))
+
+
+@entry(DEFORMATIONS_ENTRY)
+def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
+    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
+    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
+                        carray(De, (k, m)), carray(D2e, (k, m, m)))
+
+
+@entry(INERTIA_ENTRY)
+def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
+    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
+    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
+                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))

@@ -12,7 +12,9 @@ It has no stiffness, damping or mass.
 """
 
 import numpy as np
-from numba import njit
+from numba import carray
+
+from ..jit import DEFORMATIONS_ENTRY, entry, kernel
 
 type_name = "EULER"
 dimension = 3
@@ -64,7 +66,7 @@ def pack_reference(ref):
     return np.ascontiguousarray(np.asarray(ref["ones"], float)[:, None])
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def deformations_kernel(x, ref, order, e, De, D2e):
     """One node: norm (1,) and, by order, D norm = lambda (1, 4), D2 norm = I (1, 4, 4)."""
     e[0] = 0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3] - 1.0)
@@ -77,3 +79,10 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     for i in range(4):
         for j in range(4):
             D2e[0, i, j] = 1.0 if i == j else 0.0
+
+
+@entry(DEFORMATIONS_ENTRY)
+def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
+    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
+    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
+                        carray(De, (k, m)), carray(D2e, (k, m, m)))

@@ -25,7 +25,9 @@ Every function works on all elements of this type at once: arrays shaped (n_elem
 """
 
 import numpy as np
-from numba import njit
+from numba import carray
+
+from ..jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
 
 type_name = "PLBEAM"
 dimension = 2
@@ -208,7 +210,7 @@ _KZ = np.array([0, 1, 2, 0, 1, 3])
 _KS = np.array([-1.0, -1.0, 1.0, 1.0, 1.0, 1.0])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _bending_hessian(k, a, b, cp, sp, cq, sq, e2, e3):
     """d2 e_k / dz_a dz_b of the bending deformations (k = 1: e2, k = 2: e3) in z."""
     if k == 1:  # d2 e2 / dl dphi^p = t^p = (cos, sin), d2 e2 / dphi^p2 = -e2
@@ -224,7 +226,7 @@ def _bending_hessian(k, a, b, cp, sp, cq, sq, e2, e3):
     return -e3 if a == 3 and b == 3 else 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def deformations_kernel(x, ref, order, e, De, D2e):
     """One element: e (3,) and, by order, De (3, 6) and D2e (3, 6, 6), every entry written.
 
@@ -278,7 +280,7 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             D2e[2, i, j] = sign * h3
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def inertia_kernel(x, v, ref, order, p, Dp, acc):
     """One element: the points p (8,) of `inertia_points` and, by order, Dp (8, 6) and
     acc = (D2p v) v (8,) for the local velocity v (6,)."""
@@ -301,3 +303,17 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
     acc[0] = acc[1] = acc[4] = acc[5] = 0.0
     acc[2], acc[3] = -lcp * wp, -lsp * wp
     acc[6], acc[7] = -lcq * wq, -lsq * wq
+
+
+@entry(DEFORMATIONS_ENTRY)
+def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
+    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
+    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
+                        carray(De, (k, m)), carray(D2e, (k, m, m)))
+
+
+@entry(INERTIA_ENTRY)
+def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
+    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
+    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
+                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))

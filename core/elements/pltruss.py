@@ -17,7 +17,9 @@ and in any dimension (the spatial TRUSS uses them as they are).
 """
 
 import numpy as np
-from numba import njit
+from numba import carray
+
+from ..jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
 
 type_name = "PLTRUSS"
 dimension = 2
@@ -106,7 +108,7 @@ def pack_reference(ref):
     return np.ascontiguousarray(np.asarray(ref["l0"], float)[:, None])
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def deformations_kernel(x, ref, order, e, De, D2e):
     """One element: e (1,) and, by order, De (1, 2d) and D2e (1, 2d, 2d), every entry written.
 
@@ -133,7 +135,7 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             D2e[0, a, d + b] = D2e[0, d + a, b] = -proj
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def inertia_kernel(x, v, ref, order, p, Dp, acc):
     """One element: the points p = x (2d,), Dp = I and acc = (D2p v) v = 0 (linear map)."""
     m = x.size
@@ -148,3 +150,17 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
         return
     for i in range(m):
         acc[i] = 0.0
+
+
+@entry(DEFORMATIONS_ENTRY)
+def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
+    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
+    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
+                        carray(De, (k, m)), carray(D2e, (k, m, m)))
+
+
+@entry(INERTIA_ENTRY)
+def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
+    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
+    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
+                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))

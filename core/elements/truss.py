@@ -15,7 +15,9 @@ from .pltruss import (
     REFERENCE_WIDTH,
     damping,
     deformations,
+    deformations_entry,
     deformations_kernel,
+    inertia_entry,
     inertia_kernel,
     inertia_matrix,
     inertia_points,
@@ -34,5 +36,6 @@ coordinates_per_element = 6
 inertia_point_kinds = ("position", "position")
 properties = ("EA", "EdA", "rho_A", "A")  # section properties used
 
-__all__ = ["REFERENCE_WIDTH", "damping", "deformations", "deformations_kernel", "inertia_kernel",
-           "inertia_matrix", "inertia_points", "pack_reference", "reference", "stiffness"]
+__all__ = ["REFERENCE_WIDTH", "damping", "deformations", "deformations_entry",
+           "deformations_kernel", "inertia_entry", "inertia_kernel", "inertia_matrix",
+           "inertia_points", "pack_reference", "reference", "stiffness"]
