@@ -226,18 +226,23 @@ class DiscreteController:
     """
 
     def __init__(self, sys):
-        self.A, self.B = np.asarray(sys.A, float), np.asarray(sys.B, float)
-        self.C, self.D = np.asarray(sys.C, float), np.asarray(sys.D, float)
+        self.A, self.B, self.C, self.D = (np.ascontiguousarray(np.atleast_2d(
+            np.asarray(m, float))) for m in (sys.A, sys.B, sys.C, sys.D))
         self.x = np.zeros(self.A.shape[0])
 
     def reset(self):
         self.x = np.zeros(self.A.shape[0])
 
     def step(self, e):
-        """The output u_k for the error e_k, advancing the state; arrays (n_loops,)."""
-        e = np.atleast_1d(np.asarray(e, float))
-        u = self.C @ self.x + self.D @ e
-        self.x = self.A @ self.x + self.B @ e
+        """The output u_k for the error e_k, advancing the state; arrays (n_loops,).
+
+        The arithmetic is flexure.core's compiled `controller_step`, which the compiled
+        in-process loop uses too, so every plant sees the same forces bit for bit."""
+        from flexure.core import controller_step
+
+        e = np.ascontiguousarray(np.atleast_1d(np.asarray(e, float)))
+        u = np.empty(self.C.shape[0])
+        controller_step(self.A, self.B, self.C, self.D, self.x, e, u)
         return u
 
     def to_dict(self):

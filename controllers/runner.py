@@ -355,18 +355,32 @@ def _run_plant(plant, model, scene, controller, design, *, rtol, workdir, progre
 
         return run_cosimulation(model, scene, controller, design, rtol=rtol, workdir=workdir,
                                 progress=progress)
-    from .plants import FmuPlant, InProcessPlant
-
     if plant == "inprocess":
-        adapter = InProcessPlant(model, rtol=rtol)
-    else:
-        from .cosim import scene_fmu
+        return _compiled_loop(model, controller, design, rtol=rtol, progress=progress)
+    from .cosim import scene_fmu
+    from .plants import FmuPlant
 
-        adapter = FmuPlant(scene_fmu(scene, model, workdir), rtol=rtol)
+    adapter = FmuPlant(scene_fmu(scene, model, workdir), rtol=rtol)
     try:
         return simulate_loop(adapter, controller, design, progress=progress)
     finally:
         adapter.close()
+
+
+def _compiled_loop(model, controller, design, *, rtol, progress):
+    """The in-process loop as one compiled run (flexure.core.run_sampled_loop): the same
+    samples, forces and integrator calls as `simulate_loop` with an in-process plant."""
+    from flexure.core import Simulator, run_sampled_loop
+
+    sim = Simulator(model, rtol=rtol)
+    feedback = controller.controller
+    t, position, force = run_sampled_loop(
+        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
+        feedforward=controller.feedforward,
+        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
+        loop_inputs=[pair.input_index for pair in design.pairs],
+        loop_outputs=[pair.output_index for pair in design.pairs], progress=progress)
+    return t, controller.reference[: len(t)].copy(), position, force
 
 
 def simulate_loop(plant, controller, design, *, progress=None):

@@ -30,6 +30,7 @@ _LAZY = {
     "build_model": "scene", "builtin_scenes": "scene", "load_scene": "scene",
     "scene_path": "scene",
     "SimulationResult": "simulation", "Simulator": "simulation", "default_atol": "simulation",
+    "controller_step": "sampled_loop", "run_sampled_loop": "sampled_loop",
     "simulate": "simulation",
     "state_space": "statespace",
     "StaticSolution": "statics", "static_equilibrium": "statics",
@@ -41,7 +42,8 @@ __all__ = [
     "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
     "Simulator", "StaticSolution", "beam_stresses", "buckling_load_factors", "build_model",
     "builtin_scenes", "check_exact_constraint", "default_atol", "linearize", "load_scene",
-    "natural_frequencies", "scene_path", "simulate", "state_space", "static_equilibrium",
+    "natural_frequencies", "controller_step", "run_sampled_loop", "scene_path", "simulate",
+    "state_space", "static_equilibrium",
     "stresses_along",
 ]
 

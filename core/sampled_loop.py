@@ -1,0 +1,259 @@
+"""A sampled feedback loop around a Simulator, compiled: no Python call per sample.
+
+At the samples t_k = k / fs (k = 0 .. N), with y_k the loop outputs (positions, m) measured at
+t_k, r_k the reference and x_c the state of a discrete linear controller (A, B, C, D):
+
+    e_k   = r_k - y_k
+    u_k+1 = C x_c + D e_k + u_ff,k+1,    x_c <- A x_c + B e_k      (computed at t_k)
+    plant: u_k held over [t_k, t_k+1)                            (zero-order hold)
+
+so the force acts one sample after the measurement it comes from (one sample of computation
+delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. Past
+the last sample of the reference and feedforward arrays their last entries hold.
+
+The plant is the Simulator's own integrator: at every sample whose force differs from the
+previous one the integrator restarts exactly as `Simulator.set_inputs` plus `advance` do
+(the same kinematic warm start, the same calls to CVODE), so this loop and a loop of Python
+calls give the same numbers, bit for bit; the difference is that here the whole run is one
+compiled function calling CVODE's C functions, with the controller in compiled code too.
+"""
+
+import numpy as np
+from numba import carray
+
+from . import engine
+from . import engine_data as ed
+from .errors import SimulationError
+from .jit import kernel
+from .native import (
+    as_float_pointer,
+    as_int_pointer,
+    call_engine,
+    call_reinit,
+    call_solve,
+    call_with_time,
+)
+from .sundials import STATUS_MESSAGES, Cvode
+
+_DIMS_SLOT = ed.INT_SLOTS.index("dims")
+_Q_REF_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("q_ref")
+_X_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("x")
+_X_START_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("x_start")
+_INPUTS_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("inputs")
+
+
+def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, loop_inputs,
+                     loop_outputs, progress=None):
+    """Run the loop from the simulator's current state (t = 0 after `reset`).
+
+    Parameters
+    ----------
+    sim : Simulator
+        The plant, with the CVODE method (the loop's integrator restarts are CVODE's).
+    fs : float
+        Sample rate (Hz).
+    samples : int
+        The number of intervals N; the run ends at t_N = N / fs.
+    reference, feedforward : arrays (>= 1, n_loops)
+        r_k (m) and u_ff,k (N) per sample (the last row holds past the end).
+    controller : tuple of arrays (A, B, C, D)
+        The discrete controller from errors (m) to forces (N): A (s, s), B (s, n_loops),
+        C (n_loops, s), D (n_loops, n_loops).
+    loop_inputs, loop_outputs : sequences of int
+        The model input driven by each loop, and the model output (a position) it measures.
+    progress : callable, optional
+        Called with the fraction of samples done, about 100 times.
+
+    Returns
+    -------
+    (t (N+1,), position (N+1, n_loops), force (N+1, n_loops)): y_k, and u_k held from t_k (the
+    last row repeats the one before).
+    """
+    if not isinstance(sim.integrator, Cvode):
+        raise SimulationError("the compiled sampled loop drives CVODE; use method "
+                              "'cvode-bdf' or 'cvode-adams'")
+    ports = [sim.model.outputs[j] for j in loop_outputs]
+    if any(port.quantity != "position" for port in ports):
+        raise SimulationError("the compiled sampled loop measures positions only")
+    A, B, C, D = (np.ascontiguousarray(np.atleast_2d(np.asarray(m, float))) for m in controller)
+    reference = np.ascontiguousarray(reference, dtype=float)
+    feedforward = np.ascontiguousarray(feedforward, dtype=float)
+    n_loops = len(loop_inputs)
+    if reference.shape[1] != n_loops or feedforward.shape[1] != n_loops:
+        raise SimulationError(f"reference and feedforward: expected {n_loops} columns, got "
+                              f"{reference.shape[1]} and {feedforward.shape[1]}")
+    N = int(samples)
+    position = np.zeros((N + 1, n_loops))
+    force = np.zeros((N + 1, n_loops))
+    state = np.zeros(A.shape[0])
+    # loop variables kept between chunks: [t, sample, restart needed], the held inputs
+    loop_state = np.array([sim.time, 0.0, 1.0 if sim._needs_init else 0.0])
+    held = np.array(sim.inputs, dtype=float)
+    coordinates = np.array([port.coordinate for port in ports], dtype=np.int64)
+    inputs = np.array(loop_inputs, dtype=np.int64)
+    solver = sim.integrator
+    addresses = np.array([solver.addresses[key] for key in ("solve", "reinit", "stop",
+                                                             "memory", "y", "tret")]
+                         + [sim.data.address, sim._output_data.address,
+                            sim.data.int_array("dims")[ed.ENGINE]], dtype=np.int64)
+    y = solver.y_array
+    y[:] = sim.state
+    sim._q_ref_array[:] = sim._q_ref
+    scratch = np.zeros(2 * sim.ndof)
+    chunk = max(1, N // 100) if progress is not None else N
+    done = 0
+    while done < N:
+        stop = min(N, done + chunk)
+        flag = _loop(addresses, loop_state, held, y, scratch, done, stop, float(fs), reference,
+                     feedforward, A, B, C, D, state, inputs, coordinates, position, force)
+        if flag != 0:
+            raise _failure(sim, solver, flag, loop_state[0])
+        done = stop
+        if progress is not None:
+            progress(done / N)
+    # measure y_N and leave the simulator at t_N with the last force held
+    status = _measure(addresses, y, scratch, coordinates, position[N])
+    if status != ed.OK:
+        raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
+    force[N] = force[N - 1]
+    sim._t, sim._y = float(loop_state[0]), y.copy()
+    sim._u = held.copy()
+    sim._x = sim.data.float_array("x").copy()
+    sim._outputs_cache = None
+    sim._needs_init = bool(loop_state[2])
+    return np.arange(N + 1) / fs, position, force
+
+
+def _failure(sim, solver, flag, t):
+    if flag == _MEASURE_FAILED:
+        return SimulationError(f"t = {t:.9g} s: outputs: the kinematics of the measured "
+                               "positions could not be solved")
+    error = solver.failure(flag, t)
+    return SimulationError(f"simulation of {sim.model.name!r} in the sampled loop: {error}")
+
+
+@kernel
+def controller_step(A, B, C, D, state, error, output):
+    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e
+    (state x updated in place). Arrays 2-D (A, B, C, D) and 1-D; the sums run in index order,
+    so every caller gets the same numbers."""
+    n_out, n_state, n_in = C.shape[0], A.shape[0], B.shape[1]
+    for i in range(n_out):
+        s = 0.0
+        for j in range(n_state):
+            s += C[i, j] * state[j]
+        d = 0.0
+        for j in range(n_in):
+            d += D[i, j] * error[j]
+        output[i] = s + d
+    new_state = np.empty(n_state)
+    for i in range(n_state):
+        s = 0.0
+        for j in range(n_state):
+            s += A[i, j] * state[j]
+        b = 0.0
+        for j in range(n_in):
+            b += B[i, j] * error[j]
+        new_state[i] = s + b
+    state[:] = new_state
+
+
+# the addresses handed to the compiled loop, in this order
+(_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE) = range(9)
+_TABLE_SIZE = 2 * (len(ed.INT_SLOTS) + len(ed.FLOAT_SLOTS))
+_MEASURE_FAILED = -1000
+
+
+@kernel(inline="always")
+def _float_slot(table_address, slot):
+    """The float64 array of `slot` (an index into the address table) of packed data."""
+    table = carray(as_int_pointer(table_address), (_TABLE_SIZE,))
+    return carray(as_float_pointer(table[2 * slot]), (table[2 * slot + 1],))
+
+
+@kernel(inline="always")
+def _int_slot(table_address, slot):
+    """The int64 array of `slot` of packed data."""
+    table = carray(as_int_pointer(table_address), (_TABLE_SIZE,))
+    return carray(as_int_pointer(table[2 * slot]), (table[2 * slot + 1],))
+
+
+@kernel
+def _measure(addresses, y, scratch, coordinates, out):
+    """The loop outputs (positions, m) at the integrator state y into out; a status. As
+    `Simulator.outputs`: full Newton from the plant's last coordinates."""
+    ndof = y.size // 2
+    _float_slot(addresses[_OUTPUT], _X_START_SLOT)[:] = _float_slot(addresses[_PLANT], _X_SLOT)
+    _int_slot(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
+    q_ref = _float_slot(addresses[_PLANT], _Q_REF_SLOT)
+    for j in range(ndof):
+        scratch[j] = q_ref[j] + y[j]
+    status = call_engine(addresses[_ENGINE], engine.OP_KINEMATICS, addresses[_OUTPUT], 0.0,
+                         scratch.ctypes.data, 0, 0, 0.0)
+    if status != ed.OK:
+        return status
+    x = _float_slot(addresses[_OUTPUT], _X_SLOT)
+    for j in range(coordinates.size):
+        out[j] = x[coordinates[j]]
+    return ed.OK
+
+
+@kernel
+def _loop(addresses, loop_state, held, y, scratch, start, stop, fs, reference, feedforward,
+          A, B, C, D, state, inputs, coordinates, position, force):
+    """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
+    _MEASURE_FAILED) with loop_state[0] the time reached."""
+    plant = addresses[_PLANT]
+    plant_inputs = _float_slot(plant, _INPUTS_SLOT)
+    x_plant, x_start = _float_slot(plant, _X_SLOT), _float_slot(plant, _X_START_SLOT)
+    dims = _int_slot(plant, _DIMS_SLOT)
+    tret = carray(as_float_pointer(addresses[_TRET]), (1,))
+    n_loops, n_state = inputs.size, state.size
+    error = np.empty(n_loops)
+    output = np.empty(n_loops)
+    t = loop_state[0]
+    restart = loop_state[2] != 0.0
+    for k in range(start, stop):
+        if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+            loop_state[0] = t
+            return _MEASURE_FAILED
+        if k == 0:
+            force[0, :] = feedforward[0]
+        r = reference[min(k, reference.shape[0] - 1)]
+        ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
+        for i in range(n_loops):
+            error[i] = r[i] - position[k, i]
+        controller_step(A, B, C, D, state, error, output)
+        for i in range(n_loops):  # u_k+1 = C x_c + D e_k + u_ff,k+1
+            force[k + 1, i] = output[i] + ff[i]
+        # the plant over [t_k, t_k+1) with u_k (the other inputs zero)
+        changed = False
+        for j in range(held.size):
+            value = 0.0
+            for i in range(n_loops):
+                if inputs[i] == j:
+                    value = force[k, i]
+            if value != held[j]:
+                changed = True
+                held[j] = value
+        if changed or restart:  # as Simulator.set_inputs and its restart in advance
+            plant_inputs[:] = held
+            x_start[:] = x_plant
+            dims[ed.WARM] = 0
+            flag = call_reinit(addresses[_REINIT], addresses[_MEMORY], t, addresses[_Y])
+            if flag < 0:
+                loop_state[0] = t
+                return flag
+            restart = False
+        t_next = (k + 1) / fs
+        call_with_time(addresses[_STOP], addresses[_MEMORY], t_next)
+        flag = call_solve(addresses[_SOLVE], addresses[_MEMORY], t_next, addresses[_Y],
+                          addresses[_TRET], 1)
+        if flag < 0:
+            loop_state[0] = tret[0]
+            loop_state[2] = 1.0
+            return flag
+        t = t_next
+    loop_state[0] = t
+    loop_state[2] = 1.0 if restart else 0.0
+    return 0
