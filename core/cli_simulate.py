@@ -23,10 +23,12 @@ from .cli import (
     write_outputs,
 )
 from .errors import SimulationError, UsageError
-from .integrators import METHODS
 from .progress import Progress
 from .tables import format_table
 
+# flexure.core.sundials.METHODS, spelled out so that registering the command (every `flexure`
+# call) loads neither numba nor SUNDIALS; tests/test_engine.py checks that the two agree
+METHODS = ("cvode-bdf", "cvode-adams", "ida")
 SAMPLES = number(1, 10_000_000, integer=True, low_open=False, high_open=False)
 
 
@@ -125,7 +127,8 @@ def run(args):
     from .scene import load_scene
     from .simulation import simulate
 
-    # --max-order above the method's largest order: refused by make_integrator, before the run
+    # --max-order above the method's largest order: refused by sundials.make_solver, before
+    # the run
     outputs = [("--out", args.out), ("--plot", args.plot)]
     distinct_outputs(*outputs)
     model = load_scene(args.scene)

@@ -138,26 +138,17 @@ def test_plbeam_matches_its_textbook_formulas_element_by_element():
 
 
 @pytest.mark.parametrize("scene", ["stage_planar_3dof", "truss_1dof_x", "stage_spatial_19dof"])
-def test_fast_dynamics_assembly_matches_the_einsum_forms(scene):
-    """Dynamics' batched mass, convective force and Hessian forms against assembly's einsums."""
+def test_batched_hessian_forms_match_the_einsum_forms(scene):
+    """assembly's batched quadratic forms v^T D2e_i v (the convective term) against its einsum
+    over columns. (The compiled engine's mass and convective force are checked against
+    assembly.Inertia in tests/test_engine.py.)"""
     from flexure.core import assembly, load_scene
-    from flexure.core.dynamics import Dynamics
 
     model = load_scene(scene)
-    dynamics = Dynamics(model)
     rng = np.random.default_rng(8)
     x = model.initial_coordinates + rng.normal(scale=1e-3, size=model.nx)
     v = rng.normal(size=model.nx)
-    M, force = dynamics._inertia(x, v, True)
-    inertia = dynamics.inertia
-    np.testing.assert_allclose(M, inertia.mass_matrix(x), rtol=1e-12, atol=1e-15 * np.abs(M).max())
-    if inertia.groups:
-        expected = inertia.convective_force(x, v)
-        np.testing.assert_allclose(force, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
-    e, De, hessians = dynamics._deformations_order2(x)
-    e_ref, De_ref = assembly.deformation_jacobian(model, x)
-    np.testing.assert_array_equal(e, e_ref)
-    np.testing.assert_array_equal(De, De_ref)
+    hessians = assembly.deformation_hessians(model, x)
     forms = assembly.hessian_quadratic_forms(model, hessians, v)
     columns = assembly.hessian_quadratic_forms(model, hessians, v[:, None])[:, 0]
     np.testing.assert_allclose(forms, columns, rtol=1e-12, atol=1e-12 * np.abs(columns).max())

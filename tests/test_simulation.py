@@ -20,7 +20,7 @@ from flexure.core import (
     simulate,
     static_equilibrium,
 )
-from flexure.core.dynamics import Dynamics
+from flexure.core.energy import mechanical_energy
 
 
 def scene_dict(name):
@@ -80,15 +80,14 @@ def test_undamped_3dof_stage_conserves_energy():
     measured with the deviation state). The test runs 0.5 s (CPU time);
     examples/energy_drift.py runs the full 10 s of the issue."""
     model = undamped("stage_planar_3dof")
-    dyn = Dynamics(model)
     q0 = modal_release(model)  # the example's release: vibrates in the first mode
     sim = Simulator(model, method="cvode-adams", rtol=1e-9)
     sim.reset(q0=q0)
-    e0 = dyn.mechanical_energy(q0, np.zeros(3))
+    e0 = mechanical_energy(model, q0, np.zeros(3))
     drift, lowest = 0.0, q0[0]
     for t in np.linspace(0.05, 0.5, 10):
         sim.advance(t)
-        drift = max(drift, abs(dyn.mechanical_energy(sim.q, sim.qdot) - e0) / e0)
+        drift = max(drift, abs(mechanical_energy(model, sim.q, sim.qdot) - e0) / e0)
         lowest = min(lowest, sim.q[0])
     assert drift < 1e-8
     assert lowest < 0.0  # it did swing through the rest position
@@ -168,17 +167,16 @@ def test_model_jacobian_matches_finite_differences_at_an_equilibrium_in_motion()
     loads = model.loads.copy()
     loads[model.inputs[0].coordinate] += 3.0
     q = static_equilibrium(model, loads=loads).q
-    system = sim  # the first-order system the integrators see
     for qdot in (np.zeros(3), np.array([0.02, 1e-4, 1e-3])):
         y = np.concatenate([q - sim.q_ref, qdot])  # the integrator's (deviation) state
-        analytic = system.jacobian_matrix(0.0, y)
+        analytic = sim.jacobian_matrix(0.0, y)
         numeric = np.zeros_like(analytic)
         steps = np.array([1e-7, 1e-8, 1e-7, 1e-4, 1e-5, 1e-4])
         for j, h in enumerate(steps):
             up, down = y.copy(), y.copy()
             up[j] += h
             down[j] -= h
-            numeric[:, j] = (system.derivative(0.0, up) - system.derivative(0.0, down)) / (2 * h)
+            numeric[:, j] = (sim.derivative(0.0, up) - sim.derivative(0.0, down)) / (2 * h)
         scale = np.max(np.abs(numeric), axis=1, keepdims=True)
         tolerance = 1e-5 if not np.any(qdot) else 1e-3  # exact at rest, close in motion
         assert np.all(np.abs(analytic - numeric) <= tolerance * scale)
