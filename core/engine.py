@@ -285,9 +285,8 @@ def solve_kinematics(ints, floats, q):
             for j in range(ndof):
                 s += DF[a * ndof + j] * (q[j] - q_prev[j])
             x[a] = s
-        deformations(ints, floats, x, 0)
+        deformations(ints, floats, x, 2)  # with the derivatives: usually x needs no correction
         if _residual(ints, floats, x, q, g) <= tolerance:
-            deformations(ints, floats, x, 2)
             return _store(ints, floats, q, x)
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             dx[:] = g
@@ -493,15 +492,18 @@ def _inertia(ints, floats, x, xdot, conv, moving, r):
         coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
         data = floats[_GROUP_DATA]
         refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
-        # scratch: x, v (m), p, acc, w (P), Dp (P, m), B = Dp DF_e (P, ndof)
+        # scratch: x, v (m), p then the point forces, acc, w (P), Dp (P, m), B = Dp DF_e and
+        # Mp B (P, ndof)
         xl, vl = local[:max_m], local[max_m: 2 * max_m]
         o = 2 * max_m
-        pl, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
+        point, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
             local[o + 2 * max_p: o + 3 * max_p]
         o += 3 * max_p
         Dp = local[o: o + P * m].reshape((P, m))
         o += max_p * max_m
         B = local[o: o + max_p * ndof]
+        o += max_p * ndof
+        MpB = local[o: o + max_p * ndof]
         gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
         for i in range(n):
             Mp = data[row[ed.G_MASS_OFFSET] + i * P * P: row[ed.G_MASS_OFFSET] + (i + 1) * P * P]
@@ -509,44 +511,46 @@ def _inertia(ints, floats, x, xdot, conv, moving, r):
                 xl[a] = x[coords[i * m + a]]
                 vl[a] = xdot[coords[i * m + a]]
             call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
-                         2 if moving else 1, pl.ctypes.data, Dp.ctypes.data, acc.ctypes.data,
-                         m, P, width)
-            # B = Dp DF_e (P, ndof)
+                         2 if moving else 1, point.ctypes.data, Dp.ctypes.data,
+                         acc.ctypes.data, m, P, width)
+            # B = Dp DF_e (P, ndof), and the force on the points gravity - Dp conv_e - acc
+            B[: P * ndof] = 0.0
             for pp in range(P):
+                f = gravity[pp]
+                for a in range(m):
+                    d = Dp[pp, a]
+                    if d != 0.0:
+                        row_df = coords[i * m + a] * ndof
+                        for j in range(ndof):
+                            B[pp * ndof + j] += d * DF[row_df + j]
+                        if moving:
+                            f -= d * conv[coords[i * m + a]]
+                point[pp] = f - acc[pp] if moving else f
+            # w = Mp (point forces), MpB = Mp B
+            for pp in range(P):
+                s = 0.0
                 for j in range(ndof):
-                    s = 0.0
-                    for a in range(m):
-                        d = Dp[pp, a]
-                        if d != 0.0:
-                            s += d * DF[coords[i * m + a] * ndof + j]
-                    B[pp * ndof + j] = s
-            # w = Mp (gravity - Dp conv_e - acc): the point force whose Dp^T adds to r
-            for pp in range(P):
-                s = 0.0
-                for qq in range(P):
-                    point = gravity[qq]
-                    if moving:
-                        dpc = 0.0
-                        for a in range(m):
-                            dpc += Dp[qq, a] * conv[coords[i * m + a]]
-                        point -= dpc + acc[qq]
-                    s += Mp[pp * P + qq] * point
-                w[pp] = s
-            for a in range(m):
-                s = 0.0
-                for pp in range(P):
-                    s += Dp[pp, a] * w[pp]
-                r[coords[i * m + a]] += s
-            # M_bar += B^T Mp B
-            for pp in range(P):
+                    MpB[pp * ndof + j] = 0.0
                 for qq in range(P):
                     mpq = Mp[pp * P + qq]
                     if mpq == 0.0:
                         continue
-                    for a in range(ndof):
-                        ba = mpq * B[pp * ndof + a]
-                        for b in range(ndof):
-                            mass[a * ndof + b] += ba * B[qq * ndof + b]
+                    s += mpq * point[qq]
+                    for j in range(ndof):
+                        MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
+                w[pp] = s
+            for a in range(m):  # r += Dp^T w
+                s = 0.0
+                for pp in range(P):
+                    s += Dp[pp, a] * w[pp]
+                r[coords[i * m + a]] += s
+            for pp in range(P):  # M_bar += B^T (Mp B)
+                for a in range(ndof):
+                    ba = B[pp * ndof + a]
+                    if ba == 0.0:
+                        continue
+                    for b in range(ndof):
+                        mass[a * ndof + b] += ba * MpB[pp * ndof + b]
 
 
 # -- tangent ----------------------------------------------------------------------------------

@@ -151,7 +151,7 @@ class EngineData:
         # functions lay out one after the other (see engine._inertia, tangent, _mass_times),
         # plus the absolute DOFs at the end
         scratch = (2 * ndof + max_m * max_m + max_m * ndof + 2 * max_m + 3 * max_p
-                   + max_p * max_m + max_p * ndof + max_k + ndof + max(nx, ne, 2 * ndof))
+                   + max_p * max_m + 2 * max_p * ndof + max_k + ndof + max(nx, ne, 2 * ndof))
         ints = {
             "dims": dims, "free": free.astype(np.int64), "constraint_rows": rows.astype(np.int64),
             "dof_coordinates": model.dof_coordinates.astype(np.int64),

@@ -186,3 +186,33 @@ def call_engine(typingctx, address, op, user_data, t, a, b, c, s):
         return _call_by_address(builder, args[0], args[1:], "ivdvvvd", _I32)
 
     return sig, codegen
+
+
+@intrinsic
+def call_get_real(typingctx, function, memory, out):
+    """int f(void *mem, sunrealtype *out) (CVodeGetActualInitStep, ...) by address; out is
+    an address."""
+    sig = types.int32(function, memory, out)
+
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(_I32, [_I8P, _DOUBLE.as_pointer()])
+        callee = builder.inttoptr(args[0], fnty.as_pointer())
+        return builder.call(callee, [builder.inttoptr(args[1], _I8P),
+                                     _cast(builder, args[2], _DOUBLE.as_pointer())])
+
+    return sig, codegen
+
+
+@intrinsic
+def call_get_long(typingctx, function, memory, out):
+    """int f(void *mem, long *out) (CVodeGetNumSteps, ...) by address; out an address."""
+    sig = types.int32(function, memory, out)
+
+    def codegen(context, builder, signature, args):
+        long_pointer = ir.IntType(64).as_pointer()
+        fnty = ir.FunctionType(_I32, [_I8P, long_pointer])
+        callee = builder.inttoptr(args[0], fnty.as_pointer())
+        return builder.call(callee, [builder.inttoptr(args[1], _I8P),
+                                     _cast(builder, args[2], long_pointer)])
+
+    return sig, codegen

@@ -18,6 +18,8 @@ calls give the same numbers, bit for bit; the difference is that here the whole 
 compiled function calling CVODE's C functions, with the controller in compiled code too.
 """
 
+import time
+
 import numpy as np
 from numba import carray
 
@@ -29,6 +31,8 @@ from .native import (
     as_float_pointer,
     as_int_pointer,
     call_engine,
+    call_get_long,
+    call_get_real,
     call_reinit,
     call_solve,
     call_with_time,
@@ -95,17 +99,32 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     addresses = np.array([solver.addresses[key] for key in ("solve", "reinit", "stop",
                                                              "memory", "y", "tret")]
                          + [sim.data.address, sim._output_data.address,
-                            sim.data.int_array("dims")[ed.ENGINE]], dtype=np.int64)
+                            sim.data.int_array("dims")[ed.ENGINE],
+                            solver.addresses["init_step"], solver.addresses["actual_init_step"],
+                            solver.addresses["num_steps"], int(solver.analytic)],
+                         dtype=np.int64)
+    steps = np.zeros(2, dtype=np.int64)  # [steps before the restarts in the loop, scratch]
+    # what the integrator keeps between restarts (sundials.Cvode.reset): [initial step,
+    # Jacobian cached (0 or 1)]
+    memory = np.array([solver.initial_step, float(solver.jacobian_cached())])
     y = solver.y_array
     y[:] = sim.state
     sim._q_ref_array[:] = sim._q_ref
     scratch = np.zeros(2 * sim.ndof)
     chunk = max(1, N // 100) if progress is not None else N
     done = 0
+    start_time = time.perf_counter()
     while done < N:
         stop = min(N, done + chunk)
-        flag = _loop(addresses, loop_state, held, y, scratch, done, stop, float(fs), reference,
-                     feedforward, A, B, C, D, state, inputs, coordinates, position, force)
+        jacobians = int(sim.data.int_array("counters")[ed.JACOBIAN_COUNT])
+        flag = _loop(addresses, loop_state, memory, steps, held, y, scratch, done, stop,
+                     float(fs), reference, feedforward, A, B, C, D, state, inputs, coordinates,
+                     position, force)
+        solver._totals["steps"] += int(steps[0])  # CVodeReInit zeroes SUNDIALS' count
+        steps[0] = 0
+        solver.initial_step = memory[0]
+        if sim.data.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
+            memory[1] = 1.0
         if flag != 0:
             raise _failure(sim, solver, flag, loop_state[0])
         done = stop
@@ -116,6 +135,7 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     if status != ed.OK:
         raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
     force[N] = force[N - 1]
+    sim._wall += time.perf_counter() - start_time
     sim._t, sim._y = float(loop_state[0]), y.copy()
     sim._u = held.copy()
     sim._x = sim.data.float_array("x").copy()
@@ -159,7 +179,8 @@ def controller_step(A, B, C, D, state, error, output):
 
 
 # the addresses handed to the compiled loop, in this order
-(_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE) = range(9)
+(_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE, _INIT_STEP,
+ _ACTUAL_INIT_STEP, _NUM_STEPS, _ANALYTIC) = range(13)
 _TABLE_SIZE = 2 * (len(ed.INT_SLOTS) + len(ed.FLOAT_SLOTS))
 _MEASURE_FAILED = -1000
 
@@ -199,8 +220,8 @@ def _measure(addresses, y, scratch, coordinates, out):
 
 
 @kernel
-def _loop(addresses, loop_state, held, y, scratch, start, stop, fs, reference, feedforward,
-          A, B, C, D, state, inputs, coordinates, position, force):
+def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, reference,
+          feedforward, A, B, C, D, state, inputs, coordinates, position, force):
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
     _MEASURE_FAILED) with loop_state[0] the time reached."""
     plant = addresses[_PLANT]
@@ -208,7 +229,7 @@ def _loop(addresses, loop_state, held, y, scratch, start, stop, fs, reference, f
     x_plant, x_start = _float_slot(plant, _X_SLOT), _float_slot(plant, _X_START_SLOT)
     dims = _int_slot(plant, _DIMS_SLOT)
     tret = carray(as_float_pointer(addresses[_TRET]), (1,))
-    n_loops, n_state = inputs.size, state.size
+    n_loops = inputs.size
     error = np.empty(n_loops)
     output = np.empty(n_loops)
     t = loop_state[0]
@@ -240,10 +261,16 @@ def _loop(addresses, loop_state, held, y, scratch, start, stop, fs, reference, f
             plant_inputs[:] = held
             x_start[:] = x_plant
             dims[ed.WARM] = 0
+            call_get_long(addresses[_NUM_STEPS], addresses[_MEMORY], steps[1:].ctypes.data)
+            steps[0] += steps[1]
             flag = call_reinit(addresses[_REINIT], addresses[_MEMORY], t, addresses[_Y])
             if flag < 0:
                 loop_state[0] = t
                 return flag
+            if memory[0] > 0.0:  # as sundials.Cvode.reset
+                call_with_time(addresses[_INIT_STEP], addresses[_MEMORY], memory[0])
+            if memory[1] != 0.0 and addresses[_ANALYTIC] != 0:
+                dims[ed.JACOBIAN_REUSE] = 1
             restart = False
         t_next = (k + 1) / fs
         call_with_time(addresses[_STOP], addresses[_MEMORY], t_next)
@@ -253,6 +280,9 @@ def _loop(addresses, loop_state, held, y, scratch, start, stop, fs, reference, f
             loop_state[0] = tret[0]
             loop_state[2] = 1.0
             return flag
+        if memory[0] == 0.0:  # as sundials.Cvode.learn_initial_step
+            call_get_real(addresses[_ACTUAL_INIT_STEP], addresses[_MEMORY], memory.ctypes.data)
+        memory[1] = 1.0 if addresses[_ANALYTIC] != 0 else 0.0
         t = t_next
     loop_state[0] = t
     loop_state[2] = 1.0 if restart else 0.0

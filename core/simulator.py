@@ -113,6 +113,11 @@ class Simulator:
         self._needs_init = True
         self._counters_at_reset = self._counts()
         self._wall = 0.0
+        self._forget()
+
+    def _forget(self):
+        if hasattr(self.integrator, "forget"):
+            self.integrator.forget()
 
     def _initial_dofs(self):
         x0 = self.model.initial_coordinates
@@ -184,9 +189,11 @@ class Simulator:
         """A snapshot of the whole state (plain numbers and arrays); the next `advance`
         restarts from it."""
         self._needs_init = True
+        memory = getattr(self.integrator, "restart_memory", {})
         return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
                 "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
-                "x": self._x.copy()}
+                "x": self._x.copy(), "initial_step": memory.get("initial_step", 0.0),
+                "jacobian": memory.get("jacobian", np.zeros(0))}
 
     def set_state(self, state):
         """Restore a snapshot of `get_state` (of a simulator of the same model).
@@ -218,6 +225,13 @@ class Simulator:
             y[: self.ndof] = 0.0
         self._t, self._y, self._u, self._x = t, y, u, x
         self._q_ref = q_ref
+        if hasattr(self.integrator, "restart_memory"):  # what the integrator had learnt
+            try:
+                self.integrator.restart_memory = {
+                    "initial_step": float(state.get("initial_step", 0.0)),
+                    "jacobian": np.asarray(state.get("jacobian", ()), dtype=float)}
+            except (TypeError, ValueError) as error:
+                raise SimulationError(f"not a simulator state: {error}") from None
         self._outputs_cache = None
         self._needs_init = True
 
@@ -293,6 +307,8 @@ class Simulator:
                 self._t = t
                 self._y = np.array(y, dtype=float)
                 self._x = self.data.float_array("x").copy()
+                if hasattr(self.integrator, "learn_initial_step"):
+                    self.integrator.learn_initial_step()
                 self._outputs_cache = None
                 if _record is not None:
                     _record(t, self._y)

@@ -121,7 +121,8 @@ class _Libraries:
         for name in ("CVodeGetNumSteps", "CVodeGetNumRhsEvals", "CVodeGetNumJacEvals",
                      "CVodeGetNumErrTestFails", "CVodeGetNumNonlinSolvIters"):
             proto(getattr(cv, name), _INT, [_VP, ctypes.POINTER(_LONG)])
-        proto(cv.CVodeGetLastStep, _INT, [_VP, ctypes.POINTER(_D)])
+        for name in ("CVodeGetLastStep", "CVodeGetActualInitStep"):
+            proto(getattr(cv, name), _INT, [_VP, ctypes.POINTER(_D)])
         proto(cv.CVodeGetReturnFlagName, ctypes.c_char_p, [_LONG])
         proto(cv.CVodeFree, None, [ctypes.POINTER(_VP)])
         ida = self.ida
@@ -385,20 +386,73 @@ class Cvode(_Solver):
             _check(cv.CVodeSetMaxStep(self.memory, float(max_step)), "CVodeSetMaxStep")
         if max_order is not None:
             _check(cv.CVodeSetMaxOrd(self.memory, int(max_order)), "CVodeSetMaxOrd")
+        self.analytic = jacobian == "analytic"
+        self.initial_step = 0.0
+        self._jacobians_at_forget = 0
         self.addresses = {
             "solve": function_address(cv.CVode), "reinit": function_address(cv.CVodeReInit),
             "stop": function_address(cv.CVodeSetStopTime), "memory": self.memory,
+            "init_step": function_address(cv.CVodeSetInitStep),
+            "actual_init_step": function_address(cv.CVodeGetActualInitStep),
+            "num_steps": function_address(cv.CVodeGetNumSteps),
             "y": self.y, "tret": ctypes.addressof(self.tret)}
 
     def flag_name(self, flag):
         return self.lib.cvode.CVodeGetReturnFlagName(flag).decode()
 
     def reset(self, t, y):
-        """(Re)start at time t (s) from y (2 NDOF,): order 1, a new initial step."""
+        """(Re)start at time t (s) from y (2 NDOF,) at order 1.
+
+        What the integrator learnt before is kept (`restart_memory`): the first restart
+        estimates its initial step, later ones start with that step; and the Jacobian of the
+        last setup is handed back once instead of a new one (the tangent changes little
+        between restarts at the samples of a loop, and CVODE asks for a fresh one when its
+        Newton iteration does not converge with it)."""
         self._accumulate()
         self.y_array[:] = y
         self.counters[ed.FAILED_STATUS] = 0
-        _check(self.lib.cvode.CVodeReInit(self.memory, float(t), self.y), "CVodeReInit")
+        cv = self.lib.cvode
+        _check(cv.CVodeReInit(self.memory, float(t), self.y), "CVodeReInit")
+        if self.initial_step > 0.0:
+            _check(cv.CVodeSetInitStep(self.memory, self.initial_step), "CVodeSetInitStep")
+        if self.jacobian_cached():
+            self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 1
+
+    def forget(self):
+        """Start the next restart from nothing: SUNDIALS' initial step, a new Jacobian."""
+        self.initial_step = 0.0
+        self._jacobians_at_forget = int(self.counters[ed.JACOBIAN_COUNT])
+        self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 0
+        self.data.float_array("jacobian_cache")[:] = 0.0
+        _check(self.lib.cvode.CVodeSetInitStep(self.memory, 0.0), "CVodeSetInitStep")
+
+    def jacobian_cached(self):
+        """Whether a Jacobian has been computed since `forget` (analytic Jacobians only)."""
+        return (self.analytic
+                and int(self.counters[ed.JACOBIAN_COUNT]) > self._jacobians_at_forget)
+
+    @property
+    def restart_memory(self):
+        """{"initial_step": s, "jacobian": (2n * 2n,) or empty}: what `reset` keeps."""
+        jacobian = (self.data.float_array("jacobian_cache").copy() if self.jacobian_cached()
+                    else np.zeros(0))
+        return {"initial_step": float(self.initial_step), "jacobian": jacobian}
+
+    @restart_memory.setter
+    def restart_memory(self, memory):
+        self.forget()
+        self.initial_step = float(memory.get("initial_step", 0.0))
+        jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
+        if jacobian.size == self.n * self.n and self.analytic:
+            self.data.float_array("jacobian_cache")[:] = jacobian
+            self._jacobians_at_forget = int(self.counters[ed.JACOBIAN_COUNT]) - 1
+
+    def learn_initial_step(self):
+        """After the first interval since `forget`: keep the initial step CVODE chose."""
+        if self.initial_step == 0.0:
+            value = _D(0.0)
+            self.lib.cvode.CVodeGetActualInitStep(self.memory, ctypes.byref(value))
+            self.initial_step = float(value.value)
 
     def advance(self, t_stop, *, one_step=False):
         """Integrate to t_stop (s), never past it (one step only with one_step); returns t and
