@@ -4,8 +4,9 @@ and tolerance.
 Every method integrates the same right-hand side, the compiled engine's: SUNDIALS CVODE
 (BDF, Adams) and IDA through `simulate`, and scipy's Radau, BDF and DOP853
 (`scipy.integrate.solve_ivp` on `Simulator.derivative`, the implicit ones with the same model
-Jacobian, `Simulator.jacobian_matrix`) as the peer baseline. The error is the largest deviation of any declared output (m) from the reference
-at equally spaced sample times; the reference is CVODE Adams at a tight tolerance.
+Jacobian, `Simulator.jacobian_matrix`) as the peer baseline. The error is the largest
+deviation of any declared output (m) from the reference at equally spaced sample times; the
+reference is CVODE Adams at a tight tolerance.
 
 A SUNDIALS method may carry a largest order, "cvode-bdf:2" or "ida:2" (max_order 2, the
 A-stable BDF2), so that the study compares the order limit with the default.

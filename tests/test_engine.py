@@ -1,0 +1,396 @@
+"""The compiled engine (flexure.core.engine) against independent plain-numpy computations.
+
+Every quantity the integrators get from the engine is recomputed here from the reference path
+the static analyses use (Kinematics, assembly.Inertia, Mechanics), written out in this file:
+
+    x = F(q), DF                                        Kinematics.solve
+    M_bar qddot = DF^T r,  M_bar = DF^T M DF
+    r = f + B u + gravity - De^T sigma_c - M (D2F qdot) qdot - g_conv
+    K = K0 + G0 (stress resultants of the dynamic balance r - M DF qddot),  C = C0
+
+on every built-in scene and on two with gravity (element masses under gravity), at random
+states near the initial configuration; the tangent also against finite differences of qddot,
+and the CVODE Jacobian against finite differences of Simulator.derivative. Then the status
+codes, the compiled sampled loop against a Python loop of Simulator calls (bit for bit), and
+the on-disk cache of compiled code found again by a copy of the package elsewhere.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexure.core import (
+    Mechanics,
+    SimulationError,
+    Simulator,
+    build_model,
+    builtin_scenes,
+    engine,
+    load_scene,
+    run_sampled_loop,
+    scene_path,
+    static_equilibrium,
+)
+from flexure.core import engine_data as ed
+from flexure.core.engine_data import EngineData
+from flexure.core.sundials import METHODS, STATUS_MESSAGES
+
+CORE = Path(__file__).resolve().parents[1] / "core"
+
+
+def scene_with_gravity(name, gravity):
+    data = tomllib.loads(scene_path(name).read_text())
+    data["scene"].update(name=f"{name}_gravity", gravity=gravity)
+    return build_model(data, source=f"{name} with gravity")
+
+
+MODELS = {name: (lambda name=name: load_scene(name)) for name in builtin_scenes()}
+MODELS["stage_planar_3dof_gravity"] = lambda: scene_with_gravity("stage_planar_3dof",
+                                                                 [0.0, -9.81])
+MODELS["stage_spatial_1dof_gravity"] = lambda: scene_with_gravity("stage_spatial_1dof",
+                                                                  [0.0, 0.0, -9.81])
+
+
+@pytest.fixture(scope="module", params=sorted(MODELS))
+def case(request):
+    """(model, Mechanics, EngineData, q0) of one scene."""
+    model = MODELS[request.param]()
+    mechanics = Mechanics(model)
+    return model, mechanics, EngineData(model), mechanics.kinematics.dofs_of(
+        model.initial_coordinates)
+
+
+def random_states(model, q0, seed, count=2):
+    """(q, qdot, u): DOFs 1e-4 (m or rad) from the scene's, velocities of 0.05 m/s (rad/s),
+    inputs of 1 N."""
+    rng = np.random.default_rng(seed)
+    n = q0.size
+    return [(q0 + 1e-4 * rng.standard_normal(n), 0.05 * rng.standard_normal(n),
+             rng.standard_normal(len(model.inputs))) for _ in range(count)]
+
+
+# -- the plain computation -------------------------------------------------------------------
+def plain_dynamics(model, mechanics, q, qdot, u):
+    """The reduced equations of motion by the numpy reference path: a dict of config,
+    qddot, M (NX, NX), M_bar, r (the force balance without M DF qddot) and sigma_c."""
+    kinematics, inertia = mechanics.kinematics, mechanics.inertia
+    config = kinematics.solve(q, model.initial_coordinates.copy())
+    x, DF, De = config.x, config.DF, config.De
+    xdot = DF @ qdot
+    sigma_c = mechanics.constitutive_stress(config, De @ xdot)  # S e_s + D edot_s
+    f = model.loads + inertia.gravity_force(x)
+    for port, value in zip(model.inputs, u, strict=True):
+        f[port.coordinate] += value
+    M = inertia.mass_matrix(x)
+    conv = [M @ kinematics.convective_acceleration(config, qdot),
+            inertia.convective_force(x, xdot)]
+    r = f - De.T @ sigma_c - conv[0] - conv[1]
+    mass = DF.T @ M @ DF
+    # the size of the force terms, for the round-off: the stress resultants with those of a
+    # deformation error of the length scale (e = l - l0 and the like lose the digits of the
+    # coordinates: eps L, times the stiffness S)
+    rounding = np.zeros(sigma_c.size)
+    rounding[mechanics.stressed] = np.abs(mechanics.S).sum(axis=1) * kinematics.length_scale
+    size = np.abs(DF.T) @ (np.abs(f) + np.abs(De.T) @ (np.abs(sigma_c) + rounding)
+                           + np.abs(conv[0]) + np.abs(conv[1]))
+    return {"config": config, "qddot": np.linalg.solve(mass, DF.T @ r), "M": M,
+            "mass": mass, "r": r, "sigma_c": sigma_c, "size": size}
+
+
+def plain_tangent(mechanics, plain, qddot):
+    """(K, C): K0 + G0 with the stress resultants of the balance r - M DF qddot, and C0."""
+    config = plain["config"]
+    r_full = plain["r"] - plain["M"] @ (config.DF @ qddot)
+    sigma = mechanics.stress_resultants(config, r_full, plain["sigma_c"])
+    K = (mechanics.structural_stiffness(config)
+         + mechanics.geometric_stiffness(config, sigma, 1.0))
+    return K, mechanics.damping_matrix(config)
+
+
+def evaluate(data, q, qdot, u):
+    """The engine's qddot (a copy) at (q, qdot) with inputs u."""
+    data.float_array("inputs")[:] = u
+    status = engine.call(data, engine.OP_EVALUATE, np.array(q, float), np.array(qdot, float))
+    assert status == ed.OK, STATUS_MESSAGES[status]
+    return data.float_array("qddot").copy()
+
+
+def close(actual, expected, rtol, scale=None):
+    """max |actual - expected| <= rtol * scale (default: max |expected|)."""
+    scale = np.max(np.abs(expected)) if scale is None else scale
+    error = np.max(np.abs(actual - expected), initial=0.0)
+    assert error <= rtol * scale, f"error {error:.3e} > {rtol:g} x {scale:.3e}"
+
+
+# -- kinematics, equations of motion, tangent ---------------------------------------------------
+def test_kinematics_match_newton_on_the_plain_constraints(case):
+    """x and DF from full Newton (first call) and from the warm-started chord iterations (the
+    calls after it, each from the previous solution) against Kinematics.solve."""
+    model, mechanics, data, q0 = case
+    n, L = q0.size, mechanics.kinematics.length_scale
+    data.int_array("dims")[ed.WARM] = 0
+    data.float_array("x_start")[:] = model.initial_coordinates
+    for q, _, _ in random_states(model, q0, seed=1, count=3):
+        assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK
+        expected = mechanics.kinematics.solve(q, model.initial_coordinates.copy())
+        close(data.float_array("x"), expected.x, 1e-14, scale=max(L, np.max(np.abs(expected.x))))
+        close(data.float_array("DF").reshape(model.nx, n), expected.DF, 1e-13)
+    assert engine.call(data, engine.OP_DEFORMATIONS, expected.x, s=0) == ed.OK
+    close(data.float_array("e"), expected.e, 1e-14, scale=max(L, np.max(np.abs(expected.e))))
+
+
+def test_accelerations_match_the_plain_equations_of_motion(case):
+    """qddot: the backward error M_bar qddot - DF^T r to 1e-14 of the size of the force terms
+    (`plain_dynamics`: the stiff elements' forces cancel in r, and their deformations carry
+    the round-off of the coordinates); the forward error to that over M_bar's smallest
+    eigenvalue; M_bar to 1e-12; the velocity terms (convective, damping: qddot(q, qdot) -
+    qddot(q, 0)) on their own to the same absolute bound."""
+    model, mechanics, data, q0 = case
+    for q, qdot, u in random_states(model, q0, seed=2):
+        qddot = evaluate(data, q, qdot, u)
+        plain = plain_dynamics(model, mechanics, q, qdot, u)
+        DF, mass = plain["config"].DF, plain["mass"]
+        size = np.max(plain["size"])
+        close(mass @ qddot, DF.T @ plain["r"], 1e-14, scale=size)
+        bound = 1e-14 * size / np.linalg.eigvalsh(mass)[0]  # m/s^2, rad/s^2
+        close(qddot, plain["qddot"], 1.0, scale=bound)
+        close(data.float_array("mass").reshape(q0.size, q0.size), mass, 1e-12)
+        at_rest = plain_dynamics(model, mechanics, q, 0 * qdot, u)["qddot"]
+        close(qddot - evaluate(data, q, 0 * qdot, u), plain["qddot"] - at_rest, 2.0,
+              scale=bound)
+
+
+def test_tangent_matches_the_plain_stiffness_and_damping(case):
+    """K0 + G0 and C0 of OP_TANGENT, at the evaluation's own qddot and at another one (IDA's
+    iterate), against Mechanics' structural and geometric stiffness and damping."""
+    model, mechanics, data, q0 = case
+    n = q0.size
+    for q, qdot, u in random_states(model, q0, seed=3):
+        qddot = evaluate(data, q, qdot, u)
+        plain = plain_dynamics(model, mechanics, q, qdot, u)
+        for acc in (qddot, 0.5 * qddot + 1.0):
+            assert engine.call(data, engine.OP_TANGENT, np.array(acc)) == ed.OK
+            K, C = plain_tangent(mechanics, plain, acc)
+            close(data.float_array("stiffness").reshape(n, n), K, 1e-10)
+            close(data.float_array("damping").reshape(n, n), C, 1e-12,
+                  scale=max(np.max(np.abs(C)), 1e-300))
+
+
+def test_tangent_matches_finite_differences_at_the_static_equilibrium(case):
+    """At the static equilibrium under the scene's loads, at rest: -M_bar d qddot / dq = K and
+    -M_bar d qddot / d qdot = C (central differences), and the CVODE Jacobian of Simulator
+    against central differences of Simulator.derivative."""
+    model, mechanics, data, _ = case
+    q = static_equilibrium(model).q
+    n = q.size
+    u = np.zeros(len(model.inputs))
+    evaluate(data, q, np.zeros(n), u)
+    mass = data.float_array("mass").reshape(n, n).copy()
+    assert engine.call(data, engine.OP_TANGENT, data.float_array("qddot").copy()) == ed.OK
+    K = data.float_array("stiffness").reshape(n, n).copy()
+    C = data.float_array("damping").reshape(n, n).copy()
+    h = 1e-7
+    dq, dv = np.zeros((n, n)), np.zeros((n, n))
+    for j in range(n):
+        step = h * np.eye(n)[j]
+        dq[:, j] = (evaluate(data, q + step, np.zeros(n), u)
+                    - evaluate(data, q - step, np.zeros(n), u)) / (2 * h)
+        dv[:, j] = (evaluate(data, q, step, u) - evaluate(data, q, -step, u)) / (2 * h)
+    close(-mass @ dq, K, 1e-5)
+    close(-mass @ dv, C, 1e-6, scale=max(np.max(np.abs(C)), 1e-300))
+
+    sim = Simulator(model)
+    y = np.concatenate([q - sim.q_ref, np.zeros(n)])
+    J = sim.jacobian_matrix(0.0, y)
+    numeric = np.zeros_like(J)
+    for j in range(2 * n):
+        step = h * np.eye(2 * n)[j]
+        numeric[:, j] = (sim.derivative(0.0, y + step) - sim.derivative(0.0, y - step)) / (2 * h)
+    for rows, columns in ((slice(n, None), slice(None, n)), (slice(n, None), slice(n, None))):
+        close(J[rows, columns], numeric[rows, columns], 1e-5,
+              scale=max(np.max(np.abs(numeric[rows, columns])), 1e-300))
+    assert np.array_equal(J[:n], np.hstack([np.zeros((n, n)), np.eye(n)]))
+
+
+def test_first_order_and_implicit_forms(case):
+    """OP_RHS and Simulator.derivative: [qdot, qddot]; OP_JACOBIAN (row- and column-major) and
+    Simulator.jacobian_matrix: [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] of the plain tangent;
+    OP_RESIDUAL, OP_RESIDUAL_JACOBIAN: IDA's [yp_q - qdot, M_bar (yp_v - qddot)] and
+    [[cj I, -I], [K, C + cj M_bar]] with the tangent at qddot = yp_v."""
+    model, mechanics, data, q0 = case
+    n = q0.size
+    sim = Simulator(model)
+    for q, qdot, u in random_states(model, q0, seed=4, count=1):
+        plain = plain_dynamics(model, mechanics, q, qdot, u)
+        mass = plain["mass"]
+        y = np.concatenate([q - sim.q_ref, qdot])
+        sim.set_inputs(u)
+        ydot = sim.derivative(0.0, y)
+        assert np.array_equal(ydot[:n], qdot)
+        close(ydot[n:], plain["qddot"], 1e-14, scale=np.max(plain["size"])
+              / np.linalg.eigvalsh(mass)[0])
+        J = sim.jacobian_matrix(0.0, y)
+        K, C = plain_tangent(mechanics, plain, ydot[n:])
+        assert np.array_equal(J[:n], np.hstack([np.zeros((n, n)), np.eye(n)]))
+        close(mass @ J[n:, :n], -K, 1e-10)
+        close(mass @ J[n:, n:], -C, 1e-10, scale=max(np.max(np.abs(C)), 1e-300))
+        # the packed data of the simulator, as SUNDIALS' callbacks see it
+        column_major = np.empty(4 * n * n)
+        assert engine.call(sim.data, engine.OP_JACOBIAN, y, column_major, s=1.0) == ed.OK
+        assert np.array_equal(column_major.reshape(2 * n, 2 * n).T, J)
+        yp = np.concatenate([qdot + 1e-3, ydot[n:] * 0.9 + 0.1])
+        res = np.empty(2 * n)
+        assert engine.call(sim.data, engine.OP_RESIDUAL, y, yp, res) == ed.OK
+        close(res[:n], yp[:n] - qdot, 1e-15, scale=1.0)
+        close(res[n:], mass @ (yp[n:] - plain["qddot"]), 1e-10)
+        cj = 123.0
+        JR = np.empty(4 * n * n)
+        assert engine.call(sim.data, engine.OP_RESIDUAL_JACOBIAN, y, yp, JR, s=cj) == ed.OK
+        JR = JR.reshape(2 * n, 2 * n).T  # column-major
+        K, C = plain_tangent(mechanics, plain, yp[n:])
+        expected = np.block([[cj * np.eye(n), -np.eye(n)], [K, C + cj * mass]])
+        close(JR[:n], expected[:n], 0.0, scale=1.0)
+        close(JR[n:, :n], K, 1e-10)
+        close(JR[n:, n:], C + cj * mass, 1e-10)
+
+
+# -- status codes --------------------------------------------------------------------------------
+def truss_pendulum(length=0.5, mass=1.0):
+    """A truss with its elongation prescribed zero and the mass's y as the DOF: singular where
+    it hangs vertically (y = -length)."""
+    node = {"position": [length, 0.0], "dof": ["y"]}
+    if mass:
+        node["mass"] = mass
+    return build_model({
+        "scene": {"name": "truss_pendulum", "gravity": [0.0, -9.81]},
+        "sections": {"rod": {"EA": 1.0}},
+        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]}, "2": node},
+        "elements": {"rod": {"type": "PLTRUSS", "nodes": ["1", "2"], "section": "rod"}},
+        "outputs": {"y": {"node": "2", "coordinate": "y"}},
+    })
+
+
+def test_statuses_and_their_messages():
+    """Each failure comes back as its status code (nothing raises in compiled code), and
+    Simulator turns it into a SimulationError with the time and the documented message."""
+    assert set(STATUS_MESSAGES) == {ed.NOT_CONVERGED, ed.SINGULAR_CONSTRAINTS,
+                                    ed.SINGULAR_MASS, ed.NONFINITE_STATE, ed.NONFINITE_RESULT}
+    model = truss_pendulum()
+    data = EngineData(model)
+
+    def kinematics(y):
+        data.int_array("dims")[ed.WARM] = 0  # full Newton from the scene's coordinates
+        return engine.call(data, engine.OP_KINEMATICS, np.array([y]))
+
+    assert kinematics(-0.3) == ed.OK
+    assert kinematics(-0.5 * (1 - 1e-13)) == ed.SINGULAR_CONSTRAINTS  # x = 3.5e-7 m
+    assert kinematics(-0.6) == ed.NOT_CONVERGED  # beyond its reach
+    # the first-order form checks the state first, then its result
+    ydot = np.empty(2)
+    assert engine.call(data, engine.OP_RHS, np.array([np.inf, 0.0]), ydot) == ed.NONFINITE_STATE
+    nonfinite = truss_pendulum()
+    nonfinite.loads[nonfinite.dof_coordinates[0]] = np.inf
+    assert engine.call(EngineData(nonfinite), engine.OP_RHS, np.zeros(2), ydot) == \
+        ed.NONFINITE_RESULT
+    massless = EngineData(truss_pendulum(mass=0.0))
+    assert engine.call(massless, engine.OP_RHS, np.zeros(2), ydot) == ed.SINGULAR_MASS
+
+    sim = Simulator(model)  # q_ref = 0 (y = 0: the truss horizontal)
+    checks = [([-0.5 * (1 - 1e-13), 0.0], ed.SINGULAR_CONSTRAINTS),
+              ([0.0, np.nan], ed.NONFINITE_STATE)]
+    for y, status in checks:
+        with pytest.raises(SimulationError) as error:
+            sim.derivative(0.25, np.array(y))
+        assert str(error.value) == f"t = 0.25 s: {STATUS_MESSAGES[status]}"
+    with pytest.raises(SimulationError, match="singular configuration"):
+        sim.jacobian_matrix(0.0, np.array([-0.5 * (1 - 1e-13), 0.0]))
+    with pytest.raises(SimulationError, match="initial DOFs q0 cannot be assembled: a singular"):
+        sim.reset(q0=[-0.5 * (1 - 1e-13)])
+    with pytest.raises(SimulationError, match=r"M_bar is singular"):
+        Simulator(truss_pendulum(mass=0.0)).derivative(0.0, np.zeros(2))
+    assert np.all(np.isfinite(sim.derivative(0.0, np.array([-0.3, 0.1]))))  # still usable
+
+
+def test_method_names_of_the_command_line_are_the_solvers():
+    from flexure.core.cli_simulate import METHODS as COMMAND_METHODS
+
+    assert COMMAND_METHODS == METHODS
+
+
+# -- the compiled sampled loop ------------------------------------------------------------------
+def test_compiled_sampled_loop_equals_a_python_loop_of_simulator_calls_bit_for_bit():
+    """flexure.core.run_sampled_loop against controllers.runner.simulate_loop around an
+    InProcessPlant (a Simulator stepped from Python): the same positions and forces."""
+    from flexure.controllers import build_loop
+    from flexure.controllers.plants import InProcessPlant
+    from flexure.controllers.runner import simulate_loop
+
+    model = load_scene("stage_planar_3dof")
+    controller, design = build_loop(model, stroke=1e-3, duration=0.02, settle=0.005,
+                                    fs=4000.0)
+    t, _, position, force = simulate_loop(InProcessPlant(model, rtol=1e-7), controller, design)
+    feedback = controller.controller
+    sim = Simulator(model, rtol=1e-7)
+    t_c, position_c, force_c = run_sampled_loop(
+        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
+        feedforward=controller.feedforward,
+        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
+        loop_inputs=[pair.input_index for pair in design.pairs],
+        loop_outputs=[pair.output_index for pair in design.pairs])
+    assert position.shape == (101, 1) and np.ptp(position) > 5e-4  # it moved
+    assert np.array_equal(t_c, t)
+    assert np.array_equal(position_c, position)
+    assert np.array_equal(force_c, force)
+    assert sim.time == t[-1]
+
+
+# -- the on-disk cache of compiled code -------------------------------------------------------
+PROBE = textwrap.dedent("""
+    import json, sys
+    import numpy as np
+    from {package}.core.sampled_loop import controller_step
+    out = np.zeros(1)
+    controller_step(np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)),
+                    np.zeros(1), np.ones(1), out)
+    stats = controller_step.stats
+    print(json.dumps({{"hits": sum(stats.cache_hits.values()),
+                      "misses": sum(stats.cache_misses.values())}}))
+""")
+
+
+def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_path):
+    """The cache is keyed by the package's name and a hash of its sources, not by the folder
+    (an FMU unpacks its copy of flexure into a new folder every time): a copy of core/ under
+    another folder loads the compiled kernel the first copy wrote; a changed source compiles
+    afresh."""
+
+    def copy(folder, change=False):
+        package = tmp_path / folder / "flexure_cache_probe"
+        shutil.copytree(CORE, package / "core",
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+        (package / "__init__.py").write_text("")
+        if change:
+            with open(package / "core" / "tables.py", "a") as handle:
+                handle.write("\n# a change\n")
+        return tmp_path / folder
+
+    def run(root):
+        env = {**os.environ, "FLEXURE_CACHE_DIR": str(tmp_path / "cache"),
+               "PYTHONPATH": str(root)}
+        done = subprocess.run([sys.executable, "-c",
+                               PROBE.format(package="flexure_cache_probe")],
+                              capture_output=True, text=True, env=env, cwd=root, check=True)
+        return json.loads(done.stdout.strip().splitlines()[-1])
+
+    first = run(copy("first"))
+    assert first == {"hits": 0, "misses": 1}
+    assert run(copy("second")) == {"hits": 1, "misses": 0}
+    assert run(copy("changed", change=True)) == {"hits": 0, "misses": 1}
