@@ -38,7 +38,7 @@ from numba import carray, types
 
 from . import engine_data as ed
 from .jit import entry, kernel
-from .native import as_float_pointer, as_int_pointer, call_deformations, call_inertia
+from .native import address_of, as_float_pointer, as_int_pointer, call_deformations, call_inertia
 
 # slot indices as compile-time constants
 (_DIMS, _FREE, _ROWS, _DOF_COORDS, _DOF_DEFS, _DOF_POS, _STRESSED, _INPUT_COORDS, _GROUPS,
@@ -51,40 +51,26 @@ from .native import as_float_pointer, as_int_pointer, call_deformations, call_in
 _N_INT, _N_FLOAT = len(ed.INT_SLOTS), len(ed.FLOAT_SLOTS)
 
 
-# -- from a C callback's user data to the arrays -----------------------------------------------
+# -- the packed model's arrays, from the address of its table ------------------------------------
+# Every function takes the table's address (`table`, int64) and takes from it the arrays it
+# uses: passing the 49 arrays themselves from call to call made each call copy hundreds of
+# values, and the compiled code ten times larger.
+_TABLE_SIZE = 2 * (_N_INT + _N_FLOAT)
+
+
 @kernel
-def unpack(user_data):
-    """(ints, floats) tuples of the arrays whose (address, length) table is at user_data."""
-    table = carray(as_int_pointer(user_data), (2 * (_N_INT + _N_FLOAT),))
-    ints = (
-        _ints(table, 0), _ints(table, 1), _ints(table, 2), _ints(table, 3), _ints(table, 4),
-        _ints(table, 5), _ints(table, 6), _ints(table, 7), _ints(table, 8), _ints(table, 9),
-        _ints(table, 10), _ints(table, 11), _ints(table, 12), _ints(table, 13),
-        _ints(table, 14), _ints(table, 15))
-    o = _N_INT
-    floats = (
-        _floats(table, o), _floats(table, o + 1), _floats(table, o + 2), _floats(table, o + 3),
-        _floats(table, o + 4), _floats(table, o + 5), _floats(table, o + 6),
-        _floats(table, o + 7), _floats(table, o + 8), _floats(table, o + 9),
-        _floats(table, o + 10), _floats(table, o + 11), _floats(table, o + 12),
-        _floats(table, o + 13), _floats(table, o + 14), _floats(table, o + 15),
-        _floats(table, o + 16), _floats(table, o + 17), _floats(table, o + 18),
-        _floats(table, o + 19), _floats(table, o + 20), _floats(table, o + 21),
-        _floats(table, o + 22), _floats(table, o + 23), _floats(table, o + 24),
-        _floats(table, o + 25), _floats(table, o + 26), _floats(table, o + 27),
-        _floats(table, o + 28), _floats(table, o + 29), _floats(table, o + 30),
-        _floats(table, o + 31), _floats(table, o + 32))
-    return ints, floats
+def _i(table, slot):
+    """The int64 array of `slot` (an index of engine_data.INT_SLOTS)."""
+    entries = carray(as_int_pointer(table), (_TABLE_SIZE,))
+    return carray(as_int_pointer(entries[2 * slot]), (entries[2 * slot + 1],))
 
 
-@kernel(inline="always")
-def _ints(table, slot):
-    return carray(as_int_pointer(table[2 * slot]), (table[2 * slot + 1],))
-
-
-@kernel(inline="always")
-def _floats(table, slot):
-    return carray(as_float_pointer(table[2 * slot]), (table[2 * slot + 1],))
+@kernel
+def _f(table, slot):
+    """The float64 array of `slot` (an index of engine_data.FLOAT_SLOTS)."""
+    entries = carray(as_int_pointer(table), (_TABLE_SIZE,))
+    k = 2 * (_N_INT + slot)
+    return carray(as_float_pointer(entries[k]), (entries[k + 1],))
 
 
 # -- dense linear algebra on small matrices (row-major, in place) --------------------------------
@@ -154,31 +140,31 @@ def lu_solve_transposed(a, n, piv, b):
             b[k], b[p] = b[p], b[k]
 
 
-@kernel(inline="always")
-def _group(ints, g):
-    groups = ints[_GROUPS]
+@kernel
+def _group(table, g):
+    groups = _i(table, _GROUPS)
     return groups[g * ed.G_WIDTH: (g + 1) * ed.G_WIDTH]
 
 
 # -- deformations of every element ---------------------------------------------------------------
 @kernel
-def deformations(ints, floats, x, order):
-    """e (NE,) into F[_E] and, by order, each element's De, D2e into F[_DE], F[_D2E]."""
-    dims = ints[_DIMS]
-    e = floats[_E]
-    local = floats[_LOCAL]
+def deformations(table, x, order):
+    """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e."""
+    dims = _i(table, _DIMS)
+    e = _f(table, _E)
+    local = _f(table, _LOCAL)
     max_m = dims[ed.MAX_M]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
         if k == 0:
             continue
         width, function = row[ed.G_REF_WIDTH], row[ed.G_DEFORMATIONS_ENTRY]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        refs = floats[_GROUP_DATA].ctypes.data + 8 * row[ed.G_DATA_OFFSET]
-        De = floats[_DE].ctypes.data + 8 * row[ed.G_DE_OFFSET]
-        D2e = floats[_D2E].ctypes.data + 8 * row[ed.G_D2E_OFFSET]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        refs = _f(table, _GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+        De = _f(table, _DE).ctypes.data + 8 * row[ed.G_DE_OFFSET]
+        D2e = _f(table, _D2E).ctypes.data + 8 * row[ed.G_D2E_OFFSET]
         xl = local[:m]
         el = local[max_m: max_m + k]
         for i in range(n):
@@ -193,37 +179,37 @@ def deformations(ints, floats, x, order):
 
 # -- kinematics -----------------------------------------------------------------------------------
 @kernel
-def _residual(ints, floats, x, q, g):
-    """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in F[_E]."""
-    dims = ints[_DIMS]
-    e = floats[_E]
+def _residual(table, x, q, g):
+    """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in slot e."""
+    dims = _i(table, _DIMS)
+    e = _f(table, _E)
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
-    rows = ints[_ROWS]
+    rows = _i(table, _ROWS)
     worst = 0.0
     for j in range(n_rigid):
         g[j] = e[rows[j]]
     for j in range(n_edof):
         g[n_rigid + j] = e[rows[n_rigid + j]] - q[n_xdof + j]
     for j in range(n_xdof):
-        g[n_rigid + n_edof + j] = x[ints[_DOF_COORDS][j]] - q[j]
+        g[n_rigid + n_edof + j] = x[_i(table, _DOF_COORDS)[j]] - q[j]
     for j in range(g.size):
         worst = max(worst, abs(g[j]))
     return worst
 
 
 @kernel
-def _constraint_jacobian(ints, floats, J):
-    """J (n_free, n_free) row-major into J from the elements' De in F[_DE]."""
-    dims = ints[_DIMS]
+def _constraint_jacobian(table, J):
+    """J (n_free, n_free) row-major into J from the elements' De in slot de."""
+    dims = _i(table, _DIMS)
     nf = dims[ed.NFREE]
     J[:] = 0.0
-    row_of_def, col_of_coord = ints[_ROW_OF_DEF], ints[_COL_OF_COORD]
+    row_of_def, col_of_coord = _i(table, _ROW_OF_DEF), _i(table, _COL_OF_COORD)
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
         for i in range(n):
             for b in range(k):
                 r = row_of_def[defs[i * k + b]]
@@ -234,24 +220,25 @@ def _constraint_jacobian(ints, floats, J):
                     if c >= 0:
                         J[r * nf + c] = De[(i * k + b) * m + a]
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
-    positions = ints[_DOF_POS]
+    positions = _i(table, _DOF_POS)
     for j in range(dims[ed.NXDOF]):
         J[(n_def + j) * nf + positions[j]] = 1.0
 
 
 @kernel
-def _store(ints, floats, q, x):
-    """Factor J at the solved x (deformations of order 2 in F), DF, and keep both as the next
-    warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is singular."""
-    dims = ints[_DIMS]
+def _store(table, q, x):
+    """Factor J at the solved x (deformations of order 2 evaluated there), DF, and keep both
+    as the next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
+    singular."""
+    dims = _i(table, _DIMS)
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    lu, piv = floats[_LU], ints[_PIVOTS]
-    _constraint_jacobian(ints, floats, lu)
+    lu, piv = _f(table, _LU), _i(table, _PIVOTS)
+    _constraint_jacobian(table, lu)
     ratio = lu_factor(lu, nf, piv)
-    if not ratio > floats[_SETTINGS][ed.SINGULAR_RATIO]:
+    if not ratio > _f(table, _SETTINGS)[ed.SINGULAR_RATIO]:
         return ed.SINGULAR_CONSTRAINTS
-    DF, column = floats[_DF], floats[_DX]
-    free = ints[_FREE]
+    DF, column = _f(table, _DF), _f(table, _DX)
+    free = _i(table, _FREE)
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
     DF[:] = 0.0
     for j in range(ndof):  # J DF = [0; I]: DOF coordinates first in q, last in the rows of J
@@ -263,31 +250,31 @@ def _store(ints, floats, q, x):
         lu_solve(lu, nf, piv, column)
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
-    floats[_X][:nx] = x[:nx]
-    floats[_Q][:] = q
+    _f(table, _X)[:nx] = x[:nx]
+    _f(table, _Q)[:] = q
     dims[ed.WARM] = 1
     return ed.OK
 
 
 @kernel
-def solve_kinematics(ints, floats, q):
-    """x = F(q) into F[_X], with e, De, D2e, the LU of J and DF there; a status code."""
-    dims = ints[_DIMS]
+def solve_kinematics(table, q):
+    """x = F(q) into slot x, with e, De, D2e, the LU of J and DF there; a status code."""
+    dims = _i(table, _DIMS)
     nx, nf = dims[ed.NX], dims[ed.NFREE]
-    tolerance = floats[_SETTINGS][ed.TOLERANCE]
-    x, g, dx, free = floats[_X_TRIAL], floats[_G], floats[_DX], ints[_FREE]
-    lu, piv = floats[_LU], ints[_PIVOTS]
+    tolerance = _f(table, _SETTINGS)[ed.TOLERANCE]
+    x, g, dx, free = _f(table, _X_TRIAL), _f(table, _G), _f(table, _DX), _i(table, _FREE)
+    lu, piv = _f(table, _LU), _i(table, _PIVOTS)
     if dims[ed.WARM] == 1:
-        DF, x_prev, q_prev = floats[_DF], floats[_X], floats[_Q]
+        DF, x_prev, q_prev = _f(table, _DF), _f(table, _X), _f(table, _Q)
         ndof = dims[ed.NDOF]
         for a in range(nx):
             s = x_prev[a]
             for j in range(ndof):
                 s += DF[a * ndof + j] * (q[j] - q_prev[j])
             x[a] = s
-        deformations(ints, floats, x, 2)  # with the derivatives: usually x needs no correction
-        if _residual(ints, floats, x, q, g) <= tolerance:
-            return _store(ints, floats, q, x)
+        deformations(table, x, 2)  # with the derivatives: usually x needs no correction
+        if _residual(table, x, q, g) <= tolerance:
+            return _store(table, q, x)
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             dx[:] = g
             lu_solve(lu, nf, piv, dx)
@@ -297,17 +284,17 @@ def solve_kinematics(ints, floats, q):
                 step = max(step, abs(dx[a]))
             if not np.isfinite(step):
                 break
-            deformations(ints, floats, x, 2)
-            if _residual(ints, floats, x, q, g) <= tolerance or step <= tolerance:
-                return _store(ints, floats, q, x)
+            deformations(table, x, 2)
+            if _residual(table, x, q, g) <= tolerance or step <= tolerance:
+                return _store(table, q, x)
     else:
-        x[:] = floats[_X_START]
+        x[:] = _f(table, _X_START)
     if not np.all(np.isfinite(x)):
-        x[:] = floats[_X]
+        x[:] = _f(table, _X)
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton
-        deformations(ints, floats, x, 1)
-        _residual(ints, floats, x, q, g)
-        _constraint_jacobian(ints, floats, lu)
+        deformations(table, x, 1)
+        _residual(table, x, q, g)
+        _constraint_jacobian(table, lu)
         if not lu_factor(lu, nf, piv) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         dx[:] = g
@@ -319,32 +306,33 @@ def solve_kinematics(ints, floats, q):
         if not np.isfinite(step):
             return ed.NOT_CONVERGED
         if step <= tolerance:
-            deformations(ints, floats, x, 2)
-            return _store(ints, floats, q, x)
+            deformations(table, x, 2)
+            return _store(table, q, x)
     return ed.NOT_CONVERGED
 
 
 @kernel
-def positions(ints, floats, q, out):
+def positions(table, q, out):
     """Coordinates x (NX,) for q into out (the kinematics of `solve_kinematics`); status."""
-    status = solve_kinematics(ints, floats, q)
-    out[:] = floats[_X]
+    status = solve_kinematics(table, q)
+    out[:] = _f(table, _X)
     return status
 
 
 # -- equations of motion ------------------------------------------------------------------------
 @kernel
-def evaluate(ints, floats, q, qdot):
-    """qddot (NDOF,) into F[_QDDOT] for DOFs q, velocities qdot and the inputs in F[_INPUTS].
+def evaluate(table, q, qdot):
+    """qddot (NDOF,) into slot qddot for DOFs q, velocities qdot and the inputs in slot inputs.
 
-    Leaves in F what the tangent needs: the kinematics, the constitutive stress resultants
-    (F[_SIGMA]), the coordinate force balance r (F[_FORCE]) and M_bar (F[_MASS]); a status."""
-    status = solve_kinematics(ints, floats, q)
+    Leaves in the packed arrays what the tangent needs: the kinematics, the constitutive
+    stress resultants (slot sigma), the coordinate force balance r (slot force) and M_bar
+    (slot mass); a status."""
+    status = solve_kinematics(table, q)
     if status != ed.OK:
         return status
-    dims = ints[_DIMS]
+    dims = _i(table, _DIMS)
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x, xdot = floats[_DF], floats[_X], floats[_XDOT]
+    DF, x, xdot = _f(table, _DF), _f(table, _X), _f(table, _XDOT)
     moving = False
     for j in range(ndof):
         if qdot[j] != 0.0:
@@ -355,10 +343,10 @@ def evaluate(ints, floats, q, qdot):
             s += DF[a * ndof + j] * qdot[j]
         xdot[a] = s
     # edot and, if moving, the quadratic forms of the constraint rows
-    _element_rates(ints, floats, xdot, moving)
+    _element_rates(table, xdot, moving)
     # sigma_c = S e_s + D edot_s
-    sigma, e, edot = floats[_SIGMA], floats[_E], floats[_EDOT]
-    stressed, S, D = ints[_STRESSED], floats[_S], floats[_D]
+    sigma, e, edot = _f(table, _SIGMA), _f(table, _E), _f(table, _EDOT)
+    stressed, S, D = _i(table, _STRESSED), _f(table, _S), _f(table, _D)
     ns = stressed.size
     sigma[:] = 0.0
     damped = dims[ed.HAS_DAMPING] == 1
@@ -370,54 +358,54 @@ def evaluate(ints, floats, q, qdot):
                 s += D[a * ns + b] * edot[stressed[b]]
         sigma[stressed[a]] = s
     # coordinate force r = f - De^T sigma_c (- inertia terms below)
-    r = floats[_FORCE]
-    r[:] = floats[_CONST_FORCE]
-    inputs, input_coords = floats[_INPUTS], ints[_INPUT_COORDS]
+    r = _f(table, _FORCE)
+    r[:] = _f(table, _CONST_FORCE)
+    inputs, input_coords = _f(table, _INPUTS), _i(table, _INPUT_COORDS)
     for j in range(inputs.size):
         r[input_coords[j]] += inputs[j]
-    _scatter_stress(ints, floats, sigma, r)
-    conv = floats[_CONV]
+    _scatter_stress(table, sigma, r)
+    conv = _f(table, _CONV)
     if moving:  # (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot on the constraint rows]
-        dx = floats[_DX]
+        dx = _f(table, _DX)
         for a in range(nf):
-            dx[a] = floats[_G][a]  # the quadratic forms, left in g by _element_rates
-        lu_solve(floats[_LU], nf, ints[_PIVOTS], dx)
+            dx[a] = _f(table, _G)[a]  # the quadratic forms, left in g by _element_rates
+        lu_solve(_f(table, _LU), nf, _i(table, _PIVOTS), dx)
         conv[:] = 0.0
-        free = ints[_FREE]
+        free = _i(table, _FREE)
         for a in range(nf):
             conv[free[a]] = -dx[a]
-    _inertia(ints, floats, x, xdot, conv, moving, r)
+    _inertia(table, x, xdot, conv, moving, r)
     # M_bar qddot = DF^T r
-    rq, qddot = floats[_REDUCED_FORCE], floats[_QDDOT]
+    rq, qddot = _f(table, _REDUCED_FORCE), _f(table, _QDDOT)
     for j in range(ndof):
         s = 0.0
         for a in range(nx):
             s += DF[a * ndof + j] * r[a]
         rq[j] = s
-    mass_lu = floats[_MASS_LU]
-    mass_lu[:] = floats[_MASS]
-    if not lu_factor(mass_lu, ndof, ints[_MASS_PIVOTS]) > 0.0:
+    mass_lu = _f(table, _MASS_LU)
+    mass_lu[:] = _f(table, _MASS)
+    if not lu_factor(mass_lu, ndof, _i(table, _MASS_PIVOTS)) > 0.0:
         return ed.SINGULAR_MASS
     qddot[:] = rq
-    lu_solve(mass_lu, ndof, ints[_MASS_PIVOTS], qddot)
+    lu_solve(mass_lu, ndof, _i(table, _MASS_PIVOTS), qddot)
     return ed.OK
 
 
 @kernel
-def _element_rates(ints, floats, xdot, moving):
-    """edot = De xdot (F[_EDOT]) and, if moving, xdot^T D2e_i xdot of the constraint rows
-    into F[_G] (n_free,: zero on the unit rows of the DOF coordinates)."""
-    dims = ints[_DIMS]
-    edot, quad = floats[_EDOT], floats[_G]
-    row_of_def = ints[_ROW_OF_DEF]
+def _element_rates(table, xdot, moving):
+    """edot = De xdot (slot edot) and, if moving, xdot^T D2e_i xdot of the constraint rows
+    into slot g (n_free,: zero on the unit rows of the DOF coordinates)."""
+    dims = _i(table, _DIMS)
+    edot, quad = _f(table, _EDOT), _f(table, _G)
+    row_of_def = _i(table, _ROW_OF_DEF)
     quad[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
-        D2e = floats[_D2E][row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        D2e = _f(table, _D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
         for i in range(n):
             for b in range(k):
                 s = 0.0
@@ -441,15 +429,15 @@ def _element_rates(ints, floats, xdot, moving):
 
 
 @kernel
-def _scatter_stress(ints, floats, sigma, r):
+def _scatter_stress(table, sigma, r):
     """r -= De^T sigma, element by element."""
-    dims = ints[_DIMS]
+    dims = _i(table, _DIMS)
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
         for i in range(n):
             for b in range(k):
                 s = sigma[defs[i * k + b]]
@@ -461,12 +449,12 @@ def _scatter_stress(ints, floats, sigma, r):
 
 
 @kernel
-def _inertia(ints, floats, x, xdot, conv, moving, r):
-    """M_bar = DF^T M DF into F[_MASS]; gravity on the element masses into r; and, if moving,
+def _inertia(table, x, xdot, conv, moving, r):
+    """M_bar = DF^T M DF into slot mass; gravity on the element masses into r; and, if moving,
     r -= M conv + g_conv. Element by element through the inertia points."""
-    dims = ints[_DIMS]
+    dims = _i(table, _DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
-    DF, mass, lumped = floats[_DF], floats[_MASS], floats[_LUMPED]
+    DF, mass, lumped = _f(table, _DF), _f(table, _MASS), _f(table, _LUMPED)
     mass[:] = 0.0
     for a in range(nx):  # the lumped masses
         la = lumped[a]
@@ -480,17 +468,17 @@ def _inertia(ints, floats, x, xdot, conv, moving, r):
                 continue
             for j in range(ndof):
                 mass[i * ndof + j] += di * DF[a * ndof + j]
-    local = floats[_LOCAL]
+    local = _f(table, _LOCAL)
     max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         P = row[ed.G_P]
         if P == 0:
             continue
         n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
         function = row[ed.G_INERTIA_ENTRY]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        data = floats[_GROUP_DATA]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        data = _f(table, _GROUP_DATA)
         refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
         # scratch: x, v (m), p then the point forces, acc, w (P), Dp (P, m), B = Dp DF_e and
         # Mp B (P, ndof)
@@ -555,44 +543,44 @@ def _inertia(ints, floats, x, xdot, conv, moving, r):
 
 # -- tangent ----------------------------------------------------------------------------------
 @kernel
-def tangent(ints, floats, qddot):
-    """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into F[_STIFFNESS], F[_DAMPING] at the
+def tangent(table, qddot):
+    """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot."""
-    dims = ints[_DIMS]
+    dims = _i(table, _DIMS)
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x = floats[_DF], floats[_X]
+    DF, x = _f(table, _DF), _f(table, _X)
     # r_full = r - M DF qddot, then the multipliers J^-T r_full on the free coordinates
-    acc = floats[_CONV]
+    acc = _f(table, _CONV)
     for a in range(nx):
         s = 0.0
         for j in range(ndof):
             s += DF[a * ndof + j] * qddot[j]
         acc[a] = s
-    r_full = floats[_X_TRIAL]
-    r_full[:] = floats[_FORCE]
-    _mass_times(ints, floats, x, acc, r_full)
-    free, lam = ints[_FREE], floats[_DX]
+    r_full = _f(table, _X_TRIAL)
+    r_full[:] = _f(table, _FORCE)
+    _mass_times(table, x, acc, r_full)
+    free, lam = _i(table, _FREE), _f(table, _DX)
     for a in range(nf):
         lam[a] = r_full[free[a]]
-    lu_solve_transposed(floats[_LU], nf, ints[_PIVOTS], lam)
-    sigma = floats[_EDOT]  # reused: the full stress resultants
-    sigma[:] = floats[_SIGMA]
-    rows = ints[_ROWS]
+    lu_solve_transposed(_f(table, _LU), nf, _i(table, _PIVOTS), lam)
+    sigma = _f(table, _EDOT)  # reused: the full stress resultants
+    sigma[:] = _f(table, _SIGMA)
+    rows = _i(table, _ROWS)
     for j in range(rows.size):
         sigma[rows[j]] += lam[j]
     # DeF = De DF (NE, NDOF) and G0 = sum DF_e^T (sum_i sigma_i D2e_i) DF_e
-    DeF, K, C = floats[_DEF], floats[_STIFFNESS], floats[_DAMPING]
+    DeF, K, C = _f(table, _DEF), _f(table, _STIFFNESS), _f(table, _DAMPING)
     K[:] = 0.0
     C[:] = 0.0
     DeF[:] = 0.0
-    local = floats[_LOCAL]
+    local = _f(table, _LOCAL)
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = ints[_DEF_INDEX][row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = floats[_DE][row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
-        D2e = floats[_D2E][row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        D2e = _f(table, _D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
         H = local[: m * m]
         HD = local[m * m: m * m + m * ndof]
         for i in range(n):
@@ -626,7 +614,7 @@ def tangent(ints, floats, qddot):
                     for j2 in range(ndof):
                         K[j1 * ndof + j2] += dfa * HD[a * ndof + j2]
     # K0 = DeF_s^T S DeF_s, C0 = DeF_s^T D DeF_s
-    stressed, S, D = ints[_STRESSED], floats[_S], floats[_D]
+    stressed, S, D = _i(table, _STRESSED), _f(table, _S), _f(table, _D)
     ns = stressed.size
     damped = dims[ed.HAS_DAMPING] == 1
     SD = local[: ndof]
@@ -653,25 +641,25 @@ def tangent(ints, floats, qddot):
 
 
 @kernel
-def _mass_times(ints, floats, x, v, out):
+def _mass_times(table, x, v, out):
     """out -= M(x) v for a coordinate vector v (NX,): lumped plus element masses."""
-    dims = ints[_DIMS]
+    dims = _i(table, _DIMS)
     nx = dims[ed.NX]
-    lumped = floats[_LUMPED]
+    lumped = _f(table, _LUMPED)
     for a in range(nx):
         out[a] -= lumped[a] * v[a]
-    local = floats[_LOCAL]
+    local = _f(table, _LOCAL)
     max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
-    data = floats[_GROUP_DATA]
+    data = _f(table, _GROUP_DATA)
     ndof = dims[ed.NDOF]
     for g in range(dims[ed.NGROUPS]):
-        row = _group(ints, g)
+        row = _group(table, g)
         P = row[ed.G_P]
         if P == 0:
             continue
         n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
         function = row[ed.G_INERTIA_ENTRY]
-        coords = ints[_COORD_INDEX][row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
         refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
         # scratch after the first 2 ndof entries, which `tangent` keeps for itself
         o = 2 * ndof + max_m * max_m + max_m * ndof
@@ -706,23 +694,23 @@ def _mass_times(ints, floats, x, v, out):
 
 # -- first-order form for the integrators ---------------------------------------------------------
 @kernel
-def first_order_rhs(ints, floats, y, ydot):
+def first_order_rhs(table, y, ydot):
     """ydot = [qdot, qddot] for the state y = [q - q_ref, qdot]; a status code.
 
     The absolute DOFs are formed in the last NDOF entries of the scratch array, which no
     other part of an evaluation uses."""
-    n = ints[_DIMS][ed.NDOF]
+    n = _i(table, _DIMS)[ed.NDOF]
     for j in range(2 * n):
         if not np.isfinite(y[j]):
             return ed.NONFINITE_STATE
-    q_abs = floats[_LOCAL][floats[_LOCAL].size - n:]
-    q_ref = floats[_Q_REF]
+    q_abs = _f(table, _LOCAL)[_f(table, _LOCAL).size - n:]
+    q_ref = _f(table, _Q_REF)
     for j in range(n):
         q_abs[j] = q_ref[j] + y[j]
-    status = evaluate(ints, floats, q_abs, y[n: 2 * n])
+    status = evaluate(table, q_abs, y[n: 2 * n])
     if status != ed.OK:
         return status
-    qddot = floats[_QDDOT]
+    qddot = _f(table, _QDDOT)
     for j in range(n):
         if not np.isfinite(qddot[j]):
             return ed.NONFINITE_RESULT
@@ -734,16 +722,17 @@ def first_order_rhs(ints, floats, y, ydot):
 
 
 @kernel
-def first_order_jacobian(ints, floats, y, J, column_major):
+def first_order_jacobian(table, y, J, column_major):
     """d ydot / d y (2n, 2n) into J (flat; column-major for SUNDIALS' dense matrix):
     [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at y; a status code."""
-    status = first_order_rhs(ints, floats, y, floats[_DX][: 0])
+    status = first_order_rhs(table, y, _f(table, _DX)[: 0])
     if status != ed.OK:
         return status
-    n = ints[_DIMS][ed.NDOF]
-    tangent(ints, floats, floats[_QDDOT])
-    K, C, mass_lu, piv = floats[_STIFFNESS], floats[_DAMPING], floats[_MASS_LU], ints[_MASS_PIVOTS]
-    column = floats[_REDUCED_FORCE]
+    n = _i(table, _DIMS)[ed.NDOF]
+    tangent(table, _f(table, _QDDOT))
+    K, C = _f(table, _STIFFNESS), _f(table, _DAMPING)
+    mass_lu, piv = _f(table, _MASS_LU), _i(table, _MASS_PIVOTS)
+    column = _f(table, _REDUCED_FORCE)
     N = 2 * n
     J[:] = 0.0
     for j in range(n):
@@ -762,7 +751,7 @@ def first_order_jacobian(ints, floats, y, J, column_major):
     return ed.OK
 
 
-@kernel(inline="always")
+@kernel
 def _put(J, N, i, j, value, column_major):
     if column_major:
         J[j * N + i] = value
@@ -771,13 +760,13 @@ def _put(J, N, i, j, value, column_major):
 
 
 @kernel
-def implicit_residual(ints, floats, y, yp, res):
+def implicit_residual(table, y, yp, res):
     """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot))]; a status code."""
-    status = first_order_rhs(ints, floats, y, floats[_DX][: 0])
+    status = first_order_rhs(table, y, _f(table, _DX)[: 0])
     if status != ed.OK:
         return status
-    n = ints[_DIMS][ed.NDOF]
-    mass, qddot = floats[_MASS], floats[_QDDOT]
+    n = _i(table, _DIMS)[ed.NDOF]
+    mass, qddot = _f(table, _MASS), _f(table, _QDDOT)
     for i in range(n):
         res[i] = yp[i] - y[n + i]
         s = 0.0
@@ -788,15 +777,15 @@ def implicit_residual(ints, floats, y, yp, res):
 
 
 @kernel
-def implicit_jacobian(ints, floats, y, yp, cj, J):
+def implicit_jacobian(table, y, yp, cj, J):
     """IDA's d res / d y + cj d res / d yp, column-major (2n, 2n): [[cj I, -I], [K, C + cj
     M_bar]] with the tangent's dynamic balance at qddot = yp[n:]; a status code."""
-    status = first_order_rhs(ints, floats, y, floats[_DX][: 0])
+    status = first_order_rhs(table, y, _f(table, _DX)[: 0])
     if status != ed.OK:
         return status
-    n = ints[_DIMS][ed.NDOF]
-    tangent(ints, floats, yp[n: 2 * n])
-    K, C, mass = floats[_STIFFNESS], floats[_DAMPING], floats[_MASS]
+    n = _i(table, _DIMS)[ed.NDOF]
+    tangent(table, yp[n: 2 * n])
+    K, C, mass = _f(table, _STIFFNESS), _f(table, _DAMPING), _f(table, _MASS)
     N = 2 * n
     J[:] = 0.0
     for i in range(n):
@@ -823,31 +812,31 @@ def engine_entry(op, user_data, t, a, b, c, s):
     OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major), OP_RESIDUAL (y, yp, res),
     OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q), OP_DEFORMATIONS (x; s =
     order), OP_EVALUATE (q, qdot), OP_TANGENT (qddot). Returns the status code."""
-    ints, floats = unpack(user_data)
-    dims = ints[_DIMS]
+    table = address_of(user_data)
+    dims = _i(table, _DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     n = 2 * ndof
     f8 = np.float64
     if op == OP_RHS:
-        return first_order_rhs(ints, floats, carray(a, (n,), f8), carray(b, (n,), f8))
+        return first_order_rhs(table, carray(a, (n,), f8), carray(b, (n,), f8))
     if op == OP_JACOBIAN:
-        return first_order_jacobian(ints, floats, carray(a, (n,), f8), carray(b, (n * n,), f8),
+        return first_order_jacobian(table, carray(a, (n,), f8), carray(b, (n * n,), f8),
                                     s != 0.0)
     if op == OP_RESIDUAL:
-        return implicit_residual(ints, floats, carray(a, (n,), f8), carray(b, (n,), f8),
+        return implicit_residual(table, carray(a, (n,), f8), carray(b, (n,), f8),
                                  carray(c, (n,), f8))
     if op == OP_RESIDUAL_JACOBIAN:
-        return implicit_jacobian(ints, floats, carray(a, (n,), f8), carray(b, (n,), f8), s,
+        return implicit_jacobian(table, carray(a, (n,), f8), carray(b, (n,), f8), s,
                                  carray(c, (n * n,), f8))
     if op == OP_KINEMATICS:
-        return solve_kinematics(ints, floats, carray(a, (ndof,), f8))
+        return solve_kinematics(table, carray(a, (ndof,), f8))
     if op == OP_DEFORMATIONS:
-        deformations(ints, floats, carray(a, (nx,), f8), int(s))
+        deformations(table, carray(a, (nx,), f8), int(s))
         return ed.OK
     if op == OP_EVALUATE:
-        return evaluate(ints, floats, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
+        return evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
     if op == OP_TANGENT:
-        tangent(ints, floats, carray(a, (ndof,), f8))
+        tangent(table, carray(a, (ndof,), f8))
         return ed.OK
     return -1
 

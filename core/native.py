@@ -216,3 +216,14 @@ def call_get_long(typingctx, function, memory, out):
                                      _cast(builder, args[2], long_pointer)])
 
     return sig, codegen
+
+
+@intrinsic
+def address_of(typingctx, pointer):
+    """The address (int64) of a pointer (e.g. a C callback's void* user data)."""
+    sig = types.int64(pointer)
+
+    def codegen(context, builder, signature, args):
+        return builder.ptrtoint(args[0], ir.IntType(64))
+
+    return sig, codegen
