@@ -7,8 +7,9 @@ of `--repeat` runs (the minimum is shown with it). The table has one row per tar
     target | flexure | peer / limit | ratio | met
 
 where "peer / limit" is Exudyn's figure for the same work when the target compares with it
-(ratio = flexure / Exudyn) and the target's limit otherwise (ratio = flexure / limit, or limit
-/ flexure for a speed, so that a ratio <= 1 ... see each row's text for the direction).
+(ratio = flexure / Exudyn) and the target's limit otherwise (ratio = flexure / limit). For a
+time or a cost a ratio <= 1 (or the target's factor, 0.5 for the loop) meets the target; for
+a speed (times real time) a ratio >= 1 does.
 
 The row groups (one function each; `--only` picks some):
 
@@ -27,12 +28,14 @@ step      A 1 N step for 1 s on stage_planar_3dof (one PLBEAM per spring) and on
           with 4 PLBEAMs per spring (`refined_stage`). The error is max |x - x_ref| / stroke
           (the stroke: the static deflection 1 N / (24 EI / l^3) = 1.058 mm) against each
           code's own converged reference of the same model: flexure's at rtol 1e-11
-          (cvode-bdf; cvode-adams at 1e-11 gives its uncertainty), Exudyn's the h = 1/128 ms
+          (cvode-adams; cvode-bdf at 1e-11 gives its uncertainty), Exudyn's the h = 1/128 ms
           generalized-alpha run (`peer_exudyn.converged_reference`, its Richardson estimate
           about 1.6e-6 of the stroke). For each error level 1e-3, 1e-5, 1e-7 the fastest
           setting that reaches it is found by a scan (flexure: rtol 1e-3 ... 1e-10 with
           cvode-bdf, cvode-bdf of order <= 2, cvode-adams, ida; Exudyn: fixed steps h), and
-          the two chosen settings are then timed alternately. Exudyn cannot reach a level
+          the two chosen settings are then timed alternately. A method's scan stops at the
+          first rtol that reaches 1e-7 or whose 0.1 s probe shows a run longer than a cap
+          (20 s; 5 s with --quick). Exudyn cannot reach a level
           within the reference's own error (1e-7 here): its time there is extrapolated from
           its finest verified step at its order 2 (error ~ h^2, wall ~ 1 / h; the observed
           order is 2.0) and marked "extrap.". flexure's wall is the whole `simulate` call
@@ -49,7 +52,8 @@ fmu       stage_planar_3dof's FMU (`flexure.fmu.build_scene_fmu`, its defaults c
           rtol 1e-8) stepped by fmpy's FMU2Slave at 1 ms for 1 s with F = 1 N: 1 s / wall
           >= 10; overhead = 1 - engine / FMU wall <= 10 %, the engine time being a
           `Simulator`'s own time inside `advance` for the same 1 ms advances in this process
-          (alternated with the FMU runs). Also the latency of the first instantiate +
+          (alternated with the FMU runs); the FMU's own simulator time is shown too. Also
+          the latency of the first instantiate +
           initialise + doStep in a fresh process, with an empty FLEXURE_CACHE_DIR (the
           engine compiles) and with the warm cache.
 startup   Whole-process wall of `python -c "import flexure.core"` (<= 0.5 s) and `flexure
