@@ -36,7 +36,7 @@ from flexure.core import FlexureError
 from .model_description import fix_model_description
 
 # The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
-FMU_RUNTIME_MODULES = ("slave.py", "scene_slave.py")
+FMU_RUNTIME_MODULES = ("slave.py", "scene_slave.py", "state_format.py")
 FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
 
 from .slave import SafeSlave, UnitReal, escape_log
@@ -48,10 +48,11 @@ __all__ = ["SafeSlave", "UnitReal", "escape_log"]
 # Appended to every slave script (see flexure.fmu.slave.keep_script_namespace).
 KEEP_NAMESPACE = """
 
-# Added by flexure's FMU builder: works around pythonfmu 0.7.0 releasing this namespace.
+# Added by flexure's FMU builder: works around pythonfmu 0.7.0 releasing this namespace, and
+# leaking the classes a re-execution of this script creates.
 from flexure.fmu.slave import keep_script_namespace as _keep_script_namespace  # noqa: E402
 
-_keep_script_namespace(globals())
+_keep_script_namespace(globals(), locals())
 """
 
 

@@ -23,10 +23,18 @@ Variables (only what the scene has):
 own internal steps; any h works. A `SimulationError` (non-finite input, integrator or Newton
 failure) leaves the simulator at its last good state and the step is answered with
 fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs,
-parameters and outputs.
+parameters and outputs, stored as data (`flexure.fmu.state_format`); its identity is the scene
+name and a digest of the embedded scene text, tunable keys and outputs, so a state of another
+scene (or of the same scene built from another scene file) is refused by name.
+
+Values a host sets are checked when set (`check_value`): the method must be one of METHODS,
+0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, EdI) >= 0 and any other tunable
+value > 0, all finite. A refused value puts the instance in the error state (see `SafeSlave`).
 """
 
+
 import copy
+import math
 import tomllib
 
 import numpy as np
@@ -124,6 +132,29 @@ class SceneSlave(SafeSlave):
                           getter=lambda key=key: self.parameters[key],
                           setter=lambda value, key=key: self.parameters.__setitem__(key, value))
 
+    @classmethod
+    def identity_text(cls):
+        return f"{cls.__name__}\0{cls.scene_toml}\0{tuple(cls.tunable)!r}\0{cls.von_mises!r}"
+
+    def check_value(self, name, value):
+        if name == "integrator.method":
+            if value not in METHODS:
+                return f"integrator.method = {value!r}: expected one of {', '.join(METHODS)}"
+            return None
+        if name == "integrator.rtol":
+            if not (math.isfinite(value) and 0.0 < value < 1.0):
+                return f"integrator.rtol = {value!r}: expected a finite number in (0, 1)"
+        elif name == "integrator.atol":
+            if not (math.isfinite(value) and value >= 0.0):
+                return (f"integrator.atol = {value!r}: expected a finite number >= 0 (0: the "
+                        "simulator's default)")
+        elif name in self.parameters:
+            damping = name.rsplit(".", 1)[-1] in ("EdA", "EdI")
+            if not (math.isfinite(value) and (value >= 0.0 if damping else value > 0.0)):
+                return (f"{name} = {value!r}: expected a finite number "
+                        f"{'>= 0' if damping else '> 0'}")
+        return None
+
     # -- the model -----------------------------------------------------------------------------
 
     def _settings(self):
@@ -175,11 +206,49 @@ class SceneSlave(SafeSlave):
                 "outputs": self.outputs.copy(), "stress": self.stress}
 
     def load_state(self, state):
-        method, rtol, atol, parameters = state["settings"]
+        settings, outputs = self._checked_state(state)
+        method, rtol, atol, parameters = settings
         self.method, self.rtol, self.atol = method, rtol, atol
         self.parameters = dict(parameters)
-        if self._built_with != state["settings"]:
+        if self._built_with != settings:
             self._build()
         self.simulator.set_state(state["simulator"])
-        self.outputs = np.asarray(state["outputs"], dtype=float).copy()
-        self.stress = state["stress"]
+        self.outputs = outputs
+        self.stress = float(state["stress"])
+
+    def _checked_state(self, state):
+        """(settings, outputs) of a decoded model state; ValueError naming what does not fit."""
+        if not isinstance(state, dict) or set(state) != {"settings", "simulator", "outputs",
+                                                         "stress"}:
+            raise ValueError("the model part is not a scene slave's state")
+        settings = state["settings"]
+        if not (isinstance(settings, tuple) and len(settings) == 4
+                and isinstance(settings[3], tuple)):
+            raise ValueError(f"settings {settings!r}: expected (method, rtol, atol, "
+                             "parameters)")
+        method, rtol, atol, parameters = settings
+        checks = [("integrator.method", method), ("integrator.rtol", rtol),
+                  ("integrator.atol", atol)]
+        if sorted(key for key, _ in parameters) != sorted(self.tunable):
+            raise ValueError(f"the state's parameters {[k for k, _ in parameters]} are not "
+                             f"this FMU's {list(self.tunable)}")
+        for name, value in checks + list(parameters):
+            if name != "integrator.method" and not isinstance(value, float):
+                raise ValueError(f"{name} = {value!r}: expected a float")
+            problem = self.check_value(name, value)
+            if problem:
+                raise ValueError(problem)
+        simulator = state["simulator"]
+        if not isinstance(simulator, dict):
+            raise ValueError("the simulator state is not a dict")
+        for key, value in simulator.items():
+            if isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(
+                    np.isfinite(value)):
+                raise ValueError(f"the simulator state {key!r} is not finite")
+        outputs = state["outputs"]
+        if not (isinstance(outputs, np.ndarray) and outputs.shape == self.outputs.shape):
+            raise ValueError(f"outputs of shape {getattr(outputs, 'shape', None)}: expected "
+                             f"{self.outputs.shape}")
+        if not isinstance(state["stress"], float):
+            raise ValueError(f"stress = {state['stress']!r}: expected a float")
+        return settings, outputs.astype(float)

@@ -11,61 +11,185 @@ supplies only the model part:
             self.add_real("y", causality="output", unit="m")
         def advance(self, t, h):      # integrate over [t, t + h]; raise on failure
             ...
-        def save_state(self): ...     # picklable; returned values are deep-copied
+        def save_state(self): ...     # data only: numbers, strings, numpy arrays, dicts...
         def load_state(self, state): ...
 
-What the base does (the FMI side of every do_step, Reference-FMUs style):
+Why everything here is defensive: pythonfmu 0.7.0's binary turns an exception raised by any
+Python method it calls into fmi2Fatal *and* releases its references to the slave class, the
+instance and its log queue without forgetting them (PySlaveInstance::handle_py_exception ->
+cleanPyObject). The next call then runs on freed objects (SIGSEGV) and fmi2FreeInstance
+releases them a second time (heap corruption, "corrupted double-linked list" at exit). So no
+method pythonfmu calls may raise, ever: each one below catches everything and turns it into
+a logged message and the best status that binary can carry:
 
-- checks the call: the instance is not broken, h > 0 and finite, and the step starts at the
-  current communication point (relative tolerance 1e-9);
-- calls `advance(t, h)` inside a try: a `FlexureError` (a failed Newton, an integrator failure,
-  a non-finite input) is logged at status error and answered with fmi2Discard; the subclass
-  must leave itself at its last good time (flexure's Simulator does). Any other exception is a
-  bug: it is logged with its traceback, the instance is marked broken (every later do_step is
-  refused with the reason until fmi2Reset or a state restore) and the step is answered with
-  fmi2Discard. pythonfmu 0.7.0 cannot answer fmi2Error from do_step: a raised exception
-  becomes fmi2Fatal, which makes hosts give up on the whole simulation;
-- escapes '%' in every logged message: pythonfmu passes messages to the host's logger as a
-  printf format (libcosim and fmpy crash on "%s");
-- saves and restores the whole state (`_get_fmu_state` / `_set_fmu_state`) as deep copies
-  (pythonfmu's default keeps references, so the next step would change a saved state) and
-  serialises it with pickle;
-- guards the other calls (setup, initialization, terminate) the same way.
+- doStep: fmi2OK or fmi2Discard (Python returns True / False);
+- every other call (setupExperiment, enter/exitInitializationMode, terminate, get/set of
+  values, get/set/serialize/deserialize of FMU states): fmi2OK only. A refused call is logged
+  at status error; the binary gives the Python side no way to answer fmi2Error.
 
-Setters never raise (an exception there would be fmi2Fatal): values are stored as given and
-checked by the subclass when it steps.
+What the base does, Reference-FMUs style:
+
+- the FMI 2.0 call sequence: instantiated -> (setupExperiment) -> initialization mode ->
+  step complete -> terminated, plus the error state. A call outside its states is refused and
+  logged ("Illegal call sequence") and changes nothing; doStep outside step complete answers
+  fmi2Discard. Getters are allowed in every state (the values are well defined from
+  instantiation on, and a refusal could only hand the host NaN under fmi2OK);
+- setters: an unknown value reference, a variable of another type, an output, a fixed
+  parameter after initialization, or a value the model refuses (`check_value`, e.g. a
+  negative tolerance) is refused, and the instance enters the error state: since the setter
+  itself can only answer fmi2OK, the next doStep answers fmi2Discard naming the refused value
+  (fmi2Reset or restoring a state recovers), instead of running with a value the host did
+  not ask for;
+- doStep checks h > 0 and finite, and that the step starts at the current communication
+  point (relative tolerance 1e-9); then calls `advance(t, h)` inside a try: a `FlexureError`
+  (a failed Newton, an integrator failure, a non-finite input) is logged at status error and
+  answered with fmi2Discard, the model staying at its last good time (flexure's Simulator
+  does); any other exception is a bug: logged with its traceback, the instance enters the
+  error state, and the step is answered with fmi2Discard;
+- FMU states are data, never code (`flexure.fmu.state_format`): a state is the immutable
+  bytes of the versioned format, so getFMUstate returns a snapshot nothing can change,
+  serialising is a copy, and deserialising validates the bytes (magic, version, length,
+  SHA-256, identity of the FMU, tags) without running anything. A state that does not
+  validate is refused by setFMUstate with a log line naming what is wrong, and the instance
+  stays exactly as it was (a state that validates but that the model refuses is rolled back);
+- '%' is escaped in every logged message: pythonfmu passes messages to the host's logger as
+  a printf format (libcosim and fmpy crash on "%s").
 """
 
-import copy
+import hashlib
 import math
-import pickle
+import sys
 import time as _time
 import traceback
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real, String
 from pythonfmu.enums import Fmi2Status
+from pythonfmu.variables import Boolean, Integer
+
+from . import state_format
 
 # Relative tolerance on the communication point a do_step starts from (hosts that count time
 # in integer nanoseconds, e.g. libcosim, round it).
 TIME_TOLERANCE = 1e-9
 
+# The FMI 2.0 co-simulation states (the error state is `SafeSlave.broken` != "").
+INSTANTIATED = "instantiated"
+INITIALIZATION = "initialization mode"
+STEP_COMPLETE = "step complete"
+TERMINATED = "terminated"
+PHASES = (INSTANTIATED, INITIALIZATION, STEP_COMPLETE, TERMINATED)
+
 
 # pythonfmu 0.7.0's binary finds the slave class by importing the script module, executing the
-# script once more in the module's namespace, and then releasing one reference to that
-# namespace it never owned (findClass in PySlaveInstance.cpp: Py_DECREF on the borrowed
-# PyModule_GetDict). The first instance frees the module's __dict__; the next instantiation of
-# the same FMU in the process then fails ("module has no attribute ...") or reads garbage.
+# script once more in the module's namespace with a fresh dict of locals, and then releasing
+# one reference to that namespace it never owned (findClass in PySlaveInstance.cpp:
+# Py_DECREF on the borrowed PyModule_GetDict). The first instance frees the module's __dict__;
+# the next instantiation of the same FMU in the process then fails ("module has no attribute
+# ...") or reads garbage. findClass also leaks, per instantiation, the list of the MRO of
+# every class among those locals, and the repr strings of that MRO's classes: a class created
+# anew by every execution of the script would be kept alive by that list (~2.5 kB each).
 _SCRIPT_NAMESPACES = []
 
 
-def keep_script_namespace(namespace):
-    """Take one reference to a slave script's namespace; call as `(globals())` at module level.
+class _CachedRepr(type):
+    """A metaclass whose repr is one stored string (no new object per repr call)."""
 
-    The script runs once on import and once more per instantiation, so every release by
-    pythonfmu's binary is matched by one reference here (kept for the life of the process).
-    `build_slave_fmu` appends the call to every script it builds.
+    def __repr__(cls):
+        return cls.__dict__["_repr"]
+
+
+class _Fmi2SlaveLookalike(metaclass=_CachedRepr):
+    _repr = "<class 'pythonfmu.fmi2slave.Fmi2Slave'>"
+
+
+class _SlaveMarker(_Fmi2SlaveLookalike):
+    """What findClass finds in the locals of a re-executed script: a three-class MRO whose
+    reprs it matches against "<class '*.Fmi2Slave'>" to pick the name it then looks up in
+    the module (the real class); cached reprs, so findClass leaks the least it can."""
+
+    _repr = "<class 'flexure.fmu.slave._SlaveMarker'>"
+
+
+def keep_script_namespace(namespace, local_namespace=None):
+    """Called at the end of a slave script as `(globals(), locals())`, by code the builder
+    appends (`build_slave_fmu`).
+
+    The script runs once on import (then both are the module's namespace) and once more per
+    instantiation, in fresh locals; every release of the namespace by pythonfmu's binary is
+    matched by one reference taken here (kept for the life of the process). In a re-execution
+    the locals are emptied down to the slave class's name bound to `_SlaveMarker`, so the class
+    objects created by that execution die with the locals instead of leaking.
     """
     _SCRIPT_NAMESPACES.append(namespace)
+    if local_namespace is None or local_namespace is namespace:
+        return
+    name, depth = None, 0
+    for key, value in list(local_namespace.items()):
+        if isinstance(value, type):
+            chain = [c.__name__ for c in value.__mro__]
+            if "Fmi2Slave" in chain[1:] and chain.index("Fmi2Slave") > depth:
+                name, depth = key, chain.index("Fmi2Slave")
+    local_namespace.clear()
+    if name is not None:
+        local_namespace[name] = _SlaveMarker
+
+
+# pythonfmu 0.7.0's binary holds its interpreter guard in a static std::shared_ptr and also
+# resets it from an __attribute__((destructor)) function (finalizePythonInterpreter). At exit
+# the static's destructor runs first (exit handlers), then the library destructor assigns to
+# the destroyed shared_ptr and releases its freed control block a second time: "corrupted
+# double-linked list" / SIGSEGV after the host's last line, in any process that instantiated
+# the FMU (intermittent: it depends on what reused the freed block). dlclose cannot avoid it:
+# the binary has STB_GNU_UNIQUE symbols, so glibc never unloads it. In a Python host the
+# remedy is to release the guard ourselves before the interpreter finalizes (an atexit
+# handler), through the exported finalizePythonInterpreter: both later resets then see an
+# empty pointer. Not in a host whose interpreter the binary created (JVM, C): there the
+# guard's release *is* the interpreter's finalization.
+_GUARDED_BINARIES = {}
+
+
+def _guard_exit(resources, model_identifier):
+    """Register the release of this FMU binary's interpreter guard at interpreter exit."""
+    if sys.platform != "linux" or not resources:
+        return
+    import os
+    import threading
+
+    if threading.main_thread().native_id != os.getpid():
+        return  # the interpreter runs on the binary's own thread: not a Python host
+    path = os.path.join(os.path.dirname(os.path.normpath(resources)), "binaries", "linux64",
+                        f"{model_identifier}.so")
+    if path in _GUARDED_BINARIES or not os.path.isfile(path):
+        return
+    import ctypes
+
+    library = ctypes.CDLL(path, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # the loaded copy
+    release = getattr(library, "finalizePythonInterpreter", None)
+    if release is None:
+        return
+    release.restype, release.argtypes = None, []
+    if not _GUARDED_BINARIES:
+        import atexit
+
+        atexit.register(_release_guards)
+    _GUARDED_BINARIES[path] = release
+
+
+def _release_guards():
+    for release in _GUARDED_BINARIES.values():
+        release()
+    _GUARDED_BINARIES.clear()
+
+
+def _tidy_sys_path(resources):
+    """Drop the copies of the resources folder pythonfmu's binary adds to sys.path.
+
+    It inserts the folder at the front of sys.path on every instantiation (PySlaveInstance's
+    constructor) and never removes it: sys.path would grow by one entry per instance.
+    """
+    if resources and sys.path.count(resources) > 1:
+        first = sys.path.index(resources)
+        sys.path[:] = [p for i, p in enumerate(sys.path) if p != resources or i == first]
 
 
 class UnitReal(Real):
@@ -91,20 +215,44 @@ def escape_log(message):
     return str(message).replace("%", "%%")
 
 
+class RefusedState:
+    """What deserialising or taking a state answers when it cannot give a state: the reason.
+
+    pythonfmu's binary cannot answer an error from fmi2DeSerializeFMUstate or fmi2GetFMUstate,
+    so the refusal travels in the state: setFMUstate logs the reason and changes nothing.
+    """
+
+    __slots__ = ("reason",)
+
+    def __init__(self, reason):
+        self.reason = reason
+
+    def __repr__(self):
+        return f"RefusedState({self.reason!r})"
+
+
 class SafeSlave(Fmi2Slave):
     """Base of a co-simulation slave whose failures become FMI statuses, never exceptions.
 
     Subclasses implement `advance(t, h)` and, for state save/restore, `save_state()` and
-    `load_state(state)`. They register variables with `add_real` / `add_string`. The attribute
-    `time` (s) is the current communication point; `advance` need not update it (the base sets
-    it to `t + h` on success, or to `last_good_time()` after a failure).
+    `load_state(state)`; `check_value(name, value)` validates what a host sets. They register
+    variables with `add_real` / `add_string`. The attribute `time` (s) is the current
+    communication point; `advance` need not update it (the base sets it to `t + h` on
+    success, or to `last_good_time()` after a failure).
     """
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        try:
+            _tidy_sys_path(self.resources)
+            _guard_exit(self.resources, type(self).__name__)
+        except Exception as error:  # noqa: BLE001 -- a work-around must not stop the FMU
+            self.log_message(f"{self.instance_name}: pythonfmu work-arounds not applied: "
+                             f"{error}", Fmi2Status.warning)
         self.time = 0.0  # s, the current communication point
         self.start_time = 0.0  # s
-        self.broken = ""  # why this instance cannot go on ("" while it can)
+        self.phase = INSTANTIATED  # where the instance is in the FMI call sequence
+        self.broken = ""  # why this instance is in the error state ("" while it is not)
         self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
 
     # -- to override -------------------------------------------------------------------------
@@ -120,12 +268,30 @@ class SafeSlave(Fmi2Slave):
     def initialize(self, start_time):
         """Prepare to step from `start_time` (s), after the parameters are set."""
 
+    def check_value(self, name, value):
+        """Why the value a host sets for variable `name` is refused, or None to accept it."""
+        return None
+
     def save_state(self):
-        """The model's state beyond the registered variables (picklable); default None."""
+        """The model's state beyond the registered variables, as data `state_format` can store
+        (None, bool, int, float, str, numpy arrays, and dicts, lists, tuples of those)."""
         return None
 
     def load_state(self, state):
-        """Restore what `save_state` returned (already a private deep copy)."""
+        """Restore what `save_state` returned (decoded from bytes: a private copy). Raise if
+        the state does not fit the model; the base then puts the instance back as it was."""
+
+    @classmethod
+    def identity_text(cls):
+        """What the FMU is built from, for the identity a state carries (default: the class's
+        module and name). A state is accepted only by an FMU of the same identity."""
+        return f"{cls.__module__}.{cls.__qualname__}"
+
+    @classmethod
+    def state_identity(cls):
+        """"<model identifier> <12 hex digits of identity_text's SHA-256>"."""
+        digest = hashlib.sha256(cls.identity_text().encode()).hexdigest()[:12]
+        return f"{cls.__name__} {digest}"
 
     # -- variables ---------------------------------------------------------------------------
 
@@ -167,60 +333,116 @@ class SafeSlave(Fmi2Slave):
             variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
             description=description, getter=getter, setter=setter), nested=False)
 
-    # -- logging -----------------------------------------------------------------------------
+    # -- logging and the error state -----------------------------------------------------------
 
     def log_message(self, message, status=Fmi2Status.ok):
         """Queue a message for the host's logger, '%' escaped."""
         self.log(escape_log(message), status=status)
 
+    def _error(self, message):
+        """Log a refused call at status error (nothing else changes)."""
+        self.log_message(f"{self.instance_name}: {message}", Fmi2Status.error)
+
+    def _illegal(self, call, allowed):
+        """Refuse a call made in the wrong state of the FMI call sequence."""
+        self._error(f"{call}: illegal call sequence: the instance is in "
+                    f"{self._state_name()}; {call} is allowed in {allowed}")
+
+    def _state_name(self):
+        return f"the error state ({self.broken})" if self.broken else f"state {self.phase}"
+
+    def _break(self, reason):
+        """Enter the error state for `reason` (the first reason is kept) and log it."""
+        if not self.broken:
+            self.broken = reason
+        self._error(f"{reason}; this instance cannot go on until fmi2Reset or a restored "
+                    "state")
+
     def _fail(self, what, error):
-        """Mark the instance broken (it cannot go on) and log why.
+        """Enter the error state after an exception and log why.
 
         A model error (FlexureError) is reported by its message; anything else is a bug and
         is logged with its traceback.
         """
         if _is_model_error(error):
-            self.broken = f"{what} failed: {error}"
+            reason = f"{what} failed: {error}"
             detail = ""
         else:
             exception = "".join(traceback.format_exception_only(type(error), error)).strip()
-            self.broken = f"{what} failed unexpectedly: {exception}"
+            reason = f"{what} failed unexpectedly: {exception}"
             detail = "\n" + traceback.format_exc()
-        self.log_message(f"{self.instance_name}: {self.broken}; this instance cannot go on "
-                         f"until fmi2Reset or a restored state{detail}", Fmi2Status.error)
+        self.broken = self.broken or reason
+        self._error(f"{reason}; this instance cannot go on until fmi2Reset or a restored "
+                    f"state{detail}")
 
     # -- FMI calls ---------------------------------------------------------------------------
+    # Every method pythonfmu calls catches BaseException: anything escaping is fatal (above).
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self.start_time = float(start_time)
-        self.time = self.start_time
+        try:
+            if self.broken or self.phase != INSTANTIATED:
+                return self._illegal("fmi2SetupExperiment", "state instantiated")
+            problem = _experiment_problem(start_time, stop_time, tolerance)
+            if problem:
+                return self._break(f"fmi2SetupExperiment refused: {problem}")
+            self.start_time = float(start_time)
+            self.time = self.start_time
+        except BaseException as error:  # noqa: BLE001
+            self._fail("fmi2SetupExperiment", error)
+
+    def enter_initialization_mode(self):
+        try:
+            if self.broken or self.phase != INSTANTIATED:
+                return self._illegal("fmi2EnterInitializationMode", "state instantiated")
+            self.phase = INITIALIZATION
+        except BaseException as error:  # noqa: BLE001
+            self._fail("fmi2EnterInitializationMode", error)
 
     def exit_initialization_mode(self):
         try:
+            if self.broken or self.phase != INITIALIZATION:
+                return self._illegal("fmi2ExitInitializationMode",
+                                     "initialization mode (after fmi2EnterInitializationMode)")
             self.initialize(self.start_time)
-        except Exception as error:  # noqa: BLE001 -- anything here would be fmi2Fatal
+            self.time = self.start_time
+            self.phase = STEP_COMPLETE
+        except BaseException as error:  # noqa: BLE001
             self._fail("initialization", error)
+
+    def terminate(self):
+        try:
+            if self.broken or self.phase != STEP_COMPLETE:
+                return self._illegal("fmi2Terminate", "state step complete")
+            self.phase = TERMINATED
+        except BaseException as error:  # noqa: BLE001
+            self._fail("fmi2Terminate", error)
 
     def do_step(self, current_time, step_size):
         start = _time.perf_counter()
         try:
             return self._do_step(current_time, step_size)
+        except BaseException as error:  # noqa: BLE001
+            self._fail(f"doStep at t = {current_time!r} s", error)
+            return False
         finally:
             self.step_seconds += _time.perf_counter() - start
 
     def _do_step(self, current_time, step_size):
         if self.broken:
-            self.log_message(f"{self.instance_name}: step refused: {self.broken}",
-                             Fmi2Status.error)
+            self._error(f"step refused: {self.broken}")
+            return False
+        if self.phase != STEP_COMPLETE:
+            self._illegal("fmi2DoStep", "state step complete (after "
+                                        "fmi2ExitInitializationMode, before fmi2Terminate)")
             return False
         if not (math.isfinite(step_size) and step_size > 0.0):
-            self.log_message(f"{self.instance_name}: doStep at t = {current_time!r} s: "
-                             f"expected a step size h > 0, got {step_size!r} s",
-                             Fmi2Status.error)
+            self._error(f"doStep at t = {current_time!r} s: expected a step size h > 0, "
+                        f"got {step_size!r} s")
             return False
-        if abs(current_time - self.time) > TIME_TOLERANCE * max(1.0, abs(self.time)):
-            self.log_message(f"{self.instance_name}: doStep: expected the communication point "
-                             f"t = {self.time!r} s, got {current_time!r} s", Fmi2Status.error)
+        if not (math.isfinite(current_time) and abs(current_time - self.time)
+                <= TIME_TOLERANCE * max(1.0, abs(self.time))):
+            self._error(f"doStep: expected the communication point t = {self.time!r} s, "
+                        f"got {current_time!r} s")
             return False
         try:
             self.advance(self.time, current_time + step_size - self.time)
@@ -234,57 +456,223 @@ class SafeSlave(Fmi2Slave):
                 self._fail(f"doStep from t = {current_time!r} s over h = {step_size!r} s "
                            f"({error}); then recovering the last good state", inner)
                 return False
-            self.log_message(f"{self.instance_name}: doStep from t = {current_time!r} s "
-                             f"over h = {step_size!r} s discarded: {error}; the instance "
-                             f"stays at its last good time t = {self.time!r} s",
-                             Fmi2Status.error)
+            self._error(f"doStep from t = {current_time!r} s over h = {step_size!r} s "
+                        f"discarded: {error}; the instance stays at its last good time "
+                        f"t = {self.time!r} s")
             return False
         self.time = current_time + step_size
         return True
 
-    def terminate(self):
-        pass
+    # -- values ------------------------------------------------------------------------------
+
+    def get_real(self, vrs):
+        return self._get("fmi2GetReal", vrs, Real, float, math.nan)
+
+    def get_integer(self, vrs):
+        return self._get("fmi2GetInteger", vrs, Integer, int, 0)
+
+    def get_boolean(self, vrs):
+        return self._get("fmi2GetBoolean", vrs, Boolean, bool, False)
+
+    def get_string(self, vrs):
+        return self._get("fmi2GetString", vrs, String, str, "")
+
+    def _get(self, call, vrs, kind, convert, default):
+        """One value per reference, always (the binary reads exactly that many); a reference
+        that cannot be read gives `default` and a logged error."""
+        values = []
+        try:
+            for vr in vrs:
+                value = default
+                try:
+                    problem = self._variable_problem(vr, kind)
+                    if problem:
+                        self._error(f"{call}: {problem}")
+                    else:
+                        value = convert(self.vars[vr].getter())
+                except BaseException as error:  # noqa: BLE001
+                    self._error(f"{call}: reading value reference {vr!r} failed: "
+                                f"{type(error).__name__}: {error}")
+                values.append(value)
+        except BaseException as error:  # noqa: BLE001 -- vrs itself unreadable
+            self._error(f"{call}: {type(error).__name__}: {error}")
+        return values
+
+    def set_real(self, vrs, values):
+        self._set("fmi2SetReal", vrs, values, Real)
+
+    def set_integer(self, vrs, values):
+        self._set("fmi2SetInteger", vrs, values, Integer)
+
+    def set_boolean(self, vrs, values):
+        self._set("fmi2SetBoolean", vrs, values, Boolean)
+
+    def set_string(self, vrs, values):
+        self._set("fmi2SetString", vrs, values, String)
+
+    def _set(self, call, vrs, values, kind):
+        """Set values in order; the first one refused stops the call and enters the error
+        state (see the module docstring: the setter itself can only answer fmi2OK)."""
+        try:
+            if self.broken or self.phase not in (INSTANTIATED, INITIALIZATION, STEP_COMPLETE):
+                return self._illegal(call, "states instantiated, initialization mode and "
+                                           "step complete")
+            for vr, value in zip(vrs, values, strict=True):
+                problem = self._variable_problem(vr, kind) or self._settable_problem(vr)
+                if not problem:
+                    problem = self.check_value(self.vars[vr].name, value)
+                if problem:
+                    return self._break(f"{call} refused: {problem}")
+                self.vars[vr].setter(value)
+        except BaseException as error:  # noqa: BLE001
+            self._fail(call, error)
+
+    def _variable_problem(self, vr, kind):
+        variable = self.vars.get(vr)
+        if variable is None:
+            return (f"unknown value reference {vr!r} (this FMU has value references 0 to "
+                    f"{len(self.vars) - 1})")
+        if not isinstance(variable, kind):
+            return (f"{variable.name!r} (value reference {vr}) is a "
+                    f"{_kind_name(type(variable))}, not a {kind.__name__}")
+        return None
+
+    def _settable_problem(self, vr):
+        variable = self.vars[vr]
+        causality, variability = variable.causality, variable.variability
+        if variable.setter is None or causality in (Fmi2Causality.output,
+                                                    Fmi2Causality.calculatedParameter):
+            name = causality.name if causality is not None else "read-only"
+            return f"{variable.name!r} (value reference {vr}) is {_article(name)}: it cannot " \
+                   "be set"
+        if variability == Fmi2Variability.constant:
+            return f"{variable.name!r} (value reference {vr}) is a constant"
+        if variability == Fmi2Variability.fixed and self.phase == STEP_COMPLETE:
+            return (f"{variable.name!r} (value reference {vr}) is a fixed parameter: it can be "
+                    "set before fmi2ExitInitializationMode only")
+        return None
 
     # -- FMU state ---------------------------------------------------------------------------
 
-    def _get_fmu_state(self):
+    def _capture(self):
+        """The instance's whole state as the dict `state_format` stores."""
         values = {}
         for variable in self.vars.values():
             if variable.setter is not None:
-                values[variable.name] = copy.deepcopy(variable.getter())
-        state = {"variables": values, "time": self.time, "start_time": self.start_time,
-                 "broken": self.broken, "model": None}
+                convert = str if isinstance(variable, String) else float
+                values[variable.name] = convert(variable.getter())
+        return {"phase": self.phase, "broken": self.broken, "time": float(self.time),
+                "start_time": float(self.start_time), "variables": values,
+                "model": None if self.broken else self.save_state()}
+
+    def _get_fmu_state(self):
         try:
-            state["model"] = copy.deepcopy(self.save_state())
-        except Exception as error:  # noqa: BLE001 -- a raise here would be fmi2Fatal
-            # The state is still returned (pythonfmu cannot answer an error here); restoring
-            # it breaks the instance with the reason instead of continuing from garbage.
-            self._fail("getting the FMU state", error)
-            state["broken"] = self.broken
-            self.broken = ""
-        return state
+            return state_format.encode(self.state_identity(), self._capture())
+        except BaseException as error:  # noqa: BLE001
+            reason = (f"fmi2GetFMUstate failed: {type(error).__name__}: {error}")
+            self._error(f"{reason}; the state returned is empty and fmi2SetFMUstate will "
+                        "refuse it")
+            return RefusedState(reason)
 
     def _set_fmu_state(self, state):
-        state = copy.deepcopy(state)
         try:
-            by_name = {v.name: v for v in self.vars.values()}
-            for name, value in state["variables"].items():
-                by_name[name].setter(value)
-            self.time = state["time"]
-            self.start_time = state["start_time"]
-            self.broken = state["broken"]
-            if not self.broken:
-                self.load_state(state["model"])
-        except Exception as error:  # noqa: BLE001
-            self._fail("restoring an FMU state", error)
+            if isinstance(state, RefusedState):
+                return self._error(f"fmi2SetFMUstate refused: {state.reason}; the instance "
+                                   "is unchanged")
+            if not isinstance(state, bytes):
+                return self._error(f"fmi2SetFMUstate refused: not a state of this FMU "
+                                   f"({type(state).__name__}); the instance is unchanged")
+            try:
+                data = state_format.decode(state, self.state_identity())
+                problem = self._state_problem(data)
+            except state_format.StateFormatError as error:
+                problem = str(error)
+            if problem:
+                return self._error(f"fmi2SetFMUstate refused: {problem}; the instance is "
+                                   "unchanged")
+            before = self._capture()
+            try:
+                self._apply(data)
+            except Exception as error:  # noqa: BLE001 -- the model refused it: roll back
+                try:
+                    self._apply(before)
+                except Exception as inner:  # noqa: BLE001
+                    return self._fail(f"fmi2SetFMUstate ({error}); then restoring the "
+                                      "instance as it was", inner)
+                return self._error(f"fmi2SetFMUstate refused: the model does not accept the "
+                                   f"state: {error}; the instance is unchanged")
+        except BaseException as error:  # noqa: BLE001
+            self._fail("fmi2SetFMUstate", error)
 
-    @staticmethod
-    def _fmu_state_to_bytes(state):
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    def _state_problem(self, data):
+        """Why a decoded state cannot be this instance's, or None."""
+        if not isinstance(data, dict) or set(data) != {"phase", "broken", "time",
+                                                       "start_time", "variables", "model"}:
+            return "the payload is not a SafeSlave state"
+        if data["phase"] not in PHASES or not isinstance(data["broken"], str):
+            return f"unknown call-sequence state {data['phase']!r}"
+        for key in ("time", "start_time"):
+            if not isinstance(data[key], float) or not math.isfinite(data[key]):
+                return f"{key} = {data[key]!r}: expected a finite float"
+        by_name = {v.name: v for v in self.vars.values() if v.setter is not None}
+        values = data["variables"]
+        if not isinstance(values, dict) or set(values) != set(by_name):
+            return "the variables stored are not this FMU's"
+        for name, value in values.items():
+            expected = str if isinstance(by_name[name], String) else float
+            if not isinstance(value, expected):
+                return f"variable {name!r} = {value!r}: expected a {expected.__name__}"
+        return None
 
-    @staticmethod
-    def _fmu_state_from_bytes(data):
-        return pickle.loads(data)
+    def _apply(self, data):
+        by_name = {v.name: v for v in self.vars.values()}
+        for name, value in data["variables"].items():
+            by_name[name].setter(value)
+        self.time = data["time"]
+        self.start_time = data["start_time"]
+        self.phase = data["phase"]
+        self.broken = data["broken"]
+        if not self.broken:
+            self.load_state(data["model"])
+
+    @classmethod
+    def _fmu_state_to_bytes(cls, state):
+        # Called on the class (no instance, nothing to log to): a state is its bytes already.
+        return state if isinstance(state, bytes) else b""
+
+    @classmethod
+    def _fmu_state_from_bytes(cls, data):
+        # Called on the class: validated here, refused (with the reason) by fmi2SetFMUstate.
+        try:
+            state_format.decode(data, cls.state_identity())
+            return bytes(data)
+        except state_format.StateFormatError as error:
+            return RefusedState(f"fmi2DeSerializeFMUstate: {error}")
+        except BaseException as error:  # noqa: BLE001
+            return RefusedState(f"fmi2DeSerializeFMUstate failed: {type(error).__name__}: "
+                                f"{error}")
+
+
+def _experiment_problem(start_time, stop_time, tolerance):
+    """Why setupExperiment's arguments are refused, or None."""
+    if not math.isfinite(start_time):
+        return f"startTime = {start_time!r} s: expected a finite time"
+    if stop_time is not None and not (math.isfinite(stop_time) and stop_time >= start_time):
+        return f"stopTime = {stop_time!r} s: expected a finite time >= startTime"
+    if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
+        return f"tolerance = {tolerance!r}: expected a finite number > 0"
+    return None
+
+
+def _kind_name(cls):
+    for kind in (Real, Integer, Boolean, String):
+        if issubclass(cls, kind):
+            return kind.__name__
+    return cls.__name__
+
+
+def _article(word):
+    return ("an " if word[:1] in "aeiou" else "a ") + word
 
 
 def _is_model_error(error):
