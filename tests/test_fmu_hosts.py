@@ -108,13 +108,19 @@ def test_jvm_host_fmi4j_steps_and_replays_state(stage_fmu, fmi4j_classpath, tmp_
     vr = {v.name: v.valueReference for v in md.modelVariables}
     h, steps, force = 1e-3, 20, 0.5
     env = dict(os.environ, **fmu_environment())
-    # a run takes a few seconds; a JVM that crashes can hang writing its error report, which
-    # goes to tmp_path (not the working directory)
-    done = subprocess.run(
-        ["java", f"-XX:ErrorFile={tmp_path / 'hs_err_%p.log'}", "-cp", fmi4j_classpath,
-         str(HOSTS / "fmi4j" / "Host.java"), str(stage_fmu), str(steps * h), str(h),
-         str(vr["F"]), str(force), f"{vr['x']},{vr['y']}"],
-        capture_output=True, text=True, env=env, timeout=120, cwd=tmp_path)
+    # a run takes a few seconds; a JVM that crashes can hang writing its error report (to
+    # tmp_path, not the working directory): stopped after 60 s, the report's head shown
+    try:
+        done = subprocess.run(
+            ["java", f"-XX:ErrorFile={tmp_path / 'hs_err_%p.log'}", "-cp", fmi4j_classpath,
+             str(HOSTS / "fmi4j" / "Host.java"), str(stage_fmu), str(steps * h), str(h),
+             str(vr["F"]), str(force), f"{vr['x']},{vr['y']}"],
+            capture_output=True, text=True, env=env, timeout=60, cwd=tmp_path)
+    except subprocess.TimeoutExpired as timeout:
+        reports = [path.read_text()[:1500] for path in tmp_path.glob("hs_err_*.log")]
+        output = (timeout.stdout or b"")[-500:]
+        pytest.fail(f"the JVM host did not finish in 60 s; its last output: {output!r}; "
+                    f"crash report: {reports[0] if reports else 'none'}")
     assert done.returncode == 0, done.stderr[-3000:]
     lines = [line.split(",") for line in done.stdout.splitlines() if line[:1].isdigit()]
     jvm = np.array([[float(v) for v in line[1:]] for line in lines])
