@@ -10,11 +10,17 @@ summed with `np.bincount` over flat indices cached per group (`scatter_matrix`,
 `scatter_vector`; `np.add.at` is an order of magnitude slower on small arrays).
 """
 
+import collections
+
 import numpy as np
 
 from .rotary_inertia import node_inertia_groups
 
-_PAIRS = {}  # id(group) -> (group, nx, flat indices of its (coordinate, coordinate) pairs)
+# id(group) -> (group, nx, flat indices of its (coordinate, coordinate) pairs), the most
+# recently used first out; bounded, so that a process that builds model after model (an FMU
+# host instantiating again and again) does not keep every model's groups alive
+_PAIRS = collections.OrderedDict()
+_PAIRS_KEPT = 64
 
 
 def pair_index(group, nx):
@@ -25,6 +31,10 @@ def pair_index(group, nx):
         idx = group.coordinate_index
         hit = (group, nx, (idx[:, :, None] * nx + idx[:, None, :]).ravel())
         _PAIRS[id(group)] = hit
+        while len(_PAIRS) > _PAIRS_KEPT:
+            _PAIRS.popitem(last=False)
+    else:
+        _PAIRS.move_to_end(id(group))
     return hit[2]
 
 

@@ -21,6 +21,7 @@ The engine's status code of the last failure is kept, so an error names its caus
 import ctypes
 import glob
 import os
+import sys
 
 import numpy as np
 from numba import carray, cfunc, types
@@ -482,7 +483,8 @@ class Cvode(_Solver):
             self._free_common()
 
     def __del__(self):
-        self.close()
+        if not sys.is_finalizing():  # at exit SUNDIALS may be unloaded already; the OS frees
+            self.close()
 
 
 class Ida(_Solver):
@@ -557,7 +559,8 @@ class Ida(_Solver):
             self._free_common()
 
     def __del__(self):
-        self.close()
+        if not sys.is_finalizing():
+            self.close()
 
 
 def make_solver(data, method, *, rtol, atol, max_step=None, jacobian="analytic",
