@@ -73,7 +73,8 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     (t (N+1,), position (N+1, n_loops), force (N+1, n_loops)): y_k, and u_k held from t_k (the
     last row repeats the one before).
     """
-    if not isinstance(sim.integrator, Cvode):
+    solver, plant, outputs, restart_needed = sim.hand_over()
+    if not isinstance(solver, Cvode):
         raise SimulationError("the compiled sampled loop drives CVODE; use method "
                               "'cvode-bdf' or 'cvode-adams'")
     ports = [sim.model.outputs[j] for j in loop_outputs]
@@ -91,15 +92,13 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     force = np.zeros((N + 1, n_loops))
     state = np.zeros(A.shape[0])
     # loop variables kept between chunks: [t, sample, restart needed], the held inputs
-    loop_state = np.array([sim.time, 0.0, 1.0 if sim._needs_init else 0.0])
+    loop_state = np.array([sim.time, 0.0, 1.0 if restart_needed else 0.0])
     held = np.array(sim.inputs, dtype=float)
     coordinates = np.array([port.coordinate for port in ports], dtype=np.int64)
     inputs = np.array(loop_inputs, dtype=np.int64)
-    solver = sim.integrator
     addresses = np.array([solver.addresses[key] for key in ("solve", "reinit", "stop",
                                                              "memory", "y", "tret")]
-                         + [sim.data.address, sim._output_data.address,
-                            sim.data.int_array("dims")[ed.ENGINE],
+                         + [plant.address, outputs.address, plant.int_array("dims")[ed.ENGINE],
                             solver.addresses["init_step"], solver.addresses["actual_init_step"],
                             solver.addresses["num_steps"], int(solver.analytic)],
                          dtype=np.int64)
@@ -108,22 +107,20 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     # Jacobian cached (0 or 1)]
     memory = np.array([solver.initial_step, float(solver.jacobian_cached())])
     y = solver.y_array
-    y[:] = sim.state
-    sim._q_ref_array[:] = sim._q_ref
     scratch = np.zeros(2 * sim.ndof)
     chunk = max(1, N // 100) if progress is not None else N
     done = 0
     start_time = time.perf_counter()
     while done < N:
         stop = min(N, done + chunk)
-        jacobians = int(sim.data.int_array("counters")[ed.JACOBIAN_COUNT])
+        jacobians = int(plant.int_array("counters")[ed.JACOBIAN_COUNT])
         flag = _loop(addresses, loop_state, memory, steps, held, y, scratch, done, stop,
                      float(fs), reference, feedforward, A, B, C, D, state, inputs, coordinates,
                      position, force)
-        solver._totals["steps"] += int(steps[0])  # CVodeReInit zeroes SUNDIALS' count
+        solver.add_steps(steps[0])
         steps[0] = 0
         solver.initial_step = memory[0]
-        if sim.data.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
+        if plant.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
             memory[1] = 1.0
         if flag != 0:
             raise _failure(sim, solver, flag, loop_state[0])
@@ -135,12 +132,8 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     if status != ed.OK:
         raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
     force[N] = force[N - 1]
-    sim._wall += time.perf_counter() - start_time
-    sim._t, sim._y = float(loop_state[0]), y.copy()
-    sim._u = held.copy()
-    sim._x = sim.data.float_array("x").copy()
-    sim._outputs_cache = None
-    sim._needs_init = bool(loop_state[2])
+    sim.take_back(loop_state[0], y, held, restart_needed=loop_state[2] != 0.0,
+                  wall=time.perf_counter() - start_time)
     return np.arange(N + 1) / fs, position, force
 
 

@@ -358,6 +358,23 @@ class Simulator:
                     p.coordinate]
         return result
 
+    # -- handing the integrator to a compiled driver (flexure.core.sampled_loop) ---------------
+    def hand_over(self):
+        """The state into the integrator's vector and the kinematic reference set, for a
+        compiled driver; returns (integrator, plant data, output data, restart needed)."""
+        self._q_ref_array[:] = self._q_ref
+        self.integrator.y_array[:] = self._y
+        return self.integrator, self.data, self._output_data, self._needs_init
+
+    def take_back(self, t, y, u, *, restart_needed, wall):
+        """Continue from where a compiled driver left the integrator: time t (s), state y
+        (2 NDOF,), held inputs u (N); wall the driver's time (s), for the statistics."""
+        self._t, self._y, self._u = float(t), np.array(y, dtype=float), np.array(u, dtype=float)
+        self._x = self.data.float_array("x").copy()
+        self._outputs_cache = None
+        self._needs_init = bool(restart_needed)
+        self._wall += wall
+
     # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ----------------
     def derivative(self, t, y):
         """ydot (2 NDOF,) at time t (s) and integrator state y = [q - q_ref, qdot]; raises

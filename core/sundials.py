@@ -306,6 +306,11 @@ class _Solver:
         for key, value in self._current().items():
             self._totals[key] += value
 
+    def add_steps(self, count):
+        """Count steps taken by a compiled driver before its restarts (ReInit zeroes
+        SUNDIALS' own count)."""
+        self._totals["steps"] += int(count)
+
     def statistics(self):
         """{"steps", "solver_rhs_evaluations", "solver_jacobian_evaluations"} since the
         solver was made."""
