@@ -335,6 +335,10 @@ def run_loop(scene, *, stroke=1e-3, duration=1.0, fs=4000.0, crossover=300.0,
                 "feedforward_kind": kind or "none",
                 "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
                 "rtol": rtol}
+    if plant == "inprocess":  # the engine's compilation (first use only) is not the loop's
+        from flexure.core import prepare
+
+        prepare(model)
     start = _time.perf_counter()
     with contextlib.ExitStack() as stack:
         if workdir is None and plant != "inprocess":  # FMUs built for this run only

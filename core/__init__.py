@@ -31,6 +31,7 @@ _LAZY = {
     "scene_path": "scene",
     "SimulationResult": "simulation", "Simulator": "simulation", "default_atol": "simulation",
     "controller_step": "sampled_loop", "run_sampled_loop": "sampled_loop",
+    "prepare": "simulator",
     "simulate": "simulation",
     "state_space": "statespace",
     "StaticSolution": "statics", "static_equilibrium": "statics",
@@ -42,7 +43,8 @@ __all__ = [
     "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
     "Simulator", "StaticSolution", "beam_stresses", "buckling_load_factors", "build_model",
     "builtin_scenes", "check_exact_constraint", "default_atol", "linearize", "load_scene",
-    "natural_frequencies", "controller_step", "run_sampled_loop", "scene_path", "simulate",
+    "natural_frequencies", "controller_step", "prepare", "run_sampled_loop", "scene_path",
+    "simulate",
     "state_space", "static_equilibrium",
     "stresses_along",
 ]

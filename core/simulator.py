@@ -404,6 +404,17 @@ class Simulator:
         self._q_ref_array[:] = self._q_ref
 
 
+def prepare(model):
+    """Compile, or load from the on-disk cache, the compiled code a Simulator of `model` runs
+    (the engine, the model's element kernels, the SUNDIALS callbacks); returns the time it
+    took (s). The first use on a machine compiles (about 20-50 s); later ones load the cache
+    (well under a second). A Simulator does this itself; call it first to keep the latency
+    out of a timed run."""
+    start = _time.perf_counter()
+    EngineData(model)
+    return _time.perf_counter() - start
+
+
 def _vector(value, size, name):
     v = np.array(value, dtype=float).reshape(-1)
     if v.size != size or not np.all(np.isfinite(v)):
