@@ -311,14 +311,6 @@ def solve_kinematics(table, q):
     return ed.NOT_CONVERGED
 
 
-@kernel
-def positions(table, q, out):
-    """Coordinates x (NX,) for q into out (the kinematics of `solve_kinematics`); status."""
-    status = solve_kinematics(table, q)
-    out[:] = _f(table, _X)
-    return status
-
-
 # -- equations of motion ------------------------------------------------------------------------
 @kernel
 def evaluate(table, q, qdot):
