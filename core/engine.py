@@ -59,18 +59,22 @@ _TABLE_SIZE = 2 * (_N_INT + _N_FLOAT)
 
 
 @kernel
-def _i(table, slot):
-    """The int64 array of `slot` (an index of engine_data.INT_SLOTS)."""
+def int_array(table, slot):
+    """The int64 array of `slot` (an index of engine_data.INT_SLOTS) of the packed model whose
+    table is at the address `table` (int64); for any compiled code that holds that address."""
     entries = carray(as_int_pointer(table), (_TABLE_SIZE,))
     return carray(as_int_pointer(entries[2 * slot]), (entries[2 * slot + 1],))
 
 
 @kernel
-def _f(table, slot):
-    """The float64 array of `slot` (an index of engine_data.FLOAT_SLOTS)."""
+def float_array(table, slot):
+    """The float64 array of `slot` (an index of engine_data.FLOAT_SLOTS), as `int_array`."""
     entries = carray(as_int_pointer(table), (_TABLE_SIZE,))
     k = 2 * (_N_INT + slot)
     return carray(as_float_pointer(entries[k]), (entries[k + 1],))
+
+
+_i, _f = int_array, float_array  # the short names of the many uses below
 
 
 # -- dense linear algebra on small matrices (row-major, in place) --------------------------------
@@ -146,6 +150,20 @@ def _group(table, g):
     return groups[g * ed.G_WIDTH: (g + 1) * ed.G_WIDTH]
 
 
+@kernel
+def _group_deformations(table, g):
+    """(n, m, k, coords, defs, De, D2e) of element group g: its element count, coordinates and
+    deformations per element, their model indices (flat, element by element) and the elements'
+    De and D2e of the last evaluation (flat)."""
+    row = _group(table, g)
+    n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
+    coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+    defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+    De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+    D2e = _f(table, _D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+    return n, m, k, coords, defs, De, D2e
+
+
 # -- deformations of every element ---------------------------------------------------------------
 @kernel
 def deformations(table, x, order):
@@ -205,11 +223,7 @@ def _constraint_jacobian(table, J):
     J[:] = 0.0
     row_of_def, col_of_coord = _i(table, _ROW_OF_DEF), _i(table, _COL_OF_COORD)
     for g in range(dims[ed.NGROUPS]):
-        row = _group(table, g)
-        n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
         for i in range(n):
             for b in range(k):
                 r = row_of_def[defs[i * k + b]]
@@ -392,12 +406,7 @@ def _element_rates(table, xdot, moving):
     row_of_def = _i(table, _ROW_OF_DEF)
     quad[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
-        row = _group(table, g)
-        n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
-        D2e = _f(table, _D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+        n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
         for i in range(n):
             for b in range(k):
                 s = 0.0
@@ -425,11 +434,7 @@ def _scatter_stress(table, sigma, r):
     """r -= De^T sigma, element by element."""
     dims = _i(table, _DIMS)
     for g in range(dims[ed.NGROUPS]):
-        row = _group(table, g)
-        n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
+        n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
         for i in range(n):
             for b in range(k):
                 s = sigma[defs[i * k + b]]
@@ -567,12 +572,7 @@ def tangent(table, qddot):
     DeF[:] = 0.0
     local = _f(table, _LOCAL)
     for g in range(dims[ed.NGROUPS]):
-        row = _group(table, g)
-        n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
-        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        defs = _i(table, _DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
-        De = _f(table, _DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
-        D2e = _f(table, _D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
+        n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
         H = local[: m * m]
         HD = local[m * m: m * m + m * ndof]
         for i in range(n):

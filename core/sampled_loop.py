@@ -29,7 +29,6 @@ from .errors import SimulationError
 from .jit import kernel
 from .native import (
     as_float_pointer,
-    as_int_pointer,
     call_engine,
     call_get_long,
     call_get_real,
@@ -40,10 +39,10 @@ from .native import (
 from .sundials import STATUS_MESSAGES, Cvode
 
 _DIMS_SLOT = ed.INT_SLOTS.index("dims")
-_Q_REF_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("q_ref")
-_X_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("x")
-_X_START_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("x_start")
-_INPUTS_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("inputs")
+_Q_REF_SLOT = ed.FLOAT_SLOTS.index("q_ref")
+_X_SLOT = ed.FLOAT_SLOTS.index("x")
+_X_START_SLOT = ed.FLOAT_SLOTS.index("x_start")
+_INPUTS_SLOT = ed.FLOAT_SLOTS.index("inputs")
 
 
 def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, loop_inputs,
@@ -174,22 +173,7 @@ def controller_step(A, B, C, D, state, error, output):
 # the addresses handed to the compiled loop, in this order
 (_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE, _INIT_STEP,
  _ACTUAL_INIT_STEP, _NUM_STEPS, _ANALYTIC) = range(13)
-_TABLE_SIZE = 2 * (len(ed.INT_SLOTS) + len(ed.FLOAT_SLOTS))
 _MEASURE_FAILED = -1000
-
-
-@kernel(inline="always")
-def _float_slot(table_address, slot):
-    """The float64 array of `slot` (an index into the address table) of packed data."""
-    table = carray(as_int_pointer(table_address), (_TABLE_SIZE,))
-    return carray(as_float_pointer(table[2 * slot]), (table[2 * slot + 1],))
-
-
-@kernel(inline="always")
-def _int_slot(table_address, slot):
-    """The int64 array of `slot` of packed data."""
-    table = carray(as_int_pointer(table_address), (_TABLE_SIZE,))
-    return carray(as_int_pointer(table[2 * slot]), (table[2 * slot + 1],))
 
 
 @kernel
@@ -197,16 +181,17 @@ def _measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m) at the integrator state y into out; a status. As
     `Simulator.outputs`: full Newton from the plant's last coordinates."""
     ndof = y.size // 2
-    _float_slot(addresses[_OUTPUT], _X_START_SLOT)[:] = _float_slot(addresses[_PLANT], _X_SLOT)
-    _int_slot(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
-    q_ref = _float_slot(addresses[_PLANT], _Q_REF_SLOT)
+    x_plant = engine.float_array(addresses[_PLANT], _X_SLOT)
+    engine.float_array(addresses[_OUTPUT], _X_START_SLOT)[:] = x_plant
+    engine.int_array(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
+    q_ref = engine.float_array(addresses[_PLANT], _Q_REF_SLOT)
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
     status = call_engine(addresses[_ENGINE], engine.OP_KINEMATICS, addresses[_OUTPUT], 0.0,
                          scratch.ctypes.data, 0, 0, 0.0)
     if status != ed.OK:
         return status
-    x = _float_slot(addresses[_OUTPUT], _X_SLOT)
+    x = engine.float_array(addresses[_OUTPUT], _X_SLOT)
     for j in range(coordinates.size):
         out[j] = x[coordinates[j]]
     return ed.OK
@@ -218,9 +203,9 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
     _MEASURE_FAILED) with loop_state[0] the time reached."""
     plant = addresses[_PLANT]
-    plant_inputs = _float_slot(plant, _INPUTS_SLOT)
-    x_plant, x_start = _float_slot(plant, _X_SLOT), _float_slot(plant, _X_START_SLOT)
-    dims = _int_slot(plant, _DIMS_SLOT)
+    plant_inputs = engine.float_array(plant, _INPUTS_SLOT)
+    x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
+    dims = engine.int_array(plant, _DIMS_SLOT)
     tret = carray(as_float_pointer(addresses[_TRET]), (1,))
     n_loops = inputs.size
     error = np.empty(n_loops)

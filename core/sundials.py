@@ -32,8 +32,7 @@ from .errors import SimulationError
 from .jit import kernel
 from .native import (
     NVECTOR_DATA_OFFSET,
-    as_float_pointer,
-    as_int_pointer,
+    address_of,
     call_engine,
     dense_matrix_data,
     nvector_data,
@@ -41,7 +40,7 @@ from .native import (
 
 _DIMS_SLOT = ed.INT_SLOTS.index("dims")
 _COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
-_JACOBIAN_CACHE_SLOT = len(ed.INT_SLOTS) + ed.FLOAT_SLOTS.index("jacobian_cache")
+_JACOBIAN_CACHE_SLOT = ed.FLOAT_SLOTS.index("jacobian_cache")
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
@@ -190,18 +189,12 @@ def function_address(function):
 
 # -- compiled callbacks ---------------------------------------------------------------------------
 @kernel(inline="always")
-def _table_array(user_data, slot):
-    """The int64 array of `slot` in the address table at user_data."""
-    table = carray(as_int_pointer(user_data), (2 * slot + 2,))
-    return carray(as_int_pointer(table[2 * slot]), (table[2 * slot + 1],))
-
-
-@kernel(inline="always")
 def _callback(op, user_data, t, a, b, c, s, counter):
     """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
     1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
-    dims = _table_array(user_data, _DIMS_SLOT)
-    counters = _table_array(user_data, _COUNTERS_SLOT)
+    table = address_of(user_data)
+    dims = engine.int_array(table, _DIMS_SLOT)
+    counters = engine.int_array(table, _COUNTERS_SLOT)
     counters[counter] += 1
     status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
     if status == ed.OK:
@@ -222,14 +215,13 @@ def cvode_rhs(t, y, ydot, user_data):
 def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent. After a restart
     in a sampled loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once."""
-    dims = _table_array(user_data, _DIMS_SLOT)
+    table = address_of(user_data)
+    dims = engine.int_array(table, _DIMS_SLOT)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
         n = 2 * dims[ed.NDOF]
-        table = carray(as_int_pointer(user_data), (2 * _JACOBIAN_CACHE_SLOT + 2,))
-        cache = carray(as_float_pointer(table[2 * _JACOBIAN_CACHE_SLOT]), (n * n,))
         J = carray(dense_matrix_data(matrix), (n * n,))
-        J[:] = cache
+        J[:] = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
         return 0
     return _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
                      dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
@@ -331,6 +323,18 @@ class _Solver:
         name = self.flag_name(flag)
         detail = f" ({cause})" if cause else ""
         return SimulationError(f"t = {t:.9g} s: {self.label} failed with {name}{detail}")
+
+    def close(self):
+        """Free the SUNDIALS objects (idempotent)."""
+        if getattr(self, "memory", None):
+            self._free_memory(_VP(self.memory))
+            self.memory = None
+        if getattr(self, "linear_solver", None):
+            self._free_common()
+
+    def __del__(self):
+        if not sys.is_finalizing():  # at exit SUNDIALS may be unloaded already; the OS frees
+            self.close()
 
     def _free_common(self):
         lib = self.lib
@@ -478,18 +482,8 @@ class Cvode(_Solver):
                 "solver_rhs_evaluations": _get_long(cv.CVodeGetNumRhsEvals, self.memory),
                 "solver_jacobian_evaluations": _get_long(cv.CVodeGetNumJacEvals, self.memory)}
 
-    def close(self):
-        """Free the SUNDIALS objects (idempotent)."""
-        if getattr(self, "memory", None):
-            memory = _VP(self.memory)
-            self.lib.cvode.CVodeFree(ctypes.byref(memory))
-            self.memory = None
-        if getattr(self, "linear_solver", None):
-            self._free_common()
-
-    def __del__(self):
-        if not sys.is_finalizing():  # at exit SUNDIALS may be unloaded already; the OS frees
-            self.close()
+    def _free_memory(self, memory):
+        self.lib.cvode.CVodeFree(ctypes.byref(memory))
 
 
 class Ida(_Solver):
@@ -555,17 +549,8 @@ class Ida(_Solver):
                 "solver_rhs_evaluations": _get_long(ida.IDAGetNumResEvals, self.memory),
                 "solver_jacobian_evaluations": _get_long(ida.IDAGetNumJacEvals, self.memory)}
 
-    def close(self):
-        if getattr(self, "memory", None):
-            memory = _VP(self.memory)
-            self.lib.ida.IDAFree(ctypes.byref(memory))
-            self.memory = None
-        if getattr(self, "linear_solver", None):
-            self._free_common()
-
-    def __del__(self):
-        if not sys.is_finalizing():
-            self.close()
+    def _free_memory(self, memory):
+        self.lib.ida.IDAFree(ctypes.byref(memory))
 
 
 def make_solver(data, method, *, rtol, atol, max_step=None, jacobian="analytic",
