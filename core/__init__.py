@@ -31,7 +31,7 @@ _LAZY = {
     "scene_path": "scene",
     "SimulationResult": "simulation", "Simulator": "simulation", "default_atol": "simulation",
     "controller_step": "sampled_loop", "run_sampled_loop": "sampled_loop",
-    "prepare": "simulator",
+    "METHODS": "simulator", "prepare": "simulator",
     "simulate": "simulation",
     "state_space": "statespace",
     "StaticSolution": "statics", "static_equilibrium": "statics",
@@ -39,7 +39,7 @@ _LAZY = {
 }
 
 __all__ = [
-    "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel",
+    "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel", "METHODS",
     "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
     "Simulator", "StaticSolution", "beam_stresses", "buckling_load_factors", "build_model",
     "builtin_scenes", "check_exact_constraint", "default_atol", "linearize", "load_scene",

@@ -26,9 +26,9 @@ from .errors import SimulationError, UsageError
 from .progress import Progress
 from .tables import format_table
 
-# flexure.core.sundials.METHODS, spelled out so that registering the command (every `flexure`
+# flexure.core.simulator.METHODS, spelled out so that registering the command (every `flexure`
 # call) loads neither numba nor SUNDIALS; tests/test_engine.py checks that the two agree
-METHODS = ("cvode-bdf", "cvode-adams", "ida")
+METHODS = ("cvode-bdf", "cvode-adams", "ida", "esdirk", "esdirk3")
 SAMPLES = number(1, 10_000_000, integer=True, low_open=False, high_open=False)
 
 

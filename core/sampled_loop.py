@@ -11,11 +11,12 @@ so the force acts one sample after the measurement it comes from (one sample of 
 delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. Past
 the last sample of the reference and feedforward arrays their last entries hold.
 
-The plant is the Simulator's own integrator: at every sample whose force differs from the
-previous one the integrator restarts exactly as `Simulator.set_inputs` plus `advance` do
-(the same kinematic warm start, the same calls to CVODE), so this loop and a loop of Python
-calls give the same numbers, bit for bit; the difference is that here the whole run is one
-compiled function calling CVODE's C functions, with the controller in compiled code too.
+The plant is the Simulator's own integrator, driven exactly as `Simulator.set_inputs` plus
+`advance` drive it, so this loop and a loop of Python calls give the same numbers, bit for
+bit; the difference is that here the whole run is one compiled function, with the controller
+in compiled code too. With the one-step ESDIRK (`flexure.core.esdirk`, the loop's default) a
+changed force costs one evaluation and the integrator steps on with its step size and Newton
+matrix; with CVODE it restarts at every changed force (its C functions called directly).
 """
 
 import time
@@ -23,9 +24,10 @@ import time
 import numpy as np
 from numba import carray
 
-from . import engine
+from . import engine, esdirk
 from . import engine_data as ed
 from .errors import SimulationError
+from .esdirk import Esdirk
 from .jit import kernel
 from .native import (
     as_float_pointer,
@@ -43,6 +45,7 @@ _Q_REF_SLOT = ed.FLOAT_SLOTS.index("q_ref")
 _X_SLOT = ed.FLOAT_SLOTS.index("x")
 _X_START_SLOT = ed.FLOAT_SLOTS.index("x_start")
 _INPUTS_SLOT = ed.FLOAT_SLOTS.index("inputs")
+_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
 
 
 def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, loop_inputs,
@@ -72,10 +75,10 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     (t (N+1,), position (N+1, n_loops), force (N+1, n_loops)): y_k, and u_k held from t_k (the
     last row repeats the one before).
     """
-    solver, plant, outputs, restart_needed = sim.hand_over()
-    if not isinstance(solver, Cvode):
-        raise SimulationError("the compiled sampled loop drives CVODE; use method "
-                              "'cvode-bdf' or 'cvode-adams'")
+    solver, plant, outputs, restart_needed, restart_kinematics = sim.hand_over()
+    if not isinstance(solver, (Cvode, Esdirk)):
+        raise SimulationError("the compiled sampled loop drives CVODE or ESDIRK; use method "
+                              "'esdirk', 'cvode-bdf' or 'cvode-adams'")
     ports = [sim.model.outputs[j] for j in loop_outputs]
     if any(port.quantity != "position" for port in ports):
         raise SimulationError("the compiled sampled loop measures positions only")
@@ -89,33 +92,64 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     N = int(samples)
     position = np.zeros((N + 1, n_loops))
     force = np.zeros((N + 1, n_loops))
-    state = np.zeros(A.shape[0])
-    # loop variables kept between chunks: [t, sample, restart needed], the held inputs
-    loop_state = np.array([sim.time, 0.0, 1.0 if restart_needed else 0.0])
+    loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
+            np.array(loop_inputs, dtype=np.int64),
+            np.array([port.coordinate for port in ports], dtype=np.int64), position, force)
+    # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
+    loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
     held = np.array(sim.inputs, dtype=float)
-    coordinates = np.array([port.coordinate for port in ports], dtype=np.int64)
-    inputs = np.array(loop_inputs, dtype=np.int64)
-    addresses = np.array([solver.addresses[key] for key in ("solve", "reinit", "stop",
-                                                             "memory", "y", "tret")]
-                         + [plant.address, outputs.address, plant.int_array("dims")[ed.ENGINE],
-                            solver.addresses["init_step"], solver.addresses["actual_init_step"],
-                            solver.addresses["num_steps"], int(solver.analytic)],
-                         dtype=np.int64)
+    addresses = np.zeros(_ADDRESSES, dtype=np.int64)
+    addresses[[_PLANT, _OUTPUT, _ENGINE]] = (plant.address, outputs.address,
+                                             plant.int_array("dims")[ed.ENGINE])
+    drive = _drive_esdirk if isinstance(solver, Esdirk) else _drive_cvode
+    chunk = max(1, N // 100) if progress is not None else N
+    start_time = time.perf_counter()
+    drive(sim, solver, plant, addresses, loop_state, held, loop, N, chunk, progress)
+    # measure y_N and leave the simulator at t_N with the last force held
+    status = _measure(addresses, solver.y_array, np.zeros(2 * sim.ndof), loop[9], position[N])
+    if status != ed.OK:
+        raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
+    force[N] = force[N - 1]
+    sim.take_back(loop_state[0], solver.y_array, held, restart_needed=loop_state[1] != 0.0,
+                  wall=time.perf_counter() - start_time)
+    return np.arange(N + 1) / fs, position, force
+
+
+def _drive_esdirk(sim, solver, plant, addresses, loop_state, held, loop, N, chunk, progress):
+    """The loop on the one-step integrator, in chunks of samples (for the progress report)."""
+    scratch = np.zeros(2 * sim.ndof)
+    done = 0
+    while done < N:
+        stop = min(N, done + chunk)
+        flag = _loop_esdirk(addresses, loop_state, held, solver.memory, solver.flags,
+                            solver.vectors, solver.J, solver.LU, solver.pivots, solver.atol,
+                            *solver.tables, scratch, done, stop, *loop)
+        if flag != 0:
+            raise _failure(sim, solver, flag, loop_state[0])
+        done = stop
+        if progress is not None:
+            progress(done / N)
+
+
+def _drive_cvode(sim, solver, plant, addresses, loop_state, held, loop, N, chunk, progress):
+    """The loop on CVODE, restarting it at every change of the held force, in chunks."""
+    for key, slot in (("solve", _SOLVE), ("reinit", _REINIT), ("stop", _STOP),
+                      ("memory", _MEMORY), ("y", _Y), ("tret", _TRET),
+                      ("init_step", _INIT_STEP), ("actual_init_step", _ACTUAL_INIT_STEP),
+                      ("num_steps", _NUM_STEPS)):
+        addresses[slot] = solver.addresses[key]
+    addresses[_ANALYTIC] = int(solver.analytic)
     steps = np.zeros(2, dtype=np.int64)  # [steps before the restarts in the loop, scratch]
     # what the integrator keeps between restarts (sundials.Cvode.reset): [initial step,
     # Jacobian cached (0 or 1)]
     memory = np.array([solver.initial_step, float(solver.jacobian_cached())])
-    y = solver.y_array
     scratch = np.zeros(2 * sim.ndof)
-    chunk = max(1, N // 100) if progress is not None else N
     done = 0
-    start_time = time.perf_counter()
     while done < N:
         stop = min(N, done + chunk)
         jacobians = int(plant.int_array("counters")[ed.JACOBIAN_COUNT])
-        flag = _loop(addresses, loop_state, memory, steps, held, y, scratch, done, stop,
-                     float(fs), reference, feedforward, A, B, C, D, state, inputs, coordinates,
-                     position, force)
+        flag = _loop(addresses, loop_state, memory, steps, held, solver.y_array, scratch, done,
+                     stop, *loop)
         solver.add_steps(steps[0])
         steps[0] = 0
         solver.initial_step = memory[0]
@@ -126,14 +160,6 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
         done = stop
         if progress is not None:
             progress(done / N)
-    # measure y_N and leave the simulator at t_N with the last force held
-    status = _measure(addresses, y, scratch, coordinates, position[N])
-    if status != ed.OK:
-        raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
-    force[N] = force[N - 1]
-    sim.take_back(loop_state[0], y, held, restart_needed=loop_state[2] != 0.0,
-                  wall=time.perf_counter() - start_time)
-    return np.arange(N + 1) / fs, position, force
 
 
 def _failure(sim, solver, flag, t):
@@ -172,7 +198,7 @@ def controller_step(A, B, C, D, state, error, output):
 
 # the addresses handed to the compiled loop, in this order
 (_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE, _INIT_STEP,
- _ACTUAL_INIT_STEP, _NUM_STEPS, _ANALYTIC) = range(13)
+ _ACTUAL_INIT_STEP, _NUM_STEPS, _ANALYTIC, _ADDRESSES) = range(14)
 _MEASURE_FAILED = -1000
 
 
@@ -211,7 +237,7 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     error = np.empty(n_loops)
     output = np.empty(n_loops)
     t = loop_state[0]
-    restart = loop_state[2] != 0.0
+    restart = loop_state[1] != 0.0
     for k in range(start, stop):
         if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
             loop_state[0] = t
@@ -256,12 +282,74 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
                           addresses[_TRET], 1)
         if flag < 0:
             loop_state[0] = tret[0]
-            loop_state[2] = 1.0
+            loop_state[1] = 1.0
             return flag
         if memory[0] == 0.0:  # as sundials.Cvode.learn_initial_step
             call_get_real(addresses[_ACTUAL_INIT_STEP], addresses[_MEMORY], memory.ctypes.data)
         memory[1] = 1.0 if addresses[_ANALYTIC] != 0 else 0.0
         t = t_next
     loop_state[0] = t
-    loop_state[2] = 1.0 if restart else 0.0
+    loop_state[1] = 1.0 if restart else 0.0
+    return 0
+
+
+@kernel
+def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, pivots, atol,
+                 tableau_A, tableau_EW, tableau_P, scratch, start, stop, fs, reference,
+                 feedforward, A, B, C, D, state, inputs, coordinates, position, force):
+    """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
+    status (or _MEASURE_FAILED) with loop_state[0] the time reached. Each change of the held
+    force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
+    inputs, the integrator's state re-entered (its first stage recomputed)."""
+    plant = addresses[_PLANT]
+    plant_inputs = engine.float_array(plant, _INPUTS_SLOT)
+    x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
+    dims = engine.int_array(plant, _DIMS_SLOT)
+    counters = engine.int_array(plant, _COUNTERS_SLOT)
+    y = vectors[esdirk.V_Y]
+    n_loops = inputs.size
+    error = np.empty(n_loops)
+    output = np.empty(n_loops)
+    t = loop_state[0]
+    for k in range(start, stop):
+        if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+            loop_state[0] = t
+            return _MEASURE_FAILED
+        if k == 0:
+            force[0, :] = feedforward[0]
+        r = reference[min(k, reference.shape[0] - 1)]
+        ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
+        for i in range(n_loops):
+            error[i] = r[i] - position[k, i]
+        controller_step(A, B, C, D, state, error, output)
+        for i in range(n_loops):  # u_k+1 = C x_c + D e_k + u_ff,k+1
+            force[k + 1, i] = output[i] + ff[i]
+        changed = False
+        for j in range(held.size):
+            value = 0.0
+            for i in range(n_loops):
+                if inputs[i] == j:
+                    value = force[k, i]
+            if value != held[j]:
+                changed = True
+                held[j] = value
+        if changed or loop_state[1] != 0.0:  # as Simulator._restart and Esdirk.reset
+            plant_inputs[:] = held
+            if loop_state[2] != 0.0:
+                x_start[:] = x_plant
+                dims[ed.WARM] = 0
+                loop_state[2] = 0.0
+            memory[esdirk.M_T] = t
+            flags[esdirk.I_FSAL] = 0
+            counters[ed.FAILED_STATUS] = 0
+            loop_state[1] = 0.0
+        t_next = (k + 1) / fs
+        status = esdirk.advance(plant, memory, flags, vectors, J, LU, pivots, atol, tableau_A,
+                                tableau_EW, tableau_P, t_next, False, 0)
+        if status != esdirk.OK:
+            loop_state[0] = memory[esdirk.M_T]
+            loop_state[1] = loop_state[2] = 1.0
+            return status
+        t = t_next
+    loop_state[0] = t
     return 0

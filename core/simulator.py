@@ -29,9 +29,16 @@ from . import engine
 from . import engine_data as ed
 from .engine_data import EngineData
 from .errors import SimulationError
-from .sundials import METHODS, STATUS_MESSAGES, make_solver
+from .esdirk import Esdirk
+from .sundials import METHODS as SUNDIALS_METHODS
+from .sundials import STATUS_MESSAGES, make_solver
+
+METHODS = SUNDIALS_METHODS + ("esdirk", "esdirk3")
+_ONE_STEP = ("esdirk", "esdirk3")
 
 STATE_VERSION = 2
+# what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
+_MEMORY_KEYS = ("lu_step", "newton_rate", "refresh")
 
 
 class Simulator:
@@ -42,7 +49,10 @@ class Simulator:
     model : Model
         The model; its inputs are forces (N, N m), its outputs positions or velocities.
     method : str
-        "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff) or "ida".
+        "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a
+        one-step L-stable method of order 4, `flexure.core.esdirk`: no restart cost when an
+        input changes, so the choice for sampled loops and co-simulation steps), "esdirk3"
+        (its order-3 sibling: 4 stages instead of 6).
     rtol : float
         Relative tolerance of the integrator.
     atol : float or array (2 NDOF,), optional
@@ -85,7 +95,7 @@ class Simulator:
         self._input_functions = dict(input_functions or {})
         self._inputs = self.data.float_array("inputs")
         self._q_ref_array = self.data.float_array("q_ref")
-        self.integrator = make_solver(
+        self.integrator = _make_integrator(
             self.data, method, rtol=rtol, atol=self.atol, max_step=max_step, jacobian=jacobian,
             max_order=max_order,
             input_function=self._inputs_at if self._input_functions else None)
@@ -110,7 +120,7 @@ class Simulator:
         self._y = np.concatenate([np.zeros(self.ndof), qdot])
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
-        self._needs_init = True
+        self._needs_init = self._restart_kinematics = True
         self._counters_at_reset = self._counts()
         self._wall = 0.0
         self._forget()
@@ -188,12 +198,13 @@ class Simulator:
     def get_state(self):
         """A snapshot of the whole state (plain numbers and arrays); the next `advance`
         restarts from it."""
-        self._needs_init = True
+        self._needs_init = self._restart_kinematics = True
         memory = getattr(self.integrator, "restart_memory", {})
         return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
                 "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
                 "x": self._x.copy(), "initial_step": memory.get("initial_step", 0.0),
-                "jacobian": memory.get("jacobian", np.zeros(0))}
+                "jacobian": memory.get("jacobian", np.zeros(0)),
+                **{key: value for key, value in memory.items() if key in _MEMORY_KEYS}}
 
     def set_state(self, state):
         """Restore a snapshot of `get_state` (of a simulator of the same model).
@@ -229,11 +240,12 @@ class Simulator:
             try:
                 self.integrator.restart_memory = {
                     "initial_step": float(state.get("initial_step", 0.0)),
-                    "jacobian": np.asarray(state.get("jacobian", ()), dtype=float)}
+                    "jacobian": np.asarray(state.get("jacobian", ()), dtype=float),
+                    **{key: float(state[key]) for key in _MEMORY_KEYS if key in state}}
             except (TypeError, ValueError) as error:
                 raise SimulationError(f"not a simulator state: {error}") from None
         self._outputs_cache = None
-        self._needs_init = True
+        self._needs_init = self._restart_kinematics = True
 
     @property
     def statistics(self):
@@ -263,11 +275,17 @@ class Simulator:
         return u
 
     def _restart(self):
+        """Restart the integrator at the current state with the held inputs. The kinematics
+        start afresh from the state's coordinates after anything that sets a state (reset,
+        set_state, get_state, a failure), so that a restored run continues bit for bit; after
+        a mere input change the one-step method keeps the warm start of its last evaluation
+        (CVODE and IDA start afresh there too)."""
         self._inputs[:] = self._u
         self._q_ref_array[:] = self._q_ref
-        self._start_kinematics(self._x)
+        if self._restart_kinematics or self.method not in _ONE_STEP:
+            self._start_kinematics(self._x)
         self.integrator.reset(self._t, self._y)
-        self._needs_init = False
+        self._needs_init = self._restart_kinematics = False
 
     def advance(self, t_end, *, max_steps=None, _record=None, _progress=None):
         """Integrate from `time` to t_end (s), stopping exactly there.
@@ -292,7 +310,7 @@ class Simulator:
                         self._restart()
                     t, y = self.integrator.advance(t_end, one_step=one_step)
                 except SimulationError as error:
-                    self._needs_init = True
+                    self._needs_init = self._restart_kinematics = True
                     t_good, y_good = getattr(error, "last_good", (self._t, None))
                     if y_good is not None and self._t < t_good < t_end:
                         self._t, self._y = t_good, y_good
@@ -361,10 +379,12 @@ class Simulator:
     # -- handing the integrator to a compiled driver (flexure.core.sampled_loop) ---------------
     def hand_over(self):
         """The state into the integrator's vector and the kinematic reference set, for a
-        compiled driver; returns (integrator, plant data, output data, restart needed)."""
+        compiled driver; returns (integrator, plant data, output data, restart needed,
+        kinematics restart needed): the driver's first interval restarts as `_restart`."""
         self._q_ref_array[:] = self._q_ref
         self.integrator.y_array[:] = self._y
-        return self.integrator, self.data, self._output_data, self._needs_init
+        return (self.integrator, self.data, self._output_data, self._needs_init,
+                self._restart_kinematics or self.method not in _ONE_STEP)
 
     def take_back(self, t, y, u, *, restart_needed, wall):
         """Continue from where a compiled driver left the integrator: time t (s), state y
@@ -373,6 +393,7 @@ class Simulator:
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
         self._needs_init = bool(restart_needed)
+        self._restart_kinematics = self._needs_init
         self._wall += wall
 
     # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ----------------
@@ -404,15 +425,42 @@ class Simulator:
         self._q_ref_array[:] = self._q_ref
 
 
-def prepare(model):
+def prepare(model, *, loop_method=None):
     """Compile, or load from the on-disk cache, the compiled code a Simulator of `model` runs
     (the engine, the model's element kernels, the SUNDIALS callbacks); returns the time it
-    took (s). The first use on a machine compiles (about 20-50 s); later ones load the cache
+    took (s). With loop_method (a METHODS name) also the integrator and the compiled sampled
+    loop (`run_sampled_loop`) of that method, by running one sample of it on a throwaway
+    simulator. The first use on a machine compiles (about 20-50 s); later ones load the cache
     (well under a second). A Simulator does this itself; call it first to keep the latency
     out of a timed run."""
     start = _time.perf_counter()
     EngineData(model)
+    if loop_method is not None and model.inputs and any(
+            port.quantity == "position" for port in model.outputs):
+        from .sampled_loop import run_sampled_loop
+
+        output = next(j for j, port in enumerate(model.outputs) if port.quantity == "position")
+        zero = np.zeros((1, 1))
+        run_sampled_loop(Simulator(model, method=loop_method), fs=1e4, samples=1,
+                         reference=zero, feedforward=zero, controller=(zero, zero, zero, zero),
+                         loop_inputs=[0], loop_outputs=[output])
     return _time.perf_counter() - start
+
+
+def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
+                     input_function):
+    if method not in _ONE_STEP:
+        return make_solver(data, method, rtol=rtol, atol=atol, max_step=max_step,
+                           jacobian=jacobian, max_order=max_order, input_function=input_function)
+    refused = {"max_order": max_order is not None, "jacobian": jacobian != "analytic",
+               "input_functions": input_function is not None}
+    for name, given in refused.items():
+        if given:
+            raise SimulationError(f"method {method!r} takes no {name} (a one-step method "
+                                  "with the analytic Jacobian and held inputs); use a CVODE "
+                                  "or IDA method for that")
+    return Esdirk(data, rtol=rtol, atol=atol, max_step=max_step,
+                  tableau="esdirk4" if method == "esdirk" else method)
 
 
 def _vector(value, size, name):
@@ -422,4 +470,4 @@ def _vector(value, size, name):
     return v
 
 
-__all__ = ["Simulator", "STATE_VERSION"]
+__all__ = ["METHODS", "Simulator", "STATE_VERSION"]

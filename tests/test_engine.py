@@ -321,8 +321,11 @@ def test_statuses_and_their_messages():
 
 def test_method_names_of_the_command_line_are_the_solvers():
     from flexure.core.cli_simulate import METHODS as COMMAND_METHODS
+    from flexure.core.simulator import METHODS as ALL_METHODS
+    from flexure.fmu.scene_slave import METHODS as FMU_METHODS
 
-    assert COMMAND_METHODS == METHODS
+    assert COMMAND_METHODS == ALL_METHODS == METHODS + ("esdirk", "esdirk3")
+    assert sorted(FMU_METHODS) == sorted(ALL_METHODS)
 
 
 # -- the compiled sampled loop ------------------------------------------------------------------
@@ -336,7 +339,8 @@ def test_compiled_sampled_loop_equals_a_python_loop_of_simulator_calls_bit_for_b
     model = load_scene("stage_planar_3dof")
     controller, design = build_loop(model, stroke=1e-3, duration=0.02, settle=0.005,
                                     fs=4000.0)
-    t, _, position, force = simulate_loop(InProcessPlant(model, rtol=1e-7), controller, design)
+    t, _, position, force = simulate_loop(InProcessPlant(model, method="cvode-bdf", rtol=1e-7),
+                                          controller, design)
     feedback = controller.controller
     sim = Simulator(model, rtol=1e-7)
     t_c, position_c, force_c = run_sampled_loop(

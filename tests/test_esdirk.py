@@ -1,0 +1,219 @@
+"""The one-step ESDIRK integrators: their tableaus, their order, their accuracy against CVODE,
+their restart-free sampled loop, and their error paths."""
+
+import pickle
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from flexure.core import Simulator, load_scene, run_sampled_loop, simulate
+from flexure.core.errors import SimulationError
+from flexure.core.esdirk import Esdirk
+from flexure.core.esdirk_method import ESDIRK3, ESDIRK4
+
+TABLEAUS = [ESDIRK3, ESDIRK4]
+
+
+# -- the tableaus --------------------------------------------------------------------------------
+def order_conditions(tableau, b):
+    """Residuals of the Runge-Kutta order conditions up to order 4 for weights b (the rooted
+    trees with 1 to 4 nodes), in the tableau's own fractions."""
+    A, c, s = tableau.A, tableau.c, tableau.stages
+
+    def dot(u, v):
+        return sum((Fraction(x) * Fraction(y) for x, y in zip(u, v, strict=True)), Fraction(0))
+
+    def times_A(v):
+        return [dot(A[i], v) for i in range(s)]
+
+    c2 = [ci * ci for ci in c]
+    Ac = times_A(c)
+    return {1: [dot(b, [1] * s) - 1],
+            2: [dot(b, c) - Fraction(1, 2)],
+            3: [dot(b, c2) - Fraction(1, 3), dot(b, Ac) - Fraction(1, 6)],
+            4: [dot(b, [ci ** 3 for ci in c]) - Fraction(1, 4),
+                dot(b, [ci * a for ci, a in zip(c, Ac, strict=True)]) - Fraction(1, 8),
+                dot(b, times_A(c2)) - Fraction(1, 12),
+                dot(b, times_A(Ac)) - Fraction(1, 24)]}
+
+
+@pytest.mark.parametrize("tableau", TABLEAUS, ids=lambda t: t.name)
+def test_tableau_has_its_order_and_its_embedding_one_less(tableau):
+    """ESDIRK4 is exact in its fractions; ESDIRK3's gamma is irrational and its fractions
+    rational approximations (Kennedy & Carpenter's), good to about 1e-20."""
+    bound = 0 if tableau is ESDIRK4 else Fraction(1, 10 ** 18)
+    for weights, order in ((tableau.b, tableau.order), (tableau.b_hat, tableau.embedded_order)):
+        residuals = order_conditions(tableau, weights)
+        for p in range(1, order + 1):
+            assert all(abs(r) <= bound for r in residuals[p]), (p, residuals[p])
+        if order + 1 in residuals:  # and not one order more
+            assert max(abs(r) for r in residuals[order + 1]) > 1e-6
+
+
+@pytest.mark.parametrize("tableau", TABLEAUS, ids=lambda t: t.name)
+def test_tableau_is_stiffly_accurate_explicit_first_and_l_stable(tableau):
+    A = np.array([[float(v) for v in row] for row in tableau.A])
+    b = A[-1]
+    s = tableau.stages
+    assert np.all(A[0] == 0.0) and np.all(np.triu(A, 1) == 0.0)
+    assert np.all(np.diag(A)[1:] == float(tableau.gamma))
+
+    def R(z):  # the stability function 1 + z b^T (I - z A)^-1 1
+        return 1.0 + z * b @ np.linalg.solve(np.eye(s) - z * A, np.ones(s))
+
+    assert abs(R(-1e9)) < 1e-6  # L-stable: stiff modes damped, not carried
+    for w in np.logspace(-2, 4, 61):  # A-stable on the imaginary axis: undamped modes
+        assert abs(R(1j * w)) <= 1.0 + 1e-12
+    z = -0.01  # consistent with exp(z) to its order
+    assert abs(R(z) - np.exp(z)) < 10 * abs(z) ** (tableau.order + 1)
+
+
+def test_predictor_reproduces_polynomials_of_the_stage_time():
+    """The Newton start of stage i extrapolates F_j in c: exact for F = 1, c, c^2 (quadratic
+    through the last three stages)."""
+    for tableau in TABLEAUS:
+        P, c = tableau.predictor(), tableau.c
+        for i in range(1, tableau.stages):
+            degree = min(i, 3) - 1
+            for power in range(degree + 1):
+                assert sum(P[i][j] * c[j] ** power for j in range(i)) == c[i] ** power
+
+
+# -- convergence and accuracy on a model ----------------------------------------------------------
+@pytest.mark.parametrize("tableau, order", [("esdirk3", 3), ("esdirk4", 4)])
+def test_observed_order_with_fixed_steps(tableau, order):
+    """truss_1dof_x (a mass-spring-damper, its 1 N load from t = 0) for 0.05 s in fixed steps
+    h (the first step given, rtol so loose that no step is rejected or resized, h the largest
+    step): halving h divides the error at 0.05 s by 2^order (within 0.3)."""
+    model = load_scene("truss_1dof_x")
+    reference = simulate(model, 0.05, rtol=1e-12, output_times=[0.05]).q[-1, 0]
+    errors = []
+    for h in (0.05 / 8, 0.05 / 16, 0.05 / 32):
+        sim = Simulator(model)
+        data = sim.data
+        data.float_array("q_ref")[:] = sim.q_ref  # what Simulator.advance sets before a run
+        integrator = Esdirk(data, rtol=0.5, atol=np.full(2, 1.0), max_step=h, tableau=tableau)
+        integrator.restart_memory = {"initial_step": h}
+        integrator.reset(0.0, np.zeros(2))
+        t, y = integrator.advance(0.05)
+        assert t == 0.05 and integrator.statistics()["steps"] == round(0.05 / h)
+        errors.append(abs(data.float_array("q_ref")[0] + y[0] - reference))
+    observed = np.log2(np.array(errors[:-1]) / errors[1:])
+    assert np.all(np.abs(observed - order) < 0.3), observed
+
+
+@pytest.mark.parametrize("method, bound", [("esdirk", 2.0), ("esdirk3", 50.0)])
+def test_three_dof_step_within_rtol_of_a_tight_cvode_run(method, bound):
+    """stage_planar_3dof, 1 N for 0.2 s at rtol 1e-6: x within `bound` rtol of its motion.
+    Measured at rtol 1e-5 to 1e-7: esdirk 0.2 to 0.7 rtol, esdirk3 23 to 28 rtol (its
+    order-2 error estimate is conservative per step, the order-3 solution's global error
+    accumulates over ~400 steps)."""
+    model = load_scene("stage_planar_3dof")
+    times = np.linspace(0.0, 0.2, 21)
+    reference = simulate(model, 0.2, inputs={"F": 1.0}, rtol=1e-11, output_times=times)
+    result = simulate(model, 0.2, inputs={"F": 1.0}, method=method, rtol=1e-6,
+                      output_times=times)
+    motion = np.ptp(reference.outputs["x"])
+    assert motion > 1e-3
+    error = np.max(np.abs(result.outputs["x"] - reference.outputs["x"]))
+    assert error <= bound * 1e-6 * motion
+
+
+# -- the restart-free sampled loop ---------------------------------------------------------------
+def test_compiled_loop_on_esdirk_equals_a_python_loop_bit_for_bit():
+    from flexure.controllers import build_loop
+    from flexure.controllers.plants import InProcessPlant
+    from flexure.controllers.runner import simulate_loop
+
+    model = load_scene("stage_planar_3dof")
+    controller, design = build_loop(model, stroke=1e-3, duration=0.02, settle=0.005,
+                                    fs=4000.0)
+    plant = InProcessPlant(model, method="esdirk3", rtol=1e-7)
+    t, _, position, force = simulate_loop(plant, controller, design)
+    feedback = controller.controller
+    sim = Simulator(model, method="esdirk3", rtol=1e-7)
+    t_c, position_c, force_c = run_sampled_loop(
+        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
+        feedforward=controller.feedforward,
+        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
+        loop_inputs=[pair.input_index for pair in design.pairs],
+        loop_outputs=[pair.output_index for pair in design.pairs])
+    assert np.ptp(position) > 5e-4
+    assert np.array_equal(position_c, position) and np.array_equal(force_c, force)
+    assert sim.time == t[-1] and np.array_equal(t_c, t)
+
+
+def test_an_input_change_costs_one_evaluation_not_a_restart():
+    model = load_scene("stage_planar_1dof")
+    sim = Simulator(model, method="esdirk", rtol=1e-8)
+    sim.set_inputs([1.0])
+    sim.advance(1e-3)
+    before = sim.statistics
+    for k in range(2, 12):  # ten samples, each with a new force
+        sim.set_inputs([1.0 + 0.01 * k])
+        sim.advance(k * 1e-3 / 2 + 0.5e-3)
+    after = sim.statistics
+    assert after["jacobian_evaluations"] == before["jacobian_evaluations"]
+    assert after["steps"] - before["steps"] <= 12
+
+
+@pytest.mark.parametrize("method", ["esdirk", "esdirk3"])
+def test_restored_state_continues_bit_for_bit(method):
+    model = load_scene("stage_planar_1dof")
+    sim = Simulator(model, method=method, rtol=1e-7)
+    sim.set_inputs([1.0])
+    sim.advance(0.05)
+    state = pickle.loads(pickle.dumps(sim.get_state()))
+    assert state["jacobian"].size == 4 and state["lu_step"] > 0
+    sim.advance(0.1)
+    sim.set_inputs([-0.5])
+    sim.advance(0.15)
+    other = Simulator(model, method=method, rtol=1e-7)
+    other.set_state(state)
+    other.advance(0.1)
+    other.set_inputs([-0.5])
+    other.advance(0.15)
+    assert other.time == sim.time
+    assert np.array_equal(other.q, sim.q) and np.array_equal(other.qdot, sim.qdot)
+
+
+# -- error paths -----------------------------------------------------------------------------------
+@pytest.mark.parametrize("options, name", [
+    ({"max_order": 2}, "max_order"), ({"jacobian": "finite-difference"}, "jacobian"),
+    ({"input_functions": {0: np.sin}}, "input_functions")])
+def test_options_a_one_step_method_does_not_take_are_refused(options, name):
+    with pytest.raises(SimulationError, match=f"method 'esdirk' takes no {name}"):
+        Simulator(load_scene("truss_1dof_x"), method="esdirk", **options)
+
+
+def test_step_budget_stops_at_the_last_accepted_state():
+    model = load_scene("stage_planar_3dof")
+    sim = Simulator(model, method="esdirk", rtol=1e-8)
+    sim.set_inputs([1.0])
+    with pytest.raises(SimulationError, match="step budget of 5 integrator steps"):
+        sim.advance(0.5, max_steps=5)
+    assert 0.0 < sim.time < 0.5 and np.all(np.isfinite(sim.state))
+    sim.advance(0.01 if sim.time < 0.01 else sim.time + 0.01)  # and goes on from there
+
+
+def test_a_state_it_cannot_evaluate_is_a_message_naming_the_cause():
+    """A DOF driven through the truss pendulum's singular (stretched-flat) configuration:
+    the integrator stops with the engine's reason, at its last good state."""
+    model = load_scene("truss_1dof_x")
+    integrator = Esdirk(Simulator(model).data, rtol=1e-6, atol=np.full(2, 1e-9))
+    integrator.reset(0.0, np.array([np.nan, 0.0]))
+    with pytest.raises(SimulationError, match=r"ESDIRK4\(3\)6L\[2\]SA failed with RHS_FAILURE "
+                                              r"\(the state became non-finite\)"):
+        integrator.advance(0.1)
+
+
+def test_a_corrupt_integrator_memory_is_refused():
+    model = load_scene("truss_1dof_x")
+    sim = Simulator(model, method="esdirk")
+    sim.advance(0.01)
+    state = sim.get_state()
+    for key, value in (("lu_step", -1.0), ("initial_step", np.nan), ("newton_rate", np.inf)):
+        with pytest.raises(SimulationError, match="integrator memory holds negative or "
+                                                  "non-finite numbers"):
+            Simulator(model, method="esdirk").set_state(dict(state, **{key: value}))
