@@ -49,8 +49,8 @@ def step_nanoseconds(fs):
     return step
 
 
-def run_cosimulation(model, scene, controller, design, *, rtol=1e-8, workdir=None,
-                     progress=None):
+def run_cosimulation(model, scene, controller, design, *, method="esdirk3", rtol=1e-8,
+                     workdir=None, progress=None):
     """Run the loop in libcosim; returns t, reference, position, force like simulate_loop.
 
     `progress`, if given, is called with the fraction done: the run is then advanced in
@@ -80,6 +80,8 @@ def run_cosimulation(model, scene, controller, design, *, rtol=1e-8, workdir=Non
           for s in (plant, ctrl) for v in ex.slave_variables(s)}
     if not ex.real_initial_value(plant, vr[(plant, "integrator.rtol")], float(rtol)):
         raise SimulationError("libcosim: cannot set the plant's integrator.rtol")
+    if not ex.string_initial_value(plant, vr[(plant, "integrator.method")], method):
+        raise SimulationError("libcosim: cannot set the plant's integrator.method")
     for pair in design.pairs:
         out, inp = pair.output_name, pair.input_name
         if ex.connect_real_variables(plant, vr[(plant, out)], ctrl, vr[(ctrl, out)]) != 0 or \

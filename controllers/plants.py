@@ -27,7 +27,7 @@ class InProcessPlant:
 
     kind = "inprocess"
 
-    def __init__(self, model, *, method="cvode-bdf", rtol=1e-8):
+    def __init__(self, model, *, method="esdirk3", rtol=1e-8):
         self.model = model
         self.simulator = Simulator(model, method=method, rtol=rtol)
         self.input_names = list(self.simulator.input_names)
@@ -67,7 +67,7 @@ class FmuPlant:
 
     kind = "fmu"
 
-    def __init__(self, fmu_path, *, method="cvode-bdf", rtol=1e-8):
+    def __init__(self, fmu_path, *, method="esdirk3", rtol=1e-8):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
