@@ -14,7 +14,8 @@ Variables (only what the scene has):
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
   stress at the ends of the scene's beams with a cross-section, in the current state
   (`flexure.core.stresses_along`);
-- parameters "integrator.method" (String: cvode-bdf, cvode-adams, ida),
+- parameters "integrator.method" (String: esdirk (default), esdirk3, cvode-bdf, cvode-adams,
+  ida; the one-step esdirk takes a host's new inputs at each doStep without a restart),
   "integrator.rtol" (1) and "integrator.atol" (0 means the simulator's default);
 - one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
   by rebuilding the model from the scene with the new value when initialization ends.
@@ -44,7 +45,7 @@ from flexure.core import Mechanics, Simulator, build_model, stresses_along
 
 from .slave import SafeSlave
 
-METHODS = ("cvode-bdf", "cvode-adams", "ida")
+METHODS = ("esdirk", "esdirk3", "cvode-bdf", "cvode-adams", "ida")  # the first: the default
 
 # The unit of a tunable scene key, by its last part.
 TUNABLE_UNITS = {

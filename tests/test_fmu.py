@@ -35,6 +35,9 @@ from flexure.fmu import (
     validate_fmu_file,
 )
 from flexure.fmu.regression import check_fmu, compare, read_csv
+from flexure.fmu.scene_slave import METHODS as FMU_METHODS
+
+FMU_METHOD = FMU_METHODS[0]  # the integrator a scene FMU runs by default
 
 SCENES = builtin_scenes()
 
@@ -179,7 +182,7 @@ def test_escape_log_doubles_percent():
 def test_fmu_equals_in_process_simulation_on_the_same_grid(scene, scene_fmus):
     times, forces = grid_and_inputs()
     slave = Slave(scene_fmus(scene))
-    sim = Simulator(load_scene(scene), method="cvode-bdf", rtol=1e-8)
+    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=1e-8)
     sim.reset(t0=0.0)
     try:
         assert np.array_equal(slave.y(), sim.outputs())
@@ -199,7 +202,7 @@ def test_fmu_agrees_with_a_continuous_run_within_tolerance(scene_fmus):
     communication point change the error only within the integrator's tolerance."""
     scene = "stage_planar_3dof"
     slave = Slave(scene_fmus(scene))
-    sim = Simulator(load_scene(scene), rtol=1e-8)
+    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=1e-8)
     sim.reset(t0=0.0)
     sim.set_inputs([1.0])
     sim.advance(0.05)
@@ -499,7 +502,7 @@ def test_velocity_and_rotation_ports_get_their_units(tmp_path):
     speed, angle = definitions["m/s"].baseUnit, definitions["rad"].baseUnit
     assert (speed.m, speed.s, speed.kg, angle.rad) == (1, -1, 0, 1)
     slave = Slave(path)
-    sim = Simulator(load_scene(scene))
+    sim = Simulator(load_scene(scene), method=FMU_METHOD)
     sim.reset()
     for k in range(5):
         slave.set([1.0, 0.01])
@@ -524,7 +527,7 @@ def test_von_mises_output_on_request(tmp_path):
     assert validate_fmu_file(path) == []
     model = load_scene(scene)
     slave = Slave(path)
-    sim = Simulator(model)
+    sim = Simulator(model, method=FMU_METHOD)
     sim.reset()
     for k in range(3):
         slave.set(0.5)
