@@ -14,7 +14,7 @@ a speed (times real time) a ratio >= 1 does.
 The row groups (one function each; `--only` picks some):
 
 loop      `flexure loop` with its defaults (`flexure.controllers.runner.run_loop` on
-          stage_planar_1dof: 1 mm in 1 s, 0.25 s settling, 4 kHz, rtol 1e-8), its
+          stage_planar_1dof: 1 mm in 1 s, 0.25 s settling, 4 kHz, esdirk3 at rtol 1e-8), its
           `LoopResult.wall_time_s` (the compiled loop, the controller design excluded) against
           `peer_exudyn.closed_loop(4)`, the same controller stepped in Exudyn (SolveDynamic
           alone). Exudyn's n = 4 cables per spring, not 1: with its full Gauss integration one
@@ -32,7 +32,8 @@ step      A 1 N step for 1 s on stage_planar_3dof (one PLBEAM per spring) and on
           generalized-alpha run (`peer_exudyn.converged_reference`, its Richardson estimate
           about 1.6e-6 of the stroke). For each error level 1e-3, 1e-5, 1e-7 the fastest
           setting that reaches it is found by a scan (flexure: rtol 1e-3 ... 1e-10 with
-          cvode-bdf, cvode-bdf of order <= 2, cvode-adams, ida; Exudyn: fixed steps h), and
+          esdirk, esdirk3, cvode-bdf, cvode-bdf of order <= 2, cvode-adams, ida; Exudyn:
+          fixed steps h), and
           the two chosen settings are then timed alternately. A method's scan stops at the
           first rtol that reaches 1e-7 or whose 0.1 s probe shows a run longer than a cap
           (20 s; 5 s with --quick). Exudyn cannot reach a level
@@ -40,8 +41,9 @@ step      A 1 N step for 1 s on stage_planar_3dof (one PLBEAM per spring) and on
           its finest verified step at its order 2 (error ~ h^2, wall ~ 1 / h; the observed
           order is 2.0) and marked "extrap.". flexure's wall is the whole `simulate` call
           (the Simulator built inside), Exudyn's SolveDynamic alone (the model built before).
-          Target: faster than Exudyn at each level; x real time >= 10 at rtol 1e-6.
-refined   The 4-PLBEAMs-per-spring stage undamped (EdA = EdI = 0), 1 s step at rtol 1e-6:
+          Target: faster than Exudyn at each level; x real time >= 10 at rtol 1e-6 (esdirk).
+refined   The 4-PLBEAMs-per-spring stage undamped (EdA = EdI = 0), 1 s step at rtol 1e-6
+          (esdirk):
           wall <= 2 s. The cost of one right-hand-side evaluation for n = 1, 2, 4, 8, 16
           PLBEAMs per spring (6 n - 3 DOFs, 2 n + 1 elements): the engine's RHS operation
           called in a loop at a deformed state (a ~1 us ctypes call included), and, for
@@ -91,7 +93,10 @@ HERE = Path(__file__).resolve().parent
 SCENES = HERE.parent / "scenes"
 LEAF_LENGTH = 0.1  # m
 LEVELS = (1e-3, 1e-5, 1e-7)  # error levels of the step, fractions of the stroke
-SCAN_METHODS = (("cvode-bdf", None), ("cvode-bdf", 2), ("cvode-adams", None), ("ida", None))
+SCAN_METHODS = (("esdirk", None), ("esdirk3", None), ("cvode-bdf", None), ("cvode-bdf", 2),
+                ("cvode-adams", None), ("ida", None))
+STEP_METHOD = "esdirk"  # the integrator of the fixed-rtol rows (the step and the refined stage)
+FMU_METHOD = "cvode-bdf"  # the scene FMU's default integrator
 SCAN_RTOLS = tuple(10.0 ** -k for k in range(3, 11))
 QUICK_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6)
 PEER_STEPS = (1e-3, 5e-4, 2.5e-4, 1.25e-4, 6.25e-5, 3.125e-5, 1.5625e-5)
@@ -503,12 +508,12 @@ def step(*, repeat=5, quick=False):
             ratio = t["flexure"].median / peer_wall
             rows.append(Row(target, flexure_text, peer_text, ratio, ratio < 1))
         if n == 1:
-            log("step: stage_planar_3dof at rtol 1e-6, cvode-bdf")
-            plain = alternate({"flexure": lambda m=model: capped_step(m, "cvode-bdf", 1e-6,
+            log(f"step: stage_planar_3dof at rtol 1e-6, {STEP_METHOD}")
+            plain = alternate({"flexure": lambda m=model: capped_step(m, STEP_METHOD, 1e-6,
                                                                       cap)},
                               repeat, "step rtol 1e-6")["flexure"]
     speed = 1.0 / plain.median
-    rows.append(Row("1 N step, 1 s, stage_planar_3dof at rtol 1e-6 (cvode-bdf): >= 10 x real "
+    rows.append(Row(f"1 N step, 1 s, stage_planar_3dof at rtol 1e-6 ({STEP_METHOD}): >= 10 x real "
                     "time", f"{speed:.2f} x ({step_stats_text(plain)})", ">= 10 x", speed / 10,
                     speed >= 10))
     return rows
@@ -571,7 +576,7 @@ def refined(*, repeat=5, quick=False):
     rows = []
     model = refined_stage(4, damped=False)
     cap = 10.0 if quick else None
-    t = alternate({"flexure": lambda: capped_step(model, "cvode-bdf", 1e-6, cap)}, repeat,
+    t = alternate({"flexure": lambda: capped_step(model, STEP_METHOD, 1e-6, cap)}, repeat,
                   "refined undamped step", budget=20.0 if quick else 30.0)["flexure"]
     rows.append(Row(f"refined stage, 4 PLBEAMs per spring ({model.declared_dof_count} DOFs), "
                     "undamped 1 s step at rtol 1e-6: wall <= 2 s", step_stats_text(t),
@@ -681,7 +686,7 @@ def in_process_steps(model, steps, force=1.0):
     the engine time being the simulator's own time inside `advance`."""
     from flexure.core import Simulator
 
-    sim = Simulator(model, method="cvode-bdf", rtol=1e-8)
+    sim = Simulator(model, method=FMU_METHOD, rtol=1e-8)
     start = time.perf_counter()
     for k in range(steps):
         sim.set_inputs([force])
@@ -741,7 +746,7 @@ def fmu(*, repeat=5, quick=False):
         inside_text = ("" if inside is None else
                        f"; the FMU's own simulator inside advance: {inside:.3f} s (last run), "
                        f"{100 * (1 - inside / f.walls[-1]):.1f} % beyond it")
-        rows.append(Row("FMU of stage_planar_3dof by fmpy, 1 ms steps for 1 s (cvode-bdf, "
+        rows.append(Row(f"FMU of stage_planar_3dof by fmpy, 1 ms steps for 1 s ({FMU_METHOD}, "
                         "rtol 1e-8): >= 10 x real time",
                         f"{speed:.2f} x ({f.text()})", ">= 10 x", speed / 10, speed >= 10))
         rows.append(Row("FMU overhead beyond the engine (1 - engine / FMU wall) <= 10 %",
