@@ -224,6 +224,37 @@ def _measure(addresses, y, scratch, coordinates, out):
 
 
 @kernel
+def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state, inputs,
+            coordinates, position, force, held, error, output):
+    """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
+    stepped), and put u_k into the held plant inputs (the others zero) for [t_k, t_k+1).
+    Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
+    error, output: scratch (n_loops,)."""
+    if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+        return -1
+    n_loops = inputs.size
+    if k == 0:
+        force[0, :] = feedforward[0]
+    r = reference[min(k, reference.shape[0] - 1)]
+    ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
+    for i in range(n_loops):
+        error[i] = r[i] - position[k, i]
+    controller_step(A, B, C, D, state, error, output)
+    for i in range(n_loops):
+        force[k + 1, i] = output[i] + ff[i]
+    changed = 0
+    for j in range(held.size):
+        value = 0.0
+        for i in range(n_loops):
+            if inputs[i] == j:
+                value = force[k, i]
+        if value != held[j]:
+            changed = 1
+            held[j] = value
+    return changed
+
+
+@kernel
 def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, reference,
           feedforward, A, B, C, D, state, inputs, coordinates, position, force):
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
@@ -233,34 +264,15 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
     dims = engine.int_array(plant, _DIMS_SLOT)
     tret = carray(as_float_pointer(addresses[_TRET]), (1,))
-    n_loops = inputs.size
-    error = np.empty(n_loops)
-    output = np.empty(n_loops)
     t = loop_state[0]
     restart = loop_state[1] != 0.0
+    error, output = np.empty(inputs.size), np.empty(inputs.size)
     for k in range(start, stop):
-        if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+        changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
+                          inputs, coordinates, position, force, held, error, output)
+        if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
-        if k == 0:
-            force[0, :] = feedforward[0]
-        r = reference[min(k, reference.shape[0] - 1)]
-        ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
-        for i in range(n_loops):
-            error[i] = r[i] - position[k, i]
-        controller_step(A, B, C, D, state, error, output)
-        for i in range(n_loops):  # u_k+1 = C x_c + D e_k + u_ff,k+1
-            force[k + 1, i] = output[i] + ff[i]
-        # the plant over [t_k, t_k+1) with u_k (the other inputs zero)
-        changed = False
-        for j in range(held.size):
-            value = 0.0
-            for i in range(n_loops):
-                if inputs[i] == j:
-                    value = force[k, i]
-            if value != held[j]:
-                changed = True
-                held[j] = value
         if changed or restart:  # as Simulator.set_inputs and its restart in advance
             plant_inputs[:] = held
             x_start[:] = x_plant
@@ -307,32 +319,14 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     dims = engine.int_array(plant, _DIMS_SLOT)
     counters = engine.int_array(plant, _COUNTERS_SLOT)
     y = vectors[esdirk.V_Y]
-    n_loops = inputs.size
-    error = np.empty(n_loops)
-    output = np.empty(n_loops)
     t = loop_state[0]
+    error, output = np.empty(inputs.size), np.empty(inputs.size)
     for k in range(start, stop):
-        if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+        changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
+                          inputs, coordinates, position, force, held, error, output)
+        if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
-        if k == 0:
-            force[0, :] = feedforward[0]
-        r = reference[min(k, reference.shape[0] - 1)]
-        ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
-        for i in range(n_loops):
-            error[i] = r[i] - position[k, i]
-        controller_step(A, B, C, D, state, error, output)
-        for i in range(n_loops):  # u_k+1 = C x_c + D e_k + u_ff,k+1
-            force[k + 1, i] = output[i] + ff[i]
-        changed = False
-        for j in range(held.size):
-            value = 0.0
-            for i in range(n_loops):
-                if inputs[i] == j:
-                    value = force[k, i]
-            if value != held[j]:
-                changed = True
-                held[j] = value
         if changed or loop_state[1] != 0.0:  # as Simulator._restart and Esdirk.reset
             plant_inputs[:] = held
             if loop_state[2] != 0.0:
