@@ -12,10 +12,7 @@ and a package that only needs the exceptions start fast. `from flexure.core impo
 
 import importlib
 
-from .blas import limit_blas_threads
 from .errors import ConstraintError, ConvergenceError, FlexureError, SceneError, SimulationError
-
-limit_blas_threads()  # small matrices: one BLAS thread is fastest (see core/blas.py)
 
 __version__ = "0.1.0"
 

@@ -17,12 +17,14 @@ relative threshold of 1e-9 on the singular values.
 import numpy as np
 
 from . import assembly
+from .blas import blas_threads
 from .errors import ConstraintError
 from .kinematics import Kinematics
 
 RANK_TOLERANCE = 1e-9
 
 
+@blas_threads()
 def check_exact_constraint(model, x=None):
     """Raise ConstraintError unless `model` is exactly constrained at coordinates x.
 

@@ -18,9 +18,11 @@ none of it; it costs a Newton solve of the kinematics per call (about a millisec
 import numpy as np
 
 from .assembly import Inertia
+from .blas import blas_threads
 from .mechanics import Mechanics
 
 
+@blas_threads()
 def mechanical_energy(model, q, qdot, u=None, *, x_start=None):
     """Kinetic plus potential energy (J) of the state (q, qdot) of `model`.
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .blas import blas_threads
 from .mechanics import Mechanics
 from .statics import StaticSolution, static_equilibrium
 
@@ -38,6 +39,7 @@ class LinearModel:
         return self.solution.config.DF
 
 
+@blas_threads()
 def linearize(model, solution=None, *, mechanics=None):
     """Linearise `model` at `solution` (default: its static equilibrium under its loads)."""
     mech = mechanics or Mechanics(model)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from .blas import blas_threads
 from .errors import ConvergenceError
 from .linearization import LinearModel, linearize
 from .mechanics import Mechanics
@@ -31,6 +32,7 @@ class Modes:
     linear_model: LinearModel
 
 
+@blas_threads()
 def natural_frequencies(model, count=None, *, linear_model=None):
     """The lowest `count` (default: all) natural frequencies and mode shapes of `model`."""
     lin = linear_model or linearize(model)
@@ -53,6 +55,7 @@ def natural_frequencies(model, count=None, *, linear_model=None):
     )
 
 
+@blas_threads()
 def buckling_load_factors(model, count=None, *, loads=None):
     """Load factors lambda (smallest first) at which the reference load buckles `model`.
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .blas import blas_threads
 from .errors import SimulationError
 from .simulator import STATE_VERSION, Simulator
 
@@ -205,6 +206,7 @@ def split_inputs(model, inputs):
 MOTION_FRACTION = 1e-3
 
 
+@blas_threads()
 def default_atol(model, rtol):
     """Per-state absolute tolerance (2 NDOF,) from rtol and the model's scales.
 

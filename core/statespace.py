@@ -11,10 +11,12 @@ of DF of each output coordinate (OUTX). Units: inputs N (N m), outputs m, m/s (r
 
 import numpy as np
 
+from .blas import blas_threads
 from .errors import SceneError
 from .linearization import linearize
 
 
+@blas_threads()
 def state_space(model, *, linear_model=None):
     """The linearised model as a control.StateSpace with named inputs, outputs and states."""
     import control  # 0.5 s to import (scipy.signal, matplotlib): only where it is used

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .blas import blas_threads
 from .errors import ConvergenceError
 from .mechanics import Mechanics
 
@@ -44,6 +45,7 @@ class StaticSolution:
                         strict=True))
 
 
+@blas_threads()
 def static_equilibrium(model, *, loads=None, load_steps=10, tolerance=1e-11,
                        max_iterations=30, mechanics=None):
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .blas import blas_threads
+
 
 @dataclass
 class BeamStresses:
@@ -123,6 +125,7 @@ def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=N
     return mechanics.stress_resultants(config, r, sigma_c)
 
 
+@blas_threads()
 def stresses_along(model, states, *, inputs=None, mechanics=None):
     """Von Mises stresses along a trajectory: (names, (n_times, n_beams, 2) Pa).
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .blas import blas_threads
 from .errors import FlexureError, SimulationError
 from .tables import format_table, markdown_table
 
@@ -84,6 +85,7 @@ class WorkPrecision:
         plt.close(fig)
 
 
+@blas_threads()
 def work_precision(model, t_end, *, inputs=None, methods=DEFAULT_METHODS,
                    rtols=(1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8), reference_rtol=1e-11,
                    samples=101, time_limit=60.0, progress=None):
