@@ -1,6 +1,6 @@
 """The closed-loop controller as an FMI 2.0 co-simulation FMU (pythonfmu, flexure.fmu glue).
 
-The slave runs the very `LoopController` of the in-process loop (runner.py), configured by
+The slave runs the very `LoopController` of the in-process loop (loop_controller.py), configured by
 the dictionary `LoopController.to_dict()` embedded in the generated script, so it computes the
 same numbers. Variables, per loop (named after the plant's ports so that connections read
 plainly):
@@ -27,7 +27,7 @@ from pythonfmu import DefaultExperiment
 from flexure.core import FlexureError
 from flexure.fmu.slave import SafeSlave
 
-from .runner import LoopController
+from .loop_controller import LoopController
 
 
 class ControllerStepError(FlexureError, ValueError):
@@ -104,6 +104,7 @@ def build_controller_fmu(controller, design, model, dest):
     `dest` is the .fmu file (or a folder for `flexure_controller.fmu`). The script is named
     after a digest of the configuration so FMUs of different designs do not share a module.
     """
+    # the builder is not part of the bundle inside an FMU, which imports this module too
     from flexure.fmu import build_slave_fmu
 
     config = json.dumps(controller_config(controller, design, model), sort_keys=True)

@@ -6,7 +6,7 @@
 libcosim's fixed-step algorithm steps both FMUs over each macro step [t_k, t_k+1] (h = 1 / fs,
 an integer number of nanoseconds) after transferring the connected values: the controller
 reads y_k, the plant gets the force the controller computed during the previous step. That is
-the loop timing of runner.py (one sample of computation delay), so the co-simulation
+the loop timing of loop_controller.py (one sample of computation delay), so the co-simulation
 reproduces the in-process loop. The samples are read back with time-series observers: after
 macro step k+1 the plant's output is y_k+1 and its input the force it held on [t_k, t_k+1).
 """
@@ -17,6 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from flexure.core import SimulationError
+from flexure.fmu import build_scene_fmu
+
+from .controller_fmu import build_controller_fmu
 
 NS = 1_000_000_000
 
@@ -29,8 +32,6 @@ def _scene_source(scene, model):
 
 def scene_fmu(scene, model, workdir=None):
     """The scene's FMU in `workdir` (built once; rebuilt when absent)."""
-    from flexure.fmu import build_scene_fmu
-
     folder = Path(workdir) if workdir is not None else Path(
         tempfile.mkdtemp(prefix="flexure_loop_"))
     folder.mkdir(parents=True, exist_ok=True)
@@ -61,8 +62,6 @@ def run_cosimulation(model, scene, controller, design, *, method="esdirk3", rtol
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
     from libcosimpy.CosimSlave import CosimLocalSlave
-
-    from .controller_fmu import build_controller_fmu
 
     log_output_level(CosimLogLevel.WARNING)
     folder = Path(workdir) if workdir is not None else Path(

@@ -14,8 +14,8 @@ The controller runs at the sample rate fs as the Tustin discretisation (pre-warp
 the plant is seen through a zero-order hold (exact discretisation of the full linear model,
 parasitic modes included) and one sample of computation delay z^-1: the force computed from
 y(t_k) is applied on [t_(k+1), t_(k+2)), the timing of a co-simulation master that transfers
-values once per macro step (see runner.py). k_p is set so that |L(e^(j w_c Ts))| = 1 for the
-discrete loop gain L(z) = P_zoh(z) z^-1 C(z).
+values once per macro step (see loop_controller.py). k_p is set so that |L(e^(j w_c Ts))| = 1
+for the discrete loop gain L(z) = P_zoh(z) z^-1 C(z).
 
 The design reports phase margin, gain margin and modulus margin (1 / max |S|, the smallest
 distance of L to -1) from python-control, and refuses (ControlDesignError) a design whose

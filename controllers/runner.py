@@ -31,7 +31,8 @@ import numpy as np
 from flexure.core import FlexureError
 
 from .feedback import DiscreteController, design_feedback
-from .feedforward import LowFrequencyModel, forces, low_frequency_model
+from .feedforward import low_frequency_model
+from .loop_controller import LoopController
 from .profiles import ThirdOrderProfile
 
 TARGET = 1e-3  # the tracking target: max |error| / stroke
@@ -40,86 +41,6 @@ PLANTS = ("inprocess", "fmu", "libcosim")
 
 class LoopError(FlexureError, ValueError):
     """A closed-loop run was asked for with impossible settings."""
-
-
-class LoopController:
-    """Feedback plus feedforward at one sample rate; the same object runs in the FMU.
-
-    Parameters
-    ----------
-    controller : DiscreteController
-        The discrete feedback C(z) from errors (m) to forces (N), one channel per loop.
-    profile : ThirdOrderProfile
-        The motion of the loop `axis`; the other loops hold their initial position.
-    fs : float
-        Sample rate (Hz).
-    samples : int
-        The number of intervals N (the run ends at N / fs).
-    offsets : array (n_loops,)
-        The initial positions of the loops (m): the reference is offsets + profile.
-    feedforward : LowFrequencyModel or None
-        The model whose inverse gives the feedforward; None for feedback alone.
-    feedforward_forces : array (samples + 2, n_loops), optional
-        Precomputed feedforward forces (N) held from each sample, instead of `feedforward`
-        (e.g. from a `StableInverse` of the full linear model).
-    """
-
-    def __init__(self, controller, profile, *, fs, samples, offsets, feedforward=None, axis=0,
-                 feedforward_forces=None):
-        self.controller, self.profile = controller, profile
-        self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
-        self.offsets = np.asarray(offsets, float).reshape(-1)
-        self.feedforward_model = feedforward
-        n = self.offsets.size
-        direction = np.eye(n)[self.axis]
-        k = np.arange(self.samples + 2)
-        t = k / self.fs
-        self.reference = self.offsets + np.outer(profile.position(t), direction)
-        self.explicit_forces = feedforward_forces is not None
-        if self.explicit_forces:
-            self.feedforward = np.asarray(feedforward_forces, float).reshape(k.size, n)
-        elif feedforward is None:
-            self.feedforward = np.zeros((k.size, n))
-        else:
-            self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
-                                      direction=direction, offsets=self.offsets)
-
-    def reset(self):
-        self.controller.reset()
-
-    def initial_output(self):
-        """u_0 (N): the force on [t_0, t_1), before anything is measured."""
-        return self.feedforward[0].copy()
-
-    def step(self, k, y):
-        """u_k+1 (N) from the measurement y_k (m) at sample k; also returns e_k."""
-        k = min(int(k), self.samples)  # past the end: the reference and force are held
-        e = self.reference[k] - np.asarray(y, float)
-        return self.controller.step(e) + self.feedforward[k + 1], e
-
-    # -- serialisation (the controller FMU is configured by this dictionary) ---------------
-    def to_dict(self):
-        p = self.profile
-        return {
-            "controller": self.controller.to_dict(),
-            "profile": {"stroke": p.stroke, "duration": p.duration, "jerk_time": p.jerk_time,
-                        "acceleration_time": p.acceleration_time, "start": p.start},
-            "fs": self.fs, "samples": self.samples, "offsets": self.offsets.tolist(),
-            "axis": self.axis,
-            "feedforward": (None if self.feedforward_model is None
-                            else self.feedforward_model.to_dict()),
-            "feedforward_forces": (self.feedforward.tolist() if self.explicit_forces
-                                   else None),
-        }
-
-    @classmethod
-    def from_dict(cls, data):
-        ff = data["feedforward"]
-        return cls(DiscreteController.from_dict(data["controller"]),
-                   ThirdOrderProfile(**data["profile"]), fs=data["fs"],
-                   samples=data["samples"], offsets=data["offsets"], axis=data["axis"],
-                   feedforward=None if ff is None else LowFrequencyModel.from_dict(ff),
-                   feedforward_forces=data.get("feedforward_forces"))
 
 
 @dataclass

@@ -1,0 +1,114 @@
+"""The loop controller: feedback plus feedforward at one sample rate, the same on every plant.
+
+At the samples t_k = k / fs (k = 0 .. N):
+
+    y_k   = plant output (the colocated positions of the loops), measured at t_k
+    e_k   = r_k - y_k                         r: the profile plus the initial positions
+    u_k+1 = C(z) e_k + u_ff,k+1               computed at t_k, applied on [t_k+1, t_k+2)
+    plant: u_k held over [t_k, t_k+1)         (zero-order hold)
+
+so the force is computed from a measurement one sample older than the interval it acts on:
+one sample of computation delay, as in a real-time controller that writes its output at the
+next clock tick. That is also exactly the timing of a co-simulation master that transfers
+the values between the FMUs once per macro step (libcosim's fixed-step algorithm: the
+controller FMU reads y_k at the start of its step over [t_k, t_k+1] and its new output reaches
+the plant at the start of the next step), so the in-process loop (sample_loop.py), the loop
+around the fmpy FMU and the libcosim co-simulation (cosim.py, controller_fmu.py) all compute
+the same sequence. The design (feedback.py) includes that delay and the hold in its margins.
+u_0 = u_ff,0 (nothing measured yet).
+
+u_ff,k is the mean over [t_k, t_k+1) of the continuous feedforward (feedforward.py), so the
+held force carries no half-sample lag.
+"""
+
+import numpy as np
+
+from .feedback import DiscreteController
+from .feedforward import LowFrequencyModel, forces
+from .profiles import ThirdOrderProfile
+
+
+class LoopController:
+    """Feedback plus feedforward at one sample rate; the same object runs in the FMU.
+
+    Parameters
+    ----------
+    controller : DiscreteController
+        The discrete feedback C(z) from errors (m) to forces (N), one channel per loop.
+    profile : ThirdOrderProfile
+        The motion of the loop `axis`; the other loops hold their initial position.
+    fs : float
+        Sample rate (Hz).
+    samples : int
+        The number of intervals N (the run ends at N / fs).
+    offsets : array (n_loops,)
+        The initial positions of the loops (m): the reference is offsets + profile.
+    feedforward : LowFrequencyModel or None
+        The model whose inverse gives the feedforward; None for feedback alone.
+    axis : int
+        The loop that follows the profile.
+    feedforward_forces : array (samples + 2, n_loops), optional
+        Precomputed feedforward forces (N) held from each sample, instead of `feedforward`
+        (e.g. from a `StableInverse` of the full linear model).
+    """
+
+    def __init__(self, controller: DiscreteController, profile: ThirdOrderProfile, *,
+                 fs: float, samples: int, offsets, feedforward: LowFrequencyModel | None = None,
+                 axis: int = 0, feedforward_forces=None):
+        self.controller, self.profile = controller, profile
+        self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
+        self.offsets = np.asarray(offsets, float).reshape(-1)
+        self.feedforward_model = feedforward
+        n = self.offsets.size
+        direction = np.eye(n)[self.axis]
+        k = np.arange(self.samples + 2)
+        t = k / self.fs
+        self.reference = self.offsets + np.outer(profile.position(t), direction)
+        self.explicit_forces = feedforward_forces is not None
+        if self.explicit_forces:
+            self.feedforward = np.asarray(feedforward_forces, float).reshape(k.size, n)
+        elif feedforward is None:
+            self.feedforward = np.zeros((k.size, n))
+        else:
+            self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
+                                      direction=direction, offsets=self.offsets)
+
+    def reset(self) -> None:
+        """Back to the zero state of the feedback, before sample 0."""
+        self.controller.reset()
+
+    def initial_output(self) -> np.ndarray:
+        """u_0 (N): the force on [t_0, t_1), before anything is measured."""
+        return self.feedforward[0].copy()
+
+    def step(self, k: int, y) -> tuple[np.ndarray, np.ndarray]:
+        """u_k+1 (N) from the measurement y_k (m) at sample k; also returns e_k (m)."""
+        k = min(int(k), self.samples)  # past the end: the reference and force are held
+        e = self.reference[k] - np.asarray(y, float)
+        return self.controller.step(e) + self.feedforward[k + 1], e
+
+    # -- serialisation (the controller FMU is configured by this dictionary) ---------------
+    def to_dict(self) -> dict:
+        """The JSON-able settings `from_dict` rebuilds this controller from."""
+        p = self.profile
+        return {
+            "controller": self.controller.to_dict(),
+            "profile": {"stroke": p.stroke, "duration": p.duration, "jerk_time": p.jerk_time,
+                        "acceleration_time": p.acceleration_time, "start": p.start},
+            "fs": self.fs, "samples": self.samples, "offsets": self.offsets.tolist(),
+            "axis": self.axis,
+            "feedforward": (None if self.feedforward_model is None
+                            else self.feedforward_model.to_dict()),
+            "feedforward_forces": (self.feedforward.tolist() if self.explicit_forces
+                                   else None),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "LoopController":
+        """The controller of `to_dict` (at its zero initial state)."""
+        ff = data["feedforward"]
+        return cls(DiscreteController.from_dict(data["controller"]),
+                   ThirdOrderProfile(**data["profile"]), fs=data["fs"],
+                   samples=data["samples"], offsets=data["offsets"], axis=data["axis"],
+                   feedforward=None if ff is None else LowFrequencyModel.from_dict(ff),
+                   feedforward_forces=data.get("feedforward_forces"))
