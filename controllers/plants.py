@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexure.core import SimulationError, Simulator
+from flexure.core import SimulationError
 
 
 class InProcessPlant:
@@ -28,6 +28,8 @@ class InProcessPlant:
     kind = "inprocess"
 
     def __init__(self, model, *, method="esdirk3", rtol=1e-8):
+        from flexure.core import Simulator  # the models (numba, scipy) on first use
+
         self.model = model
         self.simulator = Simulator(model, method=method, rtol=rtol)
         self.input_names = list(self.simulator.input_names)
