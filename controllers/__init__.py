@@ -9,9 +9,16 @@
   gain and modulus margins of the sampled loop (feedback.py).
 - `low_frequency_model`, `StableInverse`: feedforward, the inverse of the low-frequency model
   and a stable approximate inverse of models with bad zeros (feedforward.py).
-- `run_loop`: the sampled loop around the in-process simulation, the scene FMU under fmpy, or
-  the controller and scene FMUs in libcosim (runner.py, plants.py, cosim.py,
-  controller_fmu.py); `flexure loop` on the command line (cli.py).
+- `LoopController`: feedback plus feedforward at one sample rate, the same object on every
+  plant and inside the controller FMU (loop_controller.py); `build_loop` designs it for a
+  scene (loop_design.py).
+- `run_loop`: the sampled loop (sample_loop.py) around the in-process simulation, the scene
+  FMU under fmpy (plants.py), or the controller and scene FMUs in libcosim (cosim.py,
+  controller_fmu.py); its `LoopResult` (loop_result.py); `flexure loop` on the command line
+  (cli.py).
+
+The modules import one way: profiles, feedback, feedforward -> loop_controller ->
+loop_design, sample_loop, controller_fmu -> cosim -> runner -> cli.
 
 Only flexure.core's public API is used: no physics here.
 """
@@ -26,8 +33,10 @@ _LAZY = {
     "LowFrequencyModel": "feedforward", "StableInverse": "feedforward",
     "low_frequency_model": "feedforward",
     "ProfileError": "profiles", "ThirdOrderProfile": "profiles",
-    "TARGET": "runner", "LoopController": "runner", "LoopError": "runner",
-    "LoopResult": "runner", "build_loop": "runner", "run_loop": "runner",
+    "LoopController": "loop_controller",
+    "LoopError": "loop_design", "build_loop": "loop_design",
+    "TARGET": "loop_result", "LoopResult": "loop_result",
+    "run_loop": "runner",
 }
 
 __all__ = [

@@ -1,0 +1,106 @@
+"""The result of a closed-loop run: its samples, the summary `flexure loop` prints, its plot.
+
+The error reported is max_k |e_k| over the samples, during the move and a settling time after
+it, against the target `TARGET` (0.1 % of the stroke).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+TARGET = 1e-3  # the tracking target: max |error| / stroke
+
+
+@dataclass
+class LoopResult:
+    """The samples of a closed-loop run and its summary.
+
+    t (N+1,) s; reference, position, error (N+1, n_loops) m; force, feedforward
+    (N+1, n_loops) N, the force held from t_k (the last row repeats the one before).
+    """
+
+    t: np.ndarray
+    reference: np.ndarray
+    position: np.ndarray
+    force: np.ndarray
+    feedforward: np.ndarray
+    stroke: float
+    design: dict
+    settings: dict = field(default_factory=dict)
+    wall_time_s: float = 0.0
+
+    @property
+    def error(self) -> np.ndarray:
+        """r - y (m), (N+1, n_loops)."""
+        return self.reference - self.position
+
+    @property
+    def max_abs_error(self) -> float:
+        """The largest |r - y| (m) over the samples and the loops."""
+        return float(np.max(np.abs(self.error)))
+
+    def summary(self) -> dict:
+        """The dictionary `flexure loop --json` prints (SI units)."""
+        ratio = self.max_abs_error / abs(self.stroke)
+        axis = self.settings.get("axis", 0)
+        return {
+            "scene": self.settings.get("scene"), "plant": self.settings.get("plant"),
+            "feedforward": self.settings.get("feedforward"),
+            "feedforward_kind": self.settings.get("feedforward_kind"),
+            "max_abs_error": self.max_abs_error, "stroke": self.stroke,
+            "error_ratio": ratio, "target": TARGET, "passed": bool(ratio <= TARGET),
+            "max_abs_error_during_move": float(np.max(np.abs(
+                self.error[self.t <= self.settings.get("move_end", np.inf), axis]))),
+            "final_error": float(np.max(np.abs(self.error[-1]))),
+            "max_abs_force": float(np.max(np.abs(self.force))),
+            "max_abs_feedback_force": float(np.max(np.abs(self.force - self.feedforward))),
+            "phase_margin_deg": self.design["phase_margin_deg"],
+            "gain_margin": self.design["gain_margin"],
+            "modulus_margin": self.design["modulus_margin"],
+            "crossover_rad_s": self.design["crossover_rad_s"],
+            "sample_rate_hz": self.design["sample_rate_hz"],
+            "closed_loop_spectral_radius": self.design["closed_loop_spectral_radius"],
+            "loops": self.design["loops"],
+            "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
+            "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
+        }
+
+    def plot(self, path, *, title: str | None = None):
+        """Reference, position, error and force against time, saved as a PNG; returns path."""
+        import matplotlib  # 0.5 s to import: only where it is used
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        axis = self.settings.get("axis", 0)
+        fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+        axes[0].plot(self.t, self.reference[:, axis] * 1e3, label="reference")
+        axes[0].plot(self.t, self.position[:, axis] * 1e3, "--", label="position")
+        axes[0].set_ylabel("position (mm)")
+        axes[0].legend(loc="lower right")
+        band = TARGET * abs(self.stroke) * 1e6
+        error = self.error[:, axis] * 1e6
+        axes[1].plot(self.t, error, label="error r - y")
+        if np.max(np.abs(error)) > 0.05 * band:  # the target band would flatten the error
+            axes[1].axhline(band, color="r", lw=0.8, ls=":", label=f"target +-{band:.3g} um")
+            axes[1].axhline(-band, color="r", lw=0.8, ls=":")
+        else:
+            axes[1].text(0.01, 0.04, f"target +-{band:.3g} um: far off this scale",
+                         transform=axes[1].transAxes, va="bottom", fontsize=9, color="r")
+        axes[1].set_ylabel("error (um)")
+        axes[1].legend(loc="upper right")
+        axes[2].step(self.t, self.force[:, axis], where="post", label="total force")
+        axes[2].step(self.t, self.feedforward[:, axis], where="post", ls="--",
+                     label="feedforward")
+        axes[2].set_ylabel("force (N)")
+        axes[2].set_xlabel("time (s)")
+        axes[2].legend(loc="upper right")
+        s = self.summary()
+        fig.suptitle(title or (
+            f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} mm, "
+            f"max |e| = {s['max_abs_error'] * 1e6:.3g} um = {100 * s['error_ratio']:.3g} % "
+            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"), fontsize=10)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path

@@ -1,0 +1,86 @@
+"""The sample loop: a plant stepped under a `LoopController`, sample by sample.
+
+Two implementations of the same loop (the timing is in loop_controller.py):
+
+- `simulate_loop`: the readable reference in Python, around any plant of plants.py (the
+  in-process simulator or the scene FMU under fmpy);
+- `compiled_loop`: the in-process plant as one compiled run (flexure.core.run_sampled_loop),
+  with the same samples, forces and integrator calls as `simulate_loop` around an
+  `InProcessPlant`; the tests hold one against the other.
+
+Both return t (N+1,) s, reference and position (N+1, n_loops) m, force (N+1, n_loops) N.
+"""
+
+import numpy as np
+
+from .loop_controller import LoopController
+
+
+def simulate_loop(plant, controller: LoopController, design, *, progress=None):
+    """Step `plant` (plants.py interface) under `controller`; returns t, r, y, u arrays.
+
+    Parameters
+    ----------
+    plant : InProcessPlant or FmuPlant
+    controller : LoopController
+    design : FeedbackDesign
+        Its `pairs` say which plant inputs and outputs the loops use.
+    progress : callable, optional
+        Called with the fraction of samples done, about 100 times.
+    """
+    pairs = design.pairs
+    n_inputs = len(plant.input_names)
+    inputs = [p.input_index for p in pairs]
+    outputs = [p.output_index for p in pairs]
+    N, fs = controller.samples, controller.fs
+    position = np.empty((N + 1, len(pairs)))
+    force = np.empty((N + 1, len(pairs)))
+    controller.reset()
+    y = plant.reset()[outputs]
+    u = controller.initial_output()
+    full = np.zeros(n_inputs)
+    report_every = max(1, N // 100)
+    for k in range(N):
+        if progress is not None and k % report_every == 0:
+            progress(k / N)
+        position[k] = y
+        force[k] = u
+        u_next, _ = controller.step(k, y)
+        full[inputs] = u
+        plant.set_input(full)
+        plant.advance((k + 1) / fs)
+        y = plant.output()[outputs]
+        u = u_next
+    if progress is not None:
+        progress(1.0)
+    position[N], force[N] = y, force[N - 1]
+    t = np.arange(N + 1) / fs
+    return t, controller.reference[: N + 1].copy(), position, force
+
+
+def compiled_loop(model, controller: LoopController, design, *, method: str, rtol: float,
+                  progress=None):
+    """The in-process loop of `model` as one compiled run; returns t, r, y, u like
+    `simulate_loop`.
+
+    Parameters
+    ----------
+    model : Model
+    controller : LoopController
+    design : FeedbackDesign
+    method, rtol : str, float
+        The integrator (a `flexure.core.METHODS` name) and its relative tolerance.
+    progress : callable, optional
+        Called with the fraction of samples done.
+    """
+    from flexure.core import Simulator, run_sampled_loop  # the models (numba) on first use
+
+    sim = Simulator(model, method=method, rtol=rtol)
+    feedback = controller.controller
+    t, position, force = run_sampled_loop(
+        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
+        feedforward=controller.feedforward,
+        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
+        loop_inputs=[pair.input_index for pair in design.pairs],
+        loop_outputs=[pair.output_index for pair in design.pairs], progress=progress)
+    return t, controller.reference[: len(t)].copy(), position, force
