@@ -6,7 +6,6 @@ first use (PEP 562). These are structural checks in a fresh interpreter, not tim
 """
 
 import json
-import os
 import subprocess
 import sys
 
@@ -60,18 +59,3 @@ def test_submodules_still_import_through_the_package():
     from flexure.core import assembly, elements
 
     assert hasattr(assembly, "__file__") and hasattr(elements, "ELEMENT_TYPES")
-
-
-def test_blas_limited_for_libraries_loaded_after_import():
-    """The BLAS thread limit also reaches the libraries loaded after `import flexure.core`."""
-    code = ("import flexure.core\nfrom flexure.core import simulate\n"
-            "import flexure.core.simulation\n"
-            "from threadpoolctl import threadpool_info\n"
-            "import json\n"
-            "print(json.dumps(sorted({i['num_threads'] for i in threadpool_info() "
-            "if i['user_api'] == 'blas'})))")
-    env = {**os.environ, "FLEXURE_BLAS_THREADS": "1"}
-    env.pop("OPENBLAS_NUM_THREADS", None)
-    completed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                               check=True, env=env)
-    assert json.loads(completed.stdout.splitlines()[-1]) == [1]
