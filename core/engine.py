@@ -7,9 +7,12 @@ Kinematics. x = F(q) solves, on the free coordinates, e_o(x) = 0 (deformations p
 zero), e_m(x) = q_e (DOF deformations) and x_m = q_x (DOF coordinates). Warm start: the
 first-order prediction x_prev + DF_prev (q - q_prev); if its residual exceeds the tolerance,
 chord iterations with the previous LU of the constraint Jacobian J (converging at a rate of
-order |dq| / L), and full Newton from there if they stall. Then J DF = [0; I] gives DF.
+order |dq| / L), and full Newton from there if they stall. J DF = [0; I] gives DF where it is
+needed (the reduced form, the tangent, the kinematics operation).
 
-Equations of motion (the reduced form of the course notes):
+Equations of motion, in the reduced form of the course notes (or, for models with many DOFs,
+in the augmented form on the free coordinates that `evaluate` describes, which gives the same
+qddot without forming DF and M_bar; `engine_data.evaluation_cost` picks one per model):
 
     M_bar qddot = DF^T (f - M (D2F qdot) qdot - g_conv - De^T sigma_c),  M_bar = DF^T M DF
 
@@ -43,11 +46,11 @@ from .native import address_of, as_float_pointer, as_int_pointer, call_deformati
 # slot indices as compile-time constants
 (_DIMS, _FREE, _ROWS, _DOF_COORDS, _DOF_DEFS, _DOF_POS, _STRESSED, _INPUT_COORDS, _GROUPS,
  _COORD_INDEX, _DEF_INDEX, _ROW_OF_DEF, _COL_OF_COORD, _PIVOTS, _MASS_PIVOTS,
- _COUNTERS) = range(len(ed.INT_SLOTS))
+ _COUNTERS, _AUG_PIVOTS) = range(len(ed.INT_SLOTS))
 (_SETTINGS, _S, _D, _LUMPED, _CONST_FORCE, _GROUP_DATA, _INPUTS, _Q_REF, _X, _Q, _DF, _LU,
  _E, _DE, _D2E, _X_TRIAL, _G, _DX, _XDOT, _EDOT, _SIGMA, _FORCE, _MASS, _MASS_LU,
  _REDUCED_FORCE, _QDDOT, _CONV, _LOCAL, _DEF, _STIFFNESS, _DAMPING, _JAC_CACHE,
- _X_START) = range(len(ed.FLOAT_SLOTS))
+ _X_START, _XDDOT, _AUG, _AUG_RHS) = range(len(ed.FLOAT_SLOTS))
 _N_INT, _N_FLOAT = len(ed.INT_SLOTS), len(ed.FLOAT_SLOTS)
 
 
@@ -241,29 +244,16 @@ def _constraint_jacobian(table, J):
 
 @kernel
 def _store(table, q, x):
-    """Factor J at the solved x (deformations of order 2 evaluated there), DF, and keep both
-    as the next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
+    """Factor J at the solved x (deformations of order 2 evaluated there) and keep both as the
+    next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
     singular."""
     dims = _i(table, _DIMS)
-    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
+    nx, nf = dims[ed.NX], dims[ed.NFREE]
     lu, piv = _f(table, _LU), _i(table, _PIVOTS)
     _constraint_jacobian(table, lu)
     ratio = lu_factor(lu, nf, piv)
     if not ratio > _f(table, _SETTINGS)[ed.SINGULAR_RATIO]:
         return ed.SINGULAR_CONSTRAINTS
-    DF, column = _f(table, _DF), _f(table, _DX)
-    free = _i(table, _FREE)
-    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
-    DF[:] = 0.0
-    for j in range(ndof):  # J DF = [0; I]: DOF coordinates first in q, last in the rows of J
-        column[:] = 0.0
-        if j < n_xdof:
-            column[n_rigid + n_edof + j] = 1.0
-        else:
-            column[n_rigid + j - n_xdof] = 1.0
-        lu_solve(lu, nf, piv, column)
-        for a in range(nf):
-            DF[free[a] * ndof + j] = column[a]
     _f(table, _X)[:nx] = x[:nx]
     _f(table, _Q)[:] = q
     dims[ed.WARM] = 1
@@ -271,21 +261,57 @@ def _store(table, q, x):
 
 
 @kernel
-def solve_kinematics(table, q):
-    """x = F(q) into slot x, with e, De, D2e, the LU of J and DF there; a status code."""
+def _dof_rows(table, v, out):
+    """out (n_free,) = [0; v_e; v_x]: a DOF vector v (NDOF,: coordinate DOFs first) on the rows
+    of J (rigid rows, DOF deformation rows, DOF coordinate rows), so that J^-1 out = DF v."""
     dims = _i(table, _DIMS)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    out[:] = 0.0
+    for j in range(n_xdof):
+        out[n_rigid + n_edof + j] = v[j]
+    for j in range(n_edof):
+        out[n_rigid + j] = v[n_xdof + j]
+
+
+@kernel
+def compute_DF(table):
+    """DF (NX, NDOF) into slot DF from the LU of J of the last kinematic solution: J DF =
+    [0; I] column by column (NDOF solves)."""
+    dims = _i(table, _DIMS)
+    ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
+    lu, piv = _f(table, _LU), _i(table, _PIVOTS)
+    DF, column, unit = _f(table, _DF), _f(table, _DX), _f(table, _REDUCED_FORCE)
+    free = _i(table, _FREE)
+    DF[:] = 0.0
+    for j in range(ndof):
+        unit[:] = 0.0
+        unit[j] = 1.0
+        _dof_rows(table, unit, column)
+        lu_solve(lu, nf, piv, column)
+        for a in range(nf):
+            DF[free[a] * ndof + j] = column[a]
+
+
+@kernel
+def solve_kinematics(table, q):
+    """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
+    dims = _i(table, _DIMS)
+    dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
     nx, nf = dims[ed.NX], dims[ed.NFREE]
     tolerance = _f(table, _SETTINGS)[ed.TOLERANCE]
     x, g, dx, free = _f(table, _X_TRIAL), _f(table, _G), _f(table, _DX), _i(table, _FREE)
     lu, piv = _f(table, _LU), _i(table, _PIVOTS)
     if dims[ed.WARM] == 1:
-        DF, x_prev, q_prev = _f(table, _DF), _f(table, _X), _f(table, _Q)
-        ndof = dims[ed.NDOF]
-        for a in range(nx):
-            s = x_prev[a]
-            for j in range(ndof):
-                s += DF[a * ndof + j] * (q[j] - q_prev[j])
-            x[a] = s
+        # the first-order prediction x_prev + DF_prev (q - q_prev), DF_prev dq = J_prev^-1
+        # [0; dq] with the factors kept from the previous solution
+        x_prev, q_prev, dq = _f(table, _X), _f(table, _Q), _f(table, _REDUCED_FORCE)
+        for j in range(dq.size):
+            dq[j] = q[j] - q_prev[j]
+        _dof_rows(table, dq, dx)
+        lu_solve(lu, nf, piv, dx)
+        x[:nx] = x_prev[:nx]
+        for a in range(nf):
+            x[free[a]] += dx[a]
         deformations(table, x, 2)  # with the derivatives: usually x needs no correction
         if _residual(table, x, q, g) <= tolerance:
             return _store(table, q, x)
@@ -330,25 +356,35 @@ def solve_kinematics(table, q):
 def evaluate(table, q, qdot):
     """qddot (NDOF,) into slot qddot for DOFs q, velocities qdot and the inputs in slot inputs.
 
-    Leaves in the packed arrays what the tangent needs: the kinematics, the constitutive
-    stress resultants (slot sigma), the coordinate force balance r (slot force) and M_bar
-    (slot mass); a status."""
+    The accelerations come from the augmented system on the free coordinates (no DF, no
+    M_bar: the cost of forming DF^T M DF grew as NDOF^2 per element)
+
+        [M_ff  J_o^T] [xddot_f]   [r_f     ]      r = f - De^T sigma_c - g_conv
+        [J_o   0    ] [lambda ] = [-h_o    ]      h_i = xdot^T D2e_i xdot
+
+    with J_o the rigid rows of J; then qddot = [xddot on the DOF coordinates; De_m xddot +
+    h_m]. This is the reduced equation M_bar qddot = DF^T (r - M conv) (DF spans the null space
+    of J_o). Leaves in the packed arrays what the tangent needs: the kinematics with J's LU,
+    the constitutive stress resultants (slot sigma), r (slot force), xdot, conv = (D2F qdot)
+    qdot (slot conv) and xddot (slot xddot); a status. `reduced_mass` adds DF and M_bar."""
     status = solve_kinematics(table, q)
     if status != ed.OK:
         return status
     dims = _i(table, _DIMS)
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x, xdot = _f(table, _DF), _f(table, _X), _f(table, _XDOT)
+    n_rigid, n_xdof = dims[ed.NRIGID], dims[ed.NXDOF]
+    x, xdot, free = _f(table, _X), _f(table, _XDOT), _i(table, _FREE)
+    lu, piv, dx = _f(table, _LU), _i(table, _PIVOTS), _f(table, _DX)
     moving = False
     for j in range(ndof):
         if qdot[j] != 0.0:
             moving = True
-    for a in range(nx):
-        s = 0.0
-        for j in range(ndof):
-            s += DF[a * ndof + j] * qdot[j]
-        xdot[a] = s
-    # edot and, if moving, the quadratic forms of the constraint rows
+    _dof_rows(table, qdot, dx)  # xdot = DF qdot = J^-1 [0; qdot]
+    lu_solve(lu, nf, piv, dx)
+    xdot[:] = 0.0
+    for a in range(nf):
+        xdot[free[a]] = dx[a]
+    # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
     _element_rates(table, xdot, moving)
     # sigma_c = S e_s + D edot_s
     sigma, e, edot = _f(table, _SIGMA), _f(table, _E), _f(table, _EDOT)
@@ -363,38 +399,104 @@ def evaluate(table, q, qdot):
             if damped:
                 s += D[a * ns + b] * edot[stressed[b]]
         sigma[stressed[a]] = s
-    # coordinate force r = f - De^T sigma_c (- inertia terms below)
+    # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, _FORCE)
     r[:] = _f(table, _CONST_FORCE)
     inputs, input_coords = _f(table, _INPUTS), _i(table, _INPUT_COORDS)
     for j in range(inputs.size):
         r[input_coords[j]] += inputs[j]
     _scatter_stress(table, sigma, r)
-    conv = _f(table, _CONV)
-    if moving:  # (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot on the constraint rows]
-        dx = _f(table, _DX)
+    quad, conv = _f(table, _G), _f(table, _CONV)
+    conv[:] = 0.0
+    if moving:  # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows], for the tangent
         for a in range(nf):
-            dx[a] = _f(table, _G)[a]  # the quadratic forms, left in g by _element_rates
-        lu_solve(_f(table, _LU), nf, _i(table, _PIVOTS), dx)
-        conv[:] = 0.0
-        free = _i(table, _FREE)
+            dx[a] = quad[a]
+        lu_solve(lu, nf, piv, dx)
         for a in range(nf):
             conv[free[a]] = -dx[a]
-    _inertia(table, x, xdot, conv, moving, r)
-    # M_bar qddot = DF^T r
-    rq, qddot = _f(table, _REDUCED_FORCE), _f(table, _QDDOT)
-    for j in range(ndof):
-        s = 0.0
-        for a in range(nx):
-            s += DF[a * ndof + j] * r[a]
-        rq[j] = s
-    mass_lu = _f(table, _MASS_LU)
-    mass_lu[:] = _f(table, _MASS)
-    if not lu_factor(mass_lu, ndof, _i(table, _MASS_PIVOTS)) > 0.0:
+    qddot = _f(table, _QDDOT)
+    if dims[ed.AUGMENTED] == 0:  # the reduced form: DF, M_bar, M_bar qddot = DF^T r
+        compute_DF(table)
+        _inertia_reduced(table, x, xdot, conv, moving, r)  # r -= M conv + g_conv here
+        DF, rq = _f(table, _DF), _f(table, _REDUCED_FORCE)
+        for j in range(ndof):
+            s = 0.0
+            for a in range(nx):
+                s += DF[a * ndof + j] * r[a]
+            rq[j] = s
+        mass_lu = _f(table, _MASS_LU)
+        mass_lu[:] = _f(table, _MASS)
+        dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 1
+        if not lu_factor(mass_lu, ndof, _i(table, _MASS_PIVOTS)) > 0.0:
+            return ed.SINGULAR_MASS
+        qddot[:] = rq
+        lu_solve(mass_lu, ndof, _i(table, _MASS_PIVOTS), qddot)
+        return ed.OK
+    dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
+    na = nf + n_rigid
+    A, rhs = _f(table, _AUG), _f(table, _AUG_RHS)
+    A[: na * na] = 0.0
+    _inertia_forces(table, x, xdot, moving, r, A, na)
+    _rigid_rows(table, A, na)
+    for a in range(nf):
+        rhs[a] = r[free[a]]
+    for o in range(n_rigid):
+        rhs[nf + o] = -quad[o] if moving else 0.0
+    if not lu_factor(A, na, _i(table, _AUG_PIVOTS)) > 0.0:
         return ed.SINGULAR_MASS
-    qddot[:] = rq
-    lu_solve(mass_lu, ndof, _i(table, _MASS_PIVOTS), qddot)
+    lu_solve(A, na, _i(table, _AUG_PIVOTS), rhs)
+    xddot = _f(table, _XDDOT)
+    xddot[:] = 0.0
+    for a in range(nf):
+        xddot[free[a]] = rhs[a]
+    positions = _i(table, _DOF_POS)
+    for j in range(n_xdof):
+        qddot[j] = rhs[positions[j]]
+    _dof_deformation_accelerations(table, xddot, quad, moving, qddot)
     return ed.OK
+
+
+@kernel
+def _rigid_rows(table, A, na):
+    """The rigid rows J_o of J (De of the deformations prescribed zero on the free coordinates)
+    into A (na, na) as [., J_o^T; J_o, 0] beside the mass block of the n_free coordinates."""
+    dims = _i(table, _DIMS)
+    nf = dims[ed.NFREE]
+    row_of_def, col_of_coord = _i(table, _ROW_OF_DEF), _i(table, _COL_OF_COORD)
+    n_rigid = dims[ed.NRIGID]
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                o = row_of_def[defs[i * k + b]]
+                if o < 0 or o >= n_rigid:
+                    continue
+                for a in range(m):
+                    c = col_of_coord[coords[i * m + a]]
+                    if c >= 0:
+                        v = De[(i * k + b) * m + a]
+                        A[(nf + o) * na + c] = v
+                        A[c * na + nf + o] = v
+
+
+@kernel
+def _dof_deformation_accelerations(table, xddot, quad, moving, qddot):
+    """qddot of the DOF deformations: De_m xddot + h_m (the constraint rows of those DOFs)."""
+    dims = _i(table, _DIMS)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    row_of_def = _i(table, _ROW_OF_DEF)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                rr = row_of_def[defs[i * k + b]]
+                if rr < n_rigid or rr >= n_rigid + n_edof:
+                    continue
+                s = quad[rr] if moving else 0.0
+                base = (i * k + b) * m
+                for a in range(m):
+                    s += De[base + a] * xddot[coords[i * m + a]]
+                qddot[n_xdof + rr - n_rigid] = s
 
 
 @kernel
@@ -446,7 +548,82 @@ def _scatter_stress(table, sigma, r):
 
 
 @kernel
-def _inertia(table, x, xdot, conv, moving, r):
+def _inertia_forces(table, x, xdot, moving, r, A, na):
+    """The mass of the free coordinates M_ff = diag(lumped) + sum Dp^T Mp Dp into A's first
+    n_free rows and columns (row length na); gravity on the element masses into r and, if
+    moving, r -= g_conv = Dp^T Mp (D2p xdot) xdot. Element by element through the inertia
+    points."""
+    dims = _i(table, _DIMS)
+    nx = dims[ed.NX]
+    lumped, col_of_coord = _f(table, _LUMPED), _i(table, _COL_OF_COORD)
+    for a in range(nx):
+        c = col_of_coord[a]
+        if c >= 0:
+            A[c * na + c] += lumped[a]
+    local = _f(table, _LOCAL)
+    max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
+    data = _f(table, _GROUP_DATA)
+    for g in range(dims[ed.NGROUPS]):
+        row = _group(table, g)
+        P = row[ed.G_P]
+        if P == 0:
+            continue
+        n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
+        function = row[ed.G_INERTIA_ENTRY]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Mp Dp (P, m)
+        xl, vl = local[:max_m], local[max_m: 2 * max_m]
+        o = 2 * max_m
+        point, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
+            local[o + 2 * max_p: o + 3 * max_p]
+        o += 3 * max_p
+        Dp = local[o: o + P * m].reshape((P, m))
+        o += max_p * max_m
+        MpDp = local[o: o + P * m].reshape((P, m))
+        gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
+        for i in range(n):
+            Mp = data[row[ed.G_MASS_OFFSET] + i * P * P: row[ed.G_MASS_OFFSET] + (i + 1) * P * P]
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+                vl[a] = xdot[coords[i * m + a]]
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
+                         2 if moving else 1, point.ctypes.data, Dp.ctypes.data,
+                         acc.ctypes.data, m, P, width)
+            for pp in range(P):
+                point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
+            for pp in range(P):  # w = Mp (point forces), MpDp = Mp Dp
+                s = 0.0
+                for a in range(m):
+                    MpDp[pp, a] = 0.0
+                for qq in range(P):
+                    mpq = Mp[pp * P + qq]
+                    if mpq == 0.0:
+                        continue
+                    s += mpq * point[qq]
+                    for a in range(m):
+                        MpDp[pp, a] += mpq * Dp[qq, a]
+                w[pp] = s
+            for a in range(m):  # r += Dp^T w, M_ff += Dp^T Mp Dp
+                s = 0.0
+                for pp in range(P):
+                    s += Dp[pp, a] * w[pp]
+                r[coords[i * m + a]] += s
+                ca = col_of_coord[coords[i * m + a]]
+                if ca < 0:
+                    continue
+                for b in range(m):
+                    cb = col_of_coord[coords[i * m + b]]
+                    if cb < 0:
+                        continue
+                    s = 0.0
+                    for pp in range(P):
+                        s += Dp[pp, a] * MpDp[pp, b]
+                    A[ca * na + cb] += s
+
+
+@kernel
+def _inertia_reduced(table, x, xdot, conv, moving, r):
     """M_bar = DF^T M DF into slot mass; gravity on the element masses into r; and, if moving,
     r -= M conv + g_conv. Element by element through the inertia points."""
     dims = _i(table, _DIMS)
@@ -538,18 +715,106 @@ def _inertia(table, x, xdot, conv, moving, r):
                         mass[a * ndof + b] += ba * MpB[pp * ndof + b]
 
 
+@kernel
+def reduced_mass(table):
+    """DF (slot DF), M_bar = DF^T M DF (slot mass) and its LU (slot mass_lu) at the state of
+    the last `evaluate`, for the tangent and the implicit form (already there when that took
+    the reduced form); a status (SINGULAR_MASS)."""
+    dims = _i(table, _DIMS)
+    if dims[ed.MASS_CURRENT] == 1:
+        return ed.OK
+    compute_DF(table)
+    nx, ndof = dims[ed.NX], dims[ed.NDOF]
+    DF, mass, lumped, x = _f(table, _DF), _f(table, _MASS), _f(table, _LUMPED), _f(table, _X)
+    mass[:] = 0.0
+    for a in range(nx):  # the lumped masses
+        la = lumped[a]
+        if la == 0.0:
+            continue
+        for i in range(ndof):
+            di = la * DF[a * ndof + i]
+            if di == 0.0:
+                continue
+            for j in range(ndof):
+                mass[i * ndof + j] += di * DF[a * ndof + j]
+    local = _f(table, _LOCAL)
+    max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
+    data = _f(table, _GROUP_DATA)
+    for g in range(dims[ed.NGROUPS]):
+        row = _group(table, g)
+        P = row[ed.G_P]
+        if P == 0:
+            continue
+        n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
+        function = row[ed.G_INERTIA_ENTRY]
+        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
+        refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+        # scratch: x, v (m), p, acc (P), Dp (P, m), B = Dp DF_e and Mp B (P, ndof)
+        xl, vl = local[:max_m], local[max_m: 2 * max_m]
+        o = 2 * max_m
+        point, acc = local[o: o + max_p], local[o + max_p: o + 2 * max_p]
+        o += 3 * max_p
+        Dp = local[o: o + P * m].reshape((P, m))
+        o += 2 * max_p * max_m
+        B = local[o: o + max_p * ndof]
+        o += max_p * ndof
+        MpB = local[o: o + max_p * ndof]
+        for i in range(n):
+            Mp = data[row[ed.G_MASS_OFFSET] + i * P * P: row[ed.G_MASS_OFFSET] + (i + 1) * P * P]
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width, 1,
+                         point.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
+            B[: P * ndof] = 0.0
+            for pp in range(P):
+                for a in range(m):
+                    d = Dp[pp, a]
+                    if d != 0.0:
+                        row_df = coords[i * m + a] * ndof
+                        for j in range(ndof):
+                            B[pp * ndof + j] += d * DF[row_df + j]
+            for pp in range(P):
+                for j in range(ndof):
+                    MpB[pp * ndof + j] = 0.0
+                for qq in range(P):
+                    mpq = Mp[pp * P + qq]
+                    if mpq == 0.0:
+                        continue
+                    for j in range(ndof):
+                        MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
+            for pp in range(P):  # M_bar += B^T (Mp B)
+                for a in range(ndof):
+                    ba = B[pp * ndof + a]
+                    if ba == 0.0:
+                        continue
+                    for b in range(ndof):
+                        mass[a * ndof + b] += ba * MpB[pp * ndof + b]
+    mass_lu = _f(table, _MASS_LU)
+    mass_lu[:] = mass
+    if not lu_factor(mass_lu, ndof, _i(table, _MASS_PIVOTS)) > 0.0:
+        return ed.SINGULAR_MASS
+    dims[ed.MASS_CURRENT] = 1
+    return ed.OK
+
+
 # -- tangent ----------------------------------------------------------------------------------
 @kernel
 def tangent(table, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
-    state of the last `evaluate`, with the dynamic balance taken at accelerations qddot."""
+    state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,
+    M_bar and its LU as `reduced_mass` does. A status."""
+    status = reduced_mass(table)
+    if status != ed.OK:
+        return status
     dims = _i(table, _DIMS)
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x = _f(table, _DF), _f(table, _X)
-    # r_full = r - M DF qddot, then the multipliers J^-T r_full on the free coordinates
-    acc = _f(table, _CONV)
+    DF, x, conv = _f(table, _DF), _f(table, _X), _f(table, _CONV)
+    # r_full = r - M xddot with xddot = DF qddot + conv (the reduced form's r holds - M conv
+    # already), then the multipliers J^-T r_full on the free coordinates
+    acc = _f(table, _XDDOT)
+    with_conv = dims[ed.REDUCED] == 0
     for a in range(nx):
-        s = 0.0
+        s = conv[a] if with_conv else 0.0
         for j in range(ndof):
             s += DF[a * ndof + j] * qddot[j]
         acc[a] = s
@@ -630,6 +895,7 @@ def tangent(table, qddot):
                 K[i * ndof + j] += v * SD[j]
                 if damped:
                     C[i * ndof + j] += v * DD[j]
+    return ed.OK
 
 
 @kernel
@@ -721,7 +987,9 @@ def first_order_jacobian(table, y, J, column_major):
     if status != ed.OK:
         return status
     n = _i(table, _DIMS)[ed.NDOF]
-    tangent(table, _f(table, _QDDOT))
+    status = tangent(table, _f(table, _QDDOT))
+    if status != ed.OK:
+        return status
     K, C = _f(table, _STIFFNESS), _f(table, _DAMPING)
     mass_lu, piv = _f(table, _MASS_LU), _i(table, _MASS_PIVOTS)
     column = _f(table, _REDUCED_FORCE)
@@ -757,6 +1025,9 @@ def implicit_residual(table, y, yp, res):
     status = first_order_rhs(table, y, _f(table, _DX)[: 0])
     if status != ed.OK:
         return status
+    status = reduced_mass(table)
+    if status != ed.OK:
+        return status
     n = _i(table, _DIMS)[ed.NDOF]
     mass, qddot = _f(table, _MASS), _f(table, _QDDOT)
     for i in range(n):
@@ -776,7 +1047,9 @@ def implicit_jacobian(table, y, yp, cj, J):
     if status != ed.OK:
         return status
     n = _i(table, _DIMS)[ed.NDOF]
-    tangent(table, yp[n: 2 * n])
+    status = tangent(table, yp[n: 2 * n])
+    if status != ed.OK:
+        return status
     K, C, mass = _f(table, _STIFFNESS), _f(table, _DAMPING), _f(table, _MASS)
     N = 2 * n
     J[:] = 0.0
@@ -802,8 +1075,9 @@ def engine_entry(op, user_data, t, a, b, c, s):
     """Every operation of the engine on the packed model at user_data (an address table):
 
     OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major), OP_RESIDUAL (y, yp, res),
-    OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q), OP_DEFORMATIONS (x; s =
-    order), OP_EVALUATE (q, qdot), OP_TANGENT (qddot). Returns the status code."""
+    OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q; with DF), OP_DEFORMATIONS (x;
+    s = order), OP_EVALUATE (q, qdot; with DF and M_bar), OP_TANGENT (qddot). Returns the
+    status code."""
     table = address_of(user_data)
     dims = _i(table, _DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
@@ -821,15 +1095,18 @@ def engine_entry(op, user_data, t, a, b, c, s):
         return implicit_jacobian(table, carray(a, (n,), f8), carray(b, (n,), f8), s,
                                  carray(c, (n * n,), f8))
     if op == OP_KINEMATICS:
-        return solve_kinematics(table, carray(a, (ndof,), f8))
+        status = solve_kinematics(table, carray(a, (ndof,), f8))
+        if status == ed.OK:
+            compute_DF(table)
+        return status
     if op == OP_DEFORMATIONS:
         deformations(table, carray(a, (nx,), f8), int(s))
         return ed.OK
     if op == OP_EVALUATE:
-        return evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
+        status = evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
+        return reduced_mass(table) if status == ed.OK else status
     if op == OP_TANGENT:
-        tangent(table, carray(a, (ndof,), f8))
-        return ed.OK
+        return tangent(table, carray(a, (ndof,), f8))
     return -1
 
 

@@ -59,13 +59,18 @@ MODELS["stage_spatial_1dof_gravity"] = lambda: scene_with_gravity("stage_spatial
                                                                   [0.0, 0.0, -9.81])
 
 
-@pytest.fixture(scope="module", params=sorted(MODELS))
+@pytest.fixture(scope="module", params=[(name, form) for name in sorted(MODELS)
+                                        for form in ("reduced", "augmented")],
+                ids=lambda param: f"{param[0]}-{param[1]}")
 def case(request):
-    """(model, Mechanics, EngineData, q0) of one scene."""
-    model = MODELS[request.param]()
+    """(model, Mechanics, EngineData, q0) of one scene, the engine solving for the
+    accelerations in the reduced or in the augmented form (both are checked against the same
+    plain formulas)."""
+    name, form = request.param
+    model = MODELS[name]()
     mechanics = Mechanics(model)
-    return model, mechanics, EngineData(model), mechanics.kinematics.dofs_of(
-        model.initial_coordinates)
+    data = EngineData(model, augmented=form == "augmented")
+    return model, mechanics, data, mechanics.kinematics.dofs_of(model.initial_coordinates)
 
 
 def random_states(model, q0, seed, count=2):
@@ -276,6 +281,17 @@ def truss_pendulum(length=0.5, mass=1.0):
         "elements": {"rod": {"type": "PLTRUSS", "nodes": ["1", "2"], "section": "rod"}},
         "outputs": {"y": {"node": "2", "coordinate": "y"}},
     })
+
+
+def test_the_cheaper_form_is_chosen_per_model():
+    """The 1-DOF stage (M_bar 1 x 1) takes the reduced form, the 93-DOF refined stage (M_bar
+    costs NDOF^2 per element) the augmented one."""
+    from flexure.core.engine_data import evaluation_cost
+
+    assert EngineData(load_scene("stage_planar_1dof")).int_array("dims")[ed.AUGMENTED] == 0
+    small = evaluation_cost(11, 10, 1, [(3, 6, 8)])
+    large = evaluation_cost(99, 6, 93, [(33, 6, 8)])
+    assert small["reduced"] < small["augmented"] and large["augmented"] < large["reduced"]
 
 
 def test_statuses_and_their_messages():
