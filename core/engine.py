@@ -302,16 +302,26 @@ def solve_kinematics(table, q):
     x, g, dx, free = _f(table, _X_TRIAL), _f(table, _G), _f(table, _DX), _i(table, _FREE)
     lu, piv = _f(table, _LU), _i(table, _PIVOTS)
     if dims[ed.WARM] == 1:
-        # the first-order prediction x_prev + DF_prev (q - q_prev), DF_prev dq = J_prev^-1
-        # [0; dq] with the factors kept from the previous solution
+        # the first-order prediction x_prev + DF_prev (q - q_prev): with DF where the reduced
+        # form keeps it (every solution computes it there), else as J_prev^-1 [0; dq] with the
+        # factors kept from the previous solution
         x_prev, q_prev, dq = _f(table, _X), _f(table, _Q), _f(table, _REDUCED_FORCE)
-        for j in range(dq.size):
+        ndof = dims[ed.NDOF]
+        for j in range(ndof):
             dq[j] = q[j] - q_prev[j]
-        _dof_rows(table, dq, dx)
-        lu_solve(lu, nf, piv, dx)
-        x[:nx] = x_prev[:nx]
-        for a in range(nf):
-            x[free[a]] += dx[a]
+        if dims[ed.AUGMENTED] == 0:
+            DF = _f(table, _DF)
+            for a in range(nx):
+                s = x_prev[a]
+                for j in range(ndof):
+                    s += DF[a * ndof + j] * dq[j]
+                x[a] = s
+        else:
+            _dof_rows(table, dq, dx)
+            lu_solve(lu, nf, piv, dx)
+            x[:nx] = x_prev[:nx]
+            for a in range(nf):
+                x[free[a]] += dx[a]
         deformations(table, x, 2)  # with the derivatives: usually x needs no correction
         if _residual(table, x, q, g) <= tolerance:
             return _store(table, q, x)
@@ -379,11 +389,21 @@ def evaluate(table, q, qdot):
     for j in range(ndof):
         if qdot[j] != 0.0:
             moving = True
-    _dof_rows(table, qdot, dx)  # xdot = DF qdot = J^-1 [0; qdot]
-    lu_solve(lu, nf, piv, dx)
-    xdot[:] = 0.0
-    for a in range(nf):
-        xdot[free[a]] = dx[a]
+    reduced = dims[ed.AUGMENTED] == 0
+    if reduced:  # xdot = DF qdot
+        compute_DF(table)
+        DF = _f(table, _DF)
+        for a in range(nx):
+            s = 0.0
+            for j in range(ndof):
+                s += DF[a * ndof + j] * qdot[j]
+            xdot[a] = s
+    else:  # xdot = J^-1 [0; qdot]
+        _dof_rows(table, qdot, dx)
+        lu_solve(lu, nf, piv, dx)
+        xdot[:] = 0.0
+        for a in range(nf):
+            xdot[free[a]] = dx[a]
     # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
     _element_rates(table, xdot, moving)
     # sigma_c = S e_s + D edot_s
@@ -415,8 +435,7 @@ def evaluate(table, q, qdot):
         for a in range(nf):
             conv[free[a]] = -dx[a]
     qddot = _f(table, _QDDOT)
-    if dims[ed.AUGMENTED] == 0:  # the reduced form: DF, M_bar, M_bar qddot = DF^T r
-        compute_DF(table)
+    if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
         _inertia_reduced(table, x, xdot, conv, moving, r)  # r -= M conv + g_conv here
         DF, rq = _f(table, _DF), _f(table, _REDUCED_FORCE)
         for j in range(ndof):
