@@ -32,7 +32,10 @@ def test_work_precision_example_writes_table_and_plot(tmp_path):
     study = work_precision.main(["--scene", "stage_planar_1dof", "--t-end", "0.05",
                                  "--rtols", "1e-5", "--reference-rtol", "1e-9",
                                  "--out", str(tmp_path)])
-    assert len(study.rows) == 8 and all(r["status"] == "ok" for r in study.rows)
+    from flexure.core.workprecision import DEFAULT_METHODS
+
+    assert len(study.rows) == len(DEFAULT_METHODS) == 10
+    assert all(r["status"] == "ok" for r in study.rows)
     for name in ("work_precision.csv", "work_precision.md", "work_precision.png"):
         assert (tmp_path / name).stat().st_size > 100
     assert (tmp_path / "work_precision.csv").read_text().startswith("method,rtol,")
