@@ -29,7 +29,9 @@ J^-T (r - M DF qddot) on the constraint rows), DeF = De DF.
 
 Everything works element by element on the packed arrays of `engine_data.EngineData` (no
 dense (NX, NX) matrix is formed; M_bar is accumulated from (Dp DF_e)^T Mp (Dp DF_e)), and no
-evaluation allocates. The plain-numpy twin of every quantity is in `kinematics`, `assembly`
+evaluation allocates. J and the augmented system are factored as banded matrices
+(`core/banded.py`) in the bandwidth-reducing orders computed at packing, so an evaluation in
+the augmented form costs in proportion to the element count. The plain-numpy twin of every quantity is in `kinematics`, `assembly`
 and `mechanics` (used by the static analyses); tests compare the two to round-off.
 
 Status codes (`engine_data`): each function returns OK or the reason it could not finish;
@@ -39,6 +41,7 @@ nothing raises inside compiled code.
 import numpy as np
 from numba import carray, types
 
+from . import banded
 from . import engine_data as ed
 from .jit import entry, kernel
 from .native import address_of, as_float_pointer, as_int_pointer, call_deformations, call_inertia
@@ -46,11 +49,11 @@ from .native import address_of, as_float_pointer, as_int_pointer, call_deformati
 # slot indices as compile-time constants
 (_DIMS, _FREE, _ROWS, _DOF_COORDS, _DOF_DEFS, _DOF_POS, _STRESSED, _INPUT_COORDS, _GROUPS,
  _COORD_INDEX, _DEF_INDEX, _ROW_OF_DEF, _COL_OF_COORD, _PIVOTS, _MASS_PIVOTS,
- _COUNTERS, _AUG_PIVOTS) = range(len(ed.INT_SLOTS))
+ _COUNTERS, _AUG_PIVOTS, _J_ROW_POS, _J_COL_POS, _AUG_POS) = range(len(ed.INT_SLOTS))
 (_SETTINGS, _S, _D, _LUMPED, _CONST_FORCE, _GROUP_DATA, _INPUTS, _Q_REF, _X, _Q, _DF, _LU,
  _E, _DE, _D2E, _X_TRIAL, _G, _DX, _XDOT, _EDOT, _SIGMA, _FORCE, _MASS, _MASS_LU,
  _REDUCED_FORCE, _QDDOT, _CONV, _LOCAL, _DEF, _STIFFNESS, _DAMPING, _JAC_CACHE,
- _X_START, _XDDOT, _AUG, _AUG_RHS) = range(len(ed.FLOAT_SLOTS))
+ _X_START, _XDDOT, _AUG, _AUG_RHS, _BAND_SCRATCH) = range(len(ed.FLOAT_SLOTS))
 _N_INT, _N_FLOAT = len(ed.INT_SLOTS), len(ed.FLOAT_SLOTS)
 
 
@@ -220,10 +223,12 @@ def _residual(table, x, q, g):
 
 @kernel
 def _constraint_jacobian(table, J):
-    """J (n_free, n_free) row-major into J from the elements' De in slot de."""
+    """J (n_free, n_free) row-major into J from the elements' De in slot de, its rows and
+    columns in their banded order (slots j_row_position, j_column_position)."""
     dims = _i(table, _DIMS)
     nf = dims[ed.NFREE]
     J[:] = 0.0
+    rpos, cpos = _i(table, _J_ROW_POS), _i(table, _J_COL_POS)
     row_of_def, col_of_coord = _i(table, _ROW_OF_DEF), _i(table, _COL_OF_COORD)
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
@@ -235,11 +240,48 @@ def _constraint_jacobian(table, J):
                 for a in range(m):
                     c = col_of_coord[coords[i * m + a]]
                     if c >= 0:
-                        J[r * nf + c] = De[(i * k + b) * m + a]
+                        J[rpos[r] * nf + cpos[c]] = De[(i * k + b) * m + a]
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
     positions = _i(table, _DOF_POS)
     for j in range(dims[ed.NXDOF]):
-        J[(n_def + j) * nf + positions[j]] = 1.0
+        J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
+
+
+@kernel
+def _j_factor(table):
+    """J at the deformations' De into slot lu, factored (banded); the pivot ratio."""
+    dims = _i(table, _DIMS)
+    lu = _f(table, _LU)
+    _constraint_jacobian(table, lu)
+    return banded.factor(lu, dims[ed.NFREE], _i(table, _PIVOTS), dims[ed.J_KL], dims[ed.J_KU])
+
+
+@kernel
+def _j_solve(table, b):
+    """b (n_free,: on J's rows) <- J^-1 b (on the free coordinates), with the factors in
+    slot lu."""
+    dims = _i(table, _DIMS)
+    nf = dims[ed.NFREE]
+    rpos, cpos, t = _i(table, _J_ROW_POS), _i(table, _J_COL_POS), _f(table, _BAND_SCRATCH)
+    for r in range(nf):
+        t[rpos[r]] = b[r]
+    banded.solve(_f(table, _LU), nf, _i(table, _PIVOTS), dims[ed.J_KL], dims[ed.J_KU], t)
+    for c in range(nf):
+        b[c] = t[cpos[c]]
+
+
+@kernel
+def _j_solve_transposed(table, b):
+    """b (n_free,: on the free coordinates) <- J^-T b (on J's rows)."""
+    dims = _i(table, _DIMS)
+    nf = dims[ed.NFREE]
+    rpos, cpos, t = _i(table, _J_ROW_POS), _i(table, _J_COL_POS), _f(table, _BAND_SCRATCH)
+    for c in range(nf):
+        t[cpos[c]] = b[c]
+    banded.solve_transposed(_f(table, _LU), nf, _i(table, _PIVOTS), dims[ed.J_KL],
+                            dims[ed.J_KU], t)
+    for r in range(nf):
+        b[r] = t[rpos[r]]
 
 
 @kernel
@@ -248,10 +290,8 @@ def _store(table, q, x):
     next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
     singular."""
     dims = _i(table, _DIMS)
-    nx, nf = dims[ed.NX], dims[ed.NFREE]
-    lu, piv = _f(table, _LU), _i(table, _PIVOTS)
-    _constraint_jacobian(table, lu)
-    ratio = lu_factor(lu, nf, piv)
+    nx = dims[ed.NX]
+    ratio = _j_factor(table)
     if not ratio > _f(table, _SETTINGS)[ed.SINGULAR_RATIO]:
         return ed.SINGULAR_CONSTRAINTS
     _f(table, _X)[:nx] = x[:nx]
@@ -279,7 +319,6 @@ def compute_DF(table):
     [0; I] column by column (NDOF solves)."""
     dims = _i(table, _DIMS)
     ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
-    lu, piv = _f(table, _LU), _i(table, _PIVOTS)
     DF, column, unit = _f(table, _DF), _f(table, _DX), _f(table, _REDUCED_FORCE)
     free = _i(table, _FREE)
     DF[:] = 0.0
@@ -287,7 +326,7 @@ def compute_DF(table):
         unit[:] = 0.0
         unit[j] = 1.0
         _dof_rows(table, unit, column)
-        lu_solve(lu, nf, piv, column)
+        _j_solve(table, column)
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
 
@@ -300,7 +339,6 @@ def solve_kinematics(table, q):
     nx, nf = dims[ed.NX], dims[ed.NFREE]
     tolerance = _f(table, _SETTINGS)[ed.TOLERANCE]
     x, g, dx, free = _f(table, _X_TRIAL), _f(table, _G), _f(table, _DX), _i(table, _FREE)
-    lu, piv = _f(table, _LU), _i(table, _PIVOTS)
     if dims[ed.WARM] == 1:
         # the first-order prediction x_prev + DF_prev (q - q_prev): with DF where the reduced
         # form keeps it (every solution computes it there), else as J_prev^-1 [0; dq] with the
@@ -318,7 +356,7 @@ def solve_kinematics(table, q):
                 x[a] = s
         else:
             _dof_rows(table, dq, dx)
-            lu_solve(lu, nf, piv, dx)
+            _j_solve(table, dx)
             x[:nx] = x_prev[:nx]
             for a in range(nf):
                 x[free[a]] += dx[a]
@@ -327,7 +365,7 @@ def solve_kinematics(table, q):
             return _store(table, q, x)
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             dx[:] = g
-            lu_solve(lu, nf, piv, dx)
+            _j_solve(table, dx)
             step = 0.0
             for a in range(nf):
                 x[free[a]] -= dx[a]
@@ -344,11 +382,10 @@ def solve_kinematics(table, q):
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton
         deformations(table, x, 1)
         _residual(table, x, q, g)
-        _constraint_jacobian(table, lu)
-        if not lu_factor(lu, nf, piv) > 0.0:
+        if not _j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         dx[:] = g
-        lu_solve(lu, nf, piv, dx)
+        _j_solve(table, dx)
         step = 0.0
         for a in range(nf):
             x[free[a]] -= dx[a]
@@ -384,7 +421,7 @@ def evaluate(table, q, qdot):
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
     n_rigid, n_xdof = dims[ed.NRIGID], dims[ed.NXDOF]
     x, xdot, free = _f(table, _X), _f(table, _XDOT), _i(table, _FREE)
-    lu, piv, dx = _f(table, _LU), _i(table, _PIVOTS), _f(table, _DX)
+    dx = _f(table, _DX)
     moving = False
     for j in range(ndof):
         if qdot[j] != 0.0:
@@ -400,7 +437,7 @@ def evaluate(table, q, qdot):
             xdot[a] = s
     else:  # xdot = J^-1 [0; qdot]
         _dof_rows(table, qdot, dx)
-        lu_solve(lu, nf, piv, dx)
+        _j_solve(table, dx)
         xdot[:] = 0.0
         for a in range(nf):
             xdot[free[a]] = dx[a]
@@ -431,7 +468,7 @@ def evaluate(table, q, qdot):
     if moving:  # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows], for the tangent
         for a in range(nf):
             dx[a] = quad[a]
-        lu_solve(lu, nf, piv, dx)
+        _j_solve(table, dx)
         for a in range(nf):
             conv[free[a]] = -dx[a]
     qddot = _f(table, _QDDOT)
@@ -457,13 +494,17 @@ def evaluate(table, q, qdot):
     A[: na * na] = 0.0
     _inertia_forces(table, x, xdot, moving, r, A, na)
     _rigid_rows(table, A, na)
+    apos, t = _i(table, _AUG_POS), _f(table, _BAND_SCRATCH)
     for a in range(nf):
-        rhs[a] = r[free[a]]
+        t[apos[a]] = r[free[a]]
     for o in range(n_rigid):
-        rhs[nf + o] = -quad[o] if moving else 0.0
-    if not lu_factor(A, na, _i(table, _AUG_PIVOTS)) > 0.0:
+        t[apos[nf + o]] = -quad[o] if moving else 0.0
+    kl, ku = dims[ed.A_KL], dims[ed.A_KU]
+    if not banded.factor(A, na, _i(table, _AUG_PIVOTS), kl, ku) > 0.0:
         return ed.SINGULAR_MASS
-    lu_solve(A, na, _i(table, _AUG_PIVOTS), rhs)
+    banded.solve(A, na, _i(table, _AUG_PIVOTS), kl, ku, t)
+    for u in range(na):
+        rhs[u] = t[apos[u]]
     xddot = _f(table, _XDDOT)
     xddot[:] = 0.0
     for a in range(nf):
@@ -483,6 +524,7 @@ def _rigid_rows(table, A, na):
     nf = dims[ed.NFREE]
     row_of_def, col_of_coord = _i(table, _ROW_OF_DEF), _i(table, _COL_OF_COORD)
     n_rigid = dims[ed.NRIGID]
+    apos = _i(table, _AUG_POS)
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = _group_deformations(table, g)
         for i in range(n):
@@ -490,12 +532,13 @@ def _rigid_rows(table, A, na):
                 o = row_of_def[defs[i * k + b]]
                 if o < 0 or o >= n_rigid:
                     continue
+                po = apos[nf + o]
                 for a in range(m):
                     c = col_of_coord[coords[i * m + a]]
                     if c >= 0:
                         v = De[(i * k + b) * m + a]
-                        A[(nf + o) * na + c] = v
-                        A[c * na + nf + o] = v
+                        A[po * na + apos[c]] = v
+                        A[apos[c] * na + po] = v
 
 
 @kernel
@@ -575,10 +618,11 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
     dims = _i(table, _DIMS)
     nx = dims[ed.NX]
     lumped, col_of_coord = _f(table, _LUMPED), _i(table, _COL_OF_COORD)
+    apos = _i(table, _AUG_POS)
     for a in range(nx):
         c = col_of_coord[a]
         if c >= 0:
-            A[c * na + c] += lumped[a]
+            A[apos[c] * na + apos[c]] += lumped[a]
     local = _f(table, _LOCAL)
     max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
     data = _f(table, _GROUP_DATA)
@@ -631,10 +675,12 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                 ca = col_of_coord[coords[i * m + a]]
                 if ca < 0:
                     continue
+                ca = apos[ca]
                 for b in range(m):
                     cb = col_of_coord[coords[i * m + b]]
                     if cb < 0:
                         continue
+                    cb = apos[cb]
                     s = 0.0
                     for pp in range(P):
                         s += Dp[pp, a] * MpDp[pp, b]
@@ -843,7 +889,7 @@ def tangent(table, qddot):
     free, lam = _i(table, _FREE), _f(table, _DX)
     for a in range(nf):
         lam[a] = r_full[free[a]]
-    lu_solve_transposed(_f(table, _LU), nf, _i(table, _PIVOTS), lam)
+    _j_solve_transposed(table, lam)
     sigma = _f(table, _EDOT)  # reused: the full stress resultants
     sigma[:] = _f(table, _SIGMA)
     rows = _i(table, _ROWS)

@@ -25,18 +25,19 @@ from . import assembly
 INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformations",
              "dof_positions", "stressed", "input_coordinates", "groups", "coordinate_index",
              "deformation_index", "row_of_deformation", "column_of_coordinate", "pivots",
-             "mass_pivots", "counters", "augmented_pivots")
+             "mass_pivots", "counters", "augmented_pivots", "j_row_position",
+             "j_column_position", "augmented_position")
 # float64 slots (`floats`)
 FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
                "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
                "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot",
-               "augmented", "augmented_rhs")
+               "augmented", "augmented_rhs", "band_scratch")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
  MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, ENGINE, AUGMENTED, REDUCED,
- MASS_CURRENT, DIMS_SIZE) = range(24)
+ MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, DIMS_SIZE) = range(28)
 # per-group row of `groups`
 (G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
  G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
@@ -66,7 +67,7 @@ class EngineData:
     augmented : bool, optional
         How `engine.evaluate` solves for the accelerations: the augmented system on the free
         coordinates (True) or the reduced M_bar qddot = DF^T r (False); default: whichever
-        needs less than half the multiplications for this model (`evaluation_cost`).
+        needs fewer multiplications for this model (`evaluation_cost`).
     """
 
     def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6, augmented=None):
@@ -147,15 +148,22 @@ class EngineData:
         dims[HAS_DAMPING] = int(np.any(D))
         dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
         dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
+        # banded orders of J and of the augmented system (core/banded.py)
+        j_rows, j_cols, dims[J_KL], dims[J_KU] = _constraint_order(
+            model, free, rows, row_of_def, col_of_coord)
+        aug_position, dims[A_KL], dims[A_KU] = _augmented_order(
+            model, free.size, row_of_def, col_of_coord,
+            [group for group in all_groups if id(group) in inertia])
         costs = evaluation_cost(free.size, model.rigid_deformations.size, ndof,
-                                [(row[G_COUNT], row[G_M], row[G_P]) for row in groups])
+                                [(row[G_COUNT], row[G_M], row[G_P]) for row in groups],
+                                (int(dims[J_KL]), int(dims[J_KU]), int(dims[A_KL]),
+                                 int(dims[A_KU])))
         self.costs = costs
-        # the augmented form when it needs fewer than half the multiplications: its dense LU
-        # skips fewer zeros than the reduced form's sparse DF products (measured, one
-        # evaluation: stage_spatial_19dof 1.6 times fewer multiplications but 1.5 times the
-        # time; the refined stages 2.3, 4.9, 6.9, 7.7 times fewer and 0.90, 0.55, 0.26, 0.10
-        # times the time)
-        dims[AUGMENTED] = int(2.0 * costs["augmented"] < costs["reduced"] if augmented is None
+        # the form with fewer multiplications (measured, one evaluation, both forms
+        # alternating: reduced / augmented 6.6 / 7.4 us on stage_planar_1dof, 47 / 41 us on
+        # stage_spatial_19dof, 21 / 14 us on the refined stage with 4 PLBEAMs per spring,
+        # 244 / 50 us with 16; the counts order all of them the same way)
+        dims[AUGMENTED] = int(costs["augmented"] < costs["reduced"] if augmented is None
                               else bool(augmented))
         from .engine import engine_entry  # the engine imports this module's constants
 
@@ -185,6 +193,8 @@ class EngineData:
             "pivots": np.zeros(free.size, np.int64), "mass_pivots": np.zeros(ndof, np.int64),
             "counters": np.zeros(COUNTERS_SIZE, np.int64),
             "augmented_pivots": np.zeros(augmented, np.int64),
+            "j_row_position": j_rows, "j_column_position": j_cols,
+            "augmented_position": aug_position,
         }
         floats = {
             "settings": settings, "S": np.ascontiguousarray(S).ravel(),
@@ -204,7 +214,7 @@ class EngineData:
             "damping": np.zeros(ndof * ndof), "jacobian_cache": np.zeros(4 * ndof * ndof),
             "x_start": model.initial_coordinates.astype(float).copy(),
             "xddot": np.zeros(nx), "augmented": np.zeros(augmented * augmented),
-            "augmented_rhs": np.zeros(augmented),
+            "augmented_rhs": np.zeros(augmented), "band_scratch": np.zeros(augmented),
         }
         self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)
         self.floats = tuple(np.ascontiguousarray(floats[name], dtype=float)
@@ -227,20 +237,100 @@ class EngineData:
         return self.table.ctypes.data
 
 
-def evaluation_cost(n_free, n_rigid, ndof, groups):
-    """Multiplications of one evaluation's dense algebra by each way to the accelerations
+def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None):
+    """Multiplications of one evaluation's linear algebra by each way to the accelerations
     (zeros counted):
     {"reduced": DF (NDOF solves), M_bar = DF^T M DF element by element and its LU;
     "augmented": the LU of the augmented system (n_free + n_rigid) and the free-coordinate
-    mass blocks}; both factor J (n_free^3 / 3). groups: (element count, coordinates m,
-    inertia points P) per element group. The reduced form wins on few DOFs (a 1-DOF stage:
-    M_bar is 1 x 1), the augmented one on many (M_bar costs NDOF^2 per element)."""
-    shared = n_free ** 3 / 3
-    reduced = shared + 2 * ndof * n_free ** 2 + ndof ** 3 / 3 + sum(
+    mass blocks}; both factor J. groups: (element count, coordinates m, inertia points P) per
+    element group; bands: (kl, ku) of J and of the augmented system (default: dense). The
+    reduced form wins on few DOFs (a 1-DOF stage: M_bar is 1 x 1), the augmented one on many
+    (M_bar costs NDOF^2 per element)."""
+    na = n_free + n_rigid
+    j_kl, j_ku, a_kl, a_ku = bands if bands is not None else (n_free, n_free, na, na)
+
+    def lu(n, kl, ku):  # banded LU with partial pivoting, and one solve
+        kl, ku = min(kl, n), min(ku, n)
+        return n * kl * (kl + ku) + 2 * n * (kl + ku)
+
+    shared = lu(n_free, j_kl, j_ku)
+    reduced = shared + ndof * 2 * n_free * (j_kl + j_ku) + ndof ** 3 / 3 + sum(
         n * (P * m * ndof + P * P * ndof + P * ndof * ndof) for n, m, P in groups)
-    augmented = shared + (n_free + n_rigid) ** 3 / 3 + sum(
+    augmented = shared + lu(na, a_kl, a_ku) + sum(
         n * (P * P * m + P * m * m) for n, m, P in groups)
     return {"reduced": reduced, "augmented": augmented}
+
+
+def _constraint_order(model, free, rows, row_of_def, col_of_coord):
+    """Positions of J's rows and columns in its banded order, and its (kl, ku): each row
+    matched to a column (a structurally nonsingular J has a perfect matching), then reverse
+    Cuthill-McKee on the matched pattern (core/banded.py). The identity order, dense, when
+    there is no perfect matching."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import maximum_bipartite_matching
+
+    from .banded import bandwidth_order
+
+    nf = free.size
+    entries = []
+    for group in model.groups:
+        for coords, defs in zip(group.coordinate_index, group.deformation_index, strict=True):
+            cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
+            for d in defs:
+                if row_of_def[d] >= 0:
+                    entries.extend((row_of_def[d], c) for c in cols)
+    n_def = rows.size
+    for j, c in enumerate(model.dof_coordinates):
+        entries.append((n_def + j, col_of_coord[c]))
+    identity = np.arange(nf, dtype=np.int64)
+    if nf == 0 or not entries:
+        return identity, identity.copy(), max(nf - 1, 0), max(nf - 1, 0)
+    r, c = np.array(entries, dtype=np.int64).T
+    pattern = csr_matrix((np.ones(r.size), (r, c)), shape=(nf, nf))
+    column_of_row = maximum_bipartite_matching(pattern, perm_type="column")
+    if np.any(column_of_row < 0):
+        return identity, identity.copy(), nf - 1, nf - 1
+    row_of_column = np.empty(nf, dtype=np.int64)
+    row_of_column[column_of_row] = np.arange(nf)
+    order, _, _ = bandwidth_order(pattern[row_of_column])  # rows renamed by their column
+    column_position = np.empty(nf, dtype=np.int64)
+    column_position[order] = np.arange(nf)
+    row_position = column_position[column_of_row]
+    offsets = row_position[r] - column_position[c]
+    return (row_position, column_position, int(max(0, offsets.max())),
+            int(max(0, -offsets.min())))
+
+
+def _augmented_order(model, nf, row_of_def, col_of_coord, inertia_groups):
+    """Positions of the augmented system's unknowns (the free coordinates, then the rigid
+    rows' multipliers) in its banded order, and its (kl, ku)."""
+    from scipy.sparse import csr_matrix
+
+    from .banded import bandwidth_order
+
+    n_rigid = model.rigid_deformations.size
+    na = nf + n_rigid
+    entries = [(a, a) for a in range(nf)]
+    for group in inertia_groups:
+        for coords in group.coordinate_index:
+            cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
+            entries.extend((a, b) for a in cols for b in cols)
+    for group in model.groups:
+        for coords, defs in zip(group.coordinate_index, group.deformation_index, strict=True):
+            cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
+            for d in defs:
+                o = row_of_def[d]
+                if 0 <= o < n_rigid:
+                    entries.extend((nf + o, c) for c in cols)
+                    entries.extend((c, nf + o) for c in cols)
+    if na == 0:
+        return np.zeros(0, dtype=np.int64), 0, 0
+    r, c = np.array(entries, dtype=np.int64).T
+    pattern = csr_matrix((np.ones(r.size), (r, c)), shape=(na, na))
+    order, kl, ku = bandwidth_order(pattern)
+    position = np.empty(na, dtype=np.int64)
+    position[order] = np.arange(na)
+    return position, kl, ku
 
 
 def _concat_int(parts):
