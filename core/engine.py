@@ -31,8 +31,9 @@ Everything works element by element on the packed arrays of `engine_data.EngineD
 dense (NX, NX) matrix is formed; M_bar is accumulated from (Dp DF_e)^T Mp (Dp DF_e)), and no
 evaluation allocates. J and the augmented system are factored as banded matrices
 (`core/banded.py`) in the bandwidth-reducing orders computed at packing, so an evaluation in
-the augmented form costs in proportion to the element count. The plain-numpy twin of every quantity is in `kinematics`, `assembly`
-and `mechanics` (used by the static analyses); tests compare the two to round-off.
+the augmented form costs in proportion to the element count. The plain-numpy twin of every
+quantity is in `kinematics`, `assembly` and `mechanics` (used by the static analyses); tests
+compare the two to round-off.
 
 Status codes (`engine_data`): each function returns OK or the reason it could not finish;
 nothing raises inside compiled code.
@@ -689,95 +690,9 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
 
 @kernel
 def _inertia_reduced(table, x, xdot, conv, moving, r):
-    """M_bar = DF^T M DF into slot mass; gravity on the element masses into r; and, if moving,
-    r -= M conv + g_conv. Element by element through the inertia points."""
-    dims = _i(table, _DIMS)
-    nx, ndof = dims[ed.NX], dims[ed.NDOF]
-    DF, mass, lumped = _f(table, _DF), _f(table, _MASS), _f(table, _LUMPED)
-    mass[:] = 0.0
-    for a in range(nx):  # the lumped masses
-        la = lumped[a]
-        if la == 0.0:
-            continue
-        if moving:
-            r[a] -= la * conv[a]
-        for i in range(ndof):
-            di = la * DF[a * ndof + i]
-            if di == 0.0:
-                continue
-            for j in range(ndof):
-                mass[i * ndof + j] += di * DF[a * ndof + j]
-    local = _f(table, _LOCAL)
-    max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
-    for g in range(dims[ed.NGROUPS]):
-        row = _group(table, g)
-        P = row[ed.G_P]
-        if P == 0:
-            continue
-        n, m, width = row[ed.G_COUNT], row[ed.G_M], row[ed.G_REF_WIDTH]
-        function = row[ed.G_INERTIA_ENTRY]
-        coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
-        data = _f(table, _GROUP_DATA)
-        refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
-        # scratch: x, v (m), p then the point forces, acc, w (P), Dp (P, m), B = Dp DF_e and
-        # Mp B (P, ndof)
-        xl, vl = local[:max_m], local[max_m: 2 * max_m]
-        o = 2 * max_m
-        point, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
-            local[o + 2 * max_p: o + 3 * max_p]
-        o += 3 * max_p
-        Dp = local[o: o + P * m].reshape((P, m))
-        o += max_p * max_m
-        B = local[o: o + max_p * ndof]
-        o += max_p * ndof
-        MpB = local[o: o + max_p * ndof]
-        gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
-        for i in range(n):
-            Mp = data[row[ed.G_MASS_OFFSET] + i * P * P: row[ed.G_MASS_OFFSET] + (i + 1) * P * P]
-            for a in range(m):
-                xl[a] = x[coords[i * m + a]]
-                vl[a] = xdot[coords[i * m + a]]
-            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
-                         2 if moving else 1, point.ctypes.data, Dp.ctypes.data,
-                         acc.ctypes.data, m, P, width)
-            # B = Dp DF_e (P, ndof), and the force on the points gravity - Dp conv_e - acc
-            B[: P * ndof] = 0.0
-            for pp in range(P):
-                f = gravity[pp]
-                for a in range(m):
-                    d = Dp[pp, a]
-                    if d != 0.0:
-                        row_df = coords[i * m + a] * ndof
-                        for j in range(ndof):
-                            B[pp * ndof + j] += d * DF[row_df + j]
-                        if moving:
-                            f -= d * conv[coords[i * m + a]]
-                point[pp] = f - acc[pp] if moving else f
-            # w = Mp (point forces), MpB = Mp B
-            for pp in range(P):
-                s = 0.0
-                for j in range(ndof):
-                    MpB[pp * ndof + j] = 0.0
-                for qq in range(P):
-                    mpq = Mp[pp * P + qq]
-                    if mpq == 0.0:
-                        continue
-                    s += mpq * point[qq]
-                    for j in range(ndof):
-                        MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
-                w[pp] = s
-            for a in range(m):  # r += Dp^T w
-                s = 0.0
-                for pp in range(P):
-                    s += Dp[pp, a] * w[pp]
-                r[coords[i * m + a]] += s
-            for pp in range(P):  # M_bar += B^T (Mp B)
-                for a in range(ndof):
-                    ba = B[pp * ndof + a]
-                    if ba == 0.0:
-                        continue
-                    for b in range(ndof):
-                        mass[a * ndof + b] += ba * MpB[pp * ndof + b]
+    """M_bar = DF^T M DF into slot mass (`_reduced_mass_of`); gravity on the element masses
+    into r; and, if moving, r -= M conv + g_conv."""
+    _reduced_mass_of(table, x, xdot, conv, moving, r, True)
 
 
 @kernel
@@ -789,13 +704,33 @@ def reduced_mass(table):
     if dims[ed.MASS_CURRENT] == 1:
         return ed.OK
     compute_DF(table)
+    x = _f(table, _X)
+    _reduced_mass_of(table, x, x, x, False, x, False)
+    ndof = dims[ed.NDOF]
+    mass_lu = _f(table, _MASS_LU)
+    mass_lu[:] = _f(table, _MASS)
+    if not lu_factor(mass_lu, ndof, _i(table, _MASS_PIVOTS)) > 0.0:
+        return ed.SINGULAR_MASS
+    dims[ed.MASS_CURRENT] = 1
+    return ed.OK
+
+
+@kernel
+def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
+    """M_bar = DF^T M DF into slot mass, element by element through the inertia points
+    (M_bar += (Dp DF_e)^T Mp (Dp DF_e)) and the lumped masses; with_forces: also gravity on
+    the element masses into r and, if moving, r -= M conv + g_conv (xdot, conv, r are not
+    read otherwise)."""
+    dims = _i(table, _DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
-    DF, mass, lumped, x = _f(table, _DF), _f(table, _MASS), _f(table, _LUMPED), _f(table, _X)
+    DF, mass, lumped = _f(table, _DF), _f(table, _MASS), _f(table, _LUMPED)
     mass[:] = 0.0
     for a in range(nx):  # the lumped masses
         la = lumped[a]
         if la == 0.0:
             continue
+        if with_forces and moving:
+            r[a] -= la * conv[a]
         for i in range(ndof):
             di = la * DF[a * ndof + i]
             if di == 0.0:
@@ -814,39 +749,57 @@ def reduced_mass(table):
         function = row[ed.G_INERTIA_ENTRY]
         coords = _i(table, _COORD_INDEX)[row[ed.G_COORD_OFFSET]: row[ed.G_COORD_OFFSET] + n * m]
         refs = data.ctypes.data + 8 * row[ed.G_DATA_OFFSET]
-        # scratch: x, v (m), p, acc (P), Dp (P, m), B = Dp DF_e and Mp B (P, ndof)
+        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), B = Dp DF_e and Mp B
+        # (P, ndof)
         xl, vl = local[:max_m], local[max_m: 2 * max_m]
         o = 2 * max_m
-        point, acc = local[o: o + max_p], local[o + max_p: o + 2 * max_p]
+        point, acc, w = local[o: o + max_p], local[o + max_p: o + 2 * max_p], \
+            local[o + 2 * max_p: o + 3 * max_p]
         o += 3 * max_p
         Dp = local[o: o + P * m].reshape((P, m))
         o += 2 * max_p * max_m
         B = local[o: o + max_p * ndof]
         o += max_p * ndof
         MpB = local[o: o + max_p * ndof]
+        gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
+        order = 2 if with_forces and moving else 1
         for i in range(n):
             Mp = data[row[ed.G_MASS_OFFSET] + i * P * P: row[ed.G_MASS_OFFSET] + (i + 1) * P * P]
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
-            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width, 1,
-                         point.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
+                vl[a] = xdot[coords[i * m + a]] if with_forces else 0.0
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
+                         order, point.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
             B[: P * ndof] = 0.0
-            for pp in range(P):
+            for pp in range(P):  # B = Dp DF_e, and the point forces gravity - Dp conv - acc
+                f = gravity[pp]
                 for a in range(m):
                     d = Dp[pp, a]
                     if d != 0.0:
                         row_df = coords[i * m + a] * ndof
                         for j in range(ndof):
                             B[pp * ndof + j] += d * DF[row_df + j]
-            for pp in range(P):
+                        if order == 2:
+                            f -= d * conv[coords[i * m + a]]
+                point[pp] = f - acc[pp] if order == 2 else f
+            for pp in range(P):  # w = Mp (point forces), MpB = Mp B
+                s = 0.0
                 for j in range(ndof):
                     MpB[pp * ndof + j] = 0.0
                 for qq in range(P):
                     mpq = Mp[pp * P + qq]
                     if mpq == 0.0:
                         continue
+                    s += mpq * point[qq]
                     for j in range(ndof):
                         MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
+                w[pp] = s
+            if with_forces:
+                for a in range(m):  # r += Dp^T w
+                    s = 0.0
+                    for pp in range(P):
+                        s += Dp[pp, a] * w[pp]
+                    r[coords[i * m + a]] += s
             for pp in range(P):  # M_bar += B^T (Mp B)
                 for a in range(ndof):
                     ba = B[pp * ndof + a]
@@ -854,12 +807,6 @@ def reduced_mass(table):
                         continue
                     for b in range(ndof):
                         mass[a * ndof + b] += ba * MpB[pp * ndof + b]
-    mass_lu = _f(table, _MASS_LU)
-    mass_lu[:] = mass
-    if not lu_factor(mass_lu, ndof, _i(table, _MASS_PIVOTS)) > 0.0:
-        return ed.SINGULAR_MASS
-    dims[ed.MASS_CURRENT] = 1
-    return ed.OK
 
 
 # -- tangent ----------------------------------------------------------------------------------
