@@ -5,9 +5,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
+@pytest.mark.slow  # 45 s: the slow tier, which .ci/run runs after the default one
 def test_compare_prints_the_startup_and_loop_rows(tmp_path):
     table = tmp_path / "table.md"
     done = subprocess.run(
