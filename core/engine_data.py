@@ -4,7 +4,8 @@ The compiled evaluation engine (`flexure.core.engine`) and the SUNDIALS callback
 (`flexure.core.sundials`) take no Python objects: everything they read or write is one of the
 flat arrays built here, float64 arrays in `floats` and int64 arrays in `ints`, in the fixed
 order of the slot names below. The same arrays reach a C callback through one address: `table`
-lists (address, length) of every array, and `engine.unpack` rebuilds the two tuples from it.
+lists (address, length) of every array, and `engine_slots.int_array` / `float_array` find an
+array from it.
 
 Per element group (all elements of one type) the engine needs the addresses of the element
 module's compiled entry points (`deformations_entry`, `inertia_entry`), the local coordinate
@@ -17,9 +18,15 @@ engine never allocates in an evaluation.
 Units: SI throughout (m, rad, kg, N, s), as the model's.
 """
 
+import weakref
+
 import numpy as np
 
 from . import assembly
+
+# the banded orders of a model's J and augmented system, computed once per live model (read
+# only): {id(model): (weak reference to the model, orders)}
+_ORDERS = {}
 
 # int64 slots (`ints`)
 INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformations",
@@ -46,7 +53,7 @@ FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "
 TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
 # counters entries
 RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, COUNTERS_SIZE = range(4)
-# status codes written by the engine (dims[STATUS]) and read by `engine.status_message`
+# status codes returned by the engine's functions (messages: sundials.STATUS_MESSAGES)
 OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT = \
     range(6)
 
@@ -149,11 +156,17 @@ class EngineData:
         dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
         dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
         # banded orders of J and of the augmented system (core/banded.py)
-        j_rows, j_cols, dims[J_KL], dims[J_KU] = _constraint_order(
-            model, free, rows, row_of_def, col_of_coord)
-        aug_position, dims[A_KL], dims[A_KU] = _augmented_order(
-            model, free.size, row_of_def, col_of_coord,
-            [group for group in all_groups if id(group) in inertia])
+        known = _ORDERS.get(id(model))  # a Simulator packs its model twice (plant, outputs)
+        if known is not None and known[0]() is model:
+            orders = known[1]
+        else:
+            orders = (_constraint_order(model, free, rows, row_of_def, col_of_coord),
+                      _augmented_order(model, free.size, row_of_def, col_of_coord,
+                                       [group for group in all_groups if id(group) in inertia]))
+            key = id(model)
+            _ORDERS[key] = (weakref.ref(model, lambda _, key=key: _ORDERS.pop(key, None)),
+                            orders)
+        (j_rows, j_cols, dims[J_KL], dims[J_KU]), (aug_position, dims[A_KL], dims[A_KU]) = orders
         costs = evaluation_cost(free.size, model.rigid_deformations.size, ndof,
                                 [(row[G_COUNT], row[G_M], row[G_P]) for row in groups],
                                 (int(dims[J_KL]), int(dims[J_KU]), int(dims[A_KL]),
@@ -172,7 +185,7 @@ class EngineData:
         settings[TOLERANCE] = tolerance * _length_scale(model)
         settings[SINGULAR_RATIO] = singular_ratio
         # scratch of one evaluation: the largest of the element-local buffers the engine's
-        # functions lay out one after the other (see engine._inertia, tangent, _mass_times),
+        # functions lay out one after the other (engine_slots.inertia_scratch, engine_tangent),
         # plus the absolute DOFs at the end
         scratch = (2 * ndof + 2 * max_m * max_m + max_m * ndof + 2 * max_m + 3 * max_p
                    + 2 * max_p * max_m + 2 * max_p * ndof + max_k + ndof

@@ -390,6 +390,7 @@ PROBE = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow  # 10 s: it compiles a copy of the package twice
 def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_path):
     """The cache is keyed by the package's name and a hash of its sources, not by the folder
     (an FMU unpacks its copy of flexure into a new folder every time): a copy of core/ under

@@ -36,6 +36,8 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
 )
 
+pytestmark = pytest.mark.slow  # the slow tier (each case in its own host process); .ci/run runs it
+
 STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
 

@@ -27,6 +27,8 @@ from hypothesis import strategies as st
 
 from flexure.core import FlexureError, build_model, builtin_scenes, load_scene, scene_path
 
+pytestmark = pytest.mark.slow  # the slow tier (hypothesis runs ~1000 cases); .ci/run runs it
+
 SCENES = {name: scene_path(name).read_bytes() for name in builtin_scenes()}
 DATA = {name: tomllib.loads(text.decode()) for name, text in SCENES.items()}
 FAST = settings(deadline=None, suppress_health_check=[HealthCheck.too_slow], database=None)
