@@ -32,7 +32,7 @@ from numba import carray, types
 from . import engine_data as ed
 from . import engine_slots as slot
 from .engine_dense import lu_factor, lu_solve
-from .engine_kinematics import compute_DF, deformations, solve_kinematics
+from .engine_kinematics import compute_DF, deformations, solve_kinematics, solve_positions
 from .engine_motion import evaluate, reduced_mass
 from .engine_slots import float_array, int_array
 from .engine_tangent import tangent
@@ -41,7 +41,7 @@ from .native import address_of
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
 __all__ = ["ENGINE_ENTRY", "OP_DEFORMATIONS", "OP_EVALUATE", "OP_JACOBIAN", "OP_KINEMATICS",
-           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call",
+           "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call",
            "engine_entry", "first_order_jacobian", "first_order_rhs", "float_array",
            "implicit_jacobian", "implicit_residual", "int_array", "lu_factor", "lu_solve"]
 
@@ -162,7 +162,7 @@ def implicit_jacobian(table, y, yp, cj, J):
 
 # -- the one entry point: every operation through one compiled C function ---------------------
 (OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
- OP_EVALUATE, OP_TANGENT) = range(8)
+ OP_EVALUATE, OP_TANGENT, OP_POSITIONS) = range(9)
 # (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number
 ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.voidptr,
                            types.voidptr, types.voidptr, types.float64)
@@ -174,8 +174,8 @@ def engine_entry(op, user_data, t, a, b, c, s):
 
     OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major), OP_RESIDUAL (y, yp, res),
     OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q; with DF), OP_DEFORMATIONS (x;
-    s = order), OP_EVALUATE (q, qdot; with DF and M_bar), OP_TANGENT (qddot). Returns the
-    status code."""
+    s = order), OP_EVALUATE (q, qdot; with DF and M_bar), OP_TANGENT (qddot), OP_POSITIONS
+    (q; x by Newton from slot x_start, nothing else). Returns the status code."""
     table = address_of(user_data)
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
@@ -205,6 +205,8 @@ def engine_entry(op, user_data, t, a, b, c, s):
         return reduced_mass(table) if status == ed.OK else status
     if op == OP_TANGENT:
         return tangent(table, carray(a, (ndof,), f8))
+    if op == OP_POSITIONS:
+        return solve_positions(table, carray(a, (ndof,), f8))
     return -1
 
 

@@ -208,6 +208,31 @@ def _newton_step(table, x, g, dx):
 
 
 @kernel
+def solve_positions(table, q):
+    """x = F(q) into slot x by full Newton from slot x_start, stopping as soon as the
+    constraint residual is within the tolerance: the positions alone (no D2e, no factors or DF
+    kept, no warm start set), for measuring outputs; a status code."""
+    dims = _i(table, slot.DIMS)
+    dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = 0
+    nx = dims[ed.NX]
+    tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
+    x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
+    x[:] = _f(table, slot.X_START)
+    if not np.all(np.isfinite(x)):
+        x[:] = _f(table, slot.X)
+    for _ in range(dims[ed.MAX_NEWTON]):
+        deformations(table, x, 1)
+        if _residual(table, x, q, g) <= tolerance:
+            _f(table, slot.X)[:nx] = x[:nx]
+            return ed.OK
+        if not _j_factor(table) > 0.0:
+            return ed.SINGULAR_CONSTRAINTS
+        if not np.isfinite(_newton_step(table, x, g, dx)):
+            return ed.NOT_CONVERGED
+    return ed.NOT_CONVERGED
+
+
+@kernel
 def solve_kinematics(table, q):
     """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
     dims = _i(table, slot.DIMS)

@@ -213,7 +213,7 @@ def _measure(addresses, y, scratch, coordinates, out):
     q_ref = engine.float_array(addresses[_PLANT], _Q_REF_SLOT)
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
-    status = call_engine(addresses[_ENGINE], engine.OP_KINEMATICS, addresses[_OUTPUT], 0.0,
+    status = call_engine(addresses[_ENGINE], engine.OP_POSITIONS, addresses[_OUTPUT], 0.0,
                          scratch.ctypes.data, 0, 0, 0.0)
     if status != ed.OK:
         return status

@@ -352,9 +352,23 @@ class Simulator:
 
         Computed once per state (`advance`, `reset` and `set_state` start a new one)."""
         if self._outputs_cache is None:
-            self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
-                                                     start=self._x)[0]
+            if all(port.quantity == "position" for port in self.model.outputs):
+                self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
+            else:
+                self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
+                                                         start=self._x)[0]
         return self._outputs_cache.copy()
+
+    def _positions_at(self, q):
+        """The position outputs at DOFs q: Newton from the plant's coordinates, positions
+        only (as the compiled sampled loop measures them)."""
+        data = self._output_data
+        self._start_kinematics(self._x, data)
+        status = engine.call(data, engine.OP_POSITIONS, np.ascontiguousarray(q))
+        if status != ed.OK:
+            raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
+        x = data.float_array("x")
+        return np.array([x[port.coordinate] for port in self.model.outputs])
 
     def outputs_along(self, states, *, start=None):
         """Outputs (n, n_outputs) along absolute states [q, qdot] (n, 2 NDOF), solving the

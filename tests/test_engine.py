@@ -419,3 +419,19 @@ def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_pat
     assert first == {"hits": 0, "misses": 1}
     assert run(copy("second")) == {"hits": 1, "misses": 0}
     assert run(copy("changed", change=True)) == {"hits": 0, "misses": 1}
+
+
+def test_positions_operation_matches_the_full_kinematics(case):
+    """OP_POSITIONS (Newton from x_start until the residual is within the tolerance, used to
+    measure outputs) against OP_KINEMATICS' x, to the kinematic tolerance."""
+    model, mechanics, data, q0 = case
+    L = mechanics.kinematics.length_scale
+    for q, _, _ in random_states(model, q0, seed=5, count=2):
+        data.int_array("dims")[ed.WARM] = 0
+        data.float_array("x_start")[:] = model.initial_coordinates
+        assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK
+        expected = data.float_array("x").copy()
+        data.float_array("x_start")[:] = model.initial_coordinates
+        assert engine.call(data, engine.OP_POSITIONS, q) == ed.OK
+        close(data.float_array("x"), expected, 1e-13, scale=max(L, np.max(np.abs(expected))))
+        assert data.int_array("dims")[ed.WARM] == 0
