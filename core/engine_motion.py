@@ -295,15 +295,14 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                 if ca < 0:
                     continue
                 ca = apos[ca]
-                for b in range(m):
-                    cb = col_of_coord[coords[i * m + b]]
-                    if cb < 0:
+                for pp in range(P):  # Dp is sparse: each point moves with few coordinates
+                    d = Dp[pp, a]
+                    if d == 0.0:
                         continue
-                    cb = apos[cb]
-                    s = 0.0
-                    for pp in range(P):
-                        s += Dp[pp, a] * MpDp[pp, b]
-                    A[ca * na + cb] += s
+                    for b in range(m):
+                        cb = col_of_coord[coords[i * m + b]]
+                        if cb >= 0:
+                            A[ca * na + apos[cb]] += d * MpDp[pp, b]
 
 
 @kernel
