@@ -25,6 +25,11 @@ class SimulationError(FlexureError, RuntimeError):
     """A time-domain simulation cannot go on: non-finite input, singular configuration, ..."""
 
 
+class StepBudgetSpent(SimulationError):
+    """An integrator took the step budget it was given for one call without reaching its end
+    time; `last_good` is (t, y) of its last step."""
+
+
 class UsageError(FlexureError, ValueError):
     """A command-line option or an output path cannot be used (checked before a run)."""
 

@@ -42,7 +42,7 @@ import numpy as np
 
 from . import engine
 from . import engine_data as ed
-from .errors import SimulationError
+from .errors import SimulationError, StepBudgetSpent
 from .esdirk_method import MAX_STAGES, TABLEAUS
 from .jit import kernel
 from .native import call_engine
@@ -336,12 +336,18 @@ class Esdirk:
         self.memory[M_ETA] = 1.0
         self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU]] = 0
 
-    def advance(self, t_stop, *, one_step=False, max_steps=0):
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
         """Integrate to t_stop (s), landing on it exactly (one accepted step only with
-        one_step); returns t and a view of y. Raises SimulationError on failure."""
+        one_step; at most max_steps steps, else StepBudgetSpent); returns t and a view of y.
+        Raises SimulationError on failure."""
         status = advance(self.data.address, self.memory, self.flags, self.vectors, self.J,
                          self.LU, self.pivots, self.atol, *self.tables, float(t_stop),
-                         bool(one_step), int(max_steps))
+                         bool(one_step), int(max_steps or 0))
+        if status == TOO_MUCH_WORK and max_steps:
+            error = StepBudgetSpent(f"t = {self.memory[M_T]:.9g} s: the step budget of "
+                                    f"{max_steps} integrator steps is spent")
+            error.last_good = (float(self.memory[M_T]), self.y_array.copy())
+            raise error
         if status != OK:
             raise self.failure(status, self.memory[M_T])
         return self.memory[M_T], self.y_array

@@ -28,7 +28,7 @@ import numpy as np
 from . import engine
 from . import engine_data as ed
 from .engine_data import EngineData
-from .errors import SimulationError
+from .errors import SimulationError, StepBudgetSpent
 from .esdirk import Esdirk
 from .sundials import METHODS as SUNDIALS_METHODS
 from .sundials import STATUS_MESSAGES, make_solver
@@ -300,15 +300,28 @@ class Simulator:
                                   "a finite time after the current one")
         start = _time.perf_counter()
         steps_before = self._counts()["steps"]
-        one_step = (_record is not None or _progress is not None or self.deadline is not None
-                    or max_steps is not None)
+        # with a budget alone the integrator counts its steps itself (normal mode); a record,
+        # a progress report or a deadline need control back after every step
+        one_step = _record is not None or _progress is not None or self.deadline is not None
         retried_at = None
         try:
             while self._t < t_end:
                 try:
                     if self._needs_init:
                         self._restart()
-                    t, y = self.integrator.advance(t_end, one_step=one_step)
+                    budget = None
+                    if max_steps is not None and not one_step:
+                        budget = max(1, max_steps - (self._counts()["steps"] - steps_before))
+                    t, y = self.integrator.advance(t_end, one_step=one_step, max_steps=budget)
+                except StepBudgetSpent as error:  # no retry: the budget is the host's limit
+                    self._needs_init = self._restart_kinematics = True
+                    t_good, y_good = error.last_good
+                    if self._t < t_good < t_end:
+                        self._t, self._y = t_good, np.array(y_good, dtype=float)
+                        self._x = self.data.float_array("x").copy()
+                        self._outputs_cache = None
+                    raise SimulationError(f"t = {self._t:.9g} s: the step budget of {max_steps} "
+                                          "integrator steps is spent") from None
                 except SimulationError as error:
                     self._needs_init = self._restart_kinematics = True
                     t_good, y_good = getattr(error, "last_good", (self._t, None))

@@ -28,7 +28,7 @@ from numba import carray, cfunc, types
 
 from . import engine
 from . import engine_data as ed
-from .errors import SimulationError
+from .errors import SimulationError, StepBudgetSpent
 from .jit import kernel
 from .native import (
     NVECTOR_DATA_OFFSET,
@@ -45,6 +45,7 @@ _JACOBIAN_CACHE_SLOT = ed.FLOAT_SLOTS.index("jacobian_cache")
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
 NORMAL, ONE_STEP = 1, 2
+TOO_MUCH_WORK = -1  # CV_TOO_MUCH_WORK, IDA_TOO_MUCH_WORK: the step limit of one call reached
 METHODS = ("cvode-bdf", "cvode-adams", "ida")
 JACOBIANS = ("analytic", "finite-difference")
 
@@ -308,6 +309,14 @@ class _Solver:
         solver was made."""
         return {key: self._totals[key] + value for key, value in self._current().items()}
 
+    def budget_spent(self, max_steps, t):
+        """The StepBudgetSpent of a call that took max_steps steps, at the time t (s) it
+        reached; its `last_good` is (t, y) there."""
+        error = StepBudgetSpent(f"t = {t:.9g} s: the step budget of {max_steps} integrator "
+                                "steps is spent")
+        error.last_good = (t, self.y_array.copy())
+        return error
+
     def failure(self, flag, t):
         """A SimulationError for a failed call, naming the time and the engine's cause; its
         `last_good` is (t, y) of the last successful step, which SUNDIALS returns."""
@@ -464,13 +473,20 @@ class Cvode(_Solver):
             self.lib.cvode.CVodeGetActualInitStep(self.memory, ctypes.byref(value))
             self.initial_step = float(value.value)
 
-    def advance(self, t_stop, *, one_step=False):
-        """Integrate to t_stop (s), never past it (one step only with one_step); returns t and
-        a view of y (valid until the next call). Raises SimulationError on failure."""
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
+        """Integrate to t_stop (s), never past it (one step only with one_step; at most
+        max_steps steps, else StepBudgetSpent); returns t and a view of y (valid until the next
+        call). Raises SimulationError on failure."""
         cv = self.lib.cvode
         cv.CVodeSetStopTime(self.memory, float(t_stop))
+        if max_steps:
+            cv.CVodeSetMaxNumSteps(self.memory, int(max_steps))
         flag = cv.CVode(self.memory, float(t_stop), self.y, ctypes.byref(self.tret),
                         ONE_STEP if one_step else NORMAL)
+        if max_steps:
+            cv.CVodeSetMaxNumSteps(self.memory, 1_000_000)
+        if flag == TOO_MUCH_WORK and max_steps:
+            raise self.budget_spent(max_steps, self.tret.value)
         if flag < 0:
             raise self.failure(flag, self.tret.value)
         t = self.tret.value
@@ -532,12 +548,18 @@ class Ida(_Solver):
         self.counters[ed.FAILED_STATUS] = 0
         _check(self.lib.ida.IDAReInit(self.memory, float(t), self.y, self.yp), "IDAReInit")
 
-    def advance(self, t_stop, *, one_step=False):
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
         """As `Cvode.advance`."""
         ida = self.lib.ida
         ida.IDASetStopTime(self.memory, float(t_stop))
+        if max_steps:
+            ida.IDASetMaxNumSteps(self.memory, int(max_steps))
         flag = ida.IDASolve(self.memory, float(t_stop), ctypes.byref(self.tret), self.y,
                             self.yp, ONE_STEP if one_step else NORMAL)
+        if max_steps:
+            ida.IDASetMaxNumSteps(self.memory, 1_000_000)
+        if flag == TOO_MUCH_WORK and max_steps:
+            raise self.budget_spent(max_steps, self.tret.value)
         if flag < 0:
             raise self.failure(flag, self.tret.value)
         t = self.tret.value

@@ -16,7 +16,9 @@ Variables (only what the scene has):
   (`flexure.core.stresses_along`);
 - parameters "integrator.method" (String: cvode-bdf (default), esdirk, esdirk3, cvode-adams,
   ida; the one-step esdirk takes a host's new inputs at each doStep without a restart),
-  "integrator.rtol" (1) and "integrator.atol" (0 means the simulator's default);
+  "integrator.rtol" (1), "integrator.atol" (0 means the simulator's default) and
+  "integrator.max_steps" (Integer: the step budget of one doStep, beyond which it answers
+  fmi2Discard);
 - one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
   by rebuilding the model from the scene with the new value when initialization ends.
 
@@ -49,6 +51,9 @@ from .slave import SafeSlave
 # 1 ms) CVODE is 1.3 times faster than esdirk; a host that changes the inputs at every step
 # (a sampled loop) is better served by esdirk or esdirk3, which take the change without a restart
 METHODS = ("cvode-bdf", "esdirk", "esdirk3", "cvode-adams", "ida")
+# a doStep's step budget: far above a normal step (the 3-DOF stage at rtol 1e-8: about 50
+# CVODE steps per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
+DEFAULT_MAX_STEPS = 200_000
 
 # The unit of a tunable scene key, by its last part.
 TUNABLE_UNITS = {
@@ -94,6 +99,7 @@ class SceneSlave(SafeSlave):
         self.method = METHODS[0]
         self.rtol = 1e-8
         self.atol = 0.0
+        self.max_steps = DEFAULT_MAX_STEPS
         self.parameters = {key: float(scene_value(self.scene, key)) for key in self.tunable}
         self.simulator = None
         self._build()
@@ -129,6 +135,11 @@ class SceneSlave(SafeSlave):
                                   "default, scaled from rtol)",
                       getter=lambda: self.atol,
                       setter=lambda value: setattr(self, "atol", value))
+        self.add_integer("integrator.max_steps", start=self.max_steps,
+                         description="step budget of one doStep: more integrator steps answer "
+                                     "fmi2Discard (a normal step takes tens to thousands)",
+                         getter=lambda: self.max_steps,
+                         setter=lambda value: setattr(self, "max_steps", int(value)))
         for key in self.tunable:
             self.add_real(key, causality="parameter",
                           unit=TUNABLE_UNITS.get(key.rsplit(".", 1)[-1]),
@@ -148,6 +159,9 @@ class SceneSlave(SafeSlave):
         if name == "integrator.rtol":
             if not (math.isfinite(value) and 0.0 < value < 1.0):
                 return f"integrator.rtol = {value!r}: expected a finite number in (0, 1)"
+        elif name == "integrator.max_steps":
+            if not (isinstance(value, int) and 1 <= value <= 10**9):
+                return f"integrator.max_steps = {value!r}: expected an integer from 1 to 1e9"
         elif name == "integrator.atol":
             if not (math.isfinite(value) and value >= 0.0):
                 return (f"integrator.atol = {value!r}: expected a finite number >= 0 (0: the "
@@ -196,7 +210,7 @@ class SceneSlave(SafeSlave):
 
     def advance(self, t, h):
         self.simulator.set_inputs(self.inputs)
-        self.simulator.advance(t + h)
+        self.simulator.advance(t + h, max_steps=int(self.max_steps))
         self._refresh()
 
     def last_good_time(self):

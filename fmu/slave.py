@@ -320,6 +320,19 @@ class SafeSlave(Fmi2Slave):
             initial=initial, description=description, getter=getter, setter=setter),
             nested=False)
 
+    def add_integer(self, name, *, start, description=None, getter=None, setter=None):
+        """Register a fixed Integer parameter (e.g. the integrator's step budget)."""
+        if getter is None:
+            def getter():
+                return getattr(self, name)
+        if setter is None:
+            def setter(value):
+                setattr(self, name, value)
+        self.register_variable(Integer(
+            name, start=start, causality=Fmi2Causality.parameter,
+            variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
+            description=description, getter=getter, setter=setter), nested=False)
+
     def add_string(self, name, *, start, description=None, getter=None, setter=None):
         """Register a fixed String parameter (e.g. the integration method)."""
         if getter is None:

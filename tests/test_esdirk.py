@@ -187,9 +187,13 @@ def test_options_a_one_step_method_does_not_take_are_refused(options, name):
         Simulator(load_scene("truss_1dof_x"), method="esdirk", **options)
 
 
-def test_step_budget_stops_at_the_last_accepted_state():
+@pytest.mark.parametrize("method", ["esdirk", "cvode-bdf", "ida"])
+def test_step_budget_stops_at_the_last_accepted_state(method):
+    """Simulator.advance(max_steps=5): the integrator counts its own steps (CVODE's and
+    IDA's max_num_steps, the ESDIRK kernel's budget), the simulator stays at its last good
+    state and goes on from there."""
     model = load_scene("stage_planar_3dof")
-    sim = Simulator(model, method="esdirk", rtol=1e-8)
+    sim = Simulator(model, method=method, rtol=1e-8)
     sim.set_inputs([1.0])
     with pytest.raises(SimulationError, match="step budget of 5 integrator steps"):
         sim.advance(0.5, max_steps=5)

@@ -59,7 +59,8 @@ def scene_fmus(tmp_path_factory):
 class Slave:
     """An FMU2Slave with a capturing logger, initialised and ready to step."""
 
-    def __init__(self, path, instance_name="a", *, parameters=None, strings=None):
+    def __init__(self, path, instance_name="a", *, parameters=None, strings=None,
+                 integers=None):
         self.md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
@@ -75,16 +76,18 @@ class Slave:
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName=instance_name)
         self.fmu.instantiate(callbacks=callbacks, loggingOn=True)
-        self.initialize(parameters, strings)
+        self.initialize(parameters, strings, integers)
 
     def _log(self, environment, name, status, category, message):
         self.logs.append((status, message.decode().replace("%%", "%")))
 
-    def initialize(self, parameters=None, strings=None):
+    def initialize(self, parameters=None, strings=None, integers=None):
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         for name, value in (parameters or {}).items():
             self.fmu.setReal([self.vr[name]], [value])
+        for name, value in (integers or {}).items():
+            self.fmu.setInteger([self.vr[name]], [value])
         for name, value in (strings or {}).items():
             self.fmu.setString([self.vr[name]], [value])
         self.fmu.exitInitializationMode()
@@ -139,7 +142,7 @@ def test_model_description_is_valid_and_carries_only_the_scene(scene, scene_fmus
     data = tomllib.loads(scene_path(scene).read_text())
     parameters = [v.name for v in md.modelVariables if v.causality == "parameter"]
     assert parameters == ["integrator.method", "integrator.rtol", "integrator.atol",
-                          *default_tunable(data)]
+                          "integrator.max_steps", *default_tunable(data)]
     assert all(by_name[p].variability == "fixed" and by_name[p].initial == "exact"
                for p in parameters)
     assert len(md.modelVariables) == len(inputs) + len(outputs) + len(parameters)
@@ -357,6 +360,30 @@ def test_bad_method_parameter_is_reported_not_fatal(scene_fmus):
     slave.close()
 
 
+@pytest.mark.parametrize("method", ["cvode-bdf", "esdirk"])
+def test_a_do_step_beyond_its_step_budget_is_discarded(scene_fmus, method):
+    """integrator.max_steps: a doStep that would need more integrator steps answers
+    fmi2Discard naming the budget, in the integrator's own count (no step-by-step return to
+    Python); the instance then goes on."""
+    slave = Slave(scene_fmus("stage_planar_3dof"), strings={"integrator.method": method},
+                  integers={"integrator.max_steps": 30})
+    slave.set(1.0)
+    slave.step(0.0, 1e-4)  # a short step, within the budget
+    with pytest.raises(FMICallException, match="discard"):
+        slave.step(1e-4, 0.5)  # thousands of steps
+    status, message = slave.logs[-1]
+    assert "the step budget of 30 integrator steps is spent" in message
+    slave.close()
+
+
+def test_a_step_budget_out_of_range_is_refused(scene_fmus):
+    slave = Slave(scene_fmus("truss_1dof_x"), integers={"integrator.max_steps": 0})
+    with pytest.raises(FMICallException):
+        slave.step(0.0, 1e-3)
+    assert any("integrator.max_steps = 0: expected an integer from 1 to 1e9" in message
+               for _, message in slave.logs)
+
+
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the overflow on the way to failure
 def test_integrator_failure_is_discarded(scene_fmus):
     """A force of 1e300 N: the integrator fails in the first step (error tests). The
@@ -396,7 +423,7 @@ def test_cli_build_check_and_env(tmp_path, capsys):
     assert str(fmu) in capsys.readouterr().out
     md = read_model_description(str(fmu))
     assert [v.name for v in md.modelVariables if v.causality == "parameter"] == [
-        "integrator.method", "integrator.rtol", "integrator.atol"]
+        "integrator.method", "integrator.rtol", "integrator.atol", "integrator.max_steps"]
     scenes = scene_path("truss_1dof_x").parent
     inputs, reference = scenes / "truss_1dof_x_in.csv", scenes / "truss_1dof_x_ref.csv"
     assert main(["fmu", "check", str(fmu), str(inputs), str(reference)]) == 0
