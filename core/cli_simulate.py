@@ -163,4 +163,5 @@ def render(result):
              format_table(["output", "final", "unit", "min", "max"], rows),
              f"steps {stats['steps']}, rhs evaluations {stats['rhs_evaluations']}, Jacobians "
              f"{stats['jacobian_evaluations']}, wall time {stats['wall_time_s']:.3f} s"]
+    lines += [f"warning: {message}" for message in result.warnings]
     return "\n".join(lines)

@@ -37,6 +37,7 @@ class SimulationResult:
     statistics: dict
     inputs: np.ndarray = field(default=None)  # (n, n_inputs) N
     input_names: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)  # states beyond the range of validity
 
     @property
     def outputs(self):
@@ -148,13 +149,14 @@ def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=N
         else:
             keep[0] = False
         times, states, held = times[keep], states[keep], np.array(held)[keep]
-    outputs = sim.outputs_along(states)
+    outputs, warnings = sim.outputs_and_warnings(states)
     n = sim.ndof
     return SimulationResult(model_name=model.name, method=method, rtol=rtol, times=times,
                             q=states[:, :n], qdot=states[:, n:], dof_names=sim.dof_names,
                             output_names=sim.output_names, output_units=sim.output_units,
                             output_array=outputs, statistics=sim.statistics,
-                            inputs=np.array(held), input_names=sim.input_names)
+                            inputs=np.array(held), input_names=sim.input_names,
+                            warnings=warnings)
 
 
 def _held(sim, functions, t):

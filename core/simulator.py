@@ -30,6 +30,7 @@ from . import engine_data as ed
 from .engine_data import EngineData
 from .errors import SimulationError, StepBudgetSpent
 from .esdirk import Esdirk
+from .plausibility import RangeCheck
 from .sundials import METHODS as SUNDIALS_METHODS
 from .sundials import STATUS_MESSAGES, make_solver
 
@@ -100,6 +101,7 @@ class Simulator:
             max_order=max_order,
             input_function=self._inputs_at if self._input_functions else None)
         self._output_data = EngineData(model)
+        self._range = None  # plausibility.RangeCheck, made on first use
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -386,6 +388,30 @@ class Simulator:
     def outputs_along(self, states, *, start=None):
         """Outputs (n, n_outputs) along absolute states [q, qdot] (n, 2 NDOF), solving the
         kinematics point by point (warm-started from one to the next)."""
+        return self._along(states, start, None)
+
+    def outputs_and_warnings(self, states):
+        """(outputs_along(states), the range-of-validity warnings of those states
+        (`flexure.core.plausibility`))."""
+        n_points = len(states)
+        path = (np.zeros((n_points, self.model.nx)),
+                np.zeros((n_points, len(self.model.deformation_names))))
+        outputs = self._along(states, None, path)
+        return outputs, self._range_check().warnings(*path)
+
+    def range_warnings(self):
+        """The range-of-validity warnings of the current state (`flexure.core.plausibility`):
+        a list of messages, empty within the range."""
+        x = np.ascontiguousarray(self._x)
+        engine.call(self._output_data, engine.OP_DEFORMATIONS, x, s=0)
+        return self._range_check().warnings(x, self._output_data.float_array("e"))
+
+    def _range_check(self):
+        if self._range is None:
+            self._range = RangeCheck(self.model)
+        return self._range
+
+    def _along(self, states, start, path):
         data = self._output_data
         self._start_kinematics(self.model.initial_coordinates if start is None else start,
                                data)
@@ -401,6 +427,9 @@ class Simulator:
             for j, p in enumerate(ports):
                 result[k, j] = DF[p.coordinate] @ y[n:] if p.quantity == "velocity" else x[
                     p.coordinate]
+            if path is not None:  # the kinematics left x and e of this point in the data
+                path[0][k] = x
+                path[1][k] = data.float_array("e")
         return result
 
     # -- handing the integrator to a compiled driver (flexure.core.sampled_loop) ---------------

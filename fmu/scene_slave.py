@@ -42,6 +42,7 @@ import tomllib
 
 import numpy as np
 from pythonfmu import DefaultExperiment
+from pythonfmu.enums import Fmi2Status
 
 from flexure.core import Mechanics, Simulator, build_model, stresses_along
 
@@ -100,6 +101,7 @@ class SceneSlave(SafeSlave):
         self.rtol = 1e-8
         self.atol = 0.0
         self.max_steps = DEFAULT_MAX_STEPS
+        self._warned = set()  # the kinds of range warning already logged
         self.parameters = {key: float(scene_value(self.scene, key)) for key in self.tunable}
         self.simulator = None
         self._build()
@@ -212,6 +214,12 @@ class SceneSlave(SafeSlave):
         self.simulator.set_inputs(self.inputs)
         self.simulator.advance(t + h, max_steps=int(self.max_steps))
         self._refresh()
+        for message in self.simulator.range_warnings():  # each kind once per instance
+            kind = "strain" if message.startswith("axial strain") else "distance"
+            if kind not in self._warned:
+                self._warned.add(kind)
+                self.log_message(f"{self.instance_name}: t = {t + h:.9g} s: {message}",
+                                 Fmi2Status.warning)
 
     def last_good_time(self):
         self._refresh()

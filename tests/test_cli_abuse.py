@@ -293,6 +293,7 @@ def test_simulate_writes_its_outputs_atomically(capsys, places, monkeypatch):
         output_array = np.array([[0.1], [0.2]])
         statistics = {"steps": 1, "rhs_evaluations": 2, "jacobian_evaluations": 1,
                       "wall_time_s": 0.0}
+        warnings = []
 
         def to_csv(self, path):
             assert Path(path).name.startswith(".out.") and Path(path).parent.samefile(".")

@@ -376,6 +376,23 @@ def test_a_do_step_beyond_its_step_budget_is_discarded(scene_fmus, method):
     slave.close()
 
 
+def test_a_state_beyond_the_range_of_validity_is_a_warning_in_the_log(scene_fmus):
+    """1e9 N on stage_planar_3dof: the doStep answers OK (the equations stay defined) and the
+    log carries fmi2Warning, once per kind of limit, naming the limit; 1 N stays silent."""
+    slave = Slave(scene_fmus("stage_planar_3dof"))
+    slave.set(1.0)
+    slave.step(0.0, 1e-3)
+    assert not any(status == 1 for status, _ in slave.logs)
+    slave.set(1e9)
+    for k in range(1, 4):
+        slave.step(k * 1e-3, 1e-3)
+    warnings = [message for status, message in slave.logs if status == 1]
+    assert len(warnings) == 2
+    assert any("axial strain" in m and "range of validity" in m for m in warnings)
+    assert any("moved" in m and "0.25 x its length scale" in m for m in warnings)
+    slave.close()
+
+
 def test_a_step_budget_out_of_range_is_refused(scene_fmus):
     slave = Slave(scene_fmus("truss_1dof_x"), integers={"integrator.max_steps": 0})
     with pytest.raises(FMICallException):

@@ -164,3 +164,27 @@ def test_simulator_misuse_is_a_clear_error():
         Simulator(model, method="cvode-adams", max_order=0)
     with pytest.raises(SimulationError, match="state is of model"):
         sim.set_state(dict(sim.get_state(), q_ref=[0.0, 0.0]))
+
+
+def test_a_state_beyond_the_range_of_validity_is_reported_not_silent(capsys):
+    """1e9 N for 1 ms drives the 3-DOF stage's bar metres away on 0.1 m leaf springs: the
+    run completes, and the result, the command's output and the simulator say so; a 1 N
+    step stays within the range, without warnings."""
+    from flexure.core.cli import main
+    from flexure.core.plausibility import DISTANCE_LIMIT, STRAIN_LIMIT
+
+    model = load_scene("stage_planar_3dof")
+    wild = simulate(model, 1e-3, inputs={"F": 1e9}, rtol=1e-6, output_times=[0.0, 1e-3])
+    assert any("beyond the model's range of validity" in w and "axial strain" in w
+               for w in wild.warnings)
+    assert any(f"({DISTANCE_LIMIT:g} x its length scale 0.1 m)" in w for w in wild.warnings)
+    assert f"|strain| <= {STRAIN_LIMIT:g}" in " ".join(wild.warnings)
+    calm = simulate(model, 0.05, inputs={"F": 1.0}, rtol=1e-6)
+    assert calm.warnings == []
+    sim = Simulator(model, rtol=1e-6)
+    sim.set_inputs([1e9])
+    sim.advance(1e-3)
+    assert len(sim.range_warnings()) == 2
+    assert main(["simulate", "stage_planar_3dof", "--t-end", "1e-3", "--input", "F=1e9",
+                 "--rtol", "1e-6"]) == 0
+    assert "warning: axial strain" in capsys.readouterr().out
