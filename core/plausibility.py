@@ -36,6 +36,7 @@ class RangeCheck:
         self.elongation = (np.concatenate(elongations).astype(np.int64) if elongations
                            else np.zeros(0, np.int64))
         self.length = np.concatenate(lengths) if lengths else np.zeros(0)
+        self.strain_bound = STRAIN_LIMIT * self.length  # |e1| beyond it: out of range (m)
         # the length scale of the kinematics: the longest element, at least 1 mm
         self.scale = max([1e-3, *(float(np.max(group.reference["l0"]))
                                   for group in model.groups if "l0" in group.reference)])
@@ -43,6 +44,13 @@ class RangeCheck:
                          if name.rsplit(".", 1)[-1] in ("x", "y", "z")]
         self.translational = np.array(translational, dtype=np.int64)
         self.start = np.asarray(model.initial_coordinates, float)[self.translational]
+        self.distance_bound = DISTANCE_LIMIT * self.scale
+
+    def within(self, x, e):
+        """Whether one state (x (NX,), e (NE,)) is within both limits: the cheap test an FMU
+        makes after every doStep (a few microseconds); `warnings` says what is not."""
+        return not (np.any(np.abs(e[self.elongation]) > self.strain_bound)
+                    or np.any(np.abs(x[self.translational] - self.start) > self.distance_bound))
 
     def warnings(self, x, e):
         """Messages naming the first element or coordinate beyond each limit, with its worst

@@ -102,6 +102,8 @@ class Simulator:
             input_function=self._inputs_at if self._input_functions else None)
         self._output_data = EngineData(model)
         self._range = None  # plausibility.RangeCheck, made on first use
+        # views of the coordinates and deformations of the engine's last evaluation
+        self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -401,10 +403,11 @@ class Simulator:
 
     def range_warnings(self):
         """The range-of-validity warnings of the current state (`flexure.core.plausibility`):
-        a list of messages, empty within the range."""
-        x = np.ascontiguousarray(self._x)
-        engine.call(self._output_data, engine.OP_DEFORMATIONS, x, s=0)
-        return self._range_check().warnings(x, self._output_data.float_array("e"))
+        a list of messages, empty within the range. The coordinates and deformations are the
+        integrator's last evaluation, at the end of the last step."""
+        x, e = self._last_x, self._last_e
+        check = self._range_check()
+        return [] if check.within(x, e) else check.warnings(x, e)
 
     def _range_check(self):
         if self._range is None:
