@@ -322,26 +322,22 @@ class SafeSlave(Fmi2Slave):
 
     def add_integer(self, name, *, start, description=None, getter=None, setter=None):
         """Register a fixed Integer parameter (e.g. the integrator's step budget)."""
-        if getter is None:
-            def getter():
-                return getattr(self, name)
-        if setter is None:
-            def setter(value):
-                setattr(self, name, value)
-        self.register_variable(Integer(
-            name, start=start, causality=Fmi2Causality.parameter,
-            variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
-            description=description, getter=getter, setter=setter), nested=False)
+        self._add_fixed(Integer, name, start, description, getter, setter)
 
     def add_string(self, name, *, start, description=None, getter=None, setter=None):
         """Register a fixed String parameter (e.g. the integration method)."""
+        self._add_fixed(String, name, start, description, getter, setter)
+
+    def _add_fixed(self, kind, name, start, description, getter, setter):
+        """Register a fixed, exact parameter of pythonfmu's variable class `kind`; getter and
+        setter default to the attribute of the same name."""
         if getter is None:
             def getter():
                 return getattr(self, name)
         if setter is None:
             def setter(value):
                 setattr(self, name, value)
-        self.register_variable(String(
+        self.register_variable(kind(
             name, start=start, causality=Fmi2Causality.parameter,
             variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
             description=description, getter=getter, setter=setter), nested=False)

@@ -214,6 +214,7 @@ class _Result:
     statistics = {"steps": 1, "rhs_evaluations": 2, "jacobian_evaluations": 1,
                   "wall_time_s": 0.0}
     rows = [{"method": "ida", "rtol": 1e-3, "status": "ok"}]
+    warnings = []
 
     def to_csv(self, path):
         Path(path).write_text("time,x\n0,0.1\n")
