@@ -17,8 +17,8 @@ from flexure.core.cli import (
     positive,
     write_outputs,
 )
-from flexure.core.cli_simulate import METHODS as LOOP_METHODS
 from flexure.core.errors import UsageError
+from flexure.core.methods import METHODS as LOOP_METHODS
 from flexure.core.progress import Progress
 from flexure.core.tables import format_table, print_json
 

@@ -23,12 +23,10 @@ from .cli import (
     write_outputs,
 )
 from .errors import SimulationError, UsageError
+from .methods import METHODS
 from .progress import Progress
 from .tables import format_table
 
-# flexure.core.simulator.METHODS, spelled out so that registering the command (every `flexure`
-# call) loads neither numba nor SUNDIALS; tests/test_engine.py checks that the two agree
-METHODS = ("cvode-bdf", "cvode-adams", "ida", "esdirk", "esdirk3")
 SAMPLES = number(1, 10_000_000, integer=True, low_open=False, high_open=False)
 
 

@@ -30,12 +30,9 @@ from . import engine_data as ed
 from .engine_data import EngineData
 from .errors import SimulationError, StepBudgetSpent
 from .esdirk import Esdirk
+from .methods import METHODS, ONE_STEP_METHODS
 from .plausibility import RangeCheck
-from .sundials import METHODS as SUNDIALS_METHODS
 from .sundials import STATUS_MESSAGES, make_solver
-
-METHODS = SUNDIALS_METHODS + ("esdirk", "esdirk3")
-_ONE_STEP = ("esdirk", "esdirk3")
 
 STATE_VERSION = 2
 # what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
@@ -286,7 +283,7 @@ class Simulator:
         (CVODE and IDA start afresh there too)."""
         self._inputs[:] = self._u
         self._q_ref_array[:] = self._q_ref
-        if self._restart_kinematics or self.method not in _ONE_STEP:
+        if self._restart_kinematics or self.method not in ONE_STEP_METHODS:
             self._start_kinematics(self._x)
         self.integrator.reset(self._t, self._y)
         self._needs_init = self._restart_kinematics = False
@@ -443,7 +440,7 @@ class Simulator:
         self._q_ref_array[:] = self._q_ref
         self.integrator.y_array[:] = self._y
         return (self.integrator, self.data, self._output_data, self._needs_init,
-                self._restart_kinematics or self.method not in _ONE_STEP)
+                self._restart_kinematics or self.method not in ONE_STEP_METHODS)
 
     def take_back(self, t, y, u, *, restart_needed, wall):
         """Continue from where a compiled driver left the integrator: time t (s), state y
@@ -508,7 +505,7 @@ def prepare(model, *, loop_method=None):
 
 def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
                      input_function):
-    if method not in _ONE_STEP:
+    if method not in ONE_STEP_METHODS:
         return make_solver(data, method, rtol=rtol, atol=atol, max_step=max_step,
                            jacobian=jacobian, max_order=max_order, input_function=input_function)
     refused = {"max_order": max_order is not None, "jacobian": jacobian != "analytic",

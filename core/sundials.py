@@ -30,6 +30,7 @@ from . import engine
 from . import engine_data as ed
 from .errors import SimulationError, StepBudgetSpent
 from .jit import kernel
+from .methods import SUNDIALS_METHODS
 from .native import (
     NVECTOR_DATA_OFFSET,
     address_of,
@@ -46,7 +47,7 @@ _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_
 CV_BDF, CV_ADAMS = 2, 1
 NORMAL, ONE_STEP = 1, 2
 TOO_MUCH_WORK = -1  # CV_TOO_MUCH_WORK, IDA_TOO_MUCH_WORK: the step limit of one call reached
-METHODS = ("cvode-bdf", "cvode-adams", "ida")
+METHODS = SUNDIALS_METHODS  # the methods this module runs
 JACOBIANS = ("analytic", "finite-difference")
 
 STATUS_MESSAGES = {

@@ -19,10 +19,9 @@ import numpy as np
 
 from .blas import blas_threads
 from .errors import FlexureError, SimulationError
+from .methods import ONE_STEP_METHODS, SUNDIALS_METHODS  # SUNDIALS' take ":ORDER"
 from .tables import format_table, markdown_table
 
-SUNDIALS_METHODS = ("cvode-bdf", "cvode-adams", "ida")  # these take ":ORDER"
-ONE_STEP_METHODS = ("esdirk", "esdirk3")
 SCIPY_METHODS = {"scipy-radau": "Radau", "scipy-bdf": "BDF", "scipy-dop853": "DOP853"}
 ALL_METHODS = SUNDIALS_METHODS + ONE_STEP_METHODS + tuple(SCIPY_METHODS)
 DEFAULT_METHODS = ("cvode-bdf", "cvode-bdf:2", "cvode-adams", "ida", "ida:2",

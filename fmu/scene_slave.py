@@ -45,13 +45,14 @@ from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from flexure.core import Mechanics, Simulator, build_model, stresses_along
+from flexure.core.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
 
 # the first is the default: with inputs held over many steps (the speed benchmark's 1 N step at
 # 1 ms) CVODE is 1.3 times faster than esdirk; a host that changes the inputs at every step
 # (a sampled loop) is better served by esdirk or esdirk3, which take the change without a restart
-METHODS = ("cvode-bdf", "esdirk", "esdirk3", "cvode-adams", "ida")
+METHODS = ("cvode-bdf", *ONE_STEP_METHODS, "cvode-adams", "ida")  # flexure.core.METHODS
 # a doStep's step budget: far above a normal step (the 3-DOF stage at rtol 1e-8: about 50
 # CVODE steps per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
 DEFAULT_MAX_STEPS = 200_000
