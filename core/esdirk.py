@@ -6,25 +6,29 @@ a held input is a discontinuity that makes that history wrong, so CVODE restarts
 per sample, every sample. A one-step method carries no history: after an input change it
 recomputes the derivative of its first stage (one evaluation) and keeps its step size, its
 Jacobian and its Newton matrix. SUNDIALS' one-step stiff integrators (ARKODE) are not among
-the libraries scikit-sundae ships, so this module implements ARKODE's default order-4 implicit
-method itself, in numba, calling the engine through its C entry point: no Python per step.
+the libraries scikit-sundae ships, so this module implements ARKODE's default order-4 and
+order-3 implicit methods itself, in numba, calling the engine through its C entry point: no
+Python per step.
 
-Method: ESDIRK4(3)6L[2]SA (Kennedy & Carpenter 2003; tableau in `esdirk_method`), order 4,
-L-stable and stiffly accurate, embedded order 3. One step from (t, y) with size h, f the
-engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, m/s, rad/s):
+Methods (Kennedy & Carpenter 2003; tableaus in `esdirk_method`): ESDIRK4(3)6L[2]SA ("esdirk",
+s = 6 stages, g = 1/4, order 4, embedded order 3) and ESDIRK3(2)4L[2]SA ("esdirk3", s = 4,
+order 3, embedded 2), both L-stable and stiffly accurate. One step from (t, y) with size h, f
+the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, m/s, rad/s):
 
-    F_1 = f(y)                                (F_6 of the step before while inputs are held)
-    z_i = y + h sum_{j<i} a_ij F_j + h g f(z_i),  i = 2..6, g = 1/4   (simplified Newton,
-                                       started from f(z_i) extrapolated from the F_j in c)
+    F_1 = f(y)                                (F_s of the step before while inputs are held)
+    z_i = y + h sum_{j<i} a_ij F_j + h g f(z_i),  i = 2..s   (simplified Newton, started from
+                                              f(z_i) extrapolated from the F_j in c)
     F_i = (z_i - y - h sum_{j<i} a_ij F_j) / (h g)       (the stage equation: no evaluation)
-    y_new = z_6
+    y_new = z_s
     err = (I - h g J)^-1 h sum_j (b_j - b_hat_j) F_j      (the filtered estimate, Hairer &
                                                           Wanner IV.8: stiff modes damped)
 
 Error control: the step is accepted when the weighted RMS norm of err, weights
 1 / (rtol max(|y_i|, |y_new,i|) + atol_i) as CVODE's, is at most 1; the next step is
-h min(5, max(0.2, 0.9 |err|^(-1/4))). The last step before t_stop is stretched or split so the
-integration lands on t_stop exactly, never past it (the held input changes there).
+h min(5, max(0.2, 0.9 |err|^(-1/(p + 1)))), p the embedded order. The last step before t_stop
+is stretched or split so the integration lands on t_stop exactly, never past it (the held input
+changes there). With a step budget (max_steps) the kernel stops at the last accepted step once
+it is spent (TOO_MUCH_WORK).
 
 Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
 Jacobian), kept across steps and samples; it is recomputed when a stage converges slowly or
