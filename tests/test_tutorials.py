@@ -1,0 +1,31 @@
+"""Each tutorial in examples/tutorials runs as a user would run it, and its results agree with
+the hand calculations it prints beside them."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+TUTORIALS = Path(__file__).resolve().parents[1] / "examples" / "tutorials"
+
+
+def run(name):
+    done = subprocess.run([sys.executable, str(TUTORIALS / name)], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return done.stdout
+
+
+@pytest.mark.parametrize("quantity, rtol", [("static deflection (m)", 1e-9),
+                                            ("natural frequency (Hz)", 1e-9),
+                                            ("first peak of the step response (m)", 1e-6)])
+def test_truss_tutorial_matches_its_hand_calculations(quantity, rtol, truss_output):
+    line = next(line for line in truss_output.splitlines() if line.startswith(quantity))
+    ours, hand = (float(v) for v in line[len(quantity):].split())
+    assert abs(ours - hand) <= rtol * abs(hand)
+
+
+@pytest.fixture(scope="module")
+def truss_output():
+    return run("truss.py")
