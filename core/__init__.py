@@ -26,7 +26,7 @@ _LAZY = {
     "Model": "model",
     "build_model": "scene", "builtin_scenes": "scene", "load_scene": "scene",
     "scene_path": "scene",
-    "SimulationResult": "simulation", "Simulator": "simulation", "default_atol": "simulation",
+    "SimulationResult": "simulation", "Simulator": "simulation", "default_atol": "tolerances",
     "controller_step": "sampled_loop", "run_sampled_loop": "sampled_loop",
     "METHODS": "simulator", "prepare": "simulator",
     "simulate": "simulation",

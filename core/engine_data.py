@@ -78,7 +78,7 @@ class EngineData:
     """
 
     def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6, augmented=None):
-        from .kinematics import _length_scale
+        from .kinematics import length_scale
 
         self.model = model
         nx, ne = model.nx, len(model.deformation_names)
@@ -182,7 +182,7 @@ class EngineData:
 
         dims[ENGINE] = engine_entry.address  # for callbacks that call the engine
         settings = np.zeros(SETTINGS_SIZE)
-        settings[TOLERANCE] = tolerance * _length_scale(model)
+        settings[TOLERANCE] = tolerance * length_scale(model)
         settings[SINGULAR_RATIO] = singular_ratio
         # scratch of one evaluation: the largest of the element-local buffers the engine's
         # functions lay out one after the other (engine_slots.inertia_scratch, engine_tangent),

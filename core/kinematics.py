@@ -47,7 +47,7 @@ class Kinematics:
         self.constraint_rows = np.concatenate([model.rigid_deformations, model.dof_deformations])
         self.n_rigid = model.rigid_deformations.size
         self.dof_positions = np.searchsorted(self.free, model.dof_coordinates)
-        self.length_scale = _length_scale(model)
+        self.length_scale = length_scale(model)
         n_free, ndof = self.free.size, model.declared_dof_count
         # Right-hand side [0; I] of J DF = [0; I]: the rows of J are (rigid deformations, DOF
         # deformations, DOF coordinates) while q lists the DOF coordinates first.
@@ -167,7 +167,7 @@ def _positions(order, values):
     return lookup[values]
 
 
-def _length_scale(model):
+def length_scale(model):
     """A characteristic length (m): the largest element reference length, at least 1e-3."""
     lengths = [group.reference["l0"].max() for group in model.groups if "l0" in group.reference]
     return max([1e-3, *lengths])

@@ -33,6 +33,7 @@ from .esdirk import Esdirk
 from .methods import METHODS, ONE_STEP_METHODS
 from .plausibility import RangeCheck
 from .sundials import STATUS_MESSAGES, make_solver
+from .tolerances import atol_vector
 
 STATE_VERSION = 2
 # what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
@@ -54,7 +55,7 @@ class Simulator:
     rtol : float
         Relative tolerance of the integrator.
     atol : float or array (2 NDOF,), optional
-        Absolute tolerance; default `simulation.default_atol(model, rtol)` (per state).
+        Absolute tolerance; default `tolerances.default_atol(model, rtol)` (per state).
     max_step : float, optional
         Largest step (s); None for no limit.
     jacobian : str
@@ -69,8 +70,6 @@ class Simulator:
 
     def __init__(self, model, *, method="cvode-bdf", rtol=1e-8, atol=None, max_step=None,
                  jacobian="analytic", max_order=None, input_functions=None):
-        from .simulation import atol_vector
-
         if method not in METHODS:
             raise SimulationError(f"unknown method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}")
