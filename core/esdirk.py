@@ -302,13 +302,14 @@ class Esdirk:
         Absolute tolerances (m, rad, m/s, rad/s).
     max_step : float or None
         Largest step (s).
-    tableau : str
-        "esdirk4" (order 4, 6 stages) or "esdirk3" (order 3, 4 stages), `esdirk_method`.
+    method : str
+        "esdirk" (order 4, 6 stages) or "esdirk3" (order 3, 4 stages): the tableau of
+        `esdirk_method.TABLEAUS`.
     """
 
-    def __init__(self, data, *, rtol, atol, max_step=None, tableau="esdirk4"):
+    def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
         self.data = data
-        self.tableau = TABLEAUS[tableau]
+        self.tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()
         self.n = n = 2 * int(data.int_array("dims")[ed.NDOF])

@@ -98,5 +98,5 @@ ESDIRK4 = Tableau(
            _F(-3700637, 11593932), _F(61727, 225920)),
     order=4, embedded_order=3)
 
-TABLEAUS = {"esdirk3": ESDIRK3, "esdirk4": ESDIRK4}
+TABLEAUS = {"esdirk": ESDIRK4, "esdirk3": ESDIRK3}  # by method name (core/methods.py)
 MAX_STAGES = max(t.stages for t in TABLEAUS.values())

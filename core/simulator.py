@@ -282,10 +282,16 @@ class Simulator:
         (CVODE and IDA start afresh there too)."""
         self._inputs[:] = self._u
         self._q_ref_array[:] = self._q_ref
-        if self._restart_kinematics or self.method not in ONE_STEP_METHODS:
+        if self._kinematics_restart_due():
             self._start_kinematics(self._x)
         self.integrator.reset(self._t, self._y)
         self._needs_init = self._restart_kinematics = False
+
+    def _kinematics_restart_due(self):
+        """Whether the next restart starts the kinematics afresh from the state's
+        coordinates: always for CVODE and IDA, for a one-step method only after a state was
+        set or a failure."""
+        return self._restart_kinematics or self.method not in ONE_STEP_METHODS
 
     def advance(self, t_end, *, max_steps=None, _record=None, _progress=None):
         """Integrate from `time` to t_end (s), stopping exactly there.
@@ -314,21 +320,11 @@ class Simulator:
                         budget = max(1, max_steps - (self._counts()["steps"] - steps_before))
                     t, y = self.integrator.advance(t_end, one_step=one_step, max_steps=budget)
                 except StepBudgetSpent as error:  # no retry: the budget is the host's limit
-                    self._needs_init = self._restart_kinematics = True
-                    t_good, y_good = error.last_good
-                    if self._t < t_good < t_end:
-                        self._t, self._y = t_good, np.array(y_good, dtype=float)
-                        self._x = self.data.float_array("x").copy()
-                        self._outputs_cache = None
+                    self._back_to_last_good(error, t_end)
                     raise SimulationError(f"t = {self._t:.9g} s: the step budget of {max_steps} "
                                           "integrator steps is spent") from None
                 except SimulationError as error:
-                    self._needs_init = self._restart_kinematics = True
-                    t_good, y_good = getattr(error, "last_good", (self._t, None))
-                    if y_good is not None and self._t < t_good < t_end:
-                        self._t, self._y = t_good, y_good
-                        self._x = self.data.float_array("x").copy()
-                        self._outputs_cache = None
+                    self._back_to_last_good(error, t_end)
                     if retried_at == self._t:  # failed again from the same good state
                         raise SimulationError(
                             f"simulation of {self.model.name!r} stopped at t = {self._t:.9g} s "
@@ -349,6 +345,17 @@ class Simulator:
                     self._check_budget(steps_before, max_steps)
         finally:
             self._wall += _time.perf_counter() - start
+
+    def _back_to_last_good(self, error, t_end):
+        """After a failed integrator call: continue from the last good state the error
+        carries (if it is past the current time), with a restart of the integrator and the
+        kinematics."""
+        self._needs_init = self._restart_kinematics = True
+        t_good, y_good = getattr(error, "last_good", (self._t, None))
+        if y_good is not None and self._t < t_good < t_end:
+            self._t, self._y = t_good, np.array(y_good, dtype=float)
+            self._x = self.data.float_array("x").copy()
+            self._outputs_cache = None
 
     def _check_budget(self, steps_before, max_steps):
         if self.deadline is not None and _time.perf_counter() > self.deadline:
@@ -439,7 +446,7 @@ class Simulator:
         self._q_ref_array[:] = self._q_ref
         self.integrator.y_array[:] = self._y
         return (self.integrator, self.data, self._output_data, self._needs_init,
-                self._restart_kinematics or self.method not in ONE_STEP_METHODS)
+                self._kinematics_restart_due())
 
     def take_back(self, t, y, u, *, restart_needed, wall):
         """Continue from where a compiled driver left the integrator: time t (s), state y
@@ -514,8 +521,7 @@ def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
             raise SimulationError(f"method {method!r} takes no {name} (a one-step method "
                                   "with the analytic Jacobian and held inputs); use a CVODE "
                                   "or IDA method for that")
-    return Esdirk(data, rtol=rtol, atol=atol, max_step=max_step,
-                  tableau="esdirk4" if method == "esdirk" else method)
+    return Esdirk(data, rtol=rtol, atol=atol, max_step=max_step, method=method)
 
 
 def _vector(value, size, name):

@@ -81,8 +81,8 @@ def test_predictor_reproduces_polynomials_of_the_stage_time():
 
 
 # -- convergence and accuracy on a model ----------------------------------------------------------
-@pytest.mark.parametrize("tableau, order", [("esdirk3", 3), ("esdirk4", 4)])
-def test_observed_order_with_fixed_steps(tableau, order):
+@pytest.mark.parametrize("method, order", [("esdirk3", 3), ("esdirk", 4)])
+def test_observed_order_with_fixed_steps(method, order):
     """truss_1dof_x (a mass-spring-damper, its 1 N load from t = 0) for 0.05 s in fixed steps
     h (the first step given, rtol so loose that no step is rejected or resized, h the largest
     step): halving h divides the error at 0.05 s by 2^order (within 0.3)."""
@@ -93,7 +93,7 @@ def test_observed_order_with_fixed_steps(tableau, order):
         sim = Simulator(model)
         data = sim.data
         data.float_array("q_ref")[:] = sim.q_ref  # what Simulator.advance sets before a run
-        integrator = Esdirk(data, rtol=0.5, atol=np.full(2, 1.0), max_step=h, tableau=tableau)
+        integrator = Esdirk(data, rtol=0.5, atol=np.full(2, 1.0), max_step=h, method=method)
         integrator.restart_memory = {"initial_step": h}
         integrator.reset(0.0, np.zeros(2))
         t, y = integrator.advance(0.05)
