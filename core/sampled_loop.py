@@ -92,21 +92,29 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     N = int(samples)
     position = np.zeros((N + 1, n_loops))
     force = np.zeros((N + 1, n_loops))
+    coordinates = np.array([port.coordinate for port in ports], dtype=np.int64)
     loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
-            np.array(loop_inputs, dtype=np.int64),
-            np.array([port.coordinate for port in ports], dtype=np.int64), position, force)
+            np.array(loop_inputs, dtype=np.int64), coordinates, position, force)
     # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
     loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
     held = np.array(sim.inputs, dtype=float)
     addresses = np.zeros(_ADDRESSES, dtype=np.int64)
     addresses[[_PLANT, _OUTPUT, _ENGINE]] = (plant.address, outputs.address,
                                              plant.int_array("dims")[ed.ENGINE])
-    drive = _drive_esdirk if isinstance(solver, Esdirk) else _drive_cvode
-    chunk = max(1, N // 100) if progress is not None else N
+    samples_of = _esdirk_samples if isinstance(solver, Esdirk) else _cvode_samples
+    run = samples_of(sim, solver, plant, addresses, loop_state, held, loop)
+    chunk = max(1, N // 100 if progress is not None else N)
     start_time = time.perf_counter()
-    drive(sim, solver, plant, addresses, loop_state, held, loop, N, chunk, progress)
+    for done in range(0, N, chunk):  # in chunks of samples, for the progress report
+        stop = min(N, done + chunk)
+        flag = run(done, stop)
+        if flag != 0:
+            raise _failure(sim, solver, flag, loop_state[0])
+        if progress is not None:
+            progress(stop / N)
     # measure y_N and leave the simulator at t_N with the last force held
-    status = _measure(addresses, solver.y_array, np.zeros(2 * sim.ndof), loop[9], position[N])
+    status = _measure(addresses, solver.y_array, np.zeros(2 * sim.ndof), coordinates,
+                      position[N])
     if status != ed.OK:
         raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
     force[N] = force[N - 1]
@@ -115,24 +123,21 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     return np.arange(N + 1) / fs, position, force
 
 
-def _drive_esdirk(sim, solver, plant, addresses, loop_state, held, loop, N, chunk, progress):
-    """The loop on the one-step integrator, in chunks of samples (for the progress report)."""
+def _esdirk_samples(sim, solver, plant, addresses, loop_state, held, loop):
+    """run(start, stop) -> flag: samples start .. stop - 1 on the one-step integrator."""
     scratch = np.zeros(2 * sim.ndof)
-    done = 0
-    while done < N:
-        stop = min(N, done + chunk)
-        flag = _loop_esdirk(addresses, loop_state, held, solver.memory, solver.flags,
+
+    def run(start, stop):
+        return _loop_esdirk(addresses, loop_state, held, solver.memory, solver.flags,
                             solver.vectors, solver.J, solver.LU, solver.pivots, solver.atol,
-                            *solver.tables, scratch, done, stop, *loop)
-        if flag != 0:
-            raise _failure(sim, solver, flag, loop_state[0])
-        done = stop
-        if progress is not None:
-            progress(done / N)
+                            *solver.tables, scratch, start, stop, *loop)
+
+    return run
 
 
-def _drive_cvode(sim, solver, plant, addresses, loop_state, held, loop, N, chunk, progress):
-    """The loop on CVODE, restarting it at every change of the held force, in chunks."""
+def _cvode_samples(sim, solver, plant, addresses, loop_state, held, loop):
+    """run(start, stop) -> flag: samples start .. stop - 1 on CVODE, restarting it at every
+    change of the held force; what it learns is handed back to the solver after each run."""
     for key, slot in (("solve", _SOLVE), ("reinit", _REINIT), ("stop", _STOP),
                       ("memory", _MEMORY), ("y", _Y), ("tret", _TRET),
                       ("init_step", _INIT_STEP), ("actual_init_step", _ACTUAL_INIT_STEP),
@@ -144,22 +149,19 @@ def _drive_cvode(sim, solver, plant, addresses, loop_state, held, loop, N, chunk
     # Jacobian cached (0 or 1)]
     memory = np.array([solver.initial_step, float(solver.jacobian_cached())])
     scratch = np.zeros(2 * sim.ndof)
-    done = 0
-    while done < N:
-        stop = min(N, done + chunk)
+
+    def run(start, stop):
         jacobians = int(plant.int_array("counters")[ed.JACOBIAN_COUNT])
-        flag = _loop(addresses, loop_state, memory, steps, held, solver.y_array, scratch, done,
+        flag = _loop(addresses, loop_state, memory, steps, held, solver.y_array, scratch, start,
                      stop, *loop)
         solver.add_steps(steps[0])
         steps[0] = 0
         solver.initial_step = memory[0]
         if plant.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
             memory[1] = 1.0
-        if flag != 0:
-            raise _failure(sim, solver, flag, loop_state[0])
-        done = stop
-        if progress is not None:
-            progress(done / N)
+        return flag
+
+    return run
 
 
 def _failure(sim, solver, flag, t):
