@@ -53,23 +53,23 @@ class RangeCheck:
                     or np.any(np.abs(x[self.translational] - self.start) > self.distance_bound))
 
     def warnings(self, x, e):
-        """Messages naming the first element or coordinate beyond each limit, with its worst
-        value; an empty list when the states are within the range."""
+        """{"strain" or "distance": a message naming the element or coordinate worst beyond
+        that limit, with its value}; empty when the states are within the range."""
         x, e = np.atleast_2d(x), np.atleast_2d(e)
-        found = []
+        found = {}
         if self.elongation.size:
             strain = e[:, self.elongation] / self.length
             worst = np.unravel_index(np.argmax(np.abs(strain)), strain.shape)
             if abs(strain[worst]) > STRAIN_LIMIT:
                 name = self.model.deformation_names[self.elongation[worst[1]]]
-                found.append(f"axial strain {strain[worst]:.3g} of {name} is beyond the model's "
-                             f"range of validity (|strain| <= {STRAIN_LIMIT:g})")
+                found["strain"] = (f"axial strain {strain[worst]:.3g} of {name} is beyond the "
+                                   f"model's range of validity (|strain| <= {STRAIN_LIMIT:g})")
         if self.translational.size:
             distance = np.abs(x[:, self.translational] - self.start)
             worst = np.unravel_index(np.argmax(distance), distance.shape)
             if distance[worst] > DISTANCE_LIMIT * self.scale:
                 name = self.model.coordinate_names[self.translational[worst[1]]]
-                found.append(f"{name} moved {distance[worst]:.3g} m from the start, beyond the "
-                             f"model's range of validity ({DISTANCE_LIMIT:g} x its length "
-                             f"scale {self.scale:.3g} m)")
+                found["distance"] = (f"{name} moved {distance[worst]:.3g} m from the start, "
+                                     f"beyond the model's range of validity ({DISTANCE_LIMIT:g} x "
+                                     f"its length scale {self.scale:.3g} m)")
         return found

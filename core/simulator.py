@@ -402,15 +402,15 @@ class Simulator:
         path = (np.zeros((n_points, self.model.nx)),
                 np.zeros((n_points, len(self.model.deformation_names))))
         outputs = self._along(states, None, path)
-        return outputs, self._range_check().warnings(*path)
+        return outputs, list(self._range_check().warnings(*path).values())
 
     def range_warnings(self):
         """The range-of-validity warnings of the current state (`flexure.core.plausibility`):
-        a list of messages, empty within the range. The coordinates and deformations are the
-        integrator's last evaluation, at the end of the last step."""
+        {kind ("strain", "distance"): message}, empty within the range. The coordinates and
+        deformations are the integrator's last evaluation, at the end of the last step."""
         x, e = self._last_x, self._last_e
         check = self._range_check()
-        return [] if check.within(x, e) else check.warnings(x, e)
+        return {} if check.within(x, e) else check.warnings(x, e)
 
     def _range_check(self):
         if self._range is None:

@@ -215,8 +215,7 @@ class SceneSlave(SafeSlave):
         self.simulator.set_inputs(self.inputs)
         self.simulator.advance(t + h, max_steps=int(self.max_steps))
         self._refresh()
-        for message in self.simulator.range_warnings():  # each kind once per instance
-            kind = "strain" if message.startswith("axial strain") else "distance"
+        for kind, message in self.simulator.range_warnings().items():  # once per kind
             if kind not in self._warned:
                 self._warned.add(kind)
                 self.log_message(f"{self.instance_name}: t = {t + h:.9g} s: {message}",

@@ -184,7 +184,7 @@ def test_a_state_beyond_the_range_of_validity_is_reported_not_silent(capsys):
     sim = Simulator(model, rtol=1e-6)
     sim.set_inputs([1e9])
     sim.advance(1e-3)
-    assert len(sim.range_warnings()) == 2
+    assert set(sim.range_warnings()) == {"strain", "distance"}
     assert main(["simulate", "stage_planar_3dof", "--t-end", "1e-3", "--input", "F=1e9",
                  "--rtol", "1e-6"]) == 0
     assert "warning: axial strain" in capsys.readouterr().out
