@@ -18,6 +18,7 @@ from flexure.core.cli import (
     write_outputs,
 )
 from flexure.core.errors import UsageError
+from flexure.core.methods import LOOP_METHOD
 from flexure.core.methods import METHODS as LOOP_METHODS
 from flexure.core.progress import Progress
 from flexure.core.tables import format_table, print_json
@@ -64,7 +65,7 @@ def register(subparsers):
     parser.add_argument("--plant", choices=PLANTS, default="inprocess",
                         help="in-process simulation, the scene FMU under fmpy, or the "
                              "controller and scene FMUs in libcosim (default inprocess)")
-    parser.add_argument("--method", choices=LOOP_METHODS, default="esdirk3",
+    parser.add_argument("--method", choices=LOOP_METHODS, default=LOOP_METHOD,
                         help="the plant's integrator (default esdirk3: one-step, no restart "
                              "when the force changes at a sample)")
     parser.add_argument("--rtol", type=fraction, default=1e-8, metavar="R",

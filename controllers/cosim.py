@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from flexure.core import SimulationError
+from flexure.core.methods import LOOP_METHOD
 from flexure.fmu import build_scene_fmu
 
 from .controller_fmu import build_controller_fmu
@@ -50,7 +51,7 @@ def step_nanoseconds(fs):
     return step
 
 
-def run_cosimulation(model, scene, controller, design, *, method="esdirk3", rtol=1e-8,
+def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD, rtol=1e-8,
                      workdir=None, progress=None):
     """Run the loop in libcosim; returns t, reference, position, force like simulate_loop.
 

@@ -16,6 +16,8 @@ import time
 
 import numpy as np
 
+from flexure.core.methods import LOOP_METHOD
+
 from .cosim import run_cosimulation, scene_fmu
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
@@ -33,7 +35,7 @@ __all__ = ["PLANTS", "TARGET", "LoopController", "LoopError", "LoopResult", "bui
 
 def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
              crossover: float = 300.0, feedforward=True, plant: str = "inprocess",
-             settle: float = 0.25, axis: int = 0, method: str = "esdirk3", rtol: float = 1e-8,
+             settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD, rtol: float = 1e-8,
              feedforward_model=None, workdir=None, progress=None,
              **design_options) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).

@@ -9,5 +9,8 @@ which take a held input's change without a restart.
 SUNDIALS_METHODS = ("cvode-bdf", "cvode-adams", "ida")
 ONE_STEP_METHODS = ("esdirk", "esdirk3")
 METHODS = SUNDIALS_METHODS + ONE_STEP_METHODS
+# the plant integrator of a sampled loop unless one is chosen: a changed force at every sample
+# costs it one evaluation, and the sample period, not its order, limits its step
+LOOP_METHOD = "esdirk3"
 
-__all__ = ["METHODS", "ONE_STEP_METHODS", "SUNDIALS_METHODS"]
+__all__ = ["LOOP_METHOD", "METHODS", "ONE_STEP_METHODS", "SUNDIALS_METHODS"]
