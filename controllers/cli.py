@@ -18,7 +18,7 @@ from flexure.core.cli import (
     write_outputs,
 )
 from flexure.core.errors import UsageError
-from flexure.core.methods import LOOP_METHOD
+from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
 from flexure.core.methods import METHODS as LOOP_METHODS
 from flexure.core.progress import Progress
 from flexure.core.tables import format_table, print_json
@@ -68,8 +68,9 @@ def register(subparsers):
     parser.add_argument("--method", choices=LOOP_METHODS, default=LOOP_METHOD,
                         help="the plant's integrator (default esdirk3: one-step, no restart "
                              "when the force changes at a sample)")
-    parser.add_argument("--rtol", type=fraction, default=1e-8, metavar="R",
-                        help="relative tolerance of the plant's integrator (default 1e-8)")
+    parser.add_argument("--rtol", type=fraction, default=LOOP_RTOL, metavar="R",
+                        help="relative tolerance of the plant's integrator (default "
+                             f"{LOOP_RTOL:g}: the sample period bounds its step)")
     parser.add_argument("--plot", default="loop.png", metavar="PNG",
                         help="write reference, position, error and force (default loop.png)")
     parser.add_argument("--no-plot", action="store_true", help="write no plot")

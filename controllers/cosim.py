@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from flexure.core import SimulationError
-from flexure.core.methods import LOOP_METHOD
+from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
 from flexure.fmu import build_scene_fmu
 
 from .controller_fmu import build_controller_fmu
@@ -51,7 +51,8 @@ def step_nanoseconds(fs):
     return step
 
 
-def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD, rtol=1e-8,
+def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD,
+                     rtol=LOOP_RTOL,
                      workdir=None, progress=None):
     """Run the loop in libcosim; returns t, reference, position, force like simulate_loop.
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from flexure.core import SimulationError
-from flexure.core.methods import LOOP_METHOD
+from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
 
 
 class InProcessPlant:
@@ -28,7 +28,7 @@ class InProcessPlant:
 
     kind = "inprocess"
 
-    def __init__(self, model, *, method=LOOP_METHOD, rtol=1e-8):
+    def __init__(self, model, *, method=LOOP_METHOD, rtol=LOOP_RTOL):
         from flexure.core import Simulator  # the models (numba, scipy) on first use
 
         self.model = model
@@ -70,7 +70,7 @@ class FmuPlant:
 
     kind = "fmu"
 
-    def __init__(self, fmu_path, *, method=LOOP_METHOD, rtol=1e-8):
+    def __init__(self, fmu_path, *, method=LOOP_METHOD, rtol=LOOP_RTOL):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from flexure.core.methods import LOOP_METHOD
+from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
 
 from .cosim import run_cosimulation, scene_fmu
 from .loop_controller import LoopController
@@ -35,7 +35,8 @@ __all__ = ["PLANTS", "TARGET", "LoopController", "LoopError", "LoopResult", "bui
 
 def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
              crossover: float = 300.0, feedforward=True, plant: str = "inprocess",
-             settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD, rtol: float = 1e-8,
+             settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD,
+             rtol: float = LOOP_RTOL,
              feedforward_model=None, workdir=None, progress=None,
              **design_options) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
