@@ -235,6 +235,7 @@ class EngineData:
         arrays = self.ints + self.floats
         self.table = np.array([value for a in arrays for value in (a.ctypes.data, a.size)],
                               dtype=np.int64)
+        self._address = self.table.ctypes.data  # the table never moves: read it once
 
     def float_array(self, name):
         """The float64 array of slot `name` (a view: writing to it changes the engine's)."""
@@ -247,7 +248,7 @@ class EngineData:
     @property
     def address(self):
         """The address of the table (for a C callback's user data)."""
-        return self.table.ctypes.data
+        return self._address
 
 
 def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None):

@@ -370,6 +370,10 @@ class Esdirk:
         self.forget()  # what it learnt led to the failure: the retry starts afresh
         return error
 
+    def step_count(self):
+        """Accepted steps since the integrator was made (cheap: for a step budget)."""
+        return int(self.flags[I_STEPS])
+
     def statistics(self):
         """{"steps", "rejected_steps", "newton_failures", "solver_rhs_evaluations",
         "solver_jacobian_evaluations", "factorizations"} since the integrator was made."""

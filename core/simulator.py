@@ -97,6 +97,9 @@ class Simulator:
             max_order=max_order,
             input_function=self._inputs_at if self._input_functions else None)
         self._output_data = EngineData(model)
+        self._output_coordinates = np.array([port.coordinate for port in model.outputs],
+                                            dtype=np.int64)
+        self._positions_only = all(port.quantity == "position" for port in model.outputs)
         self._range = None  # plausibility.RangeCheck, made on first use
         # views of the coordinates and deformations of the engine's last evaluation
         self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")
@@ -186,12 +189,11 @@ class Simulator:
         if u.size != self._u.size:
             raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
                                   f"({', '.join(self.input_names)}), got {u.size}")
-        bad = np.flatnonzero(~np.isfinite(u))
-        if bad.size:
-            i = int(bad[0])
+        if not np.isfinite(u).all():
+            i = int(np.flatnonzero(~np.isfinite(u))[0])
             raise SimulationError(f"t = {self._t:.9g} s: input {self.input_names[i]!r} is "
                                   f"not finite ({u[i]})")
-        if not np.array_equal(u, self._u):
+        if (u != self._u).any():
             self._u = u
             self._needs_init = True
 
@@ -305,7 +307,7 @@ class Simulator:
             raise SimulationError(f"t = {self._t:.9g} s: advance to t_end = {t_end!r}: expected "
                                   "a finite time after the current one")
         start = _time.perf_counter()
-        steps_before = self._counts()["steps"]
+        steps_before = self.integrator.step_count() if max_steps is not None else 0
         # with a budget alone the integrator counts its steps itself (normal mode); a record,
         # a progress report or a deadline need control back after every step
         one_step = _record is not None or _progress is not None or self.deadline is not None
@@ -317,7 +319,8 @@ class Simulator:
                         self._restart()
                     budget = None
                     if max_steps is not None and not one_step:
-                        budget = max(1, max_steps - (self._counts()["steps"] - steps_before))
+                        budget = max(1, max_steps - (self.integrator.step_count()
+                                                     - steps_before))
                     t, y = self.integrator.advance(t_end, one_step=one_step, max_steps=budget)
                 except StepBudgetSpent as error:  # no retry: the budget is the host's limit
                     self._back_to_last_good(error, t_end)
@@ -333,7 +336,7 @@ class Simulator:
                     continue
                 self._t = t
                 self._y = np.array(y, dtype=float)
-                self._x = self.data.float_array("x").copy()
+                self._x = self._last_x.copy()
                 if hasattr(self.integrator, "learn_initial_step"):
                     self.integrator.learn_initial_step()
                 self._outputs_cache = None
@@ -361,7 +364,7 @@ class Simulator:
         if self.deadline is not None and _time.perf_counter() > self.deadline:
             self._needs_init = True
             raise SimulationError(f"t = {self._t:.9g} s: the time limit of the run is over")
-        if max_steps is not None and self._counts()["steps"] - steps_before >= max_steps \
+        if max_steps is not None and self.integrator.step_count() - steps_before >= max_steps \
                 and self._t < np.inf:
             self._needs_init = True
             raise SimulationError(f"t = {self._t:.9g} s: the step budget of {max_steps} "
@@ -372,7 +375,7 @@ class Simulator:
 
         Computed once per state (`advance`, `reset` and `set_state` start a new one)."""
         if self._outputs_cache is None:
-            if all(port.quantity == "position" for port in self.model.outputs):
+            if self._positions_only:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
@@ -387,8 +390,7 @@ class Simulator:
         status = engine.call(data, engine.OP_POSITIONS, np.ascontiguousarray(q))
         if status != ed.OK:
             raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
-        x = data.float_array("x")
-        return np.array([x[port.coordinate] for port in self.model.outputs])
+        return data.float_array("x")[self._output_coordinates]
 
     def outputs_along(self, states, *, start=None):
         """Outputs (n, n_outputs) along absolute states [q, qdot] (n, 2 NDOF), solving the

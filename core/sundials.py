@@ -310,6 +310,10 @@ class _Solver:
         solver was made."""
         return {key: self._totals[key] + value for key, value in self._current().items()}
 
+    def step_count(self):
+        """Steps since the solver was made (for a step budget)."""
+        return self.statistics()["steps"]
+
     def budget_spent(self, max_steps, t):
         """The StepBudgetSpent of a call that took max_steps steps, at the time t (s) it
         reached; its `last_good` is (t, y) there."""

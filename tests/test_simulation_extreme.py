@@ -188,3 +188,34 @@ def test_a_state_beyond_the_range_of_validity_is_reported_not_silent(capsys):
     assert main(["simulate", "stage_planar_3dof", "--t-end", "1e-3", "--input", "F=1e9",
                  "--rtol", "1e-6"]) == 0
     assert "warning: axial strain" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("scene", ["stage_planar_3dof", "stage_spatial_19dof"])
+def test_the_compiled_range_test_agrees_with_the_warnings(scene):
+    """RangeCheck.within (compiled, run after every FMU doStep) is True exactly when
+    `warnings` finds nothing: random states spread across both limits, and each limit
+    crossed alone by 1 % on one element or coordinate."""
+    from flexure.core.plausibility import DISTANCE_LIMIT, RangeCheck
+
+    model = load_scene(scene)
+    check = RangeCheck(model)
+    rng = np.random.default_rng(7)
+    x0 = np.asarray(model.initial_coordinates, float)
+    e0 = np.zeros(len(model.deformation_names))
+    seen = set()
+    for _ in range(400):
+        x, e = x0.copy(), e0.copy()
+        x[check.translational] += rng.uniform(-1.2, 1.2, check.translational.size) * (
+            DISTANCE_LIMIT * check.scale) * rng.uniform(0, 1)
+        e[check.elongation] = rng.uniform(-1.2, 1.2, check.elongation.size) * check.strain_bound
+        within = check.within(x, e)
+        assert within == (check.warnings(x, e) == {})
+        seen.add(within)
+    assert seen == {True, False}
+    for which in ("strain", "distance"):
+        x, e = x0.copy(), e0.copy()
+        if which == "strain":
+            e[check.elongation[-1]] = -1.01 * check.strain_bound[-1]
+        else:
+            x[check.translational[-1]] += 1.01 * DISTANCE_LIMIT * check.scale
+        assert not check.within(x, e) and set(check.warnings(x, e)) == {which}
