@@ -35,6 +35,8 @@ from fmpy.fmi2 import FMU2Slave, fmi2True
 from flexure.core import Simulator, load_scene
 from flexure.core.tables import format_table
 from flexure.fmu import build_scene_fmu, build_slave_fmu
+from flexure.fmu.scene_slave import DEFAULT_RTOL as FMU_RTOL
+from flexure.fmu.scene_slave import METHODS as FMU_METHODS
 
 SCENE = "stage_planar_3dof"
 STEP = 1e-3  # s, the communication step
@@ -125,7 +127,7 @@ def run_ctypes(path, forces):
 
 def run_in_process(forces):
     """Seconds for the same steps on flexure's Simulator; its statistics; the outputs."""
-    sim = Simulator(load_scene(SCENE), method="cvode-bdf", rtol=1e-8)  # the FMU's defaults
+    sim = Simulator(load_scene(SCENE), method=FMU_METHODS[0], rtol=FMU_RTOL)  # the FMU's defaults
     sim.reset(t0=0.0)
     clock = time.perf_counter()
     for k, force in enumerate(forces):

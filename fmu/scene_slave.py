@@ -14,9 +14,9 @@ Variables (only what the scene has):
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
   stress at the ends of the scene's beams with a cross-section, in the current state
   (`flexure.core.stresses_along`);
-- parameters "integrator.method" (String: cvode-bdf (default), esdirk, esdirk3, cvode-adams,
+- parameters "integrator.method" (String: esdirk (default), esdirk3, cvode-bdf, cvode-adams,
   ida; the one-step esdirk takes a host's new inputs at each doStep without a restart),
-  "integrator.rtol" (1), "integrator.atol" (0 means the simulator's default) and
+  "integrator.rtol" (1, default 1e-6), "integrator.atol" (0 means the simulator's default) and
   "integrator.max_steps" (Integer: the step budget of one doStep, beyond which it answers
   fmi2Discard);
 - one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
@@ -49,12 +49,17 @@ from flexure.core.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
 
-# the first is the default: with inputs held over many steps (the speed benchmark's 1 N step at
-# 1 ms) CVODE is 1.3 times faster than esdirk; a host that changes the inputs at every step
-# (a sampled loop) is better served by esdirk or esdirk3, which take the change without a restart
-METHODS = ("cvode-bdf", *ONE_STEP_METHODS, "cvode-adams", "ida")  # flexure.core.METHODS
-# a doStep's step budget: far above a normal step (the 3-DOF stage at rtol 1e-8: about 50
-# CVODE steps per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
+# The first is the default, with DEFAULT_RTOL. A host changes the inputs at most doSteps, and
+# the one-step esdirk takes a change without a restart (CVODE restarts at order 1). With the
+# inputs held too it is the faster at this tolerance: stage_planar_3dof, 1 N held, 1 ms doSteps
+# for 1 s (measured 2026-11-23, in process): esdirk at rtol 1e-6 0.062 s, error 3.1e-6 of the
+# motion; CVODE BDF at rtol 1e-6 or 1e-8 about 0.2 s (its high orders are unstable beside the
+# stage's lightly damped 2.1 and 3.6 kHz modes, so it takes ~50 steps per ms at any
+# tolerance), error 6e-9. A host that wants the smaller error sets the method and rtol.
+METHODS = (*ONE_STEP_METHODS, "cvode-bdf", "cvode-adams", "ida")  # flexure.core.METHODS
+DEFAULT_RTOL = 1e-6
+# a doStep's step budget: far above a normal step (the 3-DOF stage with CVODE: about 50 steps
+# per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
 DEFAULT_MAX_STEPS = 200_000
 
 # The unit of a tunable scene key, by its last part.
@@ -99,7 +104,7 @@ class SceneSlave(SafeSlave):
         self.description = header.get("description", f"flexure scene {self.scene_name}")
         self.author = "flexure"
         self.method = METHODS[0]
-        self.rtol = 1e-8
+        self.rtol = DEFAULT_RTOL
         self.atol = 0.0
         self.max_steps = DEFAULT_MAX_STEPS
         self._warned = set()  # the kinds of range warning already logged

@@ -35,9 +35,10 @@ from flexure.fmu import (
     validate_fmu_file,
 )
 from flexure.fmu.regression import check_fmu, compare, read_csv
+from flexure.fmu.scene_slave import DEFAULT_RTOL as FMU_RTOL
 from flexure.fmu.scene_slave import METHODS as FMU_METHODS
 
-FMU_METHOD = FMU_METHODS[0]  # the integrator a scene FMU runs by default
+FMU_METHOD = FMU_METHODS[0]  # the integrator a scene FMU runs by default, at FMU_RTOL
 
 SCENES = builtin_scenes()
 
@@ -185,7 +186,7 @@ def test_escape_log_doubles_percent():
 def test_fmu_equals_in_process_simulation_on_the_same_grid(scene, scene_fmus):
     times, forces = grid_and_inputs()
     slave = Slave(scene_fmus(scene))
-    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=1e-8)
+    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=FMU_RTOL)
     sim.reset(t0=0.0)
     try:
         assert np.array_equal(slave.y(), sim.outputs())
@@ -205,7 +206,7 @@ def test_fmu_agrees_with_a_continuous_run_within_tolerance(scene_fmus):
     communication point change the error only within the integrator's tolerance."""
     scene = "stage_planar_3dof"
     slave = Slave(scene_fmus(scene))
-    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=1e-8)
+    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=FMU_RTOL)
     sim.reset(t0=0.0)
     sim.set_inputs([1.0])
     sim.advance(0.05)
@@ -216,7 +217,7 @@ def test_fmu_agrees_with_a_continuous_run_within_tolerance(scene_fmus):
     slave.close()
     displacement = sim.outputs() - load_scene(scene).initial_coordinates[
         [p.coordinate for p in load_scene(scene).outputs]]
-    # x moves ~2 mm; rtol 1e-8 per step over ~1e3 internal steps: 1e-6 of the motion.
+    # x moves ~2 mm; the default rtol over the steps of 50 ms: within 1e-6 of the motion
     np.testing.assert_allclose(y, sim.outputs(), rtol=0,
                                atol=1e-6 * np.abs(displacement).max())
 
@@ -546,7 +547,7 @@ def test_velocity_and_rotation_ports_get_their_units(tmp_path):
     speed, angle = definitions["m/s"].baseUnit, definitions["rad"].baseUnit
     assert (speed.m, speed.s, speed.kg, angle.rad) == (1, -1, 0, 1)
     slave = Slave(path)
-    sim = Simulator(load_scene(scene), method=FMU_METHOD)
+    sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=FMU_RTOL)
     sim.reset()
     for k in range(5):
         slave.set([1.0, 0.01])
@@ -571,7 +572,7 @@ def test_von_mises_output_on_request(tmp_path):
     assert validate_fmu_file(path) == []
     model = load_scene(scene)
     slave = Slave(path)
-    sim = Simulator(model, method=FMU_METHOD)
+    sim = Simulator(model, method=FMU_METHOD, rtol=FMU_RTOL)
     sim.reset()
     for k in range(3):
         slave.set(0.5)
