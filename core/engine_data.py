@@ -33,7 +33,7 @@ INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformat
              "dof_positions", "stressed", "input_coordinates", "groups", "coordinate_index",
              "deformation_index", "row_of_deformation", "column_of_coordinate", "pivots",
              "mass_pivots", "counters", "augmented_pivots", "j_row_position",
-             "j_column_position", "augmented_position")
+             "j_column_position", "augmented_position", "mass_pattern", "point_columns")
 # float64 slots (`floats`)
 FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
@@ -48,7 +48,7 @@ FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "
 # per-group row of `groups`
 (G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
  G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
- G_INERTIA_ENTRY, G_WIDTH) = range(16)
+ G_INERTIA_ENTRY, G_PATTERN_OFFSET, G_PATTERN_COUNT, G_WIDTH) = range(18)
 # settings entries
 TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
 # counters entries
@@ -93,13 +93,13 @@ class EngineData:
         mech_S, mech_D = assembly.stiffness_and_damping(model)
         S = mech_S[np.ix_(stressed, stressed)]
         D = mech_D[np.ix_(stressed, stressed)]
-        groups, coord_index, def_index, data = [], [], [], []
+        groups, coord_index, def_index, data, patterns = [], [], [], [], []
         de_size = d2e_size = 0
         inertia_groups = assembly.Inertia(model).groups
         inertia = {id(group): Mp for group, Mp in inertia_groups}
         all_groups = list(model.groups) + [group for group, _ in inertia_groups
                                            if group.kind.type_name == "NODE_INERTIA"]
-        offsets = {"coord": 0, "def": 0, "data": 0}
+        offsets = {"coord": 0, "def": 0, "data": 0, "pattern": 0}
         max_m = max_k = max_p = 1
         for group in all_groups:
             kind = group.kind
@@ -127,6 +127,13 @@ class EngineData:
                 row[G_GRAVITY_OFFSET] = offsets["data"] + size
                 pieces.append(assembly._point_gravity(group, model.gravity).astype(float))
                 size += P
+                # the entries of Mp that any element of the group fills (flat p P + q): the
+                # element masses are sparse (a BEAM's: 72 of 24 x 24), and the engine's
+                # loops over them visit these alone
+                pattern = np.flatnonzero(np.any(np.asarray(Mp) != 0.0, axis=0).ravel())
+                row[G_PATTERN_OFFSET], row[G_PATTERN_COUNT] = offsets["pattern"], pattern.size
+                patterns.append(pattern.astype(np.int64))
+                offsets["pattern"] += pattern.size
             row[G_DE_OFFSET], row[G_D2E_OFFSET] = de_size, d2e_size
             de_size += n * k * m
             d2e_size += n * k * m * m
@@ -208,6 +215,11 @@ class EngineData:
             "augmented_pivots": np.zeros(augmented, np.int64),
             "j_row_position": j_rows, "j_column_position": j_cols,
             "augmented_position": aug_position,
+            "mass_pattern": np.concatenate(patterns) if patterns else np.zeros(0, np.int64),
+            # scratch: the columns of each row of an element's Dp that are not zero (max_p
+            # rows of max_m columns), the count of each row, the element's coordinates'
+            # positions in the augmented system
+            "point_columns": np.zeros(max_p * (max_m + 1) + max_m, np.int64),
         }
         floats = {
             "settings": settings, "S": np.ascontiguousarray(S).ravel(),

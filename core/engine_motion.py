@@ -25,7 +25,13 @@ from . import engine_slots as slot
 from .engine_dense import lu_factor, lu_solve
 from .engine_kinematics import compute_DF, dof_rows, j_solve, solve_kinematics
 from .engine_slots import float_array as _f
-from .engine_slots import group, group_deformations, group_inertia, inertia_scratch
+from .engine_slots import (
+    group,
+    group_deformations,
+    group_inertia,
+    group_mass_pattern,
+    inertia_scratch,
+)
 from .engine_slots import int_array as _i
 from .jit import kernel
 from .native import call_inertia
@@ -256,16 +262,17 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         if c >= 0:
             A[apos[c] * na + apos[c]] += lumped[a]
     local = _f(table, slot.LOCAL)
+    columns = _i(table, slot.POINT_COLUMNS)
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         if row[ed.G_P] == 0:
             continue
         n, m, P, width, function, coords, refs, masses, gravity = group_inertia(table, row)
-        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Mp Dp (P, m)
+        pattern = group_mass_pattern(table, row)
+        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
         xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
-        MpDp = local[o: o + P * m].reshape((P, m))
+        Me = local[o: o + m * m]
         for i in range(n):
-            Mp = masses[i * P * P: (i + 1) * P * P]
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
                 vl[a] = xdot[coords[i * m + a]]
@@ -274,35 +281,55 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                          acc.ctypes.data, m, P, width)
             for pp in range(P):
                 point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
-            for pp in range(P):  # w = Mp (point forces), MpDp = Mp Dp
-                s = 0.0
-                for a in range(m):
-                    MpDp[pp, a] = 0.0
-                for qq in range(P):
-                    mpq = Mp[pp * P + qq]
-                    if mpq == 0.0:
-                        continue
-                    s += mpq * point[qq]
-                    for a in range(m):
-                        MpDp[pp, a] += mpq * Dp[qq, a]
-                w[pp] = s
-            for a in range(m):  # r += Dp^T w, M_ff += Dp^T Mp Dp
-                s = 0.0
-                for pp in range(P):
-                    s += Dp[pp, a] * w[pp]
-                r[coords[i * m + a]] += s
-                ca = col_of_coord[coords[i * m + a]]
+            _element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w, Me,
+                          columns)
+            counts, position = columns[P * m: P * m + P], columns[P * m + P: P * m + P + m]
+            for pp in range(P):  # r += Dp^T w
+                for u in range(counts[pp]):
+                    a = columns[pp * m + u]
+                    r[coords[i * m + a]] += Dp[pp, a] * w[pp]
+            for a in range(m):  # M_ff += Me on the free coordinates
+                c = col_of_coord[coords[i * m + a]]
+                position[a] = apos[c] if c >= 0 else -1
+            for a in range(m):
+                ca = position[a]
                 if ca < 0:
                     continue
-                ca = apos[ca]
-                for pp in range(P):  # Dp is sparse: each point moves with few coordinates
-                    d = Dp[pp, a]
-                    if d == 0.0:
-                        continue
-                    for b in range(m):
-                        cb = col_of_coord[coords[i * m + b]]
-                        if cb >= 0:
-                            A[ca * na + apos[cb]] += d * MpDp[pp, b]
+                for b in range(m):
+                    cb = position[b]
+                    if cb >= 0:
+                        A[ca * na + cb] += Me[a * m + b]
+
+
+@kernel
+def _element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
+    """One element's w = Mp point (P,) and Me = Dp^T Mp Dp (m * m, row by row), visiting
+    only the entries of Mp in `pattern` (flat p P + q) and the non-zero entries of Dp (each
+    point moves with few coordinates: a BEAM's with 1 or 4 of 14). Leaves in `columns` the
+    non-zero columns of each row p of Dp (at p m ...) and their counts (at P m + p)."""
+    counts = columns[P * m:]
+    for pp in range(P):
+        w[pp] = 0.0
+        k = 0
+        for a in range(m):
+            if Dp[pp, a] != 0.0:
+                columns[pp * m + k] = a
+                k += 1
+        counts[pp] = k
+    for a in range(m * m):
+        Me[a] = 0.0
+    for e in range(pattern.size):
+        flat = pattern[e]
+        pp = flat // P
+        qq = flat - pp * P
+        mpq = Mp[flat]
+        w[pp] += mpq * point[qq]
+        for u in range(counts[pp]):
+            a = columns[pp * m + u]
+            da = mpq * Dp[pp, a]
+            for v in range(counts[qq]):
+                b = columns[qq * m + v]
+                Me[a * m + b] += da * Dp[qq, b]
 
 
 @kernel
@@ -361,8 +388,9 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
         if row[ed.G_P] == 0:
             continue
         n, m, P, width, function, coords, refs, masses, gravity = group_inertia(table, row)
-        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), room for the Mp Dp of
-        # `_inertia_forces`, B = Dp DF_e and Mp B (P, ndof)
+        pattern = group_mass_pattern(table, row)
+        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), room for the Me of
+        # `_inertia_forces` (max_p max_m >= m m), B = Dp DF_e and Mp B (P, ndof)
         xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
         o += max_p * max_m
         B = local[o: o + max_p * ndof]
@@ -389,17 +417,17 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
                             f -= d * conv[coords[i * m + a]]
                 point[pp] = f - acc[pp] if order == 2 else f
             for pp in range(P):  # w = Mp (point forces), MpB = Mp B
-                s = 0.0
+                w[pp] = 0.0
                 for j in range(ndof):
                     MpB[pp * ndof + j] = 0.0
-                for qq in range(P):
-                    mpq = Mp[pp * P + qq]
-                    if mpq == 0.0:
-                        continue
-                    s += mpq * point[qq]
-                    for j in range(ndof):
-                        MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
-                w[pp] = s
+            for e in range(pattern.size):
+                flat = pattern[e]
+                pp = flat // P
+                qq = flat - pp * P
+                mpq = Mp[flat]
+                w[pp] += mpq * point[qq]
+                for j in range(ndof):
+                    MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
             if with_forces:
                 for a in range(m):  # r += Dp^T w
                     s = 0.0

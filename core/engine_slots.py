@@ -18,7 +18,8 @@ from .native import as_float_pointer, as_int_pointer
 # slot indices as compile-time constants
 (DIMS, FREE, ROWS, DOF_COORDS, DOF_DEFS, DOF_POS, STRESSED, INPUT_COORDS, GROUPS,
  COORD_INDEX, DEF_INDEX, ROW_OF_DEF, COL_OF_COORD, PIVOTS, MASS_PIVOTS,
- COUNTERS, AUG_PIVOTS, J_ROW_POS, J_COL_POS, AUG_POS) = range(len(ed.INT_SLOTS))
+ COUNTERS, AUG_PIVOTS, J_ROW_POS, J_COL_POS, AUG_POS, MASS_PATTERN,
+ POINT_COLUMNS) = range(len(ed.INT_SLOTS))
 (SETTINGS, S, D, LUMPED, CONST_FORCE, GROUP_DATA, INPUTS, Q_REF, X, Q, DF, LU,
  E, DE, D2E, X_TRIAL, G, DX, XDOT, EDOT, SIGMA, FORCE, MASS, MASS_LU,
  REDUCED_FORCE, QDDOT, CONV, LOCAL, DEF, STIFFNESS, DAMPING, JAC_CACHE,
@@ -77,6 +78,14 @@ def group_deformations(table, g):
     De = float_array(table, DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
     D2e = float_array(table, D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
     return n, m, k, coords, defs, De, D2e
+
+
+@kernel
+def group_mass_pattern(table, row):
+    """The flat indices p P + q of the entries of Mp that the group's elements fill (the
+    group with the row `row` and P > 0 inertia points per element)."""
+    start = row[ed.G_PATTERN_OFFSET]
+    return int_array(table, MASS_PATTERN)[start: start + row[ed.G_PATTERN_COUNT]]
 
 
 @kernel

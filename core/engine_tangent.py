@@ -15,7 +15,13 @@ from . import engine_slots as slot
 from .engine_kinematics import j_solve_transposed
 from .engine_motion import reduced_mass
 from .engine_slots import float_array as _f
-from .engine_slots import group, group_deformations, group_inertia, inertia_scratch
+from .engine_slots import (
+    group,
+    group_deformations,
+    group_inertia,
+    group_mass_pattern,
+    inertia_scratch,
+)
 from .engine_slots import int_array as _i
 from .jit import kernel
 from .native import call_inertia
@@ -135,6 +141,7 @@ def _mass_times(table, x, v, out):
         if row[ed.G_P] == 0:
             continue
         n, m, P, width, function, coords, refs, masses, _ = group_inertia(table, row)
+        pattern = group_mass_pattern(table, row)
         # scratch after the first 2 ndof entries, which `tangent` keeps for itself
         base = 2 * ndof + max_m * max_m + max_m * ndof
         xl, vl, pl, acc, w, Dp, _ = inertia_scratch(table, base, P, m)
@@ -150,10 +157,11 @@ def _mass_times(table, x, v, out):
                     s += Dp[pp, a] * v[coords[i * m + a]]
                 acc[pp] = s
             for pp in range(P):
-                s = 0.0
-                for qq in range(P):
-                    s += Mp[pp * P + qq] * acc[qq]
-                w[pp] = s
+                w[pp] = 0.0
+            for e in range(pattern.size):  # w = Mp acc over the entries Mp has
+                flat = pattern[e]
+                pp = flat // P
+                w[pp] += Mp[flat] * acc[flat - pp * P]
             for a in range(m):
                 s = 0.0
                 for pp in range(P):
