@@ -66,7 +66,7 @@ def register(subparsers):
                         help="in-process simulation, the scene FMU under fmpy, or the "
                              "controller and scene FMUs in libcosim (default inprocess)")
     parser.add_argument("--method", choices=LOOP_METHODS, default=LOOP_METHOD,
-                        help="the plant's integrator (default esdirk3: one-step, no restart "
+                        help=f"the plant's integrator (default {LOOP_METHOD}: one-step, no restart "
                              "when the force changes at a sample)")
     parser.add_argument("--rtol", type=fraction, default=LOOP_RTOL, metavar="R",
                         help="relative tolerance of the plant's integrator (default "

@@ -10,9 +10,10 @@ the libraries scikit-sundae ships, so this module implements ARKODE's default or
 order-3 implicit methods itself, in numba, calling the engine through its C entry point: no
 Python per step.
 
-Methods (Kennedy & Carpenter 2003; tableaus in `esdirk_method`): ESDIRK4(3)6L[2]SA ("esdirk",
-s = 6 stages, g = 1/4, order 4, embedded order 3) and ESDIRK3(2)4L[2]SA ("esdirk3", s = 4,
-order 3, embedded 2), both L-stable and stiffly accurate. One step from (t, y) with size h, f
+Methods (tableaus in `esdirk_method`): ESDIRK4(3)6L[2]SA ("esdirk", s = 6 stages, g = 1/4,
+order 4, embedded order 3) and ESDIRK3(2)4L[2]SA ("esdirk3", s = 4, order 3, embedded 2) of
+Kennedy & Carpenter 2003, and TR-BDF2 ("esdirk2", s = 3, g = 1 - 1/sqrt(2), order 2, embedded
+3), all L-stable and stiffly accurate. One step from (t, y) with size h, f
 the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, m/s, rad/s):
 
     F_1 = f(y)                                (F_s of the step before while inputs are held)
@@ -25,10 +26,10 @@ the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, 
 
 Error control: the step is accepted when the weighted RMS norm of err, weights
 1 / (rtol max(|y_i|, |y_new,i|) + atol_i) as CVODE's, is at most 1; the next step is
-h min(5, max(0.2, 0.9 |err|^(-1/(p + 1)))), p the embedded order. The last step before t_stop
-is stretched or split so the integration lands on t_stop exactly, never past it (the held input
-changes there). With a step budget (max_steps) the kernel stops at the last accepted step once
-it is spent (TOO_MUCH_WORK).
+h min(5, max(0.2, 0.9 |err|^(-1/(p + 1)))), p the lower of the two orders. The last step
+before t_stop is stretched or split so the integration lands on t_stop exactly, never past it
+(the held input changes there). With a step budget (max_steps) the kernel stops at the last
+accepted step once it is spent (TOO_MUCH_WORK).
 
 Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
 Jacobian), kept across steps and samples; it is recomputed when a stage converges slowly or
@@ -303,13 +304,13 @@ class Esdirk:
     max_step : float or None
         Largest step (s).
     method : str
-        "esdirk" (order 4, 6 stages) or "esdirk3" (order 3, 4 stages): the tableau of
-        `esdirk_method.TABLEAUS`.
+        "esdirk" (order 4, 6 stages), "esdirk3" (order 3, 4 stages) or "esdirk2" (TR-BDF2,
+        order 2, 3 stages): the tableau of `esdirk_method.TABLEAUS`.
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
         self.data = data
-        self.tableau = TABLEAUS[method]
+        self.tableau = tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()
         self.n = n = 2 * int(data.int_array("dims")[ed.NDOF])
@@ -317,7 +318,7 @@ class Esdirk:
         self.memory[M_RTOL] = float(rtol)
         self.memory[M_H_MAX] = float(max_step or 0.0)
         self.memory[M_ETA] = 1.0
-        self.memory[M_EXPONENT] = 1.0 / (self.tableau.embedded_order + 1)
+        self.memory[M_EXPONENT] = 1.0 / (min(tableau.order, tableau.embedded_order) + 1)
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)

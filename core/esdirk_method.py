@@ -1,17 +1,24 @@
 """The Butcher tableaus of the ESDIRK integrators, in exact fractions.
 
-Both are from Kennedy, C. A. and Carpenter, M. H. (2003), "Additive Runge-Kutta schemes for
-convection-diffusion-reaction equations", Applied Numerical Mathematics 44, 139-181: the
-implicit parts of ARK3(2)4L[2]SA and ARK4(3)6L[2]SA, which SUNDIALS' ARKODE uses as its default
-order-3 and order-4 implicit methods (ARKODE_ARK324L2SA_DIRK_4_2_3, ARKODE_ARK436L2SA_DIRK_6_3_4).
+The order-3 and order-4 tables are from Kennedy, C. A. and Carpenter, M. H. (2003), "Additive
+Runge-Kutta schemes for convection-diffusion-reaction equations", Applied Numerical
+Mathematics 44, 139-181: the implicit parts of ARK3(2)4L[2]SA and ARK4(3)6L[2]SA, which
+SUNDIALS' ARKODE uses as its default order-3 and order-4 implicit methods
+(ARKODE_ARK324L2SA_DIRK_4_2_3, ARKODE_ARK436L2SA_DIRK_6_3_4). The order-2 table is TR-BDF2
+(Bank et al. 1985, a trapezoidal stage to c = 2 - sqrt(2), then BDF2 to 1) as an ESDIRK with
+the order-3 embedded solution of Hosea, M. E. and Shampine, L. F. (1996), "Analysis and
+implementation of TR-BDF2", Applied Numerical Mathematics 20, 21-37 (ARKODE_TRBDF2_3_3_2; its
+stages are those of ARKODE's default order-2 method, ARKODE_ARK2_DIRK_3_1_2).
 
 Each has c_1 = 0 and a_11 = 0 (the first stage is explicit: "E" SDIRK), the same diagonal gamma
 on the other stages, is stiffly accurate (the last row of A is b: the last stage is the
 solution), L-stable (R(z) -> 0 as z -> -inf) and of stage order 2; `b_hat` is the embedded
-solution one order lower, for the error estimate. The order-4 table is exact in these
-fractions; the order-3 table's gamma is irrational and its fractions are the paper's rational
-approximations, so its order conditions hold to about 1e-20. `tests/test_esdirk.py` checks the
-order conditions and the stability function at infinity.
+solution for the error estimate: one order lower for the order-3 and order-4 tables, one
+higher for TR-BDF2 (its estimate is then the order-2 solution's own local error). The order-4
+table is exact in these fractions; the others' gamma is irrational (the order-3 table's
+fractions are the paper's rational approximations, its order conditions hold to about 1e-20;
+TR-BDF2's sqrt(2) is a fraction exact to 1e-40). `tests/test_esdirk.py` checks the order
+conditions and the stability function.
 """
 
 from dataclasses import dataclass
@@ -98,5 +105,26 @@ ESDIRK4 = Tableau(
            _F(-3700637, 11593932), _F(61727, 225920)),
     order=4, embedded_order=3)
 
-TABLEAUS = {"esdirk": ESDIRK4, "esdirk3": ESDIRK3}  # by method name (core/methods.py)
+
+def _sqrt2():
+    """sqrt(2) as a fraction exact to about 1e-44 (TR-BDF2's gamma is irrational)."""
+    from decimal import Decimal, localcontext
+
+    with localcontext() as context:
+        context.prec = 45
+        return _F(Decimal(2).sqrt())
+
+
+_R2 = _sqrt2()
+_G2 = 1 - 1 / _R2  # (2 - sqrt(2)) / 2
+TRBDF2 = Tableau(
+    name="TR-BDF2",
+    A=((0, 0, 0),
+       (_G2, _G2, 0),
+       (_R2 / 4, _R2 / 4, _G2)),
+    b_hat=((1 - _R2 / 4) / 3, (3 * _R2 / 4 + 1) / 3, _G2 / 3),
+    order=2, embedded_order=3)
+
+# by method name (core/methods.py)
+TABLEAUS = {"esdirk": ESDIRK4, "esdirk3": ESDIRK3, "esdirk2": TRBDF2}
 MAX_STAGES = max(t.stages for t in TABLEAUS.values())

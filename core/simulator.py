@@ -51,7 +51,8 @@ class Simulator:
         "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a
         one-step L-stable method of order 4, `flexure.core.esdirk`: no restart cost when an
         input changes, so the choice for sampled loops and co-simulation steps), "esdirk3"
-        (its order-3 sibling: 4 stages instead of 6).
+        (its order-3 sibling: 4 stages instead of 6) or "esdirk2" (TR-BDF2, order 2, 3
+        stages: the sampled loop's default, where the sample period bounds the step).
     rtol : float
         Relative tolerance of the integrator.
     atol : float or array (2 NDOF,), optional

@@ -344,7 +344,7 @@ def test_method_names_of_the_command_line_are_the_solvers():
     from flexure.core.simulator import METHODS as ALL_METHODS
     from flexure.fmu.scene_slave import METHODS as FMU_METHODS
 
-    assert COMMAND_METHODS == ALL_METHODS == METHODS + ("esdirk", "esdirk3")
+    assert COMMAND_METHODS == ALL_METHODS == METHODS + ("esdirk", "esdirk3", "esdirk2")
     assert sorted(FMU_METHODS) == sorted(ALL_METHODS)
 
 

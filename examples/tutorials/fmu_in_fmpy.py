@@ -6,8 +6,10 @@ in flexure itself.
 `flexure.fmu.build_scene_fmu` packs the built-in scene truss_1dof_x (a 0.2 kg mass on a truss
 spring, 1 N of constant load in the scene) with its own copy of flexure into truss.fmu. fmpy
 then steps it at 1 ms for 0.2 s with 0.5 N more on its input F; the FMU's output x (m) is
-compared with `flexure.core.simulate` on the same grid. The FMU's first instantiation on a
-machine compiles its engine once (tens of seconds); later ones load the cache.
+compared with `flexure.core.simulate` on the same grid, with the FMU's integrator settings
+(its parameters integrator.method and integrator.rtol: esdirk at 1e-6 unless a host sets
+them). The FMU's first instantiation on a machine compiles its engine once (tens of seconds);
+later ones load the cache.
 """
 
 import tempfile
@@ -20,6 +22,7 @@ from flexure.core import load_scene, simulate
 from flexure.fmu import build_scene_fmu
 
 STEP, STOP, FORCE = 1e-3, 0.2, 0.5  # s, s, N
+METHOD, RTOL = "esdirk", 1e-6  # the scene FMU's default integrator (docs/fmu.md)
 
 
 def main():
@@ -32,7 +35,7 @@ def main():
         by_fmpy = simulate_fmu(str(fmu), stop_time=STOP, step_size=STEP,
                                output_interval=STEP, input=inputs, output=["x"])
     by_flexure = simulate(load_scene("truss_1dof_x"), STOP, inputs={"F": FORCE},
-                          output_times=by_fmpy["time"])
+                          method=METHOD, rtol=RTOL, output_times=by_fmpy["time"])
     difference = np.max(np.abs(by_fmpy["x"] - by_flexure.outputs["x"]))
     last = by_flexure.outputs["x"][-1]
     print(f"x at {STOP} s: fmpy {by_fmpy['x'][-1]:.9f} m, flexure {last:.9f} m")
