@@ -61,6 +61,8 @@ import math
 import sys
 import time as _time
 import traceback
+import types
+import weakref
 
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real, String
 from pythonfmu.enums import Fmi2Status
@@ -85,10 +87,36 @@ PHASES = (INSTANTIATED, INITIALIZATION, STEP_COMPLETE, TERMINATED)
 # one reference to that namespace it never owned (findClass in PySlaveInstance.cpp:
 # Py_DECREF on the borrowed PyModule_GetDict). The first instance frees the module's __dict__;
 # the next instantiation of the same FMU in the process then fails ("module has no attribute
-# ...") or reads garbage. findClass also leaks, per instantiation, the list of the MRO of
-# every class among those locals, and the repr strings of that MRO's classes: a class created
-# anew by every execution of the script would be kept alive by that list (~2.5 kB each).
-_SCRIPT_NAMESPACES = []
+# ...") or reads garbage. So every execution of the script takes one reference to the
+# namespace that is never released (`_hold`).
+#
+# findClass also leaks, per instantiation and for every class among those locals, the list it
+# makes of the class's __mro__, the repr of every entry of that list and the UTF-8 bytes of
+# each repr, then the bytes of the name it picks; and the constructor leaks the string of the
+# resources path it inserts into sys.path. A class created anew by every execution of the
+# script would be kept alive by that list (~2.5 kB each): `keep_script_namespace` leaves
+# findClass only `_SlaveMarker`, whose __mro__ and reprs are stored objects chosen to leak the
+# least: two entries (no `object`, whose repr is a new string at every call), an empty repr
+# first (its bytes are Python's shared empty bytes) and then the shortest repr findClass's
+# pattern "<class '*.Fmi2Slave'>" accepts. What is left per instantiation is pythonfmu's: the
+# list (72 bytes), the repr's bytes (56), the name's bytes (48 for "truss_1dof_x") and the
+# path string (49 bytes + the path's length): about 0.3 kB where a three-entry MRO cost 0.5.
+_SCRIPT_NAMESPACES = []  # the namespaces held while Py_IncRef cannot be called (see _hold)
+_INCREF = []  # Py_IncRef, called through ctypes (looked up once)
+
+
+def _hold(namespace):
+    """Take one reference to `namespace` that is never released: Py_IncRef through ctypes
+    (nothing grows), or, in a host where that call cannot be made, a place in a list."""
+    try:
+        if not _INCREF:
+            import ctypes
+
+            _INCREF.append(ctypes.PYFUNCTYPE(None, ctypes.py_object)(
+                ("Py_IncRef", ctypes.pythonapi)))
+        _INCREF[0](namespace)
+    except Exception:  # noqa: BLE001 -- no ctypes, or no Py_IncRef: hold it in the list
+        _SCRIPT_NAMESPACES.append(namespace)
 
 
 class _CachedRepr(type):
@@ -99,15 +127,28 @@ class _CachedRepr(type):
 
 
 class _Fmi2SlaveLookalike(metaclass=_CachedRepr):
-    _repr = "<class 'pythonfmu.fmi2slave.Fmi2Slave'>"
+    _repr = "<class '_.Fmi2Slave'>"  # the shortest repr findClass takes for Fmi2Slave
 
 
-class _SlaveMarker(_Fmi2SlaveLookalike):
-    """What findClass finds in the locals of a re-executed script: a three-class MRO whose
-    reprs it matches against "<class '*.Fmi2Slave'>" to pick the name it then looks up in
-    the module (the real class); cached reprs, so findClass leaks the least it can."""
+class _StoredMro(_CachedRepr):
+    """A metaclass whose classes answer `__mro__` with a stored tuple (what findClass reads;
+    the interpreter's own method resolution is unchanged)."""
 
-    _repr = "<class 'flexure.fmu.slave._SlaveMarker'>"
+    @property
+    def __mro__(cls):
+        return cls.__dict__["_mro"]
+
+
+class _SlaveMarker(_Fmi2SlaveLookalike, metaclass=_StoredMro):
+    """What findClass finds in the locals of a re-executed script, bound to the slave class's
+    name: an `__mro__` of two entries whose second's repr it matches against
+    "<class '*.Fmi2Slave'>" to pick the name it then looks up in the module (the real
+    class). Stored reprs and MRO, the first repr empty: findClass leaks the least it can."""
+
+    _repr = ""
+
+
+_SlaveMarker._mro = (_SlaveMarker, _Fmi2SlaveLookalike)
 
 
 def keep_script_namespace(namespace, local_namespace=None):
@@ -116,11 +157,14 @@ def keep_script_namespace(namespace, local_namespace=None):
 
     The script runs once on import (then both are the module's namespace) and once more per
     instantiation, in fresh locals; every release of the namespace by pythonfmu's binary is
-    matched by one reference taken here (kept for the life of the process). In a re-execution
-    the locals are emptied down to the slave class's name bound to `_SlaveMarker`, so the class
-    objects created by that execution die with the locals instead of leaking.
+    matched by one reference taken here (`_hold`, never released). In a re-execution the
+    locals are emptied down to the slave class's name bound to `_SlaveMarker`. A scene script
+    creates no class when it is re-executed (it looks its class up in the module, see
+    `flexure.fmu.builder._scene_script`); a class that another script does create again dies
+    with the locals (at a collection of the garbage collector's youngest generation: a class
+    is a reference cycle) instead of being kept by findClass's leaked lists.
     """
-    _SCRIPT_NAMESPACES.append(namespace)
+    _hold(namespace)
     if local_namespace is None or local_namespace is namespace:
         return
     name, depth = None, 0
@@ -190,6 +234,45 @@ def _tidy_sys_path(resources):
     if resources and sys.path.count(resources) > 1:
         first = sys.path.index(resources)
         sys.path[:] = [p for i, p in enumerate(sys.path) if p != resources or i == first]
+
+
+def _weakly_bound(function, owner):
+    """`function` (a getter or setter of one of `owner`'s variables) holding `owner` weakly.
+
+    A getter that is a closure over the instance (`lambda: self.x`, the defaults of `add_real`,
+    SceneSlave's lambdas) or a bound method of it makes instance -> vars -> getter -> instance
+    a reference cycle. pythonfmu's binary releases the instance at fmi2FreeInstance, but a
+    cycle is freed only by the cyclic garbage collector, whose full collections a host that
+    instantiates and frees an FMU in a loop reaches every few hundred instances: the freed
+    instances, their models and arrays pile up in between (0.6 MB of the 1.7 MB the RSS of
+    tests/test_fmu_abuse.py's leak case grew over 1000 cycles). So the closure is copied
+    with cells that hold a weak proxy of the instance instead of the instance (the original
+    function is left as it is: its cells may be shared), and a bound method is bound to the
+    proxy; anything else is returned unchanged.
+    """
+    if isinstance(function, types.MethodType) and function.__self__ is owner:
+        return types.MethodType(function.__func__, weakref.proxy(owner))
+    if not isinstance(function, types.FunctionType) or not function.__closure__:
+        return function
+    cells = [(cell, _cell_holds(cell, owner)) for cell in function.__closure__]
+    if not any(holds for _, holds in cells):
+        return function
+    proxy = weakref.proxy(owner)
+    copy = types.FunctionType(function.__code__, function.__globals__, function.__name__,
+                              function.__defaults__,
+                              tuple(types.CellType(proxy) if holds else cell
+                                    for cell, holds in cells))
+    copy.__kwdefaults__ = function.__kwdefaults__
+    copy.__qualname__ = function.__qualname__
+    copy.__dict__.update(function.__dict__)
+    return copy
+
+
+def _cell_holds(cell, owner):
+    try:
+        return cell.cell_contents is owner
+    except ValueError:  # an empty cell (a variable not yet assigned)
+        return False
 
 
 class UnitReal(Real):
@@ -341,6 +424,13 @@ class SafeSlave(Fmi2Slave):
             name, start=start, causality=Fmi2Causality.parameter,
             variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
             description=description, getter=getter, setter=setter), nested=False)
+
+    def register_variable(self, var, nested=True):
+        """pythonfmu's registration, with the getter and setter holding the instance weakly
+        (`_weakly_bound`): fmi2FreeInstance then frees the instance at once."""
+        super().register_variable(var, nested=nested)
+        var.getter = _weakly_bound(var.getter, self)
+        var.setter = _weakly_bound(var.setter, self)
 
     # -- logging and the error state -----------------------------------------------------------
 
