@@ -25,6 +25,7 @@ import numpy as np
 from .constraints import check_exact_constraint
 from .elements import ELEMENT_TYPES, euler
 from .errors import SceneError
+from .meshing import segment_count, split
 from .model import DEPENDENT, DOF, FIXED, RELEASED, ZERO, ElementGroup, Model, Port
 from .rotations import from_rotation_vector
 from .sections import beam_properties
@@ -407,13 +408,31 @@ class _SceneBuilder:
             self.fail(key, f"node {name!r} is {self.node_kind[name]}, expected a {kind} node")
         return name
 
+    def node_values(self, name):
+        """The initial coordinates of node `name` (m or rad; Euler parameters in space)."""
+        return np.array([self.initial[i] for i in self.node_coordinates[name].values()])
+
+    def add_interior_node(self, name, kind, values):
+        """A node the scene builder makes (`meshing`): its coordinates dependent, no lumped
+        mass or load."""
+        axes = (TRANSLATION_AXES if kind == "translational" else ROTATION_AXES)[self.dimension]
+        self.node_kind[name] = kind
+        self.node_coordinates[name] = {}
+        for axis, value in zip(axes, values, strict=True):
+            self.node_coordinates[name][axis] = len(self.coordinate_names)
+            self.coordinate_names.append(f"{name}.{axis}")
+            self.initial.append(float(value))
+            self.status.append(DEPENDENT)
+            self.mass.append(0.0)
+            self.loads.append(0.0)
+
     def build_elements(self, elements):
         by_type = {}
         deformation_names, deformation_status = [], []
         for name, element in elements.items():
             key = f"elements.{name}"
             element = self.table(key, element)
-            allowed = {"type", "nodes", "section", "released", "dof"}
+            allowed = {"type", "nodes", "section", "released", "dof", "segments"}
             self.check_keys(key, element, allowed | ({"y_axis"} if self.dimension == 3 else set()))
             type_name = element.get("type")
             if not isinstance(type_name, str) or type_name.upper() not in ELEMENT_TYPES:
@@ -423,49 +442,72 @@ class _SceneBuilder:
             if kind.dimension != self.dimension:
                 self.fail(f"{key}.type", f"{kind.type_name} is a {kind.dimension}-D element in a "
                                          f"{self.dimension}-D scene")
-            nodes = element.get("nodes")
-            if not isinstance(nodes, list) or len(nodes) != len(kind.node_kinds):
-                self.fail(f"{key}.nodes", f"{kind.type_name} expects {len(kind.node_kinds)} nodes "
-                                          f"({', '.join(kind.node_kinds)}), got {nodes!r}")
-            nodes = [self.node(f"{key}.nodes[{i}]", n, k)
-                     for i, (n, k) in enumerate(zip(nodes, kind.node_kinds, strict=True))]
-            index = [i for n in nodes for i in self.node_coordinates[n].values()]
-            section_name = element.get("section")
-            if section_name is None:
-                self.fail(key, "element without a section: add section = \"NAME\"")
-            if not isinstance(section_name, str) or section_name not in self.sections:
-                self.fail(f"{key}.section", f"unknown section {_show(section_name)}; expected one "
-                                            f"of {', '.join(self.sections) or 'none declared'}")
-            section = self.sections[section_name]
-            released = self.names(f"{key}.released", element.get("released", []),
-                                  kind.deformation_names)
-            dofs = self.names(f"{key}.dof", element.get("dof", []), kind.deformation_names)
-            for both in set(released) & set(dofs):
-                self.fail(key, f"deformation {both!r} is both released and a DOF")
-            for deformation in released:
-                needed = kind.deformation_stiffness[deformation]
-                if section.get(needed, 0.0) <= 0.0:
-                    self.fail(f"{key}.released",
-                              f"released deformation {deformation!r} needs a stiffness: "
-                              f"section {section_name!r} has no {needed} > 0")
-            entry = by_type.setdefault(kind.type_name, {"kind": kind, "names": [], "coords": [],
-                                                        "defs": [], "props": [], "axes": []})
-            if getattr(kind, "needs_orientation", False):
-                if "y_axis" not in element:
-                    self.fail(key, f"a {kind.type_name} needs its principal axis: add "
-                                   "y_axis = [x, y, z]")
-                entry["axes"].append(self.vector(f"{key}.y_axis", element["y_axis"], 3))
-            elif "y_axis" in element:
-                self.fail(f"{key}.y_axis", f"a {kind.type_name} has no principal axis")
-            entry["names"].append(name)
-            entry["coords"].append(index)
-            entry["defs"].append(list(range(len(deformation_names),
-                                            len(deformation_names) + len(kind.deformation_names))))
-            entry["props"].append({p: section.get(p, 0.0) for p in kind.properties})
-            for deformation in kind.deformation_names:
-                deformation_names.append(f"{name}.{deformation}")
-                deformation_status.append(
-                    DOF if deformation in dofs else RELEASED if deformation in released else ZERO)
+            nodes = self.element_nodes(key, element, kind)
+            count = segment_count(self, key, element)
+            for piece, table in split(self, name, element, kind, nodes, count):
+                if piece != name and piece in elements:
+                    self.fail(f"{key}.segments", f"the segment {piece!r} has the name of an "
+                                                 "element of the scene; rename that element")
+                self.add_element(key, piece, table, kind, by_type, deformation_names,
+                                 deformation_status)
+        return self.element_groups(by_type), deformation_names, deformation_status
+
+    def element_nodes(self, key, element, kind):
+        """The element's node names, each checked to exist and to be of the kind it needs."""
+        nodes = element.get("nodes")
+        if not isinstance(nodes, list) or len(nodes) != len(kind.node_kinds):
+            self.fail(f"{key}.nodes", f"{kind.type_name} expects {len(kind.node_kinds)} nodes "
+                                      f"({', '.join(kind.node_kinds)}), got {nodes!r}")
+        return [self.node(f"{key}.nodes[{i}]", n, k)
+                for i, (n, k) in enumerate(zip(nodes, kind.node_kinds, strict=True))]
+
+    def add_element(self, key, name, element, kind, by_type, deformation_names,
+                    deformation_status):
+        """Add element `name` (the scene's element at `key`, or one of its segments) to its
+        type's entry of by_type (its coordinates, section properties, principal axis) and its
+        deformations, with their status, to the two lists."""
+        nodes = self.element_nodes(key, element, kind)
+        index = [i for n in nodes for i in self.node_coordinates[n].values()]
+        section_name = element.get("section")
+        if section_name is None:
+            self.fail(key, "element without a section: add section = \"NAME\"")
+        if not isinstance(section_name, str) or section_name not in self.sections:
+            self.fail(f"{key}.section", f"unknown section {_show(section_name)}; expected one "
+                                        f"of {', '.join(self.sections) or 'none declared'}")
+        section = self.sections[section_name]
+        released = self.names(f"{key}.released", element.get("released", []),
+                              kind.deformation_names)
+        dofs = self.names(f"{key}.dof", element.get("dof", []), kind.deformation_names)
+        for both in set(released) & set(dofs):
+            self.fail(key, f"deformation {both!r} is both released and a DOF")
+        for deformation in released:
+            needed = kind.deformation_stiffness[deformation]
+            if section.get(needed, 0.0) <= 0.0:
+                self.fail(f"{key}.released",
+                          f"released deformation {deformation!r} needs a stiffness: "
+                          f"section {section_name!r} has no {needed} > 0")
+        entry = by_type.setdefault(kind.type_name, {"kind": kind, "names": [], "coords": [],
+                                                    "defs": [], "props": [], "axes": []})
+        if getattr(kind, "needs_orientation", False):
+            if "y_axis" not in element:
+                self.fail(key, f"a {kind.type_name} needs its principal axis: add "
+                               "y_axis = [x, y, z]")
+            entry["axes"].append(self.vector(f"{key}.y_axis", element["y_axis"], 3))
+        elif "y_axis" in element:
+            self.fail(f"{key}.y_axis", f"a {kind.type_name} has no principal axis")
+        entry["names"].append(name)
+        entry["coords"].append(index)
+        entry["props"].append({p: section.get(p, 0.0) for p in kind.properties})
+        start = len(deformation_names)
+        entry["defs"].append(list(range(start, start + len(kind.deformation_names))))
+        for deformation in kind.deformation_names:
+            deformation_names.append(f"{name}.{deformation}")
+            deformation_status.append(
+                DOF if deformation in dofs else RELEASED if deformation in released else ZERO)
+
+    def element_groups(self, by_type):
+        """One ElementGroup per element type, with its reference data from the initial
+        coordinates; a zero-length element or a principal axis along a beam refused."""
         groups = []
         for entry in by_type.values():
             kind = entry["kind"]
@@ -488,7 +530,7 @@ class _SceneBuilder:
                                        coordinate_index=coords,
                                        deformation_index=np.array(entry["defs"], dtype=int),
                                        reference=reference, properties=props))
-        return groups, deformation_names, deformation_status
+        return groups
 
     def _parallel_axis(self, entry, reference):
         """Name the first beam whose y' axis lies along it (reference raised ValueError)."""
