@@ -37,7 +37,8 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     from .statics import static_equilibrium
     from .stresses import beam_stresses
 
-    result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names}
+    result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
+              "dofs_chosen": bool(model.chosen_dofs)}
     mech = Mechanics(model)
     needs_equilibrium = static or modes is not None or with_state_space
     solution = static_equilibrium(model, mechanics=mech) if needs_equilibrium else None
@@ -106,7 +107,9 @@ def render(result):
     """The analyses of `analyze` as readable tables."""
     count = result["dof_count"]
     parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} "
-             f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])})"]
+             f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])}"
+             + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
+                else ")")]
     if "static" in result:
         static = result["static"]
         parts.append(format_table(["coordinate", "value (m, rad)"],

@@ -20,6 +20,7 @@ from . import assembly
 from .blas import blas_threads
 from .errors import ConstraintError
 from .kinematics import Kinematics
+from .model import DOF
 
 RANK_TOLERANCE = 1e-9
 
@@ -77,6 +78,82 @@ def check_exact_constraint(model, x=None):
             + "\n  - ".join(problems)
         )
     return model.dof_count()
+
+
+@blas_threads()
+def choose_dofs(model, x=None):
+    """A valid set of DOFs for a model whose scene lists none: (coordinate_status,
+    deformation_status, names of the chosen DOFs), or None when the prescribed deformations
+    alone are dependent (over-constrained: `check_exact_constraint` then names them).
+
+    The DOFs must complete the rigid rows R of the constraint Jacobian (prescribed
+    deformations x free coordinates, at x, default the initial coordinates) to a regular
+    matrix: their rows, projected on the null space N of R (the motions the constraints
+    allow), must span it. Coordinates are preferred, as a designer names them (a planar node's
+    x, y or phi; in space the translations, since a 3-D rotational node's Euler parameters
+    cannot be DOFs); where they cannot span the motions (a free rotation in space), released
+    deformations become DOF deformations. Among the candidates the choice is a QR
+    factorisation with column pivoting of their projections: the ones that move most along
+    the allowed motions first, ties in the scene's order. Rotations are scaled by the model's
+    length scale, as in the check."""
+    import scipy.linalg
+
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    if not np.all(np.isfinite(De)):
+        return None  # a degenerate configuration: the check reports it
+    scale = _column_scale(model, kin.length_scale)
+    free = model.free_coordinates
+    rigid = De[np.ix_(model.rigid_deformations, free)] * scale[free]
+    if model.rigid_deformations.size and np.linalg.matrix_rank(
+            rigid, tol=RANK_TOLERANCE * max(np.abs(rigid).max(), 1e-300)) < rigid.shape[0]:
+        return None
+    motions = np.array(_null_space(rigid)).reshape(-1, free.size).T  # (free, NDOF)
+    ndof = motions.shape[1]
+    if ndof == 0:
+        return None
+    translations = {"x", "y", "z"}
+    coordinates = [i for i, c in enumerate(free)
+                   if model.dimension == 2
+                   or model.coordinate_names[c].rsplit(".", 1)[1] in translations]
+    # a coordinate's row is the unit row of its column (times its scale)
+    coordinate_rows = np.zeros((len(coordinates), free.size))
+    for k, i in enumerate(coordinates):
+        coordinate_rows[k, i] = scale[free[i]]
+    released = model.released_deformations
+    deformation_rows = De[np.ix_(released, free)] * scale[free]
+
+    def pick(rows, basis, count):
+        """Indices of up to `count` rows whose projections on `basis` are independent."""
+        if rows.shape[0] == 0 or count == 0:
+            return []
+        projected = rows @ basis
+        _, r, order = scipy.linalg.qr(projected.T, pivoting=True, mode="economic")
+        diagonal = np.abs(np.diag(r))
+        top = max(diagonal.max(initial=0.0), 1e-300)
+        rank = int(np.sum(diagonal > 1e-6 * top))
+        return sorted(order[:min(rank, count)].tolist())
+
+    chosen_coordinates = pick(coordinate_rows, motions, ndof)
+    remaining = motions
+    if chosen_coordinates:  # the motions the chosen coordinates leave free
+        taken = coordinate_rows[chosen_coordinates] @ motions
+        remaining = motions @ np.array(_null_space(taken)).reshape(-1, ndof).T
+    chosen_deformations = pick(deformation_rows, remaining, ndof - len(chosen_coordinates))
+    if len(chosen_coordinates) + len(chosen_deformations) < ndof:
+        return None  # the check names the motion no DOF can take
+    coordinate_status = model.coordinate_status.copy()
+    deformation_status = model.deformation_status.copy()
+    names = []
+    for k in chosen_coordinates:
+        c = free[coordinates[k]]
+        coordinate_status[c] = DOF
+        names.append(model.coordinate_names[c])
+    for k in chosen_deformations:
+        deformation_status[released[k]] = DOF
+        names.append(model.deformation_names[released[k]])
+    return coordinate_status, deformation_status, names
 
 
 def _counted(index_sets):

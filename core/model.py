@@ -70,6 +70,9 @@ class Model:
     node_inertias: list = field(default_factory=list)
     # Scene keys a user may tune without rebuilding the scene ("nodes.3.mass"), [scene] tunable
     tunable: list = field(default_factory=list)
+    # The DOFs flexure chose because the scene lists none (`constraints.choose_dofs`); empty
+    # when the scene lists its own
+    chosen_dofs: tuple = ()
 
     def __post_init__(self):
         status = self.coordinate_status

@@ -18,11 +18,12 @@ of flexure.core.sections.beam_properties.
 import importlib.resources
 import math
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from .constraints import check_exact_constraint
+from .constraints import check_exact_constraint, choose_dofs
 from .elements import ELEMENT_TYPES, euler
 from .errors import SceneError
 from .meshing import segment_count, split
@@ -224,6 +225,13 @@ class _SceneBuilder:
             node_inertias=self.node_inertias,
             tunable=tunable,
         )
+        listed = DOF in self.status or DOF in deformation_status
+        if not listed and model.ndof > 0:  # none listed: flexure chooses a valid set
+            chosen = choose_dofs(model)
+            if chosen is not None:
+                coordinate_status, deformation_status, names = chosen
+                model = replace(model, coordinate_status=coordinate_status,
+                                deformation_status=deformation_status, chosen_dofs=tuple(names))
         if check:
             check_exact_constraint(model)
         return model

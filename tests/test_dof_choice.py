@@ -1,0 +1,78 @@
+"""DOFs chosen for the user: a scene that lists none gets a valid set, which describes the
+same mechanism as the set the built-in scene lists (the same natural frequencies)."""
+
+import copy
+import re
+
+import numpy as np
+import pytest
+
+from flexure.core import ConstraintError, build_model, load_scene, natural_frequencies
+from flexure.core.cli import main
+from flexure.core.scene import parse_toml, scene_path
+
+
+def without_dofs(name):
+    """The built-in scene with its DOF lists removed (a DOF deformation becomes released)."""
+    data = copy.deepcopy(parse_toml(scene_path(name)))
+    for node in data["nodes"].values():
+        node.pop("dof", None)
+    for element in data["elements"].values():
+        listed = element.pop("dof", [])
+        if listed:
+            element["released"] = sorted(set(element.get("released", [])) | set(listed))
+    return data
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("truss_1dof_x", ("2.x",)),
+    ("stage_planar_1dof", ("3.x",)),
+    ("stage_planar_3dof", None),
+    ("stage_spatial_1dof", ("3.x",)),
+    ("stage_spatial_19dof", None),
+])
+def test_chosen_dofs_describe_the_same_mechanism(name, expected):
+    """As many DOFs as the listed ones, reported in model.chosen_dofs, and every natural
+    frequency the same to 1e-8 (another choice of coordinates linearises the same motion;
+    5.5e-9 measured on the 19-DOF spatial stage, round-off elsewhere)."""
+    listed = load_scene(name)
+    chosen = build_model(without_dofs(name), source=name)
+    assert chosen.declared_dof_count == listed.declared_dof_count == chosen.ndof
+    assert chosen.chosen_dofs == tuple(chosen.dof_names) and listed.chosen_dofs == ()
+    if expected is not None:
+        assert chosen.chosen_dofs == expected
+    np.testing.assert_allclose(natural_frequencies(chosen).frequencies_hz,
+                               natural_frequencies(listed).frequencies_hz, rtol=1e-8)
+
+
+def test_a_free_rotation_in_space_gets_a_deformation_dof():
+    """In space a rotational node's Euler parameters cannot be DOFs: the 19-DOF stage's
+    bending and torsion of the meshed spring become DOF deformations instead."""
+    model = build_model(without_dofs("stage_spatial_19dof"))
+    assert not any(".lambda" in name for name in model.chosen_dofs)
+    assert any(".e" in name for name in model.chosen_dofs)
+
+
+def test_an_over_constrained_scene_without_dofs_is_still_named():
+    """Two rigid collinear trusses hold a node: no DOF can fix that; the check names it."""
+    data = {"scene": {"name": "collinear"}, "sections": {"s": {"EA": 1.0}},
+            "nodes": {"A": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                      "B": {"position": [2.0, 0.0], "fixed": ["x", "y"]},
+                      "C": {"position": [1.0, 0.0], "mass": 1.0}},
+            "elements": {"AC": {"type": "PLTRUSS", "nodes": ["A", "C"], "section": "s"},
+                         "CB": {"type": "PLTRUSS", "nodes": ["C", "B"], "section": "s"}}}
+    with pytest.raises(ConstraintError, match="over-constrained: the prescribed deformations "
+                                              "AC.e1, CB.e1 are mutually dependent"):
+        build_model(data)
+
+
+def test_analyze_reports_the_chosen_dofs(tmp_path, capsys):
+    """The scene file without its `dof = [...]` line: `flexure analyze` names the DOF it chose
+    and says so."""
+    text = scene_path("stage_planar_1dof").read_text()
+    assert re.search(r"^dof = ", text, flags=re.M)
+    path = tmp_path / "no_dofs.toml"
+    path.write_text(re.sub(r"^dof = .*$", "", text, flags=re.M))
+    assert main(["analyze", str(path), "--modes", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "(DOFs: 3.x; chosen by flexure, the scene lists none)" in out
