@@ -18,7 +18,8 @@ __version__ = "0.1.0"
 
 # public name -> the submodule that defines it (imported by __getattr__ on first use)
 _LAZY = {
-    "check_exact_constraint": "constraints",
+    "check_exact_constraint": "constraints", "choose_dofs": "constraints",
+    "proposed_releases": "constraints",
     "Kinematics": "kinematics",
     "LinearModel": "linearization", "linearize": "linearization",
     "Mechanics": "mechanics",
@@ -39,7 +40,8 @@ __all__ = [
     "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel", "METHODS",
     "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
     "Simulator", "StaticSolution", "beam_stresses", "buckling_load_factors", "build_model",
-    "builtin_scenes", "check_exact_constraint", "default_atol", "linearize", "load_scene",
+    "builtin_scenes", "check_exact_constraint", "choose_dofs", "default_atol", "linearize",
+    "load_scene", "proposed_releases",
     "natural_frequencies", "controller_step", "prepare", "run_sampled_loop", "scene_path",
     "simulate",
     "state_space", "static_equilibrium",

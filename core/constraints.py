@@ -58,6 +58,14 @@ def check_exact_constraint(model, x=None):
             + f" are mutually dependent, so {redundant} redundant; release {release} "
             "(or remove a support)"
         )
+    releases = _independent_rows(rigid_rows, _release_preference(model))[1]
+    if releases:
+        names = [model.deformation_names[model.rigid_deformations[i]] for i in releases]
+        problems.append(
+            f"a release that removes the over-constraint: {', '.join(names)} (released instead of "
+            f"prescribed zero: each needs its stiffness in the section, and the model gains "
+            f"{len(names)} DOF(s); flexure chooses them when the scene lists none)"
+        )
     rows = De[np.ix_(kin.constraint_rows, kin.free)] * scale
     dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
     dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
@@ -154,6 +162,62 @@ def choose_dofs(model, x=None):
         deformation_status[released[k]] = DOF
         names.append(model.deformation_names[released[k]])
     return coordinate_status, deformation_status, names
+
+
+def proposed_releases(model, x=None):
+    """The prescribed deformations whose release removes every over-constraint of `model`
+    (names; empty when the prescribed deformations are independent), as SPACAR Light's
+    automatic releases would choose them, but proposed, not applied.
+
+    The rows of the prescribed deformations (at x, default the initial coordinates) are taken
+    one by one, those that cannot be released first (their section has no stiffness for
+    them), then the others in the scene's order; a row that adds nothing to the span of the
+    rows kept before it is redundant and proposed for release. The rows kept are independent,
+    so the proposal releases exactly as many deformations as there are over-constraints."""
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    scale = _column_scale(model, kin.length_scale)[kin.free]
+    rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
+    redundant = _independent_rows(rows, _release_preference(model))[1]
+    return [model.deformation_names[model.rigid_deformations[i]] for i in redundant]
+
+
+def _release_preference(model):
+    """The prescribed deformations' positions in `model.rigid_deformations`, those that can
+    be released (a stiffness for them in their section) last, so that they are the ones left
+    over."""
+    releasable = np.zeros(model.rigid_deformations.size, dtype=bool)
+    position = {d: k for k, d in enumerate(model.rigid_deformations)}
+    for group in model.groups:
+        stiffness = getattr(group.kind, "deformation_stiffness", {})
+        for i, indices in enumerate(group.deformation_index):
+            for name, d in zip(group.kind.deformation_names, indices, strict=True):
+                values = group.properties.get(stiffness.get(name))
+                if d in position and values is not None and float(values[i]) > 0.0:
+                    releasable[position[d]] = True
+    return sorted(range(releasable.size), key=lambda k: (releasable[k], k))
+
+
+def _independent_rows(rows, order):
+    """(kept, redundant): the positions of `rows`, taken in `order`, that add to the span of
+    the rows kept before them, and those that do not (relative tolerance RANK_TOLERANCE,
+    Gram-Schmidt twice)."""
+    basis, kept, redundant = [], [], []
+    top = max(np.abs(rows).max(initial=0.0), 1e-300)
+    for k in order:
+        row = rows[k].astype(float)
+        norm = np.linalg.norm(row)
+        for _ in range(2):
+            for b in basis:
+                row = row - (b @ row) * b
+        residual = np.linalg.norm(row)
+        if norm > 0.0 and residual > max(1e-6 * norm, RANK_TOLERANCE * top):
+            basis.append(row / residual)
+            kept.append(k)
+        else:
+            redundant.append(k)
+    return sorted(kept), sorted(redundant)
 
 
 def _counted(index_sets):

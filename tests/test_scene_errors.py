@@ -192,3 +192,55 @@ def test_tunable_keys_must_name_numbers_of_the_scene(keys, fragment):
 
 def test_tunable_keys_reach_the_model():
     assert load_scene("stage_planar_1dof").tunable == ["sections.bar.rho_A"]
+
+
+def triple_leaf_guidance():
+    """stage_planar_1dof with a third leaf in the middle, its bar in two rigid halves: three
+    rigid leaf elongations for the bar's two motions besides the sideways one, one too many."""
+    data = copy.deepcopy(BASE)
+    nodes, elements = data["nodes"], data["elements"]
+    nodes["9"] = {"position": [0.05, 0.0], "fixed": ["x", "y"]}
+    nodes["10"] = {"angle": 0.0, "fixed": ["phi"]}
+    nodes["11"] = {"position": [0.05, 0.1]}
+    nodes["12"] = {"angle": 0.0}
+    elements["leaf_mid"] = {**elements["leaf_left"], "nodes": ["9", "10", "11", "12"]}
+    bar = elements.pop("bar")
+    elements["bar_a"] = {**bar, "nodes": ["3", "4", "11", "12"]}
+    elements["bar_b"] = {**bar, "nodes": ["11", "12", "5", "6"]}
+    return data
+
+
+def test_an_over_constraint_comes_with_a_release_that_removes_it():
+    """The check names the dependent set and proposes one release from it that the section
+    allows (a leaf's elongation, not the stiffness-less bar's); applying the proposal gives an
+    exactly constrained guidance with its one DOF."""
+    from flexure.core.constraints import proposed_releases
+
+    data = triple_leaf_guidance()
+    with pytest.raises(ConstraintError) as error:
+        build_model(data)
+    message = str(error.value)
+    assert "over-constrained: the prescribed deformations leaf_left.e1, leaf_right.e1, " \
+           "leaf_mid.e1, bar_a.e3, bar_b.e2 are mutually dependent" in message
+    assert "a release that removes the over-constraint: leaf_mid.e1 (" in message
+    assert proposed_releases(build_model(data, check=False)) == ["leaf_mid.e1"]
+    data["elements"]["leaf_mid"]["released"] = ["e1", "e2", "e3"]
+    model = build_model(data)
+    assert model.declared_dof_count == model.ndof == 1
+
+
+def test_an_exact_model_needs_no_release():
+    from flexure.core.constraints import proposed_releases
+
+    assert proposed_releases(load_scene("stage_planar_3dof")) == []
+    assert proposed_releases(load_scene("stage_spatial_19dof")) == []
+
+
+def test_collinear_trusses_get_one_release_proposed():
+    """Two rigid collinear trusses: release one elongation (the later, both can be); the
+    sideways freedom of C stays, named as under-constrained."""
+    with pytest.raises(ConstraintError) as error:
+        build_model(collinear_trusses())
+    message = str(error.value)
+    assert "a release that removes the over-constraint: CB.e1 (" in message
+    assert "under-constrained: the coordinates C.y can move" in message
