@@ -21,7 +21,9 @@ releases (or makes a DOF) is a DOF, while its prescribed (zero) deformations sta
 segment's deformations fix the pose of its end node relative to its start node (3 of each in
 the plane, 6 in space), so this chain determines every interior node from the element's first
 node. The last segment keeps the element's own statuses, which tie the chain to the element's
-last node as the element itself did. The model gains (n - 1) times the element's released and
+last node as the element itself did. A scene that lists no DOFs at all leaves every segment
+with the element's statuses and lets flexure choose the whole model's DOFs
+(`constraints.choose_dofs`). The model gains (n - 1) times the element's released and
 DOF deformations as DOFs; its mechanics are those of n beams with free interior nodes (the
 DOF deformations are stressed like released ones: the same energy, another choice of
 generalized coordinates than interior node coordinates as DOFs).
@@ -77,9 +79,10 @@ def split(builder, name, element, kind, nodes, count):
     for j in range(count):
         table = {k: v for k, v in element.items() if k not in ("segments", "released", "dof")}
         table["nodes"] = [*chain[j], *chain[j + 1]]
-        if j < count - 1:  # every deformation not prescribed zero: a DOF of the chain
+        if j < count - 1 and builder.lists_dofs:  # not prescribed zero: a DOF of the chain
             table["released"], table["dof"] = [], free
-        else:  # the last keeps the element's own statuses
+        else:  # the last keeps the element's own statuses; all do when the scene lists no
+            # DOFs, which flexure then chooses for the whole model (constraints.choose_dofs)
             table["released"] = sorted(released, key=kind.deformation_names.index)
             table["dof"] = sorted(dofs, key=kind.deformation_names.index)
         segments.append((f"{name}_{j + 1}", table))

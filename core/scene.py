@@ -190,6 +190,12 @@ class _SceneBuilder:
         gravity = np.array(self.vector("scene.gravity", header.get("gravity", [0.0] * dimension),
                                        dimension))
         self.dimension = dimension
+        # whether the scene lists any DOF (a node's or element's non-empty "dof"): meshing
+        # makes DOFs of its segments only then, and flexure chooses them all otherwise
+        self.lists_dofs = any(isinstance(table, dict) and table.get("dof")
+                              for part in ("nodes", "elements")
+                              if isinstance(data.get(part), dict)
+                              for table in data[part].values())
         self.sections = self.build_sections(self.table("sections", data.get("sections", {})))
         self.build_nodes(self.table("nodes", data.get("nodes", {})))
         groups, deformation_names, deformation_status = self.build_elements(

@@ -182,3 +182,23 @@ def test_a_name_clash_with_the_scene_is_named():
     with pytest.raises(SceneError, match="the segment 'leaf_left_3' has the name of an element "
                                          "of the scene"):
         build_model(data)
+
+
+def test_segments_in_a_scene_that_lists_no_dofs():
+    """Meshing and chosen DOFs together: the clamped leaf with no DOF listed anywhere, in
+    8 segments, gets its 16 DOFs chosen and the frequencies of the listed version."""
+    listed = cantilever(8)
+    data = {"scene": {"name": "leaf_free_choice"},
+            "sections": {"leaf": {"E": 2.1e11, "rho": 7850.0, "width": 0.018,
+                                  "height": 0.0005}},
+            "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                      "2": {"angle": 0.0, "fixed": ["phi"]},
+                      "3": {"position": [LENGTH, 0.0]}, "4": {"angle": 0.0}},
+            "elements": {"leaf": {"type": "PLBEAM", "nodes": ["1", "2", "3", "4"],
+                                  "section": "leaf", "released": ["e2", "e3"],
+                                  "segments": 8}}}
+    chosen = build_model(data)
+    assert chosen.ndof == chosen.declared_dof_count == listed.ndof == 16
+    assert len(chosen.chosen_dofs) == 16
+    np.testing.assert_allclose(natural_frequencies(chosen).frequencies_hz,
+                               natural_frequencies(listed).frequencies_hz, rtol=1e-8)
