@@ -1,0 +1,99 @@
+"""Model reduction (`flexure reduce`) and writing scenes back to TOML."""
+
+import copy
+import json
+import tomllib
+
+import numpy as np
+import pytest
+
+from flexure.core import FlexureError, build_model, load_scene, natural_frequencies
+from flexure.core.cli import main
+from flexure.core.reduction import frozen_scene, propose_reduction
+from flexure.core.scene import builtin_scenes, parse_toml, scene_path
+from flexure.core.scene_writer import scene_toml
+
+
+@pytest.mark.parametrize("name", builtin_scenes())
+def test_a_written_scene_reads_back_the_same(name):
+    data = parse_toml(scene_path(name))
+    assert tomllib.loads(scene_toml(data, "a header\nover two lines")) == data
+
+
+def test_what_a_scene_cannot_hold_is_named():
+    with pytest.raises(ValueError, match=r"nodes\.3\.mass: nan has no place in a scene"):
+        scene_toml({"nodes": {"3": {"mass": float("nan")}}})
+    with pytest.raises(ValueError, match=r"scene\.gravity: a set cannot be written"):
+        scene_toml({"scene": {"gravity": {1.0}}})
+
+
+def test_the_3_dof_stage_reduces_to_the_1_dof_stage():
+    """Keeping its first mode, stage_planar_3dof freezes the two leaf elongations (their
+    share of the mode's strain energy 1.2e-5) and is then stage_planar_1dof: the same
+    frequency to round-off, an independent model of the same stage."""
+    data = parse_toml(scene_path("stage_planar_3dof"))
+    reduction = propose_reduction(data, 1, 1.0)
+    assert sorted(reduction.frozen) == [("leaf_left", "e1"), ("leaf_right", "e1")]
+    assert (reduction.ndof_full, reduction.ndof_reduced) == (3, 1)
+    assert reduction.change_percent <= 1.0 and reduction.dofs_chosen
+    assert all(reduction.shares[key] < 1e-4 for key in reduction.frozen)
+    reduced = build_model(reduction.scene)
+    one_dof = natural_frequencies(load_scene("stage_planar_1dof")).frequencies_hz
+    np.testing.assert_allclose(natural_frequencies(reduced).frequencies_hz, one_dof,
+                               rtol=1e-9)
+
+
+def test_no_tolerance_freezes_nothing():
+    reduction = propose_reduction(parse_toml(scene_path("stage_planar_3dof")), 1, 0.0)
+    assert reduction.frozen == [] and reduction.ndof_reduced == 3
+
+
+def test_a_release_the_mechanism_needs_is_never_frozen():
+    """The spatial stage's right leaf is cut locally (torsion and its second bending released,
+    or the pair is over-constrained); meshed in 4 segments, only what keeps the model valid is
+    frozen, and the five lowest frequencies stay within 1 %."""
+    data = copy.deepcopy(parse_toml(scene_path("stage_spatial_1dof")))
+    for leaf in ("leaf_left", "leaf_right"):
+        data["elements"][leaf]["segments"] = 4
+    reduction = propose_reduction(data, 5, 1.0)
+    assert reduction.frozen and reduction.ndof_reduced < reduction.ndof_full
+    assert reduction.change_percent <= 1.0
+    build_model(reduction.scene)  # exactly constrained
+    for key in reduction.frozen:  # each alone keeps it valid too
+        build_model(frozen_scene(data, [key])[0])
+
+
+def test_keeping_more_modes_than_dofs_is_refused():
+    with pytest.raises(FlexureError, match="--keep 2: the model has only 1 DOFs"):
+        propose_reduction(parse_toml(scene_path("stage_planar_1dof")), 2)
+
+
+def test_reduce_command_writes_a_scene_that_loads(tmp_path, capsys):
+    out = tmp_path / "reduced.toml"
+    assert main(["reduce", "stage_planar_3dof", "--keep", "1", "--out", str(out),
+                 "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["frozen"] == ["leaf_right.e1", "leaf_left.e1"]
+    assert result["ndof_reduced"] == 1 and result["change_percent"] < 0.01
+    model = load_scene(out)
+    assert model.ndof == 1 and model.chosen_dofs == ("3.x",)
+    assert out.read_text().startswith("# stage_planar_3dof, reduced by `flexure reduce")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--keep", "0"], "argument --keep: expected an integer >= 1, got '0'"),
+    (["--keep", "1", "--tol", "-1"], "argument --tol: expected a number > 0, got '-1'"),
+    (["--keep", "9"], "--keep 9: the model has only 3 DOFs"),
+    (["--keep", "1", "--out", "reduced.txt"], "expected a file name ending in .toml"),
+])
+def test_reduce_command_refuses_bad_options_without_traceback(argv, message, tmp_path,
+                                                             capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main(["reduce", "stage_planar_3dof", *argv])
+    except SystemExit as exit_:  # argparse refuses an option's value itself
+        code = exit_.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())  # nothing written
