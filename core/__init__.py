@@ -31,7 +31,7 @@ _LAZY = {
     "controller_step": "sampled_loop", "run_sampled_loop": "sampled_loop",
     "METHODS": "simulator", "prepare": "simulator",
     "simulate": "simulation",
-    "state_space": "statespace",
+    "principal_gains": "statespace", "state_space": "statespace",
     "StaticSolution": "statics", "static_equilibrium": "statics",
     "beam_stresses": "stresses", "stresses_along": "stresses",
 }
@@ -42,7 +42,8 @@ __all__ = [
     "Simulator", "StaticSolution", "beam_stresses", "buckling_load_factors", "build_model",
     "builtin_scenes", "check_exact_constraint", "choose_dofs", "default_atol", "linearize",
     "load_scene", "proposed_releases",
-    "natural_frequencies", "controller_step", "prepare", "run_sampled_loop", "scene_path",
+    "natural_frequencies", "controller_step", "prepare", "principal_gains", "run_sampled_loop",
+    "scene_path",
     "simulate",
     "state_space", "static_equilibrium",
     "stresses_along",

@@ -25,10 +25,14 @@ def register(subparsers):
     parser.add_argument("--plot", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the von Mises stresses along the beams at the static "
                              "equilibrium to this PNG file (spatial beams with a section)")
+    parser.add_argument("--sigma", metavar="PNG", type=output_file(PLOT_SUFFIXES),
+                        help="plot the singular values (principal gains) of the transfer "
+                             "matrix from the inputs to the outputs against frequency")
     parser.set_defaults(run=run)
 
 
-def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False):
+def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False,
+            with_gains=False):
     """Run the requested analyses; returns the dict that `--json` prints (SI units)."""
     from .linearization import linearize
     from .mechanics import Mechanics
@@ -40,7 +44,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
               "dofs_chosen": bool(model.chosen_dofs)}
     mech = Mechanics(model)
-    needs_equilibrium = static or modes is not None or with_state_space
+    needs_equilibrium = static or modes is not None or with_state_space or with_gains
     solution = static_equilibrium(model, mechanics=mech) if needs_equilibrium else None
     if static:
         # the multipliers of the Euler-parameter normalisation ("NODE.norm") are no output
@@ -51,8 +55,8 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
-    lin = linearize(model, solution, mechanics=mech) if (modes is not None
-                                                          or with_state_space) else None
+    lin = linearize(model, solution, mechanics=mech) if (modes is not None or with_state_space
+                                                          or with_gains) else None
     if modes is not None:
         found = natural_frequencies(model, None if modes < 0 else modes, linear_model=lin)
         result["modes"] = {"frequencies_hz": found.frequencies_hz,
@@ -68,6 +72,16 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                                  "inputs": [p.name for p in model.inputs],
                                  "outputs": [p.name for p in model.outputs],
                                  "states": list(sys.state_labels)}
+    if with_gains:
+        from .statespace import frequency_grid, principal_gains
+
+        natural = natural_frequencies(model, linear_model=lin).frequencies_hz
+        grid = frequency_grid(natural)
+        result["principal_gains"] = {
+            "frequencies_hz": grid, "natural_hz": natural,
+            "singular_values": principal_gains(model, grid, linear_model=lin),
+            "inputs": [p.name for p in model.inputs],
+            "outputs": [p.name for p in model.outputs]}
     return jsonable(result)
 
 
@@ -76,12 +90,22 @@ def run(args):
 
     model = load_scene(args.scene)
     static, modes = args.static, args.modes
-    if not (static or modes is not None or args.buckling is not None or args.state_space):
+    if not (static or modes is not None or args.buckling is not None or args.state_space
+            or args.sigma):
         static, modes = True, -1
     result = analyze(model, static=static or bool(args.plot), modes=modes,
-                     buckling=args.buckling, with_state_space=args.state_space)
+                     buckling=args.buckling, with_state_space=args.state_space,
+                     with_gains=bool(args.sigma))
     if args.plot:
         plot_stresses(model, args.plot)
+    if args.sigma:
+        from .statespace import plot_principal_gains
+
+        gains = result["principal_gains"]
+        with atomic_output(args.sigma, "--sigma") as temporary:
+            plot_principal_gains(model, np.array(gains["frequencies_hz"]),
+                                 np.array(gains["singular_values"]), temporary,
+                                 natural_hz=gains["natural_hz"])
     if args.json:
         print_json(result, command="flexure analyze")
     else:
@@ -140,4 +164,15 @@ def render(result):
                 parts.append(f"\n{key} =\n{np.array(ss[key])}")
         parts.append(f"\ninputs: {', '.join(ss['inputs'])}   outputs: {', '.join(ss['outputs'])}"
                      f"   states: {', '.join(ss['states'])}")
+    if "principal_gains" in result:
+        gains = result["principal_gains"]
+        f, sigma = np.array(gains["frequencies_hz"]), np.array(gains["singular_values"])
+        rows = []
+        for natural in gains["natural_hz"][:10]:  # the largest gain at each natural frequency
+            k = int(np.argmin(np.abs(f - natural)))
+            rows.append((f"{natural:.6g}", f"{sigma[k, 0]:.4g}"))
+        parts.append(format_table(["natural frequency (Hz)", "largest singular value"], rows,
+                                  title=f"\nprincipal gains from {', '.join(gains['inputs'])} to "
+                                        f"{', '.join(gains['outputs'])} ({f.size} frequencies, "
+                                        f"{f.min():.3g} to {f.max():.3g} Hz)"))
     return "\n".join(parts)

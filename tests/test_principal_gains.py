@@ -1,0 +1,85 @@
+"""Principal gains: the singular values of the transfer matrix from the inputs to the outputs
+against frequency (`flexure analyze --sigma`), against python-control's own frequency response
+and the static compliance of the nonlinear statics."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from flexure.core import build_model, load_scene, state_space, static_equilibrium
+from flexure.core.cli import main
+from flexure.core.scene import parse_toml, scene_path
+from flexure.core.statespace import frequency_grid, principal_gains
+
+
+def two_by_two():
+    """stage_planar_3dof with a second input, a vertical force on the bar: 2 x 2."""
+    data = copy.deepcopy(parse_toml(scene_path("stage_planar_3dof")))
+    data["inputs"]["Fy"] = {"node": "3", "coordinate": "y"}
+    return build_model(data)
+
+
+@pytest.mark.parametrize("model", [load_scene("stage_planar_3dof"), two_by_two()],
+                         ids=["1x2", "2x2"])
+def test_gains_are_the_singular_values_of_python_controls_response(model):
+    frequencies = frequency_grid([10.6, 2129.0, 3586.0], points=60)
+    gains = principal_gains(model, frequencies)
+    system = state_space(model)
+    for f, sigma in zip(frequencies, gains, strict=True):
+        G = np.atleast_2d(system(2j * np.pi * f))
+        expected = np.linalg.svd(G.reshape(len(model.outputs), len(model.inputs)),
+                                 compute_uv=False)
+        np.testing.assert_allclose(sigma, expected, rtol=1e-8)
+
+
+def test_low_frequency_gains_are_the_static_compliance():
+    """At 0 Hz the gains are the singular values of the compliance (m/N) that the nonlinear
+    statics give for 1 mN on each input (its nonlinearity about 1e-6 of it)."""
+    model = two_by_two()
+    compliance = np.zeros((2, 2))
+    x0 = model.initial_coordinates[[p.coordinate for p in model.outputs]]
+    for column, port in enumerate(model.inputs):
+        loads = model.loads.copy()
+        loads[port.coordinate] += 1e-3
+        x = static_equilibrium(model, loads=loads).x[[p.coordinate for p in model.outputs]]
+        compliance[:, column] = (x - x0) / 1e-3
+    expected = np.linalg.svd(compliance, compute_uv=False)
+    np.testing.assert_allclose(principal_gains(model, [0.0])[0], expected, rtol=1e-4)
+
+
+def test_the_solve_path_gives_the_same_gains(monkeypatch):
+    """Where the eigenvectors of A are ill-conditioned the gains come from a solve per
+    frequency: the same numbers."""
+    model = two_by_two()
+    frequencies = [1.0, 10.6, 100.0, 3586.0]
+    modal = principal_gains(model, frequencies)
+    monkeypatch.setattr(np.linalg, "cond", lambda matrix: np.inf)
+    np.testing.assert_allclose(principal_gains(model, frequencies), modal, rtol=1e-9)
+
+
+def test_a_bad_frequency_is_refused():
+    with pytest.raises(ValueError, match="expected finite frequencies >= 0"):
+        principal_gains(load_scene("stage_planar_3dof"), [-1.0])
+
+
+def test_analyze_plots_the_gains_and_names_the_peaks(tmp_path, capsys):
+    path = tmp_path / "sigma.png"
+    assert main(["analyze", "stage_planar_3dof", "--sigma", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "principal gains from F to x, y" in out and "10.6447" in out
+    assert path.stat().st_size > 10_000
+
+
+def test_analyze_sigma_needs_inputs_and_outputs(tmp_path, capsys):
+    from flexure.core.scene_writer import scene_toml
+
+    data = copy.deepcopy(parse_toml(scene_path("stage_planar_3dof")))
+    del data["inputs"]
+    scene = tmp_path / "no_inputs.toml"
+    scene.write_text(scene_toml(data))
+    plot = tmp_path / "never.png"
+    assert main(["analyze", str(scene), "--sigma", str(plot)]) == 2
+    err = capsys.readouterr().err
+    assert "a state-space model needs [inputs] and [outputs]" in err and "Traceback" not in err
+    assert not plot.exists()
