@@ -309,27 +309,34 @@ def _element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
     non-zero columns of each row p of Dp (at p m ...) and their counts (at P m + p)."""
     counts = columns[P * m:]
     for pp in range(P):
-        w[pp] = 0.0
         k = 0
         for a in range(m):
             if Dp[pp, a] != 0.0:
                 columns[pp * m + k] = a
                 k += 1
         counts[pp] = k
+    _point_forces(Mp, pattern, P, point, w)
     for a in range(m * m):
         Me[a] = 0.0
     for e in range(pattern.size):
-        flat = pattern[e]
-        pp = flat // P
-        qq = flat - pp * P
-        mpq = Mp[flat]
-        w[pp] += mpq * point[qq]
+        pp, qq = divmod(pattern[e], P)
+        mpq = Mp[pattern[e]]
         for u in range(counts[pp]):
             a = columns[pp * m + u]
             da = mpq * Dp[pp, a]
             for v in range(counts[qq]):
                 b = columns[qq * m + v]
                 Me[a * m + b] += da * Dp[qq, b]
+
+
+@kernel
+def _point_forces(Mp, pattern, P, point, w):
+    """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
+    for pp in range(P):
+        w[pp] = 0.0
+    for e in range(pattern.size):
+        pp, qq = divmod(pattern[e], P)
+        w[pp] += Mp[pattern[e]] * point[qq]
 
 
 @kernel
@@ -416,16 +423,11 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
                         if order == 2:
                             f -= d * conv[coords[i * m + a]]
                 point[pp] = f - acc[pp] if order == 2 else f
-            for pp in range(P):  # w = Mp (point forces), MpB = Mp B
-                w[pp] = 0.0
-                for j in range(ndof):
-                    MpB[pp * ndof + j] = 0.0
+            _point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
+            MpB[: P * ndof] = 0.0
             for e in range(pattern.size):
-                flat = pattern[e]
-                pp = flat // P
-                qq = flat - pp * P
-                mpq = Mp[flat]
-                w[pp] += mpq * point[qq]
+                pp, qq = divmod(pattern[e], P)
+                mpq = Mp[pattern[e]]
                 for j in range(ndof):
                     MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
             if with_forces:
