@@ -24,11 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from .constraints import check_exact_constraint, choose_dofs
-from .elements import ELEMENT_TYPES, euler
+from .elements import euler
 from .errors import SceneError
-from .meshing import segment_count, split
-from .model import DEPENDENT, DOF, FIXED, RELEASED, ZERO, ElementGroup, Model, Port
+from .model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Port
 from .rotations import from_rotation_vector
+from .scene_elements import ElementBuilding
+from .scene_reader import MAX_ANGLE, SceneReader, show
 from .sections import beam_properties
 
 TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
@@ -38,13 +39,6 @@ SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rh
                    "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
                    "diameter", "beta"}
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
-# Every number of a scene is in SI units; none of a compliant mechanism comes near 1e20 (steel's
-# E is 2.1e11 Pa). The bound keeps products of scene numbers (E w h^3, masses times lengths
-# squared, ...) finite, so an absurd value is refused here instead of as inf or NaN later.
-MAX_MAGNITUDE = 1e20
-# An initial angle or rotation vector beyond this (rad, about 160 turns) is a mistake: its
-# sine and cosine would carry no significant digits.
-MAX_ANGLE = 1e3
 
 
 def builtin_scenes():
@@ -104,71 +98,14 @@ def build_model(data, *, source="<dict>", default_name="scene", check=True):
     return _SceneBuilder(data, source, default_name).build(check=check)
 
 
-class _SceneBuilder:
+class _SceneBuilder(SceneReader, ElementBuilding):
+    """Builds a Model from a scene dictionary: the checked reading of values
+    (`SceneReader`), the [elements] (`ElementBuilding`) and the rest here."""
+
     def __init__(self, data, source, default_name):
         self.data = data
         self.source = source
         self.default_name = default_name
-
-    def fail(self, key, message):
-        raise SceneError(f"{self.source}: {key}: {message}")
-
-    def table(self, key, value):
-        if not isinstance(value, dict):
-            self.fail(key, f"expected a table, got {type(value).__name__}")
-        return value
-
-    def number(self, key, value, *, minimum=None, positive=False, limit=MAX_MAGNITUDE):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(key, f"expected a number, got {_show(value)}")
-        if isinstance(value, float) and not math.isfinite(value):
-            self.fail(key, f"expected a finite number, got {value!r}")
-        if abs(value) > limit:
-            unit = "rad" if limit == MAX_ANGLE else "(SI units)"
-            self.fail(key, f"expected a magnitude <= {limit:g} {unit}, got {_show(value)}")
-        if positive and value <= 0:
-            self.fail(key, f"expected a value > 0, got {value!r}")
-        if minimum is not None and value < minimum:
-            self.fail(key, f"expected a value >= {minimum}, got {value!r}")
-        return float(value)
-
-    def vector(self, key, value, length, *, limit=MAX_MAGNITUDE):
-        if not isinstance(value, list) or len(value) != length:
-            self.fail(key, f"expected a list of {length} numbers, got {_show(value)}")
-        return [self.number(f"{key}[{i}]", v, limit=limit) for i, v in enumerate(value)]
-
-    def string(self, key, value, what="a string"):
-        if not isinstance(value, str):
-            self.fail(key, f"expected {what}, got {_show(value)}")
-        return value
-
-    def names(self, key, value, allowed):
-        if isinstance(value, str):
-            value = [value]
-        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            self.fail(key, f"expected a list of names, got {_show(value)}")
-        for v in value:
-            if v not in allowed:
-                self.fail(key, f"unknown name {v!r}; expected one of {', '.join(allowed)}")
-        for v in set(value):
-            if value.count(v) > 1:
-                self.fail(key, f"{v!r} is listed {value.count(v)} times; list each name once")
-        return list(value)
-
-    def check_unique(self, what, names):
-        """Refuse a name that appears twice (say, a node "a.x" beside node "a")."""
-        seen = set()
-        for name in names:
-            if name in seen:
-                self.fail(f"{what} {name!r}", f"two {what}s of the scene have this name; rename "
-                                              "one of the nodes or elements")
-            seen.add(name)
-
-    def check_keys(self, key, table, allowed):
-        for k in table:
-            if k not in allowed:
-                self.fail(f"{key}.{k}",
-                          f"unknown key; expected one of {', '.join(sorted(allowed))}")
 
     # -- the scene --------------------------------------------------------------------------
 
@@ -185,7 +122,7 @@ class _SceneBuilder:
         dimension = header.get("dimension", 2)
         if isinstance(dimension, bool) or dimension not in (2, 3):
             self.fail("scene.dimension",
-                      f"expected 2 (planar) or 3 (spatial), got {_show(dimension)}")
+                      f"expected 2 (planar) or 3 (spatial), got {show(dimension)}")
         dimension = int(dimension)
         gravity = np.array(self.vector("scene.gravity", header.get("gravity", [0.0] * dimension),
                                        dimension))
@@ -440,133 +377,12 @@ class _SceneBuilder:
             self.mass.append(0.0)
             self.loads.append(0.0)
 
-    def build_elements(self, elements):
-        by_type = {}
-        deformation_names, deformation_status = [], []
-        for name, element in elements.items():
-            key = f"elements.{name}"
-            element = self.table(key, element)
-            allowed = {"type", "nodes", "section", "released", "dof", "segments"}
-            self.check_keys(key, element, allowed | ({"y_axis"} if self.dimension == 3 else set()))
-            type_name = element.get("type")
-            if not isinstance(type_name, str) or type_name.upper() not in ELEMENT_TYPES:
-                self.fail(f"{key}.type", f"unknown element type {type_name!r}; expected one of "
-                                         f"{', '.join(ELEMENT_TYPES)}")
-            kind = ELEMENT_TYPES[type_name.upper()]
-            if kind.dimension != self.dimension:
-                self.fail(f"{key}.type", f"{kind.type_name} is a {kind.dimension}-D element in a "
-                                         f"{self.dimension}-D scene")
-            nodes = self.element_nodes(key, element, kind)
-            count = segment_count(self, key, element)
-            for piece, table in split(self, name, element, kind, nodes, count):
-                if piece != name and piece in elements:
-                    self.fail(f"{key}.segments", f"the segment {piece!r} has the name of an "
-                                                 "element of the scene; rename that element")
-                self.add_element(key, piece, table, kind, by_type, deformation_names,
-                                 deformation_status)
-        return self.element_groups(by_type), deformation_names, deformation_status
-
-    def element_nodes(self, key, element, kind):
-        """The element's node names, each checked to exist and to be of the kind it needs."""
-        nodes = element.get("nodes")
-        if not isinstance(nodes, list) or len(nodes) != len(kind.node_kinds):
-            self.fail(f"{key}.nodes", f"{kind.type_name} expects {len(kind.node_kinds)} nodes "
-                                      f"({', '.join(kind.node_kinds)}), got {nodes!r}")
-        return [self.node(f"{key}.nodes[{i}]", n, k)
-                for i, (n, k) in enumerate(zip(nodes, kind.node_kinds, strict=True))]
-
-    def add_element(self, key, name, element, kind, by_type, deformation_names,
-                    deformation_status):
-        """Add element `name` (the scene's element at `key`, or one of its segments) to its
-        type's entry of by_type (its coordinates, section properties, principal axis) and its
-        deformations, with their status, to the two lists."""
-        nodes = self.element_nodes(key, element, kind)
-        index = [i for n in nodes for i in self.node_coordinates[n].values()]
-        section_name = element.get("section")
-        if section_name is None:
-            self.fail(key, "element without a section: add section = \"NAME\"")
-        if not isinstance(section_name, str) or section_name not in self.sections:
-            self.fail(f"{key}.section", f"unknown section {_show(section_name)}; expected one "
-                                        f"of {', '.join(self.sections) or 'none declared'}")
-        section = self.sections[section_name]
-        released = self.names(f"{key}.released", element.get("released", []),
-                              kind.deformation_names)
-        dofs = self.names(f"{key}.dof", element.get("dof", []), kind.deformation_names)
-        for both in set(released) & set(dofs):
-            self.fail(key, f"deformation {both!r} is both released and a DOF")
-        for deformation in released:
-            needed = kind.deformation_stiffness[deformation]
-            if section.get(needed, 0.0) <= 0.0:
-                self.fail(f"{key}.released",
-                          f"released deformation {deformation!r} needs a stiffness: "
-                          f"section {section_name!r} has no {needed} > 0")
-        entry = by_type.setdefault(kind.type_name, {"kind": kind, "names": [], "coords": [],
-                                                    "defs": [], "props": [], "axes": []})
-        if getattr(kind, "needs_orientation", False):
-            if "y_axis" not in element:
-                self.fail(key, f"a {kind.type_name} needs its principal axis: add "
-                               "y_axis = [x, y, z]")
-            entry["axes"].append(self.vector(f"{key}.y_axis", element["y_axis"], 3))
-        elif "y_axis" in element:
-            self.fail(f"{key}.y_axis", f"a {kind.type_name} has no principal axis")
-        entry["names"].append(name)
-        entry["coords"].append(index)
-        entry["props"].append({p: section.get(p, 0.0) for p in kind.properties})
-        start = len(deformation_names)
-        entry["defs"].append(list(range(start, start + len(kind.deformation_names))))
-        for deformation in kind.deformation_names:
-            deformation_names.append(f"{name}.{deformation}")
-            deformation_status.append(
-                DOF if deformation in dofs else RELEASED if deformation in released else ZERO)
-
-    def element_groups(self, by_type):
-        """One ElementGroup per element type, with its reference data from the initial
-        coordinates; a zero-length element or a principal axis along a beam refused."""
-        groups = []
-        for entry in by_type.values():
-            kind = entry["kind"]
-            coords = np.array(entry["coords"], dtype=int)
-            x0 = np.array(self.initial)[coords]
-            if entry["axes"]:
-                try:
-                    reference = kind.reference(x0, y_axis=np.array(entry["axes"]))
-                except ValueError:
-                    reference = kind.reference(x0, y_axis=None)
-                    self._parallel_axis(entry, reference)
-            else:
-                reference = kind.reference(x0)
-            for element_name, length in zip(entry["names"], reference["l0"], strict=True):
-                if length <= 1e-12:
-                    self.fail(f"elements.{element_name}.nodes", "zero-length element: its end "
-                                                            f"nodes coincide ({length:.3g} m)")
-            props = {p: np.array([v[p] for v in entry["props"]]) for p in kind.properties}
-            groups.append(ElementGroup(kind=kind, names=tuple(entry["names"]),
-                                       coordinate_index=coords,
-                                       deformation_index=np.array(entry["defs"], dtype=int),
-                                       reference=reference, properties=props))
-        return groups
-
-    def _parallel_axis(self, entry, reference):
-        """Name the first beam whose y' axis lies along it (reference raised ValueError)."""
-        for name, axis, length in zip(entry["names"], entry["axes"], reference["l0"],
-                                      strict=True):
-            index = entry["names"].index(name)
-            coords = np.array(entry["coords"][index])
-            r = np.array(self.initial)[coords]
-            l_vec = r[7:10] - r[0:3]
-            axis = np.array(axis)
-            if length <= 1e-12 or np.linalg.norm(np.cross(axis, l_vec)) <= 1e-9 * np.linalg.norm(
-                    axis) * length:
-                self.fail(f"elements.{name}.y_axis", f"the principal axis {axis.tolist()} lies "
-                                                     "along the beam (or is zero)")
-        self.fail("elements", "a principal axis lies along its beam")
-
     def coordinate(self, key, table):
         node = self.node(f"{key}.node", table.get("node"))
         axis = table.get("coordinate")
         if not isinstance(axis, str) or axis not in self.node_coordinates[node]:
             self.fail(f"{key}.coordinate",
-                      f"node {node!r} has no coordinate {_show(axis)}; expected one of "
+                      f"node {node!r} has no coordinate {show(axis)}; expected one of "
                       f"{', '.join(self.node_coordinates[node])}")
         return self.node_coordinates[node][axis]
 
@@ -591,7 +407,7 @@ class _SceneBuilder:
                 quantity = port.get("quantity", "position")
                 if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
                     self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
-                                                 f"got {_show(quantity)}")
+                                                 f"got {show(quantity)}")
                 unit = OUTPUT_QUANTITIES[quantity]
                 if not self._is_translation(port):
                     unit = unit.replace("m", "rad")
@@ -620,11 +436,3 @@ class _SceneBuilder:
                                    strict=True):
                 loads[self.node_coordinates[node][axis]] += value
         return loads
-
-
-def _show(value, width=60):
-    """repr(value), shortened to about `width` characters for a one-line message."""
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
-        return f"an integer of {int(value.bit_length() * 0.30103) + 1} digits"
-    text = repr(value)
-    return text if len(text) <= width else text[:width - 4] + " ..."
