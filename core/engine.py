@@ -210,6 +210,15 @@ def engine_entry(op, user_data, t, a, b, c, s):
     return -1
 
 
+def connect(data):
+    """Put the engine entry's address into the packed model (dims[ENGINE]), for the compiled
+    callbacks (SUNDIALS', the ESDIRK's, the sampled loop's) that call the engine through it;
+    the address belongs to this process, so it is set at run time, never cached. Returns
+    `data`."""
+    data.int_array("dims")[ed.ENGINE] = engine_entry.address
+    return data
+
+
 def call(data, op, a=None, b=None, c=None, s=0.0, t=0.0):
     """Run one engine operation from Python (a ctypes call, about 1 us): data an
     `EngineData`, a, b, c contiguous float64 arrays of the operation. Returns the status."""

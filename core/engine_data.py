@@ -185,9 +185,9 @@ class EngineData:
         # 244 / 50 us with 16; the counts order all of them the same way)
         dims[AUGMENTED] = int(costs["augmented"] < costs["reduced"] if augmented is None
                               else bool(augmented))
-        from .engine import engine_entry  # the engine imports this module's constants
-
-        dims[ENGINE] = engine_entry.address  # for callbacks that call the engine
+        # dims[ENGINE], the address of the engine's entry for callbacks that call it, is set
+        # by the integrators that make such callbacks (`engine.connect`): the engine imports
+        # this module, not the other way round
         settings = np.zeros(SETTINGS_SIZE)
         settings[TOLERANCE] = tolerance * length_scale(model)
         settings[SINGULAR_RATIO] = singular_ratio

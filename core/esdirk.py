@@ -309,7 +309,7 @@ class Esdirk:
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
-        self.data = data
+        self.data = engine.connect(data)
         self.tableau = tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()

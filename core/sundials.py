@@ -260,7 +260,7 @@ class _Solver:
 
     def __init__(self, data, *, rtol, atol, input_function=None):
         lib = libraries()
-        self.lib, self.data = lib, data
+        self.lib, self.data = lib, engine.connect(data)
         self.n = 2 * int(data.int_array("dims")[ed.NDOF])
         self.context = _VP()
         _check(lib.core.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
