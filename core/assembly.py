@@ -183,13 +183,12 @@ class Inertia:
         return result
 
     def _translation_gravity(self, g):
-        """g spread over the coordinates: component d of g on every coordinate named '.x' etc."""
+        """g spread over the coordinates: component d of g on every translation along axis d
+        (the model's node table)."""
         axes = "xyz"[: self.model.dimension]
         per_coordinate = np.zeros(self.model.nx)
-        for i, name in enumerate(self.model.coordinate_names):
-            axis = name.rsplit(".", 1)[1]
-            if axis in axes:
-                per_coordinate[i] = g[axes.index(axis)]
+        for i in self.model.translations:
+            per_coordinate[i] = g[axes.index(self.model.coordinate_axis[i])]
         return per_coordinate
 
 

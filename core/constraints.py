@@ -133,10 +133,8 @@ def choose_dofs(model, x=None):
     ndof = motions.shape[1]
     if ndof == 0:
         return None
-    translations = {"x", "y", "z"}
-    coordinates = [i for i, c in enumerate(free)
-                   if model.dimension == 2
-                   or model.coordinate_names[c].rsplit(".", 1)[1] in translations]
+    translations = set(model.translations.tolist())
+    coordinates = [i for i, c in enumerate(free) if model.dimension == 2 or c in translations]
     # a coordinate's row is the unit row of its column (times its scale)
     coordinate_rows = np.zeros((len(coordinates), free.size))
     for k, i in enumerate(coordinates):
@@ -261,10 +259,8 @@ def _counted(index_sets):
 
 def _column_scale(model, length_scale):
     """Scale rotation coordinates (rad) by a length so every column is in metres."""
-    scale = np.ones(model.nx)
-    for i, name in enumerate(model.coordinate_names):
-        if name.rsplit(".", 1)[1] not in ("x", "y", "z"):
-            scale[i] = length_scale
+    scale = np.full(model.nx, float(length_scale))
+    scale[model.translations] = 1.0
     return scale
 
 

@@ -62,10 +62,8 @@ def gravity_work(model, x, inertia=None):
     inertia = inertia or Inertia(model)
     axes = "xyz"[: model.dimension]
     work = 0.0
-    for i, name in enumerate(model.coordinate_names):  # lumped masses on translations
-        axis = name.rsplit(".", 1)[1]
-        if axis in axes:
-            work += model.lumped_mass[i] * g[axes.index(axis)] * x[i]
+    for i in model.translations:  # lumped masses on translations
+        work += model.lumped_mass[i] * g[axes.index(model.coordinate_axis[i])] * x[i]
     for group, Mp in inertia.groups:  # element masses on their position points
         g_points = np.concatenate([g if kind == "position" else np.zeros_like(g)
                                    for kind in group.kind.inertia_point_kinds])

@@ -2,7 +2,9 @@
 
 A `Model` is a plain container built by `flexure.core.scene`; it holds only what a scene
 declares. Coordinates are numbered in node order ("3.x", "4.phi"); deformations in element
-order ("leaf_left.e2"). Each coordinate is fixed, dependent or a DOF; each deformation is
+order ("leaf_left.e2"). The node table (`Model.nodes`, with `coordinate_node`,
+`coordinate_axis` and `translations` per coordinate) says which node a coordinate belongs to
+and along which axis; the names are labels for people, never parsed. Each coordinate is fixed, dependent or a DOF; each deformation is
 zero (prescribed), released or a DOF. The DOF vector q lists the DOF coordinates first, then
 the DOF deformations, each in model order.
 """
@@ -14,6 +16,29 @@ import numpy as np
 
 FIXED, DEPENDENT, DOF = "fixed", "dependent", "dof"
 ZERO, RELEASED = "zero", "released"
+
+
+TRANSLATIONS = ("x", "y", "z")  # the axes of a translational node's coordinates
+
+
+@dataclass(frozen=True)
+class Node:
+    """A node of the model: its name, its kind ("translational" or "rotational"), the indices
+    of its coordinates and their axes ("x", "y", "z"; "phi" in the plane; "lambda0" ...
+    "lambda3", the Euler parameters, in space)."""
+
+    name: str
+    kind: str
+    coordinates: tuple
+    axes: tuple
+
+    @property
+    def units(self):
+        """The unit of each coordinate: m on translations, rad on a planar rotation, 1 on
+        Euler parameters."""
+        if self.kind == "translational":
+            return ("m",) * len(self.axes)
+        return ("rad",) if self.axes == ("phi",) else ("1",) * len(self.axes)
 
 
 @dataclass(frozen=True)
@@ -73,8 +98,19 @@ class Model:
     # The DOFs flexure chose because the scene lists none (`constraints.choose_dofs`); empty
     # when the scene lists its own
     chosen_dofs: tuple = ()
+    # The node table: every node with its coordinates, in coordinate order
+    nodes: tuple = ()
 
     def __post_init__(self):
+        # what each coordinate is, from the node table: its node and its axis
+        self.coordinate_node = np.empty(self.nx, dtype=object)
+        self.coordinate_axis = np.empty(self.nx, dtype=object)
+        for node in self.nodes:
+            self.coordinate_node[list(node.coordinates)] = node.name
+            self.coordinate_axis[list(node.coordinates)] = node.axes
+        # coordinates of translational nodes (m), the rest rotations (rad or Euler parameters)
+        self.translations = np.flatnonzero(
+            np.isin(self.coordinate_axis.astype(str), TRANSLATIONS))
         status = self.coordinate_status
         self.fixed_coordinates = np.flatnonzero(status == FIXED)
         self.free_coordinates = np.flatnonzero(status != FIXED)

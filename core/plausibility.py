@@ -42,9 +42,7 @@ class RangeCheck:
         # the length scale of the kinematics: the longest element, at least 1 mm
         self.scale = max([1e-3, *(float(np.max(group.reference["l0"]))
                                   for group in model.groups if "l0" in group.reference)])
-        translational = [i for i, name in enumerate(model.coordinate_names)
-                         if name.rsplit(".", 1)[-1] in ("x", "y", "z")]
-        self.translational = np.array(translational, dtype=np.int64)
+        self.translational = np.asarray(model.translations, dtype=np.int64)
         self.start = np.asarray(model.initial_coordinates, float)[self.translational]
         self.distance_bound = DISTANCE_LIMIT * self.scale
 

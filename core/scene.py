@@ -26,7 +26,7 @@ import numpy as np
 from .constraints import check_exact_constraint, choose_dofs
 from .elements import euler
 from .errors import SceneError
-from .model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Port
+from .model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
 from .rotations import from_rotation_vector
 from .scene_elements import ElementBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
@@ -149,7 +149,12 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         self.check_unique("deformation", deformation_names)
         buckling = self.build_buckling(data.get("buckling"))
         tunable = self.build_tunable(data, header.get("tunable", []))
+        nodes = tuple(Node(name=node, kind=self.node_kind[node],
+                           coordinates=tuple(self.node_coordinates[node].values()),
+                           axes=tuple(self.node_coordinates[node]))
+                      for node in self.node_kind)
         model = Model(
+            nodes=nodes,
             name=name,
             dimension=dimension,
             coordinate_names=self.coordinate_names,

@@ -87,10 +87,9 @@ def beam_stresses(model, x, sigma):
         stress = von_mises(forces, group.properties)
         profile = von_mises(forces, group.properties, FRACTIONS)
         keep = group.properties["A"] > 0
-        node_of = [model.coordinate_names[i].rsplit(".", 1)[0]
-                   for i in group.coordinate_index[:, 0]]
-        end_of = [model.coordinate_names[i].rsplit(".", 1)[0]
-                  for i in group.coordinate_index[:, -group.kind.coordinates_per_element // 2]]
+        node_of = model.coordinate_node[group.coordinate_index[:, 0]].tolist()
+        end_of = model.coordinate_node[
+            group.coordinate_index[:, -group.kind.coordinates_per_element // 2]].tolist()
         for i in np.flatnonzero(keep):
             names.append(group.names[i])
             stresses.append(stress[i])
@@ -186,9 +185,7 @@ def plot_beam_stresses(model, stresses, path, *, title=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fixed_nodes = {name.rsplit(".", 1)[0] for name, status in
-                   zip(model.coordinate_names, model.coordinate_status, strict=True)
-                   if status == "fixed"}
+    fixed_nodes = set(model.coordinate_node[model.fixed_coordinates].tolist())
     fig, ax = plt.subplots(figsize=(7, 4))
     for k, chain in enumerate(_chains(stresses, fixed_nodes)):
         s, xs, ys = 0.0, [], []
