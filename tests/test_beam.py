@@ -248,6 +248,8 @@ class _Node:
         self.lumped_mass = np.zeros(4)
         self.gravity = np.array([0.0, -9.81, 0.0])
         self.coordinate_names = [f"n.lambda{k}" for k in range(4)]
+        self.coordinate_axis = np.array([f"lambda{k}" for k in range(4)], dtype=object)
+        self.translations = np.zeros(0, dtype=np.int64)  # the node table's: none here
 
 
 def _constrained_acceleration(M, h, lam, lam_dot):
