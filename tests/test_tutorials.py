@@ -48,3 +48,21 @@ def test_closed_loop_tutorial_shows_what_the_feedforward_buys():
                for line in out.splitlines() if "% of the stroke" in line}
     assert percent["feedforward"] <= 1e-5 and "passed" in out
     assert percent["feedback"] > 0.1 and "FAILED" in out
+
+
+def test_cross_flexure_tutorial_stiffness_and_buckling_convergence():
+    """The pivot's rotational stiffness is 2 EI / L to the moment's nonlinearity (theta^2,
+    4e-6 here); its buckling load falls with each refinement, the changes shrinking as h^4
+    (a factor near 16, more than 10 asserted) to less than 1e-4 at 16 beams per leaf."""
+    out = run("cross_flexure.py")
+    assert "DOFs chosen by flexure:" in out
+    line = next(x for x in out.splitlines() if x.startswith("rotational stiffness (N m/rad)"))
+    ours, hand = (float(v) for v in line.split(")")[1].split())
+    assert abs(ours / hand - 1.0) < 1e-5
+    rows = [x.split() for x in out.splitlines() if x.strip()[:2].strip().isdigit()
+            and len(x.split()) >= 3 and "." in x.split()[2]]
+    factors = [float(r[2]) for r in rows]
+    assert len(factors) == 5 and factors == sorted(factors, reverse=True)
+    changes = [abs(factors[k + 1] / factors[k] - 1.0) for k in range(4)]
+    assert changes[2] < changes[1] / 10.0 and changes[3] < changes[2] / 10.0
+    assert changes[-1] < 1e-4
