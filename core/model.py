@@ -4,9 +4,9 @@ A `Model` is a plain container built by `flexure.core.scene`; it holds only what
 declares. Coordinates are numbered in node order ("3.x", "4.phi"); deformations in element
 order ("leaf_left.e2"). The node table (`Model.nodes`, with `coordinate_node`,
 `coordinate_axis` and `translations` per coordinate) says which node a coordinate belongs to
-and along which axis; the names are labels for people, never parsed. Each coordinate is fixed, dependent or a DOF; each deformation is
-zero (prescribed), released or a DOF. The DOF vector q lists the DOF coordinates first, then
-the DOF deformations, each in model order.
+and along which axis; the names are labels for people, never parsed. Each coordinate is
+fixed, dependent or a DOF; each deformation is zero (prescribed), released or a DOF. The DOF
+vector q lists the DOF coordinates first, then the DOF deformations, each in model order.
 """
 
 from dataclasses import dataclass, field
