@@ -36,7 +36,8 @@ from flexure.core import FlexureError
 from .model_description import fix_model_description
 
 # The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
-FMU_RUNTIME_MODULES = ("slave.py", "scene_slave.py", "state_format.py")
+FMU_RUNTIME_MODULES = ("slave.py", "pythonfmu_workarounds.py", "scene_slave.py",
+                       "state_format.py")
 FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
 
 from .slave import SafeSlave, UnitReal, escape_log
@@ -45,12 +46,14 @@ __all__ = ["SafeSlave", "UnitReal", "escape_log"]
 '''
 
 
-# Appended to every slave script (see flexure.fmu.slave.keep_script_namespace).
+# Appended to every slave script (see flexure.fmu.pythonfmu_workarounds.keep_script_namespace).
 KEEP_NAMESPACE = """
 
 # Added by flexure's FMU builder: works around pythonfmu 0.7.0 releasing this namespace, and
 # leaking what it finds in the locals of its re-execution of this script.
-from flexure.fmu.slave import keep_script_namespace as _keep_script_namespace  # noqa: E402
+from flexure.fmu.pythonfmu_workarounds import (  # noqa: E402
+    keep_script_namespace as _keep_script_namespace,
+)
 
 _keep_script_namespace(globals(), locals())
 """

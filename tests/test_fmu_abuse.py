@@ -653,8 +653,8 @@ def test_instantiate_free_cycles_do_not_leak(fmus):
     cache = int(result.value("core-pair-cache"))
     assert cache < 20, cache  # core keeps no model alive (weak references)
     # the growth after the first 250 cycles, per cycle: pythonfmu's binary leaks about 0.3 kB
-    # of Python objects per instantiation (flexure.fmu.slave, _SlaveMarker); measured 0.35 to
-    # 0.4 kB per cycle of RSS; more would be ours
+    # of Python objects per instantiation (flexure.fmu.pythonfmu_workarounds,
+    # SlaveMarker); measured 0.35 to 0.4 kB per cycle of RSS; more would be ours
     steady = (marks[-1] - marks[0]) / 750 * 1e3  # kB per cycle
     assert steady < 0.8, marks
     assert marks[-1] < 1.0, marks
@@ -710,7 +710,7 @@ def test_a_slave_instance_is_freed_without_the_garbage_collector():
 def test_weakly_bound_copies_only_closures_over_the_owner():
     import weakref
 
-    from flexure.fmu.slave import _weakly_bound
+    from flexure.fmu.pythonfmu_workarounds import weakly_bound
 
     class Owner:
         value = 2.0
@@ -720,7 +720,7 @@ def test_weakly_bound_copies_only_closures_over_the_owner():
     def getter():
         return owner.value * later
 
-    weak = _weakly_bound(getter, owner)  # `later` is an empty cell yet: left shared
+    weak = weakly_bound(getter, owner)  # `later` is an empty cell yet: left shared
     later = 3.0
     assert weak is not getter and weak() == 6.0
     assert type(weak.__closure__[1].cell_contents) is weakref.ProxyType
@@ -729,26 +729,26 @@ def test_weakly_bound_copies_only_closures_over_the_owner():
     def unrelated():
         return later
 
-    assert _weakly_bound(unrelated, owner) is unrelated
-    assert _weakly_bound(len, owner) is len and _weakly_bound(None, owner) is None
+    assert weakly_bound(unrelated, owner) is unrelated
+    assert weakly_bound(len, owner) is len and weakly_bound(None, owner) is None
 
 
 def test_findclass_sees_a_two_entry_mro_with_stored_reprs():
     """What pythonfmu's findClass reads from the stand-in, and leaks: no new repr strings."""
-    from flexure.fmu.slave import _Fmi2SlaveLookalike, _SlaveMarker
+    from flexure.fmu.pythonfmu_workarounds import Fmi2SlaveLookalike, SlaveMarker
 
-    mro = _SlaveMarker.__mro__
-    assert mro == (_SlaveMarker, _Fmi2SlaveLookalike) and mro is _SlaveMarker.__mro__
-    assert repr(_SlaveMarker) == "" and repr(_Fmi2SlaveLookalike) is repr(_Fmi2SlaveLookalike)
+    mro = SlaveMarker.__mro__
+    assert mro == (SlaveMarker, Fmi2SlaveLookalike) and mro is SlaveMarker.__mro__
+    assert repr(SlaveMarker) == "" and repr(Fmi2SlaveLookalike) is repr(Fmi2SlaveLookalike)
     match = re.search(r"<class '[^']+\.([^']+)'", repr(mro[1]))  # findClass's pattern
     assert match and match[1] == "Fmi2Slave"
-    assert type.mro(_SlaveMarker)[-1] is object  # the interpreter's own MRO is unchanged
+    assert type.mro(SlaveMarker)[-1] is object  # the interpreter's own MRO is unchanged
 
 
 def test_scene_script_creates_no_class_when_executed_again():
     from flexure.fmu import scene_slave
     from flexure.fmu.builder import KEEP_NAMESPACE, _scene_script
-    from flexure.fmu.slave import _SlaveMarker
+    from flexure.fmu.pythonfmu_workarounds import SlaveMarker
 
     code = compile(_scene_script("probe_scene", "", (), False) + KEEP_NAMESPACE,
                    "probe_scene", "exec")
@@ -763,30 +763,30 @@ def test_scene_script_creates_no_class_when_executed_again():
         assert len(scene_slave.SceneSlave.__subclasses__()) == before
     finally:
         gc.enable()
-    assert local_namespace == {"probe_scene": _SlaveMarker}
+    assert local_namespace == {"probe_scene": SlaveMarker}
     assert namespace["probe_scene"] is cls
 
 
 def test_namespace_held_by_a_reference_not_a_growing_list():
-    from flexure.fmu import slave
+    from flexure.fmu import pythonfmu_workarounds as workarounds
 
     namespace = {}
-    before, held = sys.getrefcount(namespace), len(slave._SCRIPT_NAMESPACES)
-    slave._hold(namespace)
+    before, held = sys.getrefcount(namespace), len(workarounds.SCRIPT_NAMESPACES)
+    workarounds.hold_namespace(namespace)
     assert sys.getrefcount(namespace) == before + 1
-    assert len(slave._SCRIPT_NAMESPACES) == held
+    assert len(workarounds.SCRIPT_NAMESPACES) == held
 
 
 def test_namespace_held_in_a_list_without_ctypes(monkeypatch):
-    from flexure.fmu import slave
+    from flexure.fmu import pythonfmu_workarounds as workarounds
 
-    monkeypatch.setattr(slave, "_INCREF", [])
-    monkeypatch.setattr(slave, "_SCRIPT_NAMESPACES", [])
+    monkeypatch.setattr(workarounds, "INCREF", [])
+    monkeypatch.setattr(workarounds, "SCRIPT_NAMESPACES", [])
     monkeypatch.setitem(sys.modules, "ctypes", None)  # `import ctypes` raises ImportError
     namespace = {}
     before = sys.getrefcount(namespace)
-    slave._hold(namespace)
-    assert slave._SCRIPT_NAMESPACES == [namespace] and slave._INCREF == []
+    workarounds.hold_namespace(namespace)
+    assert workarounds.SCRIPT_NAMESPACES == [namespace] and workarounds.INCREF == []
     assert sys.getrefcount(namespace) == before + 1
 
 

@@ -124,11 +124,12 @@ def test_jvm_host_fmi4j_steps_and_replays_state(stage_fmu, fmi4j_classpath, tmp_
     np.testing.assert_allclose(jvm, expected, rtol=0, atol=1e-12)
     if done.returncode != 0:
         # Known defect, not ours to fix here: pythonfmu 0.7.0's binary releases its
-        # interpreter guard twice at process exit (fmu/slave.py, _guard_exit); in a JVM host
-        # that release is the interpreter's finalisation, and the static destructors of the
-        # compiled engine's LLVM run between the two releases and reuse the freed block, so
-        # the JVM can die after its last line (malloc's unlink_chunk). Every result above has
-        # been checked; the exit status is reported, not hidden.
+        # interpreter guard twice at process exit (fmu/pythonfmu_workarounds.py,
+        # guard_exit); in a JVM host that release is the interpreter's finalisation, and
+        # the static destructors of the compiled engine's LLVM run between the two releases
+        # and reuse the freed block, so the JVM can die after its last line (malloc's
+        # unlink_chunk). Every result above has been checked; the exit status is reported,
+        # not hidden.
         pytest.xfail(f"the JVM exited with {done.returncode} after a complete, correct run "
                      "(pythonfmu 0.7.0's double release of its guard at exit)")
 

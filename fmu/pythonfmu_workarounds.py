@@ -1,0 +1,203 @@
+"""What pythonfmu 0.7.0's binary needs from the Python side of an FMU to stay safe: the
+script namespace it releases without owning it and the classes it leaks while looking for the
+slave class (`keep_script_namespace`, appended to every slave script by the builder), the
+interpreter guard it releases twice at exit (`guard_exit`), the copies of the resources folder
+it adds to sys.path (`tidy_sys_path`), and getters and setters that would keep a freed
+instance alive in a reference cycle (`weakly_bound`). `SafeSlave` (`slave.py`) uses them; the
+measurements behind each are in docs/fmu.md."""
+
+import sys
+import types
+import weakref
+
+# pythonfmu 0.7.0's binary finds the slave class by importing the script module, executing the
+# script once more in the module's namespace with a fresh dict of locals, and then releasing
+# one reference to that namespace it never owned (findClass in PySlaveInstance.cpp:
+# Py_DECREF on the borrowed PyModule_GetDict). The first instance frees the module's __dict__;
+# the next instantiation of the same FMU in the process then fails ("module has no attribute
+# ...") or reads garbage. So every execution of the script takes one reference to the
+# namespace that is never released (`hold_namespace`).
+#
+# findClass also leaks, per instantiation and for every class among those locals, the list it
+# makes of the class's __mro__, the repr of every entry of that list and the UTF-8 bytes of
+# each repr, then the bytes of the name it picks; and the constructor leaks the string of the
+# resources path it inserts into sys.path. A class created anew by every execution of the
+# script would be kept alive by that list (~2.5 kB each): `keep_script_namespace` leaves
+# findClass only `SlaveMarker`, whose __mro__ and reprs are stored objects chosen to leak the
+# least: two entries (no `object`, whose repr is a new string at every call), an empty repr
+# first (its bytes are Python's shared empty bytes) and then the shortest repr findClass's
+# pattern "<class '*.Fmi2Slave'>" accepts. What is left per instantiation is pythonfmu's: the
+# list (72 bytes), the repr's bytes (56), the name's bytes (48 for "truss_1dof_x") and the
+# path string (49 bytes + the path's length): about 0.3 kB where a three-entry MRO cost 0.5.
+SCRIPT_NAMESPACES = []  # the namespaces held while Py_IncRef cannot be called (see hold_namespace)
+INCREF = []  # Py_IncRef, called through ctypes (looked up once)
+
+
+def hold_namespace(namespace):
+    """Take one reference to `namespace` that is never released: Py_IncRef through ctypes
+    (nothing grows), or, in a host where that call cannot be made, a place in a list."""
+    try:
+        if not INCREF:
+            import ctypes
+
+            INCREF.append(ctypes.PYFUNCTYPE(None, ctypes.py_object)(
+                ("Py_IncRef", ctypes.pythonapi)))
+        INCREF[0](namespace)
+    except Exception:  # noqa: BLE001 -- no ctypes, or no Py_IncRef: hold it in the list
+        SCRIPT_NAMESPACES.append(namespace)
+
+
+class CachedRepr(type):
+    """A metaclass whose repr is one stored string (no new object per repr call)."""
+
+    def __repr__(cls):
+        return cls.__dict__["_repr"]
+
+
+class Fmi2SlaveLookalike(metaclass=CachedRepr):
+    _repr = "<class '_.Fmi2Slave'>"  # the shortest repr findClass takes for Fmi2Slave
+
+
+class StoredMro(CachedRepr):
+    """A metaclass whose classes answer `__mro__` with a stored tuple (what findClass reads;
+    the interpreter's own method resolution is unchanged)."""
+
+    @property
+    def __mro__(cls):
+        return cls.__dict__["_mro"]
+
+
+class SlaveMarker(Fmi2SlaveLookalike, metaclass=StoredMro):
+    """What findClass finds in the locals of a re-executed script, bound to the slave class's
+    name: an `__mro__` of two entries whose second's repr it matches against
+    "<class '*.Fmi2Slave'>" to pick the name it then looks up in the module (the real
+    class). Stored reprs and MRO, the first repr empty: findClass leaks the least it can."""
+
+    _repr = ""
+
+
+SlaveMarker._mro = (SlaveMarker, Fmi2SlaveLookalike)
+
+
+def keep_script_namespace(namespace, local_namespace=None):
+    """Called at the end of a slave script as `(globals(), locals())`, by code the builder
+    appends (`build_slave_fmu`).
+
+    The script runs once on import (then both are the module's namespace) and once more per
+    instantiation, in fresh locals; every release of the namespace by pythonfmu's binary is
+    matched by one reference taken here (`hold_namespace`, never released). In a re-execution the
+    locals are emptied down to the slave class's name bound to `SlaveMarker`. A scene script
+    creates no class when it is re-executed (it looks its class up in the module, see
+    `flexure.fmu.builder._scene_script`); a class that another script does create again dies
+    with the locals (at a collection of the garbage collector's youngest generation: a class
+    is a reference cycle) instead of being kept by findClass's leaked lists.
+    """
+    hold_namespace(namespace)
+    if local_namespace is None or local_namespace is namespace:
+        return
+    name, depth = None, 0
+    for key, value in list(local_namespace.items()):
+        if isinstance(value, type):
+            chain = [c.__name__ for c in value.__mro__]
+            if "Fmi2Slave" in chain[1:] and chain.index("Fmi2Slave") > depth:
+                name, depth = key, chain.index("Fmi2Slave")
+    local_namespace.clear()
+    if name is not None:
+        local_namespace[name] = SlaveMarker
+
+
+# pythonfmu 0.7.0's binary holds its interpreter guard in a static std::shared_ptr and also
+# resets it from an __attribute__((destructor)) function (finalizePythonInterpreter). At exit
+# the static's destructor runs first (exit handlers), then the library destructor assigns to
+# the destroyed shared_ptr and releases its freed control block a second time: "corrupted
+# double-linked list" / SIGSEGV after the host's last line, in any process that instantiated
+# the FMU (intermittent: it depends on what reused the freed block). dlclose cannot avoid it:
+# the binary has STB_GNU_UNIQUE symbols, so glibc never unloads it. In a Python host the
+# remedy is to release the guard ourselves before the interpreter finalizes (an atexit
+# handler), through the exported finalizePythonInterpreter: both later resets then see an
+# empty pointer. Not in a host whose interpreter the binary created (JVM, C): there the
+# guard's release *is* the interpreter's finalization.
+_GUARDED_BINARIES = {}
+
+
+def guard_exit(resources, model_identifier):
+    """Register the release of this FMU binary's interpreter guard at interpreter exit."""
+    if sys.platform != "linux" or not resources:
+        return
+    import os
+    import threading
+
+    if threading.main_thread().native_id != os.getpid():
+        return  # the interpreter runs on the binary's own thread: not a Python host
+    path = os.path.join(os.path.dirname(os.path.normpath(resources)), "binaries", "linux64",
+                        f"{model_identifier}.so")
+    if path in _GUARDED_BINARIES or not os.path.isfile(path):
+        return
+    import ctypes
+
+    library = ctypes.CDLL(path, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # the loaded copy
+    release = getattr(library, "finalizePythonInterpreter", None)
+    if release is None:
+        return
+    release.restype, release.argtypes = None, []
+    if not _GUARDED_BINARIES:
+        import atexit
+
+        atexit.register(_release_guards)
+    _GUARDED_BINARIES[path] = release
+
+
+def _release_guards():
+    for release in _GUARDED_BINARIES.values():
+        release()
+    _GUARDED_BINARIES.clear()
+
+
+def tidy_sys_path(resources):
+    """Drop the copies of the resources folder pythonfmu's binary adds to sys.path.
+
+    It inserts the folder at the front of sys.path on every instantiation (PySlaveInstance's
+    constructor) and never removes it: sys.path would grow by one entry per instance.
+    """
+    if resources and sys.path.count(resources) > 1:
+        first = sys.path.index(resources)
+        sys.path[:] = [p for i, p in enumerate(sys.path) if p != resources or i == first]
+
+
+def weakly_bound(function, owner):
+    """`function` (a getter or setter of one of `owner`'s variables) holding `owner` weakly.
+
+    A getter that is a closure over the instance (`lambda: self.x`, the defaults of `add_real`,
+    SceneSlave's lambdas) or a bound method of it makes instance -> vars -> getter -> instance
+    a reference cycle. pythonfmu's binary releases the instance at fmi2FreeInstance, but a
+    cycle is freed only by the cyclic garbage collector, whose full collections a host that
+    instantiates and frees an FMU in a loop reaches every few hundred instances: the freed
+    instances, their models and arrays pile up in between (0.6 MB of the 1.7 MB the RSS of
+    tests/test_fmu_abuse.py's leak case grew over 1000 cycles). So the closure is copied
+    with cells that hold a weak proxy of the instance instead of the instance (the original
+    function is left as it is: its cells may be shared), and a bound method is bound to the
+    proxy; anything else is returned unchanged.
+    """
+    if isinstance(function, types.MethodType) and function.__self__ is owner:
+        return types.MethodType(function.__func__, weakref.proxy(owner))
+    if not isinstance(function, types.FunctionType) or not function.__closure__:
+        return function
+    cells = [(cell, _cell_holds(cell, owner)) for cell in function.__closure__]
+    if not any(holds for _, holds in cells):
+        return function
+    proxy = weakref.proxy(owner)
+    copy = types.FunctionType(function.__code__, function.__globals__, function.__name__,
+                              function.__defaults__,
+                              tuple(types.CellType(proxy) if holds else cell
+                                    for cell, holds in cells))
+    copy.__kwdefaults__ = function.__kwdefaults__
+    copy.__qualname__ = function.__qualname__
+    copy.__dict__.update(function.__dict__)
+    return copy
+
+
+def _cell_holds(cell, owner):
+    try:
+        return cell.cell_contents is owner
+    except ValueError:  # an empty cell (a variable not yet assigned)
+        return False
