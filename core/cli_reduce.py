@@ -1,12 +1,22 @@
 """`flexure reduce SCENE --keep N [--tol P]`: which released deformations to prescribe zero
 while the lowest N frequencies move by less than P %; writes the reduced scene."""
 
+import argparse
 from pathlib import Path
 
 from .cli import count, number, output_file, refuse_overwriting_inputs, write_outputs
 from .tables import format_table, print_json
 
 DEFAULT_TOLERANCE = 1.0  # %
+
+
+def deformation_names(text):
+    """An argparse type: comma-separated deformation names such as e1 or e1,e2."""
+    names = tuple(name.strip() for name in text.split(","))
+    if not all(len(n) >= 2 and n[0] == "e" and n[1:].isdigit() for n in names):
+        raise argparse.ArgumentTypeError(f"expected deformation names such as e1 or e1,e2, "
+                                         f"got {text!r}")
+    return names
 
 
 def register(subparsers):
@@ -23,6 +33,9 @@ def register(subparsers):
     parser.add_argument("--tol", type=number(0.0), default=DEFAULT_TOLERANCE, metavar="P",
                         help=f"largest change of any kept frequency, %% (default "
                              f"{DEFAULT_TOLERANCE:g})")
+    parser.add_argument("--freeze", type=deformation_names, default=(), metavar="NAMES",
+                        help="deformations to prescribe zero on every element first, "
+                             "whatever the tolerance, e.g. e1 (every elongation) or e1,e2")
     parser.add_argument("--out", type=output_file((".toml",)), metavar="TOML",
                         help="the reduced scene (default: SCENE_reduced.toml here)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -40,7 +53,8 @@ def run(args):
     name = data.get("scene", {}).get("name", path.stem) if isinstance(data, dict) else path.stem
     out = args.out or output_file((".toml",))(f"{name}_reduced.toml")
     refuse_overwriting_inputs([("--out", out)], [path])
-    reduction = propose_reduction(data, args.keep, args.tol, source=str(path),
+    reduction = propose_reduction(data, args.keep, args.tol, freeze=args.freeze,
+                                  source=str(path),
                                   progress=Progress("flexure reduce", after=1.0))
     header = (f"{name}, reduced by `flexure reduce --keep {args.keep} --tol {args.tol:g}` from "
               f"{path.name}:\nprescribed zero: "
@@ -66,6 +80,8 @@ def summary(reduction, out):
             "ndof_full": reduction.ndof_full, "ndof_reduced": reduction.ndof_reduced,
             "full_hz": reduction.full_hz, "reduced_hz": reduction.reduced_hz,
             "change_percent": reduction.change_percent,
+            "forced": [f"{e}.{d}" for e, d in reduction.forced],
+            "ndof_forced": reduction.ndof_forced, "forced_hz": reduction.forced_hz,
             "dofs_chosen": reduction.dofs_chosen, "scene": str(out)}
 
 
@@ -77,10 +93,18 @@ def render(reduction):
     if rows:
         parts.append(format_table(["prescribed zero", "largest share of a kept mode's "
                                                       "strain energy"], rows))
-    frequencies = [[i + 1, f"{full:.6g}", f"{reduced:.6g}",
-                    f"{(reduced / full - 1.0) * 100.0:+.3g}"]
-                   for i, (full, reduced) in enumerate(zip(reduction.full_hz,
-                                                           reduction.reduced_hz, strict=True))]
-    parts.append(format_table(["mode", "full (Hz)", "reduced (Hz)", "change (%)"],
-                              frequencies))
+    forced = reduction.forced_hz is not None
+    frequencies = []
+    for i, (full, reduced) in enumerate(zip(reduction.full_hz, reduction.reduced_hz,
+                                            strict=True)):
+        row = [i + 1, f"{full:.6g}"]
+        if forced:
+            row.append(f"{reduction.forced_hz[i]:.6g}")
+        frequencies.append(row + [f"{reduced:.6g}", f"{(reduced / full - 1.0) * 100.0:+.3g}"])
+    names = sorted({d for _, d in reduction.forced})
+    headers = ["mode", f"full, {reduction.ndof_full} DOFs (Hz)"]
+    if forced:
+        headers.append(f"{','.join(names)} frozen, {reduction.ndof_forced} DOFs (Hz)")
+    headers += [f"reduced, {reduction.ndof_reduced} DOFs (Hz)", "change (%)"]
+    parts.append(format_table(headers, frequencies))
     return "\n\n".join(parts)

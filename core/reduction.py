@@ -19,6 +19,10 @@ cost. SPACAR users freeze them by hand; `propose_reduction` does it by measureme
    breaks the model (a release that removes an over-constraint, such as a leaf's local cut)
    is skipped.
 
+`freeze` (`flexure reduce --freeze e1`) prescribes the named deformations zero on every
+element before anything else, whatever the tolerance (the chapter's elongation-frozen model);
+the reduction goes on from there.
+
 The reduced scene keeps the scene's DOF lists where they still count right (a frozen DOF
 deformation is simply no DOF any more); where they do not (a frozen released deformation
 removes a freedom some DOF stood for), it lists none and flexure chooses its DOFs
@@ -55,6 +59,9 @@ class Reduction:
     ndof_reduced: int
     shares: dict = field(default_factory=dict)  # (element, deformation) -> energy share
     dofs_chosen: bool = False  # the reduced scene lists no DOFs (flexure chooses them)
+    forced: list = field(default_factory=list)  # the pairs `freeze` asked for (and kept valid)
+    forced_hz: np.ndarray | None = None  # the frequencies with those alone frozen
+    ndof_forced: int | None = None
 
     @property
     def change_percent(self):
@@ -91,18 +98,20 @@ def energy_shares(model, data, keep):
     return {key: float(value.max()) for key, value in shares.items()}, modes
 
 
-def propose_reduction(data, keep, tolerance=1.0, *, source="<dict>", progress=None):
+def propose_reduction(data, keep, tolerance=1.0, *, freeze=(), source="<dict>",
+                      progress=None):
     """The reduction of scene `data` (a dict) that freezes the most released deformations
     while its lowest `keep` frequencies move by at most `tolerance` percent; `progress` is
-    called with the fraction of the trials done. Raises FlexureError when the scene has fewer
-    than `keep` DOFs."""
+    called with the fraction of the trials done. `freeze` names deformations ("e1": every
+    elongation) prescribed zero on every element first, whatever the tolerance says (but not
+    where that alone breaks the model), as the chapter's elongation-frozen model; the
+    reduction then goes on from there. Raises FlexureError when the scene has fewer than
+    `keep` DOFs."""
     model = build_model(data, source=source)
     if keep > model.ndof:
         raise FlexureError(f"{source}: --keep {keep}: the model has only {model.ndof} DOFs")
     shares, modes = energy_shares(model, data, keep)
     full = modes.frequencies_hz
-    order = sorted(shares, key=lambda key: (shares[key], key))
-
     structural = {}  # (element, deformation) -> whether freezing it alone breaks the model
 
     def breaks_alone(key):
@@ -137,8 +146,19 @@ def propose_reduction(data, keep, tolerance=1.0, *, source="<dict>", progress=No
         return result is not None and np.all(
             np.abs(result[1] / full - 1.0) * 100.0 <= tolerance)
 
-    low, high = 0, len(order)  # low passes (nothing frozen), high untested
+    forced = [key for key in sorted(shares) if key[1] in set(freeze) and not breaks_alone(key)]
+    rest = sorted((key for key in shares if key not in set(forced)),
+                  key=lambda key: (shares[key], key))
+    order = forced + rest
     best = (copy.deepcopy(data), full, False, model.ndof, [])
+    forced_hz = ndof_forced = None
+    if forced:
+        best = trial(len(forced))
+        if best is None:
+            raise FlexureError(f"{source}: --freeze {','.join(freeze)}: the model with those "
+                               "deformations frozen has no valid modes")
+        forced_hz, ndof_forced = best[1], best[3]
+    low, high = len(forced), len(order)  # low passes (the forced ones frozen), high untested
     trials = 1 + max(1, len(order)).bit_length()  # the bisection's most
 
     def report(done):
@@ -162,7 +182,8 @@ def propose_reduction(data, keep, tolerance=1.0, *, source="<dict>", progress=No
     scene, reduced_hz, chosen, ndof, frozen = best
     return Reduction(keep=keep, tolerance=tolerance, frozen=frozen, scene=scene,
                      full_hz=full, reduced_hz=reduced_hz, ndof_full=model.ndof,
-                     ndof_reduced=ndof, shares=shares, dofs_chosen=chosen)
+                     ndof_reduced=ndof, shares=shares, dofs_chosen=chosen, forced=forced,
+                     forced_hz=forced_hz, ndof_forced=ndof_forced)
 
 
 def frozen_scene(data, frozen):

@@ -63,6 +63,22 @@ def test_a_release_the_mechanism_needs_is_never_frozen():
         build_model(frozen_scene(data, [key])[0])
 
 
+def test_frozen_elongations_come_first_whatever_the_tolerance():
+    """--freeze e1: every elongation prescribed zero before the ranking, even at a tolerance
+    of 0 (the chapter's elongation-frozen model); on stage_planar_3dof that is
+    stage_planar_1dof, shown beside the full and the reduced frequencies."""
+    data = parse_toml(scene_path("stage_planar_3dof"))
+    reduction = propose_reduction(data, 1, 0.0, freeze=("e1",))
+    assert sorted(reduction.forced) == [("leaf_left", "e1"), ("leaf_right", "e1")]
+    assert sorted(reduction.frozen) == sorted(reduction.forced)
+    assert reduction.ndof_forced == reduction.ndof_reduced == 1
+    one_dof = natural_frequencies(load_scene("stage_planar_1dof")).frequencies_hz
+    np.testing.assert_allclose(reduction.forced_hz, one_dof, rtol=1e-9)
+    none = propose_reduction(parse_toml(scene_path("stage_spatial_19dof")), 2, 0.0,
+                             freeze=("e1",))  # its elongations are prescribed already
+    assert none.forced == [] and none.forced_hz is None
+
+
 def test_keeping_more_modes_than_dofs_is_refused():
     with pytest.raises(FlexureError, match="--keep 2: the model has only 1 DOFs"):
         propose_reduction(parse_toml(scene_path("stage_planar_1dof")), 2)
@@ -73,7 +89,7 @@ def test_reduce_command_writes_a_scene_that_loads(tmp_path, capsys):
     assert main(["reduce", "stage_planar_3dof", "--keep", "1", "--out", str(out),
                  "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["frozen"] == ["leaf_right.e1", "leaf_left.e1"]
+    assert result["frozen"] == ["leaf_right.e1", "leaf_left.e1"] and result["forced"] == []
     assert result["ndof_reduced"] == 1 and result["change_percent"] < 0.01
     model = load_scene(out)
     assert model.ndof == 1 and model.chosen_dofs == ("3.x",)
@@ -85,6 +101,7 @@ def test_reduce_command_writes_a_scene_that_loads(tmp_path, capsys):
     (["--keep", "1", "--tol", "-1"], "argument --tol: expected a number > 0, got '-1'"),
     (["--keep", "9"], "--keep 9: the model has only 3 DOFs"),
     (["--keep", "1", "--out", "reduced.txt"], "expected a file name ending in .toml"),
+    (["--keep", "1", "--freeze", "x1"], "expected deformation names such as e1 or e1,e2"),
 ])
 def test_reduce_command_refuses_bad_options_without_traceback(argv, message, tmp_path,
                                                              capsys, monkeypatch):
