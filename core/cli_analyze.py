@@ -36,7 +36,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     """Run the requested analyses; returns the dict that `--json` prints (SI units)."""
     from .linearization import linearize
     from .mechanics import Mechanics
-    from .modal import buckling_load_factors, natural_frequencies
+    from .modal import buckling_load_factors, describe_mode, natural_frequencies
     from .statespace import state_space
     from .statics import static_equilibrium
     from .stresses import beam_stresses
@@ -60,6 +60,8 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if modes is not None:
         found = natural_frequencies(model, None if modes < 0 else modes, linear_model=lin)
         result["modes"] = {"frequencies_hz": found.frequencies_hz,
+                           "descriptions": [describe_mode(model, shape, solution.x)
+                                            for shape in found.coordinate_shapes.T],
                            "mass_matrix": lin.M0, "stiffness_matrix": lin.K,
                            "damping_matrix": lin.C0,
                            "shapes": found.shapes}
@@ -149,8 +151,10 @@ def render(result):
                 title="\nstatic equilibrium: von Mises stresses (largest over the section)"))
     if "modes" in result:
         freqs = result["modes"]["frequencies_hz"]
-        parts.append(format_table(["mode", "frequency (Hz)"],
-                                  [(i + 1, f) for i, f in enumerate(freqs)],
+        descriptions = result["modes"]["descriptions"]
+        parts.append(format_table(["mode", "frequency (Hz)", "what moves most"],
+                                  [(i + 1, f, d) for i, (f, d) in enumerate(
+                                      zip(freqs, descriptions, strict=True))],
                                   title="\nnatural frequencies (at the static equilibrium)"))
     if "buckling" in result:
         factors = result["buckling"]["load_factors"]

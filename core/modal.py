@@ -79,3 +79,49 @@ def buckling_load_factors(model, count=None, *, loads=None):
     positive = inverse[inverse > 1e-12 * scale] if scale > 0 else inverse[:0]
     factors = np.sort(1.0 / positive)
     return factors if count is None else factors[:count]
+
+
+def describe_mode(model, coordinate_shape, x=None):
+    """Which nodes move how in a mode (the coordinate shape (NX,) of `Modes`), in words: the
+    translational nodes that move most (within 10 % of the largest) and the axis they move
+    along, and the rotational nodes that turn most and about which axis (x', y', z': in
+    space the body frame of the node at the configuration x, default the initial one).
+    A rotation is named beside a translation only when it moves a point at the model's length
+    scale by at least a tenth as much, and the other way round, so that "3 and 5 along x"
+    describes a sideways mode and "4 and 6 turn about z" a tilting one."""
+    from .kinematics import length_scale
+    from .rotations import body_rates_matrix
+
+    shape = np.asarray(coordinate_shape, dtype=float)
+    x = model.initial_coordinates if x is None else np.asarray(x, dtype=float)
+    moves, turns = [], []
+    for node in model.nodes:
+        index = list(node.coordinates)
+        if node.kind == "translational":
+            vector = shape[index]
+            moves.append((float(np.linalg.norm(vector)), node.name,
+                          node.axes[int(np.argmax(np.abs(vector)))]))
+        elif node.axes == ("phi",):
+            turns.append((abs(float(shape[index[0]])), node.name, "z"))
+        else:  # Euler parameters: the body-frame rotation 2 G(lambda) d lambda (rad)
+            rotation = 2.0 * body_rates_matrix(x[index]) @ shape[index]
+            turns.append((float(np.linalg.norm(rotation)), node.name,
+                          "xyz"[int(np.argmax(np.abs(rotation)))] + "'"))
+    scale = length_scale(model)
+    largest_move = max((m[0] for m in moves), default=0.0)
+    largest_turn = max((t[0] for t in turns), default=0.0) * scale
+    parts = []
+    for group, largest, verb in ((moves, largest_move, "along"), (turns, largest_turn, "turn")):
+        top = max(largest_move, largest_turn)
+        if largest <= 0.0 or largest < 0.1 * top:
+            continue
+        factor = 1.0 if verb == "along" else scale
+        leaders = [g for g in group if g[0] * factor >= 0.9 * largest]
+        leaders.sort(key=lambda g: -float(f"{g[0]:.4g}"))  # near-ties in the scene's order
+        axes = sorted({g[2] for g in leaders[:3]})
+        names = " and ".join(g[1] for g in leaders[:3]) + (" ..." if len(leaders) > 3 else "")
+        if verb == "along":
+            parts.append(f"{names} along {'/'.join(axes)}")
+        else:
+            parts.append(f"{names} turn about {'/'.join(axes)}")
+    return "; ".join(parts) or "no motion"
