@@ -14,7 +14,10 @@ Rank decisions use an SVD with the rotation columns scaled by the model's length
 relative threshold of 1e-9 on the singular values.
 """
 
+from __future__ import annotations
+
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +26,9 @@ from .blas import blas_threads
 from .errors import ConstraintError
 from .kinematics import Kinematics
 from .model import DOF
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 RANK_TOLERANCE = 1e-9
 # A constraint Jacobian whose reciprocal condition estimate (LU, LAPACK's gecon, 1-norm) is above
@@ -33,7 +39,7 @@ CLEAR_RCOND = 1e-7
 
 
 @blas_threads()
-def check_exact_constraint(model, x=None):
+def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict:
     """Raise ConstraintError unless `model` is exactly constrained at coordinates x.
 
     The message names the DOF counts, the redundant constraints (element deformations) and the
@@ -101,7 +107,7 @@ def check_exact_constraint(model, x=None):
 
 
 @blas_threads()
-def choose_dofs(model, x=None):
+def choose_dofs(model: Model, x: np.ndarray | None = None) -> tuple | None:
     """A valid set of DOFs for a model whose scene lists none: (coordinate_status,
     deformation_status, names of the chosen DOFs), or None when the prescribed deformations
     alone are dependent (over-constrained: `check_exact_constraint` then names them).
@@ -192,7 +198,7 @@ def _clearly_regular(matrix):
     return info == 0 and rcond > CLEAR_RCOND
 
 
-def proposed_releases(model, x=None):
+def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
     """The prescribed deformations whose release removes every over-constraint of `model`
     (names; empty when the prescribed deformations are independent), as SPACAR Light's
     automatic releases would choose them, but proposed, not applied.

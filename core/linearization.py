@@ -8,13 +8,19 @@ M0 = DF^T M DF is the reduced mass (kg), C0 the damping (N s/m), K0 the structur
 compressive preload lowers the stiffness K0 + G0 and with it the frequencies.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .blas import blas_threads
 from .mechanics import Mechanics
 from .statics import StaticSolution, static_equilibrium
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 
 @dataclass
@@ -40,7 +46,8 @@ class LinearModel:
 
 
 @blas_threads()
-def linearize(model, solution=None, *, mechanics=None):
+def linearize(model: Model, solution: StaticSolution | None = None, *,
+              mechanics: Mechanics | None = None) -> LinearModel:
     """Linearise `model` at `solution` (default: its static equilibrium under its loads)."""
     mech = mechanics or Mechanics(model)
     if solution is None:

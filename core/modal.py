@@ -10,7 +10,10 @@ problem -G0 phi = (1 / lambda) K0 phi so that a singular G0 (DOFs the load does 
 causes no trouble. Positive factors only, smallest first.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -20,6 +23,9 @@ from .errors import ConvergenceError
 from .linearization import LinearModel, linearize
 from .mechanics import Mechanics
 from .statics import static_equilibrium
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 
 @dataclass
@@ -33,7 +39,8 @@ class Modes:
 
 
 @blas_threads()
-def natural_frequencies(model, count=None, *, linear_model=None):
+def natural_frequencies(model: Model, count: int | None = None, *,
+                        linear_model: LinearModel | None = None) -> Modes:
     """The lowest `count` (default: all) natural frequencies and mode shapes of `model`."""
     lin = linear_model or linearize(model)
     if lin.M0.size == 0:
@@ -56,7 +63,8 @@ def natural_frequencies(model, count=None, *, linear_model=None):
 
 
 @blas_threads()
-def buckling_load_factors(model, count=None, *, loads=None):
+def buckling_load_factors(model: Model, count: int | None = None, *,
+                          loads: np.ndarray | None = None) -> np.ndarray:
     """Load factors lambda (smallest first) at which the reference load buckles `model`.
 
     The reference load is `loads` (NX,), else the scene's [buckling] forces, else its loads.
@@ -81,7 +89,8 @@ def buckling_load_factors(model, count=None, *, loads=None):
     return factors if count is None else factors[:count]
 
 
-def describe_mode(model, coordinate_shape, x=None):
+def describe_mode(model: Model, coordinate_shape: np.ndarray,
+                  x: np.ndarray | None = None) -> str:
     """Which nodes move how in a mode (the coordinate shape (NX,) of `Modes`), in words: the
     translational nodes that move most (within 10 % of the largest) and the axis they move
     along, and the rotational nodes that turn most and about which axis (x', y', z': in

@@ -30,6 +30,8 @@ removes a freedom some DOF stood for), it lists none and flexure chooses its DOF
 that builds no valid model counts as too much freezing.
 """
 
+from __future__ import annotations
+
 import copy
 from dataclasses import dataclass, field
 
@@ -98,8 +100,8 @@ def energy_shares(model, data, keep):
     return {key: float(value.max()) for key, value in shares.items()}, modes
 
 
-def propose_reduction(data, keep, tolerance=1.0, *, freeze=(), source="<dict>",
-                      progress=None):
+def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(),
+                      source: str = "<dict>", progress=None) -> Reduction:
     """The reduction of scene `data` (a dict) that freezes the most released deformations
     while its lowest `keep` frequencies move by at most `tolerance` percent; `progress` is
     called with the fraction of the trials done. `freeze` names deformations ("e1": every

@@ -15,6 +15,8 @@ needs y_axis = [.., .., ..], its principal y' axis; sections of spatial elements
 of flexure.core.sections.beam_properties.
 """
 
+from __future__ import annotations
+
 import importlib.resources
 import math
 import tomllib
@@ -41,13 +43,13 @@ SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rh
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
 
 
-def builtin_scenes():
+def builtin_scenes() -> list[str]:
     """Names of the scenes that ship with flexure (usable without a checkout)."""
     folder = importlib.resources.files("flexure.scenes")
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
-def scene_path(name_or_path):
+def scene_path(name_or_path: str | Path) -> Path:
     """The path of a scene file: an existing path, or the name of a built-in scene."""
     path = Path(name_or_path)
     if path.is_file():
@@ -62,7 +64,7 @@ def scene_path(name_or_path):
     )
 
 
-def load_scene(name_or_path, *, check=True):
+def load_scene(name_or_path: str | Path, *, check: bool = True) -> Model:
     """Load and validate a scene file or built-in scene name into a `Model`."""
     path = scene_path(name_or_path)
     data = parse_toml(path)
@@ -93,7 +95,8 @@ def parse_toml(path):
         raise SceneError(f"{path}: not valid TOML: {error}") from None
 
 
-def build_model(data, *, source="<dict>", default_name="scene", check=True):
+def build_model(data: dict, *, source: str = "<dict>", default_name: str = "scene",
+                check: bool = True) -> Model:
     """Build a `Model` from a scene dictionary, validating every key."""
     return _SceneBuilder(data, source, default_name).build(check=check)
 

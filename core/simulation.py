@@ -6,13 +6,19 @@
     result.outputs["x"]              # m, at every accepted step (or at output_times)
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .errors import SimulationError
 from .simulator import STATE_VERSION, Simulator
 from .tolerances import default_atol
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 __all__ = ["STATE_VERSION", "SimulationResult", "Simulator", "default_atol", "simulate",
            "split_inputs"]
@@ -73,9 +79,11 @@ class SimulationResult:
         plt.close(fig)
 
 
-def simulate(model, t_end, *, inputs=None, method="cvode-bdf", rtol=1e-8, atol=None,
-             max_step=None, output_times=None, jacobian="analytic", max_order=None, q0=None,
-             qdot0=None, deadline=None, progress=None):
+def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
+             method: str = "cvode-bdf", rtol: float = 1e-8, atol=None,
+             max_step: float | None = None, output_times=None, jacobian: str = "analytic",
+             max_order: int | None = None, q0=None, qdot0=None, deadline: float | None = None,
+             progress=None) -> SimulationResult:
     """Simulate `model` from rest (or q0, qdot0) at t = 0 to t_end (s).
 
     Parameters

@@ -21,7 +21,10 @@ it, with the kinematics started afresh from the snapshot's coordinates, so a run
 `set_state` continues bit for bit like the original.
 """
 
+from __future__ import annotations
+
 import time as _time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -34,6 +37,9 @@ from .methods import METHODS, ONE_STEP_METHODS
 from .simulator_outputs import SimulatorOutputs
 from .sundials import STATUS_MESSAGES, make_solver
 from .tolerances import atol_vector
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 STATE_VERSION = 2
 # what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
@@ -420,7 +426,7 @@ class Simulator(SimulatorOutputs):
         self._q_ref_array[:] = self._q_ref
 
 
-def prepare(model, *, loop_method=None):
+def prepare(model: Model, *, loop_method: str | None = None) -> float:
     """Compile, or load from the on-disk cache, the compiled code a Simulator of `model` runs
     (the engine, the model's element kernels, the SUNDIALS callbacks); returns the time it
     took (s). With loop_method (a METHODS name) also the integrator and the compiled sampled

@@ -9,15 +9,23 @@ where b holds a unit force on the coordinate of each input (SPACAR's INPUTF) and
 of DF of each output coordinate (OUTX). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .blas import blas_threads
 from .errors import SceneError
 from .linearization import linearize
 
+if TYPE_CHECKING:  # names for the annotations only
+    from .linearization import LinearModel
+    from .model import Model
+
 
 @blas_threads()
-def state_space(model, *, linear_model=None):
+def state_space(model: Model, *, linear_model: LinearModel | None = None):
     """The linearised model as a control.StateSpace with named inputs, outputs and states."""
     import control  # 0.5 s to import (scipy.signal, matplotlib): only where it is used
 
@@ -52,7 +60,8 @@ def state_space(model, *, linear_model=None):
 
 
 @blas_threads()
-def principal_gains(model, frequencies_hz, *, linear_model=None):
+def principal_gains(model: Model, frequencies_hz, *,
+                    linear_model: LinearModel | None = None) -> np.ndarray:
     """The singular values of the transfer matrix G(j w) = C (j w I - A)^-1 B of
     `state_space(model)` (inputs N or N m, outputs m, m/s, rad, rad/s) at the frequencies (Hz):
     an array (frequencies, min(outputs, inputs)), largest first at each frequency; the

@@ -8,13 +8,19 @@ Convergence: |dq| <= `tolerance` times the model's length scale (rotations count
 through that scale).
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .blas import blas_threads
 from .errors import ConvergenceError
 from .mechanics import Mechanics
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 
 @dataclass
@@ -46,8 +52,9 @@ class StaticSolution:
 
 
 @blas_threads()
-def static_equilibrium(model, *, loads=None, load_steps=10, tolerance=1e-11,
-                       max_iterations=30, mechanics=None):
+def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_steps: int = 10,
+                       tolerance: float = 1e-11, max_iterations: int = 30,
+                       mechanics: Mechanics | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
 
     Returns a StaticSolution; raises ConvergenceError naming the load step that failed.

@@ -1,16 +1,23 @@
 """The default absolute tolerances of the integrators, from rtol and the model's scales."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .blas import blas_threads
 from .errors import SimulationError
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .model import Model
 
 # the smallest motion, as a fraction of the model's length scale, that rtol controls
 MOTION_FRACTION = 1e-3
 
 
 @blas_threads()
-def default_atol(model, rtol):
+def default_atol(model: Model, rtol: float) -> np.ndarray:
     """Per-state absolute tolerance (2 NDOF,) from rtol and the model's scales.
 
     The integrator's state is the deviation from the start configuration, and its local
