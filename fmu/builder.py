@@ -89,7 +89,7 @@ def _rewrite_imports(text, package):
                   flags=re.MULTILINE)
 
 
-def bundle_name(parts=("core", "fmu")):
+def bundle_name(parts=("core", "fmu")) -> str:
     """The package name `_flexure_<hash>` a bundle of `parts` gets (hash of its sources)."""
     digest = hashlib.sha256()
     for path, text in sorted(_bundle_sources(parts).items()):
@@ -108,8 +108,8 @@ def write_bundle(folder, parts=("core", "fmu")):
     return root
 
 
-def build_slave_fmu(script_path, dest, *, project_files=(), bundle=("core", "fmu"),
-                    validate=True, **options):
+def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=(),
+                    bundle=("core", "fmu"), validate: bool = True, **options) -> Path:
     """Build an FMI 2.0 co-simulation FMU from a pythonfmu slave script.
 
     Parameters
@@ -187,7 +187,7 @@ def build_slave_fmu(script_path, dest, *, project_files=(), bundle=("core", "fmu
     return built
 
 
-def validate_fmu_file(path):
+def validate_fmu_file(path: str | Path) -> list[str]:
     """fmpy's validation problems of an FMU (an empty list when it is valid)."""
     from fmpy.validation import validate_fmu
 
@@ -225,7 +225,8 @@ def default_tunable(scene):
     return keys + [key for key in marked if key not in keys]
 
 
-def build_scene_fmu(scene, dest=None, *, tunable=None, von_mises=False, validate=True):
+def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunable=None,
+                    von_mises: bool = False, validate: bool = True) -> Path:
     """Build the co-simulation FMU of a scene.
 
     Parameters

@@ -33,7 +33,7 @@ def libpython_path():
         "--enable-shared pyenv install 3.11)")
 
 
-def fmu_environment():
+def fmu_environment() -> dict[str, str]:
     """{variable: value} a non-Python host needs to run flexure's FMUs on this machine."""
     paths = [p for p in site.getsitepackages() if Path(p).is_dir()]
     return {

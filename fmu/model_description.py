@@ -46,7 +46,7 @@ _ORDER = ["ModelExchange", "CoSimulation", "UnitDefinitions", "TypeDefinitions",
           "ModelStructure"]
 
 
-def fix_model_description(xml_text):
+def fix_model_description(xml_text: str) -> str:
     """Return the completed modelDescription.xml text (see the module docstring).
 
     Parameters

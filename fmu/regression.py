@@ -131,7 +131,8 @@ def simulate(fmu, input_csv, *, output_interval=DEFAULT_INTERVAL, stop_time=None
                             f"{error}") from None
 
 
-def write_reference(fmu, input_csv, reference_csv, *, output_interval=DEFAULT_INTERVAL):
+def write_reference(fmu: str | Path, input_csv: str | Path, reference_csv: str | Path, *,
+                    output_interval: float = DEFAULT_INTERVAL) -> Path:
     """Simulate and write the reference CSV (time and every output); returns its path."""
     from fmpy.util import write_csv
 
@@ -163,7 +164,8 @@ def compare(result, reference, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
     return problems
 
 
-def check_fmu(fmu, input_csv, reference_csv, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
+def check_fmu(fmu: str | Path, input_csv: str | Path, reference_csv: str | Path, *,
+              rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL) -> list[str]:
     """Simulate `fmu` on the reference's grid and compare; returns the list of problems."""
     model_description(fmu)  # not an FMU: say so before reading the CSV files
     reference = read_csv(reference_csv, min_rows=2, steps_allowed=False)
