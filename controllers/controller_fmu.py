@@ -16,10 +16,13 @@ master that transfers values once per macro step (libcosim) then applies u_k+1 o
 step the force output is u_0 = u_ff,0.
 """
 
+from __future__ import annotations
+
 import hashlib
 import json
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pythonfmu import DefaultExperiment
@@ -28,6 +31,11 @@ from flexure.core import FlexureError
 from flexure.fmu.slave import SafeSlave
 
 from .loop_controller import LoopController
+
+if TYPE_CHECKING:  # names for the annotations only
+    from flexure.core import Model
+
+    from .feedback import FeedbackDesign
 
 
 class ControllerStepError(FlexureError, ValueError):
@@ -98,7 +106,8 @@ def controller_config(controller, design, model):
     return data
 
 
-def build_controller_fmu(controller, design, model, dest):
+def build_controller_fmu(controller: LoopController, design: FeedbackDesign, model: Model,
+                         dest: str | Path) -> Path:
     """Build the controller FMU of a designed loop; returns its path.
 
     `dest` is the .fmu file (or a folder for `flexure_controller.fmu`). The script is named

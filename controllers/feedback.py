@@ -22,6 +22,8 @@ distance of L to -1) from python-control, and refuses (ControlDesignError) a des
 closed loop has a pole on or outside the unit circle.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -31,6 +33,8 @@ from flexure.core import FlexureError
 
 if TYPE_CHECKING:  # python-control takes 0.5 s to import: imported where it is used
     import control
+
+    from flexure.core import Model
 
 
 class ControlDesignError(FlexureError, ValueError):
@@ -62,8 +66,8 @@ class FeedbackDesign:
     sample_rate_hz: float
     delay_samples: int
     continuous: list
-    controller: "control.StateSpace"
-    loop_gain: "control.StateSpace"  # L(z) of the first loop, the others open
+    controller: control.StateSpace
+    loop_gain: control.StateSpace  # L(z) of the first loop, the others open
     phase_margin_deg: float
     gain_margin: float
     modulus_margin: float
@@ -99,8 +103,9 @@ def colocated_pairs(model):
     return pairs
 
 
-def pid_lowpass(crossover, *, gain=1.0, integral_ratio=10.0, lead_ratio=3.0,
-                lowpass_ratio=10.0, lowpass_damping=0.5):
+def pid_lowpass(crossover: float, *, gain: float = 1.0, integral_ratio: float = 10.0,
+                lead_ratio: float = 3.0, lowpass_ratio: float = 10.0,
+                lowpass_damping: float = 0.5) -> control.TransferFunction:
     """The continuous PID-like controller C(s) (N/m) around `crossover` (rad/s)."""
     wc = float(crossover)
     wi, wz, wp, wlp = wc / integral_ratio, wc / lead_ratio, wc * lead_ratio, wc * lowpass_ratio
@@ -111,8 +116,9 @@ def pid_lowpass(crossover, *, gain=1.0, integral_ratio=10.0, lead_ratio=3.0,
             * wlp**2 / (s**2 + 2 * lowpass_damping * wlp * s + wlp**2))
 
 
-def design_feedback(model, *, crossover=300.0, fs=4000.0, delay_samples=1, linear_model=None,
-                    plant=None, **shape):
+def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.0,
+                    delay_samples: int = 1, linear_model=None, plant=None,
+                    **shape) -> FeedbackDesign:
     """Design the discrete loops of `model` for the cross-over `crossover` (rad/s) at `fs` Hz.
 
     `plant` overrides the linear model (a continuous control.StateSpace with the model's

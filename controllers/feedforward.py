@@ -31,11 +31,17 @@ non-causal stable inversion); the inputs then start before the motion, by a few 
 constants of those zeros.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .feedback import ControlDesignError, colocated_pairs
+
+if TYPE_CHECKING:  # names for the annotations only
+    from flexure.core import Model
 
 
 @dataclass(frozen=True)
@@ -75,7 +81,7 @@ class LowFrequencyModel:
         return cls(**{k: np.asarray(v, float) for k, v in data.items()})
 
 
-def low_frequency_model(model, *, linear_model=None):
+def low_frequency_model(model: Model, *, linear_model=None) -> LowFrequencyModel:
     """The low-frequency model of `model` on its colocated loops (see the module docstring)."""
     from flexure.core import linearize, natural_frequencies  # the models on first use
 
@@ -105,7 +111,8 @@ def low_frequency_model(model, *, linear_model=None):
     )
 
 
-def forces(lf_model, profile, t0, t1, *, direction=None, offsets=None):
+def forces(lf_model: LowFrequencyModel, profile, t0: float, t1: float, *, direction=None,
+           offsets=None) -> np.ndarray:
     """Feedforward forces (N), (n_samples, n_loops), held over the intervals [t0, t1).
 
     The profile moves the loops along `direction` (n_loops,), default the first loop only,
