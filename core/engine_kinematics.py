@@ -14,7 +14,7 @@ reduced form, the tangent, the kinematics operation).
 
 J is factored as a banded matrix (`core/banded.py`) with its rows and columns in the
 bandwidth-reducing orders computed at packing (slots j_row_position, j_column_position);
-`j_solve` and `j_solve_transposed` take and give vectors in the model's order. The element
+`j_solve` (J^-1 or J^-T) takes and gives vectors in the model's order. The element
 deformations e, De = de/dx and D2e come from each element module's compiled entry point.
 """
 
@@ -117,33 +117,24 @@ def _j_factor(table):
 
 
 @kernel
-def j_solve(table, b):
-    """b (n_free,: on J's rows) <- J^-1 b (on the free coordinates), with the factors in
-    slot lu."""
+def j_solve(table, b, transposed=False):
+    """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
+    b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
+    factors in slot lu."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
+    into, out = (cpos, rpos) if transposed else (rpos, cpos)
     t = _f(table, slot.BAND_SCRATCH)
     for r in range(nf):
-        t[rpos[r]] = b[r]
-    banded.solve(_f(table, slot.LU), nf, _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU], t)
+        t[into[r]] = b[r]
+    lu, pivots, kl, ku = _f(table, slot.LU), _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU]
+    if transposed:
+        banded.solve_transposed(lu, nf, pivots, kl, ku, t)
+    else:
+        banded.solve(lu, nf, pivots, kl, ku, t)
     for c in range(nf):
-        b[c] = t[cpos[c]]
-
-
-@kernel
-def j_solve_transposed(table, b):
-    """b (n_free,: on the free coordinates) <- J^-T b (on J's rows)."""
-    dims = _i(table, slot.DIMS)
-    nf = dims[ed.NFREE]
-    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
-    t = _f(table, slot.BAND_SCRATCH)
-    for c in range(nf):
-        t[cpos[c]] = b[c]
-    banded.solve_transposed(_f(table, slot.LU), nf, _i(table, slot.PIVOTS), dims[ed.J_KL],
-                            dims[ed.J_KU], t)
-    for r in range(nf):
-        b[r] = t[rpos[r]]
+        b[c] = t[out[c]]
 
 
 @kernel

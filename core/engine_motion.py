@@ -29,7 +29,6 @@ from .engine_slots import (
     group,
     group_deformations,
     group_inertia,
-    group_mass_pattern,
     inertia_scratch,
 )
 from .engine_slots import int_array as _i
@@ -267,8 +266,8 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         row = group(table, g)
         if row[ed.G_P] == 0:
             continue
-        n, m, P, width, function, coords, refs, masses, gravity = group_inertia(table, row)
-        pattern = group_mass_pattern(table, row)
+        (n, m, P, width, function, coords, refs, masses, gravity,
+         pattern) = group_inertia(table, row)
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
         xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
         Me = local[o: o + m * m]
@@ -394,8 +393,8 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
         row = group(table, g)
         if row[ed.G_P] == 0:
             continue
-        n, m, P, width, function, coords, refs, masses, gravity = group_inertia(table, row)
-        pattern = group_mass_pattern(table, row)
+        (n, m, P, width, function, coords, refs, masses, gravity,
+         pattern) = group_inertia(table, row)
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), room for the Me of
         # `_inertia_forces` (max_p max_m >= m m), B = Dp DF_e and Mp B (P, ndof)
         xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)

@@ -81,26 +81,21 @@ def group_deformations(table, g):
 
 
 @kernel
-def group_mass_pattern(table, row):
-    """The flat indices p P + q of the entries of Mp that the group's elements fill (the
-    group with the row `row` and P > 0 inertia points per element)."""
-    start = row[ed.G_PATTERN_OFFSET]
-    return int_array(table, MASS_PATTERN)[start: start + row[ed.G_PATTERN_COUNT]]
-
-
-@kernel
 def group_inertia(table, row):
-    """(n, m, P, width, entry, coords, refs, masses, gravity) of the group with the row `row`
-    (`group`) and P > 0 inertia points per element: its element count, coordinates per
-    element, reference width, inertia entry point, coordinate indices (`group_coordinates`),
-    the address of its packed reference rows, the elements' Mp (n P P, flat, element by
-    element) and gravity on the points (P,)."""
+    """(n, m, P, width, entry, coords, refs, masses, gravity, pattern) of the group with the
+    row `row` (`group`) and P > 0 inertia points per element: its element count, coordinates
+    per element, reference width, inertia entry point, coordinate indices
+    (`group_coordinates`), the address of its packed reference rows, the elements' Mp (n P P,
+    flat, element by element), gravity on the points (P,) and the flat indices p P + q of the
+    entries of Mp that the group's elements fill."""
     data = float_array(table, GROUP_DATA)
     n, m, P = row[ed.G_COUNT], row[ed.G_M], row[ed.G_P]
     masses = data[row[ed.G_MASS_OFFSET]: row[ed.G_MASS_OFFSET] + n * P * P]
     gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
+    start = row[ed.G_PATTERN_OFFSET]
+    pattern = int_array(table, MASS_PATTERN)[start: start + row[ed.G_PATTERN_COUNT]]
     return (n, m, P, row[ed.G_REF_WIDTH], row[ed.G_INERTIA_ENTRY], group_coordinates(table, row),
-            data.ctypes.data + 8 * row[ed.G_DATA_OFFSET], masses, gravity)
+            data.ctypes.data + 8 * row[ed.G_DATA_OFFSET], masses, gravity, pattern)
 
 
 @kernel

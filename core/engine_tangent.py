@@ -12,14 +12,13 @@ J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed defo
 
 from . import engine_data as ed
 from . import engine_slots as slot
-from .engine_kinematics import j_solve_transposed
+from .engine_kinematics import j_solve
 from .engine_motion import reduced_mass
 from .engine_slots import float_array as _f
 from .engine_slots import (
     group,
     group_deformations,
     group_inertia,
-    group_mass_pattern,
     inertia_scratch,
 )
 from .engine_slots import int_array as _i
@@ -53,7 +52,7 @@ def tangent(table, qddot):
     free, lam = _i(table, slot.FREE), _f(table, slot.DX)
     for a in range(nf):
         lam[a] = r_full[free[a]]
-    j_solve_transposed(table, lam)
+    j_solve(table, lam, True)  # J^-T
     sigma = _f(table, slot.EDOT)  # reused: the full stress resultants
     sigma[:] = _f(table, slot.SIGMA)
     rows = _i(table, slot.ROWS)
@@ -140,8 +139,7 @@ def _mass_times(table, x, v, out):
         row = group(table, g)
         if row[ed.G_P] == 0:
             continue
-        n, m, P, width, function, coords, refs, masses, _ = group_inertia(table, row)
-        pattern = group_mass_pattern(table, row)
+        n, m, P, width, function, coords, refs, masses, _, pattern = group_inertia(table, row)
         # scratch after the first 2 ndof entries, which `tangent` keeps for itself
         base = 2 * ndof + max_m * max_m + max_m * ndof
         xl, vl, pl, acc, w, Dp, _ = inertia_scratch(table, base, P, m)
