@@ -47,6 +47,11 @@ def segment_count(builder, key, element):
     return count
 
 
+def segment_names(name, count):
+    """The names of the `count` segments of element `name`: name_1 ... name_count."""
+    return [f"{name}_{j}" for j in range(1, count + 1)]
+
+
 def split(builder, name, element, kind, nodes, count):
     """The segments of element `name` as [(segment name, its table)], adding the interior
     nodes to the builder; `nodes` are the element's four validated node names, `kind` its
@@ -76,7 +81,7 @@ def split(builder, name, element, kind, nodes, count):
         chain.append((t, r))
     chain.append((q, rq))
     segments = []
-    for j in range(count):
+    for j, segment in enumerate(segment_names(name, count)):
         table = {k: v for k, v in element.items() if k not in ("segments", "released", "dof")}
         table["nodes"] = [*chain[j], *chain[j + 1]]
         if j < count - 1 and builder.lists_dofs:  # not prescribed zero: a DOF of the chain
@@ -85,7 +90,7 @@ def split(builder, name, element, kind, nodes, count):
             # DOFs, which flexure then chooses for the whole model (constraints.choose_dofs)
             table["released"] = sorted(released, key=kind.deformation_names.index)
             table["dof"] = sorted(dofs, key=kind.deformation_names.index)
-        segments.append((f"{name}_{j + 1}", table))
+        segments.append((segment, table))
     return segments
 
 
@@ -108,4 +113,4 @@ def _between_rotations(builder, a, b, s):
     return list(lam / np.linalg.norm(lam))
 
 
-__all__ = ["MAX_SEGMENTS", "segment_count", "split"]
+__all__ = ["MAX_SEGMENTS", "segment_count", "segment_names", "split"]

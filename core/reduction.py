@@ -40,6 +40,7 @@ import numpy as np
 from . import assembly
 from .errors import FlexureError
 from .linearization import linearize
+from .meshing import segment_names
 from .modal import natural_frequencies
 from .scene import build_model
 from .statics import static_equilibrium
@@ -130,13 +131,17 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
         None. The first `count` candidates, less those whose freezing alone breaks the model
         (tested only when the whole set does)."""
         chosen_set = order[:count]
-        try:
-            build_model(frozen_scene(data, chosen_set)[0], source=source)
-        except FlexureError:
-            chosen_set = [key for key in chosen_set if not breaks_alone(key)]
         scene, chosen = frozen_scene(data, chosen_set)
         try:
             reduced_model = build_model(scene, source=f"{source} (reduced)")
+        except FlexureError:
+            chosen_set = [key for key in chosen_set if not breaks_alone(key)]
+            scene, chosen = frozen_scene(data, chosen_set)
+            try:
+                reduced_model = build_model(scene, source=f"{source} (reduced)")
+            except FlexureError:
+                return None
+        try:
             found, _ = lowest_frequencies(reduced_model, keep)
         except FlexureError:
             return None
@@ -221,5 +226,5 @@ def _scene_elements(data):
     for name, table in data.get("elements", {}).items():
         count = table.get("segments", 1) if isinstance(table, dict) else 1
         if isinstance(count, int) and count > 1:
-            owner.update({f"{name}_{j}": name for j in range(1, count + 1)})
+            owner.update({segment: name for segment in segment_names(name, count)})
     return owner
