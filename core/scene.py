@@ -132,6 +132,7 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         self.dimension = dimension
         # whether the scene lists any DOF (a node's or element's non-empty "dof"): meshing
         # makes DOFs of its segments only then, and flexure chooses them all otherwise
+        # (`build`, `constraints.choose_dofs`)
         self.lists_dofs = any(isinstance(table, dict) and table.get("dof")
                               for part in ("nodes", "elements")
                               if isinstance(data.get(part), dict)
@@ -176,8 +177,7 @@ class _SceneBuilder(SceneReader, ElementBuilding):
             node_inertias=self.node_inertias,
             tunable=tunable,
         )
-        listed = DOF in self.status or DOF in deformation_status
-        if not listed and model.ndof > 0:  # none listed: flexure chooses a valid set
+        if not self.lists_dofs and model.ndof > 0:  # none listed: flexure chooses a valid set
             chosen = choose_dofs(model)
             if chosen is not None:
                 coordinate_status, deformation_status, names = chosen
