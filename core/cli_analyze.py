@@ -77,7 +77,9 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if with_gains:
         from .statespace import frequency_grid, principal_gains
 
-        natural = natural_frequencies(model, linear_model=lin).frequencies_hz
+        every_mode = result.get("modes") if modes is not None and modes < 0 else None
+        natural = (every_mode["frequencies_hz"] if every_mode is not None
+                   else natural_frequencies(model, linear_model=lin).frequencies_hz)
         grid = frequency_grid(natural)
         result["principal_gains"] = {
             "frequencies_hz": grid, "natural_hz": natural,
