@@ -19,9 +19,47 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse
+import scipy.sparse.linalg
 
 from . import assembly
 from .errors import ConvergenceError
+
+# From this many free coordinates on, J is factored as a sparse matrix (SuperLU): a deformation
+# depends on at most 14 coordinates, so a large J is almost empty and its dense LU (O(n^3))
+# dominates a static solve. Below it, the dense LU is faster than the sparse bookkeeping.
+SPARSE_FROM = 300
+
+
+class JacobianFactor:
+    """The LU factorisation of the constraint Jacobian J, dense or sparse by its size; `solve`
+    solves J z = b (or J^T z = b) for one or more right-hand sides. Singular: solve gives
+    non-finite values, as LAPACK's dense LU does."""
+
+    def __init__(self, J):
+        self.size = J.shape[0]
+        self.sparse = scipy.sparse.issparse(J)
+        if self.sparse:
+            J = J.tocsc()
+            try:
+                # SuperLU would factor non-finite entries into garbage (and BLAS complaints)
+                self.lu = scipy.sparse.linalg.splu(J) if np.all(np.isfinite(J.data)) else None
+            except RuntimeError:  # "Factor is exactly singular"
+                self.lu = None
+        else:
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+                self.lu = scipy.linalg.lu_factor(J, check_finite=False)
+
+    def solve(self, b, *, transposed=False):
+        """J^-1 b (or J^-T b); b (n,) or (n, k)."""
+        if self.lu is None:
+            return np.full(np.shape(b), np.nan)
+        if self.sparse:
+            return self.lu.solve(np.asarray(b, dtype=float), trans="T" if transposed else "N")
+        with np.errstate(all="ignore"):
+            return scipy.linalg.lu_solve(self.lu, b, trans=1 if transposed else 0,
+                                         check_finite=False)
 
 
 @dataclass
@@ -32,7 +70,7 @@ class Configuration:
     x: np.ndarray  # (NX,) coordinates
     e: np.ndarray  # (NE,) deformations
     De: np.ndarray  # (NE, NX) deformation Jacobian
-    lu: tuple  # LU factors of the constraint Jacobian J (free x free)
+    lu: JacobianFactor  # LU factors of the constraint Jacobian J (free x free)
     DF: np.ndarray  # (NX, NDOF) first-order transfer function
 
 
@@ -48,6 +86,7 @@ class Kinematics:
         self.n_rigid = model.rigid_deformations.size
         self.dof_positions = np.searchsorted(self.free, model.dof_coordinates)
         self.length_scale = length_scale(model)
+        self._pattern = None  # the sparse J's entries, found on first use (`factor`)
         n_free, ndof = self.free.size, model.declared_dof_count
         # Right-hand side [0; I] of J DF = [0; I]: the rows of J are (rigid deformations, DOF
         # deformations, DOF coordinates) while q lists the DOF coordinates first.
@@ -70,6 +109,37 @@ class Kinematics:
         J[n_def + np.arange(self.dof_positions.size), self.dof_positions] = 1.0
         return J
 
+    def factor(self, De):
+        """The LU factors of J at the deformation Jacobian De: sparse from SPARSE_FROM free
+        coordinates on (its pattern, the elements' coordinates, is the same at every x)."""
+        if self.free.size < SPARSE_FROM:
+            return JacobianFactor(self.constraint_jacobian(De))
+        if self._pattern is None:
+            self._pattern = self._sparse_pattern()
+        source_rows, source_columns, rows, columns = self._pattern
+        n_def = self.constraint_rows.size
+        data = np.concatenate([De[source_rows, source_columns],
+                               np.ones(self.dof_positions.size)])
+        rows = np.concatenate([rows, n_def + np.arange(self.dof_positions.size)])
+        columns = np.concatenate([columns, self.dof_positions])
+        return JacobianFactor(scipy.sparse.csc_matrix((data, (rows, columns)),
+                                                      shape=(self.free.size, self.free.size)))
+
+    def _sparse_pattern(self):
+        """(De rows, De columns, J rows, J columns) of every entry J takes from De."""
+        row_of = np.full(len(self.model.deformation_names), -1)
+        row_of[self.constraint_rows] = np.arange(self.constraint_rows.size)
+        column_of = np.full(self.model.nx, -1)
+        column_of[self.free] = np.arange(self.free.size)
+        pairs = [np.broadcast_arrays(group.deformation_index[:, :, None],
+                                     group.coordinate_index[:, None, :])
+                 for group in self.model.groups]
+        source_rows = np.concatenate([d.ravel() for d, _ in pairs])
+        source_columns = np.concatenate([c.ravel() for _, c in pairs])
+        keep = (row_of[source_rows] >= 0) & (column_of[source_columns] >= 0)
+        source_rows, source_columns = source_rows[keep], source_columns[keep]
+        return source_rows, source_columns, row_of[source_rows], column_of[source_columns]
+
     def residual(self, x, e, q):
         """Constraint residual g (free,) of coordinates x with deformations e for DOFs q."""
         model = self.model
@@ -89,14 +159,12 @@ class Kinematics:
         x = np.array(x_start, dtype=float)
         step_tolerance = self.tolerance * self.length_scale
         for _ in range(self.max_iterations):
-            e, De = assembly.deformation_jacobian(self.model, x)
-            g = self.residual(x, e, q)
-            J = self.constraint_jacobian(De)
-            # A singular J is answered below with a ConvergenceError of our own.
-            with np.errstate(all="ignore"), warnings.catch_warnings():
-                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                lu = scipy.linalg.lu_factor(J, check_finite=False)
-                dx = scipy.linalg.lu_solve(lu, g, check_finite=False)
+            # A singular J, or Newton running away from a configuration it cannot reach (x
+            # overflowing on the way), is answered below with a ConvergenceError of our own.
+            with np.errstate(over="ignore", invalid="ignore"):
+                e, De = assembly.deformation_jacobian(self.model, x)
+                g = self.residual(x, e, q)
+                dx = self.factor(De).solve(g)
             if not np.all(np.isfinite(dx)):
                 raise ConvergenceError(
                     f"kinematics of {self.model.name!r}: the constraint Jacobian is singular "
@@ -117,9 +185,9 @@ class Kinematics:
     def configuration(self, q, x):
         """First-order kinematics at coordinates x that satisfy the constraints for q."""
         e, De = assembly.deformation_jacobian(self.model, x)
-        lu = scipy.linalg.lu_factor(self.constraint_jacobian(De), check_finite=False)
+        lu = self.factor(De)
         DF = np.zeros((self.model.nx, self.selector.shape[1]))
-        DF[self.free] = scipy.linalg.lu_solve(lu, self.selector, check_finite=False)
+        DF[self.free] = lu.solve(self.selector)
         return Configuration(q=np.asarray(q, float), x=x, e=e, De=De, lu=lu, DF=DF)
 
     def convective_acceleration(self, config, qdot, hessians=None):
@@ -131,7 +199,7 @@ class Kinematics:
         rhs = np.zeros(self.free.size)
         rhs[: self.constraint_rows.size] = quad[self.constraint_rows]
         result = np.zeros(self.model.nx)
-        result[self.free] = -scipy.linalg.lu_solve(config.lu, rhs, check_finite=False)
+        result[self.free] = -config.lu.solve(rhs)
         return result
 
     def second_order(self, config, hessians=None):
@@ -147,7 +215,7 @@ class Kinematics:
             mask = rows >= 0
             rhs[rows[mask]] = forms[mask]
         D2F = np.zeros((self.model.nx, ndof, ndof))
-        solved = scipy.linalg.lu_solve(config.lu, rhs.reshape(self.free.size, -1))
+        solved = config.lu.solve(rhs.reshape(self.free.size, -1))
         D2F[self.free] = -solved.reshape(self.free.size, ndof, ndof)
         return D2F
 
@@ -157,7 +225,7 @@ class Kinematics:
         The entries of rigid deformations are their stress resultants (reaction forces);
         those of the DOFs are the unbalanced generalised forces DF^T r.
         """
-        return scipy.linalg.lu_solve(config.lu, generalized_force[self.free], trans=1)
+        return config.lu.solve(generalized_force[self.free], transposed=True)
 
 
 def _positions(order, values):

@@ -132,3 +132,34 @@ def test_dofs_beyond_the_reach_of_the_mechanism_are_a_clear_error():
         x = kin.solve(np.array([q]), x).x
     with pytest.raises(ConvergenceError, match=r"q = \[-0\.095\].*beyond the reach"):
         kin.solve(np.array([-0.095]), x)
+
+
+def test_the_sparse_constraint_factor_gives_the_dense_ones_results(monkeypatch):
+    """Large models factor J with SuperLU instead of LAPACK's dense LU: the same static
+    equilibrium, DF and constraint multipliers, to round-off, on the 19-DOF stage forced
+    through each path."""
+    from flexure.core import kinematics
+
+    results = {}
+    for path, threshold in (("dense", 10**9), ("sparse", 0)):
+        monkeypatch.setattr(kinematics, "SPARSE_FROM", threshold)
+        model = load_scene("stage_spatial_19dof")
+        solution = static_equilibrium(model)
+        assert solution.config.lu.sparse == (path == "sparse")
+        force = np.linspace(-1.0, 1.0, model.nx)
+        multipliers = Kinematics(model).multipliers(solution.config, force)
+        results[path] = (solution.x, solution.config.DF, multipliers)
+    for dense, sparse in zip(results["dense"], results["sparse"], strict=True):
+        np.testing.assert_allclose(sparse, dense, rtol=1e-9, atol=1e-12 * np.abs(dense).max())
+
+
+def test_a_sparse_factor_of_a_non_finite_jacobian_solves_to_nan():
+    import scipy.sparse
+
+    from flexure.core.kinematics import JacobianFactor
+
+    J = scipy.sparse.csc_matrix(np.array([[1.0, 0.0], [np.inf, 1.0]]))
+    assert np.all(np.isnan(JacobianFactor(J).solve(np.ones(2))))
+    singular = scipy.sparse.csc_matrix(np.array([[1.0, 1.0], [1.0, 1.0]]))
+    assert np.all(np.isnan(JacobianFactor(singular).solve(np.ones(2))))
+
