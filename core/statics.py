@@ -1,9 +1,10 @@
 """Static equilibrium: load steps and Newton's method on the DOFs.
 
-The load (nodal forces and gravity) is applied in `load_steps` equal increments; in each the
-generalised force Q(q) = DF^T (f - De^T sigma) is driven to zero by Newton's method with the
-full tangent stiffness K0 + G0 (quadratic convergence). A step that does not converge is
-halved up to four times; then ConvergenceError names the load step and the load factor.
+The load (nodal forces and gravity) is applied in `load_steps` equal increments (one, when
+there is no load); in each the generalised force Q(q) = DF^T (f - De^T sigma) is driven to
+zero by Newton's method with the full tangent stiffness K0 + G0 (quadratic convergence). A
+step that does not converge is halved up to four times; then ConvergenceError names the load
+step and the load factor.
 Convergence: |dq| <= `tolerance` times the model's length scale (rotations count as lengths
 through that scale).
 """
@@ -64,7 +65,10 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     config = mech.initial_configuration()
     scale = kin.length_scale
     total_iterations = 0
-    factor, step = 0.0, 1.0 / load_steps
+    # Without loads and gravity there is nothing to step: the reference configuration (all
+    # deformations zero) balances, and one Newton step at full load confirms it.
+    unloaded = not np.any(mech.external_force(config.x, 1.0, loads))
+    factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     halvings = 0
     step_number = 0
     while factor < 1.0 - 1e-12:

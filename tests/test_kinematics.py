@@ -163,3 +163,12 @@ def test_a_sparse_factor_of_a_non_finite_jacobian_solves_to_nan():
     singular = scipy.sparse.csc_matrix(np.array([[1.0, 1.0], [1.0, 1.0]]))
     assert np.all(np.isnan(JacobianFactor(singular).solve(np.ones(2))))
 
+
+def test_an_unloaded_model_is_at_rest_where_it_was_built():
+    """No load, no gravity: one Newton step at full load confirms the reference configuration
+    (stage_spatial_1dof's only force is its buckling reference load)."""
+    model = load_scene("stage_spatial_1dof")
+    assert not np.any(model.loads) and not np.any(model.gravity)
+    solution = static_equilibrium(model)
+    assert solution.iterations == 1
+    np.testing.assert_allclose(solution.x, model.initial_coordinates, rtol=0, atol=1e-15)
