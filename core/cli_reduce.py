@@ -2,6 +2,7 @@
 while the lowest N frequencies move by less than P %; writes the reduced scene."""
 
 import argparse
+import textwrap
 from pathlib import Path
 
 from .cli import count, number, output_file, refuse_overwriting_inputs, write_outputs
@@ -56,13 +57,18 @@ def run(args):
     reduction = propose_reduction(data, args.keep, args.tol, freeze=args.freeze,
                                   source=str(path),
                                   progress=Progress("flexure reduce", after=1.0))
+    frozen = ", ".join(f"{e}.{d}" for e, d in reduction.frozen) or "nothing"
     header = (f"{name}, reduced by `flexure reduce --keep {args.keep} --tol {args.tol:g}` from "
-              f"{path.name}:\nprescribed zero: "
-              + (", ".join(f"{e}.{d}" for e, d in reduction.frozen) or "nothing")
+              f"{path.name}:\n" + textwrap.fill(f"prescribed zero: {frozen}", 95)
               + f"\nNDOF {reduction.ndof_full} -> {reduction.ndof_reduced}; the lowest "
               f"{args.keep} frequencies within {reduction.change_percent:.3g} %"
               + ("\nthe DOFs are chosen by flexure (the frozen released deformations changed "
                  "their count)" if reduction.dofs_chosen else ""))
+    # the reduced scene is another model: it takes its file's name (which names its FMU)
+    scene = reduction.scene.setdefault("scene", {})
+    scene["name"] = Path(out).stem
+    scene["description"] = f"{name} reduced to {reduction.ndof_reduced} DOFs" + (
+        f": {scene['description']}" if isinstance(scene.get("description"), str) else "")
     text = scene_toml(reduction.scene, header)
     code = write_outputs("flexure reduce", [("--out", Path(out), lambda t: Path(t).write_text(
         text))], announce=not args.json)

@@ -217,6 +217,48 @@ def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
     return [model.deformation_names[model.rigid_deformations[i]] for i in redundant]
 
 
+@blas_threads()
+def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[int]:
+    """Which `groups` of released (or DOF) deformations, taken in their order, can be
+    prescribed zero together, on top of the model's prescribed deformations, without
+    over-constraining it: a group is taken when its rows of the deformation Jacobian (at
+    coordinates x, default the initial ones; rotations scaled to lengths) add fully to the
+    span of the prescribed rows and of the groups taken before it. `groups` are arrays of
+    deformation indices; returns the positions in `groups` of those taken.
+
+    This is the over-constraint test of `check_exact_constraint` done incrementally: a model
+    reduction can then freeze many deformations at once and know that the result builds.
+    """
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    columns = kin.free
+    scale = _column_scale(model, kin.length_scale)[columns]
+    prescribed = De[np.ix_(model.rigid_deformations, columns)] * scale
+    top = max(np.abs(De[:, columns] * scale).max(initial=0.0), 1e-300)
+    # an orthonormal basis of the prescribed rows' span (they are independent in a model
+    # that passed the check), grown by each group taken
+    q, r = np.linalg.qr(prescribed.T)
+    keep = np.abs(np.diag(r)) > RANK_TOLERANCE * top
+    basis = np.zeros((columns.size, columns.size))
+    count = int(keep.sum())
+    basis[:, :count] = q[:, keep]
+    taken = []
+    for position, group in enumerate(groups):
+        rows = De[np.ix_(np.asarray(group, dtype=np.int64), columns)] * scale
+        norms = np.linalg.norm(rows, axis=1)
+        if rows.shape[0] == 0 or count + rows.shape[0] > columns.size or not np.all(norms > 0):
+            continue
+        for _ in range(2):  # Gram-Schmidt twice: orthogonal to round-off
+            rows = rows - (rows @ basis[:, :count]) @ basis[:, :count].T
+        q, r = np.linalg.qr(rows.T)
+        if np.all(np.abs(np.diag(r)) > np.maximum(1e-6 * norms, RANK_TOLERANCE * top)):
+            basis[:, count:count + rows.shape[0]] = q
+            count += rows.shape[0]
+            taken.append(position)
+    return taken
+
+
 def _release_preference(model):
     """The prescribed deformations' positions in `model.rigid_deformations`, those that can
     be released (a stiffness for them in their section) last, so that they are the ones left

@@ -15,9 +15,11 @@ cost. SPACAR users freeze them by hand; `propose_reduction` does it by measureme
 3. Deformations are frozen (prescribed zero: removed from `released` and `dof`) in order of
    increasing share, as many as keep the `keep` lowest frequencies within `tolerance` (%,
    relative to each): the largest count that does, by bisection over the count (each trial
-   builds the reduced scene and computes its modes). A deformation whose freezing alone
-   breaks the model (a release that removes an over-constraint, such as a leaf's local cut)
-   is skipped.
+   builds the reduced scene and computes its modes). A deformation whose freezing would
+   over-constrain the model together with those before it (a release that removes an
+   over-constraint, such as a leaf's local cut, or the second leaf of a parallel pair) is
+   skipped: `constraints.freezable` tests the rank of the constraint rows incrementally, so
+   that every trial builds.
 
 `freeze` (`flexure reduce --freeze e1`) prescribes the named deformations zero on every
 element before anything else, whatever the tolerance (the chapter's elongation-frozen model);
@@ -38,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import assembly
+from .constraints import freezable
 from .errors import FlexureError
 from .linearization import linearize
 from .meshing import segment_names
@@ -91,14 +94,8 @@ def energy_shares(model, data, keep):
     energy = np.abs(moved * (S @ moved))
     total = energy.sum(axis=0)
     share = energy / np.where(total > 0.0, total, 1.0)
-    owner = _scene_elements(data)
-    shares = {}
-    for d in model.stressed_deformations:
-        element, deformation = model.deformation_names[d].rsplit(".", 1)
-        key = (owner.get(element, element), deformation)
-        shares.setdefault(key, np.zeros(share.shape[1]))
-        shares[key] = shares[key] + share[d]
-    return {key: float(value.max()) for key, value in shares.items()}, modes
+    return {key: float(share[rows].sum(axis=0).max())
+            for key, rows in _deformation_rows(model, data).items()}, modes
 
 
 def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(),
@@ -107,7 +104,7 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
     while its lowest `keep` frequencies move by at most `tolerance` percent; `progress` is
     called with the fraction of the trials done. `freeze` names deformations ("e1": every
     elongation) prescribed zero on every element first, whatever the tolerance says (but not
-    where that alone breaks the model), as the chapter's elongation-frozen model; the
+    where that over-constrains the model), as the chapter's elongation-frozen model; the
     reduction then goes on from there. Raises FlexureError when the scene has fewer than
     `keep` DOFs."""
     model = build_model(data, source=source)
@@ -115,33 +112,25 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
         raise FlexureError(f"{source}: --keep {keep}: the model has only {model.ndof} DOFs")
     shares, modes = energy_shares(model, data, keep)
     full = modes.frequencies_hz
-    structural = {}  # (element, deformation) -> whether freezing it alone breaks the model
-
-    def breaks_alone(key):
-        if key not in structural:
-            try:
-                build_model(frozen_scene(data, [key])[0], source=source)
-                structural[key] = False
-            except FlexureError:  # say, a release that removes an over-constraint
-                structural[key] = True
-        return structural[key]
+    # Freezing a deformation adds a constraint; some sets of them together over-constrain
+    # (both leaves of a parallel pair frozen in torsion). Keep, in the order of freezing, only
+    # what keeps the constraints independent, so that every prefix of `order` builds.
+    forced = [key for key in sorted(shares) if key[1] in set(freeze)]
+    rest = sorted((key for key in shares if key not in set(forced)),
+                  key=lambda key: (shares[key], key))
+    candidates = forced + rest
+    rows = _deformation_rows(model, data)
+    taken = freezable(model, [rows[key] for key in candidates])
+    order = [candidates[k] for k in taken]
+    forced = [key for key in order if key in set(forced)]
 
     def trial(count):
         """(reduced scene, its frequencies, whether the DOFs were chosen, NDOF, frozen), or
-        None. The first `count` candidates, less those whose freezing alone breaks the model
-        (tested only when the whole set does)."""
+        None when the first `count` of `order` frozen give no valid model."""
         chosen_set = order[:count]
         scene, chosen = frozen_scene(data, chosen_set)
         try:
             reduced_model = build_model(scene, source=f"{source} (reduced)")
-        except FlexureError:
-            chosen_set = [key for key in chosen_set if not breaks_alone(key)]
-            scene, chosen = frozen_scene(data, chosen_set)
-            try:
-                reduced_model = build_model(scene, source=f"{source} (reduced)")
-            except FlexureError:
-                return None
-        try:
             found, _ = lowest_frequencies(reduced_model, keep)
         except FlexureError:
             return None
@@ -153,10 +142,6 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
         return result is not None and np.all(
             np.abs(result[1] / full - 1.0) * 100.0 <= tolerance)
 
-    forced = [key for key in sorted(shares) if key[1] in set(freeze) and not breaks_alone(key)]
-    rest = sorted((key for key in shares if key not in set(forced)),
-                  key=lambda key: (shares[key], key))
-    order = forced + rest
     best = (copy.deepcopy(data), full, False, model.ndof, [])
     forced_hz = ndof_forced = None
     if forced:
@@ -218,6 +203,17 @@ def frozen_scene(data, frozen):
             released = [released] if isinstance(released, str) else list(released)
             table["released"] = released + [d for d in listed if d not in released]
     return scene, True
+
+
+def _deformation_rows(model, data):
+    """{(scene element, deformation): the model's deformation indices of it (one per
+    segment)} for the released and DOF deformations of `model`."""
+    owner = _scene_elements(data)
+    rows = {}
+    for d in model.stressed_deformations:
+        element, deformation = model.deformation_names[d].rsplit(".", 1)
+        rows.setdefault((owner.get(element, element), deformation), []).append(int(d))
+    return rows
 
 
 def _scene_elements(data):

@@ -93,6 +93,7 @@ def test_reduce_command_writes_a_scene_that_loads(tmp_path, capsys):
     assert result["ndof_reduced"] == 1 and result["change_percent"] < 0.01
     model = load_scene(out)
     assert model.ndof == 1 and model.chosen_dofs == ("3.x",)
+    assert model.name == "reduced"  # another model: its file's name, which names its FMU
     assert out.read_text().startswith("# stage_planar_3dof, reduced by `flexure reduce")
 
 
