@@ -106,15 +106,20 @@ def plot_principal_gains(model, frequencies_hz, gains, path, *, natural_hz=()):
         axes.axvline(f, color="0.8", linewidth=0.8, zorder=0)
     axes.set_xlabel("frequency (Hz)")
     axes.set_ylabel(f"singular value ({unit})")
-    axes.set_title(f"{model.name}: principal gains from "
-                   f"{', '.join(p.name for p in model.inputs)} to "
-                   f"{', '.join(p.name for p in model.outputs)}")
+    axes.set_title(f"{model.name}: principal gains from {_names(model.inputs)} to "
+                   f"{_names(model.outputs)}", fontsize=10)
     axes.grid(True, which="both", linewidth=0.3)
     if gains.shape[1] > 1:
         axes.legend()
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
+
+
+def _names(ports):
+    """Port names for a title: all of up to three, else the first and the last."""
+    names = [p.name for p in ports]
+    return ", ".join(names) if len(names) <= 3 else f"{names[0]} ... {names[-1]}"
 
 
 def frequency_grid(natural_hz, points=400):
