@@ -95,8 +95,10 @@ def run(args):
     model = load_scene(args.scene)
     static, modes = args.static, args.modes
     if not (static or modes is not None or args.buckling is not None or args.state_space
-            or args.sigma):
-        static, modes = True, -1
+            or args.sigma or args.plot):
+        # a kinematic model (SPACAR's mode 1) has no equilibrium to find and no modes: the
+        # exact-constraint check that loading it passed is the analysis
+        static, modes = (False, None) if is_kinematic(model) else (True, -1)
     result = analyze(model, static=static or bool(args.plot), modes=modes,
                      buckling=args.buckling, with_state_space=args.state_space,
                      with_gains=bool(args.sigma))
@@ -115,6 +117,15 @@ def run(args):
     else:
         print(render(result))
     return 0
+
+
+def is_kinematic(model):
+    """Whether `model` carries neither mass nor load: a kinematic model, which the
+    exact-constraint check describes completely."""
+    massive = np.any(model.lumped_mass) or bool(model.node_inertias) or any(
+        np.any(group.properties.get("rho_A", 0.0)) for group in model.groups)
+    loaded = np.any(model.loads) or np.any(model.gravity)
+    return not (massive or loaded)
 
 
 def plot_stresses(model, path):
@@ -138,6 +149,9 @@ def render(result):
              f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])}"
              + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
                 else ")")]
+    if not {"static", "modes", "buckling", "state_space", "principal_gains"} & result.keys():
+        parts.append("exactly constrained; a kinematic model (no mass, no load), so there is "
+                     "no equilibrium or mode to compute")
     if "static" in result:
         static = result["static"]
         parts.append(format_table(["coordinate", "value (m, rad)"],

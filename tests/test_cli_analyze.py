@@ -53,3 +53,16 @@ def test_default_analyses_are_static_and_modes(capsys):
     out = capsys.readouterr().out
     assert "static equilibrium: coordinates" in out and "natural frequencies" in out
     assert "2128.97" in out
+
+
+def test_a_kinematic_scene_is_checked_and_nothing_more(capsys):
+    """Without mass or load there is no equilibrium or mode: the default analyses are the
+    exact-constraint check alone (the manipulator's end-effector stage, 6 DOFs)."""
+    assert main(["analyze", "manipulator_stage"]) == 0
+    out = capsys.readouterr().out
+    assert "NDOF = NX - NXO - NEO = 42 - 12 - 24 = 6" in out
+    assert "exactly constrained; a kinematic model (no mass, no load)" in out
+    assert main(["analyze", "manipulator_stage", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert set(result) == {"scene", "dof_count", "dofs", "dofs_chosen"}
+    assert result["dof_count"]["ndof"] == 6
