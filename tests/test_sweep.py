@@ -89,6 +89,15 @@ def test_a_static_displacement_is_that_of_the_output_coordinate():
     assert row == {"static.x [m]": pytest.approx(2.0 * 0.1 / 94.5, rel=1e-6), "status": "ok"}
 
 
+def test_a_rotational_output_is_a_displacement_in_rad():
+    # the output y moved to the rotation of node 4, which the 1 N m moment turns by
+    # phi = M L / (2 E I) ... about the guided leaves: here only its unit and sign are asked
+    overrides = {"outputs.y.node": "4", "outputs.y.coordinate": "phi", "nodes.4.moment": 1.0}
+    row = evaluate_point(DATA, overrides, analyses=("static",))
+    assert set(row) == {"static.x [m]", "static.y [rad]", "status"}
+    assert row["static.y [rad]"] > 0.0 and row["status"] == "ok"
+
+
 def test_an_unforeseen_exception_is_the_status_of_its_point(monkeypatch):
     import flexure.core.statics as statics
 
@@ -214,6 +223,20 @@ def test_the_plot_and_parquet_are_written_beside_the_table(tmp_path, capsys):
     assert table["mode.1 [Hz]"][:2] == [None, None]  # the failed points
     assert table["mode.1 [Hz]"][2:] == [float(row[4]) for row in rows[3:]]
     assert table["status"] == [row[-1] for row in rows[1:]]
+
+
+def test_values_of_mixed_kinds_are_text_in_parquet_and_categories_in_the_plot(tmp_path):
+    pyarrow = pytest.importorskip("pyarrow.parquet")
+    from flexure.core.sweep_table import SweepTable
+
+    table = SweepTable(["elements.bar.type"], ["mode.1 [Hz]"])
+    rows = [["PLBEAM", "10.5", "ok"], ["2", "", "elements.bar.type: expected a string"]]
+    table.write_parquet(tmp_path / "t.parquet", rows)
+    assert pyarrow.read_table(tmp_path / "t.parquet").to_pydict() == {
+        "elements.bar.type": ["PLBEAM", "2"], "mode.1 [Hz]": [10.5, None],
+        "status": ["ok", "elements.bar.type: expected a string"]}
+    table.plot(tmp_path / "t.png", rows)
+    assert (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_without_pyarrow_no_parquet_and_with_no_plot_no_png(tmp_path, capsys, monkeypatch):
