@@ -90,12 +90,23 @@ def test_a_static_displacement_is_that_of_the_output_coordinate():
 
 
 def test_a_rotational_output_is_a_displacement_in_rad():
-    # the output y moved to the rotation of node 4, which the 1 N m moment turns by
-    # phi = M L / (2 E I) ... about the guided leaves: here only its unit and sign are asked
-    overrides = {"outputs.y.node": "4", "outputs.y.coordinate": "phi", "nodes.4.moment": 1.0}
-    row = evaluate_point(DATA, overrides, analyses=("static",))
-    assert set(row) == {"static.x [m]", "static.y [rad]", "status"}
-    assert row["static.y [rad]"] > 0.0 and row["status"] == "ok"
+    # a cantilever (one PLBEAM, EI = 2 N m^2, L = 0.5 m) under a small tip moment M: the tip
+    # turns by M L / EI and rises by M L^2 / (2 EI), up to terms of order phi^2 (1e-8)
+    moment, length, stiffness = 4e-4, 0.5, 2.0
+    scene = {
+        "sections": {"s": {"EA": 1e6, "EI": stiffness}},
+        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "2": {"angle": 0.0, "fixed": ["phi"]},
+                  "3": {"position": [length, 0.0]}, "4": {"angle": 0.0, "moment": moment}},
+        "elements": {"beam": {"type": "PLBEAM", "nodes": ["1", "2", "3", "4"], "section": "s",
+                              "released": ["e1", "e2", "e3"]}},
+        "outputs": {"tip_y": {"node": "3", "coordinate": "y"},
+                    "tip_phi": {"node": "4", "coordinate": "phi"}}}
+    row = evaluate_point(scene, {}, analyses=("static",))
+    assert row == {
+        "static.tip_y [m]": pytest.approx(moment * length**2 / (2 * stiffness), rel=1e-7),
+        "static.tip_phi [rad]": pytest.approx(moment * length / stiffness, rel=1e-7),
+        "status": "ok"}
 
 
 def test_an_unforeseen_exception_is_the_status_of_its_point(monkeypatch):
