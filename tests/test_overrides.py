@@ -56,7 +56,8 @@ def test_build_model_leaves_its_dictionary_as_it_was():
 
 
 def test_numpy_values_and_tuples_become_what_a_toml_file_holds():
-    np = pytest.importorskip("numpy")
+    import numpy as np
+
     data = apply_overrides({"nodes": {"3": {}}},
                            {"nodes.3.mass": np.float64(0.2), "nodes.3.position": (0.0, 1),
                             "nodes.3.force": np.array([1.0, 2.0])})
