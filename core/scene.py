@@ -138,6 +138,9 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         name = header.get("name", self.default_name)
         if not isinstance(name, str) or not name.isidentifier():
             self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
+        # text only: a scene is written back (scene_toml: reduce, an FMU of overrides), and a
+        # TOML date or a table has no place there
+        self.string("scene.description", header.get("description", ""))
         dimension = header.get("dimension", 2)
         if isinstance(dimension, bool) or dimension not in (2, 3):
             self.fail("scene.dimension",
