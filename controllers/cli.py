@@ -10,6 +10,7 @@ from pathlib import Path
 
 from flexure.core.cli import (
     PLOT_SUFFIXES,
+    add_set_option,
     check_output,
     fraction,
     nonnegative,
@@ -46,6 +47,7 @@ def register(subparsers):
                     "largest tracking error against the target of 0.1 %% of the stroke.")
     parser.add_argument("scene", nargs="?", default="stage_planar_1dof",
                         help="scene file or built-in scene name (default stage_planar_1dof)")
+    add_set_option(parser)
     parser.add_argument("--stroke", type=stroke, default=1e-3, metavar="S",
                         help="stroke of the move in m (default 0.001)")
     parser.add_argument("--duration", type=positive, default=1.0, metavar="T",
@@ -89,7 +91,7 @@ def run(args):
     result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
                       crossover=args.crossover, feedforward=feedforward, plant=args.plant,
                       settle=args.settle, method=args.method, rtol=args.rtol,
-                      workdir=args.workdir,
+                      workdir=args.workdir, overrides=args.set,
                       progress=Progress(f"flexure loop ({args.plant})"))
     summary = result.summary()
     code = write_outputs("flexure loop", [("--plot", plot, result.plot)],

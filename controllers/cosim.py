@@ -11,6 +11,7 @@ reproduces the in-process loop. The samples are read back with time-series obser
 macro step k+1 the plant's output is y_k+1 and its input the force it held on [t_k, t_k+1).
 """
 
+import hashlib
 import tempfile
 from pathlib import Path
 
@@ -31,14 +32,20 @@ def _scene_source(scene, model):
     return model.source
 
 
-def scene_fmu(scene, model, workdir=None):
-    """The scene's FMU in `workdir` (built once; rebuilt when absent)."""
+def scene_fmu(scene, model, workdir=None, *, overrides=None):
+    """The scene's FMU in `workdir` (built once; rebuilt when absent), of the scene with
+    `overrides` ({dotted scene key: value}) if given."""
     folder = Path(workdir) if workdir is not None else Path(
         tempfile.mkdtemp(prefix="flexure_loop_"))
+    if overrides:
+        # a folder of its own per set of overrides, so that a kept workdir never hands an
+        # FMU of other values to this run (the FMU keeps the scene's name: its identifier)
+        digest = hashlib.sha256(repr(sorted(overrides.items())).encode()).hexdigest()[:10]
+        folder = folder / f"set_{digest}"
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{model.name}.fmu"
     if not path.exists():
-        build_scene_fmu(_scene_source(scene, model), path)
+        build_scene_fmu(_scene_source(scene, model), path, overrides=overrides)
     return path
 
 
@@ -53,11 +60,12 @@ def step_nanoseconds(fs):
 
 def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD,
                      rtol=LOOP_RTOL,
-                     workdir=None, progress=None):
+                     workdir=None, progress=None, overrides=None):
     """Run the loop in libcosim; returns t, reference, position, force like simulate_loop.
 
     `progress`, if given, is called with the fraction done: the run is then advanced in
     (about 100) chunks of whole macro steps, which libcosim continues seamlessly.
+    `overrides` ({dotted scene key: value}) are the scene's, for its FMU (`scene_fmu`).
     """
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
@@ -68,7 +76,7 @@ def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD,
     log_output_level(CosimLogLevel.WARNING)
     folder = Path(workdir) if workdir is not None else Path(
         tempfile.mkdtemp(prefix="flexure_loop_"))
-    plant_path = scene_fmu(scene, model, folder)
+    plant_path = scene_fmu(scene, model, folder, overrides=overrides)
     controller_path = build_controller_fmu(controller, design, model,
                                            folder / "flexure_controller.fmu")
     N, fs = controller.samples, controller.fs

@@ -38,7 +38,7 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
              settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD,
              rtol: float = LOOP_RTOL,
              feedforward_model=None, workdir=None, progress=None,
-             **design_options) -> LoopResult:
+             overrides: dict | None = None, **design_options) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
     Parameters
@@ -71,6 +71,9 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
     progress : callable, optional
         Called with the fraction of the samples done (0 to 1) as the loop runs, e.g. a
         `flexure.core.progress.Progress`.
+    overrides : dict, optional
+        {dotted scene key: value} set on a scene file or name before it is built
+        (`flexure.core.load_scene`); the FMU plants are built from the overridden scene.
     **design_options
         Passed on to `design_feedback`.
 
@@ -87,8 +90,11 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
 
     if method not in METHODS:
         raise LoopError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    model = load_scene(scene) if isinstance(scene, (str, bytes)) or hasattr(
-        scene, "__fspath__") else scene
+    named = isinstance(scene, (str, bytes)) or hasattr(scene, "__fspath__")
+    if overrides and not named:
+        raise LoopError("overrides apply to a scene file or name, not to a built Model: "
+                        "build the model with them (build_model(data, overrides=...))")
+    model = load_scene(scene, overrides=overrides) if named else scene
     controller, design = build_loop(
         model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
         feedforward=feedforward, settle=settle, axis=axis,
@@ -107,22 +113,24 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
                 prefix="flexure_loop_", ignore_cleanup_errors=True))
         t, reference, position, force = _run_plant(plant, model, scene, controller, design,
                                                    method=method, rtol=rtol, workdir=workdir,
-                                                   progress=progress)
+                                                   progress=progress, overrides=overrides)
     wall = time.perf_counter() - start
     return LoopResult(t=t, reference=reference, position=position, force=force,
                       feedforward=controller.feedforward[: len(t)].copy(), stroke=stroke,
                       design=design.summary(), settings=settings, wall_time_s=wall)
 
 
-def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir, progress):
+def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir, progress,
+               overrides):
     """t, reference, position, force of the loop on the plant named `plant`."""
     if plant == "libcosim":
         return run_cosimulation(model, scene, controller, design, method=method, rtol=rtol,
-                                workdir=workdir, progress=progress)
+                                workdir=workdir, progress=progress, overrides=overrides)
     if plant == "inprocess":
         return compiled_loop(model, controller, design, method=method, rtol=rtol,
                              progress=progress)
-    adapter = FmuPlant(scene_fmu(scene, model, workdir), method=method, rtol=rtol)
+    adapter = FmuPlant(scene_fmu(scene, model, workdir, overrides=overrides), method=method,
+                       rtol=rtol)
     try:
         return simulate_loop(adapter, controller, design, progress=progress)
     finally:

@@ -102,6 +102,36 @@ count = number(1, integer=True, low_open=False)  # a count: an integer >= 1
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
+class _SetOption(argparse.Action):
+    """`--set KEY=VALUE`, repeatable: collects {key: value} (`overrides.parse_assignment`),
+    refusing a key given twice (which value was meant?)."""
+
+    def __call__(self, parser, namespace, text, option_string=None):
+        from .overrides import parse_assignment
+
+        try:
+            key, value = parse_assignment(text)
+        except ValueError as error:
+            raise argparse.ArgumentError(self, str(error)) from None
+        overrides = dict(getattr(namespace, self.dest) or {})  # never the shared default
+        if key in overrides:
+            raise argparse.ArgumentError(self, f"{key} is given twice; give each key once")
+        overrides[key] = value
+        setattr(namespace, self.dest, overrides)
+
+
+def add_set_option(parser):
+    """Add `--set KEY=VALUE` (repeatable) to the parser of a command that takes a scene.
+
+    `args.set` is then {dotted scene key: value} for `load_scene(..., overrides=args.set)`
+    (flexure.core.overrides): VALUE is read as TOML (0.3e-3, [0, 1], "text", true), else taken
+    as a string."""
+    parser.add_argument("--set", action=_SetOption, default={}, metavar="KEY=VALUE",
+                        help="set a scene value before the scene is built and checked, e.g. "
+                             "--set sections.leaf.height=0.3e-3 --set nodes.3.mass=0.2 "
+                             "(repeatable; VALUE is TOML, SI units)")
+
+
 def output_file(suffixes=None):
     """An argparse type: a file to write, checked now (see `check_output`), as a Path."""
     def parse(text):

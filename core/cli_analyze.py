@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from .cli import PLOT_SUFFIXES, atomic_output, count, output_file
+from .cli import PLOT_SUFFIXES, add_set_option, atomic_output, count, output_file
 from .errors import SceneError
 from .tables import format_table, jsonable, print_json
 
@@ -14,6 +14,7 @@ def register(subparsers):
         description="Analyse a scene (a TOML file or the name of a built-in scene). Without an "
                     "analysis option, --static and --modes are run.")
     parser.add_argument("scene", help="scene file or built-in scene name")
+    add_set_option(parser)
     parser.add_argument("--static", action="store_true", help="static equilibrium under the loads")
     parser.add_argument("--modes", nargs="?", type=count, const=-1, metavar="N",
                         help="the lowest N (default all) natural frequencies")
@@ -92,7 +93,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
 def run(args):
     from .scene import load_scene
 
-    model = load_scene(args.scene)
+    model = load_scene(args.scene, overrides=args.set)
     static, modes = args.static, args.modes
     if not (static or modes is not None or args.buckling is not None or args.state_space
             or args.sigma or args.plot):

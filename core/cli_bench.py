@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .cli import (
     PLOT_SUFFIXES,
+    add_set_option,
     distinct_outputs,
     fraction,
     number,
@@ -68,6 +69,7 @@ def register(subparsers):
                     "reference; print the table, and write it as CSV, markdown and a log-log "
                     "plot.")
     parser.add_argument("scene", help="scene file or built-in scene name")
+    add_set_option(parser)
     parser.add_argument("--t-end", type=positive, default=1.0, metavar="T",
                         help="end time (s)")
     parser.add_argument("--input", action="append", default=[], metavar="NAME=VALUE",
@@ -93,7 +95,7 @@ def register(subparsers):
 def run(args):
     from .scene import load_scene
 
-    model = load_scene(args.scene)
+    model = load_scene(args.scene, overrides=args.set)
     inputs = parse_inputs(args.input)
     if not args.input and "F" in [p.name for p in model.inputs]:
         inputs = {"F": 1.0}

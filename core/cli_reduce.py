@@ -5,7 +5,14 @@ import argparse
 import textwrap
 from pathlib import Path
 
-from .cli import count, number, output_file, refuse_overwriting_inputs, write_outputs
+from .cli import (
+    add_set_option,
+    count,
+    number,
+    output_file,
+    refuse_overwriting_inputs,
+    write_outputs,
+)
 from .tables import format_table, print_json
 
 DEFAULT_TOLERANCE = 1.0  # %
@@ -29,6 +36,7 @@ def register(subparsers):
                     "keep those N frequencies within the tolerance, and write the reduced "
                     "scene. Prints the frozen deformations and both sets of frequencies.")
     parser.add_argument("scene", help="scene file or built-in scene name")
+    add_set_option(parser)
     parser.add_argument("--keep", type=count, required=True, metavar="N",
                         help="the number of lowest natural frequencies to keep")
     parser.add_argument("--tol", type=number(0.0), default=DEFAULT_TOLERANCE, metavar="P",
@@ -44,13 +52,20 @@ def register(subparsers):
 
 
 def run(args):
+    from .overrides import apply_overrides, describe_overrides
     from .progress import Progress
     from .reduction import propose_reduction
-    from .scene import parse_toml, scene_path
+    from .scene import build_model, parse_toml, scene_path
     from .scene_writer import scene_toml
 
     path = scene_path(args.scene)
     data = parse_toml(path)
+    if args.set:
+        # checked here, where a mistake is named as the --set it came from; the reduction
+        # then starts from the overridden scene, and so does the scene it writes
+        build_model(data, overrides=args.set, source=str(path), default_name=path.stem,
+                    check=False)
+        data = apply_overrides(data, args.set, source=str(path))
     name = data.get("scene", {}).get("name", path.stem) if isinstance(data, dict) else path.stem
     out = args.out or output_file((".toml",))(f"{name}_reduced.toml")
     refuse_overwriting_inputs([("--out", out)], [path])
@@ -59,7 +74,8 @@ def run(args):
                                   progress=Progress("flexure reduce", after=1.0))
     frozen = ", ".join(f"{e}.{d}" for e, d in reduction.frozen) or "nothing"
     header = (f"{name}, reduced by `flexure reduce --keep {args.keep} --tol {args.tol:g}` from "
-              f"{path.name}:\n" + textwrap.fill(f"prescribed zero: {frozen}", 95)
+              f"{path.name}" + (f" with {describe_overrides(args.set)}" if args.set else "")
+              + ":\n" + textwrap.fill(f"prescribed zero: {frozen}", 95)
               + f"\nNDOF {reduction.ndof_full} -> {reduction.ndof_reduced}; the lowest "
               f"{args.keep} frequencies within {reduction.change_percent:.3g} %"
               + ("\nthe DOFs are chosen by flexure (the frozen released deformations changed "

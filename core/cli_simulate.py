@@ -13,6 +13,7 @@ import numpy as np
 
 from .cli import (
     PLOT_SUFFIXES,
+    add_set_option,
     count,
     distinct_outputs,
     fraction,
@@ -37,6 +38,7 @@ def register(subparsers):
         description="Simulate a scene from rest under its loads and the given inputs; print a "
                     "summary, and write the outputs to CSV (--out) and a plot (--plot).")
     parser.add_argument("scene", help="scene file or built-in scene name")
+    add_set_option(parser)
     parser.add_argument("--t-end", type=positive, required=True, metavar="T",
                         help="end time (s)")
     parser.add_argument("--input", action="append", default=[], metavar="NAME=VALUE|NAME=FILE",
@@ -129,7 +131,7 @@ def run(args):
     # the run
     outputs = [("--out", args.out), ("--plot", args.plot)]
     distinct_outputs(*outputs)
-    model = load_scene(args.scene)
+    model = load_scene(args.scene, overrides=args.set)
     inputs = parse_inputs(args.input)
     refuse_overwriting_inputs(outputs, [model.source, *_input_files(args.input)])
     output_times = (np.linspace(0.0, args.t_end, args.samples + 1) if args.samples else None)

@@ -29,6 +29,7 @@ from .constraints import check_exact_constraint, choose_dofs
 from .elements import euler
 from .errors import SceneError
 from .model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
+from .overrides import apply_overrides
 from .rotations import from_rotation_vector
 from .scene_elements import ElementBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
@@ -64,11 +65,18 @@ def scene_path(name_or_path: str | Path) -> Path:
     )
 
 
-def load_scene(name_or_path: str | Path, *, check: bool = True) -> Model:
-    """Load and validate a scene file or built-in scene name into a `Model`."""
+def load_scene(name_or_path: str | Path, *, overrides: dict | None = None,
+               check: bool = True) -> Model:
+    """Load and validate a scene file or built-in scene name into a `Model`.
+
+    `overrides` {dotted scene key: value} are set on the scene before it is built and checked
+    as the file's own keys are (`flexure.core.overrides`), e.g.
+    {"sections.leaf.height": 0.3e-3, "nodes.3.mass": 0.2} (SI units: m, kg).
+    """
     path = scene_path(name_or_path)
     data = parse_toml(path)
-    return build_model(data, source=str(path), default_name=path.stem, check=check)
+    return build_model(data, overrides=overrides, source=str(path), default_name=path.stem,
+                       check=check)
 
 
 def read_scene_text(path):
@@ -95,10 +103,18 @@ def parse_toml(path):
         raise SceneError(f"{path}: not valid TOML: {error}") from None
 
 
-def build_model(data: dict, *, source: str = "<dict>", default_name: str = "scene",
-                check: bool = True) -> Model:
-    """Build a `Model` from a scene dictionary, validating every key."""
-    return _SceneBuilder(data, source, default_name).build(check=check)
+def build_model(data: dict, *, overrides: dict | None = None, source: str = "<dict>",
+                default_name: str = "scene", check: bool = True) -> Model:
+    """Build a `Model` from a scene dictionary, validating every key.
+
+    `overrides` {dotted scene key: value} are set on a copy of `data` first (`data` is not
+    changed); an error in one names it as `--set KEY` (`flexure.core.overrides`).
+    """
+    builder = _SceneBuilder(data, source, default_name)
+    if overrides:
+        builder.data = apply_overrides(data, overrides, source=source)
+        builder.overridden = frozenset(overrides)
+    return builder.build(check=check)
 
 
 class _SceneBuilder(SceneReader, ElementBuilding):
@@ -122,6 +138,9 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         name = header.get("name", self.default_name)
         if not isinstance(name, str) or not name.isidentifier():
             self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
+        # text only: a scene is written back (scene_toml: reduce, an FMU of overrides), and a
+        # TOML date or a table has no place there
+        self.string("scene.description", header.get("description", ""))
         dimension = header.get("dimension", 2)
         if isinstance(dimension, bool) or dimension not in (2, 3):
             self.fail("scene.dimension",

@@ -19,8 +19,13 @@ class SceneReader:
     file in every message."""
 
     source = "<dict>"
+    overridden = frozenset()  # the keys set by overrides (`flexure.core.overrides`)
 
     def fail(self, key, message):
+        # a mistake in an override is named as the user gave it (`--set KEY`), not as a key
+        # of the file, which may not even have it
+        if any(key == k or key.startswith((f"{k}.", f"{k}[")) for k in self.overridden):
+            key = f"--set {key}"
         raise SceneError(f"{self.source}: {key}: {message}")
 
     def table(self, key, value):

@@ -9,7 +9,7 @@ the key. Comments of the file a scene came from are not kept.
 
 import math
 
-__all__ = ["scene_toml"]
+__all__ = ["scene_toml", "toml_value"]
 
 
 def scene_toml(data, header=""):
@@ -17,6 +17,11 @@ def scene_toml(data, header=""):
     lines = [f"# {line}".rstrip() for line in header.splitlines()]
     _table(lines, [], data)
     return "\n".join(lines).lstrip("\n") + "\n"
+
+
+def toml_value(value) -> str:
+    """The TOML text of one scene value (a number, string, boolean, list or inline table)."""
+    return _value(value, [])
 
 
 def _table(lines, path, table):

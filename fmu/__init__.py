@@ -4,7 +4,8 @@ any flexure slave as one.
     from flexure.fmu import build_scene_fmu
     build_scene_fmu("stage_planar_3dof", "stage_planar_3dof.fmu")
 
-- `build_scene_fmu(scene, dest, *, tunable=None)`: a scene's FMU (`flexure fmu build`).
+- `build_scene_fmu(scene, dest, *, tunable=None, overrides=None)`: a scene's FMU (`flexure fmu
+  build`), of the scene with `overrides` {dotted key: value} if given.
 - `build_slave_fmu(script, dest, *, project_files=(), bundle=("core", "fmu"))`: any pythonfmu
   slave script (e.g. a controller) with flexure bundled and the model description completed.
 - `SafeSlave`, `UnitReal`: the base of a slave whose failures become FMI statuses.

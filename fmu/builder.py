@@ -226,7 +226,8 @@ def default_tunable(scene):
 
 
 def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunable=None,
-                    von_mises: bool = False, validate: bool = True) -> Path:
+                    von_mises: bool = False, validate: bool = True,
+                    overrides: dict | None = None) -> Path:
     """Build the co-simulation FMU of a scene.
 
     Parameters
@@ -243,6 +244,9 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
         beams; the scene needs beams with a cross-section (spatial BEAMs with dimensions).
     validate : bool, optional
         Run fmpy's validation on the result.
+    overrides : dict, optional
+        {dotted scene key: value} set on the scene first (`flexure.core.load_scene`); the FMU
+        carries the scene with them, written by `flexure.core.scene_toml`.
 
     Returns
     -------
@@ -252,7 +256,8 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
     import keyword
     import tomllib
 
-    from flexure.core import build_model, scene_path
+    from flexure.core import apply_overrides, build_model, scene_path, scene_toml
+    from flexure.core.overrides import describe_overrides
 
     from .scene_slave import scene_value
 
@@ -262,7 +267,10 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise FMUBuildError(f"{path}: not valid TOML: {error}") from None
-    model = build_model(data, source=str(path), default_name=path.stem)
+    model = build_model(data, overrides=overrides, source=str(path), default_name=path.stem)
+    if overrides:  # the FMU carries the scene it was built from: the overridden one
+        data = apply_overrides(data, overrides, source=str(path))
+        text = scene_toml(data, f"{path.name} with {describe_overrides(overrides)}")
     name = model.name
     if keyword.iskeyword(name) or name.startswith("_"):
         raise FMUBuildError(f"{path}: scene.name: {name!r} cannot be an FMU model identifier "

@@ -11,7 +11,14 @@ import tempfile
 from pathlib import Path
 
 from flexure.core import FlexureError
-from flexure.core.cli import check_output, nonnegative, number, positive, refuse_overwriting_inputs
+from flexure.core.cli import (
+    add_set_option,
+    check_output,
+    nonnegative,
+    number,
+    positive,
+    refuse_overwriting_inputs,
+)
 from flexure.core.errors import OutputError, UsageError
 
 from .builder import build_scene_fmu, default_tunable
@@ -30,6 +37,7 @@ def register(subparsers):
                                 description="Build the co-simulation FMU of a scene; its model "
                                             "identifier is the scene name.")
     build.add_argument("scene", help="scene file or built-in scene name")
+    add_set_option(build)
     build.add_argument("-o", "--output", help="the .fmu to write (default: SCENE_NAME.fmu)")
     build.add_argument("--tunable", action="append", metavar="KEY",
                        help="a dotted scene key to expose as a parameter (repeatable; default: "
@@ -101,7 +109,7 @@ def run_build(args):
                           f"{error.strerror}") from None
     try:
         built = build_scene_fmu(source, temporary, tunable=tunable, von_mises=args.von_mises,
-                                validate=not args.no_validate)
+                                validate=not args.no_validate, overrides=args.set)
         path = (folder / built.name if output is None or Path(output).is_dir()
                 else Path(output))
         if path.is_dir():

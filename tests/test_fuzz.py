@@ -156,6 +156,10 @@ INPUT_TEXTS = st.one_of(NUMBER_TEXTS.map(lambda v: f"F={v}"),
                         st.sampled_from(["F", "=1", "G=1", "F=in.csv", "F=bad.csv", "F=folder",
                                          "F=scene.toml", "F=missing.csv"]))
 FLAG = None
+SET_TEXTS = st.sampled_from([
+    "nodes.2.mass=0.3", "nodes.2.mass=-1", "nodes.9.mass=1", "nodes.2.mass", "=1",
+    "sections.springs.EA=abc", "nodes.2.mass=inf", "nodes.2.mass=1979-05-27", "nodes.2=1",
+    "scene.name=x y", "elements.spring.released=[]", "nodes.2.position=[0.1]"])
 COMMANDS = {
     "simulate": {"--t-end": NUMBER_TEXTS, "--input": INPUT_TEXTS,
                  "--method": st.sampled_from(["cvode-bdf", "ida", "euler"]),
@@ -177,7 +181,16 @@ COMMANDS = {
         ["nodes.2.mass", "sections.springs.EdA", "nodes", "x.y"]), "--no-tunable": FLAG},
     "fmu check": {"--rtol": NUMBER_TEXTS, "--atol": NUMBER_TEXTS, "--update": FLAG,
                   "--interval": NUMBER_TEXTS},
+    "sweep": {"--param": st.sampled_from(
+        ["nodes.2.mass=0:1:3", "nodes.2.mass=0.1,0.2", "sections.springs.EA=-1,1", "x=1:2",
+         "nodes.2.mass=1:1:2", "nodes.2.mass=", "nodes.9.mass=1,2", "nodes.2.mass=0:1:0"]),
+        "--analyses": st.sampled_from(["static", "modes,buckling", "loop", "x", ""]),
+        "--modes": NUMBER_TEXTS, "--out": PATH_TEXTS, "--resume": FLAG, "--no-plot": FLAG},
 }
+for _options in COMMANDS.values():  # every command that takes a scene takes --set
+    if "--t-end" in _options or "--modes" in _options or "--stroke" in _options \
+            or "--tunable" in _options:
+        _options["--set"] = SET_TEXTS
 SCENE_ARGS = st.sampled_from(["truss_1dof_x", "truss_1dof_x", "no_such_scene", "scene.toml",
                               "bad.toml", "folder", ""])
 CSV_TEXTS = st.one_of(
@@ -198,6 +211,8 @@ def command_lines(draw):
         argv.append(draw(SCENE_ARGS))
     if command == "simulate" and draw(st.booleans()):
         argv += ["--t-end", "0.1"]
+    if command == "sweep":  # in this process: a Dask cluster per example would be minutes
+        argv += ["--serial"]
     options = COMMANDS[command]
     for option in draw(st.lists(st.sampled_from(sorted(options)), max_size=4)):
         argv.append(option)

@@ -91,6 +91,8 @@ CASES = {
                                     ["inputs.F.coordinate", "no coordinate 'z'"]),
     "output quantity": (lambda d: d["outputs"]["x"].update(quantity="acceleration"),
                         ["outputs.x.quantity", "acceleration"]),
+    "description that is no text": (lambda d: d["scene"].update(description=3),
+                                    ["scene.description", "expected a string, got 3"]),
 }
 
 
@@ -291,3 +293,14 @@ def test_the_quick_test_and_the_svd_agree_on_meshed_stages():
         lu, _ = scipy.linalg.lu_factor(full)
         estimate, _ = scipy.linalg.lapack.dgecon(lu, np.linalg.norm(full, 1), norm="1")
         assert 0.5 < estimate / (sigma[-1] / sigma[0]) < 2.0
+
+
+def test_a_dated_description_is_refused_before_a_scene_is_written_back(tmp_path, capsys):
+    # flexure reduce writes the scene back with scene_toml, which has no TOML dates: the
+    # scene is refused on load, in one line, not with a traceback at the writing
+    path = tmp_path / "dated.toml"
+    path.write_text(scene_path("truss_1dof_x").read_text().replace(
+        'description = "', 'description = 1979-05-27\n# "', 1))
+    assert main(["reduce", str(path), "--keep", "1", "--out", str(tmp_path / "r.toml")]) == 2
+    assert capsys.readouterr().err == (f"flexure reduce: error: {path}: scene.description: "
+                                       "expected a string, got datetime.date(1979, 5, 27)\n")
