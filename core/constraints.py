@@ -79,8 +79,10 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict:
             + f" are mutually dependent, so {redundant} redundant; release {release} "
             "(or remove a support)"
         )
-    releases = _independent_rows(rigid_rows, _release_preference(model))[1] \
-        if dependencies else []
+    releases = []
+    if dependencies:
+        kept, releases = _independent_rows(rigid_rows, _release_preference(model))
+        problems.append(_redundancies(model, rigid_rows, kept, releases))
     if releases:
         names = [model.deformation_names[model.rigid_deformations[i]] for i in releases]
         problems.append(
@@ -259,10 +261,30 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
     return taken
 
 
-def _release_preference(model):
-    """The prescribed deformations' positions in `model.rigid_deformations`, those that can
-    be released (a stiffness for them in their section) last, so that they are the ones left
-    over."""
+def _redundancies(model, rows, kept, redundant, shown=10):
+    """The line that names each redundancy: a redundant prescribed deformation (the one
+    proposed for release) with the releasable ones it depends on, and the elements that cannot
+    be released (rigid links) the dependency runs through. `rows` are the prescribed rows,
+    `kept` the independent ones, `redundant` the others."""
+    releasable = _releasable(model)
+    name = [model.deformation_names[d] for d in model.rigid_deformations]
+    weights = np.linalg.lstsq(rows[kept].T, rows[redundant].T, rcond=None)[0]
+    parts = []
+    for column, r in enumerate(redundant[:shown]):
+        w = np.abs(weights[:, column])
+        involved = [kept[i] for i in np.flatnonzero(w > 1e-6 * w.max(initial=0.0))]
+        partners = [name[i] for i in involved if releasable[i]]
+        links = list(dict.fromkeys(name[i].rsplit(".", 1)[0] for i in involved
+                                   if not releasable[i]))
+        parts.append(f"{name[r]} with {', '.join(partners) or 'supports only'}"
+                     + (f" (through {', '.join(links)})" if links else ""))
+    more = f"; and {len(redundant) - shown} more" if len(redundant) > shown else ""
+    return "each redundancy: " + "; ".join(parts) + more
+
+
+def _releasable(model):
+    """For each prescribed deformation (position in `model.rigid_deformations`), whether its
+    section has a stiffness for it, so that it could be released."""
     releasable = np.zeros(model.rigid_deformations.size, dtype=bool)
     position = {d: k for k, d in enumerate(model.rigid_deformations)}
     for group in model.groups:
@@ -272,6 +294,14 @@ def _release_preference(model):
                 values = group.properties.get(stiffness.get(name))
                 if d in position and values is not None and float(values[i]) > 0.0:
                     releasable[position[d]] = True
+    return releasable
+
+
+def _release_preference(model):
+    """The prescribed deformations' positions in `model.rigid_deformations`, those that can
+    be released (a stiffness for them in their section) last, so that they are the ones left
+    over."""
+    releasable = _releasable(model)
     return sorted(range(releasable.size), key=lambda k: (releasable[k], k))
 
 

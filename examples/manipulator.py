@@ -199,7 +199,9 @@ def sections(parameters, *, dynamic):
         "push": leaf("push_height", "push_thickness"),
         "slant": leaf("slant_width", "slant_thickness"),
         "wire": steel | {"diameter": value("wire_diameter", p)},
-        "rigid": {"EA": 1.0, "GIt": 1.0, "EIy": 1.0, "EIz": 1.0},  # unused: nothing released
+        # no stiffness: nothing of a rigid link can be released, so the exact-constraint check
+        # never proposes it, and names it as the link a redundancy runs through
+        "rigid": {},
     }
 
 

@@ -62,6 +62,11 @@ def test_the_guidance_is_over_constrained_by_design_and_the_proposal_makes_it_ex
         load_scene("manipulator_guidance")
     message = str(refused.value)
     assert "so 3 of them are redundant" in message
+    assert ("each redundancy: g1_leaf2.e4 with g1_leaf1.e3, g1_leaf1.e4, g1_leaf2.e3 (through "
+            "g1_L_to_leaf1, g1_L_to_leaf2); g1_leaf4.e4 with g1_leaf3.e3, g1_leaf3.e4, "
+            "g1_leaf4.e3 (through g1_H_to_leaf3, g1_H_to_leaf4, g1_L_to_leaf3, g1_L_to_leaf4); "
+            "g1_pivotT.e4 with g1_pivotS.e3, g1_pivotS.e4, g1_pivotT.e3 (through g1_U_to_S, "
+            "g1_U_to_T)") in message
     proposal = "g1_leaf2.e4, g1_leaf4.e4, g1_pivotT.e4"
     assert f"a release that removes the over-constraint: {proposal}" in message
     model = build_model(guidance_with(proposal.split(", ")))
