@@ -19,10 +19,10 @@ from flexure.core.cli import (
     write_outputs,
 )
 from flexure.core.errors import UsageError
-from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
-from flexure.core.methods import METHODS as LOOP_METHODS
-from flexure.core.progress import Progress
-from flexure.core.tables import format_table, print_json
+from flexure.core.reporting.progress import Progress
+from flexure.core.reporting.tables import format_table, print_json
+from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
+from flexure.core.simulation.methods import METHODS as LOOP_METHODS
 
 from .runner import PLANTS, run_loop
 

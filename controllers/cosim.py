@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from flexure.core import SimulationError
-from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
+from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 from flexure.fmu import build_scene_fmu
 
 from .controller_fmu import build_controller_fmu

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from flexure.core import SimulationError
-from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
+from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 
 class InProcessPlant:

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from flexure.core.methods import LOOP_METHOD, LOOP_RTOL
+from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .cosim import run_cosimulation, scene_fmu
 from .loop_controller import LoopController
@@ -70,7 +70,7 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
         Where the FMUs are built and kept (default: a temporary folder, removed after).
     progress : callable, optional
         Called with the fraction of the samples done (0 to 1) as the loop runs, e.g. a
-        `flexure.core.progress.Progress`.
+        `flexure.core.reporting.progress.Progress`.
     overrides : dict, optional
         {dotted scene key: value} set on a scene file or name before it is built
         (`flexure.core.load_scene`); the FMU plants are built from the overridden scene.

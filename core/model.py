@@ -1,6 +1,6 @@
 """The model: nodal coordinates, element groups, masses, loads, inputs and outputs.
 
-A `Model` is a plain container built by `flexure.core.scene`; it holds only what a scene
+A `Model` is a plain container built by `flexure.core.scene.building`; it holds only what a scene
 declares. Coordinates are numbered in node order ("3.x", "4.phi"); deformations in element
 order ("leaf_left.e2"). The node table (`Model.nodes`, with `coordinate_node`,
 `coordinate_axis` and `translations` per coordinate) says which node a coordinate belongs to
@@ -91,7 +91,7 @@ class Model:
     buckling_loads: np.ndarray | None = None  # (NX,) reference load of the buckling analysis
     source: str = "<dict>"
     # 3-D: rigid-body inertias of rotational nodes, [(Euler parameter indices (4,), J (3, 3)
-    # kg m^2 in the node's body frame)], see flexure.core.rotary_inertia
+    # kg m^2 in the node's body frame)], see flexure.core.elements.rotary_inertia
     node_inertias: list = field(default_factory=list)
     # Scene keys a user may tune without rebuilding the scene ("nodes.3.mass"), [scene] tunable
     tunable: list = field(default_factory=list)

@@ -16,8 +16,8 @@ import time
 import numpy as np
 
 from flexure.core import load_scene, static_equilibrium
-from flexure.core.simulation import simulate
-from flexure.core.tables import format_table
+from flexure.core.reporting.tables import format_table
+from flexure.core.simulation.simulation import simulate
 
 METHODS = ("cvode-bdf", "ida")
 

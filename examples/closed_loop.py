@@ -26,7 +26,7 @@ import numpy as np
 
 from flexure.controllers import low_frequency_model, run_loop
 from flexure.core import load_scene
-from flexure.core.tables import markdown_table
+from flexure.core.reporting.tables import markdown_table
 
 warnings.filterwarnings("ignore", module="scipy.signal")
 

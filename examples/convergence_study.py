@@ -154,7 +154,7 @@ def observed_order(errors, ratio=2.0):
 
 
 def main(plot="convergence_study.png"):
-    from flexure.core.tables import format_table
+    from flexure.core.reporting.tables import format_table
 
     exact, rows = buckling_convergence()
     orders = observed_order([r[2] for r in rows])

@@ -3,7 +3,7 @@
 The damping of the leaf springs is removed; the stage is released from rest in the static
 equilibrium under the modal load M0 phi_1 (1 N sideways), so that it vibrates in its first
 mode (10.6 Hz) with the stiff modes (2.1 and 3.6 kHz) excited only by the nonlinearity. The
-mechanical energy (kinetic plus strain, `flexure.core.energy.mechanical_energy`: the plain
+mechanical energy (kinetic plus strain, `flexure.core.mechanics.energy.mechanical_energy`: the plain
 numpy formulas, independent of the compiled engine that integrates) is compared with its
 initial value every 0.5 s.
 
@@ -18,8 +18,8 @@ import numpy as np
 import scipy.linalg
 
 from flexure.core import Simulator, build_model, linearize, scene_path, static_equilibrium
-from flexure.core.energy import mechanical_energy
-from flexure.core.tables import format_table
+from flexure.core.mechanics.energy import mechanical_energy
+from flexure.core.reporting.tables import format_table
 
 
 def undamped_stage():

@@ -33,7 +33,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2True
 
 from flexure.core import Simulator, load_scene
-from flexure.core.tables import format_table
+from flexure.core.reporting.tables import format_table
 from flexure.fmu import build_scene_fmu, build_slave_fmu
 from flexure.fmu.scene_slave import DEFAULT_RTOL as FMU_RTOL
 from flexure.fmu.scene_slave import METHODS as FMU_METHODS

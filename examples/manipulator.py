@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexure.core.scene_writer import scene_toml
+from flexure.core.scene.scene_writer import scene_toml
 
 SCENES = Path(__file__).resolve().parent / "scenes"
 

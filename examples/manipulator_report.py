@@ -37,8 +37,8 @@ from flexure.core import (
     state_space,
     static_equilibrium,
 )
-from flexure.core.modal import describe_mode
-from flexure.core.statespace import frequency_grid, plot_principal_gains
+from flexure.core.analysis.modal import describe_mode
+from flexure.core.analysis.statespace import frequency_grid, plot_principal_gains
 
 MODELS = ("manipulator", "manipulator_e1", "manipulator_reduced")
 FIGURES = Path(__file__).resolve().parent / "figures"

@@ -1,19 +1,19 @@
 """The integrators' own floor: how fast could the 1 N step run if the model cost nothing?
 
-The speed target of the simulation (stage_planar_3dof, 1 s of a 1 N step at rtol 1e-6, ten
-times faster than real time) is measured on the nonlinear model. This script separates the
-model's cost from the solver's: it replaces the nonlinear model by its linearisation at rest
+The speed target of the simulation (stage_planar_3dof, 1 s of a 1 N step at rtol 1e-6, ten times
+faster than real time) is measured on the nonlinear model. This script separates the model's
+cost from the solver's: it replaces the nonlinear model by its linearisation at rest
 (`flexure.core.state_space`: ydot = A y + B u on y = [q - q0, qdot]), whose right-hand side is
 one 6 x 6 product (a few microseconds), and runs it through the SUNDIALS formulas the simulator
 uses (CVODE BDF, BDF limited to order 2, Adams, IDA; and scipy's Radau) with the simulator's
 tolerances (`default_atol`) and solver options (dense linear solver, up to 10 Newton iterations
 in CVODE). The simulator calls SUNDIALS through compiled callbacks on its packed model
-(`flexure.core.sundials`), which take no Python right-hand side; the surrogate's runs go through
-scikit-sundae's Python interface to the same SUNDIALS instead. So the step counts compare one to
-one, while the surrogate's wall time includes some 10 us of Python per evaluation: its
-real-time factor is the floor of a Python model, not of a compiled one. The linear step response
-is known exactly (eigen-decomposition of A, checked against the matrix exponential), so each
-run's error is exact: the largest output error at the accepted steps (m).
+(`flexure.core.simulation.sundials`), which take no Python right-hand side; the surrogate's runs
+go through scikit-sundae's Python interface to the same SUNDIALS instead. So the step counts
+compare one to one, while the surrogate's wall time includes some 10 us of Python per
+evaluation: its real-time factor is the floor of a Python model, not of a compiled one. The
+linear step response is known exactly (eigen-decomposition of A, checked against the matrix
+exponential), so each run's error is exact: the largest output error at the accepted steps (m).
 
 It prints two tables:
 
@@ -38,7 +38,7 @@ from sksundae.cvode import CVODE
 from sksundae.ida import IDA
 
 from flexure.core import FlexureError, default_atol, load_scene, simulate, state_space
-from flexure.core.tables import format_table
+from flexure.core.reporting.tables import format_table
 
 METHODS = ("cvode-bdf", "cvode-bdf:2", "cvode-adams", "ida", "scipy-radau")
 
@@ -148,7 +148,7 @@ def run_method(method, A, b, *, rtol, atol, t_end):
     if name == "ida":
         solver = IDA(system.residual, jacfn=system.residual_jacobian, **options)
         solver.init_step(0.0, y0, system.derivative(0.0, y0))
-    else:  # the simulator's CVODE options (flexure.core.sundials.Cvode)
+    else:  # the simulator's CVODE options (flexure.core.simulation.sundials.Cvode)
         solver = CVODE(system.rhs, method="BDF" if name == "cvode-bdf" else "Adams",
                        jacfn=system.jacobian, max_nonlin_iters=10, **options)
         solver.init_step(0.0, y0)

@@ -17,7 +17,7 @@ import pstats
 import time
 
 from flexure.core import load_scene, simulate
-from flexure.core.tables import format_table
+from flexure.core.reporting.tables import format_table
 
 SCENES = ("truss_1dof_x", "truss_1dof_e", "stage_planar_1dof", "stage_planar_3dof")
 

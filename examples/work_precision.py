@@ -13,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from flexure.core import load_scene
-from flexure.core.workprecision import DEFAULT_METHODS, work_precision
+from flexure.core.simulation.workprecision import DEFAULT_METHODS, work_precision
 
 
 def main(argv=None):

@@ -257,7 +257,7 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
     import tomllib
 
     from flexure.core import apply_overrides, build_model, scene_path, scene_toml
-    from flexure.core.overrides import describe_overrides
+    from flexure.core.scene.overrides import describe_overrides
 
     from .scene_slave import scene_value
 

@@ -79,7 +79,7 @@ def register(subparsers):
 
 
 def run_build(args):
-    from flexure.core.scene import parse_toml, scene_path
+    from flexure.core.scene.building import parse_toml, scene_path
 
     tunable = [] if args.no_tunable else args.tunable
     for key in set(tunable or []):

@@ -45,7 +45,7 @@ from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from flexure.core import Mechanics, Simulator, build_model, stresses_along
-from flexure.core.methods import ONE_STEP_METHODS
+from flexure.core.simulation.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
 

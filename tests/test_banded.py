@@ -1,10 +1,10 @@
-"""The banded LU (core/banded.py) against numpy on random banded and dense matrices."""
+"""The banded LU (core/numerics/banded.py) against numpy on random banded and dense matrices."""
 
 import numpy as np
 import pytest
 from scipy.sparse import random as sparse_random
 
-from flexure.core import banded
+from flexure.core.numerics import banded
 
 
 def banded_matrix(rng, n, kl, ku, zero_diagonal=False):

@@ -21,7 +21,7 @@ import pytest
 import scipy.integrate
 
 from flexure.core import Kinematics, build_model, linearize, static_equilibrium
-from flexure.core.rotations import (
+from flexure.core.numerics.rotations import (
     body_rates_matrix,
     compose,
     from_rotation_vector,
@@ -267,7 +267,7 @@ def test_rotary_inertia_reproduces_eulers_equations(seed):
     J omega'_dot = -omega' x J omega' (a torque-free rigid body), and so does the classical
     Euler-parameter form M = 4 G^T J G, h = 4 G(lambda_dot)^T J omega' (an independent
     derivation). No gravity on rotational inertia."""
-    from flexure.core.assembly import Inertia
+    from flexure.core.mechanics.assembly import Inertia
 
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(3, 3))
@@ -292,7 +292,7 @@ def test_rotary_inertia_reproduces_eulers_equations(seed):
 def test_node_inertia_with_an_idealised_tensor():
     """An inertia about one body axis only (J = diag(j, 0, 0), negative point mass) still
     gives the right kinetic energy for any angular velocity."""
-    from flexure.core.assembly import Inertia
+    from flexure.core.mechanics.assembly import Inertia
 
     J = np.diag([2.0, 0.0, 0.0])
     inertia = Inertia(_Node(J))

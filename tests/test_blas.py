@@ -25,8 +25,8 @@ from flexure.core import (
     static_equilibrium,
     stresses_along,
 )
-from flexure.core.blas import blas_threads
-from flexure.core.energy import mechanical_energy
+from flexure.core.mechanics.energy import mechanical_energy
+from flexure.core.numerics.blas import blas_threads
 
 HOST_THREADS = 2
 

@@ -21,7 +21,7 @@ import pytest
 from flexure.core import ConstraintError, SceneError, build_model, load_scene, scene_path
 from flexure.core.cli import atomic_output, main, write_outputs
 from flexure.core.errors import OutputError
-from flexure.core.tables import json_text
+from flexure.core.reporting.tables import json_text
 
 FLEXURE = str(Path(sys.executable).with_name("flexure"))  # the installed console script
 SCENES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
@@ -58,8 +58,8 @@ def no_run(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("the run started before the arguments were checked")
 
-    import flexure.core.cli_bench as cli_bench
-    import flexure.core.simulation as simulation
+    import flexure.core.cli.bench as cli_bench
+    import flexure.core.simulation.simulation as simulation
     import flexure.fmu.cli as fmu_cli
 
     monkeypatch.setattr(simulation, "simulate", forbidden)
@@ -284,7 +284,7 @@ def test_one_failed_output_does_not_lose_the_others(tmp_path, capsys):
 
 
 def test_simulate_writes_its_outputs_atomically(capsys, places, monkeypatch):
-    import flexure.core.simulation as simulation
+    import flexure.core.simulation.simulation as simulation
 
     class Result:
         model_name, method, rtol = "truss_1dof_x", "cvode-bdf", 1e-8
@@ -345,7 +345,7 @@ def test_loop_json_writes_an_infinite_margin_as_null(capsys, monkeypatch, tmp_pa
 
 def test_bench_whose_every_run_fails_exits_2_after_writing_its_table(capsys, places,
                                                                     monkeypatch):
-    import flexure.core.cli_bench as cli_bench
+    import flexure.core.cli.bench as cli_bench
 
     class Study:
         rows = [{"method": m, "rtol": 1e-3, "status": "time limit"} for m in ("ida", "cvode-bdf")]

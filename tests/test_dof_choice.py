@@ -9,7 +9,7 @@ import pytest
 
 from flexure.core import ConstraintError, build_model, load_scene, natural_frequencies
 from flexure.core.cli import main
-from flexure.core.scene import parse_toml, scene_path
+from flexure.core.scene.building import parse_toml, scene_path
 
 
 def without_dofs(name):

@@ -142,7 +142,8 @@ def test_batched_hessian_forms_match_the_einsum_forms(scene):
     """assembly's batched quadratic forms v^T D2e_i v (the convective term) against its einsum
     over columns. (The compiled engine's mass and convective force are checked against
     assembly.Inertia in tests/test_engine.py.)"""
-    from flexure.core import assembly, load_scene
+    from flexure.core import load_scene
+    from flexure.core.mechanics import assembly
 
     model = load_scene(scene)
     rng = np.random.default_rng(8)

@@ -1,4 +1,4 @@
-"""The compiled engine (flexure.core.engine) against independent plain-numpy computations.
+"""The compiled engine (flexure.core.engine.engine) against independent plain-numpy computations.
 
 Every quantity the integrators get from the engine is recomputed here from the reference path
 the static analyses use (Kinematics, assembly.Inertia, Mechanics), written out in this file:
@@ -33,15 +33,15 @@ from flexure.core import (
     Simulator,
     build_model,
     builtin_scenes,
-    engine,
     load_scene,
     run_sampled_loop,
     scene_path,
     static_equilibrium,
 )
-from flexure.core import engine_data as ed
-from flexure.core.engine_data import EngineData
-from flexure.core.sundials import METHODS, STATUS_MESSAGES
+from flexure.core.engine import data as ed
+from flexure.core.engine import engine
+from flexure.core.engine.data import EngineData
+from flexure.core.simulation.sundials import METHODS, STATUS_MESSAGES
 
 CORE = Path(__file__).resolve().parents[1] / "core"
 
@@ -292,7 +292,7 @@ def truss_pendulum(length=0.5, mass=1.0):
 def test_the_cheaper_form_is_chosen_per_model():
     """The 1-DOF stage (M_bar 1 x 1) takes the reduced form, the 93-DOF refined stage (M_bar
     costs NDOF^2 per element) the augmented one."""
-    from flexure.core.engine_data import evaluation_cost
+    from flexure.core.engine.data import evaluation_cost
 
     assert EngineData(load_scene("stage_planar_1dof")).int_array("dims")[ed.AUGMENTED] == 0
     small = evaluation_cost(11, 10, 1, [(3, 6, 8)])
@@ -342,8 +342,8 @@ def test_statuses_and_their_messages():
 
 
 def test_method_names_of_the_command_line_are_the_solvers():
-    from flexure.core.cli_simulate import METHODS as COMMAND_METHODS
-    from flexure.core.simulator import METHODS as ALL_METHODS
+    from flexure.core.cli.simulate import METHODS as COMMAND_METHODS
+    from flexure.core.simulation.simulator import METHODS as ALL_METHODS
     from flexure.fmu.scene_slave import METHODS as FMU_METHODS
 
     assert COMMAND_METHODS == ALL_METHODS == METHODS + ("esdirk", "esdirk3", "esdirk2")
@@ -382,7 +382,7 @@ def test_compiled_sampled_loop_equals_a_python_loop_of_simulator_calls_bit_for_b
 PROBE = textwrap.dedent("""
     import json, sys
     import numpy as np
-    from {package}.core.sampled_loop import controller_step
+    from {package}.core.simulation.sampled_loop import controller_step
     out = np.zeros(1)
     controller_step(np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)),
                     np.zeros(1), np.ones(1), out)
@@ -405,7 +405,7 @@ def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_pat
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         (package / "__init__.py").write_text("")
         if change:
-            with open(package / "core" / "tables.py", "a") as handle:
+            with open(package / "core" / "reporting" / "tables.py", "a") as handle:
                 handle.write("\n# a change\n")
         return tmp_path / folder
 

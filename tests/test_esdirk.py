@@ -9,8 +9,8 @@ import pytest
 
 from flexure.core import Simulator, load_scene, run_sampled_loop, simulate
 from flexure.core.errors import SimulationError
-from flexure.core.esdirk import Esdirk
-from flexure.core.esdirk_method import ESDIRK3, ESDIRK4, TRBDF2
+from flexure.core.simulation.esdirk import Esdirk
+from flexure.core.simulation.esdirk_method import ESDIRK3, ESDIRK4, TRBDF2
 
 TABLEAUS = [ESDIRK3, ESDIRK4, TRBDF2]
 

@@ -465,7 +465,7 @@ def test_cli_build_check_and_env(tmp_path, capsys):
     assert capsys.readouterr().out.startswith("export LD_PRELOAD=")
     with zipfile.ZipFile(fmu) as archive:  # flexure travels inside, under a hashed name
         names = archive.namelist()
-    assert any(n.startswith("resources/_flexure_") and n.endswith("core/simulation.py")
+    assert any(n.startswith("resources/_flexure_") and n.endswith("core/simulation/simulation.py")
                for n in names)
 
 

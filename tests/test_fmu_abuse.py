@@ -375,7 +375,7 @@ def case_leak(host, other, cycles=1000, warmup=10):
             gc.collect()
             marks.append(rss() - start)
     say("VALUE leak-mb", " ".join(f"{m:.3f}" for m in marks))
-    # core's pair-index cache (flexure.core.assembly._PAIRS) in the bundled copy, if any:
+    # core's pair-index cache (flexure.core.mechanics.assembly._PAIRS) in the bundled copy, if any:
     caches = [len(getattr(module, "_PAIRS", ())) for name, module in list(sys.modules.items())
               if name.endswith(".core.assembly")]
     say("VALUE core-pair-cache", sum(caches))

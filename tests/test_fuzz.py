@@ -299,8 +299,8 @@ def _run_cli(argv):
 @given(command_lines())
 def test_random_command_lines(cli_folder, case):
     import flexure.controllers.cli as loop_cli
-    import flexure.core.cli_bench as cli_bench
-    import flexure.core.simulation as simulation
+    import flexure.core.cli.bench as cli_bench
+    import flexure.core.simulation.simulation as simulation
     import flexure.fmu.cli as fmu_cli
 
     argv, input_text, reference_text = case

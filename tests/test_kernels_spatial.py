@@ -10,9 +10,8 @@ import pytest
 from numba import njit
 from numpy.testing import assert_allclose
 
-from flexure.core import rotary_inertia
-from flexure.core.elements import beam
-from flexure.core.rotations import from_rotation_vector
+from flexure.core.elements import beam, rotary_inertia
+from flexure.core.numerics.rotations import from_rotation_vector
 
 COUNT = 12
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flexure.core import Kinematics, Mechanics, load_scene, static_equilibrium
-from flexure.core.assembly import deformations
+from flexure.core.mechanics.assembly import deformations
 
 
 @pytest.fixture(params=["stage_planar_1dof", "stage_planar_3dof", "truss_1dof_e"])
@@ -138,7 +138,7 @@ def test_the_sparse_constraint_factor_gives_the_dense_ones_results(monkeypatch):
     """Large models factor J with SuperLU instead of LAPACK's dense LU: the same static
     equilibrium, DF and constraint multipliers, to round-off, on the 19-DOF stage forced
     through each path."""
-    from flexure.core import kinematics
+    from flexure.core.mechanics import kinematics
 
     results = {}
     for path, threshold in (("dense", 10**9), ("sparse", 0)):
@@ -156,7 +156,7 @@ def test_the_sparse_constraint_factor_gives_the_dense_ones_results(monkeypatch):
 def test_a_sparse_factor_of_a_non_finite_jacobian_solves_to_nan():
     import scipy.sparse
 
-    from flexure.core.kinematics import JacobianFactor
+    from flexure.core.mechanics.kinematics import JacobianFactor
 
     J = scipy.sparse.csc_matrix(np.array([[1.0, 0.0], [np.inf, 1.0]]))
     assert np.all(np.isnan(JacobianFactor(J).solve(np.ones(2))))

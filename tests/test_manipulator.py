@@ -21,8 +21,8 @@ from flexure.core import (
     state_space,
     static_equilibrium,
 )
-from flexure.core.constraints import check_exact_constraint, freezable
-from flexure.core.scene import parse_toml, scene_path
+from flexure.core.mechanics.constraints import check_exact_constraint, freezable
+from flexure.core.scene.building import parse_toml, scene_path
 
 
 @pytest.mark.parametrize("file_name", sorted(manipulator.all_scenes()))

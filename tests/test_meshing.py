@@ -9,7 +9,7 @@ import pytest
 
 from flexure.core import build_model, load_scene, natural_frequencies
 from flexure.core.errors import SceneError
-from flexure.core.scene import parse_toml, scene_path
+from flexure.core.scene.building import parse_toml, scene_path
 
 # a 0.1 m steel leaf, 18 mm x 0.5 mm: EI = 0.039375 N m^2, rho A = 0.07065 kg/m
 LENGTH, EI, RHO_A = 0.1, 2.1e11 * 0.018 * 0.0005 ** 3 / 12, 7850.0 * 0.018 * 0.0005

@@ -5,8 +5,8 @@ import json
 import numpy as np
 
 from flexure.core import load_scene, natural_frequencies
+from flexure.core.analysis.modal import describe_mode
 from flexure.core.cli import main
-from flexure.core.modal import describe_mode
 
 
 def test_the_planar_stage_modes_in_words():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexure.core import build_model, load_scene
-from flexure.core.scene import builtin_scenes, parse_toml, scene_path
+from flexure.core.scene.building import builtin_scenes, parse_toml, scene_path
 
 
 # the manipulator's scenes (hundreds of DOFs, one refused by design): tests/test_manipulator.py

@@ -10,7 +10,7 @@ import pytest
 
 from flexure.core import SceneError, build_model, load_scene, natural_frequencies, scene_path
 from flexure.core.cli import main
-from flexure.core.overrides import apply_overrides, parse_assignment, parse_value
+from flexure.core.scene.overrides import apply_overrides, parse_assignment, parse_value
 
 SCENE = "stage_planar_1dof"
 SOURCE = str(scene_path(SCENE))

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from flexure.core import build_model, load_scene, state_space, static_equilibrium
+from flexure.core.analysis.statespace import frequency_grid, principal_gains
 from flexure.core.cli import main
-from flexure.core.scene import parse_toml, scene_path
-from flexure.core.statespace import frequency_grid, principal_gains
+from flexure.core.scene.building import parse_toml, scene_path
 
 
 def two_by_two():
@@ -72,7 +72,7 @@ def test_analyze_plots_the_gains_and_names_the_peaks(tmp_path, capsys):
 
 
 def test_analyze_sigma_needs_inputs_and_outputs(tmp_path, capsys):
-    from flexure.core.scene_writer import scene_toml
+    from flexure.core.scene.scene_writer import scene_toml
 
     data = copy.deepcopy(parse_toml(scene_path("stage_planar_3dof")))
     del data["inputs"]

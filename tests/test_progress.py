@@ -6,7 +6,7 @@ import numpy as np
 
 from flexure.controllers import run_loop
 from flexure.core import load_scene, simulate
-from flexure.core.progress import Progress
+from flexure.core.reporting.progress import Progress
 
 
 class Terminal(io.StringIO):

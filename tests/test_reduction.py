@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from flexure.core import FlexureError, build_model, load_scene, natural_frequencies
+from flexure.core.analysis.reduction import frozen_scene, propose_reduction
 from flexure.core.cli import main
-from flexure.core.reduction import frozen_scene, propose_reduction
-from flexure.core.scene import builtin_scenes, parse_toml, scene_path
-from flexure.core.scene_writer import scene_toml
+from flexure.core.scene.building import builtin_scenes, parse_toml, scene_path
+from flexure.core.scene.scene_writer import scene_toml
 
 
 @pytest.mark.parametrize("name", builtin_scenes())

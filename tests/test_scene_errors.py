@@ -217,7 +217,7 @@ def test_an_over_constraint_comes_with_a_release_that_removes_it():
     """The check names the dependent set and proposes one release from it that the section
     allows (a leaf's elongation, not the stiffness-less bar's); applying the proposal gives an
     exactly constrained guidance with its one DOF."""
-    from flexure.core.constraints import proposed_releases
+    from flexure.core.mechanics.constraints import proposed_releases
 
     data = triple_leaf_guidance()
     with pytest.raises(ConstraintError) as error:
@@ -233,7 +233,7 @@ def test_an_over_constraint_comes_with_a_release_that_removes_it():
 
 
 def test_an_exact_model_needs_no_release():
-    from flexure.core.constraints import proposed_releases
+    from flexure.core.mechanics.constraints import proposed_releases
 
     assert proposed_releases(load_scene("stage_planar_3dof")) == []
     assert proposed_releases(load_scene("stage_spatial_19dof")) == []
@@ -252,7 +252,7 @@ def test_collinear_trusses_get_one_release_proposed():
 def test_the_quick_regularity_test_clears_only_well_conditioned_matrices():
     """check_exact_constraint skips its SVD when an LU condition estimate clears the
     constraint Jacobian by a margin; a matrix near singular or singular goes to the SVD."""
-    from flexure.core.constraints import CLEAR_RCOND, RANK_TOLERANCE, _clearly_regular
+    from flexure.core.mechanics.constraints import CLEAR_RCOND, RANK_TOLERANCE, _clearly_regular
 
     rng = np.random.default_rng(3)
     u, _ = np.linalg.qr(rng.normal(size=(40, 40)))
@@ -273,10 +273,10 @@ def test_the_quick_test_and_the_svd_agree_on_meshed_stages():
     (its ratio 5e-7: cleared without an SVD)."""
     import scipy.linalg
 
-    from flexure.core import assembly
-    from flexure.core.constraints import _column_scale
-    from flexure.core.kinematics import Kinematics
-    from flexure.core.scene import parse_toml
+    from flexure.core.mechanics import assembly
+    from flexure.core.mechanics.constraints import _column_scale
+    from flexure.core.mechanics.kinematics import Kinematics
+    from flexure.core.scene.building import parse_toml
 
     for segments in (4, 20):
         data = copy.deepcopy(parse_toml(scene_path("stage_spatial_1dof")))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from flexure.core import SceneError, build_model
-from flexure.core.sections import beam_properties, circle, rectangle
+from flexure.core.scene.sections import beam_properties, circle, rectangle
 
 
 @pytest.mark.parametrize("ratio, k1, k2", [(1, 0.1406, 0.208), (2, 0.229, 0.246),

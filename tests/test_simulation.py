@@ -20,7 +20,7 @@ from flexure.core import (
     simulate,
     static_equilibrium,
 )
-from flexure.core.energy import mechanical_energy
+from flexure.core.mechanics.energy import mechanical_energy
 
 
 def scene_dict(name):

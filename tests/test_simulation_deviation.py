@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from flexure.core import Simulator, build_model, default_atol, load_scene, simulate
-from flexure.core.kinematics import Kinematics
+from flexure.core.mechanics.kinematics import Kinematics
 
 
 def step_response(periods, samples):

@@ -171,7 +171,7 @@ def test_a_state_beyond_the_range_of_validity_is_reported_not_silent(capsys):
     run completes, and the result, the command's output and the simulator say so; a 1 N
     step stays within the range, without warnings."""
     from flexure.core.cli import main
-    from flexure.core.plausibility import DISTANCE_LIMIT, STRAIN_LIMIT
+    from flexure.core.simulation.plausibility import DISTANCE_LIMIT, STRAIN_LIMIT
 
     model = load_scene("stage_planar_3dof")
     wild = simulate(model, 1e-3, inputs={"F": 1e9}, rtol=1e-6, output_times=[0.0, 1e-3])
@@ -195,7 +195,7 @@ def test_the_compiled_range_test_agrees_with_the_warnings(scene):
     """RangeCheck.within (compiled, run after every FMU doStep) is True exactly when
     `warnings` finds nothing: random states spread across both limits, and each limit
     crossed alone by 1 % on one element or coordinate."""
-    from flexure.core.plausibility import DISTANCE_LIMIT, RangeCheck
+    from flexure.core.simulation.plausibility import DISTANCE_LIMIT, RangeCheck
 
     model = load_scene(scene)
     check = RangeCheck(model)

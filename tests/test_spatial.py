@@ -23,8 +23,8 @@ from flexure.core import (
     scene_path,
     static_equilibrium,
 )
+from flexure.core.analysis.stresses import beam_stresses
 from flexure.core.cli import main
-from flexure.core.stresses import beam_stresses
 
 PLANAR_FREQUENCY = 10.64484738  # Hz, stage_planar_1dof (the planar figures check)
 
@@ -85,7 +85,7 @@ def test_planar_motion_in_time_equals_the_planar_model():
     the planar trajectory. The trajectories, each integrated with rtol = 1e-10, agree to
     1e-9 m on a 3.6 mm motion: what is left is the integrators' own error.
     """
-    from flexure.core.simulation import Simulator, simulate
+    from flexure.core.simulation.simulation import Simulator, simulate
 
     def force(t):
         return 2.0 * np.sin(2 * np.pi * 5.0 * t)
@@ -184,8 +184,8 @@ def test_19dof_stage_simulates_for_one_second_with_cvode_and_ida():
     to 1 N in 0.5 s (a fifth-order smooth step), then held: at 1 s the stage is at the static
     deflection under 2 N (to the small residual vibration) and the two integrators agree; the
     von Mises stresses follow along the motion."""
-    from flexure.core.simulation import simulate
-    from flexure.core.stresses import stresses_along
+    from flexure.core.analysis.stresses import stresses_along
+    from flexure.core.simulation.simulation import simulate
 
     def vcm(t):
         s = min(t / 0.5, 1.0)

@@ -12,7 +12,7 @@ import speed_benchmark
 import work_precision
 
 from flexure.core import load_scene, natural_frequencies
-from flexure.core.workprecision import work_precision as study_of
+from flexure.core.simulation.workprecision import work_precision as study_of
 
 FLEXURE = str(Path(sys.executable).with_name("flexure"))
 
@@ -32,7 +32,7 @@ def test_work_precision_example_writes_table_and_plot(tmp_path):
     study = work_precision.main(["--scene", "stage_planar_1dof", "--t-end", "0.05",
                                  "--rtols", "1e-5", "--reference-rtol", "1e-9",
                                  "--out", str(tmp_path)])
-    from flexure.core.workprecision import DEFAULT_METHODS
+    from flexure.core.simulation.workprecision import DEFAULT_METHODS
 
     assert len(study.rows) == len(DEFAULT_METHODS) == 11
     assert all(r["status"] == "ok" for r in study.rows)

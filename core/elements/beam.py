@@ -51,8 +51,8 @@ compiled evaluation engine.
 import numpy as np
 from numba import carray
 
-from ..jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
-from ..rotations import from_rotation_vector, rotation_matrix, vector_tensor
+from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.rotations import from_rotation_vector, rotation_matrix, vector_tensor
 from .plbeam import HERMITE_MASS
 
 type_name = "BEAM"

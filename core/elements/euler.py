@@ -14,7 +14,7 @@ It has no stiffness, damping or mass.
 import numpy as np
 from numba import carray
 
-from ..jit import DEFORMATIONS_ENTRY, entry, kernel
+from ..numerics.jit import DEFORMATIONS_ENTRY, entry, kernel
 
 type_name = "EULER"
 dimension = 3

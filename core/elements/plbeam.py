@@ -27,7 +27,7 @@ Every function works on all elements of this type at once: arrays shaped (n_elem
 import numpy as np
 from numba import carray
 
-from ..jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
 
 type_name = "PLBEAM"
 dimension = 2

@@ -19,7 +19,7 @@ and in any dimension (the spatial TRUSS uses them as they are).
 import numpy as np
 from numba import carray
 
-from ..jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
 
 type_name = "PLTRUSS"
 dimension = 2

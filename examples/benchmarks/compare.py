@@ -549,7 +549,8 @@ def rhs_cost(model, *, seconds=0.2):
     y = np.ascontiguousarray(sim.state, dtype=float)
     sim.derivative(0.0, y)  # prepares the engine's inputs and reference state
     try:
-        from flexure.core import engine, engine_data
+        from flexure.core.engine import data as engine_data
+        from flexure.core.engine import engine
 
         ydot = np.empty_like(y)
         data, call = sim.data, engine.call
@@ -864,13 +865,13 @@ def run(groups=GROUPS, *, repeat=5, quick=False):
 
 
 def text_table(rows, title):
-    from flexure.core.tables import format_table
+    from flexure.core.reporting.tables import format_table
 
     return format_table(HEADERS, [r.cells() for r in rows], title=title)
 
 
 def markdown(rows, title):
-    from flexure.core.tables import markdown_table
+    from flexure.core.reporting.tables import markdown_table
 
     return f"{title}\n\n" + markdown_table(HEADERS, [[c.replace("|", "\\|") for c in r.cells()]
                                                      for r in rows]) + "\n"

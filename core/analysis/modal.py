@@ -1,0 +1,136 @@
+"""Natural frequencies, mode shapes and linear buckling load factors.
+
+Frequencies solve (K0 + G0) phi = omega^2 M0 phi (scipy.linalg.eigh, symmetric-definite);
+mode shapes are normalised to unit modal mass and given on the DOFs and on all coordinates
+(DF phi). A negative frequency marks an unstable (divergent) mode, omega^2 < 0.
+
+Buckling load factors solve K0 phi + lambda G0 phi = 0 with G0 the geometric stiffness of the
+reference load at its equilibrium, as SPACAR's eig(-K0, G0); computed as the symmetric
+problem -G0 phi = (1 / lambda) K0 phi so that a singular G0 (DOFs the load does not soften)
+causes no trouble. Positive factors only, smallest first.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.linalg
+
+from ..errors import ConvergenceError
+from ..mechanics.mechanics import Mechanics
+from ..numerics.blas import blas_threads
+from .linearization import LinearModel, linearize
+from .statics import static_equilibrium
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+
+
+@dataclass
+class Modes:
+    """Natural frequencies (Hz) and mass-normalised mode shapes."""
+
+    frequencies_hz: np.ndarray  # (n,)
+    shapes: np.ndarray  # (NDOF, n) on the DOFs
+    coordinate_shapes: np.ndarray  # (NX, n) on all coordinates
+    linear_model: LinearModel
+
+
+@blas_threads()
+def natural_frequencies(model: Model, count: int | None = None, *,
+                        linear_model: LinearModel | None = None) -> Modes:
+    """The lowest `count` (default: all) natural frequencies and mode shapes of `model`."""
+    lin = linear_model or linearize(model)
+    if lin.M0.size == 0:
+        raise ConvergenceError(f"{model.name!r} has no DOFs: no natural frequencies")
+    try:
+        eigenvalues, shapes = scipy.linalg.eigh(lin.K, lin.M0)
+    except np.linalg.LinAlgError:
+        raise ConvergenceError(
+            f"{model.source}: the reduced mass matrix of {model.name!r} is not positive "
+            "definite: give every DOF some mass (node mass, inertia or rho_A)"
+        ) from None
+    count = eigenvalues.size if count is None else min(count, eigenvalues.size)
+    omega = np.sign(eigenvalues) * np.sqrt(np.abs(eigenvalues))
+    return Modes(
+        frequencies_hz=omega[:count] / (2 * np.pi),
+        shapes=shapes[:, :count],
+        coordinate_shapes=lin.DF @ shapes[:, :count],
+        linear_model=lin,
+    )
+
+
+@blas_threads()
+def buckling_load_factors(model: Model, count: int | None = None, *,
+                          loads: np.ndarray | None = None) -> np.ndarray:
+    """Load factors lambda (smallest first) at which the reference load buckles `model`.
+
+    The reference load is `loads` (NX,), else the scene's [buckling] forces, else its loads.
+    """
+    if loads is None:
+        loads = model.buckling_loads if model.buckling_loads is not None else model.loads
+    mech = Mechanics(model)
+    solution = static_equilibrium(model, loads=loads, mechanics=mech)
+    config = solution.config
+    K0 = mech.structural_stiffness(config)
+    G0 = mech.geometric_stiffness(config, solution.stress_resultants)
+    try:
+        inverse = scipy.linalg.eigh(-G0, K0, eigvals_only=True)
+    except np.linalg.LinAlgError:
+        raise ConvergenceError(
+            f"{model.source}: the structural stiffness K0 of {model.name!r} is singular: "
+            "no buckling analysis without stiffness on every DOF"
+        ) from None
+    scale = np.max(np.abs(inverse), initial=0.0)
+    positive = inverse[inverse > 1e-12 * scale] if scale > 0 else inverse[:0]
+    factors = np.sort(1.0 / positive)
+    return factors if count is None else factors[:count]
+
+
+def describe_mode(model: Model, coordinate_shape: np.ndarray,
+                  x: np.ndarray | None = None) -> str:
+    """Which nodes move how in a mode (the coordinate shape (NX,) of `Modes`), in words: the
+    translational nodes that move most (within 10 % of the largest) and the axis they move
+    along, and the rotational nodes that turn most and about which axis (x', y', z': in
+    space the body frame of the node at the configuration x, default the initial one).
+    A rotation is named beside a translation only when it moves a point at the model's length
+    scale by at least a tenth as much, and the other way round, so that "3 and 5 along x"
+    describes a sideways mode and "4 and 6 turn about z" a tilting one."""
+    from ..mechanics.kinematics import length_scale
+    from ..numerics.rotations import body_rates_matrix
+
+    shape = np.asarray(coordinate_shape, dtype=float)
+    x = model.initial_coordinates if x is None else np.asarray(x, dtype=float)
+    moves, turns = [], []
+    for node in model.nodes:
+        index = list(node.coordinates)
+        if node.kind == "translational":
+            vector = shape[index]
+            moves.append((float(np.linalg.norm(vector)), node.name,
+                          node.axes[int(np.argmax(np.abs(vector)))]))
+        elif node.axes == ("phi",):
+            turns.append((abs(float(shape[index[0]])), node.name, "z"))
+        else:  # Euler parameters: the body-frame rotation 2 G(lambda) d lambda (rad)
+            rotation = 2.0 * body_rates_matrix(x[index]) @ shape[index]
+            turns.append((float(np.linalg.norm(rotation)), node.name,
+                          "xyz"[int(np.argmax(np.abs(rotation)))] + "'"))
+    scale = length_scale(model)
+    largest_move = max((m[0] for m in moves), default=0.0)
+    largest_turn = max((t[0] for t in turns), default=0.0) * scale
+    parts = []
+    for group, largest, verb in ((moves, largest_move, "along"), (turns, largest_turn, "turn")):
+        top = max(largest_move, largest_turn)
+        if largest <= 0.0 or largest < 0.1 * top:
+            continue
+        factor = 1.0 if verb == "along" else scale
+        leaders = [g for g in group if g[0] * factor >= 0.9 * largest]
+        leaders.sort(key=lambda g: -float(f"{g[0]:.4g}"))  # near-ties in the scene's order
+        axes = sorted({g[2] for g in leaders[:3]})
+        names = " and ".join(g[1] for g in leaders[:3]) + (" ..." if len(leaders) > 3 else "")
+        if verb == "along":
+            parts.append(f"{names} along {'/'.join(axes)}")
+        else:
+            parts.append(f"{names} turn about {'/'.join(axes)}")
+    return "; ".join(parts) or "no motion"

@@ -1,0 +1,226 @@
+"""Model reduction: which released deformations a model can prescribe zero while its lowest
+modes stay where they are.
+
+A released (or DOF) deformation adds a DOF. Stiff ones, a leaf spring's elongation or its
+in-plane bending, carry almost none of the energy of the low modes and only add high modes
+(the parasitic modes a controller must see, but not every one of them) and integration
+cost. SPACAR users freeze them by hand; `propose_reduction` does it by measurement:
+
+1. The lowest `keep` modes of the scene's model at its static equilibrium. In each mode phi
+   the deformations move by de = De DF phi; deformation d carries the strain energy
+   u_d = de_d (S de)_d (S the deformation stiffness, block-diagonal per element), and its
+   share of the mode's energy is |u_d| / sum |u_d|.
+2. A scene element's deformation (all its segments together, since the scene's `released`
+   and `dof` lists apply to every segment) gets the largest share it has in any kept mode.
+3. Deformations are frozen (prescribed zero: removed from `released` and `dof`) in order of
+   increasing share, as many as keep the `keep` lowest frequencies within `tolerance` (%,
+   relative to each): the largest count that does, by bisection over the count (each trial
+   builds the reduced scene and computes its modes). A deformation whose freezing would
+   over-constrain the model together with those before it (a release that removes an
+   over-constraint, such as a leaf's local cut, or the second leaf of a parallel pair) is
+   skipped: `constraints.freezable` tests the rank of the constraint rows incrementally, so
+   that every trial builds.
+
+`freeze` (`flexure reduce --freeze e1`) prescribes the named deformations zero on every
+element before anything else, whatever the tolerance (the chapter's elongation-frozen model);
+the reduction goes on from there.
+
+The reduced scene keeps the scene's DOF lists where they still count right (a frozen DOF
+deformation is simply no DOF any more); where they do not (a frozen released deformation
+removes a freedom some DOF stood for), it lists none and flexure chooses its DOFs
+(`constraints.choose_dofs`), the scene's DOF deformations becoming released ones. A trial
+that builds no valid model counts as too much freezing.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import FlexureError
+from ..mechanics import assembly
+from ..mechanics.constraints import freezable
+from ..scene.building import build_model
+from ..scene.meshing import segment_names
+from .linearization import linearize
+from .modal import natural_frequencies
+from .statics import static_equilibrium
+
+__all__ = ["Reduction", "energy_shares", "propose_reduction"]
+
+
+@dataclass
+class Reduction:
+    """What `propose_reduction` found; frequencies in Hz, shares as fractions."""
+
+    keep: int
+    tolerance: float  # %
+    frozen: list  # [(scene element, deformation)] prescribed zero in the reduced scene
+    scene: dict  # the reduced scene
+    full_hz: np.ndarray  # the lowest `keep` frequencies of the scene
+    reduced_hz: np.ndarray  # and of the reduced scene
+    ndof_full: int
+    ndof_reduced: int
+    shares: dict = field(default_factory=dict)  # (element, deformation) -> energy share
+    dofs_chosen: bool = False  # the reduced scene lists no DOFs (flexure chooses them)
+    forced: list = field(default_factory=list)  # the pairs `freeze` asked for (and kept valid)
+    forced_hz: np.ndarray | None = None  # the frequencies with those alone frozen
+    ndof_forced: int | None = None
+
+    @property
+    def change_percent(self):
+        """The largest relative change of the kept frequencies (%)."""
+        return float(np.max(np.abs(self.reduced_hz / self.full_hz - 1.0)) * 100.0)
+
+
+def lowest_frequencies(model, keep):
+    """The lowest `keep` natural frequencies (Hz) at the static equilibrium, and the modes."""
+    solution = static_equilibrium(model)
+    lin = linearize(model, solution)
+    modes = natural_frequencies(model, keep, linear_model=lin)
+    return modes, solution
+
+
+def energy_shares(model, data, keep):
+    """{(scene element, deformation): the largest share of the strain energy of any of the
+    lowest `keep` modes that it carries} for the released and DOF deformations of `model`,
+    built from scene `data` (whose segmented elements' segments are summed)."""
+    modes, solution = lowest_frequencies(model, keep)
+    _, De = assembly.deformation_jacobian(model, solution.x)
+    S, _ = assembly.stiffness_and_damping(model)
+    moved = De @ modes.linear_model.DF @ modes.shapes  # (NE, keep)
+    energy = np.abs(moved * (S @ moved))
+    total = energy.sum(axis=0)
+    share = energy / np.where(total > 0.0, total, 1.0)
+    return {key: float(share[rows].sum(axis=0).max())
+            for key, rows in _deformation_rows(model, data).items()}, modes
+
+
+def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(),
+                      source: str = "<dict>", progress=None) -> Reduction:
+    """The reduction of scene `data` (a dict) that freezes the most released deformations
+    while its lowest `keep` frequencies move by at most `tolerance` percent; `progress` is
+    called with the fraction of the trials done. `freeze` names deformations ("e1": every
+    elongation) prescribed zero on every element first, whatever the tolerance says (but not
+    where that over-constrains the model), as the chapter's elongation-frozen model; the
+    reduction then goes on from there. Raises FlexureError when the scene has fewer than
+    `keep` DOFs."""
+    model = build_model(data, source=source)
+    if keep > model.ndof:
+        raise FlexureError(f"{source}: --keep {keep}: the model has only {model.ndof} DOFs")
+    shares, modes = energy_shares(model, data, keep)
+    full = modes.frequencies_hz
+    # Freezing a deformation adds a constraint; some sets of them together over-constrain
+    # (both leaves of a parallel pair frozen in torsion). Keep, in the order of freezing, only
+    # what keeps the constraints independent, so that every prefix of `order` builds.
+    forced = [key for key in sorted(shares) if key[1] in set(freeze)]
+    rest = sorted((key for key in shares if key not in set(forced)),
+                  key=lambda key: (shares[key], key))
+    candidates = forced + rest
+    rows = _deformation_rows(model, data)
+    taken = freezable(model, [rows[key] for key in candidates])
+    order = [candidates[k] for k in taken]
+    forced = [key for key in order if key in set(forced)]
+
+    def trial(count):
+        """(reduced scene, its frequencies, whether the DOFs were chosen, NDOF, frozen), or
+        None when the first `count` of `order` frozen give no valid model."""
+        chosen_set = order[:count]
+        scene, chosen = frozen_scene(data, chosen_set)
+        try:
+            reduced_model = build_model(scene, source=f"{source} (reduced)")
+            found, _ = lowest_frequencies(reduced_model, keep)
+        except FlexureError:
+            return None
+        if found.frequencies_hz.size < keep:
+            return None
+        return scene, found.frequencies_hz, chosen, reduced_model.ndof, chosen_set
+
+    def within(result):
+        return result is not None and np.all(
+            np.abs(result[1] / full - 1.0) * 100.0 <= tolerance)
+
+    best = (copy.deepcopy(data), full, False, model.ndof, [])
+    forced_hz = ndof_forced = None
+    if forced:
+        best = trial(len(forced))
+        if best is None:
+            raise FlexureError(f"{source}: --freeze {','.join(freeze)}: the model with those "
+                               "deformations frozen has no valid modes")
+        forced_hz, ndof_forced = best[1], best[3]
+    low, high = len(forced), len(order)  # low passes (the forced ones frozen), high untested
+    trials = 1 + max(1, len(order)).bit_length()  # the bisection's most
+
+    def report(done):
+        if progress is not None:
+            progress(min(done / trials, 1.0))
+
+    attempt = trial(high)
+    report(1)
+    done = 1
+    if within(attempt):
+        low, best = high, attempt
+    while high - low > 1:
+        middle = (low + high) // 2
+        attempt = trial(middle)
+        done += 1
+        report(done)
+        if within(attempt):
+            low, best = middle, attempt
+        else:
+            high = middle
+    scene, reduced_hz, chosen, ndof, frozen = best
+    return Reduction(keep=keep, tolerance=tolerance, frozen=frozen, scene=scene,
+                     full_hz=full, reduced_hz=reduced_hz, ndof_full=model.ndof,
+                     ndof_reduced=ndof, shares=shares, dofs_chosen=chosen, forced=forced,
+                     forced_hz=forced_hz, ndof_forced=ndof_forced)
+
+
+def frozen_scene(data, frozen):
+    """Scene `data` with the (element, deformation) pairs of `frozen` prescribed zero, and
+    whether its DOF lists had to go (see the module docstring)."""
+    scene = copy.deepcopy(data)
+    released_frozen = False
+    for element, deformation in frozen:
+        table = scene["elements"][element]
+        for status in ("released", "dof"):
+            names = table.get(status)
+            if isinstance(names, str):
+                names = [names]
+            if names and deformation in names:
+                table[status] = [n for n in names if n != deformation]
+                released_frozen |= status == "released"
+    if not released_frozen:
+        return scene, False
+    for node in scene.get("nodes", {}).values():
+        node.pop("dof", None)
+    for table in scene["elements"].values():
+        listed = table.pop("dof", [])
+        if listed:
+            released = table.get("released", [])
+            released = [released] if isinstance(released, str) else list(released)
+            table["released"] = released + [d for d in listed if d not in released]
+    return scene, True
+
+
+def _deformation_rows(model, data):
+    """{(scene element, deformation): the model's deformation indices of it (one per
+    segment)} for the released and DOF deformations of `model`."""
+    owner = _scene_elements(data)
+    rows = {}
+    for d in model.stressed_deformations:
+        element, deformation = model.deformation_names[d].rsplit(".", 1)
+        rows.setdefault((owner.get(element, element), deformation), []).append(int(d))
+    return rows
+
+
+def _scene_elements(data):
+    """{model element name: scene element name} for the segments of segmented elements."""
+    owner = {}
+    for name, table in data.get("elements", {}).items():
+        count = table.get("segments", 1) if isinstance(table, dict) else 1
+        if isinstance(count, int) and count > 1:
+            owner.update({segment: name for segment in segment_names(name, count)})
+    return owner

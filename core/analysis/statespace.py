@@ -1,0 +1,132 @@
+"""State-space models of the declared inputs and outputs, as python-control objects.
+
+With the state [dq, dq'] (deviations from the configuration of the linear model):
+
+    A = [[0, I], [-M0^-1 K, -M0^-1 C0]]     B = [[0], [M0^-1 DF^T b]]
+    C = [[DF_y, 0]] for positions, [[0, DF_y]] for velocities,  D = 0
+
+where b holds a unit force on the coordinate of each input (SPACAR's INPUTF) and DF_y the rows
+of DF of each output coordinate (OUTX). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import SceneError
+from ..numerics.blas import blas_threads
+from .linearization import linearize
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+    from .linearization import LinearModel
+
+
+@blas_threads()
+def state_space(model: Model, *, linear_model: LinearModel | None = None):
+    """The linearised model as a control.StateSpace with named inputs, outputs and states."""
+    import control  # 0.5 s to import (scipy.signal, matplotlib): only where it is used
+
+    if not model.inputs or not model.outputs:
+        raise SceneError(
+            f"{model.source}: a state-space model needs [inputs] and [outputs]; "
+            f"{model.name!r} declares {len(model.inputs)} input(s), {len(model.outputs)} output(s)"
+        )
+    lin = linear_model or linearize(model)
+    n = lin.M0.shape[0]
+    DF = lin.DF
+    b = np.zeros((model.nx, len(model.inputs)))
+    for column, port in enumerate(model.inputs):
+        b[port.coordinate, column] = 1.0
+    M_inv_K = np.linalg.solve(lin.M0, lin.K)
+    M_inv_C = np.linalg.solve(lin.M0, lin.C0)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
+    B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
+    C = np.zeros((len(model.outputs), 2 * n))
+    for row, port in enumerate(model.outputs):
+        offset = 0 if port.quantity == "position" else n
+        C[row, offset:offset + n] = DF[port.coordinate]
+    D = np.zeros((len(model.outputs), len(model.inputs)))
+    dofs = model.dof_names
+    return control.ss(
+        A, B, C, D,
+        inputs=[p.name for p in model.inputs],
+        outputs=[p.name for p in model.outputs],
+        states=[f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs],
+        name=model.name,
+    )
+
+
+@blas_threads()
+def principal_gains(model: Model, frequencies_hz, *,
+                    linear_model: LinearModel | None = None) -> np.ndarray:
+    """The singular values of the transfer matrix G(j w) = C (j w I - A)^-1 B of
+    `state_space(model)` (inputs N or N m, outputs m, m/s, rad, rad/s) at the frequencies (Hz):
+    an array (frequencies, min(outputs, inputs)), largest first at each frequency; the
+    principal gains whose peaks are the natural frequencies the inputs excite and the
+    outputs see (the chapter's Fig. 3.5).
+
+    Evaluated through the eigenvectors of A, G(j w) = (C V) diag(1 / (j w - lambda))
+    (V^-1 B), O(n) per frequency instead of a 2 NDOF solve, unless V is ill-conditioned
+    (cond > 1e8: defective or nearly so), where each frequency solves (j w I - A) X = B."""
+    system = state_space(model, linear_model=linear_model)
+    A, B, C, D = (np.asarray(m, dtype=float) for m in (system.A, system.B, system.C, system.D))
+    omega = 2.0 * np.pi * np.asarray(frequencies_hz, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(omega)) or np.any(omega < 0.0):
+        raise ValueError("principal_gains: expected finite frequencies >= 0 (Hz)")
+    eigenvalues, V = np.linalg.eig(A)
+    gains = np.empty((omega.size, min(C.shape[0], B.shape[1])))
+    if np.linalg.cond(V) < 1e8:
+        left, right = C @ V, np.linalg.solve(V, B)
+        for k, w in enumerate(omega):
+            G = (left / (1j * w - eigenvalues)) @ right + D
+            gains[k] = np.linalg.svd(G, compute_uv=False)
+    else:
+        identity = np.eye(A.shape[0])
+        for k, w in enumerate(omega):
+            G = C @ np.linalg.solve(1j * w * identity - A, B) + D
+            gains[k] = np.linalg.svd(G, compute_uv=False)
+    return gains
+
+
+def plot_principal_gains(model, frequencies_hz, gains, path, *, natural_hz=()):
+    """Plot the principal gains (`principal_gains`) against frequency, log-log, to `path`."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    unit = "m/N" if all(p.quantity == "position" for p in model.outputs) else "output / input"
+    figure, axes = plt.subplots(figsize=(7.0, 4.2))
+    for i in range(gains.shape[1]):
+        axes.loglog(frequencies_hz, gains[:, i], label=f"sigma {i + 1}")
+    for f in natural_hz:
+        axes.axvline(f, color="0.8", linewidth=0.8, zorder=0)
+    axes.set_xlabel("frequency (Hz)")
+    axes.set_ylabel(f"singular value ({unit})")
+    axes.set_title(f"{model.name}: principal gains from {_names(model.inputs)} to "
+                   f"{_names(model.outputs)}", fontsize=10)
+    axes.grid(True, which="both", linewidth=0.3)
+    if gains.shape[1] > 1:
+        axes.legend()
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+
+
+def _names(ports):
+    """Port names for a title: all of up to three, else the first and the last."""
+    names = [p.name for p in ports]
+    return ", ".join(names) if len(names) <= 3 else f"{names[0]} ... {names[-1]}"
+
+
+def frequency_grid(natural_hz, points=400):
+    """Log-spaced frequencies (Hz) from a tenth of the lowest natural frequency to ten times
+    the highest, with the natural frequencies themselves added (so the peaks are hit)."""
+    natural = np.asarray([f for f in natural_hz if f > 0.0], dtype=float)
+    if natural.size == 0:
+        return np.logspace(-1, 4, points)
+    grid = np.logspace(np.log10(natural.min() / 10.0), np.log10(natural.max() * 10.0), points)
+    return np.unique(np.concatenate([grid, natural]))

@@ -1,0 +1,211 @@
+"""Von Mises stresses along spatial beams, from stress resultants.
+
+For every element whose module defines `section_forces` (the BEAM) and whose section has
+dimensions (A > 0), at both element ends:
+
+    normal stress   s = |N| / A + |My'| / Wy' + |Mz'| / Wz'       (rectangle: at a corner)
+                    s = |N| / A + sqrt(My'^2 + Mz'^2) / W          (circle: on the surface)
+    shear stress    t = |T| / Wt                                   (Saint-Venant torsion)
+    von Mises       s_vm = sqrt(s^2 + 3 t^2)
+
+For a circle the largest s and t occur at the same surface point, so s_vm is the largest over
+the section. For a rectangle the largest torsion shear (middle of the long sides) and the
+largest normal stress (corners) are at different points: s_vm above is then an upper bound,
+exact whenever the beam is not twisted and bent at once. Shear from transverse forces is left
+out (the beam theory of the element has none: zero for slender beams). Beams given by their
+stiffness only (no A) get NaN.
+
+The stress resultants sigma (NE,) are those of every deformation: the constitutive ones of
+released and DOF deformations plus the multipliers of the rigid ones (reaction forces), as
+`StaticSolution.stress_resultants` holds them; `dynamic_stress_resultants` gives them along a
+motion.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..numerics.blas import blas_threads
+
+
+@dataclass
+class BeamStresses:
+    """Von Mises stresses (Pa) at both ends of every beam with a section: names, (n, 2)."""
+
+    names: list
+    von_mises: np.ndarray  # (n, 2) Pa at p and q
+    start_nodes: list  # the translational node at p of each element
+    end_nodes: list  # the translational node at q
+    lengths: np.ndarray  # (n,) m
+    along: np.ndarray  # (n, POINTS) Pa at the fractions FRACTIONS of the length, p to q
+
+    def as_dict(self):
+        """{element: [s_vm at p, s_vm at q]} in Pa."""
+        return {name: row.tolist() for name, row in zip(self.names, self.von_mises, strict=True)}
+
+    def maximum(self):
+        """(element, end "p" or "q", s_vm in Pa) of the largest von Mises stress."""
+        flat = np.nanargmax(self.von_mises)
+        i, j = divmod(int(flat), 2)
+        return self.names[i], "pq"[j], float(self.von_mises[i, j])
+
+
+FRACTIONS = np.linspace(0.0, 1.0, 11)
+
+
+def von_mises(forces, props, fractions=(0.0, 1.0)):
+    """s_vm (n, len(fractions)) from section_forces (dict of (n,)) and section properties.
+
+    At the ends (fractions 0 and 1) with the end moments; in between the bending moments are
+    interpolated linearly (no distributed load on the beam), N and T are constant.
+    """
+    area, circular = props["A"], props["circular"] > 0.5
+    with np.errstate(divide="ignore", invalid="ignore"):
+        axial = np.abs(forces["N"]) / area
+        tau = np.abs(forces["T"]) / props["Wt"]
+        result = []
+        for xi in fractions:
+            my = (1.0 - xi) * forces["My_p"] + xi * forces["My_q"]
+            mz = (1.0 - xi) * forces["Mz_p"] + xi * forces["Mz_q"]
+            bending = np.where(circular, np.hypot(my, mz) / props["Wy"],
+                               np.abs(my) / props["Wy"] + np.abs(mz) / props["Wz"])
+            result.append(np.sqrt((axial + bending) ** 2 + 3.0 * tau**2))
+    stress = np.stack(result, axis=1)
+    stress[~(area > 0)] = np.nan
+    return stress
+
+
+def beam_stresses(model, x, sigma):
+    """BeamStresses of `model` at coordinates x (NX,) with stress resultants sigma (NE,)."""
+    names, stresses, starts, ends, lengths, along = [], [], [], [], [], []
+    for group in model.groups:
+        forces_of = getattr(group.kind, "section_forces", None)
+        if forces_of is None or not np.any(group.properties.get("A", 0.0) > 0):
+            continue
+        (e,) = group.kind.deformations(group.local(x), group.reference, order=0)
+        forces = forces_of(e, sigma[group.deformation_index], group.reference)
+        stress = von_mises(forces, group.properties)
+        profile = von_mises(forces, group.properties, FRACTIONS)
+        keep = group.properties["A"] > 0
+        node_of = model.coordinate_node[group.coordinate_index[:, 0]].tolist()
+        end_of = model.coordinate_node[
+            group.coordinate_index[:, -group.kind.coordinates_per_element // 2]].tolist()
+        for i in np.flatnonzero(keep):
+            names.append(group.names[i])
+            stresses.append(stress[i])
+            starts.append(node_of[i])
+            ends.append(end_of[i])
+            lengths.append(group.reference["l0"][i])
+            along.append(profile[i])
+    return BeamStresses(names, np.array(stresses).reshape(-1, 2), starts, ends,
+                        np.array(lengths), np.array(along).reshape(-1, FRACTIONS.size))
+
+
+def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=None):
+    """sigma (NE,) of every deformation in motion: constitutive plus the multipliers of
+
+    r = f - M xddot - h(x, xdot) - De^T sigma_c,   xddot = DF qddot + (D2F qdot) qdot,
+
+    with f the loads and gravity plus `input_force` ((NX,) N) and h the convective inertia
+    force. qddot (NDOF,) defaults to the accelerations of the equations of motion.
+    """
+    xdot = config.DF @ qdot
+    sigma_c = mechanics.constitutive_stress(config, config.De @ xdot)
+    inertia = mechanics.inertia
+    f = mechanics.external_force(config.x)
+    if input_force is not None:
+        f = f + input_force
+    M = inertia.mass_matrix(config.x)
+    r = (f - M @ mechanics.kinematics.convective_acceleration(config, qdot)
+         - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
+    if qddot is None:
+        qddot = np.linalg.solve(config.DF.T @ M @ config.DF, config.DF.T @ r)
+    r = r - M @ (config.DF @ qddot)
+    return mechanics.stress_resultants(config, r, sigma_c)
+
+
+@blas_threads()
+def stresses_along(model, states, *, inputs=None, mechanics=None):
+    """Von Mises stresses along a trajectory: (names, (n_times, n_beams, 2) Pa).
+
+    states (n_times, 2 NDOF) = [q, qdot] as `SimulationResult` holds them (q, qdot side by
+    side); inputs (n_times, n_inputs) N on the scene's input coordinates (default zero). The
+    accelerations follow from the equations of motion in each state.
+    """
+    from ..mechanics.mechanics import Mechanics
+
+    mech = mechanics or Mechanics(model)
+    ndof = model.declared_dof_count
+    x = model.initial_coordinates.copy()
+    names, result = [], []
+    for k, state in enumerate(np.asarray(states, float)):
+        config = mech.kinematics.solve(state[:ndof], x)
+        x = config.x
+        force = np.zeros(model.nx)
+        if inputs is not None:
+            for j, port in enumerate(model.inputs):
+                force[port.coordinate] += inputs[k][j]
+        sigma = dynamic_stress_resultants(mech, config, state[ndof:], input_force=force)
+        stresses = beam_stresses(model, x, sigma)
+        names = stresses.names
+        result.append(stresses.von_mises)
+    return names, np.array(result)
+
+
+def _chains(stresses, fixed_nodes):
+    """Beams joined end to end: lists of (row, reversed) along each chain, starting at a
+    fixed node where there is one."""
+    touching = {}
+    for row, (a, b) in enumerate(zip(stresses.start_nodes, stresses.end_nodes, strict=True)):
+        touching.setdefault(a, []).append(row)
+        touching.setdefault(b, []).append(row)
+    unused, chains = set(range(len(stresses.names))), []
+    while unused:
+        ends = [n for n, rows in touching.items() if len(rows) == 1 and rows[0] in unused]
+        ends.sort(key=lambda n: (n not in fixed_nodes, n))
+        node = ends[0] if ends else stresses.start_nodes[min(unused)]
+        chain = []
+        while True:
+            rows = [r for r in touching[node] if r in unused]
+            if not rows:
+                break
+            row = rows[0]
+            unused.discard(row)
+            flipped = stresses.start_nodes[row] != node
+            chain.append((row, flipped))
+            node = stresses.start_nodes[row] if flipped else stresses.end_nodes[row]
+        chains.append(chain)
+    return chains
+
+
+def plot_beam_stresses(model, stresses, path, *, title=None):
+    """Plot the von Mises stresses along every chain of beams to a PNG file (MPa over mm)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fixed_nodes = set(model.coordinate_node[model.fixed_coordinates].tolist())
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for k, chain in enumerate(_chains(stresses, fixed_nodes)):
+        s, xs, ys = 0.0, [], []
+        for row, flipped in chain:
+            values = stresses.along[row][::-1] if flipped else stresses.along[row]
+            length = stresses.lengths[row]
+            xs += list(1e3 * (s + length * FRACTIONS))
+            ys += list(values / 1e6)
+            s += length
+        first, last = stresses.names[chain[0][0]], stresses.names[chain[-1][0]]
+        label = first if first == last else f"{first} ... {last}"
+        ax.plot(xs, ys, color=f"C{k}", label=label)
+        ax.plot(xs[::FRACTIONS.size] + xs[FRACTIONS.size - 1::FRACTIONS.size],
+                ys[::FRACTIONS.size] + ys[FRACTIONS.size - 1::FRACTIONS.size], "o",
+                color=f"C{k}")
+    ax.set_xlabel("distance along the beams from their first node [mm]")
+    ax.set_ylabel("von Mises stress [MPa]")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    ax.set_title(title or f"{model.name}: von Mises stresses (largest over the section)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

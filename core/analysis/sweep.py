@@ -1,0 +1,242 @@
+"""Design sweeps: a scene evaluated over a grid of parameter values, serially or on Dask.
+
+    points = grid([parse_parameter("sections.leaf.height=0.3e-3:0.8e-3:6"),
+                   parse_parameter("nodes.3.mass=0,0.1,0.2")])
+    rows = run_sweep(data, points, analyses=("static", "modes"), workers=2)
+
+A parameter is a dotted scene key (an override, `flexure.core.scene.overrides`) with its values; the
+grid is the Cartesian product of the parameters' values, the first parameter varying slowest.
+Each point is one call of `evaluate_point`, a plain function of the scene dictionary and the
+point's overrides that returns the point's quantities: the serial run calls it in this process,
+the Dask run on the workers of a dask.distributed cluster (a LocalCluster of processes, one
+thread each, or an existing scheduler). Both give the same numbers, bit for bit: the same
+function on the same inputs, with flexure's BLAS calls on one thread in either case
+(`flexure.core.numerics.blas`). A point that fails (a value the scene validation refuses, a static
+equilibrium that does not converge) gives its reason in `status` and never stops the sweep.
+
+The quantities (columns after the parameters, SI units):
+
+- static: `static.NAME [m]` (or `[rad]`), the displacement of each output's coordinate at the
+  static equilibrium under the scene's loads;
+- modes: `mode.1 [Hz]` ... `mode.N [Hz]`, the lowest N natural frequencies there (blank past
+  the model's DOF count);
+- buckling: `buckling.1 [-]`, the first load factor of the reference load (blank if none).
+
+A row keeps what was computed before a failure. Dask is imported only when a sweep runs on it.
+"""
+
+import math
+import os
+
+import numpy as np
+
+from ..errors import FlexureError, UsageError
+from ..scene.overrides import parse_value
+
+__all__ = ["ANALYSES", "columns", "evaluate_point", "grid", "parse_parameter", "run_sweep"]
+
+ANALYSES = ("static", "modes", "buckling")
+DEFAULT_MODES = 6
+# the significant digits of a value of START:STOP:N, so that 0.3e-3:0.8e-3:6 gives 0.0004 and not
+# linspace's 0.00039999999999999996 (a value the table and a user's --set both write plainly)
+DIGITS = 15
+CONNECT_TIMEOUT = "10s"  # to reach a --scheduler before the sweep is given up
+
+
+def parse_parameter(text: str) -> tuple[str, list]:
+    """(KEY, values) of "KEY=START:STOP:N" (N values, linearly spaced, both ends included) or
+    "KEY=V1,V2,..." (each a TOML value: 0.3e-3, 2, PLTRUSS); ValueError saying what is wrong."""
+    key, sep, spec = text.partition("=")
+    key, spec = key.strip(), spec.strip()
+    if not sep or not key or not spec:
+        raise ValueError(f"expected KEY=START:STOP:N or KEY=V1,V2,... with a dotted scene key, "
+                         f"got {text!r}")
+    if ":" in spec and "," not in spec and not spec.startswith(("[", '"', "'")):
+        return key, _linear(text, spec)
+    values = [parse_value(part.strip()) for part in spec.split(",")]
+    for value in values:
+        if values.count(value) > 1:
+            raise ValueError(f"{text!r}: {value!r} is listed {values.count(value)} times; list "
+                             "each value once")
+    return key, values
+
+
+def _linear(text, spec):
+    parts = spec.split(":")
+    expected = f"{text!r}: expected START:STOP:N (two finite numbers and a count >= 2)"
+    if len(parts) != 3:
+        raise ValueError(expected)
+    try:
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise ValueError(expected) from None
+    if not (math.isfinite(start) and math.isfinite(stop)) or count < 2:
+        raise ValueError(expected)
+    if start == stop:
+        raise ValueError(f"{text!r}: START and STOP are equal; give a single value as KEY=V")
+    return [float(f"{v:.{DIGITS}g}") for v in np.linspace(start, stop, count)]
+
+
+def grid(parameters) -> list[dict]:
+    """The points of the Cartesian product of `parameters` [(key, values)]: one
+    {key: value} per point, the first parameter varying slowest."""
+    points = [{}]
+    for key, values in parameters:
+        points = [{**point, key: value} for point in points for value in values]
+    return points
+
+
+def columns(model, analyses, modes=DEFAULT_MODES) -> list[str]:
+    """The quantity columns of a sweep of `model`'s scene (see the module's docstring)."""
+    names = []
+    if "static" in analyses:
+        names += [f"static.{port.name} [{_unit(model, port)}]" for port in model.outputs]
+    if "modes" in analyses:
+        names += [f"mode.{i} [Hz]" for i in range(1, modes + 1)]
+    if "buckling" in analyses:
+        names.append("buckling.1 [-]")
+    return names
+
+
+def _unit(model, port):
+    """m for a translational coordinate, rad for a rotational one (whatever the output
+    reports, position or velocity: the column is the coordinate's displacement)."""
+    axis = model.coordinate_names[port.coordinate].rsplit(".", 1)[1]
+    return "m" if axis in ("x", "y", "z") else "rad"
+
+
+def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes"),
+                   modes: int = DEFAULT_MODES, source: str = "<dict>",
+                   default_name: str = "scene") -> dict:
+    """The quantities of one grid point: {column: value} (floats, SI units) and "status".
+
+    `scene` is the scene dictionary, `overrides` the point's {dotted key: value} (its
+    parameters and any fixed overrides); `source` and `default_name` as for `build_model`.
+    "status" is "ok", or the one-line reason the point failed, without the name of the scene
+    file every row shares (the columns computed before it are kept). This is the function
+    each Dask task runs; it raises nothing.
+    """
+    from ..mechanics.mechanics import Mechanics
+    from ..scene.building import build_model
+    from .linearization import linearize
+    from .modal import buckling_load_factors, natural_frequencies
+    from .statics import static_equilibrium
+
+    row = {}
+    try:
+        model = build_model(scene, overrides=overrides, source=source,
+                            default_name=default_name)
+        if "static" in analyses or "modes" in analyses:
+            mechanics = Mechanics(model)
+            solution = static_equilibrium(model, mechanics=mechanics)
+            if "static" in analyses:
+                for port, name in zip(model.outputs, columns(model, ("static",)), strict=True):
+                    row[name] = float(solution.x[port.coordinate]
+                                      - model.initial_coordinates[port.coordinate])
+            if "modes" in analyses:
+                found = natural_frequencies(
+                    model, modes, linear_model=linearize(model, solution, mechanics=mechanics))
+                for i, frequency in enumerate(found.frequencies_hz, start=1):
+                    row[f"mode.{i} [Hz]"] = float(frequency)
+        if "buckling" in analyses:
+            factors = buckling_load_factors(model, 1)
+            if factors.size:
+                row["buckling.1 [-]"] = float(factors[0])
+    except FlexureError as error:
+        # every row is of the same scene file: its name would only hide the reason
+        row["status"] = _one_line(str(error).removeprefix(f"{source}: "))
+    # A sweep of hours must not lose its other points to one that trips over something
+    # unforeseen: the point reports the exception (its type names the kind of failure).
+    except Exception as error:  # noqa: BLE001
+        row["status"] = _one_line(f"{type(error).__name__}: {error}")
+    else:
+        row["status"] = "ok"
+    return row
+
+
+def _one_line(text):
+    return " ".join(text.split())
+
+
+def run_sweep(scene: dict, points, *, overrides=None, analyses=("static", "modes"),
+              modes: int = DEFAULT_MODES, source: str = "<dict>", default_name: str = "scene",
+              workers: int | None = None, scheduler: str | None = None,
+              on_row=None) -> list[dict]:
+    """Evaluate `evaluate_point` at each of `points` ({key: value}); the rows in their order.
+
+    Parameters
+    ----------
+    scene : dict
+        The scene dictionary (as `parse_toml` gives it); `overrides` are set at every point
+        before the point's own values.
+    workers : int, optional
+        0: in this process, one point after the other. Otherwise the points run on a
+        dask.distributed LocalCluster of this many processes, one thread each (default: one
+        per core this process may use), or, with `scheduler` (an address such as
+        "tcp://host:8786"), on that cluster's workers (flexure must be installed there).
+    on_row : callable, optional
+        Called with (index of the point, its row) as each point finishes, in the order they
+        finish (to save rows as they come, and report progress).
+    """
+    tasks = [{**(overrides or {}), **point} for point in points]
+    options = {"analyses": tuple(analyses), "modes": modes, "source": source,
+               "default_name": default_name}
+    rows = [None] * len(tasks)
+
+    def done(index, row):
+        rows[index] = row
+        if on_row is not None:
+            on_row(index, row)
+
+    if workers == 0 and scheduler is None:
+        for index, task in enumerate(tasks):
+            done(index, evaluate_point(scene, task, **options))
+    else:
+        _run_on_dask(scene, tasks, options, workers, scheduler, done)
+    return rows
+
+
+def default_workers() -> int:
+    """The cores this process may run on (the LocalCluster's default process count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _run_on_dask(scene, tasks, options, workers, scheduler, done):
+    """Run the tasks on a dask.distributed cluster, calling done(index, row) as each ends."""
+    import logging
+
+    from distributed import Client, LocalCluster, as_completed
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError, TypeError) as error:
+            raise UsageError(f"--scheduler {scheduler}: cannot connect: "
+                             f"{_one_line(str(error)) or type(error).__name__}") from None
+        cluster = None
+    else:
+        # processes, not threads: an analysis of a small model spends most of its time in
+        # Python and in numba kernels that hold the GIL; one thread each, as flexure's BLAS
+        # calls use one (flexure.core.numerics.blas)
+        cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                               processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
+        client = Client(cluster)
+    try:
+        [shared] = client.scatter([scene], broadcast=True)  # sent once, not with every task
+        futures = client.map(evaluate_point, [shared] * len(tasks), tasks, pure=False,
+                             **options)
+        index = {future.key: i for i, future in enumerate(futures)}
+        for future in as_completed(futures):
+            try:
+                row = future.result()
+            except Exception as error:  # noqa: BLE001 -- a lost worker; the others go on
+                row = {"status": _one_line(f"dask: {type(error).__name__}: {error}")}
+            done(index[future.key], row)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

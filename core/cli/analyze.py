@@ -1,0 +1,199 @@
+"""`flexure analyze SCENE`: DOF count, static equilibrium, modes, buckling, state space."""
+
+import numpy as np
+
+from ..errors import SceneError
+from ..reporting.tables import format_table, jsonable, print_json
+from . import PLOT_SUFFIXES, add_set_option, atomic_output, count, output_file
+
+
+def register(subparsers):
+    """Add the `analyze` subcommand."""
+    parser = subparsers.add_parser(
+        "analyze", help="static, modal, buckling and state-space analyses of a scene",
+        description="Analyse a scene (a TOML file or the name of a built-in scene). Without an "
+                    "analysis option, --static and --modes are run.")
+    parser.add_argument("scene", help="scene file or built-in scene name")
+    add_set_option(parser)
+    parser.add_argument("--static", action="store_true", help="static equilibrium under the loads")
+    parser.add_argument("--modes", nargs="?", type=count, const=-1, metavar="N",
+                        help="the lowest N (default all) natural frequencies")
+    parser.add_argument("--buckling", nargs="?", type=count, const=-1, metavar="N",
+                        help="the lowest N (default all) buckling load factors")
+    parser.add_argument("--state-space", action="store_true",
+                        help="state-space matrices of the declared inputs and outputs")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--plot", metavar="PNG", type=output_file(PLOT_SUFFIXES),
+                        help="plot the von Mises stresses along the beams at the static "
+                             "equilibrium to this PNG file (spatial beams with a section)")
+    parser.add_argument("--sigma", metavar="PNG", type=output_file(PLOT_SUFFIXES),
+                        help="plot the singular values (principal gains) of the transfer "
+                             "matrix from the inputs to the outputs against frequency")
+    parser.set_defaults(run=run)
+
+
+def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False,
+            with_gains=False):
+    """Run the requested analyses; returns the dict that `--json` prints (SI units)."""
+    from ..analysis.linearization import linearize
+    from ..analysis.modal import buckling_load_factors, describe_mode, natural_frequencies
+    from ..analysis.statespace import state_space
+    from ..analysis.statics import static_equilibrium
+    from ..analysis.stresses import beam_stresses
+    from ..mechanics.mechanics import Mechanics
+
+    result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
+              "dofs_chosen": bool(model.chosen_dofs)}
+    mech = Mechanics(model)
+    needs_equilibrium = static or modes is not None or with_state_space or with_gains
+    solution = static_equilibrium(model, mechanics=mech) if needs_equilibrium else None
+    if static:
+        # the multipliers of the Euler-parameter normalisation ("NODE.norm") are no output
+        resultants = {name: value for name, value in solution.stresses().items()
+                      if not name.endswith(".norm")}
+        result["static"] = {"coordinates": solution.coordinates(),
+                            "stress_resultants": resultants}
+        stresses = beam_stresses(model, solution.x, solution.stress_resultants)
+        if stresses.names:
+            result["static"]["von_mises_pa"] = stresses.as_dict()
+    lin = linearize(model, solution, mechanics=mech) if (modes is not None or with_state_space
+                                                          or with_gains) else None
+    if modes is not None:
+        found = natural_frequencies(model, None if modes < 0 else modes, linear_model=lin)
+        result["modes"] = {"frequencies_hz": found.frequencies_hz,
+                           "descriptions": [describe_mode(model, shape, solution.x)
+                                            for shape in found.coordinate_shapes.T],
+                           "mass_matrix": lin.M0, "stiffness_matrix": lin.K,
+                           "damping_matrix": lin.C0,
+                           "shapes": found.shapes}
+    if buckling is not None:
+        factors = buckling_load_factors(model, None if buckling < 0 else buckling)
+        result["buckling"] = {"load_factors": factors}
+    if with_state_space:
+        sys = state_space(model, linear_model=lin)
+        result["state_space"] = {"A": sys.A, "B": sys.B, "C": sys.C, "D": sys.D,
+                                 "inputs": [p.name for p in model.inputs],
+                                 "outputs": [p.name for p in model.outputs],
+                                 "states": list(sys.state_labels)}
+    if with_gains:
+        from ..analysis.statespace import frequency_grid, principal_gains
+
+        every_mode = result.get("modes") if modes is not None and modes < 0 else None
+        natural = (every_mode["frequencies_hz"] if every_mode is not None
+                   else natural_frequencies(model, linear_model=lin).frequencies_hz)
+        grid = frequency_grid(natural)
+        result["principal_gains"] = {
+            "frequencies_hz": grid, "natural_hz": natural,
+            "singular_values": principal_gains(model, grid, linear_model=lin),
+            "inputs": [p.name for p in model.inputs],
+            "outputs": [p.name for p in model.outputs]}
+    return jsonable(result)
+
+
+def run(args):
+    from ..scene.building import load_scene
+
+    model = load_scene(args.scene, overrides=args.set)
+    static, modes = args.static, args.modes
+    if not (static or modes is not None or args.buckling is not None or args.state_space
+            or args.sigma or args.plot):
+        # a kinematic model (SPACAR's mode 1) has no equilibrium to find and no modes: the
+        # exact-constraint check that loading it passed is the analysis
+        static, modes = (False, None) if is_kinematic(model) else (True, -1)
+    result = analyze(model, static=static or bool(args.plot), modes=modes,
+                     buckling=args.buckling, with_state_space=args.state_space,
+                     with_gains=bool(args.sigma))
+    if args.plot:
+        plot_stresses(model, args.plot)
+    if args.sigma:
+        from ..analysis.statespace import plot_principal_gains
+
+        gains = result["principal_gains"]
+        with atomic_output(args.sigma, "--sigma") as temporary:
+            plot_principal_gains(model, np.array(gains["frequencies_hz"]),
+                                 np.array(gains["singular_values"]), temporary,
+                                 natural_hz=gains["natural_hz"])
+    if args.json:
+        print_json(result, command="flexure analyze")
+    else:
+        print(render(result))
+    return 0
+
+
+def is_kinematic(model):
+    """Whether `model` carries neither mass nor load: a kinematic model, which the
+    exact-constraint check describes completely."""
+    massive = np.any(model.lumped_mass) or bool(model.node_inertias) or any(
+        np.any(group.properties.get("rho_A", 0.0)) for group in model.groups)
+    loaded = np.any(model.loads) or np.any(model.gravity)
+    return not (massive or loaded)
+
+
+def plot_stresses(model, path):
+    """Plot the von Mises stresses at the static equilibrium to `path` (PNG)."""
+    from ..analysis.statics import static_equilibrium
+    from ..analysis.stresses import beam_stresses, plot_beam_stresses
+
+    solution = static_equilibrium(model)
+    stresses = beam_stresses(model, solution.x, solution.stress_resultants)
+    if not stresses.names:
+        raise SceneError(f"{model.source}: --plot: no beam with section dimensions (A) in "
+                         f"{model.name!r}, so no stresses to plot")
+    with atomic_output(path, "--plot") as temporary:
+        plot_beam_stresses(model, stresses, temporary)
+
+
+def render(result):
+    """The analyses of `analyze` as readable tables."""
+    count = result["dof_count"]
+    parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} "
+             f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])}"
+             + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
+                else ")")]
+    if not {"static", "modes", "buckling", "state_space", "principal_gains"} & result.keys():
+        parts.append("exactly constrained; a kinematic model (no mass, no load), so there is "
+                     "no equilibrium or mode to compute")
+    if "static" in result:
+        static = result["static"]
+        parts.append(format_table(["coordinate", "value (m, rad)"],
+                                  list(static["coordinates"].items()),
+                                  title="\nstatic equilibrium: coordinates"))
+        parts.append(format_table(["deformation", "stress resultant (N)"],
+                                  list(static["stress_resultants"].items()),
+                                  title="\nstatic equilibrium: stress resultants"))
+        if "von_mises_pa" in static:
+            parts.append(format_table(
+                ["element", "von Mises at p (MPa)", "von Mises at q (MPa)"],
+                [(name, p / 1e6, q / 1e6) for name, (p, q) in static["von_mises_pa"].items()],
+                title="\nstatic equilibrium: von Mises stresses (largest over the section)"))
+    if "modes" in result:
+        freqs = result["modes"]["frequencies_hz"]
+        descriptions = result["modes"]["descriptions"]
+        parts.append(format_table(["mode", "frequency (Hz)", "what moves most"],
+                                  [(i + 1, f, d) for i, (f, d) in enumerate(
+                                      zip(freqs, descriptions, strict=True))],
+                                  title="\nnatural frequencies (at the static equilibrium)"))
+    if "buckling" in result:
+        factors = result["buckling"]["load_factors"]
+        parts.append(format_table(["mode", "load factor"],
+                                  [(i + 1, f) for i, f in enumerate(factors)],
+                                  title="\nbuckling load factors eig(-K0, G0)"))
+    if "state_space" in result:
+        ss = result["state_space"]
+        with np.printoptions(precision=6, linewidth=100):
+            for key in "ABCD":
+                parts.append(f"\n{key} =\n{np.array(ss[key])}")
+        parts.append(f"\ninputs: {', '.join(ss['inputs'])}   outputs: {', '.join(ss['outputs'])}"
+                     f"   states: {', '.join(ss['states'])}")
+    if "principal_gains" in result:
+        gains = result["principal_gains"]
+        f, sigma = np.array(gains["frequencies_hz"]), np.array(gains["singular_values"])
+        rows = []
+        for natural in gains["natural_hz"][:10]:  # the largest gain at each natural frequency
+            k = int(np.argmin(np.abs(f - natural)))
+            rows.append((f"{natural:.6g}", f"{sigma[k, 0]:.4g}"))
+        parts.append(format_table(["natural frequency (Hz)", "largest singular value"], rows,
+                                  title=f"\nprincipal gains from {', '.join(gains['inputs'])} to "
+                                        f"{', '.join(gains['outputs'])} ({f.size} frequencies, "
+                                        f"{f.min():.3g} to {f.max():.3g} Hz)"))
+    return "\n".join(parts)

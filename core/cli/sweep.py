@@ -1,0 +1,213 @@
+"""`flexure sweep SCENE --param KEY=START:STOP:N ...`: a design sweep, on Dask, to a table.
+
+    flexure sweep stage_planar_1dof --param sections.leaf.height=0.3e-3:0.8e-3:6 \
+        --param nodes.3.mass=0,0.2 --analyses static,modes,buckling --out sweep.csv
+
+Every point of the grid (the Cartesian product of the --param values) is one scene with those
+overrides, analysed by `flexure.core.analysis.sweep.evaluate_point`, on a dask.distributed
+LocalCluster of this machine's cores, on an existing cluster (--scheduler), or in this process
+(--serial). The table (`flexure.core.analysis.sweep_table`) goes to CSV, to Parquet when pyarrow
+is importable, and its quantities to a plot beside it.
+"""
+
+import argparse
+import time
+
+from ..analysis.sweep import (
+    ANALYSES,
+    DEFAULT_MODES,
+    columns,
+    default_workers,
+    grid,
+    parse_parameter,
+    run_sweep,
+)
+from ..analysis.sweep_table import SweepTable
+from ..errors import FlexureError, UsageError
+from ..reporting.progress import Progress
+from ..reporting.tables import format_table
+from . import (
+    PLOT_SUFFIXES,
+    add_set_option,
+    atomic_output,
+    check_output,
+    count,
+    number,
+    output_file,
+    refuse_overwriting_inputs,
+    write_outputs,
+)
+
+
+def parameter(text):
+    """argparse type of --param: (KEY, values) (`sweep.parse_parameter`)."""
+    try:
+        return parse_parameter(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def analysis_list(text):
+    """argparse type of --analyses: known analyses, each once, in the order of ANALYSES."""
+    names = [name.strip() for name in text.split(",")]
+    for name in names:
+        if name in ("simulate", "loop"):
+            raise argparse.ArgumentTypeError(f"{name!r} is not available in sweeps yet; "
+                                             f"expected some of {', '.join(ANALYSES)}")
+        if name not in ANALYSES:
+            raise argparse.ArgumentTypeError(f"unknown analysis {name!r}; expected some of "
+                                             f"{', '.join(ANALYSES)} separated by commas")
+        if names.count(name) > 1:
+            raise argparse.ArgumentTypeError(f"{name!r} is listed {names.count(name)} times")
+    return tuple(name for name in ANALYSES if name in names)
+
+
+def register(subparsers):
+    """Add the `sweep` subcommand."""
+    parser = subparsers.add_parser(
+        "sweep", help="a design sweep: analyses over a grid of scene values, on Dask",
+        description="Evaluate the analyses of a scene at every point of a grid of scene "
+                    "values (the Cartesian product of the --param values) on dask.distributed "
+                    "(a local cluster of this machine's cores, or --scheduler), and write one "
+                    "row per point to CSV (and Parquet when pyarrow is importable) with a plot "
+                    "of each quantity. A point that fails gives its reason in the status "
+                    "column; the others go on.")
+    parser.add_argument("scene", help="scene file or built-in scene name")
+    parser.add_argument("--param", type=parameter, action="append", required=True,
+                        metavar="KEY=START:STOP:N|KEY=V1,V2,...",
+                        help="a dotted scene key and its values: N linearly spaced from START "
+                             "to STOP, or a list (repeatable; the grid is the product)")
+    add_set_option(parser)
+    parser.add_argument("--analyses", type=analysis_list, default=("static", "modes"),
+                        metavar="LIST",
+                        help=f"some of {','.join(ANALYSES)} (default static,modes)")
+    parser.add_argument("--modes", type=count, default=DEFAULT_MODES, metavar="N",
+                        help=f"the lowest N natural frequencies (default {DEFAULT_MODES})")
+    parser.add_argument("--out", type=output_file((".csv",)), metavar="CSV",
+                        help="the table (default: SCENE_NAME_sweep.csv here); the Parquet "
+                             "file and the plot get its name with .parquet and .png")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=number(0, integer=True, low_open=False), metavar="N",
+                       help=f"processes of the local Dask cluster (default: the cores, here "
+                            f"{default_workers()}); 0 runs in this process")
+    where.add_argument("--serial", action="store_const", const=0, dest="workers",
+                       help="run in this process, one point after the other (--workers 0)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on the workers of this Dask scheduler (e.g. "
+                            "tcp://host:8786), which need flexure installed")
+    parser.add_argument("--resume", action="store_true",
+                        help="keep the rows the --out table has, and compute only the other "
+                             "points")
+    parser.add_argument("--no-plot", action="store_true", help="write no plot")
+    parser.set_defaults(run=run)
+
+
+def run(args):
+    from ..scene.building import build_model, parse_toml, scene_path
+
+    keys = [key for key, _ in args.param]
+    for key in keys:
+        if keys.count(key) > 1:
+            raise UsageError(f"--param {key}: given {keys.count(key)} times; give each key once")
+        if key in args.set:
+            raise UsageError(f"--param {key}: also given to --set; a key is either swept or "
+                             "set")
+    path = scene_path(args.scene)
+    data = parse_toml(path)
+    # the scene and its fixed overrides must stand on their own: a mistake there is one
+    # error now, not the same failure in every row
+    model = build_model(data, overrides=args.set, source=str(path), default_name=path.stem)
+    out = args.out or output_file((".csv",))(f"{model.name}_sweep.csv")
+    parquet = _parquet_path(out)
+    plot = None if args.no_plot else check_output(out.with_suffix(".png"),
+                                                  suffixes=PLOT_SUFFIXES, option="the plot")
+    refuse_overwriting_inputs([("--out", out), ("the Parquet file", parquet),
+                               ("the plot", plot)], [path])
+    table = SweepTable(keys, columns(model, args.analyses, args.modes))
+    points = grid(args.param)
+    earlier, unreadable = table.read(out) if args.resume and out.exists() else ({}, 0)
+    todo = [i for i, point in enumerate(points) if table.key(point) not in earlier]
+    finished = {}
+    progress = Progress("flexure sweep", after=1.0)
+    start = time.perf_counter()
+    # the rows kept so far, then each new one as it comes: an interrupted sweep loses no point
+    # it finished, and --resume takes it from there. The file is touched at the first new row
+    # only, so a run that fails to start (an unreachable --scheduler) leaves it as it was.
+    appending = []
+
+    def on_row(index, row):
+        if not appending:
+            with atomic_output(out, "--out") as temporary:
+                table.write_csv(temporary, list(earlier.values()))
+            appending.append(open(out, "a", newline=""))  # closed after the run
+        point = points[todo[index]]
+        finished[table.key(point)] = table.cells(point, row)
+        table.append(appending[0], finished[table.key(point)])
+        progress(len(finished) / len(todo))
+
+    try:
+        run_sweep(data, [points[i] for i in todo], overrides=args.set, analyses=args.analyses,
+                  modes=args.modes, source=str(path), default_name=path.stem,
+                  workers=args.workers, scheduler=args.scheduler, on_row=on_row)
+    finally:
+        for handle in appending:
+            handle.close()
+    wall = time.perf_counter() - start
+    every = {**earlier, **finished}
+    in_grid = [table.key(point) for point in points]
+    outside = set(earlier) - set(in_grid)  # kept, after the grid's rows
+    rows = [every[key] for key in in_grid] + [earlier[key] for key in earlier if key in outside]
+    outputs = [("--out", out, lambda t: table.write_csv(t, rows))]
+    if parquet is not None:
+        outputs.append(("the Parquet file", parquet, lambda t: table.write_parquet(t, rows)))
+    if plot is not None:
+        outputs.append(("the plot", plot, lambda t: table.plot(t, rows, _title(model, args))))
+    print(render(table, rows, points=len(points), computed=len(todo), unreadable=unreadable,
+                 wall=wall, where=_where(args)))
+    code = write_outputs("flexure sweep", outputs)
+    failed = [row for row in rows if row[-1] != "ok"]
+    if rows and len(failed) == len(rows):
+        raise FlexureError(f"sweep {model.name}: every point failed ({len(rows)}); first: "
+                           f"{failed[0][-1]}")
+    return code
+
+
+def _parquet_path(out):
+    """Where the Parquet table goes, or None without pyarrow."""
+    try:
+        import pyarrow.parquet  # noqa: F401
+    except ImportError:
+        return None
+    return check_output(out.with_suffix(".parquet"), option="the Parquet file")
+
+
+def _where(args):
+    if args.scheduler is not None:
+        return f"the Dask scheduler {args.scheduler}"
+    if args.workers == 0:
+        return "this process"
+    workers = args.workers or default_workers()
+    return f"a local Dask cluster of {workers} process{'es' if workers > 1 else ''}"
+
+
+def _title(model, args):
+    return model.name + "".join(f"  {key}={value}" for key, value in args.set.items())
+
+
+def render(table, rows, *, points, computed, unreadable, wall, where):
+    """What was done, and the failed points with their reasons (the first ten)."""
+    failed = [row for row in rows if row[-1] != "ok"]
+    summary = [("points", points), ("computed now", computed),
+               ("kept from the table", points - computed), ("ok", len(rows) - len(failed)),
+               ("failed", len(failed)), ("run on", where), ("wall time (s)", f"{wall:.3g}")]
+    if unreadable:
+        summary.insert(3, ("unreadable rows computed again", unreadable))
+    parts = [format_table(["sweep", "value"], summary)]
+    if failed:
+        n = len(table.parameters)
+        parts.append(format_table(
+            [*table.parameters, "status"],
+            [[*row[:n], row[-1]] for row in failed[:10]],
+            title="\nfailed points" + (f" (the first 10 of {len(failed)})"
+                                       if len(failed) > 10 else "")))
+    return "\n".join(parts)

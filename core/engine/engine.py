@@ -1,0 +1,237 @@
+"""The compiled evaluation engine: kinematics, inertia, equations of motion and their tangent.
+
+One place computes, for DOFs q and velocities qdot (m, rad, m/s, rad/s) and the held inputs u
+(N, N m), everything the integrators need, compiled with numba and cached on disk. Each job
+has its module; this one holds the forms the integrators call and the one entry point:
+
+    data             the model packed into flat arrays (`EngineData`), status codes
+    slots            the packed model's arrays by slot (indices, accessors)
+    kinematics       the elements' deformations, x = F(q), J and its banded LU, DF
+    motion           qddot from M_bar qddot = DF^T r (or the augmented system), M_bar
+    tangent          stiffness K0 + G0 and damping C0 of the dynamic balance
+    engine (here)    the first-order and implicit forms, `engine_entry`, `call`
+
+with the dense LU of small matrices (M_bar, the integrators' Newton matrices) from
+`numerics.dense`.
+
+First-order form (CVODE, ESDIRK): the state y = [q - q_ref, qdot] and ydot = [qdot, qddot],
+its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the residual
+[qp - qdot; M_bar (qddot_p - qddot(q, qdot))] and its Jacobian d res / d y + cj d res / d yp
+= [[cj I, -I], [K, C + cj M_bar]]. Every operation reaches compiled code (a SUNDIALS callback,
+the sampled loop, Python through `call`) through the one C function `engine_entry`.
+
+Everything works element by element on the packed arrays of `data.EngineData` (no
+dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
+quantity is in `mechanics` (its kinematics, assembly and mechanics modules, which the static
+analyses use); tests compare the two to round-off.
+
+Status codes (`data`): each function returns OK or the reason it could not finish;
+nothing raises inside compiled code.
+"""
+
+import numpy as np
+from numba import carray, types
+
+from ..numerics.dense import lu_factor, lu_solve
+from ..numerics.jit import entry, kernel
+from ..numerics.native import address_of
+from . import data as ed
+from . import slots as slot
+from .kinematics import compute_DF, deformations, solve_kinematics, solve_positions
+from .motion import evaluate, reduced_mass
+from .slots import float_array, int_array
+from .tangent import tangent
+
+# what other modules take from here (the accessors and the dense LU are the engine's too)
+__all__ = ["ENGINE_ENTRY", "OP_DEFORMATIONS", "OP_EVALUATE", "OP_JACOBIAN", "OP_KINEMATICS",
+           "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call",
+           "engine_entry", "first_order_jacobian", "first_order_rhs", "float_array",
+           "implicit_jacobian", "implicit_residual", "int_array", "lu_factor", "lu_solve"]
+
+_i, _f = int_array, float_array  # the short names of the many uses below
+
+
+# -- first-order form for the integrators ---------------------------------------------------------
+@kernel
+def first_order_rhs(table, y, ydot):
+    """ydot = [qdot, qddot] for the state y = [q - q_ref, qdot]; a status code.
+
+    The absolute DOFs are formed in the last NDOF entries of the scratch array, which no
+    other part of an evaluation uses."""
+    n = _i(table, slot.DIMS)[ed.NDOF]
+    for j in range(2 * n):
+        if not np.isfinite(y[j]):
+            return ed.NONFINITE_STATE
+    q_abs = _f(table, slot.LOCAL)[_f(table, slot.LOCAL).size - n:]
+    q_ref = _f(table, slot.Q_REF)
+    for j in range(n):
+        q_abs[j] = q_ref[j] + y[j]
+    status = evaluate(table, q_abs, y[n: 2 * n])
+    if status != ed.OK:
+        return status
+    qddot = _f(table, slot.QDDOT)
+    for j in range(n):
+        if not np.isfinite(qddot[j]):
+            return ed.NONFINITE_RESULT
+    if ydot.size:  # empty when only the evaluation left in F is wanted
+        for j in range(n):
+            ydot[j] = y[n + j]
+            ydot[n + j] = qddot[j]
+    return ed.OK
+
+
+@kernel
+def first_order_jacobian(table, y, J, column_major):
+    """d ydot / d y (2n, 2n) into J (flat; column-major for SUNDIALS' dense matrix):
+    [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at y; a status code."""
+    status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
+    if status != ed.OK:
+        return status
+    n = _i(table, slot.DIMS)[ed.NDOF]
+    status = tangent(table, _f(table, slot.QDDOT))
+    if status != ed.OK:
+        return status
+    K, C = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
+    mass_lu, piv = _f(table, slot.MASS_LU), _i(table, slot.MASS_PIVOTS)
+    column = _f(table, slot.REDUCED_FORCE)
+    N = 2 * n
+    J[:] = 0.0
+    for j in range(n):
+        _put(J, N, j, n + j, 1.0, column_major)
+    for j in range(n):  # column j of -M^-1 K and of -M^-1 C
+        for i in range(n):
+            column[i] = K[i * n + j]
+        lu_solve(mass_lu, n, piv, column)
+        for i in range(n):
+            _put(J, N, n + i, j, -column[i], column_major)
+        for i in range(n):
+            column[i] = C[i * n + j]
+        lu_solve(mass_lu, n, piv, column)
+        for i in range(n):
+            _put(J, N, n + i, n + j, -column[i], column_major)
+    return ed.OK
+
+
+@kernel
+def _put(J, N, i, j, value, column_major):
+    if column_major:
+        J[j * N + i] = value
+    else:
+        J[i * N + j] = value
+
+
+@kernel
+def implicit_residual(table, y, yp, res):
+    """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot))]; a status code."""
+    status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
+    if status != ed.OK:
+        return status
+    status = reduced_mass(table)
+    if status != ed.OK:
+        return status
+    n = _i(table, slot.DIMS)[ed.NDOF]
+    mass, qddot = _f(table, slot.MASS), _f(table, slot.QDDOT)
+    for i in range(n):
+        res[i] = yp[i] - y[n + i]
+        s = 0.0
+        for j in range(n):
+            s += mass[i * n + j] * (yp[n + j] - qddot[j])
+        res[n + i] = s
+    return ed.OK
+
+
+@kernel
+def implicit_jacobian(table, y, yp, cj, J):
+    """IDA's d res / d y + cj d res / d yp, column-major (2n, 2n): [[cj I, -I], [K, C + cj
+    M_bar]] with the tangent's dynamic balance at qddot = yp[n:]; a status code."""
+    status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
+    if status != ed.OK:
+        return status
+    n = _i(table, slot.DIMS)[ed.NDOF]
+    status = tangent(table, yp[n: 2 * n])
+    if status != ed.OK:
+        return status
+    K, C, mass = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING), _f(table, slot.MASS)
+    N = 2 * n
+    J[:] = 0.0
+    for i in range(n):
+        J[i * N + i] = cj
+        J[(n + i) * N + i] = -1.0
+        for j in range(n):
+            J[j * N + n + i] = K[i * n + j]
+            J[(n + j) * N + n + i] = C[i * n + j] + cj * mass[i * n + j]
+    return ed.OK
+
+
+# -- the one entry point: every operation through one compiled C function ---------------------
+(OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
+ OP_EVALUATE, OP_TANGENT, OP_POSITIONS) = range(9)
+# (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number
+ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.voidptr,
+                           types.voidptr, types.voidptr, types.float64)
+
+
+@entry(ENGINE_ENTRY)
+def engine_entry(op, user_data, t, a, b, c, s):
+    """Every operation of the engine on the packed model at user_data (an address table):
+
+    OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major), OP_RESIDUAL (y, yp, res),
+    OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q; with DF), OP_DEFORMATIONS (x;
+    s = order), OP_EVALUATE (q, qdot; with DF and M_bar), OP_TANGENT (qddot), OP_POSITIONS
+    (q; x by Newton from slot x_start, nothing else). Returns the status code."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    nx, ndof = dims[ed.NX], dims[ed.NDOF]
+    n = 2 * ndof
+    f8 = np.float64
+    if op == OP_RHS:
+        return first_order_rhs(table, carray(a, (n,), f8), carray(b, (n,), f8))
+    if op == OP_JACOBIAN:
+        return first_order_jacobian(table, carray(a, (n,), f8), carray(b, (n * n,), f8),
+                                    s != 0.0)
+    if op == OP_RESIDUAL:
+        return implicit_residual(table, carray(a, (n,), f8), carray(b, (n,), f8),
+                                 carray(c, (n,), f8))
+    if op == OP_RESIDUAL_JACOBIAN:
+        return implicit_jacobian(table, carray(a, (n,), f8), carray(b, (n,), f8), s,
+                                 carray(c, (n * n,), f8))
+    if op == OP_KINEMATICS:
+        status = solve_kinematics(table, carray(a, (ndof,), f8))
+        if status == ed.OK:
+            compute_DF(table)
+        return status
+    if op == OP_DEFORMATIONS:
+        deformations(table, carray(a, (nx,), f8), int(s))
+        return ed.OK
+    if op == OP_EVALUATE:
+        status = evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
+        return reduced_mass(table) if status == ed.OK else status
+    if op == OP_TANGENT:
+        return tangent(table, carray(a, (ndof,), f8))
+    if op == OP_POSITIONS:
+        return solve_positions(table, carray(a, (ndof,), f8))
+    return -1
+
+
+def connect(data):
+    """Put the engine entry's address into the packed model (dims[ENGINE]), for the compiled
+    callbacks (SUNDIALS', the ESDIRK's, the sampled loop's) that call the engine through it;
+    the address belongs to this process, so it is set at run time, never cached. Returns
+    `data`."""
+    data.int_array("dims")[ed.ENGINE] = engine_entry.address
+    return data
+
+
+def call(data, op, a=None, b=None, c=None, s=0.0, t=0.0):
+    """Run one engine operation from Python (a ctypes call, about 1 us): data an
+    `EngineData`, a, b, c contiguous float64 arrays of the operation. Returns the status."""
+    return engine_entry.ctypes(op, data.address, t, _address(a), _address(b), _address(c),
+                               float(s))
+
+
+def _address(array):
+    if array is None:
+        return None
+    if not (array.dtype == np.float64 and array.flags.c_contiguous):
+        raise TypeError("engine arrays must be C-contiguous float64")
+    return array.ctypes.data

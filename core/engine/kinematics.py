@@ -1,0 +1,282 @@
+"""Kinematics in the compiled engine: the elements' deformations, x = F(q) and DF.
+
+For DOFs q (m, rad) the coordinates x (m, and the rotation parameters of the elements) solve,
+on the free coordinates,
+
+    g(x) = [e_o(x); e_m(x) - q_e; x_m - q_x] = 0
+
+(the deformations e_o prescribed zero, the DOF deformations e_m and the DOF coordinates x_m
+equal to their DOFs). Warm start: the first-order prediction x_prev + DF_prev (q - q_prev);
+if its residual exceeds the tolerance, chord iterations with the previous LU of the
+constraint Jacobian J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton
+from there if they stall. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the
+reduced form, the tangent, the kinematics operation).
+
+J is factored as a banded matrix (`core/numerics/banded.py`) with its rows and columns in the
+bandwidth-reducing orders computed at packing (slots j_row_position, j_column_position);
+`j_solve` (J^-1 or J^-T) takes and gives vectors in the model's order. The element
+deformations e, De = de/dx and D2e come from each element module's compiled entry point.
+"""
+
+import numpy as np
+
+from ..numerics import banded
+from ..numerics.jit import kernel
+from ..numerics.native import call_deformations
+from . import data as ed
+from . import slots as slot
+from .slots import float_array as _f
+from .slots import group, group_coordinates, group_deformations
+from .slots import int_array as _i
+
+
+# -- deformations of every element ---------------------------------------------------------------
+@kernel
+def deformations(table, x, order):
+    """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e."""
+    dims = _i(table, slot.DIMS)
+    e = _f(table, slot.E)
+    local = _f(table, slot.LOCAL)
+    max_m = dims[ed.MAX_M]
+    for g in range(dims[ed.NGROUPS]):
+        row = group(table, g)
+        n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
+        if k == 0:
+            continue
+        width, function = row[ed.G_REF_WIDTH], row[ed.G_DEFORMATIONS_ENTRY]
+        coords = group_coordinates(table, row)
+        defs = _i(table, slot.DEF_INDEX)[row[ed.G_DEF_OFFSET]: row[ed.G_DEF_OFFSET] + n * k]
+        refs = _f(table, slot.GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+        De = _f(table, slot.DE).ctypes.data + 8 * row[ed.G_DE_OFFSET]
+        D2e = _f(table, slot.D2E).ctypes.data + 8 * row[ed.G_D2E_OFFSET]
+        xl = local[:m]
+        el = local[max_m: max_m + k]
+        for i in range(n):
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+            call_deformations(function, xl.ctypes.data, refs + 8 * i * width, order,
+                              el.ctypes.data, De + 8 * i * k * m, D2e + 8 * i * k * m * m,
+                              m, k, width)
+            for b in range(k):
+                e[defs[i * k + b]] = el[b]
+
+
+# -- kinematics -----------------------------------------------------------------------------------
+@kernel
+def _residual(table, x, q, g):
+    """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in slot e."""
+    dims = _i(table, slot.DIMS)
+    e = _f(table, slot.E)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    rows = _i(table, slot.ROWS)
+    worst = 0.0
+    for j in range(n_rigid):
+        g[j] = e[rows[j]]
+    for j in range(n_edof):
+        g[n_rigid + j] = e[rows[n_rigid + j]] - q[n_xdof + j]
+    for j in range(n_xdof):
+        g[n_rigid + n_edof + j] = x[_i(table, slot.DOF_COORDS)[j]] - q[j]
+    for j in range(g.size):
+        worst = max(worst, abs(g[j]))
+    return worst
+
+
+@kernel
+def _constraint_jacobian(table, J):
+    """J (n_free, n_free) row-major into J from the elements' De in slot de, its rows and
+    columns in their banded order (slots j_row_position, j_column_position)."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    J[:] = 0.0
+    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
+    row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                r = row_of_def[defs[i * k + b]]
+                if r < 0:
+                    continue
+                for a in range(m):
+                    c = col_of_coord[coords[i * m + a]]
+                    if c >= 0:
+                        J[rpos[r] * nf + cpos[c]] = De[(i * k + b) * m + a]
+    n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
+    positions = _i(table, slot.DOF_POS)
+    for j in range(dims[ed.NXDOF]):
+        J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
+
+
+@kernel
+def _j_factor(table):
+    """J at the deformations' De into slot lu, factored (banded); the pivot ratio."""
+    dims = _i(table, slot.DIMS)
+    lu = _f(table, slot.LU)
+    _constraint_jacobian(table, lu)
+    return banded.factor(lu, dims[ed.NFREE], _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU])
+
+
+@kernel
+def j_solve(table, b, transposed=False):
+    """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
+    b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
+    factors in slot lu."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
+    into, out = (cpos, rpos) if transposed else (rpos, cpos)
+    t = _f(table, slot.BAND_SCRATCH)
+    for r in range(nf):
+        t[into[r]] = b[r]
+    lu, pivots, kl, ku = _f(table, slot.LU), _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU]
+    if transposed:
+        banded.solve_transposed(lu, nf, pivots, kl, ku, t)
+    else:
+        banded.solve(lu, nf, pivots, kl, ku, t)
+    for c in range(nf):
+        b[c] = t[out[c]]
+
+
+@kernel
+def _store(table, q, x):
+    """Factor J at the solved x (deformations of order 2 evaluated there) and keep both as the
+    next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
+    singular."""
+    dims = _i(table, slot.DIMS)
+    nx = dims[ed.NX]
+    ratio = _j_factor(table)
+    if not ratio > _f(table, slot.SETTINGS)[ed.SINGULAR_RATIO]:
+        return ed.SINGULAR_CONSTRAINTS
+    _f(table, slot.X)[:nx] = x[:nx]
+    _f(table, slot.Q)[:] = q
+    dims[ed.WARM] = 1
+    return ed.OK
+
+
+@kernel
+def dof_rows(table, v, out):
+    """out (n_free,) = [0; v_e; v_x]: a DOF vector v (NDOF,: coordinate DOFs first) on the rows
+    of J (rigid rows, DOF deformation rows, DOF coordinate rows), so that J^-1 out = DF v."""
+    dims = _i(table, slot.DIMS)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    out[:] = 0.0
+    for j in range(n_xdof):
+        out[n_rigid + n_edof + j] = v[j]
+    for j in range(n_edof):
+        out[n_rigid + j] = v[n_xdof + j]
+
+
+@kernel
+def compute_DF(table):
+    """DF (NX, NDOF) into slot DF from the LU of J of the last kinematic solution: J DF =
+    [0; I] column by column (NDOF solves)."""
+    dims = _i(table, slot.DIMS)
+    ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
+    DF, column, unit = _f(table, slot.DF), _f(table, slot.DX), _f(table, slot.REDUCED_FORCE)
+    free = _i(table, slot.FREE)
+    DF[:] = 0.0
+    for j in range(ndof):
+        unit[:] = 0.0
+        unit[j] = 1.0
+        dof_rows(table, unit, column)
+        j_solve(table, column)
+        for a in range(nf):
+            DF[free[a] * ndof + j] = column[a]
+
+
+@kernel
+def _newton_step(table, x, g, dx):
+    """x -= J^-1 g on the free coordinates, with the factors in slot lu (the step into dx,
+    n_free); the step's largest magnitude (m, rad; not finite if the step is not)."""
+    free = _i(table, slot.FREE)
+    dx[:] = g
+    j_solve(table, dx)
+    step = 0.0
+    for a in range(_i(table, slot.DIMS)[ed.NFREE]):
+        x[free[a]] -= dx[a]
+        step = max(step, abs(dx[a]))
+    return step
+
+
+@kernel
+def solve_positions(table, q):
+    """x = F(q) into slot x by full Newton from slot x_start, stopping as soon as the
+    constraint residual is within the tolerance: the positions alone (no D2e, no factors or DF
+    kept, no warm start set), for measuring outputs; a status code."""
+    dims = _i(table, slot.DIMS)
+    dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = 0
+    nx = dims[ed.NX]
+    tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
+    x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
+    x[:] = _f(table, slot.X_START)
+    if not np.all(np.isfinite(x)):
+        x[:] = _f(table, slot.X)
+    for _ in range(dims[ed.MAX_NEWTON]):
+        deformations(table, x, 1)
+        if _residual(table, x, q, g) <= tolerance:
+            _f(table, slot.X)[:nx] = x[:nx]
+            return ed.OK
+        if not _j_factor(table) > 0.0:
+            return ed.SINGULAR_CONSTRAINTS
+        if not np.isfinite(_newton_step(table, x, g, dx)):
+            return ed.NOT_CONVERGED
+    return ed.NOT_CONVERGED
+
+
+@kernel
+def solve_kinematics(table, q):
+    """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
+    dims = _i(table, slot.DIMS)
+    dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
+    nx, nf = dims[ed.NX], dims[ed.NFREE]
+    tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
+    x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
+    free = _i(table, slot.FREE)
+    if dims[ed.WARM] == 1:
+        # the first-order prediction x_prev + DF_prev (q - q_prev): with DF where the reduced
+        # form keeps it (every solution computes it there), else as J_prev^-1 [0; dq] with the
+        # factors kept from the previous solution
+        x_prev, q_prev, dq = _f(table, slot.X), _f(table, slot.Q), _f(table, slot.REDUCED_FORCE)
+        ndof = dims[ed.NDOF]
+        for j in range(ndof):
+            dq[j] = q[j] - q_prev[j]
+        if dims[ed.AUGMENTED] == 0:
+            DF = _f(table, slot.DF)
+            for a in range(nx):
+                s = x_prev[a]
+                for j in range(ndof):
+                    s += DF[a * ndof + j] * dq[j]
+                x[a] = s
+        else:
+            dof_rows(table, dq, dx)
+            j_solve(table, dx)
+            x[:nx] = x_prev[:nx]
+            for a in range(nf):
+                x[free[a]] += dx[a]
+        deformations(table, x, 2)  # with the derivatives: usually x needs no correction
+        if _residual(table, x, q, g) <= tolerance:
+            return _store(table, q, x)
+        for _ in range(dims[ed.CHORD_ITERATIONS]):
+            step = _newton_step(table, x, g, dx)
+            if not np.isfinite(step):
+                break
+            deformations(table, x, 2)
+            if _residual(table, x, q, g) <= tolerance or step <= tolerance:
+                return _store(table, q, x)
+    else:
+        x[:] = _f(table, slot.X_START)
+    if not np.all(np.isfinite(x)):
+        x[:] = _f(table, slot.X)
+    for _ in range(dims[ed.MAX_NEWTON]):  # full Newton
+        deformations(table, x, 1)
+        _residual(table, x, q, g)
+        if not _j_factor(table) > 0.0:
+            return ed.SINGULAR_CONSTRAINTS
+        step = _newton_step(table, x, g, dx)
+        if not np.isfinite(step):
+            return ed.NOT_CONVERGED
+        if step <= tolerance:
+            deformations(table, x, 2)
+            return _store(table, q, x)
+    return ed.NOT_CONVERGED
+

@@ -1,0 +1,445 @@
+"""Equations of motion in the compiled engine: the accelerations qddot (m/s^2, rad/s^2).
+
+For DOFs q, velocities qdot (m/s, rad/s) and the held inputs u (N, N m), in the reduced form
+of the course notes (or, for models with many DOFs, in the augmented form on the free
+coordinates that `evaluate` describes, which gives the same qddot without forming DF and
+M_bar; `data.evaluation_cost` picks one per model):
+
+    M_bar qddot = DF^T (f - M (D2F qdot) qdot - g_conv - De^T sigma_c),  M_bar = DF^T M DF
+
+with f the constant loads, gravity and the inputs, sigma_c = S e + D edot on the stressed
+deformations, M = diag(lumped) + sum Dp^T Mp Dp over the inertia points p of the element
+masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, and (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot]
+on the constraint rows. Gravity acts on the position points of the inertia, which are linear
+in x for every element, so it has no tangent stiffness.
+
+M_bar is accumulated element by element from (Dp DF_e)^T Mp (Dp DF_e), never from a dense
+(NX, NX) M; the augmented system is factored as a banded matrix (`core/numerics/banded.py`) in the
+bandwidth-reducing order computed at packing, so an evaluation in the augmented form costs in
+proportion to the element count.
+"""
+
+from ..numerics import banded
+from ..numerics.dense import lu_factor, lu_solve
+from ..numerics.jit import kernel
+from ..numerics.native import call_inertia
+from . import data as ed
+from . import slots as slot
+from .kinematics import compute_DF, dof_rows, j_solve, solve_kinematics
+from .slots import float_array as _f
+from .slots import (
+    group,
+    group_deformations,
+    group_inertia,
+    inertia_scratch,
+)
+from .slots import int_array as _i
+
+
+@kernel
+def evaluate(table, q, qdot):
+    """qddot (NDOF,) into slot qddot for DOFs q, velocities qdot and the inputs in slot inputs.
+
+    The accelerations come from the augmented system on the free coordinates (no DF, no
+    M_bar: the cost of forming DF^T M DF grew as NDOF^2 per element)
+
+        [M_ff  J_o^T] [xddot_f]   [r_f     ]      r = f - De^T sigma_c - g_conv
+        [J_o   0    ] [lambda ] = [-h_o    ]      h_i = xdot^T D2e_i xdot
+
+    with J_o the rigid rows of J; then qddot = [xddot on the DOF coordinates; De_m xddot +
+    h_m]. This is the reduced equation M_bar qddot = DF^T (r - M conv) (DF spans the null space
+    of J_o). Leaves in the packed arrays what the tangent needs: the kinematics with J's LU,
+    the constitutive stress resultants (slot sigma), r (slot force), xdot, conv = (D2F qdot)
+    qdot (slot conv) and xddot (slot xddot); a status. `reduced_mass` adds DF and M_bar."""
+    status = solve_kinematics(table, q)
+    if status != ed.OK:
+        return status
+    dims = _i(table, slot.DIMS)
+    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
+    n_rigid, n_xdof = dims[ed.NRIGID], dims[ed.NXDOF]
+    x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
+    dx = _f(table, slot.DX)
+    moving = False
+    for j in range(ndof):
+        if qdot[j] != 0.0:
+            moving = True
+    reduced = dims[ed.AUGMENTED] == 0
+    if reduced:  # xdot = DF qdot
+        compute_DF(table)
+        DF = _f(table, slot.DF)
+        for a in range(nx):
+            s = 0.0
+            for j in range(ndof):
+                s += DF[a * ndof + j] * qdot[j]
+            xdot[a] = s
+    else:  # xdot = J^-1 [0; qdot]
+        dof_rows(table, qdot, dx)
+        j_solve(table, dx)
+        xdot[:] = 0.0
+        for a in range(nf):
+            xdot[free[a]] = dx[a]
+    # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
+    _element_rates(table, xdot, moving)
+    # sigma_c = S e_s + D edot_s
+    sigma, e, edot = _f(table, slot.SIGMA), _f(table, slot.E), _f(table, slot.EDOT)
+    stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
+    ns = stressed.size
+    sigma[:] = 0.0
+    damped = dims[ed.HAS_DAMPING] == 1
+    for a in range(ns):
+        s = 0.0
+        for b in range(ns):
+            s += S[a * ns + b] * e[stressed[b]]
+            if damped:
+                s += D[a * ns + b] * edot[stressed[b]]
+        sigma[stressed[a]] = s
+    # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
+    r = _f(table, slot.FORCE)
+    r[:] = _f(table, slot.CONST_FORCE)
+    inputs, input_coords = _f(table, slot.INPUTS), _i(table, slot.INPUT_COORDS)
+    for j in range(inputs.size):
+        r[input_coords[j]] += inputs[j]
+    _scatter_stress(table, sigma, r)
+    quad, conv = _f(table, slot.G), _f(table, slot.CONV)
+    conv[:] = 0.0
+    if moving:  # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows], for the tangent
+        for a in range(nf):
+            dx[a] = quad[a]
+        j_solve(table, dx)
+        for a in range(nf):
+            conv[free[a]] = -dx[a]
+    qddot = _f(table, slot.QDDOT)
+    if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
+        _inertia_reduced(table, x, xdot, conv, moving, r)  # r -= M conv + g_conv here
+        DF, rq = _f(table, slot.DF), _f(table, slot.REDUCED_FORCE)
+        for j in range(ndof):
+            s = 0.0
+            for a in range(nx):
+                s += DF[a * ndof + j] * r[a]
+            rq[j] = s
+        mass_lu = _f(table, slot.MASS_LU)
+        mass_lu[:] = _f(table, slot.MASS)
+        dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 1
+        if not lu_factor(mass_lu, ndof, _i(table, slot.MASS_PIVOTS)) > 0.0:
+            return ed.SINGULAR_MASS
+        qddot[:] = rq
+        lu_solve(mass_lu, ndof, _i(table, slot.MASS_PIVOTS), qddot)
+        return ed.OK
+    dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
+    na = nf + n_rigid
+    A, rhs = _f(table, slot.AUG), _f(table, slot.AUG_RHS)
+    A[: na * na] = 0.0
+    _inertia_forces(table, x, xdot, moving, r, A, na)
+    _rigid_rows(table, A, na)
+    apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
+    for a in range(nf):
+        t[apos[a]] = r[free[a]]
+    for o in range(n_rigid):
+        t[apos[nf + o]] = -quad[o] if moving else 0.0
+    kl, ku = dims[ed.A_KL], dims[ed.A_KU]
+    if not banded.factor(A, na, _i(table, slot.AUG_PIVOTS), kl, ku) > 0.0:
+        return ed.SINGULAR_MASS
+    banded.solve(A, na, _i(table, slot.AUG_PIVOTS), kl, ku, t)
+    for u in range(na):
+        rhs[u] = t[apos[u]]
+    xddot = _f(table, slot.XDDOT)
+    xddot[:] = 0.0
+    for a in range(nf):
+        xddot[free[a]] = rhs[a]
+    positions = _i(table, slot.DOF_POS)
+    for j in range(n_xdof):
+        qddot[j] = rhs[positions[j]]
+    _dof_deformation_accelerations(table, xddot, quad, moving, qddot)
+    return ed.OK
+
+
+@kernel
+def _rigid_rows(table, A, na):
+    """The rigid rows J_o of J (De of the deformations prescribed zero on the free coordinates)
+    into A (na, na) as [., J_o^T; J_o, 0] beside the mass block of the n_free coordinates."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
+    n_rigid = dims[ed.NRIGID]
+    apos = _i(table, slot.AUG_POS)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                o = row_of_def[defs[i * k + b]]
+                if o < 0 or o >= n_rigid:
+                    continue
+                po = apos[nf + o]
+                for a in range(m):
+                    c = col_of_coord[coords[i * m + a]]
+                    if c >= 0:
+                        v = De[(i * k + b) * m + a]
+                        A[po * na + apos[c]] = v
+                        A[apos[c] * na + po] = v
+
+
+@kernel
+def _dof_deformation_accelerations(table, xddot, quad, moving, qddot):
+    """qddot of the DOF deformations: De_m xddot + h_m (the constraint rows of those DOFs)."""
+    dims = _i(table, slot.DIMS)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                rr = row_of_def[defs[i * k + b]]
+                if rr < n_rigid or rr >= n_rigid + n_edof:
+                    continue
+                s = quad[rr] if moving else 0.0
+                base = (i * k + b) * m
+                for a in range(m):
+                    s += De[base + a] * xddot[coords[i * m + a]]
+                qddot[n_xdof + rr - n_rigid] = s
+
+
+@kernel
+def _element_rates(table, xdot, moving):
+    """edot = De xdot (slot edot) and, if moving, xdot^T D2e_i xdot of the constraint rows
+    into slot g (n_free,: zero on the unit rows of the DOF coordinates)."""
+    dims = _i(table, slot.DIMS)
+    edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    quad[:] = 0.0
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                s = 0.0
+                base = (i * k + b) * m
+                for a in range(m):
+                    s += De[base + a] * xdot[coords[i * m + a]]
+                edot[defs[i * k + b]] = s
+                r = row_of_def[defs[i * k + b]]
+                if moving and r >= 0:
+                    h = 0.0
+                    base2 = (i * k + b) * m * m
+                    for a in range(m):
+                        va = xdot[coords[i * m + a]]
+                        if va == 0.0:
+                            continue
+                        t = 0.0
+                        for c in range(m):
+                            t += D2e[base2 + a * m + c] * xdot[coords[i * m + c]]
+                        h += va * t
+                    quad[r] = h
+
+
+@kernel
+def _scatter_stress(table, sigma, r):
+    """r -= De^T sigma, element by element."""
+    dims = _i(table, slot.DIMS)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                s = sigma[defs[i * k + b]]
+                if s == 0.0:
+                    continue
+                base = (i * k + b) * m
+                for a in range(m):
+                    r[coords[i * m + a]] -= De[base + a] * s
+
+
+@kernel
+def _inertia_forces(table, x, xdot, moving, r, A, na):
+    """The mass of the free coordinates M_ff = diag(lumped) + sum Dp^T Mp Dp into A's first
+    n_free rows and columns (row length na); gravity on the element masses into r and, if
+    moving, r -= g_conv = Dp^T Mp (D2p xdot) xdot. Element by element through the inertia
+    points."""
+    dims = _i(table, slot.DIMS)
+    nx = dims[ed.NX]
+    lumped, col_of_coord = _f(table, slot.LUMPED), _i(table, slot.COL_OF_COORD)
+    apos = _i(table, slot.AUG_POS)
+    for a in range(nx):
+        c = col_of_coord[a]
+        if c >= 0:
+            A[apos[c] * na + apos[c]] += lumped[a]
+    local = _f(table, slot.LOCAL)
+    columns = _i(table, slot.POINT_COLUMNS)
+    for g in range(dims[ed.NGROUPS]):
+        row = group(table, g)
+        if row[ed.G_P] == 0:
+            continue
+        (n, m, P, width, function, coords, refs, masses, gravity,
+         pattern) = group_inertia(table, row)
+        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
+        xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
+        Me = local[o: o + m * m]
+        for i in range(n):
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+                vl[a] = xdot[coords[i * m + a]]
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
+                         2 if moving else 1, point.ctypes.data, Dp.ctypes.data,
+                         acc.ctypes.data, m, P, width)
+            for pp in range(P):
+                point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
+            _element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w, Me,
+                          columns)
+            counts, position = columns[P * m: P * m + P], columns[P * m + P: P * m + P + m]
+            for pp in range(P):  # r += Dp^T w
+                for u in range(counts[pp]):
+                    a = columns[pp * m + u]
+                    r[coords[i * m + a]] += Dp[pp, a] * w[pp]
+            for a in range(m):  # M_ff += Me on the free coordinates
+                c = col_of_coord[coords[i * m + a]]
+                position[a] = apos[c] if c >= 0 else -1
+            for a in range(m):
+                ca = position[a]
+                if ca < 0:
+                    continue
+                for b in range(m):
+                    cb = position[b]
+                    if cb >= 0:
+                        A[ca * na + cb] += Me[a * m + b]
+
+
+@kernel
+def _element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
+    """One element's w = Mp point (P,) and Me = Dp^T Mp Dp (m * m, row by row), visiting
+    only the entries of Mp in `pattern` (flat p P + q) and the non-zero entries of Dp (each
+    point moves with few coordinates: a BEAM's with 1 or 4 of 14). Leaves in `columns` the
+    non-zero columns of each row p of Dp (at p m ...) and their counts (at P m + p)."""
+    counts = columns[P * m:]
+    for pp in range(P):
+        k = 0
+        for a in range(m):
+            if Dp[pp, a] != 0.0:
+                columns[pp * m + k] = a
+                k += 1
+        counts[pp] = k
+    _point_forces(Mp, pattern, P, point, w)
+    for a in range(m * m):
+        Me[a] = 0.0
+    for e in range(pattern.size):
+        pp, qq = divmod(pattern[e], P)
+        mpq = Mp[pattern[e]]
+        for u in range(counts[pp]):
+            a = columns[pp * m + u]
+            da = mpq * Dp[pp, a]
+            for v in range(counts[qq]):
+                b = columns[qq * m + v]
+                Me[a * m + b] += da * Dp[qq, b]
+
+
+@kernel
+def _point_forces(Mp, pattern, P, point, w):
+    """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
+    for pp in range(P):
+        w[pp] = 0.0
+    for e in range(pattern.size):
+        pp, qq = divmod(pattern[e], P)
+        w[pp] += Mp[pattern[e]] * point[qq]
+
+
+@kernel
+def _inertia_reduced(table, x, xdot, conv, moving, r):
+    """M_bar = DF^T M DF into slot mass (`_reduced_mass_of`); gravity on the element masses
+    into r; and, if moving, r -= M conv + g_conv."""
+    _reduced_mass_of(table, x, xdot, conv, moving, r, True)
+
+
+@kernel
+def reduced_mass(table):
+    """DF (slot DF), M_bar = DF^T M DF (slot mass) and its LU (slot mass_lu) at the state of
+    the last `evaluate`, for the tangent and the implicit form (already there when that took
+    the reduced form); a status (SINGULAR_MASS)."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.MASS_CURRENT] == 1:
+        return ed.OK
+    compute_DF(table)
+    x = _f(table, slot.X)
+    _reduced_mass_of(table, x, x, x, False, x, False)
+    ndof = dims[ed.NDOF]
+    mass_lu = _f(table, slot.MASS_LU)
+    mass_lu[:] = _f(table, slot.MASS)
+    if not lu_factor(mass_lu, ndof, _i(table, slot.MASS_PIVOTS)) > 0.0:
+        return ed.SINGULAR_MASS
+    dims[ed.MASS_CURRENT] = 1
+    return ed.OK
+
+
+@kernel
+def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
+    """M_bar = DF^T M DF into slot mass, element by element through the inertia points
+    (M_bar += (Dp DF_e)^T Mp (Dp DF_e)) and the lumped masses; with_forces: also gravity on
+    the element masses into r and, if moving, r -= M conv + g_conv (xdot, conv, r are not
+    read otherwise)."""
+    dims = _i(table, slot.DIMS)
+    nx, ndof = dims[ed.NX], dims[ed.NDOF]
+    DF, mass, lumped = _f(table, slot.DF), _f(table, slot.MASS), _f(table, slot.LUMPED)
+    mass[:] = 0.0
+    for a in range(nx):  # the lumped masses
+        la = lumped[a]
+        if la == 0.0:
+            continue
+        if with_forces and moving:
+            r[a] -= la * conv[a]
+        for i in range(ndof):
+            di = la * DF[a * ndof + i]
+            if di == 0.0:
+                continue
+            for j in range(ndof):
+                mass[i * ndof + j] += di * DF[a * ndof + j]
+    local = _f(table, slot.LOCAL)
+    max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
+    for g in range(dims[ed.NGROUPS]):
+        row = group(table, g)
+        if row[ed.G_P] == 0:
+            continue
+        (n, m, P, width, function, coords, refs, masses, gravity,
+         pattern) = group_inertia(table, row)
+        # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), room for the Me of
+        # `_inertia_forces` (max_p max_m >= m m), B = Dp DF_e and Mp B (P, ndof)
+        xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
+        o += max_p * max_m
+        B = local[o: o + max_p * ndof]
+        o += max_p * ndof
+        MpB = local[o: o + max_p * ndof]
+        order = 2 if with_forces and moving else 1
+        for i in range(n):
+            Mp = masses[i * P * P: (i + 1) * P * P]
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+                vl[a] = xdot[coords[i * m + a]] if with_forces else 0.0
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
+                         order, point.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
+            B[: P * ndof] = 0.0
+            for pp in range(P):  # B = Dp DF_e, and the point forces gravity - Dp conv - acc
+                f = gravity[pp]
+                for a in range(m):
+                    d = Dp[pp, a]
+                    if d != 0.0:
+                        row_df = coords[i * m + a] * ndof
+                        for j in range(ndof):
+                            B[pp * ndof + j] += d * DF[row_df + j]
+                        if order == 2:
+                            f -= d * conv[coords[i * m + a]]
+                point[pp] = f - acc[pp] if order == 2 else f
+            _point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
+            MpB[: P * ndof] = 0.0
+            for e in range(pattern.size):
+                pp, qq = divmod(pattern[e], P)
+                mpq = Mp[pattern[e]]
+                for j in range(ndof):
+                    MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
+            if with_forces:
+                for a in range(m):  # r += Dp^T w
+                    s = 0.0
+                    for pp in range(P):
+                        s += Dp[pp, a] * w[pp]
+                    r[coords[i * m + a]] += s
+            for pp in range(P):  # M_bar += B^T (Mp B)
+                for a in range(ndof):
+                    ba = B[pp * ndof + a]
+                    if ba == 0.0:
+                        continue
+                    for b in range(ndof):
+                        mass[a * ndof + b] += ba * MpB[pp * ndof + b]
+

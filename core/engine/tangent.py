@@ -1,0 +1,168 @@
+"""The tangent of the equations of motion in the compiled engine: the integrators' Newton
+matrix.
+
+At the state of the last `motion.evaluate` and accelerations qddot: mass M_bar,
+damping C0 = DeF_s^T D DeF_s (N s/m, N m s/rad) and stiffness K0 + G0 (N/m, N m/rad),
+
+    K0 = DeF_s^T S DeF_s,   G0 = sum_e DF_e^T (sum_i sigma_i D2e_i) DF_e,   DeF = De DF,
+
+with sigma the stress resultants of the full dynamic balance: sigma_c plus the multipliers
+J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed deformations).
+"""
+
+from ..numerics.jit import kernel
+from ..numerics.native import call_inertia
+from . import data as ed
+from . import slots as slot
+from .kinematics import j_solve
+from .motion import reduced_mass
+from .slots import float_array as _f
+from .slots import (
+    group,
+    group_deformations,
+    group_inertia,
+    inertia_scratch,
+)
+from .slots import int_array as _i
+
+
+@kernel
+def tangent(table, qddot):
+    """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
+    state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,
+    M_bar and its LU as `reduced_mass` does. A status."""
+    status = reduced_mass(table)
+    if status != ed.OK:
+        return status
+    dims = _i(table, slot.DIMS)
+    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
+    DF, x, conv = _f(table, slot.DF), _f(table, slot.X), _f(table, slot.CONV)
+    # r_full = r - M xddot with xddot = DF qddot + conv (the reduced form's r holds - M conv
+    # already), then the multipliers J^-T r_full on the free coordinates
+    acc = _f(table, slot.XDDOT)
+    with_conv = dims[ed.REDUCED] == 0
+    for a in range(nx):
+        s = conv[a] if with_conv else 0.0
+        for j in range(ndof):
+            s += DF[a * ndof + j] * qddot[j]
+        acc[a] = s
+    r_full = _f(table, slot.X_TRIAL)
+    r_full[:] = _f(table, slot.FORCE)
+    _mass_times(table, x, acc, r_full)
+    free, lam = _i(table, slot.FREE), _f(table, slot.DX)
+    for a in range(nf):
+        lam[a] = r_full[free[a]]
+    j_solve(table, lam, True)  # J^-T
+    sigma = _f(table, slot.EDOT)  # reused: the full stress resultants
+    sigma[:] = _f(table, slot.SIGMA)
+    rows = _i(table, slot.ROWS)
+    for j in range(rows.size):
+        sigma[rows[j]] += lam[j]
+    # DeF = De DF (NE, NDOF) and G0 = sum DF_e^T (sum_i sigma_i D2e_i) DF_e
+    DeF, K, C = _f(table, slot.DEF), _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
+    K[:] = 0.0
+    C[:] = 0.0
+    DeF[:] = 0.0
+    local = _f(table, slot.LOCAL)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        H = local[: m * m]
+        HD = local[m * m: m * m + m * ndof]
+        for i in range(n):
+            for b in range(k):
+                base = (i * k + b) * m
+                d = defs[i * k + b]
+                for j in range(ndof):
+                    s = 0.0
+                    for a in range(m):
+                        s += De[base + a] * DF[coords[i * m + a] * ndof + j]
+                    DeF[d * ndof + j] = s
+            H[:] = 0.0
+            for b in range(k):
+                s = sigma[defs[i * k + b]]
+                if s == 0.0:
+                    continue
+                base2 = (i * k + b) * m * m
+                for a in range(m * m):
+                    H[a] += s * D2e[base2 + a]
+            for a in range(m):  # HD = H DF_e
+                for j in range(ndof):
+                    s = 0.0
+                    for c in range(m):
+                        s += H[a * m + c] * DF[coords[i * m + c] * ndof + j]
+                    HD[a * ndof + j] = s
+            for a in range(m):
+                for j1 in range(ndof):
+                    dfa = DF[coords[i * m + a] * ndof + j1]
+                    if dfa == 0.0:
+                        continue
+                    for j2 in range(ndof):
+                        K[j1 * ndof + j2] += dfa * HD[a * ndof + j2]
+    # K0 = DeF_s^T S DeF_s, C0 = DeF_s^T D DeF_s
+    stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
+    ns = stressed.size
+    damped = dims[ed.HAS_DAMPING] == 1
+    SD = local[: ndof]
+    DD = local[ndof: 2 * ndof]
+    for a in range(ns):
+        for j in range(ndof):
+            s = 0.0
+            t = 0.0
+            for b in range(ns):
+                v = DeF[stressed[b] * ndof + j]
+                s += S[a * ns + b] * v
+                if damped:
+                    t += D[a * ns + b] * v
+            SD[j] = s
+            DD[j] = t
+        for i in range(ndof):
+            v = DeF[stressed[a] * ndof + i]
+            if v == 0.0:
+                continue
+            for j in range(ndof):
+                K[i * ndof + j] += v * SD[j]
+                if damped:
+                    C[i * ndof + j] += v * DD[j]
+    return ed.OK
+
+
+@kernel
+def _mass_times(table, x, v, out):
+    """out -= M(x) v for a coordinate vector v (NX,): lumped plus element masses."""
+    dims = _i(table, slot.DIMS)
+    nx = dims[ed.NX]
+    lumped = _f(table, slot.LUMPED)
+    for a in range(nx):
+        out[a] -= lumped[a] * v[a]
+    max_m, ndof = dims[ed.MAX_M], dims[ed.NDOF]
+    for g in range(dims[ed.NGROUPS]):
+        row = group(table, g)
+        if row[ed.G_P] == 0:
+            continue
+        n, m, P, width, function, coords, refs, masses, _, pattern = group_inertia(table, row)
+        # scratch after the first 2 ndof entries, which `tangent` keeps for itself
+        base = 2 * ndof + max_m * max_m + max_m * ndof
+        xl, vl, pl, acc, w, Dp, _ = inertia_scratch(table, base, P, m)
+        for i in range(n):
+            Mp = masses[i * P * P: (i + 1) * P * P]
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width, 1,
+                         pl.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
+            for pp in range(P):
+                s = 0.0
+                for a in range(m):
+                    s += Dp[pp, a] * v[coords[i * m + a]]
+                acc[pp] = s
+            for pp in range(P):
+                w[pp] = 0.0
+            for e in range(pattern.size):  # w = Mp acc over the entries Mp has
+                flat = pattern[e]
+                pp = flat // P
+                w[pp] += Mp[flat] * acc[flat - pp * P]
+            for a in range(m):
+                s = 0.0
+                for pp in range(P):
+                    s += Dp[pp, a] * w[pp]
+                out[coords[i * m + a]] -= s
+

@@ -1,0 +1,366 @@
+"""The exact-constraint check: DOF count and the rank of the constraint Jacobian.
+
+A model is exactly constrained when its declared DOFs number NDOF = NX - NXO - NEO and the
+constraint Jacobian J (free coordinates x free coordinates: rigid deformations, DOF
+deformations, DOF coordinates) is regular. Otherwise, following the exact-constraint-design
+check of the seed chapter:
+
+- over-constrained: the rows of the rigid deformations are linearly dependent; the redundant
+  constraints are named (each could be released to remove one over-constraint);
+- under-constrained: some motion of the free coordinates changes no rigid deformation and no
+  DOF; the coordinates of that motion are named (a mechanism, or a missing DOF).
+
+Rank decisions use an SVD with the rotation columns scaled by the model's length scale, and a
+relative threshold of 1e-9 on the singular values.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import ConstraintError
+from ..model import DOF
+from ..numerics.blas import blas_threads
+from . import assembly
+from .kinematics import Kinematics
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+
+RANK_TOLERANCE = 1e-9
+# A constraint Jacobian whose reciprocal condition estimate (LU, LAPACK's gecon, 1-norm) is above
+# CLEAR_RCOND is regular without an SVD; below it the SVD decides. Measured on meshed spatial
+# stages of 56 to 1 750 free coordinates, the estimate stays within a factor of 1.6 of the
+# SVD's sigma_min / sigma_max, so 1e-7 keeps a margin of about 60 over RANK_TOLERANCE
+CLEAR_RCOND = 1e-7
+
+
+@blas_threads()
+def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict:
+    """Raise ConstraintError unless `model` is exactly constrained at coordinates x.
+
+    The message names the DOF counts, the redundant constraints (element deformations) and the
+    free coordinates, as far as they apply. Returns the model's dof_count() when it passes.
+    """
+    kin = Kinematics(model)
+    if x is None:
+        x = model.initial_coordinates
+    problems = []
+    if model.declared_dof_count != model.ndof:
+        declared = ", ".join(model.dof_names) or "none"
+        count = model.dof_count()  # the course notes' count (3 per 3-D rotational node)
+        problems.append(
+            f"NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} - {count['neo']} = "
+            f"{count['ndof']}, "
+            f"but the scene declares {model.declared_dof_count} DOF(s): {declared}"
+        )
+    _, De = assembly.deformation_jacobian(model, x)
+    scale = _column_scale(model, kin.length_scale)[kin.free]
+    rows = De[np.ix_(kin.constraint_rows, kin.free)] * scale
+    dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
+    dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
+    full = np.vstack([rows, dof_rows])
+    if not problems and _clearly_regular(full):
+        # a regular J has independent rigid rows and no free motion: nothing to name
+        return model.dof_count()
+    rigid_rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
+    # Several null-space vectors may involve the same rows: one line per set, with its count.
+    dependencies = _counted(_dependent_row_sets(rigid_rows))
+    for dependency, count in dependencies:
+        names = [model.deformation_names[model.rigid_deformations[i]] for i in dependency]
+        redundant = "one of them is" if count == 1 else f"{count} of them are"
+        release = "one of them" if count == 1 else f"{count} of them"
+        problems.append(
+            "over-constrained: the prescribed deformations "
+            + ", ".join(names)
+            + f" are mutually dependent, so {redundant} redundant; release {release} "
+            "(or remove a support)"
+        )
+    releases = []
+    if dependencies:
+        kept, releases = _independent_rows(rigid_rows, _release_preference(model))
+        problems.append(_redundancies(model, rigid_rows, kept, releases))
+    if releases:
+        names = [model.deformation_names[model.rigid_deformations[i]] for i in releases]
+        problems.append(
+            f"a release that removes the over-constraint: {', '.join(names)} (released instead of "
+            f"prescribed zero: each needs its stiffness in the section, and the model gains "
+            f"{len(names)} DOF(s); flexure chooses them when the scene lists none)"
+        )
+    motions = [tuple(np.flatnonzero(np.abs(motion) > 1e-6 * np.abs(motion).max()))
+               for motion in _free_motions(full)]
+    for moving, count in _counted(motions):
+        names = ", ".join(model.coordinate_names[kin.free[i]] for i in moving)
+        ways = "" if count == 1 else f" in {count} independent ways"
+        problems.append(
+            f"under-constrained: the coordinates {names} can move{ways} without changing any "
+            "prescribed deformation or DOF; prescribe a released deformation zero, fix a "
+            "coordinate or declare a DOF"
+        )
+    if problems:
+        raise ConstraintError(
+            f"{model.source}: model {model.name!r} is not exactly constrained:\n  - "
+            + "\n  - ".join(problems)
+        )
+    return model.dof_count()
+
+
+@blas_threads()
+def choose_dofs(model: Model, x: np.ndarray | None = None) -> tuple | None:
+    """A valid set of DOFs for a model whose scene lists none: (coordinate_status,
+    deformation_status, names of the chosen DOFs), or None when the prescribed deformations
+    alone are dependent (over-constrained: `check_exact_constraint` then names them).
+
+    The DOFs must complete the rigid rows R of the constraint Jacobian (prescribed
+    deformations x free coordinates, at x, default the initial coordinates) to a regular
+    matrix: their rows, projected on the null space N of R (the motions the constraints
+    allow), must span it. Coordinates are preferred, as a designer names them (a planar node's
+    x, y or phi; in space the translations, since a 3-D rotational node's Euler parameters
+    cannot be DOFs); where they cannot span the motions (a free rotation in space), released
+    deformations become DOF deformations. Among the candidates the choice is a QR
+    factorisation with column pivoting of their projections: the ones that move most along
+    the allowed motions first, ties in the scene's order. Rotations are scaled by the model's
+    length scale, as in the check."""
+    import scipy.linalg
+
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    if not np.all(np.isfinite(De)):
+        return None  # a degenerate configuration: the check reports it
+    scale = _column_scale(model, kin.length_scale)
+    free = model.free_coordinates
+    rigid = De[np.ix_(model.rigid_deformations, free)] * scale[free]
+    if model.rigid_deformations.size and np.linalg.matrix_rank(
+            rigid, tol=RANK_TOLERANCE * max(np.abs(rigid).max(), 1e-300)) < rigid.shape[0]:
+        return None
+    motions = np.array(_null_space(rigid)).reshape(-1, free.size).T  # (free, NDOF)
+    ndof = motions.shape[1]
+    if ndof == 0:
+        return None
+    translations = set(model.translations.tolist())
+    coordinates = [i for i, c in enumerate(free) if model.dimension == 2 or c in translations]
+    # a coordinate's row is the unit row of its column (times its scale)
+    coordinate_rows = np.zeros((len(coordinates), free.size))
+    for k, i in enumerate(coordinates):
+        coordinate_rows[k, i] = scale[free[i]]
+    released = model.released_deformations
+    deformation_rows = De[np.ix_(released, free)] * scale[free]
+
+    def pick(rows, basis, count):
+        """Indices of up to `count` rows whose projections on `basis` are independent."""
+        if rows.shape[0] == 0 or count == 0:
+            return []
+        projected = rows @ basis
+        _, r, order = scipy.linalg.qr(projected.T, pivoting=True, mode="economic")
+        diagonal = np.abs(np.diag(r))
+        top = max(diagonal.max(initial=0.0), 1e-300)
+        rank = int(np.sum(diagonal > 1e-6 * top))
+        return sorted(order[:min(rank, count)].tolist())
+
+    chosen_coordinates = pick(coordinate_rows, motions, ndof)
+    remaining = motions
+    if chosen_coordinates:  # the motions the chosen coordinates leave free
+        taken = coordinate_rows[chosen_coordinates] @ motions
+        remaining = motions @ np.array(_null_space(taken)).reshape(-1, ndof).T
+    chosen_deformations = pick(deformation_rows, remaining, ndof - len(chosen_coordinates))
+    if len(chosen_coordinates) + len(chosen_deformations) < ndof:
+        return None  # the check names the motion no DOF can take
+    coordinate_status = model.coordinate_status.copy()
+    deformation_status = model.deformation_status.copy()
+    names = []
+    for k in chosen_coordinates:
+        c = free[coordinates[k]]
+        coordinate_status[c] = DOF
+        names.append(model.coordinate_names[c])
+    for k in chosen_deformations:
+        deformation_status[released[k]] = DOF
+        names.append(model.deformation_names[released[k]])
+    return coordinate_status, deformation_status, names
+
+
+def _clearly_regular(matrix):
+    """Whether the square `matrix` is regular by a margin: its LU's reciprocal condition
+    estimate (LAPACK's gecon, 1-norm) above CLEAR_RCOND. An O(n^3 / 3) test where the SVD
+    costs about ten times more (1.5 s on a 1 700-coordinate model); whatever it does not
+    clear goes to the SVD, which decides with RANK_TOLERANCE and names what is wrong."""
+    import scipy.linalg
+
+    if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
+        return matrix.shape == (0, 0)
+    if not np.all(np.isfinite(matrix)):
+        return False
+    with warnings.catch_warnings():  # an exactly singular matrix is an answer here
+        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+        lu, _ = scipy.linalg.lu_factor(matrix, check_finite=False)
+    rcond, info = scipy.linalg.lapack.dgecon(lu, np.linalg.norm(matrix, 1), norm="1")
+    return info == 0 and rcond > CLEAR_RCOND
+
+
+def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
+    """The prescribed deformations whose release removes every over-constraint of `model`
+    (names; empty when the prescribed deformations are independent), as SPACAR Light's
+    automatic releases would choose them, but proposed, not applied.
+
+    The rows of the prescribed deformations (at x, default the initial coordinates) are taken
+    one by one, those that cannot be released first (their section has no stiffness for
+    them), then the others in the scene's order; a row that adds nothing to the span of the
+    rows kept before it is redundant and proposed for release. The rows kept are independent,
+    so the proposal releases exactly as many deformations as there are over-constraints."""
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    scale = _column_scale(model, kin.length_scale)[kin.free]
+    rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
+    redundant = _independent_rows(rows, _release_preference(model))[1]
+    return [model.deformation_names[model.rigid_deformations[i]] for i in redundant]
+
+
+@blas_threads()
+def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[int]:
+    """Which `groups` of released (or DOF) deformations, taken in their order, can be
+    prescribed zero together, on top of the model's prescribed deformations, without
+    over-constraining it: a group is taken when its rows of the deformation Jacobian (at
+    coordinates x, default the initial ones; rotations scaled to lengths) add fully to the
+    span of the prescribed rows and of the groups taken before it. `groups` are arrays of
+    deformation indices; returns the positions in `groups` of those taken.
+
+    This is the over-constraint test of `check_exact_constraint` done incrementally: a model
+    reduction can then freeze many deformations at once and know that the result builds.
+    """
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    columns = kin.free
+    scale = _column_scale(model, kin.length_scale)[columns]
+    prescribed = De[np.ix_(model.rigid_deformations, columns)] * scale
+    top = max(np.abs(De[:, columns] * scale).max(initial=0.0), 1e-300)
+    # an orthonormal basis of the prescribed rows' span (they are independent in a model
+    # that passed the check), grown by each group taken
+    q, r = np.linalg.qr(prescribed.T)
+    keep = np.abs(np.diag(r)) > RANK_TOLERANCE * top
+    basis = np.zeros((columns.size, columns.size))
+    count = int(keep.sum())
+    basis[:, :count] = q[:, keep]
+    taken = []
+    for position, group in enumerate(groups):
+        rows = De[np.ix_(np.asarray(group, dtype=np.int64), columns)] * scale
+        norms = np.linalg.norm(rows, axis=1)
+        if rows.shape[0] == 0 or count + rows.shape[0] > columns.size or not np.all(norms > 0):
+            continue
+        for _ in range(2):  # Gram-Schmidt twice: orthogonal to round-off
+            rows = rows - (rows @ basis[:, :count]) @ basis[:, :count].T
+        q, r = np.linalg.qr(rows.T)
+        if np.all(np.abs(np.diag(r)) > np.maximum(1e-6 * norms, RANK_TOLERANCE * top)):
+            basis[:, count:count + rows.shape[0]] = q
+            count += rows.shape[0]
+            taken.append(position)
+    return taken
+
+
+def _redundancies(model, rows, kept, redundant, shown=10):
+    """The line that names each redundancy: a redundant prescribed deformation (the one
+    proposed for release) with the releasable ones it depends on, and the elements that cannot
+    be released (rigid links) the dependency runs through. `rows` are the prescribed rows,
+    `kept` the independent ones, `redundant` the others."""
+    releasable = _releasable(model)
+    name = [model.deformation_names[d] for d in model.rigid_deformations]
+    weights = np.linalg.lstsq(rows[kept].T, rows[redundant].T, rcond=None)[0]
+    parts = []
+    for column, r in enumerate(redundant[:shown]):
+        w = np.abs(weights[:, column])
+        involved = [kept[i] for i in np.flatnonzero(w > 1e-6 * w.max(initial=0.0))]
+        partners = [name[i] for i in involved if releasable[i]]
+        links = list(dict.fromkeys(name[i].rsplit(".", 1)[0] for i in involved
+                                   if not releasable[i]))
+        parts.append(f"{name[r]} with {', '.join(partners) or 'supports only'}"
+                     + (f" (through {', '.join(links)})" if links else ""))
+    more = f"; and {len(redundant) - shown} more" if len(redundant) > shown else ""
+    return "each redundancy: " + "; ".join(parts) + more
+
+
+def _releasable(model):
+    """For each prescribed deformation (position in `model.rigid_deformations`), whether its
+    section has a stiffness for it, so that it could be released."""
+    releasable = np.zeros(model.rigid_deformations.size, dtype=bool)
+    position = {d: k for k, d in enumerate(model.rigid_deformations)}
+    for group in model.groups:
+        stiffness = getattr(group.kind, "deformation_stiffness", {})
+        for i, indices in enumerate(group.deformation_index):
+            for name, d in zip(group.kind.deformation_names, indices, strict=True):
+                values = group.properties.get(stiffness.get(name))
+                if d in position and values is not None and float(values[i]) > 0.0:
+                    releasable[position[d]] = True
+    return releasable
+
+
+def _release_preference(model):
+    """The prescribed deformations' positions in `model.rigid_deformations`, those that can
+    be released (a stiffness for them in their section) last, so that they are the ones left
+    over."""
+    releasable = _releasable(model)
+    return sorted(range(releasable.size), key=lambda k: (releasable[k], k))
+
+
+def _independent_rows(rows, order):
+    """(kept, redundant): the positions of `rows`, taken in `order`, that add to the span of
+    the rows kept before them, and those that do not (relative tolerance RANK_TOLERANCE,
+    Gram-Schmidt twice)."""
+    basis, kept, redundant = [], [], []
+    top = max(np.abs(rows).max(initial=0.0), 1e-300)
+    for k in order:
+        row = rows[k].astype(float)
+        norm = np.linalg.norm(row)
+        for _ in range(2):
+            for b in basis:
+                row = row - (b @ row) * b
+        residual = np.linalg.norm(row)
+        if norm > 0.0 and residual > max(1e-6 * norm, RANK_TOLERANCE * top):
+            basis.append(row / residual)
+            kept.append(k)
+        else:
+            redundant.append(k)
+    return sorted(kept), sorted(redundant)
+
+
+def _counted(index_sets):
+    """(index set, how many times it occurs) in order of first occurrence."""
+    counts = {}
+    for indices in index_sets:
+        key = tuple(int(i) for i in indices)
+        counts[key] = counts.get(key, 0) + 1
+    return list(counts.items())
+
+
+def _column_scale(model, length_scale):
+    """Scale rotation coordinates (rad) by a length so every column is in metres."""
+    scale = np.full(model.nx, float(length_scale))
+    scale[model.translations] = 1.0
+    return scale
+
+
+def _dependent_row_sets(rows):
+    """For each left null-space vector of `rows`, the indices of the rows taking part."""
+    return [list(np.flatnonzero(np.abs(v) > 1e-6 * np.abs(v).max()))
+            for v in _null_space(rows.T)]
+
+
+def _free_motions(matrix):
+    """Right null-space vectors of `matrix` (rows x free coordinates)."""
+    return _null_space(matrix)
+
+
+def _null_space(matrix):
+    """An orthonormal basis (list of vectors) of the null space of `matrix`, by SVD with the
+    relative rank threshold RANK_TOLERANCE."""
+    if matrix.shape[1] == 0:
+        return []
+    if matrix.shape[0] == 0:
+        return list(np.eye(matrix.shape[1]))
+    _, s, vt = np.linalg.svd(matrix)
+    top = max(s.max(initial=0.0), 1e-300)
+    rank = int(np.sum(s > RANK_TOLERANCE * top))
+    return list(vt[rank:])

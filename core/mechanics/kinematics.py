@@ -1,0 +1,241 @@
+"""Kinematics: the dependent coordinates for given DOFs, and the transfer functions DF, D2F.
+
+For DOF values q the coordinates x = F(q) solve, on the free (non-fixed) coordinates,
+
+    e_o(x) = 0          every deformation prescribed zero
+    e_m(x) = q_e        every DOF deformation
+    x_m    = q_x        every DOF coordinate
+
+a square system whose Jacobian J is regular exactly when the model is exactly constrained.
+Newton's method, warm-started from the previous solution, converges quadratically; it stops
+when the correction is below `tolerance` times the model's length scale.
+
+First order: DF = dx/dq solves J DF = [0; I].  Second order: with the constraint Hessians
+H_i = d2 g_i / dx2, (D2F qdot) qdot = -J^-1 [ (DF qdot)^T H_i (DF qdot) ]_i.
+"""
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse
+import scipy.sparse.linalg
+
+from ..errors import ConvergenceError
+from . import assembly
+
+# From this many free coordinates on, J is factored as a sparse matrix (SuperLU): a deformation
+# depends on at most 14 coordinates, so a large J is almost empty and its dense LU (O(n^3))
+# dominates a static solve. Below it, the dense LU is faster than the sparse bookkeeping.
+SPARSE_FROM = 300
+
+
+class JacobianFactor:
+    """The LU factorisation of the constraint Jacobian J, dense or sparse by its size; `solve`
+    solves J z = b (or J^T z = b) for one or more right-hand sides. Singular: solve gives
+    non-finite values, as LAPACK's dense LU does."""
+
+    def __init__(self, J):
+        self.size = J.shape[0]
+        self.sparse = scipy.sparse.issparse(J)
+        if self.sparse:
+            J = J.tocsc()
+            try:
+                # SuperLU would factor non-finite entries into garbage (and BLAS complaints)
+                self.lu = scipy.sparse.linalg.splu(J) if np.all(np.isfinite(J.data)) else None
+            except RuntimeError:  # "Factor is exactly singular"
+                self.lu = None
+        else:
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+                self.lu = scipy.linalg.lu_factor(J, check_finite=False)
+
+    def solve(self, b, *, transposed=False):
+        """J^-1 b (or J^-T b); b (n,) or (n, k)."""
+        if self.lu is None:
+            return np.full(np.shape(b), np.nan)
+        if self.sparse:
+            return self.lu.solve(np.asarray(b, dtype=float), trans="T" if transposed else "N")
+        with np.errstate(all="ignore"):
+            return scipy.linalg.lu_solve(self.lu, b, trans=1 if transposed else 0,
+                                         check_finite=False)
+
+
+@dataclass
+class Configuration:
+    """A solved configuration: coordinates, deformations and first-order kinematics."""
+
+    q: np.ndarray  # (NDOF,) DOF values
+    x: np.ndarray  # (NX,) coordinates
+    e: np.ndarray  # (NE,) deformations
+    De: np.ndarray  # (NE, NX) deformation Jacobian
+    lu: JacobianFactor  # LU factors of the constraint Jacobian J (free x free)
+    DF: np.ndarray  # (NX, NDOF) first-order transfer function
+
+
+class Kinematics:
+    """Solves a model's constraints; one instance per model, reused across evaluations."""
+
+    def __init__(self, model, *, tolerance=1e-12, max_iterations=30):
+        self.model = model
+        self.tolerance = tolerance
+        self.max_iterations = max_iterations
+        self.free = model.free_coordinates
+        self.constraint_rows = np.concatenate([model.rigid_deformations, model.dof_deformations])
+        self.n_rigid = model.rigid_deformations.size
+        self.dof_positions = np.searchsorted(self.free, model.dof_coordinates)
+        self.length_scale = length_scale(model)
+        self._pattern = None  # the sparse J's entries, found on first use (`factor`)
+        n_free, ndof = self.free.size, model.declared_dof_count
+        # Right-hand side [0; I] of J DF = [0; I]: the rows of J are (rigid deformations, DOF
+        # deformations, DOF coordinates) while q lists the DOF coordinates first.
+        n_xdof, n_edof = model.dof_coordinates.size, model.dof_deformations.size
+        self.selector = np.zeros((max(n_free, self.n_rigid + ndof), ndof))
+        self.selector[self.n_rigid + np.arange(n_edof), n_xdof + np.arange(n_edof)] = 1.0
+        self.selector[self.n_rigid + n_edof + np.arange(n_xdof), np.arange(n_xdof)] = 1.0
+        self.selector = self.selector[:n_free]  # J is square only in an exactly counted model
+
+    def dofs_of(self, x):
+        """The DOF values q (NDOF,) of coordinates x."""
+        e = assembly.deformations(self.model, x)
+        return np.concatenate([x[self.model.dof_coordinates], e[self.model.dof_deformations]])
+
+    def constraint_jacobian(self, De):
+        """J (free x free): rows of rigid and DOF deformations, then unit rows of DOF coords."""
+        J = np.zeros((self.free.size, self.free.size))
+        n_def = self.constraint_rows.size
+        J[:n_def] = De[np.ix_(self.constraint_rows, self.free)]
+        J[n_def + np.arange(self.dof_positions.size), self.dof_positions] = 1.0
+        return J
+
+    def factor(self, De):
+        """The LU factors of J at the deformation Jacobian De: sparse from SPARSE_FROM free
+        coordinates on (its pattern, the elements' coordinates, is the same at every x)."""
+        if self.free.size < SPARSE_FROM:
+            return JacobianFactor(self.constraint_jacobian(De))
+        if self._pattern is None:
+            self._pattern = self._sparse_pattern()
+        source_rows, source_columns, rows, columns = self._pattern
+        n_def = self.constraint_rows.size
+        data = np.concatenate([De[source_rows, source_columns],
+                               np.ones(self.dof_positions.size)])
+        rows = np.concatenate([rows, n_def + np.arange(self.dof_positions.size)])
+        columns = np.concatenate([columns, self.dof_positions])
+        return JacobianFactor(scipy.sparse.csc_matrix((data, (rows, columns)),
+                                                      shape=(self.free.size, self.free.size)))
+
+    def _sparse_pattern(self):
+        """(De rows, De columns, J rows, J columns) of every entry J takes from De."""
+        row_of = np.full(len(self.model.deformation_names), -1)
+        row_of[self.constraint_rows] = np.arange(self.constraint_rows.size)
+        column_of = np.full(self.model.nx, -1)
+        column_of[self.free] = np.arange(self.free.size)
+        pairs = [np.broadcast_arrays(group.deformation_index[:, :, None],
+                                     group.coordinate_index[:, None, :])
+                 for group in self.model.groups]
+        source_rows = np.concatenate([d.ravel() for d, _ in pairs])
+        source_columns = np.concatenate([c.ravel() for _, c in pairs])
+        keep = (row_of[source_rows] >= 0) & (column_of[source_columns] >= 0)
+        source_rows, source_columns = source_rows[keep], source_columns[keep]
+        return source_rows, source_columns, row_of[source_rows], column_of[source_columns]
+
+    def residual(self, x, e, q):
+        """Constraint residual g (free,) of coordinates x with deformations e for DOFs q."""
+        model = self.model
+        n_xdof = model.dof_coordinates.size
+        return np.concatenate([
+            e[model.rigid_deformations],
+            e[model.dof_deformations] - q[n_xdof:],
+            x[model.dof_coordinates] - q[:n_xdof],
+        ])
+
+    def solve(self, q, x_start):
+        """The configuration for DOFs q (NDOF,), by Newton's method from x_start (NX,).
+
+        Raises ConvergenceError (with the residual) when the constraints cannot be solved,
+        e.g. beyond a singular configuration.
+        """
+        x = np.array(x_start, dtype=float)
+        step_tolerance = self.tolerance * self.length_scale
+        for _ in range(self.max_iterations):
+            # A singular J, or Newton running away from a configuration it cannot reach (x
+            # overflowing on the way), is answered below with a ConvergenceError of our own.
+            with np.errstate(over="ignore", invalid="ignore"):
+                e, De = assembly.deformation_jacobian(self.model, x)
+                g = self.residual(x, e, q)
+                dx = self.factor(De).solve(g)
+            if not np.all(np.isfinite(dx)):
+                raise ConvergenceError(
+                    f"kinematics of {self.model.name!r}: the constraint Jacobian is singular "
+                    f"at q = {np.array2string(q, precision=6)} (a singular configuration)"
+                )
+            x[self.free] -= dx
+            if np.max(np.abs(dx)) <= step_tolerance:
+                break
+        else:
+            raise ConvergenceError(
+                f"kinematics of {self.model.name!r}: Newton did not converge in "
+                f"{self.max_iterations} iterations at q = {np.array2string(q, precision=6)} "
+                f"(last correction {np.max(np.abs(dx)):.3e} m): these DOF values lie beyond "
+                "the reach of the mechanism or at a singular configuration"
+            )
+        return self.configuration(q, x)
+
+    def configuration(self, q, x):
+        """First-order kinematics at coordinates x that satisfy the constraints for q."""
+        e, De = assembly.deformation_jacobian(self.model, x)
+        lu = self.factor(De)
+        DF = np.zeros((self.model.nx, self.selector.shape[1]))
+        DF[self.free] = lu.solve(self.selector)
+        return Configuration(q=np.asarray(q, float), x=x, e=e, De=De, lu=lu, DF=DF)
+
+    def convective_acceleration(self, config, qdot, hessians=None):
+        """(D2F qdot) qdot (NX,): the coordinate acceleration at zero DOF acceleration."""
+        if hessians is None:
+            hessians = assembly.deformation_hessians(self.model, config.x)
+        xdot = config.DF @ qdot
+        quad = assembly.hessian_quadratic_forms(self.model, hessians, xdot)
+        rhs = np.zeros(self.free.size)
+        rhs[: self.constraint_rows.size] = quad[self.constraint_rows]
+        result = np.zeros(self.model.nx)
+        result[self.free] = -config.lu.solve(rhs)
+        return result
+
+    def second_order(self, config, hessians=None):
+        """D2F (NX, NDOF, NDOF): d2x / dq_j dq_k."""
+        if hessians is None:
+            hessians = assembly.deformation_hessians(self.model, config.x)
+        ndof = config.DF.shape[1]
+        rhs = np.zeros((self.free.size, ndof, ndof))
+        for group, D2e in hessians:
+            local = config.DF[group.coordinate_index]  # (n, m, ndof)
+            forms = np.einsum("nkij,nir,njs->nkrs", D2e, local, local)
+            rows = _positions(self.constraint_rows, group.deformation_index)
+            mask = rows >= 0
+            rhs[rows[mask]] = forms[mask]
+        D2F = np.zeros((self.model.nx, ndof, ndof))
+        solved = config.lu.solve(rhs.reshape(self.free.size, -1))
+        D2F[self.free] = -solved.reshape(self.free.size, ndof, ndof)
+        return D2F
+
+    def multipliers(self, config, generalized_force):
+        """lambda = J^-T r on the free coordinates, for a coordinate-space force r (NX,).
+
+        The entries of rigid deformations are their stress resultants (reaction forces);
+        those of the DOFs are the unbalanced generalised forces DF^T r.
+        """
+        return config.lu.solve(generalized_force[self.free], transposed=True)
+
+
+def _positions(order, values):
+    """Position of each value in `order`, or -1 where absent."""
+    lookup = np.full(max(order.max(initial=-1), values.max(initial=-1)) + 1, -1)
+    lookup[order] = np.arange(order.size)
+    return lookup[values]
+
+
+def length_scale(model):
+    """A characteristic length (m): the largest element reference length, at least 1e-3."""
+    lengths = [group.reference["l0"].max() for group in model.groups if "l0" in group.reference]
+    return max([1e-3, *lengths])

@@ -1,0 +1,61 @@
+"""Dense LU of small matrices, row-major and in place: the reduced mass M_bar (NDOF, NDOF)
+and the integrators' Newton matrices (2 NDOF, 2 NDOF).
+
+`lu_factor` is Gaussian elimination with partial pivoting (A = P^T L U, unit L below the
+diagonal and U on and above it, in the one array) and returns the ratio of the smallest to
+the largest pivot magnitude, which callers compare with a threshold to call a matrix
+singular; `lu_solve` solves with those factors. The banded matrices (J, the augmented
+system) have their own LU in `core/numerics/banded.py`.
+"""
+
+import numpy as np
+
+from .jit import kernel
+
+
+@kernel
+def lu_factor(a, n, piv):
+    """LU with partial pivoting of the (n, n) row-major a, in place; returns the ratio of the
+    smallest to the largest pivot magnitude (0 for an exactly singular matrix)."""
+    smallest, largest = np.inf, 0.0
+    for k in range(n):
+        p, big = k, abs(a[k * n + k])
+        for i in range(k + 1, n):
+            value = abs(a[i * n + k])
+            if value > big:
+                p, big = i, value
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                a[k * n + j], a[p * n + j] = a[p * n + j], a[k * n + j]
+        smallest, largest = min(smallest, big), max(largest, big)
+        if big == 0.0:
+            continue
+        inverse = 1.0 / a[k * n + k]
+        for i in range(k + 1, n):
+            factor = a[i * n + k] * inverse
+            a[i * n + k] = factor
+            if factor != 0.0:
+                for j in range(k + 1, n):
+                    a[i * n + j] -= factor * a[k * n + j]
+    return smallest / largest if largest > 0.0 else 0.0
+
+
+@kernel
+def lu_solve(a, n, piv, b):
+    """Solve A z = b in place (b (n,)) with the factors of `lu_factor`."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= a[i * n + j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= a[i * n + j] * b[j]
+        b[i] = s / a[i * n + i]
+

@@ -1,0 +1,153 @@
+"""`kernel`: numba's njit as flexure's compiled code uses it, with an on-disk cache that every
+copy of flexure finds again.
+
+Every kernel is compiled with cache=True and error_model="numpy" (a division by zero gives
+inf or nan, which the engine checks, instead of raising inside code that a C callback runs).
+
+Where the cache lives. numba keeps its cache next to the source file and stamps it with the
+file's modification time; an FMU unpacks its copy of flexure into a new temporary folder at
+every instantiation, so numba's own cache would be missed every time and each instance would
+compile for tens of seconds. Flexure's locator instead keys the cache by the package's name
+(an FMU bundles flexure under a content-hashed name) and by a hash of the package's sources:
+any copy with the same sources finds the same compiled code, wherever it is unpacked, and a
+change to any source file (a kernel's callee included, which numba's per-file stamp misses)
+starts a fresh cache. The folder is $FLEXURE_CACHE_DIR, else $NUMBA_CACHE_DIR, else the
+user's cache folder (~/.cache/flexure), else a folder in the temporary directory when that is
+not writable.
+"""
+
+import functools
+import hashlib
+import os
+import tempfile
+
+from numba import cfunc, njit, types
+from numba.core import caching
+
+_CORE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # core/, above numerics/
+_PACKAGE_ROOT = os.path.dirname(_CORE)  # holds core/
+
+
+@functools.cache
+def _sources_hash():
+    """SHA-256 (hex) of every Python source of this copy's core package."""
+    digest = hashlib.sha256()
+    for folder, _, files in sorted(os.walk(_CORE)):
+        for name in sorted(files):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                digest.update(os.path.relpath(path, _CORE).encode())
+                with open(path, "rb") as source:
+                    digest.update(source.read())
+    return digest.hexdigest()
+
+
+def _package_name():
+    """The name this copy of flexure is imported under ("flexure", or an FMU's own name)."""
+    return __name__.rsplit(".", 3)[0]  # <package>.core.numerics.jit
+
+
+@functools.cache
+def cache_root():
+    """The folder of flexure's compiled-code cache (created if missing)."""
+    candidates = [os.environ.get("FLEXURE_CACHE_DIR"), os.environ.get("NUMBA_CACHE_DIR")]
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    candidates.append(os.path.join(base, "flexure"))
+    candidates.append(os.path.join(tempfile.gettempdir(), f"flexure-cache-{os.getuid()}"
+                                   if hasattr(os, "getuid") else "flexure-cache"))
+    for folder in filter(None, candidates):
+        try:
+            os.makedirs(folder, exist_ok=True)
+            tempfile.TemporaryFile(dir=folder).close()
+            return folder
+        except OSError:
+            continue
+    return None
+
+
+class _SourceHashLocator(caching._CacheLocator):
+    """numba cache locator for the files of this copy of flexure's core (see the module)."""
+
+    def __init__(self, py_func, py_file):
+        self._lineno = py_func.__code__.co_firstlineno
+        relative = os.path.relpath(os.path.dirname(os.path.abspath(py_file)), _PACKAGE_ROOT)
+        self._path = os.path.join(cache_root(), _package_name(), _sources_hash()[:20],
+                                  relative)
+
+    def get_cache_path(self):
+        return self._path
+
+    def get_source_stamp(self):
+        return _sources_hash()
+
+    def get_disambiguator(self):
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        inside = os.path.abspath(py_file).startswith(_CORE + os.sep)
+        if not inside or cache_root() is None:
+            return None
+        return cls(py_func, py_file)
+
+
+# numba 0.61 renamed _CacheImpl to CacheImpl; its subclasses share the list of locators
+_IMPL = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+if _SourceHashLocator not in _IMPL._locator_classes:
+    _IMPL._locator_classes.insert(0, _SourceHashLocator)
+
+
+def kernel(function=None, **options):
+    """numba.njit with flexure's defaults (cache=True, error_model="numpy"); use as
+    `@kernel` or `@kernel(inline="always")`."""
+    options = {"cache": True, "error_model": "numpy", **options}
+    if function is None:
+        return njit(**options)
+    return njit(**options)(function)
+
+
+# -- compiled entry points: C functions that other compiled code calls by address ------------
+_POINTER = types.CPointer(types.float64)
+# an element's deformations: (x, ref, order, e, De, D2e, m, k, width) -> void
+DEFORMATIONS_ENTRY = types.void(_POINTER, _POINTER, types.int64, _POINTER, _POINTER, _POINTER,
+                                types.int64, types.int64, types.int64)
+# an element's inertia points: (x, v, ref, order, p, Dp, acc, m, P, width) -> void
+INERTIA_ENTRY = types.void(_POINTER, _POINTER, _POINTER, types.int64, _POINTER, _POINTER,
+                           _POINTER, types.int64, types.int64, types.int64)
+
+
+class _Entry:
+    """A numba cfunc compiled (or loaded from the cache) when its address is first asked for.
+
+    Compiled code calls these through their addresses, never inlines them: each kernel and
+    the engine are compiled once, as separate units, which keeps the first compilation short
+    (inlining every kernel into every caller made it minutes) and lets an element module plug
+    its kernels into the engine without the engine knowing it."""
+
+    def __init__(self, function, signature):
+        self.function, self.signature = function, signature
+        self._compiled = None
+        functools.update_wrapper(self, function)
+
+    @property
+    def compiled(self):
+        """The numba CFunc (compiled on first use)."""
+        if self._compiled is None:
+            self._compiled = cfunc(self.signature, cache=True,
+                                   error_model="numpy")(self.function)
+        return self._compiled
+
+    @property
+    def address(self):
+        """The C function's address (int)."""
+        return self.compiled.address
+
+    @property
+    def ctypes(self):
+        """The C function as a ctypes function."""
+        return self.compiled.ctypes
+
+
+def entry(signature):
+    """Decorator: a lazily compiled C entry point (`_Entry`) with the numba signature."""
+    return functools.partial(_Entry, signature=signature)

@@ -1,0 +1,1 @@
+"""Plain-text tables, JSON-safe values and progress lines for commands and reports."""

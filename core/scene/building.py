@@ -1,0 +1,465 @@
+"""Scenes: TOML files (or dicts) that declare a model, validated on load.
+
+A scene has the tables [scene], [sections.NAME], [nodes.NAME], [elements.NAME] and the
+optional [inputs.NAME], [outputs.NAME] and [buckling]; README.md documents every key. Every
+problem is reported as a SceneError that names the file, the key and what is wrong; the
+exact-constraint check then refuses an over- or under-constrained model (ConstraintError).
+
+Spatial scenes (dimension = 3): translational nodes have position = [x, y, z]; a rotational
+node has rotation = [rx, ry, rz] (its initial orientation as a rotation vector, rad), is
+either fixed as a whole (fixed = true) or free, and may carry a rigid-body inertia
+(inertia = [Jx, Jy, Jz] or a 3 x 3 list, kg m^2, in its body frame). Its coordinates are the
+four Euler parameters "NODE.lambda0" ... "NODE.lambda3" (see flexure.core.numerics.rotations); the
+builder adds the normalisation constraint "NODE.norm" of every free rotational node. A BEAM
+needs y_axis = [.., .., ..], its principal y' axis; sections of spatial elements take the keys
+of flexure.core.scene.sections.beam_properties.
+"""
+
+from __future__ import annotations
+
+import importlib.resources
+import math
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..elements import euler
+from ..errors import SceneError
+from ..mechanics.constraints import check_exact_constraint, choose_dofs
+from ..model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
+from ..numerics.rotations import from_rotation_vector
+from .overrides import apply_overrides
+from .scene_elements import ElementBuilding
+from .scene_reader import MAX_ANGLE, SceneReader, show
+from .sections import beam_properties
+
+TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
+ROTATION_AXES = {2: ("phi",), 3: ("lambda0", "lambda1", "lambda2", "lambda3")}
+SECTION_KEYS = {"EA", "EI", "EdA", "EdI", "rho_A", "E", "rho", "width", "height"}
+SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
+                   "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
+                   "diameter", "beta"}
+OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
+
+
+def builtin_scenes() -> list[str]:
+    """Names of the scenes that ship with flexure (usable without a checkout)."""
+    folder = importlib.resources.files("flexure.scenes")
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def scene_path(name_or_path: str | Path) -> Path:
+    """The path of a scene file: an existing path, or the name of a built-in scene."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    stem = path.name[:-5] if path.name.endswith(".toml") else path.name
+    builtin = importlib.resources.files("flexure.scenes") / f"{stem}.toml"
+    if builtin.is_file():
+        return Path(str(builtin))
+    raise SceneError(
+        f"{name_or_path}: no such scene file, and no built-in scene of that name "
+        f"(built in: {', '.join(builtin_scenes())})"
+    )
+
+
+def load_scene(name_or_path: str | Path, *, overrides: dict | None = None,
+               check: bool = True) -> Model:
+    """Load and validate a scene file or built-in scene name into a `Model`.
+
+    `overrides` {dotted scene key: value} are set on the scene before it is built and checked
+    as the file's own keys are (`flexure.core.scene.overrides`), e.g.
+    {"sections.leaf.height": 0.3e-3, "nodes.3.mass": 0.2} (SI units: m, kg).
+    """
+    path = scene_path(name_or_path)
+    data = parse_toml(path)
+    return build_model(data, overrides=overrides, source=str(path), default_name=path.stem,
+                       check=check)
+
+
+def read_scene_text(path):
+    """The text of a scene file (UTF-8); SceneError on an unreadable file or invalid bytes."""
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as error:
+        raise SceneError(f"{path}: cannot read the scene file: {error.strerror}") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = raw.count(b"\n", 0, error.start) + 1
+        raise SceneError(f"{path}: line {line}: not UTF-8 text: byte "
+                         f"0x{raw[error.start]:02x} at offset {error.start} ({error.reason}); "
+                         "TOML files must be UTF-8") from None
+
+
+def parse_toml(path):
+    """The dictionary of a scene file; SceneError on invalid bytes or invalid TOML."""
+    text = read_scene_text(path)
+    try:
+        return tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, ValueError) as error:  # ValueError: an int too long
+        raise SceneError(f"{path}: not valid TOML: {error}") from None
+
+
+def build_model(data: dict, *, overrides: dict | None = None, source: str = "<dict>",
+                default_name: str = "scene", check: bool = True) -> Model:
+    """Build a `Model` from a scene dictionary, validating every key.
+
+    `overrides` {dotted scene key: value} are set on a copy of `data` first (`data` is not
+    changed); an error in one names it as `--set KEY` (`flexure.core.scene.overrides`).
+    """
+    builder = _SceneBuilder(data, source, default_name)
+    if overrides:
+        builder.data = apply_overrides(data, overrides, source=source)
+        builder.overridden = frozenset(overrides)
+    return builder.build(check=check)
+
+
+class _SceneBuilder(SceneReader, ElementBuilding):
+    """Builds a Model from a scene dictionary: the checked reading of values
+    (`SceneReader`), the [elements] (`ElementBuilding`) and the rest here."""
+
+    def __init__(self, data, source, default_name):
+        self.data = data
+        self.source = source
+        self.default_name = default_name
+
+    # -- the scene --------------------------------------------------------------------------
+
+    def build(self, *, check):
+        data = self.table("scene file", self.data)
+        self.check_keys("scene file", data, {
+            "scene", "sections", "nodes", "elements", "inputs", "outputs", "buckling"})
+        header = self.table("scene", data.get("scene", {}))
+        self.check_keys("scene", header,
+                        {"name", "description", "dimension", "gravity", "tunable"})
+        name = header.get("name", self.default_name)
+        if not isinstance(name, str) or not name.isidentifier():
+            self.fail("scene.name", f"expected an identifier (letters, digits, _), got {name!r}")
+        # text only: a scene is written back (scene_toml: reduce, an FMU of overrides), and a
+        # TOML date or a table has no place there
+        self.string("scene.description", header.get("description", ""))
+        dimension = header.get("dimension", 2)
+        if isinstance(dimension, bool) or dimension not in (2, 3):
+            self.fail("scene.dimension",
+                      f"expected 2 (planar) or 3 (spatial), got {show(dimension)}")
+        dimension = int(dimension)
+        gravity = np.array(self.vector("scene.gravity", header.get("gravity", [0.0] * dimension),
+                                       dimension))
+        self.dimension = dimension
+        # whether the scene lists any DOF (a node's or element's non-empty "dof"): meshing
+        # makes DOFs of its segments only then, and flexure chooses them all otherwise
+        # (`build`, `constraints.choose_dofs`)
+        self.lists_dofs = any(isinstance(table, dict) and table.get("dof")
+                              for part in ("nodes", "elements")
+                              if isinstance(data.get(part), dict)
+                              for table in data[part].values())
+        self.sections = self.build_sections(self.table("sections", data.get("sections", {})))
+        self.build_nodes(self.table("nodes", data.get("nodes", {})))
+        groups, deformation_names, deformation_status = self.build_elements(
+            self.table("elements", data.get("elements", {})))
+        if dimension == 3:
+            self.add_normalisation(groups, deformation_names, deformation_status)
+        inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
+        for port in outputs:
+            if port.name in {p.name for p in inputs}:
+                self.fail(f"outputs.{port.name}", f"the input inputs.{port.name} has the same "
+                                                  "name; inputs and outputs need distinct names")
+        self.check_unique("coordinate", self.coordinate_names)
+        self.check_unique("deformation", deformation_names)
+        buckling = self.build_buckling(data.get("buckling"))
+        tunable = self.build_tunable(data, header.get("tunable", []))
+        nodes = tuple(Node(name=node, kind=self.node_kind[node],
+                           coordinates=tuple(self.node_coordinates[node].values()),
+                           axes=tuple(self.node_coordinates[node]))
+                      for node in self.node_kind)
+        model = Model(
+            nodes=nodes,
+            name=name,
+            dimension=dimension,
+            coordinate_names=self.coordinate_names,
+            initial_coordinates=np.array(self.initial),
+            coordinate_status=np.array(self.status),
+            deformation_names=deformation_names,
+            deformation_status=np.array(deformation_status, dtype=object),
+            groups=groups,
+            lumped_mass=np.array(self.mass),
+            loads=np.array(self.loads),
+            gravity=gravity,
+            inputs=inputs,
+            outputs=outputs,
+            buckling_loads=buckling,
+            source=self.source,
+            node_inertias=self.node_inertias,
+            tunable=tunable,
+        )
+        if not self.lists_dofs and model.ndof > 0:  # none listed: flexure chooses a valid set
+            chosen = choose_dofs(model)
+            if chosen is not None:
+                coordinate_status, deformation_status, names = chosen
+                model = replace(model, coordinate_status=coordinate_status,
+                                deformation_status=deformation_status, chosen_dofs=tuple(names))
+        if check:
+            check_exact_constraint(model)
+        return model
+
+    def build_tunable(self, data, keys):
+        """The scene keys marked tunable: each must name a number the scene declares."""
+        if not isinstance(keys, list) or not all(isinstance(k, str) for k in keys):
+            self.fail("scene.tunable", f"expected a list of scene keys such as "
+                                       f"\"nodes.3.mass\", got {keys!r}")
+        for key in set(keys):
+            if keys.count(key) > 1:
+                self.fail("scene.tunable", f"{key!r} is listed {keys.count(key)} times; list "
+                                           "each key once")
+        for key in keys:
+            value = data
+            for part in key.split("."):
+                if not isinstance(value, dict) or part not in value:
+                    self.fail("scene.tunable", f"{key!r} is not a key this scene declares")
+                value = value[part]
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                self.fail("scene.tunable", f"{key!r} is not a number (got {value!r})")
+        return list(keys)
+
+    def build_sections(self, sections):
+        result = {}
+        for name, section in sections.items():
+            key = f"sections.{name}"
+            section = self.table(key, section)
+            if self.dimension == 3:
+                result[name] = self.spatial_section(key, section)
+                continue
+            self.check_keys(key, section, SECTION_KEYS)
+            values = self.section_values(key, section)
+            dims = {"E", "width", "height"}
+            if dims & values.keys():
+                missing = dims - values.keys()
+                if missing:
+                    self.fail(key, "a rectangle needs E, width and height; "
+                                   f"missing {sorted(missing)}")
+                area = values["width"] * values["height"]
+                values.setdefault("EA", values["E"] * area)
+                values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
+                if "rho" in values:
+                    values.setdefault("rho_A", values["rho"] * area)
+            result[name] = self.finite_section(key, values)
+        return result
+
+    def section_values(self, key, section):
+        """The numbers of a section: none negative, dimensions (width, ...) positive."""
+        return {k: self.number(f"{key}.{k}", v, minimum=0.0,
+                               positive=k in ("width", "height", "diameter"))
+                for k, v in section.items()}
+
+    def finite_section(self, key, values):
+        """Refuse a section whose derived properties (EA = E w h, ...) over- or underflow."""
+        for k, v in values.items():
+            if not math.isfinite(v):
+                self.fail(key, f"the section's {k} comes out as {v!r} from its numbers; check "
+                               "their magnitudes (SI units)")
+        return values
+
+    def spatial_section(self, key, section):
+        self.check_keys(key, section, SECTION_KEYS_3D)
+        values = self.section_values(key, section)
+        try:
+            properties = beam_properties(values)
+        except ValueError as error:
+            self.fail(key, str(error))
+        return self.finite_section(key, properties)
+
+    def build_nodes(self, nodes):
+        if not nodes:
+            self.fail("nodes", "a scene needs at least one node")
+        self.node_kind, self.node_coordinates = {}, {}
+        self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
+        self.node_inertias = []
+        for name, node in nodes.items():
+            key = f"nodes.{name}"
+            node = self.table(key, node)
+            if self.dimension == 3 and "position" not in node:
+                self.spatial_rotational_node(key, name, node)
+                continue
+            if ("position" in node) == ("angle" in node):
+                self.fail(key, "expected exactly one of 'position' (a translational node) or "
+                               "'angle' (a rotational node)")
+            translational = "position" in node
+            if translational:
+                self.check_keys(key, node, {"position", "fixed", "dof", "mass", "force"})
+                axes = TRANSLATION_AXES[self.dimension]
+                values = self.vector(f"{key}.position", node["position"], len(axes))
+                mass = self.number(f"{key}.mass", node.get("mass", 0.0), minimum=0.0)
+                force = self.vector(f"{key}.force", node.get("force", [0.0] * len(axes)), len(axes))
+                masses = [mass] * len(axes)
+            else:
+                self.check_keys(key, node, {"angle", "fixed", "dof", "inertia", "moment"})
+                axes = ROTATION_AXES[self.dimension]
+                values = [self.number(f"{key}.angle", node["angle"], limit=MAX_ANGLE)]
+                # A lumped rotational inertia may be negative: SPACAR's lumped model of a bar
+                # puts m/2 at both ends with J = -m l^2 / 12 each (the total stays positive).
+                masses = [self.number(f"{key}.inertia", node.get("inertia", 0.0))]
+                force = [self.number(f"{key}.moment", node.get("moment", 0.0))]
+            fixed = self.names(f"{key}.fixed", node.get("fixed", []), axes)
+            dofs = self.names(f"{key}.dof", node.get("dof", []), axes)
+            for both in set(fixed) & set(dofs):
+                self.fail(key, f"coordinate {both!r} is both fixed and a DOF")
+            self.node_kind[name] = "translational" if translational else "rotational"
+            self.node_coordinates[name] = {}
+            for axis, value, mass_value, load in zip(axes, values, masses, force, strict=True):
+                self.node_coordinates[name][axis] = len(self.coordinate_names)
+                self.coordinate_names.append(f"{name}.{axis}")
+                self.initial.append(value)
+                self.status.append(FIXED if axis in fixed else DOF if axis in dofs else DEPENDENT)
+                self.mass.append(mass_value)
+                self.loads.append(load)
+
+    def spatial_rotational_node(self, key, name, node):
+        """A 3-D rotational node: four Euler parameters, fixed as a whole or free."""
+        if "rotation" not in node:
+            self.fail(key, "expected exactly one of 'position' (a translational node) or "
+                           "'rotation' (a rotational node: a rotation vector, rad)")
+        self.check_keys(key, node, {"rotation", "fixed", "inertia"})
+        rotation = np.array(self.vector(f"{key}.rotation", node["rotation"], 3, limit=MAX_ANGLE))
+        if np.linalg.norm(rotation) > MAX_ANGLE:
+            self.fail(f"{key}.rotation", f"expected a rotation vector of magnitude <= "
+                                         f"{MAX_ANGLE:g} rad, got {rotation.tolist()!r}")
+        lam = from_rotation_vector(rotation)
+        fixed = node.get("fixed", False)
+        if fixed in (["rotation"], "rotation"):
+            fixed = True
+        if not isinstance(fixed, bool):
+            self.fail(f"{key}.fixed", "a 3-D rotational node is fixed as a whole: expected true "
+                                      f"or false, got {fixed!r}")
+        inertia = node.get("inertia")
+        index = []
+        self.node_kind[name] = "rotational"
+        self.node_coordinates[name] = {}
+        for axis, value in zip(ROTATION_AXES[3], lam, strict=True):
+            index.append(len(self.coordinate_names))
+            self.node_coordinates[name][axis] = index[-1]
+            self.coordinate_names.append(f"{name}.{axis}")
+            self.initial.append(float(value))
+            self.status.append(FIXED if fixed else DEPENDENT)
+            self.mass.append(0.0)
+            self.loads.append(0.0)
+        if inertia is not None:
+            if isinstance(inertia, list) and len(inertia) == 3 and all(
+                    isinstance(row, list) for row in inertia):
+                J = np.array([self.vector(f"{key}.inertia[{i}]", row, 3)
+                              for i, row in enumerate(inertia)])
+                if not np.allclose(J, J.T):
+                    self.fail(f"{key}.inertia", "the inertia tensor must be symmetric")
+            else:
+                J = np.diag(self.vector(f"{key}.inertia", inertia, 3))
+            if not fixed:
+                self.node_inertias.append((np.array(index), J))
+
+    def add_normalisation(self, groups, deformation_names, deformation_status):
+        """One EULER pseudo-element (lambda . lambda = 1) per free 3-D rotational node."""
+        names, coords = [], []
+        for name, kind in self.node_kind.items():
+            index = list(self.node_coordinates[name].values())
+            if kind == "rotational" and self.status[index[0]] != FIXED:
+                names.append(name)
+                coords.append(index)
+        if not names:
+            return
+        start = len(deformation_names)
+        for name in names:
+            deformation_names.append(f"{name}.norm")
+            deformation_status.append(ZERO)
+        coords = np.array(coords, dtype=int)
+        groups.append(ElementGroup(
+            kind=euler, names=tuple(names), coordinate_index=coords,
+            deformation_index=np.arange(start, start + len(names))[:, None],
+            reference=euler.reference(np.array(self.initial)[coords]), properties={}))
+
+    def node(self, key, name, kind=None):
+        name = str(name)
+        if name not in self.node_kind:
+            self.fail(key, f"unknown node {name!r}")
+        if kind is not None and self.node_kind[name] != kind:
+            self.fail(key, f"node {name!r} is {self.node_kind[name]}, expected a {kind} node")
+        return name
+
+    def node_values(self, name):
+        """The initial coordinates of node `name` (m or rad; Euler parameters in space)."""
+        return np.array([self.initial[i] for i in self.node_coordinates[name].values()])
+
+    def add_interior_node(self, name, kind, values):
+        """A node the scene builder makes (`meshing`): its coordinates dependent, no lumped
+        mass or load."""
+        axes = (TRANSLATION_AXES if kind == "translational" else ROTATION_AXES)[self.dimension]
+        self.node_kind[name] = kind
+        self.node_coordinates[name] = {}
+        for axis, value in zip(axes, values, strict=True):
+            self.node_coordinates[name][axis] = len(self.coordinate_names)
+            self.coordinate_names.append(f"{name}.{axis}")
+            self.initial.append(float(value))
+            self.status.append(DEPENDENT)
+            self.mass.append(0.0)
+            self.loads.append(0.0)
+
+    def coordinate(self, key, table):
+        node = self.node(f"{key}.node", table.get("node"))
+        axis = table.get("coordinate")
+        if not isinstance(axis, str) or axis not in self.node_coordinates[node]:
+            self.fail(f"{key}.coordinate",
+                      f"node {node!r} has no coordinate {show(axis)}; expected one of "
+                      f"{', '.join(self.node_coordinates[node])}")
+        return self.node_coordinates[node][axis]
+
+    def build_ports(self, section, table, *, is_input):
+        ports = []
+        for name, port in self.table(section, table).items():
+            key = f"{section}.{name}"
+            port = self.table(key, port)
+            if not name.isidentifier():
+                self.fail(key, "a port name must be an identifier (letters, digits, _)")
+            if self.dimension == 3 and not self._is_translation(port) and isinstance(
+                    port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
+                self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
+                                               "3-D rotational node are not supported; use a "
+                                               "translational coordinate")
+            if is_input:
+                self.check_keys(key, port, {"node", "coordinate"})
+                ports.append(Port(name, self.coordinate(key, port), "force",
+                                  "N" if self._is_translation(port) else "N.m"))
+            else:
+                self.check_keys(key, port, {"node", "coordinate", "quantity"})
+                quantity = port.get("quantity", "position")
+                if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
+                    self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
+                                                 f"got {show(quantity)}")
+                unit = OUTPUT_QUANTITIES[quantity]
+                if not self._is_translation(port):
+                    unit = unit.replace("m", "rad")
+                ports.append(Port(name, self.coordinate(key, port), quantity, unit))
+        return ports
+
+    def _is_translation(self, port):
+        return port.get("coordinate") in TRANSLATION_AXES[self.dimension]
+
+    def build_buckling(self, table):
+        if table is None:
+            return None
+        table = self.table("buckling", table)
+        self.check_keys("buckling", table, {"forces"})
+        forces = table.get("forces")
+        if not isinstance(forces, list) or not forces:
+            self.fail("buckling.forces", "expected a list of {node, force} tables")
+        loads = np.zeros(len(self.coordinate_names))
+        for i, entry in enumerate(forces):
+            key = f"buckling.forces[{i}]"
+            entry = self.table(key, entry)
+            self.check_keys(key, entry, {"node", "force"})
+            node = self.node(f"{key}.node", entry.get("node"), "translational")
+            axes = list(self.node_coordinates[node])
+            for axis, value in zip(axes, self.vector(f"{key}.force", entry.get("force"), len(axes)),
+                                   strict=True):
+                loads[self.node_coordinates[node][axis]] += value
+        return loads

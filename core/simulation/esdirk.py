@@ -1,0 +1,420 @@
+"""A one-step, L-stable implicit Runge-Kutta integrator (ESDIRK), compiled, on the engine.
+
+Why a one-step method next to SUNDIALS' CVODE. BDF carries a history of past steps. A change of
+a held input is a discontinuity that makes that history wrong, so CVODE restarts there at order
+1 with a small step and climbs back: in `flexure loop` at 4 kHz, 9 steps and 13 evaluations
+per sample, every sample. A one-step method carries no history: after an input change it
+recomputes the derivative of its first stage (one evaluation) and keeps its step size, its
+Jacobian and its Newton matrix. SUNDIALS' one-step stiff integrators (ARKODE) are not among
+the libraries scikit-sundae ships, so this module implements ARKODE's default order-4 and
+order-3 implicit methods itself, in numba, calling the engine through its C entry point: no
+Python per step.
+
+Methods (tableaus in `esdirk_method`): ESDIRK4(3)6L[2]SA ("esdirk", s = 6 stages, g = 1/4,
+order 4, embedded order 3) and ESDIRK3(2)4L[2]SA ("esdirk3", s = 4, order 3, embedded 2) of
+Kennedy & Carpenter 2003, and TR-BDF2 ("esdirk2", s = 3, g = 1 - 1/sqrt(2), order 2, embedded
+3), all L-stable and stiffly accurate. One step from (t, y) with size h, f
+the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, m/s, rad/s):
+
+    F_1 = f(y)                                (F_s of the step before while inputs are held)
+    z_i = y + h sum_{j<i} a_ij F_j + h g f(z_i),  i = 2..s   (simplified Newton, started from
+                                              f(z_i) extrapolated from the F_j in c)
+    F_i = (z_i - y - h sum_{j<i} a_ij F_j) / (h g)       (the stage equation: no evaluation)
+    y_new = z_s
+    err = (I - h g J)^-1 h sum_j (b_j - b_hat_j) F_j      (the filtered estimate, Hairer &
+                                                          Wanner IV.8: stiff modes damped)
+
+Error control: the step is accepted when the weighted RMS norm of err, weights
+1 / (rtol max(|y_i|, |y_new,i|) + atol_i) as CVODE's, is at most 1; the next step is
+h min(5, max(0.2, 0.9 |err|^(-1/(p + 1)))), p the lower of the two orders. The last step
+before t_stop is stretched or split so the integration lands on t_stop exactly, never past it
+(the held input changes there). With a step budget (max_steps) the kernel stops at the last
+accepted step once it is spent (TOO_MUCH_WORK).
+
+Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
+Jacobian), kept across steps and samples; it is recomputed when a stage converges slowly or
+fails, and I - h g J is refactored only when J is new or h has moved more than 20 % from the
+h of the factors. Iterations stop when the estimated remaining error eta |dz| (eta =
+theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm above, as in
+Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
+(kinematics not converged) recomputes J or, with J fresh, quarters h and retries.
+
+Status (the kernel's return): OK = 0 or one of the negative codes below; the state is always
+the last accepted one.
+"""
+
+import numpy as np
+
+from ..engine import data as ed
+from ..engine import engine
+from ..errors import SimulationError, StepBudgetSpent
+from ..numerics.jit import kernel
+from ..numerics.native import call_engine
+from .esdirk_method import MAX_STAGES, TABLEAUS
+
+# float64 memory slots
+(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
+# int64 flags and counters
+(I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
+ I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_SIZE) = range(12)
+# rows of the vector workspace (the stage derivatives after them)
+(V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
+V_ROWS = V_F + MAX_STAGES
+
+OK = 0
+TOO_MUCH_WORK, STEP_TOO_SMALL, ERROR_TEST_FAILURES, CONVERGENCE_FAILURES, SINGULAR_MATRIX, \
+    RHS_FAILURE = -1, -2, -3, -4, -5, -8
+FLAG_NAMES = {TOO_MUCH_WORK: "TOO_MUCH_WORK", STEP_TOO_SMALL: "STEP_TOO_SMALL",
+              ERROR_TEST_FAILURES: "ERROR_TEST_FAILURES",
+              CONVERGENCE_FAILURES: "CONVERGENCE_FAILURES", SINGULAR_MATRIX: "SINGULAR_MATRIX",
+              RHS_FAILURE: "RHS_FAILURE"}
+
+NEWTON_TOLERANCE = 0.05   # eta |dz| in the weighted norm (1 = the error the step may make)
+MAX_NEWTON = 7
+MAX_FAILURES = 12         # consecutive failed attempts of one step
+LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factors
+SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
+
+_DIMS = ed.INT_SLOTS.index("dims")
+_COUNTERS = ed.INT_SLOTS.index("counters")
+
+
+@kernel
+def _f(table, y, out, flags):
+    """out = f(y) by the engine; its status."""
+    flags[I_RHS] += 1
+    counters = engine.int_array(table, _COUNTERS)
+    counters[ed.RHS_COUNT] += 1
+    status = call_engine(engine.int_array(table, _DIMS)[ed.ENGINE], engine.OP_RHS, table, 0.0,
+                         y.ctypes.data, out.ctypes.data, 0, 0.0)
+    if status != ed.OK:
+        counters[ed.FAILED_STATUS] = status
+    return status
+
+
+@kernel
+def _jacobian(table, y, J, flags):
+    """J = d f / d y (row-major, flat) at y from the model's tangent; its status."""
+    flags[I_JACOBIANS] += 1
+    counters = engine.int_array(table, _COUNTERS)
+    counters[ed.JACOBIAN_COUNT] += 1
+    status = call_engine(engine.int_array(table, _DIMS)[ed.ENGINE], engine.OP_JACOBIAN, table,
+                         0.0, y.ctypes.data, J.ctypes.data, 0, 0.0)
+    if status != ed.OK:
+        counters[ed.FAILED_STATUS] = status
+    return status
+
+
+@kernel
+def factor(J, LU, piv, hg, flags):
+    """LU = factors of I - hg J (flat, row-major); False when singular."""
+    n = piv.size
+    for i in range(n * n):
+        LU[i] = -hg * J[i]
+    for i in range(n):
+        LU[i * n + i] += 1.0
+    flags[I_FACTORIZATIONS] += 1
+    return engine.lu_factor(LU, n, piv) > 1e-300
+
+
+@kernel
+def _norm(v, weight):
+    """Weighted RMS norm sqrt(mean((v_i weight_i)^2))."""
+    s = 0.0
+    for i in range(v.size):
+        s += (v[i] * weight[i]) ** 2
+    return np.sqrt(s / v.size)
+
+
+@kernel
+def _initial_step(table, memory, flags, vectors, atol, t_stop):
+    """A first step (s) from the size of y, f and an estimate of f' (Hairer, Norsett & Wanner,
+    Solving ODEs I, II.4), for the embedded order; the stage derivative F_1 must be current."""
+    y, F1 = vectors[V_Y], vectors[V_F]
+    weight, probe, slope = vectors[V_WEIGHT], vectors[V_Z], vectors[V_DELTA]
+    rtol = memory[M_RTOL]
+    for i in range(y.size):
+        weight[i] = 1.0 / (rtol * abs(y[i]) + atol[i])
+    d0, d1 = _norm(y, weight), _norm(F1, weight)
+    h0 = 0.01 * d0 / d1 if d0 > 1e-5 and d1 > 1e-5 else 1e-6
+    h0 = min(h0, t_stop - memory[M_T])
+    for i in range(y.size):
+        probe[i] = y[i] + h0 * F1[i]
+    if _f(table, probe, slope, flags) != ed.OK:
+        return h0
+    for i in range(y.size):
+        slope[i] = (slope[i] - F1[i]) / h0
+    d2 = _norm(slope, weight)
+    big = max(d1, d2)
+    h1 = (0.01 / big) ** memory[M_EXPONENT] if big > 1e-15 else max(1e-6, 1e-3 * h0)
+    return min(100.0 * h0, h1)
+
+
+@kernel
+def _stage(table, i, h, memory, flags, vectors, LU, piv, A, P):
+    """Solve stage i: z = base + h g f(z) by simplified Newton; F_i from the stage equation.
+    True when it converged."""
+    n = piv.size
+    base, z, delta, weight = vectors[V_BASE], vectors[V_Z], vectors[V_DELTA], vectors[V_WEIGHT]
+    y, F = vectors[V_Y], vectors[V_F:]
+    hg = h * A[1, 1]
+    for k in range(n):
+        s = y[k]
+        for j in range(i):
+            s += h * A[i, j] * F[j, k]
+        base[k] = s
+        p = 0.0
+        for j in range(i):
+            p += P[i, j] * F[j, k]
+        z[k] = s + hg * p  # f(z_i) predicted by extrapolating the stages before
+    eta = max(memory[M_ETA], 1e-16) ** 0.8
+    previous = 0.0
+    for iteration in range(MAX_NEWTON):
+        if _f(table, z, F[i], flags) != ed.OK:
+            return False
+        for k in range(n):
+            delta[k] = base[k] + hg * F[i, k] - z[k]
+        engine.lu_solve(LU, n, piv, delta)
+        for k in range(n):
+            z[k] += delta[k]
+        norm = _norm(delta, weight)
+        if not np.isfinite(norm):
+            return False
+        if iteration > 0:
+            theta = norm / previous
+            if theta >= 0.99:
+                return False
+            eta = theta / (1.0 - theta)
+            if iteration >= 3 or theta > 0.5:
+                flags[I_REFRESH] = 1  # converging slowly: a new J for the next step
+        if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:
+            memory[M_ETA] = eta
+            for k in range(n):
+                F[i, k] = (z[k] - base[k]) / hg
+            return True
+        previous = norm
+    return False
+
+
+@kernel
+def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, one_step,
+            max_steps):
+    """Integrate from memory[M_T] towards t_stop (s): to t_stop exactly, or one accepted step
+    with one_step; at most max_steps steps (0: no limit). The state y is vectors[V_Y]; returns
+    OK or a negative status, with y and memory[M_T] the last accepted state. The tableau:
+    A (s, s), EW = b - b_hat (s,), P the predictor weights (s, s) (`esdirk_method`)."""
+    n = piv.size
+    stages = A.shape[0]
+    y, z, err, weight, F = vectors[V_Y], vectors[V_Z], vectors[V_ERR], vectors[V_WEIGHT], \
+        vectors[V_F:]
+    rtol = memory[M_RTOL]
+    steps = 0
+    failures = 0
+    while memory[M_T] < t_stop:
+        t = memory[M_T]
+        if flags[I_FSAL] == 0:
+            if _f(table, y, F[0], flags) != ed.OK:
+                return RHS_FAILURE
+            flags[I_FSAL] = 1
+        if memory[M_H] <= 0.0:
+            memory[M_H] = _initial_step(table, memory, flags, vectors, atol, t_stop)
+        h = memory[M_H]
+        if memory[M_H_MAX] > 0.0:
+            h = min(h, memory[M_H_MAX])
+        remaining = t_stop - t
+        if h >= remaining * (1.0 - 1e-10):
+            h = remaining
+        elif 2.0 * h > remaining:
+            h = 0.5 * remaining
+        if h <= 16.0 * 2.2e-16 * max(abs(t), abs(t_stop)):
+            return STEP_TOO_SMALL
+        if flags[I_REFRESH] == 1 or flags[I_JACOBIAN] == 0:
+            if _jacobian(table, y, J, flags) != ed.OK:
+                return RHS_FAILURE
+            flags[I_JACOBIAN], flags[I_FRESH], flags[I_REFRESH], flags[I_LU] = 1, 1, 0, 0
+        hg = h * A[1, 1]
+        if flags[I_LU] == 0 or abs(hg / memory[M_H_LU] - 1.0) > LU_SLACK:
+            if not factor(J, LU, piv, hg, flags):
+                return SINGULAR_MATRIX
+            flags[I_LU] = 1
+            memory[M_H_LU] = hg
+        for k in range(n):
+            weight[k] = 1.0 / (rtol * abs(y[k]) + atol[k])
+        converged = True
+        for i in range(1, stages):
+            if not _stage(table, i, h, memory, flags, vectors, LU, piv, A, P):
+                converged = False
+                break
+        failures += 1
+        if not converged:
+            flags[I_NEWTON_FAILURES] += 1
+            if failures > MAX_FAILURES:
+                return CONVERGENCE_FAILURES
+            if flags[I_FRESH] == 0:
+                flags[I_REFRESH] = 1
+            else:
+                memory[M_H] = 0.25 * h
+            memory[M_ETA] = 1.0
+            continue
+        # the error estimate, filtered by the Newton matrix
+        for k in range(n):
+            s = 0.0
+            for j in range(stages):
+                s += EW[j] * F[j, k]
+            err[k] = h * s
+            weight[k] = 1.0 / (rtol * max(abs(y[k]), abs(z[k])) + atol[k])
+        engine.lu_solve(LU, n, piv, err)
+        error = _norm(err, weight)
+        if not np.isfinite(error):
+            error = 1e10
+        if error > 1.0:
+            flags[I_REJECTED] += 1
+            if failures > MAX_FAILURES:
+                return ERROR_TEST_FAILURES
+            memory[M_H] = h * max(SHRINK, SAFETY * error ** -memory[M_EXPONENT])
+            continue
+        # accept: y_new = z_s, and its derivative F_s is the next step's F_1
+        for k in range(n):
+            y[k] = z[k]
+            F[0, k] = F[stages - 1, k]
+        memory[M_T] = t_stop if h == remaining else t + h
+        memory[M_H] = (h * min(GROW, SAFETY * error ** -memory[M_EXPONENT]) if error > 0.0
+                       else h * GROW)
+        flags[I_STEPS] += 1
+        flags[I_FRESH] = 0
+        failures = 0
+        steps += 1
+        if one_step or (max_steps > 0 and steps >= max_steps and memory[M_T] < t_stop):
+            return OK if one_step else TOO_MUCH_WORK
+    return OK
+
+
+class Esdirk:
+    """The ESDIRK integrator on ydot = f(y), y = [q - q_ref, qdot], with the engine; the same
+    interface as `sundials.Cvode` (reset, advance, statistics, restart memory).
+
+    Parameters
+    ----------
+    data : EngineData
+        The packed model; its inputs array holds the forces (N) of the current interval.
+    rtol : float
+        Relative tolerance.
+    atol : array (2 NDOF,)
+        Absolute tolerances (m, rad, m/s, rad/s).
+    max_step : float or None
+        Largest step (s).
+    method : str
+        "esdirk" (order 4, 6 stages), "esdirk3" (order 3, 4 stages) or "esdirk2" (TR-BDF2,
+        order 2, 3 stages): the tableau of `esdirk_method.TABLEAUS`.
+    """
+
+    def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
+        self.data = engine.connect(data)
+        self.tableau = tableau = TABLEAUS[method]
+        self.label = self.tableau.name
+        self.tables = self.tableau.arrays()
+        self.n = n = 2 * int(data.int_array("dims")[ed.NDOF])
+        self.memory = np.zeros(M_SIZE)
+        self.memory[M_RTOL] = float(rtol)
+        self.memory[M_H_MAX] = float(max_step or 0.0)
+        self.memory[M_ETA] = 1.0
+        self.memory[M_EXPONENT] = 1.0 / (min(tableau.order, tableau.embedded_order) + 1)
+        self.flags = np.zeros(I_SIZE, dtype=np.int64)
+        self.vectors = np.zeros((V_ROWS, n))
+        self.J = np.zeros(n * n)
+        self.LU = np.zeros(n * n)
+        self.pivots = np.zeros(n, dtype=np.int64)
+        self.atol = np.ascontiguousarray(atol, dtype=float)
+        self.y_array = self.vectors[V_Y]
+        self.counters = data.int_array("counters")
+
+    def reset(self, t, y):
+        """Continue from time t (s) and state y (2 NDOF,): the first stage's derivative is
+        recomputed, the step size, Jacobian and Newton matrix are kept."""
+        self.memory[M_T] = float(t)
+        self.y_array[:] = y
+        self.flags[I_FSAL] = 0
+        self.counters[ed.FAILED_STATUS] = 0
+
+    def forget(self):
+        """Start the next step from nothing: an estimated first step, a new Jacobian."""
+        self.memory[M_H] = 0.0
+        self.memory[M_ETA] = 1.0
+        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU]] = 0
+
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
+        """Integrate to t_stop (s), landing on it exactly (one accepted step only with
+        one_step; at most max_steps steps, else StepBudgetSpent); returns t and a view of y.
+        Raises SimulationError on failure."""
+        status = advance(self.data.address, self.memory, self.flags, self.vectors, self.J,
+                         self.LU, self.pivots, self.atol, *self.tables, float(t_stop),
+                         bool(one_step), int(max_steps or 0))
+        if status == TOO_MUCH_WORK and max_steps:
+            error = StepBudgetSpent(f"t = {self.memory[M_T]:.9g} s: the step budget of "
+                                    f"{max_steps} integrator steps is spent")
+            error.last_good = (float(self.memory[M_T]), self.y_array.copy())
+            raise error
+        if status != OK:
+            raise self.failure(status, self.memory[M_T])
+        return self.memory[M_T], self.y_array
+
+    def failure(self, status, t):
+        """A SimulationError naming the time and the cause; `last_good` is (t, y) of the last
+        accepted step."""
+        from .sundials import STATUS_MESSAGES
+
+        cause = STATUS_MESSAGES.get(int(self.counters[ed.FAILED_STATUS]))
+        detail = f" ({cause})" if cause else ""
+        error = SimulationError(f"t = {t:.9g} s: {self.label} failed with "
+                                f"{FLAG_NAMES.get(status, status)}{detail}")
+        error.last_good = (float(t), self.y_array.copy())
+        self.forget()  # what it learnt led to the failure: the retry starts afresh
+        return error
+
+    def step_count(self):
+        """Accepted steps since the integrator was made (cheap: for a step budget)."""
+        return int(self.flags[I_STEPS])
+
+    def statistics(self):
+        """{"steps", "rejected_steps", "newton_failures", "solver_rhs_evaluations",
+        "solver_jacobian_evaluations", "factorizations"} since the integrator was made."""
+        f = self.flags
+        return {"steps": int(f[I_STEPS]), "rejected_steps": int(f[I_REJECTED]),
+                "newton_failures": int(f[I_NEWTON_FAILURES]),
+                "solver_rhs_evaluations": int(f[I_RHS]),
+                "solver_jacobian_evaluations": int(f[I_JACOBIANS]),
+                "factorizations": int(f[I_FACTORIZATIONS])}
+
+    @property
+    def restart_memory(self):
+        """What the integrator has learnt, as plain numbers: {"initial_step" (s, the next
+        step), "jacobian" (n * n,) or empty, "lu_step" (s, h g of the Newton matrix),
+        "newton_rate", "refresh" (1: a new Jacobian at the next step)}."""
+        valid = self.flags[I_JACOBIAN] == 1
+        return {"initial_step": float(self.memory[M_H]),
+                "jacobian": self.J.copy() if valid else np.zeros(0),
+                "lu_step": float(self.memory[M_H_LU]) if self.flags[I_LU] else 0.0,
+                "newton_rate": float(self.memory[M_ETA]),
+                "refresh": int(self.flags[I_REFRESH])}
+
+    @restart_memory.setter
+    def restart_memory(self, memory):
+        self.forget()
+        h = float(memory.get("initial_step", 0.0))
+        lu_step = float(memory.get("lu_step", 0.0))
+        rate = float(memory.get("newton_rate", 1.0))
+        jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
+        if not all(np.isfinite(v) and v >= 0.0 for v in (h, lu_step, rate)) \
+                or not np.all(np.isfinite(jacobian)):
+            raise SimulationError("the integrator memory holds negative or non-finite numbers")
+        self.memory[M_H], self.memory[M_ETA] = h, rate
+        if jacobian.size == self.n * self.n:
+            self.J[:] = jacobian
+            self.flags[I_JACOBIAN] = 1
+            self.flags[I_REFRESH] = int(memory.get("refresh", 0))
+            if lu_step > 0.0 and factor(self.J, self.LU, self.pivots, lu_step, self.flags):
+                self.flags[I_LU] = 1
+                self.memory[M_H_LU] = lu_step
+
+    def close(self):
+        """Nothing to free (numpy arrays only); for the interface of `sundials.Cvode`."""

@@ -1,0 +1,88 @@
+"""The range of validity of a model, checked on its states: warnings, never errors.
+
+flexure's elements are geometrically exact for large motions, but their constitutive law is
+linear in small deformations, and a flexure stage that has moved a quarter of its own size
+has left the range it was designed and modelled for. A state beyond either limit is still
+integrated (the equations stay well defined), but the result is reported with a warning
+(`Simulator.range_warnings`, `SimulationResult.warnings`, `flexure simulate`, the FMU's log)
+instead of being returned in silence:
+
+- axial strain e1 / l0 of any beam (PLBEAM, BEAM: the leaves, wires and bodies of a flexure):
+  |strain| <= STRAIN_LIMIT (1 %: well past the elastic limit of flexure materials, about
+  0.5 % for spring steel). Trusses are left out: a scene uses them for springs too, whose
+  linear law holds at any elongation;
+- translation of any node from the start configuration: <= DISTANCE_LIMIT (0.25) times the
+  model's length scale (its longest element).
+"""
+
+import numpy as np
+
+from ..numerics.jit import kernel
+
+STRAIN_LIMIT = 1e-2
+DISTANCE_LIMIT = 0.25
+BEAMS = ("PLBEAM", "BEAM")
+
+
+class RangeCheck:
+    """The limits above for one model; `warnings(x, e)` of a state (coordinates x (NX,) and
+    deformations e (NE,), SI units), or of many at once ((n, NX), (n, NE))."""
+
+    def __init__(self, model):
+        self.model = model
+        lengths, elongations = [], []
+        for group in model.groups:
+            if group.kind.type_name in BEAMS and group.deformation_index.shape[1] > 0:
+                lengths.append(np.asarray(group.reference["l0"], float))
+                elongations.append(group.deformation_index[:, 0])  # e1: the elongation (m)
+        self.elongation = (np.concatenate(elongations).astype(np.int64) if elongations
+                           else np.zeros(0, np.int64))
+        self.length = np.concatenate(lengths) if lengths else np.zeros(0)
+        self.strain_bound = STRAIN_LIMIT * self.length  # |e1| beyond it: out of range (m)
+        # the length scale of the kinematics: the longest element, at least 1 mm
+        self.scale = max([1e-3, *(float(np.max(group.reference["l0"]))
+                                  for group in model.groups if "l0" in group.reference)])
+        self.translational = np.asarray(model.translations, dtype=np.int64)
+        self.start = np.asarray(model.initial_coordinates, float)[self.translational]
+        self.distance_bound = DISTANCE_LIMIT * self.scale
+
+    def within(self, x, e):
+        """Whether one state (x (NX,), e (NE,)) is within both limits: the cheap test an FMU
+        makes after every doStep (a few microseconds); `warnings` says what is not."""
+        return _within(x, e, self.elongation, self.strain_bound, self.translational,
+                       self.start, self.distance_bound)
+
+    def warnings(self, x, e):
+        """{"strain" or "distance": a message naming the element or coordinate worst beyond
+        that limit, with its value}; empty when the states are within the range."""
+        x, e = np.atleast_2d(x), np.atleast_2d(e)
+        found = {}
+        if self.elongation.size:
+            strain = e[:, self.elongation] / self.length
+            worst = np.unravel_index(np.argmax(np.abs(strain)), strain.shape)
+            if abs(strain[worst]) > STRAIN_LIMIT:
+                name = self.model.deformation_names[self.elongation[worst[1]]]
+                found["strain"] = (f"axial strain {strain[worst]:.3g} of {name} is beyond the "
+                                   f"model's range of validity (|strain| <= {STRAIN_LIMIT:g})")
+        if self.translational.size:
+            distance = np.abs(x[:, self.translational] - self.start)
+            worst = np.unravel_index(np.argmax(distance), distance.shape)
+            if distance[worst] > DISTANCE_LIMIT * self.scale:
+                name = self.model.coordinate_names[self.translational[worst[1]]]
+                found["distance"] = (f"{name} moved {distance[worst]:.3g} m from the start, "
+                                     f"beyond the model's range of validity ({DISTANCE_LIMIT:g} x "
+                                     f"its length scale {self.scale:.3g} m)")
+        return found
+
+
+@kernel
+def _within(x, e, elongation, strain_bound, translational, start, distance_bound):
+    """`RangeCheck.within` compiled: a tenth of the numpy expression's time on a few
+    elements, where each numpy call's overhead dominated a doStep of the FMU."""
+    for i in range(elongation.size):
+        if abs(e[elongation[i]]) > strain_bound[i]:
+            return False
+    for i in range(translational.size):
+        if abs(x[translational[i]] - start[i]) > distance_bound:
+            return False
+    return True

@@ -1,0 +1,352 @@
+"""A sampled feedback loop around a Simulator, compiled: no Python call per sample.
+
+At the samples t_k = k / fs (k = 0 .. N), with y_k the loop outputs (positions, m) measured at
+t_k, r_k the reference and x_c the state of a discrete linear controller (A, B, C, D):
+
+    e_k   = r_k - y_k
+    u_k+1 = C x_c + D e_k + u_ff,k+1,    x_c <- A x_c + B e_k      (computed at t_k)
+    plant: u_k held over [t_k, t_k+1)                            (zero-order hold)
+
+so the force acts one sample after the measurement it comes from (one sample of computation
+delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. Past
+the last sample of the reference and feedforward arrays their last entries hold.
+
+The plant is the Simulator's own integrator, driven exactly as `Simulator.set_inputs` plus
+`advance` drive it, so this loop and a loop of Python calls give the same numbers, bit for bit;
+the difference is that here the whole run is one compiled function, with the controller in
+compiled code too. With the one-step ESDIRK (`flexure.core.simulation.esdirk`, the loop's
+default) a changed force costs one evaluation and the integrator steps on with its step size and
+Newton matrix; with CVODE it restarts at every changed force (its C functions called directly).
+"""
+
+import time
+
+import numpy as np
+from numba import carray
+
+from ..engine import data as ed
+from ..engine import engine
+from ..errors import SimulationError
+from ..numerics.jit import kernel
+from ..numerics.native import (
+    as_float_pointer,
+    call_engine,
+    call_get_long,
+    call_get_real,
+    call_reinit,
+    call_solve,
+    call_with_time,
+)
+from . import esdirk
+from .esdirk import Esdirk
+from .sundials import STATUS_MESSAGES, Cvode
+
+_DIMS_SLOT = ed.INT_SLOTS.index("dims")
+_Q_REF_SLOT = ed.FLOAT_SLOTS.index("q_ref")
+_X_SLOT = ed.FLOAT_SLOTS.index("x")
+_X_START_SLOT = ed.FLOAT_SLOTS.index("x_start")
+_INPUTS_SLOT = ed.FLOAT_SLOTS.index("inputs")
+_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
+
+
+def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, loop_inputs,
+                     loop_outputs, progress=None):
+    """Run the loop from the simulator's current state (t = 0 after `reset`).
+
+    Parameters
+    ----------
+    sim : Simulator
+        The plant, with the CVODE method (the loop's integrator restarts are CVODE's).
+    fs : float
+        Sample rate (Hz).
+    samples : int
+        The number of intervals N; the run ends at t_N = N / fs.
+    reference, feedforward : arrays (>= 1, n_loops)
+        r_k (m) and u_ff,k (N) per sample (the last row holds past the end).
+    controller : tuple of arrays (A, B, C, D)
+        The discrete controller from errors (m) to forces (N): A (s, s), B (s, n_loops),
+        C (n_loops, s), D (n_loops, n_loops).
+    loop_inputs, loop_outputs : sequences of int
+        The model input driven by each loop, and the model output (a position) it measures.
+    progress : callable, optional
+        Called with the fraction of samples done, about 100 times.
+
+    Returns
+    -------
+    (t (N+1,), position (N+1, n_loops), force (N+1, n_loops)): y_k, and u_k held from t_k (the
+    last row repeats the one before).
+    """
+    solver, plant, outputs, restart_needed, restart_kinematics = sim.hand_over()
+    if not isinstance(solver, (Cvode, Esdirk)):
+        raise SimulationError("the compiled sampled loop drives CVODE or ESDIRK; use method "
+                              "'esdirk', 'cvode-bdf' or 'cvode-adams'")
+    ports = [sim.model.outputs[j] for j in loop_outputs]
+    if any(port.quantity != "position" for port in ports):
+        raise SimulationError("the compiled sampled loop measures positions only")
+    A, B, C, D = (np.ascontiguousarray(np.atleast_2d(np.asarray(m, float))) for m in controller)
+    reference = np.ascontiguousarray(reference, dtype=float)
+    feedforward = np.ascontiguousarray(feedforward, dtype=float)
+    n_loops = len(loop_inputs)
+    if reference.shape[1] != n_loops or feedforward.shape[1] != n_loops:
+        raise SimulationError(f"reference and feedforward: expected {n_loops} columns, got "
+                              f"{reference.shape[1]} and {feedforward.shape[1]}")
+    N = int(samples)
+    position = np.zeros((N + 1, n_loops))
+    force = np.zeros((N + 1, n_loops))
+    coordinates = np.array([port.coordinate for port in ports], dtype=np.int64)
+    loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
+            np.array(loop_inputs, dtype=np.int64), coordinates, position, force)
+    # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
+    loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
+    held = np.array(sim.inputs, dtype=float)
+    addresses = np.zeros(_ADDRESSES, dtype=np.int64)
+    addresses[[_PLANT, _OUTPUT, _ENGINE]] = (plant.address, outputs.address,
+                                             plant.int_array("dims")[ed.ENGINE])
+    samples_of = _esdirk_samples if isinstance(solver, Esdirk) else _cvode_samples
+    run = samples_of(sim, solver, plant, addresses, loop_state, held, loop)
+    chunk = max(1, N // 100 if progress is not None else N)
+    start_time = time.perf_counter()
+    for done in range(0, N, chunk):  # in chunks of samples, for the progress report
+        stop = min(N, done + chunk)
+        flag = run(done, stop)
+        if flag != 0:
+            raise _failure(sim, solver, flag, loop_state[0])
+        if progress is not None:
+            progress(stop / N)
+    # measure y_N and leave the simulator at t_N with the last force held
+    status = _measure(addresses, solver.y_array, np.zeros(2 * sim.ndof), coordinates,
+                      position[N])
+    if status != ed.OK:
+        raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
+    force[N] = force[N - 1]
+    sim.take_back(loop_state[0], solver.y_array, held, restart_needed=loop_state[1] != 0.0,
+                  wall=time.perf_counter() - start_time)
+    return np.arange(N + 1) / fs, position, force
+
+
+def _esdirk_samples(sim, solver, plant, addresses, loop_state, held, loop):
+    """run(start, stop) -> flag: samples start .. stop - 1 on the one-step integrator."""
+    scratch = np.zeros(2 * sim.ndof)
+
+    def run(start, stop):
+        return _loop_esdirk(addresses, loop_state, held, solver.memory, solver.flags,
+                            solver.vectors, solver.J, solver.LU, solver.pivots, solver.atol,
+                            *solver.tables, scratch, start, stop, *loop)
+
+    return run
+
+
+def _cvode_samples(sim, solver, plant, addresses, loop_state, held, loop):
+    """run(start, stop) -> flag: samples start .. stop - 1 on CVODE, restarting it at every
+    change of the held force; what it learns is handed back to the solver after each run."""
+    for key, slot in (("solve", _SOLVE), ("reinit", _REINIT), ("stop", _STOP),
+                      ("memory", _MEMORY), ("y", _Y), ("tret", _TRET),
+                      ("init_step", _INIT_STEP), ("actual_init_step", _ACTUAL_INIT_STEP),
+                      ("num_steps", _NUM_STEPS)):
+        addresses[slot] = solver.addresses[key]
+    addresses[_ANALYTIC] = int(solver.analytic)
+    steps = np.zeros(2, dtype=np.int64)  # [steps before the restarts in the loop, scratch]
+    # what the integrator keeps between restarts (sundials.Cvode.reset): [initial step,
+    # Jacobian cached (0 or 1)]
+    memory = np.array([solver.initial_step, float(solver.jacobian_cached())])
+    scratch = np.zeros(2 * sim.ndof)
+
+    def run(start, stop):
+        jacobians = int(plant.int_array("counters")[ed.JACOBIAN_COUNT])
+        flag = _loop(addresses, loop_state, memory, steps, held, solver.y_array, scratch, start,
+                     stop, *loop)
+        solver.add_steps(steps[0])
+        steps[0] = 0
+        solver.initial_step = memory[0]
+        if plant.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
+            memory[1] = 1.0
+        return flag
+
+    return run
+
+
+def _failure(sim, solver, flag, t):
+    if flag == _MEASURE_FAILED:
+        return SimulationError(f"t = {t:.9g} s: outputs: the kinematics of the measured "
+                               "positions could not be solved")
+    error = solver.failure(flag, t)
+    return SimulationError(f"simulation of {sim.model.name!r} in the sampled loop: {error}")
+
+
+@kernel
+def controller_step(A, B, C, D, state, error, output):
+    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e
+    (state x updated in place). Arrays 2-D (A, B, C, D) and 1-D; the sums run in index order,
+    so every caller gets the same numbers."""
+    n_out, n_state, n_in = C.shape[0], A.shape[0], B.shape[1]
+    for i in range(n_out):
+        s = 0.0
+        for j in range(n_state):
+            s += C[i, j] * state[j]
+        d = 0.0
+        for j in range(n_in):
+            d += D[i, j] * error[j]
+        output[i] = s + d
+    new_state = np.empty(n_state)
+    for i in range(n_state):
+        s = 0.0
+        for j in range(n_state):
+            s += A[i, j] * state[j]
+        b = 0.0
+        for j in range(n_in):
+            b += B[i, j] * error[j]
+        new_state[i] = s + b
+    state[:] = new_state
+
+
+# the addresses handed to the compiled loop, in this order
+(_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE, _INIT_STEP,
+ _ACTUAL_INIT_STEP, _NUM_STEPS, _ANALYTIC, _ADDRESSES) = range(14)
+_MEASURE_FAILED = -1000
+
+
+@kernel
+def _measure(addresses, y, scratch, coordinates, out):
+    """The loop outputs (positions, m) at the integrator state y into out; a status. As
+    `Simulator.outputs`: full Newton from the plant's last coordinates."""
+    ndof = y.size // 2
+    x_plant = engine.float_array(addresses[_PLANT], _X_SLOT)
+    engine.float_array(addresses[_OUTPUT], _X_START_SLOT)[:] = x_plant
+    engine.int_array(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
+    q_ref = engine.float_array(addresses[_PLANT], _Q_REF_SLOT)
+    for j in range(ndof):
+        scratch[j] = q_ref[j] + y[j]
+    status = call_engine(addresses[_ENGINE], engine.OP_POSITIONS, addresses[_OUTPUT], 0.0,
+                         scratch.ctypes.data, 0, 0, 0.0)
+    if status != ed.OK:
+        return status
+    x = engine.float_array(addresses[_OUTPUT], _X_SLOT)
+    for j in range(coordinates.size):
+        out[j] = x[coordinates[j]]
+    return ed.OK
+
+
+@kernel
+def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state, inputs,
+            coordinates, position, force, held, error, output):
+    """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
+    stepped), and put u_k into the held plant inputs (the others zero) for [t_k, t_k+1).
+    Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
+    error, output: scratch (n_loops,)."""
+    if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+        return -1
+    n_loops = inputs.size
+    if k == 0:
+        force[0, :] = feedforward[0]
+    r = reference[min(k, reference.shape[0] - 1)]
+    ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
+    for i in range(n_loops):
+        error[i] = r[i] - position[k, i]
+    controller_step(A, B, C, D, state, error, output)
+    for i in range(n_loops):
+        force[k + 1, i] = output[i] + ff[i]
+    changed = 0
+    for j in range(held.size):
+        value = 0.0
+        for i in range(n_loops):
+            if inputs[i] == j:
+                value = force[k, i]
+        if value != held[j]:
+            changed = 1
+            held[j] = value
+    return changed
+
+
+@kernel
+def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, reference,
+          feedforward, A, B, C, D, state, inputs, coordinates, position, force):
+    """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
+    _MEASURE_FAILED) with loop_state[0] the time reached."""
+    plant = addresses[_PLANT]
+    plant_inputs = engine.float_array(plant, _INPUTS_SLOT)
+    x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
+    dims = engine.int_array(plant, _DIMS_SLOT)
+    tret = carray(as_float_pointer(addresses[_TRET]), (1,))
+    t = loop_state[0]
+    restart = loop_state[1] != 0.0
+    error, output = np.empty(inputs.size), np.empty(inputs.size)
+    for k in range(start, stop):
+        changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
+                          inputs, coordinates, position, force, held, error, output)
+        if changed < 0:
+            loop_state[0] = t
+            return _MEASURE_FAILED
+        if changed or restart:  # as Simulator.set_inputs and its restart in advance
+            plant_inputs[:] = held
+            x_start[:] = x_plant
+            dims[ed.WARM] = 0
+            call_get_long(addresses[_NUM_STEPS], addresses[_MEMORY], steps[1:].ctypes.data)
+            steps[0] += steps[1]
+            flag = call_reinit(addresses[_REINIT], addresses[_MEMORY], t, addresses[_Y])
+            if flag < 0:
+                loop_state[0] = t
+                return flag
+            if memory[0] > 0.0:  # as sundials.Cvode.reset
+                call_with_time(addresses[_INIT_STEP], addresses[_MEMORY], memory[0])
+            if memory[1] != 0.0 and addresses[_ANALYTIC] != 0:
+                dims[ed.JACOBIAN_REUSE] = 1
+            restart = False
+        t_next = (k + 1) / fs
+        call_with_time(addresses[_STOP], addresses[_MEMORY], t_next)
+        flag = call_solve(addresses[_SOLVE], addresses[_MEMORY], t_next, addresses[_Y],
+                          addresses[_TRET], 1)
+        if flag < 0:
+            loop_state[0] = tret[0]
+            loop_state[1] = 1.0
+            return flag
+        if memory[0] == 0.0:  # as sundials.Cvode.learn_initial_step
+            call_get_real(addresses[_ACTUAL_INIT_STEP], addresses[_MEMORY], memory.ctypes.data)
+        memory[1] = 1.0 if addresses[_ANALYTIC] != 0 else 0.0
+        t = t_next
+    loop_state[0] = t
+    loop_state[1] = 1.0 if restart else 0.0
+    return 0
+
+
+@kernel
+def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, pivots, atol,
+                 tableau_A, tableau_EW, tableau_P, scratch, start, stop, fs, reference,
+                 feedforward, A, B, C, D, state, inputs, coordinates, position, force):
+    """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
+    status (or _MEASURE_FAILED) with loop_state[0] the time reached. Each change of the held
+    force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
+    inputs, the integrator's state re-entered (its first stage recomputed)."""
+    plant = addresses[_PLANT]
+    plant_inputs = engine.float_array(plant, _INPUTS_SLOT)
+    x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
+    dims = engine.int_array(plant, _DIMS_SLOT)
+    counters = engine.int_array(plant, _COUNTERS_SLOT)
+    y = vectors[esdirk.V_Y]
+    t = loop_state[0]
+    error, output = np.empty(inputs.size), np.empty(inputs.size)
+    for k in range(start, stop):
+        changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
+                          inputs, coordinates, position, force, held, error, output)
+        if changed < 0:
+            loop_state[0] = t
+            return _MEASURE_FAILED
+        if changed or loop_state[1] != 0.0:  # as Simulator._restart and Esdirk.reset
+            plant_inputs[:] = held
+            if loop_state[2] != 0.0:
+                x_start[:] = x_plant
+                dims[ed.WARM] = 0
+                loop_state[2] = 0.0
+            memory[esdirk.M_T] = t
+            flags[esdirk.I_FSAL] = 0
+            counters[ed.FAILED_STATUS] = 0
+            loop_state[1] = 0.0
+        t_next = (k + 1) / fs
+        status = esdirk.advance(plant, memory, flags, vectors, J, LU, pivots, atol, tableau_A,
+                                tableau_EW, tableau_P, t_next, False, 0)
+        if status != esdirk.OK:
+            loop_state[0] = memory[esdirk.M_T]
+            loop_state[1] = loop_state[2] = 1.0
+            return status
+        t = t_next
+    loop_state[0] = t
+    return 0

@@ -1,0 +1,474 @@
+"""The stepping `Simulator`: a model's nonlinear equations of motion under SUNDIALS.
+
+The integrator's state is y = [q - q_ref, qdot] on the DOFs (m, rad, m/s, rad/s): the deviation
+from a reference configuration q_ref, the DOFs where the run started (`reset`), and the
+velocities. A flexure moves micrometres to millimetres away from a configuration whose
+coordinates are centimetres (the 3-DOF stage: y = 0.1 m, moving 2 mm in x), so integrating the
+absolute DOFs would let rtol act on 0.1 m; on the deviation it acts on the motion. The
+constraints are solved away at every evaluation by the compiled engine
+(`flexure.core.engine.engine`), never integrated; SUNDIALS calls the engine through compiled
+callbacks (`flexure.core.simulation.sundials`), so no Python runs per evaluation. Inputs are
+forces on the scene's input coordinates, held constant between `set_inputs` calls (zero-order
+hold); a change of input is a discontinuity, so the integrator restarts there (order 1, new
+step).
+
+    sim = Simulator(model, method="cvode-bdf", rtol=1e-8)
+    sim.set_inputs([1.0])            # N
+    sim.advance(0.5)                 # s
+    sim.outputs()                    # the scene's outputs, m and m/s
+
+A snapshot `get_state()` is a restart point: the next `advance` restarts the integrator from
+it, with the kinematics started afresh from the snapshot's coordinates, so a run restored with
+`set_state` continues bit for bit like the original.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..engine import data as ed
+from ..engine import engine
+from ..engine.data import EngineData
+from ..errors import SimulationError, StepBudgetSpent
+from .esdirk import Esdirk
+from .methods import METHODS, ONE_STEP_METHODS
+from .simulator_outputs import SimulatorOutputs
+from .sundials import STATUS_MESSAGES, make_solver
+from .tolerances import atol_vector
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+
+STATE_VERSION = 2
+# what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
+_MEMORY_KEYS = ("lu_step", "newton_rate", "refresh")
+
+
+class Simulator(SimulatorOutputs):
+    """Integrates a model's nonlinear equations of motion step by step.
+
+    Parameters
+    ----------
+    model : Model
+        The model; its inputs are forces (N, N m), its outputs positions or velocities.
+    method : str
+        "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a one-step
+        L-stable method of order 4, `flexure.core.simulation.esdirk`: no restart cost when an
+        input changes, so the choice for sampled loops and co-simulation steps), "esdirk3" (its
+        order-3 sibling: 4 stages instead of 6) or "esdirk2" (TR-BDF2, order 2, 3 stages: the
+        sampled loop's default, where the sample period bounds the step).
+    rtol : float
+        Relative tolerance of the integrator.
+    atol : float or array (2 NDOF,), optional
+        Absolute tolerance; default `tolerances.default_atol(model, rtol)` (per state).
+    max_step : float, optional
+        Largest step (s); None for no limit.
+    jacobian : str
+        "analytic" (the model's tangent, default) or "finite-difference" (SUNDIALS').
+    max_order : int, optional
+        Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA, 12
+        for Adams). 2 makes BDF A-stable (docs/decisions.md: why it is not the default).
+    input_functions : dict, optional
+        {input index: callable(t) -> N}: inputs that vary within an interval. They are
+        evaluated in Python at every evaluation (the compiled path is for held inputs).
+    """
+
+    def __init__(self, model, *, method="cvode-bdf", rtol=1e-8, atol=None, max_step=None,
+                 jacobian="analytic", max_order=None, input_functions=None):
+        if method not in METHODS:
+            raise SimulationError(f"unknown method {method!r}; expected one of "
+                                  f"{', '.join(METHODS)}")
+        if not (np.isfinite(rtol) and 0 < rtol < 1):
+            raise SimulationError(f"rtol must be a number between 0 and 1, got {rtol!r}")
+        if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
+            raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
+        self.model = model
+        self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
+        self.data = EngineData(model)
+        self.ndof = model.declared_dof_count
+        self.atol = atol_vector(model, rtol, atol, self.ndof)
+        self.input_names = [p.name for p in model.inputs]
+        self.input_units = [p.unit for p in model.inputs]
+        self.output_names = [p.name for p in model.outputs]
+        self.output_units = [p.unit for p in model.outputs]
+        self.dof_names = model.dof_names
+        self.deadline = None  # a time.perf_counter() value past which `advance` stops
+        self._u = np.zeros(len(model.inputs))
+        self._input_functions = dict(input_functions or {})
+        self._inputs = self.data.float_array("inputs")
+        self._q_ref_array = self.data.float_array("q_ref")
+        self.integrator = _make_integrator(
+            self.data, method, rtol=rtol, atol=self.atol, max_step=max_step, jacobian=jacobian,
+            max_order=max_order,
+            input_function=self._inputs_at if self._input_functions else None)
+        self._output_data = EngineData(model)
+        self._output_coordinates = np.array([port.coordinate for port in model.outputs],
+                                            dtype=np.int64)
+        self._positions_only = all(port.quantity == "position" for port in model.outputs)
+        self._range = None  # plausibility.RangeCheck, made on first use
+        # views of the coordinates and deformations of the engine's last evaluation
+        self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")
+        self.reset()
+
+    # -- state ----------------------------------------------------------------------------
+    def reset(self, *, t0=0.0, q0=None, qdot0=None):
+        """Start again at t0 (s) from q0, qdot0 (default: the scene's configuration at rest).
+
+        The inputs are kept; the statistics restart from zero.
+        """
+        q = self._initial_dofs() if q0 is None else _vector(q0, self.ndof, "q0")
+        qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
+        self._start_kinematics(self.model.initial_coordinates)
+        status = engine.call(self.data, engine.OP_KINEMATICS, q)
+        if status != ed.OK:
+            raise SimulationError(f"t = {t0:.9g} s: the initial DOFs q0 cannot be assembled: "
+                                  f"{STATUS_MESSAGES[status]} (q0 = {np.array2string(q)})")
+        self._t = float(t0)
+        self._q_ref = q.copy()
+        self._y = np.concatenate([np.zeros(self.ndof), qdot])
+        self._x = self.data.float_array("x").copy()
+        self._outputs_cache = None
+        self._needs_init = self._restart_kinematics = True
+        self._counters_at_reset = self._counts()
+        self._wall = 0.0
+        self._forget()
+
+    def _forget(self):
+        if hasattr(self.integrator, "forget"):
+            self.integrator.forget()
+
+    def _initial_dofs(self):
+        x0 = self.model.initial_coordinates
+        e = self._deformations(x0)
+        return np.concatenate([x0[self.model.dof_coordinates], e[self.model.dof_deformations]])
+
+    def _deformations(self, x):
+        engine.call(self.data, engine.OP_DEFORMATIONS, np.ascontiguousarray(x, float), s=0)
+        return self.data.float_array("e").copy()
+
+    def _start_kinematics(self, x, data=None):
+        """The next kinematic solution starts with full Newton from x (NX,)."""
+        data = data or self.data
+        data.float_array("x_start")[:] = x
+        data.int_array("dims")[ed.WARM] = 0
+
+    @property
+    def time(self):
+        """The current time (s)."""
+        return self._t
+
+    @property
+    def q(self):
+        """The current DOFs (NDOF,) m, rad (a copy)."""
+        return self._q_ref + self._y[: self.ndof]
+
+    @property
+    def q_ref(self):
+        """The reference DOFs (NDOF,) m, rad the integrator's state is taken from (a copy)."""
+        return self._q_ref.copy()
+
+    @property
+    def state(self):
+        """The integrator's state [q - q_ref, qdot] (2 NDOF,) (a copy)."""
+        return self._y.copy()
+
+    def absolute(self, y):
+        """States [q, qdot] (..., 2 NDOF) of integrator states [q - q_ref, qdot] (a copy)."""
+        y = np.array(y, dtype=float)
+        y[..., : self.ndof] += self._q_ref
+        return y
+
+    @property
+    def qdot(self):
+        """The current DOF velocities (NDOF,) m/s, rad/s (a copy)."""
+        return self._y[self.ndof:].copy()
+
+    @property
+    def inputs(self):
+        """The inputs held now (n_inputs,) N (a copy)."""
+        return self._u.copy()
+
+    def set_inputs(self, u):
+        """Hold the inputs u (n_inputs,) N from now on; a change restarts the integrator."""
+        u = np.array(u, dtype=float).reshape(-1)
+        if u.size != self._u.size:
+            raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
+                                  f"({', '.join(self.input_names)}), got {u.size}")
+        if not np.isfinite(u).all():
+            i = int(np.flatnonzero(~np.isfinite(u))[0])
+            raise SimulationError(f"t = {self._t:.9g} s: input {self.input_names[i]!r} is "
+                                  f"not finite ({u[i]})")
+        if (u != self._u).any():
+            self._u = u
+            self._needs_init = True
+
+    def get_state(self):
+        """A snapshot of the whole state (plain numbers and arrays); the next `advance`
+        restarts from it."""
+        self._needs_init = self._restart_kinematics = True
+        memory = getattr(self.integrator, "restart_memory", {})
+        return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
+                "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
+                "x": self._x.copy(), "initial_step": memory.get("initial_step", 0.0),
+                "jacobian": memory.get("jacobian", np.zeros(0)),
+                **{key: value for key, value in memory.items() if key in _MEMORY_KEYS}}
+
+    def set_state(self, state):
+        """Restore a snapshot of `get_state` (of a simulator of the same model).
+
+        A version-1 snapshot (absolute y = [q, qdot]) is taken from the configuration it
+        holds."""
+        try:
+            version = int(state.get("version", 1))
+            y = np.array(state["y"], dtype=float).reshape(-1)
+            q_ref = np.array(state["q_ref"] if version >= 2 else y[: y.size // 2],
+                             dtype=float).reshape(-1)
+            u = np.array(state["u"], dtype=float).reshape(-1)
+            x = np.array(state["x"], dtype=float).reshape(-1)
+            t = float(state["t"])
+        except (AttributeError, KeyError, TypeError, ValueError) as error:
+            raise SimulationError(f"not a simulator state: {error}") from None
+        if (state.get("model") != self.model.name or y.size != 2 * self.ndof
+                or q_ref.size != self.ndof):
+            raise SimulationError(f"the state is of model {state.get('model')!r} with "
+                                  f"{y.size} states; expected {self.model.name!r} with "
+                                  f"{2 * self.ndof}")
+        if u.size != self._u.size or x.size != self.model.nx:
+            raise SimulationError(f"the state holds {u.size} inputs and {x.size} coordinates; "
+                                  f"expected {self._u.size} and {self.model.nx}")
+        if not (np.isfinite(t) and np.all(np.isfinite(y)) and np.all(np.isfinite(q_ref))
+                and np.all(np.isfinite(u)) and np.all(np.isfinite(x))):
+            raise SimulationError("the state holds non-finite numbers")
+        if version < 2:
+            y[: self.ndof] = 0.0
+        self._t, self._y, self._u, self._x = t, y, u, x
+        self._q_ref = q_ref
+        if hasattr(self.integrator, "restart_memory"):  # what the integrator had learnt
+            try:
+                self.integrator.restart_memory = {
+                    "initial_step": float(state.get("initial_step", 0.0)),
+                    "jacobian": np.asarray(state.get("jacobian", ()), dtype=float),
+                    **{key: float(state[key]) for key in _MEMORY_KEYS if key in state}}
+            except (TypeError, ValueError) as error:
+                raise SimulationError(f"not a simulator state: {error}") from None
+        self._outputs_cache = None
+        self._needs_init = self._restart_kinematics = True
+
+    @property
+    def statistics(self):
+        """Solver statistics since `reset`: steps, rhs and Jacobian evaluations, wall time (s)."""
+        now, start = self._counts(), self._counters_at_reset
+        return {"steps": now["steps"] - start["steps"],
+                "rhs_evaluations": now["rhs"] - start["rhs"],
+                "jacobian_evaluations": now["jacobians"] - start["jacobians"],
+                "wall_time_s": self._wall}
+
+    def _counts(self):
+        counters = self.data.int_array("counters")
+        solver = self.integrator.statistics()
+        jacobians = (int(counters[ed.JACOBIAN_COUNT]) if self.jacobian == "analytic"
+                     else solver["solver_jacobian_evaluations"])
+        return {"steps": solver["steps"], "rhs": int(counters[ed.RHS_COUNT]),
+                "jacobians": jacobians}
+
+    # -- integration ----------------------------------------------------------------------
+    def _inputs_at(self, t):
+        u = self._u.copy()
+        for i, function in self._input_functions.items():
+            u[i] = function(t)
+            if not np.isfinite(u[i]):
+                raise SimulationError(f"t = {t:.9g} s: input {self.input_names[i]!r} is not "
+                                      f"finite ({u[i]})")
+        return u
+
+    def _restart(self):
+        """Restart the integrator at the current state with the held inputs. The kinematics
+        start afresh from the state's coordinates after anything that sets a state (reset,
+        set_state, get_state, a failure), so that a restored run continues bit for bit; after
+        a mere input change the one-step method keeps the warm start of its last evaluation
+        (CVODE and IDA start afresh there too)."""
+        self._inputs[:] = self._u
+        self._q_ref_array[:] = self._q_ref
+        if self._kinematics_restart_due():
+            self._start_kinematics(self._x)
+        self.integrator.reset(self._t, self._y)
+        self._needs_init = self._restart_kinematics = False
+
+    def _kinematics_restart_due(self):
+        """Whether the next restart starts the kinematics afresh from the state's
+        coordinates: always for CVODE and IDA, for a one-step method only after a state was
+        set or a failure."""
+        return self._restart_kinematics or self.method not in ONE_STEP_METHODS
+
+    def advance(self, t_end, *, max_steps=None, _record=None, _progress=None):
+        """Integrate from `time` to t_end (s), stopping exactly there.
+
+        max_steps: a budget of integrator steps for this call; exceeding it raises a
+        SimulationError (the simulator then stays at its last good state). Raises
+        SimulationError (naming the time and the cause) on any failure, likewise.
+        """
+        t_end = float(t_end)
+        if not np.isfinite(t_end) or t_end <= self._t:
+            raise SimulationError(f"t = {self._t:.9g} s: advance to t_end = {t_end!r}: expected "
+                                  "a finite time after the current one")
+        start = _time.perf_counter()
+        steps_before = self.integrator.step_count() if max_steps is not None else 0
+        # with a budget alone the integrator counts its steps itself (normal mode); a record,
+        # a progress report or a deadline need control back after every step
+        one_step = _record is not None or _progress is not None or self.deadline is not None
+        retried_at = None
+        try:
+            while self._t < t_end:
+                try:
+                    if self._needs_init:
+                        self._restart()
+                    budget = None
+                    if max_steps is not None and not one_step:
+                        budget = max(1, max_steps - (self.integrator.step_count()
+                                                     - steps_before))
+                    t, y = self.integrator.advance(t_end, one_step=one_step, max_steps=budget)
+                except StepBudgetSpent as error:  # no retry: the budget is the host's limit
+                    self._back_to_last_good(error, t_end)
+                    raise SimulationError(f"t = {self._t:.9g} s: the step budget of {max_steps} "
+                                          "integrator steps is spent") from None
+                except SimulationError as error:
+                    self._back_to_last_good(error, t_end)
+                    if retried_at == self._t:  # failed again from the same good state
+                        raise SimulationError(
+                            f"simulation of {self.model.name!r} stopped at t = {self._t:.9g} s "
+                            f"(last good state): {error}") from None
+                    retried_at = self._t
+                    continue
+                self._t = t
+                self._y = np.array(y, dtype=float)
+                self._x = self._last_x.copy()
+                if hasattr(self.integrator, "learn_initial_step"):
+                    self.integrator.learn_initial_step()
+                self._outputs_cache = None
+                if _record is not None:
+                    _record(t, self._y)
+                if _progress is not None:
+                    _progress(t)
+                if one_step:
+                    self._check_budget(steps_before, max_steps)
+        finally:
+            self._wall += _time.perf_counter() - start
+
+    def _back_to_last_good(self, error, t_end):
+        """After a failed integrator call: continue from the last good state the error
+        carries (if it is past the current time), with a restart of the integrator and the
+        kinematics."""
+        self._needs_init = self._restart_kinematics = True
+        t_good, y_good = getattr(error, "last_good", (self._t, None))
+        if y_good is not None and self._t < t_good < t_end:
+            self._t, self._y = t_good, np.array(y_good, dtype=float)
+            self._x = self.data.float_array("x").copy()
+            self._outputs_cache = None
+
+    def _check_budget(self, steps_before, max_steps):
+        if self.deadline is not None and _time.perf_counter() > self.deadline:
+            self._needs_init = True
+            raise SimulationError(f"t = {self._t:.9g} s: the time limit of the run is over")
+        if max_steps is not None and self.integrator.step_count() - steps_before >= max_steps \
+                and self._t < np.inf:
+            self._needs_init = True
+            raise SimulationError(f"t = {self._t:.9g} s: the step budget of {max_steps} "
+                                  "integrator steps is spent")
+
+    # -- handing the integrator to a compiled driver (flexure.core.simulation.sampled_loop) -------
+    def hand_over(self):
+        """The state into the integrator's vector and the kinematic reference set, for a
+        compiled driver; returns (integrator, plant data, output data, restart needed,
+        kinematics restart needed): the driver's first interval restarts as `_restart`."""
+        self._q_ref_array[:] = self._q_ref
+        self.integrator.y_array[:] = self._y
+        return (self.integrator, self.data, self._output_data, self._needs_init,
+                self._kinematics_restart_due())
+
+    def take_back(self, t, y, u, *, restart_needed, wall):
+        """Continue from where a compiled driver left the integrator: time t (s), state y
+        (2 NDOF,), held inputs u (N); wall the driver's time (s), for the statistics."""
+        self._t, self._y, self._u = float(t), np.array(y, dtype=float), np.array(u, dtype=float)
+        self._x = self.data.float_array("x").copy()
+        self._outputs_cache = None
+        self._needs_init = bool(restart_needed)
+        self._restart_kinematics = self._needs_init
+        self._wall += wall
+
+    # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ----------------
+    def derivative(self, t, y):
+        """ydot (2 NDOF,) at time t (s) and integrator state y = [q - q_ref, qdot]; raises
+        SimulationError when the state cannot be evaluated."""
+        self._prepare(t)
+        ydot = np.empty(2 * self.ndof)
+        status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
+                             ydot)
+        if status != ed.OK:
+            raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
+        return ydot
+
+    def jacobian_matrix(self, t, y):
+        """d ydot / d y (2 NDOF, 2 NDOF) from the model's tangent at (t, y)."""
+        self._prepare(t)
+        J = np.empty(4 * self.ndof ** 2)
+        status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
+                             J, s=0.0)
+        if status != ed.OK:
+            raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
+        return J.reshape(2 * self.ndof, 2 * self.ndof)
+
+    def _prepare(self, t):
+        if self.deadline is not None and _time.perf_counter() > self.deadline:
+            raise SimulationError(f"t = {t:.9g} s: the time limit of the run is over")
+        self._inputs[:] = self._inputs_at(t) if self._input_functions else self._u
+        self._q_ref_array[:] = self._q_ref
+
+
+def prepare(model: Model, *, loop_method: str | None = None) -> float:
+    """Compile, or load from the on-disk cache, the compiled code a Simulator of `model` runs
+    (the engine, the model's element kernels, the SUNDIALS callbacks); returns the time it
+    took (s). With loop_method (a METHODS name) also the integrator and the compiled sampled
+    loop (`run_sampled_loop`) of that method, by running one sample of it on a throwaway
+    simulator. The first use on a machine compiles (about 20-50 s); later ones load the cache
+    (well under a second). A Simulator does this itself; call it first to keep the latency
+    out of a timed run."""
+    start = _time.perf_counter()
+    EngineData(model)
+    if loop_method is not None and model.inputs and any(
+            port.quantity == "position" for port in model.outputs):
+        from .sampled_loop import run_sampled_loop
+
+        output = next(j for j, port in enumerate(model.outputs) if port.quantity == "position")
+        zero = np.zeros((1, 1))
+        run_sampled_loop(Simulator(model, method=loop_method), fs=1e4, samples=1,
+                         reference=zero, feedforward=zero, controller=(zero, zero, zero, zero),
+                         loop_inputs=[0], loop_outputs=[output])
+    return _time.perf_counter() - start
+
+
+def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
+                     input_function):
+    if method not in ONE_STEP_METHODS:
+        return make_solver(data, method, rtol=rtol, atol=atol, max_step=max_step,
+                           jacobian=jacobian, max_order=max_order, input_function=input_function)
+    refused = {"max_order": max_order is not None, "jacobian": jacobian != "analytic",
+               "input_functions": input_function is not None}
+    for name, given in refused.items():
+        if given:
+            raise SimulationError(f"method {method!r} takes no {name} (a one-step method "
+                                  "with the analytic Jacobian and held inputs); use a CVODE "
+                                  "or IDA method for that")
+    return Esdirk(data, rtol=rtol, atol=atol, max_step=max_step, method=method)
+
+
+def _vector(value, size, name):
+    v = np.array(value, dtype=float).reshape(-1)
+    if v.size != size or not np.all(np.isfinite(v)):
+        raise SimulationError(f"{name}: expected {size} finite values, got {value!r}")
+    return v
+
+
+__all__ = ["METHODS", "Simulator", "STATE_VERSION"]

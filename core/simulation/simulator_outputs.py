@@ -1,0 +1,89 @@
+"""What a Simulator measures: its declared outputs at the current state or along a path of
+states, and the range-of-validity warnings (`plausibility`) of its states. The part of
+`Simulator` that solves the kinematics on its second packed model (`_output_data`), so that
+measuring never disturbs the integrator's own."""
+
+import numpy as np
+
+from ..engine import data as ed
+from ..engine import engine
+from ..errors import SimulationError
+from .plausibility import RangeCheck
+from .sundials import STATUS_MESSAGES
+
+
+class SimulatorOutputs:
+    """The measuring methods of `Simulator` (which sets up the attributes they read: the
+    model, the state, `_output_data`, `_output_coordinates`, `_positions_only`, the last
+    evaluation's `_last_x`, `_last_e`)."""
+
+    def outputs(self):
+        """The declared outputs at the current state (n_outputs,): positions m, velocities m/s.
+
+        Computed once per state (`advance`, `reset` and `set_state` start a new one)."""
+        if self._outputs_cache is None:
+            if self._positions_only:
+                self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
+            else:
+                self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
+                                                         start=self._x)[0]
+        return self._outputs_cache.copy()
+
+    def _positions_at(self, q):
+        """The position outputs at DOFs q: Newton from the plant's coordinates, positions
+        only (as the compiled sampled loop measures them)."""
+        data = self._output_data
+        self._start_kinematics(self._x, data)
+        status = engine.call(data, engine.OP_POSITIONS, np.ascontiguousarray(q))
+        if status != ed.OK:
+            raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
+        return data.float_array("x")[self._output_coordinates]
+
+    def outputs_along(self, states, *, start=None):
+        """Outputs (n, n_outputs) along absolute states [q, qdot] (n, 2 NDOF), solving the
+        kinematics point by point (warm-started from one to the next)."""
+        return self._along(states, start, None)
+
+    def outputs_and_warnings(self, states):
+        """(outputs_along(states), the range-of-validity warnings of those states
+        (`flexure.core.simulation.plausibility`))."""
+        n_points = len(states)
+        path = (np.zeros((n_points, self.model.nx)),
+                np.zeros((n_points, len(self.model.deformation_names))))
+        outputs = self._along(states, None, path)
+        return outputs, list(self._range_check().warnings(*path).values())
+
+    def range_warnings(self):
+        """The range-of-validity warnings of the current state
+        (`flexure.core.simulation.plausibility`): {kind ("strain", "distance"): message}, empty
+        within the range. The coordinates and deformations are the integrator's last evaluation,
+        at the end of the last step."""
+        x, e = self._last_x, self._last_e
+        check = self._range_check()
+        return {} if check.within(x, e) else check.warnings(x, e)
+
+    def _range_check(self):
+        if self._range is None:
+            self._range = RangeCheck(self.model)
+        return self._range
+
+    def _along(self, states, start, path):
+        data = self._output_data
+        self._start_kinematics(self.model.initial_coordinates if start is None else start,
+                               data)
+        ports = self.model.outputs
+        result = np.zeros((len(states), len(ports)))
+        n = self.ndof
+        x, DF = data.float_array("x"), data.float_array("DF").reshape(self.model.nx, n)
+        for k, y in enumerate(np.asarray(states, float)):
+            status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
+            if status != ed.OK:
+                raise SimulationError(f"t = {self._t:.9g} s: outputs: "
+                                      f"{STATUS_MESSAGES[status]}")
+            for j, p in enumerate(ports):
+                result[k, j] = DF[p.coordinate] @ y[n:] if p.quantity == "velocity" else x[
+                    p.coordinate]
+            if path is not None:  # the kinematics left x and e of this point in the data
+                path[0][k] = x
+                path[1][k] = data.float_array("e")
+        return result

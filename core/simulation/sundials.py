@@ -1,0 +1,490 @@
+"""SUNDIALS CVODE and IDA through their C interface, with compiled callbacks.
+
+The integrators call the model through C function pointers of numba `cfunc`s: the right-hand
+side, the residual and their Jacobians run compiled, with no Python call per evaluation (the
+callbacks' user data is the address table of `data.EngineData`). The libraries are the
+SUNDIALS 7.9 shared libraries that scikit-sundae's wheel ships; they are loaded with ctypes.
+
+Why this route (measured on this machine, 2026-11-22, stage_planar_3dof): scikit-sundae's
+Python callbacks cost 8-10 us per evaluation on top of the model, more than the whole compiled
+evaluation (about 1 us); sundials4py, SUNDIALS' own binding, needs Python 3.12 or later and
+still calls Python per evaluation. The C interface plus a compiled callback costs nothing per
+evaluation beyond the model and SUNDIALS' own step (about 0.3 us per step on a 2-state
+problem).
+
+Status: a callback returns 0, 1 (recoverable: CVODE and IDA retry with a smaller step; a
+kinematics that does not converge at a trial state) or -1 (unrecoverable: a non-finite state,
+or a singular configuration, through which the DOFs cannot describe the motion).
+The engine's status code of the last failure is kept, so an error names its cause.
+"""
+
+import ctypes
+import sys
+
+import numpy as np
+from numba import carray, cfunc, types
+
+from ..engine import data as ed
+from ..engine import engine
+from ..errors import SimulationError, StepBudgetSpent
+from ..numerics.jit import kernel
+from ..numerics.native import (
+    address_of,
+    call_engine,
+    dense_matrix_data,
+    nvector_data,
+)
+from .methods import SUNDIALS_METHODS
+from .sundials_libraries import function_address, libraries
+
+_DIMS_SLOT = ed.INT_SLOTS.index("dims")
+_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
+_JACOBIAN_CACHE_SLOT = ed.FLOAT_SLOTS.index("jacobian_cache")
+
+_VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
+CV_BDF, CV_ADAMS = 2, 1
+NORMAL, ONE_STEP = 1, 2
+TOO_MUCH_WORK = -1  # CV_TOO_MUCH_WORK, IDA_TOO_MUCH_WORK: the step limit of one call reached
+METHODS = SUNDIALS_METHODS  # the methods this module runs
+JACOBIANS = ("analytic", "finite-difference")
+
+STATUS_MESSAGES = {
+    ed.NOT_CONVERGED: "the constraints could not be solved (Newton did not converge: the DOFs "
+                      "may lie beyond the mechanism's reach or at a singular configuration)",
+    ed.SINGULAR_CONSTRAINTS: "a singular configuration: the constraint Jacobian is singular, "
+                             "the DOFs cannot describe the motion through it",
+    ed.SINGULAR_MASS: "the reduced mass matrix M_bar is singular (a DOF without mass)",
+    ed.NONFINITE_STATE: "the state became non-finite",
+    ed.NONFINITE_RESULT: "non-finite accelerations (a singular configuration or a non-finite "
+                         "force)",
+}
+
+
+# -- compiled callbacks ---------------------------------------------------------------------------
+@kernel(inline="always")
+def _callback(op, user_data, t, a, b, c, s, counter):
+    """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
+    1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
+    table = address_of(user_data)
+    dims = engine.int_array(table, _DIMS_SLOT)
+    counters = engine.int_array(table, _COUNTERS_SLOT)
+    counters[counter] += 1
+    status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
+    if status == ed.OK:
+        return 0
+    counters[ed.FAILED_STATUS] = status
+    return -1 if status in (ed.NONFINITE_STATE, ed.SINGULAR_CONSTRAINTS) else 1
+
+
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)
+def cvode_rhs(t, y, ydot, user_data):
+    """CVRhsFn: ydot = f(t, y) by the engine."""
+    return _callback(engine.OP_RHS, user_data, t, nvector_data(y), nvector_data(ydot),
+                     nvector_data(y), 0.0, ed.RHS_COUNT)
+
+
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr,
+                  types.voidptr, types.voidptr, types.voidptr), cache=True)
+def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
+    """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent. After a restart
+    in a sampled loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once."""
+    table = address_of(user_data)
+    dims = engine.int_array(table, _DIMS_SLOT)
+    if dims[ed.JACOBIAN_REUSE] == 1:
+        dims[ed.JACOBIAN_REUSE] = 0
+        n = 2 * dims[ed.NDOF]
+        J = carray(dense_matrix_data(matrix), (n * n,))
+        J[:] = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
+        return 0
+    return _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
+                     dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
+
+
+@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
+       cache=True)
+def ida_residual(t, y, yp, res, user_data):
+    """IDAResFn: the implicit form's residual by the engine."""
+    return _callback(engine.OP_RESIDUAL, user_data, t, nvector_data(y), nvector_data(yp),
+                     nvector_data(res), 0.0, ed.RHS_COUNT)
+
+
+@cfunc(types.intc(types.double, types.double, types.voidptr, types.voidptr, types.voidptr,
+                  types.voidptr, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
+       cache=True)
+def ida_jacobian(t, cj, y, yp, res, matrix, user_data, tmp1, tmp2, tmp3):
+    """IDALsJacFn: d res / d y + cj d res / d yp from the model's tangent."""
+    return _callback(engine.OP_RESIDUAL_JACOBIAN, user_data, t, nvector_data(y),
+                     nvector_data(yp), dense_matrix_data(matrix), cj, ed.JACOBIAN_COUNT)
+
+
+_CV_RHS = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP)
+_CV_JAC = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP)
+_IDA_RES = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP, _VP)
+_IDA_JAC = ctypes.CFUNCTYPE(_INT, _D, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP, _VP)
+
+
+# -- the integrators ----------------------------------------------------------------------------
+class _Solver:
+    """What CVODE and IDA share: the context, the vectors, the dense linear solver, and the
+    Python callbacks used instead of the compiled ones when an input varies within an
+    interval (`input_function(t)` -> inputs (N), set before each compiled evaluation)."""
+
+    def __init__(self, data, *, rtol, atol, input_function=None):
+        lib = libraries()
+        self.lib, self.data = lib, engine.connect(data)
+        self.n = 2 * int(data.int_array("dims")[ed.NDOF])
+        self.context = _VP()
+        _check(lib.core.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
+        lib.core.SUNContext_ClearErrHandlers(self.context)  # errors come back as our messages
+        self.y = lib.nvec.N_VNew_Serial(self.n, self.context)
+        self.yp = lib.nvec.N_VNew_Serial(self.n, self.context)
+        self.atol = lib.nvec.N_VNew_Serial(self.n, self.context)
+        self.y_array = _vector_array(lib, self.y, self.n)
+        self.yp_array = _vector_array(lib, self.yp, self.n)
+        _vector_array(lib, self.atol, self.n)[:] = atol
+        self.matrix = lib.matrix.SUNDenseMatrix(self.n, self.n, self.context)
+        self.linear_solver = lib.linsol.SUNLinSol_Dense(self.y, self.matrix, self.context)
+        self.rtol = float(rtol)
+        self.tret = _D(0.0)
+        self.counters = data.int_array("counters")
+        self.input_function = input_function
+        self.input_error = None
+        self._totals = {"steps": 0, "solver_rhs_evaluations": 0,
+                        "solver_jacobian_evaluations": 0}
+
+    def _with_inputs(self, compiled, prototype):
+        """A ctypes callback that sets the inputs at time t, then calls the compiled one."""
+        inputs, function = self.data.float_array("inputs"), self.input_function
+
+        def callback(t, *args):
+            try:
+                inputs[:] = function(t)
+            except SimulationError as error:
+                self.input_error = error
+                return -1
+            return compiled(t, *args)
+
+        return prototype(callback)
+
+    def _accumulate(self):
+        """Add the counts since the last (re)start to the totals (ReInit zeroes SUNDIALS')."""
+        for key, value in self._current().items():
+            self._totals[key] += value
+
+    def add_steps(self, count):
+        """Count steps taken by a compiled driver before its restarts (ReInit zeroes
+        SUNDIALS' own count)."""
+        self._totals["steps"] += int(count)
+
+    def statistics(self):
+        """{"steps", "solver_rhs_evaluations", "solver_jacobian_evaluations"} since the
+        solver was made."""
+        return {key: self._totals[key] + value for key, value in self._current().items()}
+
+    def step_count(self):
+        """Steps since the solver was made (for a step budget)."""
+        return self.statistics()["steps"]
+
+    def budget_spent(self, max_steps, t):
+        """The StepBudgetSpent of a call that took max_steps steps, at the time t (s) it
+        reached; its `last_good` is (t, y) there."""
+        error = StepBudgetSpent(f"t = {t:.9g} s: the step budget of {max_steps} integrator "
+                                "steps is spent")
+        error.last_good = (t, self.y_array.copy())
+        return error
+
+    def failure(self, flag, t):
+        """A SimulationError for a failed call, naming the time and the engine's cause; its
+        `last_good` is (t, y) of the last successful step, which SUNDIALS returns."""
+        error = self._failure(flag, t)
+        error.last_good = (t, self.y_array.copy())
+        return error
+
+    def _failure(self, flag, t):
+        if self.input_error is not None:
+            error, self.input_error = self.input_error, None
+            return error
+        cause = STATUS_MESSAGES.get(int(self.counters[ed.FAILED_STATUS]))
+        name = self.flag_name(flag)
+        detail = f" ({cause})" if cause else ""
+        return SimulationError(f"t = {t:.9g} s: {self.label} failed with {name}{detail}")
+
+    def close(self):
+        """Free the SUNDIALS objects (idempotent)."""
+        if getattr(self, "memory", None):
+            self._free_memory(_VP(self.memory))
+            self.memory = None
+        if getattr(self, "linear_solver", None):
+            self._free_common()
+
+    def __del__(self):
+        if not sys.is_finalizing():  # at exit SUNDIALS may be unloaded already; the OS frees
+            self.close()
+
+    def _free_common(self):
+        lib = self.lib
+        if self.linear_solver:
+            lib.linsol.SUNLinSolFree(self.linear_solver)
+            lib.matrix.SUNMatDestroy(self.matrix)
+            for vector in (self.y, self.yp, self.atol):
+                lib.nvec.N_VDestroy(vector)
+            lib.core.SUNContext_Free(ctypes.byref(self.context))
+            self.linear_solver = None
+
+
+class Cvode(_Solver):
+    """CVODE (BDF or Adams) on ydot = f(t, y), y = [q - q_ref, qdot], with the engine.
+
+    Parameters
+    ----------
+    data : EngineData
+        The packed model; its inputs array holds the forces (N) of the current interval.
+    method : str
+        "BDF" or "Adams".
+    rtol : float
+        Relative tolerance.
+    atol : array (2 NDOF,)
+        Absolute tolerances (m, rad, m/s, rad/s).
+    max_step : float or None
+        Largest step (s).
+    jacobian : str
+        "analytic" (the model's tangent) or "finite-difference" (SUNDIALS').
+    max_order : int or None
+        Largest order (SUNDIALS' default: 5 for BDF, 12 for Adams).
+    """
+
+    def __init__(self, data, *, method="BDF", rtol, atol, max_step=None, jacobian="analytic",
+                 max_order=None, input_function=None):
+        super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
+        cv = self.lib.cvode
+        self.label = f"CVODE {method}"
+        rhs, jac = cvode_rhs.address, cvode_jacobian.address
+        if input_function is not None:
+            self._callbacks = (self._with_inputs(cvode_rhs.ctypes, _CV_RHS),
+                               self._with_inputs(cvode_jacobian.ctypes, _CV_JAC))
+            rhs, jac = (ctypes.cast(c, _VP).value for c in self._callbacks)
+        self.memory = cv.CVodeCreate(CV_BDF if method == "BDF" else CV_ADAMS, self.context)
+        _check(cv.CVodeInit(self.memory, rhs, 0.0, self.y), "CVodeInit")
+        _check(cv.CVodeSVtolerances(self.memory, self.rtol, self.atol), "CVodeSVtolerances")
+        _check(cv.CVodeSetUserData(self.memory, data.address), "CVodeSetUserData")
+        _check(cv.CVodeSetLinearSolver(self.memory, self.linear_solver, self.matrix),
+               "CVodeSetLinearSolver")
+        if jacobian == "analytic":
+            _check(cv.CVodeSetJacFn(self.memory, jac), "CVodeSetJacFn")
+        _check(cv.CVodeSetMaxNumSteps(self.memory, 1_000_000), "CVodeSetMaxNumSteps")
+        # up to 10 Newton iterations (SUNDIALS' default is 3): with the lightly damped kHz
+        # modes of a stage, 3 iterations on a reused Jacobian often fail and each failure cuts
+        # the step (stage_planar_3dof, 0.3 s of a 1 N step at rtol 1e-6: 2731 steps with 3,
+        # 159 with 10)
+        _check(cv.CVodeSetMaxNonlinIters(self.memory, 10), "CVodeSetMaxNonlinIters")
+        if max_step:
+            _check(cv.CVodeSetMaxStep(self.memory, float(max_step)), "CVodeSetMaxStep")
+        if max_order is not None:
+            _check(cv.CVodeSetMaxOrd(self.memory, int(max_order)), "CVodeSetMaxOrd")
+        self.analytic = jacobian == "analytic"
+        self.initial_step = 0.0
+        self._jacobians_at_forget = 0
+        self.addresses = {
+            "solve": function_address(cv.CVode), "reinit": function_address(cv.CVodeReInit),
+            "stop": function_address(cv.CVodeSetStopTime), "memory": self.memory,
+            "init_step": function_address(cv.CVodeSetInitStep),
+            "actual_init_step": function_address(cv.CVodeGetActualInitStep),
+            "num_steps": function_address(cv.CVodeGetNumSteps),
+            "y": self.y, "tret": ctypes.addressof(self.tret)}
+
+    def flag_name(self, flag):
+        return self.lib.cvode.CVodeGetReturnFlagName(flag).decode()
+
+    def reset(self, t, y):
+        """(Re)start at time t (s) from y (2 NDOF,) at order 1.
+
+        What the integrator learnt before is kept (`restart_memory`): the first restart
+        estimates its initial step, later ones start with that step; and the Jacobian of the
+        last setup is handed back once instead of a new one (the tangent changes little
+        between restarts at the samples of a loop, and CVODE asks for a fresh one when its
+        Newton iteration does not converge with it)."""
+        self._accumulate()
+        self.y_array[:] = y
+        self.counters[ed.FAILED_STATUS] = 0
+        cv = self.lib.cvode
+        _check(cv.CVodeReInit(self.memory, float(t), self.y), "CVodeReInit")
+        if self.initial_step > 0.0:
+            _check(cv.CVodeSetInitStep(self.memory, self.initial_step), "CVodeSetInitStep")
+        if self.jacobian_cached():
+            self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 1
+
+    def forget(self):
+        """Start the next restart from nothing: SUNDIALS' initial step, a new Jacobian."""
+        self.initial_step = 0.0
+        self._jacobians_at_forget = int(self.counters[ed.JACOBIAN_COUNT])
+        self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 0
+        self.data.float_array("jacobian_cache")[:] = 0.0
+        _check(self.lib.cvode.CVodeSetInitStep(self.memory, 0.0), "CVodeSetInitStep")
+
+    def jacobian_cached(self):
+        """Whether a Jacobian has been computed since `forget` (analytic Jacobians only)."""
+        return (self.analytic
+                and int(self.counters[ed.JACOBIAN_COUNT]) > self._jacobians_at_forget)
+
+    @property
+    def restart_memory(self):
+        """{"initial_step": s, "jacobian": (2n * 2n,) or empty}: what `reset` keeps."""
+        jacobian = (self.data.float_array("jacobian_cache").copy() if self.jacobian_cached()
+                    else np.zeros(0))
+        return {"initial_step": float(self.initial_step), "jacobian": jacobian}
+
+    @restart_memory.setter
+    def restart_memory(self, memory):
+        self.forget()
+        self.initial_step = float(memory.get("initial_step", 0.0))
+        jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
+        if jacobian.size == self.n * self.n and self.analytic:
+            self.data.float_array("jacobian_cache")[:] = jacobian
+            self._jacobians_at_forget = int(self.counters[ed.JACOBIAN_COUNT]) - 1
+
+    def learn_initial_step(self):
+        """After the first interval since `forget`: keep the initial step CVODE chose."""
+        if self.initial_step == 0.0:
+            value = _D(0.0)
+            self.lib.cvode.CVodeGetActualInitStep(self.memory, ctypes.byref(value))
+            self.initial_step = float(value.value)
+
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
+        """Integrate to t_stop (s), never past it (one step only with one_step; at most
+        max_steps steps, else StepBudgetSpent); returns t and a view of y (valid until the next
+        call). Raises SimulationError on failure."""
+        cv = self.lib.cvode
+        cv.CVodeSetStopTime(self.memory, float(t_stop))
+        if max_steps:
+            cv.CVodeSetMaxNumSteps(self.memory, int(max_steps))
+        flag = cv.CVode(self.memory, float(t_stop), self.y, ctypes.byref(self.tret),
+                        ONE_STEP if one_step else NORMAL)
+        if max_steps:
+            cv.CVodeSetMaxNumSteps(self.memory, 1_000_000)
+        if flag == TOO_MUCH_WORK and max_steps:
+            raise self.budget_spent(max_steps, self.tret.value)
+        if flag < 0:
+            raise self.failure(flag, self.tret.value)
+        t = self.tret.value
+        return (t_stop if flag == 1 else t), self.y_array
+
+    def _current(self):
+        cv = self.lib.cvode
+        return {"steps": _get_long(cv.CVodeGetNumSteps, self.memory),
+                "solver_rhs_evaluations": _get_long(cv.CVodeGetNumRhsEvals, self.memory),
+                "solver_jacobian_evaluations": _get_long(cv.CVodeGetNumJacEvals, self.memory)}
+
+    def _free_memory(self, memory):
+        self.lib.cvode.CVodeFree(ctypes.byref(memory))
+
+
+class Ida(_Solver):
+    """IDA on the implicit form res(t, y, yp) = 0 with the engine; arguments as `Cvode`."""
+
+    def __init__(self, data, *, rtol, atol, max_step=None, jacobian="analytic", max_order=None,
+                 input_function=None):
+        super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
+        ida = self.lib.ida
+        self.label = "IDA"
+        residual, jac = ida_residual.address, ida_jacobian.address
+        if input_function is not None:
+            self._callbacks = (self._with_inputs(ida_residual.ctypes, _IDA_RES),
+                               self._with_inputs(ida_jacobian.ctypes, _IDA_JAC))
+            residual, jac = (ctypes.cast(c, _VP).value for c in self._callbacks)
+        self.memory = ida.IDACreate(self.context)
+        _check(ida.IDAInit(self.memory, residual, 0.0, self.y, self.yp), "IDAInit")
+        _check(ida.IDASVtolerances(self.memory, self.rtol, self.atol), "IDASVtolerances")
+        _check(ida.IDASetUserData(self.memory, data.address), "IDASetUserData")
+        _check(ida.IDASetLinearSolver(self.memory, self.linear_solver, self.matrix),
+               "IDASetLinearSolver")
+        if jacobian == "analytic":
+            _check(ida.IDASetJacFn(self.memory, jac), "IDASetJacFn")
+        _check(ida.IDASetMaxNumSteps(self.memory, 1_000_000), "IDASetMaxNumSteps")
+        if max_step:
+            _check(ida.IDASetMaxStep(self.memory, float(max_step)), "IDASetMaxStep")
+        if max_order is not None:
+            _check(ida.IDASetMaxOrd(self.memory, int(max_order)), "IDASetMaxOrd")
+        self._ydot = np.zeros(self.n)
+
+    def flag_name(self, flag):
+        return self.lib.ida.IDAGetReturnFlagName(flag).decode()
+
+    def reset(self, t, y):
+        """(Re)start at t from y with the consistent yp = f(t, y) (both halves differential)."""
+        if self.input_function is not None:
+            self.data.float_array("inputs")[:] = self.input_function(t)
+        status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, float),
+                             self._ydot)
+        if status != ed.OK:
+            raise SimulationError(f"t = {t:.9g} s: IDA could not start: "
+                                  f"{STATUS_MESSAGES.get(status, status)}")
+        self._accumulate()
+        self.y_array[:] = y
+        self.yp_array[:] = self._ydot
+        self.counters[ed.FAILED_STATUS] = 0
+        _check(self.lib.ida.IDAReInit(self.memory, float(t), self.y, self.yp), "IDAReInit")
+
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
+        """As `Cvode.advance`."""
+        ida = self.lib.ida
+        ida.IDASetStopTime(self.memory, float(t_stop))
+        if max_steps:
+            ida.IDASetMaxNumSteps(self.memory, int(max_steps))
+        flag = ida.IDASolve(self.memory, float(t_stop), ctypes.byref(self.tret), self.y,
+                            self.yp, ONE_STEP if one_step else NORMAL)
+        if max_steps:
+            ida.IDASetMaxNumSteps(self.memory, 1_000_000)
+        if flag == TOO_MUCH_WORK and max_steps:
+            raise self.budget_spent(max_steps, self.tret.value)
+        if flag < 0:
+            raise self.failure(flag, self.tret.value)
+        t = self.tret.value
+        return (t_stop if flag == 1 else t), self.y_array
+
+    def _current(self):
+        ida = self.lib.ida
+        return {"steps": _get_long(ida.IDAGetNumSteps, self.memory),
+                "solver_rhs_evaluations": _get_long(ida.IDAGetNumResEvals, self.memory),
+                "solver_jacobian_evaluations": _get_long(ida.IDAGetNumJacEvals, self.memory)}
+
+    def _free_memory(self, memory):
+        self.lib.ida.IDAFree(ctypes.byref(memory))
+
+
+def make_solver(data, method, *, rtol, atol, max_step=None, jacobian="analytic",
+                max_order=None, input_function=None):
+    """The integrator for `method` ("cvode-bdf", "cvode-adams" or "ida") on packed data.
+
+    max_order: the largest order of the multistep formulas (None: SUNDIALS' default, 5 for
+    BDF and IDA, 12 for Adams)."""
+    if method not in METHODS:
+        raise SimulationError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    if max_order is not None:
+        top = 12 if method == "cvode-adams" else 5
+        if not (isinstance(max_order, (int, np.integer)) and 1 <= max_order <= top):
+            raise SimulationError(f"max_order: expected an integer from 1 to {top} for "
+                                  f"{method}, got {max_order!r}")
+    if jacobian not in JACOBIANS:
+        raise SimulationError(f"unknown jacobian {jacobian!r}; expected one of "
+                              f"{', '.join(JACOBIANS)}")
+    options = dict(rtol=rtol, atol=atol, max_step=max_step, jacobian=jacobian,
+                   max_order=max_order, input_function=input_function)
+    if method == "ida":
+        return Ida(data, **options)
+    return Cvode(data, method="BDF" if method == "cvode-bdf" else "Adams", **options)
+
+
+def _vector_array(lib, vector, n):
+    pointer = lib.nvec.N_VGetArrayPointer(vector)
+    return np.ctypeslib.as_array(ctypes.cast(pointer, ctypes.POINTER(_D)), (n,))
+
+
+def _get_long(function, memory):
+    value = _LONG(0)
+    function(memory, ctypes.byref(value))
+    return int(value.value)
+
+
+def _check(flag, what):
+    if flag is not None and flag < 0:
+        raise SimulationError(f"SUNDIALS {what} failed (flag {flag})")
