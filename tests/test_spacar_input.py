@@ -2,6 +2,7 @@
 results of the built-in scenes; `flexure import` writes a scene that loads the same; every
 mistake is refused in one line that names the file and the line."""
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -168,7 +169,37 @@ def test_spatial_nodes_map_to_rotation_fixed_and_inertia_tensor(tmp_path):
     assert data["sections"]["1"] == {}
 
 
-@pytest.mark.parametrize("command", ["analyze"])
+# -- flexure import -----------------------------------------------------------------------------
+def test_import_writes_a_scene_that_loads_to_the_same_model(tmp_path, capsys):
+    source = SPACAR / "stage_planar_3dof.dat"
+    out = tmp_path / "stage.toml"
+    assert main(["import", str(source), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert f"wrote {out}" in printed and "NDOF = NX - NXO - NEO = 12 - 6 - 3 = 3" in printed
+    text = out.read_text()
+    assert text.startswith("# Imported by `flexure import` from the SPACAR input file "
+                           "stage_planar_3dof.dat")
+    assert tomllib.loads(text) == read_spacar(source)  # floats written exactly
+    assert parse_toml(source) == read_spacar(source)  # every command's reader takes a .dat
+    imported = natural_frequencies(load_scene(out)).frequencies_hz
+    assert imported == pytest.approx(natural_frequencies(load_scene(source)).frequencies_hz,
+                                     rel=1e-12)
+
+
+def test_import_writes_next_to_where_it_runs_by_default(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["import", str(SPACAR / "truss_1dof_x.dat")]) == 0
+    assert tomllib.loads((tmp_path / "truss_1dof_x.toml").read_text())["scene"]["name"] == \
+        "truss_1dof_x"
+
+
+def test_import_refuses_a_file_that_is_not_dat(capsys):
+    assert main(["import", str(SPACAR.parent / "scenes" / "truss_1dof_x.toml")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("flexure import: error: ") and "expected a SPACAR input file" in err
+
+
+@pytest.mark.parametrize("command", ["import", "analyze"])
 def test_cli_reports_a_mistake_in_one_line_with_exit_code_2(command, tmp_path, capsys):
     path = tmp_path / "bad.dat"
     path.write_text(TRUSS.replace("X 2 0.1 0.0", "X 2 0.1 O.0"))
