@@ -34,6 +34,7 @@ from .overrides import apply_overrides
 from .scene_elements import ElementBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
 from .sections import beam_properties
+from .spacar_input import read_spacar
 
 TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
 ROTATION_AXES = {2: ("phi",), 3: ("lambda0", "lambda1", "lambda2", "lambda3")}
@@ -95,7 +96,12 @@ def read_scene_text(path):
 
 
 def parse_toml(path):
-    """The dictionary of a scene file; SceneError on invalid bytes or invalid TOML."""
+    """The dictionary of a scene file; SceneError on invalid bytes or invalid TOML.
+
+    A SPACAR input file (suffix .dat) is read by `spacar_input.read_spacar` instead, so every
+    command that takes a scene takes one."""
+    if Path(path).suffix.lower() == ".dat":
+        return read_spacar(path)
     text = read_scene_text(path)
     try:
         return tomllib.loads(text)

@@ -1,0 +1,471 @@
+"""SPACAR input files (.dat) read into flexure scene dictionaries: `read_spacar(path)`.
+
+A SPACAR input file holds one keyword per line followed by its numbers; `%` or `#` starts a
+comment, keywords may be in either case. Its data come in blocks, each closed by END: the
+kinematic block first (X, the elements, FIX, INPUTX, DYNX, DYNE, RLSE), then the dynamic
+data (ESTIFF, EDAMP, EM, XM, XF, GRAVITY, INPUTF, OUTX, OUTXP); HALT may follow an END, and
+END END ends the input (what follows, such as SPAVISUAL's VISUALIZATION data, is not read).
+Node numbers name flexure's nodes ("1", "2", ...), element numbers its elements and their
+sections; directions 1, 2, 3 are x, y, z (1 is phi on a planar rotational node, 1 to 4 the
+Euler parameters of a spatial one); deformation numbers n are flexure's "en"; INPUTF number k
+is the input "uk", OUTX / OUTXP number k the output "yk" (one numbering, SPACAR's vector y).
+
+    PLTRUSS e p q             TRUSS e p q               FIX n [dir ...]
+    PLBEAM e p rp q rq        BEAM e p rp q rq yx yy yz  INPUTX n dir [dir ...]
+    X n x y [z]               DYNX n dir [dir ...]      DYNE e def [def ...]
+    RLSE e def [def ...]      ESTIFF e EA [EI]          ESTIFF e EA GIt EIy EIz [0 0]  (BEAM)
+    EDAMP e (as ESTIFF: EdA [EdI]; EdA GdIt EdIy EdIz [0 0])
+    EM e rho_A [0]            EM e rho_A [rho(Iy+Iz) rho_Iy rho_Iz 0]  (BEAM)
+    XM n m | J | Jxx Jxy Jxz Jyy Jyz Jzz    XF n fx fy [fz] | M    GRAVITY gx gy [gz]
+    INPUTF k n dir            OUTX k n dir              OUTXP k n dir     ITERSTEP ... (ignored)
+
+What this is based on (SPACAR's own manual was not at hand):
+- The course notes "Prototype modelling of mechanic systems" (Aarts, Jonker, van Dijk,
+  University of Twente): PLTRUSS, PLBEAM and BEAM with their nodes and deformations e1..e6,
+  the node numbering of their models (a beam's translational and rotational nodes as separate
+  numbers), fixed / dynamic-DOF coordinates and released deformations, `INPUTF 1 2 1` and
+  `OUTX 1 2 1` (number, node, coordinate).
+- SPACAR Light (github.com/precision-utwente/spalight, spacarlight.m version 1.28 and the
+  earlier Spacar_light.m), the University of Twente's MATLAB front end that writes the .dat
+  files SPACAR reads: `X n x y z`, `BEAM e p rp q rq yx yy yz` (the last three the principal
+  y' axis), DYNE / RLSE with deformation numbers, `FIX n [dir]`, `INPUTX n dir ...`, ESTIFF
+  with EA GJ EIy EIz and two shear terms, EM with m/L Jxx/L Jyy/L Jzz/L Jyz/L, XM with a mass
+  or Ixx Ixy Ixz Iyy Iyz Izz, XF, GRAVITY, ITERSTEP, INPUTF / OUTX / OUTXP, the blocks
+  END HALT ... END END and `#` comments.
+Where they are silent (the PLTRUSS, PLBEAM and TRUSS lines, EDAMP, DYNX, the planar counts)
+the choice made here follows the same pattern and is documented in docs/scene-format.md,
+with what is refused. Every mistake is a SceneError naming the file, the line and what is
+wrong; nothing is guessed.
+"""
+
+import re
+from pathlib import Path
+
+from ..errors import SceneError
+from .spacar_records import (
+    AXES,
+    DYNAMIC,
+    ELEMENTS,
+    KINEMATIC,
+    NUMBER,
+    UNSUPPORTED,
+    R,
+    RecordReader,
+    T,
+    records,
+)
+
+__all__ = ["read_spacar"]
+
+STATUS_WORDS = {"fixed": "fixed", "input": "an input", "dof": "a DOF", "released": "released",
+                "edof": "a DOF"}
+
+
+def read_spacar(path) -> dict:
+    """The flexure scene dictionary of the SPACAR input file `path` (SI units, as the file).
+
+    The result is what `build_model` takes (and `scene_toml` writes); `load_scene` reads a
+    `.dat` path through this. SceneError "`path`: line N: KEYWORD: what is wrong" for a
+    mistake or for what flexure does not support (the module docstring lists the syntax).
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as error:
+        raise SceneError(f"{path}: cannot read the SPACAR input file: {error.strerror}") from None
+    # keywords and numbers are ASCII: a byte that is not UTF-8 (8-bit text in a comment) can
+    # only matter outside a comment, where its replacement character is a named mistake
+    found = records(path, raw.decode("utf-8", errors="replace"))
+    return _Importer(path, found).scene()
+
+
+class _Importer(RecordReader):
+    """Turns the records of one file into a scene dictionary, checking each."""
+
+    def __init__(self, path, found):
+        self.path = path
+        self.records = found
+        self.dimension = None
+        self.elements = {}  # number -> {"type", "nodes", "record", "y_axis"}
+        self.kinds = {}  # node number -> (kind, record that made it so)
+        self.positions = {}  # node number -> (values, record)
+        self.coordinate_status = {}  # (node, axis) -> (status, record)
+        self.deformation_status = {}  # (element, deformation) -> (status, record)
+        self.sections = {}  # element number -> {flexure key: value}
+        self.nodal = {}  # (node, "mass" | "force") -> (value, record)
+        self.given = {}  # (keyword, number) -> record: property lines given once
+        self.first_element = None  # the record that set the dimension
+        self.gravity = None
+        self.ports = {"INPUTF": {}, "OUTX": {}}  # number -> (record, node, axis, quantity)
+
+    # -- the scene ------------------------------------------------------------------------
+    def scene(self):
+        """Read every record (elements and X first: they say what the nodes are)."""
+        for record in self.records:
+            self.check_block(record)
+        for record in self.records:
+            if record.keyword in ELEMENTS:
+                self.element(record)
+        if self.dimension is None:
+            raise SceneError(f"{self.path}: no element (PLTRUSS, PLBEAM, TRUSS or BEAM): "
+                             "nothing to model")
+        for record in self.records:
+            if record.keyword == "X":
+                self.position(record)
+        for number, element in self.elements.items():
+            for node in element["nodes"]:
+                if self.kinds[node][0] == T and node not in self.positions:
+                    self.fail(element["record"], f"node {node} of element {number} is a "
+                                                 "translational node without an X line (its "
+                                                 "initial position)")
+        handlers = {"FIX": self.fix, "INPUTX": self.coordinate_list, "DYNX": self.coordinate_list,
+                    "DYNE": self.deformation_list, "RLSE": self.deformation_list,
+                    "ESTIFF": self.stiffness, "EDAMP": self.stiffness, "EM": self.mass_per_length,
+                    "XM": self.lumped_mass, "XF": self.force, "GRAVITY": self.set_gravity,
+                    "INPUTF": self.port, "OUTX": self.port, "OUTXP": self.port,
+                    "ITERSTEP": lambda record: None}  # flexure's solver has its own steps
+        for record in self.records:
+            if record.keyword in handlers:
+                handlers[record.keyword](record)
+        self.check_released_stiffness()
+        return self.assemble()
+
+    def check_block(self, record):
+        """A known keyword in its block; an unknown or unsupported one refused."""
+        keyword = record.keyword
+        if keyword in UNSUPPORTED:
+            self.fail(record, UNSUPPORTED[keyword])
+        if keyword not in KINEMATIC | DYNAMIC:
+            if NUMBER.fullmatch(keyword):
+                self.fail(record, "a line must start with a keyword, not a number")
+            self.fail(record, f"unknown keyword (flexure reads "
+                              f"{', '.join(sorted(KINEMATIC | DYNAMIC))}, END and HALT)")
+        if keyword == "INPUTX" and record.block > 0:
+            self.fail(record, "a prescribed input value after the kinematic block is not "
+                              "supported (an INPUTX coordinate stays at its X position)")
+        if keyword in KINEMATIC and record.block > 0:
+            self.fail(record, "belongs to the kinematic block, before the first END")
+        if keyword in DYNAMIC and record.block == 0:
+            self.fail(record, "belongs after the kinematic block's END (SPACAR reads the "
+                              "dynamic data there)")
+
+    # -- values -------------------------------------------------------------------------
+
+    def node(self, record, word):
+        number = self.integer(record, word, "a node number")
+        if number not in self.kinds:
+            self.fail(record, f"unknown node {number}: no X line and no element has it")
+        return number
+
+    def element_number(self, record, word):
+        number = self.integer(record, word, "an element number")
+        if number not in self.elements:
+            self.fail(record, f"unknown element {number}: no element line defines it")
+        return number
+
+    def axes(self, node):
+        return AXES[(self.kinds[node][0], self.dimension)]
+
+    def direction(self, record, node, word):
+        """The axis name of direction `word` (1, 2, ...) of `node`."""
+        axes = self.axes(node)
+        number = self.integer(record, word, "a direction")
+        if number > len(axes):
+            self.fail(record, f"node {node} is {self.kinds[node][0]} with directions 1 to "
+                              f"{len(axes)} ({', '.join(axes)}); got {number}")
+        return axes[number - 1]
+
+    # -- the kinematic block ----------------------------------------------------------------
+    def element(self, record):
+        syntax = ELEMENTS[record.keyword]
+        what = "element number, nodes " + " ".join(
+            ("p", "rp", "q", "rq") if len(syntax.node_kinds) == 4 else ("p", "q"))
+        if syntax.orientation:
+            what += " and the principal y' axis (3 numbers)"
+        words = self.count(record, {1 + len(syntax.node_kinds) + 3 * syntax.orientation},
+                           what)
+        number = self.integer(record, words[0], "an element number")
+        if number in self.elements:
+            self.fail(record, f"element {number} is defined twice (first on line "
+                              f"{self.elements[number]['record'].line})")
+        if self.dimension is None:
+            self.dimension, self.first_element = syntax.dimension, record
+        elif syntax.dimension != self.dimension:
+            first = self.first_element
+            self.fail(record, f"a {syntax.dimension}-D element in a {self.dimension}-D model "
+                              f"({first.keyword}, line {first.line}); planar (PL...) and "
+                              "spatial elements do not mix")
+        nodes = [self.integer(record, word, "a node number")
+                 for word in words[1:1 + len(syntax.node_kinds)]]
+        for node, kind in zip(nodes, syntax.node_kinds, strict=True):
+            known = self.kinds.setdefault(node, (kind, record))
+            if known[0] != kind:
+                self.fail(record, f"node {node} is {kind} here but {known[0]} in "
+                                  f"{known[1].keyword} on line {known[1].line}")
+        if len(set(nodes)) < len(nodes):
+            self.fail(record, f"a node appears twice among {nodes}")
+        entry = {"type": record.keyword, "nodes": nodes, "record": record}
+        if syntax.orientation:
+            entry["y_axis"] = [self.number(record, w, "the principal y' axis")
+                               for w in words[-3:]]
+        self.elements[number] = entry
+
+    def position(self, record):
+        words = self.count(record, {1 + self.dimension},
+                           f"node number and {self.dimension} coordinates in this "
+                           f"{self.dimension}-D model")
+        node = self.integer(record, words[0], "a node number")
+        kind = self.kinds.setdefault(node, (T, record))
+        if kind[0] == R:
+            self.fail(record, f"node {node} is the rotational node of {kind[1].keyword} on "
+                              f"line {kind[1].line}; X gives translational nodes' positions")
+        if node in self.positions:
+            self.fail(record, f"node {node} has an X line already (line "
+                              f"{self.positions[node][1].line})")
+        self.positions[node] = ([self.number(record, w, "coordinate") for w in words[1:]],
+                                record)
+
+    def set_status(self, table, key, status, record, name):
+        known = table.setdefault(key, (status, record))
+        if known[0] != status:
+            self.fail(record, f"{name} is already {STATUS_WORDS[known[0]]} "
+                              f"({known[1].keyword}, line {known[1].line})")
+
+    def fix(self, record):
+        self.at_least(record, 1, "node number, then optional directions")
+        node = self.node(record, record.words[0])
+        axes = [self.direction(record, node, w) for w in record.words[1:]] or self.axes(node)
+        if self.kinds[node][0] == R and self.dimension == 3 and set(axes) != set(self.axes(node)):
+            self.fail(record, f"node {node} is a spatial rotational node: flexure fixes its "
+                              "orientation as a whole (FIX without directions)")
+        for axis in axes:
+            self.set_status(self.coordinate_status, (node, axis), "fixed", record,
+                            f"{axis} of node {node}")
+
+    def coordinate_list(self, record):
+        """INPUTX (an input held at its X position: fixed) or DYNX (a DOF) coordinates."""
+        words = self.at_least(record, 2, "node number and one or more directions")
+        node = self.node(record, words[0])
+        if self.kinds[node][0] == R and self.dimension == 3:
+            self.fail(record, f"node {node} is a spatial rotational node: its Euler "
+                              "parameters cannot be DOFs or inputs in flexure (make a "
+                              "deformation a DOF with DYNE)")
+        status = "input" if record.keyword == "INPUTX" else "dof"
+        for word in words[1:]:
+            axis = self.direction(record, node, word)
+            self.set_status(self.coordinate_status, (node, axis), status, record,
+                            f"{axis} of node {node}")
+
+    def deformation_list(self, record):
+        """DYNE (DOF) or RLSE (released) deformations of one element."""
+        words = self.at_least(record, 2, "element number and one or more deformation numbers")
+        number = self.element_number(record, words[0])
+        count = len(ELEMENTS[self.elements[number]["type"]].stiffness_of)
+        status = "edof" if record.keyword == "DYNE" else "released"
+        for word in words[1:]:
+            deformation = self.integer(record, word, "a deformation number")
+            if deformation > count:
+                self.fail(record, f"element {number} ({self.elements[number]['type']}) has "
+                                  f"deformations 1 to {count}; got {deformation}")
+            self.set_status(self.deformation_status, (number, deformation), status, record,
+                            f"deformation {deformation} of element {number}")
+
+    def check_released_stiffness(self):
+        """A released deformation deforms elastically in flexure: it needs its stiffness."""
+        for (number, deformation), (status, record) in self.deformation_status.items():
+            syntax = ELEMENTS[self.elements[number]["type"]]
+            needed = syntax.stiffness_of[deformation - 1]
+            if status == "released" and self.sections.get(number, {}).get(needed, 0.0) <= 0.0:
+                self.fail(record, f"deformation {deformation} of element {number} is released "
+                                  f"but has no stiffness: flexure needs ESTIFF {number} with "
+                                  f"{needed} > 0 (a released deformation deforms elastically; "
+                                  "a free one is a DOF: DYNE)")
+
+    # -- the dynamic data -------------------------------------------------------------------
+    def once(self, record, number, what):
+        """Refuse a property line given twice for the same element or node."""
+        first = self.given.setdefault((record.keyword, number), record)
+        if first is not record:
+            self.fail(record, f"{what} {number}: given twice (first on line {first.line})")
+
+    def stiffness(self, record):
+        """ESTIFF (stiffness) or EDAMP (damping) of one element."""
+        self.at_least(record, 1, "element number and the values")
+        number = self.element_number(record, record.words[0])
+        syntax = ELEMENTS[self.elements[number]["type"]]
+        keys = syntax.stiffness if record.keyword == "ESTIFF" else syntax.damping
+        allowed = {len(keys) + 1, len(keys) + 1 + syntax.shear_terms}
+        words = self.count(record, allowed, f"element number, then {' '.join(keys)}"
+                           + (" and optionally two shear terms, 0" if syntax.shear_terms
+                              else "") + f" for a {self.elements[number]['type']}")
+        self.once(record, number, "element")
+        values = [self.number(record, w, name, minimum=0.0)
+                  for w, name in zip(words[1:], (*keys, "shear", "shear"), strict=False)]
+        if any(values[len(keys):]):
+            self.fail(record, "flexure's BEAM has no shear deformation: its two shear terms "
+                              f"must be 0, got {' '.join(words[1 + len(keys):])}")
+        self.sections.setdefault(number, {}).update(zip(keys, values, strict=False))
+
+    def mass_per_length(self, record):
+        """EM: mass per length and, for a BEAM, the section's rotational inertia per length."""
+        self.at_least(record, 1, "element number and the values")
+        number = self.element_number(record, record.words[0])
+        kind = self.elements[number]["type"]
+        allowed = {"PLTRUSS": {2}, "TRUSS": {2}, "PLBEAM": {2, 3}, "BEAM": {2, 6}}[kind]
+        names = {"PLBEAM": ("rho_A", "J/L"),
+                 "BEAM": ("rho_A", "Jxx/L", "Jyy/L", "Jzz/L", "Jyz/L")}.get(kind, ("rho_A",))
+        words = self.count(record, allowed, f"element number, then {' '.join(names)} for a "
+                                            f"{kind}")
+        self.once(record, number, "element")
+        values = [self.number(record, w, name, minimum=None if name == "Jyz/L" else 0.0)
+                  for w, name in zip(words[1:], names, strict=False)]
+        section = self.sections.setdefault(number, {})
+        section["rho_A"] = values[0]
+        if kind == "PLBEAM" and len(values) == 2 and values[1] != 0.0:
+            self.fail(record, "flexure's PLBEAM neglects the section's rotational inertia: "
+                              f"J/L must be 0, got {words[2]}")
+        if kind == "BEAM" and len(values) == 5:
+            jxx, jyy, jzz, jyz = values[1:]
+            # flexure's torsional inertia is rho (Iy + Iz); the file's values carry about 15
+            # decimals (SPACAR Light writes %20.15f), so their sum may differ by round-off
+            if abs(jxx - (jyy + jzz)) > 1e-9 * jxx + 3e-15:
+                self.fail(record, f"Jxx/L = {words[2]} is not Jyy/L + Jzz/L = {jyy + jzz!r}: "
+                                  "flexure's torsional inertia of a section is rho (Iy + Iz)")
+            if jyz != 0.0:
+                self.fail(record, f"Jyz/L must be 0 (flexure takes principal axes), got "
+                                  f"{words[5]}")
+            section.update(rho_Iy=jyy, rho_Iz=jzz)
+
+    def lumped_mass(self, record):
+        """XM: a translational node's mass, a planar rotational node's inertia, or a spatial
+        rotational node's inertia tensor Ixx Ixy Ixz Iyy Iyz Izz (body frame)."""
+        self.at_least(record, 1, "node number and the values")
+        node = self.node(record, record.words[0])
+        kind = self.kinds[node][0]
+        if kind == R and self.dimension == 3:
+            words = self.count(record, {7}, "node number, then Ixx Ixy Ixz Iyy Iyz Izz")
+            xx, xy, xz, yy, yz, zz = (self.number(record, w, "inertia") for w in words[1:])
+            value = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
+        else:
+            what = "mass" if kind == T else "rotational inertia"
+            words = self.count(record, {2}, f"node number and its {what}")
+            # a lumped rotational inertia may be negative (SPACAR's lumped bar model)
+            value = self.number(record, words[1], what, minimum=0.0 if kind == T else None)
+        self.once(record, node, "node")
+        self.nodal[(node, "mass")] = (value, record)
+
+    def force(self, record):
+        """XF: a force on a translational node, a moment on a planar rotational node."""
+        self.at_least(record, 1, "node number and the values")
+        node = self.node(record, record.words[0])
+        if self.kinds[node][0] == R and self.dimension == 3:
+            self.fail(record, f"node {node} is a spatial rotational node: flexure applies no "
+                              "moments there")
+        axes = self.axes(node)
+        words = self.count(record, {1 + len(axes)}, f"node number and {', '.join(axes)}")
+        self.once(record, node, "node")
+        values = [self.number(record, w, a) for w, a in zip(words[1:], axes, strict=True)]
+        self.nodal[(node, "force")] = (values if self.kinds[node][0] == T else values[0], record)
+
+    def set_gravity(self, record):
+        words = self.count(record, {self.dimension},
+                           f"{self.dimension} components in this {self.dimension}-D model")
+        if self.gravity is not None:
+            self.fail(record, f"given twice (first on line {self.gravity[1].line})")
+        self.gravity = ([self.number(record, w, "gravity") for w in words], record)
+
+    def port(self, record):
+        """INPUTF k n dir (the input uk), OUTX / OUTXP k n dir (the output yk)."""
+        words = self.count(record, {3}, "number, node number and direction")
+        number = self.integer(record, words[0], "an input or output number")
+        node = self.node(record, words[1])
+        if self.kinds[node][0] == R and self.dimension == 3:
+            self.fail(record, f"node {node} is a spatial rotational node: inputs and outputs "
+                              "on its Euler parameters are not supported")
+        axis = self.direction(record, node, words[2])
+        table = self.ports["INPUTF" if record.keyword == "INPUTF" else "OUTX"]
+        if number in table:
+            first = table[number][0]
+            self.fail(record, f"number {number} is given twice (first in {first.keyword} on "
+                              f"line {first.line})")
+        table[number] = (record, node, axis, "velocity" if record.keyword == "OUTXP"
+                         else "position")
+
+    # -- the scene dictionary ---------------------------------------------------------------
+    def assemble(self):
+        name = re.sub(r"[^A-Za-z0-9_]", "_", self.path.stem)
+        if not name or name[0].isdigit():
+            name = f"spacar_{name}"
+        held = [f"{n}.{a}" for (n, a), (s, _) in sorted(self.coordinate_status.items())
+                if s == "input"]
+        description = f"imported from the SPACAR input file {self.path.name}" + (
+            f"; INPUTX held at the X position: {', '.join(held)}" if held else "")
+        header = {"name": name, "description": description, "dimension": self.dimension}
+        if self.gravity is not None:
+            header["gravity"] = self.gravity[0]
+        scene = {"scene": header, "sections": {}, "nodes": {}, "elements": {}}
+        for node in sorted(self.kinds):
+            scene["nodes"][str(node)] = self.node_table(node)
+        for number in sorted(self.elements):
+            scene["sections"][str(number)] = dict(self.sections.get(number, {}))
+            scene["elements"][str(number)] = self.element_table(number)
+        for table, prefix, section in ((self.ports["INPUTF"], "u", "inputs"),
+                                       (self.ports["OUTX"], "y", "outputs")):
+            ports = self.numbered(table)
+            if ports:
+                scene[section] = {f"{prefix}{k}": self.port_table(entry, section)
+                                  for k, entry in ports}
+        return scene
+
+    def node_table(self, node):
+        kind = self.kinds[node][0]
+        status = {a: self.coordinate_status.get((node, a), (None,))[0] for a in self.axes(node)}
+        fixed = [a for a, s in status.items() if s in ("fixed", "input")]
+        dofs = [a for a, s in status.items() if s == "dof"]
+        if kind == T:
+            table = {"position": self.positions[node][0]}
+        elif self.dimension == 2:
+            table = {"angle": 0.0}  # SPACAR's rotational nodes start unrotated
+        else:
+            table = {"rotation": [0.0, 0.0, 0.0]}
+            fixed = bool(fixed)
+        if fixed:
+            table["fixed"] = fixed
+        if dofs:
+            table["dof"] = dofs
+        if (node, "mass") in self.nodal:
+            table["mass" if kind == T else "inertia"] = self.nodal[(node, "mass")][0]
+        if (node, "force") in self.nodal:
+            table["force" if kind == T else "moment"] = self.nodal[(node, "force")][0]
+        return table
+
+    def element_table(self, number):
+        element = self.elements[number]
+        table = {"type": element["type"], "nodes": [str(n) for n in element["nodes"]],
+                 "section": str(number)}
+        for status, key in (("released", "released"), ("edof", "dof")):
+            found = sorted(d for (e, d), (s, _) in self.deformation_status.items()
+                           if e == number and s == status)
+            if found:
+                table[key] = [f"e{d}" for d in found]
+        if "y_axis" in element:
+            table["y_axis"] = element["y_axis"]
+        return table
+
+    def numbered(self, table):
+        """The entries of an input or output table in order, numbered 1, 2, ... as SPACAR's
+        vectors u and y are: a gap is refused."""
+        for k, number in enumerate(sorted(table), start=1):
+            if number != k:
+                record = table[number][0]
+                self.fail(record, f"number {number} without a number {k}: SPACAR numbers its "
+                                  "inputs (and its outputs) 1, 2, ... as positions in u (y)")
+        return [(k, table[k]) for k in sorted(table)]
+
+    @staticmethod
+    def port_table(entry, section):
+        _, node, axis, quantity = entry
+        table = {"node": str(node), "coordinate": axis}
+        if section == "outputs":
+            table["quantity"] = quantity
+        return table

@@ -1,0 +1,146 @@
+"""The lines of a SPACAR input file: its keyword records in their blocks (`records`), the
+syntax of its element lines (`ELEMENTS`), and the checked reading of their values
+(`RecordReader`, the base of `spacar_input`'s importer). `spacar_input` says what the syntax is
+based on; every problem is a SceneError naming the file and the line."""
+
+import re
+from dataclasses import dataclass
+
+from ..errors import SceneError
+from .scene_reader import MAX_MAGNITUDE, show
+
+T, R = "translational", "rotational"
+
+
+@dataclass(frozen=True)
+class ElementSyntax:
+    """How SPACAR writes one element type and what its property lines hold."""
+
+    dimension: int
+    node_kinds: tuple  # the kinds of the node numbers after the element number
+    stiffness: tuple  # flexure's section key of each ESTIFF value, in order
+    damping: tuple  # ... of each EDAMP value
+    stiffness_of: tuple  # the stiffness key behind each deformation e1, e2, ...
+    shear_terms: int = 0  # trailing ESTIFF / EDAMP values flexure has no use for: must be 0
+    orientation: bool = False  # the principal y' axis follows the nodes
+
+
+ELEMENTS = {
+    "PLTRUSS": ElementSyntax(2, (T, T), ("EA",), ("EdA",), ("EA",)),
+    "PLBEAM": ElementSyntax(2, (T, R, T, R), ("EA", "EI"), ("EdA", "EdI"), ("EA", "EI", "EI")),
+    "TRUSS": ElementSyntax(3, (T, T), ("EA",), ("EdA",), ("EA",)),
+    "BEAM": ElementSyntax(3, (T, R, T, R), ("EA", "GIt", "EIy", "EIz"),
+                          ("EdA", "GdIt", "EdIy", "EdIz"),
+                          ("EA", "GIt", "EIy", "EIy", "EIz", "EIz"), shear_terms=2,
+                          orientation=True),
+}
+KINEMATIC = {"X", "FIX", "INPUTX", "DYNX", "DYNE", "RLSE", *ELEMENTS}
+DYNAMIC = {"ESTIFF", "EDAMP", "EM", "XM", "XF", "GRAVITY", "INPUTF", "OUTX", "OUTXP",
+           "ITERSTEP"}
+# SPACAR keywords met in public files that flexure does not model: why, in one line each
+UNSUPPORTED = {
+    "DELXF": "a load increment over the load steps is not supported; put the final load in XF",
+    "DELINPX": "a prescribed input motion is not supported (an INPUTX coordinate stays at "
+               "its X position)",
+    "INPUTE": "a prescribed input deformation is not supported",
+    "DELINPE": "a prescribed input deformation is not supported",
+    "INX": "kinematic inputs of a state-space model are not supported; use INPUTF",
+    "OUTF": "force outputs are not supported; use OUTX or OUTXP",
+    "OUTE": "deformation outputs are not supported; use OUTX or OUTXP",
+}
+AXES = {(T, 2): ("x", "y"), (T, 3): ("x", "y", "z"), (R, 2): ("phi",),
+        (R, 3): ("lambda0", "lambda1", "lambda2", "lambda3")}
+COMMENT = re.compile(r"[%#]")
+INTEGER = re.compile(r"[-+]?\d+")
+# a Fortran number: 1, -2.5, .5, 1e-3, 1.5D3 (Python's float() would take nan, inf and 1_0)
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?")
+
+
+@dataclass(frozen=True)
+class Record:
+    """One keyword line: its line number, keyword (upper case), values and block (0 is the
+    kinematic block, before the first END)."""
+
+    line: int
+    keyword: str
+    words: tuple
+    block: int
+
+
+def records(path, text):
+    """The keyword lines of the file up to END END, each with its block number."""
+    found, block, previous, opened = [], 0, None, None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        words = COMMENT.split(raw, maxsplit=1)[0].split()
+        if not words:
+            continue
+        keyword = words[0].upper()
+        if keyword in ("END", "HALT"):
+            if len(words) > 1:
+                raise SceneError(f"{path}: line {number}: {keyword} takes no values, got "
+                                 f"{show(' '.join(words[1:]))}")
+            if keyword == "HALT" and previous != "END":
+                raise SceneError(f"{path}: line {number}: HALT must follow an END")
+            if keyword == "END" and previous == "END":
+                return found  # END END: the end of SPACAR's input
+            if keyword == "END":
+                block, opened = block + 1, None
+            previous = keyword
+            continue
+        previous = keyword
+        opened = opened or number
+        found.append(Record(number, keyword, tuple(words[1:]), block))
+    if block == 0:
+        what = "keywords but " if found else "no keyword line and "
+        raise SceneError(f"{path}: {what}no END: a SPACAR input file closes its kinematic "
+                         "block (X, the elements, FIX, ...) with END")
+    if opened is not None:
+        raise SceneError(f"{path}: line {opened}: the block that starts here has no END "
+                         "before the end of the file")
+    return found
+
+
+class RecordReader:
+    """Reads the values of one file's records, each checked: `path` names the file, the
+    record its line and keyword, in every message."""
+
+    path = "<input>"
+
+    def fail(self, record, message):
+        """Raise the SceneError "path: line N: KEYWORD: message"."""
+        raise SceneError(f"{self.path}: line {record.line}: {record.keyword}: {message}")
+
+    def count(self, record, allowed, what):
+        """The record's values, refused unless their number is one of `allowed`."""
+        if len(record.words) not in allowed:
+            expected = " or ".join(str(n) for n in sorted(allowed))
+            plural = "" if allowed == {1} else "s"
+            self.fail(record, f"expected {expected} value{plural} ({what}), got "
+                              f"{len(record.words)}")
+        return record.words
+
+    def at_least(self, record, minimum, what):
+        """The record's values, refused if fewer than `minimum`."""
+        if len(record.words) < minimum:
+            self.fail(record, f"expected at least {minimum} value{'s' * (minimum > 1)} "
+                              f"({what}), got {len(record.words)}")
+        return record.words
+
+    def integer(self, record, word, what):
+        """The positive integer `word` (a node, element, direction or port number)."""
+        if not INTEGER.fullmatch(word) or int(word) < 1:
+            self.fail(record, f"expected {what} (a positive integer), got {show(word)}")
+        return int(word)
+
+    def number(self, record, word, what, *, minimum=None):
+        """The finite number `word` (SI units, as the file), at least `minimum` if given;
+        `what` names it in a message."""
+        if not NUMBER.fullmatch(word):
+            self.fail(record, f"{what}: expected a number, got {show(word)}")
+        value = float(word.replace("d", "e").replace("D", "e"))
+        if abs(value) > MAX_MAGNITUDE:
+            self.fail(record, f"{what}: expected a magnitude <= {MAX_MAGNITUDE:g} (SI units), "
+                              f"got {word}")
+        if minimum is not None and value < minimum:
+            self.fail(record, f"{what}: expected a value >= {minimum:g}, got {word}")
+        return value
