@@ -254,23 +254,28 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
         The FMU written; its model identifier is the scene name.
     """
     import keyword
-    import tomllib
 
-    from flexure.core import apply_overrides, build_model, scene_path, scene_toml
+    from flexure.core import FlexureError, apply_overrides, build_model, scene_path, scene_toml
+    from flexure.core.scene.building import parse_toml
     from flexure.core.scene.overrides import describe_overrides
 
     from .scene_slave import scene_value
 
     path = scene_path(scene)
-    text = path.read_text()
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise FMUBuildError(f"{path}: not valid TOML: {error}") from None
+    try:  # a TOML scene or a SPACAR input file (.dat), as load_scene reads them
+        data = parse_toml(path)
+    except FlexureError as error:
+        raise FMUBuildError(str(error)) from None
     model = build_model(data, overrides=overrides, source=str(path), default_name=path.stem)
-    if overrides:  # the FMU carries the scene it was built from: the overridden one
-        data = apply_overrides(data, overrides, source=str(path))
-        text = scene_toml(data, f"{path.name} with {describe_overrides(overrides)}")
+    # the FMU carries the scene it was built from: the file's own text where it is TOML as
+    # given, otherwise the scene written back (an imported SPACAR file, overrides)
+    if path.suffix.lower() == ".toml" and not overrides:
+        text = path.read_text()
+    else:
+        if overrides:
+            data = apply_overrides(data, overrides, source=str(path))
+        with_overrides = f" with {describe_overrides(overrides)}" if overrides else ""
+        text = scene_toml(data, f"{path.name}{with_overrides}")
     name = model.name
     if keyword.iskeyword(name) or name.startswith("_"):
         raise FMUBuildError(f"{path}: scene.name: {name!r} cannot be an FMU model identifier "

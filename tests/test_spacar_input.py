@@ -394,3 +394,24 @@ def test_bytes_that_are_not_text_are_named_in_their_line(tmp_path):
         read_spacar(path)
     path.write_bytes(b"% caf\xe9: a Latin-1 comment\n" + TRUSS.encode())  # comments are free
     assert read_spacar(path)["nodes"]["2"]["position"] == [0.1, 0.0]
+
+
+def test_an_fmu_builds_from_a_spacar_file_and_steps_like_the_scenes_fmu(tmp_path):
+    """`flexure fmu build FILE.dat` (build_scene_fmu) reads the file as load_scene does and
+    carries the scene written back as TOML: stepped by fmpy under the same force step, the
+    FMU of pf2db and the FMU of the built-in stage_planar_1dof, given pf2db's 1 N downward load
+    (its XF; the scene has it as the buckling reference only), give the same position to
+    round-off (the same model, integrator and tolerance)."""
+    from fmpy import simulate_fmu
+
+    from flexure.fmu import build_scene_fmu
+
+    results = []
+    for scene, force, overrides in ((SPACAR / "stage_planar_1dof.dat", "u1", None),
+                                    ("stage_planar_1dof", "F", {"nodes.3.force": [0.0, -1.0]})):
+        fmu = build_scene_fmu(scene, tmp_path / f"{len(results)}.fmu", overrides=overrides)
+        signal = np.array([(0.0, 1.0)], dtype=[("time", np.float64), (force, np.float64)])
+        run = simulate_fmu(str(fmu), stop_time=0.02, output_interval=1e-3, input=signal)
+        results.append(run[run.dtype.names[1]])
+    assert np.ptp(results[1]) > 1e-6  # it moves
+    np.testing.assert_allclose(results[0], results[1], rtol=0, atol=1e-12)
