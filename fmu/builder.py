@@ -36,8 +36,8 @@ from flexure.core import FlexureError
 from .model_description import fix_model_description
 
 # The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
-FMU_RUNTIME_MODULES = ("slave.py", "pythonfmu_workarounds.py", "scene_slave.py",
-                       "state_format.py")
+FMU_RUNTIME_MODULES = ("slave.py", "slave_states.py", "pythonfmu_workarounds.py",
+                       "scene_slave.py", "state_format.py")
 FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
 
 from .slave import SafeSlave, UnitReal, escape_log

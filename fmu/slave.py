@@ -65,19 +65,19 @@ from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Re
 from pythonfmu.enums import Fmi2Status
 from pythonfmu.variables import Boolean, Integer
 
-from . import state_format
 from .pythonfmu_workarounds import guard_exit, tidy_sys_path, weakly_bound
+from .slave_states import (
+    INITIALIZATION,
+    INSTANTIATED,
+    STEP_COMPLETE,
+    TERMINATED,
+    StateSnapshots,
+)
 
 # Relative tolerance on the communication point a do_step starts from (hosts that count time
 # in integer nanoseconds, e.g. libcosim, round it).
 TIME_TOLERANCE = 1e-9
 
-# The FMI 2.0 co-simulation states (the error state is `SafeSlave.broken` != "").
-INSTANTIATED = "instantiated"
-INITIALIZATION = "initialization mode"
-STEP_COMPLETE = "step complete"
-TERMINATED = "terminated"
-PHASES = (INSTANTIATED, INITIALIZATION, STEP_COMPLETE, TERMINATED)
 
 
 class UnitReal(Real):
@@ -103,23 +103,7 @@ def escape_log(message):
     return str(message).replace("%", "%%")
 
 
-class RefusedState:
-    """What deserialising or taking a state answers when it cannot give a state: the reason.
-
-    pythonfmu's binary cannot answer an error from fmi2DeSerializeFMUstate or fmi2GetFMUstate,
-    so the refusal travels in the state: setFMUstate logs the reason and changes nothing.
-    """
-
-    __slots__ = ("reason",)
-
-    def __init__(self, reason):
-        self.reason = reason
-
-    def __repr__(self):
-        return f"RefusedState({self.reason!r})"
-
-
-class SafeSlave(Fmi2Slave):
+class SafeSlave(StateSnapshots, Fmi2Slave):
     """Base of a co-simulation slave whose failures become FMI statuses, never exceptions.
 
     Subclasses implement `advance(t, h)` and, for state save/restore, `save_state()` and
@@ -455,106 +439,6 @@ class SafeSlave(Fmi2Slave):
             return (f"{variable.name!r} (value reference {vr}) is a fixed parameter: it can be "
                     "set before fmi2ExitInitializationMode only")
         return None
-
-    # -- FMU state ---------------------------------------------------------------------------
-
-    def _capture(self):
-        """The instance's whole state as the dict `state_format` stores."""
-        values = {}
-        for variable in self.vars.values():
-            if variable.setter is not None:
-                convert = str if isinstance(variable, String) else float
-                values[variable.name] = convert(variable.getter())
-        return {"phase": self.phase, "broken": self.broken, "time": float(self.time),
-                "start_time": float(self.start_time), "variables": values,
-                "model": None if self.broken else self.save_state()}
-
-    def _get_fmu_state(self):
-        try:
-            return state_format.encode(self.state_identity(), self._capture())
-        except BaseException as error:  # noqa: BLE001
-            reason = (f"fmi2GetFMUstate failed: {type(error).__name__}: {error}")
-            self._error(f"{reason}; the state returned is empty and fmi2SetFMUstate will "
-                        "refuse it")
-            return RefusedState(reason)
-
-    def _set_fmu_state(self, state):
-        try:
-            if isinstance(state, RefusedState):
-                return self._error(f"fmi2SetFMUstate refused: {state.reason}; the instance "
-                                   "is unchanged")
-            if not isinstance(state, bytes):
-                return self._error(f"fmi2SetFMUstate refused: not a state of this FMU "
-                                   f"({type(state).__name__}); the instance is unchanged")
-            try:
-                data = state_format.decode(state, self.state_identity())
-                problem = self._state_problem(data)
-            except state_format.StateFormatError as error:
-                problem = str(error)
-            if problem:
-                return self._error(f"fmi2SetFMUstate refused: {problem}; the instance is "
-                                   "unchanged")
-            before = self._capture()
-            try:
-                self._apply(data)
-            except Exception as error:  # noqa: BLE001 -- the model refused it: roll back
-                try:
-                    self._apply(before)
-                except Exception as inner:  # noqa: BLE001
-                    return self._fail(f"fmi2SetFMUstate ({error}); then restoring the "
-                                      "instance as it was", inner)
-                return self._error(f"fmi2SetFMUstate refused: the model does not accept the "
-                                   f"state: {error}; the instance is unchanged")
-        except BaseException as error:  # noqa: BLE001
-            self._fail("fmi2SetFMUstate", error)
-
-    def _state_problem(self, data):
-        """Why a decoded state cannot be this instance's, or None."""
-        if not isinstance(data, dict) or set(data) != {"phase", "broken", "time",
-                                                       "start_time", "variables", "model"}:
-            return "the payload is not a SafeSlave state"
-        if data["phase"] not in PHASES or not isinstance(data["broken"], str):
-            return f"unknown call-sequence state {data['phase']!r}"
-        for key in ("time", "start_time"):
-            if not isinstance(data[key], float) or not math.isfinite(data[key]):
-                return f"{key} = {data[key]!r}: expected a finite float"
-        by_name = {v.name: v for v in self.vars.values() if v.setter is not None}
-        values = data["variables"]
-        if not isinstance(values, dict) or set(values) != set(by_name):
-            return "the variables stored are not this FMU's"
-        for name, value in values.items():
-            expected = str if isinstance(by_name[name], String) else float
-            if not isinstance(value, expected):
-                return f"variable {name!r} = {value!r}: expected a {expected.__name__}"
-        return None
-
-    def _apply(self, data):
-        by_name = {v.name: v for v in self.vars.values()}
-        for name, value in data["variables"].items():
-            by_name[name].setter(value)
-        self.time = data["time"]
-        self.start_time = data["start_time"]
-        self.phase = data["phase"]
-        self.broken = data["broken"]
-        if not self.broken:
-            self.load_state(data["model"])
-
-    @classmethod
-    def _fmu_state_to_bytes(cls, state):
-        # Called on the class (no instance, nothing to log to): a state is its bytes already.
-        return state if isinstance(state, bytes) else b""
-
-    @classmethod
-    def _fmu_state_from_bytes(cls, data):
-        # Called on the class: validated here, refused (with the reason) by fmi2SetFMUstate.
-        try:
-            state_format.decode(data, cls.state_identity())
-            return bytes(data)
-        except state_format.StateFormatError as error:
-            return RefusedState(f"fmi2DeSerializeFMUstate: {error}")
-        except BaseException as error:  # noqa: BLE001
-            return RefusedState(f"fmi2DeSerializeFMUstate failed: {type(error).__name__}: "
-                                f"{error}")
 
 
 def _experiment_problem(start_time, stop_time, tolerance):
