@@ -1,9 +1,9 @@
 """Convergence under mesh refinement, the elastica, and the frequency under preload."""
 
-import convergence_study as study
 import numpy as np
 import pytest
 
+from examples import convergence_study as study
 from flexure.core import buckling_load_factors, load_scene, natural_frequencies
 
 

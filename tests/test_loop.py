@@ -258,7 +258,7 @@ def test_runner_errors(stage1):
 
 
 def test_closed_loop_example_runs(tmp_path, capsys):
-    import closed_loop
+    from examples import closed_loop
 
     rows, results, agreement = closed_loop.main(quick=True, workdir=tmp_path)
     assert len(rows) == len(closed_loop.cases(quick=True))

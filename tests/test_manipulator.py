@@ -7,11 +7,11 @@ import copy
 import math
 from pathlib import Path
 
-import manipulator
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from examples import manipulator
 from flexure.core import (
     ConstraintError,
     Kinematics,

@@ -10,8 +10,8 @@ import tomllib
 import numpy as np
 import pytest
 import scipy.special
-from energy_drift import modal_release
 
+from examples.energy_drift import modal_release
 from flexure.core import (
     Simulator,
     build_model,

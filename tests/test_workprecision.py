@@ -4,13 +4,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-import energy_drift
 import numpy as np
 import pytest
-import solver_floor
-import speed_benchmark
-import work_precision
 
+from examples import energy_drift, solver_floor, speed_benchmark, work_precision
 from flexure.core import load_scene, natural_frequencies
 from flexure.core.simulation.workprecision import work_precision as study_of
 
