@@ -239,7 +239,7 @@ def test_spatial_scene_errors_name_the_key():
 
 
 def test_spatial_speed_benchmark_runs():
-    import benchmark_spatial
+    from examples import benchmark_spatial
 
     rows = benchmark_spatial.benchmark(t_end=0.05, scenes=("stage_spatial_19dof",),
                                        rtols=(1e-6,))
