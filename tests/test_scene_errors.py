@@ -6,7 +6,14 @@ import tomllib
 import numpy as np
 import pytest
 
-from flexure.core import ConstraintError, SceneError, build_model, load_scene, scene_path
+from flexure.core import (
+    ConstraintError,
+    SceneError,
+    build_model,
+    load_scene,
+    scene_path,
+    scene_toml,
+)
 from flexure.core.cli import main
 
 BASE = tomllib.loads(scene_path("stage_planar_1dof").read_text())
@@ -304,3 +311,35 @@ def test_a_dated_description_is_refused_before_a_scene_is_written_back(tmp_path,
     assert main(["reduce", str(path), "--keep", "1", "--out", str(tmp_path / "r.toml")]) == 2
     assert capsys.readouterr().err == (f"flexure reduce: error: {path}: scene.description: "
                                        "expected a string, got datetime.date(1979, 5, 27)\n")
+
+
+def test_every_mistake_of_a_table_is_named_at_once(tmp_path, capsys):
+    """Two wrong nodes and a wrong section: the sections are read first, and their one mistake
+    is reported alone; mended, both nodes' mistakes come together, one per line, and the
+    elements (which might only repeat them) are not read yet."""
+    data = tomllib.loads(scene_path("stage_planar_1dof").read_text())
+    data["sections"]["leaf"]["E"] = -1.0
+    data["nodes"]["3"]["mass"] = -0.2
+    data["nodes"]["5"]["position"] = [0.1]
+    data["elements"]["bar"]["nodes"] = ["3", "4", "9", "6"]
+    with pytest.raises(SceneError) as one:
+        build_model(data, source="s.toml")
+    assert str(one.value) == "s.toml: sections.leaf.E: expected a value >= 0.0, got -1.0"
+    data["sections"]["leaf"]["E"] = 2.1e11
+    with pytest.raises(SceneError) as two:
+        build_model(data, source="s.toml")
+    assert str(two.value) == (
+        "s.toml: 2 mistakes:\n"
+        "  nodes.3.mass: expected a value >= 0.0, got -0.2\n"
+        "  nodes.5.position: expected a list of 2 numbers, got [0.1]")
+    data["nodes"]["3"]["mass"], data["nodes"]["5"]["position"] = 0.0, [0.1, 0.1]
+    with pytest.raises(SceneError, match=r"^s\.toml: elements\.bar\.nodes\[2\]: unknown node"):
+        build_model(data, source="s.toml")
+    path = tmp_path / "broken.toml"
+    data["elements"]["bar"]["nodes"] = ["3", "4", "5", "6"]
+    data["nodes"]["3"]["mass"], data["nodes"]["5"]["mass"] = -1.0, -2.0
+    path.write_text(scene_toml(data))
+    assert main(["analyze", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "2 mistakes:\n  nodes.3.mass" in err and "nodes.5.mass" in err
+    assert "Traceback" not in err

@@ -131,6 +131,7 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         self.data = data
         self.source = source
         self.default_name = default_name
+        self.problems = []  # the mistakes of the table being read (`entry`)
 
     # -- the scene --------------------------------------------------------------------------
 
@@ -234,26 +235,31 @@ class _SceneBuilder(SceneReader, ElementBuilding):
     def build_sections(self, sections):
         result = {}
         for name, section in sections.items():
-            key = f"sections.{name}"
-            section = self.table(key, section)
-            if self.dimension == 3:
-                result[name] = self.spatial_section(key, section)
-                continue
-            self.check_keys(key, section, SECTION_KEYS)
-            values = self.section_values(key, section)
-            dims = {"E", "width", "height"}
-            if dims & values.keys():
-                missing = dims - values.keys()
-                if missing:
-                    self.fail(key, "a rectangle needs E, width and height; "
-                                   f"missing {sorted(missing)}")
-                area = values["width"] * values["height"]
-                values.setdefault("EA", values["E"] * area)
-                values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
-                if "rho" in values:
-                    values.setdefault("rho_A", values["rho"] * area)
-            result[name] = self.finite_section(key, values)
+            with self.entry():  # collected, so every entry is checked
+                result[name] = self.build_section(name, section)
+        self.raise_problems()
         return result
+
+    def build_section(self, name, section):
+        """One [sections.NAME]: its properties (SI units), planar or spatial."""
+        key = f"sections.{name}"
+        section = self.table(key, section)
+        if self.dimension == 3:
+            return self.spatial_section(key, section)
+        self.check_keys(key, section, SECTION_KEYS)
+        values = self.section_values(key, section)
+        dims = {"E", "width", "height"}
+        if dims & values.keys():
+            missing = dims - values.keys()
+            if missing:
+                self.fail(key, "a rectangle needs E, width and height; "
+                               f"missing {sorted(missing)}")
+            area = values["width"] * values["height"]
+            values.setdefault("EA", values["E"] * area)
+            values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
+            if "rho" in values:
+                values.setdefault("rho_A", values["rho"] * area)
+        return self.finite_section(key, values)
 
     def section_values(self, key, section):
         """The numbers of a section: none negative, dimensions (width, ...) positive."""
@@ -285,43 +291,49 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
         self.node_inertias = []
         for name, node in nodes.items():
-            key = f"nodes.{name}"
-            node = self.table(key, node)
-            if self.dimension == 3 and "position" not in node:
-                self.spatial_rotational_node(key, name, node)
-                continue
-            if ("position" in node) == ("angle" in node):
-                self.fail(key, "expected exactly one of 'position' (a translational node) or "
-                               "'angle' (a rotational node)")
-            translational = "position" in node
-            if translational:
-                self.check_keys(key, node, {"position", "fixed", "dof", "mass", "force"})
-                axes = TRANSLATION_AXES[self.dimension]
-                values = self.vector(f"{key}.position", node["position"], len(axes))
-                mass = self.number(f"{key}.mass", node.get("mass", 0.0), minimum=0.0)
-                force = self.vector(f"{key}.force", node.get("force", [0.0] * len(axes)), len(axes))
-                masses = [mass] * len(axes)
-            else:
-                self.check_keys(key, node, {"angle", "fixed", "dof", "inertia", "moment"})
-                axes = ROTATION_AXES[self.dimension]
-                values = [self.number(f"{key}.angle", node["angle"], limit=MAX_ANGLE)]
-                # A lumped rotational inertia may be negative: SPACAR's lumped model of a bar
-                # puts m/2 at both ends with J = -m l^2 / 12 each (the total stays positive).
-                masses = [self.number(f"{key}.inertia", node.get("inertia", 0.0))]
-                force = [self.number(f"{key}.moment", node.get("moment", 0.0))]
-            fixed = self.names(f"{key}.fixed", node.get("fixed", []), axes)
-            dofs = self.names(f"{key}.dof", node.get("dof", []), axes)
-            for both in set(fixed) & set(dofs):
-                self.fail(key, f"coordinate {both!r} is both fixed and a DOF")
-            self.node_kind[name] = "translational" if translational else "rotational"
-            self.node_coordinates[name] = {}
-            for axis, value, mass_value, load in zip(axes, values, masses, force, strict=True):
-                self.node_coordinates[name][axis] = len(self.coordinate_names)
-                self.coordinate_names.append(f"{name}.{axis}")
-                self.initial.append(value)
-                self.status.append(FIXED if axis in fixed else DOF if axis in dofs else DEPENDENT)
-                self.mass.append(mass_value)
-                self.loads.append(load)
+            with self.entry():  # collected, so every entry is checked
+                self.build_node(name, node)
+        self.raise_problems()
+
+    def build_node(self, name, node):
+        """One [nodes.NAME]: its coordinates with their statuses, masses and loads."""
+        key = f"nodes.{name}"
+        node = self.table(key, node)
+        if self.dimension == 3 and "position" not in node:
+            self.spatial_rotational_node(key, name, node)
+            return
+        if ("position" in node) == ("angle" in node):
+            self.fail(key, "expected exactly one of 'position' (a translational node) or "
+                           "'angle' (a rotational node)")
+        translational = "position" in node
+        if translational:
+            self.check_keys(key, node, {"position", "fixed", "dof", "mass", "force"})
+            axes = TRANSLATION_AXES[self.dimension]
+            values = self.vector(f"{key}.position", node["position"], len(axes))
+            mass = self.number(f"{key}.mass", node.get("mass", 0.0), minimum=0.0)
+            force = self.vector(f"{key}.force", node.get("force", [0.0] * len(axes)), len(axes))
+            masses = [mass] * len(axes)
+        else:
+            self.check_keys(key, node, {"angle", "fixed", "dof", "inertia", "moment"})
+            axes = ROTATION_AXES[self.dimension]
+            values = [self.number(f"{key}.angle", node["angle"], limit=MAX_ANGLE)]
+            # A lumped rotational inertia may be negative: SPACAR's lumped model of a bar
+            # puts m/2 at both ends with J = -m l^2 / 12 each (the total stays positive).
+            masses = [self.number(f"{key}.inertia", node.get("inertia", 0.0))]
+            force = [self.number(f"{key}.moment", node.get("moment", 0.0))]
+        fixed = self.names(f"{key}.fixed", node.get("fixed", []), axes)
+        dofs = self.names(f"{key}.dof", node.get("dof", []), axes)
+        for both in set(fixed) & set(dofs):
+            self.fail(key, f"coordinate {both!r} is both fixed and a DOF")
+        self.node_kind[name] = "translational" if translational else "rotational"
+        self.node_coordinates[name] = {}
+        for axis, value, mass_value, load in zip(axes, values, masses, force, strict=True):
+            self.node_coordinates[name][axis] = len(self.coordinate_names)
+            self.coordinate_names.append(f"{name}.{axis}")
+            self.initial.append(value)
+            self.status.append(FIXED if axis in fixed else DOF if axis in dofs else DEPENDENT)
+            self.mass.append(mass_value)
+            self.loads.append(load)
 
     def spatial_rotational_node(self, key, name, node):
         """A 3-D rotational node: four Euler parameters, fixed as a whole or free."""
@@ -422,30 +434,35 @@ class _SceneBuilder(SceneReader, ElementBuilding):
     def build_ports(self, section, table, *, is_input):
         ports = []
         for name, port in self.table(section, table).items():
-            key = f"{section}.{name}"
-            port = self.table(key, port)
-            if not name.isidentifier():
-                self.fail(key, "a port name must be an identifier (letters, digits, _)")
-            if self.dimension == 3 and not self._is_translation(port) and isinstance(
-                    port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
-                self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
-                                               "3-D rotational node are not supported; use a "
-                                               "translational coordinate")
-            if is_input:
-                self.check_keys(key, port, {"node", "coordinate"})
-                ports.append(Port(name, self.coordinate(key, port), "force",
-                                  "N" if self._is_translation(port) else "N.m"))
-            else:
-                self.check_keys(key, port, {"node", "coordinate", "quantity"})
-                quantity = port.get("quantity", "position")
-                if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
-                    self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
-                                                 f"got {show(quantity)}")
-                unit = OUTPUT_QUANTITIES[quantity]
-                if not self._is_translation(port):
-                    unit = unit.replace("m", "rad")
-                ports.append(Port(name, self.coordinate(key, port), quantity, unit))
+            with self.entry():  # collected, so every entry is checked
+                ports.append(self.build_port(section, name, port, is_input=is_input))
+        self.raise_problems()
         return ports
+
+    def build_port(self, section, name, port, *, is_input):
+        """One [inputs.NAME] (a force, N or N m) or [outputs.NAME] (a position or velocity)."""
+        key = f"{section}.{name}"
+        port = self.table(key, port)
+        if not name.isidentifier():
+            self.fail(key, "a port name must be an identifier (letters, digits, _)")
+        if self.dimension == 3 and not self._is_translation(port) and isinstance(
+                port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
+            self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
+                                           "3-D rotational node are not supported; use a "
+                                           "translational coordinate")
+        if is_input:
+            self.check_keys(key, port, {"node", "coordinate"})
+            return Port(name, self.coordinate(key, port), "force",
+                        "N" if self._is_translation(port) else "N.m")
+        self.check_keys(key, port, {"node", "coordinate", "quantity"})
+        quantity = port.get("quantity", "position")
+        if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
+            self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
+                                         f"got {show(quantity)}")
+        unit = OUTPUT_QUANTITIES[quantity]
+        if not self._is_translation(port):
+            unit = unit.replace("m", "rad")
+        return Port(name, self.coordinate(key, port), quantity, unit)
 
     def _is_translation(self, port):
         return port.get("coordinate") in TRANSLATION_AXES[self.dimension]

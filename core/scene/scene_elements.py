@@ -18,27 +18,35 @@ class ElementBuilding:
         by_type = {}
         deformation_names, deformation_status = [], []
         for name, element in elements.items():
-            key = f"elements.{name}"
-            element = self.table(key, element)
-            allowed = {"type", "nodes", "section", "released", "dof", "segments"}
-            self.check_keys(key, element, allowed | ({"y_axis"} if self.dimension == 3 else set()))
-            type_name = element.get("type")
-            if not isinstance(type_name, str) or type_name.upper() not in ELEMENT_TYPES:
-                self.fail(f"{key}.type", f"unknown element type {type_name!r}; expected one of "
-                                         f"{', '.join(ELEMENT_TYPES)}")
-            kind = ELEMENT_TYPES[type_name.upper()]
-            if kind.dimension != self.dimension:
-                self.fail(f"{key}.type", f"{kind.type_name} is a {kind.dimension}-D element in a "
-                                         f"{self.dimension}-D scene")
-            nodes = self.element_nodes(key, element, kind)
-            count = segment_count(self, key, element)
-            for piece, table in split(self, name, element, kind, nodes, count):
-                if piece != name and piece in elements:
-                    self.fail(f"{key}.segments", f"the segment {piece!r} has the name of an "
-                                                 "element of the scene; rename that element")
-                self.add_element(key, piece, table, kind, by_type, deformation_names,
-                                 deformation_status)
+            with self.entry():  # collected, so every entry is checked
+                self.build_element(name, element, elements, by_type, deformation_names,
+                                   deformation_status)
+        self.raise_problems()
         return self.element_groups(by_type), deformation_names, deformation_status
+
+    def build_element(self, name, element, elements, by_type, deformation_names,
+                      deformation_status):
+        """One [elements.NAME], its segments when meshed, added to by_type and the lists."""
+        key = f"elements.{name}"
+        element = self.table(key, element)
+        allowed = {"type", "nodes", "section", "released", "dof", "segments"}
+        self.check_keys(key, element, allowed | ({"y_axis"} if self.dimension == 3 else set()))
+        type_name = element.get("type")
+        if not isinstance(type_name, str) or type_name.upper() not in ELEMENT_TYPES:
+            self.fail(f"{key}.type", f"unknown element type {type_name!r}; expected one of "
+                                     f"{', '.join(ELEMENT_TYPES)}")
+        kind = ELEMENT_TYPES[type_name.upper()]
+        if kind.dimension != self.dimension:
+            self.fail(f"{key}.type", f"{kind.type_name} is a {kind.dimension}-D element in a "
+                                     f"{self.dimension}-D scene")
+        nodes = self.element_nodes(key, element, kind)
+        count = segment_count(self, key, element)
+        for piece, table in split(self, name, element, kind, nodes, count):
+            if piece != name and piece in elements:
+                self.fail(f"{key}.segments", f"the segment {piece!r} has the name of an "
+                                             "element of the scene; rename that element")
+            self.add_element(key, piece, table, kind, by_type, deformation_names,
+                             deformation_status)
 
     def element_nodes(self, key, element, kind):
         """The element's node names, each checked to exist and to be of the kind it needs."""

@@ -1,6 +1,7 @@
 """The checked reading of a scene's values: every problem a SceneError naming the file, the
 key and what is wrong (`SceneReader`, the base of the scene builder)."""
 
+import contextlib
 import math
 
 from ..errors import SceneError
@@ -19,6 +20,7 @@ class SceneReader:
     file in every message."""
 
     source = "<dict>"
+    problems = ()  # the mistakes collected (`entry`); a list while a scene is built
     overridden = frozenset()  # the keys set by overrides (`flexure.core.scene.overrides`)
 
     def fail(self, key, message):
@@ -27,6 +29,29 @@ class SceneReader:
         if any(key == k or key.startswith((f"{k}.", f"{k}[")) for k in self.overridden):
             key = f"--set {key}"
         raise SceneError(f"{self.source}: {key}: {message}")
+
+    @contextlib.contextmanager
+    def entry(self):
+        """Check one entry of a table (a node, a section, an element, a port): its mistake is
+        collected in `problems` and the table's other entries are checked as well, so that a
+        user sees every mistake of a table at once (`raise_problems`), as FMPy's validation
+        lists them."""
+        try:
+            yield
+        except SceneError as error:
+            self.problems.append(str(error))
+
+    def raise_problems(self):
+        """One SceneError for the mistakes collected: a single one as it is, several one per
+        line. A table's mistakes are reported before the next table is read, whose entries
+        might only repeat them (an element on a node that was refused)."""
+        problems, self.problems = list(self.problems), []
+        if len(problems) == 1:
+            raise SceneError(problems[0])
+        if problems:
+            prefix = f"{self.source}: "
+            raise SceneError(f"{self.source}: {len(problems)} mistakes:\n" + "\n".join(
+                f"  {p.removeprefix(prefix)}" for p in problems))
 
     def table(self, key, value):
         if not isinstance(value, dict):
