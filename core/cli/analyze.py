@@ -32,11 +32,21 @@ def register(subparsers):
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--plot", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the von Mises stresses along the beams at the static "
-                             "equilibrium to this PNG file (spatial beams with a section)")
+                             "equilibrium to this PNG file (beams and trusses whose section "
+                             "has dimensions)")
     parser.add_argument("--sigma", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the singular values (principal gains) of the transfer "
                              "matrix from the inputs to the outputs against frequency")
     parser.set_defaults(run=run)
+
+
+# The units of `static`: every stress resultant is in N, as every deformation is a length; a
+# bending (and the BEAM's torsion) resultant is the moment over l0, where SPACAR's are N m
+STATIC_UNITS = {
+    "coordinates": "m (translations), rad (planar angles), 1 (Euler parameters)",
+    "stress_resultants": "N: e1 the normal force; bending (PLBEAM e2, e3; BEAM e3 to e6) and "
+                         "torsion (BEAM e2) the moment in N m divided by l0",
+    "von_mises_pa": "Pa"}
 
 
 def node_list(text):
@@ -75,7 +85,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
         resultants = {name: value for name, value in solution.stresses().items()
                       if not name.endswith(".norm")}
         result["static"] = {"coordinates": solution.coordinates(),
-                            "stress_resultants": resultants}
+                            "stress_resultants": resultants, "units": STATIC_UNITS}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
@@ -163,8 +173,9 @@ def plot_stresses(model, path):
     solution = static_equilibrium(model)
     stresses = beam_stresses(model, solution.x, solution.stress_resultants)
     if not stresses.names:
-        raise SceneError(f"{model.source}: --plot: no beam with section dimensions (A) in "
-                         f"{model.name!r}, so no stresses to plot")
+        raise SceneError(f"{model.source}: --plot: no beam or truss with section dimensions "
+                         f"(width and height, or diameter) in {model.name!r}, so no stresses "
+                         "to plot")
     with atomic_output(path, "--plot") as temporary:
         plot_beam_stresses(model, stresses, temporary)
 
@@ -187,7 +198,8 @@ def render(result):
                                   title="\nstatic equilibrium: coordinates"))
         parts.append(format_table(["deformation", "stress resultant (N)"],
                                   list(static["stress_resultants"].items()),
-                                  title="\nstatic equilibrium: stress resultants"))
+                                  title="\nstatic equilibrium: stress resultants (a "
+                                        "bending or torsion resultant is the moment over l0)"))
         if "von_mises_pa" in static:
             parts.append(format_table(
                 ["element", "von Mises at p (MPa)", "von Mises at q (MPa)"],
