@@ -18,6 +18,7 @@ __version__ = "0.1.0"
 
 # public name -> the submodule that defines it (imported by __getattr__ on first use)
 _LAZY = {
+    "Compliance": "analysis.compliance", "compliance": "analysis.compliance",
     "LinearModel": "analysis.linearization", "linearize": "analysis.linearization",
     "Modes": "analysis.modal", "buckling_load_factors": "analysis.modal",
     "natural_frequencies": "analysis.modal",
@@ -42,12 +43,13 @@ _LAZY = {
 }
 
 __all__ = [
-    "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics", "LinearModel", "METHODS",
+    "Compliance", "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics",
+    "LinearModel", "METHODS",
     "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
     "Simulator", "StaticSolution", "apply_overrides", "beam_stresses", "buckling_load_factors",
     "build_model",
-    "builtin_scenes", "check_exact_constraint", "choose_dofs", "default_atol", "linearize",
-    "load_scene", "proposed_releases", "read_spacar",
+    "builtin_scenes", "check_exact_constraint", "choose_dofs", "compliance", "default_atol",
+    "linearize", "load_scene", "proposed_releases", "read_spacar",
     "natural_frequencies", "controller_step", "prepare", "principal_gains", "run_sampled_loop",
     "scene_path", "scene_toml",
     "simulate",

@@ -174,9 +174,10 @@ def test_cli_lists_19_frequencies_and_plots_the_stresses(tmp_path, capsys):
 
 
 def test_cli_plot_without_beam_sections_is_an_error(tmp_path, capsys):
-    code = main(["analyze", "stage_planar_1dof", "--plot", str(tmp_path / "s.png")])
-    assert code != 0
-    assert "no beam with section dimensions" in capsys.readouterr().err
+    """truss_1dof_x gives its truss's EA alone, no dimensions."""
+    code = main(["analyze", "truss_1dof_x", "--plot", str(tmp_path / "s.png")])
+    assert code == 2
+    assert "no beam or truss with section dimensions" in capsys.readouterr().err
 
 
 def test_19dof_stage_simulates_for_one_second_with_cvode_and_ida():

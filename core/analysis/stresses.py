@@ -1,17 +1,19 @@
-"""Von Mises stresses along spatial beams, from stress resultants.
+"""Von Mises stresses along beams and trusses, from stress resultants.
 
-For every element whose module defines `section_forces` (the BEAM) and whose section has
-dimensions (A > 0), at both element ends:
+For every element whose module defines `section_forces` (BEAM, PLBEAM, PLTRUSS) and whose
+section has dimensions (A > 0), at both element ends:
 
     normal stress   s = |N| / A + |My'| / Wy' + |Mz'| / Wz'       (rectangle: at a corner)
                     s = |N| / A + sqrt(My'^2 + Mz'^2) / W          (circle: on the surface)
     shear stress    t = |T| / Wt                                   (Saint-Venant torsion)
     von Mises       s_vm = sqrt(s^2 + 3 t^2)
 
-For a circle the largest s and t occur at the same surface point, so s_vm is the largest over
-the section. For a rectangle the largest torsion shear (middle of the long sides) and the
-largest normal stress (corners) are at different points: s_vm above is then an upper bound,
-exact whenever the beam is not twisted and bent at once. Shear from transverse forces is left
+A PLBEAM has N and the in-plane bending moment alone, so s = |N| / A + |M| / W with
+W = width height^2 / 6 (the largest of N/A +- M/W, at one face), and s_vm = s; a PLTRUSS
+s = |N| / A. For a circle the largest s and t occur at the same surface point, so s_vm is the
+largest over the section. For a rectangle the largest torsion shear (middle of the long sides)
+and the largest normal stress (corners) are at different points: s_vm above is then an upper
+bound, exact whenever the beam is not twisted and bent at once. Shear from transverse forces is left
 out (the beam theory of the element has none: zero for slender beams). Beams given by their
 stiffness only (no A) get NaN.
 
@@ -54,21 +56,28 @@ FRACTIONS = np.linspace(0.0, 1.0, 11)
 
 
 def von_mises(forces, props, fractions=(0.0, 1.0)):
-    """s_vm (n, len(fractions)) from section_forces (dict of (n,)) and section properties.
+    """s_vm (n, len(fractions)) in Pa from section_forces (dict of (n,), N and N m) and the
+    section properties (A m^2, W m^3).
 
     At the ends (fractions 0 and 1) with the end moments; in between the bending moments are
     interpolated linearly (no distributed load on the beam), N and T are constant.
     """
-    area, circular = props["A"], props["circular"] > 0.5
+    area = props["A"]
+    circular = props.get("circular", 0.0) > 0.5
+    zero = np.zeros_like(forces["N"])
     with np.errstate(divide="ignore", invalid="ignore"):
         axial = np.abs(forces["N"]) / area
-        tau = np.abs(forces["T"]) / props["Wt"]
+        # planar elements have neither torsion nor out-of-plane bending; trusses no bending
+        tau = np.abs(forces["T"]) / props["Wt"] if "T" in forces else zero
         result = []
         for xi in fractions:
-            my = (1.0 - xi) * forces["My_p"] + xi * forces["My_q"]
-            mz = (1.0 - xi) * forces["Mz_p"] + xi * forces["Mz_q"]
-            bending = np.where(circular, np.hypot(my, mz) / props["Wy"],
-                               np.abs(my) / props["Wy"] + np.abs(mz) / props["Wz"])
+            mz = (1.0 - xi) * forces.get("Mz_p", zero) + xi * forces.get("Mz_q", zero)
+            if "My_p" in forces:
+                my = (1.0 - xi) * forces["My_p"] + xi * forces["My_q"]
+                bending = np.where(circular, np.hypot(my, mz) / props["Wy"],
+                                   np.abs(my) / props["Wy"] + np.abs(mz) / props["Wz"])
+            else:
+                bending = np.abs(mz) / props["Wz"] if "Mz_p" in forces else zero
             result.append(np.sqrt((axial + bending) ** 2 + 3.0 * tau**2))
     stress = np.stack(result, axis=1)
     stress[~(area > 0)] = np.nan

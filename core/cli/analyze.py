@@ -1,4 +1,7 @@
-"""`flexure analyze SCENE`: DOF count, static equilibrium, modes, buckling, state space."""
+"""`flexure analyze SCENE`: DOF count, static equilibrium, modes, buckling, state space,
+compliance at nodes."""
+
+import argparse
 
 import numpy as np
 
@@ -22,19 +25,46 @@ def register(subparsers):
                         help="the lowest N (default all) buckling load factors")
     parser.add_argument("--state-space", action="store_true",
                         help="state-space matrices of the declared inputs and outputs")
+    parser.add_argument("--compliance", action="append", metavar="NODE", type=node_list,
+                        help="the compliance matrix (m/N, rad/(N m), ...) and support "
+                             "stiffness of this node at the static equilibrium (repeatable, "
+                             "or comma-separated: 3,5)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--plot", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the von Mises stresses along the beams at the static "
-                             "equilibrium to this PNG file (spatial beams with a section)")
+                             "equilibrium to this PNG file (beams and trusses whose section "
+                             "has dimensions)")
     parser.add_argument("--sigma", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the singular values (principal gains) of the transfer "
                              "matrix from the inputs to the outputs against frequency")
     parser.set_defaults(run=run)
 
 
+# The units of `static`: every stress resultant is in N, as every deformation is a length; a
+# bending (and the BEAM's torsion) resultant is the moment over l0, where SPACAR's are N m
+STATIC_UNITS = {
+    "coordinates": "m (translations), rad (planar angles), 1 (Euler parameters)",
+    "stress_resultants": "N: e1 the normal force; bending (PLBEAM e2, e3; BEAM e3 to e6) and "
+                         "torsion (BEAM e2) the moment in N m divided by l0",
+    "von_mises_pa": "Pa"}
+
+
+def node_list(text):
+    """An argparse type: "3" or "3,5" as a list of node names."""
+    names = [name.strip() for name in text.split(",")]
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"expected node names separated by commas, got "
+                                         f"{text!r}")
+    return names
+
+
 def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False,
-            with_gains=False):
-    """Run the requested analyses; returns the dict that `--json` prints (SI units)."""
+            with_gains=False, compliance_nodes=()):
+    """Run the requested analyses; returns the dict that `--json` prints (SI units).
+
+    compliance_nodes: the nodes whose compliance (m/N, rad/(N m), ...) to give.
+    """
+    from ..analysis.compliance import compliance, node_coordinates
     from ..analysis.linearization import linearize
     from ..analysis.modal import buckling_load_factors, describe_mode, natural_frequencies
     from ..analysis.statespace import state_space
@@ -44,20 +74,22 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
 
     result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
               "dofs_chosen": bool(model.chosen_dofs)}
+    for node in compliance_nodes:  # an unknown node is refused before any computation
+        node_coordinates(model, node)
     mech = Mechanics(model)
-    needs_equilibrium = static or modes is not None or with_state_space or with_gains
+    needs_linear = modes is not None or with_state_space or with_gains or bool(compliance_nodes)
+    needs_equilibrium = static or needs_linear
     solution = static_equilibrium(model, mechanics=mech) if needs_equilibrium else None
     if static:
         # the multipliers of the Euler-parameter normalisation ("NODE.norm") are no output
         resultants = {name: value for name, value in solution.stresses().items()
                       if not name.endswith(".norm")}
         result["static"] = {"coordinates": solution.coordinates(),
-                            "stress_resultants": resultants}
+                            "stress_resultants": resultants, "units": STATIC_UNITS}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
-    lin = linearize(model, solution, mechanics=mech) if (modes is not None or with_state_space
-                                                          or with_gains) else None
+    lin = linearize(model, solution, mechanics=mech) if needs_linear else None
     if modes is not None:
         found = natural_frequencies(model, None if modes < 0 else modes, linear_model=lin)
         result["modes"] = {"frequencies_hz": found.frequencies_hz,
@@ -66,6 +98,9 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                            "mass_matrix": lin.M0, "stiffness_matrix": lin.K,
                            "damping_matrix": lin.C0,
                            "shapes": found.shapes}
+    if compliance_nodes:
+        result["compliance"] = {node: compliance(model, node, linear_model=lin).as_dict()
+                                for node in dict.fromkeys(compliance_nodes)}
     if buckling is not None:
         factors = buckling_load_factors(model, None if buckling < 0 else buckling)
         result["buckling"] = {"load_factors": factors}
@@ -95,14 +130,15 @@ def run(args):
 
     model = load_scene(args.scene, overrides=args.set)
     static, modes = args.static, args.modes
+    nodes = [name for names in args.compliance or [] for name in names]
     if not (static or modes is not None or args.buckling is not None or args.state_space
-            or args.sigma or args.plot):
+            or args.sigma or args.plot or nodes):
         # a kinematic model (SPACAR's mode 1) has no equilibrium to find and no modes: the
         # exact-constraint check that loading it passed is the analysis
         static, modes = (False, None) if is_kinematic(model) else (True, -1)
     result = analyze(model, static=static or bool(args.plot), modes=modes,
                      buckling=args.buckling, with_state_space=args.state_space,
-                     with_gains=bool(args.sigma))
+                     with_gains=bool(args.sigma), compliance_nodes=nodes)
     if args.plot:
         plot_stresses(model, args.plot)
     if args.sigma:
@@ -137,8 +173,9 @@ def plot_stresses(model, path):
     solution = static_equilibrium(model)
     stresses = beam_stresses(model, solution.x, solution.stress_resultants)
     if not stresses.names:
-        raise SceneError(f"{model.source}: --plot: no beam with section dimensions (A) in "
-                         f"{model.name!r}, so no stresses to plot")
+        raise SceneError(f"{model.source}: --plot: no beam or truss with section dimensions "
+                         f"(width and height, or diameter) in {model.name!r}, so no stresses "
+                         "to plot")
     with atomic_output(path, "--plot") as temporary:
         plot_beam_stresses(model, stresses, temporary)
 
@@ -150,7 +187,8 @@ def render(result):
              f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])}"
              + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
                 else ")")]
-    if not {"static", "modes", "buckling", "state_space", "principal_gains"} & result.keys():
+    if not {"static", "modes", "buckling", "state_space", "principal_gains",
+            "compliance"} & result.keys():
         parts.append("exactly constrained; a kinematic model (no mass, no load), so there is "
                      "no equilibrium or mode to compute")
     if "static" in result:
@@ -160,7 +198,8 @@ def render(result):
                                   title="\nstatic equilibrium: coordinates"))
         parts.append(format_table(["deformation", "stress resultant (N)"],
                                   list(static["stress_resultants"].items()),
-                                  title="\nstatic equilibrium: stress resultants"))
+                                  title="\nstatic equilibrium: stress resultants (a "
+                                        "bending or torsion resultant is the moment over l0)"))
         if "von_mises_pa" in static:
             parts.append(format_table(
                 ["element", "von Mises at p (MPa)", "von Mises at q (MPa)"],
@@ -173,6 +212,8 @@ def render(result):
                                   [(i + 1, f, d) for i, (f, d) in enumerate(
                                       zip(freqs, descriptions, strict=True))],
                                   title="\nnatural frequencies (at the static equilibrium)"))
+    for node, found in result.get("compliance", {}).items():
+        parts.append(render_compliance(node, found))
     if "buckling" in result:
         factors = result["buckling"]["load_factors"]
         parts.append(format_table(["mode", "load factor"],
@@ -197,3 +238,27 @@ def render(result):
                                         f"{', '.join(gains['outputs'])} ({f.size} frequencies, "
                                         f"{f.min():.3g} to {f.max():.3g} Hz)"))
     return "\n".join(parts)
+
+
+def render_compliance(node, found):
+    """The compliance of one node (the `compliance` entry of `analyze`) as tables: rows the
+    displacements, columns the loads, each with its unit; then the stiffness or why none."""
+    names, units = found["coordinates"], found["units"]
+    load_units = [unit.split("/", 1)[1].strip("()") for unit in units[0]]
+    coordinate_units = [row[0].split("/", 1)[0] for row in units]
+    headers = ["displacement per load"] + [f"on {name} ({unit})"
+                                           for name, unit in zip(names, load_units, strict=True)]
+    rows = [[f"{name} ({unit})", *values]
+            for name, unit, values in zip(names, coordinate_units, found["matrix"], strict=True)]
+    text = [format_table(headers, rows, title=f"\ncompliance of node {node} (m/N, m/(N m), "
+                                              "rad/N, rad/(N m); at the static equilibrium)")]
+    if found["stiffness"] is None:
+        text.append(f"no support stiffness: {found['note']}")
+    else:
+        headers = ["load per displacement"] + [
+            f"of {name} ({unit})" for name, unit in zip(names, coordinate_units, strict=True)]
+        rows = [[f"{name} ({unit})", *values] for name, unit, values in
+                zip(names, load_units, found["stiffness"], strict=True)]
+        text.append(format_table(headers, rows, title=f"\nsupport stiffness of node {node} "
+                                                      "(N/m, N/rad, N m/m, N m/rad)"))
+    return "\n".join(text)

@@ -14,7 +14,11 @@ The second-order terms in e1 are those of the cubic bending line; they give the 
 geometric stiffness, hence 10 EI / l0^2 per clamped-guided spring with one element.
 
 Stress resultants: sigma1 = EA / l0 e1 (N), and the bending moments
-[sigma2, sigma3] = EI / l0^3 [[4, -2], [-2, 4]] [e2, e3] (N, as e2 and e3 are lengths).
+[sigma2, sigma3] = EI / l0^3 [[4, -2], [-2, 4]] [e2, e3] (N, as e2 and e3 are lengths: a
+moment over l0, where SPACAR's are N m). The end bending moments (N m) are their work
+conjugates of the end rotations (e2 = l0 theta^p to first order), with the normal force's share
+through the second-order terms of e1: M^p = l0 (sigma2 + sigma1 d e1 / d e2), M^q likewise
+(`section_forces`).
 
 Distributed mass: the position along the beam is the cubic (Hermite) interpolation between the
 end positions r^p, r^q and the end tangents l0 t^p, l0 t^q (t the initial element x axis rotated
@@ -37,7 +41,8 @@ deformation_names = ("e1", "e2", "e3")
 deformation_stiffness = {"e1": "EA", "e2": "EI", "e3": "EI"}  # property per deformation
 coordinates_per_element = 6
 inertia_point_kinds = ("position", "tangent", "position", "tangent")
-properties = ("EA", "EI", "EdA", "EdI", "rho_A")  # section properties used
+# section properties used; A (m^2) and Wz = width height^2 / 6 (m^3) only for the stresses
+properties = ("EA", "EI", "EdA", "EdI", "rho_A", "A", "Wz")
 
 _DL = np.array([[-1.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0, 1.0, 0.0]])
 _PHI_P, _PHI_Q = 2, 5
@@ -191,6 +196,20 @@ def inertia_matrix(ref, props):
     """Consistent mass (n, 8, 8) in kg on the inertia points of `inertia_points`."""
     mass = props["rho_A"] * ref["l0"]
     return mass[:, None, None] * np.kron(HERMITE_MASS, np.eye(2))[None]
+
+
+def section_forces(e, sigma, ref):
+    """Normal force and end bending moments from deformations and stress resultants.
+
+    e, sigma (n, 3). Returns a dict of (n,) arrays: N (N), Mz_p, Mz_q (N m, bending in the
+    plane). M = l0 (sigma_k + sigma1 d e1 / d e_k): the work conjugate of the end rotation,
+    as the spatial BEAM's (whose e5, e6 are -e2, -e3: the same moments with the opposite sign,
+    so that the moment along the beam is linear between Mz_p and Mz_q either way).
+    """
+    l0, c, s1 = ref["l0"], ref["c"], sigma[:, 0]
+    e2, e3 = e[:, 1], e[:, 2]
+    return {"N": s1, "Mz_p": l0 * (sigma[:, 1] + s1 * c * (4 * e2 + e3)),
+            "Mz_q": l0 * (sigma[:, 2] + s1 * c * (e2 + 4 * e3))}
 
 
 # -- compiled kernel: one element, the formulas above in scalars ----------------------------

@@ -29,7 +29,7 @@ deformation_names = ("e1",)
 deformation_stiffness = {"e1": "EA"}  # property per deformation
 coordinates_per_element = 4
 inertia_point_kinds = ("position", "position")
-properties = ("EA", "EdA", "rho_A")  # section properties used
+properties = ("EA", "EdA", "rho_A", "A")  # section properties used (A: for the stress)
 
 
 def reference(x0):
@@ -96,6 +96,11 @@ def inertia_matrix(ref, props):
     shape = np.array([[1.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 3.0]])
     mass = props["rho_A"] * ref["l0"]
     return mass[:, None, None] * np.kron(shape, np.eye(ref["dimension"]))[None]
+
+
+def section_forces(e, sigma, ref):
+    """The normal force N (n,) in N of each truss, as a dict: {"N": sigma1}."""
+    return {"N": sigma[:, 0]}
 
 
 # -- compiled kernel: one element, the formulas above in scalars (any dimension) ----------

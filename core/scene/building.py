@@ -257,6 +257,9 @@ class _SceneBuilder(SceneReader, ElementBuilding):
             area = values["width"] * values["height"]
             values.setdefault("EA", values["E"] * area)
             values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
+            # for the stresses (sigma = N/A +- M/W): height is the in-plane thickness
+            values.setdefault("A", area)
+            values.setdefault("Wz", values["width"] * values["height"] ** 2 / 6)
             if "rho" in values:
                 values.setdefault("rho_A", values["rho"] * area)
         return self.finite_section(key, values)

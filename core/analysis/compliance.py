@@ -1,0 +1,182 @@
+"""Compliance and support stiffness at a node (SPACAR Light's CMglob).
+
+In a configuration (the static equilibrium under the scene's loads, or a given one) the
+linearised statics on the DOFs are K dq = DF^T df, with K = K0 + G0 the tangent stiffness and
+DF = dx/dq. A small force (and moment) df on the coordinates c of one node moves them by
+
+    dx_c = C df_c,      C = DF_c K^-1 DF_c^T                                  (compliance)
+
+with DF_c the rows of DF of those coordinates. C is symmetric; its units are m/N on
+translations, rad/(N m) on the planar angle and m/(N m) = rad/N across. Where C is regular its
+inverse is the support stiffness (N/m, N/rad, N m/m, N m/rad): the force that holds the node
+displaced by a unit step of one coordinate with the others held.
+
+The coordinates of a node are its translations and, in the plane, the angle of the rotational
+node the elements join to it (a PLBEAM's p or q pair); a planar rotational node named alone
+gives its angle. A coordinate the DOFs cannot move (fixed, or held by a prescribed
+deformation, such as the vertical of a leaf-spring stage whose leaves do not stretch) has zero
+compliance: C is then singular and there is no support stiffness, which the result says rather
+than inverting it. In 3-D only translations are given: a rotation there is carried by four
+Euler parameters, not by angles a moment can be applied to one by one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import FlexureError, SceneError
+from ..mechanics.kinematics import length_scale
+from ..numerics.blas import blas_threads
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+    from .linearization import LinearModel
+    from .statics import StaticSolution
+
+# A coordinate whose compliance is below this fraction of the largest in the model is
+# unreachable: its DF row is then about 1e-10 of the largest, the
+# round-off of a row that is zero in exact arithmetic (C goes with the square of DF).
+UNREACHABLE = 1e-20
+# C restricted to the reachable coordinates, scaled to a unit diagonal (unit-free), is
+# singular beyond this condition number: coordinates that the DOFs move only together.
+SINGULAR = 1e10
+
+
+@dataclass
+class Compliance:
+    """The compliance of one node and, where regular, its support stiffness.
+
+    matrix (n, n): displacement per unit load (m/N, m/(N m), rad/N, rad/(N m): `units`);
+    stiffness (n, n) its inverse (N/m, ...: `stiffness_units`), or None where the matrix is
+    singular; coordinates: the names ("3.x", "4.phi"); unreachable: those the DOFs cannot
+    move (zero rows and columns); note: why there is no stiffness, or "".
+    """
+
+    node: str
+    coordinates: list
+    matrix: np.ndarray
+    stiffness: np.ndarray | None
+    units: list
+    stiffness_units: list
+    unreachable: list
+    note: str = ""
+
+    def as_dict(self):
+        """The result as plain lists and strings (the `--json` entry)."""
+        return {"coordinates": self.coordinates, "matrix": self.matrix.tolist(),
+                "units": self.units,
+                "stiffness": None if self.stiffness is None else self.stiffness.tolist(),
+                "stiffness_units": self.stiffness_units, "unreachable": self.unreachable,
+                "note": self.note}
+
+
+def node_coordinates(model: Model, node: str) -> list[int]:
+    """The coordinate indices a compliance of `node` covers: its translations, then in the
+    plane the angle of the rotational node joined to it. SceneError names an unknown node and
+    a 3-D rotational one."""
+    nodes = {n.name: n for n in model.nodes}
+    if node not in nodes:
+        listed = ", ".join(list(nodes)[:12]) + (", ..." if len(nodes) > 12 else "")
+        raise SceneError(f"{model.source}: compliance: model {model.name!r} has no node "
+                         f"{node!r}; expected one of {listed}")
+    found = nodes[node]
+    if found.kind == "rotational":
+        if model.dimension == 3:
+            raise SceneError(f"{model.source}: compliance: node {node!r} is a spatial "
+                             "rotational node (Euler parameters); name its translational node, "
+                             "whose translations are given")
+        return list(found.coordinates)
+    index = list(found.coordinates)
+    if model.dimension == 2:
+        partners = joined_rotational_nodes(model, node)
+        if len(partners) == 1:
+            index += list(nodes[partners[0]].coordinates)
+    return index
+
+
+def joined_rotational_nodes(model: Model, node: str) -> list[str]:
+    """The rotational nodes the elements pair with translational `node` (same end p or q)."""
+    found = []
+    for group in model.groups:
+        kinds = group.kind.node_kinds
+        roles = getattr(group.kind, "node_roles", None)
+        if roles is None or "rotational" not in kinds:
+            continue
+        for row in group.coordinate_index:
+            names = list(dict.fromkeys(model.coordinate_node[row].tolist()))
+            for name, kind, role in zip(names, kinds, roles, strict=True):
+                if name != node or kind != "translational":
+                    continue
+                found += [other for other, k, r in zip(names, kinds, roles, strict=True)
+                          if k == "rotational" and r == role and other not in found]
+    return found
+
+
+@blas_threads()
+def compliance(model: Model, node: str, *, solution: StaticSolution | None = None,
+               linear_model: LinearModel | None = None) -> Compliance:
+    """The compliance matrix of `node` and its support stiffness, from K = K0 + G0.
+
+    In the configuration of `solution` (default: the static equilibrium under the scene's
+    loads), or of `linear_model` when given (it is reused, as `flexure analyze` does for
+    several nodes). Returns a Compliance (m/N, rad/(N m), ...). SceneError names an unknown
+    node; FlexureError a singular tangent stiffness (a buckling or a mechanism).
+    """
+    from .linearization import linearize
+
+    index = node_coordinates(model, node)
+    lin = linear_model or linearize(model, solution)
+    DF = lin.DF
+    try:
+        solved = np.linalg.solve(lin.K, DF.T)  # K^-1 DF^T (NDOF, NX)
+    except np.linalg.LinAlgError:
+        solved = np.full(DF.T.shape, np.nan)
+    if not np.all(np.isfinite(solved)):
+        raise FlexureError(f"{model.source}: compliance of node {node!r}: the tangent "
+                           f"stiffness K0 + G0 of {model.name!r} is singular in this "
+                           "configuration (at a buckling load, or a mechanism)")
+    C = DF[index] @ solved[:, index]
+    C = 0.5 * (C + C.T)  # symmetric in exact arithmetic
+    translational = np.isin(model.coordinate_axis[index].astype(str), ("x", "y", "z"))
+    # "Zero" is measured against the largest compliance in the model, a rotation's taken as
+    # the motion it gives a point at the model's length scale L (rad/(N m) times L^2 is m/N)
+    L = length_scale(model)
+    every = np.einsum("ij,ji->i", DF, solved)
+    every[~np.isin(model.coordinate_axis.astype(str), ("x", "y", "z"))] *= L**2
+    as_lengths = np.abs(np.diag(C)) * np.where(translational, 1.0, L**2)
+    zero = as_lengths <= UNREACHABLE * np.max(np.abs(every), initial=0.0)
+    C[zero, :] = 0.0
+    C[:, zero] = 0.0
+    names = [model.coordinate_names[i] for i in index]
+    coordinate_units = ["m" if t else "rad" for t in translational]
+    load_units = ["N" if t else "N m" for t in translational]
+    units = [[f"{c}/{_group(f)}" for f in load_units] for c in coordinate_units]
+    stiffness_units = [[f"{f}/{c}" for c in coordinate_units] for f in load_units]
+    unreachable = [name for name, z in zip(names, zero, strict=True) if z]
+    notes = []
+    if unreachable:
+        notes.append(f"{', '.join(unreachable)} cannot move through the DOFs (fixed or held "
+                     "by a prescribed deformation): their compliance is zero")
+    reachable = [k for k, z in enumerate(zero) if not z]
+    if reachable:
+        d = 1.0 / np.sqrt(np.diag(C)[reachable])
+        scaled = d[:, None] * C[np.ix_(reachable, reachable)] * d[None, :]  # unit diagonal
+        singular_values = np.linalg.svd(scaled, compute_uv=False)
+        rank = int(np.sum(singular_values > singular_values[0] / SINGULAR))
+        if rank < len(reachable):
+            notes.append(f"the DOFs move {', '.join(names[k] for k in reachable)} only "
+                         f"together (rank {rank} of {len(reachable)})")
+    stiffness = None
+    if not notes:
+        stiffness = np.linalg.inv(C)
+        stiffness = 0.5 * (stiffness + stiffness.T)
+    note = "; ".join(notes) + (": the matrix is singular" if notes else "")
+    return Compliance(node, names, C, stiffness, units, stiffness_units, unreachable, note)
+
+
+def _group(unit):
+    """A unit as a denominator: "N m" -> "(N m)"."""
+    return f"({unit})" if " " in unit else unit
