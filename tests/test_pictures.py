@@ -222,3 +222,15 @@ def test_a_scene_without_elements_has_no_picture(tmp_path, capsys, monkeypatch, 
     with pytest.raises(Exception, match="no truss or beam"):
         pictures.plot_shape(load_scene(scene), np.zeros(2), tmp_path / "never.png")
 
+
+
+def test_readme_figure_is_what_the_command_draws(tmp_path, capsys):
+    """examples/figures/stage_planar_3dof_modes.png is the README's command's picture
+    (compared in pixel size: the bytes differ between matplotlib versions)."""
+    path = tmp_path / "modes.png"
+    code, _, _ = run(capsys, "analyze", "stage_planar_3dof", "--modes", "3", "--plot-modes",
+                     path)
+    assert code == 0
+    with Image.open(path) as drawn, Image.open(FIGURE) as committed:
+        assert drawn.size == committed.size
+    assert 0.5 < path.stat().st_size / FIGURE.stat().st_size < 2.0
