@@ -166,6 +166,20 @@ def test_animation_is_a_gif_with_one_frame_per_chosen_time(tmp_path):
     assert scale == pytest.approx(pictures.FRACTION * 0.1 / 1e-3, rel=0.05)
 
 
+def test_a_spatial_animation_is_drawn_in_3d(tmp_path):
+    model = load_scene("stage_spatial_1dof")
+    q0 = static_equilibrium(model).q
+    result = SimpleNamespace(times=np.linspace(0.0, 0.01, 4),
+                             q=q0 + np.linspace(0.0, 1e-3, 4)[:, None])  # m along the DOF
+    path = tmp_path / "spatial.gif"
+    pictures.animate(model, result, path)
+    with Image.open(path) as image:
+        assert image.format == "GIF" and image.n_frames == 4
+    xs = pictures.coordinates_along(model, result.q)
+    assert xs.shape == (4, model.nx)  # each frame's configuration holds its DOF value
+    np.testing.assert_allclose(xs[:, model.dof_coordinates[0]], result.q[:, 0], atol=1e-12)
+
+
 # -- the command line ------------------------------------------------------------------------
 
 def test_analyze_draws_the_shape_and_the_modes(tmp_path, capsys):
