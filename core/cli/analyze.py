@@ -37,7 +37,8 @@ def register(subparsers):
     parser.add_argument("--sigma", metavar="PNG", type=output_file(PLOT_SUFFIXES),
                         help="plot the singular values (principal gains) of the transfer "
                              "matrix from the inputs to the outputs against frequency")
-    parser.set_defaults(run=run)
+    add_picture_options(parser)
+    parser.set_defaults(run=run_with_pictures)
 
 
 # The units of `static`: every stress resultant is in N, as every deformation is a length; a
@@ -262,3 +263,61 @@ def render_compliance(node, found):
         text.append(format_table(headers, rows, title=f"\nsupport stiffness of node {node} "
                                                       "(N/m, N/rad, N m/m, N m/rad)"))
     return "\n".join(text)
+
+
+# -- pictures: --plot-shape and --plot-modes (kept apart from `run`, which they wrap) ---------
+
+MODE_PANELS = 6  # the mode shapes drawn when --modes gives no count
+
+
+def add_picture_options(parser):
+    """Add --plot-shape and --plot-modes to the `analyze` parser."""
+    parser.add_argument("--plot-shape", metavar="PNG", type=output_file(PLOT_SUFFIXES),
+                        help="draw the static equilibrium's deformed shape over the undeformed "
+                             "model to this PNG (or .pdf, .svg) file, magnified so that the "
+                             "largest displacement is 10 %% of the model's size")
+    parser.add_argument("--plot-modes", metavar="PNG", type=output_file(PLOT_SUFFIXES),
+                        help="draw the mode shapes, one panel each (the N of --modes, else "
+                             f"the lowest {MODE_PANELS}), to this PNG (or .pdf, .svg) file")
+
+
+def run_with_pictures(args):
+    """`run`, then the pictures asked for. Whether the scene has anything to draw and whether
+    the picture files are distinct is checked before the analyses, so a mistake costs no run."""
+    from ..analysis.pictures import require_drawable
+    from ..scene.building import load_scene
+    from . import distinct_outputs
+
+    wanted = [("--plot-shape", args.plot_shape), ("--plot-modes", args.plot_modes)]
+    if not any(path for _, path in wanted):
+        return run(args)
+    distinct_outputs(("--plot", args.plot), ("--sigma", args.sigma), *wanted)
+    model = load_scene(args.scene, overrides=args.set)
+    for option, path in wanted:
+        if path:
+            require_drawable(model, option)
+    code = run(args)
+    if code:
+        return code
+    draw_pictures(model, args)
+    return 0
+
+
+def draw_pictures(model, args):
+    """Draw --plot-shape and --plot-modes. The equilibrium and modes are computed here again
+    rather than taken from `analyze`, whose result holds the shapes on the DOFs only; for the
+    models of flexure that costs a fraction of a second."""
+    from ..analysis.linearization import linearize
+    from ..analysis.modal import natural_frequencies
+    from ..analysis.pictures import plot_modes, plot_shape
+    from ..analysis.statics import static_equilibrium
+
+    solution = static_equilibrium(model)
+    if args.plot_shape:
+        with atomic_output(args.plot_shape, "--plot-shape") as temporary:
+            plot_shape(model, solution.x, temporary)
+    if args.plot_modes:
+        panels = args.modes if args.modes is not None and args.modes > 0 else MODE_PANELS
+        modes = natural_frequencies(model, panels, linear_model=linearize(model, solution))
+        with atomic_output(args.plot_modes, "--plot-modes") as temporary:
+            plot_modes(model, modes, temporary, count=panels)

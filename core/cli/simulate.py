@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.pictures import MAX_FRAMES
 from ..errors import SimulationError, UsageError
 from ..reporting.progress import Progress
 from ..reporting.tables import format_table
@@ -61,6 +62,11 @@ def register(subparsers):
                         help="CSV file: time and one column per output")
     parser.add_argument("--plot", type=output_file(PLOT_SUFFIXES),
                         help="PNG (or .pdf, .svg) file: the outputs against time")
+    parser.add_argument("--animate", type=output_file((".gif",)), metavar="GIF",
+                        help="GIF file: the motion over the undeformed model, magnified so "
+                             "that the largest displacement is 10 %% of the model's size, at "
+                             f"most {MAX_FRAMES} frames (recorded times nearest to equally "
+                             "spaced ones; --samples sets them)")
     parser.set_defaults(run=run)
 
 
@@ -124,14 +130,17 @@ def _is_number(text):
 
 
 def run(args):
+    from ..analysis.pictures import animate, require_drawable
     from ..scene.building import load_scene
     from ..simulation.simulation import simulate
 
     # --max-order above the method's largest order: refused by sundials.make_solver, before
     # the run
-    outputs = [("--out", args.out), ("--plot", args.plot)]
+    outputs = [("--out", args.out), ("--plot", args.plot), ("--animate", args.animate)]
     distinct_outputs(*outputs)
     model = load_scene(args.scene, overrides=args.set)
+    if args.animate:
+        require_drawable(model, "--animate")  # before the run, not after it
     inputs = parse_inputs(args.input)
     refuse_overwriting_inputs(outputs, [model.source, *_input_files(args.input)])
     output_times = (np.linspace(0.0, args.t_end, args.samples + 1) if args.samples else None)
@@ -140,8 +149,9 @@ def run(args):
                       max_order=args.max_order,
                       progress=Progress(f"flexure simulate {model.name}", after=1.0))
     print(render(result))
-    return write_outputs("flexure simulate", [("--out", args.out, result.to_csv),
-                                              ("--plot", args.plot, result.plot)])
+    return write_outputs("flexure simulate", [
+        ("--out", args.out, result.to_csv), ("--plot", args.plot, result.plot),
+        ("--animate", args.animate, lambda path: animate(model, result, path))])
 
 
 def _input_files(specs):
