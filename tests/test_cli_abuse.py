@@ -19,9 +19,10 @@ import numpy as np
 import pytest
 
 from flexure.core import ConstraintError, SceneError, build_model, load_scene, scene_path
-from flexure.core.cli import atomic_output, main, write_outputs
+from flexure.core.cli import atomic_output, write_outputs
 from flexure.core.errors import OutputError
 from flexure.core.reporting.tables import json_text
+from tests.cli_runs import run
 
 FLEXURE = str(Path(sys.executable).with_name("flexure"))  # the installed console script
 SCENES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
@@ -33,15 +34,6 @@ def scene(name, edit):
     return data
 
 
-def run(capsys, *argv):
-    """(exit code, stdout, stderr) of `flexure ARGV` in this process."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as stop:  # argparse: exit 2 with its message
-        code = stop.code
-    out, err = capsys.readouterr()
-    assert "Traceback" not in out + err
-    return code, out, err
 
 
 def refused(capsys, *argv, says):

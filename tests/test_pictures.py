@@ -11,22 +11,13 @@ from PIL import Image
 
 from flexure.core import build_model, load_scene, natural_frequencies, static_equilibrium
 from flexure.core.analysis import pictures
-from flexure.core.cli import main
+from tests.cli_runs import run
 
 PNG = b"\x89PNG\r\n\x1a\n"
 FIGURE = Path(__file__).resolve().parents[1] / "examples" / "figures" / \
     "stage_planar_3dof_modes.png"
 
 
-def run(capsys, *argv):
-    """(exit code, stdout, stderr) of `flexure ARGV` in this process."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as stop:  # argparse: exit 2 with its message
-        code = stop.code
-    out, err = capsys.readouterr()
-    assert "Traceback" not in out + err
-    return code, out, err
 
 
 def position(model, x, node):
