@@ -42,7 +42,7 @@ def test_the_generator_writes_the_committed_files(tmp_path, capsys):
 
 
 def test_the_docs_show_the_parameter_table():
-    docs = scene_path("manipulator").parents[1].parent / "docs" / "manipulator.md"
+    docs = Path(__file__).resolve().parents[1] / "docs" / "manipulator.md"
     assert manipulator.parameter_table() in docs.read_text()
 
 
