@@ -241,7 +241,7 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
         declares, e.g. "sections.leaf.EdA", "nodes.3.mass"); default `default_tunable`.
     von_mises : bool, optional
         Add the output "von_mises_max" (Pa), the largest von Mises stress at the ends of the
-        beams; the scene needs beams with a cross-section (spatial BEAMs with dimensions).
+        beams; the scene needs beams or trusses whose section gives its dimensions.
     validate : bool, optional
         Run fmpy's validation on the result.
     overrides : dict, optional
@@ -313,9 +313,9 @@ def _check_stresses(model, path):
     simulator.reset()
     names, _ = stresses_along(model, [np.concatenate([simulator.q, simulator.qdot])])
     if not names:
-        raise FMUBuildError(f"{path}: von Mises output: the scene has no beams with a "
-                            "cross-section (spatial BEAM elements whose section gives their "
-                            "dimensions), so there is no stress to report")
+        raise FMUBuildError(f"{path}: von Mises output: the scene has no beam or truss whose "
+                            "section gives its dimensions (width and height, or diameter), so "
+                            "there is no stress to report")
 
 
 def _scene_script(name, text, tunable, von_mises):

@@ -46,7 +46,8 @@ def register(subparsers):
                        help="expose no scene keys (only the integrator parameters)")
     build.add_argument("--von-mises", action="store_true",
                        help="add the output von_mises_max (Pa): the largest von Mises stress "
-                            "at the beam ends (scenes with spatial beams of given section)")
+                            "at the beam ends (beams and trusses whose section gives its "
+                            "dimensions)")
     build.add_argument("--no-validate", action="store_true",
                        help="skip fmpy's validation of the result")
     build.set_defaults(run=run_build)

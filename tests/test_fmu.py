@@ -583,5 +583,5 @@ def test_von_mises_output_on_request(tmp_path):
     slave.close()
     assert np.nanmax(expected) > 0
     # truss_1dof_x gives its truss's EA alone (planar beams with width and height have stresses)
-    with pytest.raises(FMUBuildError, match="no beams with a cross-section"):
+    with pytest.raises(FMUBuildError, match="no beam or truss whose section gives its dimensions"):
         build_scene_fmu("truss_1dof_x", tmp_path / "planar.fmu", von_mises=True)
