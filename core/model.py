@@ -100,6 +100,9 @@ class Model:
     chosen_dofs: tuple = ()
     # The node table: every node with its coordinates, in coordinate order
     nodes: tuple = ()
+    # The scene dictionary the model was built from (overrides applied; the scene's own
+    # statuses, before meshing and DOF choice): what `to_toml` writes back
+    scene: dict | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         # what each coordinate is, from the node table: its node and its axis

@@ -17,6 +17,7 @@ of flexure.core.scene.sections.beam_properties.
 
 from __future__ import annotations
 
+import copy
 import importlib.resources
 import math
 import tomllib
@@ -202,6 +203,7 @@ class _SceneBuilder(SceneReader, ElementBuilding):
             source=self.source,
             node_inertias=self.node_inertias,
             tunable=tunable,
+            scene=copy.deepcopy(self.data),
         )
         if not self.lists_dofs and model.ndof > 0:  # none listed: flexure chooses a valid set
             chosen = choose_dofs(model)

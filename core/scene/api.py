@@ -1,0 +1,132 @@
+"""Building a scene in Python, in the spirit of SPACAR Light: nodes, sections, elements,
+releases, inputs and outputs added one call each, then `build()` to a Model.
+
+    from flexure.core import Scene
+
+    s = Scene("stage", dimension=2)
+    s.section("leaf", E=2.1e11, width=0.018, height=0.0005, rho=7850.0)
+    s.section("bar", rho_A=2.06)
+    s.node("1", position=[0.0, 0.0], fixed=["x", "y"])
+    s.node("2", angle=0.0, fixed=["phi"])
+    ...
+    s.element("leaf_left", "PLBEAM", ["1", "2", "3", "4"], section="leaf",
+              released=["e2", "e3"])
+    s.input("F", node="3", coordinate="x")
+    s.output("x", node="3", coordinate="x")
+    model = s.build()          # the same Model the TOML scene builds, checked the same way
+    text = s.to_toml()         # the scene file; load_scene of it gives the same Model again
+
+A `Scene` holds the scene dictionary of the TOML format (docs/scene-format.md) and nothing
+else: every key a call takes is that format's key (SI units: m, rad, kg, N, s, Pa), and every
+check is `build_model`'s, made when `build()` runs, so a mistake reads as it would in a file
+("<scene stage>: nodes.3.mass: expected a value >= 0.0, got -0.2"). A call refuses only what
+would lose a value: a name given twice. `to_toml(model)` writes back the scene a model was
+built from (`Model.scene`).
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import TYPE_CHECKING
+
+from ..errors import SceneError
+from .building import build_model
+from .scene_writer import scene_toml
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+
+__all__ = ["Scene", "to_toml"]
+
+
+class Scene:
+    """A scene being built in Python; `build()` makes its Model, `to_toml()` its file."""
+
+    def __init__(self, name: str, *, dimension: int = 2, gravity=None, description: str = "",
+                 tunable=()):
+        header = {"name": name, "dimension": dimension}
+        if description:
+            header["description"] = description
+        if gravity is not None:
+            header["gravity"] = list(gravity)
+        if tunable:
+            header["tunable"] = list(tunable)
+        self.data = {"scene": header, "sections": {}, "nodes": {}, "elements": {}}
+
+    @property
+    def source(self) -> str:
+        """How messages name this scene."""
+        return f"<scene {self.data['scene']['name']}>"
+
+    def section(self, name: str, **properties) -> Scene:
+        """A [sections.NAME]: E (Pa), width, height, diameter (m), rho (kg/m^3), or the
+        properties directly (EA N, EI N m^2, rho_A kg/m, damping EdA N s, ...)."""
+        return self._add("sections", name, properties)
+
+    def node(self, name: str, **keys) -> Scene:
+        """A [nodes.NAME]: position (m) for a translational node, angle (rad, planar) or
+        rotation (rotation vector, rad, spatial) for a rotational one; fixed, dof, mass (kg),
+        inertia (kg m^2), force (N), moment (N m)."""
+        return self._add("nodes", name, keys)
+
+    def element(self, name: str, type: str, nodes, *, section: str, **keys) -> Scene:
+        """An [elements.NAME] of `type` (PLTRUSS, PLBEAM, TRUSS, BEAM) on `nodes`; released,
+        dof, segments, y_axis (BEAM) as in the scene format."""
+        return self._add("elements", name, {"type": type, "nodes": list(nodes),
+                                            "section": section, **keys})
+
+    def release(self, element: str, *deformations: str) -> Scene:
+        """Release deformations of an element already added (SPACAR's RLSE)."""
+        table = self._existing("elements", element)
+        released = list(table.get("released", []))
+        table["released"] = released + [d for d in deformations if d not in released]
+        return self
+
+    def input(self, name: str, *, node: str, coordinate: str) -> Scene:
+        """An [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate."""
+        return self._add("inputs", name, {"node": node, "coordinate": coordinate})
+
+    def output(self, name: str, *, node: str, coordinate: str,
+               quantity: str = "position") -> Scene:
+        """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate."""
+        return self._add("outputs", name, {"node": node, "coordinate": coordinate,
+                                           "quantity": quantity})
+
+    def buckling_load(self, node: str, force) -> Scene:
+        """Add a force (N) to the buckling analysis' reference load ([buckling] forces)."""
+        forces = self.data.setdefault("buckling", {"forces": []})["forces"]
+        forces.append({"node": node, "force": list(force)})
+        return self
+
+    def build(self, *, check: bool = True) -> Model:
+        """The Model, built and checked as `build_model` checks a scene file."""
+        return build_model(copy.deepcopy(self.data), source=self.source,
+                           default_name=self.data["scene"]["name"], check=check)
+
+    def to_toml(self, header: str = "") -> str:
+        """The scene file's text (`load_scene` of it builds the same Model)."""
+        return scene_toml(self.data, header)
+
+    def _add(self, table, name, entry):
+        entries = self.data.setdefault(table, {})
+        if name in entries:
+            raise SceneError(f"{self.source}: {table}.{name}: given twice; change it in "
+                             f"scene.data['{table}']['{name}'] instead")
+        entries[name] = copy.deepcopy(entry)
+        return self
+
+    def _existing(self, table, name):
+        entries = self.data.get(table, {})
+        if name not in entries:
+            raise SceneError(f"{self.source}: {table}.{name}: not added yet; known: "
+                             f"{', '.join(entries) or 'none'}")
+        return entries[name]
+
+
+def to_toml(model: Model, header: str = "") -> str:
+    """The scene file of the scene `model` was built from (after its overrides, before
+    meshing and DOF choice, which building it again repeats)."""
+    if model.scene is None:
+        raise SceneError(f"{model.source}: model {model.name!r} was not built from a scene "
+                         "(it has none to write)")
+    return scene_toml(model.scene, header)
