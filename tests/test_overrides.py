@@ -278,3 +278,8 @@ def test_the_loop_refuses_overrides_of_a_built_model():
     with pytest.raises(LoopError, match="overrides apply to a scene file or name, not to a "
                                         "built Model"):
         run_loop(load_scene(SCENE), overrides={"nodes.3.mass": 0.2})
+
+
+def test_overrides_that_are_not_a_mapping_are_named():
+    with pytest.raises(SceneError, match="overrides: expected a mapping .* got a str"):
+        load_scene("stage_planar_1dof", overrides="sections.leaf.height=1e-3")

@@ -112,5 +112,10 @@ def test_a_name_given_twice_or_unknown_is_refused():
 
 def test_a_model_without_a_scene_has_nothing_to_write():
     model = dataclasses.replace(load_scene("truss_1dof_x"), scene=None)
-    with pytest.raises(SceneError, match="was not built from a scene"):
+    with pytest.raises(SceneError, match="expected a Model built from a scene, got Model"):
         to_toml(model)
+
+
+def test_to_toml_of_something_else_than_a_model_is_named():
+    with pytest.raises(SceneError, match="to_toml: expected a Model built from a scene, got dict"):
+        to_toml({"scene": {}})

@@ -130,16 +130,17 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
     index = node_coordinates(model, node)
     lin = linear_model or linearize(model, solution)
     DF = lin.DF
-    try:
-        solved = np.linalg.solve(lin.K, DF.T)  # K^-1 DF^T (NDOF, NX)
-    except np.linalg.LinAlgError:
-        solved = np.full(DF.T.shape, np.nan)
-    if not np.all(np.isfinite(solved)):
-        raise FlexureError(f"{model.source}: compliance of node {node!r}: the tangent "
-                           f"stiffness K0 + G0 of {model.name!r} is singular in this "
-                           "configuration (at a buckling load, or a mechanism)")
+    singular = FlexureError(f"{model.source}: compliance of node {node!r}: the tangent "
+                            f"stiffness K0 + G0 of {model.name!r} is singular in this "
+                            "configuration (at a buckling load, a mechanism, or DOFs without "
+                            "stiffness as in a kinematic model)")
+    solved = _solve_regular(lin.K, DF.T)  # K^-1 DF^T (NDOF, NX), None where K is singular
+    if solved is None:
+        raise singular
     C = DF[index] @ solved[:, index]
     C = 0.5 * (C + C.T)  # symmetric in exact arithmetic
+    if np.any(np.diag(C) < 0.0):  # a stable equilibrium's compliance is positive semidefinite
+        raise singular
     translational = np.isin(model.coordinate_axis[index].astype(str), ("x", "y", "z"))
     # "Zero" is measured against the largest compliance in the model, a rotation's taken as
     # the motion it gives a point at the model's length scale L (rad/(N m) times L^2 is m/N)
@@ -175,6 +176,30 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
         stiffness = 0.5 * (stiffness + stiffness.T)
     note = "; ".join(notes) + (": the matrix is singular" if notes else "")
     return Compliance(node, names, C, stiffness, units, stiffness_units, unreachable, note)
+
+
+# A tangent stiffness whose reciprocal condition estimate (LU, LAPACK's gecon, 1-norm) is below
+# this is singular for the compliance: its solution would carry no significant digit.
+SINGULAR_RCOND = 1e-13
+
+
+def _solve_regular(K, rhs):
+    """K^-1 rhs, or None when K is singular or nearly so (its condition estimate)."""
+    import warnings
+
+    import scipy.linalg
+
+    try:
+        with warnings.catch_warnings():  # an exactly singular K is answered by gecon below
+            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+            lu, piv = scipy.linalg.lu_factor(K, check_finite=True)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    rcond, info = scipy.linalg.lapack.dgecon(lu, np.linalg.norm(K, 1), norm="1")
+    if info != 0 or not rcond > SINGULAR_RCOND:
+        return None
+    solved = scipy.linalg.lu_solve((lu, piv), rhs)
+    return solved if np.all(np.isfinite(solved)) else None
 
 
 def _group(unit):

@@ -125,7 +125,7 @@ class EngineData:
                 pieces.append(np.ascontiguousarray(Mp, float).ravel())
                 size += Mp.size
                 row[G_GRAVITY_OFFSET] = offsets["data"] + size
-                pieces.append(assembly._point_gravity(group, model.gravity).astype(float))
+                pieces.append(assembly.point_gravity(group, model.gravity).astype(float))
                 size += P
                 # the entries of Mp that any element of the group fills (flat p P + q): the
                 # element masses are sparse (a BEAM's: 72 of 24 x 24), and the engine's

@@ -166,7 +166,7 @@ class Inertia:
         result += self.lumped * self._translation_gravity(g)
         for group, Mp in self.groups:
             _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
-            g_points = _point_gravity(group, g)
+            g_points = point_gravity(group, g)
             scatter_vector(result, group, np.einsum("npi,npr,r->ni", Dp, Mp, g_points))
         return result
 
@@ -178,7 +178,7 @@ class Inertia:
             return result
         for group, Mp in self.groups:
             _, _, D2p = group.kind.inertia_points(group.local(x), group.reference, order=2)
-            weights = Mp @ _point_gravity(group, model.gravity)
+            weights = Mp @ point_gravity(group, model.gravity)
             scatter_matrix(result, group, np.einsum("np,npij->nij", weights, D2p))
         return result
 
@@ -192,7 +192,7 @@ class Inertia:
         return per_coordinate
 
 
-def _point_gravity(group, g):
+def point_gravity(group, g):
     """Gravity on the inertia points: g on position points, zero on tangent points."""
     return np.concatenate(
         [g if kind == "position" else np.zeros_like(g) for kind in group.kind.inertia_point_kinds]

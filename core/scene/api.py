@@ -126,7 +126,7 @@ class Scene:
 def to_toml(model: Model, header: str = "") -> str:
     """The scene file of the scene `model` was built from (after its overrides, before
     meshing and DOF choice, which building it again repeats)."""
-    if model.scene is None:
-        raise SceneError(f"{model.source}: model {model.name!r} was not built from a scene "
-                         "(it has none to write)")
+    if getattr(model, "scene", None) is None:
+        raise SceneError(f"{getattr(model, 'source', '<to_toml>')}: to_toml: expected a Model "
+                         f"built from a scene, got {type(model).__name__} without one")
     return scene_toml(model.scene, header)

@@ -19,6 +19,7 @@ that is not one is taken as a string (`--set elements.bar.type=PLTRUSS`).
 import copy
 import datetime
 import tomllib
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -42,6 +43,9 @@ def apply_overrides(data: dict, overrides, *, source: str = "<dict>") -> dict:
     SceneError "`source`: --set KEY: what is wrong" otherwise. `data` is not changed.
     """
     result = copy.deepcopy(data)
+    if not isinstance(overrides or {}, Mapping):
+        raise SceneError(f"{source}: overrides: expected a mapping {{dotted scene key: value}}, "
+                         f"got a {type(overrides).__name__}")
     for key, value in dict(overrides or {}).items():
         table, name = _target(result, key, source)
         table[name] = _toml_value(key, value, source)
