@@ -44,7 +44,7 @@ def register(subparsers):
         description="Design a PID-like controller for the requested cross-over on the "
                     "scene's linear model, add the feedforward of its low-frequency model, "
                     "and track a third-order move on the nonlinear plant. Reports the "
-                    "largest tracking error against the target of 0.1 %% of the stroke.")
+                    "largest tracking error against the target of 0.1 % of the stroke.")
     parser.add_argument("scene", nargs="?", default="stage_planar_1dof",
                         help="scene file or built-in scene name (default stage_planar_1dof)")
     add_set_option(parser)

@@ -457,3 +457,12 @@ def test_fmu_build_refuses_an_output_named_like_the_von_mises_output(capsys, pla
     (places / "s.toml").write_text(data)
     refused(capsys, "fmu", "build", "s.toml", "--von-mises",
             says="outputs.von_mises_max: --von-mises adds an output of that name")
+
+
+@pytest.mark.parametrize("command", [["loop"], ["analyze"], ["fmu", "build"], ["reduce"],
+                                     ["simulate"], ["sweep"], ["import"]])
+def test_help_shows_percent_signs_as_typed(command, capsys):
+    """argparse %-formats help strings but not descriptions: a doubled sign in a description
+    prints doubled ("0.1 %%" in `loop --help`)."""
+    code, out, err = run(capsys, *command, "--help")
+    assert code == 0 and "%%" not in out + err
