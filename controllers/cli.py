@@ -30,7 +30,7 @@ _finite = number()
 
 
 def stroke(text):
-    """argparse type of --stroke: a finite length (m), not zero."""
+    """argparse type of --stroke: a finite length (m) or angle (rad), not zero."""
     value = _finite(text)
     if value == 0:
         raise argparse.ArgumentTypeError(f"expected a nonzero length (m), got {text!r}")
@@ -49,7 +49,7 @@ def register(subparsers):
                         help="scene file or built-in scene name (default stage_planar_1dof)")
     add_set_option(parser)
     parser.add_argument("--stroke", type=stroke, default=1e-3, metavar="S",
-                        help="stroke of the move in m (default 0.001)")
+                        help="stroke of the move in m, or in rad on an angle (default 0.001)")
     parser.add_argument("--duration", type=positive, default=1.0, metavar="T",
                         help="duration of the move in s (default 1)")
     parser.add_argument("--fs", type=positive, default=4000.0, metavar="HZ",
@@ -123,12 +123,12 @@ def render(s):
         ("scene", s["scene"]), ("plant", s["plant"]),
         ("controller", f"feedback + {s['feedforward_kind']} feedforward" if s["feedforward"]
          else "feedback alone"),
-        ("stroke (m)", s["stroke"]), ("duration (s)", s["duration"]),
+        (f"stroke ({s['units']['position']})", s["stroke"]), ("duration (s)", s["duration"]),
         ("sample rate (Hz)", s["sample_rate_hz"]),
         ("cross-over (rad/s)", s["crossover_rad_s"]),
         ("phase margin (deg)", s["phase_margin_deg"]), ("gain margin", s["gain_margin"]),
         ("modulus margin", s["modulus_margin"]),
-        ("max |error| (m)", s["max_abs_error"]),
+        (f"max |error| ({s['units']['position']})", s["max_abs_error"]),
         ("error / stroke", s["error_ratio"]), ("target", s["target"]),
         ("wall time (s)", s["wall_time_s"]),
     ]

@@ -16,7 +16,8 @@ class LoopResult:
     """The samples of a closed-loop run and its summary.
 
     t (N+1,) s; reference, position, error (N+1, n_loops) m; force, feedforward
-    (N+1, n_loops) N, the force held from t_k (the last row repeats the one before).
+    (N+1, n_loops) N, the force held from t_k (the last row repeats the one before). A loop on
+    a planar angle has rad and N m instead (`units`).
     """
 
     t: np.ndarray
@@ -28,6 +29,11 @@ class LoopResult:
     design: dict
     settings: dict = field(default_factory=dict)
     wall_time_s: float = 0.0
+
+    @property
+    def units(self) -> dict:
+        """{"position": "m" or "rad", "force": "N" or "N m"}: the moving loop's units."""
+        return self.settings.get("units", {"position": "m", "force": "N"})
 
     @property
     def error(self) -> np.ndarray:
@@ -63,6 +69,7 @@ class LoopResult:
             "loops": self.design["loops"],
             "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
+            "units": self.units,
         }
 
     def plot(self, path, *, title: str | None = None):
@@ -73,32 +80,37 @@ class LoopResult:
         import matplotlib.pyplot as plt
 
         axis = self.settings.get("axis", 0)
+        length, force_unit = self.units["position"], self.units["force"]
+        what = "angle" if length == "rad" else "position"
         fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
         axes[0].plot(self.t, self.reference[:, axis] * 1e3, label="reference")
-        axes[0].plot(self.t, self.position[:, axis] * 1e3, "--", label="position")
-        axes[0].set_ylabel("position (mm)")
+        axes[0].plot(self.t, self.position[:, axis] * 1e3, "--", label=what)
+        axes[0].set_ylabel(f"{what} (m{length})")
         axes[0].legend(loc="lower right")
         band = TARGET * abs(self.stroke) * 1e6
         error = self.error[:, axis] * 1e6
         axes[1].plot(self.t, error, label="error r - y")
         if np.max(np.abs(error)) > 0.05 * band:  # the target band would flatten the error
-            axes[1].axhline(band, color="r", lw=0.8, ls=":", label=f"target +-{band:.3g} um")
+            axes[1].axhline(band, color="r", lw=0.8, ls=":",
+                            label=f"target +-{band:.3g} u{length}")
             axes[1].axhline(-band, color="r", lw=0.8, ls=":")
         else:
-            axes[1].text(0.01, 0.04, f"target +-{band:.3g} um: far off this scale",
+            axes[1].text(0.01, 0.04, f"target +-{band:.3g} u{length}: far off this scale",
                          transform=axes[1].transAxes, va="bottom", fontsize=9, color="r")
-        axes[1].set_ylabel("error (um)")
+        axes[1].set_ylabel(f"error (u{length})")
         axes[1].legend(loc="upper right")
-        axes[2].step(self.t, self.force[:, axis], where="post", label="total force")
+        axes[2].step(self.t, self.force[:, axis], where="post",
+                     label="total moment" if force_unit == "N m" else "total force")
         axes[2].step(self.t, self.feedforward[:, axis], where="post", ls="--",
                      label="feedforward")
-        axes[2].set_ylabel("force (N)")
+        axes[2].set_ylabel(f"{'moment' if force_unit == 'N m' else 'force'} ({force_unit})")
         axes[2].set_xlabel("time (s)")
         axes[2].legend(loc="upper right")
         s = self.summary()
         fig.suptitle(title or (
-            f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} mm, "
-            f"max |e| = {s['max_abs_error'] * 1e6:.3g} um = {100 * s['error_ratio']:.3g} % "
+            f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} m{length}, "
+            f"max |e| = {s['max_abs_error'] * 1e6:.3g} u{length} = "
+            f"{100 * s['error_ratio']:.3g} % "
             f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"), fontsize=10)
         fig.tight_layout()
         fig.savefig(path, dpi=110)

@@ -100,10 +100,15 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
         feedforward=feedforward, settle=settle, axis=axis,
         feedforward_model=feedforward_model, **design_options)
     kind = feedforward_kind(feedforward)
+    moving = design.pairs[axis]
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
                 "feedforward_kind": kind or "none",
                 "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
-                "method": method, "rtol": rtol}
+                "method": method, "rtol": rtol,
+                # the moving loop's units: a force (N) and a position (m), or on a planar
+                # angle a moment (N m) and an angle (rad)
+                "units": {"force": model.inputs[moving.input_index].unit.replace(".", " "),
+                          "position": model.outputs[moving.output_index].unit}}
     if plant == "inprocess":  # the engine's compilation (first use only) is not the loop's
         prepare(model, loop_method=method)
     start = time.perf_counter()
