@@ -30,6 +30,7 @@ import numpy as np
 from ..errors import FlexureError, SceneError
 from ..mechanics.kinematics import length_scale
 from ..numerics.blas import blas_threads
+from ..numerics.conditioning import lu_and_rcond
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
@@ -185,20 +186,12 @@ SINGULAR_RCOND = 1e-13
 
 def _solve_regular(K, rhs):
     """K^-1 rhs, or None when K is singular or nearly so (its condition estimate)."""
-    import warnings
-
     import scipy.linalg
 
-    try:
-        with warnings.catch_warnings():  # an exactly singular K is answered by gecon below
-            warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-            lu, piv = scipy.linalg.lu_factor(K, check_finite=True)
-    except (ValueError, np.linalg.LinAlgError):
+    factors, rcond = lu_and_rcond(K)
+    if not rcond > SINGULAR_RCOND:
         return None
-    rcond, info = scipy.linalg.lapack.dgecon(lu, np.linalg.norm(K, 1), norm="1")
-    if info != 0 or not rcond > SINGULAR_RCOND:
-        return None
-    solved = scipy.linalg.lu_solve((lu, piv), rhs)
+    solved = scipy.linalg.lu_solve(factors, rhs)
     return solved if np.all(np.isfinite(solved)) else None
 
 

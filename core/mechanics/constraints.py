@@ -16,7 +16,6 @@ relative threshold of 1e-9 on the singular values.
 
 from __future__ import annotations
 
-import warnings
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -24,6 +23,7 @@ import numpy as np
 from ..errors import ConstraintError
 from ..model import DOF
 from ..numerics.blas import blas_threads
+from ..numerics.conditioning import lu_and_rcond
 from . import assembly
 from .kinematics import Kinematics
 
@@ -187,17 +187,9 @@ def _clearly_regular(matrix):
     estimate (LAPACK's gecon, 1-norm) above CLEAR_RCOND. An O(n^3 / 3) test where the SVD
     costs about ten times more (1.5 s on a 1 700-coordinate model); whatever it does not
     clear goes to the SVD, which decides with RANK_TOLERANCE and names what is wrong."""
-    import scipy.linalg
-
     if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
         return matrix.shape == (0, 0)
-    if not np.all(np.isfinite(matrix)):
-        return False
-    with warnings.catch_warnings():  # an exactly singular matrix is an answer here
-        warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-        lu, _ = scipy.linalg.lu_factor(matrix, check_finite=False)
-    rcond, info = scipy.linalg.lapack.dgecon(lu, np.linalg.norm(matrix, 1), norm="1")
-    return info == 0 and rcond > CLEAR_RCOND
+    return lu_and_rcond(matrix)[1] > CLEAR_RCOND
 
 
 def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
