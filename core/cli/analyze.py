@@ -126,10 +126,12 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     return jsonable(result)
 
 
-def run(args):
+def run(args, model=None):
+    """Run `flexure analyze` on `args`; `model` is the scene's, when the caller loaded it."""
     from ..scene.building import load_scene
 
-    model = load_scene(args.scene, overrides=args.set)
+    if model is None:
+        model = load_scene(args.scene, overrides=args.set)
     static, modes = args.static, args.modes
     nodes = [name for names in args.compliance or [] for name in names]
     if not (static or modes is not None or args.buckling is not None or args.state_space
@@ -296,7 +298,7 @@ def run_with_pictures(args):
     for option, path in wanted:
         if path:
             require_drawable(model, option)
-    code = run(args)
+    code = run(args, model)  # the model loaded once, for the checks above and the analyses
     if code:
         return code
     draw_pictures(model, args)
