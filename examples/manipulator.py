@@ -103,9 +103,10 @@ def value(name, parameters=None):
 class SceneParts:
     """The nodes, sections and elements of one scene as it is being assembled."""
 
-    def __init__(self, parameters, *, dynamic):
+    def __init__(self, parameters, *, dynamic, frozen=()):
         self.p = parameters
         self.dynamic = dynamic
+        self.frozen = tuple(frozen)  # deformations a dynamic scene prescribes zero
         self.nodes = {}
         self.elements = {}
         self.inputs = {}
@@ -168,8 +169,6 @@ class SceneParts:
         else:
             element["released"] = [e for e in DEFORMATIONS if e not in prescribed]
         self.elements[name] = element
-
-    frozen = ()
 
 
 DEFORMATIONS = ("e1", "e2", "e3", "e4", "e5", "e6")
@@ -325,8 +324,7 @@ def scene_stage(parameters=PARAMETERS):
 
 def scene_manipulator(parameters=PARAMETERS, *, frozen=()):
     """The whole manipulator, dynamic: every flexure meshed, `frozen` deformations prescribed."""
-    parts = SceneParts(parameters, dynamic=True)
-    parts.frozen = tuple(frozen)
+    parts = SceneParts(parameters, dynamic=True, frozen=frozen)
     starts = []
     for i, angle in enumerate(BODY_ANGLES, start=1):
         radial = np.array([math.cos(math.radians(angle)), math.sin(math.radians(angle)), 0.0])

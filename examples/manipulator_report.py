@@ -39,6 +39,7 @@ from flexure.core import (
 )
 from flexure.core.analysis.modal import describe_mode
 from flexure.core.analysis.statespace import frequency_grid, plot_principal_gains
+from flexure.core.numerics.rotations import to_rotation_vector
 
 MODELS = ("manipulator", "manipulator_e1", "manipulator_reduced")
 FIGURES = Path(__file__).resolve().parent / "figures"
@@ -108,10 +109,7 @@ def effector_pose(model, x, x0):
     names = model.coordinate_names
     position = [x[names.index(f"E.{a}")] - x0[names.index(f"E.{a}")] for a in "xyz"]
     euler = np.array([x[names.index(f"E_r.lambda{k}")] for k in range(4)])
-    vector = euler[1:]
-    angle = 2.0 * math.atan2(np.linalg.norm(vector), euler[0])
-    rotation = vector / np.linalg.norm(vector) * angle if angle > 0.0 else np.zeros(3)
-    return np.array(position), rotation
+    return np.array(position), to_rotation_vector(euler)  # from the reference orientation
 
 
 def workspace(amplitudes):
