@@ -19,6 +19,7 @@ __version__ = "0.1.0"
 # public name -> the submodule that defines it (imported by __getattr__ on first use)
 _LAZY = {
     "Compliance": "analysis.compliance", "compliance": "analysis.compliance",
+    "InverseStatics": "analysis.inverse_statics", "inverse_statics": "analysis.inverse_statics",
     "LinearModel": "analysis.linearization", "linearize": "analysis.linearization",
     "Modes": "analysis.modal", "buckling_load_factors": "analysis.modal",
     "natural_frequencies": "analysis.modal",
@@ -30,6 +31,7 @@ _LAZY = {
     "Kinematics": "mechanics.kinematics",
     "Mechanics": "mechanics.mechanics",
     "Model": "model",
+    "blas_threads": "numerics.blas",
     "apply_overrides": "scene.overrides",
     "build_model": "scene.building", "builtin_scenes": "scene.building",
     "load_scene": "scene.building", "scene_path": "scene.building",
@@ -44,9 +46,10 @@ _LAZY = {
 }
 
 __all__ = [
-    "Compliance", "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics",
+    "Compliance", "ConstraintError", "ConvergenceError", "FlexureError", "InverseStatics",
+    "Kinematics", "inverse_statics",
     "LinearModel", "METHODS",
-    "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
+    "Mechanics", "Model", "Modes", "blas_threads", "SceneError", "SimulationError", "SimulationResult",
     "Simulator", "StaticSolution", "apply_overrides", "beam_stresses", "buckling_load_factors",
     "build_model",
     "builtin_scenes", "check_exact_constraint", "choose_dofs", "compliance", "default_atol",

@@ -55,15 +55,28 @@ class StaticSolution:
 @blas_threads()
 def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_steps: int = 10,
                        tolerance: float = 1e-11, max_iterations: int = 30,
-                       mechanics: Mechanics | None = None) -> StaticSolution:
+                       mechanics: Mechanics | None = None,
+                       start: StaticSolution | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
 
+    `start`, an equilibrium of the same model under nearby loads, is where Newton starts at
+    the full load (a path of equilibria, e.g. inverse statics along a move); if it does not
+    converge from there, the load is stepped from the unloaded configuration as without it.
     Returns a StaticSolution; raises ConvergenceError naming the load step that failed.
     """
     mech = mechanics or Mechanics(model)
     kin = mech.kinematics
-    config = mech.initial_configuration()
     scale = kin.length_scale
+    if start is not None:
+        try:
+            config, iterations = _newton(mech, start.config, 1.0, loads, tolerance * scale,
+                                         max_iterations)
+        except ConvergenceError:
+            pass
+        else:
+            _, _, sigma = mech.static_balance(config, 1.0, loads)
+            return StaticSolution(model, config, sigma, 1.0, iterations)
+    config = mech.initial_configuration()
     total_iterations = 0
     # Without loads and gravity there is nothing to step: the reference configuration (all
     # deformations zero) balances, and one Newton step at full load confirms it.
