@@ -71,6 +71,18 @@ class LowFrequencyModel:
         eq = 0.0 if self.equilibrium is None else np.asarray(self.equilibrium, float)
         return a @ self.mass.T + v @ self.damping.T + (p - eq) @ self.stiffness.T
 
+    def state_space(self):
+        """The model as a continuous control.StateSpace from the forces (N) to the outputs'
+        displacements from equilibrium (m): states [y, y'], y'' = M^-1 (u - C y' - K y)."""
+        import control
+
+        n = self.mass.shape[0]
+        inverse = np.linalg.inv(self.mass)
+        A = np.block([[np.zeros((n, n)), np.eye(n)],
+                      [-inverse @ self.stiffness, -inverse @ self.damping]])
+        B = np.vstack([np.zeros((n, n)), inverse])
+        return control.ss(A, B, np.hstack([np.eye(n), np.zeros((n, n))]), np.zeros((n, n)))
+
     def to_dict(self):
         return {k: np.asarray(getattr(self, k)).tolist()
                 for k in ("mass", "damping", "stiffness", "frequencies_hz", "equilibrium")

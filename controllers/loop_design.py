@@ -38,7 +38,7 @@ def feedforward_kind(feedforward) -> str | None:
 
 def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
                crossover: float = 300.0, feedforward=True, settle: float = 0.25, axis: int = 0,
-               feedforward_model=None, **design_options):
+               feedforward_model=None, path=None, design=None, **design_options):
     """Design the feedback and the feedforward of `model`; returns (LoopController, design).
 
     Parameters
@@ -62,6 +62,11 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     feedforward_model : LowFrequencyModel, optional
         Replaces the low-frequency model derived from `model` (e.g. a deliberately wrong one,
         `low_frequency_model(model).scaled(mass=1.1, stiffness=1.1)`).
+    path : MovePath, optional
+        Every loop follows its displacement along this path (move_path.py) in `duration`;
+        `stroke` and `axis` are then unused; the feedforward is "modal" or none.
+    design : FeedbackDesign, optional
+        A feedback designed before (`design_feedback`), reused instead of designing again.
     **design_options
         Passed on to `design_feedback`.
 
@@ -74,15 +79,23 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     for name, value in (("duration", duration), ("fs", fs), ("settle", settle)):
         if not np.isfinite(value) or (value <= 0 if name != "settle" else value < 0):
             raise LoopError(f"{name} must be a positive finite number, got {value}")
-    design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
+    if design is None:
+        design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
     n = len(design.pairs)
     if not 0 <= axis < n:
         raise LoopError(f"axis {axis} out of range: {model.name} has {n} loop(s)")
+    kind = feedforward_kind(feedforward)
+    if path is not None:
+        if path.displacements.shape[1] != n:
+            raise LoopError(f"the move path has {path.displacements.shape[1]} loop(s), "
+                            f"{model.name} has {n}")
+        if kind == "inverse":
+            raise LoopError("a move path takes the 'modal' feedforward or none, not 'inverse'")
+        stroke = 1.0  # the profile is the progress s along the path
     profile = ThirdOrderProfile(stroke, duration)
     samples = int(round((duration + settle) * fs))
     offsets = [model.initial_coordinates[model.outputs[p.output_index].coordinate]
                for p in design.pairs]
-    kind = feedforward_kind(feedforward)
     lf, explicit = None, None
     if kind == "modal":
         lf = feedforward_model if feedforward_model is not None else low_frequency_model(model)
@@ -90,7 +103,7 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
         explicit = _inverse_forces(model, design, profile, fs, samples, offsets)
     controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
                                 samples=samples, offsets=offsets, feedforward=lf, axis=axis,
-                                feedforward_forces=explicit)
+                                feedforward_forces=explicit, path=path)
     return controller, design
 
 
