@@ -29,9 +29,9 @@ Every function works on all elements of this type at once: arrays shaped (n_elem
 """
 
 import numpy as np
-from numba import carray
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import kernel
+from . import entries
 
 type_name = "PLBEAM"
 dimension = 2
@@ -324,15 +324,5 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
     acc[6], acc[7] = -lcq * wq, -lsq * wq
 
 
-@entry(DEFORMATIONS_ENTRY)
-def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
-    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
-    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
-                        carray(De, (k, m)), carray(D2e, (k, m, m)))
-
-
-@entry(INERTIA_ENTRY)
-def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
-    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
-    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
-                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
+deformations_entry = entries.deformations_entry(deformations_kernel)
+inertia_entry = entries.inertia_entry(inertia_kernel)
