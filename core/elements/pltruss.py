@@ -20,16 +20,24 @@ import numpy as np
 
 from ..numerics.jit import kernel
 from . import entries
+from .protocol import SchemaKey, property_names, zero_length_problems
 
 type_name = "PLTRUSS"
 dimension = 2
 node_kinds = ("translational", "translational")
 node_roles = ("p", "q")
 deformation_names = ("e1",)
-deformation_stiffness = {"e1": "EA"}  # property per deformation
+deformation_stiffness = {"e1": "EA"}  # the section key that makes each one elastic
 coordinates_per_element = 4
 inertia_point_kinds = ("position", "position")
-properties = ("EA", "EdA", "rho_A", "A")  # section properties used (A: for the stress)
+section_schema = (
+    SchemaKey("EA", "N", "axial stiffness E A"),
+    SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
+    SchemaKey("rho_A", "kg/m", "mass per length"),
+    SchemaKey("A", "m2", "cross-section area, for the normal stress (from width and height)",
+              given=False),
+)
+properties = property_names(section_schema)
 
 
 def reference(x0):
@@ -37,6 +45,11 @@ def reference(x0):
     dimension of the space (2; 3 for the spatial TRUSS)."""
     d = x0.shape[1] // 2
     return {"l0": np.linalg.norm(x0[:, d:] - x0[:, :d], axis=1), "dimension": d}
+
+
+def reference_problems(x0):
+    """[(element index, "nodes", message)] of the elements whose end nodes coincide."""
+    return zero_length_problems(reference(x0)["l0"])
 
 
 def deformations(x, ref, order=2):
