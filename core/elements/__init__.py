@@ -17,7 +17,7 @@ derivative of the inertia points is returned from the reference data, read-only)
 them and never modify them in place.
 """
 
-from . import beam, plbeam, pltruss, truss
+from . import beam, plbeam, plspring, pltruss, spring, truss
 from .protocol import ElementProtocolError, SchemaKey, check_element
 
 ELEMENT_TYPES = {}
@@ -43,7 +43,7 @@ def section_keys():
     return {key.name: key for kind in ELEMENT_TYPES.values() for key in kind.section_schema}
 
 
-for _kind in (pltruss, plbeam, truss, beam):
+for _kind in (pltruss, plbeam, truss, beam, plspring, spring):
     register(_kind)
 
 __all__ = ["ELEMENT_TYPES", "ElementProtocolError", "SchemaKey", "element_type", "register",
