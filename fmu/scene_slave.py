@@ -31,8 +31,10 @@ name and a digest of the embedded scene text, tunable keys and outputs, so a sta
 scene (or of the same scene built from another scene file) is refused by name.
 
 Values a host sets are checked when set (`check_value`): the method must be one of METHODS,
-0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, EdI) >= 0 and any other tunable
+0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, cx, ...) >= 0 and any other tunable
 value > 0, all finite. A refused value puts the instance in the error state (see `SafeSlave`).
+A tunable key's unit, and whether it is a damping, are its schema's
+(`flexure.core.scene.building.scene_key`: the element section schemas and the node keys).
 """
 
 
@@ -45,6 +47,7 @@ from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from flexure.core import Mechanics, Simulator, build_model, stresses_along
+from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
@@ -61,12 +64,6 @@ DEFAULT_RTOL = 1e-6
 # a doStep's step budget: far above a normal step (the 3-DOF stage with CVODE: about 50 steps
 # per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
 DEFAULT_MAX_STEPS = 200_000
-
-# The unit of a tunable scene key, by its last part.
-TUNABLE_UNITS = {
-    "EA": "N", "EI": "N.m2", "EdA": "N.s", "EdI": "N.m2.s", "rho_A": "kg/m", "rho": "kg/m3",
-    "E": "Pa", "mass": "kg", "inertia": "kg.m2",
-}
 
 
 def scene_value(scene, key):
@@ -149,8 +146,9 @@ class SceneSlave(SafeSlave):
                          getter=lambda: self.max_steps,
                          setter=lambda value: setattr(self, "max_steps", int(value)))
         for key in self.tunable:
+            schema = scene_key(key)
             self.add_real(key, causality="parameter",
-                          unit=TUNABLE_UNITS.get(key.rsplit(".", 1)[-1]),
+                          unit=schema.unit if schema is not None else None,
                           start=self.parameters[key], description=f"scene key {key}",
                           getter=lambda key=key: self.parameters[key],
                           setter=lambda value, key=key: self.parameters.__setitem__(key, value))
@@ -175,7 +173,8 @@ class SceneSlave(SafeSlave):
                 return (f"integrator.atol = {value!r}: expected a finite number >= 0 (0: the "
                         "simulator's default)")
         elif name in self.parameters:
-            damping = name.rsplit(".", 1)[-1] in ("EdA", "EdI")
+            schema = scene_key(name)
+            damping = schema is not None and schema.damping
             if not (math.isfinite(value) and (value >= 0.0 if damping else value > 0.0)):
                 return (f"{name} = {value!r}: expected a finite number "
                         f"{'>= 0' if damping else '> 0'}")

@@ -11,15 +11,15 @@ either fixed as a whole (fixed = true) or free, and may carry a rigid-body inert
 (inertia = [Jx, Jy, Jz] or a 3 x 3 list, kg m^2, in its body frame). Its coordinates are the
 four Euler parameters "NODE.lambda0" ... "NODE.lambda3" (see flexure.core.numerics.rotations); the
 builder adds the normalisation constraint "NODE.norm" of every free rotational node. A BEAM
-needs y_axis = [.., .., ..], its principal y' axis; sections of spatial elements take the keys
-of flexure.core.scene.sections.beam_properties.
+needs y_axis = [.., .., ..], its principal y' axis. A section takes the keys of the elements
+that use it (their section schemas) and the shape and material keys that derive them
+(`scene_sections`).
 """
 
 from __future__ import annotations
 
 import copy
 import importlib.resources
-import math
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..elements import euler
+from ..elements.protocol import SchemaKey
 from ..errors import SceneError
 from ..mechanics.constraints import check_exact_constraint, choose_dofs
 from ..model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
@@ -34,15 +35,19 @@ from ..numerics.rotations import from_rotation_vector
 from .overrides import apply_overrides
 from .scene_elements import ElementBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
-from .sections import beam_properties
+from .scene_sections import SectionBuilding, section_key
 from .spacar_input import read_spacar
 
 TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
 ROTATION_AXES = {2: ("phi",), 3: ("lambda0", "lambda1", "lambda2", "lambda3")}
-SECTION_KEYS = {"EA", "EI", "EdA", "EdI", "rho_A", "E", "rho", "width", "height"}
-SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
-                   "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
-                   "diameter", "beta"}
+# The numbers a node takes, with their units (a tunable FMU parameter's unit: `scene_key`);
+# the section keys are the elements' (`scene_sections`).
+NODE_KEYS = {key.name: key for key in (
+    SchemaKey("mass", "kg", "lumped mass of a translational node, on each of its coordinates"),
+    SchemaKey("inertia", "kg.m2", "lumped rotational inertia of a rotational node"),
+    SchemaKey("angle", "rad", "initial angle of a planar rotational node"),
+    SchemaKey("moment", "N.m", "constant moment on a planar rotational node"),
+)}
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
 
 
@@ -110,6 +115,19 @@ def parse_toml(path):
         raise SceneError(f"{path}: not valid TOML: {error}") from None
 
 
+def scene_key(key: str) -> SchemaKey | None:
+    """The SchemaKey (unit, meaning, ...) of a dotted scene key that holds a number:
+    "sections.NAME.KEY" (an element property, or a section's shape or material) or
+    "nodes.NAME.KEY" ("mass", "inertia", ...); None for any other key."""
+    table, _, rest = key.partition(".")
+    name = rest.rpartition(".")[2] if "." in rest else None
+    if table == "sections" and name:
+        return section_key(name)
+    if table == "nodes" and name:
+        return NODE_KEYS.get(name)
+    return None
+
+
 def build_model(data: dict, *, overrides: dict | None = None, source: str = "<dict>",
                 default_name: str = "scene", check: bool = True) -> Model:
     """Build a `Model` from a scene dictionary, validating every key.
@@ -124,9 +142,10 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
     return builder.build(check=check)
 
 
-class _SceneBuilder(SceneReader, ElementBuilding):
+class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding):
     """Builds a Model from a scene dictionary: the checked reading of values
-    (`SceneReader`), the [elements] (`ElementBuilding`) and the rest here."""
+    (`SceneReader`), the [sections] (`SectionBuilding`), the [elements] (`ElementBuilding`)
+    and the rest here."""
 
     def __init__(self, data, source, default_name):
         self.data = data
@@ -164,7 +183,8 @@ class _SceneBuilder(SceneReader, ElementBuilding):
                               for part in ("nodes", "elements")
                               if isinstance(data.get(part), dict)
                               for table in data[part].values())
-        self.sections = self.build_sections(self.table("sections", data.get("sections", {})))
+        self.sections = self.build_sections(self.table("sections", data.get("sections", {})),
+                                            data.get("elements", {}))
         self.build_nodes(self.table("nodes", data.get("nodes", {})))
         groups, deformation_names, deformation_status = self.build_elements(
             self.table("elements", data.get("elements", {})))
@@ -233,61 +253,6 @@ class _SceneBuilder(SceneReader, ElementBuilding):
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 self.fail("scene.tunable", f"{key!r} is not a number (got {value!r})")
         return list(keys)
-
-    def build_sections(self, sections):
-        result = {}
-        for name, section in sections.items():
-            with self.entry():  # collected, so every entry is checked
-                result[name] = self.build_section(name, section)
-        self.raise_problems()
-        return result
-
-    def build_section(self, name, section):
-        """One [sections.NAME]: its properties (SI units), planar or spatial."""
-        key = f"sections.{name}"
-        section = self.table(key, section)
-        if self.dimension == 3:
-            return self.spatial_section(key, section)
-        self.check_keys(key, section, SECTION_KEYS)
-        values = self.section_values(key, section)
-        dims = {"E", "width", "height"}
-        if dims & values.keys():
-            missing = dims - values.keys()
-            if missing:
-                self.fail(key, "a rectangle needs E, width and height; "
-                               f"missing {sorted(missing)}")
-            area = values["width"] * values["height"]
-            values.setdefault("EA", values["E"] * area)
-            values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
-            # for the stresses (sigma = N/A +- M/W): height is the in-plane thickness
-            values.setdefault("A", area)
-            values.setdefault("Wz", values["width"] * values["height"] ** 2 / 6)
-            if "rho" in values:
-                values.setdefault("rho_A", values["rho"] * area)
-        return self.finite_section(key, values)
-
-    def section_values(self, key, section):
-        """The numbers of a section: none negative, dimensions (width, ...) positive."""
-        return {k: self.number(f"{key}.{k}", v, minimum=0.0,
-                               positive=k in ("width", "height", "diameter"))
-                for k, v in section.items()}
-
-    def finite_section(self, key, values):
-        """Refuse a section whose derived properties (EA = E w h, ...) over- or underflow."""
-        for k, v in values.items():
-            if not math.isfinite(v):
-                self.fail(key, f"the section's {k} comes out as {v!r} from its numbers; check "
-                               "their magnitudes (SI units)")
-        return values
-
-    def spatial_section(self, key, section):
-        self.check_keys(key, section, SECTION_KEYS_3D)
-        values = self.section_values(key, section)
-        try:
-            properties = beam_properties(values)
-        except ValueError as error:
-            self.fail(key, str(error))
-        return self.finite_section(key, properties)
 
     def build_nodes(self, nodes):
         if not nodes:
