@@ -83,12 +83,14 @@ class Scene:
         return self
 
     def input(self, name: str, *, node: str, coordinate: str) -> Scene:
-        """An [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate."""
+        """An [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate, or on a
+        3-D rotational node a moment (N m) about a global axis (coordinate "rx", "ry", "rz")."""
         return self._add("inputs", name, {"node": node, "coordinate": coordinate})
 
     def output(self, name: str, *, node: str, coordinate: str,
                quantity: str = "position") -> Scene:
-        """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate."""
+        """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate, or on a 3-D
+        rotational node the angle (rad) or angular velocity about a global axis ("rx", ...)."""
         return self._add("outputs", name, {"node": node, "coordinate": coordinate,
                                            "quantity": quantity})
 

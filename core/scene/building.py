@@ -26,13 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..elements import euler
 from ..errors import SceneError
 from ..mechanics.constraints import check_exact_constraint, choose_dofs
-from ..model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
-from ..numerics.rotations import from_rotation_vector
+from ..model import DEPENDENT, DOF, FIXED, Model, Node
 from .overrides import apply_overrides
+from .rotational_nodes import RotationalNodeBuilding
 from .scene_elements import ElementBuilding
+from .scene_ports import PortBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
 from .sections import beam_properties
 from .spacar_input import read_spacar
@@ -43,7 +43,6 @@ SECTION_KEYS = {"EA", "EI", "EdA", "EdI", "rho_A", "E", "rho", "width", "height"
 SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
                    "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
                    "diameter", "beta"}
-OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
 
 
 def builtin_scenes() -> list[str]:
@@ -124,9 +123,11 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
     return builder.build(check=check)
 
 
-class _SceneBuilder(SceneReader, ElementBuilding):
+class _SceneBuilder(SceneReader, ElementBuilding, RotationalNodeBuilding, PortBuilding):
     """Builds a Model from a scene dictionary: the checked reading of values
-    (`SceneReader`), the [elements] (`ElementBuilding`) and the rest here."""
+    (`SceneReader`), the [elements] (`ElementBuilding`), the 3-D rotational nodes
+    (`RotationalNodeBuilding`), the [inputs] and [outputs] (`PortBuilding`) and the rest
+    here."""
 
     def __init__(self, data, source, default_name):
         self.data = data
@@ -340,67 +341,6 @@ class _SceneBuilder(SceneReader, ElementBuilding):
             self.mass.append(mass_value)
             self.loads.append(load)
 
-    def spatial_rotational_node(self, key, name, node):
-        """A 3-D rotational node: four Euler parameters, fixed as a whole or free."""
-        if "rotation" not in node:
-            self.fail(key, "expected exactly one of 'position' (a translational node) or "
-                           "'rotation' (a rotational node: a rotation vector, rad)")
-        self.check_keys(key, node, {"rotation", "fixed", "inertia"})
-        rotation = np.array(self.vector(f"{key}.rotation", node["rotation"], 3, limit=MAX_ANGLE))
-        if np.linalg.norm(rotation) > MAX_ANGLE:
-            self.fail(f"{key}.rotation", f"expected a rotation vector of magnitude <= "
-                                         f"{MAX_ANGLE:g} rad, got {rotation.tolist()!r}")
-        lam = from_rotation_vector(rotation)
-        fixed = node.get("fixed", False)
-        if fixed in (["rotation"], "rotation"):
-            fixed = True
-        if not isinstance(fixed, bool):
-            self.fail(f"{key}.fixed", "a 3-D rotational node is fixed as a whole: expected true "
-                                      f"or false, got {fixed!r}")
-        inertia = node.get("inertia")
-        index = []
-        self.node_kind[name] = "rotational"
-        self.node_coordinates[name] = {}
-        for axis, value in zip(ROTATION_AXES[3], lam, strict=True):
-            index.append(len(self.coordinate_names))
-            self.node_coordinates[name][axis] = index[-1]
-            self.coordinate_names.append(f"{name}.{axis}")
-            self.initial.append(float(value))
-            self.status.append(FIXED if fixed else DEPENDENT)
-            self.mass.append(0.0)
-            self.loads.append(0.0)
-        if inertia is not None:
-            if isinstance(inertia, list) and len(inertia) == 3 and all(
-                    isinstance(row, list) for row in inertia):
-                J = np.array([self.vector(f"{key}.inertia[{i}]", row, 3)
-                              for i, row in enumerate(inertia)])
-                if not np.allclose(J, J.T):
-                    self.fail(f"{key}.inertia", "the inertia tensor must be symmetric")
-            else:
-                J = np.diag(self.vector(f"{key}.inertia", inertia, 3))
-            if not fixed:
-                self.node_inertias.append((np.array(index), J))
-
-    def add_normalisation(self, groups, deformation_names, deformation_status):
-        """One EULER pseudo-element (lambda . lambda = 1) per free 3-D rotational node."""
-        names, coords = [], []
-        for name, kind in self.node_kind.items():
-            index = list(self.node_coordinates[name].values())
-            if kind == "rotational" and self.status[index[0]] != FIXED:
-                names.append(name)
-                coords.append(index)
-        if not names:
-            return
-        start = len(deformation_names)
-        for name in names:
-            deformation_names.append(f"{name}.norm")
-            deformation_status.append(ZERO)
-        coords = np.array(coords, dtype=int)
-        groups.append(ElementGroup(
-            kind=euler, names=tuple(names), coordinate_index=coords,
-            deformation_index=np.arange(start, start + len(names))[:, None],
-            reference=euler.reference(np.array(self.initial)[coords]), properties={}))
-
     def node(self, key, name, kind=None):
         name = str(name)
         if name not in self.node_kind:
@@ -435,42 +375,6 @@ class _SceneBuilder(SceneReader, ElementBuilding):
                       f"node {node!r} has no coordinate {show(axis)}; expected one of "
                       f"{', '.join(self.node_coordinates[node])}")
         return self.node_coordinates[node][axis]
-
-    def build_ports(self, section, table, *, is_input):
-        ports = []
-        for name, port in self.table(section, table).items():
-            with self.entry():  # collected, so every entry is checked
-                ports.append(self.build_port(section, name, port, is_input=is_input))
-        self.raise_problems()
-        return ports
-
-    def build_port(self, section, name, port, *, is_input):
-        """One [inputs.NAME] (a force, N or N m) or [outputs.NAME] (a position or velocity)."""
-        key = f"{section}.{name}"
-        port = self.table(key, port)
-        if not name.isidentifier():
-            self.fail(key, "a port name must be an identifier (letters, digits, _)")
-        if self.dimension == 3 and not self._is_translation(port) and isinstance(
-                port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
-            self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
-                                           "3-D rotational node are not supported; use a "
-                                           "translational coordinate")
-        if is_input:
-            self.check_keys(key, port, {"node", "coordinate"})
-            return Port(name, self.coordinate(key, port), "force",
-                        "N" if self._is_translation(port) else "N.m")
-        self.check_keys(key, port, {"node", "coordinate", "quantity"})
-        quantity = port.get("quantity", "position")
-        if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
-            self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
-                                         f"got {show(quantity)}")
-        unit = OUTPUT_QUANTITIES[quantity]
-        if not self._is_translation(port):
-            unit = unit.replace("m", "rad")
-        return Port(name, self.coordinate(key, port), quantity, unit)
-
-    def _is_translation(self, port):
-        return port.get("coordinate") in TRANSLATION_AXES[self.dimension]
 
     def build_buckling(self, table):
         if table is None:
