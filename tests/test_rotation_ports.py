@@ -115,6 +115,21 @@ def test_wrong_rotation_ports_are_named(change, key, message):
         build_model(data)
 
 
+@pytest.mark.parametrize("node, message", [
+    ({"rotation": [0.0, 0.0, 0.0], "dof": ["rw"]}, "nodes.4.dof: unknown name 'rw'; "
+                                                   "expected one of rx, ry, rz"),
+    ({"rotation": [0.0, 0.0, 0.0], "dof": ["rx", "rx"]}, "'rx' is listed 2 times"),
+    ({"rotation": [0.0, 0.0, 0.0], "dof": ["rx"], "fixed": True},
+     "nodes.4.dof: node '4' is fixed: its rotations cannot be DOFs"),
+    ({"rotation": [0.0, 0.0, 0.0], "moment": [1.0, 0.0, 0.0]}, "nodes.4.moment: unknown key"),
+])
+def test_wrong_rotation_dofs_are_named(node, message):
+    data = cantilever()
+    data["nodes"]["4"] = node
+    with pytest.raises(SceneError, match=message):
+        build_model(data)
+
+
 # -- statics and the state space: a cantilever's tip moments ----------------------------------
 
 def test_cantilever_tip_moments_turn_it_by_the_textbook_angles():
@@ -246,7 +261,7 @@ def torsion_body(*, rotation=(0.0, 0.0, 0.0), dof=None):
     }
 
 
-@pytest.mark.parametrize("dof", [None], ids=["torsion-dof"])
+@pytest.mark.parametrize("dof", [None, ["rx"]], ids=["torsion-dof", "rotation-dof"])
 def test_rigid_body_on_a_torsion_beam_follows_the_single_dof_response(dof):
     """A 1e-3 N m step for two periods: theta = 0.3 + (M l / GIt)(1 - cos w t) and its rate
     M l w / GIt sin w t, w = sqrt(GIt / (l J)), to 1e-6 of the amplitude (the torsion
@@ -268,6 +283,56 @@ def test_rigid_body_on_a_torsion_beam_follows_the_single_dof_response(dof):
                                rtol=0, atol=1e-6 * amplitude * w)
     if dof:  # the DOF is the angle itself
         np.testing.assert_allclose(result.q[:, 0], result.outputs["theta"], rtol=0, atol=1e-15)
+
+
+def test_rotation_dof_and_torsion_dof_give_the_same_linear_model():
+    chosen = build_model(torsion_body(rotation=(0.2, 0.1, 0.0)))
+    listed = build_model(torsion_body(rotation=(0.2, 0.1, 0.0), dof=["rx"]))
+    np.testing.assert_allclose(control.dcgain(state_space(listed)),
+                               control.dcgain(state_space(chosen)), rtol=1e-12)
+    np.testing.assert_allclose(natural_frequencies(listed).frequencies_hz,
+                               natural_frequencies(chosen).frequencies_hz, rtol=1e-12)
+
+
+def test_three_rotation_dofs_describe_the_mechanism_of_the_chosen_ones():
+    """The rotated cantilever with the tip's x, y, z and rx, ry, rz as its six DOFs against
+    the same scene with the DOFs flexure chooses (translations and deformations): the same
+    frequencies and DC gains (1e-9), the same motion under moments (1e-7 of it, the
+    integrators' tolerance); the engine's tangent with the angles' second derivatives against
+    central differences of its accelerations."""
+    rotation = (0.3, -0.2, 0.4)
+    listed_data = cantilever(rotation=rotation, dof=["rx", "ry", "rz"])
+    listed_data["nodes"]["3"]["dof"] = ["x", "y", "z"]
+    listed, chosen = build_model(listed_data), build_model(cantilever(rotation=rotation))
+    assert listed.dof_names == ["3.x", "3.y", "3.z", "4.rx", "4.ry", "4.rz"]
+    np.testing.assert_allclose(natural_frequencies(listed).frequencies_hz,
+                               natural_frequencies(chosen).frequencies_hz, rtol=1e-9)
+    np.testing.assert_allclose(control.dcgain(state_space(listed)),
+                               control.dcgain(state_space(chosen)), rtol=1e-9,
+                               atol=1e-9 * L / EIZ)
+    u = {"Mx": 0.02, "My": -0.01, "Mz": 0.015}
+    runs = [simulate(m, 0.005, inputs=u, rtol=1e-10, method="cvode-adams",
+                     output_times=np.linspace(0, 0.005, 11)) for m in (listed, chosen)]
+    for name in ("rx", "ry", "rz"):
+        motion = runs[1].outputs[name] - runs[1].outputs[name][0]
+        np.testing.assert_allclose(runs[0].outputs[name], runs[1].outputs[name], rtol=0,
+                                   atol=1e-7 * np.abs(motion).max())
+    data = EngineData(listed)
+    data.float_array("inputs")[:] = list(u.values())
+    q = runs[0].q[-1]
+    n = q.size
+
+    def qddot(q):
+        assert engine.call(data, engine.OP_EVALUATE, np.array(q), np.zeros(n)) == ed.OK
+        return data.float_array("qddot").copy()
+
+    assert engine.call(data, engine.OP_TANGENT, qddot(q)) == ed.OK
+    K = data.float_array("stiffness").reshape(n, n).copy()
+    mass = data.float_array("mass").reshape(n, n).copy()  # M_bar, formed by the tangent
+    h = 1e-7
+    numeric = np.column_stack([(qddot(q + h * e) - qddot(q - h * e)) / (2 * h)
+                               for e in np.eye(n)])
+    np.testing.assert_allclose(-mass @ numeric, K, rtol=0, atol=1e-5 * np.abs(K).max())
 
 
 def test_simulator_outputs_are_the_ports_of_the_state():

@@ -65,8 +65,9 @@ class Scene:
 
     def node(self, name: str, **keys) -> Scene:
         """A [nodes.NAME]: position (m) for a translational node, angle (rad, planar) or
-        rotation (rotation vector, rad, spatial) for a rotational one; fixed, dof, mass (kg),
-        inertia (kg m^2), force (N), moment (N m)."""
+        rotation (rotation vector, rad, spatial) for a rotational one; fixed, dof (a spatial
+        rotational node's "rx", "ry", "rz"), mass (kg), inertia (kg m^2), force (N), moment
+        (N m, planar)."""
         return self._add("nodes", name, keys)
 
     def element(self, name: str, type: str, nodes, *, section: str, **keys) -> Scene:

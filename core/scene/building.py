@@ -171,6 +171,7 @@ class _SceneBuilder(SceneReader, ElementBuilding, RotationalNodeBuilding, PortBu
             self.table("elements", data.get("elements", {})))
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
+            self.add_rotation_dofs(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         for port in outputs:
@@ -296,6 +297,7 @@ class _SceneBuilder(SceneReader, ElementBuilding, RotationalNodeBuilding, PortBu
         self.node_kind, self.node_coordinates = {}, {}
         self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
         self.node_inertias = []
+        self.rotation_dofs = []  # (node, "rx" | "ry" | "rz") listed as DOFs
         for name, node in nodes.items():
             with self.entry():  # collected, so every entry is checked
                 self.build_node(name, node)
