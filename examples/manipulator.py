@@ -44,7 +44,9 @@ The scenes written (all `flexure` built-ins once written into examples/scenes/):
   bends and doubles its frequency; a controller's robustness depends on that mode).
 
 Inputs F1 ... F6 are the actuator forces (N) on the carriages, outputs x1 ... x6 the
-carriages' positions (m) along their axes: the colocated encoders.
+carriages' positions (m) along their axes: the colocated encoders. With `--angle-outputs`
+the dynamic scenes also get E_rx, E_ry, E_rz, the end effector's rotations about the global
+axes (rad, rotation-vector components): its parasitic rotations.
 """
 
 import argparse
@@ -322,8 +324,10 @@ def scene_stage(parameters=PARAMETERS):
                   "translating in the plane, 6 DOFs", dynamic=False)
 
 
-def scene_manipulator(parameters=PARAMETERS, *, frozen=()):
-    """The whole manipulator, dynamic: every flexure meshed, `frozen` deformations prescribed."""
+def scene_manipulator(parameters=PARAMETERS, *, frozen=(), angle_outputs=False):
+    """The whole manipulator, dynamic: every flexure meshed, `frozen` deformations prescribed;
+    with `angle_outputs` also the end effector's rotations about x, y and z (rad) as the
+    outputs E_rx, E_ry, E_rz after the encoders (its parasitic rotations)."""
     parts = SceneParts(parameters, dynamic=True, frozen=frozen)
     starts = []
     for i, angle in enumerate(BODY_ANGLES, start=1):
@@ -347,6 +351,10 @@ def scene_manipulator(parameters=PARAMETERS, *, frozen=()):
                                       "quantity": "position"}
         starts.append(points["M"])
     ends = effector(parts)
+    if angle_outputs:
+        for axis in ("rx", "ry", "rz"):
+            parts.outputs[f"E_{axis}"] = {"node": "E_r", "coordinate": axis,
+                                          "quantity": "position"}
     slanted_springs(parts, starts, ends, prescribed=LEAF)
     name = "manipulator_e1" if "e1" in frozen else "manipulator"
     what = ("every elongation prescribed zero" if "e1" in frozen
@@ -366,10 +374,13 @@ def _scene(parts, name, description, *, dynamic):
     return scene
 
 
-def all_scenes(parameters=PARAMETERS):
-    """{file name: scene dictionary} of the scenes this table writes."""
+def all_scenes(parameters=PARAMETERS, *, angle_outputs=False):
+    """{file name: scene dictionary} of the scenes this table writes; `angle_outputs` adds the
+    end effector's angles to the dynamic ones (`scene_manipulator`; not in the committed
+    scenes)."""
     scenes = [scene_guidance(parameters), scene_stage(parameters),
-              scene_manipulator(parameters), scene_manipulator(parameters, frozen=("e1",))]
+              scene_manipulator(parameters, angle_outputs=angle_outputs),
+              scene_manipulator(parameters, frozen=("e1",), angle_outputs=angle_outputs)]
     return {f"{s['scene']['name']}.toml": s for s in scenes}
 
 
@@ -389,11 +400,15 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--table", action="store_true", help="print the parameter table")
     parser.add_argument("--out", type=Path, default=SCENES, help="folder for the scenes")
+    parser.add_argument("--angle-outputs", action="store_true",
+                        help="add the end effector's angles about x, y, z (E_rx, E_ry, E_rz, "
+                             "rad) to the dynamic scenes' outputs (the committed scenes have "
+                             "none: write these with --out elsewhere)")
     args = parser.parse_args(argv)
     if args.table:
         sys.stdout.write(parameter_table())
         return 0
-    for file_name, scene in all_scenes().items():
+    for file_name, scene in all_scenes(angle_outputs=args.angle_outputs).items():
         text = scene_toml(scene, HEADER.format(description=scene["scene"]["description"]))
         (args.out / file_name).write_text(text)
         print(f"wrote {args.out / file_name}")
