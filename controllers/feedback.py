@@ -91,16 +91,20 @@ class FeedbackDesign:
 
 
 def colocated_pairs(model):
-    """The (input, position output) pairs on the same coordinate, one per input."""
+    """The (input, position output) pairs on the same coordinate (or about the same global
+    axis of a 3-D rotational node: a moment and its angle), one per input."""
+    from flexure.core import port_description
+
     pairs = []
     for i, port in enumerate(model.inputs):
         match = [j for j, out in enumerate(model.outputs)
-                 if out.coordinate == port.coordinate and out.quantity == "position"]
+                 if out.location == port.location and out.quantity == "position"]
         if not match:
+            where = (port_description(model, port, is_input=True) if port.about_axis
+                     else model.coordinate_names[port.coordinate])
             raise ControlDesignError(
                 f"{model.source}: input {port.name!r} has no position output on the same "
-                f"coordinate ({model.coordinate_names[port.coordinate]}); declare one in "
-                "[outputs] to close a loop on it")
+                f"coordinate ({where}); declare one in [outputs] to close a loop on it")
         j = match[0]
         pairs.append(LoopPair(i, j, port.name, model.outputs[j].name))
     return pairs

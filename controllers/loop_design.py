@@ -94,7 +94,9 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
         stroke = 1.0  # the profile is the progress s along the path
     profile = ThirdOrderProfile(stroke, duration)
     samples = int(round((duration + settle) * fs))
-    offsets = [model.initial_coordinates[model.outputs[p.output_index].coordinate]
+    from flexure.core import output_value  # the models (numba, scipy) on first use
+
+    offsets = [output_value(model, model.outputs[p.output_index], model.initial_coordinates)
                for p in design.pairs]
     lf, explicit = None, None
     if kind == "modal":
@@ -111,7 +113,8 @@ def _inverse_forces(model, design, profile, fs, samples, offsets):
     """Feedforward from the stable inverse of the sampled full linear model (one loop)."""
     import control  # 0.5 s to import: only where it is used
 
-    from flexure.core import linearize, state_space  # the models (numba, scipy) on first use
+    # the models (numba, scipy) on first use
+    from flexure.core import linearize, output_value, state_space
 
     if len(design.pairs) != 1:
         raise LoopError(f"{model.name}: the 'inverse' feedforward handles one loop, the scene "
@@ -120,7 +123,7 @@ def _inverse_forces(model, design, profile, fs, samples, offsets):
     lin = linearize(model)
     plant = state_space(model, linear_model=lin)[pair.output_index, pair.input_index]
     inverse = StableInverse(control.c2d(plant, 1.0 / fs, method="zoh"))
-    equilibrium = lin.solution.config.x[model.outputs[pair.output_index].coordinate]
+    equilibrium = output_value(model, model.outputs[pair.output_index], lin.solution.config.x)
     k = np.arange(samples + 2)
     # u_k, held on [t_k, t_k+1), makes the sampled linear output follow r_k (deviations
     # from the linearisation point, which carries the scene's constant loads).

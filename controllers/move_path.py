@@ -83,7 +83,14 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     progress : callable, optional
         Called with the fraction of the points done.
     """
-    from flexure.core import inverse_statics, linearize, static_equilibrium  # on first use
+    from flexure.core import (  # the models on first use
+        input_columns,
+        inverse_statics,
+        linearize,
+        output_rows,
+        output_value,
+        static_equilibrium,
+    )
 
     if kind not in KINDS:
         raise ControlDesignError(f"move path kind must be one of {', '.join(KINDS)}, got "
@@ -95,8 +102,7 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     if kind == "nonlinear" and points < 4:
         raise ControlDesignError(f"a nonlinear move path needs at least 4 points, got {points}")
     inputs = [pair.input_name for pair in pairs]
-    outputs = [model.outputs[pair.output_index].coordinate for pair in pairs]
-    input_index = [model.inputs[pair.input_index].coordinate for pair in pairs]
+    outputs = [model.outputs[pair.output_index] for pair in pairs]
     names = list(targets)
     try:
         target_index = [model.coordinate_index(name) for name in names]
@@ -107,8 +113,9 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     rest = static_equilibrium(model)
     if kind == "linear":
         lin = linearize(model, rest)
-        response = np.linalg.solve(lin.K, lin.DF[input_index].T)  # dq per unit force
-        c_yu = lin.DF[outputs] @ response
+        columns = input_columns(model, rest.x, [model.inputs[p.input_index] for p in pairs])
+        response = np.linalg.solve(lin.K, lin.DF.T @ columns)  # dq per unit input
+        c_yu = output_rows(model, rest.x, lin.DF, outputs) @ response
         c_tu = lin.DF[target_index] @ response
         end = c_yu @ np.linalg.solve(c_tu, delta)
         # a straight line: the spline through three collinear points is the line itself
@@ -121,7 +128,8 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     for j, s in enumerate(s_values):
         wanted = dict(zip(names, start_values + s * delta, strict=True))
         point = inverse_statics(model, wanted, inputs=inputs, start=point)
-        displacements.append(point.solution.x[outputs] - rest.x[outputs])
+        displacements.append([output_value(model, port, point.solution.x)
+                              - output_value(model, port, rest.x) for port in outputs])
         forces.append(point.forces)
         if progress is not None:
             progress((j + 1) / len(s_values))

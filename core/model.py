@@ -61,14 +61,38 @@ class ElementGroup:
         return vector[self.coordinate_index]
 
 
+GLOBAL_ROTATIONS = ("rx", "ry", "rz")  # a 3-D rotational node's rotations about global x, y, z
+
+
 @dataclass(frozen=True)
 class Port:
-    """A named input force or output on one model coordinate (SPACAR's INPUTF / OUTX)."""
+    """A named input or output of the model.
+
+    On one model coordinate (SPACAR's INPUTF / OUTX): `coordinate` its index; an input is a
+    force on it (N, or N m on a planar angle), an output its position or velocity (m, m/s,
+    rad, rad/s). About a global axis of a 3-D rotational node: `euler` the indices of the
+    node's four Euler parameters, `axis` "rx", "ry" or "rz" and `coordinate` None; an input is
+    a moment about that axis (N m), an output the rotation-vector component about it (rad) or
+    the angular velocity about it (rad/s). `flexure.core.mechanics.ports` has their maths.
+    """
 
     name: str
-    coordinate: int
-    quantity: str = "force"  # "force" for inputs; "position" or "velocity" for outputs
+    coordinate: int | None
+    quantity: str = "force"  # "force" or "moment" for inputs; "position" or "velocity"
     unit: str = "N"
+    euler: tuple = ()
+    axis: str = ""
+
+    @property
+    def about_axis(self):
+        """Whether the port is a rotation about a global axis of a 3-D rotational node."""
+        return bool(self.euler)
+
+    @property
+    def location(self):
+        """What the port acts on or measures, comparable between ports: the coordinate
+        index, or (the Euler parameter indices, the axis)."""
+        return (self.euler, self.axis) if self.euler else self.coordinate
 
 
 @dataclass

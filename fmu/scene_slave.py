@@ -9,8 +9,10 @@ the scene's TOML text and the scene keys a user may tune:
 
 Variables (only what the scene has):
 
-- one input per scene input (force N or moment N.m, start 0), held over each step;
-- one output per scene output (position m / rad, velocity m/s / rad/s);
+- one input per scene input (force N or moment N.m, start 0; a moment about a global axis of
+  a 3-D rotational node too), held over each step;
+- one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
+  global axis of a 3-D rotational node, rad, or its angular velocity, rad/s);
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
   stress at the ends of the scene's beams with a cross-section, in the current state
   (`flexure.core.stresses_along`);
@@ -46,7 +48,7 @@ import numpy as np
 from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from flexure.core import Mechanics, Simulator, build_model, stresses_along
+from flexure.core import Mechanics, Simulator, build_model, port_description, stresses_along
 from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 
@@ -114,14 +116,12 @@ class SceneSlave(SafeSlave):
 
         for i, port in enumerate(model.inputs):
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
-                          description=f"{port.quantity} on coordinate "
-                                      f"{model.coordinate_names[port.coordinate]}",
+                          description=port_description(model, port, is_input=True),
                           getter=lambda i=i: float(self.inputs[i]),
                           setter=lambda value, i=i: self.inputs.__setitem__(i, value))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
-                          description=f"{port.quantity} of coordinate "
-                                      f"{model.coordinate_names[port.coordinate]}",
+                          description=port_description(model, port, is_input=False),
                           getter=lambda j=j: float(self.outputs[j]))
         if self.von_mises:
             self.add_real("von_mises_max", causality="output", unit="Pa",

@@ -11,7 +11,9 @@ targets at the current equilibrium,
 
     d x_t / d u = DF_t K^-1 DF_u^T          (K = K0 + G0, the tangent stiffness on the DOFs)
 
-(DF_t, DF_u the rows of DF = dx/dq of the target and input coordinates), so the iteration
+(DF_t the rows of DF = dx/dq of the targets, DF_u^T the generalised forces of unit inputs: a
+force on its coordinate, a moment about a global axis on its node's Euler parameters), so the
+iteration
 converges quadratically; it stops when every target is within `tolerance` (m or rad). The
 solution also gives every other coordinate there, e.g. the actuator positions that put the
 end effector at a pose: the nonlinear inverse kinematics of the mechanism, with its
@@ -26,6 +28,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, FlexureError
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.ports import input_columns
 from ..model import Model
 from ..numerics.blas import blas_threads
 from .linearization import linearize
@@ -102,7 +105,6 @@ def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
     wanted = np.array([float(v) for v in targets.values()])
     if not np.all(np.isfinite(wanted)):
         raise InverseStaticsError(f"{model.source}: every target value must be finite")
-    input_index = np.array([ports[name].coordinate for name in names], dtype=int)
     if initial is None:
         initial = start.forces if start is not None else np.zeros(len(names))
     u = np.array(initial, float).reshape(-1)
@@ -112,16 +114,17 @@ def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
     residual = np.inf
     solution = None if start is None else start.solution
     for iteration in range(1, max_iterations + 1):
-        loads = model.loads.astype(float).copy()
-        np.add.at(loads, input_index, u)
-        solution = static_equilibrium(model, loads=loads, mechanics=mech, start=solution)
+        held = dict.fromkeys(ports, 0.0) | dict(zip(names, u.tolist(), strict=True))
+        solution = static_equilibrium(model, inputs=held, mechanics=mech, start=solution)
         error = solution.x[target_index] - wanted
         residual = float(np.max(np.abs(error)))
         if residual <= tolerance:
             return InverseStatics(u, solution, iteration, residual)
         lin = linearize(model, solution, mechanics=mech)
         DF = lin.DF
-        compliance = DF[target_index] @ np.linalg.solve(lin.K, DF[input_index].T)
+        # the generalised forces of unit inputs (a moment's depends on the orientation)
+        b = input_columns(model, solution.x, [ports[name] for name in names])
+        compliance = DF[target_index] @ np.linalg.solve(lin.K, DF.T @ b)
         try:
             du = np.linalg.solve(compliance, error)
         except np.linalg.LinAlgError:

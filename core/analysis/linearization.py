@@ -59,5 +59,6 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
         M0=mech.mass_matrix(config),
         C0=mech.damping_matrix(config),
         K0=mech.structural_stiffness(config),
-        G0=mech.geometric_stiffness(config, solution.stress_resultants, solution.load_factor),
+        G0=mech.geometric_stiffness(config, solution.stress_resultants, solution.load_factor,
+                                    inputs=solution.inputs),
     )

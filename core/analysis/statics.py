@@ -1,10 +1,10 @@
 """Static equilibrium: load steps and Newton's method on the DOFs.
 
-The load (nodal forces and gravity) is applied in `load_steps` equal increments (one, when
-there is no load); in each the generalised force Q(q) = DF^T (f - De^T sigma) is driven to
-zero by Newton's method with the full tangent stiffness K0 + G0 (quadratic convergence). A
-step that does not converge is halved up to four times; then ConvergenceError names the load
-step and the load factor.
+The load (nodal forces and gravity, and the inputs when given) is applied in `load_steps`
+equal increments (one, when there is no load); in each the generalised force
+Q(q) = DF^T (f - De^T sigma) is driven to zero by Newton's method with the full tangent
+stiffness K0 + G0 (quadratic convergence). A step that does not converge is halved up to four
+times; then ConvergenceError names the load step and the load factor.
 Convergence: |dq| <= `tolerance` times the model's length scale (rotations count as lengths
 through that scale).
 """
@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import ConvergenceError
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.ports import input_values
 from ..numerics.blas import blas_threads
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -33,6 +34,7 @@ class StaticSolution:
     stress_resultants: np.ndarray  # (NE,) N (truss, elongation), N (bending, as e2, e3 are m)
     load_factor: float
     iterations: int
+    inputs: np.ndarray | None = None  # (n_inputs,) N, N m held in this equilibrium, if any
 
     @property
     def q(self):
@@ -56,39 +58,46 @@ class StaticSolution:
 def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_steps: int = 10,
                        tolerance: float = 1e-11, max_iterations: int = 30,
                        mechanics: Mechanics | None = None,
+                       inputs: dict | np.ndarray | None = None,
                        start: StaticSolution | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
 
-    `start`, an equilibrium of the same model under nearby loads, is where Newton starts at
-    the full load (a path of equilibria, e.g. inverse statics along a move); if it does not
-    converge from there, the load is stepped from the unloaded configuration as without it.
-    Returns a StaticSolution; raises ConvergenceError naming the load step that failed.
+    `inputs` ({name: value} or (n_inputs,), N and N m) are held as well, stepped with the
+    loads: a force on its coordinate, a moment about a global axis through its generalised
+    force on the Euler parameters (`flexure.core.mechanics.ports`; it depends on the
+    orientation, so it cannot be given as `loads`). `start`, an equilibrium of the same model
+    under nearby loads and inputs, is where Newton starts at the full load (a path of
+    equilibria, e.g. inverse statics along a move); if it does not converge from there, the
+    load is stepped from the unloaded configuration as without it. Returns a StaticSolution;
+    raises ConvergenceError naming the load step that failed.
     """
+    if inputs is not None:
+        inputs = input_values(model, inputs)
     mech = mechanics or Mechanics(model)
     kin = mech.kinematics
     scale = kin.length_scale
     if start is not None:
         try:
-            config, iterations = _newton(mech, start.config, 1.0, loads, tolerance * scale,
-                                         max_iterations)
+            config, iterations = _newton(mech, start.config, 1.0, loads, inputs,
+                                         tolerance * scale, max_iterations)
         except ConvergenceError:
             pass
         else:
-            _, _, sigma = mech.static_balance(config, 1.0, loads)
-            return StaticSolution(model, config, sigma, 1.0, iterations)
+            _, _, sigma = mech.static_balance(config, 1.0, loads, inputs)
+            return StaticSolution(model, config, sigma, 1.0, iterations, inputs)
     config = mech.initial_configuration()
     total_iterations = 0
     # Without loads and gravity there is nothing to step: the reference configuration (all
     # deformations zero) balances, and one Newton step at full load confirms it.
-    unloaded = not np.any(mech.external_force(config.x, 1.0, loads))
+    unloaded = not np.any(mech.external_force(config.x, 1.0, loads, inputs))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     halvings = 0
     step_number = 0
     while factor < 1.0 - 1e-12:
         target = min(1.0, factor + step)
         try:
-            config, iterations = _newton(mech, config, target, loads, tolerance * scale,
-                                         max_iterations)
+            config, iterations = _newton(mech, config, target, loads, inputs,
+                                         tolerance * scale, max_iterations)
         except ConvergenceError as error:
             if halvings == 4:
                 raise ConvergenceError(
@@ -102,16 +111,16 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         total_iterations += iterations
         factor = target
         step_number += 1
-    _, _, sigma = mech.static_balance(config, 1.0, loads)
-    return StaticSolution(model, config, sigma, 1.0, total_iterations)
+    _, _, sigma = mech.static_balance(config, 1.0, loads, inputs)
+    return StaticSolution(model, config, sigma, 1.0, total_iterations, inputs)
 
 
-def _newton(mech, config, load_factor, loads, step_tolerance, max_iterations):
+def _newton(mech, config, load_factor, loads, inputs, step_tolerance, max_iterations):
     kin = mech.kinematics
     for iteration in range(1, max_iterations + 1):
-        Q, _, sigma = mech.static_balance(config, load_factor, loads)
+        Q, _, sigma = mech.static_balance(config, load_factor, loads, inputs)
         K = mech.structural_stiffness(config) + mech.geometric_stiffness(
-            config, sigma, load_factor)
+            config, sigma, load_factor, inputs=inputs)
         try:
             dq = np.linalg.solve(K, Q)
         except np.linalg.LinAlgError:

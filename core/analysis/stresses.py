@@ -138,10 +138,11 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
     """Von Mises stresses along a trajectory: (names, (n_times, n_beams, 2) Pa).
 
     states (n_times, 2 NDOF) = [q, qdot] as `SimulationResult` holds them (q, qdot side by
-    side); inputs (n_times, n_inputs) N on the scene's input coordinates (default zero). The
+    side); inputs (n_times, n_inputs) N, N m: the scene's inputs (default zero). The
     accelerations follow from the equations of motion in each state.
     """
     from ..mechanics.mechanics import Mechanics
+    from ..mechanics.ports import input_forces
 
     mech = mechanics or Mechanics(model)
     ndof = model.declared_dof_count
@@ -151,9 +152,8 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
         config = mech.kinematics.solve(state[:ndof], x)
         x = config.x
         force = np.zeros(model.nx)
-        if inputs is not None:
-            for j, port in enumerate(model.inputs):
-                force[port.coordinate] += inputs[k][j]
+        if inputs is not None:  # forces on their coordinates, moments by their orientation
+            force = input_forces(model, x, inputs[k])
         sigma = dynamic_stress_resultants(mech, config, state[ndof:], input_force=force)
         stresses = beam_stresses(model, x, sigma)
         names = stresses.names

@@ -7,7 +7,8 @@ M_bar; `data.evaluation_cost` picks one per model):
 
     M_bar qddot = DF^T (f - M (D2F qdot) qdot - g_conv - De^T sigma_c),  M_bar = DF^T M DF
 
-with f the constant loads, gravity and the inputs, sigma_c = S e + D edot on the stressed
+with f the constant loads, gravity and the inputs (a moment input's force depends on x:
+`ports`), sigma_c = S e + D edot on the stressed
 deformations, M = diag(lumped) + sum Dp^T Mp Dp over the inertia points p of the element
 masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, and (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot]
 on the constraint rows. Gravity acts on the position points of the inertia, which are linear
@@ -26,6 +27,7 @@ from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
 from .kinematics import compute_DF, dof_rows, j_solve, solve_kinematics
+from .ports import add_input_forces
 from .slots import float_array as _f
 from .slots import (
     group,
@@ -96,9 +98,7 @@ def evaluate(table, q, qdot):
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
     r[:] = _f(table, slot.CONST_FORCE)
-    inputs, input_coords = _f(table, slot.INPUTS), _i(table, slot.INPUT_COORDS)
-    for j in range(inputs.size):
-        r[input_coords[j]] += inputs[j]
+    add_input_forces(_i(table, slot.INPUT_PORTS), _f(table, slot.INPUTS), x, r)
     _scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0

@@ -16,7 +16,7 @@ from ..numerics.native import as_float_pointer, as_int_pointer
 from . import data as ed
 
 # slot indices as compile-time constants
-(DIMS, FREE, ROWS, DOF_COORDS, DOF_DEFS, DOF_POS, STRESSED, INPUT_COORDS, GROUPS,
+(DIMS, FREE, ROWS, DOF_COORDS, DOF_DEFS, DOF_POS, STRESSED, INPUT_PORTS, GROUPS,
  COORD_INDEX, DEF_INDEX, ROW_OF_DEF, COL_OF_COORD, PIVOTS, MASS_PIVOTS,
  COUNTERS, AUG_PIVOTS, J_ROW_POS, J_COL_POS, AUG_POS, MASS_PATTERN,
  POINT_COLUMNS) = range(len(ed.INT_SLOTS))

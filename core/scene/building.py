@@ -26,14 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..elements import euler
 from ..elements.protocol import SchemaKey
 from ..errors import SceneError
 from ..mechanics.constraints import check_exact_constraint, choose_dofs
-from ..model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
-from ..numerics.rotations import from_rotation_vector
+from ..model import DEPENDENT, DOF, FIXED, Model, Node
 from .overrides import apply_overrides
+from .rotational_nodes import RotationalNodeBuilding
 from .scene_elements import ElementBuilding
+from .scene_ports import PortBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
 from .scene_sections import SectionBuilding, section_key
 from .spacar_input import read_spacar
@@ -48,7 +48,6 @@ NODE_KEYS = {key.name: key for key in (
     SchemaKey("angle", "rad", "initial angle of a planar rotational node"),
     SchemaKey("moment", "N.m", "constant moment on a planar rotational node"),
 )}
-OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
 
 
 def builtin_scenes() -> list[str]:
@@ -142,10 +141,12 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
     return builder.build(check=check)
 
 
-class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding):
+class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNodeBuilding,
+                    PortBuilding):
     """Builds a Model from a scene dictionary: the checked reading of values
-    (`SceneReader`), the [sections] (`SectionBuilding`), the [elements] (`ElementBuilding`)
-    and the rest here."""
+    (`SceneReader`), the [sections] (`SectionBuilding`), the [elements] (`ElementBuilding`),
+    the 3-D rotational nodes (`RotationalNodeBuilding`), the [inputs] and [outputs]
+    (`PortBuilding`) and the rest here."""
 
     def __init__(self, data, source, default_name):
         self.data = data
@@ -190,6 +191,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding):
             self.table("elements", data.get("elements", {})))
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
+            self.add_rotation_dofs(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         for port in outputs:
@@ -260,6 +262,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding):
         self.node_kind, self.node_coordinates = {}, {}
         self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
         self.node_inertias = []
+        self.rotation_dofs = []  # (node, "rx" | "ry" | "rz") listed as DOFs
         for name, node in nodes.items():
             with self.entry():  # collected, so every entry is checked
                 self.build_node(name, node)
@@ -305,67 +308,6 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding):
             self.mass.append(mass_value)
             self.loads.append(load)
 
-    def spatial_rotational_node(self, key, name, node):
-        """A 3-D rotational node: four Euler parameters, fixed as a whole or free."""
-        if "rotation" not in node:
-            self.fail(key, "expected exactly one of 'position' (a translational node) or "
-                           "'rotation' (a rotational node: a rotation vector, rad)")
-        self.check_keys(key, node, {"rotation", "fixed", "inertia"})
-        rotation = np.array(self.vector(f"{key}.rotation", node["rotation"], 3, limit=MAX_ANGLE))
-        if np.linalg.norm(rotation) > MAX_ANGLE:
-            self.fail(f"{key}.rotation", f"expected a rotation vector of magnitude <= "
-                                         f"{MAX_ANGLE:g} rad, got {rotation.tolist()!r}")
-        lam = from_rotation_vector(rotation)
-        fixed = node.get("fixed", False)
-        if fixed in (["rotation"], "rotation"):
-            fixed = True
-        if not isinstance(fixed, bool):
-            self.fail(f"{key}.fixed", "a 3-D rotational node is fixed as a whole: expected true "
-                                      f"or false, got {fixed!r}")
-        inertia = node.get("inertia")
-        index = []
-        self.node_kind[name] = "rotational"
-        self.node_coordinates[name] = {}
-        for axis, value in zip(ROTATION_AXES[3], lam, strict=True):
-            index.append(len(self.coordinate_names))
-            self.node_coordinates[name][axis] = index[-1]
-            self.coordinate_names.append(f"{name}.{axis}")
-            self.initial.append(float(value))
-            self.status.append(FIXED if fixed else DEPENDENT)
-            self.mass.append(0.0)
-            self.loads.append(0.0)
-        if inertia is not None:
-            if isinstance(inertia, list) and len(inertia) == 3 and all(
-                    isinstance(row, list) for row in inertia):
-                J = np.array([self.vector(f"{key}.inertia[{i}]", row, 3)
-                              for i, row in enumerate(inertia)])
-                if not np.allclose(J, J.T):
-                    self.fail(f"{key}.inertia", "the inertia tensor must be symmetric")
-            else:
-                J = np.diag(self.vector(f"{key}.inertia", inertia, 3))
-            if not fixed:
-                self.node_inertias.append((np.array(index), J))
-
-    def add_normalisation(self, groups, deformation_names, deformation_status):
-        """One EULER pseudo-element (lambda . lambda = 1) per free 3-D rotational node."""
-        names, coords = [], []
-        for name, kind in self.node_kind.items():
-            index = list(self.node_coordinates[name].values())
-            if kind == "rotational" and self.status[index[0]] != FIXED:
-                names.append(name)
-                coords.append(index)
-        if not names:
-            return
-        start = len(deformation_names)
-        for name in names:
-            deformation_names.append(f"{name}.norm")
-            deformation_status.append(ZERO)
-        coords = np.array(coords, dtype=int)
-        groups.append(ElementGroup(
-            kind=euler, names=tuple(names), coordinate_index=coords,
-            deformation_index=np.arange(start, start + len(names))[:, None],
-            reference=euler.reference(np.array(self.initial)[coords]), properties={}))
-
     def node(self, key, name, kind=None):
         name = str(name)
         if name not in self.node_kind:
@@ -400,42 +342,6 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding):
                       f"node {node!r} has no coordinate {show(axis)}; expected one of "
                       f"{', '.join(self.node_coordinates[node])}")
         return self.node_coordinates[node][axis]
-
-    def build_ports(self, section, table, *, is_input):
-        ports = []
-        for name, port in self.table(section, table).items():
-            with self.entry():  # collected, so every entry is checked
-                ports.append(self.build_port(section, name, port, is_input=is_input))
-        self.raise_problems()
-        return ports
-
-    def build_port(self, section, name, port, *, is_input):
-        """One [inputs.NAME] (a force, N or N m) or [outputs.NAME] (a position or velocity)."""
-        key = f"{section}.{name}"
-        port = self.table(key, port)
-        if not name.isidentifier():
-            self.fail(key, "a port name must be an identifier (letters, digits, _)")
-        if self.dimension == 3 and not self._is_translation(port) and isinstance(
-                port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
-            self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
-                                           "3-D rotational node are not supported; use a "
-                                           "translational coordinate")
-        if is_input:
-            self.check_keys(key, port, {"node", "coordinate"})
-            return Port(name, self.coordinate(key, port), "force",
-                        "N" if self._is_translation(port) else "N.m")
-        self.check_keys(key, port, {"node", "coordinate", "quantity"})
-        quantity = port.get("quantity", "position")
-        if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
-            self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
-                                         f"got {show(quantity)}")
-        unit = OUTPUT_QUANTITIES[quantity]
-        if not self._is_translation(port):
-            unit = unit.replace("m", "rad")
-        return Port(name, self.coordinate(key, port), quantity, unit)
-
-    def _is_translation(self, port):
-        return port.get("coordinate") in TRANSLATION_AXES[self.dimension]
 
     def build_buckling(self, table):
         if table is None:
