@@ -3,12 +3,14 @@
 How an FMU carries "the code it needs"
 -------------------------------------
 A pythonfmu FMU runs in the host's Python (or, in a non-Python host, in the libpython that is
-preloaded), so numpy, scipy, scikit-sundae and python-control must be installed there anyway
-(`flexure fmu env` prints what a host needs). flexure itself is *bundled*: the FMU's
-resources hold a copy of the flexure packages it uses (`core`, the runtime part of `fmu`, and
-on request `controllers`) under the package name `_flexure_<hash>`, where the hash is taken
-over the bundled sources. The slave script's `flexure` imports are rewritten to that name.
-So:
+preloaded), so the packages the bundled flexure imports must be installed there: the FMU lists
+them, pinned, in resources/requirements.txt and its model description, checks them before its
+slave runs (`flexure.fmu.requirements`; `flexure fmu doctor` checks them from the command
+line; `flexure fmu env` prints what a non-Python host needs). flexure itself is *bundled*:
+the FMU's resources hold a copy of the flexure packages it uses (`core`, the runtime part of
+`fmu`, and on request `controllers`) under the package name `_flexure_<hash>`, where the hash
+is taken over the bundled sources. The slave script's `flexure` imports are rewritten to that
+name. So:
 
 - an FMU does not depend on the flexure version installed in the host, and keeps giving the
   results it was built (and regression-tested) with;

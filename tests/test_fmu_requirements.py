@@ -396,3 +396,45 @@ def test_tunable_geometry_gets_its_unit(tmp_path):
     assert units["sections.leaf.height"] == units["sections.leaf.width"] == "m"
     assert units["sections.leaf.E"] == "Pa"
     assert validate_fmu_file(path) == []
+
+
+def test_the_launcher_runs_again_without_a_new_class_even_when_its_folder_is_gone(truss_fmu,
+                                                                                   tmp_path):
+    """What pythonfmu's binary does at every instantiation: run the slave script again in the
+    namespace of its first import, with fresh locals. The launcher carries the script and the
+    requirements as text, so the first import's folder may be gone (a host that unpacks each
+    instance anew and removes it); the slave class is looked up, not created again."""
+    import importlib
+    import shutil
+
+    folder = tmp_path / "unpacked"
+    with zipfile.ZipFile(truss_fmu) as archive:
+        archive.extractall(folder)
+    resources = str(folder / "resources")
+    name = (folder / "resources" / "slavemodule.txt").read_text().strip()
+    text = (folder / "resources" / f"{name}.py").read_text()
+    sys.path.insert(0, resources)
+    try:
+        module = importlib.import_module(name)
+        cls = getattr(module, SCENE)
+        bundled = cls.__base__.__module__.rsplit(".", 1)[0]  # _flexure_<hash>.fmu
+        marker = importlib.import_module(f"{bundled}.pythonfmu_workarounds").SlaveMarker
+        shutil.rmtree(folder)
+        for _ in range(2):
+            local_namespace = {}
+            exec(compile(text, name, "exec"), module.__dict__, local_namespace)
+            assert local_namespace == {SCENE: marker}
+            assert getattr(module, SCENE) is cls
+        assert len(cls.__base__.__subclasses__()) == 1  # SceneSlave: this scene's class only
+    finally:
+        sys.path.remove(resources)
+        sys.modules.pop(name, None)
+
+
+def test_fmu_env_says_what_a_native_host_needs(capsys):
+    code, out, _ = run(capsys, "fmu", "env")
+    lines = out.splitlines()
+    assert code == 0 and [line.split("=")[0] for line in lines[:3]] == [
+        "export LD_PRELOAD", "export PYTHONHOME", "export PYTHONPATH"]
+    assert all(line.startswith("# ") for line in lines[3:])
+    assert "resources/requirements.txt" in out and "flexure fmu doctor FMU --native" in out
