@@ -133,19 +133,48 @@ def manipulator():
     return model, Mechanics(model)
 
 
+def twin_errors(model, mechanics, data, q, qdot, u):
+    """Relative errors against the plain twin: the backward error of qddot (of the size of the
+    force terms), M_bar, K (of their largest entries)."""
+    n = model.declared_dof_count
+    qddot = evaluate(data, q, qdot, u)
+    plain = plain_dynamics(model, mechanics, q, qdot, u)
+    DF, mass = plain["config"].DF, plain["mass"]
+    backward = np.max(np.abs(mass @ qddot - DF.T @ plain["r"])) / np.max(plain["size"])
+    mass_error = np.max(np.abs(data.float_array("mass").reshape(n, n) - mass)) / np.max(
+        np.abs(mass))
+    assert engine.call(data, engine.OP_TANGENT, qddot.copy()) == ed.OK
+    K, _ = plain_tangent(mechanics, plain, qddot)
+    stiffness = np.max(np.abs(data.float_array("stiffness").reshape(n, n) - K)) / np.max(
+        np.abs(K))
+    return np.array([backward, mass_error, stiffness])
+
+
 @pytest.mark.slow
 def test_the_manipulator_takes_the_sparse_lu_and_matches_the_plain_twin(manipulator):
     """At the initial configuration and at two displaced ones (DOFs 1e-4 from it, 0.05 m/s),
-    with the LUs the cost counts choose: both sparse."""
+    with the LUs the cost counts choose (both sparse): qddot's backward error, M_bar and K
+    against the plain twin within twice the banded engine's errors (measured: 0.8 to 1.0
+    times; at 507 DOFs both exceed the 1e-14 that test_engine asks of the small scenes, up to
+    6e-14 for qddot and 8e-11 for K), and within 1e-13, 1e-12 and 1e-9 outright."""
     model, mechanics = manipulator
-    data = EngineData(model)
+    data, banded = EngineData(model), EngineData(model, sparse=False)
     dims = data.int_array("dims")
     assert (dims[ed.J_SPARSE], dims[ed.A_SPARSE], dims[ed.AUGMENTED]) == (1, 1, 1)
+    assert banded.int_array("dims")[ed.J_SPARSE] == banded.int_array("dims")[ed.A_SPARSE] == 0
     q0 = mechanics.kinematics.dofs_of(model.initial_coordinates)
     n = q0.size
     states = [(q0, np.zeros(n), np.zeros(len(model.inputs)))]
     states += random_states(model, q0, seed=12, count=2)
-    check_against_the_twin(model, mechanics, data, states)
+    for q, qdot, u in states:
+        assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK
+        expected = mechanics.kinematics.solve(q, model.initial_coordinates.copy())
+        close(data.float_array("DF").reshape(model.nx, n), expected.DF, 1e-12)
+        sparse_errors = twin_errors(model, mechanics, data, q, qdot, u)
+        banded_errors = twin_errors(model, mechanics, banded, q, qdot, u)
+        assert np.all(sparse_errors <= 2.0 * banded_errors + 1e-16), (sparse_errors,
+                                                                        banded_errors)
+        assert np.all(sparse_errors <= [1e-13, 1e-12, 1e-9]), sparse_errors
     counters = data.int_array("counters")
     assert counters[ed.SPARSE_FALLBACKS] == 0
     # the Euler parameters of nodes rotated away from the initial configuration change
