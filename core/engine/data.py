@@ -10,7 +10,9 @@ find an array from it.
 Per element group (all elements of one type) the engine needs the addresses of the element
 module's compiled entry points (`deformations_entry`, `inertia_entry`), the local coordinate
 and deformation indices, the packed reference rows (`pack_reference`) and, for groups with
-mass, the constant mass Mp of the inertia points and gravity on those points. An element
+mass, the constant mass Mp of the inertia points and gravity on those points. J and the
+augmented system are factored banded or, for models whose band stays wide, sparse
+(`sparse_packing`, chosen by `evaluation_cost`). An element
 module that defines these plugs into the engine without the engine naming it. Workspace
 arrays (warm start of the kinematics, the last evaluation, scratch) live here too, so the
 engine never allocates in an evaluation.
