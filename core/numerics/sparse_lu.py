@@ -17,8 +17,8 @@ Natarajan, ACM TOMS 37, 2010):
 - `factor` (compiled, left-looking with partial pivoting, Gilbert & Peierls 1988): column j
   of A Q; the rows it reaches through the pattern of L found by depth-first search (in
   topological order); x = L^-1 A[:, j] on them; the pivot: the row that was pivot j before
-  if it passes the threshold test below, else the largest |x_i|; U[:, j] = x on the rows
-  already pivotal, L[:, j] = x / pivot on the others. Sets the row order P.
+  if |x| there is at least KEEP = 0.5 of the largest, else the largest |x_i|; U[:, j] = x on
+  the rows already pivotal, L[:, j] = x / pivot on the others. Sets the row order P.
 - `refactor` (compiled, the hot path): the same column loop on the kept P, Q and patterns,
   with no search and no choice: for every k in the pattern of U[:, j] in its stored
   (topological) order x -= L[:, k] x_k. Cost (multiplications, `StaticLU.multiplications`
@@ -53,6 +53,11 @@ REJECTED = -1.0  # a kept pivot failed (`refactor`), or the matrix is singular (
 CAPACITY = -2.0  # `factor`: the fill of L or U outgrew the room packed for it
 ORDERINGS = ("COLAMD", "MMD_ATA", "MMD_AT_PLUS_A")  # SuperLU's column orderings tried
 SLACK = 3  # room for L and U: SLACK times the first factorisation's fill, plus n
+# `factor` keeps a previous pivot row while |x| >= KEEP max |x| in its column, so that a pivot
+# it leaves has to lose a factor of KEEP / THRESHOLD = 5 against its column before the next
+# rejection (with KEEP = THRESHOLD the 507-DOF manipulator re-pivoted at 10 % of its
+# factorisations in a simulation)
+KEEP = 0.5
 
 # the head of the packed int64 array: n, nnz of A, room for L (strictly lower) and for U
 # (with the diagonal), 1 while the patterns and P hold a factorisation; then Ap (n + 1), Ai,
@@ -279,8 +284,8 @@ def refactor(ints, floats, threshold):
 def factor(ints, floats, threshold):
     """Factor P A Q = L U with partial pivoting, A's values in `matrix_values`: new P and
     patterns of L and U, kept for `refactor`. A row that was pivot j before stays so while
-    |x| >= threshold max |x| in its column. Returns the pivot ratio as `refactor`, REJECTED
-    for a singular or non-finite matrix, CAPACITY when L or U outgrow their room."""
+    |x| >= max(threshold, KEEP) max |x| in its column. Returns the pivot ratio as `refactor`,
+    REJECTED for a singular or non-finite matrix, CAPACITY when L or U outgrow their room."""
     n, Ap, Ai, Lp, Li, Up, Ui, prow, pinv, _, old, stack, pstack, mark, Ax, Lx, Ux, x = \
         _parts(ints, floats)
     room_l, room_u = ints[H_ROOM_L], ints[H_ROOM_U]
@@ -347,7 +352,7 @@ def factor(ints, floats, threshold):
                     chosen, big = i, value
         previous = old[j]
         if previous >= 0 and pinv[previous] < 0 and mark[previous] == j \
-                and abs(x[previous]) >= threshold * big:
+                and abs(x[previous]) >= max(threshold, KEEP) * big:
             chosen = previous
         if unz + (n - top) - count_l + 1 > room_u or lnz + count_l > room_l:
             _clear(x, stack, top, n)
