@@ -44,8 +44,11 @@ def frequency_response(sys, omega):
     eigenvalues, V = np.linalg.eig(A)
     if np.linalg.cond(V) < 1e8:
         left, right = C @ V, np.linalg.solve(V, B)
+        # H_ij(z_f) = sum_n W_fn left_in right_nj: one product (len(z), n) @ (n, i j)
+        residues = (left.T[:, :, None] * right[:, None, :]).reshape(A.shape[0], -1)
         weights = 1.0 / (z[:, None] - eigenvalues[None, :])  # (len(z), n)
-        return np.einsum("in,fn,nj->ijf", left, weights, right) + D[:, :, None]
+        response = (weights @ residues).reshape(z.size, *D.shape)
+        return np.moveaxis(response, 0, 2) + D[:, :, None]
     eye = np.eye(A.shape[0])
     return np.stack([C @ np.linalg.solve(zk * eye - A, B) + D for zk in z], axis=2)
 
