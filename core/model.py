@@ -63,12 +63,38 @@ class ElementGroup:
 
 @dataclass(frozen=True)
 class Port:
-    """A named input force or output on one model coordinate (SPACAR's INPUTF / OUTX)."""
+    """A named input force or output on one model coordinate (SPACAR's INPUTF / OUTX); an input
+    an actuator drives is its amplifier's drive signal: quantity "drive", unit "V"
+    (`Actuator`)."""
 
     name: str
     coordinate: int
-    quantity: str = "force"  # "force" for inputs; "position" or "velocity" for outputs
+    quantity: str = "force"  # "force" or "drive" for inputs; "position" or "velocity" for outputs
     unit: str = "N"
+
+
+VOLTAGE, CURRENT = "voltage", "current"  # the drives of an actuator's amplifier
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """A voice-coil actuator (VCM) that drives one input (`flexure.core.mechanics.actuators`
+    has its equations): the input's value becomes the drive signal of its amplifier.
+
+    force_constant Km (N/A, equal to the back-EMF constant in V s/m; N m/A on an angle),
+    resistance R (ohm) and inductance L (H) of the coil; drive "voltage" (the amplifier sets
+    the coil voltage) or "current"; amplifier_gain G (V/V or A/V) from the drive signal to the
+    amplifier's output, which is clipped at +- saturation (V or A; inf: no limit).
+    """
+
+    name: str
+    input: int  # index into Model.inputs
+    force_constant: float
+    resistance: float
+    inductance: float
+    drive: str = VOLTAGE
+    amplifier_gain: float = 1.0
+    saturation: float = float("inf")
 
 
 @dataclass
@@ -100,6 +126,8 @@ class Model:
     chosen_dofs: tuple = ()
     # The node table: every node with its coordinates, in coordinate order
     nodes: tuple = ()
+    # The voice-coil actuators ([actuators.NAME]); an input without one is a force (N, N m)
+    actuators: list = field(default_factory=list)
     # The scene dictionary the model was built from (overrides applied; the scene's own
     # statuses, before meshing and DOF choice): what `to_toml` writes back
     scene: dict | None = field(default=None, repr=False, compare=False)
@@ -144,6 +172,12 @@ class Model:
     def ndof(self):
         """NDOF = NX - NXO - NEO."""
         return self.nx - self.nxo - self.neo
+
+    @property
+    def coil_actuators(self):
+        """The voltage-driven actuators, in scene order: each has one electrical state, its
+        coil current (A), after [q - q_ref, qdot] in the integrators' state."""
+        return [a for a in self.actuators if a.drive == VOLTAGE]
 
     @property
     def dof_names(self):

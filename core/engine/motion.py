@@ -1,6 +1,7 @@
 """Equations of motion in the compiled engine: the accelerations qddot (m/s^2, rad/s^2).
 
-For DOFs q, velocities qdot (m/s, rad/s) and the held inputs u (N, N m), in the reduced form
+For DOFs q, velocities qdot (m/s, rad/s) and the held inputs u (N, N m; an actuated input's
+force from its drive signal or its coil current: `actuators`), in the reduced form
 of the course notes (or, for models with many DOFs, in the augmented form on the free
 coordinates that `evaluate` describes, which gives the same qddot without forming DF and
 M_bar; `data.evaluation_cost` picks one per model):
@@ -25,6 +26,7 @@ from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
+from .actuators import add_input_forces
 from .kinematics import compute_DF, dof_rows, j_solve, solve_kinematics
 from .slots import float_array as _f
 from .slots import (
@@ -96,9 +98,7 @@ def evaluate(table, q, qdot):
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
     r[:] = _f(table, slot.CONST_FORCE)
-    inputs, input_coords = _f(table, slot.INPUTS), _i(table, slot.INPUT_COORDS)
-    for j in range(inputs.size):
-        r[input_coords[j]] += inputs[j]
+    add_input_forces(table, r)  # forces, or the actuators' (`actuators`)
     _scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0

@@ -1,9 +1,10 @@
 """Scenes: TOML files (or dicts) that declare a model, validated on load.
 
 A scene has the tables [scene], [sections.NAME], [nodes.NAME], [elements.NAME] and the
-optional [inputs.NAME], [outputs.NAME] and [buckling]; README.md documents every key. Every
-problem is reported as a SceneError that names the file, the key and what is wrong; the
-exact-constraint check then refuses an over- or under-constrained model (ConstraintError).
+optional [inputs.NAME], [actuators.NAME], [outputs.NAME] and [buckling];
+docs/scene-format.md documents every key. Every problem is reported as a SceneError that names
+the file, the key and what is wrong; the exact-constraint check then refuses an over- or
+under-constrained model (ConstraintError).
 
 Spatial scenes (dimension = 3): translational nodes have position = [x, y, z]; a rotational
 node has rotation = [rx, ry, rz] (its initial orientation as a rotation vector, rad), is
@@ -32,6 +33,7 @@ from ..mechanics.constraints import check_exact_constraint, choose_dofs
 from ..model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
 from ..numerics.rotations import from_rotation_vector
 from .overrides import apply_overrides
+from .scene_actuators import ActuatorBuilding
 from .scene_elements import ElementBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
 from .sections import beam_properties
@@ -124,9 +126,10 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
     return builder.build(check=check)
 
 
-class _SceneBuilder(SceneReader, ElementBuilding):
+class _SceneBuilder(SceneReader, ElementBuilding, ActuatorBuilding):
     """Builds a Model from a scene dictionary: the checked reading of values
-    (`SceneReader`), the [elements] (`ElementBuilding`) and the rest here."""
+    (`SceneReader`), the [elements] (`ElementBuilding`), the [actuators]
+    (`ActuatorBuilding`) and the rest here."""
 
     def __init__(self, data, source, default_name):
         self.data = data
@@ -139,7 +142,8 @@ class _SceneBuilder(SceneReader, ElementBuilding):
     def build(self, *, check):
         data = self.table("scene file", self.data)
         self.check_keys("scene file", data, {
-            "scene", "sections", "nodes", "elements", "inputs", "outputs", "buckling"})
+            "scene", "sections", "nodes", "elements", "inputs", "actuators", "outputs",
+            "buckling"})
         header = self.table("scene", data.get("scene", {}))
         self.check_keys("scene", header,
                         {"name", "description", "dimension", "gravity", "tunable"})
@@ -171,6 +175,7 @@ class _SceneBuilder(SceneReader, ElementBuilding):
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        actuators, inputs = self.build_actuators(data.get("actuators", {}), inputs)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         for port in outputs:
             if port.name in {p.name for p in inputs}:
@@ -199,6 +204,7 @@ class _SceneBuilder(SceneReader, ElementBuilding):
             gravity=gravity,
             inputs=inputs,
             outputs=outputs,
+            actuators=actuators,
             buckling_loads=buckling,
             source=self.source,
             node_inertias=self.node_inertias,

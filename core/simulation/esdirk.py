@@ -290,17 +290,19 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, o
 
 
 class Esdirk:
-    """The ESDIRK integrator on ydot = f(y), y = [q - q_ref, qdot], with the engine; the same
-    interface as `sundials.Cvode` (reset, advance, statistics, restart memory).
+    """The ESDIRK integrator on ydot = f(y), y = [q - q_ref, qdot(, coil currents)], with the
+    engine; the same interface as `sundials.Cvode` (reset, advance, statistics, restart
+    memory).
 
     Parameters
     ----------
     data : EngineData
-        The packed model; its inputs array holds the forces (N) of the current interval.
+        The packed model; its inputs array holds the forces (N) or drive signals (V) of the
+        current interval.
     rtol : float
         Relative tolerance.
-    atol : array (2 NDOF,)
-        Absolute tolerances (m, rad, m/s, rad/s).
+    atol : array (2 NDOF + coil currents,)
+        Absolute tolerances (m, rad, m/s, rad/s, A).
     max_step : float or None
         Largest step (s).
     method : str
@@ -313,7 +315,8 @@ class Esdirk:
         self.tableau = tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()
-        self.n = n = 2 * int(data.int_array("dims")[ed.NDOF])
+        dims = data.int_array("dims")
+        self.n = n = 2 * int(dims[ed.NDOF]) + int(dims[ed.NEL])  # with the coil currents
         self.memory = np.zeros(M_SIZE)
         self.memory[M_RTOL] = float(rtol)
         self.memory[M_H_MAX] = float(max_step or 0.0)
@@ -329,8 +332,8 @@ class Esdirk:
         self.counters = data.int_array("counters")
 
     def reset(self, t, y):
-        """Continue from time t (s) and state y (2 NDOF,): the first stage's derivative is
-        recomputed, the step size, Jacobian and Newton matrix are kept."""
+        """Continue from time t (s) and state y (2 NDOF + coil currents,): the first stage's
+        derivative is recomputed, the step size, Jacobian and Newton matrix are kept."""
         self.memory[M_T] = float(t)
         self.y_array[:] = y
         self.flags[I_FSAL] = 0

@@ -8,9 +8,11 @@ absolute DOFs would let rtol act on 0.1 m; on the deviation it acts on the motio
 constraints are solved away at every evaluation by the compiled engine
 (`flexure.core.engine.engine`), never integrated; SUNDIALS calls the engine through compiled
 callbacks (`flexure.core.simulation.sundials`), so no Python runs per evaluation. Inputs are
-forces on the scene's input coordinates, held constant between `set_inputs` calls (zero-order
-hold); a change of input is a discontinuity, so the integrator restarts there (order 1, new
-step).
+forces on the scene's input coordinates, or the drive signals (V) of the voice-coil actuators
+that drive them (`flexure.core.mechanics.actuators`), held constant between `set_inputs` calls
+(zero-order hold); a change of input is a discontinuity, so the integrator restarts there
+(order 1, new step). A voltage-driven actuator's coil current (A) is a state: the state is then
+y = [q - q_ref, qdot, i].
 
     sim = Simulator(model, method="cvode-bdf", rtol=1e-8)
     sim.set_inputs([1.0])            # N
@@ -53,7 +55,8 @@ class Simulator(SimulatorOutputs):
     Parameters
     ----------
     model : Model
-        The model; its inputs are forces (N, N m), its outputs positions or velocities.
+        The model; its inputs are forces (N, N m) or actuators' drive signals (V), its outputs
+        positions or velocities.
     method : str
         "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a one-step
         L-stable method of order 4, `flexure.core.simulation.esdirk`: no restart cost when an
@@ -62,7 +65,7 @@ class Simulator(SimulatorOutputs):
         sampled loop's default, where the sample period bounds the step).
     rtol : float
         Relative tolerance of the integrator.
-    atol : float or array (2 NDOF,), optional
+    atol : float or array (2 NDOF + coil currents,), optional
         Absolute tolerance; default `tolerances.default_atol(model, rtol)` (per state).
     max_step : float, optional
         Largest step (s); None for no limit.
@@ -72,7 +75,7 @@ class Simulator(SimulatorOutputs):
         Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA, 12
         for Adams). 2 makes BDF A-stable (docs/decisions.md: why it is not the default).
     input_functions : dict, optional
-        {input index: callable(t) -> N}: inputs that vary within an interval. They are
+        {input index: callable(t) -> N or V}: inputs that vary within an interval. They are
         evaluated in Python at every evaluation (the compiled path is for held inputs).
     """
 
@@ -89,7 +92,10 @@ class Simulator(SimulatorOutputs):
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model)
         self.ndof = model.declared_dof_count
-        self.atol = atol_vector(model, rtol, atol, self.ndof)
+        # the integrator's states: [q - q_ref, qdot] and the coil currents (A)
+        self.ncurrents = len(model.coil_actuators)
+        self.nstate = 2 * self.ndof + self.ncurrents
+        self.atol = atol_vector(model, rtol, atol, self.nstate)
         self.input_names = [p.name for p in model.inputs]
         self.input_units = [p.unit for p in model.inputs]
         self.output_names = [p.name for p in model.outputs]
@@ -114,13 +120,16 @@ class Simulator(SimulatorOutputs):
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
-    def reset(self, *, t0=0.0, q0=None, qdot0=None):
-        """Start again at t0 (s) from q0, qdot0 (default: the scene's configuration at rest).
+    def reset(self, *, t0=0.0, q0=None, qdot0=None, i0=None):
+        """Start again at t0 (s) from q0, qdot0 and the coil currents i0 (A; default: the
+        scene's configuration at rest, no current).
 
         The inputs are kept; the statistics restart from zero.
         """
         q = self._initial_dofs() if q0 is None else _vector(q0, self.ndof, "q0")
         qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
+        i = (np.zeros(self.ncurrents) if i0 is None
+             else _vector(i0, self.ncurrents, "i0"))
         self._start_kinematics(self.model.initial_coordinates)
         status = engine.call(self.data, engine.OP_KINEMATICS, q)
         if status != ed.OK:
@@ -128,7 +137,7 @@ class Simulator(SimulatorOutputs):
                                   f"{STATUS_MESSAGES[status]} (q0 = {np.array2string(q)})")
         self._t = float(t0)
         self._q_ref = q.copy()
-        self._y = np.concatenate([np.zeros(self.ndof), qdot])
+        self._y = np.concatenate([np.zeros(self.ndof), qdot, i])
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
         self._needs_init = self._restart_kinematics = True
@@ -172,11 +181,13 @@ class Simulator(SimulatorOutputs):
 
     @property
     def state(self):
-        """The integrator's state [q - q_ref, qdot] (2 NDOF,) (a copy)."""
+        """The integrator's state [q - q_ref, qdot, coil currents] (2 NDOF + currents,) (a
+        copy)."""
         return self._y.copy()
 
     def absolute(self, y):
-        """States [q, qdot] (..., 2 NDOF) of integrator states [q - q_ref, qdot] (a copy)."""
+        """States [q, qdot(, i)] (..., 2 NDOF + currents) of integrator states
+        [q - q_ref, qdot(, i)] (a copy)."""
         y = np.array(y, dtype=float)
         y[..., : self.ndof] += self._q_ref
         return y
@@ -184,15 +195,22 @@ class Simulator(SimulatorOutputs):
     @property
     def qdot(self):
         """The current DOF velocities (NDOF,) m/s, rad/s (a copy)."""
-        return self._y[self.ndof:].copy()
+        return self._y[self.ndof: 2 * self.ndof].copy()
+
+    @property
+    def currents(self):
+        """The coil currents now (A, one per voltage-driven actuator, `Model.coil_actuators`;
+        a copy)."""
+        return self._y[2 * self.ndof:].copy()
 
     @property
     def inputs(self):
-        """The inputs held now (n_inputs,) N (a copy)."""
+        """The inputs held now (n_inputs,) N or V (a copy)."""
         return self._u.copy()
 
     def set_inputs(self, u):
-        """Hold the inputs u (n_inputs,) N from now on; a change restarts the integrator."""
+        """Hold the inputs u (n_inputs,) N (V for a drive signal) from now on; a change
+        restarts the integrator."""
         u = np.array(u, dtype=float).reshape(-1)
         if u.size != self._u.size:
             raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
@@ -231,11 +249,11 @@ class Simulator(SimulatorOutputs):
             t = float(state["t"])
         except (AttributeError, KeyError, TypeError, ValueError) as error:
             raise SimulationError(f"not a simulator state: {error}") from None
-        if (state.get("model") != self.model.name or y.size != 2 * self.ndof
+        if (state.get("model") != self.model.name or y.size != self.nstate
                 or q_ref.size != self.ndof):
             raise SimulationError(f"the state is of model {state.get('model')!r} with "
                                   f"{y.size} states; expected {self.model.name!r} with "
-                                  f"{2 * self.ndof}")
+                                  f"{self.nstate}")
         if u.size != self._u.size or x.size != self.model.nx:
             raise SimulationError(f"the state holds {u.size} inputs and {x.size} coordinates; "
                                   f"expected {self._u.size} and {self.model.nx}")
@@ -390,7 +408,8 @@ class Simulator(SimulatorOutputs):
 
     def take_back(self, t, y, u, *, restart_needed, wall):
         """Continue from where a compiled driver left the integrator: time t (s), state y
-        (2 NDOF,), held inputs u (N); wall the driver's time (s), for the statistics."""
+        (2 NDOF + currents,), held inputs u (N, V); wall the driver's time (s), for the
+        statistics."""
         self._t, self._y, self._u = float(t), np.array(y, dtype=float), np.array(u, dtype=float)
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
@@ -400,10 +419,10 @@ class Simulator(SimulatorOutputs):
 
     # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ----------------
     def derivative(self, t, y):
-        """ydot (2 NDOF,) at time t (s) and integrator state y = [q - q_ref, qdot]; raises
-        SimulationError when the state cannot be evaluated."""
+        """ydot (2 NDOF + currents,) at time t (s) and integrator state y = [q - q_ref, qdot,
+        i]; raises SimulationError when the state cannot be evaluated."""
         self._prepare(t)
-        ydot = np.empty(2 * self.ndof)
+        ydot = np.empty(self.nstate)
         status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
                              ydot)
         if status != ed.OK:
@@ -411,14 +430,14 @@ class Simulator(SimulatorOutputs):
         return ydot
 
     def jacobian_matrix(self, t, y):
-        """d ydot / d y (2 NDOF, 2 NDOF) from the model's tangent at (t, y)."""
+        """d ydot / d y (N, N; N = 2 NDOF + currents) from the model's tangent at (t, y)."""
         self._prepare(t)
-        J = np.empty(4 * self.ndof ** 2)
+        J = np.empty(self.nstate ** 2)
         status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
                              J, s=0.0)
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
-        return J.reshape(2 * self.ndof, 2 * self.ndof)
+        return J.reshape(self.nstate, self.nstate)
 
     def _prepare(self, t):
         if self.deadline is not None and _time.perf_counter() > self.deadline:

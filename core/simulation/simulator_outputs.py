@@ -40,7 +40,7 @@ class SimulatorOutputs:
         return data.float_array("x")[self._output_coordinates]
 
     def outputs_along(self, states, *, start=None):
-        """Outputs (n, n_outputs) along absolute states [q, qdot] (n, 2 NDOF), solving the
+        """Outputs (n, n_outputs) along absolute states [q, qdot(, i)] (n, 2 NDOF(+)), solving the
         kinematics point by point (warm-started from one to the next)."""
         return self._along(states, start, None)
 
@@ -81,8 +81,8 @@ class SimulatorOutputs:
                 raise SimulationError(f"t = {self._t:.9g} s: outputs: "
                                       f"{STATUS_MESSAGES[status]}")
             for j, p in enumerate(ports):
-                result[k, j] = DF[p.coordinate] @ y[n:] if p.quantity == "velocity" else x[
-                    p.coordinate]
+                result[k, j] = (DF[p.coordinate] @ y[n: 2 * n] if p.quantity == "velocity"
+                                else x[p.coordinate])
             if path is not None:  # the kinematics left x and e of this point in the data
                 path[0][k] = x
                 path[1][k] = data.float_array("e")
