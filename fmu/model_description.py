@@ -38,6 +38,11 @@ BASE_UNITS = {
     "Pa": {"kg": 1, "m": -1, "s": -2},
     "kg/m": {"kg": 1, "m": -1},
     "1": {},
+    "A": {"A": 1},  # voice-coil actuators: coil current, drive signal, Km, R, L
+    "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
+    "N/A": {"kg": 1, "m": 1, "s": -2, "A": -1},
+    "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
+    "H": {"kg": 1, "m": 2, "s": -2, "A": -2},
 }
 
 # The element order of fmiModelDescription (FMI 2.0, fmi2ModelDescription.xsd).

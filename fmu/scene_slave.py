@@ -9,8 +9,11 @@ the scene's TOML text and the scene keys a user may tune:
 
 Variables (only what the scene has):
 
-- one input per scene input (force N or moment N.m, start 0), held over each step;
+- one input per scene input (force N or moment N.m, start 0), held over each step; an input
+  a voice-coil actuator drives is its amplifier's drive signal (V);
 - one output per scene output (position m / rad, velocity m/s / rad/s);
+- one output "NAME.current" (A) per voltage-driven actuator [actuators.NAME]: its coil
+  current, a state of the FMU;
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
   stress at the ends of the scene's beams with a cross-section, in the current state
   (`flexure.core.stresses_along`);
@@ -66,6 +69,7 @@ DEFAULT_MAX_STEPS = 200_000
 TUNABLE_UNITS = {
     "EA": "N", "EI": "N.m2", "EdA": "N.s", "EdI": "N.m2.s", "rho_A": "kg/m", "rho": "kg/m3",
     "E": "Pa", "mass": "kg", "inertia": "kg.m2",
+    "force_constant": "N/A", "resistance": "Ohm", "inductance": "H",
 }
 
 
@@ -115,9 +119,12 @@ class SceneSlave(SafeSlave):
         self.inputs = np.zeros(len(model.inputs))
         self._refresh()
 
+        drivers = {a.input: a for a in model.actuators}
         for i, port in enumerate(model.inputs):
+            what = (f"drive signal of actuator {drivers[i].name} ({drivers[i].drive} "
+                    "amplifier), acting" if i in drivers else port.quantity)
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
-                          description=f"{port.quantity} on coordinate "
+                          description=f"{what} on coordinate "
                                       f"{model.coordinate_names[port.coordinate]}",
                           getter=lambda i=i: float(self.inputs[i]),
                           setter=lambda value, i=i: self.inputs.__setitem__(i, value))
@@ -126,6 +133,10 @@ class SceneSlave(SafeSlave):
                           description=f"{port.quantity} of coordinate "
                                       f"{model.coordinate_names[port.coordinate]}",
                           getter=lambda j=j: float(self.outputs[j]))
+        for k, actuator in enumerate(model.coil_actuators):
+            self.add_real(f"{actuator.name}.current", causality="output", unit="A",
+                          description=f"coil current of actuator {actuator.name}",
+                          getter=lambda k=k: float(self.currents[k]))
         if self.von_mises:
             self.add_real("von_mises_max", causality="output", unit="Pa",
                           description="largest von Mises stress at the ends of the beams",
@@ -203,9 +214,10 @@ class SceneSlave(SafeSlave):
     def _refresh(self):
         """Read the outputs (and the stress) from the simulator's current state."""
         self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self.currents = self.simulator.currents
         self.stress = float("nan")
         if self.von_mises:
-            state = np.concatenate([self.simulator.q, self.simulator.qdot])
+            state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
             _, stresses = stresses_along(self._model, [state], inputs=[self.inputs],
                                          mechanics=self._mechanics)
             self.stress = float(np.nanmax(stresses))
@@ -245,6 +257,7 @@ class SceneSlave(SafeSlave):
             self._build()
         self.simulator.set_state(state["simulator"])
         self.outputs = outputs
+        self.currents = self.simulator.currents
         self.stress = float(state["stress"])
 
     def _checked_state(self, state):

@@ -7,6 +7,9 @@ With the state [dq, dq'] (deviations from the configuration of the linear model)
 
 where b holds a unit force on the coordinate of each input (SPACAR's INPUTF) and DF_y the rows
 of DF of each output coordinate (OUTX). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
+An input a voice-coil actuator drives is its drive signal (V), and a voltage-driven coil adds
+its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`): the transfer from
+the drive signal to a position then shows the back-EMF damping and the coil's pole near -R/L.
 """
 
 from __future__ import annotations
@@ -37,24 +40,27 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None):
     lin = linear_model or linearize(model)
     n = lin.M0.shape[0]
     DF = lin.DF
-    b = np.zeros((model.nx, len(model.inputs)))
-    for column, port in enumerate(model.inputs):
-        b[port.coordinate, column] = 1.0
-    M_inv_K = np.linalg.solve(lin.M0, lin.K)
-    M_inv_C = np.linalg.solve(lin.M0, lin.C0)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
-    B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
-    C = np.zeros((len(model.outputs), 2 * n))
+    if model.actuators:
+        A, B, states = lin.state_matrices()
+    else:  # the force inputs alone: the same numbers, as they have always been computed
+        b = np.zeros((model.nx, len(model.inputs)))
+        for column, port in enumerate(model.inputs):
+            b[port.coordinate, column] = 1.0
+        M_inv_K = np.linalg.solve(lin.M0, lin.K)
+        M_inv_C = np.linalg.solve(lin.M0, lin.C0)
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
+        B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
+        states = [f"{d}" for d in model.dof_names] + [f"{d}_dot" for d in model.dof_names]
+    C = np.zeros((len(model.outputs), A.shape[0]))
     for row, port in enumerate(model.outputs):
         offset = 0 if port.quantity == "position" else n
         C[row, offset:offset + n] = DF[port.coordinate]
     D = np.zeros((len(model.outputs), len(model.inputs)))
-    dofs = model.dof_names
     return control.ss(
         A, B, C, D,
         inputs=[p.name for p in model.inputs],
         outputs=[p.name for p in model.outputs],
-        states=[f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs],
+        states=states,
         name=model.name,
     )
 

@@ -7,6 +7,11 @@ step that does not converge is halved up to four times; then ConvergenceError na
 step and the load factor.
 Convergence: |dq| <= `tolerance` times the model's length scale (rotations count as lengths
 through that scale).
+
+Held inputs (`inputs`) add their steady forces to the load: a force input its value (N, N m);
+an input a voice-coil actuator drives its actuator's force at rest
+(`flexure.core.mechanics.actuators.steady_forces`): Km sat(G u) for a current drive,
+Km sat(G u) / R for a voltage drive, whose coil current settles at sat(G u) / R.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ class StaticSolution:
     stress_resultants: np.ndarray  # (NE,) N (truss, elongation), N (bending, as e2, e3 are m)
     load_factor: float
     iterations: int
+    inputs: np.ndarray | None = None  # the held inputs (n_inputs,) N or V; None: zero
 
     @property
     def q(self):
@@ -55,12 +61,19 @@ class StaticSolution:
 @blas_threads()
 def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_steps: int = 10,
                        tolerance: float = 1e-11, max_iterations: int = 30,
-                       mechanics: Mechanics | None = None) -> StaticSolution:
+                       mechanics: Mechanics | None = None,
+                       inputs=None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
 
-    Returns a StaticSolution; raises ConvergenceError naming the load step that failed.
+    inputs: held inputs, {input name: value} or (n_inputs,), N for a force, V for an
+    actuator's drive signal; their steady forces are added to the loads (module docstring).
+    Returns a StaticSolution; raises ConvergenceError naming the load step that failed, and
+    SceneError for an unknown input.
     """
     mech = mechanics or Mechanics(model)
+    held = None
+    if inputs is not None:
+        held, loads = _with_inputs(model, loads, inputs)
     kin = mech.kinematics
     config = mech.initial_configuration()
     scale = kin.length_scale
@@ -90,7 +103,25 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         factor = target
         step_number += 1
     _, _, sigma = mech.static_balance(config, 1.0, loads)
-    return StaticSolution(model, config, sigma, 1.0, total_iterations)
+    return StaticSolution(model, config, sigma, 1.0, total_iterations, held)
+
+
+def _with_inputs(model, loads, inputs):
+    """(held inputs (n_inputs,), loads (NX,) N with their steady forces added)."""
+    from ..errors import SceneError
+    from ..mechanics.actuators import input_vector, steady_forces
+
+    try:
+        u = input_vector(model, inputs)
+    except ValueError as error:
+        raise SceneError(f"{model.source}: static equilibrium: {error}") from None
+    if not np.all(np.isfinite(u)):
+        raise SceneError(f"{model.source}: static equilibrium: the inputs must be finite, "
+                         f"got {u.tolist()}")
+    total = np.array(model.loads if loads is None else loads, dtype=float)
+    for port, force in zip(model.inputs, steady_forces(model, u), strict=True):
+        total[port.coordinate] += force
+    return u, total
 
 
 def _newton(mech, config, load_factor, loads, step_tolerance, max_iterations):

@@ -138,9 +138,12 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
     """Von Mises stresses along a trajectory: (names, (n_times, n_beams, 2) Pa).
 
     states (n_times, 2 NDOF) = [q, qdot] as `SimulationResult` holds them (q, qdot side by
-    side); inputs (n_times, n_inputs) N on the scene's input coordinates (default zero). The
-    accelerations follow from the equations of motion in each state.
+    side), followed by the coil currents (A) of a model with voltage-driven actuators (zero
+    when left out); inputs (n_times, n_inputs) the held inputs (N on the scene's input
+    coordinates, V for an actuator's drive signal; default zero). The accelerations follow
+    from the equations of motion in each state.
     """
+    from ..mechanics.actuators import input_forces
     from ..mechanics.mechanics import Mechanics
 
     mech = mechanics or Mechanics(model)
@@ -151,10 +154,14 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
         config = mech.kinematics.solve(state[:ndof], x)
         x = config.x
         force = np.zeros(model.nx)
-        if inputs is not None:
+        currents = state[2 * ndof:] if state.size > 2 * ndof else None
+        if inputs is not None or model.actuators:  # a coil's current acts without inputs
+            held = np.zeros(len(model.inputs)) if inputs is None else inputs[k]
+            applied = input_forces(model, held, currents) if model.actuators else held
             for j, port in enumerate(model.inputs):
-                force[port.coordinate] += inputs[k][j]
-        sigma = dynamic_stress_resultants(mech, config, state[ndof:], input_force=force)
+                force[port.coordinate] += applied[j]
+        sigma = dynamic_stress_resultants(mech, config, state[ndof: 2 * ndof],
+                                          input_force=force)
         stresses = beam_stresses(model, x, sigma)
         names = stresses.names
         result.append(stresses.von_mises)
