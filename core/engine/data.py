@@ -69,7 +69,8 @@ class EngineData:
     Parameters
     ----------
     model : Model
-        The model; its inputs are forces (N, N m) on their coordinates.
+        The model; its inputs are forces (N, N m) on their coordinates, or the drive signals
+        (V) of the voice-coil actuators that drive them (`engine.actuators`).
     tolerance : float
         Kinematic tolerance relative to the length scale (default 1e-14: near round-off, so
         the kinematic error stays below the tightest integrator tolerance).

@@ -86,8 +86,9 @@ def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
              method: str = "cvode-bdf", rtol: float = 1e-8, atol=None,
              max_step: float | None = None, output_times=None, jacobian: str = "analytic",
              max_order: int | None = None, q0=None, qdot0=None, deadline: float | None = None,
-             progress=None) -> SimulationResult:
-    """Simulate `model` from rest (or q0, qdot0) at t = 0 to t_end (s).
+             progress=None, i0=None) -> SimulationResult:
+    """Simulate `model` from rest (or q0, qdot0 and the coil currents i0, A) at t = 0 to
+    t_end (s).
 
     Parameters
     ----------
@@ -113,7 +114,7 @@ def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
     constants, functions, samples = split_inputs(model, inputs or {})
     sim = Simulator(model, method=method, rtol=rtol, atol=atol, max_step=max_step,
                     jacobian=jacobian, max_order=max_order, input_functions=functions)
-    sim.reset(q0=q0, qdot0=qdot0)
+    sim.reset(q0=q0, qdot0=qdot0, i0=i0)
     sim.deadline = deadline
     u0 = np.zeros(len(sim.input_names))
     for i, value in constants.items():
