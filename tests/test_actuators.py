@@ -319,6 +319,17 @@ def test_a_restored_state_with_a_coil_continues_bit_for_bit():
         (1.0 - R * 0.25) / L)
 
 
+def test_a_velocity_output_reads_the_velocity_beside_the_coil_current():
+    data = truss()
+    data["outputs"]["v"] = {"node": "2", "coordinate": "x", "quantity": "velocity"}
+    sim = Simulator(build_model(data), rtol=1e-9)
+    sim.set_inputs([1.0])
+    sim.advance(0.01)
+    x, v = sim.outputs()
+    assert v == sim.qdot[0] and v > 0.0 and sim.currents[0] > 0.0
+    assert x == sim.q[0]  # x is the DOF itself
+
+
 def test_the_compiled_loop_holds_the_drive_signal_as_a_python_loop_does():
     """A proportional loop on the coil's drive signal: the compiled sampled loop and the same
     loop of set_inputs and advance give the same numbers, bit for bit."""

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..mechanics.actuators import amplifier_slope
 from ..mechanics.mechanics import Mechanics
 from ..numerics.blas import blas_threads
 from .statics import StaticSolution, static_equilibrium
@@ -62,8 +63,6 @@ class LinearModel:
         """(A, B, state names) of the first-order linear system dz/dt = A z + B du, z =
         [dq, dq', di] (module docstring; di the coil currents, A): A (N, N), B (N, n_inputs)
         with N = 2 NDOF + the coils, inputs N (N m) for forces and V for drive signals."""
-        from ..mechanics.actuators import amplifier_slope
-
         model, DF = self.model, self.DF
         n, coils = self.M0.shape[0], model.coil_actuators
         N = 2 * n + len(coils)

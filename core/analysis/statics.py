@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, SceneError
+from ..mechanics.actuators import input_vector, steady_forces
 from ..mechanics.mechanics import Mechanics
 from ..numerics.blas import blas_threads
 
@@ -108,9 +109,6 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
 
 def _with_inputs(model, loads, inputs):
     """(held inputs (n_inputs,), loads (NX,) N with their steady forces added)."""
-    from ..errors import SceneError
-    from ..mechanics.actuators import input_vector, steady_forces
-
     try:
         u = input_vector(model, inputs)
     except ValueError as error:

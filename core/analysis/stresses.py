@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..mechanics.actuators import input_forces
 from ..numerics.blas import blas_threads
 
 
@@ -143,7 +144,6 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
     coordinates, V for an actuator's drive signal; default zero). The accelerations follow
     from the equations of motion in each state.
     """
-    from ..mechanics.actuators import input_forces
     from ..mechanics.mechanics import Mechanics
 
     mech = mechanics or Mechanics(model)
