@@ -91,6 +91,7 @@ def test_a_wrong_actuator_key_is_named(key, value, message):
 
 
 @pytest.mark.parametrize("change, message", [
+    (lambda a: a.pop("input"), "actuators.VCM1: missing 'input'"),
     (lambda a: a.pop("force_constant"), "actuators.VCM1: missing 'force_constant'"),
     (lambda a: a.pop("inductance"), "actuators.VCM1: missing 'inductance': a voltage-driven"),
     (lambda a: a.pop("resistance"), "actuators.VCM1: missing 'resistance'"),
