@@ -24,12 +24,14 @@ closed loop has a pole on or outside the unit circle.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from flexure.core import FlexureError
+from flexure.core import FlexureError, blas_threads
+
+from .robustness import Robustness, check_robustness, delay_block
 
 if TYPE_CHECKING:  # python-control takes 0.5 s to import: imported where it is used
     import control
@@ -72,6 +74,7 @@ class FeedbackDesign:
     gain_margin: float
     modulus_margin: float
     closed_loop_poles: np.ndarray
+    robustness: Robustness | None = None  # margins per loop, others open and closed; |S|
 
     @property
     def spectral_radius(self):
@@ -88,16 +91,20 @@ class FeedbackDesign:
 
 
 def colocated_pairs(model):
-    """The (input, position output) pairs on the same coordinate, one per input."""
+    """The (input, position output) pairs on the same coordinate (or about the same global
+    axis of a 3-D rotational node: a moment and its angle), one per input."""
+    from flexure.core import port_description
+
     pairs = []
     for i, port in enumerate(model.inputs):
         match = [j for j, out in enumerate(model.outputs)
-                 if out.coordinate == port.coordinate and out.quantity == "position"]
+                 if out.location == port.location and out.quantity == "position"]
         if not match:
+            where = (port_description(model, port, is_input=True) if port.about_axis
+                     else model.coordinate_names[port.coordinate])
             raise ControlDesignError(
                 f"{model.source}: input {port.name!r} has no position output on the same "
-                f"coordinate ({model.coordinate_names[port.coordinate]}); declare one in "
-                "[outputs] to close a loop on it")
+                f"coordinate ({where}); declare one in [outputs] to close a loop on it")
         j = match[0]
         pairs.append(LoopPair(i, j, port.name, model.outputs[j].name))
     return pairs
@@ -116,6 +123,7 @@ def pid_lowpass(crossover: float, *, gain: float = 1.0, integral_ratio: float = 
             * wlp**2 / (s**2 + 2 * lowpass_damping * wlp * s + wlp**2))
 
 
+@blas_threads()
 def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.0,
                     delay_samples: int = 1, linear_model=None, plant=None,
                     **shape) -> FeedbackDesign:
@@ -153,23 +161,21 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
         continuous.append(shape_c / magnitude)
         discrete.append(control.ss(c_d / magnitude))
     controller = control.append(*discrete) if len(discrete) > 1 else discrete[0]
-    delay = control.ss(control.tf([1], [1, 0], Ts))
-    delays = control.append(*[delay] * len(pairs)) if len(pairs) > 1 else delay
-    delays = delays if delay_samples == 1 else _delay_power(delays, delay_samples, len(pairs))
-    loop = plant_d * delays * controller
-    closed = control.feedback(loop, np.eye(len(pairs)))
-    poles = closed.poles()
-    # margins per loop with the other loops open; the worst of each is reported
-    gains = [_siso(plant_d, k, k) * _siso(delays, k, k) * _siso(controller, k, k)
-             for k in range(len(pairs))]
-    margins = np.array([_margins(g, crossover, resonances=plant_d.poles()) for g in gains])
-    gm, pm, sm = margins.min(axis=0)
-    first = gains[0]
+    if delay_samples < 0:
+        raise ControlDesignError(f"delay_samples must be >= 0, got {delay_samples}")
+    delays = delay_block(len(pairs), delay_samples, Ts)
+    first = _siso(plant_d, 0, 0) * _siso(delays, 0, 0) * _siso(controller, 0, 0)
     design = FeedbackDesign(
         pairs=pairs, crossover_rad_s=float(crossover), sample_rate_hz=float(fs),
         delay_samples=int(delay_samples), continuous=continuous, controller=controller,
-        loop_gain=first, phase_margin_deg=float(pm), gain_margin=float(gm),
-        modulus_margin=float(sm), closed_loop_poles=np.asarray(poles))
+        loop_gain=first, phase_margin_deg=np.nan, gain_margin=np.nan, modulus_margin=np.nan,
+        closed_loop_poles=np.zeros(0))
+    # margins per loop with the other loops open (the worst of each reported) and closed
+    robust = check_robustness(design, sub, name=model.name)
+    gm, pm, sm = robust.open_margins.min(axis=0)
+    poles = robust.closed_loop_poles
+    design = replace(design, phase_margin_deg=float(pm), gain_margin=float(gm),
+                     modulus_margin=float(sm), closed_loop_poles=poles, robustness=robust)
     if not np.all(np.abs(poles) < 1.0):
         worst = poles[np.argmax(np.abs(poles))]
         raise ControlDesignError(
@@ -179,50 +185,10 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
     return design
 
 
-def _margins(loop, crossover, *, resonances=()):
-    """Gain margin, phase margin (deg) and modulus margin of a discrete SISO loop gain.
-
-    Evaluated by python-control on a frequency grid up to the Nyquist frequency (its 'frd'
-    method, robust with the lightly damped modes of the plant): logarithmic, dense around the
-    cross-over, and refined across the half-power band of every plant pole `resonances` (z),
-    so that a narrow parasitic peak is not stepped over.
-    """
-    import control
-
-    Ts = loop.dt
-    nyquist = np.pi / Ts
-    parts = [np.geomspace(crossover * 1e-3, nyquist * 0.999999, 3000),
-             np.linspace(crossover * 0.5, crossover * 2.0, 501)]
-    for z in np.atleast_1d(resonances):
-        if abs(z) == 0:
-            continue
-        s = np.log(complex(z)) / Ts
-        w, width = abs(s.imag), max(abs(s.real), 1e-6 * abs(s))
-        if 0 < w < nyquist:
-            parts.append(np.clip(w + width * np.linspace(-20, 20, 201), w * 0.5, nyquist))
-    omega = np.unique(np.concatenate(parts))
-    response = control.frd(loop, omega)
-    gm, pm, sm, *_ = control.stability_margins(response, method="frd")
-    return gm, pm, sm
-
-
 def _siso(sys, i, j):
     import control
 
     return control.ss(sys.A, sys.B[:, [j]], sys.C[[i], :], sys.D[[i], [j]], sys.dt)
-
-
-def _delay_power(delays, n, count):
-    import control
-
-    if n < 0:
-        raise ControlDesignError(f"delay_samples must be >= 0, got {n}")
-    if n == 0:
-        return control.ss([], [], [], np.eye(count), delays.dt)
-    out = delays
-    for _ in range(n - 1):
-        out = out * delays
-    return out
 
 
 class DiscreteController:

@@ -71,6 +71,18 @@ class LowFrequencyModel:
         eq = 0.0 if self.equilibrium is None else np.asarray(self.equilibrium, float)
         return a @ self.mass.T + v @ self.damping.T + (p - eq) @ self.stiffness.T
 
+    def state_space(self):
+        """The model as a continuous control.StateSpace from the forces (N) to the outputs'
+        displacements from equilibrium (m): states [y, y'], y'' = M^-1 (u - C y' - K y)."""
+        import control
+
+        n = self.mass.shape[0]
+        inverse = np.linalg.inv(self.mass)
+        A = np.block([[np.zeros((n, n)), np.eye(n)],
+                      [-inverse @ self.stiffness, -inverse @ self.damping]])
+        B = np.vstack([np.zeros((n, n)), inverse])
+        return control.ss(A, B, np.hstack([np.eye(n), np.zeros((n, n))]), np.zeros((n, n)))
+
     def to_dict(self):
         return {k: np.asarray(getattr(self, k)).tolist()
                 for k in ("mass", "damping", "stiffness", "frequencies_hz", "equilibrium")
@@ -83,7 +95,14 @@ class LowFrequencyModel:
 
 def low_frequency_model(model: Model, *, linear_model=None) -> LowFrequencyModel:
     """The low-frequency model of `model` on its colocated loops (see the module docstring)."""
-    from flexure.core import linearize, natural_frequencies  # the models on first use
+    # the models on first use
+    from flexure.core import (
+        input_columns,
+        linearize,
+        natural_frequencies,
+        output_rows,
+        output_value,
+    )
 
     pairs = colocated_pairs(model)
     lin = linear_model or linearize(model)
@@ -91,12 +110,12 @@ def low_frequency_model(model: Model, *, linear_model=None) -> LowFrequencyModel
     r = len(pairs)
     phi = modes.shapes[:, :r]
     omega = 2 * np.pi * modes.frequencies_hz[:r]
-    b = np.zeros((model.nx, r))
-    for k, pair in enumerate(pairs):
-        b[model.inputs[pair.input_index].coordinate, k] = 1.0
+    x = lin.solution.config.x
+    # a force on its coordinate, or a moment's generalised force at the linearisation point
+    b = input_columns(model, x, [model.inputs[pair.input_index] for pair in pairs])
     B_r = phi.T @ lin.DF.T @ b
-    coordinates = [model.outputs[p.output_index].coordinate for p in pairs]
-    C_r = lin.DF[coordinates] @ phi
+    outputs = [model.outputs[p.output_index] for p in pairs]
+    C_r = output_rows(model, x, lin.DF, outputs) @ phi
     if np.linalg.cond(B_r) > 1e12 or np.linalg.cond(C_r) > 1e12:
         raise ControlDesignError(
             f"{model.name}: the {r} lowest mode(s) are not driven or not seen by the loops "
@@ -107,7 +126,7 @@ def low_frequency_model(model: Model, *, linear_model=None) -> LowFrequencyModel
         damping=left @ (phi.T @ lin.C0 @ phi) @ right,
         stiffness=left @ np.diag(omega**2) @ right,
         frequencies_hz=modes.frequencies_hz[:r].copy(),
-        equilibrium=lin.solution.config.x[coordinates].copy(),
+        equilibrium=np.array([output_value(model, port, x) for port in outputs]),
     )
 
 

@@ -19,13 +19,24 @@ u_0 = u_ff,0 (nothing measured yet).
 
 u_ff,k is the mean over [t_k, t_k+1) of the continuous feedforward (feedforward.py), so the
 held force carries no half-sample lag.
+
+The references: one loop (`axis`) follows the profile while the others hold; or, with a
+`MovePath` (move_path.py), every loop follows its displacement y(s) along the path with the
+progress s(t) = the profile (of stroke 1) over time, and the feedforward is
+m y'' + c y' + (the path's static forces, or k y of the low-frequency model), with
+y' = y_s s', y'' = y_ss s'^2 + y_s s''. Its interval means: those of y' and y'' exact (the
+differences of y and y' over the interval), those of y and of the static force by 4-point
+Gauss-Legendre quadrature (exact for polynomials of degree 7 in t).
 """
 
 import numpy as np
 
 from .feedback import DiscreteController
 from .feedforward import LowFrequencyModel, forces
+from .move_path import MovePath
 from .profiles import ThirdOrderProfile
+
+_GAUSS_POINTS, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(4)
 
 
 class LoopController:
@@ -50,12 +61,15 @@ class LoopController:
     feedforward_forces : array (samples + 2, n_loops), optional
         Precomputed feedforward forces (N) held from each sample, instead of `feedforward`
         (e.g. from a `StableInverse` of the full linear model).
+    path : MovePath, optional
+        Every loop follows its displacement along this path, `profile` (of stroke 1) giving
+        the progress s(t); `axis` is then unused.
     """
 
     def __init__(self, controller: DiscreteController, profile: ThirdOrderProfile, *,
                  fs: float, samples: int, offsets, feedforward: LowFrequencyModel | None = None,
-                 axis: int = 0, feedforward_forces=None):
-        self.controller, self.profile = controller, profile
+                 axis: int = 0, feedforward_forces=None, path: MovePath | None = None):
+        self.controller, self.profile, self.path = controller, profile, path
         self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
         self.offsets = np.asarray(offsets, float).reshape(-1)
         self.feedforward_model = feedforward
@@ -63,12 +77,18 @@ class LoopController:
         direction = np.eye(n)[self.axis]
         k = np.arange(self.samples + 2)
         t = k / self.fs
-        self.reference = self.offsets + np.outer(profile.position(t), direction)
+        if path is None:
+            self.reference = self.offsets + np.outer(profile.position(t), direction)
+        else:
+            self.reference = self.offsets + path.displacement(profile.position(t))
         self.explicit_forces = feedforward_forces is not None
         if self.explicit_forces:
             self.feedforward = np.asarray(feedforward_forces, float).reshape(k.size, n)
         elif feedforward is None:
             self.feedforward = np.zeros((k.size, n))
+        elif path is not None:
+            self.feedforward = _path_forces(feedforward, profile, path, t, (k + 1) / self.fs,
+                                            self.offsets)
         else:
             self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
                                       direction=direction, offsets=self.offsets)
@@ -101,6 +121,7 @@ class LoopController:
                             else self.feedforward_model.to_dict()),
             "feedforward_forces": (self.feedforward.tolist() if self.explicit_forces
                                    else None),
+            "path": None if self.path is None else self.path.to_dict(),
         }
 
     @classmethod
@@ -111,4 +132,25 @@ class LoopController:
                    ThirdOrderProfile(**data["profile"]), fs=data["fs"],
                    samples=data["samples"], offsets=data["offsets"], axis=data["axis"],
                    feedforward=None if ff is None else LowFrequencyModel.from_dict(ff),
-                   feedforward_forces=data.get("feedforward_forces"))
+                   feedforward_forces=data.get("feedforward_forces"),
+                   path=None if data.get("path") is None else MovePath.from_dict(data["path"]))
+
+
+def _path_forces(model: LowFrequencyModel, profile, path: MovePath, t0, t1, offsets):
+    """The feedforward (N) along `path`, held over the intervals [t0, t1); (len(t0), n)."""
+    h = (t1 - t0)[:, None]
+    s0, sdot0, _, _ = profile.evaluate(t0)
+    s1, sdot1, _, _ = profile.evaluate(t1)
+    velocity = (path.displacement(s1) - path.displacement(s0)) / h
+    acceleration = (path.displacement(s1, 1) * sdot1[:, None]
+                    - path.displacement(s0, 1) * sdot0[:, None]) / h
+    static = np.zeros_like(velocity)
+    for point, weight in zip(_GAUSS_POINTS, _GAUSS_WEIGHTS, strict=True):
+        s = profile.position(t0 + (point + 1.0) / 2.0 * (t1 - t0))
+        if path.forces is not None:
+            static += weight / 2.0 * path.static_force(s)
+        else:
+            position = offsets + path.displacement(s)
+            eq = 0.0 if model.equilibrium is None else np.asarray(model.equilibrium, float)
+            static += weight / 2.0 * ((position - eq) @ model.stiffness.T)
+    return acceleration @ model.mass.T + velocity @ model.damping.T + static

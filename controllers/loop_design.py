@@ -38,7 +38,7 @@ def feedforward_kind(feedforward) -> str | None:
 
 def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
                crossover: float = 300.0, feedforward=True, settle: float = 0.25, axis: int = 0,
-               feedforward_model=None, **design_options):
+               feedforward_model=None, path=None, design=None, **design_options):
     """Design the feedback and the feedforward of `model`; returns (LoopController, design).
 
     Parameters
@@ -62,6 +62,11 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     feedforward_model : LowFrequencyModel, optional
         Replaces the low-frequency model derived from `model` (e.g. a deliberately wrong one,
         `low_frequency_model(model).scaled(mass=1.1, stiffness=1.1)`).
+    path : MovePath, optional
+        Every loop follows its displacement along this path (move_path.py) in `duration`;
+        `stroke` and `axis` are then unused; the feedforward is "modal" or none.
+    design : FeedbackDesign, optional
+        A feedback designed before (`design_feedback`), reused instead of designing again.
     **design_options
         Passed on to `design_feedback`.
 
@@ -74,15 +79,25 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     for name, value in (("duration", duration), ("fs", fs), ("settle", settle)):
         if not np.isfinite(value) or (value <= 0 if name != "settle" else value < 0):
             raise LoopError(f"{name} must be a positive finite number, got {value}")
-    design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
+    if design is None:
+        design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
     n = len(design.pairs)
     if not 0 <= axis < n:
         raise LoopError(f"axis {axis} out of range: {model.name} has {n} loop(s)")
+    kind = feedforward_kind(feedforward)
+    if path is not None:
+        if path.displacements.shape[1] != n:
+            raise LoopError(f"the move path has {path.displacements.shape[1]} loop(s), "
+                            f"{model.name} has {n}")
+        if kind == "inverse":
+            raise LoopError("a move path takes the 'modal' feedforward or none, not 'inverse'")
+        stroke = 1.0  # the profile is the progress s along the path
     profile = ThirdOrderProfile(stroke, duration)
     samples = int(round((duration + settle) * fs))
-    offsets = [model.initial_coordinates[model.outputs[p.output_index].coordinate]
+    from flexure.core import output_value  # the models (numba, scipy) on first use
+
+    offsets = [output_value(model, model.outputs[p.output_index], model.initial_coordinates)
                for p in design.pairs]
-    kind = feedforward_kind(feedforward)
     lf, explicit = None, None
     if kind == "modal":
         lf = feedforward_model if feedforward_model is not None else low_frequency_model(model)
@@ -90,7 +105,7 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
         explicit = _inverse_forces(model, design, profile, fs, samples, offsets)
     controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
                                 samples=samples, offsets=offsets, feedforward=lf, axis=axis,
-                                feedforward_forces=explicit)
+                                feedforward_forces=explicit, path=path)
     return controller, design
 
 
@@ -98,7 +113,8 @@ def _inverse_forces(model, design, profile, fs, samples, offsets):
     """Feedforward from the stable inverse of the sampled full linear model (one loop)."""
     import control  # 0.5 s to import: only where it is used
 
-    from flexure.core import linearize, state_space  # the models (numba, scipy) on first use
+    # the models (numba, scipy) on first use
+    from flexure.core import linearize, output_value, state_space
 
     if len(design.pairs) != 1:
         raise LoopError(f"{model.name}: the 'inverse' feedforward handles one loop, the scene "
@@ -107,7 +123,7 @@ def _inverse_forces(model, design, profile, fs, samples, offsets):
     lin = linearize(model)
     plant = state_space(model, linear_model=lin)[pair.output_index, pair.input_index]
     inverse = StableInverse(control.c2d(plant, 1.0 / fs, method="zoh"))
-    equilibrium = lin.solution.config.x[model.outputs[pair.output_index].coordinate]
+    equilibrium = output_value(model, model.outputs[pair.output_index], lin.solution.config.x)
     k = np.arange(samples + 2)
     # u_k, held on [t_k, t_k+1), makes the sampled linear output follow r_k (deviations
     # from the linearisation point, which carries the scene's constant loads).

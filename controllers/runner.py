@@ -38,7 +38,8 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
              settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD,
              rtol: float = LOOP_RTOL,
              feedforward_model=None, workdir=None, progress=None,
-             overrides: dict | None = None, **design_options) -> LoopResult:
+             overrides: dict | None = None, path=None, design=None,
+             **design_options) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
     Parameters
@@ -74,6 +75,11 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
     overrides : dict, optional
         {dotted scene key: value} set on a scene file or name before it is built
         (`flexure.core.load_scene`); the FMU plants are built from the overridden scene.
+    path : MovePath, optional
+        Every loop follows its displacement along this path (`move_path`) in `duration`;
+        `stroke` becomes the largest displacement of a loop at the end of the path.
+    design : FeedbackDesign, optional
+        A feedback designed before, reused (`design_feedback`).
     **design_options
         Passed on to `design_feedback`.
 
@@ -98,7 +104,9 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
     controller, design = build_loop(
         model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
         feedforward=feedforward, settle=settle, axis=axis,
-        feedforward_model=feedforward_model, **design_options)
+        feedforward_model=feedforward_model, path=path, design=design, **design_options)
+    if path is not None:
+        stroke = float(np.max(np.abs(path.displacement([1.0]))))
     kind = feedforward_kind(feedforward)
     moving = design.pairs[axis]
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,

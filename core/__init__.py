@@ -19,6 +19,7 @@ __version__ = "0.1.0"
 # public name -> the submodule that defines it (imported by __getattr__ on first use)
 _LAZY = {
     "Compliance": "analysis.compliance", "compliance": "analysis.compliance",
+    "InverseStatics": "analysis.inverse_statics", "inverse_statics": "analysis.inverse_statics",
     "LinearModel": "analysis.linearization", "linearize": "analysis.linearization",
     "Modes": "analysis.modal", "buckling_load_factors": "analysis.modal",
     "natural_frequencies": "analysis.modal",
@@ -29,7 +30,11 @@ _LAZY = {
     "proposed_releases": "mechanics.constraints",
     "Kinematics": "mechanics.kinematics",
     "Mechanics": "mechanics.mechanics",
+    "input_columns": "mechanics.ports", "input_values": "mechanics.ports",
+    "output_rows": "mechanics.ports", "output_value": "mechanics.ports",
+    "port_description": "mechanics.ports",
     "Model": "model",
+    "blas_threads": "numerics.blas",
     "apply_overrides": "scene.overrides",
     "build_model": "scene.building", "builtin_scenes": "scene.building",
     "load_scene": "scene.building", "scene_path": "scene.building",
@@ -44,12 +49,15 @@ _LAZY = {
 }
 
 __all__ = [
-    "Compliance", "ConstraintError", "ConvergenceError", "FlexureError", "Kinematics",
+    "Compliance", "ConstraintError", "ConvergenceError", "FlexureError", "InverseStatics",
+    "Kinematics", "inverse_statics",
     "LinearModel", "METHODS",
-    "Mechanics", "Model", "Modes", "SceneError", "SimulationError", "SimulationResult",
+    "Mechanics", "Model", "Modes", "blas_threads", "SceneError", "SimulationError",
+    "SimulationResult",
     "Simulator", "StaticSolution", "apply_overrides", "beam_stresses", "buckling_load_factors",
     "build_model",
     "builtin_scenes", "check_exact_constraint", "choose_dofs", "compliance", "default_atol",
+    "input_columns", "input_values", "output_rows", "output_value", "port_description",
     "linearize", "load_scene", "proposed_releases", "read_spacar", "Scene", "to_toml",
     "natural_frequencies", "controller_step", "prepare", "principal_gains", "run_sampled_loop",
     "scene_path", "scene_toml",

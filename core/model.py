@@ -61,16 +61,40 @@ class ElementGroup:
         return vector[self.coordinate_index]
 
 
+GLOBAL_ROTATIONS = ("rx", "ry", "rz")  # a 3-D rotational node's rotations about global x, y, z
+
+
 @dataclass(frozen=True)
 class Port:
-    """A named input force or output on one model coordinate (SPACAR's INPUTF / OUTX); an input
-    an actuator drives is its amplifier's drive signal: quantity "drive", unit "V"
-    (`Actuator`)."""
+    """A named input or output of the model.
+
+    On one model coordinate (SPACAR's INPUTF / OUTX): `coordinate` its index; an input is a
+    force on it (N, or N m on a planar angle), an output its position or velocity (m, m/s,
+    rad, rad/s). About a global axis of a 3-D rotational node: `euler` the indices of the
+    node's four Euler parameters, `axis` "rx", "ry" or "rz" and `coordinate` None; an input is
+    a moment about that axis (N m), an output the rotation-vector component about it (rad) or
+    the angular velocity about it (rad/s). `flexure.core.mechanics.ports` has their maths.
+    An input a voice-coil actuator drives is its amplifier's drive signal, quantity "drive"
+    and unit "V" (`Actuator`): the actuator's force or moment acts on the port.
+    """
 
     name: str
-    coordinate: int
-    quantity: str = "force"  # "force" or "drive" for inputs; "position" or "velocity" for outputs
+    coordinate: int | None
+    quantity: str = "force"  # "force", "moment" or "drive" for inputs; "position", "velocity"
     unit: str = "N"
+    euler: tuple = ()
+    axis: str = ""
+
+    @property
+    def about_axis(self):
+        """Whether the port is a rotation about a global axis of a 3-D rotational node."""
+        return bool(self.euler)
+
+    @property
+    def location(self):
+        """What the port acts on or measures, comparable between ports: the coordinate
+        index, or (the Euler parameter indices, the axis)."""
+        return (self.euler, self.axis) if self.euler else self.coordinate
 
 
 VOLTAGE, CURRENT = "voltage", "current"  # the drives of an actuator's amplifier
@@ -79,9 +103,11 @@ VOLTAGE, CURRENT = "voltage", "current"  # the drives of an actuator's amplifier
 @dataclass(frozen=True)
 class Actuator:
     """A voice-coil actuator (VCM) that drives one input (`flexure.core.mechanics.actuators`
-    has its equations): the input's value becomes the drive signal of its amplifier.
+    has its equations): the input's value becomes the drive signal of its amplifier, and the
+    actuator's force (or moment, on a port about a global axis) acts on the input's port.
 
-    force_constant Km (N/A, equal to the back-EMF constant in V s/m; N m/A on an angle),
+    force_constant Km (N/A, equal to the back-EMF constant in V s/m; N m/A, V s/rad on an
+    angle or about a global axis),
     resistance R (ohm) and inductance L (H) of the coil; drive "voltage" (the amplifier sets
     the coil voltage) or "current"; amplifier_gain G (V/V or A/V) from the drive signal to the
     amplifier's output, which is clipped at +- saturation (V or A; inf: no limit).

@@ -38,13 +38,17 @@ The scenes written (all `flexure` built-ins once written into examples/scenes/):
   deformations released, the bodies rigid with their masses and inertias (the chapter's
   870-DOF model's analogue).
 - `manipulator_e1`: the same with every elongation prescribed zero (its 315-DOF analogue).
+- `manipulator_control`: one beam per flexure, every elongation prescribed zero (75 DOFs): the
+  plant of the closed loop, its ten lowest frequencies within 0.5 % of the full model's.
 - `manipulator_reduced`: written by `flexure reduce manipulator_e1 --keep 7 --tol 1`
   (its 237-DOF analogue), not by this script: the six suspension modes and the first
   parasitic one within 1 % (keeping six only, the reduction freezes what the parasitic mode
   bends and doubles its frequency; a controller's robustness depends on that mode).
 
 Inputs F1 ... F6 are the actuator forces (N) on the carriages, outputs x1 ... x6 the
-carriages' positions (m) along their axes: the colocated encoders.
+carriages' positions (m) along their axes: the colocated encoders. With `--angle-outputs`
+the dynamic scenes also get E_rx, E_ry, E_rz, the end effector's rotations about the global
+axes (rad, rotation-vector components): its parasitic rotations.
 """
 
 import argparse
@@ -322,8 +326,11 @@ def scene_stage(parameters=PARAMETERS):
                   "translating in the plane, 6 DOFs", dynamic=False)
 
 
-def scene_manipulator(parameters=PARAMETERS, *, frozen=()):
-    """The whole manipulator, dynamic: every flexure meshed, `frozen` deformations prescribed."""
+def scene_manipulator(parameters=PARAMETERS, *, frozen=(), angle_outputs=False, name=None,
+                      description=None):
+    """The whole manipulator, dynamic: every flexure meshed, `frozen` deformations prescribed;
+    with `angle_outputs` also the end effector's rotations about x, y and z (rad) as the
+    outputs E_rx, E_ry, E_rz after the encoders (its parasitic rotations)."""
     parts = SceneParts(parameters, dynamic=True, frozen=frozen)
     starts = []
     for i, angle in enumerate(BODY_ANGLES, start=1):
@@ -347,13 +354,33 @@ def scene_manipulator(parameters=PARAMETERS, *, frozen=()):
                                       "quantity": "position"}
         starts.append(points["M"])
     ends = effector(parts)
+    if angle_outputs:
+        for axis in ("rx", "ry", "rz"):
+            parts.outputs[f"E_{axis}"] = {"node": "E_r", "coordinate": axis,
+                                          "quantity": "position"}
     slanted_springs(parts, starts, ends, prescribed=LEAF)
-    name = "manipulator_e1" if "e1" in frozen else "manipulator"
+    name = name or ("manipulator_e1" if "e1" in frozen else "manipulator")
     what = ("every elongation prescribed zero" if "e1" in frozen
             else "every deformation released")
-    return _scene(parts, name, f"the six-DOF flexure manipulator, dynamic, "
-                               f"{int(value('segments', parameters))} beams per flexure, {what}",
-                  dynamic=True)
+    segments = int(value("segments", parameters))
+    description = description or (f"the six-DOF flexure manipulator, dynamic, {segments} "
+                                  f"beam{'s' if segments > 1 else ''} per flexure, {what}")
+    return _scene(parts, name, description, dynamic=True)
+
+
+def scene_control(parameters=PARAMETERS):
+    """The control model: one beam per flexure, every elongation prescribed zero.
+
+    75 DOFs; its ten lowest natural frequencies lie within 0.5 % of the 816-DOF model's (the
+    six suspension modes and the parasitic cluster at 166 Hz), so it is the plant of the
+    closed-loop studies, where every sample costs an evaluation of the nonlinear model. It
+    has the end effector's angles as outputs, for its parasitic rotations."""
+    coarse = dict(parameters)
+    coarse["segments"] = (1, "-", PARAMETERS["segments"][2])
+    return scene_manipulator(
+        coarse, frozen=("e1",), angle_outputs=True, name="manipulator_control",
+        description="the six-DOF flexure manipulator's control model: dynamic, 1 beam per "
+                    "flexure, every elongation prescribed zero")
 
 
 def _scene(parts, name, description, *, dynamic):
@@ -366,10 +393,14 @@ def _scene(parts, name, description, *, dynamic):
     return scene
 
 
-def all_scenes(parameters=PARAMETERS):
-    """{file name: scene dictionary} of the scenes this table writes."""
+def all_scenes(parameters=PARAMETERS, *, angle_outputs=False):
+    """{file name: scene dictionary} of the scenes this table writes; `angle_outputs` adds the
+    end effector's angles to the dynamic ones (`scene_manipulator`; not in the committed
+    scenes)."""
     scenes = [scene_guidance(parameters), scene_stage(parameters),
-              scene_manipulator(parameters), scene_manipulator(parameters, frozen=("e1",))]
+              scene_manipulator(parameters, angle_outputs=angle_outputs),
+              scene_manipulator(parameters, frozen=("e1",), angle_outputs=angle_outputs),
+              scene_control(parameters)]
     return {f"{s['scene']['name']}.toml": s for s in scenes}
 
 
@@ -389,11 +420,15 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--table", action="store_true", help="print the parameter table")
     parser.add_argument("--out", type=Path, default=SCENES, help="folder for the scenes")
+    parser.add_argument("--angle-outputs", action="store_true",
+                        help="add the end effector's angles about x, y, z (E_rx, E_ry, E_rz, "
+                             "rad) to the dynamic scenes' outputs (the committed scenes have "
+                             "none: write these with --out elsewhere)")
     args = parser.parse_args(argv)
     if args.table:
         sys.stdout.write(parameter_table())
         return 0
-    for file_name, scene in all_scenes().items():
+    for file_name, scene in all_scenes(angle_outputs=args.angle_outputs).items():
         text = scene_toml(scene, HEADER.format(description=scene["scene"]["description"]))
         (args.out / file_name).write_text(text)
         print(f"wrote {args.out / file_name}")

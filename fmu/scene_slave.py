@@ -9,9 +9,11 @@ the scene's TOML text and the scene keys a user may tune:
 
 Variables (only what the scene has):
 
-- one input per scene input (force N or moment N.m, start 0), held over each step; an input
-  a voice-coil actuator drives is its amplifier's drive signal (V);
-- one output per scene output (position m / rad, velocity m/s / rad/s);
+- one input per scene input (force N or moment N.m, start 0; a moment about a global axis of
+  a 3-D rotational node too), held over each step; an input a voice-coil actuator drives is
+  its amplifier's drive signal (V);
+- one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
+  global axis of a 3-D rotational node, rad, or its angular velocity, rad/s);
 - one output "NAME.current" (A) per voltage-driven actuator [actuators.NAME]: its coil
   current, a state of the FMU;
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
@@ -34,20 +36,25 @@ name and a digest of the embedded scene text, tunable keys and outputs, so a sta
 scene (or of the same scene built from another scene file) is refused by name.
 
 Values a host sets are checked when set (`check_value`): the method must be one of METHODS,
-0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, EdI) >= 0 and any other tunable
+0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, cx, ...) >= 0 and any other tunable
 value > 0, all finite. A refused value puts the instance in the error state (see `SafeSlave`).
+A tunable key's unit, and whether it is a damping, are its schema's
+(`flexure.core.scene.building.scene_key`: the element section schemas, the node keys and the
+actuators').
 """
 
 
 import copy
 import math
 import tomllib
+from dataclasses import replace
 
 import numpy as np
 from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from flexure.core import Mechanics, Simulator, build_model, stresses_along
+from flexure.core import Mechanics, Simulator, build_model, port_description, stresses_along
+from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
@@ -64,13 +71,6 @@ DEFAULT_RTOL = 1e-6
 # a doStep's step budget: far above a normal step (the 3-DOF stage with CVODE: about 50 steps
 # per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
 DEFAULT_MAX_STEPS = 200_000
-
-# The unit of a tunable scene key, by its last part.
-TUNABLE_UNITS = {
-    "EA": "N", "EI": "N.m2", "EdA": "N.s", "EdI": "N.m2.s", "rho_A": "kg/m", "rho": "kg/m3",
-    "E": "Pa", "mass": "kg", "inertia": "kg.m2",
-    "force_constant": "N/A", "resistance": "Ohm", "inductance": "H",
-}
 
 
 def scene_value(scene, key):
@@ -121,17 +121,18 @@ class SceneSlave(SafeSlave):
 
         drivers = {a.input: a for a in model.actuators}
         for i, port in enumerate(model.inputs):
-            what = (f"drive signal of actuator {drivers[i].name} ({drivers[i].drive} "
-                    "amplifier), acting" if i in drivers else port.quantity)
+            description = port_description(model, port, is_input=True)
+            if i in drivers:  # the port's own force or moment, which the actuator's acts as
+                acting = port_description(model, replace(port, quantity="force"), is_input=True)
+                description = (f"drive signal of actuator {drivers[i].name} ({drivers[i].drive} "
+                               f"amplifier) of the {acting}")
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
-                          description=f"{what} on coordinate "
-                                      f"{model.coordinate_names[port.coordinate]}",
+                          description=description,
                           getter=lambda i=i: float(self.inputs[i]),
                           setter=lambda value, i=i: self.inputs.__setitem__(i, value))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
-                          description=f"{port.quantity} of coordinate "
-                                      f"{model.coordinate_names[port.coordinate]}",
+                          description=port_description(model, port, is_input=False),
                           getter=lambda j=j: float(self.outputs[j]))
         for k, actuator in enumerate(model.coil_actuators):
             self.add_real(f"{actuator.name}.current", causality="output", unit="A",
@@ -160,8 +161,9 @@ class SceneSlave(SafeSlave):
                          getter=lambda: self.max_steps,
                          setter=lambda value: setattr(self, "max_steps", int(value)))
         for key in self.tunable:
+            schema = scene_key(key, model)
             self.add_real(key, causality="parameter",
-                          unit=TUNABLE_UNITS.get(key.rsplit(".", 1)[-1]),
+                          unit=schema.unit if schema is not None else None,
                           start=self.parameters[key], description=f"scene key {key}",
                           getter=lambda key=key: self.parameters[key],
                           setter=lambda value, key=key: self.parameters.__setitem__(key, value))
@@ -186,7 +188,8 @@ class SceneSlave(SafeSlave):
                 return (f"integrator.atol = {value!r}: expected a finite number >= 0 (0: the "
                         "simulator's default)")
         elif name in self.parameters:
-            damping = name.rsplit(".", 1)[-1] in ("EdA", "EdI")
+            schema = scene_key(name, self._model)
+            damping = schema is not None and schema.damping
             if not (math.isfinite(value) and (value >= 0.0 if damping else value > 0.0)):
                 return (f"{name} = {value!r}: expected a finite number "
                         f"{'>= 0' if damping else '> 0'}")

@@ -53,6 +53,26 @@ def test_a_free_rotation_in_space_gets_a_deformation_dof():
     assert any(".e" in name for name in model.chosen_dofs)
 
 
+@pytest.mark.parametrize("rotation", [[0.0, 0.0, 0.0], [0.3, 0.0, 0.0], [0.2, -0.1, 0.4]])
+def test_a_rotated_end_node_leaves_its_torsion_to_the_deformation(rotation):
+    """A spatial beam released in torsion only, its end node starting rotated: no coordinate
+    takes the twist (the translations' projections on it are round-off, 1e-17), so the
+    torsion deformation is the one DOF, as with the node unrotated."""
+    model = build_model({
+        "scene": {"name": "twist", "dimension": 3},
+        "sections": {"s": {"EA": 1e7, "GIt": 2.0, "EIy": 1e3, "EIz": 1e3}},
+        "nodes": {"1": {"position": [0.0, 0.0, 0.0], "fixed": ["x", "y", "z"]},
+                  "2": {"rotation": [0.0, 0.0, 0.0], "fixed": True},
+                  "3": {"position": [0.1, 0.0, 0.0]},
+                  "4": {"rotation": rotation, "inertia": [1e-3, 1e-3, 1e-3]}},
+        "elements": {"b": {"type": "BEAM", "nodes": ["1", "2", "3", "4"], "section": "s",
+                           "y_axis": [0.0, 1.0, 0.0], "released": ["e2"]}}})
+    assert model.chosen_dofs == ("b.e2",)
+    # GIt / l over J: the same torsion frequency however the node starts
+    assert natural_frequencies(model).frequencies_hz[0] == pytest.approx(
+        np.sqrt(2.0 / 0.1 / 1e-3) / (2 * np.pi), rel=1e-10)
+
+
 def test_an_over_constrained_scene_without_dofs_is_still_named():
     """Two rigid collinear trusses hold a node: no DOF can fix that; the check names it."""
     data = {"scene": {"name": "collinear"}, "sections": {"s": {"EA": 1.0}},

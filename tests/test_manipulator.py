@@ -237,3 +237,50 @@ def test_the_report_runs_as_a_user_runs_it(tmp_path):
     assert float(lift[4]) == pytest.approx(3.0, rel=0.1)
     assert (tmp_path / "manipulator_sigma.png").stat().st_size > 10_000
     assert (tmp_path / "manipulator_workspace.png").stat().st_size > 10_000
+
+
+def test_angle_outputs_are_optional_and_only_add_the_end_effector_angles():
+    """The generator's angle outputs leave the committed scenes as they are and add E_rx,
+    E_ry, E_rz (rad) on the end effector's rotational node to the dynamic scenes, after the
+    six encoders; they read the scene's unrotated end effector as zero."""
+    from flexure.core import output_value
+
+    plain, angled = manipulator.all_scenes(), manipulator.all_scenes(angle_outputs=True)
+    assert plain == manipulator.all_scenes(angle_outputs=False)
+    extra = {f"E_{a}": {"node": "E_r", "coordinate": a, "quantity": "position"}
+             for a in ("rx", "ry", "rz")}
+    for file_name, scene in angled.items():
+        changed = copy.deepcopy(scene)
+        if file_name in ("manipulator.toml", "manipulator_e1.toml"):  # the dynamic ones
+            assert list(scene["outputs"])[-3:] == list(extra)
+            for name in extra:
+                assert changed["outputs"].pop(name) == extra[name]
+        assert changed == plain[file_name]
+    model = build_model(angled["manipulator_e1.toml"])
+    angles = [p for p in model.outputs if p.about_axis]
+    assert [(p.name, p.unit) for p in angles] == [("E_rx", "rad"), ("E_ry", "rad"),
+                                                  ("E_rz", "rad")]
+    assert [output_value(model, p, model.initial_coordinates) for p in angles] == [0.0] * 3
+
+
+@pytest.mark.slow
+def test_the_end_effector_angles_have_the_static_compliance_as_their_dc_gain():
+    """The reduced manipulator with the end effector's angle outputs: the state space's DC
+    gain from each actuator force to the three angles against static equilibria under 1 mN
+    on that actuator (the angle outputs' Jacobian in C), to 2e-5 of the largest gain as the
+    encoders' test."""
+    from flexure.core import output_value
+
+    data = parse_toml(scene_path("manipulator_reduced"))
+    data["outputs"] = {f"E_{a}": {"node": "E_r", "coordinate": a} for a in ("rx", "ry", "rz")}
+    model = build_model(data)
+    sys = state_space(model)
+    assert (sys.ninputs, sys.noutputs) == (6, 3)
+    dc = -sys.C @ np.linalg.solve(sys.A, sys.B)
+    assert np.abs(dc).max() > 0.0
+    force = 1e-3
+    for k, port in enumerate(model.inputs):
+        x = static_equilibrium(model, inputs={port.name: force}).x
+        angles = [output_value(model, p, x) for p in model.outputs]
+        np.testing.assert_allclose(np.array(angles) / force, dc[:, k], rtol=2e-5,
+                                   atol=2e-5 * np.abs(dc).max())

@@ -88,7 +88,9 @@ def node_coordinates(model: Model, node: str) -> list[int]:
         if model.dimension == 3:
             raise SceneError(f"{model.source}: compliance: node {node!r} is a spatial "
                              "rotational node (Euler parameters); name its translational node, "
-                             "whose translations are given")
+                             "whose translations are given, or declare moment inputs and angle "
+                             "outputs on it (coordinate rx, ry, rz) and take the DC gain of "
+                             "the state space")
         return list(found.coordinates)
     index = list(found.coordinates)
     if model.dimension == 2:

@@ -6,10 +6,15 @@ With the state [dq, dq'] (deviations from the configuration of the linear model)
     C = [[DF_y, 0]] for positions, [[0, DF_y]] for velocities,  D = 0
 
 where b holds a unit force on the coordinate of each input (SPACAR's INPUTF) and DF_y the rows
-of DF of each output coordinate (OUTX). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
+of DF of each output coordinate (OUTX). A port about a global axis of a 3-D rotational node
+is nonlinear in the coordinates; linearised at the configuration x of the linear model, its b
+column is the moment's generalised force 2 E_k(lambda)^T and its C row (d y / d lambda) DF_l:
+the rotation-vector component's gradient for an angle, 2 E_k for an angular velocity
+(`flexure.core.mechanics.ports`). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
 An input a voice-coil actuator drives is its drive signal (V), and a voltage-driven coil adds
-its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`): the transfer from
-the drive signal to a position then shows the back-EMF damping and the coil's pole near -R/L.
+its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`, with the same b
+columns of the ports): the transfer from the drive signal to a position then shows the
+back-EMF damping and the coil's pole near -R/L.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SceneError
+from ..mechanics.ports import input_columns, output_rows
 from ..numerics.blas import blas_threads
 from .linearization import linearize
 
@@ -40,21 +46,21 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None):
     lin = linear_model or linearize(model)
     n = lin.M0.shape[0]
     DF = lin.DF
+    x = lin.solution.config.x
     if model.actuators:
         A, B, states = lin.state_matrices()
-    else:  # the force inputs alone: the same numbers, as they have always been computed
-        b = np.zeros((model.nx, len(model.inputs)))
-        for column, port in enumerate(model.inputs):
-            b[port.coordinate, column] = 1.0
+    else:  # the force and moment inputs alone: the same numbers, as they have been computed
+        b = input_columns(model, x)
         M_inv_K = np.linalg.solve(lin.M0, lin.K)
         M_inv_C = np.linalg.solve(lin.M0, lin.C0)
         A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
         B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
         states = [f"{d}" for d in model.dof_names] + [f"{d}_dot" for d in model.dof_names]
     C = np.zeros((len(model.outputs), A.shape[0]))
+    rows = output_rows(model, x, DF)
     for row, port in enumerate(model.outputs):
         offset = 0 if port.quantity == "position" else n
-        C[row, offset:offset + n] = DF[port.coordinate]
+        C[row, offset:offset + n] = rows[row]
     D = np.zeros((len(model.outputs), len(model.inputs)))
     return control.ss(
         A, B, C, D,
@@ -104,7 +110,8 @@ def plot_principal_gains(model, frequencies_hz, gains, path, *, natural_hz=()):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    unit = "m/N" if all(p.quantity == "position" for p in model.outputs) else "output / input"
+    unit = "m/N" if all(p.quantity == "position" and p.unit == "m" for p in model.outputs) and all(
+        p.unit == "N" for p in model.inputs) else "output / input"
     figure, axes = plt.subplots(figsize=(7.0, 4.2))
     for i in range(gains.shape[1]):
         axes.loglog(frequencies_hz, gains[:, i], label=f"sigma {i + 1}")

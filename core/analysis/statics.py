@@ -1,16 +1,16 @@
 """Static equilibrium: load steps and Newton's method on the DOFs.
 
-The load (nodal forces and gravity) is applied in `load_steps` equal increments (one, when
-there is no load); in each the generalised force Q(q) = DF^T (f - De^T sigma) is driven to
-zero by Newton's method with the full tangent stiffness K0 + G0 (quadratic convergence). A
-step that does not converge is halved up to four times; then ConvergenceError names the load
-step and the load factor.
+The load (nodal forces and gravity, and the inputs when given) is applied in `load_steps`
+equal increments (one, when there is no load); in each the generalised force
+Q(q) = DF^T (f - De^T sigma) is driven to zero by Newton's method with the full tangent
+stiffness K0 + G0 (quadratic convergence). A step that does not converge is halved up to four
+times; then ConvergenceError names the load step and the load factor.
 Convergence: |dq| <= `tolerance` times the model's length scale (rotations count as lengths
 through that scale).
 
-Held inputs (`inputs`) add their steady forces to the load: a force input its value (N, N m);
-an input a voice-coil actuator drives its actuator's force at rest
-(`flexure.core.mechanics.actuators.steady_forces`): Km sat(G u) for a current drive,
+Held inputs (`inputs`) put their steady values on their ports: a force or moment input its
+value (N, N m); an input a voice-coil actuator drives its actuator's force or moment at rest
+(`flexure.core.mechanics.actuators.steady_port_values`): Km sat(G u) for a current drive,
 Km sat(G u) / R for a voltage drive, whose coil current settles at sat(G u) / R.
 """
 
@@ -21,9 +21,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ConvergenceError, SceneError
-from ..mechanics.actuators import input_vector, steady_forces
+from ..errors import ConvergenceError
+from ..mechanics.actuators import steady_port_values
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.ports import input_values
 from ..numerics.blas import blas_threads
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -39,7 +40,11 @@ class StaticSolution:
     stress_resultants: np.ndarray  # (NE,) N (truss, elongation), N (bending, as e2, e3 are m)
     load_factor: float
     iterations: int
-    inputs: np.ndarray | None = None  # the held inputs (n_inputs,) N or V; None: zero
+    # the held inputs (n_inputs,) N, N m, or V for an actuator's drive signal, if any
+    inputs: np.ndarray | None = None
+    # the values they hold on their ports (n_inputs,) N, N m: the forces and moments, and the
+    # actuators' at rest (`actuators.steady_port_values`); what the load stiffness takes
+    port_values: np.ndarray | None = None
 
     @property
     def q(self):
@@ -63,33 +68,51 @@ class StaticSolution:
 def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_steps: int = 10,
                        tolerance: float = 1e-11, max_iterations: int = 30,
                        mechanics: Mechanics | None = None,
-                       inputs=None) -> StaticSolution:
+                       inputs: dict | np.ndarray | None = None,
+                       start: StaticSolution | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
 
-    inputs: held inputs, {input name: value} or (n_inputs,), N for a force, V for an
-    actuator's drive signal; their steady forces are added to the loads (module docstring).
-    Returns a StaticSolution; raises ConvergenceError naming the load step that failed, and
-    SceneError for an unknown input.
+    `inputs` ({name: value} or (n_inputs,): N, N m for a force or moment, V for the drive
+    signal of an input a voice-coil actuator drives) are held as well, stepped with the
+    loads: a force on its coordinate, a moment about a global axis through its generalised
+    force on the Euler parameters (`flexure.core.mechanics.ports`; it depends on the
+    orientation, so it cannot be given as `loads`), an actuator's force or moment at rest
+    (module docstring). `start`, an equilibrium of the same model under nearby loads and
+    inputs, is where Newton starts at the full load (a path of equilibria, e.g. inverse
+    statics along a move); if it does not converge from there, the load is stepped from the
+    unloaded configuration as without it. Returns a StaticSolution;
+    raises ConvergenceError naming the load step that failed, SceneError naming an unknown
+    input.
     """
-    mech = mechanics or Mechanics(model)
-    held = None
+    held = values = None
     if inputs is not None:
-        held, loads = _with_inputs(model, loads, inputs)
+        held = input_values(model, inputs)
+        values = steady_port_values(model, held) if model.actuators else held
+    mech = mechanics or Mechanics(model)
     kin = mech.kinematics
-    config = mech.initial_configuration()
     scale = kin.length_scale
+    if start is not None:
+        try:
+            config, iterations = _newton(mech, start.config, 1.0, loads, values,
+                                         tolerance * scale, max_iterations)
+        except ConvergenceError:
+            pass
+        else:
+            _, _, sigma = mech.static_balance(config, 1.0, loads, values)
+            return StaticSolution(model, config, sigma, 1.0, iterations, held, values)
+    config = mech.initial_configuration()
     total_iterations = 0
     # Without loads and gravity there is nothing to step: the reference configuration (all
     # deformations zero) balances, and one Newton step at full load confirms it.
-    unloaded = not np.any(mech.external_force(config.x, 1.0, loads))
+    unloaded = not np.any(mech.external_force(config.x, 1.0, loads, values))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     halvings = 0
     step_number = 0
     while factor < 1.0 - 1e-12:
         target = min(1.0, factor + step)
         try:
-            config, iterations = _newton(mech, config, target, loads, tolerance * scale,
-                                         max_iterations)
+            config, iterations = _newton(mech, config, target, loads, values,
+                                         tolerance * scale, max_iterations)
         except ConvergenceError as error:
             if halvings == 4:
                 raise ConvergenceError(
@@ -103,31 +126,17 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         total_iterations += iterations
         factor = target
         step_number += 1
-    _, _, sigma = mech.static_balance(config, 1.0, loads)
-    return StaticSolution(model, config, sigma, 1.0, total_iterations, held)
+    _, _, sigma = mech.static_balance(config, 1.0, loads, values)
+    return StaticSolution(model, config, sigma, 1.0, total_iterations, held, values)
 
 
-def _with_inputs(model, loads, inputs):
-    """(held inputs (n_inputs,), loads (NX,) N with their steady forces added)."""
-    try:
-        u = input_vector(model, inputs)
-    except ValueError as error:
-        raise SceneError(f"{model.source}: static equilibrium: {error}") from None
-    if not np.all(np.isfinite(u)):
-        raise SceneError(f"{model.source}: static equilibrium: the inputs must be finite, "
-                         f"got {u.tolist()}")
-    total = np.array(model.loads if loads is None else loads, dtype=float)
-    for port, force in zip(model.inputs, steady_forces(model, u), strict=True):
-        total[port.coordinate] += force
-    return u, total
-
-
-def _newton(mech, config, load_factor, loads, step_tolerance, max_iterations):
+def _newton(mech, config, load_factor, loads, values, step_tolerance, max_iterations):
+    """Newton's method at one load factor; values: the inputs' port values (N, N m)."""
     kin = mech.kinematics
     for iteration in range(1, max_iterations + 1):
-        Q, _, sigma = mech.static_balance(config, load_factor, loads)
+        Q, _, sigma = mech.static_balance(config, load_factor, loads, values)
         K = mech.structural_stiffness(config) + mech.geometric_stiffness(
-            config, sigma, load_factor)
+            config, sigma, load_factor, inputs=values)
         try:
             dq = np.linalg.solve(K, Q)
         except np.linalg.LinAlgError:

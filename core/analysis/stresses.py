@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..mechanics.actuators import input_forces
+from ..mechanics.actuators import port_values
+from ..mechanics.ports import input_forces
 from ..numerics.blas import blas_threads
 
 
@@ -140,8 +141,8 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
 
     states (n_times, 2 NDOF) = [q, qdot] as `SimulationResult` holds them (q, qdot side by
     side), followed by the coil currents (A) of a model with voltage-driven actuators (zero
-    when left out); inputs (n_times, n_inputs) the held inputs (N on the scene's input
-    coordinates, V for an actuator's drive signal; default zero). The accelerations follow
+    when left out); inputs (n_times, n_inputs) the held inputs (N, N m: the scene's forces
+    and moments; V for an actuator's drive signal; default zero). The accelerations follow
     from the equations of motion in each state.
     """
     from ..mechanics.mechanics import Mechanics
@@ -157,9 +158,9 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
         currents = state[2 * ndof:] if state.size > 2 * ndof else None
         if inputs is not None or model.actuators:  # a coil's current acts without inputs
             held = np.zeros(len(model.inputs)) if inputs is None else inputs[k]
-            applied = input_forces(model, held, currents) if model.actuators else held
-            for j, port in enumerate(model.inputs):
-                force[port.coordinate] += applied[j]
+            values = port_values(model, held, currents) if model.actuators else held
+            # forces on their coordinates, moments by their orientation
+            force = input_forces(model, x, values)
         sigma = dynamic_stress_resultants(mech, config, state[ndof: 2 * ndof],
                                           input_force=force)
         stresses = beam_stresses(model, x, sigma)

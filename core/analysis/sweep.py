@@ -27,6 +27,7 @@ A row keeps what was computed before a failure. Dask is imported only when a swe
 
 import math
 import os
+from dataclasses import replace
 
 import numpy as np
 
@@ -99,8 +100,11 @@ def columns(model, analyses, modes=DEFAULT_MODES) -> list[str]:
 
 
 def _unit(model, port):
-    """m for a translational coordinate, rad for a rotational one (whatever the output
-    reports, position or velocity: the column is the coordinate's displacement)."""
+    """m for a translational coordinate, rad for a rotational one or an angle about a global
+    axis (whatever the output reports, position or velocity: the column is the coordinate's
+    displacement, or the angle's change)."""
+    if port.about_axis:
+        return "rad"
     axis = model.coordinate_names[port.coordinate].rsplit(".", 1)[1]
     return "m" if axis in ("x", "y", "z") else "rad"
 
@@ -117,6 +121,7 @@ def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes")
     each Dask task runs; it raises nothing.
     """
     from ..mechanics.mechanics import Mechanics
+    from ..mechanics.ports import output_value
     from ..scene.building import build_model
     from .linearization import linearize
     from .modal import buckling_load_factors, natural_frequencies
@@ -131,6 +136,11 @@ def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes")
             solution = static_equilibrium(model, mechanics=mechanics)
             if "static" in analyses:
                 for port, name in zip(model.outputs, columns(model, ("static",)), strict=True):
+                    if port.about_axis:  # the angle's change, whatever the quantity
+                        angle = replace(port, quantity="position")
+                        row[name] = (output_value(model, angle, solution.x)
+                                     - output_value(model, angle, model.initial_coordinates))
+                        continue
                     row[name] = float(solution.x[port.coordinate]
                                       - model.initial_coordinates[port.coordinate])
             if "modes" in analyses:

@@ -60,6 +60,7 @@ from .beam_kernels import (  # noqa: F401 (the element's compiled interface, rea
     pack_reference,
 )
 from .plbeam import HERMITE_MASS
+from .protocol import SchemaKey, property_names, zero_length_problems
 
 type_name = "BEAM"
 dimension = 3
@@ -67,12 +68,30 @@ node_kinds = ("translational", "rotational", "translational", "rotational")
 node_roles = ("p", "p", "q", "q")
 deformation_names = ("e1", "e2", "e3", "e4", "e5", "e6")
 deformation_stiffness = {"e1": "EA", "e2": "GIt", "e3": "EIy", "e4": "EIy", "e5": "EIz",
-                         "e6": "EIz"}
+                         "e6": "EIz"}  # the section key that makes each one elastic
 coordinates_per_element = 14
 inertia_point_kinds = ("position", "tangent", "position", "tangent",  # Hermite
                        "tangent", "tangent", "tangent", "tangent")  # n_y'^p n_z'^p n_y'^q n_z'^q
-properties = ("EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
-              "rho_Iz", "A", "Wy", "Wz", "Wt", "circular")
+section_schema = (
+    SchemaKey("EA", "N", "axial stiffness E A"),
+    SchemaKey("GIt", "N.m2", "torsional stiffness G It"),
+    SchemaKey("EIy", "N.m2", "bending stiffness about y' (deflection along z': e3, e4)"),
+    SchemaKey("EIz", "N.m2", "bending stiffness about z' (deflection along y': e5, e6)"),
+    SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
+    SchemaKey("GdIt", "N.m2.s", "torsional damping, the counterpart of GIt", damping=True),
+    SchemaKey("EdIy", "N.m2.s", "bending damping, the counterpart of EIy", damping=True),
+    SchemaKey("EdIz", "N.m2.s", "bending damping, the counterpart of EIz", damping=True),
+    SchemaKey("rho_A", "kg/m", "mass per length"),
+    SchemaKey("rho_Iy", "kg.m", "rotational inertia of the section about y' per length"),
+    SchemaKey("rho_Iz", "kg.m", "rotational inertia of the section about z' per length"),
+    SchemaKey("A", "m2", "cross-section area, for the stresses"),
+    SchemaKey("Wy", "m3", "section modulus about y', for the bending stress"),
+    SchemaKey("Wz", "m3", "section modulus about z', for the bending stress"),
+    SchemaKey("Wt", "m3", "torsion modulus: the largest shear stress is T / Wt"),
+    SchemaKey("circular", "1", "1 for a circular section (its stresses; from diameter)",
+              given=False),
+)
+properties = property_names(section_schema)
 needs_orientation = True  # the scene gives the principal y' axis of every beam
 
 _P, _LP, _Q, _LQ = slice(0, 3), slice(3, 7), slice(7, 10), slice(10, 14)
@@ -149,7 +168,7 @@ def reference(x0, y_axis=None):
         raise ValueError("the y' axis of a beam must not lie along the beam")
     n_y = y / size[:, None]
     n_z = np.cross(n_x, n_y)
-    with np.errstate(divide="ignore"):  # a zero-length element is refused by the scene loader
+    with np.errstate(divide="ignore"):  # a zero length is refused (`reference_problems`)
         ref = {"l0": l0, "c": 1.0 / (30.0 * l0)}
     for node, cols in (("p", _LP), ("q", _LQ)):
         R = rotation_matrix(x0[:, cols])
@@ -168,6 +187,23 @@ def reference(x0, y_axis=None):
     hessian.flags.writeable = False
     ref.update(inertia_tensors=tensors, inertia_scale=scale, inertia_hessian=hessian)
     return ref
+
+
+def reference_problems(x0, y_axis=None):
+    """[(element index, scene key, message)] of the beams `reference` cannot take: end nodes
+    that coincide ("nodes"), a principal axis along the beam or zero ("y_axis")."""
+    l_vec = x0 @ _DL.T
+    problems = zero_length_problems(np.linalg.norm(l_vec, axis=1))
+    if y_axis is not None:  # the test of `reference`: the axis's part normal to the beam
+        short = {i for i, _, _ in problems}
+        for i, (axis, along) in enumerate(zip(np.asarray(y_axis, float), l_vec, strict=True)):
+            if i in short:
+                continue
+            n_x = along / np.linalg.norm(along)
+            if np.linalg.norm(axis - (axis @ n_x) * n_x) < 1e-9:
+                problems.append((i, "y_axis", f"the principal axis {axis.tolist()} lies along "
+                                              "the beam (or is zero)"))
+    return sorted(problems)
 
 
 def random_coordinates(rng, count):

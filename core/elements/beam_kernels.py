@@ -9,9 +9,9 @@ to round-off. The element registry reads `pack_reference`, `REFERENCE_WIDTH`,
 """
 
 import numpy as np
-from numba import carray
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import kernel
+from . import entries
 
 # The packed reference row is
 # [l0, c, bend_tensors (4 x 3 x 4 x 4), inertia_tensors (6 x 3 x 4 x 4)]; inertia_scale is l0 on
@@ -281,15 +281,5 @@ def _inertia_vector(v, ref, order, p, Dp, acc, row, col, scale, base, m0, m1, m2
                                                      v[col + 3]))
 
 
-@entry(DEFORMATIONS_ENTRY)
-def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
-    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
-    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
-                        carray(De, (k, m)), carray(D2e, (k, m, m)))
-
-
-@entry(INERTIA_ENTRY)
-def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
-    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
-    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
-                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
+deformations_entry = entries.deformations_entry(deformations_kernel)
+inertia_entry = entries.inertia_entry(inertia_kernel)

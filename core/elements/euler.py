@@ -12,9 +12,9 @@ It has no stiffness, damping or mass.
 """
 
 import numpy as np
-from numba import carray
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, entry, kernel
+from ..numerics.jit import kernel
+from . import entries
 
 type_name = "EULER"
 dimension = 3
@@ -81,8 +81,4 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             D2e[0, i, j] = 1.0 if i == j else 0.0
 
 
-@entry(DEFORMATIONS_ENTRY)
-def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
-    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
-    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
-                        carray(De, (k, m)), carray(D2e, (k, m, m)))
+deformations_entry = entries.deformations_entry(deformations_kernel)

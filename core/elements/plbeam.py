@@ -29,20 +29,31 @@ Every function works on all elements of this type at once: arrays shaped (n_elem
 """
 
 import numpy as np
-from numba import carray
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import kernel
+from . import entries
+from .protocol import SchemaKey, property_names, zero_length_problems
 
 type_name = "PLBEAM"
 dimension = 2
 node_kinds = ("translational", "rotational", "translational", "rotational")
 node_roles = ("p", "p", "q", "q")
 deformation_names = ("e1", "e2", "e3")
-deformation_stiffness = {"e1": "EA", "e2": "EI", "e3": "EI"}  # property per deformation
+deformation_stiffness = {"e1": "EA", "e2": "EI", "e3": "EI"}  # the key that makes each elastic
 coordinates_per_element = 6
 inertia_point_kinds = ("position", "tangent", "position", "tangent")
-# section properties used; A (m^2) and Wz = width height^2 / 6 (m^3) only for the stresses
-properties = ("EA", "EI", "EdA", "EdI", "rho_A", "A", "Wz")
+section_schema = (
+    SchemaKey("EA", "N", "axial stiffness E A"),
+    SchemaKey("EI", "N.m2", "bending stiffness E I in the plane"),
+    SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
+    SchemaKey("EdI", "N.m2.s", "bending damping, the counterpart of EI", damping=True),
+    SchemaKey("rho_A", "kg/m", "mass per length"),
+    SchemaKey("A", "m2", "cross-section area, for the stresses (from width and height)",
+              given=False),
+    SchemaKey("Wz", "m3", "section modulus width height^2 / 6, for the bending stress (from "
+              "width and height)", given=False),
+)
+properties = property_names(section_schema)
 
 _DL = np.array([[-1.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0, -1.0, 0.0, 0.0, 1.0, 0.0]])
 _PHI_P, _PHI_Q = 2, 5
@@ -73,10 +84,15 @@ def reference(x0):
     angle = np.arctan2(l_vec[:, 1], l_vec[:, 0])
     l0 = np.linalg.norm(l_vec, axis=1)
     offsets = angle[:, None] - x0[:, _PHI_P::3]  # the node angles are columns 2 and 5
-    with np.errstate(divide="ignore"):  # a zero-length element is refused by the scene loader
+    with np.errstate(divide="ignore"):  # a zero length is refused (`reference_problems`)
         c = 1.0 / (30.0 * l0)
     return {"l0": l0, "offset_p": offsets[:, 0], "offset_q": offsets[:, 1], "offsets": offsets,
             "c": c}
+
+
+def reference_problems(x0):
+    """[(element index, "nodes", message)] of the beams whose end nodes coincide."""
+    return zero_length_problems(np.linalg.norm(x0 @ _DL.T, axis=1))
 
 
 def _angles(x, ref):
@@ -324,15 +340,5 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
     acc[6], acc[7] = -lcq * wq, -lsq * wq
 
 
-@entry(DEFORMATIONS_ENTRY)
-def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
-    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
-    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
-                        carray(De, (k, m)), carray(D2e, (k, m, m)))
-
-
-@entry(INERTIA_ENTRY)
-def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
-    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
-    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
-                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
+deformations_entry = entries.deformations_entry(deformations_kernel)
+inertia_entry = entries.inertia_entry(inertia_kernel)

@@ -17,19 +17,27 @@ and in any dimension (the spatial TRUSS uses them as they are).
 """
 
 import numpy as np
-from numba import carray
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import kernel
+from . import entries
+from .protocol import SchemaKey, property_names, zero_length_problems
 
 type_name = "PLTRUSS"
 dimension = 2
 node_kinds = ("translational", "translational")
 node_roles = ("p", "q")
 deformation_names = ("e1",)
-deformation_stiffness = {"e1": "EA"}  # property per deformation
+deformation_stiffness = {"e1": "EA"}  # the section key that makes each one elastic
 coordinates_per_element = 4
 inertia_point_kinds = ("position", "position")
-properties = ("EA", "EdA", "rho_A", "A")  # section properties used (A: for the stress)
+section_schema = (
+    SchemaKey("EA", "N", "axial stiffness E A"),
+    SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
+    SchemaKey("rho_A", "kg/m", "mass per length"),
+    SchemaKey("A", "m2", "cross-section area, for the normal stress (from width and height)",
+              given=False),
+)
+properties = property_names(section_schema)
 
 
 def reference(x0):
@@ -37,6 +45,11 @@ def reference(x0):
     dimension of the space (2; 3 for the spatial TRUSS)."""
     d = x0.shape[1] // 2
     return {"l0": np.linalg.norm(x0[:, d:] - x0[:, :d], axis=1), "dimension": d}
+
+
+def reference_problems(x0):
+    """[(element index, "nodes", message)] of the elements whose end nodes coincide."""
+    return zero_length_problems(reference(x0)["l0"])
 
 
 def deformations(x, ref, order=2):
@@ -157,15 +170,5 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
         acc[i] = 0.0
 
 
-@entry(DEFORMATIONS_ENTRY)
-def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
-    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
-    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
-                        carray(De, (k, m)), carray(D2e, (k, m, m)))
-
-
-@entry(INERTIA_ENTRY)
-def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
-    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
-    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
-                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
+deformations_entry = entries.deformations_entry(deformations_kernel)
+inertia_entry = entries.inertia_entry(inertia_kernel)

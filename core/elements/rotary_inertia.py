@@ -29,11 +29,11 @@ the compiled evaluation engine.
 """
 
 import numpy as np
-from numba import carray
 
 from ..model import ElementGroup
-from ..numerics.jit import INERTIA_ENTRY, entry, kernel
+from ..numerics.jit import kernel
 from ..numerics.rotations import rotate, vector_tensor
+from . import entries
 
 type_name = "NODE_INERTIA"
 inertia_point_kinds = ("tangent", "tangent", "tangent")
@@ -133,8 +133,4 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
             acc[row] = 2.0 * rate
 
 
-@entry(INERTIA_ENTRY)
-def inertia_entry(x, v, ref, order, p, Dp, acc, m, P, width):
-    """C entry of `inertia_kernel` for the engine (pointers to one element's arrays)."""
-    inertia_kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
-                   carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
+inertia_entry = entries.inertia_entry(inertia_kernel)

@@ -11,6 +11,7 @@ The planar PLTRUSS in three dimensions: its functions work in any dimension, so 
 them as they are; every function works on all elements at once.
 """
 
+from . import pltruss
 from .pltruss import (
     REFERENCE_WIDTH,
     damping,
@@ -23,19 +24,24 @@ from .pltruss import (
     inertia_points,
     pack_reference,
     reference,
+    reference_problems,
     stiffness,
 )
+from .protocol import SchemaKey, property_names
 
 type_name = "TRUSS"
 dimension = 3
-node_kinds = ("translational", "translational")
-node_roles = ("p", "q")
-deformation_names = ("e1",)
-deformation_stiffness = {"e1": "EA"}  # property per deformation
 coordinates_per_element = 6
-inertia_point_kinds = ("position", "position")
-properties = ("EA", "EdA", "rho_A", "A")  # section properties used
+# the planar truss's nodes, deformation and inertia points, in three dimensions
+node_kinds, node_roles = pltruss.node_kinds, pltruss.node_roles
+deformation_names = pltruss.deformation_names
+deformation_stiffness = pltruss.deformation_stiffness
+inertia_point_kinds = pltruss.inertia_point_kinds
+# its section keys, where the area A is one a scene may give (the planar scenes derive it)
+section_schema = (*pltruss.section_schema[:-1],
+                  SchemaKey("A", "m2", "cross-section area, for the normal stress"))
+properties = property_names(section_schema)
 
 __all__ = ["REFERENCE_WIDTH", "damping", "deformations", "deformations_entry",
            "deformations_kernel", "inertia_entry", "inertia_kernel", "inertia_matrix",
-           "inertia_points", "pack_reference", "reference", "stiffness"]
+           "inertia_points", "pack_reference", "reference", "reference_problems", "stiffness"]

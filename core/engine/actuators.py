@@ -1,27 +1,34 @@
-"""Voice-coil actuators in the compiled engine: input forces, coil currents and their tangent.
+"""Voice-coil actuators in the compiled engine: port values, coil currents and their tangent.
 
 The equations are those of `flexure.core.mechanics.actuators` (the plain-numpy twin): an
-input without an actuator is a force u (N, N m) on its coordinate; a current-driven one puts
+input without an actuator puts its value u (N, N m) on its port; a current-driven one puts
 F = Km sat(G u) there; a voltage-driven one F = Km i, with its coil current i (A) a state,
 
-    di/dt = (sat(G u) - R i - Km v) / L,     v = xdot of the actuated coordinate (m/s),
+    di/dt = (sat(G u) - R i - Km v) / L,
 
-and sat a clip at +- the amplifier's saturation (its derivative zero beyond it). The
-integrators' state is y = [q - q_ref, qdot, i] (n = NDOF; the currents, one per voltage-driven
-actuator, at 2n ..). The packed model holds per input its kind and current index (slot
-actuators) and Km, R, L, G, saturation (slot actuator_data); `motion.evaluate` reads the
-currents of the state from slot currents, which `set_currents` fills before it.
+v the port's velocity (`ports.port_velocity`: xdot of the coordinate, m/s, or the angular
+velocity about the global axis of a moment port, rad/s) and sat a clip at +- the amplifier's
+saturation (its derivative zero beyond it). The port turns its value into the generalised
+force (`ports.add_input_forces`). The integrators' state is y = [q - q_ref, qdot, i]
+(n = NDOF; the currents, one per voltage-driven actuator, at 2n ..). The packed model holds
+per input its kind and current index (slot actuators) and Km, R, L, G, saturation (slot
+actuator_data); `motion.evaluate` reads the currents of the state from slot currents, which
+`set_currents` fills before it, and leaves the port values in slot port_values.
 
-Tangent blocks (exact): d qddot / d i_k = M_bar^-1 DF_c^T Km (qddot is linear in the force),
-d idot_k / d qdot = -Km / L DF_c (v = DF_c qdot), d idot_k / d i_k = -R / L, with DF_c the row of
-DF of the actuated coordinate c. Approximated: d idot_k / d q = -Km / L (D2F_c qdot) is left
-out of the Newton matrix; it is zero when c is a DOF coordinate (DF_c a unit row) or at rest.
+Tangent blocks (exact): d qddot / d i_k = M_bar^-1 DF^T b_j Km (qddot is linear in the port
+value), d idot_k / d qdot = -Km / L b_j^T DF (v = b_j^T DF qdot), d idot_k / d i_k = -R / L,
+with b_j the port's unit generalised force on the coordinates (a unit column on a coordinate,
+2 E_k^T on the Euler parameters of a moment about axis k). The load stiffness of a moment port
+takes its value Km i (`tangent`). Approximated: d idot_k / d q = -Km / L d(b_j^T DF qdot)/dq
+is left out of the Newton matrix; it is zero when the port is a DOF coordinate (b_j^T DF a
+unit row) or at rest.
 """
 
 from ..numerics.dense import lu_solve
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
+from .ports import port_row, port_velocity
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -34,20 +41,32 @@ def amplifier(coefficients, j, u):
 
 
 @kernel
-def add_input_forces(table, r):
-    """r += the force of every input on its coordinate (N, N m): u, Km sat(G u) or Km i."""
-    inputs, coords = _f(table, slot.INPUTS), _i(table, slot.INPUT_COORDS)
+def port_values(table):
+    """The value each input puts on its port (N, N m): u, Km sat(G u) or Km i, at the held
+    inputs and the currents in slot currents. Without actuators the held inputs themselves
+    (slot inputs); with them slot port_values, filled here."""
+    inputs, values = _f(table, slot.INPUTS), _f(table, slot.PORT_VALUES)
+    if values.size == 0:
+        return inputs
     kinds, coefficients = _i(table, slot.ACTUATORS), _f(table, slot.ACTUATOR_DATA)
     currents = _f(table, slot.CURRENTS)
     for j in range(inputs.size):
         kind = kinds[2 * j]
         if kind == ed.FORCE_INPUT:
-            r[coords[j]] += inputs[j]
+            values[j] = inputs[j]
         elif kind == ed.CURRENT_DRIVE:
-            r[coords[j]] += coefficients[j * ed.A_WIDTH + ed.A_KM] * amplifier(
+            values[j] = coefficients[j * ed.A_WIDTH + ed.A_KM] * amplifier(
                 coefficients, j, inputs[j])
         else:
-            r[coords[j]] += coefficients[j * ed.A_WIDTH + ed.A_KM] * currents[kinds[2 * j + 1]]
+            values[j] = coefficients[j * ed.A_WIDTH + ed.A_KM] * currents[kinds[2 * j + 1]]
+    return values
+
+
+@kernel
+def evaluated_port_values(table):
+    """The port values (N, N m) of the last `port_values` (the last evaluation's)."""
+    values = _f(table, slot.PORT_VALUES)
+    return _f(table, slot.INPUTS) if values.size == 0 else values
 
 
 @kernel
@@ -61,10 +80,10 @@ def set_currents(table, y, n):
 @kernel
 def current_rates(table, out, n):
     """di/dt (A/s) of every coil into out[2n + k] at the currents in slot currents and the
-    velocities xdot of the last `evaluate`."""
-    inputs, coords = _f(table, slot.INPUTS), _i(table, slot.INPUT_COORDS)
+    coordinates x and velocities xdot of the last `evaluate`."""
+    inputs, specs = _f(table, slot.INPUTS), _i(table, slot.INPUT_PORTS)
     kinds, coefficients = _i(table, slot.ACTUATORS), _f(table, slot.ACTUATOR_DATA)
-    currents, xdot = _f(table, slot.CURRENTS), _f(table, slot.XDOT)
+    currents, x, xdot = _f(table, slot.CURRENTS), _f(table, slot.X), _f(table, slot.XDOT)
     for j in range(inputs.size):
         k = kinds[2 * j + 1]
         if kinds[2 * j] != ed.VOLTAGE_DRIVE:
@@ -72,7 +91,7 @@ def current_rates(table, out, n):
         base = j * ed.A_WIDTH
         out[2 * n + k] = (amplifier(coefficients, j, inputs[j])
                           - coefficients[base + ed.A_R] * currents[k]
-                          - coefficients[base + ed.A_KM] * xdot[coords[j]]
+                          - coefficients[base + ed.A_KM] * port_velocity(specs, j, x, xdot)
                           ) / coefficients[base + ed.A_L]
 
 
@@ -96,39 +115,42 @@ def _put(J, N, i, j, value, column_major):
 def first_order_blocks(table, J, N, n, column_major):
     """The coils' blocks of d ydot / d y (N = 2n + currents) after the tangent (DF and the LU
     of M_bar current): d qddot / d i, d idot / d qdot, d idot / d i."""
-    coords, kinds = _i(table, slot.INPUT_COORDS), _i(table, slot.ACTUATORS)
-    coefficients, DF = _f(table, slot.ACTUATOR_DATA), _f(table, slot.DF)
+    specs, kinds = _i(table, slot.INPUT_PORTS), _i(table, slot.ACTUATORS)
+    coefficients, DF, x = _f(table, slot.ACTUATOR_DATA), _f(table, slot.DF), _f(table, slot.X)
     mass_lu, piv = _f(table, slot.MASS_LU), _i(table, slot.MASS_PIVOTS)
     column = _f(table, slot.REDUCED_FORCE)
-    for j in range(coords.size):
+    for j in range(kinds.size // 2):
         if kinds[2 * j] != ed.VOLTAGE_DRIVE:
             continue
         state = 2 * n + kinds[2 * j + 1]
-        base, c = j * ed.A_WIDTH, coords[j]
+        base = j * ed.A_WIDTH
         km, inductance = coefficients[base + ed.A_KM], coefficients[base + ed.A_L]
+        port_row(specs, j, x, DF, n, column)  # b_j^T DF: the port's velocity per qdot
         for i in range(n):
-            column[i] = km * DF[c * n + i]
+            _put(J, N, state, n + i, -km / inductance * column[i], column_major)
+            column[i] *= km
         lu_solve(mass_lu, n, piv, column)
         for i in range(n):
             _put(J, N, n + i, state, column[i], column_major)
-            _put(J, N, state, n + i, -km / inductance * DF[c * n + i], column_major)
         _put(J, N, state, state, -coefficients[base + ed.A_R] / inductance, column_major)
 
 
 @kernel
 def implicit_blocks(table, J, N, n, cj):
     """The coils' blocks of IDA's d res / d y + cj d res / d yp (column-major, N = 2n +
-    currents) after the tangent: -Km DF_c^T (the force in the mechanical rows), Km / L DF_c and
-    cj + R / L (the coil rows)."""
-    coords, kinds = _i(table, slot.INPUT_COORDS), _i(table, slot.ACTUATORS)
-    coefficients, DF = _f(table, slot.ACTUATOR_DATA), _f(table, slot.DF)
-    for j in range(coords.size):
+    currents) after the tangent: -Km DF^T b_j (the force in the mechanical rows),
+    Km / L b_j^T DF and cj + R / L (the coil rows)."""
+    specs, kinds = _i(table, slot.INPUT_PORTS), _i(table, slot.ACTUATORS)
+    coefficients, DF, x = _f(table, slot.ACTUATOR_DATA), _f(table, slot.DF), _f(table, slot.X)
+    row = _f(table, slot.REDUCED_FORCE)
+    for j in range(kinds.size // 2):
         if kinds[2 * j] != ed.VOLTAGE_DRIVE:
             continue
         state = 2 * n + kinds[2 * j + 1]
-        base, c = j * ed.A_WIDTH, coords[j]
+        base = j * ed.A_WIDTH
         km, inductance = coefficients[base + ed.A_KM], coefficients[base + ed.A_L]
+        port_row(specs, j, x, DF, n, row)
         for i in range(n):
-            J[state * N + n + i] = -km * DF[c * n + i]
-            J[(n + i) * N + state] = km / inductance * DF[c * n + i]
+            J[state * N + n + i] = -km * row[i]
+            J[(n + i) * N + state] = km / inductance * row[i]
         J[state * N + state] = cj + coefficients[base + ed.A_R] / inductance

@@ -23,6 +23,7 @@ import weakref
 import numpy as np
 
 from ..mechanics import assembly
+from .ports import port_specs
 
 # the banded orders of a model's J and augmented system, computed once per live model (read
 # only): {id(model): (weak reference to the model, orders)}
@@ -30,7 +31,7 @@ _ORDERS = {}
 
 # int64 slots (`ints`)
 INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformations",
-             "dof_positions", "stressed", "input_coordinates", "groups", "coordinate_index",
+             "dof_positions", "stressed", "input_ports", "groups", "coordinate_index",
              "deformation_index", "row_of_deformation", "column_of_coordinate", "pivots",
              "mass_pivots", "counters", "augmented_pivots", "j_row_position",
              "j_column_position", "augmented_position", "mass_pattern", "point_columns",
@@ -40,7 +41,8 @@ FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
                "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
                "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot",
-               "augmented", "augmented_rhs", "band_scratch", "actuator_data", "currents")
+               "augmented", "augmented_rhs", "band_scratch", "actuator_data", "currents",
+               "port_values")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
@@ -69,8 +71,9 @@ class EngineData:
     Parameters
     ----------
     model : Model
-        The model; its inputs are forces (N, N m) on their coordinates, or the drive signals
-        (V) of the voice-coil actuators that drive them (`engine.actuators`).
+        The model; its inputs are forces (N, N m) on their coordinates or moments (N m)
+        about a global axis of a 3-D rotational node (`ports`), or the drive signals (V) of
+        the voice-coil actuators that act on them (`actuators`).
     tolerance : float
         Kinematic tolerance relative to the length scale (default 1e-14: near round-off, so
         the kinematic error stays below the tightest integrator tolerance).
@@ -155,7 +158,7 @@ class EngineData:
         row_of_def[rows] = np.arange(rows.size)
         col_of_coord = np.full(nx, -1, dtype=np.int64)
         col_of_coord[free] = np.arange(free.size)
-        input_coords = np.array([port.coordinate for port in model.inputs], dtype=np.int64)
+        input_ports = port_specs(model.inputs).ravel()  # ports.PORT_WIDTH per input
         lumped = model.lumped_mass.astype(float)
         constant_force = model.loads.astype(float).copy()
         if np.any(model.gravity):
@@ -214,7 +217,7 @@ class EngineData:
             "dof_coordinates": model.dof_coordinates.astype(np.int64),
             "dof_deformations": model.dof_deformations.astype(np.int64),
             "dof_positions": np.searchsorted(free, model.dof_coordinates).astype(np.int64),
-            "stressed": stressed.astype(np.int64), "input_coordinates": input_coords,
+            "stressed": stressed.astype(np.int64), "input_ports": input_ports,
             "groups": np.concatenate(groups) if groups else np.zeros(0, np.int64),
             "coordinate_index": _concat_int(coord_index), "deformation_index": _concat_int(
                 def_index),
@@ -251,6 +254,9 @@ class EngineData:
             "xddot": np.zeros(nx), "augmented": np.zeros(augmented * augmented),
             "augmented_rhs": np.zeros(augmented), "band_scratch": np.zeros(augmented),
             "actuator_data": actuator_data, "currents": np.zeros(dims[NEL]),
+            # the value each input puts on its port in the last evaluation (N, N m; only
+            # with actuators: without, the inputs themselves; `actuators.port_values`)
+            "port_values": np.zeros(len(model.inputs) if model.actuators else 0),
         }
         self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)
         self.floats = tuple(np.ascontiguousarray(floats[name], dtype=float)

@@ -1,14 +1,15 @@
 """Equations of motion in the compiled engine: the accelerations qddot (m/s^2, rad/s^2).
 
 For DOFs q, velocities qdot (m/s, rad/s) and the held inputs u (N, N m; an actuated input's
-force from its drive signal or its coil current: `actuators`), in the reduced form
+force or moment from its drive signal or its coil current: `actuators`), in the reduced form
 of the course notes (or, for models with many DOFs, in the augmented form on the free
 coordinates that `evaluate` describes, which gives the same qddot without forming DF and
 M_bar; `data.evaluation_cost` picks one per model):
 
     M_bar qddot = DF^T (f - M (D2F qdot) qdot - g_conv - De^T sigma_c),  M_bar = DF^T M DF
 
-with f the constant loads, gravity and the inputs, sigma_c = S e + D edot on the stressed
+with f the constant loads, gravity and the inputs (a moment input's force depends on x:
+`ports`), sigma_c = S e + D edot on the stressed
 deformations, M = diag(lumped) + sum Dp^T Mp Dp over the inertia points p of the element
 masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, and (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot]
 on the constraint rows. Gravity acts on the position points of the inertia, which are linear
@@ -26,8 +27,9 @@ from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
-from .actuators import add_input_forces
+from .actuators import port_values
 from .kinematics import compute_DF, dof_rows, j_solve, solve_kinematics
+from .ports import add_input_forces
 from .slots import float_array as _f
 from .slots import (
     group,
@@ -98,7 +100,8 @@ def evaluate(table, q, qdot):
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
     r[:] = _f(table, slot.CONST_FORCE)
-    add_input_forces(table, r)  # forces, or the actuators' (`actuators`)
+    # the inputs' forces and moments, or the actuators' (`actuators.port_values`)
+    add_input_forces(_i(table, slot.INPUT_PORTS), port_values(table), x, r)
     _scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0

@@ -158,7 +158,11 @@ def choose_dofs(model: Model, x: np.ndarray | None = None) -> tuple | None:
         _, r, order = scipy.linalg.qr(projected.T, pivoting=True, mode="economic")
         diagonal = np.abs(np.diag(r))
         top = max(diagonal.max(initial=0.0), 1e-300)
-        rank = int(np.sum(diagonal > 1e-6 * top))
+        # projections at the round-off of the rows themselves are zero: when no candidate
+        # takes a motion (the torsion of a beam whose end node starts rotated), `top` is
+        # that round-off, and 1e-6 of it would make a DOF of noise
+        floor = 1e-12 * np.linalg.norm(rows, axis=1).max()
+        rank = int(np.sum(diagonal > max(1e-6 * top, floor)))
         return sorted(order[:min(rank, count)].tolist())
 
     chosen_coordinates = pick(coordinate_rows, motions, ndof)

@@ -17,6 +17,7 @@ none of it; it costs a Newton solve of the kinematics per call (about a millisec
 
 import numpy as np
 
+from ..errors import FlexureError
 from ..numerics.blas import blas_threads
 from .assembly import Inertia
 from .mechanics import Mechanics
@@ -32,9 +33,10 @@ def mechanical_energy(model, q, qdot, u=None, *, x_start=None):
     q, qdot : arrays (NDOF,)
         DOFs (m, rad) and their velocities (m/s, rad/s).
     u : array (n_inputs,), optional
-        Forces (N, N m) held on the inputs' coordinates; their work potential -u . x_input is
+        Held forces (N, N m) on the inputs' coordinates; their work potential -u . x_input is
         included. For an input a voice-coil actuator drives, its force
-        (`flexure.core.mechanics.actuators.input_forces`), not its drive signal.
+        (`flexure.core.mechanics.actuators.port_values`), not its drive signal. A moment
+        input about a global axis has none (FlexureError unless it is zero).
     x_start : array (NX,), optional
         Start of the kinematics' Newton iterations (default: the scene's coordinates).
     """
@@ -51,6 +53,13 @@ def mechanical_energy(model, q, qdot, u=None, *, x_start=None):
     force = np.array(model.loads, dtype=float)
     if u is not None:
         for port, value in zip(model.inputs, np.atleast_1d(u), strict=True):
+            if port.about_axis:
+                if value != 0.0:
+                    raise FlexureError(
+                        f"{model.source}: mechanical energy: the moment input {port.name!r} "
+                        f"({value:g} N m) has no work potential: a moment about an axis fixed "
+                        "in space is not conservative in 3-D; give it zero")
+                continue
             force[port.coordinate] += value
     energy -= force @ x
     return float(energy - gravity_work(model, x, inertia))

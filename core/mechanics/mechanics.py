@@ -21,6 +21,7 @@ import numpy as np
 
 from . import assembly
 from .kinematics import Kinematics
+from .ports import input_forces, input_stiffness
 
 
 @dataclass
@@ -45,10 +46,14 @@ class Mechanics:
         x0 = self.model.initial_coordinates
         return self.kinematics.configuration(self.kinematics.dofs_of(x0), x0.copy())
 
-    def external_force(self, x, load_factor=1.0, loads=None):
-        """Nodal loads plus gravity (NX,), both scaled by load_factor."""
+    def external_force(self, x, load_factor=1.0, loads=None, inputs=None):
+        """Nodal loads plus gravity (NX,), both scaled by load_factor; with `inputs`
+        (n_inputs,) N, N m also their generalised force at x (`ports.input_forces`)."""
         loads = self.model.loads if loads is None else loads
-        return load_factor * (loads + self.inertia.gravity_force(x))
+        force = load_factor * (loads + self.inertia.gravity_force(x))
+        if inputs is not None:
+            force += load_factor * input_forces(self.model, x, inputs)
+        return force
 
     def constitutive_stress(self, config, edot=None):
         """sigma_c (NE,): S e (+ D edot) on stressed deformations, zero on rigid ones."""
@@ -67,11 +72,12 @@ class Mechanics:
         sigma[kin.constraint_rows] += multipliers[: kin.constraint_rows.size]
         return sigma
 
-    def static_balance(self, config, load_factor=1.0, loads=None):
+    def static_balance(self, config, load_factor=1.0, loads=None, inputs=None):
         """(Q, r_x, sigma): the generalised force on the DOFs at rest, its coordinate-space
-        force balance and the stress resultants of all deformations."""
+        force balance and the stress resultants of all deformations (under the loads and,
+        if given, the inputs (n_inputs,) N, N m)."""
         sigma_c = self.constitutive_stress(config)
-        r_x = self.external_force(config.x, load_factor, loads) - config.De.T @ sigma_c
+        r_x = self.external_force(config.x, load_factor, loads, inputs) - config.De.T @ sigma_c
         Q = config.DF.T @ r_x
         return Q, r_x, self.stress_resultants(config, r_x, sigma_c)
 
@@ -85,12 +91,15 @@ class Mechanics:
         DeF = config.De[self.stressed] @ config.DF
         return DeF.T @ self.D @ DeF
 
-    def geometric_stiffness(self, config, sigma, load_factor=1.0, hessians=None):
-        """G0 = DF^T (sum_i sigma_i d2e_i/dx2 - df/dx) DF (NDOF, NDOF)."""
+    def geometric_stiffness(self, config, sigma, load_factor=1.0, hessians=None, inputs=None):
+        """G0 = DF^T (sum_i sigma_i d2e_i/dx2 - df/dx) DF (NDOF, NDOF); df/dx includes the
+        load stiffness of the moment inputs when `inputs` (n_inputs,) are given."""
         if hessians is None:
             hessians = assembly.deformation_hessians(self.model, config.x)
         H = assembly.weighted_hessian(self.model, hessians, sigma)
         H -= load_factor * self.inertia.gravity_stiffness(config.x)
+        if inputs is not None:
+            H -= load_factor * input_stiffness(self.model, config.x, inputs)
         return config.DF.T @ H @ config.DF
 
     def mass_matrix(self, config):

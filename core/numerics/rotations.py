@@ -25,7 +25,21 @@ builder adds one per free rotational node). `Model.dof_count` reports NX, NXO an
 course notes' convention of three coordinates per rotational node (see there).
 
 Angular velocity in the body frame: omega' = 2 G(lambda) lambda_dot, with G below (a 3 x 4
-matrix, linear in lambda, G(lambda) lambda = 0).
+matrix, linear in lambda, G(lambda) lambda = 0); in the global frame omega = R omega' =
+2 E(lambda) lambda_dot (`global_rates_matrix`, also linear, E lambda = 0, R = E G^T).
+
+Rotations about the global axes (the ports of a 3-D rotational node, `mechanics.ports`):
+
+- a moment M (N m, global frame) does the virtual work M . delta theta = M . 2 E delta lambda,
+  so its generalised force on the Euler parameters is f = 2 E(lambda)^T M; f . lambda = 0: it
+  does no work along the normalisation, and f . lambda_dot = M . omega, the power of M;
+- the angle about global axis k is the component phi_k of the rotation vector phi (axis
+  times angle, rad; `rotation_vector_derivatives` gives it with its first and second
+  derivatives): exact for a rotation about that axis, the same numbers as a scene's
+  `rotation = [rx, ry, rz]`, and a vector (rotating the global frame rotates it), which no
+  three-angle (Cardan) set is. At the unrotated orientation d phi / d lambda = 2 E, so a
+  small angle is the small rotation a moment does work on; away from it they differ by the
+  factor d phi / d theta = I + [phi x] / 2 + O(phi^2).
 """
 
 import numpy as np
@@ -97,6 +111,123 @@ def body_rates_matrix(lam):
     l0, l1, l2, l3 = np.moveaxis(np.asarray(lam, float), -1, 0)
     rows = [[-l1, l0, l3, -l2], [-l2, -l3, l0, l1], [-l3, l2, -l1, l0]]
     return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+
+
+def global_rates_matrix(lam):
+    """E(lambda) (..., 3, 4): omega = 2 E(lambda) lambda_dot (global-frame angular velocity).
+
+    E = [-lv, lambda0 I + [lv x]] (G's [lv x] with the other sign), linear in lambda: row k is
+    RATES_TENSOR[k] @ lambda. The moment M about the global axes has the generalised force
+    2 E^T M on the Euler parameters.
+    """
+    return np.einsum("kab,...b->...ka", RATES_TENSOR, np.asarray(lam, float))
+
+
+def _rates_tensor():
+    """P (3, 4, 4): E(lambda)[k, a] = P[k, a, b] lambda_b (the rows of E, linear in lambda)."""
+    P = np.zeros((3, 4, 4))
+    for k in range(3):
+        P[k, 0, k + 1] = -1.0  # -lv
+        P[k, k + 1, 0] = 1.0  # lambda0 I
+    # [lv x]: row k, column m + 1: eps_kjm lv_j, i.e. (x: -l3 at y, l2 at z) and so on
+    for k, j, m, sign in ((0, 2, 1, -1.0), (0, 1, 2, 1.0), (1, 2, 0, 1.0), (1, 0, 2, -1.0),
+                          (2, 1, 0, -1.0), (2, 0, 1, 1.0)):
+        P[k, m + 1, j + 1] = sign
+    return P
+
+
+RATES_TENSOR = _rates_tensor()
+
+# terms of the series below, and the ratio s / lambda0 under which they are used: the series
+# of (atan t) / t and its derivatives converge as t^2, so 16 terms reach round-off at t = 0.2;
+# above it the closed forms lose at most eps / t^4 = 1e-13 relatively to cancellation
+SERIES_TERMS = 16
+SERIES_BELOW = 0.2
+
+
+def rotation_vector_derivatives(lam, order=2):
+    """The rotation vector phi(lambda) (n, 3), rad, and its first (n, 3, 4) and second
+    (n, 3, 4, 4) derivatives with respect to the Euler parameters lambda (n, 4).
+
+    With c = lambda0 >= 0 (lambda and -lambda are the same orientation: the sign is chosen so,
+    which keeps the angle in [0, pi]), v = [lambda1, lambda2, lambda3], s = |v|,
+    n^2 = c^2 + s^2 and alpha = atan2(s, c) (half the angle):
+
+        phi = g v,   g = 2 alpha / s
+        d phi_i / d c     = g_c v_i,                      g_c = -2 / n^2
+        d phi_i / d v_j   = g delta_ij + h v_i v_j,       h = (2 / s^2) (c / n^2 - alpha / s)
+        d2 phi_i / d c2   = (4 c / n^4) v_i
+        d2 phi_i / d c d v_j = g_c delta_ij + (4 / n^4) v_i v_j
+        d2 phi_i / d v_j d v_k = h (v_k delta_ij + v_j delta_ik + v_i delta_jk) + m v_i v_j v_k,
+                          m = (1 / s) dh / ds = 6 alpha / s^5 - 2 c / (n^2 s^4)
+                                                - 4 c (s^2 + n^2) / (n^4 s^4)
+
+    phi is homogeneous of degree 0 in lambda, so it needs no normalised lambda and
+    (d phi / d lambda) lambda = 0. For small t = s / c the closed forms of g, h and m cancel;
+    there their series in t are used, from atan(t) / t = sum (-1)^k t^2k / (2k + 1):
+
+        g = (2 / c) sum_k>=0 (-1)^k t^2k / (2k + 1)
+        h = (2 / c^3) sum_k>=1 (-1)^k 2k / (2k + 1) t^(2k - 2)
+        m = (2 / c^5) sum_k>=2 (-1)^k 2k (2k - 2) / (2k + 1) t^(2k - 4)
+
+    At the unrotated orientation (v = 0): d phi / d lambda = [0, 2 I / c], which is 2 E.
+    The compiled twin is `flexure.core.numerics.rotation_kernels.rotation_vector_component`.
+    """
+    lam = np.atleast_2d(np.asarray(lam, float))
+    sign = np.where(lam[:, 0] < 0.0, -1.0, 1.0)
+    lam = lam * sign[:, None]
+    c, v = lam[:, 0], lam[:, 1:]
+    s = np.linalg.norm(v, axis=1)
+    n2 = c * c + s * s
+    alpha = np.arctan2(s, c)
+    small = s < SERIES_BELOW * c
+    g, h, m = _series(c, s) if np.all(small) else _closed(c, s, n2, alpha)
+    if np.any(small) and not np.all(small):
+        gs, hs, ms = _series(np.where(small, c, 1.0), np.where(small, s, 0.0))
+        g, h, m = (np.where(small, a, b) for a, b in ((gs, g), (hs, h), (ms, m)))
+    phi = g[:, None] * v
+    if order == 0:
+        return (phi,)
+    eye = np.eye(3)
+    D = np.zeros((lam.shape[0], 3, 4))
+    D[:, :, 0] = (-2.0 / n2)[:, None] * v
+    D[:, :, 1:] = g[:, None, None] * eye + h[:, None, None] * v[:, :, None] * v[:, None, :]
+    D *= sign[:, None, None]  # phi(lambda) = phi(-lambda) for lambda0 < 0: chain rule
+    if order == 1:
+        return phi, D
+    n4 = n2 * n2
+    D2 = np.zeros((lam.shape[0], 3, 4, 4))
+    D2[:, :, 0, 0] = (4.0 * c / n4)[:, None] * v
+    cross = (-2.0 / n2)[:, None, None] * eye + (4.0 / n4)[:, None, None] * (
+        v[:, :, None] * v[:, None, :])
+    D2[:, :, 0, 1:] = cross
+    D2[:, :, 1:, 0] = cross
+    D2[:, :, 1:, 1:] = h[:, None, None, None] * (
+        np.einsum("nk,ij->nijk", v, eye) + np.einsum("nj,ik->nijk", v, eye)
+        + np.einsum("ni,jk->nijk", v, eye)) + m[:, None, None, None] * np.einsum(
+        "ni,nj,nk->nijk", v, v, v)
+    return phi, D, D2
+
+
+def _series(c, s):
+    """g, h, m of `rotation_vector_derivatives` by their series in t = s / c (t small)."""
+    t2 = (s / c) ** 2
+    g, h, m = np.zeros_like(c), np.zeros_like(c), np.zeros_like(c)
+    for k in range(SERIES_TERMS, -1, -1):  # Horner, smallest terms first
+        sign = -1.0 if k % 2 else 1.0
+        g = g * t2 + sign / (2 * k + 1)
+        h = h * t2 + sign * (2 * k + 2) / (2 * k + 3)  # the term k + 1 of h's sum
+        m = m * t2 + sign * (2 * k + 4) * (2 * k + 2) / (2 * k + 5)  # the term k + 2 of m's
+    return 2.0 * g / c, -2.0 * h / c**3, 2.0 * m / c**5
+
+
+def _closed(c, s, n2, alpha):
+    """g, h, m of `rotation_vector_derivatives` by their closed forms (s not small)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = 2.0 * alpha / s
+        h = 2.0 / s**2 * (c / n2 - alpha / s)
+        m = 6.0 * alpha / s**5 - 2.0 * c / (n2 * s**4) - 4.0 * c * (s * s + n2) / (n2 * n2 * s**4)
+    return g, h, m
 
 
 def from_rotation_vector(phi):

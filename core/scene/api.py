@@ -65,8 +65,9 @@ class Scene:
 
     def node(self, name: str, **keys) -> Scene:
         """A [nodes.NAME]: position (m) for a translational node, angle (rad, planar) or
-        rotation (rotation vector, rad, spatial) for a rotational one; fixed, dof, mass (kg),
-        inertia (kg m^2), force (N), moment (N m)."""
+        rotation (rotation vector, rad, spatial) for a rotational one; fixed, dof (a spatial
+        rotational node's "rx", "ry", "rz"), mass (kg), inertia (kg m^2), force (N), moment
+        (N m, planar)."""
         return self._add("nodes", name, keys)
 
     def element(self, name: str, type: str, nodes, *, section: str, **keys) -> Scene:
@@ -83,7 +84,8 @@ class Scene:
         return self
 
     def input(self, name: str, *, node: str, coordinate: str) -> Scene:
-        """An [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate."""
+        """An [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate, or on a
+        3-D rotational node a moment (N m) about a global axis (coordinate "rx", "ry", "rz")."""
         return self._add("inputs", name, {"node": node, "coordinate": coordinate})
 
     def actuator(self, name: str, *, input: str, **keys) -> Scene:
@@ -94,7 +96,8 @@ class Scene:
 
     def output(self, name: str, *, node: str, coordinate: str,
                quantity: str = "position") -> Scene:
-        """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate."""
+        """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate, or on a 3-D
+        rotational node the angle (rad) or angular velocity about a global axis ("rx", ...)."""
         return self._add("outputs", name, {"node": node, "coordinate": coordinate,
                                            "quantity": quantity})
 

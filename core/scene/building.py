@@ -12,40 +12,44 @@ either fixed as a whole (fixed = true) or free, and may carry a rigid-body inert
 (inertia = [Jx, Jy, Jz] or a 3 x 3 list, kg m^2, in its body frame). Its coordinates are the
 four Euler parameters "NODE.lambda0" ... "NODE.lambda3" (see flexure.core.numerics.rotations); the
 builder adds the normalisation constraint "NODE.norm" of every free rotational node. A BEAM
-needs y_axis = [.., .., ..], its principal y' axis; sections of spatial elements take the keys
-of flexure.core.scene.sections.beam_properties.
+needs y_axis = [.., .., ..], its principal y' axis. A section takes the keys of the elements
+that use it (their section schemas) and the shape and material keys that derive them
+(`scene_sections`).
 """
 
 from __future__ import annotations
 
 import copy
 import importlib.resources
-import math
 import tomllib
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from ..elements import euler
+from ..elements.protocol import SchemaKey
 from ..errors import SceneError
 from ..mechanics.constraints import check_exact_constraint, choose_dofs
-from ..model import DEPENDENT, DOF, FIXED, ZERO, ElementGroup, Model, Node, Port
-from ..numerics.rotations import from_rotation_vector
+from ..model import DEPENDENT, DOF, FIXED, Model, Node
 from .overrides import apply_overrides
-from .scene_actuators import ActuatorBuilding
+from .rotational_nodes import RotationalNodeBuilding
+from .scene_actuators import ACTUATOR_KEYS, ActuatorBuilding, actuator_key
 from .scene_elements import ElementBuilding
+from .scene_ports import PortBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
-from .sections import beam_properties
+from .scene_sections import SectionBuilding, section_key
 from .spacar_input import read_spacar
 
 TRANSLATION_AXES = {2: ("x", "y"), 3: ("x", "y", "z")}
 ROTATION_AXES = {2: ("phi",), 3: ("lambda0", "lambda1", "lambda2", "lambda3")}
-SECTION_KEYS = {"EA", "EI", "EdA", "EdI", "rho_A", "E", "rho", "width", "height"}
-SECTION_KEYS_3D = {"EA", "GIt", "EIy", "EIz", "EdA", "GdIt", "EdIy", "EdIz", "rho_A", "rho_Iy",
-                   "rho_Iz", "A", "Wy", "Wz", "Wt", "E", "G", "nu", "rho", "width", "height",
-                   "diameter", "beta"}
-OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
+# The numbers a node takes, with their units (a tunable FMU parameter's unit: `scene_key`);
+# the section keys are the elements' (`scene_sections`).
+NODE_KEYS = {key.name: key for key in (
+    SchemaKey("mass", "kg", "lumped mass of a translational node, on each of its coordinates"),
+    SchemaKey("inertia", "kg.m2", "lumped rotational inertia of a rotational node"),
+    SchemaKey("angle", "rad", "initial angle of a planar rotational node"),
+    SchemaKey("moment", "N.m", "constant moment on a planar rotational node"),
+)}
 
 
 def builtin_scenes() -> list[str]:
@@ -112,6 +116,23 @@ def parse_toml(path):
         raise SceneError(f"{path}: not valid TOML: {error}") from None
 
 
+def scene_key(key: str, model: Model | None = None) -> SchemaKey | None:
+    """The SchemaKey (unit, meaning, ...) of a dotted scene key that holds a number:
+    "sections.NAME.KEY" (an element property, or a section's shape or material),
+    "nodes.NAME.KEY" ("mass", "inertia", ...) or "actuators.NAME.KEY" (force_constant,
+    resistance, inductance; with the `model`, also the units that depend on the actuator:
+    `scene_actuators.actuator_key`); None for any other key."""
+    table, _, rest = key.partition(".")
+    name = rest.rpartition(".")[2] if "." in rest else None
+    if table == "sections" and name:
+        return section_key(name)
+    if table == "nodes" and name:
+        return NODE_KEYS.get(name)
+    if table == "actuators" and name:
+        return ACTUATOR_KEYS.get(name) if model is None else actuator_key(model, key)
+    return None
+
+
 def build_model(data: dict, *, overrides: dict | None = None, source: str = "<dict>",
                 default_name: str = "scene", check: bool = True) -> Model:
     """Build a `Model` from a scene dictionary, validating every key.
@@ -126,10 +147,12 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
     return builder.build(check=check)
 
 
-class _SceneBuilder(SceneReader, ElementBuilding, ActuatorBuilding):
+class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNodeBuilding,
+                    PortBuilding, ActuatorBuilding):
     """Builds a Model from a scene dictionary: the checked reading of values
-    (`SceneReader`), the [elements] (`ElementBuilding`), the [actuators]
-    (`ActuatorBuilding`) and the rest here."""
+    (`SceneReader`), the [sections] (`SectionBuilding`), the [elements] (`ElementBuilding`),
+    the 3-D rotational nodes (`RotationalNodeBuilding`), the [inputs] and [outputs]
+    (`PortBuilding`), the [actuators] (`ActuatorBuilding`) and the rest here."""
 
     def __init__(self, data, source, default_name):
         self.data = data
@@ -168,12 +191,14 @@ class _SceneBuilder(SceneReader, ElementBuilding, ActuatorBuilding):
                               for part in ("nodes", "elements")
                               if isinstance(data.get(part), dict)
                               for table in data[part].values())
-        self.sections = self.build_sections(self.table("sections", data.get("sections", {})))
+        self.sections = self.build_sections(self.table("sections", data.get("sections", {})),
+                                            data.get("elements", {}))
         self.build_nodes(self.table("nodes", data.get("nodes", {})))
         groups, deformation_names, deformation_status = self.build_elements(
             self.table("elements", data.get("elements", {})))
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
+            self.add_rotation_dofs(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         actuators, inputs = self.build_actuators(data.get("actuators", {}), inputs)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
@@ -240,67 +265,13 @@ class _SceneBuilder(SceneReader, ElementBuilding, ActuatorBuilding):
                 self.fail("scene.tunable", f"{key!r} is not a number (got {value!r})")
         return list(keys)
 
-    def build_sections(self, sections):
-        result = {}
-        for name, section in sections.items():
-            with self.entry():  # collected, so every entry is checked
-                result[name] = self.build_section(name, section)
-        self.raise_problems()
-        return result
-
-    def build_section(self, name, section):
-        """One [sections.NAME]: its properties (SI units), planar or spatial."""
-        key = f"sections.{name}"
-        section = self.table(key, section)
-        if self.dimension == 3:
-            return self.spatial_section(key, section)
-        self.check_keys(key, section, SECTION_KEYS)
-        values = self.section_values(key, section)
-        dims = {"E", "width", "height"}
-        if dims & values.keys():
-            missing = dims - values.keys()
-            if missing:
-                self.fail(key, "a rectangle needs E, width and height; "
-                               f"missing {sorted(missing)}")
-            area = values["width"] * values["height"]
-            values.setdefault("EA", values["E"] * area)
-            values.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
-            # for the stresses (sigma = N/A +- M/W): height is the in-plane thickness
-            values.setdefault("A", area)
-            values.setdefault("Wz", values["width"] * values["height"] ** 2 / 6)
-            if "rho" in values:
-                values.setdefault("rho_A", values["rho"] * area)
-        return self.finite_section(key, values)
-
-    def section_values(self, key, section):
-        """The numbers of a section: none negative, dimensions (width, ...) positive."""
-        return {k: self.number(f"{key}.{k}", v, minimum=0.0,
-                               positive=k in ("width", "height", "diameter"))
-                for k, v in section.items()}
-
-    def finite_section(self, key, values):
-        """Refuse a section whose derived properties (EA = E w h, ...) over- or underflow."""
-        for k, v in values.items():
-            if not math.isfinite(v):
-                self.fail(key, f"the section's {k} comes out as {v!r} from its numbers; check "
-                               "their magnitudes (SI units)")
-        return values
-
-    def spatial_section(self, key, section):
-        self.check_keys(key, section, SECTION_KEYS_3D)
-        values = self.section_values(key, section)
-        try:
-            properties = beam_properties(values)
-        except ValueError as error:
-            self.fail(key, str(error))
-        return self.finite_section(key, properties)
-
     def build_nodes(self, nodes):
         if not nodes:
             self.fail("nodes", "a scene needs at least one node")
         self.node_kind, self.node_coordinates = {}, {}
         self.coordinate_names, self.initial, self.status, self.mass, self.loads = [], [], [], [], []
         self.node_inertias = []
+        self.rotation_dofs = []  # (node, "rx" | "ry" | "rz") listed as DOFs
         for name, node in nodes.items():
             with self.entry():  # collected, so every entry is checked
                 self.build_node(name, node)
@@ -346,67 +317,6 @@ class _SceneBuilder(SceneReader, ElementBuilding, ActuatorBuilding):
             self.mass.append(mass_value)
             self.loads.append(load)
 
-    def spatial_rotational_node(self, key, name, node):
-        """A 3-D rotational node: four Euler parameters, fixed as a whole or free."""
-        if "rotation" not in node:
-            self.fail(key, "expected exactly one of 'position' (a translational node) or "
-                           "'rotation' (a rotational node: a rotation vector, rad)")
-        self.check_keys(key, node, {"rotation", "fixed", "inertia"})
-        rotation = np.array(self.vector(f"{key}.rotation", node["rotation"], 3, limit=MAX_ANGLE))
-        if np.linalg.norm(rotation) > MAX_ANGLE:
-            self.fail(f"{key}.rotation", f"expected a rotation vector of magnitude <= "
-                                         f"{MAX_ANGLE:g} rad, got {rotation.tolist()!r}")
-        lam = from_rotation_vector(rotation)
-        fixed = node.get("fixed", False)
-        if fixed in (["rotation"], "rotation"):
-            fixed = True
-        if not isinstance(fixed, bool):
-            self.fail(f"{key}.fixed", "a 3-D rotational node is fixed as a whole: expected true "
-                                      f"or false, got {fixed!r}")
-        inertia = node.get("inertia")
-        index = []
-        self.node_kind[name] = "rotational"
-        self.node_coordinates[name] = {}
-        for axis, value in zip(ROTATION_AXES[3], lam, strict=True):
-            index.append(len(self.coordinate_names))
-            self.node_coordinates[name][axis] = index[-1]
-            self.coordinate_names.append(f"{name}.{axis}")
-            self.initial.append(float(value))
-            self.status.append(FIXED if fixed else DEPENDENT)
-            self.mass.append(0.0)
-            self.loads.append(0.0)
-        if inertia is not None:
-            if isinstance(inertia, list) and len(inertia) == 3 and all(
-                    isinstance(row, list) for row in inertia):
-                J = np.array([self.vector(f"{key}.inertia[{i}]", row, 3)
-                              for i, row in enumerate(inertia)])
-                if not np.allclose(J, J.T):
-                    self.fail(f"{key}.inertia", "the inertia tensor must be symmetric")
-            else:
-                J = np.diag(self.vector(f"{key}.inertia", inertia, 3))
-            if not fixed:
-                self.node_inertias.append((np.array(index), J))
-
-    def add_normalisation(self, groups, deformation_names, deformation_status):
-        """One EULER pseudo-element (lambda . lambda = 1) per free 3-D rotational node."""
-        names, coords = [], []
-        for name, kind in self.node_kind.items():
-            index = list(self.node_coordinates[name].values())
-            if kind == "rotational" and self.status[index[0]] != FIXED:
-                names.append(name)
-                coords.append(index)
-        if not names:
-            return
-        start = len(deformation_names)
-        for name in names:
-            deformation_names.append(f"{name}.norm")
-            deformation_status.append(ZERO)
-        coords = np.array(coords, dtype=int)
-        groups.append(ElementGroup(
-            kind=euler, names=tuple(names), coordinate_index=coords,
-            deformation_index=np.arange(start, start + len(names))[:, None],
-            reference=euler.reference(np.array(self.initial)[coords]), properties={}))
-
     def node(self, key, name, kind=None):
         name = str(name)
         if name not in self.node_kind:
@@ -441,42 +351,6 @@ class _SceneBuilder(SceneReader, ElementBuilding, ActuatorBuilding):
                       f"node {node!r} has no coordinate {show(axis)}; expected one of "
                       f"{', '.join(self.node_coordinates[node])}")
         return self.node_coordinates[node][axis]
-
-    def build_ports(self, section, table, *, is_input):
-        ports = []
-        for name, port in self.table(section, table).items():
-            with self.entry():  # collected, so every entry is checked
-                ports.append(self.build_port(section, name, port, is_input=is_input))
-        self.raise_problems()
-        return ports
-
-    def build_port(self, section, name, port, *, is_input):
-        """One [inputs.NAME] (a force, N or N m) or [outputs.NAME] (a position or velocity)."""
-        key = f"{section}.{name}"
-        port = self.table(key, port)
-        if not name.isidentifier():
-            self.fail(key, "a port name must be an identifier (letters, digits, _)")
-        if self.dimension == 3 and not self._is_translation(port) and isinstance(
-                port.get("coordinate"), str) and port["coordinate"].startswith("lambda"):
-            self.fail(f"{key}.coordinate", "inputs and outputs on the Euler parameters of a "
-                                           "3-D rotational node are not supported; use a "
-                                           "translational coordinate")
-        if is_input:
-            self.check_keys(key, port, {"node", "coordinate"})
-            return Port(name, self.coordinate(key, port), "force",
-                        "N" if self._is_translation(port) else "N.m")
-        self.check_keys(key, port, {"node", "coordinate", "quantity"})
-        quantity = port.get("quantity", "position")
-        if not isinstance(quantity, str) or quantity not in OUTPUT_QUANTITIES:
-            self.fail(f"{key}.quantity", f"expected one of {', '.join(OUTPUT_QUANTITIES)}, "
-                                         f"got {show(quantity)}")
-        unit = OUTPUT_QUANTITIES[quantity]
-        if not self._is_translation(port):
-            unit = unit.replace("m", "rad")
-        return Port(name, self.coordinate(key, port), quantity, unit)
-
-    def _is_translation(self, port):
-        return port.get("coordinate") in TRANSLATION_AXES[self.dimension]
 
     def build_buckling(self, table):
         if table is None:

@@ -9,18 +9,29 @@
     amplifier_gain = 1.0     # G, V/V or A/V (default 1)
     saturation = 24.0        # the amplifier's output limit, V or A (optional: none)
 
-A voltage drive needs R > 0 and L > 0 (its coil current is a state); a current drive
-absorbs the coil's voltage, so its R and L may be given (a scene switched between drives by
-`--set`) but do not act. The equations: `flexure.core.mechanics.actuators`.
+The input may be a force on a coordinate or a moment about a global axis of a 3-D rotational
+node (a rotary voice coil: Km in N m/A). A voltage drive needs R > 0 and L > 0 (its coil
+current is a state); a current drive absorbs the coil's voltage, so its R and L may be given
+(a scene switched between drives by `--set`) but do not act. The equations:
+`flexure.core.mechanics.actuators`.
 """
 
 from dataclasses import replace
 
+from ..elements.protocol import SchemaKey
 from ..model import CURRENT, VOLTAGE, Actuator
 from .scene_reader import show
 
-ACTUATOR_KEYS = {"input", "force_constant", "resistance", "inductance", "drive",
-                 "amplifier_gain", "saturation"}
+# The numbers an actuator takes, with their units (a tunable FMU parameter's unit:
+# `building.scene_key`; `actuator_key` gives the ones that depend on the actuator).
+ACTUATOR_KEYS = {key.name: key for key in (
+    SchemaKey("force_constant", "N/A", "force constant Km, = back-EMF constant (V s/m)",
+              positive=True),
+    SchemaKey("resistance", "Ohm", "coil resistance R", positive=True),
+    SchemaKey("inductance", "H", "coil inductance L", positive=True),
+)}
+TEXT_KEYS = {"input", "drive"}
+GAIN_KEYS = {"amplifier_gain", "saturation"}  # units by the drive: V/V, V or A/V, A
 DRIVES = (VOLTAGE, CURRENT)
 DRIVE_UNIT = "V"  # the drive signal of either amplifier is a voltage (gain V/V or A/V)
 
@@ -49,7 +60,7 @@ class ActuatorBuilding:
         entry = self.table(key, entry)
         if not name.isidentifier():
             self.fail(key, "an actuator name must be an identifier (letters, digits, _)")
-        self.check_keys(key, entry, ACTUATOR_KEYS)
+        self.check_keys(key, entry, set(ACTUATOR_KEYS) | TEXT_KEYS | GAIN_KEYS)
         for required in ("input", "force_constant"):
             if required not in entry:
                 self.fail(key, f"missing {required!r}")
@@ -80,3 +91,28 @@ class ActuatorBuilding:
                         inductance=positive.get("inductance", 0.0), drive=drive,
                         amplifier_gain=positive.get("amplifier_gain", 1.0),
                         saturation=positive.get("saturation", float("inf")))
+
+
+def actuator_key(model, key):
+    """The SchemaKey of "actuators.NAME.KEY" for a number of actuator NAME of `model`, with
+    the unit of that actuator: Km in N/A, or N.m/A when its port is a moment or an angle;
+    the amplifier's gain 1 (V/V) or A/V and its saturation V or A by its drive. None for a
+    key that is not an actuator's number."""
+    table, _, rest = key.partition(".")
+    name, _, last = rest.rpartition(".")
+    found = [a for a in model.actuators if a.name == name]
+    if table != "actuators" or not found:
+        return None
+    actuator = found[0]
+    port = model.inputs[actuator.input]
+    voltage = actuator.drive == VOLTAGE
+    if last == "force_constant" and (port.about_axis
+                                     or port.coordinate not in model.translations):
+        return replace(ACTUATOR_KEYS[last], unit="N.m/A",
+                       meaning="torque constant Km, = back-EMF constant (V s/rad)")
+    if last == "amplifier_gain":
+        return SchemaKey(last, "1" if voltage else "A/V", "amplifier gain G", positive=True)
+    if last == "saturation":
+        return SchemaKey(last, "V" if voltage else "A", "amplifier output limit",
+                         positive=True)
+    return ACTUATOR_KEYS.get(last)

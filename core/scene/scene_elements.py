@@ -93,7 +93,8 @@ class ElementBuilding:
             self.fail(f"{key}.y_axis", f"a {kind.type_name} has no principal axis")
         entry["names"].append(name)
         entry["coords"].append(index)
-        entry["props"].append({p: section.get(p, 0.0) for p in kind.properties})
+        entry["props"].append({key.name: section.get(key.name, key.default)
+                               for key in kind.section_schema})
         start = len(deformation_names)
         entry["defs"].append(list(range(start, start + len(kind.deformation_names))))
         for deformation in kind.deformation_names:
@@ -103,42 +104,23 @@ class ElementBuilding:
 
     def element_groups(self, by_type):
         """One ElementGroup per element type, with its reference data from the initial
-        coordinates; a zero-length element or a principal axis along a beam refused."""
+        coordinates; an element whose reference configuration its type cannot take (its
+        `reference_problems`: a zero length, a principal axis along a beam) refused by name."""
         groups = []
         for entry in by_type.values():
             kind = entry["kind"]
             coords = np.array(entry["coords"], dtype=int)
             x0 = np.array(self.initial)[coords]
-            if entry["axes"]:
-                try:
-                    reference = kind.reference(x0, y_axis=np.array(entry["axes"]))
-                except ValueError:
-                    reference = kind.reference(x0, y_axis=None)
-                    self._parallel_axis(entry, reference)
-            else:
-                reference = kind.reference(x0)
-            for element_name, length in zip(entry["names"], reference["l0"], strict=True):
-                if length <= 1e-12:
-                    self.fail(f"elements.{element_name}.nodes", "zero-length element: its end "
-                                                            f"nodes coincide ({length:.3g} m)")
+            orientation = {"y_axis": np.array(entry["axes"])} if entry["axes"] else {}
+            check = getattr(kind, "reference_problems", None)
+            for i, key, message in check(x0, **orientation) if check else ():
+                with self.entry():  # collected, so every such element is named
+                    self.fail(f"elements.{entry['names'][i]}.{key}", message)
+            self.raise_problems()
+            reference = kind.reference(x0, **orientation)
             props = {p: np.array([v[p] for v in entry["props"]]) for p in kind.properties}
             groups.append(ElementGroup(kind=kind, names=tuple(entry["names"]),
                                        coordinate_index=coords,
                                        deformation_index=np.array(entry["defs"], dtype=int),
                                        reference=reference, properties=props))
         return groups
-
-    def _parallel_axis(self, entry, reference):
-        """Name the first beam whose y' axis lies along it (reference raised ValueError)."""
-        for name, axis, length in zip(entry["names"], entry["axes"], reference["l0"],
-                                      strict=True):
-            index = entry["names"].index(name)
-            coords = np.array(entry["coords"][index])
-            r = np.array(self.initial)[coords]
-            l_vec = r[7:10] - r[0:3]
-            axis = np.array(axis)
-            if length <= 1e-12 or np.linalg.norm(np.cross(axis, l_vec)) <= 1e-9 * np.linalg.norm(
-                    axis) * length:
-                self.fail(f"elements.{name}.y_axis", f"the principal axis {axis.tolist()} lies "
-                                                     "along the beam (or is zero)")
-        self.fail("elements", "a principal axis lies along its beam")

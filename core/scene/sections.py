@@ -19,9 +19,22 @@ and the largest shear stress, at the middle of the long sides, tau = T / Wt with
 A circle of diameter d: A = pi d^2 / 4, Iy' = Iz' = pi d^4 / 64, It = pi d^4 / 32,
 Wy' = Wz' = pi d^3 / 32, Wt = pi d^3 / 16. Series terms are summed until they no longer change
 the result in double precision (they fall off as n^-5 and n^-2 exp(-n pi a / 2t)).
+
+A planar section's rectangle has `height` in the plane (the bending thickness) and `width` out
+of it: A = width height, EI = E width height^3 / 12, Wz = width height^2 / 6 (`planar_properties`).
+
+The keys of a section's shape and material (E, width, rho, ...) are not properties an element
+reads: `PLANAR` and `SPATIAL` (a `SectionCalculator` each) declare them with their units and
+the properties they derive, so a section takes them where an element that uses it reads one of
+those properties (`flexure.core.scene.scene_sections`).
 """
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
+
+from ..elements.protocol import SchemaKey
 
 
 def _odd_terms(count=2001):
@@ -97,3 +110,62 @@ def beam_properties(values):
                                    ("EdIz", "EIz")):
             result.setdefault(damping, values["beta"] * result.get(stiffness, 0.0))
     return result
+
+
+def planar_properties(values):
+    """The planar section properties from a scene section (dict of numbers, SI units).
+
+    With `E`, `width` and `height` (a rectangle, height in the plane): EA, EI, and A, Wz for
+    the stresses; with `rho` as well: rho_A. Properties the section gives directly take
+    precedence. Returns a new dict; raises ValueError naming what is missing.
+    """
+    result = dict(values)
+    dims = {"E", "width", "height"}
+    if dims & values.keys():
+        missing = dims - values.keys()
+        if missing:
+            raise ValueError(f"a rectangle needs E, width and height; missing {sorted(missing)}")
+        area = values["width"] * values["height"]
+        result.setdefault("EA", values["E"] * area)
+        result.setdefault("EI", values["E"] * values["width"] * values["height"] ** 3 / 12)
+        # for the stresses (sigma = N/A +- M/W): height is the in-plane thickness
+        result.setdefault("A", area)
+        result.setdefault("Wz", values["width"] * values["height"] ** 2 / 6)
+        if "rho" in values:
+            result.setdefault("rho_A", values["rho"] * area)
+    return result
+
+
+@dataclass(frozen=True)
+class SectionCalculator:
+    """The shape and material keys a section may give (`inputs`), the element properties they
+    derive (`outputs`) and the function that derives them (`derive(values) -> values`, a new
+    dict; ValueError naming what is missing)."""
+
+    inputs: tuple
+    outputs: frozenset
+    derive: Callable
+
+
+_E = SchemaKey("E", "Pa", "Young's modulus, with the dimensions: the stiffnesses")
+_RHO = SchemaKey("rho", "kg/m3", "density, with the dimensions: the mass per length")
+PLANAR = SectionCalculator(
+    inputs=(_E, _RHO,
+            SchemaKey("width", "m", "rectangle width, out of the plane", positive=True),
+            SchemaKey("height", "m", "rectangle height, in the plane (the bending thickness)",
+                      positive=True)),
+    outputs=frozenset({"EA", "EI", "A", "Wz", "rho_A"}),
+    derive=planar_properties)
+SPATIAL = SectionCalculator(
+    inputs=(_E, _RHO,
+            SchemaKey("G", "Pa", "shear modulus (default E / (2 (1 + nu)))"),
+            SchemaKey("nu", "1", "Poisson's ratio, for G", default=0.3),
+            SchemaKey("width", "m", "rectangle width, along z'", positive=True),
+            SchemaKey("height", "m", "rectangle height, along y'", positive=True),
+            SchemaKey("diameter", "m", "circle diameter", positive=True),
+            SchemaKey("beta", "s", "stiffness-proportional damping: EdA = beta EA, ...",
+                      damping=True)),
+    outputs=frozenset({"A", "Wy", "Wz", "Wt", "circular", "EA", "EIy", "EIz", "GIt", "rho_A",
+                       "rho_Iy", "rho_Iz", "EdA", "GdIt", "EdIy", "EdIz"}),
+    derive=beam_properties)
+CALCULATORS = {2: PLANAR, 3: SPATIAL}  # by the scene's dimension

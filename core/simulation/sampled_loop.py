@@ -28,6 +28,7 @@ from numba import carray
 
 from ..engine import data as ed
 from ..engine import engine
+from ..engine.ports import port_specs, position_value
 from ..errors import SimulationError
 from ..numerics.jit import kernel
 from ..numerics.native import (
@@ -70,7 +71,8 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
         The discrete controller from errors (m) to forces (N) or drive signals (V): A (s, s),
         B (s, n_loops), C (n_loops, s), D (n_loops, n_loops).
     loop_inputs, loop_outputs : sequences of int
-        The model input driven by each loop, and the model output (a position) it measures.
+        The model input driven by each loop, and the model output (a position, or an angle
+        about a global axis) it measures.
     progress : callable, optional
         Called with the fraction of samples done, about 100 times.
 
@@ -96,7 +98,8 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     N = int(samples)
     position = np.zeros((N + 1, n_loops))
     force = np.zeros((N + 1, n_loops))
-    coordinates = np.array([port.coordinate for port in ports], dtype=np.int64)
+    # the measured outputs, packed (engine.ports): a coordinate, or an angle about a global axis
+    coordinates = port_specs(ports).ravel()
     loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
             np.array(loop_inputs, dtype=np.int64), coordinates, position, force)
     # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
@@ -210,9 +213,10 @@ _MEASURE_FAILED = -1000
 
 @kernel
 def _measure(addresses, y, scratch, coordinates, out):
-    """The loop outputs (positions, m) at the integrator state y into out; a status. As
-    `Simulator.outputs`: full Newton from the plant's last coordinates."""
-    ndof = engine.int_array(addresses[_PLANT], _DIMS_SLOT)[ed.NDOF]
+    """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
+    status. As `Simulator.outputs`: full Newton from the plant's last coordinates.
+    coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat)."""
+    ndof = engine.int_array(addresses[_PLANT], _DIMS_SLOT)[ed.NDOF]  # y: [.., coil currents]
     x_plant = engine.float_array(addresses[_PLANT], _X_SLOT)
     engine.float_array(addresses[_OUTPUT], _X_START_SLOT)[:] = x_plant
     engine.int_array(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
@@ -224,8 +228,8 @@ def _measure(addresses, y, scratch, coordinates, out):
     if status != ed.OK:
         return status
     x = engine.float_array(addresses[_OUTPUT], _X_SLOT)
-    for j in range(coordinates.size):
-        out[j] = x[coordinates[j]]
+    for j in range(out.size):
+        out[j] = position_value(coordinates, j, x)
     return ed.OK
 
 

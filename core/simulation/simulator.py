@@ -55,8 +55,10 @@ class Simulator(SimulatorOutputs):
     Parameters
     ----------
     model : Model
-        The model; its inputs are forces (N, N m) or actuators' drive signals (V), its outputs
-        positions or velocities.
+        The model; its inputs are forces (N, N m) or moments about a global axis (N m), or
+        actuators' drive signals (V); its outputs positions or velocities (m, rad, m/s,
+        rad/s; an angle about a global axis is a rotation-vector component,
+        `flexure.core.mechanics.ports`).
     method : str
         "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a one-step
         L-stable method of order 4, `flexure.core.simulation.esdirk`: no restart cost when an
@@ -111,8 +113,11 @@ class Simulator(SimulatorOutputs):
             max_order=max_order,
             input_function=self._inputs_at if self._input_functions else None)
         self._output_data = EngineData(model)
-        self._output_coordinates = np.array([port.coordinate for port in model.outputs],
-                                            dtype=np.int64)
+        # the coordinates of the outputs on one coordinate (-1 for those about an axis, which
+        # `_port_value` measures)
+        self._output_coordinates = np.array([-1 if port.about_axis else port.coordinate
+                                             for port in model.outputs], dtype=np.int64)
+        self._about_axis = any(port.about_axis for port in model.outputs)
         self._positions_only = all(port.quantity == "position" for port in model.outputs)
         self._range = None  # plausibility.RangeCheck, made on first use
         # views of the coordinates and deformations of the engine's last evaluation

@@ -8,17 +8,19 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
+from ..mechanics.ports import output_value
 from .plausibility import RangeCheck
 from .sundials import STATUS_MESSAGES
 
 
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
-    model, the state, `_output_data`, `_output_coordinates`, `_positions_only`, the last
-    evaluation's `_last_x`, `_last_e`)."""
+    model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
+    the last evaluation's `_last_x`, `_last_e`)."""
 
     def outputs(self):
-        """The declared outputs at the current state (n_outputs,): positions m, velocities m/s.
+        """The declared outputs at the current state (n_outputs,): positions m, velocities m/s
+        (angles rad, angular velocities rad/s).
 
         Computed once per state (`advance`, `reset` and `set_state` start a new one)."""
         if self._outputs_cache is None:
@@ -37,11 +39,15 @@ class SimulatorOutputs:
         status = engine.call(data, engine.OP_POSITIONS, np.ascontiguousarray(q))
         if status != ed.OK:
             raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
-        return data.float_array("x")[self._output_coordinates]
+        x = data.float_array("x")
+        if self._about_axis:
+            return np.array([output_value(self.model, port, x) for port in self.model.outputs])
+        return x[self._output_coordinates]
 
     def outputs_along(self, states, *, start=None):
-        """Outputs (n, n_outputs) along absolute states [q, qdot(, i)] (n, 2 NDOF(+)), solving the
-        kinematics point by point (warm-started from one to the next)."""
+        """Outputs (n, n_outputs) along absolute states [q, qdot(, i)] (n, 2 NDOF plus the coil
+        currents), solving the kinematics point by point (warm-started from one to the
+        next)."""
         return self._along(states, start, None)
 
     def outputs_and_warnings(self, states):
@@ -81,8 +87,15 @@ class SimulatorOutputs:
                 raise SimulationError(f"t = {self._t:.9g} s: outputs: "
                                       f"{STATUS_MESSAGES[status]}")
             for j, p in enumerate(ports):
-                result[k, j] = (DF[p.coordinate] @ y[n: 2 * n] if p.quantity == "velocity"
-                                else x[p.coordinate])
+                if p.about_axis:  # an angle, or an angular velocity from lambda_dot = DF qdot
+                    euler = list(p.euler)
+                    xdot = np.zeros(self.model.nx)
+                    if p.quantity == "velocity":
+                        xdot[euler] = DF[euler] @ y[n: 2 * n]
+                    result[k, j] = output_value(self.model, p, x, xdot)
+                else:
+                    result[k, j] = (DF[p.coordinate] @ y[n: 2 * n] if p.quantity == "velocity"
+                                    else x[p.coordinate])
             if path is not None:  # the kinematics left x and e of this point in the data
                 path[0][k] = x
                 path[1][k] = data.float_array("e")

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SimulationError
+from ..mechanics.ports import input_direction
 from ..numerics.blas import blas_threads
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -30,8 +31,9 @@ def default_atol(model: Model, rtol: float) -> np.ndarray:
     sqrt(g / L) for a structure that only gravity holds, or 1 rad/s), the velocity of that
     smallest motion in the slowest mode. Coil currents (A, of voltage-driven actuators): rtol
     times the current whose steady force Km i moves the actuated coordinate by that smallest
-    motion, through the static compliance c = DF_c K0^-1 DF_c^T of the initial configuration
-    (where K0 is singular, through M0 times the reference frequency squared).
+    motion, through the static compliance c = b^T DF K0^-1 DF^T b of the port (b its unit
+    generalised force, `ports.input_direction`) in the initial configuration (where K0 is
+    singular, through M0 times the reference frequency squared).
     """
     from ..mechanics.kinematics import length_scale
     from ..mechanics.mechanics import Mechanics
@@ -44,17 +46,18 @@ def default_atol(model: Model, rtol: float) -> np.ndarray:
     config = mech.initial_configuration()
     M0, K0 = mech.mass_matrix(config), mech.structural_stiffness(config)
     omega = _reference_frequency(mech, M0, K0, L)
-    currents = [rtol * _current_scale(model, actuator, config.DF, M0, K0, omega, L)
+    currents = [rtol * _current_scale(model, actuator, config, M0, K0, omega, L)
                 for actuator in model.coil_actuators]
     return np.concatenate([position, position * omega, currents])
 
 
-def _current_scale(model, actuator, DF, M0, K0, omega, L):
-    """The coil current (A) whose steady force moves the actuated coordinate by
-    MOTION_FRACTION of its scale (L on a translation, 1 rad on an angle)."""
-    coordinate = model.inputs[actuator.input].coordinate
-    row = DF[coordinate]
-    motion = MOTION_FRACTION * (L if coordinate in model.translations else 1.0)
+def _current_scale(model, actuator, config, M0, K0, omega, L):
+    """The coil current (A) whose steady force moves the actuated port by MOTION_FRACTION of
+    its scale (L on a translation, 1 rad on an angle or about a global axis)."""
+    port = model.inputs[actuator.input]
+    row = input_direction(model, port, config.x) @ config.DF  # the port per DOF
+    translation = not port.about_axis and port.coordinate in model.translations
+    motion = MOTION_FRACTION * (L if translation else 1.0)
     compliance = 0.0
     for stiffness in (K0, M0 * omega ** 2):
         try:
@@ -64,7 +67,7 @@ def _current_scale(model, actuator, DF, M0, K0, omega, L):
         if np.isfinite(compliance) and compliance > 0.0:
             break
     if not (np.isfinite(compliance) and compliance > 0.0):
-        return 1.0  # the coordinate does not move with the DOFs: no motion sets a scale
+        return 1.0  # the port does not move with the DOFs: no motion sets a scale
     return motion / (compliance * actuator.force_constant)
 
 

@@ -1,0 +1,136 @@
+"""A move of other coordinates (an end effector) turned into references for the loops.
+
+A parallel compliant mechanism is driven at its actuators but asked to move something else:
+the manipulator's end effector. `move_path` takes the desired displacements of as many target
+coordinates as there are loops (e.g. the end effector's x and y, with its height and
+rotations held) and gives, along the move's progress s in [0, 1] (the targets at s times
+their displacement), the displacement of each loop's output and the static force of each
+input that holds the targets there:
+
+- "nonlinear": the inverse statics of the nonlinear model (flexure.core.inverse_statics) at
+  `points` values of s, a cubic spline through them: the exact path of the mechanism;
+- "linear": the linearised statics at the start, y(s) = s C_yu C_tu^-1 dt with the static
+  compliances C_yu (loop outputs per input) and C_tu (targets per input): what a linear model
+  predicts, exact only for small moves.
+
+The loops then follow y(s(t)) with s(t) a third-order profile from 0 to 1
+(`LoopController(path=...)`), and the feedforward is m y'' + c y' plus, for the nonlinear
+path, the static forces along it (for the linear one, k y of the low-frequency model).
+Units: m and rad (displacements), N and N m (forces).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from .feedback import ControlDesignError, colocated_pairs
+
+KINDS = ("nonlinear", "linear")
+
+
+@dataclass(frozen=True)
+class MovePath:
+    """The loops' output displacements (m) and static forces (N) along a move, s in [0, 1]."""
+
+    s: np.ndarray  # (K,) the progress of the points
+    displacements: np.ndarray  # (K, n_loops) m, zero at s = 0
+    forces: np.ndarray | None  # (K, n_loops) N: the static input forces; None (linear)
+    kind: str
+    targets: dict  # {coordinate: displacement at s = 1}
+
+    def __post_init__(self):
+        object.__setattr__(self, "_spline", CubicSpline(self.s, self.displacements, axis=0))
+        if self.forces is not None:
+            object.__setattr__(self, "_force_spline", CubicSpline(self.s, self.forces, axis=0))
+
+    def displacement(self, s, derivative: int = 0) -> np.ndarray:
+        """y(s) (m), or its `derivative`-th derivative with respect to s; (len(s), n)."""
+        return self._spline(np.clip(np.asarray(s, float), 0.0, 1.0), derivative)
+
+    def static_force(self, s) -> np.ndarray:
+        """The input forces (N) that hold the targets at s; (len(s), n). Nonlinear only."""
+        return self._force_spline(np.clip(np.asarray(s, float), 0.0, 1.0))
+
+    def to_dict(self) -> dict:
+        return {"s": self.s.tolist(), "displacements": self.displacements.tolist(),
+                "forces": None if self.forces is None else self.forces.tolist(),
+                "kind": self.kind, "targets": dict(self.targets)}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> MovePath:
+        forces = data.get("forces")
+        return cls(np.asarray(data["s"], float), np.asarray(data["displacements"], float),
+                   None if forces is None else np.asarray(forces, float), data["kind"],
+                   dict(data["targets"]))
+
+
+def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11,
+              progress=None) -> MovePath:
+    """The loops' path for moving `targets` {coordinate: displacement (m or rad)}.
+
+    Parameters
+    ----------
+    model : Model
+    targets : dict
+        One displacement per loop (input), of the coordinates "NODE.AXIS" to move; a held
+        coordinate has displacement 0.
+    kind : "nonlinear" or "linear"
+    points : int
+        The number of points of the nonlinear path (its spline's knots), s = 0 .. 1.
+    progress : callable, optional
+        Called with the fraction of the points done.
+    """
+    from flexure.core import (  # the models on first use
+        input_columns,
+        inverse_statics,
+        linearize,
+        output_rows,
+        output_value,
+        static_equilibrium,
+    )
+
+    if kind not in KINDS:
+        raise ControlDesignError(f"move path kind must be one of {', '.join(KINDS)}, got "
+                                 f"{kind!r}")
+    pairs = colocated_pairs(model)
+    if len(targets) != len(pairs):
+        raise ControlDesignError(f"{model.name}: {len(targets)} target(s) for {len(pairs)} "
+                                 "loop(s); a move needs one target coordinate per loop")
+    if kind == "nonlinear" and points < 4:
+        raise ControlDesignError(f"a nonlinear move path needs at least 4 points, got {points}")
+    inputs = [pair.input_name for pair in pairs]
+    outputs = [model.outputs[pair.output_index] for pair in pairs]
+    names = list(targets)
+    try:
+        target_index = [model.coordinate_index(name) for name in names]
+    except KeyError as error:
+        raise ControlDesignError(f"{model.source}: move target: {error.args[0]}") from None
+    delta = np.array([float(targets[name]) for name in names])
+    # the move starts where the mechanism rests under its loads, the inputs at zero
+    rest = static_equilibrium(model)
+    if kind == "linear":
+        lin = linearize(model, rest)
+        columns = input_columns(model, rest.x, [model.inputs[p.input_index] for p in pairs])
+        response = np.linalg.solve(lin.K, lin.DF.T @ columns)  # dq per unit input
+        c_yu = output_rows(model, rest.x, lin.DF, outputs) @ response
+        c_tu = lin.DF[target_index] @ response
+        end = c_yu @ np.linalg.solve(c_tu, delta)
+        # a straight line: the spline through three collinear points is the line itself
+        s_values = np.array([0.0, 0.5, 1.0])
+        return MovePath(s_values, np.outer(s_values, end), None, kind, dict(targets))
+    start_values = rest.x[target_index]
+    s_values = np.linspace(0.0, 1.0, points)
+    displacements, forces = [], []
+    point = None
+    for j, s in enumerate(s_values):
+        wanted = dict(zip(names, start_values + s * delta, strict=True))
+        point = inverse_statics(model, wanted, inputs=inputs, start=point)
+        displacements.append([output_value(model, port, point.solution.x)
+                              - output_value(model, port, rest.x) for port in outputs])
+        forces.append(point.forces)
+        if progress is not None:
+            progress((j + 1) / len(s_values))
+    return MovePath(s_values, np.array(displacements), np.array(forces), kind, dict(targets))

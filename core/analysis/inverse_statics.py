@@ -1,0 +1,137 @@
+"""Inverse statics: the input forces that hold chosen coordinates at chosen values.
+
+A compliant mechanism has no separate kinematics: where its actuators must be to put the end
+effector somewhere follows from its static equilibrium. For n inputs (forces u, N or N m, on
+their coordinates) and n target coordinates x_t with desired values x_t*, find u with
+
+    x_t(u) = x_t*,   x(u) the static equilibrium under the scene's loads plus the inputs u
+
+by Newton's method on u. Its Jacobian is the static compliance between the inputs and the
+targets at the current equilibrium,
+
+    d x_t / d u = DF_t K^-1 DF_u^T          (K = K0 + G0, the tangent stiffness on the DOFs)
+
+(DF_t the rows of DF = dx/dq of the targets, DF_u^T the generalised forces of unit inputs: a
+force on its coordinate, a moment about a global axis on its node's Euler parameters), so the
+iteration
+converges quadratically; it stops when every target is within `tolerance` (m or rad). The
+solution also gives every other coordinate there, e.g. the actuator positions that put the
+end effector at a pose: the nonlinear inverse kinematics of the mechanism, with its
+nonlinear statics (the forces) for free.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConvergenceError, FlexureError
+from ..mechanics.mechanics import Mechanics
+from ..mechanics.ports import input_columns
+from ..model import Model
+from ..numerics.blas import blas_threads
+from .linearization import linearize
+from .statics import StaticSolution, static_equilibrium
+
+
+class InverseStaticsError(FlexureError, ValueError):
+    """Inverse statics was asked for with targets or inputs that do not fit the model."""
+
+
+@dataclass(frozen=True)
+class InverseStatics:
+    """The forces that hold the targets, and the equilibrium they give."""
+
+    forces: np.ndarray  # (n,) N or N m, one per input, in the order asked for
+    solution: StaticSolution
+    iterations: int
+    residual: float  # the largest |x_t - x_t*| at the solution, m or rad
+
+    def coordinate(self, name: str) -> float:
+        """The value of the coordinate "NODE.AXIS" at the solution (m or rad)."""
+        return float(self.solution.x[self.solution.model.coordinate_index(name)])
+
+
+def _indices(model, names, what):
+    try:
+        return np.array([model.coordinate_index(name) for name in names], dtype=int)
+    except KeyError as error:
+        raise InverseStaticsError(f"{model.source}: {what}: {error.args[0]}") from None
+
+
+@blas_threads()
+def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
+                    start: InverseStatics | None = None, tolerance: float = 1e-10,
+                    max_iterations: int = 20) -> InverseStatics:
+    """The input forces that put the `targets` coordinates at their values at equilibrium.
+
+    Parameters
+    ----------
+    model : Model
+    targets : dict
+        {"NODE.AXIS": value (m or rad)}, as many as there are inputs used.
+    inputs : sequence of str, optional
+        The names of the inputs to use (default: all of the model's inputs).
+    initial : array, optional
+        The forces (N, N m) to start Newton from (default: zero, or those of `start`).
+    start : InverseStatics, optional
+        The solution for neighbouring targets (a previous point along a path): Newton starts
+        from its forces and each equilibrium from its configuration.
+    tolerance : float
+        The largest allowed |x_t - x_t*| (m or rad).
+    max_iterations : int
+
+    Returns
+    -------
+    InverseStatics
+
+    Raises
+    ------
+    InverseStaticsError for unknown names or a count that does not match; ConvergenceError
+    when Newton does not converge or the compliance between inputs and targets is singular
+    (the inputs cannot move the targets independently).
+    """
+    ports = {port.name: port for port in model.inputs}
+    names = list(ports) if inputs is None else list(inputs)
+    unknown = [name for name in names if name not in ports]
+    if unknown:
+        raise InverseStaticsError(f"{model.source}: no input named {', '.join(unknown)}; the "
+                                  f"model's inputs are {', '.join(ports) or 'none'}")
+    if len(targets) != len(names):
+        raise InverseStaticsError(f"{model.source}: {len(targets)} target(s) for {len(names)} "
+                                  "input(s): inverse statics needs as many targets as inputs")
+    target_index = _indices(model, targets, "target")
+    wanted = np.array([float(v) for v in targets.values()])
+    if not np.all(np.isfinite(wanted)):
+        raise InverseStaticsError(f"{model.source}: every target value must be finite")
+    if initial is None:
+        initial = start.forces if start is not None else np.zeros(len(names))
+    u = np.array(initial, float).reshape(-1)
+    if u.size != len(names):
+        raise InverseStaticsError(f"initial: expected {len(names)} forces, got {u.size}")
+    mech = Mechanics(model)
+    residual = np.inf
+    solution = None if start is None else start.solution
+    for iteration in range(1, max_iterations + 1):
+        held = dict.fromkeys(ports, 0.0) | dict(zip(names, u.tolist(), strict=True))
+        solution = static_equilibrium(model, inputs=held, mechanics=mech, start=solution)
+        error = solution.x[target_index] - wanted
+        residual = float(np.max(np.abs(error)))
+        if residual <= tolerance:
+            return InverseStatics(u, solution, iteration, residual)
+        lin = linearize(model, solution, mechanics=mech)
+        DF = lin.DF
+        # the generalised forces of unit inputs (a moment's depends on the orientation)
+        b = input_columns(model, solution.x, [ports[name] for name in names])
+        compliance = DF[target_index] @ np.linalg.solve(lin.K, DF.T @ b)
+        try:
+            du = np.linalg.solve(compliance, error)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError(
+                f"{model.source}: the inputs {', '.join(names)} cannot move the targets "
+                f"{', '.join(targets)} independently (their compliance is singular)") from None
+        u = u - du
+    raise ConvergenceError(f"{model.source}: inverse statics did not converge in "
+                           f"{max_iterations} iterations (largest target error "
+                           f"{residual:.3e} > {tolerance:.1e})")

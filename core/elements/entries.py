@@ -1,0 +1,64 @@
+"""The C entries through which the compiled engine calls an element's one-element kernels.
+
+An element module writes its maths as two numba kernels on one element's arrays,
+
+    deformations_kernel(x, ref, order, e, De, D2e)     x (m,), ref (width,), e (k,), ...
+    inertia_kernel(x, v, ref, order, p, Dp, acc)       p (P,), Dp (P, m), acc (P,)
+
+and gets the engine's entry points from them here:
+
+    deformations_entry = entries.deformations_entry(deformations_kernel)
+    inertia_entry = entries.inertia_entry(inertia_kernel)
+
+Each entry is a lazily compiled C function (`numerics.jit.entry`) with the signature the
+engine calls through a function pointer (`jit.DEFORMATIONS_ENTRY`, `jit.INERTIA_ENTRY`): it
+wraps the raw pointers as arrays of the element's shape and calls the kernel. The entry is a
+copy of one template function whose global `kernel` is the element's kernel (numba resolves
+globals when it compiles) and whose qualified name is the kernel's own, which keys its entry in
+the compiled-code cache: every element's entry is cached apart. (A closure over the kernel
+would compile the same, but numba keys a closure's cache entry on its pickled cell contents,
+which for a kernel change with every process: the entry would compile at every start.)
+"""
+
+import types
+
+from numba import carray
+
+from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry
+
+kernel = None  # the template's kernel: each entry's globals bind it to one element's kernel
+
+
+def _deformations_template(x, ref, order, e, De, D2e, m, k, width):
+    kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
+           carray(De, (k, m)), carray(D2e, (k, m, m)))
+
+
+def _inertia_template(x, v, ref, order, p, Dp, acc, m, P, width):
+    kernel(carray(x, (m,)), carray(v, (m,)), carray(ref, (width,)), order,
+           carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
+
+
+def _bound(template, element_kernel, signature):
+    """The template as a function of its own whose global `kernel` is `element_kernel`, named
+    after it, as a lazily compiled C entry."""
+    module = element_kernel.__module__.rsplit(".", 1)[-1]
+    name = f"{module}_{element_kernel.__name__}_entry"
+    function = types.FunctionType(template.__code__, {**template.__globals__,
+                                                      "kernel": element_kernel}, name)
+    function.__qualname__ = name
+    function.__doc__ = (f"C entry of {element_kernel.__module__}.{element_kernel.__name__} for "
+                        "the engine (pointers to one element's arrays).")
+    return entry(signature)(function)
+
+
+def deformations_entry(deformations_kernel):
+    """The engine's C entry of an element's `deformations_kernel(x, ref, order, e, De, D2e)`:
+    (x, ref, order, e, De, D2e, m, k, width) with pointers to one element's arrays."""
+    return _bound(_deformations_template, deformations_kernel, DEFORMATIONS_ENTRY)
+
+
+def inertia_entry(inertia_kernel):
+    """The engine's C entry of an element's `inertia_kernel(x, v, ref, order, p, Dp, acc)`:
+    (x, v, ref, order, p, Dp, acc, m, P, width) with pointers to one element's arrays."""
+    return _bound(_inertia_template, inertia_kernel, INERTIA_ENTRY)

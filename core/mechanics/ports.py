@@ -1,0 +1,169 @@
+"""The maths of a model's inputs and outputs (`Port`), in plain numpy.
+
+A port on one coordinate c (SPACAR's INPUTF / OUTX) is linear: an input u puts the force u on
+x_c (N, or N m on a planar angle), an output reads x_c or xdot_c (m, rad, m/s, rad/s).
+
+A port about a global axis k of a 3-D rotational node (Euler parameters lambda, see
+`flexure.core.numerics.rotations`) is not:
+
+- a moment input u (N m) about axis k, fixed in space, has the generalised force on lambda
+
+      f = 2 u E_k(lambda)^T,          omega = 2 E(lambda) lambda_dot  (global frame),
+
+  from its virtual work u delta theta_k = u (2 E_k delta lambda): its power f . lambda_dot =
+  u omega_k is that of a moment on the angular velocity. E is linear in lambda
+  (E_k,a = P_kab lambda_b, `rotations.RATES_TENSOR`), so f has the constant derivative
+  df / dlambda = 2 u P_k, the load stiffness of a moment whose axis does not turn with the
+  node (not symmetric: such a moment is not conservative in 3-D);
+- an angle output is phi_k(lambda), the rotation-vector component about axis k (rad), with the
+  gradient d phi_k / d lambda (`rotations.rotation_vector_derivatives`); its velocity output is
+  the angular velocity omega_k = 2 E_k lambda_dot (rad/s), the rate a gyroscope measures and
+  the power conjugate of the moment input about the same axis. It equals d phi_k / dt about
+  the unrotated orientation (d phi / d lambda = 2 E there) and for any rotation about axis k
+  alone; otherwise they differ by d phi / d theta = I + [phi x] / 2 + O(phi^2).
+
+Linearised at a configuration x the state space takes B = DF^T f / u and C = (d y / d x) DF
+from `input_direction` and `output_gradient`. The compiled twins are in
+`flexure.core.engine.ports`.
+"""
+
+import numpy as np
+
+from ..errors import SceneError
+from ..numerics.rotations import RATES_TENSOR, global_rates_matrix, rotation_vector_derivatives
+
+AXIS_INDEX = {"rx": 0, "ry": 1, "rz": 2}
+
+
+def input_values(model, inputs):
+    """The inputs (n_inputs,) N, N m of `inputs`: a {name: value} dict (the others zero) or a
+    sequence in the model's order. SceneError names an unknown input or a wrong length."""
+    names = [port.name for port in model.inputs]
+    if isinstance(inputs, dict):
+        u = np.zeros(len(names))
+        for name, value in inputs.items():
+            if name not in names:
+                raise SceneError(f"{model.source}: unknown input {name!r}; the model "
+                                 f"{model.name!r} has inputs: {', '.join(names) or '(none)'}")
+            u[names.index(name)] = value
+    else:
+        u = np.array(inputs, dtype=float).reshape(-1)
+        if u.size != len(names):
+            raise SceneError(f"{model.source}: expected {len(names)} inputs "
+                             f"({', '.join(names)}), got {u.size}")
+    if not np.all(np.isfinite(u)):
+        raise SceneError(f"{model.source}: the inputs must be finite, got {u.tolist()}")
+    return u
+
+
+def input_direction(model, port, x):
+    """The generalised force (NX,) of a unit input `port` at coordinates x: a unit force on its
+    coordinate, or 2 E_k(lambda)^T on the Euler parameters of a moment about axis k."""
+    f = np.zeros(model.nx)
+    if port.about_axis:
+        f[list(port.euler)] = 2.0 * global_rates_matrix(x[list(port.euler)])[
+            AXIS_INDEX[port.axis]]
+    else:
+        f[port.coordinate] = 1.0
+    return f
+
+
+def input_forces(model, x, u):
+    """The generalised force (NX,) of the inputs u (n_inputs,) N, N m at coordinates x."""
+    force = np.zeros(model.nx)
+    for port, value in zip(model.inputs, np.atleast_1d(u), strict=True):
+        if port.about_axis:
+            force += value * input_direction(model, port, x)
+        else:
+            force[port.coordinate] += value
+    return force
+
+
+def input_stiffness(model, x, u):
+    """d f / d x (NX, NX) of `input_forces`: 2 u P_k on the Euler parameters of each moment
+    input (zero for the forces on coordinates, which do not depend on x)."""
+    H = np.zeros((model.nx, model.nx))
+    for port, value in zip(model.inputs, np.atleast_1d(u), strict=True):
+        if port.about_axis and value != 0.0:
+            H[np.ix_(port.euler, port.euler)] += 2.0 * value * RATES_TENSOR[
+                AXIS_INDEX[port.axis]]
+    return H
+
+
+def output_value(model, port, x, xdot=None):
+    """The output `port` at coordinates x (and velocities xdot, for a velocity output): x_c
+    or xdot_c; phi_k (rad) or omega_k = 2 E_k lambda_dot (rad/s) about axis k."""
+    velocity = port.quantity == "velocity"
+    if velocity and xdot is None:
+        raise ValueError(f"output {port.name!r} is a velocity: it needs the velocities xdot")
+    if not port.about_axis:
+        return float((xdot if velocity else x)[port.coordinate])
+    lam = x[list(port.euler)]
+    k = AXIS_INDEX[port.axis]
+    if velocity:
+        return float(2.0 * global_rates_matrix(lam)[k] @ xdot[list(port.euler)])
+    return float(rotation_vector_derivatives(lam, order=0)[0][0, k])
+
+
+def output_gradient(model, port, x):
+    """d y / d x (NX,) of a position output at x, or d y / d xdot of a velocity output (which
+    is linear in xdot): a unit row on the coordinate; d phi_k / d lambda or 2 E_k on the Euler
+    parameters of a rotation about axis k."""
+    row = np.zeros(model.nx)
+    if not port.about_axis:
+        row[port.coordinate] = 1.0
+        return row
+    lam = x[list(port.euler)]
+    k = AXIS_INDEX[port.axis]
+    if port.quantity == "velocity":
+        row[list(port.euler)] = 2.0 * global_rates_matrix(lam)[k]
+    else:
+        row[list(port.euler)] = rotation_vector_derivatives(lam, order=1)[1][0, k]
+    return row
+
+
+def output_rows(model, x, DF, ports=None):
+    """C (n_outputs, NDOF): d y / d q of the outputs (`ports`, default the model's) at a
+    configuration with coordinates x and DF = dx/dq; position and velocity outputs alike (a
+    velocity output's row multiplies qdot)."""
+    ports = model.outputs if ports is None else ports
+    C = np.zeros((len(ports), DF.shape[1]))
+    for row, port in enumerate(ports):
+        if port.about_axis:
+            euler = list(port.euler)
+            C[row] = output_gradient(model, port, x)[euler] @ DF[euler]
+        else:
+            C[row] = DF[port.coordinate]
+    return C
+
+
+def input_columns(model, x, ports=None):
+    """b (NX, n_inputs): the generalised force of a unit value of each input (`ports`,
+    default the model's) at coordinates x (`input_direction`)."""
+    ports = model.inputs if ports is None else ports
+    b = np.zeros((model.nx, len(ports)))
+    for column, port in enumerate(ports):
+        if port.about_axis:
+            b[:, column] = input_direction(model, port, x)
+        else:
+            b[port.coordinate, column] = 1.0
+    return b
+
+
+def port_description(model, port, *, is_input):
+    """What a port is, in words (the FMU's variable descriptions)."""
+    if port.about_axis:
+        node = model.coordinate_node[port.euler[0]]
+        axis = port.axis[1]
+        if is_input:
+            return f"moment about the global {axis} axis on node {node}"
+        if port.quantity == "velocity":
+            return f"angular velocity about the global {axis} axis of node {node}"
+        return f"rotation about the global {axis} axis of node {node} (rotation vector component)"
+    preposition = "on" if is_input else "of"
+    return f"{port.quantity} {preposition} coordinate {model.coordinate_names[port.coordinate]}"
+
+
+__all__ = ["AXIS_INDEX", "input_columns", "input_direction", "input_forces",
+           "input_stiffness", "input_values", "output_gradient", "output_rows", "output_value",
+           "port_description"]
