@@ -45,6 +45,24 @@ class LoopResult:
         """The largest |r - y| (m) over the samples and the loops."""
         return float(np.max(np.abs(self.error)))
 
+    @property
+    def loop_strokes(self) -> np.ndarray:
+        """Each loop's stroke (m): the largest |r_k - r_0| of its reference, (n_loops,)."""
+        return np.max(np.abs(self.reference - self.reference[0]), axis=0)
+
+    def per_loop(self) -> list[dict]:
+        """Each loop's stroke, largest |error| and their ratio against the target."""
+        names = self.design.get("loops", [])
+        rows = []
+        for k, (stroke, error) in enumerate(zip(self.loop_strokes,
+                                                np.max(np.abs(self.error), axis=0),
+                                                strict=True)):
+            ratio = float(error / stroke) if stroke > 0 else float("inf")
+            rows.append({"loop": names[k] if k < len(names) else str(k),
+                         "stroke": float(stroke), "max_abs_error": float(error),
+                         "error_ratio": ratio, "passed": bool(ratio <= TARGET)})
+        return rows
+
     def summary(self) -> dict:
         """The dictionary `flexure loop --json` prints (SI units)."""
         ratio = self.max_abs_error / abs(self.stroke)
@@ -70,6 +88,7 @@ class LoopResult:
             "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
             "units": self.units,
+            "per_loop": self.per_loop(),
         }
 
     def plot(self, path, *, title: str | None = None):
@@ -79,6 +98,8 @@ class LoopResult:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
+        if self.settings.get("path"):
+            return self._plot_loops(path, title=title)
         axis = self.settings.get("axis", 0)
         length, force_unit = self.units["position"], self.units["force"]
         what = "angle" if length == "rad" else "position"
@@ -112,6 +133,41 @@ class LoopResult:
             f"max |e| = {s['max_abs_error'] * 1e6:.3g} u{length} = "
             f"{100 * s['error_ratio']:.3g} % "
             f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"), fontsize=10)
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path
+
+    def _plot_loops(self, path, *, title=None):
+        """Every loop's reference, error (against 0.1 % of its stroke) and force."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        length, force_unit = self.units["position"], self.units["force"]
+        names = self.design.get("loops", [])
+        fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+        for k in range(self.reference.shape[1]):
+            label = names[k].split(" -> ")[-1] if k < len(names) else str(k)
+            axes[0].plot(self.t, (self.reference[:, k] - self.reference[0, k]) * 1e3,
+                         label=label)
+            stroke = self.loop_strokes[k]
+            axes[1].plot(self.t, self.error[:, k] / (TARGET * stroke) if stroke > 0
+                         else 0 * self.t, label=label)
+            axes[2].step(self.t, self.force[:, k], where="post", label=label)
+        axes[0].set_ylabel(f"reference - start (m{length})")
+        axes[0].legend(loc="upper left", ncol=3, fontsize=8)
+        axes[1].axhline(1.0, color="r", lw=0.8, ls=":")
+        axes[1].axhline(-1.0, color="r", lw=0.8, ls=":", label="target")
+        axes[1].set_ylabel("error / (0.1 % of its stroke)")
+        axes[2].set_ylabel(f"force ({force_unit})")
+        axes[2].set_xlabel("time (s)")
+        worst = max(self.per_loop(), key=lambda row: row["error_ratio"])
+        fig.suptitle(title or (
+            f"{self.settings.get('scene')} ({self.settings.get('plant')}): every loop along "
+            f"the move; worst {worst['loop']}: {100 * worst['error_ratio']:.3g} % of its "
+            f"stroke (target 0.1 %)"), fontsize=10)
         fig.tight_layout()
         fig.savefig(path, dpi=110)
         plt.close(fig)

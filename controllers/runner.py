@@ -113,6 +113,8 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
                 "feedforward_kind": kind or "none",
                 "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
                 "method": method, "rtol": rtol,
+                "path": None if path is None else {"kind": path.kind,
+                                                   "targets": dict(path.targets)},
                 # the moving loop's units: a force (N) and a position (m), or on a planar
                 # angle a moment (N m) and an angle (rad)
                 "units": {"force": model.inputs[moving.input_index].unit.replace(".", " "),

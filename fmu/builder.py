@@ -3,12 +3,14 @@
 How an FMU carries "the code it needs"
 -------------------------------------
 A pythonfmu FMU runs in the host's Python (or, in a non-Python host, in the libpython that is
-preloaded), so numpy, scipy, scikit-sundae and python-control must be installed there anyway
-(`flexure fmu env` prints what a host needs). flexure itself is *bundled*: the FMU's
-resources hold a copy of the flexure packages it uses (`core`, the runtime part of `fmu`, and
-on request `controllers`) under the package name `_flexure_<hash>`, where the hash is taken
-over the bundled sources. The slave script's `flexure` imports are rewritten to that name.
-So:
+preloaded), so the packages the bundled flexure imports must be installed there: the FMU lists
+them, pinned, in resources/requirements.txt and its model description, checks them before its
+slave runs (`flexure.fmu.requirements`; `flexure fmu doctor` checks them from the command
+line; `flexure fmu env` prints what a non-Python host needs). flexure itself is *bundled*:
+the FMU's resources hold a copy of the flexure packages it uses (`core`, the runtime part of
+`fmu`, and on request `controllers`) under the package name `_flexure_<hash>`, where the hash
+is taken over the bundled sources. The slave script's `flexure` imports are rewritten to that
+name. So:
 
 - an FMU does not depend on the flexure version installed in the host, and keeps giving the
   results it was built (and regression-tested) with;
@@ -34,15 +36,53 @@ from pathlib import Path
 from flexure.core import FlexureError
 
 from .model_description import fix_model_description
+from .requirements import FILE_NAME, format_requirements, runtime_requirements
 
 # The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
 FMU_RUNTIME_MODULES = ("slave.py", "slave_states.py", "pythonfmu_workarounds.py",
-                       "scene_slave.py", "state_format.py")
+                       "scene_slave.py", "state_format.py", "requirements.py")
+# Lazy (PEP 562), as flexure.fmu's own: the launcher imports `requirements` (the standard
+# library only) before anything may import numpy.
 FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
 
-from .slave import SafeSlave, UnitReal, escape_log
+import importlib
 
 __all__ = ["SafeSlave", "UnitReal", "escape_log"]
+
+
+def __getattr__(name):
+    if name not in __all__:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(".slave", __name__), name)
+'''
+# The platforms whose binaries an FMU keeps: those flexure's FMUs were run on (docs/fmu.md).
+# pythonfmu 0.7.0 ships binaries for linux64 and win64 and copies both into every FMU.
+TRIED_PLATFORMS = ("linux64",)
+
+# The slave script pythonfmu's binary imports (resources/<stem>.py): it checks the FMU's
+# requirements (flexure.fmu.requirements) before the slave script proper runs in its namespace
+# and locals, as if it were this file. Both travel as text in it: pythonfmu's binary runs it
+# again at every instantiation, in the namespace of the first import, whose unpacked folder
+# may be gone by then. The slave script is also shipped as <stem>.slave.py, the file its
+# tracebacks name.
+LAUNCHER = '''"""The slave script of this FMU, written by flexure's FMU builder.
+
+It checks that this Python has what the FMU imports ({requirements}), then runs the slave
+script {source} (a copy of it is beside this file); if something is missing, the slave class
+is a stand-in that logs what and fails.
+"""
+
+from {package}.fmu.requirements import stand_in as _stand_in
+from {package}.fmu.requirements import unmet_requirements as _unmet_requirements
+
+_REQUIREMENTS = {requirements_text!r}
+_SOURCE = {source_text!r}
+
+_unmet = _unmet_requirements(_REQUIREMENTS, __file__)
+if _unmet is None:
+    exec(compile(_SOURCE, __file__[: -len(".py")] + ".slave.py", "exec"), globals(), locals())
+else:
+    MissingRequirements = _stand_in(_unmet)
 '''
 
 
@@ -57,6 +97,20 @@ from flexure.fmu.pythonfmu_workarounds import (  # noqa: E402
 
 _keep_script_namespace(globals(), locals())
 """
+
+
+def _requirements_header(bundle):
+    from flexure.core import __version__
+
+    what = (f"the flexure {__version__} bundled in it ({', '.join(bundle)})" if bundle
+            else "its slave script")
+    return (f"The Python packages this FMU imports: {what}.\n"
+            f"Pinned to the versions it was built with (Python "
+            f"{'.'.join(map(str, sys.version_info[:3]))} on {' '.join(TRIED_PLATFORMS)}); "
+            "install them into "
+            "the Python\nthat runs the FMU:  python -m pip install -r requirements.txt\n"
+            "A version at or above the one after 'needs' works too: `flexure fmu doctor "
+            "FMU` checks.")
 
 
 def _package_dir(name):
@@ -109,7 +163,8 @@ def write_bundle(folder, parts=("core", "fmu")):
 
 
 def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=(),
-                    bundle=("core", "fmu"), validate: bool = True, **options) -> Path:
+                    bundle=("core", "fmu"), validate: bool = True, requirements=(),
+                    platforms=TRIED_PLATFORMS, units=None, **options) -> Path:
     """Build an FMI 2.0 co-simulation FMU from a pythonfmu slave script.
 
     Parameters
@@ -127,6 +182,16 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
         (then the host's Python must have flexure installed).
     validate : bool, optional
         Run fmpy's validation and raise `FMUBuildError` listing the problems.
+    requirements : iterable of str, optional
+        Distributions the script itself imports beyond what the bundle needs, each
+        "DISTRIBUTION" or "DISTRIBUTION:MODULE" (e.g. "control"); pinned to their installed
+        versions in resources/requirements.txt with the bundle's own
+        (`flexure.fmu.requirements`), and checked before the slave is instantiated.
+    platforms : iterable of str, optional
+        The platforms whose pythonfmu binaries the FMU keeps (default `TRIED_PLATFORMS`,
+        those flexure's FMUs were run on); pythonfmu copies all it has.
+    units : dict, optional
+        {variable name: unit} for Real variables the slave declares without a unit.
     **options
         pythonfmu's CoSimulation flags; state get/set and serialisation default to True.
 
@@ -147,6 +212,10 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
                                 "fmu or controllers")
     if bundle and "fmu" not in bundle:  # the slave base and the namespace workaround
         bundle += ("fmu",)
+    try:
+        needs = runtime_requirements(bundle, requirements)
+    except ValueError as error:
+        raise FMUBuildError(f"{script_path}: {error}") from None
     # pythonfmu imports the script by its name to find the class: a module of that name
     # already loaded in this process (another FMU's) would be taken instead. Set it aside.
     shadowed = sys.modules.pop(script_path.stem, None)
@@ -161,9 +230,21 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
             package_dir = write_bundle(source, tuple(bundle))
             package = package_dir.name
             files.append(package_dir)
-        text = script_path.read_text() + KEEP_NAMESPACE
+        listed = format_requirements(needs, _requirements_header(bundle))
+        (source / FILE_NAME).write_text(listed)
+        files.append(source / FILE_NAME)
+        text = script_path.read_text()
         script = source / script_path.name
-        script.write_text(_rewrite_imports(text, package) if package else text)
+        if package:  # the launcher checks the requirements, then runs the script
+            text = _rewrite_imports(text, package)
+            (source / f"{script_path.stem}.slave.py").write_text(text)
+            files.append(source / f"{script_path.stem}.slave.py")
+            launcher = LAUNCHER.format(package=package, source=f"{script_path.stem}.slave.py",
+                                       requirements=FILE_NAME, requirements_text=listed,
+                                       source_text=text)
+            script.write_text(launcher + _rewrite_imports(KEEP_NAMESPACE, package))
+        else:
+            script.write_text(text + KEEP_NAMESPACE)
         try:
             built = Path(FmuBuilder.build_FMU(script, dest=dest, project_files=files,
                                               **options))
@@ -179,7 +260,8 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
             sys.path[:] = path_before
             if shadowed is not None:
                 sys.modules[script_path.stem] = shadowed
-    _patch_model_description(built)
+    _patch_model_description(built, requirements=needs, units=units,
+                             platforms=tuple(platforms))
     if validate:
         problems = validate_fmu_file(built)
         if problems:
@@ -194,17 +276,30 @@ def validate_fmu_file(path: str | Path) -> list[str]:
     return [str(p) for p in validate_fmu(str(path))]
 
 
-def _patch_model_description(path):
-    """Rewrite the FMU zip with a completed modelDescription.xml."""
+def _patch_model_description(path, *, requirements=None, units=None,
+                             platforms=TRIED_PLATFORMS):
+    """Rewrite the FMU zip with a completed modelDescription.xml (its requirements and the
+    missing units added) and the binaries of `platforms` only."""
     path = Path(path)
     temporary = path.with_suffix(".fmu.tmp")
+    kept = []
     with zipfile.ZipFile(path) as source, zipfile.ZipFile(
             temporary, "w", compression=zipfile.ZIP_DEFLATED) as target:
         for item in source.infolist():
+            parts = item.filename.split("/")
+            if parts[0] == "binaries" and len(parts) > 2:
+                if parts[1] not in platforms:
+                    continue
+                kept.append(parts[1])
             data = source.read(item.filename)
             if item.filename == "modelDescription.xml":
-                data = fix_model_description(data)
+                data = fix_model_description(data, requirements=requirements, units=units)
             target.writestr(item, data)
+    if not kept:
+        temporary.unlink()
+        path.unlink()
+        raise FMUBuildError(f"{path}: pythonfmu has no binary for the platforms "
+                            f"{', '.join(platforms) or '(none given)'}")
     shutil.move(temporary, path)
 
 

@@ -1,8 +1,9 @@
-"""`flexure fmu build SCENE -o NAME.fmu` and `flexure fmu env`.
+"""`flexure fmu build SCENE -o NAME.fmu`, `flexure fmu env`, `check` and `doctor`.
 
     flexure fmu build stage_planar_3dof -o stage.fmu [--tunable sections.leaf.EdA ...]
     flexure fmu env [--json | --env]      # what a JVM / Rust / C host needs
     flexure fmu check NAME.fmu NAME_in.csv NAME_ref.csv [--update]   # regression test
+    flexure fmu doctor NAME.fmu [--native] [--json]   # can this Python host the FMU?
 """
 
 import os
@@ -78,6 +79,22 @@ def register(subparsers):
                        help="communication step of a reference written with --update (s)")
     check.set_defaults(run=run_check)
 
+    doctor = commands.add_parser(
+        "doctor", help="check that this Python can host an FMU: its requirements, platform, "
+                       "binary",
+        description="Check this Python as a host of FMU: its platform among the FMU's "
+                    "binaries, the Python version and each package of the FMU's "
+                    "requirements (resources/requirements.txt) importable at a version it "
+                    "works with, the pythonfmu binary loadable, and what a non-Python host "
+                    "needs (flexure fmu env). Prints one row per check and a fix per problem; "
+                    "exit code 0 when every check passes, 1 when one fails.")
+    doctor.add_argument("fmu")
+    doctor.add_argument("--native", action="store_true",
+                        help="fail, not warn, when a JVM, Rust or C host could not run it "
+                             "(no shared libpython, a package off `flexure fmu env`'s path)")
+    doctor.add_argument("--json", action="store_true", help="the rows as JSON")
+    doctor.set_defaults(run=run_doctor)
+
 
 def run_build(args):
     from flexure.core.scene.building import parse_toml, scene_path
@@ -146,6 +163,29 @@ def run_check(args):
     if not problems:
         print(f"{args.fmu}: matches {args.reference_csv}")
     return 1 if problems else 0
+
+
+def run_doctor(args):
+    from flexure.core.reporting.tables import format_table, print_json
+
+    from .doctor import as_dicts, diagnose, failed
+
+    rows = diagnose(args.fmu, native=args.native)
+    if args.json:
+        print_json({"fmu": args.fmu, "passed": not failed(rows), "checks": as_dicts(rows)},
+                   command="flexure fmu doctor")
+        return 1 if failed(rows) else 0
+    print(format_table(["check", "status", "found"],
+                       [(row.check, row.status, row.found) for row in rows]))
+    problems = [row for row in rows if row.fix]
+    if problems:
+        print("\nto fix:")
+        for row in problems:
+            print(f"  {row.check} ({row.status}): {row.fix}")
+    count = sum(row.status not in ("OK", "WARN") for row in rows)
+    print(f"\n{args.fmu}: " + (f"{count} of {len(rows)} checks failed" if count else
+                                f"every check passed ({len(rows)})"))
+    return 1 if failed(rows) else 0
 
 
 def run_env(args):

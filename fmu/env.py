@@ -5,8 +5,9 @@ code in whatever interpreter it finds. So a JVM, Rust or C host must:
 
 - preload libpython, so its symbols are in the global scope (`LD_PRELOAD`);
 - point the embedded interpreter at its standard library (`PYTHONHOME`, the base prefix)
-  and at the packages the FMU imports: numpy, scipy, scikit-sundae, python-control
-  (`PYTHONPATH`, the site-packages of the Python that built the FMU).
+  and at the packages the FMU imports, which it lists in resources/requirements.txt
+  (`PYTHONPATH`, the site-packages of this Python; `flexure fmu doctor FMU --native` checks
+  that they are there).
 
 flexure itself travels inside the FMU (see `flexure.fmu.builder`). A Python host (fmpy,
 libcosimpy) needs none of this: the FMU then uses the host's own interpreter.
@@ -44,9 +45,13 @@ def fmu_environment() -> dict[str, str]:
 
 
 def format_environment(environment, *, style="sh"):
-    """The environment as `export` lines ("sh"), JSON ("json") or `env` arguments ("env")."""
+    """The environment as `export` lines and a comment on what they are for ("sh"), JSON
+    ("json") or `env` arguments ("env")."""
     if style == "json":
         return json.dumps(environment, indent=2)
     if style == "env":
         return " ".join(f"{k}={v}" for k, v in environment.items())
-    return "\n".join(f"export {k}='{v}'" for k, v in environment.items())
+    return "\n".join([f"export {k}='{v}'" for k, v in environment.items()] + [
+        "# What a JVM, Rust or C host of flexure's FMUs needs: libpython preloaded, and this",
+        "# Python's standard library and site-packages, where each FMU's packages (its",
+        "# resources/requirements.txt) must be installed: flexure fmu doctor FMU --native"])

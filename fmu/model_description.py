@@ -11,7 +11,12 @@ default variabilities and initials. `fix_model_description` adds them:
 - <InitialUnknowns>: every output whose initial is approx or calculated (or absent), and every
   calculatedParameter, in value-reference order (FMI 2.0 section 2.2.8);
 - variableNamingConvention "flat": flexure's variable names follow the scene's keys
-  ("sections.leaf.EdA", "nodes.3.mass"), which the structured grammar rejects.
+  ("sections.leaf.EdA", "nodes.3.mass"), which the structured grammar rejects;
+- on request, a unit for Real variables the slave declared without one (`units`), and the
+  FMU's Python requirements (`flexure.fmu.requirements`): appended to the description
+  attribute, which hosts show (`fmpy info`), and listed in <VendorAnnotations><Tool
+  name="flexure"><PythonRequirements>, the place FMI 2.0 gives a tool's own data (fmpy's
+  schema validation accepts it).
 """
 
 import xml.etree.ElementTree as ET
@@ -37,6 +42,9 @@ BASE_UNITS = {
     "N.s/m": {"kg": 1, "s": -1},
     "Pa": {"kg": 1, "m": -1, "s": -2},
     "kg/m": {"kg": 1, "m": -1},
+    "kg.m": {"kg": 1, "m": 1},
+    "m2": {"m": 2},
+    "m3": {"m": 3},
     "1": {},
     "A": {"A": 1},  # voice-coil actuators: coil current, drive signal, Km, R, L
     "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
@@ -47,19 +55,25 @@ BASE_UNITS = {
     "H": {"kg": 1, "m": 2, "s": -2, "A": -2},
 }
 
+REQUIREMENTS_FILE = "resources/requirements.txt"
+
 # The element order of fmiModelDescription (FMI 2.0, fmi2ModelDescription.xsd).
 _ORDER = ["ModelExchange", "CoSimulation", "UnitDefinitions", "TypeDefinitions",
           "LogCategories", "DefaultExperiment", "VendorAnnotations", "ModelVariables",
           "ModelStructure"]
 
 
-def fix_model_description(xml_text: str) -> str:
+def fix_model_description(xml_text: str, *, requirements=None, units=None) -> bytes:
     """Return the completed modelDescription.xml text (see the module docstring).
 
     Parameters
     ----------
     xml_text : str or bytes
         The modelDescription.xml pythonfmu wrote.
+    requirements : flexure.fmu.requirements.Requirements, optional
+        The FMU's Python requirements, to describe.
+    units : dict, optional
+        {variable name: unit} for Real variables that have none.
 
     Returns
     -------
@@ -69,6 +83,7 @@ def fix_model_description(xml_text: str) -> str:
     root = ET.fromstring(xml_text)
     root.set("variableNamingConvention", "flat")
     variables = root.find("ModelVariables").findall("ScalarVariable")
+    extra = dict(units or {})
     units = []
     for variable in variables:
         causality = variable.get("causality", "local")
@@ -83,6 +98,8 @@ def fix_model_description(xml_text: str) -> str:
             variable.set("variability", variability)
         if causality == "parameter" and variable.get("initial") is None:
             variable.set("initial", "exact")
+        if kind.tag == "Real" and not kind.get("unit") and variable.get("name") in extra:
+            kind.set("unit", extra[variable.get("name")])
         unit = kind.get("unit")
         if unit and unit not in units:
             units.append(unit)
@@ -115,8 +132,32 @@ def fix_model_description(xml_text: str) -> str:
             ET.SubElement(element, "Unknown", index=str(index))
         # Schema order inside ModelStructure: Outputs, Derivatives, InitialUnknowns.
         structure.append(element)
+    if requirements is not None:
+        _describe_requirements(root, requirements)
     ET.indent(root, space="  ")
     return ET.tostring(root, encoding="utf-8", xml_declaration=True)
+
+
+def _describe_requirements(root, requirements):
+    """The requirements in the description attribute and in a flexure VendorAnnotation."""
+    pins = [f"Python >= {requirements.python}"] if requirements.python else []
+    pins += [item.pin() for item in requirements.items]
+    description = (root.get("description") or "").rstrip(". ")
+    root.set("description", f"{description}{'. ' if description else ''}Needs in the host's "
+                            f"Python ({REQUIREMENTS_FILE}): {', '.join(pins)}")
+    for old in root.findall("VendorAnnotations"):
+        root.remove(old)
+    annotations = ET.Element("VendorAnnotations")
+    tool = ET.SubElement(annotations, "Tool", name="flexure")
+    listed = ET.SubElement(tool, "PythonRequirements", file=REQUIREMENTS_FILE)
+    if requirements.python:
+        listed.set("python", f">={requirements.python}")
+    for item in requirements.items:
+        entry = ET.SubElement(listed, "Requirement", distribution=item.distribution,
+                              version=item.version, module=item.module)
+        if item.minimum:
+            entry.set("minimum", item.minimum)
+    _insert_in_order(root, annotations)
 
 
 def _insert_in_order(root, element):

@@ -201,3 +201,76 @@ def _cell_holds(cell, owner):
         return cell.cell_contents is owner
     except ValueError:  # an empty cell (a variable not yet assigned)
         return False
+
+
+# pythonfmu 0.7.0's binary passes every message to the host's logger only when the host
+# instantiated with loggingOn = fmi2True (PyLogger::log drops everything otherwise, errors
+# included, where the FMI 2.0 practice, e.g. the Reference FMUs, logs errors regardless), and
+# an exception in the slave's constructor reaches the host only as that dropped message: the
+# host sees "Failed to instantiate model" and nothing else. `log_to_host` calls the host's own
+# logger callback instead. The binary hands the constructor the address of its logger object
+# (kwargs["logger"]), an Fmi2Logger (PySlaveInstance.cpp, fmi2.cpp):
+#
+#     offset  0  vtable pointer             offset 16  std::string instanceName_ (data, size)
+#     offset  8  bool debugLogging_         offset 48  std::vector<std::string> categories_
+#     offset 72  const fmi2CallbackFunctions* f_  -> {logger, allocateMemory, freeMemory,
+#                                                     stepFinished, componentEnvironment}
+#
+# That layout is the one of the linux64 binary of pythonfmu 0.7.0, identified by its SHA-256;
+# any other binary (another version or platform) is not read, and the message goes to stderr.
+PYTHONFMU_LOGGER_LAYOUTS = {
+    # pythonfmu 0.7.0, binaries/linux64/libpythonfmu-export.so
+    "4be156a552c16f30eb4395805c59855d8d4086056d0f165442565f6c5fbac0c9":
+        {"name": 16, "callbacks": 72, "component_environment": 32},
+}
+FMI2_ERROR = 3  # fmi2Status
+
+
+def log_to_host(kwargs, message, status=FMI2_ERROR) -> bool:
+    """Log `message` through the host's FMI logger callback from a slave's constructor, even
+    when the host switched debug logging off; False if this binary's layout is not known.
+
+    `kwargs` are the constructor's keyword arguments (instance_name, resources, logger). The
+    instance name stored in the logger object must equal kwargs["instance_name"], or nothing
+    is called.
+    """
+    try:
+        import ctypes
+        import hashlib
+        import os
+
+        address, name = kwargs.get("logger"), kwargs.get("instance_name")
+        resources = kwargs.get("resources")
+        if not (isinstance(address, int) and address and isinstance(name, str) and resources
+                and sys.platform == "linux"):
+            return False
+        folder = os.path.join(os.path.dirname(os.path.normpath(resources)), "binaries",
+                              "linux64")
+        binaries = [os.path.join(folder, f) for f in os.listdir(folder) if f.endswith(".so")]
+        if len(binaries) != 1:
+            return False
+        with open(binaries[0], "rb") as handle:
+            layout = PYTHONFMU_LOGGER_LAYOUTS.get(hashlib.sha256(handle.read()).hexdigest())
+        if layout is None:
+            return False
+
+        def word(at):
+            return ctypes.c_void_p.from_address(at).value or 0
+
+        encoded = name.encode()
+        data, size = word(address + layout["name"]), word(address + layout["name"] + 8)
+        if not data or size != len(encoded) or ctypes.string_at(data, size) != encoded:
+            return False
+        callbacks = word(address + layout["callbacks"])
+        logger = word(callbacks) if callbacks else 0
+        if not logger:
+            return False
+        prototype = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
+                                     ctypes.c_char_p, ctypes.c_char_p)
+        category = b"logStatusError" if status == FMI2_ERROR else b"logAll"
+        # the host formats the message as printf does: '%' doubled
+        prototype(logger)(word(callbacks + layout["component_environment"]), encoded, status,
+                          category, str(message).replace("%", "%%").encode())
+        return True
+    except Exception:  # noqa: BLE001 -- a constructor that reports must not fail otherwise
+        return False

@@ -150,9 +150,12 @@ class SceneSlave(SafeSlave):
                       description="relative tolerance of the integrator",
                       getter=lambda: self.rtol,
                       setter=lambda value: setattr(self, "rtol", value))
-        self.add_real("integrator.atol", causality="parameter", start=self.atol,
-                      description="absolute tolerance on q and qdot (0: the simulator's "
-                                  "default, scaled from rtol)",
+        # unit "1": one number compared with every state in that state's SI unit (m, rad,
+        # m/s, rad/s, A for a coil current); FMI 2.0 has no unit for such a mix
+        self.add_real("integrator.atol", causality="parameter", unit="1", start=self.atol,
+                      description="absolute tolerance on q and qdot (and the coil currents), "
+                                  "each in its SI unit (0: the simulator's default, scaled "
+                                  "from rtol)",
                       getter=lambda: self.atol,
                       setter=lambda value: setattr(self, "atol", value))
         self.add_integer("integrator.max_steps", start=self.max_steps,

@@ -149,6 +149,12 @@ def test_model_description_is_valid_and_carries_only_the_scene(scene, scene_fmus
     assert len(md.modelVariables) == len(inputs) + len(outputs) + len(parameters)
     units = {u.name for u in md.unitDefinitions}
     assert {v.unit for v in md.modelVariables if v.unit} <= units
+    # every Real has its unit ("1" for the tolerances); FMI 2.0 gives Integer and String
+    # variables none
+    assert [v.name for v in md.modelVariables if v.type == "Real" and not v.unit] == []
+    assert {v.name for v in md.modelVariables if v.type != "Real"} == {
+        "integrator.method", "integrator.max_steps"}
+    assert by_name["integrator.atol"].unit == by_name["integrator.rtol"].unit == "1"
     assert [u.variable.name for u in md.initialUnknowns] == outputs
 
 

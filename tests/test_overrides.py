@@ -230,10 +230,11 @@ def test_loop_runs_on_the_changed_scene(capsys):
 
 
 def embedded_scene(path):
-    """The scene dictionary a scene FMU carries (the string literal its slave script holds)."""
+    """The scene dictionary a scene FMU carries (the string literal its slave script holds;
+    resources/<scene>_<digest>.py is the launcher that runs it)."""
     with zipfile.ZipFile(path) as archive:
         script = next(name for name in archive.namelist()
-                      if name.startswith(f"resources/{SCENE}_") and name.endswith(".py"))
+                      if name.startswith(f"resources/{SCENE}_") and name.endswith(".slave.py"))
         source = archive.read(script).decode()
     namespace = {}
     exec("scene_toml = " + source.split("scene_toml = ", 1)[1].split("\n", 1)[0], namespace)

@@ -124,13 +124,17 @@ def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
         DF = lin.DF
         # the generalised forces of unit inputs (a moment's depends on the orientation)
         b = input_columns(model, solution.x, [ports[name] for name in names])
-        compliance = DF[target_index] @ np.linalg.solve(lin.K, DF.T @ b)
-        try:
-            du = np.linalg.solve(compliance, error)
-        except np.linalg.LinAlgError:
+        response = np.linalg.solve(lin.K, DF.T @ b)  # dq per unit input
+        compliance = DF[target_index] @ response
+        # the inputs' own compliance (work-conjugate: m/N, rad/(N m)) sets the scale of
+        # "cannot move": the targets' must not be smaller by the round-off of the solve
+        own = np.linalg.norm((DF.T @ b).T @ response, 2)
+        smallest = np.linalg.svd(compliance, compute_uv=False)[-1]
+        if not smallest > 1e-9 * own:
             raise ConvergenceError(
                 f"{model.source}: the inputs {', '.join(names)} cannot move the targets "
-                f"{', '.join(targets)} independently (their compliance is singular)") from None
+                f"{', '.join(targets)} independently (their compliance is singular)")
+        du = np.linalg.solve(compliance, error)
         u = u - du
     raise ConvergenceError(f"{model.source}: inverse statics did not converge in "
                            f"{max_iterations} iterations (largest target error "

@@ -20,7 +20,10 @@ The quantities (columns after the parameters, SI units):
   static equilibrium under the scene's loads;
 - modes: `mode.1 [Hz]` ... `mode.N [Hz]`, the lowest N natural frequencies there (blank past
   the model's DOF count);
-- buckling: `buckling.1 [-]`, the first load factor of the reference load (blank if none).
+- buckling: `buckling.1 [-]`, the first load factor of the reference load (blank if none);
+- simulate, loop, and any other registered analysis: the columns it declares
+  (`flexure.core.analysis.sweep_analyses`: a step response here; the closed loop registered by
+  flexure.controllers), with its options in `settings` {analysis: {option: value}}.
 
 A row keeps what was computed before a failure. Dask is imported only when a sweep runs on it.
 """
@@ -33,10 +36,12 @@ import numpy as np
 
 from ..errors import FlexureError, UsageError
 from ..scene.overrides import parse_value
+from . import sweep_analyses
 
-__all__ = ["ANALYSES", "columns", "evaluate_point", "grid", "parse_parameter", "run_sweep"]
+__all__ = ["ANALYSES", "analysis_names", "columns", "evaluate_point", "grid",
+           "parse_parameter", "run_sweep"]
 
-ANALYSES = ("static", "modes", "buckling")
+ANALYSES = ("static", "modes", "buckling")  # on the static equilibrium; the others registered
 DEFAULT_MODES = 6
 # the significant digits of a value of START:STOP:N, so that 0.3e-3:0.8e-3:6 gives 0.0004 and not
 # linspace's 0.00039999999999999996 (a value the table and a user's --set both write plainly)
@@ -87,8 +92,14 @@ def grid(parameters) -> list[dict]:
     return points
 
 
-def columns(model, analyses, modes=DEFAULT_MODES) -> list[str]:
-    """The quantity columns of a sweep of `model`'s scene (see the module's docstring)."""
+def analysis_names() -> tuple[str, ...]:
+    """Every analysis a sweep can run: ANALYSES, then the registered ones (simulate, loop...)."""
+    return ANALYSES + tuple(name for name in sweep_analyses.available() if name not in ANALYSES)
+
+
+def columns(model, analyses, modes=DEFAULT_MODES, settings=None) -> list[str]:
+    """The quantity columns of a sweep of `model`'s scene (see the module's docstring); a
+    UsageError for an unknown analysis or options that do not fit the scene."""
     names = []
     if "static" in analyses:
         names += [f"static.{port.name} [{_unit(model, port)}]" for port in model.outputs]
@@ -96,6 +107,11 @@ def columns(model, analyses, modes=DEFAULT_MODES) -> list[str]:
         names += [f"mode.{i} [Hz]" for i in range(1, modes + 1)]
     if "buckling" in analyses:
         names.append("buckling.1 [-]")
+    for name in analyses:
+        if name not in ANALYSES:
+            analysis = sweep_analyses.find(name)
+            names += analysis.columns(model, sweep_analyses.option_values(
+                analysis, (settings or {}).get(name)))
     return names
 
 
@@ -111,11 +127,12 @@ def _unit(model, port):
 
 def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes"),
                    modes: int = DEFAULT_MODES, source: str = "<dict>",
-                   default_name: str = "scene") -> dict:
+                   default_name: str = "scene", settings: dict | None = None) -> dict:
     """The quantities of one grid point: {column: value} (floats, SI units) and "status".
 
     `scene` is the scene dictionary, `overrides` the point's {dotted key: value} (its
-    parameters and any fixed overrides); `source` and `default_name` as for `build_model`.
+    parameters and any fixed overrides); `source` and `default_name` as for `build_model`;
+    `settings` {analysis: {option: value}} the options of the registered analyses.
     "status" is "ok", or the one-line reason the point failed, without the name of the scene
     file every row shares (the columns computed before it are kept). This is the function
     each Dask task runs; it raises nothing.
@@ -152,6 +169,11 @@ def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes")
             factors = buckling_load_factors(model, 1)
             if factors.size:
                 row["buckling.1 [-]"] = float(factors[0])
+        for name in analyses:
+            if name not in ANALYSES:
+                analysis = sweep_analyses.find(name)
+                row.update(analysis.evaluate(model, sweep_analyses.option_values(
+                    analysis, (settings or {}).get(name))))
     except FlexureError as error:
         # every row is of the same scene file: its name would only hide the reason
         row["status"] = _one_line(str(error).removeprefix(f"{source}: "))
@@ -171,7 +193,7 @@ def _one_line(text):
 def run_sweep(scene: dict, points, *, overrides=None, analyses=("static", "modes"),
               modes: int = DEFAULT_MODES, source: str = "<dict>", default_name: str = "scene",
               workers: int | None = None, scheduler: str | None = None,
-              on_row=None) -> list[dict]:
+              on_row=None, settings: dict | None = None) -> list[dict]:
     """Evaluate `evaluate_point` at each of `points` ({key: value}); the rows in their order.
 
     Parameters
@@ -187,10 +209,14 @@ def run_sweep(scene: dict, points, *, overrides=None, analyses=("static", "modes
     on_row : callable, optional
         Called with (index of the point, its row) as each point finishes, in the order they
         finish (to save rows as they come, and report progress).
+    settings : dict, optional
+        {analysis: {option: value}}: the options of registered analyses such as "simulate"
+        (`flexure.core.analysis.sweep_analyses`); their defaults otherwise.
     """
     tasks = [{**(overrides or {}), **point} for point in points]
     options = {"analyses": tuple(analyses), "modes": modes, "source": source,
-               "default_name": default_name}
+               "default_name": default_name,
+               "settings": {name: dict(values) for name, values in (settings or {}).items()}}
     rows = [None] * len(tasks)
 
     def done(index, row):

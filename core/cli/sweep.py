@@ -2,6 +2,11 @@
 
     flexure sweep stage_planar_1dof --param sections.leaf.height=0.3e-3:0.8e-3:6 \
         --param nodes.3.mass=0,0.2 --analyses static,modes,buckling --out sweep.csv
+    flexure sweep stage_planar_1dof --param nodes.3.mass=0,0.2 --analyses simulate,loop \
+        --simulate-t-end 0.05 --loop-duration 0.1
+
+The options of the registered analyses (simulate; loop, registered by flexure.controllers:
+`flexure.core.analysis.sweep_analyses`) are added as --ANALYSIS-OPTION, from the registry.
 
 Every point of the grid (the Cartesian product of the --param values) is one scene with those
 overrides, analysed by `flexure.core.analysis.sweep.evaluate_point`, on a dask.distributed
@@ -13,9 +18,10 @@ is importable, and its quantities to a plot beside it.
 import argparse
 import time
 
+from ..analysis import sweep_analyses
 from ..analysis.sweep import (
-    ANALYSES,
     DEFAULT_MODES,
+    analysis_names,
     columns,
     default_workers,
     grid,
@@ -48,18 +54,57 @@ def parameter(text):
 
 
 def analysis_list(text):
-    """argparse type of --analyses: known analyses, each once, in the order of ANALYSES."""
+    """argparse type of --analyses: known analyses, each once, in the order of
+    `analysis_names` (static, modes, buckling, then the registered ones)."""
+    known = analysis_names()
     names = [name.strip() for name in text.split(",")]
     for name in names:
-        if name in ("simulate", "loop"):
-            raise argparse.ArgumentTypeError(f"{name!r} is not available in sweeps yet; "
-                                             f"expected some of {', '.join(ANALYSES)}")
-        if name not in ANALYSES:
+        if name not in known:
             raise argparse.ArgumentTypeError(f"unknown analysis {name!r}; expected some of "
-                                             f"{', '.join(ANALYSES)} separated by commas")
+                                             f"{', '.join(known)} separated by commas")
         if names.count(name) > 1:
             raise argparse.ArgumentTypeError(f"{name!r} is listed {names.count(name)} times")
-    return tuple(name for name in ANALYSES if name in names)
+    return tuple(name for name in known if name in names)
+
+
+def option_type(option):
+    """argparse type of an analysis option: its parser, its ValueError as the message."""
+    def parse(text):
+        try:
+            return option.parse(text)
+        except ValueError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+
+    parse.__name__ = option.name
+    return parse
+
+
+def add_analysis_options(parser):
+    """--ANALYSIS-OPTION for every option of every registered analysis (default None: the
+    analysis's own default)."""
+    for analysis in sweep_analyses.available().values():
+        group = parser.add_argument_group(f"options of --analyses {analysis.name}")
+        for option in analysis.options:
+            default = "" if option.default in ("", None) else f" (default {option.default})"
+            group.add_argument(f"--{analysis.name}-{option.name.replace('_', '-')}",
+                               type=option_type(option), metavar=option.metavar,
+                               dest=f"{analysis.name}:{option.name}",
+                               help=f"{option.help}{default}")
+
+
+def analysis_settings(args):
+    """{analysis: {option: value}} of the --ANALYSIS-OPTION given; UsageError for one whose
+    analysis is not in --analyses."""
+    settings = {}
+    for dest, value in vars(args).items():
+        name, sep, option = dest.partition(":")
+        if not sep or value is None:
+            continue
+        if name not in args.analyses:
+            raise UsageError(f"--{name}-{option.replace('_', '-')}: {name} is not among "
+                             f"--analyses {','.join(args.analyses)}")
+        settings.setdefault(name, {})[option] = value
+    return settings
 
 
 def register(subparsers):
@@ -80,7 +125,7 @@ def register(subparsers):
     add_set_option(parser)
     parser.add_argument("--analyses", type=analysis_list, default=("static", "modes"),
                         metavar="LIST",
-                        help=f"some of {','.join(ANALYSES)} (default static,modes)")
+                        help=f"some of {','.join(analysis_names())} (default static,modes)")
     parser.add_argument("--modes", type=count, default=DEFAULT_MODES, metavar="N",
                         help=f"the lowest N natural frequencies (default {DEFAULT_MODES})")
     parser.add_argument("--out", type=output_file((".csv",)), metavar="CSV",
@@ -99,6 +144,7 @@ def register(subparsers):
                         help="keep the rows the --out table has, and compute only the other "
                              "points")
     parser.add_argument("--no-plot", action="store_true", help="write no plot")
+    add_analysis_options(parser)
     parser.set_defaults(run=run)
 
 
@@ -123,7 +169,8 @@ def run(args):
                                                   suffixes=PLOT_SUFFIXES, option="the plot")
     refuse_overwriting_inputs([("--out", out), ("the Parquet file", parquet),
                                ("the plot", plot)], [path])
-    table = SweepTable(keys, columns(model, args.analyses, args.modes))
+    settings = analysis_settings(args)
+    table = SweepTable(keys, columns(model, args.analyses, args.modes, settings))
     points = grid(args.param)
     earlier, unreadable = table.read(out) if args.resume and out.exists() else ({}, 0)
     todo = [i for i, point in enumerate(points) if table.key(point) not in earlier]
@@ -148,7 +195,8 @@ def run(args):
     try:
         run_sweep(data, [points[i] for i in todo], overrides=args.set, analyses=args.analyses,
                   modes=args.modes, source=str(path), default_name=path.stem,
-                  workers=args.workers, scheduler=args.scheduler, on_row=on_row)
+                  workers=args.workers, scheduler=args.scheduler, on_row=on_row,
+                  settings=settings)
     finally:
         for handle in appending:
             handle.close()

@@ -50,6 +50,7 @@ NODE_KEYS = {key.name: key for key in (
     SchemaKey("angle", "rad", "initial angle of a planar rotational node"),
     SchemaKey("moment", "N.m", "constant moment on a planar rotational node"),
 )}
+SEGMENTS_KEY = SchemaKey("segments", "1", "the number of elements a meshed element is split into")
 
 
 def builtin_scenes() -> list[str]:
@@ -119,15 +120,18 @@ def parse_toml(path):
 def scene_key(key: str, model: Model | None = None) -> SchemaKey | None:
     """The SchemaKey (unit, meaning, ...) of a dotted scene key that holds a number:
     "sections.NAME.KEY" (an element property, or a section's shape or material),
-    "nodes.NAME.KEY" ("mass", "inertia", ...) or "actuators.NAME.KEY" (force_constant,
-    resistance, inductance; with the `model`, also the units that depend on the actuator:
-    `scene_actuators.actuator_key`); None for any other key."""
+    "nodes.NAME.KEY" ("mass", "inertia", ...), "elements.NAME.segments" or
+    "actuators.NAME.KEY" (force_constant, resistance, inductance; with the `model`, also the
+    units that depend on the actuator: `scene_actuators.actuator_key`); None for any other
+    key."""
     table, _, rest = key.partition(".")
     name = rest.rpartition(".")[2] if "." in rest else None
     if table == "sections" and name:
         return section_key(name)
     if table == "nodes" and name:
         return NODE_KEYS.get(name)
+    if table == "elements" and name == "segments":
+        return SEGMENTS_KEY
     if table == "actuators" and name:
         return ACTUATOR_KEYS.get(name) if model is None else actuator_key(model, key)
     return None
