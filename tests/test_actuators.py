@@ -356,6 +356,25 @@ def test_the_compiled_loop_holds_the_drive_signal_as_a_python_loop_does():
     assert np.ptp(position) > 3e-4 and np.max(np.abs(sim.currents)) > 0
 
 
+def test_the_steady_slopes_are_the_derivatives_of_the_steady_port_values():
+    """d (steady port value) / d u against central differences (exact: piecewise linear),
+    inside and beyond the saturation, for a voltage and a current drive; and the DC gain of
+    the state space is the force's static compliance times that slope."""
+    from flexure.core import steady_port_values, steady_slopes
+
+    for drive, expected in (("voltage", 10.0 * 2.0 / R), ("current", 10.0 * 2.0)):
+        model = build_model(truss(drive=drive, force_constant=10.0, amplifier_gain=2.0,
+                                  saturation=1.5))
+        for u, slope in ((0.3, expected), (-0.5, expected), (1.0, 0.0), (-2.0, 0.0)):
+            h = 1e-3
+            numeric = (steady_port_values(model, [u + h]) - steady_port_values(model, [u - h]))
+            assert steady_slopes(model, [u]).tolist() == [slope]
+            assert abs(numeric[0] / (2 * h) - slope) <= 1e-12 * expected
+    plain = build_model(truss(drive="current", force_constant=10.0))
+    assert np.asarray(state_space(plain).dcgain()).item() == pytest.approx(
+        steady_slopes(plain, [0.0])[0] / K, rel=1e-9)
+
+
 def test_a_static_equilibrium_refuses_an_unknown_input():
     model = build_model(truss(), source="vcm")
     with pytest.raises(SceneError, match="^vcm: unknown input 'G'; the model 'truss_1dof_x' "

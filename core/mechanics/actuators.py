@@ -80,6 +80,21 @@ def steady_port_values(model, u):
     return port_values(model, u, steady_currents(model, u))
 
 
+def steady_slopes(model, u):
+    """d (steady port value) / d u (n_inputs,) at held inputs u: 1 for a force or moment
+    input, Km a'(u) for a current drive (N/V, N m/V), Km a'(u) / R for a voltage drive; a'
+    the amplifier's slope (`amplifier_slope`). Times an input's unit generalised force
+    (`ports.input_columns`), the static generalised force per unit of the input (per V for a
+    drive signal)."""
+    u = np.asarray(u, dtype=float).reshape(-1)
+    slopes = np.ones(len(model.inputs))
+    for actuator in model.actuators:
+        slope = actuator.force_constant * amplifier_slope(actuator, u[actuator.input])
+        slopes[actuator.input] = slope / actuator.resistance if (
+            actuator.drive == VOLTAGE) else slope
+    return slopes
+
+
 def steady_currents(model, u):
     """The coil currents at rest (A, one per voltage-driven actuator): a(u) / R."""
     u = np.asarray(u, dtype=float).reshape(-1)
@@ -98,4 +113,4 @@ def current_rates(model, u, currents, velocities):
 
 
 __all__ = ["CURRENT", "VOLTAGE", "amplifier_output", "amplifier_slope", "current_rates",
-           "port_values", "steady_currents", "steady_port_values"]
+           "port_values", "steady_currents", "steady_port_values", "steady_slopes"]
