@@ -222,3 +222,34 @@ def test_a_corrupt_integrator_memory_is_refused():
         with pytest.raises(SimulationError, match="integrator memory holds negative or "
                                                   "non-finite numbers"):
             Simulator(model, method="esdirk").set_state(dict(state, **{key: value}))
+
+
+# -- the Newton matrix of large models -----------------------------------------------------------
+@pytest.mark.parametrize("second_order", [True, False])
+def test_the_newton_matrix_through_its_schur_complement_solves_as_the_full_one(second_order):
+    """From esdirk.REDUCED_FROM DOFs on, (I - hg J) v = r with J = [[0, I], [A, B]] is solved
+    through I - hg B - hg^2 A: the same solution as numpy on the full matrix, to the round-off
+    of either; a J of another form takes the full matrix."""
+    from flexure.core.simulation import esdirk
+
+    m = esdirk.REDUCED_FROM
+    n = 2 * m
+    rng = np.random.default_rng(5)
+    J = np.zeros((n, n))
+    J[:m, m:] = np.eye(m)
+    J[m:, :m] = -rng.uniform(0.0, 1e6, (m, m)) / m  # -M^-1 K: stiff
+    J[m:, m:] = -rng.uniform(0.0, 10.0, (m, m)) / m  # -M^-1 C
+    if not second_order:
+        J[0, 0] = 1e-3
+    hg = 2e-4
+    LU, piv, flags = np.zeros(n * n), np.zeros(n, dtype=np.int64), np.zeros(esdirk.I_SIZE,
+                                                                             dtype=np.int64)
+    assert esdirk.factor(J.ravel(), LU, piv, hg, flags)
+    assert flags[esdirk.I_REDUCED] == int(second_order)
+    r = rng.standard_normal(n)
+    v = r.copy()
+    esdirk.newton_solve(J.ravel(), LU, piv, hg, flags, v)
+    matrix = np.eye(n) - hg * J
+    expected = np.linalg.solve(matrix, r)
+    bound = 10 * np.linalg.cond(matrix) * 2.2e-16 * np.max(np.abs(expected))
+    assert np.max(np.abs(v - expected)) <= bound

@@ -10,7 +10,9 @@ find an array from it.
 Per element group (all elements of one type) the engine needs the addresses of the element
 module's compiled entry points (`deformations_entry`, `inertia_entry`), the local coordinate
 and deformation indices, the packed reference rows (`pack_reference`) and, for groups with
-mass, the constant mass Mp of the inertia points and gravity on those points. An element
+mass, the constant mass Mp of the inertia points and gravity on those points. J and the
+augmented system are factored banded or, for models whose band stays wide, sparse
+(`sparse_packing`, chosen by `evaluation_cost`). An element
 module that defines these plugs into the engine without the engine naming it. Workspace
 arrays (warm start of the kinematics, the last evaluation, scratch) live here too, so the
 engine never allocates in an evaluation.
@@ -23,6 +25,7 @@ import weakref
 import numpy as np
 
 from ..mechanics import assembly
+from . import sparse_packing
 from .ports import port_specs
 
 # the banded orders of a model's J and augmented system, computed once per live model (read
@@ -35,19 +38,21 @@ INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformat
              "deformation_index", "row_of_deformation", "column_of_coordinate", "pivots",
              "mass_pivots", "counters", "augmented_pivots", "j_row_position",
              "j_column_position", "augmented_position", "mass_pattern", "point_columns",
+             "j_sparse", "j_map", "aug_sparse", "aug_map", "stress_pointers", "stress_columns",
              "actuators")
 # float64 slots (`floats`)
 FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
                "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
                "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot",
-               "augmented", "augmented_rhs", "band_scratch", "actuator_data", "currents",
-               "port_values")
+               "augmented", "augmented_rhs", "band_scratch", "j_sparse_values",
+               "aug_sparse_values", "actuator_data", "currents", "port_values")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
  MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, ENGINE, AUGMENTED, REDUCED,
- MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, NEL, DIMS_SIZE) = range(29)
+ MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, J_SPARSE, A_SPARSE, J_FACTORS, NEL,
+ DIMS_SIZE) = range(32)
 # per-group row of `groups`
 (G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
  G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
@@ -59,7 +64,12 @@ FORCE_INPUT, CURRENT_DRIVE, VOLTAGE_DRIVE = range(3)
 # settings entries
 TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
 # counters entries
-RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, COUNTERS_SIZE = range(4)
+# (SPARSE_PIVOTING: sparse LUs that pivoted afresh because a kept pivot failed its test;
+# SPARSE_FALLBACKS: those that could not, and were banded; numerics.sparse_lu)
+RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, SPARSE_PIVOTING, SPARSE_FALLBACKS, COUNTERS_SIZE = \
+    range(6)
+# dims[J_FACTORS]: which factors of J slot lu (banded) or slot j_sparse_values hold
+BANDED_FACTORS, SPARSE_FACTORS = range(2)
 # status codes returned by the engine's functions (messages: sundials.STATUS_MESSAGES)
 OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT = \
     range(6)
@@ -84,9 +94,16 @@ class EngineData:
         How `engine.evaluate` solves for the accelerations: the augmented system on the free
         coordinates (True) or the reduced M_bar qddot = DF^T r (False); default: whichever
         needs fewer multiplications for this model (`evaluation_cost`).
+    sparse : bool, optional
+        How J and the augmented system are factored: the static-pivot sparse LU
+        (`numerics.sparse_lu`, `sparse_packing`) for both (True), the banded LU for both
+        (False); default: per matrix, whichever needs fewer (weighted) multiplications, the
+        sparse LU analysed only for models whose banded LUs cost at least
+        `sparse_packing.SPARSE_FROM`.
     """
 
-    def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6, augmented=None):
+    def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6, augmented=None,
+                 sparse=None):
         from ..mechanics.kinematics import length_scale
 
         self.model = model
@@ -102,8 +119,10 @@ class EngineData:
         mech_S, mech_D = assembly.stiffness_and_damping(model)
         S = mech_S[np.ix_(stressed, stressed)]
         D = mech_D[np.ix_(stressed, stressed)]
+        stress_rows, stress_columns = np.nonzero((S != 0.0) | (D != 0.0))  # row by row
         groups, coord_index, def_index, data, patterns = [], [], [], [], []
         de_size = d2e_size = 0
+        de_groups = []  # (group, offset of its De)
         inertia_groups = assembly.Inertia(model).groups
         inertia = {id(group): Mp for group, Mp in inertia_groups}
         all_groups = list(model.groups) + [group for group, _ in inertia_groups
@@ -144,6 +163,7 @@ class EngineData:
                 patterns.append(pattern.astype(np.int64))
                 offsets["pattern"] += pattern.size
             row[G_DE_OFFSET], row[G_D2E_OFFSET] = de_size, d2e_size
+            de_groups.append((group, de_size))
             de_size += n * k * m
             d2e_size += n * k * m * m
             groups.append(row)
@@ -173,22 +193,35 @@ class EngineData:
         dims[HAS_DAMPING] = int(np.any(D))
         dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
         dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
-        # banded orders of J and of the augmented system (core/numerics/banded.py)
+        # banded orders of J and of the augmented system (core/numerics/banded.py), and
+        # their sparse LUs where those pay (sparse_packing), found once per model
         known = _ORDERS.get(id(model))  # a Simulator packs its model twice (plant, outputs)
         if known is not None and known[0]() is model:
-            orders = known[1]
+            found = known[1]
         else:
-            orders = (_constraint_order(model, free, rows, row_of_def, col_of_coord),
-                      _augmented_order(model, free.size, row_of_def, col_of_coord,
-                                       [group for group in all_groups if id(group) in inertia]))
+            found = {"orders": (
+                _constraint_order(model, free, rows, row_of_def, col_of_coord),
+                _augmented_order(model, free.size, row_of_def, col_of_coord,
+                                 [group for group in all_groups if id(group) in inertia]))}
             key = id(model)
             _ORDERS[key] = (weakref.ref(model, lambda _, key=key: _ORDERS.pop(key, None)),
-                            orders)
-        (j_rows, j_cols, dims[J_KL], dims[J_KU]), (aug_position, dims[A_KL], dims[A_KU]) = orders
+                            found)
+        (j_rows, j_cols, dims[J_KL], dims[J_KU]), (aug_position, dims[A_KL], dims[A_KU]) = \
+            found["orders"]
+        bands = (int(dims[J_KL]), int(dims[J_KU]), int(dims[A_KL]), int(dims[A_KU]))
+        if sparse is not False and "sparse" not in found:
+            banded_lu = (banded_multiplications(free.size, *bands[:2]) + banded_multiplications(
+                free.size + model.rigid_deformations.size, *bands[2:]))
+            found["sparse"] = sparse_packing.analyse(
+                model, de_groups, [group for group in all_groups if id(group) in inertia],
+                free, rows, row_of_def, col_of_coord, de_size,
+                np.inf if sparse else banded_lu)
+        factors = found.get("sparse") if sparse is not False else None
         costs = evaluation_cost(free.size, model.rigid_deformations.size, ndof,
-                                [(row[G_COUNT], row[G_M], row[G_P]) for row in groups],
-                                (int(dims[J_KL]), int(dims[J_KU]), int(dims[A_KL]),
-                                 int(dims[A_KU])))
+                                [(row[G_COUNT], row[G_M], row[G_P]) for row in groups], bands,
+                                None if factors is None else factors.multiplications())
+        if sparse and factors is not None:  # forced: both matrices sparse
+            costs["constraint_lu"] = costs["augmented_lu"] = "sparse"
         self.costs = costs
         # the form with fewer multiplications (measured, one evaluation, both forms
         # alternating: reduced / augmented 6.6 / 7.4 us on stage_planar_1dof, 47 / 41 us on
@@ -196,6 +229,11 @@ class EngineData:
         # 244 / 50 us with 16; the counts order all of them the same way)
         dims[AUGMENTED] = int(costs["augmented"] < costs["reduced"] if augmented is None
                               else bool(augmented))
+        dims[J_SPARSE] = int(costs["constraint_lu"] == "sparse")
+        dims[A_SPARSE] = int(costs["augmented_lu"] == "sparse")
+        empty = np.zeros(0, dtype=np.int64)
+        j_lu = factors.constraints if dims[J_SPARSE] else None
+        a_lu = factors.augmented if dims[A_SPARSE] else None
         # dims[ENGINE], the address of the engine's entry for callbacks that call it, is set
         # by the integrators that make such callbacks (`engine.connect`): the engine imports
         # this module, not the other way round
@@ -232,11 +270,21 @@ class EngineData:
             # rows of max_m columns), the count of each row, the element's coordinates'
             # positions in the augmented system
             "point_columns": np.zeros(max_p * (max_m + 1) + max_m, np.int64),
+            # the sparse LUs' patterns and scatter maps (sparse_packing), empty when banded
+            "j_sparse": empty if j_lu is None else j_lu.ints.copy(),
+            "j_map": empty if j_lu is None else factors.constraint_map,
+            "aug_sparse": empty if a_lu is None else a_lu.ints.copy(),
+            "aug_map": empty if a_lu is None else factors.augmented_map,
+            # S and D on the stressed deformations, row by row on the entries either has
+            # (compressed rows: an element's stiffness couples its own deformations only)
+            "stress_pointers": np.concatenate([[0], np.cumsum(np.bincount(
+                stress_rows, minlength=stressed.size))]).astype(np.int64),
+            "stress_columns": stress_columns.astype(np.int64),
             "actuators": actuator_kinds,
         }
         floats = {
-            "settings": settings, "S": np.ascontiguousarray(S).ravel(),
-            "D": np.ascontiguousarray(D).ravel(), "lumped": lumped,
+            "settings": settings, "S": S[stress_rows, stress_columns],
+            "D": D[stress_rows, stress_columns], "lumped": lumped,
             "constant_force": constant_force,
             "group_data": np.concatenate(data) if data else np.zeros(0),
             "inputs": np.zeros(len(model.inputs)), "q_ref": np.zeros(ndof),
@@ -253,6 +301,10 @@ class EngineData:
             "x_start": model.initial_coordinates.astype(float).copy(),
             "xddot": np.zeros(nx), "augmented": np.zeros(augmented * augmented),
             "augmented_rhs": np.zeros(augmented), "band_scratch": np.zeros(augmented),
+            # the factors at the initial configuration, a copy per packing (factoring
+            # changes them)
+            "j_sparse_values": np.zeros(0) if j_lu is None else j_lu.floats.copy(),
+            "aug_sparse_values": np.zeros(0) if a_lu is None else a_lu.floats.copy(),
             "actuator_data": actuator_data, "currents": np.zeros(dims[NEL]),
             # the value each input puts on its port in the last evaluation (N, N m; only
             # with actuators: without, the inputs themselves; `actuators.port_values`)
@@ -280,28 +332,46 @@ class EngineData:
         return self._address
 
 
-def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None):
+def banded_multiplications(n, kl, ku):
+    """Multiplications of the banded LU with partial pivoting of an (n, n) matrix with kl
+    sub- and ku super-diagonals, and of one solve with it."""
+    kl, ku = min(kl, n), min(ku, n)
+    return n * kl * (kl + ku) + 2 * n * (kl + ku)
+
+
+def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None, sparse=None):
     """Multiplications of one evaluation's linear algebra by each way to the accelerations
     (zeros counted):
     {"reduced": DF (NDOF solves), M_bar = DF^T M DF element by element and its LU;
     "augmented": the LU of the augmented system (n_free + n_rigid) and the free-coordinate
     mass blocks}; both factor J. groups: (element count, coordinates m, inertia points P) per
-    element group; bands: (kl, ku) of J and of the augmented system (default: dense). The
-    reduced form wins on few DOFs (a 1-DOF stage: M_bar is 1 x 1), the augmented one on many
-    (M_bar costs NDOF^2 per element)."""
+    element group; bands: (kl, ku) of J and of the augmented system (default: dense);
+    sparse: the multiplications of the static-pivot sparse LUs {"j_factor", "j_solve",
+    "a_factor", "a_solve"} (`sparse_packing.SparseFactors.multiplications`), weighed at
+    `sparse_packing.SPARSE_WEIGHT` banded ones each, or None. The reduced form wins on few
+    DOFs (a 1-DOF stage: M_bar is 1 x 1), the augmented one on many (M_bar costs NDOF^2 per
+    element). Also says which LU each matrix takes: {"constraint_lu", "augmented_lu"}, "banded"
+    or "sparse", whichever costs less."""
     na = n_free + n_rigid
     j_kl, j_ku, a_kl, a_ku = bands if bands is not None else (n_free, n_free, na, na)
-
-    def lu(n, kl, ku):  # banded LU with partial pivoting, and one solve
-        kl, ku = min(kl, n), min(ku, n)
-        return n * kl * (kl + ku) + 2 * n * (kl + ku)
-
-    shared = lu(n_free, j_kl, j_ku)
-    reduced = shared + ndof * 2 * n_free * (j_kl + j_ku) + ndof ** 3 / 3 + sum(
+    j_solve = 2 * n_free * (min(j_kl, n_free) + min(j_ku, n_free))
+    j_lu = banded_multiplications(n_free, j_kl, j_ku)
+    a_lu = banded_multiplications(na, a_kl, a_ku)
+    lu_kinds = {"constraint_lu": "banded", "augmented_lu": "banded"}
+    if sparse is not None:
+        weight = sparse_packing.SPARSE_WEIGHT
+        sparse_j = weight * (sparse["j_factor"] + sparse["j_solve"])
+        sparse_a = weight * (sparse["a_factor"] + sparse["a_solve"])
+        if sparse_j < j_lu:
+            j_lu, j_solve = sparse_j, weight * sparse["j_solve"]
+            lu_kinds["constraint_lu"] = "sparse"
+        if sparse_a < a_lu:
+            a_lu = sparse_a
+            lu_kinds["augmented_lu"] = "sparse"
+    reduced = j_lu + ndof * j_solve + ndof ** 3 / 3 + sum(
         n * (P * m * ndof + P * P * ndof + P * ndof * ndof) for n, m, P in groups)
-    augmented = shared + lu(na, a_kl, a_ku) + sum(
-        n * (P * P * m + P * m * m) for n, m, P in groups)
-    return {"reduced": reduced, "augmented": augmented}
+    augmented = j_lu + a_lu + sum(n * (P * P * m + P * m * m) for n, m, P in groups)
+    return {"reduced": reduced, "augmented": augmented, **lu_kinds}
 
 
 def _constraint_order(model, free, rows, row_of_def, col_of_coord):

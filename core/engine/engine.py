@@ -6,7 +6,9 @@ has its module; this one holds the forms the integrators call and the one entry 
 
     data             the model packed into flat arrays (`EngineData`), status codes
     slots            the packed model's arrays by slot (indices, accessors)
-    kinematics       the elements' deformations, x = F(q), J and its banded LU, DF
+    kinematics       the elements' deformations, x = F(q), DF
+    factors          J and the augmented system: assembled and factored banded, or sparse
+                     (`sparse_packing`: their patterns and scatter maps, packed per model)
     motion           qddot from M_bar qddot = DF^T r (or the augmented system), M_bar
     tangent          stiffness K0 + G0 and damping C0 of the dynamic balance
     engine (here)    the first-order and implicit forms, `engine_entry`, `call`

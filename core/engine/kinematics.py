@@ -12,21 +12,20 @@ constraint Jacobian J = dg/dx_free (converging at a rate of order |dq| / L), and
 from there if they stall. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the
 reduced form, the tangent, the kinematics operation).
 
-J is factored as a banded matrix (`core/numerics/banded.py`) with its rows and columns in the
-bandwidth-reducing orders computed at packing (slots j_row_position, j_column_position);
-`j_solve` (J^-1 or J^-T) takes and gives vectors in the model's order. The element
+J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
+(J^-1 or J^-T), which takes and gives vectors in the model's order). The element
 deformations e, De = de/dx and D2e come from each element module's compiled entry point.
 """
 
 import numpy as np
 
-from ..numerics import banded
 from ..numerics.jit import kernel
 from ..numerics.native import call_deformations
 from . import data as ed
 from . import slots as slot
+from .factors import j_factor, j_solve
 from .slots import float_array as _f
-from .slots import group, group_coordinates, group_deformations
+from .slots import group, group_coordinates
 from .slots import int_array as _i
 
 
@@ -82,69 +81,13 @@ def _residual(table, x, q, g):
 
 
 @kernel
-def _constraint_jacobian(table, J):
-    """J (n_free, n_free) row-major into J from the elements' De in slot de, its rows and
-    columns in their banded order (slots j_row_position, j_column_position)."""
-    dims = _i(table, slot.DIMS)
-    nf = dims[ed.NFREE]
-    J[:] = 0.0
-    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
-    row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
-    for g in range(dims[ed.NGROUPS]):
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for i in range(n):
-            for b in range(k):
-                r = row_of_def[defs[i * k + b]]
-                if r < 0:
-                    continue
-                for a in range(m):
-                    c = col_of_coord[coords[i * m + a]]
-                    if c >= 0:
-                        J[rpos[r] * nf + cpos[c]] = De[(i * k + b) * m + a]
-    n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
-    positions = _i(table, slot.DOF_POS)
-    for j in range(dims[ed.NXDOF]):
-        J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
-
-
-@kernel
-def _j_factor(table):
-    """J at the deformations' De into slot lu, factored (banded); the pivot ratio."""
-    dims = _i(table, slot.DIMS)
-    lu = _f(table, slot.LU)
-    _constraint_jacobian(table, lu)
-    return banded.factor(lu, dims[ed.NFREE], _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU])
-
-
-@kernel
-def j_solve(table, b, transposed=False):
-    """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
-    b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
-    factors in slot lu."""
-    dims = _i(table, slot.DIMS)
-    nf = dims[ed.NFREE]
-    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
-    into, out = (cpos, rpos) if transposed else (rpos, cpos)
-    t = _f(table, slot.BAND_SCRATCH)
-    for r in range(nf):
-        t[into[r]] = b[r]
-    lu, pivots, kl, ku = _f(table, slot.LU), _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU]
-    if transposed:
-        banded.solve_transposed(lu, nf, pivots, kl, ku, t)
-    else:
-        banded.solve(lu, nf, pivots, kl, ku, t)
-    for c in range(nf):
-        b[c] = t[out[c]]
-
-
-@kernel
 def _store(table, q, x):
     """Factor J at the solved x (deformations of order 2 evaluated there) and keep both as the
     next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
     singular."""
     dims = _i(table, slot.DIMS)
     nx = dims[ed.NX]
-    ratio = _j_factor(table)
+    ratio = j_factor(table)
     if not ratio > _f(table, slot.SETTINGS)[ed.SINGULAR_RATIO]:
         return ed.SINGULAR_CONSTRAINTS
     _f(table, slot.X)[:nx] = x[:nx]
@@ -216,7 +159,7 @@ def solve_positions(table, q):
         if _residual(table, x, q, g) <= tolerance:
             _f(table, slot.X)[:nx] = x[:nx]
             return ed.OK
-        if not _j_factor(table) > 0.0:
+        if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         if not np.isfinite(_newton_step(table, x, g, dx)):
             return ed.NOT_CONVERGED
@@ -270,7 +213,7 @@ def solve_kinematics(table, q):
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton
         deformations(table, x, 1)
         _residual(table, x, q, g)
-        if not _j_factor(table) > 0.0:
+        if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         step = _newton_step(table, x, g, dx)
         if not np.isfinite(step):

@@ -10,25 +10,33 @@ M_bar; `data.evaluation_cost` picks one per model):
 
 with f the constant loads, gravity and the inputs (a moment input's force depends on x:
 `ports`), sigma_c = S e + D edot on the stressed
-deformations, M = diag(lumped) + sum Dp^T Mp Dp over the inertia points p of the element
-masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, and (D2F qdot) qdot = -J^-1 [xdot^T H_i xdot]
-on the constraint rows. Gravity acts on the position points of the inertia, which are linear
-in x for every element, so it has no tangent stiffness.
+deformations (S and D kept by compressed rows), M = diag(lumped) + sum Dp^T Mp Dp over the
+inertia points p of the element masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, and (D2F qdot)
+qdot = -J^-1 [xdot^T H_i xdot] on the constraint rows. Gravity acts on the position points of
+the inertia, which are linear in x for every element, so it has no tangent stiffness.
 
 M_bar is accumulated element by element from (Dp DF_e)^T Mp (Dp DF_e), never from a dense
-(NX, NX) M; the augmented system is factored as a banded matrix (`core/numerics/banded.py`) in the
-bandwidth-reducing order computed at packing, so an evaluation in the augmented form costs in
-proportion to the element count.
+(NX, NX) M; the augmented system is assembled and factored banded or sparse as the model was
+packed (`factors`), so an evaluation in the augmented form costs in proportion to the element
+count.
 """
 
-from ..numerics import banded
 from ..numerics.dense import lu_factor, lu_solve
 from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
 from .actuators import port_values
-from .kinematics import compute_DF, dof_rows, j_solve, solve_kinematics
+from .factors import (
+    add_element_mass,
+    add_lumped,
+    add_rigid_rows,
+    augmented_matrix,
+    augmented_solve,
+    j_solve,
+    mass_entries_start,
+)
+from .kinematics import compute_DF, dof_rows, solve_kinematics
 from .ports import add_input_forces
 from .slots import float_array as _f
 from .slots import (
@@ -84,18 +92,19 @@ def evaluate(table, q, qdot):
             xdot[free[a]] = dx[a]
     # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
     _element_rates(table, xdot, moving)
-    # sigma_c = S e_s + D edot_s
+    # sigma_c = S e_s + D edot_s (S, D by compressed rows)
     sigma, e, edot = _f(table, slot.SIGMA), _f(table, slot.E), _f(table, slot.EDOT)
     stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
-    ns = stressed.size
+    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
     sigma[:] = 0.0
     damped = dims[ed.HAS_DAMPING] == 1
-    for a in range(ns):
+    for a in range(stressed.size):
         s = 0.0
-        for b in range(ns):
-            s += S[a * ns + b] * e[stressed[b]]
+        for p in range(pointers[a], pointers[a + 1]):
+            b = stressed[columns[p]]
+            s += S[p] * e[b]
             if damped:
-                s += D[a * ns + b] * edot[stressed[b]]
+                s += D[p] * edot[b]
         sigma[stressed[a]] = s
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
@@ -130,21 +139,15 @@ def evaluate(table, q, qdot):
         return ed.OK
     dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
     na = nf + n_rigid
-    A, rhs = _f(table, slot.AUG), _f(table, slot.AUG_RHS)
-    A[: na * na] = 0.0
+    A, rhs = augmented_matrix(table), _f(table, slot.AUG_RHS)
     _inertia_forces(table, x, xdot, moving, r, A, na)
-    _rigid_rows(table, A, na)
-    apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
+    add_rigid_rows(table, A, na)
     for a in range(nf):
-        t[apos[a]] = r[free[a]]
+        rhs[a] = r[free[a]]
     for o in range(n_rigid):
-        t[apos[nf + o]] = -quad[o] if moving else 0.0
-    kl, ku = dims[ed.A_KL], dims[ed.A_KU]
-    if not banded.factor(A, na, _i(table, slot.AUG_PIVOTS), kl, ku) > 0.0:
+        rhs[nf + o] = -quad[o] if moving else 0.0
+    if not augmented_solve(table, A, na, rhs):
         return ed.SINGULAR_MASS
-    banded.solve(A, na, _i(table, slot.AUG_PIVOTS), kl, ku, t)
-    for u in range(na):
-        rhs[u] = t[apos[u]]
     xddot = _f(table, slot.XDDOT)
     xddot[:] = 0.0
     for a in range(nf):
@@ -154,31 +157,6 @@ def evaluate(table, q, qdot):
         qddot[j] = rhs[positions[j]]
     _dof_deformation_accelerations(table, xddot, quad, moving, qddot)
     return ed.OK
-
-
-@kernel
-def _rigid_rows(table, A, na):
-    """The rigid rows J_o of J (De of the deformations prescribed zero on the free coordinates)
-    into A (na, na) as [., J_o^T; J_o, 0] beside the mass block of the n_free coordinates."""
-    dims = _i(table, slot.DIMS)
-    nf = dims[ed.NFREE]
-    row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
-    n_rigid = dims[ed.NRIGID]
-    apos = _i(table, slot.AUG_POS)
-    for g in range(dims[ed.NGROUPS]):
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for i in range(n):
-            for b in range(k):
-                o = row_of_def[defs[i * k + b]]
-                if o < 0 or o >= n_rigid:
-                    continue
-                po = apos[nf + o]
-                for a in range(m):
-                    c = col_of_coord[coords[i * m + a]]
-                    if c >= 0:
-                        v = De[(i * k + b) * m + a]
-                        A[po * na + apos[c]] = v
-                        A[apos[c] * na + po] = v
 
 
 @kernel
@@ -256,15 +234,10 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
     moving, r -= g_conv = Dp^T Mp (D2p xdot) xdot. Element by element through the inertia
     points."""
     dims = _i(table, slot.DIMS)
-    nx = dims[ed.NX]
-    lumped, col_of_coord = _f(table, slot.LUMPED), _i(table, slot.COL_OF_COORD)
-    apos = _i(table, slot.AUG_POS)
-    for a in range(nx):
-        c = col_of_coord[a]
-        if c >= 0:
-            A[apos[c] * na + apos[c]] += lumped[a]
+    add_lumped(table, A, na)
     local = _f(table, slot.LOCAL)
     columns = _i(table, slot.POINT_COLUMNS)
+    mass_entry = mass_entries_start(table)
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         if row[ed.G_P] == 0:
@@ -290,17 +263,10 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                 for u in range(counts[pp]):
                     a = columns[pp * m + u]
                     r[coords[i * m + a]] += Dp[pp, a] * w[pp]
-            for a in range(m):  # M_ff += Me on the free coordinates
-                c = col_of_coord[coords[i * m + a]]
-                position[a] = apos[c] if c >= 0 else -1
-            for a in range(m):
-                ca = position[a]
-                if ca < 0:
-                    continue
-                for b in range(m):
-                    cb = position[b]
-                    if cb >= 0:
-                        A[ca * na + cb] += Me[a * m + b]
+            # M_ff += Me on the free coordinates
+            add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
+                             position)
+            mass_entry += m * m
 
 
 @kernel

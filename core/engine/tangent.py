@@ -17,7 +17,7 @@ from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
-from .kinematics import j_solve
+from .factors import j_solve
 from .motion import reduced_mass
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .slots import float_array as _f
@@ -104,19 +104,19 @@ def tangent(table, qddot):
                         K[j1 * ndof + j2] += dfa * HD[a * ndof + j2]
     # K0 = DeF_s^T S DeF_s, C0 = DeF_s^T D DeF_s
     stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
-    ns = stressed.size
+    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
     damped = dims[ed.HAS_DAMPING] == 1
     SD = local[: ndof]
     DD = local[ndof: 2 * ndof]
-    for a in range(ns):
+    for a in range(stressed.size):  # S and D by compressed rows
         for j in range(ndof):
             s = 0.0
             t = 0.0
-            for b in range(ns):
-                v = DeF[stressed[b] * ndof + j]
-                s += S[a * ns + b] * v
+            for p in range(pointers[a], pointers[a + 1]):
+                v = DeF[stressed[columns[p]] * ndof + j]
+                s += S[p] * v
                 if damped:
-                    t += D[a * ns + b] * v
+                    t += D[p] * v
             SD[j] = s
             DD[j] = t
         for i in range(ndof):

@@ -34,7 +34,9 @@ accepted step once it is spent (TOO_MUCH_WORK).
 Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
 Jacobian), kept across steps and samples; it is recomputed when a stage converges slowly or
 fails, and I - h g J is refactored only when J is new or h has moved more than 20 % from the
-h of the factors. Iterations stop when the estimated remaining error eta |dz| (eta =
+h of the factors. From REDUCED_FROM DOFs on it is solved through its Schur complement
+I - h g B - (h g)^2 A (J = [[0, I], [A, B]]), an LU an eighth of the full one's cost.
+Iterations stop when the estimated remaining error eta |dz| (eta =
 theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm above, as in
 Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
 (kinematics not converged) recomputes J or, with J fresh, quarters h and retries.
@@ -56,7 +58,7 @@ from .esdirk_method import MAX_STAGES, TABLEAUS
 (M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
 # int64 flags and counters
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
- I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_SIZE) = range(12)
+ I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_SIZE) = range(13)
 # rows of the vector workspace (the stage derivatives after them)
 (V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
 V_ROWS = V_F + MAX_STAGES
@@ -73,6 +75,7 @@ NEWTON_TOLERANCE = 0.05   # eta |dz| in the weighted norm (1 = the error the ste
 MAX_NEWTON = 7
 MAX_FAILURES = 12         # consecutive failed attempts of one step
 LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factors
+REDUCED_FROM = 200        # DOFs from which the Newton matrix is solved by its Schur complement
 SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
 
 _DIMS = ed.INT_SLOTS.index("dims")
@@ -107,14 +110,64 @@ def _jacobian(table, y, J, flags):
 
 @kernel
 def factor(J, LU, piv, hg, flags):
-    """LU = factors of I - hg J (flat, row-major); False when singular."""
+    """LU = factors of I - hg J (flat, row-major), or for large models (`_second_order`) of
+    its Schur complement S; False when singular."""
     n = piv.size
+    flags[I_FACTORIZATIONS] += 1
+    flags[I_REDUCED] = 0
+    if _second_order(J, n):
+        m = n // 2
+        for i in range(m):  # S = I - hg B - hg^2 A, J = [[0, I], [A, B]]
+            for j in range(m):
+                a, b = J[(m + i) * n + j], J[(m + i) * n + m + j]
+                LU[i * m + j] = -hg * b - hg * hg * a
+            LU[i * m + i] += 1.0
+        flags[I_REDUCED] = 1
+        return engine.lu_factor(LU, m, piv) > 1e-300
     for i in range(n * n):
         LU[i] = -hg * J[i]
     for i in range(n):
         LU[i * n + i] += 1.0
-    flags[I_FACTORIZATIONS] += 1
     return engine.lu_factor(LU, n, piv) > 1e-300
+
+
+@kernel
+def _second_order(J, n):
+    """True when the Newton matrix is solved through its Schur complement: from
+    REDUCED_FROM DOFs on, for J = [[0, I], [A, B]] of a second-order system (the engine's
+    first-order Jacobian; checked, as a restored J could be anything). Then (I - hg J)
+    [dq; dv] = [r1; r2] is dq = r1 + hg dv with (I - hg B - hg^2 A) dv = r2 + hg A r1: an
+    LU of NDOF^3 / 3 multiplications instead of 8 NDOF^3 / 3. Below it the full matrix keeps
+    the small models' numbers as they were (its LU costs under a millisecond there)."""
+    m = n // 2
+    if m < REDUCED_FROM:
+        return False
+    for i in range(m):
+        for j in range(n):
+            if J[i * n + j] != (1.0 if j == m + i else 0.0):
+                return False
+    return True
+
+
+@kernel
+def newton_solve(J, LU, piv, hg, flags, v):
+    """v <- (I - hg J)^-1 v with the factors of `factor` (hg: the one they were made with)."""
+    n = piv.size
+    if flags[I_REDUCED] == 0:
+        engine.lu_solve(LU, n, piv, v)
+        return
+    m = n // 2
+    t = LU[m * m: m * m + m]  # scratch: the Schur complement uses the first m^2 entries
+    for i in range(m):  # t = r2 + hg A r1
+        s = v[m + i]
+        row = (m + i) * n
+        for j in range(m):
+            s += hg * J[row + j] * v[j]
+        t[i] = s
+    engine.lu_solve(LU, m, piv, t)
+    for i in range(m):
+        v[m + i] = t[i]
+        v[i] += hg * t[i]
 
 
 @kernel
@@ -151,7 +204,7 @@ def _initial_step(table, memory, flags, vectors, atol, t_stop):
 
 
 @kernel
-def _stage(table, i, h, memory, flags, vectors, LU, piv, A, P):
+def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     """Solve stage i: z = base + h g f(z) by simplified Newton; F_i from the stage equation.
     True when it converged."""
     n = piv.size
@@ -174,7 +227,7 @@ def _stage(table, i, h, memory, flags, vectors, LU, piv, A, P):
             return False
         for k in range(n):
             delta[k] = base[k] + hg * F[i, k] - z[k]
-        engine.lu_solve(LU, n, piv, delta)
+        newton_solve(J, LU, piv, memory[M_H_LU], flags, delta)
         for k in range(n):
             z[k] += delta[k]
         norm = _norm(delta, weight)
@@ -242,7 +295,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, o
             weight[k] = 1.0 / (rtol * abs(y[k]) + atol[k])
         converged = True
         for i in range(1, stages):
-            if not _stage(table, i, h, memory, flags, vectors, LU, piv, A, P):
+            if not _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
                 converged = False
                 break
         failures += 1
@@ -263,7 +316,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, o
                 s += EW[j] * F[j, k]
             err[k] = h * s
             weight[k] = 1.0 / (rtol * max(abs(y[k]), abs(z[k])) + atol[k])
-        engine.lu_solve(LU, n, piv, err)
+        newton_solve(J, LU, piv, memory[M_H_LU], flags, err)
         error = _norm(err, weight)
         if not np.isfinite(error):
             error = 1e10

@@ -1,0 +1,258 @@
+"""The engine's two factorisations: the constraint Jacobian J and the augmented system.
+
+J (n_free, n_free: the rows of the rigid and DOF deformations, then the unit rows of the DOF
+coordinates) and the augmented system of the accelerations [M_ff J_o^T; J_o 0] (n_free +
+n_rigid) are each factored one of two ways, chosen per model at packing
+(`data.evaluation_cost`, dims J_SPARSE and A_SPARSE):
+
+- banded (`numerics.banded`): the matrix assembled dense (n, n) in the bandwidth-reducing
+  order (slots j_row_position, j_column_position, augmented_position) and factored with
+  partial pivoting in the band: the small models (the stages, the tutorials);
+- sparse (`numerics.sparse_lu`): the elements' entries scattered straight into the sparse
+  values through the maps of `sparse_packing` and refactored with the kept pivots; no dense
+  (n, n) storage is touched. When a kept pivot fails its threshold test the sparse LU
+  pivots afresh (counted in counters[SPARSE_PIVOTING]) and keeps the new pivots; when that
+  fails too (a singular matrix, or more fill than the room packed for it) the values go into
+  the dense storage and that one factorisation is banded (counters[SPARSE_FALLBACKS]).
+  dims[J_FACTORS] says which factors of J are current.
+
+Both solve in the model's order: `j_solve` takes vectors on J's rows (or, transposed, on the
+free coordinates), `augmented_solve` on the free coordinates then the rigid rows.
+"""
+
+from ..numerics import banded, sparse_lu
+from ..numerics.jit import kernel
+from . import data as ed
+from . import slots as slot
+from .slots import float_array as _f
+from .slots import group_deformations
+from .slots import int_array as _i
+
+
+@kernel
+def _sparse_factor(table, ints, floats):
+    """The sparse LU with the kept pivots, else pivoting afresh (counted); the pivot ratio, or
+    negative when the sparse LU cannot serve (counted: the caller factors banded)."""
+    ratio = sparse_lu.refactor(ints, floats, sparse_lu.THRESHOLD)
+    if ratio >= 0.0:
+        return ratio
+    counters = _i(table, slot.COUNTERS)
+    counters[ed.SPARSE_PIVOTING] += 1
+    ratio = sparse_lu.factor(ints, floats, sparse_lu.THRESHOLD)
+    if ratio < 0.0:
+        counters[ed.SPARSE_FALLBACKS] += 1
+    return ratio
+
+
+# -- J ---------------------------------------------------------------------------------------------
+@kernel
+def _constraint_jacobian(table, J):
+    """J (n_free, n_free) row-major into J from the elements' De in slot de, its rows and
+    columns in their banded order (slots j_row_position, j_column_position)."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    J[:] = 0.0
+    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
+    row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                r = row_of_def[defs[i * k + b]]
+                if r < 0:
+                    continue
+                for a in range(m):
+                    c = col_of_coord[coords[i * m + a]]
+                    if c >= 0:
+                        J[rpos[r] * nf + cpos[c]] = De[(i * k + b) * m + a]
+    n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
+    positions = _i(table, slot.DOF_POS)
+    for j in range(dims[ed.NXDOF]):
+        J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
+
+
+@kernel
+def _sparse_constraint_jacobian(table, values):
+    """J's sparse values from the elements' De in slot de through the J map."""
+    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
+    values[:] = 0.0
+    n_de = De.size
+    for e in range(n_de):
+        s = jmap[e]
+        if s >= 0:
+            values[s] = De[e]
+    for j in range(jmap.size - n_de):
+        values[jmap[n_de + j]] = 1.0
+
+
+@kernel
+def j_factor(table):
+    """J at the deformations' De factored (sparse, or banded in slot lu); the ratio of the
+    smallest to the largest pivot magnitude."""
+    dims = _i(table, slot.DIMS)
+    lu, nf = _f(table, slot.LU), dims[ed.NFREE]
+    if dims[ed.J_SPARSE] == 1:
+        ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
+        _sparse_constraint_jacobian(table, sparse_lu.matrix_values(ints, floats))
+        ratio = _sparse_factor(table, ints, floats)
+        if ratio >= 0.0:
+            dims[ed.J_FACTORS] = ed.SPARSE_FACTORS
+            return ratio
+        lu[: nf * nf] = 0.0
+        sparse_lu.scatter_dense(ints, floats, lu, _i(table, slot.J_ROW_POS),
+                                _i(table, slot.J_COL_POS))
+    else:
+        _constraint_jacobian(table, lu)
+    dims[ed.J_FACTORS] = ed.BANDED_FACTORS
+    return banded.factor(lu, nf, _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU])
+
+
+@kernel
+def j_solve(table, b, transposed=False):
+    """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
+    b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
+    factors of the last `j_factor`."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.J_FACTORS] == ed.SPARSE_FACTORS:
+        sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
+                        transposed)
+        return
+    nf = dims[ed.NFREE]
+    rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
+    into, out = (cpos, rpos) if transposed else (rpos, cpos)
+    t = _f(table, slot.BAND_SCRATCH)
+    for r in range(nf):
+        t[into[r]] = b[r]
+    lu, pivots, kl, ku = _f(table, slot.LU), _i(table, slot.PIVOTS), dims[ed.J_KL], dims[ed.J_KU]
+    if transposed:
+        banded.solve_transposed(lu, nf, pivots, kl, ku, t)
+    else:
+        banded.solve(lu, nf, pivots, kl, ku, t)
+    for c in range(nf):
+        b[c] = t[out[c]]
+
+
+# -- the augmented system --------------------------------------------------------------------------
+@kernel
+def augmented_matrix(table):
+    """The array the augmented system is assembled into, cleared: its sparse values when it
+    is factored sparse, else the dense (na, na) slot augmented (row length na)."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.A_SPARSE] == 1:
+        A = sparse_lu.matrix_values(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES))
+        A[:] = 0.0
+        return A
+    na = dims[ed.NFREE] + dims[ed.NRIGID]
+    A = _f(table, slot.AUG)[: na * na]
+    A[:] = 0.0
+    return A
+
+
+@kernel
+def add_lumped(table, A, na):
+    """The lumped masses onto the diagonal of the free coordinates' block of A."""
+    dims = _i(table, slot.DIMS)
+    lumped, col_of_coord = _f(table, slot.LUMPED), _i(table, slot.COL_OF_COORD)
+    sparse = dims[ed.A_SPARSE] == 1
+    amap, apos = _i(table, slot.AUG_MAP), _i(table, slot.AUG_POS)
+    for a in range(dims[ed.NX]):
+        c = col_of_coord[a]
+        if c >= 0:
+            if sparse:
+                A[amap[c]] += lumped[a]
+            else:
+                A[apos[c] * na + apos[c]] += lumped[a]
+
+
+@kernel
+def add_element_mass(table, A, na, mass_entry, coords, m, Me, position):
+    """One element's mass Me (m * m, row by row) onto the free coordinates' block of A: through
+    the augmented map from its entry `mass_entry` on (sparse), else at the banded positions of
+    the element's coordinates (dense; `position` (m,) scratch)."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.A_SPARSE] == 1:
+        amap = _i(table, slot.AUG_MAP)
+        for e in range(m * m):
+            s = amap[mass_entry + e]
+            if s >= 0:
+                A[s] += Me[e]
+        return
+    col_of_coord, apos = _i(table, slot.COL_OF_COORD), _i(table, slot.AUG_POS)
+    for a in range(m):
+        c = col_of_coord[coords[a]]
+        position[a] = apos[c] if c >= 0 else -1
+    for a in range(m):
+        ca = position[a]
+        if ca < 0:
+            continue
+        for b in range(m):
+            cb = position[b]
+            if cb >= 0:
+                A[ca * na + cb] += Me[a * m + b]
+
+
+@kernel
+def mass_entries_start(table):
+    """Where the element mass entries begin in the augmented map (after the diagonal of the
+    free coordinates and the two rigid-row parts)."""
+    dims = _i(table, slot.DIMS)
+    return dims[ed.NFREE] + 2 * _f(table, slot.DE).size
+
+
+@kernel
+def add_rigid_rows(table, A, na):
+    """The rigid rows J_o of J (De of the deformations prescribed zero on the free
+    coordinates) into A as [., J_o^T; J_o, 0] beside the mass block of the free coordinates."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    if dims[ed.A_SPARSE] == 1:
+        De, amap = _f(table, slot.DE), _i(table, slot.AUG_MAP)
+        n_de = De.size
+        for e in range(n_de):
+            s = amap[nf + e]
+            if s >= 0:
+                A[s] = De[e]
+                A[amap[nf + n_de + e]] = De[e]
+        return
+    row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
+    n_rigid = dims[ed.NRIGID]
+    apos = _i(table, slot.AUG_POS)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                o = row_of_def[defs[i * k + b]]
+                if o < 0 or o >= n_rigid:
+                    continue
+                po = apos[nf + o]
+                for a in range(m):
+                    c = col_of_coord[coords[i * m + a]]
+                    if c >= 0:
+                        v = De[(i * k + b) * m + a]
+                        A[po * na + apos[c]] = v
+                        A[apos[c] * na + po] = v
+
+
+@kernel
+def augmented_solve(table, A, na, rhs):
+    """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
+    then the rigid rows); False when A is singular."""
+    dims = _i(table, slot.DIMS)
+    apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
+    dense = _f(table, slot.AUG)
+    if dims[ed.A_SPARSE] == 1:
+        ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
+        if _sparse_factor(table, ints, floats) >= 0.0:
+            sparse_lu.solve(ints, floats, rhs, False)
+            return True
+        dense[: na * na] = 0.0
+        sparse_lu.scatter_dense(ints, floats, dense, apos, apos)
+    for u in range(na):
+        t[apos[u]] = rhs[u]
+    kl, ku = dims[ed.A_KL], dims[ed.A_KU]
+    if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), kl, ku) > 0.0:
+        return False
+    banded.solve(dense, na, _i(table, slot.AUG_PIVOTS), kl, ku, t)
+    for u in range(na):
+        rhs[u] = t[apos[u]]
+    return True

@@ -1,0 +1,164 @@
+"""The sparse LU with kept pivots (core/numerics/sparse_lu.py) against numpy and scipy: random
+sparse matrices, refactoring at new values, the transposed solve, a kept pivot that vanishes
+(re-pivoting), a singular matrix, fill beyond the packed room; the manipulator's J and
+augmented system in the slow tier."""
+
+import numpy as np
+import pytest
+from scipy.sparse import random as sparse_random
+
+from flexure.core.numerics import sparse_lu
+
+EPS = 2.2e-16
+
+
+def random_matrix(rng, n, density, zero_diagonal=False):
+    a = sparse_random(n, n, density=density, random_state=rng).toarray()
+    a += np.diag(rng.uniform(0.5, 1.5, n) * rng.choice([-1, 1], n))
+    if zero_diagonal and n > 1:  # 2 x 2 blocks [[0, 2], [2, d]] need pivoting off the diagonal
+        i = np.arange(0, n - 1, 3)
+        a[i, i] = 0.0
+        a[i, i + 1] += 2.0
+        a[i + 1, i] += 2.0
+    return a
+
+
+def analysed(a):
+    rows, cols = np.nonzero(a)
+    return sparse_lu.StaticLU(a.shape[0], rows, cols, a[rows, cols])
+
+
+def assert_solves(lu, a, rng, floats=None):
+    """A z = b and A^T z = b against numpy.linalg.solve, to 100 cond(A) eps of the solution:
+    the forward error bound of a backward-stable solve, with room for the growth that the
+    threshold (multipliers up to 10) allows."""
+    floats = lu.floats if floats is None else floats
+    b = rng.standard_normal(a.shape[0])
+    for transposed, matrix in ((False, a), (True, a.T)):
+        z = b.copy()
+        sparse_lu.solve(lu.ints, floats, z, transposed)
+        expected = np.linalg.solve(matrix, b)
+        bound = 100 * np.linalg.cond(a) * EPS * np.max(np.abs(expected))
+        assert np.max(np.abs(z - expected)) <= bound
+
+
+@pytest.mark.parametrize("n, density", [(1, 1.0), (12, 0.3), (60, 0.05), (150, 0.02)])
+@pytest.mark.parametrize("zero_diagonal", [False, True])
+def test_factors_at_the_reference_solve_as_numpy(n, density, zero_diagonal):
+    rng = np.random.default_rng(n)
+    a = random_matrix(rng, n, density, zero_diagonal)
+    lu = analysed(a)
+    assert lu.ordering in sparse_lu.ORDERINGS
+    assert_solves(lu, a, rng)
+    # the counted work: a solve visits each entry of L and U once, and U has the diagonal
+    assert lu.multiplications["solve"] >= n and lu.multiplications["factor"] >= 0
+
+
+@pytest.mark.parametrize("n, density", [(40, 0.08), (120, 0.03)])
+def test_refactor_at_new_values_keeps_the_pivots_and_solves(n, density):
+    """New values on the same pattern: the kept pivots pass their test (the values moved by
+    10 %) and the factors solve as numpy; the matrix put back by scatter_dense is A."""
+    rng = np.random.default_rng(7)
+    a = random_matrix(rng, n, density)
+    lu = analysed(a)
+    rows, cols = np.nonzero(a)
+    moved = a.copy()
+    moved[rows, cols] *= 1.0 + 0.1 * rng.uniform(-1.0, 1.0, rows.size)
+    lu.set_matrix(moved)
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert_solves(lu, moved, rng)
+    dense = np.zeros(n * n)
+    sparse_lu.scatter_dense(lu.ints, lu.floats, dense, np.arange(n), np.arange(n))
+    assert np.array_equal(dense.reshape(n, n), moved)
+    # another row and column order of the same matrix
+    order = rng.permutation(n)
+    dense[:] = 0.0
+    sparse_lu.scatter_dense(lu.ints, lu.floats, dense, order, order)
+    assert np.array_equal(dense.reshape(n, n)[np.ix_(order, order)], moved)
+
+
+def test_a_kept_pivot_that_vanishes_is_rejected_and_the_matrix_pivots_afresh():
+    """Pivot 0 of a 2 x 2 block [[1, 1], [1e-3, 1]] at the reference: row 0. With its
+    entry at 1e-3 and the other at 1, the kept pivot fails the threshold test (1e-3 < 0.1):
+    refactor says REJECTED, factor pivots on row 1 instead and solves as numpy; refactor
+    then keeps the new pivots."""
+    rng = np.random.default_rng(3)
+    a = random_matrix(rng, 30, 0.05)
+    a[:2, :2] = [[1.0, 1.0], [1e-3, 1.0]]
+    lu = analysed(a)
+    moved = a.copy()
+    moved[:2, :2] = [[1e-3, 1.0], [1.0, 1.0]]
+    lu.set_matrix(moved)
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    x = lu.floats[-30:]  # the work vector is left clean
+    assert np.all(x == 0.0)
+    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert_solves(lu, moved, rng)
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert_solves(lu, moved, rng)
+    # an exactly vanishing pivot too
+    moved[:2, :2] = [[0.0, 1.0], [1.0, 1.0]]
+    lu.set_matrix(moved)
+    refactored = sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD)
+    if refactored == sparse_lu.REJECTED:
+        assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert_solves(lu, moved, rng)
+
+
+def test_a_singular_matrix_is_rejected_and_refused_at_packing():
+    rng = np.random.default_rng(4)
+    a = random_matrix(rng, 20, 0.1)
+    lu = analysed(a)
+    singular = a.copy()
+    singular[:, 5] = 0.0
+    lu.set_matrix(singular)
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    # no factorisation is kept: refactor refuses until a factor works
+    lu.set_matrix(a)
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    with pytest.raises(ValueError, match="singular at the reference point"):
+        rows, cols = np.nonzero(a)
+        sparse_lu.StaticLU(20, rows, cols, singular[rows, cols])
+
+
+def test_fill_beyond_the_packed_room_is_reported():
+    """An arrow matrix (diagonal, full first row and column) factors on its diagonal with the
+    full part last: L and U hold 59 and 119 entries, packed with no slack (room 120). With
+    the diagonal but the first at 1e-9 the full row becomes a pivot and U fills in beyond
+    the room: CAPACITY, and no factorisation is kept."""
+    n = 60
+    a = np.eye(n) * 4.0
+    a[0, :] = a[:, 0] = 1.0
+    a[0, 0] = 4.0
+    rows, cols = np.nonzero(a)
+    lu = sparse_lu.StaticLU(n, rows, cols, a[rows, cols], slack=0)
+    assert lu.multiplications["solve"] == 59 + 119
+    rng = np.random.default_rng(6)
+    swapped = a.copy()
+    swapped[np.arange(1, n), np.arange(1, n)] = rng.uniform(1e-9, 2e-9, n - 1)
+    lu.set_matrix(swapped)
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.CAPACITY
+    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    # with the default room the same matrix factors, and solves
+    roomy = analysed(a)
+    roomy.set_matrix(swapped)
+    assert sparse_lu.factor(roomy.ints, roomy.floats, sparse_lu.THRESHOLD) > 0.0
+    assert_solves(roomy, swapped, rng)
+
+
+def test_slots_name_the_entries_of_the_pattern():
+    rng = np.random.default_rng(5)
+    a = random_matrix(rng, 25, 0.1)
+    lu = analysed(a)
+    rows, cols = np.nonzero(a)
+    values = sparse_lu.matrix_values(lu.ints, lu.floats)
+    values[:] = 0.0
+    values[lu.slot(rows, cols)] = a[rows, cols]
+    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert_solves(lu, a, rng)
+    outside = np.argwhere(a == 0.0)[0]
+    with pytest.raises(ValueError, match=rf"entry \({outside[0]}, {outside[1]}\) is not in"):
+        lu.slot([outside[0]], [outside[1]])
