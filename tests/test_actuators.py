@@ -375,6 +375,38 @@ def test_the_steady_slopes_are_the_derivatives_of_the_steady_port_values():
         steady_slopes(plain, [0.0])[0] / K, rel=1e-9)
 
 
+@pytest.mark.parametrize("coils", [1, 2])
+def test_a_large_model_with_coils_takes_the_full_newton_matrix_in_esdirk(coils):
+    """From esdirk.REDUCED_FROM DOFs on ESDIRK solves I - hg J through a Schur complement of
+    J = [[0, I], [A, B]]; J = [[0, I, 0], [A, B, E], [0, F, G]] with coil currents is not of
+    that form (with one coil its first rows look so when split at n // 2): the full matrix,
+    and numpy's solution to the round-off of either."""
+    from flexure.core.simulation import esdirk
+
+    m = esdirk.REDUCED_FROM
+    n = 2 * m + coils
+    rng = np.random.default_rng(7)
+    J = np.zeros((n, n))
+    J[:m, m: 2 * m] = np.eye(m)
+    J[m: 2 * m, :m] = -rng.uniform(0.0, 1e6, (m, m)) / m
+    J[m: 2 * m, m: 2 * m] = -rng.uniform(0.0, 10.0, (m, m)) / m
+    J[m: 2 * m, 2 * m:] = rng.uniform(0.0, 10.0, (m, coils))  # M^-1 DF^T b Km
+    J[2 * m:, m: 2 * m] = -rng.uniform(0.0, 1e3, (coils, m))  # -Km / L b^T DF
+    J[2 * m:, 2 * m:] = -2e3 * np.eye(coils)  # -R / L
+    hg = 2e-4
+    LU, piv = np.zeros(n * n), np.zeros(n, dtype=np.int64)
+    flags = np.zeros(esdirk.I_SIZE, dtype=np.int64)
+    assert esdirk.factor(J.ravel(), LU, piv, hg, flags)
+    assert flags[esdirk.I_REDUCED] == 0
+    r = rng.standard_normal(n)
+    v = r.copy()
+    esdirk.newton_solve(J.ravel(), LU, piv, hg, flags, v)
+    matrix = np.eye(n) - hg * J
+    expected = np.linalg.solve(matrix, r)
+    bound = 10 * np.linalg.cond(matrix) * 2.2e-16 * np.max(np.abs(expected))
+    assert np.max(np.abs(v - expected)) <= bound
+
+
 def test_a_static_equilibrium_refuses_an_unknown_input():
     model = build_model(truss(), source="vcm")
     with pytest.raises(SceneError, match="^vcm: unknown input 'G'; the model 'truss_1dof_x' "

@@ -138,9 +138,11 @@ def _second_order(J, n):
     first-order Jacobian; checked, as a restored J could be anything). Then (I - hg J)
     [dq; dv] = [r1; r2] is dq = r1 + hg dv with (I - hg B - hg^2 A) dv = r2 + hg A r1: an
     LU of NDOF^3 / 3 multiplications instead of 8 NDOF^3 / 3. Below it the full matrix keeps
-    the small models' numbers as they were (its LU costs under a millisecond there)."""
+    the small models' numbers as they were (its LU costs under a millisecond there). A state
+    with coil currents ([q - q_ref, qdot, i], `engine.actuators`) is not of that form: with one
+    coil n is odd, with more the identity block is not at n / 2; it takes the full matrix."""
     m = n // 2
-    if m < REDUCED_FROM:
+    if m < REDUCED_FROM or n != 2 * m:
         return False
     for i in range(m):
         for j in range(n):
