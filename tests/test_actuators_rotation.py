@@ -29,6 +29,9 @@ from flexure.core import (
     state_space,
     static_equilibrium,
 )
+from flexure.core.engine import data as ed
+from flexure.core.engine import engine
+from flexure.core.engine.data import EngineData
 from flexure.core.scene.building import scene_key
 
 L, EA, GIT, EIY, EIZ = 0.2, 1e6, 3.0, 5.0, 2.0  # m, N, N m^2
@@ -216,7 +219,8 @@ def test_the_engine_takes_the_load_stiffness_of_a_coils_moment():
     stiffness 2 Km i P_z: taking the drive signal 0.7 instead changes the mechanical rows by
     1.8e-2), and it equals the linearisation's A (numpy: b from the ports, G0 with the port
     values). In motion the coil's blocks to 1e-8 (measured 2e-11), the mechanical rows to
-    the Newton matrix's own 1e-3 (measured 1.1e-4), d idot / dq left out (approximated)."""
+    the Newton matrix's own 1e-3 (measured 1.1e-4), d idot / dq left out (approximated); the
+    engine's augmented form (of large models) as its reduced one."""
     coil = {"VCM": {"input": "Mz", "force_constant": 0.5, "resistance": 2.0,
                     "inductance": 1e-3}}
     model = build_model(cantilever(
@@ -252,6 +256,19 @@ def test_the_engine_takes_the_load_stiffness_of_a_coils_moment():
     coil = 2 * n
     assert error[:, coil].max() <= 1e-8 and error[coil, n:].max() <= 1e-8
     assert error[n: 2 * n].max() <= 1e-3
+    # the engine's two forms of the accelerations (reduced; augmented, of large models) agree
+    forms = []
+    for augmented in (False, True):
+        data = EngineData(model, augmented=augmented)
+        data.float_array("inputs")[:] = [0.2, 0.7]
+        data.float_array("q_ref")[:] = sim.q_ref
+        ydot, J = np.zeros(coil + 1), np.zeros((coil + 1) ** 2)
+        assert engine.call(data, engine.OP_RHS, moving, ydot) == ed.OK
+        assert engine.call(data, engine.OP_JACOBIAN, moving, J, s=0.0) == ed.OK
+        forms.append((ydot, J))
+    for reduced, augmented in zip(*forms, strict=True):
+        np.testing.assert_allclose(augmented, reduced, rtol=0,
+                                   atol=1e-13 * np.abs(reduced).max())  # measured 1.9e-16
 
 
 # -- the FMU ---------------------------------------------------------------------------------------
