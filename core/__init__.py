@@ -30,6 +30,7 @@ _LAZY = {
     "proposed_releases": "mechanics.constraints",
     "Kinematics": "mechanics.kinematics",
     "Mechanics": "mechanics.mechanics",
+    "steady_port_values": "mechanics.actuators", "steady_slopes": "mechanics.actuators",
     "input_columns": "mechanics.ports", "input_values": "mechanics.ports",
     "output_rows": "mechanics.ports", "output_value": "mechanics.ports",
     "port_description": "mechanics.ports",
@@ -62,7 +63,7 @@ __all__ = [
     "natural_frequencies", "controller_step", "prepare", "principal_gains", "run_sampled_loop",
     "scene_path", "scene_toml",
     "simulate",
-    "state_space", "static_equilibrium",
+    "state_space", "static_equilibrium", "steady_port_values", "steady_slopes",
     "stresses_along",
 ]
 

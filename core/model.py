@@ -74,11 +74,13 @@ class Port:
     node's four Euler parameters, `axis` "rx", "ry" or "rz" and `coordinate` None; an input is
     a moment about that axis (N m), an output the rotation-vector component about it (rad) or
     the angular velocity about it (rad/s). `flexure.core.mechanics.ports` has their maths.
+    An input a voice-coil actuator drives is its amplifier's drive signal, quantity "drive"
+    and unit "V" (`Actuator`): the actuator's force or moment acts on the port.
     """
 
     name: str
     coordinate: int | None
-    quantity: str = "force"  # "force" or "moment" for inputs; "position" or "velocity"
+    quantity: str = "force"  # "force", "moment" or "drive" for inputs; "position", "velocity"
     unit: str = "N"
     euler: tuple = ()
     axis: str = ""
@@ -93,6 +95,32 @@ class Port:
         """What the port acts on or measures, comparable between ports: the coordinate
         index, or (the Euler parameter indices, the axis)."""
         return (self.euler, self.axis) if self.euler else self.coordinate
+
+
+VOLTAGE, CURRENT = "voltage", "current"  # the drives of an actuator's amplifier
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """A voice-coil actuator (VCM) that drives one input (`flexure.core.mechanics.actuators`
+    has its equations): the input's value becomes the drive signal of its amplifier, and the
+    actuator's force (or moment, on a port about a global axis) acts on the input's port.
+
+    force_constant Km (N/A, equal to the back-EMF constant in V s/m; N m/A, V s/rad on an
+    angle or about a global axis),
+    resistance R (ohm) and inductance L (H) of the coil; drive "voltage" (the amplifier sets
+    the coil voltage) or "current"; amplifier_gain G (V/V or A/V) from the drive signal to the
+    amplifier's output, which is clipped at +- saturation (V or A; inf: no limit).
+    """
+
+    name: str
+    input: int  # index into Model.inputs
+    force_constant: float
+    resistance: float
+    inductance: float
+    drive: str = VOLTAGE
+    amplifier_gain: float = 1.0
+    saturation: float = float("inf")
 
 
 @dataclass
@@ -124,6 +152,8 @@ class Model:
     chosen_dofs: tuple = ()
     # The node table: every node with its coordinates, in coordinate order
     nodes: tuple = ()
+    # The voice-coil actuators ([actuators.NAME]); an input without one is a force (N, N m)
+    actuators: list = field(default_factory=list)
     # The scene dictionary the model was built from (overrides applied; the scene's own
     # statuses, before meshing and DOF choice): what `to_toml` writes back
     scene: dict | None = field(default=None, repr=False, compare=False)
@@ -168,6 +198,12 @@ class Model:
     def ndof(self):
         """NDOF = NX - NXO - NEO."""
         return self.nx - self.nxo - self.neo
+
+    @property
+    def coil_actuators(self):
+        """The voltage-driven actuators, in scene order: each has one electrical state, its
+        coil current (A), after [q - q_ref, qdot] in the integrators' state."""
+        return [a for a in self.actuators if a.drive == VOLTAGE]
 
     @property
     def dof_names(self):

@@ -46,6 +46,13 @@ BASE_UNITS = {
     "m2": {"m": 2},
     "m3": {"m": 3},
     "1": {},
+    "A": {"A": 1},  # voice-coil actuators: coil current, drive signal, Km, R, L
+    "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
+    "N/A": {"kg": 1, "m": 1, "s": -2, "A": -1},
+    "N.m/A": {"kg": 1, "m": 2, "s": -2, "A": -1},
+    "A/V": {"kg": -1, "m": -2, "s": 3, "A": 2},
+    "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
+    "H": {"kg": 1, "m": 2, "s": -2, "A": -2},
 }
 
 REQUIREMENTS_FILE = "resources/requirements.txt"

@@ -10,9 +10,12 @@ the scene's TOML text and the scene keys a user may tune:
 Variables (only what the scene has):
 
 - one input per scene input (force N or moment N.m, start 0; a moment about a global axis of
-  a 3-D rotational node too), held over each step;
+  a 3-D rotational node too), held over each step; an input a voice-coil actuator drives is
+  its amplifier's drive signal (V);
 - one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
   global axis of a 3-D rotational node, rad, or its angular velocity, rad/s);
+- one output "NAME.current" (A) per voltage-driven actuator [actuators.NAME]: its coil
+  current, a state of the FMU;
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
   stress at the ends of the scene's beams with a cross-section, in the current state
   (`flexure.core.stresses_along`);
@@ -36,13 +39,15 @@ Values a host sets are checked when set (`check_value`): the method must be one 
 0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, cx, ...) >= 0 and any other tunable
 value > 0, all finite. A refused value puts the instance in the error state (see `SafeSlave`).
 A tunable key's unit, and whether it is a damping, are its schema's
-(`flexure.core.scene.building.scene_key`: the element section schemas and the node keys).
+(`flexure.core.scene.building.scene_key`: the element section schemas, the node keys and the
+actuators').
 """
 
 
 import copy
 import math
 import tomllib
+from dataclasses import replace
 
 import numpy as np
 from pythonfmu import DefaultExperiment
@@ -114,15 +119,25 @@ class SceneSlave(SafeSlave):
         self.inputs = np.zeros(len(model.inputs))
         self._refresh()
 
+        drivers = {a.input: a for a in model.actuators}
         for i, port in enumerate(model.inputs):
+            description = port_description(model, port, is_input=True)
+            if i in drivers:  # the port's own force or moment, which the actuator's acts as
+                acting = port_description(model, replace(port, quantity="force"), is_input=True)
+                description = (f"drive signal of actuator {drivers[i].name} ({drivers[i].drive} "
+                               f"amplifier) of the {acting}")
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
-                          description=port_description(model, port, is_input=True),
+                          description=description,
                           getter=lambda i=i: float(self.inputs[i]),
                           setter=lambda value, i=i: self.inputs.__setitem__(i, value))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
                           description=port_description(model, port, is_input=False),
                           getter=lambda j=j: float(self.outputs[j]))
+        for k, actuator in enumerate(model.coil_actuators):
+            self.add_real(f"{actuator.name}.current", causality="output", unit="A",
+                          description=f"coil current of actuator {actuator.name}",
+                          getter=lambda k=k: float(self.currents[k]))
         if self.von_mises:
             self.add_real("von_mises_max", causality="output", unit="Pa",
                           description="largest von Mises stress at the ends of the beams",
@@ -136,10 +151,11 @@ class SceneSlave(SafeSlave):
                       getter=lambda: self.rtol,
                       setter=lambda value: setattr(self, "rtol", value))
         # unit "1": one number compared with every state in that state's SI unit (m, rad,
-        # m/s, rad/s); FMI 2.0 has no unit for such a mix
+        # m/s, rad/s, A for a coil current); FMI 2.0 has no unit for such a mix
         self.add_real("integrator.atol", causality="parameter", unit="1", start=self.atol,
-                      description="absolute tolerance on q and qdot, each in its SI unit (0: "
-                                  "the simulator's default, scaled from rtol)",
+                      description="absolute tolerance on q and qdot (and the coil currents), "
+                                  "each in its SI unit (0: the simulator's default, scaled "
+                                  "from rtol)",
                       getter=lambda: self.atol,
                       setter=lambda value: setattr(self, "atol", value))
         self.add_integer("integrator.max_steps", start=self.max_steps,
@@ -148,7 +164,7 @@ class SceneSlave(SafeSlave):
                          getter=lambda: self.max_steps,
                          setter=lambda value: setattr(self, "max_steps", int(value)))
         for key in self.tunable:
-            schema = scene_key(key)
+            schema = scene_key(key, model)
             self.add_real(key, causality="parameter",
                           unit=schema.unit if schema is not None else None,
                           start=self.parameters[key], description=f"scene key {key}",
@@ -175,7 +191,7 @@ class SceneSlave(SafeSlave):
                 return (f"integrator.atol = {value!r}: expected a finite number >= 0 (0: the "
                         "simulator's default)")
         elif name in self.parameters:
-            schema = scene_key(name)
+            schema = scene_key(name, self._model)
             damping = schema is not None and schema.damping
             if not (math.isfinite(value) and (value >= 0.0 if damping else value > 0.0)):
                 return (f"{name} = {value!r}: expected a finite number "
@@ -204,9 +220,10 @@ class SceneSlave(SafeSlave):
     def _refresh(self):
         """Read the outputs (and the stress) from the simulator's current state."""
         self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self.currents = self.simulator.currents
         self.stress = float("nan")
         if self.von_mises:
-            state = np.concatenate([self.simulator.q, self.simulator.qdot])
+            state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
             _, stresses = stresses_along(self._model, [state], inputs=[self.inputs],
                                          mechanics=self._mechanics)
             self.stress = float(np.nanmax(stresses))
@@ -246,6 +263,7 @@ class SceneSlave(SafeSlave):
             self._build()
         self.simulator.set_state(state["simulator"])
         self.outputs = outputs
+        self.currents = self.simulator.currents
         self.stress = float(state["stress"])
 
     def _checked_state(self, state):

@@ -6,6 +6,25 @@ M0 = DF^T M DF is the reduced mass (kg), C0 the damping (N s/m), K0 the structur
 (N/m) and G0 the geometric stiffness from the stress resultants (N/m), all in the DOF units
 (m, rad). The default configuration is the static equilibrium under the scene's loads, so a
 compressive preload lowers the stiffness K0 + G0 and with it the frequencies.
+
+Voice-coil actuators (`flexure.core.mechanics.actuators`) enter the first-order form
+(`LinearModel.state_matrices`) exactly: the state z = [dq, dq', di] with di the coil currents
+of the voltage-driven actuators (A), the inputs du (N, N m for a force or moment, V for a
+drive signal),
+
+    A = [[0, I, 0], [-M0^-1 K, -M0^-1 C0, M0^-1 DF^T b_c Km], [0, -L^-1 Km b_c^T DF, -L^-1 R]]
+    B = [[0], [M0^-1 DF^T b], [L^-1 b_i]]
+
+with b_c the ports' unit generalised forces (`flexure.core.mechanics.ports.input_columns`:
+a unit column on a coordinate, 2 E_k^T on the Euler parameters for a moment about axis k) of
+the voltage-driven actuators, b those of the force and moment inputs and Km a'(u0) those of
+the current-driven ones, b_i a'(u0) of the voltage-driven ones, a' the amplifier's slope (G
+inside its limits, 0 where it saturates) at the held inputs u0 of the equilibrium (zero by
+default). b_c^T DF dq' is the port's velocity (its back-EMF Km b_c^T xdot); the load
+stiffness of a moment at its steady value is in G0. The back-EMF Km^2 / R damps the actuated
+motion and the coil adds its pole near -R / L. M0, C0 and K stay the mechanical matrices: the
+natural frequencies are those of the mechanism with its coils open (no current, no back-EMF
+force).
 """
 
 from __future__ import annotations
@@ -15,7 +34,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..mechanics.actuators import amplifier_slope
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.ports import input_columns
 from ..numerics.blas import blas_threads
 from .statics import StaticSolution, static_equilibrium
 
@@ -44,6 +65,42 @@ class LinearModel:
         """The first-order transfer function dx/dq (NX, NDOF) of the configuration."""
         return self.solution.config.DF
 
+    def state_matrices(self):
+        """(A, B, state names) of the first-order linear system dz/dt = A z + B du, z =
+        [dq, dq', di] (module docstring; di the coil currents, A): A (N, N), B (N, n_inputs)
+        with N = 2 NDOF + the coils, inputs N, N m for forces and moments and V for drive
+        signals."""
+        model, DF = self.model, self.DF
+        n, coils = self.M0.shape[0], model.coil_actuators
+        N = 2 * n + len(coils)
+        u0 = (np.zeros(len(model.inputs)) if self.solution.inputs is None
+              else self.solution.inputs)
+        A, B = np.zeros((N, N)), np.zeros((N, len(model.inputs)))
+        A[:n, n: 2 * n] = np.eye(n)
+        A[n: 2 * n, :n] = -np.linalg.solve(self.M0, self.K)
+        A[n: 2 * n, n: 2 * n] = -np.linalg.solve(self.M0, self.C0)
+        # d force / d u: the ports' unit generalised forces at the configuration
+        forces = input_columns(model, self.solution.config.x)
+        for actuator in model.actuators:
+            j = actuator.input
+            column = forces[:, j].copy()
+            slope = amplifier_slope(actuator, u0[j])
+            if actuator.drive == "current":
+                forces[:, j] = actuator.force_constant * slope * column
+                continue
+            k = 2 * n + coils.index(actuator)
+            forces[:, j] = 0.0
+            km, inductance = actuator.force_constant, actuator.inductance
+            A[n: 2 * n, k] = np.linalg.solve(self.M0, km * (DF.T @ column))
+            A[k, n: 2 * n] = -km / inductance * (column @ DF)
+            A[k, k] = -actuator.resistance / inductance
+            B[k, j] = slope / inductance
+        B[n: 2 * n] = np.linalg.solve(self.M0, DF.T @ forces)
+        dofs = model.dof_names
+        names = ([f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
+                 + [f"{a.name}.current" for a in coils])
+        return A, B, names
+
 
 @blas_threads()
 def linearize(model: Model, solution: StaticSolution | None = None, *,
@@ -60,5 +117,5 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
         C0=mech.damping_matrix(config),
         K0=mech.structural_stiffness(config),
         G0=mech.geometric_stiffness(config, solution.stress_resultants, solution.load_factor,
-                                    inputs=solution.inputs),
+                                    inputs=solution.port_values),
     )

@@ -2,7 +2,9 @@
 
 Frequencies solve (K0 + G0) phi = omega^2 M0 phi (scipy.linalg.eigh, symmetric-definite);
 mode shapes are normalised to unit modal mass and given on the DOFs and on all coordinates
-(DF phi). A negative frequency marks an unstable (divergent) mode, omega^2 < 0.
+(DF phi). A negative frequency marks an unstable (divergent) mode, omega^2 < 0. They are the
+mechanical frequencies: voice-coil actuators count as open coils (no current, no back-EMF
+force); their damping and the coils' poles are in the state space (`statespace`).
 
 Buckling load factors solve K0 phi + lambda G0 phi = 0 with G0 the geometric stiffness of the
 reference load at its equilibrium, as SPACAR's eig(-K0, G0); computed as the symmetric

@@ -11,6 +11,10 @@ is nonlinear in the coordinates; linearised at the configuration x of the linear
 column is the moment's generalised force 2 E_k(lambda)^T and its C row (d y / d lambda) DF_l:
 the rotation-vector component's gradient for an angle, 2 E_k for an angular velocity
 (`flexure.core.mechanics.ports`). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
+An input a voice-coil actuator drives is its drive signal (V), and a voltage-driven coil adds
+its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`, with the same b
+columns of the ports): the transfer from the drive signal to a position then shows the
+back-EMF damping and the coil's pole near -R/L.
 """
 
 from __future__ import annotations
@@ -43,23 +47,26 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None):
     n = lin.M0.shape[0]
     DF = lin.DF
     x = lin.solution.config.x
-    b = input_columns(model, x)
-    M_inv_K = np.linalg.solve(lin.M0, lin.K)
-    M_inv_C = np.linalg.solve(lin.M0, lin.C0)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
-    B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
-    C = np.zeros((len(model.outputs), 2 * n))
+    if model.actuators:
+        A, B, states = lin.state_matrices()
+    else:  # the force and moment inputs alone: the same numbers, as they have been computed
+        b = input_columns(model, x)
+        M_inv_K = np.linalg.solve(lin.M0, lin.K)
+        M_inv_C = np.linalg.solve(lin.M0, lin.C0)
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
+        B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
+        states = [f"{d}" for d in model.dof_names] + [f"{d}_dot" for d in model.dof_names]
+    C = np.zeros((len(model.outputs), A.shape[0]))
     rows = output_rows(model, x, DF)
     for row, port in enumerate(model.outputs):
         offset = 0 if port.quantity == "position" else n
         C[row, offset:offset + n] = rows[row]
     D = np.zeros((len(model.outputs), len(model.inputs)))
-    dofs = model.dof_names
     return control.ss(
         A, B, C, D,
         inputs=[p.name for p in model.inputs],
         outputs=[p.name for p in model.outputs],
-        states=[f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs],
+        states=states,
         name=model.name,
     )
 

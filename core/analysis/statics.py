@@ -7,6 +7,11 @@ stiffness K0 + G0 (quadratic convergence). A step that does not converge is halv
 times; then ConvergenceError names the load step and the load factor.
 Convergence: |dq| <= `tolerance` times the model's length scale (rotations count as lengths
 through that scale).
+
+Held inputs (`inputs`) put their steady values on their ports: a force or moment input its
+value (N, N m); an input a voice-coil actuator drives its actuator's force or moment at rest
+(`flexure.core.mechanics.actuators.steady_port_values`): Km sat(G u) for a current drive,
+Km sat(G u) / R for a voltage drive, whose coil current settles at sat(G u) / R.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConvergenceError
+from ..mechanics.actuators import steady_port_values
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_values
 from ..numerics.blas import blas_threads
@@ -34,7 +40,11 @@ class StaticSolution:
     stress_resultants: np.ndarray  # (NE,) N (truss, elongation), N (bending, as e2, e3 are m)
     load_factor: float
     iterations: int
-    inputs: np.ndarray | None = None  # (n_inputs,) N, N m held in this equilibrium, if any
+    # the held inputs (n_inputs,) N, N m, or V for an actuator's drive signal, if any
+    inputs: np.ndarray | None = None
+    # the values they hold on their ports (n_inputs,) N, N m: the forces and moments, and the
+    # actuators' at rest (`actuators.steady_port_values`); what the load stiffness takes
+    port_values: np.ndarray | None = None
 
     @property
     def q(self):
@@ -62,41 +72,46 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        start: StaticSolution | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
 
-    `inputs` ({name: value} or (n_inputs,), N and N m) are held as well, stepped with the
+    `inputs` ({name: value} or (n_inputs,): N, N m for a force or moment, V for the drive
+    signal of an input a voice-coil actuator drives) are held as well, stepped with the
     loads: a force on its coordinate, a moment about a global axis through its generalised
     force on the Euler parameters (`flexure.core.mechanics.ports`; it depends on the
-    orientation, so it cannot be given as `loads`). `start`, an equilibrium of the same model
-    under nearby loads and inputs, is where Newton starts at the full load (a path of
-    equilibria, e.g. inverse statics along a move); if it does not converge from there, the
-    load is stepped from the unloaded configuration as without it. Returns a StaticSolution;
-    raises ConvergenceError naming the load step that failed.
+    orientation, so it cannot be given as `loads`), an actuator's force or moment at rest
+    (module docstring). `start`, an equilibrium of the same model under nearby loads and
+    inputs, is where Newton starts at the full load (a path of equilibria, e.g. inverse
+    statics along a move); if it does not converge from there, the load is stepped from the
+    unloaded configuration as without it. Returns a StaticSolution;
+    raises ConvergenceError naming the load step that failed, SceneError naming an unknown
+    input.
     """
+    held = values = None
     if inputs is not None:
-        inputs = input_values(model, inputs)
+        held = input_values(model, inputs)
+        values = steady_port_values(model, held) if model.actuators else held
     mech = mechanics or Mechanics(model)
     kin = mech.kinematics
     scale = kin.length_scale
     if start is not None:
         try:
-            config, iterations = _newton(mech, start.config, 1.0, loads, inputs,
+            config, iterations = _newton(mech, start.config, 1.0, loads, values,
                                          tolerance * scale, max_iterations)
         except ConvergenceError:
             pass
         else:
-            _, _, sigma = mech.static_balance(config, 1.0, loads, inputs)
-            return StaticSolution(model, config, sigma, 1.0, iterations, inputs)
+            _, _, sigma = mech.static_balance(config, 1.0, loads, values)
+            return StaticSolution(model, config, sigma, 1.0, iterations, held, values)
     config = mech.initial_configuration()
     total_iterations = 0
     # Without loads and gravity there is nothing to step: the reference configuration (all
     # deformations zero) balances, and one Newton step at full load confirms it.
-    unloaded = not np.any(mech.external_force(config.x, 1.0, loads, inputs))
+    unloaded = not np.any(mech.external_force(config.x, 1.0, loads, values))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     halvings = 0
     step_number = 0
     while factor < 1.0 - 1e-12:
         target = min(1.0, factor + step)
         try:
-            config, iterations = _newton(mech, config, target, loads, inputs,
+            config, iterations = _newton(mech, config, target, loads, values,
                                          tolerance * scale, max_iterations)
         except ConvergenceError as error:
             if halvings == 4:
@@ -111,16 +126,17 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         total_iterations += iterations
         factor = target
         step_number += 1
-    _, _, sigma = mech.static_balance(config, 1.0, loads, inputs)
-    return StaticSolution(model, config, sigma, 1.0, total_iterations, inputs)
+    _, _, sigma = mech.static_balance(config, 1.0, loads, values)
+    return StaticSolution(model, config, sigma, 1.0, total_iterations, held, values)
 
 
-def _newton(mech, config, load_factor, loads, inputs, step_tolerance, max_iterations):
+def _newton(mech, config, load_factor, loads, values, step_tolerance, max_iterations):
+    """Newton's method at one load factor; values: the inputs' port values (N, N m)."""
     kin = mech.kinematics
     for iteration in range(1, max_iterations + 1):
-        Q, _, sigma = mech.static_balance(config, load_factor, loads, inputs)
+        Q, _, sigma = mech.static_balance(config, load_factor, loads, values)
         K = mech.structural_stiffness(config) + mech.geometric_stiffness(
-            config, sigma, load_factor, inputs=inputs)
+            config, sigma, load_factor, inputs=values)
         try:
             dq = np.linalg.solve(K, Q)
         except np.linalg.LinAlgError:

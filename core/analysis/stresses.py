@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..mechanics.actuators import port_values
+from ..mechanics.ports import input_forces
 from ..numerics.blas import blas_threads
 
 
@@ -138,11 +140,12 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
     """Von Mises stresses along a trajectory: (names, (n_times, n_beams, 2) Pa).
 
     states (n_times, 2 NDOF) = [q, qdot] as `SimulationResult` holds them (q, qdot side by
-    side); inputs (n_times, n_inputs) N, N m: the scene's inputs (default zero). The
-    accelerations follow from the equations of motion in each state.
+    side), followed by the coil currents (A) of a model with voltage-driven actuators (zero
+    when left out); inputs (n_times, n_inputs) the held inputs (N, N m: the scene's forces
+    and moments; V for an actuator's drive signal; default zero). The accelerations follow
+    from the equations of motion in each state.
     """
     from ..mechanics.mechanics import Mechanics
-    from ..mechanics.ports import input_forces
 
     mech = mechanics or Mechanics(model)
     ndof = model.declared_dof_count
@@ -152,9 +155,14 @@ def stresses_along(model, states, *, inputs=None, mechanics=None):
         config = mech.kinematics.solve(state[:ndof], x)
         x = config.x
         force = np.zeros(model.nx)
-        if inputs is not None:  # forces on their coordinates, moments by their orientation
-            force = input_forces(model, x, inputs[k])
-        sigma = dynamic_stress_resultants(mech, config, state[ndof:], input_force=force)
+        currents = state[2 * ndof:] if state.size > 2 * ndof else None
+        if inputs is not None or model.actuators:  # a coil's current acts without inputs
+            held = np.zeros(len(model.inputs)) if inputs is None else inputs[k]
+            values = port_values(model, held, currents) if model.actuators else held
+            # forces on their coordinates, moments by their orientation
+            force = input_forces(model, x, values)
+        sigma = dynamic_stress_resultants(mech, config, state[ndof: 2 * ndof],
+                                          input_force=force)
         stresses = beam_stresses(model, x, sigma)
         names = stresses.names
         result.append(stresses.von_mises)

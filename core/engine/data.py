@@ -38,23 +38,29 @@ INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformat
              "deformation_index", "row_of_deformation", "column_of_coordinate", "pivots",
              "mass_pivots", "counters", "augmented_pivots", "j_row_position",
              "j_column_position", "augmented_position", "mass_pattern", "point_columns",
-             "j_sparse", "j_map", "aug_sparse", "aug_map", "stress_pointers", "stress_columns")
+             "j_sparse", "j_map", "aug_sparse", "aug_map", "stress_pointers", "stress_columns",
+             "actuators")
 # float64 slots (`floats`)
 FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
                "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
                "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot",
                "augmented", "augmented_rhs", "band_scratch", "j_sparse_values",
-               "aug_sparse_values")
+               "aug_sparse_values", "actuator_data", "currents", "port_values")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
  MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, ENGINE, AUGMENTED, REDUCED,
- MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, J_SPARSE, A_SPARSE, J_FACTORS, DIMS_SIZE) = range(31)
+ MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, J_SPARSE, A_SPARSE, J_FACTORS, NEL,
+ DIMS_SIZE) = range(32)
 # per-group row of `groups`
 (G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
  G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
  G_INERTIA_ENTRY, G_PATTERN_OFFSET, G_PATTERN_COUNT, G_WIDTH) = range(18)
+# per input: its kind in slot actuators (with the index of its coil current), and its
+# coefficients in slot actuator_data (`engine.actuators`)
+FORCE_INPUT, CURRENT_DRIVE, VOLTAGE_DRIVE = range(3)
+(A_KM, A_R, A_L, A_GAIN, A_SATURATION, A_WIDTH) = range(6)
 # settings entries
 TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
 # counters entries
@@ -76,7 +82,8 @@ class EngineData:
     ----------
     model : Model
         The model; its inputs are forces (N, N m) on their coordinates or moments (N m)
-        about a global axis of a 3-D rotational node (`ports`).
+        about a global axis of a 3-D rotational node (`ports`), or the drive signals (V) of
+        the voice-coil actuators that act on them (`actuators`).
     tolerance : float
         Kinematic tolerance relative to the length scale (default 1e-14: near round-off, so
         the kinematic error stays below the tightest integrator tolerance).
@@ -181,6 +188,8 @@ class EngineData:
         dims[[NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS]] = (
             nx, ne, ndof, free.size, model.rigid_deformations.size, model.dof_coordinates.size,
             model.dof_deformations.size, len(model.inputs), stressed.size, len(groups))
+        dims[NEL] = len(model.coil_actuators)  # the electrical states after [q - q_ref, qdot]
+        nstate = 2 * ndof + dims[NEL]
         dims[HAS_DAMPING] = int(np.any(D))
         dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
         dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
@@ -240,6 +249,7 @@ class EngineData:
         # the augmented system of the accelerations: free coordinates and the multipliers of
         # the rigid constraint rows (engine.evaluate)
         augmented = free.size + model.rigid_deformations.size
+        actuator_kinds, actuator_data = _actuator_arrays(model)
         ints = {
             "dims": dims, "free": free.astype(np.int64), "constraint_rows": rows.astype(np.int64),
             "dof_coordinates": model.dof_coordinates.astype(np.int64),
@@ -270,6 +280,7 @@ class EngineData:
             "stress_pointers": np.concatenate([[0], np.cumsum(np.bincount(
                 stress_rows, minlength=stressed.size))]).astype(np.int64),
             "stress_columns": stress_columns.astype(np.int64),
+            "actuators": actuator_kinds,
         }
         floats = {
             "settings": settings, "S": S[stress_rows, stress_columns],
@@ -286,7 +297,7 @@ class EngineData:
             "mass_lu": np.zeros(ndof * ndof), "reduced_force": np.zeros(ndof),
             "qddot": np.zeros(ndof), "conv": np.zeros(nx), "local": np.zeros(scratch),
             "DeF": np.zeros(ne * ndof), "stiffness": np.zeros(ndof * ndof),
-            "damping": np.zeros(ndof * ndof), "jacobian_cache": np.zeros(4 * ndof * ndof),
+            "damping": np.zeros(ndof * ndof), "jacobian_cache": np.zeros(nstate * nstate),
             "x_start": model.initial_coordinates.astype(float).copy(),
             "xddot": np.zeros(nx), "augmented": np.zeros(augmented * augmented),
             "augmented_rhs": np.zeros(augmented), "band_scratch": np.zeros(augmented),
@@ -294,6 +305,10 @@ class EngineData:
             # changes them)
             "j_sparse_values": np.zeros(0) if j_lu is None else j_lu.floats.copy(),
             "aug_sparse_values": np.zeros(0) if a_lu is None else a_lu.floats.copy(),
+            "actuator_data": actuator_data, "currents": np.zeros(dims[NEL]),
+            # the value each input puts on its port in the last evaluation (N, N m; only
+            # with actuators: without, the inputs themselves; `actuators.port_values`)
+            "port_values": np.zeros(len(model.inputs) if model.actuators else 0),
         }
         self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)
         self.floats = tuple(np.ascontiguousarray(floats[name], dtype=float)
@@ -429,6 +444,25 @@ def _augmented_order(model, nf, row_of_def, col_of_coord, inertia_groups):
     position = np.empty(na, dtype=np.int64)
     position[order] = np.arange(na)
     return position, kl, ku
+
+
+def _actuator_arrays(model):
+    """(kinds (2 n_inputs,): per input its kind and the index of its coil current or -1;
+    coefficients (A_WIDTH n_inputs,): per input Km N/A, R ohm, L H, G, saturation V or A)."""
+    n = len(model.inputs)
+    kinds = np.zeros(2 * n, dtype=np.int64)
+    kinds[1::2] = -1
+    data = np.zeros(A_WIDTH * n)
+    for actuator in model.actuators:
+        j = actuator.input
+        voltage = actuator.drive == "voltage"
+        kinds[2 * j] = VOLTAGE_DRIVE if voltage else CURRENT_DRIVE
+        if voltage:
+            kinds[2 * j + 1] = model.coil_actuators.index(actuator)
+        data[A_WIDTH * j: A_WIDTH * (j + 1)] = (
+            actuator.force_constant, actuator.resistance, actuator.inductance,
+            actuator.amplifier_gain, actuator.saturation)
+    return kinds, data
 
 
 def _concat_int(parts):

@@ -19,7 +19,9 @@ with the dense LU of small matrices (M_bar, the integrators' Newton matrices) fr
 First-order form (CVODE, ESDIRK): the state y = [q - q_ref, qdot] and ydot = [qdot, qddot],
 its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the residual
 [qp - qdot; M_bar (qddot_p - qddot(q, qdot))] and its Jacobian d res / d y + cj d res / d yp
-= [[cj I, -I], [K, C + cj M_bar]]. Every operation reaches compiled code (a SUNDIALS callback,
+= [[cj I, -I], [K, C + cj M_bar]]. A scene with voltage-driven actuators appends their coil
+currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tangent blocks
+from `actuators`. Every operation reaches compiled code (a SUNDIALS callback,
 the sampled loop, Python through `call`) through the one C function `engine_entry`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
@@ -39,6 +41,13 @@ from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of
 from . import data as ed
 from . import slots as slot
+from .actuators import (
+    current_rates,
+    current_residual,
+    first_order_blocks,
+    implicit_blocks,
+    set_currents,
+)
 from .kinematics import compute_DF, deformations, solve_kinematics, solve_positions
 from .motion import evaluate, reduced_mass
 from .slots import float_array, int_array
@@ -56,18 +65,21 @@ _i, _f = int_array, float_array  # the short names of the many uses below
 # -- first-order form for the integrators ---------------------------------------------------------
 @kernel
 def first_order_rhs(table, y, ydot):
-    """ydot = [qdot, qddot] for the state y = [q - q_ref, qdot]; a status code.
+    """ydot = [qdot, qddot(, di/dt)] for the state y = [q - q_ref, qdot(, i)]; a status code.
 
     The absolute DOFs are formed in the last NDOF entries of the scratch array, which no
     other part of an evaluation uses."""
-    n = _i(table, slot.DIMS)[ed.NDOF]
-    for j in range(2 * n):
+    dims = _i(table, slot.DIMS)
+    n, n_el = dims[ed.NDOF], dims[ed.NEL]
+    for j in range(2 * n + n_el):
         if not np.isfinite(y[j]):
             return ed.NONFINITE_STATE
     q_abs = _f(table, slot.LOCAL)[_f(table, slot.LOCAL).size - n:]
     q_ref = _f(table, slot.Q_REF)
     for j in range(n):
         q_abs[j] = q_ref[j] + y[j]
+    if n_el:
+        set_currents(table, y, n)
     status = evaluate(table, q_abs, y[n: 2 * n])
     if status != ed.OK:
         return status
@@ -79,13 +91,16 @@ def first_order_rhs(table, y, ydot):
         for j in range(n):
             ydot[j] = y[n + j]
             ydot[n + j] = qddot[j]
+        if n_el:
+            current_rates(table, ydot, n)
     return ed.OK
 
 
 @kernel
 def first_order_jacobian(table, y, J, column_major):
-    """d ydot / d y (2n, 2n) into J (flat; column-major for SUNDIALS' dense matrix):
-    [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at y; a status code."""
+    """d ydot / d y (N, N; N = 2n plus the coil currents) into J (flat; column-major for
+    SUNDIALS' dense matrix): [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at
+    y, and the coils' blocks (`actuators.first_order_blocks`); a status code."""
     status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
     if status != ed.OK:
         return status
@@ -96,7 +111,8 @@ def first_order_jacobian(table, y, J, column_major):
     K, C = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
     mass_lu, piv = _f(table, slot.MASS_LU), _i(table, slot.MASS_PIVOTS)
     column = _f(table, slot.REDUCED_FORCE)
-    N = 2 * n
+    n_el = _i(table, slot.DIMS)[ed.NEL]
+    N = 2 * n + n_el
     J[:] = 0.0
     for j in range(n):
         _put(J, N, j, n + j, 1.0, column_major)
@@ -111,6 +127,8 @@ def first_order_jacobian(table, y, J, column_major):
         lu_solve(mass_lu, n, piv, column)
         for i in range(n):
             _put(J, N, n + i, n + j, -column[i], column_major)
+    if n_el:
+        first_order_blocks(table, J, N, n, column_major)
     return ed.OK
 
 
@@ -124,7 +142,8 @@ def _put(J, N, i, j, value, column_major):
 
 @kernel
 def implicit_residual(table, y, yp, res):
-    """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot))]; a status code."""
+    """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot, i)); ip - di/dt] (the last
+    rows for the coil currents only); a status code."""
     status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
     if status != ed.OK:
         return status
@@ -139,13 +158,16 @@ def implicit_residual(table, y, yp, res):
         for j in range(n):
             s += mass[i * n + j] * (yp[n + j] - qddot[j])
         res[n + i] = s
+    if _i(table, slot.DIMS)[ed.NEL]:
+        current_residual(table, yp, res, n)
     return ed.OK
 
 
 @kernel
 def implicit_jacobian(table, y, yp, cj, J):
-    """IDA's d res / d y + cj d res / d yp, column-major (2n, 2n): [[cj I, -I], [K, C + cj
-    M_bar]] with the tangent's dynamic balance at qddot = yp[n:]; a status code."""
+    """IDA's d res / d y + cj d res / d yp, column-major (N, N; N = 2n plus the coil
+    currents): [[cj I, -I], [K, C + cj M_bar]] with the tangent's dynamic balance at
+    qddot = yp[n: 2n], and the coils' blocks (`actuators.implicit_blocks`); a status code."""
     status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
     if status != ed.OK:
         return status
@@ -154,7 +176,8 @@ def implicit_jacobian(table, y, yp, cj, J):
     if status != ed.OK:
         return status
     K, C, mass = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING), _f(table, slot.MASS)
-    N = 2 * n
+    n_el = _i(table, slot.DIMS)[ed.NEL]
+    N = 2 * n + n_el
     J[:] = 0.0
     for i in range(n):
         J[i * N + i] = cj
@@ -162,6 +185,8 @@ def implicit_jacobian(table, y, yp, cj, J):
         for j in range(n):
             J[j * N + n + i] = K[i * n + j]
             J[(n + j) * N + n + i] = C[i * n + j] + cj * mass[i * n + j]
+    if n_el:
+        implicit_blocks(table, J, N, n, cj)
     return ed.OK
 
 
@@ -177,14 +202,15 @@ ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.void
 def engine_entry(op, user_data, t, a, b, c, s):
     """Every operation of the engine on the packed model at user_data (an address table):
 
-    OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major), OP_RESIDUAL (y, yp, res),
+    OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major; y of 2 NDOF plus the coil
+    currents), OP_RESIDUAL (y, yp, res),
     OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q; with DF), OP_DEFORMATIONS (x;
     s = order), OP_EVALUATE (q, qdot; with DF and M_bar), OP_TANGENT (qddot), OP_POSITIONS
     (q; x by Newton from slot x_start, nothing else). Returns the status code."""
     table = address_of(user_data)
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
-    n = 2 * ndof
+    n = 2 * ndof + dims[ed.NEL]  # the integrators' state: [q - q_ref, qdot, coil currents]
     f8 = np.float64
     if op == OP_RHS:
         return first_order_rhs(table, carray(a, (n,), f8), carray(b, (n,), f8))

@@ -1,6 +1,7 @@
 """Equations of motion in the compiled engine: the accelerations qddot (m/s^2, rad/s^2).
 
-For DOFs q, velocities qdot (m/s, rad/s) and the held inputs u (N, N m), in the reduced form
+For DOFs q, velocities qdot (m/s, rad/s) and the held inputs u (N, N m; an actuated input's
+force or moment from its drive signal or its coil current: `actuators`), in the reduced form
 of the course notes (or, for models with many DOFs, in the augmented form on the free
 coordinates that `evaluate` describes, which gives the same qddot without forming DF and
 M_bar; `data.evaluation_cost` picks one per model):
@@ -25,6 +26,7 @@ from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
+from .actuators import port_values
 from .factors import (
     add_element_mass,
     add_lumped,
@@ -107,7 +109,8 @@ def evaluate(table, q, qdot):
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
     r[:] = _f(table, slot.CONST_FORCE)
-    add_input_forces(_i(table, slot.INPUT_PORTS), _f(table, slot.INPUTS), x, r)
+    # the inputs' forces and moments, or the actuators' (`actuators.port_values`)
+    add_input_forces(_i(table, slot.INPUT_PORTS), port_values(table), x, r)
     _scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0

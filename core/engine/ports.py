@@ -7,8 +7,9 @@ Each port is packed as one int64 row of PORT_WIDTH entries (`port_specs`):
                                              of the node with Euler parameters x[l0 .. l3]
 
 and the kernels below are the compiled twins of `flexure.core.mechanics.ports` (the maths is
-in its docstring): the generalised force of the inputs, its load stiffness, and the value of
-an output. Units: N, N m, m, rad, as the model's.
+in its docstring): the generalised force of the inputs, its load stiffness, the value of an
+output, and a port's velocity (the power conjugate of its force or moment, which a voice
+coil's back-EMF takes: `actuators`). Units: N, N m, m, rad, as the model's.
 """
 
 import numpy as np
@@ -93,3 +94,34 @@ def position_value(specs, j, x):
         return x[specs[base + 1]]
     return rotation_vector_value(x[specs[base + 1]], x[specs[base + 2]], x[specs[base + 3]],
                                  x[specs[base + 4]], specs[base + 5])
+
+
+@kernel
+def port_velocity(specs, j, x, xdot):
+    """The velocity of port j (packed rows, flat) at coordinates x and velocities xdot: xdot_c
+    (m/s, rad/s), or the angular velocity omega_k = 2 E_k(lambda) lambda_dot about axis k
+    (rad/s); the power conjugate of the port's force or moment."""
+    base = j * PORT_WIDTH
+    if specs[base] == COORDINATE:
+        return xdot[specs[base + 1]]
+    i0, i1, i2, i3 = specs[base + 1], specs[base + 2], specs[base + 3], specs[base + 4]
+    e0, e1, e2, e3 = rates_row(x[i0], x[i1], x[i2], x[i3], specs[base + 5])
+    return 2.0 * (e0 * xdot[i0] + e1 * xdot[i1] + e2 * xdot[i2] + e3 * xdot[i3])
+
+
+@kernel
+def port_row(specs, j, x, DF, ndof, out):
+    """out (ndof,) = b_j(x)^T DF: the velocity of port j per DOF velocity, and the generalised
+    force on the DOFs of a unit value of it (b_j the port's unit generalised force on the
+    coordinates). DF (NX NDOF) flat, row by row."""
+    base = j * PORT_WIDTH
+    if specs[base] == COORDINATE:
+        c = specs[base + 1]
+        for i in range(ndof):
+            out[i] = DF[c * ndof + i]
+        return
+    i0, i1, i2, i3 = specs[base + 1], specs[base + 2], specs[base + 3], specs[base + 4]
+    e0, e1, e2, e3 = rates_row(x[i0], x[i1], x[i2], x[i3], specs[base + 5])
+    for i in range(ndof):
+        out[i] = 2.0 * (e0 * DF[i0 * ndof + i] + e1 * DF[i1 * ndof + i]
+                        + e2 * DF[i2 * ndof + i] + e3 * DF[i3 * ndof + i])

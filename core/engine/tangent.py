@@ -5,7 +5,8 @@ At the state of the last `motion.evaluate` and accelerations qddot: mass M_bar,
 damping C0 = DeF_s^T D DeF_s (N s/m, N m s/rad) and stiffness K0 + G0 (N/m, N m/rad),
 
     K0 = DeF_s^T S DeF_s,   G0 = sum_e DF_e^T (sum_i sigma_i D2e_i) DF_e - DF^T (df/dx) DF,
-    DeF = De DF, df/dx the load stiffness of the moment inputs (`ports`; zero without them),
+    DeF = De DF, df/dx the load stiffness of the moment inputs (`ports`; zero without them;
+    an actuator's moment at its value of that evaluation, `actuators`),
 
 with sigma the stress resultants of the full dynamic balance: sigma_c plus the multipliers
 J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed deformations).
@@ -15,6 +16,7 @@ from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
+from .actuators import evaluated_port_values
 from .factors import j_solve
 from .motion import reduced_mass
 from .ports import has_moment_inputs, subtract_input_stiffness
@@ -125,7 +127,8 @@ def tangent(table, qddot):
                 K[i * ndof + j] += v * SD[j]
                 if damped:
                     C[i * ndof + j] += v * DD[j]
-    specs, inputs = _i(table, slot.INPUT_PORTS), _f(table, slot.INPUTS)
+    # the moments of the last evaluation: an input's, or an actuator's (Km sat(G u), Km i)
+    specs, inputs = _i(table, slot.INPUT_PORTS), evaluated_port_values(table)
     if has_moment_inputs(specs, inputs):  # - DF^T df/dx DF: a moment's force depends on x
         subtract_input_stiffness(specs, inputs, DF, ndof, K)
     return ed.OK

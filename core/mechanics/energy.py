@@ -33,8 +33,10 @@ def mechanical_energy(model, q, qdot, u=None, *, x_start=None):
     q, qdot : arrays (NDOF,)
         DOFs (m, rad) and their velocities (m/s, rad/s).
     u : array (n_inputs,), optional
-        Held inputs (N, N m); their work potential -u . x_input is included. A moment input
-        about a global axis has none (FlexureError unless it is zero).
+        Held forces (N, N m) on the inputs' coordinates; their work potential -u . x_input is
+        included. For an input a voice-coil actuator drives, its force
+        (`flexure.core.mechanics.actuators.port_values`), not its drive signal. A moment
+        input about a global axis has none (FlexureError unless it is zero).
     x_start : array (NX,), optional
         Start of the kinematics' Newton iterations (default: the scene's coordinates).
     """

@@ -88,6 +88,12 @@ class Scene:
         3-D rotational node a moment (N m) about a global axis (coordinate "rx", "ry", "rz")."""
         return self._add("inputs", name, {"node": node, "coordinate": coordinate})
 
+    def actuator(self, name: str, *, input: str, **keys) -> Scene:
+        """An [actuators.NAME]: a voice-coil actuator driving the input `input` (which becomes
+        its drive signal, V); force_constant (N/A), resistance (ohm), inductance (H), drive
+        ("voltage" or "current"), amplifier_gain (V/V or A/V), saturation (V or A)."""
+        return self._add("actuators", name, {"input": input, **keys})
+
     def output(self, name: str, *, node: str, coordinate: str,
                quantity: str = "position") -> Scene:
         """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate, or on a 3-D

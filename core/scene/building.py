@@ -1,9 +1,10 @@
 """Scenes: TOML files (or dicts) that declare a model, validated on load.
 
 A scene has the tables [scene], [sections.NAME], [nodes.NAME], [elements.NAME] and the
-optional [inputs.NAME], [outputs.NAME] and [buckling]; README.md documents every key. Every
-problem is reported as a SceneError that names the file, the key and what is wrong; the
-exact-constraint check then refuses an over- or under-constrained model (ConstraintError).
+optional [inputs.NAME], [actuators.NAME], [outputs.NAME] and [buckling];
+docs/scene-format.md documents every key. Every problem is reported as a SceneError that names
+the file, the key and what is wrong; the exact-constraint check then refuses an over- or
+under-constrained model (ConstraintError).
 
 Spatial scenes (dimension = 3): translational nodes have position = [x, y, z]; a rotational
 node has rotation = [rx, ry, rz] (its initial orientation as a rotation vector, rad), is
@@ -32,6 +33,7 @@ from ..mechanics.constraints import check_exact_constraint, choose_dofs
 from ..model import DEPENDENT, DOF, FIXED, Model, Node
 from .overrides import apply_overrides
 from .rotational_nodes import RotationalNodeBuilding
+from .scene_actuators import ACTUATOR_KEYS, ActuatorBuilding, actuator_key
 from .scene_elements import ElementBuilding
 from .scene_ports import PortBuilding
 from .scene_reader import MAX_ANGLE, SceneReader, show
@@ -115,10 +117,12 @@ def parse_toml(path):
         raise SceneError(f"{path}: not valid TOML: {error}") from None
 
 
-def scene_key(key: str) -> SchemaKey | None:
+def scene_key(key: str, model: Model | None = None) -> SchemaKey | None:
     """The SchemaKey (unit, meaning, ...) of a dotted scene key that holds a number:
-    "sections.NAME.KEY" (an element property, or a section's shape or material) or
-    "nodes.NAME.KEY" ("mass", "inertia", ...); "elements.NAME.segments"; None for any other
+    "sections.NAME.KEY" (an element property, or a section's shape or material),
+    "nodes.NAME.KEY" ("mass", "inertia", ...), "elements.NAME.segments" or
+    "actuators.NAME.KEY" (force_constant, resistance, inductance; with the `model`, also the
+    units that depend on the actuator: `scene_actuators.actuator_key`); None for any other
     key."""
     table, _, rest = key.partition(".")
     name = rest.rpartition(".")[2] if "." in rest else None
@@ -128,6 +132,8 @@ def scene_key(key: str) -> SchemaKey | None:
         return NODE_KEYS.get(name)
     if table == "elements" and name == "segments":
         return SEGMENTS_KEY
+    if table == "actuators" and name:
+        return ACTUATOR_KEYS.get(name) if model is None else actuator_key(model, key)
     return None
 
 
@@ -146,11 +152,11 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
 
 
 class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNodeBuilding,
-                    PortBuilding):
+                    PortBuilding, ActuatorBuilding):
     """Builds a Model from a scene dictionary: the checked reading of values
     (`SceneReader`), the [sections] (`SectionBuilding`), the [elements] (`ElementBuilding`),
     the 3-D rotational nodes (`RotationalNodeBuilding`), the [inputs] and [outputs]
-    (`PortBuilding`) and the rest here."""
+    (`PortBuilding`), the [actuators] (`ActuatorBuilding`) and the rest here."""
 
     def __init__(self, data, source, default_name):
         self.data = data
@@ -163,7 +169,8 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
     def build(self, *, check):
         data = self.table("scene file", self.data)
         self.check_keys("scene file", data, {
-            "scene", "sections", "nodes", "elements", "inputs", "outputs", "buckling"})
+            "scene", "sections", "nodes", "elements", "inputs", "actuators", "outputs",
+            "buckling"})
         header = self.table("scene", data.get("scene", {}))
         self.check_keys("scene", header,
                         {"name", "description", "dimension", "gravity", "tunable"})
@@ -197,6 +204,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             self.add_normalisation(groups, deformation_names, deformation_status)
             self.add_rotation_dofs(groups, deformation_names, deformation_status)
         inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        actuators, inputs = self.build_actuators(data.get("actuators", {}), inputs)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         for port in outputs:
             if port.name in {p.name for p in inputs}:
@@ -225,6 +233,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             gravity=gravity,
             inputs=inputs,
             outputs=outputs,
+            actuators=actuators,
             buckling_loads=buckling,
             source=self.source,
             node_inertias=self.node_inertias,

@@ -5,12 +5,12 @@
     flexure analyze stage_planar_1dof --set sections.leaf.height=0.3e-3 --set nodes.3.mass=0.2
 
 An override names one value of the scene: `scene.KEY` or `buckling.KEY`, or `TABLE.NAME.KEY` in
-a table of named entries (sections, nodes, elements, inputs, outputs). NAME must be one the
-scene declares: an override changes a scene, it adds no node, section or element to it. KEY may
-be one the file leaves out where the scene format allows it (`nodes.3.mass` on a node the file
-gives no mass): the scene builder then checks every key and value exactly as it checks the
-file's own, and its message names the override as `--set KEY` (`SceneReader.fail`). A list (a
-position, `fixed`, the buckling forces) is set as a whole.
+a table of named entries (sections, nodes, elements, inputs, actuators, outputs). NAME must be
+one the scene declares: an override changes a scene, it adds no node, section or element to it.
+KEY may be one the file leaves out where the scene format allows it (`nodes.3.mass` on a node
+the file gives no mass): the scene builder then checks every key and value exactly as it checks
+the file's own, and its message names the override as `--set KEY` (`SceneReader.fail`). A list
+(a position, `fixed`, the buckling forces) is set as a whole.
 
 On the command line VALUE is read as a TOML value (`0.3e-3`, `[0, 1]`, `"text"`, `true`); text
 that is not one is taken as a string (`--set elements.bar.type=PLTRUSS`).
@@ -29,7 +29,7 @@ __all__ = ["apply_overrides", "describe_overrides", "parse_assignment", "parse_v
 
 # the tables whose entries are named ([nodes.3], [sections.leaf]), and the singular for messages
 NAMED_TABLES = {"sections": "section", "nodes": "node", "elements": "element", "inputs": "input",
-                "outputs": "output"}
+                "actuators": "actuator", "outputs": "output"}
 PLAIN_TABLES = ("scene", "buckling")
 EXAMPLE = "e.g. sections.leaf.height or nodes.3.mass"
 

@@ -138,9 +138,11 @@ def _second_order(J, n):
     first-order Jacobian; checked, as a restored J could be anything). Then (I - hg J)
     [dq; dv] = [r1; r2] is dq = r1 + hg dv with (I - hg B - hg^2 A) dv = r2 + hg A r1: an
     LU of NDOF^3 / 3 multiplications instead of 8 NDOF^3 / 3. Below it the full matrix keeps
-    the small models' numbers as they were (its LU costs under a millisecond there)."""
+    the small models' numbers as they were (its LU costs under a millisecond there). A state
+    with coil currents ([q - q_ref, qdot, i], `engine.actuators`) is not of that form: with one
+    coil n is odd, with more the identity block is not at n / 2; it takes the full matrix."""
     m = n // 2
-    if m < REDUCED_FROM:
+    if m < REDUCED_FROM or n != 2 * m:
         return False
     for i in range(m):
         for j in range(n):
@@ -343,17 +345,19 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, o
 
 
 class Esdirk:
-    """The ESDIRK integrator on ydot = f(y), y = [q - q_ref, qdot], with the engine; the same
-    interface as `sundials.Cvode` (reset, advance, statistics, restart memory).
+    """The ESDIRK integrator on ydot = f(y), y = [q - q_ref, qdot(, coil currents)], with the
+    engine; the same interface as `sundials.Cvode` (reset, advance, statistics, restart
+    memory).
 
     Parameters
     ----------
     data : EngineData
-        The packed model; its inputs array holds the forces (N) of the current interval.
+        The packed model; its inputs array holds the forces (N) or drive signals (V) of the
+        current interval.
     rtol : float
         Relative tolerance.
-    atol : array (2 NDOF,)
-        Absolute tolerances (m, rad, m/s, rad/s).
+    atol : array (2 NDOF + coil currents,)
+        Absolute tolerances (m, rad, m/s, rad/s, A).
     max_step : float or None
         Largest step (s).
     method : str
@@ -366,7 +370,8 @@ class Esdirk:
         self.tableau = tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()
-        self.n = n = 2 * int(data.int_array("dims")[ed.NDOF])
+        dims = data.int_array("dims")
+        self.n = n = 2 * int(dims[ed.NDOF]) + int(dims[ed.NEL])  # with the coil currents
         self.memory = np.zeros(M_SIZE)
         self.memory[M_RTOL] = float(rtol)
         self.memory[M_H_MAX] = float(max_step or 0.0)
@@ -382,8 +387,8 @@ class Esdirk:
         self.counters = data.int_array("counters")
 
     def reset(self, t, y):
-        """Continue from time t (s) and state y (2 NDOF,): the first stage's derivative is
-        recomputed, the step size, Jacobian and Newton matrix are kept."""
+        """Continue from time t (s) and state y (2 NDOF + coil currents,): the first stage's
+        derivative is recomputed, the step size, Jacobian and Newton matrix are kept."""
         self.memory[M_T] = float(t)
         self.y_array[:] = y
         self.flags[I_FSAL] = 0

@@ -8,7 +8,9 @@ t_k, r_k the reference and x_c the state of a discrete linear controller (A, B, 
     plant: u_k held over [t_k, t_k+1)                            (zero-order hold)
 
 so the force acts one sample after the measurement it comes from (one sample of computation
-delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. Past
+delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. An
+input that a voice-coil actuator drives (`flexure.core.mechanics.actuators`) takes u_k as its
+drive signal (V), held likewise; its coil current is part of the integrator's state. Past
 the last sample of the reference and feedforward arrays their last entries hold.
 
 The plant is the Simulator's own integrator, driven exactly as `Simulator.set_inputs` plus
@@ -63,10 +65,11 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     samples : int
         The number of intervals N; the run ends at t_N = N / fs.
     reference, feedforward : arrays (>= 1, n_loops)
-        r_k (m) and u_ff,k (N) per sample (the last row holds past the end).
+        r_k (m) and u_ff,k (N, or V for an actuator's drive signal) per sample (the last row
+        holds past the end).
     controller : tuple of arrays (A, B, C, D)
-        The discrete controller from errors (m) to forces (N): A (s, s), B (s, n_loops),
-        C (n_loops, s), D (n_loops, n_loops).
+        The discrete controller from errors (m) to forces (N) or drive signals (V): A (s, s),
+        B (s, n_loops), C (n_loops, s), D (n_loops, n_loops).
     loop_inputs, loop_outputs : sequences of int
         The model input driven by each loop, and the model output (a position, or an angle
         about a global axis) it measures.
@@ -213,7 +216,7 @@ def _measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
     status. As `Simulator.outputs`: full Newton from the plant's last coordinates.
     coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat)."""
-    ndof = y.size // 2
+    ndof = engine.int_array(addresses[_PLANT], _DIMS_SLOT)[ed.NDOF]  # y: [.., coil currents]
     x_plant = engine.float_array(addresses[_PLANT], _X_SLOT)
     engine.float_array(addresses[_OUTPUT], _X_START_SLOT)[:] = x_plant
     engine.int_array(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0

@@ -28,7 +28,9 @@ __all__ = ["STATE_VERSION", "SimulationResult", "Simulator", "default_atol", "si
 class SimulationResult:
     """A simulated trajectory, SI units.
 
-    times (n,) s; q, qdot (n, NDOF); outputs {name: (n,)}; output_array (n, n_outputs).
+    times (n,) s; q, qdot (n, NDOF); outputs {name: (n,)}; output_array (n, n_outputs);
+    currents (n, n_coils) A, the coil currents of the voltage-driven actuators
+    (`Model.coil_actuators`; no columns without them).
     """
 
     model_name: str
@@ -42,9 +44,10 @@ class SimulationResult:
     output_units: list
     output_array: np.ndarray
     statistics: dict
-    inputs: np.ndarray = field(default=None)  # (n, n_inputs) N
+    inputs: np.ndarray = field(default=None)  # (n, n_inputs) N, or V for a drive signal
     input_names: list = field(default_factory=list)
     warnings: list = field(default_factory=list)  # states beyond the range of validity
+    currents: np.ndarray = field(default=None)  # (n, n_coils) A
 
     @property
     def outputs(self):
@@ -83,13 +86,15 @@ def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
              method: str = "cvode-bdf", rtol: float = 1e-8, atol=None,
              max_step: float | None = None, output_times=None, jacobian: str = "analytic",
              max_order: int | None = None, q0=None, qdot0=None, deadline: float | None = None,
-             progress=None) -> SimulationResult:
-    """Simulate `model` from rest (or q0, qdot0) at t = 0 to t_end (s).
+             progress=None, i0=None) -> SimulationResult:
+    """Simulate `model` from rest (or q0, qdot0 and the coil currents i0, A) at t = 0 to
+    t_end (s).
 
     Parameters
     ----------
     inputs : dict, optional
-        {input name: constant N | callable(t) -> N | (times, values) held constant from each
+        {input name: constant N (V for an actuator's drive signal) | callable(t) -> N |
+        (times, values) held constant from each
         sample time to the next (zero-order hold; values[0] before the first sample)}.
         Unnamed inputs are zero.
     output_times : array, optional
@@ -109,7 +114,7 @@ def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
     constants, functions, samples = split_inputs(model, inputs or {})
     sim = Simulator(model, method=method, rtol=rtol, atol=atol, max_step=max_step,
                     jacobian=jacobian, max_order=max_order, input_functions=functions)
-    sim.reset(q0=q0, qdot0=qdot0)
+    sim.reset(q0=q0, qdot0=qdot0, i0=i0)
     sim.deadline = deadline
     u0 = np.zeros(len(sim.input_names))
     for i, value in constants.items():
@@ -161,7 +166,8 @@ def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
     outputs, warnings = sim.outputs_and_warnings(states)
     n = sim.ndof
     return SimulationResult(model_name=model.name, method=method, rtol=rtol, times=times,
-                            q=states[:, :n], qdot=states[:, n:], dof_names=sim.dof_names,
+                            q=states[:, :n], qdot=states[:, n: 2 * n],
+                            currents=states[:, 2 * n:], dof_names=sim.dof_names,
                             output_names=sim.output_names, output_units=sim.output_units,
                             output_array=outputs, statistics=sim.statistics,
                             inputs=np.array(held), input_names=sim.input_names,

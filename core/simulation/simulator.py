@@ -8,18 +8,20 @@ absolute DOFs would let rtol act on 0.1 m; on the deviation it acts on the motio
 constraints are solved away at every evaluation by the compiled engine
 (`flexure.core.engine.engine`), never integrated; SUNDIALS calls the engine through compiled
 callbacks (`flexure.core.simulation.sundials`), so no Python runs per evaluation. Inputs are
-forces on the scene's input coordinates, held constant between `set_inputs` calls (zero-order
-hold); a change of input is a discontinuity, so the integrator restarts there (order 1, new
-step).
+forces on the scene's input coordinates, or the drive signals (V) of the voice-coil actuators
+that drive them (`flexure.core.mechanics.actuators`), held constant between `set_inputs` calls
+(zero-order hold); a change of input is a discontinuity, so the integrator restarts there
+(order 1, new step). A voltage-driven actuator's coil current (A) is a state: the state is then
+y = [q - q_ref, qdot, i].
 
     sim = Simulator(model, method="cvode-bdf", rtol=1e-8)
     sim.set_inputs([1.0])            # N
     sim.advance(0.5)                 # s
     sim.outputs()                    # the scene's outputs, m and m/s
 
-A snapshot `get_state()` is a restart point: the next `advance` restarts the integrator from
-it, with the kinematics started afresh from the snapshot's coordinates, so a run restored with
-`set_state` continues bit for bit like the original.
+A snapshot `get_state()` (`simulator_state`) is a restart point: the next `advance` restarts
+the integrator from it, with the kinematics started afresh from the snapshot's coordinates, so
+a run restored with `set_state` continues bit for bit like the original.
 """
 
 from __future__ import annotations
@@ -36,26 +38,25 @@ from ..errors import SimulationError, StepBudgetSpent
 from .esdirk import Esdirk
 from .methods import METHODS, ONE_STEP_METHODS
 from .simulator_outputs import SimulatorOutputs
+from .simulator_state import STATE_VERSION, SimulatorState
 from .sundials import STATUS_MESSAGES, make_solver
 from .tolerances import atol_vector
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
 
-STATE_VERSION = 2
-# what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
-_MEMORY_KEYS = ("lu_step", "newton_rate", "refresh")
 
 
-class Simulator(SimulatorOutputs):
+class Simulator(SimulatorOutputs, SimulatorState):
     """Integrates a model's nonlinear equations of motion step by step.
 
     Parameters
     ----------
     model : Model
-        The model; its inputs are forces (N, N m) or moments about a global axis (N m), its
-        outputs positions or velocities (m, rad, m/s, rad/s; an angle about a global axis is
-        a rotation-vector component, `flexure.core.mechanics.ports`).
+        The model; its inputs are forces (N, N m) or moments about a global axis (N m), or
+        actuators' drive signals (V); its outputs positions or velocities (m, rad, m/s,
+        rad/s; an angle about a global axis is a rotation-vector component,
+        `flexure.core.mechanics.ports`).
     method : str
         "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a one-step
         L-stable method of order 4, `flexure.core.simulation.esdirk`: no restart cost when an
@@ -64,7 +65,7 @@ class Simulator(SimulatorOutputs):
         sampled loop's default, where the sample period bounds the step).
     rtol : float
         Relative tolerance of the integrator.
-    atol : float or array (2 NDOF,), optional
+    atol : float or array (2 NDOF + coil currents,), optional
         Absolute tolerance; default `tolerances.default_atol(model, rtol)` (per state).
     max_step : float, optional
         Largest step (s); None for no limit.
@@ -74,7 +75,7 @@ class Simulator(SimulatorOutputs):
         Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA, 12
         for Adams). 2 makes BDF A-stable (docs/decisions.md: why it is not the default).
     input_functions : dict, optional
-        {input index: callable(t) -> N}: inputs that vary within an interval. They are
+        {input index: callable(t) -> N or V}: inputs that vary within an interval. They are
         evaluated in Python at every evaluation (the compiled path is for held inputs).
     """
 
@@ -91,7 +92,10 @@ class Simulator(SimulatorOutputs):
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model)
         self.ndof = model.declared_dof_count
-        self.atol = atol_vector(model, rtol, atol, self.ndof)
+        # the integrator's states: [q - q_ref, qdot] and the coil currents (A)
+        self.ncurrents = len(model.coil_actuators)
+        self.nstate = 2 * self.ndof + self.ncurrents
+        self.atol = atol_vector(model, rtol, atol, self.nstate)
         self.input_names = [p.name for p in model.inputs]
         self.input_units = [p.unit for p in model.inputs]
         self.output_names = [p.name for p in model.outputs]
@@ -119,13 +123,16 @@ class Simulator(SimulatorOutputs):
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
-    def reset(self, *, t0=0.0, q0=None, qdot0=None):
-        """Start again at t0 (s) from q0, qdot0 (default: the scene's configuration at rest).
+    def reset(self, *, t0=0.0, q0=None, qdot0=None, i0=None):
+        """Start again at t0 (s) from q0, qdot0 and the coil currents i0 (A; default: the
+        scene's configuration at rest, no current).
 
         The inputs are kept; the statistics restart from zero.
         """
         q = self._initial_dofs() if q0 is None else _vector(q0, self.ndof, "q0")
         qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
+        i = (np.zeros(self.ncurrents) if i0 is None
+             else _vector(i0, self.ncurrents, "i0"))
         self._start_kinematics(self.model.initial_coordinates)
         status = engine.call(self.data, engine.OP_KINEMATICS, q)
         if status != ed.OK:
@@ -133,7 +140,7 @@ class Simulator(SimulatorOutputs):
                                   f"{STATUS_MESSAGES[status]} (q0 = {np.array2string(q)})")
         self._t = float(t0)
         self._q_ref = q.copy()
-        self._y = np.concatenate([np.zeros(self.ndof), qdot])
+        self._y = np.concatenate([np.zeros(self.ndof), qdot, i])
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
         self._needs_init = self._restart_kinematics = True
@@ -177,11 +184,13 @@ class Simulator(SimulatorOutputs):
 
     @property
     def state(self):
-        """The integrator's state [q - q_ref, qdot] (2 NDOF,) (a copy)."""
+        """The integrator's state [q - q_ref, qdot, coil currents] (2 NDOF + currents,) (a
+        copy)."""
         return self._y.copy()
 
     def absolute(self, y):
-        """States [q, qdot] (..., 2 NDOF) of integrator states [q - q_ref, qdot] (a copy)."""
+        """States [q, qdot(, i)] (..., 2 NDOF + currents) of integrator states
+        [q - q_ref, qdot(, i)] (a copy)."""
         y = np.array(y, dtype=float)
         y[..., : self.ndof] += self._q_ref
         return y
@@ -189,15 +198,22 @@ class Simulator(SimulatorOutputs):
     @property
     def qdot(self):
         """The current DOF velocities (NDOF,) m/s, rad/s (a copy)."""
-        return self._y[self.ndof:].copy()
+        return self._y[self.ndof: 2 * self.ndof].copy()
+
+    @property
+    def currents(self):
+        """The coil currents now (A, one per voltage-driven actuator, `Model.coil_actuators`;
+        a copy)."""
+        return self._y[2 * self.ndof:].copy()
 
     @property
     def inputs(self):
-        """The inputs held now (n_inputs,) N (a copy)."""
+        """The inputs held now (n_inputs,) N or V (a copy)."""
         return self._u.copy()
 
     def set_inputs(self, u):
-        """Hold the inputs u (n_inputs,) N from now on; a change restarts the integrator."""
+        """Hold the inputs u (n_inputs,) N (V for a drive signal) from now on; a change
+        restarts the integrator."""
         u = np.array(u, dtype=float).reshape(-1)
         if u.size != self._u.size:
             raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
@@ -209,58 +225,6 @@ class Simulator(SimulatorOutputs):
         if (u != self._u).any():
             self._u = u
             self._needs_init = True
-
-    def get_state(self):
-        """A snapshot of the whole state (plain numbers and arrays); the next `advance`
-        restarts from it."""
-        self._needs_init = self._restart_kinematics = True
-        memory = getattr(self.integrator, "restart_memory", {})
-        return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
-                "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
-                "x": self._x.copy(), "initial_step": memory.get("initial_step", 0.0),
-                "jacobian": memory.get("jacobian", np.zeros(0)),
-                **{key: value for key, value in memory.items() if key in _MEMORY_KEYS}}
-
-    def set_state(self, state):
-        """Restore a snapshot of `get_state` (of a simulator of the same model).
-
-        A version-1 snapshot (absolute y = [q, qdot]) is taken from the configuration it
-        holds."""
-        try:
-            version = int(state.get("version", 1))
-            y = np.array(state["y"], dtype=float).reshape(-1)
-            q_ref = np.array(state["q_ref"] if version >= 2 else y[: y.size // 2],
-                             dtype=float).reshape(-1)
-            u = np.array(state["u"], dtype=float).reshape(-1)
-            x = np.array(state["x"], dtype=float).reshape(-1)
-            t = float(state["t"])
-        except (AttributeError, KeyError, TypeError, ValueError) as error:
-            raise SimulationError(f"not a simulator state: {error}") from None
-        if (state.get("model") != self.model.name or y.size != 2 * self.ndof
-                or q_ref.size != self.ndof):
-            raise SimulationError(f"the state is of model {state.get('model')!r} with "
-                                  f"{y.size} states; expected {self.model.name!r} with "
-                                  f"{2 * self.ndof}")
-        if u.size != self._u.size or x.size != self.model.nx:
-            raise SimulationError(f"the state holds {u.size} inputs and {x.size} coordinates; "
-                                  f"expected {self._u.size} and {self.model.nx}")
-        if not (np.isfinite(t) and np.all(np.isfinite(y)) and np.all(np.isfinite(q_ref))
-                and np.all(np.isfinite(u)) and np.all(np.isfinite(x))):
-            raise SimulationError("the state holds non-finite numbers")
-        if version < 2:
-            y[: self.ndof] = 0.0
-        self._t, self._y, self._u, self._x = t, y, u, x
-        self._q_ref = q_ref
-        if hasattr(self.integrator, "restart_memory"):  # what the integrator had learnt
-            try:
-                self.integrator.restart_memory = {
-                    "initial_step": float(state.get("initial_step", 0.0)),
-                    "jacobian": np.asarray(state.get("jacobian", ()), dtype=float),
-                    **{key: float(state[key]) for key in _MEMORY_KEYS if key in state}}
-            except (TypeError, ValueError) as error:
-                raise SimulationError(f"not a simulator state: {error}") from None
-        self._outputs_cache = None
-        self._needs_init = self._restart_kinematics = True
 
     @property
     def statistics(self):
@@ -395,7 +359,8 @@ class Simulator(SimulatorOutputs):
 
     def take_back(self, t, y, u, *, restart_needed, wall):
         """Continue from where a compiled driver left the integrator: time t (s), state y
-        (2 NDOF,), held inputs u (N); wall the driver's time (s), for the statistics."""
+        (2 NDOF + currents,), held inputs u (N, V); wall the driver's time (s), for the
+        statistics."""
         self._t, self._y, self._u = float(t), np.array(y, dtype=float), np.array(u, dtype=float)
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
@@ -405,10 +370,10 @@ class Simulator(SimulatorOutputs):
 
     # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ----------------
     def derivative(self, t, y):
-        """ydot (2 NDOF,) at time t (s) and integrator state y = [q - q_ref, qdot]; raises
-        SimulationError when the state cannot be evaluated."""
+        """ydot (2 NDOF + currents,) at time t (s) and integrator state y = [q - q_ref, qdot,
+        i]; raises SimulationError when the state cannot be evaluated."""
         self._prepare(t)
-        ydot = np.empty(2 * self.ndof)
+        ydot = np.empty(self.nstate)
         status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
                              ydot)
         if status != ed.OK:
@@ -416,14 +381,14 @@ class Simulator(SimulatorOutputs):
         return ydot
 
     def jacobian_matrix(self, t, y):
-        """d ydot / d y (2 NDOF, 2 NDOF) from the model's tangent at (t, y)."""
+        """d ydot / d y (N, N; N = 2 NDOF + currents) from the model's tangent at (t, y)."""
         self._prepare(t)
-        J = np.empty(4 * self.ndof ** 2)
+        J = np.empty(self.nstate ** 2)
         status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
                              J, s=0.0)
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
-        return J.reshape(2 * self.ndof, 2 * self.ndof)
+        return J.reshape(self.nstate, self.nstate)
 
     def _prepare(self, t):
         if self.deadline is not None and _time.perf_counter() > self.deadline:

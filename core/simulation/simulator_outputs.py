@@ -45,8 +45,9 @@ class SimulatorOutputs:
         return x[self._output_coordinates]
 
     def outputs_along(self, states, *, start=None):
-        """Outputs (n, n_outputs) along absolute states [q, qdot] (n, 2 NDOF), solving the
-        kinematics point by point (warm-started from one to the next)."""
+        """Outputs (n, n_outputs) along absolute states [q, qdot(, i)] (n, 2 NDOF plus the coil
+        currents), solving the kinematics point by point (warm-started from one to the
+        next)."""
         return self._along(states, start, None)
 
     def outputs_and_warnings(self, states):
@@ -90,11 +91,11 @@ class SimulatorOutputs:
                     euler = list(p.euler)
                     xdot = np.zeros(self.model.nx)
                     if p.quantity == "velocity":
-                        xdot[euler] = DF[euler] @ y[n:]
+                        xdot[euler] = DF[euler] @ y[n: 2 * n]
                     result[k, j] = output_value(self.model, p, x, xdot)
                 else:
-                    result[k, j] = DF[p.coordinate] @ y[n:] if p.quantity == "velocity" else x[
-                        p.coordinate]
+                    result[k, j] = (DF[p.coordinate] @ y[n: 2 * n] if p.quantity == "velocity"
+                                    else x[p.coordinate])
             if path is not None:  # the kinematics left x and e of this point in the data
                 path[0][k] = x
                 path[1][k] = data.float_array("e")

@@ -92,7 +92,7 @@ def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     dims = engine.int_array(table, _DIMS_SLOT)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
-        n = 2 * dims[ed.NDOF]
+        n = 2 * dims[ed.NDOF] + dims[ed.NEL]
         J = carray(dense_matrix_data(matrix), (n * n,))
         J[:] = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
         return 0
@@ -132,7 +132,8 @@ class _Solver:
     def __init__(self, data, *, rtol, atol, input_function=None):
         lib = libraries()
         self.lib, self.data = lib, engine.connect(data)
-        self.n = 2 * int(data.int_array("dims")[ed.NDOF])
+        dims = data.int_array("dims")
+        self.n = 2 * int(dims[ed.NDOF]) + int(dims[ed.NEL])  # [q - q_ref, qdot, coil currents]
         self.context = _VP()
         _check(lib.core.SUNContext_Create(0, ctypes.byref(self.context)), "SUNContext_Create")
         lib.core.SUNContext_ClearErrHandlers(self.context)  # errors come back as our messages
@@ -233,18 +234,20 @@ class _Solver:
 
 
 class Cvode(_Solver):
-    """CVODE (BDF or Adams) on ydot = f(t, y), y = [q - q_ref, qdot], with the engine.
+    """CVODE (BDF or Adams) on ydot = f(t, y), y = [q - q_ref, qdot] (and the coil currents of
+    voltage-driven actuators), with the engine.
 
     Parameters
     ----------
     data : EngineData
-        The packed model; its inputs array holds the forces (N) of the current interval.
+        The packed model; its inputs array holds the forces (N) or drive signals (V) of the
+        current interval.
     method : str
         "BDF" or "Adams".
     rtol : float
         Relative tolerance.
-    atol : array (2 NDOF,)
-        Absolute tolerances (m, rad, m/s, rad/s).
+    atol : array (2 NDOF + coil currents,)
+        Absolute tolerances (m, rad, m/s, rad/s, A).
     max_step : float or None
         Largest step (s).
     jacobian : str
@@ -296,7 +299,7 @@ class Cvode(_Solver):
         return self.lib.cvode.CVodeGetReturnFlagName(flag).decode()
 
     def reset(self, t, y):
-        """(Re)start at time t (s) from y (2 NDOF,) at order 1.
+        """(Re)start at time t (s) from y (2 NDOF + coil currents,) at order 1.
 
         What the integrator learnt before is kept (`restart_memory`): the first restart
         estimates its initial step, later ones start with that step; and the Jacobian of the
