@@ -31,26 +31,40 @@ def frequency_response(sys, omega):
 
     Through the eigendecomposition A = V diag(lambda) V^-1, once:
     H(z) = (C V) diag(1 / (z - lambda)) (V^-1 B) + D, so each frequency costs O(n) per
-    channel instead of a solve of (z I - A), O(n^3): seconds instead of hours on the
-    manipulator's 150-state plant over the 30 000 frequencies of a margin grid. The
-    eigenvectors of a lightly damped mechanical model are well conditioned (distinct modes);
-    an ill-conditioned V (a defective A: repeated poles such as a chain of integrators or
-    delays) falls back to one solve per frequency.
+    channel instead of a solve of (z I - A), O(n^3): a second instead of ten minutes for the
+    manipulator's 1014-state plant over the 10 000 frequencies of a margin grid. Stiff,
+    overdamped modes sample to a cluster of poles at z = 0 whose eigenvectors are nearly
+    parallel (V's condition number 1e8 on that plant), yet the sum over the cluster, which
+    is all |z| = 1 sees of it, stays accurate; so the result is checked against direct solves
+    at three frequencies (to 1e-8 of the largest response) and the solves are used throughout
+    only where that fails (a defective A, such as a chain of delays).
     """
     A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (sys.A, sys.B, sys.C, sys.D))
     z = np.exp(1j * np.asarray(omega, float) * sys.dt)
     if A.size == 0:
         return np.repeat(D[:, :, None].astype(complex), z.size, axis=2)
+    eye = np.eye(A.shape[0])
+
+    def solved(zk):
+        return C @ np.linalg.solve(zk * eye - A, B) + D
+
     eigenvalues, V = np.linalg.eig(A)
-    if np.linalg.cond(V) < 1e8:
+    try:
         left, right = C @ V, np.linalg.solve(V, B)
+    except np.linalg.LinAlgError:
+        left = None
+    if left is not None:
         # H_ij(z_f) = sum_n W_fn left_in right_nj: one product (len(z), n) @ (n, i j)
         residues = (left.T[:, :, None] * right[:, None, :]).reshape(A.shape[0], -1)
         weights = 1.0 / (z[:, None] - eigenvalues[None, :])  # (len(z), n)
-        response = (weights @ residues).reshape(z.size, *D.shape)
-        return np.moveaxis(response, 0, 2) + D[:, :, None]
-    eye = np.eye(A.shape[0])
-    return np.stack([C @ np.linalg.solve(zk * eye - A, B) + D for zk in z], axis=2)
+        response = np.moveaxis((weights @ residues).reshape(z.size, *D.shape), 0, 2)
+        response += D[:, :, None]
+        probes = np.unique([0, z.size // 2, z.size - 1])
+        direct = np.stack([solved(z[k]) for k in probes], axis=2)
+        if np.all(np.isfinite(response)) and np.max(np.abs(response[:, :, probes] - direct)) \
+                <= 1e-8 * max(np.max(np.abs(direct)), np.finfo(float).tiny):
+            return response
+    return np.stack([solved(zk) for zk in z], axis=2)
 
 
 def margin_grid(crossover, dt, poles, *, damping_below=0.1):
