@@ -217,3 +217,42 @@ def _damping(z, dt):
         return 1.0
     s = np.log(z) / dt
     return 1.0 if abs(s) == 0 else float(-np.real(s) / abs(s))
+
+
+def drive_signals(model, pairs, forces, reference, fs):
+    """The drive signals (V) that make the actuators of the loops give `forces` (N).
+
+    An input a voice coil drives (`Model.actuators`) takes its amplifier's drive signal, not
+    a force: with the coil current i = F / Km, a current drive needs u = i / G and a voltage
+    drive u = (R i + L di/dt + Km v) / G, the coil's voltage with the back-EMF of the port's
+    velocity v, taken as the loop's reference velocity (a colocated loop tracks it to 0.1 %).
+    On the hold intervals: v the exact mean (r_k+1 - r_k) fs of the reference, di/dt by central
+    differences of the interval means (second order; the L di/dt term is small below R / L).
+    The amplifier's saturation is not inverted. Other loops keep their forces.
+
+    Parameters
+    ----------
+    model : Model
+    pairs : list of LoopPair
+    forces, reference : arrays (samples + 2, n_loops)
+        The feedforward forces (N) held from each sample and the loops' references (m).
+    fs : float
+        Sample rate (Hz).
+    """
+    out = np.array(forces, float, copy=True)
+    h = 1.0 / fs
+    for actuator in model.actuators:
+        loops = [k for k, pair in enumerate(pairs) if pair.input_index == actuator.input]
+        if not loops:
+            continue
+        k = loops[0]
+        current = out[:, k] / actuator.force_constant
+        if actuator.drive == "current":
+            out[:, k] = current / actuator.amplifier_gain
+            continue
+        velocity = np.zeros(len(current))
+        velocity[:-1] = np.diff(reference[:, k]) / h
+        rate = np.gradient(current, h) if len(current) > 1 else np.zeros(1)
+        out[:, k] = (actuator.resistance * current + actuator.inductance * rate
+                     + actuator.force_constant * velocity) / actuator.amplifier_gain
+    return out

@@ -13,7 +13,7 @@ import numpy as np
 from flexure.core import FlexureError
 
 from .feedback import DiscreteController, design_feedback
-from .feedforward import StableInverse, low_frequency_model
+from .feedforward import StableInverse, drive_signals, low_frequency_model
 from .loop_controller import LoopController
 from .profiles import ThirdOrderProfile
 
@@ -106,6 +106,14 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
                                 samples=samples, offsets=offsets, feedforward=lf, axis=axis,
                                 feedforward_forces=explicit, path=path)
+    driven = {actuator.input for actuator in model.actuators}
+    if kind is not None and driven & {pair.input_index for pair in design.pairs}:
+        # voice coils take drive signals: the feedforward forces through their coils
+        signals = drive_signals(model, design.pairs, controller.feedforward,
+                                controller.reference, fs)
+        controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
+                                    samples=samples, offsets=offsets, axis=axis,
+                                    feedforward_forces=signals, path=path)
     return controller, design
 
 

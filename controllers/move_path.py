@@ -37,7 +37,7 @@ class MovePath:
 
     s: np.ndarray  # (K,) the progress of the points
     displacements: np.ndarray  # (K, n_loops) m, zero at s = 0
-    forces: np.ndarray | None  # (K, n_loops) N: the static input forces; None (linear)
+    forces: np.ndarray | None  # (K, n_loops) N: the static port forces; None (linear)
     kind: str
     targets: dict  # {coordinate: displacement at s = 1}
 
@@ -90,6 +90,8 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
         output_rows,
         output_value,
         static_equilibrium,
+        steady_port_values,
+        steady_slopes,
     )
 
     if kind not in KINDS:
@@ -114,6 +116,9 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     if kind == "linear":
         lin = linearize(model, rest)
         columns = input_columns(model, rest.x, [model.inputs[p.input_index] for p in pairs])
+        # per unit drive signal where an actuator drives the input
+        columns = columns * steady_slopes(model, np.zeros(len(model.inputs)))[
+            [p.input_index for p in pairs]]
         response = np.linalg.solve(lin.K, lin.DF.T @ columns)  # dq per unit input
         c_yu = output_rows(model, rest.x, lin.DF, outputs) @ response
         c_tu = lin.DF[target_index] @ response
@@ -130,7 +135,11 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
         point = inverse_statics(model, wanted, inputs=inputs, start=point)
         displacements.append([output_value(model, port, point.solution.x)
                               - output_value(model, port, rest.x) for port in outputs])
-        forces.append(point.forces)
+        # the static forces (N, N m) on the ports, an actuator's drive signal turned into its
+        # steady force
+        held = np.zeros(len(model.inputs))
+        held[[p.input_index for p in pairs]] = point.forces
+        forces.append(steady_port_values(model, held)[[p.input_index for p in pairs]])
         if progress is not None:
             progress((j + 1) / len(s_values))
     return MovePath(s_values, np.array(displacements), np.array(forces), kind, dict(targets))

@@ -89,3 +89,21 @@ def test_the_manipulators_end_effector_goes_where_asked():
                       for k in range(1, 7)])
     np.testing.assert_allclose(moved[::2], 1e-3, rtol=2e-3)
     assert np.all(np.abs(moved[1::2]) < 0.03e-3)
+
+
+def test_an_actuated_input_is_found_as_its_drive_signal():
+    import tomllib
+
+    from flexure.core import build_model, scene_path
+
+    data = tomllib.loads(scene_path("stage_planar_1dof").read_text())
+    data["actuators"] = {"VCM": {"input": "F", "force_constant": 5.0, "resistance": 2.0,
+                                 "inductance": 1e-3, "amplifier_gain": 2.0}}
+    model = build_model(data)
+    x0 = model.initial_coordinates[model.coordinate_index("3.x")]
+    plain = inverse_statics(load_scene("stage_planar_1dof"), {"3.x": x0 + 1e-3})
+    driven = inverse_statics(model, {"3.x": x0 + 1e-3})
+    # the steady coil force Km G u / R equals the plain stage's force
+    assert driven.forces[0] * 5.0 * 2.0 / 2.0 == pytest.approx(plain.forces[0], rel=1e-9)
+    forward = static_equilibrium(model, inputs={"F": driven.forces[0]})
+    assert forward.x[model.coordinate_index("3.x")] == pytest.approx(x0 + 1e-3, abs=1e-10)

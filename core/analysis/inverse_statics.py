@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConvergenceError, FlexureError
+from ..mechanics.actuators import steady_slopes
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_columns
 from ..model import Model
@@ -43,7 +44,7 @@ class InverseStaticsError(FlexureError, ValueError):
 class InverseStatics:
     """The forces that hold the targets, and the equilibrium they give."""
 
-    forces: np.ndarray  # (n,) N or N m, one per input, in the order asked for
+    forces: np.ndarray  # (n,) N or N m (V for an actuator's drive signal), one per input
     solution: StaticSolution
     iterations: int
     residual: float  # the largest |x_t - x_t*| at the solution, m or rad
@@ -64,7 +65,8 @@ def _indices(model, names, what):
 def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
                     start: InverseStatics | None = None, tolerance: float = 1e-10,
                     max_iterations: int = 20) -> InverseStatics:
-    """The input forces that put the `targets` coordinates at their values at equilibrium.
+    """The input forces that put the `targets` coordinates at their values at equilibrium
+    (for an input an actuator drives: its drive signal, at the actuator's steady state).
 
     Parameters
     ----------
@@ -124,6 +126,9 @@ def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
         DF = lin.DF
         # the generalised forces of unit inputs (a moment's depends on the orientation)
         b = input_columns(model, solution.x, [ports[name] for name in names])
+        # an actuated input is its drive signal: its steady force per unit of it (Km/R ...)
+        order = [list(ports).index(name) for name in names]
+        b = b * steady_slopes(model, np.array(list(held.values())))[order]
         response = np.linalg.solve(lin.K, DF.T @ b)  # dq per unit input
         compliance = DF[target_index] @ response
         # the inputs' own compliance (work-conjugate: m/N, rad/(N m)) sets the scale of
