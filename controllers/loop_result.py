@@ -128,15 +128,11 @@ class LoopResult:
         axes[2].set_xlabel("time (s)")
         axes[2].legend(loc="upper right")
         s = self.summary()
-        fig.suptitle(title or (
+        return _save(fig, path, title or (
             f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} m{length}, "
             f"max |e| = {s['max_abs_error'] * 1e6:.3g} u{length} = "
             f"{100 * s['error_ratio']:.3g} % "
-            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"), fontsize=10)
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        return path
+            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"))
 
     def _plot_loops(self, path, *, title=None):
         """Every loop's reference, error (against 0.1 % of its stroke) and force."""
@@ -164,11 +160,18 @@ class LoopResult:
         axes[2].set_ylabel(f"force ({force_unit})")
         axes[2].set_xlabel("time (s)")
         worst = max(self.per_loop(), key=lambda row: row["error_ratio"])
-        fig.suptitle(title or (
+        return _save(fig, path, title or (
             f"{self.settings.get('scene')} ({self.settings.get('plant')}): every loop along "
             f"the move; worst {worst['loop']}: {100 * worst['error_ratio']:.3g} % of its "
-            f"stroke (target 0.1 %)"), fontsize=10)
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        return path
+            f"stroke (target 0.1 %)"))
+
+
+def _save(fig, path, title):
+    """Title, lay out, write (PNG) and close a figure; returns path."""
+    import matplotlib.pyplot as plt
+
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
