@@ -71,6 +71,7 @@ def test_the_initial_forces_must_match_the_inputs(stage):
         inverse_statics(stage, {"3.x": 0.0}, initial=[1.0, 2.0])
 
 
+@pytest.mark.slow
 def test_the_manipulators_end_effector_goes_where_asked():
     model = load_scene("manipulator_control")
     x = model.initial_coordinates

@@ -239,6 +239,7 @@ def test_the_report_runs_as_a_user_runs_it(tmp_path):
     assert (tmp_path / "manipulator_workspace.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_angle_outputs_are_optional_and_only_add_the_end_effector_angles():
     """The generator's angle outputs leave the committed scenes as they are and add E_rx,
     E_ry, E_rz (rad) on the end effector's rotational node to the dynamic scenes, after the

@@ -84,6 +84,7 @@ def _translation(model, dx, dy):
     return {"E.x": dx, "E.y": dy, "E_M1.x": dx} | held
 
 
+@pytest.mark.slow
 def test_the_manipulators_paths_agree_for_a_small_move_and_part_for_a_large_one(manipulator):
     small = _translation(manipulator, 1e-6, 0.0)
     linear = move_path(manipulator, small, kind="linear").displacement([1.0])[0]

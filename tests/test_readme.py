@@ -156,7 +156,14 @@ def test_the_setup_lines_are_there_unchanged():
     assert sum(line.endswith("# the tests") for line in lines) == 1  # .ci/run's grep
 
 
-@pytest.mark.parametrize("block", readme_shell_blocks(), ids=lambda block: block[0])
+def _tiered(blocks):
+    """The README's blocks, those on the 507-DOF manipulator in the slow tier (7 s)."""
+    return [pytest.param(block, marks=pytest.mark.slow)
+            if any("manipulator_reduced" in command for command in block[1]) else block
+            for block in blocks]
+
+
+@pytest.mark.parametrize("block", _tiered(readme_shell_blocks()), ids=lambda block: block[0])
 def test_readme_commands_run(block, tmp_path, monkeypatch, capsys):
     _, commands, output = block
     monkeypatch.chdir(tmp_path)

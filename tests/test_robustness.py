@@ -74,6 +74,7 @@ def test_a_zero_delay_block_is_the_identity():
         delay_block(2, -1, 1e-3)
 
 
+@pytest.mark.slow
 def test_the_manipulator_designed_on_its_six_modes_holds_with_its_parasitic_ones():
     model = load_scene("manipulator_control")
     lf = low_frequency_model(model)
