@@ -24,7 +24,7 @@ is left out of the Newton matrix; it is zero when the port is a DOF coordinate (
 unit row) or at rest.
 """
 
-from ..numerics.dense import lu_solve
+from ..numerics.dense import lu_solve, put
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
@@ -104,14 +104,6 @@ def current_residual(table, yp, res, n):
 
 
 @kernel
-def _put(J, N, i, j, value, column_major):
-    if column_major:
-        J[j * N + i] = value
-    else:
-        J[i * N + j] = value
-
-
-@kernel
 def first_order_blocks(table, J, N, n, column_major):
     """The coils' blocks of d ydot / d y (N = 2n + currents) after the tangent (DF and the LU
     of M_bar current): d qddot / d i, d idot / d qdot, d idot / d i."""
@@ -127,12 +119,12 @@ def first_order_blocks(table, J, N, n, column_major):
         km, inductance = coefficients[base + ed.A_KM], coefficients[base + ed.A_L]
         port_row(specs, j, x, DF, n, column)  # b_j^T DF: the port's velocity per qdot
         for i in range(n):
-            _put(J, N, state, n + i, -km / inductance * column[i], column_major)
+            put(J, N, state, n + i, -km / inductance * column[i], column_major)
             column[i] *= km
         lu_solve(mass_lu, n, piv, column)
         for i in range(n):
-            _put(J, N, n + i, state, column[i], column_major)
-        _put(J, N, state, state, -coefficients[base + ed.A_R] / inductance, column_major)
+            put(J, N, n + i, state, column[i], column_major)
+        put(J, N, state, state, -coefficients[base + ed.A_R] / inductance, column_major)
 
 
 @kernel

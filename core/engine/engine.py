@@ -36,7 +36,7 @@ nothing raises inside compiled code.
 import numpy as np
 from numba import carray, types
 
-from ..numerics.dense import lu_factor, lu_solve
+from ..numerics.dense import lu_factor, lu_solve, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of
 from . import data as ed
@@ -115,29 +115,21 @@ def first_order_jacobian(table, y, J, column_major):
     N = 2 * n + n_el
     J[:] = 0.0
     for j in range(n):
-        _put(J, N, j, n + j, 1.0, column_major)
+        put(J, N, j, n + j, 1.0, column_major)
     for j in range(n):  # column j of -M^-1 K and of -M^-1 C
         for i in range(n):
             column[i] = K[i * n + j]
         lu_solve(mass_lu, n, piv, column)
         for i in range(n):
-            _put(J, N, n + i, j, -column[i], column_major)
+            put(J, N, n + i, j, -column[i], column_major)
         for i in range(n):
             column[i] = C[i * n + j]
         lu_solve(mass_lu, n, piv, column)
         for i in range(n):
-            _put(J, N, n + i, n + j, -column[i], column_major)
+            put(J, N, n + i, n + j, -column[i], column_major)
     if n_el:
         first_order_blocks(table, J, N, n, column_major)
     return ed.OK
-
-
-@kernel
-def _put(J, N, i, j, value, column_major):
-    if column_major:
-        J[j * N + i] = value
-    else:
-        J[i * N + j] = value
 
 
 @kernel

@@ -59,3 +59,12 @@ def lu_solve(a, n, piv, b):
             s -= a[i * n + j] * b[j]
         b[i] = s / a[i * n + i]
 
+
+@kernel
+def put(J, N, i, j, value, column_major):
+    """J[i, j] = value in the flat (N, N) J, column-major (SUNDIALS' dense matrix) or
+    row-major."""
+    if column_major:
+        J[j * N + i] = value
+    else:
+        J[i * N + j] = value
