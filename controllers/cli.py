@@ -165,8 +165,14 @@ def render(s):
         (f"stroke ({s['units']['position']})", s["stroke"]), ("duration (s)", s["duration"]),
         ("sample rate (Hz)", s["sample_rate_hz"]),
         ("cross-over (rad/s)", s["crossover_rad_s"]),
-        ("phase margin (deg)", s["phase_margin_deg"]), ("gain margin", s["gain_margin"]),
+        ("phase margin (deg)" if len(s["per_loop"]) < 2 else
+         "phase margin, other loops open (deg)", s["phase_margin_deg"]),
+        ("gain margin", s["gain_margin"]),
         ("modulus margin", s["modulus_margin"]),
+        *([("phase margin, other loops closed (deg)", s["phase_margin_others_closed_deg"]),
+           ("modulus margin, other loops closed", s["modulus_margin_others_closed"]),
+           ("sensitivity peak (all loops)", s["sensitivity_peak"])]
+          if "phase_margin_others_closed_deg" in s else []),
         (f"max |error| ({s['units']['position']})", s["max_abs_error"]),
         ("error / stroke", s["error_ratio"]), ("target", s["target"]),
         ("wall time (s)", s["wall_time_s"]),

@@ -82,12 +82,22 @@ class FeedbackDesign:
         return float(np.max(np.abs(self.closed_loop_poles)))
 
     def summary(self):
-        """The numbers the CLI and the report print."""
-        return {"crossover_rad_s": self.crossover_rad_s, "sample_rate_hz": self.sample_rate_hz,
-                "phase_margin_deg": self.phase_margin_deg, "gain_margin": self.gain_margin,
-                "modulus_margin": self.modulus_margin,
-                "closed_loop_spectral_radius": self.spectral_radius,
-                "loops": [f"{p.input_name} -> {p.output_name}" for p in self.pairs]}
+        """The numbers the CLI and the report print (the margins: the worst loop's, the other
+        loops open; with several loops also with the others closed, and the MIMO
+        sensitivity peak)."""
+        summary = {"crossover_rad_s": self.crossover_rad_s,
+                   "sample_rate_hz": self.sample_rate_hz,
+                   "phase_margin_deg": self.phase_margin_deg, "gain_margin": self.gain_margin,
+                   "modulus_margin": self.modulus_margin,
+                   "closed_loop_spectral_radius": self.spectral_radius,
+                   "loops": [f"{p.input_name} -> {p.output_name}" for p in self.pairs]}
+        if self.robustness is not None and len(self.pairs) > 1:
+            closed = self.robustness.closed_margins.min(axis=0)
+            summary |= {"gain_margin_others_closed": float(closed[0]),
+                        "phase_margin_others_closed_deg": float(closed[1]),
+                        "modulus_margin_others_closed": float(closed[2]),
+                        "sensitivity_peak": self.robustness.sensitivity_peak}
+        return summary
 
 
 def colocated_pairs(model):

@@ -85,6 +85,9 @@ class LoopResult:
             "sample_rate_hz": self.design["sample_rate_hz"],
             "closed_loop_spectral_radius": self.design["closed_loop_spectral_radius"],
             "loops": self.design["loops"],
+            **{key: self.design[key] for key in (
+                "phase_margin_others_closed_deg", "gain_margin_others_closed",
+                "modulus_margin_others_closed", "sensitivity_peak") if key in self.design},
             "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
             "units": self.units,

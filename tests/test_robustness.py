@@ -88,3 +88,17 @@ def test_the_manipulator_designed_on_its_six_modes_holds_with_its_parasitic_ones
     assert np.all(robust.closed_margins[:, 1] > 35.0)
     assert np.all(robust.closed_margins[:, 2] > 0.5)
     assert robust.sensitivity_peak < 2.0
+
+
+@pytest.mark.slow
+def test_a_multi_loop_summary_gives_the_margins_with_the_other_loops_closed():
+    model = load_scene("manipulator_control")
+    design = design_feedback(model)
+    summary = design.summary()
+    closed = design.robustness.closed_margins
+    assert summary["phase_margin_others_closed_deg"] == closed[:, 1].min()
+    assert summary["modulus_margin_others_closed"] == closed[:, 2].min()
+    assert summary["sensitivity_peak"] == design.robustness.sensitivity_peak
+    assert summary["phase_margin_others_closed_deg"] > summary["phase_margin_deg"]
+    assert "phase_margin_others_closed_deg" not in design_feedback(
+        load_scene("stage_planar_1dof")).summary()
