@@ -26,7 +26,7 @@ import numpy as np
 from flexure.core import blas_threads
 
 
-def frequency_response(sys, omega):
+def frequency_response(sys, omega, *, eigen=None):
     """The response (n_out, n_in, len(omega)) of a discrete state space at z = exp(j w dt).
 
     Through the eigendecomposition A = V diag(lambda) V^-1, once:
@@ -37,7 +37,8 @@ def frequency_response(sys, omega):
     parallel (V's condition number 1e8 on that plant), yet the sum over the cluster, which
     is all |z| = 1 sees of it, stays accurate; so the result is checked against direct solves
     at three frequencies (to 1e-8 of the largest response) and the solves are used throughout
-    only where that fails (a defective A, such as a chain of delays).
+    only where that fails (a defective A, such as a chain of delays). `eigen`, the
+    (eigenvalues, V) of A when the caller has them already, spares a second decomposition.
     """
     A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (sys.A, sys.B, sys.C, sys.D))
     z = np.exp(1j * np.asarray(omega, float) * sys.dt)
@@ -48,7 +49,7 @@ def frequency_response(sys, omega):
     def solved(zk):
         return C @ np.linalg.solve(zk * eye - A, B) + D
 
-    eigenvalues, V = np.linalg.eig(A)
+    eigenvalues, V = np.linalg.eig(A) if eigen is None else eigen
     try:
         left, right = C @ V, np.linalg.solve(V, B)
     except np.linalg.LinAlgError:
@@ -96,10 +97,10 @@ def siso_margins(response, omega, dt):
     return float(gm), float(pm), float(sm)
 
 
-def loop_response(plant_d, controller, delay_samples, omega):
+def loop_response(plant_d, controller, delay_samples, omega, *, eigen=None):
     """L(e^(j w dt)) = P(z) z^-d C(z), (n, n, len(omega)), for the sampled plant and the
     diagonal discrete controller."""
-    P = frequency_response(plant_d, omega)
+    P = frequency_response(plant_d, omega, eigen=eigen)
     K = frequency_response(controller, omega)
     z = np.exp(1j * omega * plant_d.dt)
     return np.einsum("ijf,jkf->ikf", P, K) * z ** (-delay_samples)
@@ -186,11 +187,13 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     dt = 1.0 / design.sample_rate_hz
     plant_d = control.c2d(control.ss(plant), dt, method="zoh")
     n = len(design.pairs)
-    poles_p = np.linalg.eigvals(plant_d.A) if plant_d.nstates else np.zeros(0)
-    omega = margin_grid(design.crossover_rad_s, dt, poles_p)
-    L = loop_response(plant_d, design.controller, design.delay_samples, omega)
+    # one eigendecomposition of the plant: its poles place the grid, its modes the response
+    eigen = np.linalg.eig(plant_d.A) if plant_d.nstates else None
+    omega = margin_grid(design.crossover_rad_s, dt, eigen[0] if eigen is not None else np.zeros(0))
+    L = loop_response(plant_d, design.controller, design.delay_samples, omega, eigen=eigen)
     open_m = np.array([siso_margins(L[k, k], omega, dt) for k in range(n)])
-    closed_m = np.array([siso_margins(others_closed(L, k), omega, dt) for k in range(n)])
+    closed_m = open_m if n == 1 else np.array(
+        [siso_margins(others_closed(L, k), omega, dt) for k in range(n)])
     S = np.linalg.inv(np.eye(n)[None] + np.moveaxis(L, 2, 0))
     peaks = np.linalg.svd(S, compute_uv=False)[:, 0]
     delays = delay_block(n, design.delay_samples, dt)

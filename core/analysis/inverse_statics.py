@@ -113,6 +113,7 @@ def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
     if u.size != len(names):
         raise InverseStaticsError(f"initial: expected {len(names)} forces, got {u.size}")
     mech = Mechanics(model)
+    order = [list(ports).index(name) for name in names]  # the inputs' places in the model
     residual = np.inf
     solution = None if start is None else start.solution
     for iteration in range(1, max_iterations + 1):
@@ -127,7 +128,6 @@ def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
         # the generalised forces of unit inputs (a moment's depends on the orientation)
         b = input_columns(model, solution.x, [ports[name] for name in names])
         # an actuated input is its drive signal: its steady force per unit of it (Km/R ...)
-        order = [list(ports).index(name) for name in names]
         b = b * steady_slopes(model, np.array(list(held.values())))[order]
         response = np.linalg.solve(lin.K, DF.T @ b)  # dq per unit input
         compliance = DF[target_index] @ response
