@@ -21,7 +21,7 @@ import importlib
 # flexure.fmu loads neither pythonfmu nor fmpy
 _LAZY = {
     "FMUBuildError": "builder", "build_scene_fmu": "builder", "build_slave_fmu": "builder",
-    "bundle_name": "builder", "default_tunable": "builder", "validate_fmu_file": "builder",
+    "bundle_name": "bundle", "default_tunable": "builder", "validate_fmu_file": "builder",
     "fmu_environment": "env",
     "fix_model_description": "model_description",
     "check_fmu": "regression", "write_reference": "regression",

@@ -9,13 +9,15 @@ slave runs (`flexure.fmu.requirements`; `flexure fmu doctor` checks them from th
 line; `flexure fmu env` prints what a non-Python host needs). flexure itself is *bundled*:
 the FMU's resources hold a copy of the flexure packages it uses (`core`, the runtime part of
 `fmu`, and on request `controllers`) under the package name `_flexure_<hash>`, where the hash
-is taken over the bundled sources. The slave script's `flexure` imports are rewritten to that
-name. So:
+is taken over the bundled sources (`flexure.fmu.bundle`). The slave script's `flexure` imports
+are rewritten to that name. So:
 
 - an FMU does not depend on the flexure version installed in the host, and keeps giving the
   results it was built (and regression-tested) with;
 - FMUs built from the same flexure sources share one bundled package in a process (same name,
   same code: harmless), FMUs built from different sources get different names and do not mix;
+- in a host whose own flexure has the bundle's sources, that flexure stands in for the bundle
+  (`bundle_init.py`): the same code, without a second compilation of the engine;
 - every slave script is a module of its own name (a scene FMU's is `<scene>_<hash>`), because
   pythonfmu imports the script by name and Python caches modules per process: two FMUs with
   the same script name would silently share the first one's class.
@@ -25,8 +27,6 @@ name, so FMUs of different scenes coexist in one process.
 """
 
 import hashlib
-import importlib.util
-import re
 import shutil
 import sys
 import tempfile
@@ -35,26 +35,10 @@ from pathlib import Path
 
 from flexure.core import FlexureError
 
+from .bundle import bundle_name, rewrite_imports, write_bundle
 from .model_description import fix_model_description
 from .requirements import FILE_NAME, format_requirements, runtime_requirements
 
-# The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
-FMU_RUNTIME_MODULES = ("slave.py", "slave_states.py", "pythonfmu_workarounds.py",
-                       "scene_slave.py", "state_format.py", "requirements.py")
-# Lazy (PEP 562), as flexure.fmu's own: the launcher imports `requirements` (the standard
-# library only) before anything may import numpy.
-FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
-
-import importlib
-
-__all__ = ["SafeSlave", "UnitReal", "escape_log"]
-
-
-def __getattr__(name):
-    if name not in __all__:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(".slave", __name__), name)
-'''
 # The platforms whose binaries an FMU keeps: those flexure's FMUs were run on (docs/fmu.md).
 # pythonfmu 0.7.0 ships binaries for linux64 and win64 and copies both into every FMU.
 TRIED_PLATFORMS = ("linux64",)
@@ -111,55 +95,6 @@ def _requirements_header(bundle):
             "the Python\nthat runs the FMU:  python -m pip install -r requirements.txt\n"
             "A version at or above the one after 'needs' works too: `flexure fmu doctor "
             "FMU` checks.")
-
-
-def _package_dir(name):
-    spec = importlib.util.find_spec(name)
-    if spec is None or not spec.submodule_search_locations:
-        raise ImportError(f"cannot find the package {name!r} to bundle")
-    return Path(next(iter(spec.submodule_search_locations)))
-
-
-def _bundle_sources(parts):
-    """{relative path: source text} of the flexure packages in `parts` (before renaming)."""
-    sources = {"__init__.py": '"""A copy of flexure bundled in an FMU."""\n'}
-    for part in parts:
-        if part == "fmu":
-            folder = Path(__file__).parent
-            sources["fmu/__init__.py"] = FMU_RUNTIME_INIT
-            for name in FMU_RUNTIME_MODULES:
-                sources[f"fmu/{name}"] = (folder / name).read_text()
-            continue
-        folder = _package_dir(f"flexure.{part}")
-        for path in sorted(folder.rglob("*.py")):
-            if "__pycache__" not in path.parts:
-                sources[f"{part}/{path.relative_to(folder).as_posix()}"] = path.read_text()
-    return sources
-
-
-def _rewrite_imports(text, package):
-    """Point `import flexure...` / `from flexure... import` at the bundled package."""
-    return re.sub(r"^(\s*)(from|import)(\s+)flexure\b", rf"\1\2\3{package}", text,
-                  flags=re.MULTILINE)
-
-
-def bundle_name(parts=("core", "fmu")) -> str:
-    """The package name `_flexure_<hash>` a bundle of `parts` gets (hash of its sources)."""
-    digest = hashlib.sha256()
-    for path, text in sorted(_bundle_sources(parts).items()):
-        digest.update(path.encode() + b"\0" + text.encode() + b"\0")
-    return f"_flexure_{digest.hexdigest()[:12]}"
-
-
-def write_bundle(folder, parts=("core", "fmu")):
-    """Write the bundled flexure package into `folder`; returns its directory."""
-    package = bundle_name(parts)
-    root = Path(folder) / package
-    for path, text in _bundle_sources(parts).items():
-        target = root / path
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(_rewrite_imports(text, package))
-    return root
 
 
 def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=(),
@@ -236,13 +171,13 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
         text = script_path.read_text()
         script = source / script_path.name
         if package:  # the launcher checks the requirements, then runs the script
-            text = _rewrite_imports(text, package)
+            text = rewrite_imports(text, package)
             (source / f"{script_path.stem}.slave.py").write_text(text)
             files.append(source / f"{script_path.stem}.slave.py")
             launcher = LAUNCHER.format(package=package, source=f"{script_path.stem}.slave.py",
                                        requirements=FILE_NAME, requirements_text=listed,
                                        source_text=text)
-            script.write_text(launcher + _rewrite_imports(KEEP_NAMESPACE, package))
+            script.write_text(launcher + rewrite_imports(KEEP_NAMESPACE, package))
         else:
             script.write_text(text + KEEP_NAMESPACE)
         try:

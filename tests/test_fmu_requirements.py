@@ -75,7 +75,9 @@ IMPORT_PROBE = textwrap.dedent("""
 
     def recording(name, globals=None, locals=None, fromlist=(), level=0):
         importer = (globals or {}).get("__name__", "")
-        if level == 0 and (importer.startswith("_flexure_") or importer == module_name):
+        # the FMU's own copy, or the identical installed flexure standing in for it
+        if level == 0 and (importer.startswith(("_flexure_", "flexure."))
+                           or importer == module_name):
             imported.add(name.split(".")[0])
         return original(name, globals, locals, fromlist, level)
 
@@ -96,7 +98,8 @@ IMPORT_PROBE = textwrap.dedent("""
             loaded_by_esdirk = sorted(m for m in sys.modules if m.split(".")[0] == "sksundae")
     builtins.__import__ = original
     outside = sorted(name for name in imported if name not in sys.stdlib_module_names
-                     and not name.startswith("_flexure_") and name != "pythonfmu")
+                     and not name.startswith("_flexure_")
+                     and name not in ("flexure", "pythonfmu"))
     print(json.dumps([outside, loaded_by_esdirk]))
 """)
 
