@@ -9,6 +9,7 @@ import json
 
 import numpy as np
 import pytest
+import test_rotation_ports as spatial
 
 from flexure.core import FlexureError, SceneError, build_model, compliance, load_scene
 from flexure.core.analysis.linearization import linearize
@@ -114,14 +115,60 @@ def test_unknown_node_is_named():
         compliance(load_scene("stage_planar_1dof"), "99")
 
 
-def test_spatial_rotational_node_is_refused_and_translations_given():
-    model = load_scene("stage_spatial_1dof")
-    rotational = next(node.name for node in model.nodes if node.kind == "rotational")
-    with pytest.raises(SceneError, match=f"node '{rotational}' is a spatial rotational node"):
-        compliance(model, rotational)
-    result = compliance(model, "3")  # the bar: moves sideways only, as in the plane
+def test_spatial_translational_node_gives_its_translations():
+    result = compliance(load_scene("stage_spatial_1dof"), "3")  # the bar: sideways only
     assert result.coordinates == ["3.x", "3.y", "3.z"]
     assert result.matrix[0, 0] == pytest.approx(LEAF_L**3 / (24 * LEAF_EI), rel=1e-9)
+
+
+def rotation_matrix(lam):
+    """R of Euler parameters (lambda0, lambda1, lambda2, lambda3), written out."""
+    l0, lv = lam[0], np.asarray(lam[1:])
+    cross = np.array([[0.0, -lv[2], lv[1]], [lv[2], 0.0, -lv[0]], [-lv[1], lv[0], 0.0]])
+    return (l0**2 - lv @ lv) * np.eye(3) + 2.0 * np.outer(lv, lv) + 2.0 * l0 * cross
+
+
+@pytest.mark.parametrize("rotation", [(0.0, 0.0, 0.0), (0.3, -0.2, 0.5)])
+def test_spatial_rotational_node_gives_torsion_and_bending(rotation):
+    """A clamped spatial beam's tip node: L / GIt about the beam, L / EIy and L / EIz about the
+    bending axes, whatever orientation its node starts in (the beam's stiffness is in its
+    own axes, here the global ones)."""
+    model = build_model(spatial.cantilever(rotation=rotation))
+    result = compliance(model, "4")
+    assert result.coordinates == ["4.rx", "4.ry", "4.rz"]
+    assert result.units[0][0] == "rad/(N m)" and result.stiffness_units[1][1] == "N m/rad"
+    L, GIT, EIY, EIZ = spatial.L, spatial.GIT, spatial.EIY, spatial.EIZ
+    np.testing.assert_allclose(result.matrix, np.diag([L / GIT, L / EIY, L / EIZ]),
+                               rtol=1e-9, atol=1e-12 * L / EIZ)
+    np.testing.assert_allclose(result.stiffness, np.diag([GIT, EIY, EIZ]) / L, rtol=1e-9,
+                               atol=1e-9 * EIY / L)
+
+
+def test_spatial_rotational_compliance_under_load_equals_static_differences():
+    """Bent by 0.4 rad and twisted under tip moments about fixed global axes (geometric
+    nonlinearity couples the axes; such moments are not conservative, so the compliance is
+    not symmetric): against central differences of static solutions under +-h N m about each
+    axis, the rotation between the two read from their Euler parameters (R+ R-^T), to 1e-6."""
+    model = build_model(spatial.cantilever())
+    base = {"Mx": 0.2, "My": 0.4 * spatial.EIY / spatial.L, "Mz": 0.0}
+    solution = static_equilibrium(model, inputs=base)
+    result = compliance(model, "4", solution=solution)
+    euler = [model.coordinate_index(f"4.lambda{k}") for k in range(4)]
+    h = 1e-4
+    numeric = np.zeros((3, 3))
+    for k, name in enumerate(("Mx", "My", "Mz")):
+        turned = []
+        for sign in (1.0, -1.0):
+            loads = dict(base)
+            loads[name] += sign * h
+            turned.append(rotation_matrix(static_equilibrium(model, inputs=loads).x[euler]))
+        relative = turned[0] @ turned[1].T
+        skew = 0.5 * (relative - relative.T)
+        numeric[:, k] = np.array([skew[2, 1], skew[0, 2], skew[1, 0]]) / (2.0 * h)
+    assert abs(numeric[0, 2]) > 1e-3 * numeric[0, 0]  # the load couples the axes
+    np.testing.assert_allclose(result.matrix, numeric, rtol=1e-6,
+                               atol=1e-6 * spatial.L / spatial.EIZ)
+    assert abs(result.matrix[0, 2] - result.matrix[2, 0]) > 1e-2 * result.matrix[0, 0]
 
 
 def test_singular_tangent_stiffness_is_reported():

@@ -6,18 +6,27 @@ DF = dx/dq. A small force (and moment) df on the coordinates c of one node moves
 
     dx_c = C df_c,      C = DF_c K^-1 DF_c^T                                  (compliance)
 
-with DF_c the rows of DF of those coordinates. C is symmetric; its units are m/N on
-translations, rad/(N m) on the planar angle and m/(N m) = rad/N across. Where C is regular its
+with DF_c the rows of DF of those coordinates. Its units are m/N on translations, rad/(N m)
+on the planar angle and m/(N m) = rad/N across. C is symmetric where the loads are
+conservative; a moment held about a fixed global axis in 3-D is not, and under one K and C are
+unsymmetric and given as they are. Where C is regular its
 inverse is the support stiffness (N/m, N/rad, N m/m, N m/rad): the force that holds the node
 displaced by a unit step of one coordinate with the others held.
 
 The coordinates of a node are its translations and, in the plane, the angle of the rotational
 node the elements join to it (a PLBEAM's p or q pair); a planar rotational node named alone
-gives its angle. A coordinate the DOFs cannot move (fixed, or held by a prescribed
-deformation, such as the vertical of a leaf-spring stage whose leaves do not stretch) has zero
-compliance: C is then singular and there is no support stiffness, which the result says rather
-than inverting it. In 3-D only translations are given: a rotation there is carried by four
-Euler parameters, not by angles a moment can be applied to one by one.
+gives its angle. A spatial rotational node gives its small rotations about the global axes
+(rx, ry, rz, rad) under moments about them (N m): its orientation is carried by four Euler
+parameters lambda, whose change turns the node by d theta = 2 E(lambda) d lambda, and a moment
+M acts on them as the generalised force 2 E(lambda)^T M (`numerics.rotations`), so that
+
+    C = H DF K^-1 DF^T H^T,      H = the unit rows of the translations, 2 E(lambda) of a rotation
+
+stays symmetric in any orientation (a spatial translational node gives its translations; name
+its rotational node for the rotations). A coordinate the DOFs cannot move (fixed, or held by a
+prescribed deformation, such as the vertical of a leaf-spring stage whose leaves do not
+stretch) has zero compliance: C is then singular and there is no support stiffness, which the
+result says rather than inverting it.
 """
 
 from __future__ import annotations
@@ -31,6 +40,7 @@ from ..errors import FlexureError, SceneError
 from ..mechanics.kinematics import length_scale
 from ..numerics.blas import blas_threads
 from ..numerics.conditioning import lu_and_rcond
+from ..numerics.rotations import global_rates_matrix
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
@@ -76,28 +86,38 @@ class Compliance:
 
 def node_coordinates(model: Model, node: str) -> list[int]:
     """The coordinate indices a compliance of `node` covers: its translations, then in the
-    plane the angle of the rotational node joined to it. SceneError names an unknown node and
-    a 3-D rotational one."""
+    plane the angle of the rotational node joined to it; a rotational node's own coordinates
+    (a spatial one's four Euler parameters, which `measure_rows` turns into three rotations).
+    SceneError names an unknown node."""
     nodes = {n.name: n for n in model.nodes}
     if node not in nodes:
         listed = ", ".join(list(nodes)[:12]) + (", ..." if len(nodes) > 12 else "")
         raise SceneError(f"{model.source}: compliance: model {model.name!r} has no node "
                          f"{node!r}; expected one of {listed}")
     found = nodes[node]
-    if found.kind == "rotational":
-        if model.dimension == 3:
-            raise SceneError(f"{model.source}: compliance: node {node!r} is a spatial "
-                             "rotational node (Euler parameters); name its translational node, "
-                             "whose translations are given, or declare moment inputs and angle "
-                             "outputs on it (coordinate rx, ry, rz) and take the DC gain of "
-                             "the state space")
-        return list(found.coordinates)
     index = list(found.coordinates)
-    if model.dimension == 2:
+    if found.kind == "translational" and model.dimension == 2:
         partners = joined_rotational_nodes(model, node)
         if len(partners) == 1:
             index += list(nodes[partners[0]].coordinates)
     return index
+
+
+def measure_rows(model: Model, node: str, x) -> tuple[np.ndarray, list[str], list[bool]]:
+    """(H (n, NX), names, translational flags) of the displacements a compliance of `node`
+    reports at coordinates x: a unit row per coordinate of `node_coordinates`, or for a
+    spatial rotational node the rows 2 E(lambda) of its rotations about the global axes
+    ("<node>.rx", ...)."""
+    index = node_coordinates(model, node)
+    found = next(n for n in model.nodes if n.name == node)
+    if found.kind == "rotational" and model.dimension == 3:
+        H = np.zeros((3, model.nx))
+        H[:, index] = 2.0 * global_rates_matrix(np.asarray(x, float)[index])
+        return H, [f"{node}.r{axis}" for axis in "xyz"], [False] * 3
+    H = np.zeros((len(index), model.nx))
+    H[np.arange(len(index)), index] = 1.0
+    translational = np.isin(model.coordinate_axis[index].astype(str), ("x", "y", "z"))
+    return H, [model.coordinate_names[i] for i in index], [bool(t) for t in translational]
 
 
 def joined_rotational_nodes(model: Model, node: str) -> list[str]:
@@ -130,9 +150,12 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
     """
     from .linearization import linearize
 
-    index = node_coordinates(model, node)
+    node_coordinates(model, node)  # an unknown node is named before any solve
     lin = linear_model or linearize(model, solution)
     DF = lin.DF
+    H, names, translational = measure_rows(model, node, lin.solution.x)
+    translational = np.array(translational, dtype=bool)
+    HDF = H @ DF
     singular = FlexureError(f"{model.source}: compliance of node {node!r}: the tangent "
                             f"stiffness K0 + G0 of {model.name!r} is singular in this "
                             "configuration (at a buckling load, a mechanism, or DOFs without "
@@ -140,11 +163,12 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
     solved = _solve_regular(lin.K, DF.T)  # K^-1 DF^T (NDOF, NX), None where K is singular
     if solved is None:
         raise singular
-    C = DF[index] @ solved[:, index]
-    C = 0.5 * (C + C.T)  # symmetric in exact arithmetic
+    C = HDF @ solved @ H.T
+    symmetric = _is_symmetric(lin.K)
+    if symmetric:
+        C = 0.5 * (C + C.T)  # symmetric in exact arithmetic
     if np.any(np.diag(C) < 0.0):  # a stable equilibrium's compliance is positive semidefinite
         raise singular
-    translational = np.isin(model.coordinate_axis[index].astype(str), ("x", "y", "z"))
     # "Zero" is measured against the largest compliance in the model, a rotation's taken as
     # the motion it gives a point at the model's length scale L (rad/(N m) times L^2 is m/N)
     L = length_scale(model)
@@ -154,7 +178,6 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
     zero = as_lengths <= UNREACHABLE * np.max(np.abs(every), initial=0.0)
     C[zero, :] = 0.0
     C[:, zero] = 0.0
-    names = [model.coordinate_names[i] for i in index]
     coordinate_units = ["m" if t else "rad" for t in translational]
     load_units = ["N" if t else "N m" for t in translational]
     units = [[f"{c}/{_group(f)}" for f in load_units] for c in coordinate_units]
@@ -176,7 +199,8 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
     stiffness = None
     if not notes:
         stiffness = np.linalg.inv(C)
-        stiffness = 0.5 * (stiffness + stiffness.T)
+        if symmetric:
+            stiffness = 0.5 * (stiffness + stiffness.T)
     note = "; ".join(notes) + (": the matrix is singular" if notes else "")
     return Compliance(node, names, C, stiffness, units, stiffness_units, unreachable, note)
 
@@ -195,6 +219,15 @@ def _solve_regular(K, rhs):
         return None
     solved = scipy.linalg.lu_solve(factors, rhs)
     return solved if np.all(np.isfinite(solved)) else None
+
+
+# K is symmetric when the loads are conservative; moments held about fixed global axes (moment
+# inputs with a value, in 3-D) are not, and their load stiffness makes K, and C, unsymmetric
+SYMMETRIC = 1e-10
+
+
+def _is_symmetric(K):
+    return np.max(np.abs(K - K.T), initial=0.0) <= SYMMETRIC * np.max(np.abs(K), initial=0.0)
 
 
 def _group(unit):
