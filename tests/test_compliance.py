@@ -1,8 +1,9 @@
 """Compliance and support stiffness at a node against analytic results: the 1-DOF truss
 (1/k, k = EA/l0), the leaf-spring stage's bar (two clamped-guided leaves, 24 EI/L^3, less the
 consistent geometric stiffness 6/5 P/L under a vertical load P), a clamped cantilever (tip
-L^3/(3EI), L/(EI), L^2/(2EI): exact for the Hermite beam, one element or several); the errors
-of an unknown node, a spatial rotational node and a singular tangent stiffness; the CLI."""
+L^3/(3EI), L/(EI), L^2/(2EI): exact for the Hermite beam, one element or several), a spatial
+cantilever's tip rotations; the errors of an unknown node and a singular tangent stiffness; the
+CLI."""
 
 import dataclasses
 import json
