@@ -219,7 +219,7 @@ class SceneSlave(SafeSlave):
 
     def _refresh(self):
         """Read the outputs (and the stress) from the simulator's current state."""
-        self.outputs = np.asarray(self.simulator.outputs(), dtype=float).copy()
+        self.outputs = self.simulator.outputs()  # a float array of its own
         self.currents = self.simulator.currents
         self.stress = float("nan")
         if self.von_mises:

@@ -126,6 +126,7 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
         self.phase = INSTANTIATED  # where the instance is in the FMI call sequence
         self.broken = ""  # why this instance is in the error state ("" while it is not)
         self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
+        self._settable_inputs = {}  # {variable kind: its inputs' value references}
 
     # -- to override -------------------------------------------------------------------------
 
@@ -405,8 +406,11 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
             if self.broken or self.phase not in (INSTANTIATED, INITIALIZATION, STEP_COMPLETE):
                 return self._illegal(call, "states instantiated, initialization mode and "
                                            "step complete")
+            inputs = self._inputs_of(kind)
             for vr, value in zip(vrs, values, strict=True):
-                problem = self._variable_problem(vr, kind) or self._settable_problem(vr)
+                # an input of this kind is always settable: only its value is checked
+                problem = None if vr in inputs else (self._variable_problem(vr, kind)
+                                                     or self._settable_problem(vr))
                 if not problem:
                     problem = self.check_value(self.vars[vr].name, value)
                 if problem:
@@ -414,6 +418,17 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
                 self.vars[vr].setter(value)
         except BaseException as error:  # noqa: BLE001
             self._fail(call, error)
+
+    def _inputs_of(self, kind):
+        """The value references of the settable inputs of `kind` (found once per kind: the
+        variables are registered in __init__, before any set)."""
+        found = self._settable_inputs.get(kind)
+        if found is None:
+            found = self._settable_inputs[kind] = frozenset(
+                vr for vr, variable in self.vars.items()
+                if isinstance(variable, kind) and variable.causality == Fmi2Causality.input
+                and variable.setter is not None)
+        return found
 
     def _variable_problem(self, vr, kind):
         variable = self.vars.get(vr)

@@ -251,3 +251,23 @@ def test_zero_order_hold_samples_equal_manual_set_inputs():
         sim.set_inputs([u])
         sim.advance(t_next)
     assert np.allclose(result.outputs["x"][-1], sim.outputs()[0], atol=1e-12, rtol=0)
+
+
+def test_outputs_that_are_dofs_are_read_from_q_and_equal_the_kinematics():
+    """stage_planar_3dof's outputs x, y are its DOFs 3.x, 3.y: `outputs` reads them from q
+    (no kinematics), equal to the kinematics' solution at that state to round-off; an
+    output that is not a DOF (truss_1dof_e's x, its DOF an elongation) is marked -1."""
+    from flexure.core.mechanics.ports import output_dofs
+
+    model = load_scene("stage_planar_3dof")
+    assert output_dofs(model).tolist() == [0, 1]
+    assert output_dofs(load_scene("truss_1dof_e")).tolist() == [-1]
+    assert output_dofs(load_scene("stage_planar_1dof")).tolist() == [0, -1]
+    sim = Simulator(model, method="esdirk", rtol=1e-6)
+    sim.set_inputs([1.0])
+    sim.advance(0.02)
+    direct = sim.outputs()
+    assert direct.tolist() == (sim.q[:2]).tolist()
+    solved = sim.outputs_along(sim.absolute(sim.state)[None])[0]
+    np.testing.assert_allclose(direct, solved, rtol=0.0, atol=1e-15)
+    assert abs(direct[0]) > 1e-6  # the stage moved

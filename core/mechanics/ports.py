@@ -137,6 +137,16 @@ def output_rows(model, x, DF, ports=None):
     return C
 
 
+def output_dofs(model, ports=None):
+    """int64 (n_ports,): the DOF index of each position output that is itself a DOF (a
+    coordinate DOF: the output is then q_j exactly, with no kinematics to solve), else -1."""
+    ports = model.outputs if ports is None else ports
+    where = {int(c): j for j, c in enumerate(model.dof_coordinates)}
+    return np.array([where.get(port.coordinate, -1) if not port.about_axis
+                     and port.quantity == "position" else -1 for port in ports],
+                    dtype=np.int64)
+
+
 def input_columns(model, x, ports=None):
     """b (NX, n_inputs): the generalised force of a unit value of each input (`ports`,
     default the model's) at coordinates x (`input_direction`)."""

@@ -30,6 +30,7 @@ from ..engine import data as ed
 from ..engine import engine
 from ..engine.ports import port_specs, position_value
 from ..errors import SimulationError
+from ..mechanics.ports import output_dofs
 from ..numerics.jit import kernel
 from ..numerics.native import (
     as_float_pointer,
@@ -98,8 +99,10 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
     N = int(samples)
     position = np.zeros((N + 1, n_loops))
     force = np.zeros((N + 1, n_loops))
-    # the measured outputs, packed (engine.ports): a coordinate, or an angle about a global axis
-    coordinates = port_specs(ports).ravel()
+    # the measured outputs, packed (engine.ports): a coordinate, or an angle about a global
+    # axis; then the DOF each one is, or -1 (`_measure`)
+    coordinates = np.concatenate([port_specs(ports).ravel(),
+                                  output_dofs(sim.model, ports)])
     loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
             np.array(loop_inputs, dtype=np.int64), coordinates, position, force)
     # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
@@ -214,13 +217,20 @@ _MEASURE_FAILED = -1000
 @kernel
 def _measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
-    status. As `Simulator.outputs`: full Newton from the plant's last coordinates.
-    coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat)."""
+    status. As `Simulator.outputs`: q_ref + y at the DOFs when every output is a coordinate
+    DOF, else full Newton from the plant's last coordinates. coordinates: the outputs' packed
+    rows (`engine.ports.port_specs`, flat), then the DOF of each output or -1
+    (`mechanics.ports.output_dofs`)."""
+    q_ref = engine.float_array(addresses[_PLANT], _Q_REF_SLOT)
+    dofs = coordinates[coordinates.size - out.size:]
+    if np.all(dofs >= 0):
+        for j in range(out.size):
+            out[j] = q_ref[dofs[j]] + y[dofs[j]]
+        return ed.OK
     ndof = engine.int_array(addresses[_PLANT], _DIMS_SLOT)[ed.NDOF]  # y: [.., coil currents]
     x_plant = engine.float_array(addresses[_PLANT], _X_SLOT)
     engine.float_array(addresses[_OUTPUT], _X_START_SLOT)[:] = x_plant
     engine.int_array(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
-    q_ref = engine.float_array(addresses[_PLANT], _Q_REF_SLOT)
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
     status = call_engine(addresses[_ENGINE], engine.OP_POSITIONS, addresses[_OUTPUT], 0.0,

@@ -35,6 +35,7 @@ from ..engine import data as ed
 from ..engine import engine
 from ..engine.data import EngineData
 from ..errors import SimulationError, StepBudgetSpent
+from ..mechanics.ports import output_dofs
 from .esdirk import Esdirk
 from .methods import METHODS, ONE_STEP_METHODS
 from .simulator_outputs import SimulatorOutputs
@@ -117,6 +118,9 @@ class Simulator(SimulatorOutputs, SimulatorState):
                                              for port in model.outputs], dtype=np.int64)
         self._about_axis = any(port.about_axis for port in model.outputs)
         self._positions_only = all(port.quantity == "position" for port in model.outputs)
+        # every output a coordinate DOF (a stage's carriage): read from q, no kinematics
+        dofs = output_dofs(model)
+        self._output_dofs = dofs if dofs.size and np.all(dofs >= 0) else None
         self._range = None  # plausibility.RangeCheck, made on first use
         # views of the coordinates and deformations of the engine's last evaluation
         self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")

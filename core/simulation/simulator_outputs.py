@@ -24,7 +24,10 @@ class SimulatorOutputs:
 
         Computed once per state (`advance`, `reset` and `set_state` start a new one)."""
         if self._outputs_cache is None:
-            if self._positions_only:
+            if self._output_dofs is not None:  # every output a coordinate DOF: q itself
+                dofs = self._output_dofs
+                self._outputs_cache = self._q_ref[dofs] + self._y[dofs]
+            elif self._positions_only:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
