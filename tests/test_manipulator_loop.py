@@ -6,6 +6,13 @@ import pytest
 from examples import manipulator_loop
 
 
+def test_comparing_plants_needs_the_loop(capsys):
+    with pytest.raises(SystemExit) as stop:
+        manipulator_loop.main(["--plant", "libcosim"])
+    assert stop.value.code == 2
+    assert "--plant compares the closed loop: give --loop too" in capsys.readouterr().err
+
+
 @pytest.mark.slow
 def test_the_loops_hold_on_every_model_and_the_linear_strokes_miss_quadratically(capsys):
     design, rows = manipulator_loop.robustness()
