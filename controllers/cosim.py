@@ -1,7 +1,7 @@
 """The third plant: the controller FMU and the scene FMU connected in libcosim (libcosimpy).
 
-    scene FMU  --- x (m) --->  controller FMU
-               <-- F (N) ----
+    scene FMU  --- x (m) --->  controller FMU        one such pair per loop, connected by
+               <-- F (N) ----                        name (the manipulator: F1..F6, x1..x6)
 
 libcosim's fixed-step algorithm steps both FMUs over each macro step [t_k, t_k+1] (h = 1 / fs,
 an integer number of nanoseconds) after transferring the connected values: the controller
@@ -85,12 +85,17 @@ def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD,
     plant = ex.add_local_slave(CosimLocalSlave(fmu_path=str(plant_path), instance_name="plant"))
     ctrl = ex.add_local_slave(CosimLocalSlave(fmu_path=str(controller_path),
                                               instance_name="controller"))
-    vr = {(s, v.name.decode()): v.reference
-          for s in (plant, ctrl) for v in ex.slave_variables(s)}
+    vr = _references(ex, {plant: plant_path, ctrl: controller_path},
+                     {plant: ["integrator.rtol", "integrator.method"]
+                      + [name for p in design.pairs for name in (p.input_name, p.output_name)],
+                      ctrl: [name for p in design.pairs
+                             for name in (p.input_name, p.output_name)]})
     if not ex.real_initial_value(plant, vr[(plant, "integrator.rtol")], float(rtol)):
         raise SimulationError("libcosim: cannot set the plant's integrator.rtol")
     if not ex.string_initial_value(plant, vr[(plant, "integrator.method")], method):
         raise SimulationError("libcosim: cannot set the plant's integrator.method")
+    # each loop's ports connected by name: the plant's output (e.g. "x3") to the controller's
+    # input of that name, the controller's output (e.g. "F3") to the plant's input
     for pair in design.pairs:
         out, inp = pair.output_name, pair.input_name
         if ex.connect_real_variables(plant, vr[(plant, out)], ctrl, vr[(ctrl, out)]) != 0 or \
@@ -128,3 +133,16 @@ def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD,
         force[N, i] = u[-1]
     t = np.arange(N + 1) / fs
     return t, controller.reference[: N + 1].copy(), position, force
+
+
+def _references(ex, paths, wanted):
+    """{(slave, name): value reference} of the slaves' variables; SimulationError naming the
+    FMU (`paths[slave]`) and the variable when one of `wanted[slave]` is missing."""
+    vr = {(slave, v.name.decode()): v.reference
+          for slave in paths for v in ex.slave_variables(slave)}
+    for slave, names in wanted.items():
+        for name in names:
+            if (slave, name) not in vr:
+                raise SimulationError(f"{paths[slave]}: the FMU has no variable {name!r} "
+                                      f"(a loop connects it by name)")
+    return vr

@@ -42,6 +42,7 @@ class MovePath:
     targets: dict  # {coordinate: displacement at s = 1}
 
     def __post_init__(self):
+        _check(self)
         object.__setattr__(self, "_spline", CubicSpline(self.s, self.displacements, axis=0))
         if self.forces is not None:
             object.__setattr__(self, "_force_spline", CubicSpline(self.s, self.forces, axis=0))
@@ -55,16 +56,44 @@ class MovePath:
         return self._force_spline(np.clip(np.asarray(s, float), 0.0, 1.0))
 
     def to_dict(self) -> dict:
+        """The path as JSON-able lists: its knots, not the splines' coefficients.
+
+        Floats survive JSON exactly (Python writes the shortest repr that reads back to the
+        same double), and `from_dict` fits the same splines through the same knots, so the
+        path read back gives the same displacements and forces bit for bit: the controller
+        FMU computes the references and feedforward of the in-process loop.
+        """
         return {"s": self.s.tolist(), "displacements": self.displacements.tolist(),
                 "forces": None if self.forces is None else self.forces.tolist(),
                 "kind": self.kind, "targets": dict(self.targets)}
 
     @classmethod
     def from_dict(cls, data: dict) -> MovePath:
+        """The path of `to_dict`; ControlDesignError names a missing key or a bad shape."""
+        missing = [key for key in ("s", "displacements", "kind", "targets") if key not in data]
+        if missing:
+            raise ControlDesignError(f"move path: the dictionary lacks {missing[0]!r}; "
+                                     "expected the keys of MovePath.to_dict()")
         forces = data.get("forces")
         return cls(np.asarray(data["s"], float), np.asarray(data["displacements"], float),
                    None if forces is None else np.asarray(forces, float), data["kind"],
                    dict(data["targets"]))
+
+
+def _check(path: MovePath) -> None:
+    """ControlDesignError unless the path's arrays fit together (expected against found)."""
+    s, y = np.asarray(path.s), np.asarray(path.displacements)
+    if path.kind not in KINDS:
+        raise ControlDesignError(f"move path kind must be one of {', '.join(KINDS)}, got "
+                                 f"{path.kind!r}")
+    if s.ndim != 1 or s.size < 2 or not np.all(np.diff(s) > 0) or s[0] != 0.0 or s[-1] != 1.0:
+        raise ControlDesignError(f"move path: s must rise strictly from 0 to 1, got {s.tolist()}")
+    if y.ndim != 2 or y.shape[0] != s.size:
+        raise ControlDesignError(f"move path: expected displacements of shape ({s.size}, "
+                                 f"n_loops), got {y.shape}")
+    if path.forces is not None and np.shape(path.forces) != y.shape:
+        raise ControlDesignError(f"move path: expected forces of shape {y.shape}, got "
+                                 f"{np.shape(path.forces)}")
 
 
 def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11,

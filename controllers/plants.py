@@ -66,19 +66,25 @@ class FmuPlant:
         The scene's FMU (`flexure.fmu.build_scene_fmu`).
     method, rtol : str, float
         Set on the FMU's parameters "integrator.method" and "integrator.rtol".
+    inputs, outputs : list of str, optional
+        The ports, by name, in the order `set_input` takes and `output` gives them (the
+        model's `inputs` and `outputs`, so that a loop's port indices hold on the FMU too);
+        default: every input and output of the FMU in its model description's order.
+        SimulationError names a port the FMU lacks.
     """
 
     kind = "fmu"
 
-    def __init__(self, fmu_path, *, method=LOOP_METHOD, rtol=LOOP_RTOL):
+    def __init__(self, fmu_path, *, method=LOOP_METHOD, rtol=LOOP_RTOL, inputs=None,
+                 outputs=None):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
         self.path = Path(fmu_path)
         md = read_model_description(str(self.path))
         variables = {v.name: v for v in md.modelVariables}
-        self.input_names = [v.name for v in md.modelVariables if v.causality == "input"]
-        self.output_names = [v.name for v in md.modelVariables if v.causality == "output"]
+        self.input_names = _ports(self.path, md, "input", inputs)
+        self.output_names = _ports(self.path, md, "output", outputs)
         self._in = [variables[n].valueReference for n in self.input_names]
         self._out = [variables[n].valueReference for n in self.output_names]
         self._dir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix="flexure_plant_"))
@@ -141,3 +147,15 @@ class FmuPlant:
             self.close()
         except Exception:  # noqa: BLE001
             pass
+
+
+def _ports(path, md, causality, names):
+    """The FMU's variables of `causality` named `names` (all of them if None), checked."""
+    present = [v.name for v in md.modelVariables if v.causality == causality]
+    if names is None:
+        return present
+    missing = [name for name in names if name not in present]
+    if missing:
+        raise SimulationError(f"{path}: the FMU has no {causality} {missing[0]!r}; its "
+                              f"{causality}s are {', '.join(present) or 'none'}")
+    return list(names)

@@ -145,7 +145,8 @@ def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir
         return compiled_loop(model, controller, design, method=method, rtol=rtol,
                              progress=progress)
     adapter = FmuPlant(scene_fmu(scene, model, workdir, overrides=overrides), method=method,
-                       rtol=rtol)
+                       rtol=rtol, inputs=[port.name for port in model.inputs],
+                       outputs=[port.name for port in model.outputs])
     try:
         return simulate_loop(adapter, controller, design, progress=progress)
     finally:

@@ -1,7 +1,8 @@
 """The six-actuator loop of the manipulator (the chapter's sections 3.3.3 and 3.4) on our model.
 
-    python examples/manipulator_loop.py              # robustness and moves, about a minute
-    python examples/manipulator_loop.py --loop       # also the 6 mm xy move in closed loop
+    python examples/manipulator_loop.py                      # robustness and moves, a minute
+    python examples/manipulator_loop.py --loop               # + the 6 mm xy move, closed loop
+    python examples/manipulator_loop.py --loop --plant libcosim   # + the same loop as FMUs
 
 1. **Design and robust stability.** One PID-like loop per actuator on its colocated encoder,
    its gain set for 300 rad/s on the low-frequency model (the six suspension modes alone,
@@ -19,7 +20,10 @@
    nonlinear path puts it where it was asked to within 1e-10 m.
 3. **Closed loop** (`--loop`): the 6 mm xy move in 1 s on the nonlinear control model with the
    nonlinear path and its feedforward (`flexure loop manipulator_control --move ...`), each
-   actuator's largest error against 0.1 % of its stroke.
+   actuator's largest error against 0.1 % of its stroke. With `--plant libcosim` the same
+   loop runs again as the manipulator's FMU and a controller FMU co-simulated in libcosim
+   (`--plant fmu`: the manipulator's FMU stepped by fmpy), and each actuator's error / stroke
+   is compared with the in-process one (the issue: within 1e-6 of the stroke).
 
 Lengths in mm, rotations in mrad (the end effector's rotation-vector components), margins in
 degrees and ratios.
@@ -27,6 +31,7 @@ degrees and ratios.
 
 import argparse
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -38,6 +43,7 @@ from flexure.controllers.move_path import move_path
 from flexure.controllers.robustness import check_robustness
 from flexure.controllers.runner import run_loop
 from flexure.core import inverse_statics, load_scene, output_value, state_space
+from flexure.core.reporting.progress import Progress
 
 CONTROL, REDUCED = "manipulator_control", "manipulator_reduced"
 FIGURES = Path(__file__).resolve().parent / "figures"
@@ -63,11 +69,19 @@ def plant_of(model):
     return full[[p.output_index for p in pairs], [p.input_index for p in pairs]]
 
 
+def design_loops(crossover=300.0, fs=4000.0):
+    """The six loops designed for `crossover` (rad/s) at `fs` (Hz) on the low-frequency model
+    of the control model."""
+    control_model = load_scene(CONTROL)
+    lf = low_frequency_model(control_model)
+    return design_feedback(control_model, crossover=crossover, fs=fs, plant=lf.state_space())
+
+
 def robustness(crossover=300.0, fs=4000.0):
     """The design on the low-frequency model and its robustness on each plant."""
     control_model = load_scene(CONTROL)
     lf = low_frequency_model(control_model)
-    design = design_feedback(control_model, crossover=crossover, fs=fs, plant=lf.state_space())
+    design = design_loops(crossover, fs)
     rows = []
     for name, plant in (("low-frequency (6 DOFs)", lf.state_space()),
                         (f"{CONTROL} ({control_model.ndof} DOFs)", plant_of(control_model)),
@@ -140,23 +154,70 @@ def print_moves(rows):
               f"{' '.join(f'{v:+.4f}' for v in r['rotation'])} |")
 
 
-def closed_loop(design, figures):
-    """The 6 mm xy move in closed loop on the control model; returns the LoopResult."""
+def closed_loop(design, figures, *, plant="inprocess", duration=1.0, settle=0.25, path=None,
+                workdir=None):
+    """The 6 mm xy move in `duration` (s) in closed loop on the control model, `settle` (s)
+    after it, on `plant` (a `run_loop` plant); returns the LoopResult. An in-process run writes
+    its plot to `figures` (None: no plot). `path`: the move's MovePath if made before."""
+    model = load_scene(CONTROL)
+    if path is None:
+        dx, dy = MOVES["6 mm xy"]
+        path = move_path(model, targets(dx, dy), kind="nonlinear")
+    result = run_loop(model, path=path, design=design, duration=duration, settle=settle,
+                      fs=design.sample_rate_hz, plant=plant, workdir=workdir,
+                      progress=Progress(f"  closed loop ({plant})"))
+    if figures is not None and plant == "inprocess":
+        result.plot(figures / "manipulator_loop.png")
+    return result
+
+
+def compare_plants(design, plants, figures, *, duration=1.0, settle=0.25):
+    """The move in process and on each of `plants` ("fmu", "libcosim"); returns
+    {plant: LoopResult}, "inprocess" first.
+
+    All follow the same path with the same designed loops, so they differ only by how the
+    plant is stepped (the same integrator and tolerance, inside the FMU)."""
     model = load_scene(CONTROL)
     dx, dy = MOVES["6 mm xy"]
     path = move_path(model, targets(dx, dy), kind="nonlinear")
-    result = run_loop(model, path=path, design=design, duration=1.0, settle=0.25,
-                      fs=design.sample_rate_hz, progress=None)
-    result.plot(figures / "manipulator_loop.png")
-    return result
+    results = {"inprocess": closed_loop(design, figures, duration=duration, settle=settle,
+                                        path=path)}
+    with tempfile.TemporaryDirectory(prefix="manipulator_loop_") as workdir:  # FMUs, shared
+        for plant in plants:
+            results[plant] = closed_loop(design, figures, plant=plant, duration=duration,
+                                         settle=settle, path=path, workdir=workdir)
+    return results
+
+
+def print_comparison(inprocess, other):
+    """Each actuator's error / stroke on both plants, and their difference."""
+    plant = other.settings["plant"]
+    print(f"| loop | stroke (mm) | error / stroke, in process | error / stroke, {plant} | "
+          "difference | max position difference / stroke |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    strokes = inprocess.loop_strokes
+    apart = np.max(np.abs(other.position - inprocess.position), axis=0) / strokes
+    for a, b, d in zip(inprocess.per_loop(), other.per_loop(), apart, strict=True):
+        print(f"| {a['loop']} | {a['stroke'] * 1e3:.4f} | {a['error_ratio']:.4e} | "
+              f"{b['error_ratio']:.4e} | {b['error_ratio'] - a['error_ratio']:+.1e} | "
+              f"{d:.1e} |")
+    print(f"\nwall time: {inprocess.wall_time_s:.1f} s in process, {other.wall_time_s:.1f} s "
+          f"{plant} (with building its FMUs)")
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--loop", action="store_true",
                         help="also run the 6 mm xy move in closed loop (minutes)")
+    parser.add_argument("--plant", choices=("inprocess", "fmu", "libcosim"),
+                        default="inprocess",
+                        help="with --loop: also run the loop on this plant (fmu: the "
+                             "manipulator's FMU under fmpy; libcosim: it and a controller FMU "
+                             "in libcosim) and compare it with the in-process loop")
     parser.add_argument("--figures", type=Path, default=FIGURES, help="folder for the PNG")
     args = parser.parse_args(argv)
+    if args.plant != "inprocess" and not args.loop:
+        parser.error("--plant compares the closed loop: give --loop too")
     log("design and robustness")
     design, rows = robustness()
     print("Robust stability (design: 300 rad/s on the low-frequency model, 4 kHz)\n")
@@ -164,7 +225,12 @@ def main(argv=None):
     log("moves")
     print("\nMoves of the end effector (control model)\n")
     print_moves(moves(load_scene(CONTROL)))
-    if args.loop:
+    if args.loop and args.plant != "inprocess":
+        log(f"closed loop: 6 mm xy, in process and {args.plant}")
+        results = compare_plants(design, [args.plant], args.figures)
+        print(f"\nClosed loop, 6 mm xy in 1 s, in process and {args.plant}\n")
+        print_comparison(results["inprocess"], results[args.plant])
+    elif args.loop:
         log("closed loop: 6 mm xy")
         result = closed_loop(design, args.figures)
         print(f"\nClosed loop, 6 mm xy in 1 s ({result.wall_time_s:.1f} s wall)\n")
