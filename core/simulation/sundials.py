@@ -86,18 +86,23 @@ def cvode_rhs(t, y, ydot, user_data):
 @cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr,
                   types.voidptr, types.voidptr, types.voidptr), cache=True)
 def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
-    """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent. After a restart
-    in a sampled loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once."""
+    """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent, kept in slot
+    jacobian_cache. After a restart in a sampled loop (dims[JACOBIAN_REUSE] = 1) the kept
+    Jacobian is handed back once instead."""
     table = address_of(user_data)
     dims = engine.int_array(table, _DIMS_SLOT)
+    n = 2 * dims[ed.NDOF] + dims[ed.NEL]
+    J = carray(dense_matrix_data(matrix), (n * n,))
+    kept = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
-        n = 2 * dims[ed.NDOF] + dims[ed.NEL]
-        J = carray(dense_matrix_data(matrix), (n * n,))
-        J[:] = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
+        J[:] = kept
         return 0
-    return _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
-                     dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
+    status = _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
+                       dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
+    if status == 0:
+        kept[:] = J
+    return status
 
 
 @cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
