@@ -17,7 +17,8 @@ class LoopResult:
 
     t (N+1,) s; reference, position, error (N+1, n_loops) m; force, feedforward
     (N+1, n_loops) N, the force held from t_k (the last row repeats the one before). A loop on
-    a planar angle has rad and N m instead (`units`).
+    a planar angle has rad and N m instead (`units`). `disturbance` (N+1, n_loops) N: the
+    sinusoidal force added at the actuators (disturbances.py), None without one.
     """
 
     t: np.ndarray
@@ -29,6 +30,7 @@ class LoopResult:
     design: dict
     settings: dict = field(default_factory=dict)
     wall_time_s: float = 0.0
+    disturbance: np.ndarray | None = None
 
     @property
     def units(self) -> dict:
@@ -49,6 +51,14 @@ class LoopResult:
     def loop_strokes(self) -> np.ndarray:
         """Each loop's stroke (m): the largest |r_k - r_0| of its reference, (n_loops,)."""
         return np.max(np.abs(self.reference - self.reference[0]), axis=0)
+
+    @property
+    def feedback_force(self) -> np.ndarray:
+        """The part of the force (N) the feedback computed: force - feedforward - disturbance,
+        (N+1, n_loops)."""
+        open_loop = self.feedforward if self.disturbance is None else (
+            self.feedforward + self.disturbance)
+        return self.force - open_loop
 
     def per_loop(self) -> list[dict]:
         """Each loop's stroke, largest |error| and their ratio against the target."""
@@ -77,7 +87,7 @@ class LoopResult:
                 self.error[self.t <= self.settings.get("move_end", np.inf), axis]))),
             "final_error": float(np.max(np.abs(self.error[-1]))),
             "max_abs_force": float(np.max(np.abs(self.force))),
-            "max_abs_feedback_force": float(np.max(np.abs(self.force - self.feedforward))),
+            "max_abs_feedback_force": float(np.max(np.abs(self.feedback_force))),
             "phase_margin_deg": self.design["phase_margin_deg"],
             "gain_margin": self.design["gain_margin"],
             "modulus_margin": self.design["modulus_margin"],
@@ -92,6 +102,11 @@ class LoopResult:
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
             "units": self.units,
             "per_loop": self.per_loop(),
+            "controller_kind": self.design.get("controller_kind", "designed"),
+            "robustness_checked": self.design.get("robustness_checked", True),
+            "reference_kind": self.settings.get("reference", "profile"),
+            **{key: self.settings[key] for key in ("quantum", "disturbance")
+               if key in self.settings},
         }
 
     def plot(self, path, *, title: str | None = None):
@@ -101,7 +116,8 @@ class LoopResult:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        if self.settings.get("path"):
+        given = self.settings.get("reference") in ("samples", "callable")
+        if self.settings.get("path") or (given and self.reference.shape[1] > 1):
             return self._plot_loops(path, title=title)
         axis = self.settings.get("axis", 0)
         length, force_unit = self.units["position"], self.units["force"]
@@ -127,6 +143,9 @@ class LoopResult:
                      label="total moment" if force_unit == "N m" else "total force")
         axes[2].step(self.t, self.feedforward[:, axis], where="post", ls="--",
                      label="feedforward")
+        if self.disturbance is not None:
+            axes[2].step(self.t, self.disturbance[:, axis], where="post", ls=":", lw=0.8,
+                         label="disturbance")
         axes[2].set_ylabel(f"{'moment' if force_unit == 'N m' else 'force'} ({force_unit})")
         axes[2].set_xlabel("time (s)")
         axes[2].legend(loc="upper right")
