@@ -187,6 +187,24 @@ def move_path_of(args):
                      progress=Progress(f"flexure loop: {args.path} move path"))
 
 
+def _per_loop_table(s):
+    """Each loop's stroke and error, the unit in the header, or in each cell where the loops'
+    units differ (a force loop beside a moment loop)."""
+    rows = s["per_loop"]
+    units = [row.get("units", s["units"])["position"] for row in rows]
+    mixed = len(set(units)) > 1
+
+    def cell(value, unit):
+        return f"{value:.6g} {unit}" if mixed else value
+
+    header = "" if mixed else f" ({units[0]})"
+    return format_table(
+        ["loop", f"stroke{header}", f"max |error|{header}", "error / stroke", "within 0.1 %"],
+        [(row["loop"], cell(row["stroke"], unit), cell(row["max_abs_error"], unit),
+          row["error_ratio"], "yes" if row["passed"] else "NO")
+         for row, unit in zip(rows, units, strict=True)])
+
+
 def _plugged_rows(s):
     """The table's rows for a reference, a controller or disturbances of one's own."""
     position = s["units"]["position"]
@@ -251,11 +269,7 @@ def render(s):
                f"target {100 * s['target']:g} %: {'PASSED' if s['passed'] else 'FAILED'}")
     text = format_table(["quantity", "value"], rows)
     if len(s["per_loop"]) > 1:
-        text += "\n\n" + format_table(
-            ["loop", f"stroke ({s['units']['position']})",
-             f"max |error| ({s['units']['position']})", "error / stroke", "within 0.1 %"],
-            [(row["loop"], row["stroke"], row["max_abs_error"], row["error_ratio"],
-              "yes" if row["passed"] else "NO") for row in s["per_loop"]])
+        text += "\n\n" + _per_loop_table(s)
     text += "\n" + verdict
     if "plot" in s:
         text += f"\nplot written to {s['plot']}"

@@ -61,8 +61,10 @@ class LoopResult:
         return self.force - open_loop
 
     def per_loop(self) -> list[dict]:
-        """Each loop's stroke, largest |error| and their ratio against the target."""
+        """Each loop's stroke, largest |error| and their ratio against the target, and its
+        units (m and N, or rad and N m on an angle) where the run recorded them."""
         names = self.design.get("loops", [])
+        units = self.settings.get("loop_units", [])
         rows = []
         for k, (stroke, error) in enumerate(zip(self.loop_strokes,
                                                 np.max(np.abs(self.error), axis=0),
@@ -71,6 +73,8 @@ class LoopResult:
             rows.append({"loop": names[k] if k < len(names) else str(k),
                          "stroke": float(stroke), "max_abs_error": float(error),
                          "error_ratio": ratio, "passed": bool(ratio <= TARGET)})
+            if k < len(units):
+                rows[-1]["units"] = units[k]
         return rows
 
     def summary(self) -> dict:

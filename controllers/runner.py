@@ -147,6 +147,9 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
                 # angle a moment (N m) and an angle (rad)
                 "units": {"force": model.inputs[moving.input_index].unit.replace(".", " "),
                           "position": model.outputs[moving.output_index].unit},
+                "loop_units": [{"force": model.inputs[p.input_index].unit.replace(".", " "),
+                                "position": model.outputs[p.output_index].unit}
+                               for p in design.pairs],
                 "reference": ("profile" if path is None else "path") if reference is None
                 else ("callable" if callable(reference) else "samples"),
                 **_disturbance_settings(loop, quantum, disturbance)}

@@ -244,3 +244,31 @@ def test_a_disturbed_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, ca
     out = capsys.readouterr().out
     assert "encoder quantum (rad)" in out and "disturbance (N m, at 50 Hz)" in out
     assert (tmp_path / "pivot.png").stat().st_size > 10_000
+    from flexure.controllers.sweep_loop import LOOP
+    from flexure.core import load_scene as load
+
+    columns = LOOP.columns(load(path), {})
+    assert "loop.max_abs_error [rad]" in columns and "loop.max_abs_force [N m]" in columns
+
+
+def test_the_per_loop_table_puts_the_units_in_the_cells_when_the_loops_differ():
+    """A force loop beside a moment loop: each cell says its unit (m, rad)."""
+    from flexure.controllers.cli import render
+
+    rows = [{"loop": "F -> x", "stroke": 1e-3, "max_abs_error": 2e-7, "error_ratio": 2e-4,
+             "passed": True, "units": {"position": "m", "force": "N"}},
+            {"loop": "M -> theta", "stroke": 2e-3, "max_abs_error": 4e-6,
+             "error_ratio": 2e-3, "passed": False, "units": {"position": "rad",
+                                                            "force": "N m"}}]
+    summary = {"scene": "s", "plant": "inprocess", "feedforward": True,
+               "feedforward_kind": "modal", "stroke": 2e-3, "duration": 1.0,
+               "sample_rate_hz": FS, "crossover_rad_s": 300.0, "phase_margin_deg": 35.0,
+               "gain_margin": 4.0, "modulus_margin": 0.5, "max_abs_error": 4e-6,
+               "error_ratio": 2e-3, "target": 1e-3, "passed": False, "wall_time_s": 0.1,
+               "units": {"position": "m", "force": "N"}, "per_loop": rows}
+    table = render(summary).split("\n\n")[1]
+    assert "0.001 m" in table and "0.002 rad" in table and "4e-06 rad" in table
+    assert "stroke (" not in table.splitlines()[0]
+    rows[1]["units"] = rows[0]["units"]
+    table = render(summary).split("\n\n")[1]
+    assert "stroke (m)" in table.splitlines()[0] and " rad" not in table
