@@ -158,7 +158,7 @@ class LoopResult:
             f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} m{length}, "
             f"max |e| = {s['max_abs_error'] * 1e6:.3g} u{length} = "
             f"{100 * s['error_ratio']:.3g} % "
-            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"))
+            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}{self._noise_note()}"))
 
     def _plot_loops(self, path, *, title=None):
         """Every loop's reference, error (against 0.1 % of its stroke) and force."""
@@ -189,7 +189,20 @@ class LoopResult:
         return _save(fig, path, title or (
             f"{self.settings.get('scene')} ({self.settings.get('plant')}): every loop along "
             f"the move; worst {worst['loop']}: {100 * worst['error_ratio']:.3g} % of its "
-            f"stroke (target 0.1 %)"))
+            f"stroke (target 0.1 %){self._noise_note()}"))
+
+    def _noise_note(self) -> str:
+        """The disturbances for a plot's title: '' without any; quantum and force as the
+        first loop has them."""
+        length = self.units["position"]
+        parts = []
+        if "quantum" in self.settings:
+            parts.append(f"encoders of {self.settings['quantum'][0]:g} {length}")
+        if "disturbance" in self.settings:
+            d = self.settings["disturbance"]
+            force = "N m" if length == "rad" else "N"
+            parts.append(f"{d['amplitude'][0]:g} {force} at {d['frequency_hz']:g} Hz")
+        return "\nwith " + " and ".join(parts) if parts else ""
 
 
 def _save(fig, path, title):
