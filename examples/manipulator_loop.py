@@ -19,7 +19,11 @@
    nonlinear path puts it where it was asked to within 1e-10 m.
 3. **Closed loop** (`--loop`): the 6 mm xy move in 1 s on the nonlinear control model with the
    nonlinear path and its feedforward (`flexure loop manipulator_control --move ...`), each
-   actuator's largest error against 0.1 % of its stroke.
+   actuator's largest error against 0.1 % of its stroke; then the same move with what the
+   chapter's experiment met (section 3.4: "below the desired 0.1 % although the signal is
+   quite noisy ... a 50 Hz disturbance from the mains"): 50 nm encoders and 30 mN at 50 Hz on
+   every actuator (`--quantum 5e-8 --disturbance 0.03@50`), the linear loop's 50 Hz response
+   to it about 2 um per actuator, half the target.
 
 Lengths in mm, rotations in mrad (the end effector's rotation-vector components), margins in
 degrees and ratios.
@@ -44,6 +48,8 @@ FIGURES = Path(__file__).resolve().parent / "figures"
 HELD = ("E.z", "E_M1.z", "E_M2.z")  # the end effector's height and its tilts held
 MOVES = {"1 mm x": (1e-3, 0.0), "4 mm x": (4e-3, 0.0), "6 mm x": (6e-3, 0.0),
          "6 mm xy": (6e-3 / np.sqrt(2), 6e-3 / np.sqrt(2))}
+# the experiment's noise: 50 nm encoder counts, 30 mN of mains hum at every actuator
+DISTURBANCES = {"quantum": 50e-9, "disturbance": 0.03, "disturbance_hz": 50.0}
 
 
 def log(text):
@@ -63,11 +69,17 @@ def plant_of(model):
     return full[[p.output_index for p in pairs], [p.input_index for p in pairs]]
 
 
+def design_loops(control_model, crossover=300.0, fs=4000.0):
+    """The six loops designed on the low-frequency model; returns (design, that model)."""
+    lf = low_frequency_model(control_model)
+    return design_feedback(control_model, crossover=crossover, fs=fs,
+                           plant=lf.state_space()), lf
+
+
 def robustness(crossover=300.0, fs=4000.0):
     """The design on the low-frequency model and its robustness on each plant."""
     control_model = load_scene(CONTROL)
-    lf = low_frequency_model(control_model)
-    design = design_feedback(control_model, crossover=crossover, fs=fs, plant=lf.state_space())
+    design, lf = design_loops(control_model, crossover, fs)
     rows = []
     for name, plant in (("low-frequency (6 DOFs)", lf.state_space()),
                         (f"{CONTROL} ({control_model.ndof} DOFs)", plant_of(control_model)),
@@ -140,15 +152,31 @@ def print_moves(rows):
               f"{' '.join(f'{v:+.4f}' for v in r['rotation'])} |")
 
 
-def closed_loop(design, figures):
-    """The 6 mm xy move in closed loop on the control model; returns the LoopResult."""
-    model = load_scene(CONTROL)
-    dx, dy = MOVES["6 mm xy"]
-    path = move_path(model, targets(dx, dy), kind="nonlinear")
+def closed_loop(design, figures, *, disturbed=False, model=None, path=None):
+    """The 6 mm xy move in closed loop on the control model; returns the LoopResult.
+    `disturbed`: with the encoders' quantum and the 50 Hz force of `DISTURBANCES`."""
+    model = load_scene(CONTROL) if model is None else model
+    if path is None:
+        dx, dy = MOVES["6 mm xy"]
+        path = move_path(model, targets(dx, dy), kind="nonlinear")
     result = run_loop(model, path=path, design=design, duration=1.0, settle=0.25,
-                      fs=design.sample_rate_hz, progress=None)
-    result.plot(figures / "manipulator_loop.png")
+                      fs=design.sample_rate_hz, progress=None,
+                      **(DISTURBANCES if disturbed else {}))
+    result.plot(figures / ("manipulator_loop_disturbed.png" if disturbed
+                           else "manipulator_loop.png"))
     return result
+
+
+def print_closed_loop(clean, disturbed):
+    """Each actuator's tracking error without and with the disturbances."""
+    print("| loop | stroke (mm) | max error (nm) | error / stroke | with 50 nm encoders and "
+          "30 mN at 50 Hz: max error (nm) | error / stroke | within 0.1 % |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | --- |")
+    for row, noisy in zip(clean.per_loop(), disturbed.per_loop(), strict=True):
+        print(f"| {row['loop']} | {row['stroke'] * 1e3:.4f} | "
+              f"{row['max_abs_error'] * 1e9:.1f} | {row['error_ratio']:.2e} | "
+              f"{noisy['max_abs_error'] * 1e9:.1f} | {noisy['error_ratio']:.2e} | "
+              f"{'yes' if noisy['passed'] else 'NO'} |")
 
 
 def main(argv=None):
@@ -165,14 +193,15 @@ def main(argv=None):
     print("\nMoves of the end effector (control model)\n")
     print_moves(moves(load_scene(CONTROL)))
     if args.loop:
-        log("closed loop: 6 mm xy")
-        result = closed_loop(design, args.figures)
-        print(f"\nClosed loop, 6 mm xy in 1 s ({result.wall_time_s:.1f} s wall)\n")
-        print("| loop | stroke (mm) | max error (um) | error / stroke |")
-        print("| --- | ---: | ---: | ---: |")
-        for row in result.per_loop():
-            print(f"| {row['loop']} | {row['stroke'] * 1e3:.4f} | "
-                  f"{row['max_abs_error'] * 1e6:.3f} | {row['error_ratio']:.2e} |")
+        log("closed loop: 6 mm xy, then with the disturbances")
+        model = load_scene(CONTROL)
+        dx, dy = MOVES["6 mm xy"]
+        path = move_path(model, targets(dx, dy), kind="nonlinear")
+        clean = closed_loop(design, args.figures, model=model, path=path)
+        disturbed = closed_loop(design, args.figures, model=model, path=path, disturbed=True)
+        print(f"\nClosed loop, 6 mm xy in 1 s ({clean.wall_time_s:.1f} s wall; with the "
+              f"disturbances {disturbed.wall_time_s:.1f} s)\n")
+        print_closed_loop(clean, disturbed)
     return 0
 
 
