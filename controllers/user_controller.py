@@ -177,6 +177,10 @@ def user_design(model, controller, *, fs: float, crossover: float, plant=None,
 
     if not (np.isfinite(fs) and fs > 0):
         raise LoopError(f"sample rate must be a positive number of Hz, got {fs}")
+    if not (np.isfinite(crossover) and 0 < crossover < np.pi * fs):
+        raise LoopError(f"crossover, where the margins' frequency grid is refined, must lie "
+                        f"between 0 and the Nyquist frequency pi fs = {np.pi * fs:g} rad/s, "
+                        f"got {crossover}")
     pairs = colocated_pairs(model)
     names = [p.input_name for p in pairs]
     entries = controller if isinstance(controller, (list, tuple)) else [controller]

@@ -187,6 +187,8 @@ def test_other_misuses_of_a_controller_of_ones_own(stage, designed, tmp_path):
         build_loop(stage, controller=function, design=designed[1], **SHORT)
     with pytest.raises(LoopError, match="lead_ratio: design options of the built-in"):
         build_loop(stage, controller=function, lead_ratio=4.0, **SHORT)
+    with pytest.raises(LoopError, match="crossover, where the margins' frequency grid"):
+        build_loop(stage, controller=function, crossover=-1.0, **SHORT)
 
 
 # -- references of one's own ------------------------------------------------------------------
