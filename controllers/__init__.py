@@ -16,9 +16,13 @@
   FMU under fmpy (plants.py), or the controller and scene FMUs in libcosim (cosim.py,
   controller_fmu.py); its `LoopResult` (loop_result.py); `flexure loop` on the command line
   (cli.py).
+- One's own feedback (a discrete python-control system or callables, user_controller.py)
+  and reference (samples or r(t), user_reference.py) in place of the designed ones; encoder
+  quantisation and a sinusoidal (mains) force at the actuators (disturbances.py).
 
-The modules import one way: profiles, feedback, feedforward -> loop_controller ->
-loop_design, sample_loop, controller_fmu -> cosim -> runner -> cli.
+The modules import one way: errors, profiles, feedback, feedforward, disturbances,
+user_reference -> loop_controller, user_controller -> loop_design, sample_loop,
+controller_fmu -> cosim -> runner -> cli.
 
 Only flexure.core's public API is used: no physics here.
 """

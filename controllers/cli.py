@@ -2,12 +2,14 @@
 
     flexure loop                                   # stage_planar_1dof, 1 mm in 1 s, 4 kHz
     flexure loop stage_planar_3dof --stroke 0.01 --plant libcosim --json
+    flexure loop --quantum 1e-8 --disturbance 0.01@50   # 10 nm encoders, 10 mN of mains
     flexure loop manipulator_control --move E.x=0.004 --move E.y=0 --move E_M1.x=0.004 \
         --move E.z=0 --move E_M1.z=0 --move E_M2.z=0    # every loop along the end effector's
                                                         # move, by the nonlinear inverse statics
 """
 
 import argparse
+import math
 import os
 from pathlib import Path
 
@@ -27,6 +29,7 @@ from flexure.core.reporting.tables import format_table, print_json
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 from flexure.core.simulation.methods import METHODS as LOOP_METHODS
 
+from .disturbances import MAINS_HZ
 from .runner import PLANTS, run_loop
 
 _finite = number()
@@ -46,6 +49,38 @@ def move(text):
     if not sep or not name.strip():
         raise argparse.ArgumentTypeError(f"expected COORDINATE=DISPLACEMENT, got {text!r}")
     return name.strip(), _finite(value)
+
+
+def quantum(text):
+    """argparse type of --quantum: Q, one for every loop, or Q1,Q2,... one per loop (m or
+    rad), each positive."""
+    values = []
+    for part in text.split(","):
+        try:
+            value = float(part)
+        except ValueError:
+            value = float("nan")
+        if not (math.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(
+                f"expected a positive quantum (m or rad), or one per loop separated by commas, "
+                f"got {text!r}")
+        values.append(value)
+    return values[0] if len(values) == 1 else values
+
+
+def disturbance(text):
+    """argparse type of --disturbance: AMPLITUDE[@HZ], a positive force (N or N m) and a
+    positive frequency (Hz, default 50)."""
+    amplitude, sep, hz = text.partition("@")
+    try:
+        values = (float(amplitude), float(hz) if sep else MAINS_HZ)
+    except ValueError:
+        values = (float("nan"), float("nan"))
+    if not all(math.isfinite(v) and v > 0 for v in values):
+        raise argparse.ArgumentTypeError(
+            f"expected AMPLITUDE[@HZ], a positive force (N or N m) and a positive frequency "
+            f"(Hz, default {MAINS_HZ:g}), got {text!r}")
+    return values
 
 
 def register(subparsers):
@@ -82,6 +117,12 @@ def register(subparsers):
     parser.add_argument("--path", choices=("nonlinear", "linear"), default="nonlinear",
                         help="how --move becomes the loops' references: the nonlinear inverse "
                              "statics (default) or the linearised statics")
+    parser.add_argument("--quantum", type=quantum, default=None, metavar="Q",
+                        help="encoder quantum in m (rad on an angle): the controller sees the "
+                             "positions rounded to it; Q1,Q2,... gives one per loop")
+    parser.add_argument("--disturbance", type=disturbance, default=None, metavar="A[@HZ]",
+                        help="a sinusoidal force of amplitude A in N (N m on an angle) at "
+                             f"every actuator, at HZ Hz (default {MAINS_HZ:g}: the mains)")
     parser.add_argument("--plant", choices=PLANTS, default="inprocess",
                         help="in-process simulation, the scene FMU under fmpy, or the "
                              "controller and scene FMUs in libcosim (default inprocess)")
@@ -109,10 +150,12 @@ def run(args):
     path = None
     if args.move:
         path = move_path_of(args)
+    amplitude, hz = args.disturbance if args.disturbance is not None else (None, MAINS_HZ)
     result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
                       crossover=args.crossover, feedforward=feedforward, plant=args.plant,
                       settle=args.settle, method=args.method, rtol=args.rtol,
                       workdir=args.workdir, overrides=args.set, path=path,
+                      quantum=args.quantum, disturbance=amplitude, disturbance_hz=hz,
                       progress=Progress(f"flexure loop ({args.plant})"))
     summary = result.summary()
     code = write_outputs("flexure loop", [("--plot", plot, result.plot)],
@@ -144,6 +187,48 @@ def move_path_of(args):
                      progress=Progress(f"flexure loop: {args.path} move path"))
 
 
+def _per_loop_table(s):
+    """Each loop's stroke and error, the unit in the header, or in each cell where the loops'
+    units differ (a force loop beside a moment loop)."""
+    rows = s["per_loop"]
+    units = [row.get("units", s["units"])["position"] for row in rows]
+    mixed = len(set(units)) > 1
+
+    def cell(value, unit):
+        return f"{value:.6g} {unit}" if mixed else value
+
+    header = "" if mixed else f" ({units[0]})"
+    return format_table(
+        ["loop", f"stroke{header}", f"max |error|{header}", "error / stroke", "within 0.1 %"],
+        [(row["loop"], cell(row["stroke"], unit), cell(row["max_abs_error"], unit),
+          row["error_ratio"], "yes" if row["passed"] else "NO")
+         for row, unit in zip(rows, units, strict=True)])
+
+
+def _plugged_rows(s):
+    """The table's rows for a reference, a controller or disturbances of one's own."""
+    position = s["units"]["position"]
+    force = "N m" if position == "rad" else "N"
+    rows = []
+    if s.get("reference_kind") in ("samples", "callable"):
+        rows.append(("reference", "given as samples" if s["reference_kind"] == "samples"
+                     else "given as r(t)"))
+    if not s.get("robustness_checked", True):
+        rows.append(("robustness", "not checked: a callable has no linear model"))
+    if "quantum" in s:
+        rows.append((f"encoder quantum ({position})", _one_or_all(s["quantum"])))
+    if "disturbance" in s:
+        d = s["disturbance"]
+        rows.append((f"disturbance ({force}, at {d['frequency_hz']:g} Hz)",
+                     _one_or_all(d["amplitude"])))
+    return rows
+
+
+def _one_or_all(values):
+    """One number when every loop has the same, else all of them."""
+    return values[0] if len(set(values)) == 1 else ", ".join(f"{v:g}" for v in values)
+
+
 def check_workdir(workdir):
     """UsageError unless `workdir` is (or can be made as) a writable folder."""
     path = Path(workdir)
@@ -158,10 +243,13 @@ def check_workdir(workdir):
 
 def render(s):
     """The summary as a short table and a verdict."""
+    feedback = {"state space": "your discrete system", "callable": "your callable"}.get(
+        s.get("controller_kind"), "feedback")
     rows = [
         ("scene", s["scene"]), ("plant", s["plant"]),
-        ("controller", f"feedback + {s['feedforward_kind']} feedforward" if s["feedforward"]
-         else "feedback alone"),
+        ("controller", f"{feedback} + {s['feedforward_kind']} feedforward" if s["feedforward"]
+         else f"{feedback} alone"),
+        *_plugged_rows(s),
         (f"stroke ({s['units']['position']})", s["stroke"]), ("duration (s)", s["duration"]),
         ("sample rate (Hz)", s["sample_rate_hz"]),
         ("cross-over (rad/s)", s["crossover_rad_s"]),
@@ -181,11 +269,7 @@ def render(s):
                f"target {100 * s['target']:g} %: {'PASSED' if s['passed'] else 'FAILED'}")
     text = format_table(["quantity", "value"], rows)
     if len(s["per_loop"]) > 1:
-        text += "\n\n" + format_table(
-            ["loop", f"stroke ({s['units']['position']})",
-             f"max |error| ({s['units']['position']})", "error / stroke", "within 0.1 %"],
-            [(row["loop"], row["stroke"], row["max_abs_error"], row["error_ratio"],
-              "yes" if row["passed"] else "NO") for row in s["per_loop"]])
+        text += "\n\n" + _per_loop_table(s)
     text += "\n" + verdict
     if "plot" in s:
         text += f"\nplot written to {s['plot']}"

@@ -75,11 +75,15 @@ class FeedbackDesign:
     modulus_margin: float
     closed_loop_poles: np.ndarray
     robustness: Robustness | None = None  # margins per loop, others open and closed; |S|
+    # "designed" here; "state space" or "callable" for a controller of one's own
+    # (user_controller.py), whose callable kind has no margins (nan) and no poles
+    kind: str = "designed"
 
     @property
     def spectral_radius(self):
-        """The largest closed-loop pole magnitude (< 1: stable)."""
-        return float(np.max(np.abs(self.closed_loop_poles)))
+        """The largest closed-loop pole magnitude (< 1: stable; nan when not known)."""
+        poles = np.asarray(self.closed_loop_poles)
+        return float(np.max(np.abs(poles))) if poles.size else float("nan")
 
     def summary(self):
         """The numbers the CLI and the report print (the margins: the worst loop's, the other
@@ -90,7 +94,9 @@ class FeedbackDesign:
                    "phase_margin_deg": self.phase_margin_deg, "gain_margin": self.gain_margin,
                    "modulus_margin": self.modulus_margin,
                    "closed_loop_spectral_radius": self.spectral_radius,
-                   "loops": [f"{p.input_name} -> {p.output_name}" for p in self.pairs]}
+                   "loops": [f"{p.input_name} -> {p.output_name}" for p in self.pairs],
+                   "controller_kind": self.kind,
+                   "robustness_checked": self.kind != "callable"}
         if self.robustness is not None and len(self.pairs) > 1:
             closed = self.robustness.closed_margins.min(axis=0)
             summary |= {"gain_margin_others_closed": float(closed[0]),

@@ -27,14 +27,28 @@ m y'' + c y' + (the path's static forces, or k y of the low-frequency model), wi
 y' = y_s s', y'' = y_ss s'^2 + y_s s''. Its interval means: those of y' and y'' exact (the
 differences of y and y' over the interval), those of y and of the static force by 4-point
 Gauss-Legendre quadrature (exact for polynomials of degree 7 in t).
+
+Or the reference is given (`reference`, user_reference.py): the loops' positions at the
+samples, the modal feedforward then taken from their cubic spline. The feedback may be one's
+own (user_controller.py): a discrete state space, stepped as the designed one, or Python
+callables, given the sample index as well. With `disturbances` (disturbances.py) the
+controller sees the positions rounded to the encoders' quantum, and a sinusoidal force d_k is
+added to the held force:
+
+    e_k = r_k - q round(y_k / q),     u_k+1 = C(z) e_k + u_ff,k+1 + d_k+1,     u_0 = u_ff,0 + d_0
+
+`open_loop_forces` holds u_ff + d (u_ff alone without a disturbance, the very same array).
 """
 
 import numpy as np
 
+from .disturbances import Disturbances
+from .errors import LoopError
 from .feedback import DiscreteController
 from .feedforward import LowFrequencyModel, forces
 from .move_path import MovePath
 from .profiles import ThirdOrderProfile
+from .user_reference import reference_forces
 
 _GAUSS_POINTS, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(4)
 
@@ -44,10 +58,12 @@ class LoopController:
 
     Parameters
     ----------
-    controller : DiscreteController
-        The discrete feedback C(z) from errors (m) to forces (N), one channel per loop.
-    profile : ThirdOrderProfile
-        The motion of the loop `axis`; the other loops hold their initial position.
+    controller : DiscreteController or CallableFeedback
+        The discrete feedback C(z) from errors (m) to forces (N), one channel per loop; or
+        callables (user_controller.py), stepped with the sample index too.
+    profile : ThirdOrderProfile or None
+        The motion of the loop `axis`; the other loops hold their initial position. None
+        with a `reference`.
     fs : float
         Sample rate (Hz).
     samples : int
@@ -64,20 +80,39 @@ class LoopController:
     path : MovePath, optional
         Every loop follows its displacement along this path, `profile` (of stroke 1) giving
         the progress s(t); `axis` is then unused.
+    reference : array (samples + 2, n_loops), optional
+        The loops' positions (m, rad) at the samples k = 0 .. samples + 1, instead of a
+        profile or a path (`user_reference.reference_samples` makes it).
+    disturbances : Disturbances, optional
+        Encoder quantisation and a sinusoidal force at the actuators.
     """
 
-    def __init__(self, controller: DiscreteController, profile: ThirdOrderProfile, *,
+    def __init__(self, controller, profile: ThirdOrderProfile | None = None, *,
                  fs: float, samples: int, offsets, feedforward: LowFrequencyModel | None = None,
-                 axis: int = 0, feedforward_forces=None, path: MovePath | None = None):
+                 axis: int = 0, feedforward_forces=None, path: MovePath | None = None,
+                 reference=None, disturbances: Disturbances | None = None):
         self.controller, self.profile, self.path = controller, profile, path
         self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
         self.offsets = np.asarray(offsets, float).reshape(-1)
         self.feedforward_model = feedforward
+        self.disturbances = disturbances
         n = self.offsets.size
         direction = np.eye(n)[self.axis]
         k = np.arange(self.samples + 2)
         t = k / self.fs
-        if path is None:
+        self.given_reference = reference is not None
+        if self.given_reference:
+            if path is not None:
+                raise LoopError("a move path and a given reference are two references: "
+                                "give one")
+            self.reference = np.asarray(reference, float)
+            if self.reference.shape != (k.size, n):
+                raise LoopError(f"the reference: expected shape ({k.size}, {n}) (samples + 2 "
+                                f"rows), got {self.reference.shape}")
+        elif profile is None:
+            raise LoopError("a LoopController needs a profile, a path with its profile, or "
+                            "a reference")
+        elif path is None:
             self.reference = self.offsets + np.outer(profile.position(t), direction)
         else:
             self.reference = self.offsets + path.displacement(profile.position(t))
@@ -86,12 +121,26 @@ class LoopController:
             self.feedforward = np.asarray(feedforward_forces, float).reshape(k.size, n)
         elif feedforward is None:
             self.feedforward = np.zeros((k.size, n))
+        elif self.given_reference:
+            self.feedforward = reference_forces(feedforward, self.reference, self.fs)
         elif path is not None:
             self.feedforward = _path_forces(feedforward, profile, path, t, (k + 1) / self.fs,
                                             self.offsets)
         else:
             self.feedforward = forces(feedforward, profile, t, (k + 1) / self.fs,
                                       direction=direction, offsets=self.offsets)
+        d = disturbances
+        self.disturbance = None if d is None or d.amplitude is None else d.forces(k, self.fs)
+        self.open_loop_forces = (self.feedforward if self.disturbance is None
+                                 else self.feedforward + self.disturbance)
+        self.sample_indexed = getattr(controller, "kind", None) == "callable"
+
+    @property
+    def compiled(self) -> bool:
+        """Whether flexure.core.run_sampled_loop can run this controller: a state space
+        without encoder quantisation (a callable, or rounding, needs the Python loop)."""
+        return not self.sample_indexed and (self.disturbances is None
+                                             or self.disturbances.quantum is None)
 
     def reset(self) -> None:
         """Back to the zero state of the feedback, before sample 0."""
@@ -99,13 +148,18 @@ class LoopController:
 
     def initial_output(self) -> np.ndarray:
         """u_0 (N): the force on [t_0, t_1), before anything is measured."""
-        return self.feedforward[0].copy()
+        return self.open_loop_forces[0].copy()
 
     def step(self, k: int, y) -> tuple[np.ndarray, np.ndarray]:
-        """u_k+1 (N) from the measurement y_k (m) at sample k; also returns e_k (m)."""
+        """u_k+1 (N) from the measurement y_k (m) at sample k; also returns e_k (m), the error
+        the controller sees (of the quantised position with encoder quantisation)."""
         k = min(int(k), self.samples)  # past the end: the reference and force are held
-        e = self.reference[k] - np.asarray(y, float)
-        return self.controller.step(e) + self.feedforward[k + 1], e
+        y = np.asarray(y, float)
+        if self.disturbances is not None:
+            y = self.disturbances.measured(y)
+        e = self.reference[k] - y
+        u = self.controller.step(e, k) if self.sample_indexed else self.controller.step(e)
+        return u + self.open_loop_forces[k + 1], e
 
     # -- serialisation (the controller FMU is configured by this dictionary) ---------------
     def to_dict(self) -> dict:
@@ -113,8 +167,9 @@ class LoopController:
         p = self.profile
         return {
             "controller": self.controller.to_dict(),
-            "profile": {"stroke": p.stroke, "duration": p.duration, "jerk_time": p.jerk_time,
-                        "acceleration_time": p.acceleration_time, "start": p.start},
+            "profile": None if p is None else {
+                "stroke": p.stroke, "duration": p.duration, "jerk_time": p.jerk_time,
+                "acceleration_time": p.acceleration_time, "start": p.start},
             "fs": self.fs, "samples": self.samples, "offsets": self.offsets.tolist(),
             "axis": self.axis,
             "feedforward": (None if self.feedforward_model is None
@@ -122,18 +177,24 @@ class LoopController:
             "feedforward_forces": (self.feedforward.tolist() if self.explicit_forces
                                    else None),
             "path": None if self.path is None else self.path.to_dict(),
+            "reference": self.reference.tolist() if self.given_reference else None,
+            "disturbances": None if self.disturbances is None else self.disturbances.to_dict(),
         }
 
     @classmethod
     def from_dict(cls, data: dict) -> "LoopController":
         """The controller of `to_dict` (at its zero initial state)."""
-        ff = data["feedforward"]
+        ff, profile, disturbances = (data.get(key) for key in ("feedforward", "profile",
+                                                                "disturbances"))
         return cls(DiscreteController.from_dict(data["controller"]),
-                   ThirdOrderProfile(**data["profile"]), fs=data["fs"],
+                   None if profile is None else ThirdOrderProfile(**profile), fs=data["fs"],
                    samples=data["samples"], offsets=data["offsets"], axis=data["axis"],
                    feedforward=None if ff is None else LowFrequencyModel.from_dict(ff),
                    feedforward_forces=data.get("feedforward_forces"),
-                   path=None if data.get("path") is None else MovePath.from_dict(data["path"]))
+                   path=None if data.get("path") is None else MovePath.from_dict(data["path"]),
+                   reference=data.get("reference"),
+                   disturbances=None if disturbances is None
+                   else Disturbances.from_dict(disturbances))
 
 
 def _path_forces(model: LowFrequencyModel, profile, path: MovePath, t0, t1, offsets):

@@ -6,20 +6,23 @@ The feedforward is one of
 - "inverse": the stable approximate inverse of the full linear model sampled with a zero-order
   hold (`StableInverse`, one loop only);
 - none: feedback alone.
+
+The feedback is designed here (feedback.py) unless one's own is given (`controller`,
+user_controller.py); the reference is the third-order profile of one loop, a move path of
+every loop, or given as samples or a callable (`reference`, user_reference.py). Encoder
+quantisation and a sinusoidal force at the actuators (disturbances.py) are optional.
 """
 
 import numpy as np
 
-from flexure.core import FlexureError
-
+from .disturbances import MAINS_HZ, Disturbances, loop_disturbances
+from .errors import LoopError
 from .feedback import DiscreteController, design_feedback
 from .feedforward import StableInverse, drive_signals, low_frequency_model
 from .loop_controller import LoopController
 from .profiles import ThirdOrderProfile
-
-
-class LoopError(FlexureError, ValueError):
-    """A closed-loop run was asked for with impossible settings."""
+from .user_controller import user_design
+from .user_reference import reference_samples
 
 
 def feedforward_kind(feedforward) -> str | None:
@@ -38,7 +41,9 @@ def feedforward_kind(feedforward) -> str | None:
 
 def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
                crossover: float = 300.0, feedforward=True, settle: float = 0.25, axis: int = 0,
-               feedforward_model=None, path=None, design=None, **design_options):
+               feedforward_model=None, path=None, design=None, controller=None,
+               reference=None, quantum=None, disturbance=None,
+               disturbance_hz: float = MAINS_HZ, **design_options):
     """Design the feedback and the feedforward of `model`; returns (LoopController, design).
 
     Parameters
@@ -67,8 +72,27 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
         `stroke` and `axis` are then unused; the feedforward is "modal" or none.
     design : FeedbackDesign, optional
         A feedback designed before (`design_feedback`), reused instead of designing again.
+    controller : python-control system, list of them, callable or list of callables, optional
+        One's own feedback instead of the designed one (user_controller.py): a discrete
+        system with dt = 1 / fs from the errors (m, rad) to the forces (N, N m), n_loops x
+        n_loops or one SISO system per loop, checked for closed-loop stability on the scene's
+        linear model; or f(k, e) -> u per loop (not checked).
+    reference : array or callable, optional
+        The loops' positions (m, rad) instead of the profile (user_reference.py): samples
+        (N+1,) or (N+1, n_loops) at fs, which set the run's length (`duration`, `settle`,
+        `stroke` and `axis` then unused), or r(t) called at each sample time of
+        `duration` + `settle`. The modal feedforward differentiates its cubic spline.
+    quantum : float or sequence, optional
+        The encoders' quantum (m, rad): the controller sees the positions rounded to it.
+    disturbance : float or sequence, optional
+        The amplitude (N, N m) of a sinusoidal force added at each loop's actuator,
+        d_k = a sin(2 pi f t_k) held with the force (disturbances.py); on an input a voice
+        coil drives by current it enters as the drive signal d / (Km G).
+    disturbance_hz : float
+        Its frequency f (Hz), below fs / 2; default 50 Hz (the mains).
     **design_options
-        Passed on to `design_feedback`.
+        Passed on to `design_feedback` (with `controller`: only `plant` and
+        `linear_model`, the model the loops are checked on).
 
     Returns
     -------
@@ -79,21 +103,44 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     for name, value in (("duration", duration), ("fs", fs), ("settle", settle)):
         if not np.isfinite(value) or (value <= 0 if name != "settle" else value < 0):
             raise LoopError(f"{name} must be a positive finite number, got {value}")
-    if design is None:
-        design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
+    if controller is not None:
+        if design is not None:
+            raise LoopError("give a designed feedback (design) or a controller of one's own "
+                            "(controller), not both")
+        unused = sorted(set(design_options) - {"plant", "linear_model"})
+        if unused:
+            raise LoopError(f"{', '.join(unused)}: design options of the built-in feedback, "
+                            "not used with a controller of one's own")
+        feedback, design = user_design(model, controller, fs=fs, crossover=crossover,
+                                       **design_options)
+    else:
+        if design is None:
+            design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
+        feedback = DiscreteController(design.controller)
     n = len(design.pairs)
     if not 0 <= axis < n:
         raise LoopError(f"axis {axis} out of range: {model.name} has {n} loop(s)")
     kind = feedforward_kind(feedforward)
-    if path is not None:
+    units = loop_units(model, design.pairs)
+    samples = int(round((duration + settle) * fs))
+    profile, given = None, None
+    if reference is not None:
+        if path is not None:
+            raise LoopError("a move path and a given reference are two references: give one")
+        given, samples, _ = reference_samples(reference, n_loops=n, fs=fs, samples=samples,
+                                              unit=units[0][0])
+    elif path is not None:
         if path.displacements.shape[1] != n:
             raise LoopError(f"the move path has {path.displacements.shape[1]} loop(s), "
                             f"{model.name} has {n}")
         if kind == "inverse":
             raise LoopError("a move path takes the 'modal' feedforward or none, not 'inverse'")
-        stroke = 1.0  # the profile is the progress s along the path
-    profile = ThirdOrderProfile(stroke, duration)
-    samples = int(round((duration + settle) * fs))
+        profile = ThirdOrderProfile(1.0, duration)  # the progress s along the path
+    else:
+        profile = ThirdOrderProfile(stroke, duration)
+    disturbances = coil_disturbances(model, design.pairs, loop_disturbances(
+        n, fs=fs, quantum=quantum, amplitude=disturbance, frequency_hz=disturbance_hz,
+        units=units[0]))
     from flexure.core import output_value  # the models (numba, scipy) on first use
 
     offsets = [output_value(model, model.outputs[p.output_index], model.initial_coordinates)
@@ -102,22 +149,51 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     if kind == "modal":
         lf = feedforward_model if feedforward_model is not None else low_frequency_model(model)
     elif kind == "inverse":
-        explicit = _inverse_forces(model, design, profile, fs, samples, offsets)
-    controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
-                                samples=samples, offsets=offsets, feedforward=lf, axis=axis,
-                                feedforward_forces=explicit, path=path)
+        explicit = _inverse_forces(model, design, profile, fs, samples, offsets, given)
+    options = {"fs": fs, "samples": samples, "offsets": offsets, "axis": axis, "path": path,
+               "reference": given, "disturbances": disturbances}
+    loop = LoopController(feedback, profile, feedforward=lf, feedforward_forces=explicit,
+                          **options)
     driven = {actuator.input for actuator in model.actuators}
     if kind is not None and driven & {pair.input_index for pair in design.pairs}:
         # voice coils take drive signals: the feedforward forces through their coils
-        signals = drive_signals(model, design.pairs, controller.feedforward,
-                                controller.reference, fs)
-        controller = LoopController(DiscreteController(design.controller), profile, fs=fs,
-                                    samples=samples, offsets=offsets, axis=axis,
-                                    feedforward_forces=signals, path=path)
-    return controller, design
+        signals = drive_signals(model, design.pairs, loop.feedforward, loop.reference, fs)
+        loop = LoopController(feedback, profile, feedforward_forces=signals, **options)
+    return loop, design
 
 
-def _inverse_forces(model, design, profile, fs, samples, offsets):
+def loop_units(model, pairs) -> list[tuple[str, str]]:
+    """Each loop's (position unit, force unit): m and N, or rad and N m on an angle (the
+    force's, also where a voice coil's drive signal (V) is the input)."""
+    units = []
+    for pair in pairs:
+        position = model.outputs[pair.output_index].unit
+        units.append((position, "N m" if position == "rad" else "N"))
+    return units
+
+
+def coil_disturbances(model, pairs, disturbances: Disturbances | None):
+    """The disturbance on the plant's inputs: a force (N, N m) where the input is one, the
+    drive signal d / (Km G) (V) where a voice coil driven by current takes it (its force is
+    Km G u below the amplifier's saturation, so the force added is d exactly). LoopError on
+    a voltage-driven coil, whose current lags its drive signal."""
+    if disturbances is None or disturbances.amplitude is None or not model.actuators:
+        return disturbances
+    amplitude = disturbances.amplitude.copy()
+    for actuator in model.actuators:
+        loops = [k for k, pair in enumerate(pairs) if pair.input_index == actuator.input]
+        if not loops:
+            continue
+        if actuator.drive != "current":
+            raise LoopError(f"{model.source}: actuator {actuator.name!r} drives input "
+                            f"{pairs[loops[0]].input_name!r} by voltage: a disturbance force "
+                            "through its coil would lag the drive signal; a disturbance "
+                            "needs a force input or a current drive")
+        amplitude[loops[0]] /= actuator.force_constant * actuator.amplifier_gain
+    return Disturbances(disturbances.quantum, amplitude, disturbances.frequency_hz)
+
+
+def _inverse_forces(model, design, profile, fs, samples, offsets, given=None):
     """Feedforward from the stable inverse of the sampled full linear model (one loop)."""
     import control  # 0.5 s to import: only where it is used
 
@@ -135,5 +211,8 @@ def _inverse_forces(model, design, profile, fs, samples, offsets):
     k = np.arange(samples + 2)
     # u_k, held on [t_k, t_k+1), makes the sampled linear output follow r_k (deviations
     # from the linearisation point, which carries the scene's constant loads).
-    reference = offsets[0] - equilibrium + profile.position(k / fs)
+    if given is None:
+        reference = offsets[0] - equilibrium + profile.position(k / fs)
+    else:
+        reference = given[:, 0] - equilibrium
     return inverse.apply(reference)[:, None]

@@ -17,7 +17,8 @@ class LoopResult:
 
     t (N+1,) s; reference, position, error (N+1, n_loops) m; force, feedforward
     (N+1, n_loops) N, the force held from t_k (the last row repeats the one before). A loop on
-    a planar angle has rad and N m instead (`units`).
+    a planar angle has rad and N m instead (`units`). `disturbance` (N+1, n_loops) N: the
+    sinusoidal force added at the actuators (disturbances.py), None without one.
     """
 
     t: np.ndarray
@@ -29,6 +30,7 @@ class LoopResult:
     design: dict
     settings: dict = field(default_factory=dict)
     wall_time_s: float = 0.0
+    disturbance: np.ndarray | None = None
 
     @property
     def units(self) -> dict:
@@ -50,9 +52,19 @@ class LoopResult:
         """Each loop's stroke (m): the largest |r_k - r_0| of its reference, (n_loops,)."""
         return np.max(np.abs(self.reference - self.reference[0]), axis=0)
 
+    @property
+    def feedback_force(self) -> np.ndarray:
+        """The part of the force (N) the feedback computed: force - feedforward - disturbance,
+        (N+1, n_loops)."""
+        open_loop = self.feedforward if self.disturbance is None else (
+            self.feedforward + self.disturbance)
+        return self.force - open_loop
+
     def per_loop(self) -> list[dict]:
-        """Each loop's stroke, largest |error| and their ratio against the target."""
+        """Each loop's stroke, largest |error| and their ratio against the target, and its
+        units (m and N, or rad and N m on an angle) where the run recorded them."""
         names = self.design.get("loops", [])
+        units = self.settings.get("loop_units", [])
         rows = []
         for k, (stroke, error) in enumerate(zip(self.loop_strokes,
                                                 np.max(np.abs(self.error), axis=0),
@@ -61,6 +73,8 @@ class LoopResult:
             rows.append({"loop": names[k] if k < len(names) else str(k),
                          "stroke": float(stroke), "max_abs_error": float(error),
                          "error_ratio": ratio, "passed": bool(ratio <= TARGET)})
+            if k < len(units):
+                rows[-1]["units"] = units[k]
         return rows
 
     def summary(self) -> dict:
@@ -77,7 +91,7 @@ class LoopResult:
                 self.error[self.t <= self.settings.get("move_end", np.inf), axis]))),
             "final_error": float(np.max(np.abs(self.error[-1]))),
             "max_abs_force": float(np.max(np.abs(self.force))),
-            "max_abs_feedback_force": float(np.max(np.abs(self.force - self.feedforward))),
+            "max_abs_feedback_force": float(np.max(np.abs(self.feedback_force))),
             "phase_margin_deg": self.design["phase_margin_deg"],
             "gain_margin": self.design["gain_margin"],
             "modulus_margin": self.design["modulus_margin"],
@@ -92,6 +106,11 @@ class LoopResult:
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
             "units": self.units,
             "per_loop": self.per_loop(),
+            "controller_kind": self.design.get("controller_kind", "designed"),
+            "robustness_checked": self.design.get("robustness_checked", True),
+            "reference_kind": self.settings.get("reference", "profile"),
+            **{key: self.settings[key] for key in ("quantum", "disturbance")
+               if key in self.settings},
         }
 
     def plot(self, path, *, title: str | None = None):
@@ -101,7 +120,8 @@ class LoopResult:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        if self.settings.get("path"):
+        given = self.settings.get("reference") in ("samples", "callable")
+        if self.settings.get("path") or (given and self.reference.shape[1] > 1):
             return self._plot_loops(path, title=title)
         axis = self.settings.get("axis", 0)
         length, force_unit = self.units["position"], self.units["force"]
@@ -127,6 +147,9 @@ class LoopResult:
                      label="total moment" if force_unit == "N m" else "total force")
         axes[2].step(self.t, self.feedforward[:, axis], where="post", ls="--",
                      label="feedforward")
+        if self.disturbance is not None:
+            axes[2].step(self.t, self.disturbance[:, axis], where="post", ls=":", lw=0.8,
+                         label="disturbance")
         axes[2].set_ylabel(f"{'moment' if force_unit == 'N m' else 'force'} ({force_unit})")
         axes[2].set_xlabel("time (s)")
         axes[2].legend(loc="upper right")
@@ -135,7 +158,7 @@ class LoopResult:
             f"{s['scene']} ({s['plant']}): stroke {self.stroke * 1e3:g} m{length}, "
             f"max |e| = {s['max_abs_error'] * 1e6:.3g} u{length} = "
             f"{100 * s['error_ratio']:.3g} % "
-            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}"))
+            f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}{self._noise_note()}"))
 
     def _plot_loops(self, path, *, title=None):
         """Every loop's reference, error (against 0.1 % of its stroke) and force."""
@@ -166,7 +189,20 @@ class LoopResult:
         return _save(fig, path, title or (
             f"{self.settings.get('scene')} ({self.settings.get('plant')}): every loop along "
             f"the move; worst {worst['loop']}: {100 * worst['error_ratio']:.3g} % of its "
-            f"stroke (target 0.1 %)"))
+            f"stroke (target 0.1 %){self._noise_note()}"))
+
+    def _noise_note(self) -> str:
+        """The disturbances for a plot's title: '' without any; quantum and force as the
+        first loop has them."""
+        length = self.units["position"]
+        parts = []
+        if "quantum" in self.settings:
+            parts.append(f"encoders of {self.settings['quantum'][0]:g} {length}")
+        if "disturbance" in self.settings:
+            d = self.settings["disturbance"]
+            force = "N m" if length == "rad" else "N"
+            parts.append(f"{d['amplitude'][0]:g} {force} at {d['frequency_hz']:g} Hz")
+        return "\nwith " + " and ".join(parts) if parts else ""
 
 
 def _save(fig, path, title):

@@ -87,13 +87,16 @@ def margin_grid(crossover, dt, poles, *, damping_below=0.1):
     return np.unique(np.concatenate(parts))
 
 
-def siso_margins(response, omega, dt):
+def siso_margins(response, omega, dt, *, with_crossover: bool = False):
     """Gain margin, phase margin (deg) and modulus margin of a discrete SISO loop gain given
-    by its response on `omega` (python-control's 'frd' method)."""
+    by its response on `omega` (python-control's 'frd' method); `with_crossover` adds the
+    gain cross-over (rad/s) where the phase margin is taken (nan if |L| never crosses 1)."""
     import control
 
-    gm, pm, sm, *_ = control.stability_margins(control.frd(response, omega, dt=dt),
-                                               method="frd")
+    gm, pm, sm, _, wgc, _ = control.stability_margins(control.frd(response, omega, dt=dt),
+                                                      method="frd")
+    if with_crossover:
+        return float(gm), float(pm), float(sm), float(wgc)
     return float(gm), float(pm), float(sm)
 
 
@@ -144,6 +147,7 @@ class Robustness:
     sensitivity_peak: float  # max over w of the largest singular value of (I + L)^-1
     peak_frequency_hz: float
     closed_loop_poles: np.ndarray
+    crossovers_rad_s: np.ndarray | None = None  # (n_loops,) each loop's, the others open
 
     @property
     def spectral_radius(self) -> float:
@@ -191,7 +195,9 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     eigen = np.linalg.eig(plant_d.A) if plant_d.nstates else None
     omega = margin_grid(design.crossover_rad_s, dt, eigen[0] if eigen is not None else np.zeros(0))
     L = loop_response(plant_d, design.controller, design.delay_samples, omega, eigen=eigen)
-    open_m = np.array([siso_margins(L[k, k], omega, dt) for k in range(n)])
+    open_m = np.array([siso_margins(L[k, k], omega, dt, with_crossover=True)
+                       for k in range(n)])
+    open_m, crossovers = open_m[:, :3], open_m[:, 3]
     closed_m = open_m if n == 1 else np.array(
         [siso_margins(others_closed(L, k), omega, dt) for k in range(n)])
     S = np.linalg.inv(np.eye(n)[None] + np.moveaxis(L, 2, 0))
@@ -204,4 +210,4 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
         open_margins=open_m, closed_margins=closed_m,
         sensitivity_peak=float(peaks.max()),
         peak_frequency_hz=float(omega[np.argmax(peaks)] / (2 * np.pi)),
-        closed_loop_poles=np.asarray(closed.poles()))
+        closed_loop_poles=np.asarray(closed.poles()), crossovers_rad_s=crossovers)

@@ -7,7 +7,10 @@
           -> LoopResult (loop_result.py)
 
 Every plant runs the same controller with the same timing (loop_controller.py), the same
-integrator and tolerance, so the three agree to the integrator's tolerance.
+integrator and tolerance, so the three agree to the integrator's tolerance. On "inprocess" a
+callable controller or encoder quantisation runs the Python loop around the in-process
+Simulator (sample_loop.simulate_loop, the same numbers the compiled loop would give, plus a
+Python call per sample); the designed controller and a python-control system run compiled.
 """
 
 import contextlib
@@ -22,8 +25,9 @@ from .cosim import run_cosimulation, scene_fmu
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
 from .loop_result import TARGET, LoopResult
-from .plants import FmuPlant
+from .plants import FmuPlant, InProcessPlant
 from .sample_loop import compiled_loop, simulate_loop
+from .user_reference import reference_stroke
 
 PLANTS = ("inprocess", "fmu", "libcosim")
 
@@ -38,7 +42,8 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
              settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD,
              rtol: float = LOOP_RTOL,
              feedforward_model=None, workdir=None, progress=None,
-             overrides: dict | None = None, path=None, design=None,
+             overrides: dict | None = None, path=None, design=None, controller=None,
+             reference=None, quantum=None, disturbance=None, disturbance_hz: float = 50.0,
              **design_options) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
@@ -80,6 +85,21 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
         `stroke` becomes the largest displacement of a loop at the end of the path.
     design : FeedbackDesign, optional
         A feedback designed before, reused (`design_feedback`).
+    controller : python-control system, list of them, callable or list of callables, optional
+        One's own feedback (user_controller.py): a discrete system with dt = 1 / fs (n_loops
+        x n_loops, or one SISO system per loop), checked for closed-loop stability and run
+        compiled; or f(k, e) -> u per loop, run in Python, not checked, not on "libcosim".
+    reference : array (N+1,) or (N+1, n_loops), or callable r(t), optional
+        The loops' positions (m, rad) instead of the third-order profile
+        (user_reference.py); samples set the run's length. The stroke reported is the
+        largest excursion of a loop's reference from its first sample.
+    quantum : float or sequence, optional
+        The encoders' quantum (m, rad): the controller sees the positions rounded to it.
+    disturbance : float or sequence, optional
+        The amplitude (N, N m) of a sinusoidal force at each loop's actuator
+        (disturbances.py).
+    disturbance_hz : float
+        Its frequency (Hz), default 50.
     **design_options
         Passed on to `design_feedback`.
 
@@ -101,12 +121,20 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
         raise LoopError("overrides apply to a scene file or name, not to a built Model: "
                         "build the model with them (build_model(data, overrides=...))")
     model = load_scene(scene, overrides=overrides) if named else scene
-    controller, design = build_loop(
+    loop, design = build_loop(
         model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
         feedforward=feedforward, settle=settle, axis=axis,
-        feedforward_model=feedforward_model, path=path, design=design, **design_options)
+        feedforward_model=feedforward_model, path=path, design=design, controller=controller,
+        reference=reference, quantum=quantum, disturbance=disturbance,
+        disturbance_hz=disturbance_hz, **design_options)
+    if plant == "libcosim" and loop.sample_indexed:
+        loop.controller.to_dict()  # raises the LoopError saying why, before any FMU is built
     if path is not None:
         stroke = float(np.max(np.abs(path.displacement([1.0]))))
+    if reference is not None:
+        stroke = reference_stroke(loop.reference, loop.samples)
+        if not callable(reference):  # the samples set the run
+            duration, settle = loop.samples / fs, 0.0
     kind = feedforward_kind(feedforward)
     moving = design.pairs[axis]
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
@@ -118,7 +146,13 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
                 # the moving loop's units: a force (N) and a position (m), or on a planar
                 # angle a moment (N m) and an angle (rad)
                 "units": {"force": model.inputs[moving.input_index].unit.replace(".", " "),
-                          "position": model.outputs[moving.output_index].unit}}
+                          "position": model.outputs[moving.output_index].unit},
+                "loop_units": [{"force": model.inputs[p.input_index].unit.replace(".", " "),
+                                "position": model.outputs[p.output_index].unit}
+                               for p in design.pairs],
+                "reference": ("profile" if path is None else "path") if reference is None
+                else ("callable" if callable(reference) else "samples"),
+                **_disturbance_settings(loop, quantum, disturbance)}
     if plant == "inprocess":  # the engine's compilation (first use only) is not the loop's
         prepare(model, loop_method=method)
     start = time.perf_counter()
@@ -126,13 +160,31 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
         if workdir is None and plant != "inprocess":  # FMUs built for this run only
             workdir = stack.enter_context(tempfile.TemporaryDirectory(
                 prefix="flexure_loop_", ignore_cleanup_errors=True))
-        t, reference, position, force = _run_plant(plant, model, scene, controller, design,
-                                                   method=method, rtol=rtol, workdir=workdir,
-                                                   progress=progress, overrides=overrides)
+        t, r, position, force = _run_plant(plant, model, scene, loop, design,
+                                           method=method, rtol=rtol, workdir=workdir,
+                                           progress=progress, overrides=overrides)
     wall = time.perf_counter() - start
-    return LoopResult(t=t, reference=reference, position=position, force=force,
-                      feedforward=controller.feedforward[: len(t)].copy(), stroke=stroke,
-                      design=design.summary(), settings=settings, wall_time_s=wall)
+    return LoopResult(t=t, reference=r, position=position, force=force,
+                      feedforward=loop.feedforward[: len(t)].copy(), stroke=stroke,
+                      design=design.summary(), settings=settings, wall_time_s=wall,
+                      disturbance=None if loop.disturbance is None
+                      else loop.disturbance[: len(t)].copy())
+
+
+def _disturbance_settings(loop, quantum, amplitude):
+    """The disturbances as the summary reports them: the quantum (m, rad) and the force's
+    amplitude (N, N m) per loop as given, and its frequency (Hz)."""
+    d = loop.disturbances
+    if d is None:
+        return {}
+    n = loop.offsets.size
+    settings = {}
+    if quantum is not None:
+        settings["quantum"] = d.quantum.tolist()
+    if amplitude is not None:
+        given = np.broadcast_to(np.asarray(amplitude, float).reshape(-1), (n,))
+        settings["disturbance"] = {"amplitude": given.tolist(), "frequency_hz": d.frequency_hz}
+    return settings
 
 
 def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir, progress,
@@ -142,8 +194,11 @@ def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir
         return run_cosimulation(model, scene, controller, design, method=method, rtol=rtol,
                                 workdir=workdir, progress=progress, overrides=overrides)
     if plant == "inprocess":
-        return compiled_loop(model, controller, design, method=method, rtol=rtol,
-                             progress=progress)
+        if controller.compiled:
+            return compiled_loop(model, controller, design, method=method, rtol=rtol,
+                                 progress=progress)
+        adapter = InProcessPlant(model, method=method, rtol=rtol)
+        return simulate_loop(adapter, controller, design, progress=progress)
     adapter = FmuPlant(scene_fmu(scene, model, workdir, overrides=overrides), method=method,
                        rtol=rtol, inputs=[port.name for port in model.inputs],
                        outputs=[port.name for port in model.outputs])

@@ -9,10 +9,14 @@ Two implementations of the same loop (the timing is in loop_controller.py):
   `InProcessPlant`; the tests hold one against the other.
 
 Both return t (N+1,) s, reference and position (N+1, n_loops) m, force (N+1, n_loops) N.
+`compiled_loop` runs a state-space feedback with exact measurements (`LoopController.compiled`);
+a callable feedback, called with the sample index, or encoder quantisation, which rounds the
+measurement before the error is formed, take `simulate_loop` (a Python call per sample).
 """
 
 import numpy as np
 
+from .errors import LoopError
 from .loop_controller import LoopController
 
 
@@ -61,7 +65,9 @@ def simulate_loop(plant, controller: LoopController, design, *, progress=None):
 def compiled_loop(model, controller: LoopController, design, *, method: str, rtol: float,
                   progress=None):
     """The in-process loop of `model` as one compiled run; returns t, r, y, u like
-    `simulate_loop`.
+    `simulate_loop`. The controller's feedback is a state space and it rounds no measurement
+    (`controller.compiled`); its disturbance force rides on the feedforward, as in
+    `LoopController.step`.
 
     Parameters
     ----------
@@ -75,11 +81,15 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
     """
     from flexure.core import Simulator, run_sampled_loop  # the models (numba) on first use
 
+    if not controller.compiled:
+        raise LoopError("the compiled loop runs a state-space feedback with exact "
+                        "measurements; a callable controller or encoder quantisation takes "
+                        "simulate_loop")
     sim = Simulator(model, method=method, rtol=rtol)
     feedback = controller.controller
     t, position, force = run_sampled_loop(
         sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
-        feedforward=controller.feedforward,
+        feedforward=controller.open_loop_forces,  # u_ff (+ the disturbance d)
         controller=(feedback.A, feedback.B, feedback.C, feedback.D),
         loop_inputs=[pair.input_index for pair in design.pairs],
         loop_outputs=[pair.output_index for pair in design.pairs], progress=progress)

@@ -31,7 +31,9 @@ def _units(model):
         pair = colocated_pairs(model)[0]
     except (ControlDesignError, IndexError):
         return "m", "N"
-    return model.outputs[pair.output_index].unit, model.inputs[pair.input_index].unit
+    # "N.m", the scene's spelling of a moment's unit, as the loop's summary writes it: "N m"
+    return (model.outputs[pair.output_index].unit,
+            model.inputs[pair.input_index].unit.replace(".", " "))
 
 
 def _columns(model, options):

@@ -47,7 +47,8 @@ def test_the_six_loops_agree_in_process_through_fmpy_and_in_libcosim():
     the manipulator's FMU stepped by fmpy, and it with the controller FMU in libcosim, track
     like the in-process loop to within 1e-6 of every actuator's stroke (the issue's
     agreement), and within 0.1 % of it, even at five times the speed (measured 3.6e-4)."""
-    design = manipulator_loop.design_loops()
+    design, _ = manipulator_loop.design_loops(
+        manipulator_loop.load_scene(manipulator_loop.CONTROL))
     results = manipulator_loop.compare_plants(design, ["fmu", "libcosim"], None,
                                               duration=0.2, settle=0.02)
     inprocess = results["inprocess"]
@@ -67,3 +68,47 @@ def test_the_six_loops_agree_in_process_through_fmpy_and_in_libcosim():
         # around the fmpy plant: the same to the integrator's tolerance
         scale = np.max(np.abs(inprocess.force), axis=0)
         assert np.all(np.max(np.abs(other.force - inprocess.force), axis=0) < 1e-6 * scale)
+
+
+@pytest.mark.slow
+def test_the_six_mm_xy_move_stays_within_the_target_with_encoders_and_mains_hum(tmp_path,
+                                                                              capsys):
+    """The chapter's experiment (section 3.4): noisy but below 0.1 %. With 50 nm encoders
+    and 30 mN at 50 Hz on every actuator, every actuator stays within 0.1 % of its stroke
+    (measured 3.3e-4 to 4.4e-4) and the disturbance shows (1.4 to 1.8 um against the clean
+    run's 34 nm at most). Its 50 Hz part follows the linear loop: a (sum over the actuators
+    of) PS(z) at 50 Hz, the sampled process sensitivity of the low-frequency model at rest,
+    within 3 % and 3 degrees early in the move (measured 2.1 % and 2.6 degrees) and within
+    10 % and 10 degrees at its end (7 % and 9 degrees: at 4 mm strokes the mechanism's
+    dynamics have moved away from those at rest)."""
+    import control
+
+    model = manipulator_loop.load_scene(manipulator_loop.CONTROL)
+    design, lf = manipulator_loop.design_loops(model)
+    dx, dy = manipulator_loop.MOVES["6 mm xy"]
+    path = manipulator_loop.move_path(model, manipulator_loop.targets(dx, dy),
+                                      kind="nonlinear")
+    clean = manipulator_loop.closed_loop(design, tmp_path, model=model, path=path)
+    noisy = manipulator_loop.closed_loop(design, tmp_path, model=model, path=path,
+                                         disturbed=True)
+    for row, clean_row in zip(noisy.per_loop(), clean.per_loop(), strict=True):
+        assert row["passed"] and row["error_ratio"] < 1e-3
+        assert row["max_abs_error"] > 10 * clean_row["max_abs_error"]
+    settings = manipulator_loop.DISTURBANCES
+    fs, w = design.sample_rate_hz, 2 * np.pi * settings["disturbance_hz"]
+    P = control.c2d(lf.state_space(), 1.0 / fs, method="zoh")
+    z = np.exp(1j * w / fs)
+    PS = np.linalg.solve(np.eye(6) + P(z) @ design.controller(z) / z, P(z))
+    predicted = settings["disturbance"] * PS.sum(axis=1)  # the same hum at every actuator
+    moved = noisy.position - clean.position
+    for (start, stop), amplitude, degrees in (((0.2, 0.4), 0.03, 3.0),
+                                              ((1.05, 1.25), 0.10, 10.0)):
+        window = (noisy.t >= start - 1e-9) & (noisy.t < stop - 1e-9)  # ten periods
+        basis = np.column_stack([np.sin(w * noisy.t[window]), np.cos(w * noisy.t[window])])
+        (sine, cosine), *_ = np.linalg.lstsq(basis, moved[window], rcond=None)
+        measured = sine + 1j * cosine
+        assert np.all(np.abs(np.abs(measured) / np.abs(predicted) - 1) < amplitude)
+        assert np.all(np.abs(np.degrees(np.angle(measured / predicted))) < degrees)
+    manipulator_loop.print_closed_loop(clean, noisy)
+    assert "30 mN at 50 Hz" in capsys.readouterr().out
+    assert (tmp_path / "manipulator_loop_disturbed.png").stat().st_size > 10_000
