@@ -49,6 +49,15 @@ def nan(*shape):
     return np.full(shape, np.nan)
 
 
+def filled_to_order(order, actual, desired):
+    """Each `actual[i]` close to `desired[i]` for i <= order, and untouched (NaN) past it."""
+    for i, array in enumerate(actual):
+        if i <= order:
+            close(array, desired[i])
+        else:
+            assert np.all(np.isnan(array))
+
+
 def python(kernel):
     """The kernel as plain Python, where indexing is bounds-checked (already so without JIT)."""
     return getattr(kernel, "py_func", kernel)
@@ -67,15 +76,7 @@ def test_beam_deformations_kernel(beams, order):
     for n in range(COUNT):
         e, De, D2e = nan(6), nan(6, 14), nan(6, 14, 14)
         beam.deformations_kernel(x[n], packed[n], order, e, De, D2e)
-        close(e, expected[0][n])
-        if order >= 1:
-            close(De, expected[1][n])
-        else:
-            assert np.all(np.isnan(De))
-        if order >= 2:
-            close(D2e, expected[2][n])
-        else:
-            assert np.all(np.isnan(D2e))
+        filled_to_order(order, (e, De, D2e), [part[n] for part in expected])
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])
@@ -86,15 +87,7 @@ def test_beam_inertia_kernel(beams, order):
     for n in range(COUNT):
         p, Dp, acc = nan(24), nan(24, 14), nan(24)
         beam.inertia_kernel(x[n], v[n], packed[n], order, p, Dp, acc)
-        close(p, expected[0][n])
-        if order >= 1:
-            close(Dp, expected[1][n])
-        else:
-            assert np.all(np.isnan(Dp))
-        if order >= 2:
-            close(acc, acc_expected[n])
-        else:
-            assert np.all(np.isnan(acc))
+        filled_to_order(order, (p, Dp, acc), (expected[0][n], expected[1][n], acc_expected[n]))
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])
@@ -105,15 +98,7 @@ def test_node_inertia_kernel(nodes, order):
     for n in range(COUNT):
         p, Dp, acc = nan(9), nan(9, 4), nan(9)
         rotary_inertia.inertia_kernel(lam[n], v[n], packed[n], order, p, Dp, acc)
-        close(p, expected[0][n])
-        if order >= 1:
-            close(Dp, expected[1][n])
-        else:
-            assert np.all(np.isnan(Dp))
-        if order >= 2:
-            close(acc, acc_expected[n])
-        else:
-            assert np.all(np.isnan(acc))
+        filled_to_order(order, (p, Dp, acc), (expected[0][n], expected[1][n], acc_expected[n]))
 
 
 def test_lower_orders_do_not_index_the_higher_arrays(beams, nodes):
