@@ -25,7 +25,7 @@ import numpy as np
 from numba import carray, cfunc, types
 
 from ..engine import data as ed
-from ..engine import engine
+from ..engine import engine, slots
 from ..errors import SimulationError, StepBudgetSpent
 from ..numerics.jit import kernel
 from ..numerics.native import (
@@ -36,10 +36,6 @@ from ..numerics.native import (
 )
 from .methods import SUNDIALS_METHODS
 from .sundials_libraries import function_address, libraries
-
-_DIMS_SLOT = ed.INT_SLOTS.index("dims")
-_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
-_JACOBIAN_CACHE_SLOT = ed.FLOAT_SLOTS.index("jacobian_cache")
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
@@ -67,8 +63,8 @@ def _callback(op, user_data, t, a, b, c, s, counter):
     """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
     1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
     table = address_of(user_data)
-    dims = engine.int_array(table, _DIMS_SLOT)
-    counters = engine.int_array(table, _COUNTERS_SLOT)
+    dims = engine.int_array(table, slots.DIMS)
+    counters = engine.int_array(table, slots.COUNTERS)
     counters[counter] += 1
     status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
     if status == ed.OK:
@@ -90,12 +86,12 @@ def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent. After a restart
     in a sampled loop (dims[JACOBIAN_REUSE] = 1) the previous Jacobian is handed back once."""
     table = address_of(user_data)
-    dims = engine.int_array(table, _DIMS_SLOT)
+    dims = engine.int_array(table, slots.DIMS)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
         n = 2 * dims[ed.NDOF] + dims[ed.NEL]
         J = carray(dense_matrix_data(matrix), (n * n,))
-        J[:] = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
+        J[:] = engine.float_array(table, slots.JAC_CACHE)
         return 0
     return _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
                      dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
