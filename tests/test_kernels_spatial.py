@@ -79,26 +79,27 @@ def test_beam_deformations_kernel(beams, order):
         filled_to_order(order, (e, De, D2e), [part[n] for part in expected])
 
 
-@pytest.mark.parametrize("order", [0, 1, 2])
-def test_beam_inertia_kernel(beams, order):
-    x, v, ref, packed = beams
-    expected = beam.inertia_points(x, ref, 2)
+def check_inertia_kernel(module, case, order, points, coordinates):
+    """One element's inertia points (points,), their Jacobian (points, coordinates) and
+    convective accelerations v' D2p v (points,) by `module.inertia_kernel`, against
+    `module.inertia_points` for every element of `case` (x, v, ref, packed)."""
+    x, v, ref, packed = case
+    expected = module.inertia_points(x, ref, 2)
     acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
     for n in range(COUNT):
-        p, Dp, acc = nan(24), nan(24, 14), nan(24)
-        beam.inertia_kernel(x[n], v[n], packed[n], order, p, Dp, acc)
+        p, Dp, acc = nan(points), nan(points, coordinates), nan(points)
+        module.inertia_kernel(x[n], v[n], packed[n], order, p, Dp, acc)
         filled_to_order(order, (p, Dp, acc), (expected[0][n], expected[1][n], acc_expected[n]))
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_beam_inertia_kernel(beams, order):
+    check_inertia_kernel(beam, beams, order, 24, 14)
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])
 def test_node_inertia_kernel(nodes, order):
-    lam, v, ref, packed = nodes
-    expected = rotary_inertia.inertia_points(lam, ref, 2)
-    acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
-    for n in range(COUNT):
-        p, Dp, acc = nan(9), nan(9, 4), nan(9)
-        rotary_inertia.inertia_kernel(lam[n], v[n], packed[n], order, p, Dp, acc)
-        filled_to_order(order, (p, Dp, acc), (expected[0][n], expected[1][n], acc_expected[n]))
+    check_inertia_kernel(rotary_inertia, nodes, order, 9, 4)
 
 
 def test_lower_orders_do_not_index_the_higher_arrays(beams, nodes):
