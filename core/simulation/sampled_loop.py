@@ -175,29 +175,28 @@ def _failure(sim, solver, flag, t):
     return SimulationError(f"simulation of {sim.model.name!r} in the sampled loop: {error}")
 
 
+@kernel(inline="always")
+def _state_space_row(P, Q, state, error, i):
+    """Row i of P x + Q e: the two dot products each summed in index order, then added."""
+    s = 0.0
+    for j in range(P.shape[1]):
+        s += P[i, j] * state[j]
+    d = 0.0
+    for j in range(Q.shape[1]):
+        d += Q[i, j] * error[j]
+    return s + d
+
+
 @kernel
 def controller_step(A, B, C, D, state, error, output):
     """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e
     (state x updated in place). Arrays 2-D (A, B, C, D) and 1-D; the sums run in index order,
     so every caller gets the same numbers."""
-    n_out, n_state, n_in = C.shape[0], A.shape[0], B.shape[1]
-    for i in range(n_out):
-        s = 0.0
-        for j in range(n_state):
-            s += C[i, j] * state[j]
-        d = 0.0
-        for j in range(n_in):
-            d += D[i, j] * error[j]
-        output[i] = s + d
-    new_state = np.empty(n_state)
-    for i in range(n_state):
-        s = 0.0
-        for j in range(n_state):
-            s += A[i, j] * state[j]
-        b = 0.0
-        for j in range(n_in):
-            b += B[i, j] * error[j]
-        new_state[i] = s + b
+    for i in range(C.shape[0]):
+        output[i] = _state_space_row(C, D, state, error, i)
+    new_state = np.empty(A.shape[0])
+    for i in range(A.shape[0]):
+        new_state[i] = _state_space_row(A, B, state, error, i)
     state[:] = new_state
 
 
