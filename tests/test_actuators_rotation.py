@@ -12,7 +12,6 @@ and on a moment port (a rotary voice coil). Checked against:
 - the FMU under fmpy against the in-process Simulator, bit for bit.
 """
 
-import shutil
 
 import control
 import numpy as np
@@ -276,7 +275,8 @@ def test_the_fmu_has_the_rotational_ports_and_the_coil_and_steps_as_the_simulato
     """Variables: the drive F (V), the moment Mz (N.m), the angle rz (rad), the coil current
     (A) and the actuator's tunable keys with their units; stepped at 2 ms under fmpy, the angle
     and the current equal the in-process Simulator's bit for bit."""
-    from fmpy import extract, instantiate_fmu, read_model_description
+    from fmpy import read_model_description
+    from test_fmu import Slave
 
     from flexure.fmu import build_scene_fmu
     from flexure.fmu.scene_slave import DEFAULT_RTOL, METHODS
@@ -301,26 +301,20 @@ def test_the_fmu_has_the_rotational_ports_and_the_coil_and_steps_as_the_simulato
     assert variables["actuators.VCM1.amplifier_gain"].unit == "1"
     refs = [variables[name].valueReference for name in ("rz", "VCM1.current")]
     inputs = [variables[name].valueReference for name in ("F", "Mz")]
-    folder = extract(str(fmu))
-    slave = instantiate_fmu(folder, md, fmi_type="CoSimulation")
+    slave = Slave(fmu)
     try:
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.exitInitializationMode()
         sim = Simulator(build_model(data), method=METHODS[0], rtol=DEFAULT_RTOL)
         h = 2e-3
         signals = [(0.05, 1e-3), (0.05, 1e-3), (-0.02, 0.0), (0.0, -5e-4), (0.03, 5e-4)] * 2
         measured, expected = [], []
         for k, u in enumerate(signals):
-            slave.setReal(inputs, list(u))
-            slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
-            measured.append(slave.getReal(refs))
+            slave.fmu.setReal(inputs, list(u))
+            slave.fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            measured.append(slave.fmu.getReal(refs))
             sim.set_inputs(list(u))
             sim.advance(k * h + h)
             expected.append([sim.outputs()[1], sim.currents[0]])
         assert np.array_equal(np.array(measured), np.array(expected))
         assert np.abs(np.array(measured)[:, 0]).max() > 1e-5  # rad: it turns
-        slave.terminate()
     finally:
-        slave.freeInstance()
-        shutil.rmtree(folder, ignore_errors=True)
+        slave.close()
