@@ -17,6 +17,7 @@ import control
 import numpy as np
 import pytest
 import scipy.linalg
+from test_rotation_ports import EIZ, L, cantilever
 
 from flexure.core import (
     Simulator,
@@ -33,31 +34,14 @@ from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
 from flexure.core.scene.building import scene_key
 
-L, EA, GIT, EIY, EIZ = 0.2, 1e6, 3.0, 5.0, 2.0  # m, N, N m^2
 KM, R, INDUCTANCE = 2.0, 2.0, 0.01  # N/A, ohm, H
 
 
-def cantilever(*, rotation=(0.0, 0.0, 0.0), inputs, outputs, actuators):
-    """A clamped spatial BEAM of length L along x, every deformation released; its tip's
-    translational node 3 (0.01 kg) and rotational node 4 (which starts at `rotation`)."""
-    return {
-        "scene": {"name": "cantilever", "dimension": 3},
-        "sections": {"s": {"EA": EA, "GIt": GIT, "EIy": EIY, "EIz": EIZ, "rho_A": 0.1}},
-        "nodes": {"1": {"position": [0.0, 0.0, 0.0], "fixed": ["x", "y", "z"]},
-                  "2": {"rotation": [0.0, 0.0, 0.0], "fixed": True},
-                  "3": {"position": [L, 0.0, 0.0], "mass": 0.01},
-                  "4": {"rotation": list(rotation), "inertia": [1e-4, 1e-4, 1e-4]}},
-        "elements": {"b": {"type": "BEAM", "nodes": ["1", "2", "3", "4"], "section": "s",
-                           "y_axis": [0.0, 1.0, 0.0],
-                           "released": ["e1", "e2", "e3", "e4", "e5", "e6"]}},
-        "inputs": inputs, "outputs": outputs, "actuators": actuators,
-    }
-
-
 def force_coil_scene(actuated=True):
-    """The cantilever with the force F on 3.y driven by the coil VCM1 (voltage drive), the
-    moment Mz about the global z axis on node 4, and the outputs y (3.y) and rz (the angle
-    about z); without the coil when not `actuated`."""
+    """The cantilever of test_rotation_ports (a spatial BEAM of length L, its tip nodes 3 and
+    4) with the force F on 3.y driven by the coil VCM1 (voltage drive), the moment Mz about
+    the global z axis on node 4, and the outputs y (3.y) and rz (the angle about z); without
+    the coil when not `actuated`."""
     coil = {"VCM1": {"input": "F", "force_constant": KM, "resistance": R,
                      "inductance": INDUCTANCE}}
     return cantilever(inputs={"F": {"node": "3", "coordinate": "y"},
