@@ -27,7 +27,7 @@ controller_fmu -> cosim -> runner -> cli.
 Only flexure.core's public API is used: no physics here.
 """
 
-import importlib
+from flexure.core.lazy_imports import lazy_exports
 
 # public name -> the submodule that defines it, imported on first use (PEP 562): importing
 # flexure.controllers loads neither python-control nor the models
@@ -49,16 +49,4 @@ __all__ = [
     "ThirdOrderProfile", "build_loop", "design_feedback", "low_frequency_model", "run_loop",
 ]
 
-
-def __getattr__(name):
-    """Import the submodule of a public name on first use, and keep the name (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, __all__)

@@ -10,9 +10,8 @@ and a package that only needs the exceptions start fast. `from flexure.core impo
 `flexure.core.X` work for every name of `__all__`, and `dir(flexure.core)` lists them.
 """
 
-import importlib
-
 from .errors import ConstraintError, ConvergenceError, FlexureError, SceneError, SimulationError
+from .lazy_imports import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -67,16 +66,4 @@ __all__ = [
     "stresses_along",
 ]
 
-
-def __getattr__(name):
-    """Import the submodule of a public name on first use, and keep the name (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, __all__)

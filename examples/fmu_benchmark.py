@@ -84,6 +84,17 @@ class Master:
         self.fmu.exitInitializationMode()
         self.inputs, self.outputs = [vr["F"]], [vr["x"], vr["y"]]
 
+    def step_through(self, forces):
+        """Seconds for the steps through FMU2Slave, one force (N) held over each STEP; the
+        last outputs."""
+        fmu, inputs, outputs = self.fmu, self.inputs, self.outputs
+        clock = time.perf_counter()
+        for k, force in enumerate(forces):
+            fmu.setReal(inputs, [force])
+            fmu.doStep(currentCommunicationPoint=k * STEP, communicationStepSize=STEP)
+            y = fmu.getReal(outputs)
+        return time.perf_counter() - clock, y
+
     def close(self):
         self.fmu.terminate()
         self.fmu.freeInstance()
@@ -93,13 +104,7 @@ class Master:
 def run_fmpy(path, forces):
     """Seconds for the steps through FMU2Slave; the last outputs."""
     master = Master(path)
-    fmu, inputs, outputs = master.fmu, master.inputs, master.outputs
-    clock = time.perf_counter()
-    for k, force in enumerate(forces):
-        fmu.setReal(inputs, [force])
-        fmu.doStep(currentCommunicationPoint=k * STEP, communicationStepSize=STEP)
-        y = fmu.getReal(outputs)
-    seconds = time.perf_counter() - clock
+    seconds, y = master.step_through(forces)
     master.close()
     return seconds, y
 
@@ -163,17 +168,11 @@ def run_fmu_split(path, forces):
     """One FMU2Slave run: seconds in total, in the slave's do_step, in the core's calls."""
     before = {id(o) for o in slave_instances(SCENE)}
     master = Master(path)
-    fmu, inputs, outputs = master.fmu, master.inputs, master.outputs
     (slave,) = [o for o in slave_instances(SCENE) if id(o) not in before]
     simulator = slave.simulator
     simulator.outputs = read = Timed(simulator.outputs)  # this instance only
     simulator.set_inputs = write = Timed(simulator.set_inputs)
-    clock = time.perf_counter()
-    for k, force in enumerate(forces):
-        fmu.setReal(inputs, [force])
-        fmu.doStep(currentCommunicationPoint=k * STEP, communicationStepSize=STEP)
-        y = fmu.getReal(outputs)
-    total = time.perf_counter() - clock
+    total, y = master.step_through(forces)
     split = {"total": total, "in_slave": slave.step_seconds,
              "advance": simulator.statistics["wall_time_s"],
              "io": read.seconds + write.seconds, "statistics": dict(simulator.statistics),

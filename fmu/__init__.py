@@ -15,7 +15,7 @@ any flexure slave as one.
   tests (`flexure fmu check`).
 """
 
-import importlib
+from flexure.core.lazy_imports import lazy_exports
 
 # public name -> the submodule that defines it, imported on first use (PEP 562): importing
 # flexure.fmu loads neither pythonfmu nor fmpy
@@ -34,16 +34,4 @@ __all__ = [
     "fmu_environment", "validate_fmu_file", "write_reference",
 ]
 
-
-def __getattr__(name):
-    """Import the submodule of a public name on first use, and keep the name (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, __all__)

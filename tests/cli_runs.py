@@ -1,4 +1,10 @@
-"""Running the `flexure` command in the test process, as a user's shell would."""
+"""Running the `flexure` command in the test process, as a user's shell would, and a stub of
+the results it reports."""
+
+import math
+from pathlib import Path
+
+import numpy as np
 
 from flexure.core.cli import main
 
@@ -12,3 +18,38 @@ def run(capsys, *argv):
     out, err = capsys.readouterr()
     assert "Traceback" not in out + err
     return code, out, err
+
+
+class StubResult:
+    """What a stubbed simulation, work-precision study or loop returns to the CLI (a few
+    samples, all ok), for tests of the command line around them."""
+
+    model_name, method, rtol = "truss_1dof_x", "cvode-bdf", 1e-8
+    times = np.array([0.0, 0.1])
+    output_names, output_units = ["x"], ["m"]
+    output_array = np.array([[0.1], [0.2]])
+    statistics = {"steps": 1, "rhs_evaluations": 2, "jacobian_evaluations": 1,
+                  "wall_time_s": 0.0}
+    rows = [{"method": "ida", "rtol": 1e-3, "status": "ok"}]
+    warnings = []
+
+    def to_csv(self, path):
+        Path(path).write_text("time,x\n0,0.1\n")
+
+    def plot(self, path, **kwargs):
+        Path(path).write_bytes(b"png")
+
+    def text(self):
+        return "table"
+
+    def markdown(self):
+        return "| table |"
+
+    def summary(self):
+        keys = ("stroke", "duration", "sample_rate_hz", "crossover_rad_s", "phase_margin_deg",
+                "modulus_margin", "max_abs_error", "error_ratio", "target", "wall_time_s")
+        return {**dict.fromkeys(keys, 1e-3), "scene": "truss_1dof_x", "plant": "inprocess",
+                "feedforward": True, "feedforward_kind": "modal", "passed": True,
+                "gain_margin": math.inf, "units": {"position": "m", "force": "N"},
+                "per_loop": [{"loop": "F -> x", "stroke": 1e-3, "max_abs_error": 1e-9,
+                              "error_ratio": 1e-6, "passed": True}]}

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 import scipy.linalg
+from test_esdirk import check_newton_solve
 
 from flexure.core import (
     SceneError,
@@ -393,18 +394,7 @@ def test_a_large_model_with_coils_takes_the_full_newton_matrix_in_esdirk(coils):
     J[m: 2 * m, 2 * m:] = rng.uniform(0.0, 10.0, (m, coils))  # M^-1 DF^T b Km
     J[2 * m:, m: 2 * m] = -rng.uniform(0.0, 1e3, (coils, m))  # -Km / L b^T DF
     J[2 * m:, 2 * m:] = -2e3 * np.eye(coils)  # -R / L
-    hg = 2e-4
-    LU, piv = np.zeros(n * n), np.zeros(n, dtype=np.int64)
-    flags = np.zeros(esdirk.I_SIZE, dtype=np.int64)
-    assert esdirk.factor(J.ravel(), LU, piv, hg, flags)
-    assert flags[esdirk.I_REDUCED] == 0
-    r = rng.standard_normal(n)
-    v = r.copy()
-    esdirk.newton_solve(J.ravel(), LU, piv, hg, flags, v)
-    matrix = np.eye(n) - hg * J
-    expected = np.linalg.solve(matrix, r)
-    bound = 10 * np.linalg.cond(matrix) * 2.2e-16 * np.max(np.abs(expected))
-    assert np.max(np.abs(v - expected)) <= bound
+    check_newton_solve(J, 2e-4, rng, reduced=False)
 
 
 def test_a_static_equilibrium_refuses_an_unknown_input():

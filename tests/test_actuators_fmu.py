@@ -1,11 +1,11 @@
 """The FMU of a scene with a voice-coil actuator under fmpy: its drive input (V) and coil
 current output (A), stepped against the in-process Simulator bit for bit, states included."""
 
-import shutil
 import tomllib
 
 import numpy as np
-from fmpy import extract, instantiate_fmu, read_model_description
+from fmpy import read_model_description
+from test_fmu import Slave
 
 from flexure.core import Simulator, build_model, scene_path, scene_toml
 from flexure.fmu import build_scene_fmu
@@ -40,12 +40,8 @@ def test_the_fmu_steps_the_drive_signal_as_the_simulator_does_bit_for_bit(tmp_pa
     volt = next(u for u in md.unitDefinitions if u.name == "V").baseUnit
     assert (volt.kg, volt.m, volt.s, volt.A) == (1, 2, -3, -1)
     refs = [variables[name].valueReference for name in ("x", "VCM1.current")]
-    folder = extract(str(fmu))
-    slave = instantiate_fmu(folder, md, fmi_type="CoSimulation")
+    slave = Slave(fmu)
     try:
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.exitInitializationMode()
         sim = Simulator(model, method=METHODS[0], rtol=DEFAULT_RTOL)
         sim.reset()
         h = 2e-3
@@ -54,14 +50,14 @@ def test_the_fmu_steps_the_drive_signal_as_the_simulator_does_bit_for_bit(tmp_pa
         def run(start, stop):
             rows = []
             for k in range(start, stop):
-                slave.setReal([variables["F"].valueReference], [drives[k]])
-                slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
-                rows.append(slave.getReal(refs))
+                slave.fmu.setReal([variables["F"].valueReference], [drives[k]])
+                slave.fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+                rows.append(slave.fmu.getReal(refs))
             return np.array(rows)
 
         half = len(drives) // 2
         first = run(0, half)
-        state = slave.getFMUstate()
+        state = slave.fmu.getFMUstate()
         rest = run(half, len(drives))
         expected = []
         for k, u in enumerate(drives):
@@ -72,10 +68,8 @@ def test_the_fmu_steps_the_drive_signal_as_the_simulator_does_bit_for_bit(tmp_pa
             expected.append([sim.outputs()[0], sim.currents[0]])
         assert np.array_equal(np.vstack([first, rest]), np.array(expected))
         assert np.max(np.abs(rest[:, 1])) > 0.5  # amperes: the coil carries current
-        slave.setFMUstate(state)
+        slave.fmu.setFMUstate(state)
         assert np.array_equal(run(half, len(drives)), rest)  # the current restored too
-        slave.freeFMUstate(state)
-        slave.terminate()
+        slave.fmu.freeFMUstate(state)
     finally:
-        slave.freeInstance()
-        shutil.rmtree(folder, ignore_errors=True)
+        slave.close()

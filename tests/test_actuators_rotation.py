@@ -12,12 +12,12 @@ and on a moment port (a rotary voice coil). Checked against:
 - the FMU under fmpy against the in-process Simulator, bit for bit.
 """
 
-import shutil
 
 import control
 import numpy as np
 import pytest
 import scipy.linalg
+from test_rotation_ports import EIZ, L, cantilever
 
 from flexure.core import (
     Simulator,
@@ -34,31 +34,14 @@ from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
 from flexure.core.scene.building import scene_key
 
-L, EA, GIT, EIY, EIZ = 0.2, 1e6, 3.0, 5.0, 2.0  # m, N, N m^2
 KM, R, INDUCTANCE = 2.0, 2.0, 0.01  # N/A, ohm, H
 
 
-def cantilever(*, rotation=(0.0, 0.0, 0.0), inputs, outputs, actuators):
-    """A clamped spatial BEAM of length L along x, every deformation released; its tip's
-    translational node 3 (0.01 kg) and rotational node 4 (which starts at `rotation`)."""
-    return {
-        "scene": {"name": "cantilever", "dimension": 3},
-        "sections": {"s": {"EA": EA, "GIt": GIT, "EIy": EIY, "EIz": EIZ, "rho_A": 0.1}},
-        "nodes": {"1": {"position": [0.0, 0.0, 0.0], "fixed": ["x", "y", "z"]},
-                  "2": {"rotation": [0.0, 0.0, 0.0], "fixed": True},
-                  "3": {"position": [L, 0.0, 0.0], "mass": 0.01},
-                  "4": {"rotation": list(rotation), "inertia": [1e-4, 1e-4, 1e-4]}},
-        "elements": {"b": {"type": "BEAM", "nodes": ["1", "2", "3", "4"], "section": "s",
-                           "y_axis": [0.0, 1.0, 0.0],
-                           "released": ["e1", "e2", "e3", "e4", "e5", "e6"]}},
-        "inputs": inputs, "outputs": outputs, "actuators": actuators,
-    }
-
-
 def force_coil_scene(actuated=True):
-    """The cantilever with the force F on 3.y driven by the coil VCM1 (voltage drive), the
-    moment Mz about the global z axis on node 4, and the outputs y (3.y) and rz (the angle
-    about z); without the coil when not `actuated`."""
+    """The cantilever of test_rotation_ports (a spatial BEAM of length L, its tip nodes 3 and
+    4) with the force F on 3.y driven by the coil VCM1 (voltage drive), the moment Mz about
+    the global z axis on node 4, and the outputs y (3.y) and rz (the angle about z); without
+    the coil when not `actuated`."""
     coil = {"VCM1": {"input": "F", "force_constant": KM, "resistance": R,
                      "inductance": INDUCTANCE}}
     return cantilever(inputs={"F": {"node": "3", "coordinate": "y"},
@@ -276,7 +259,8 @@ def test_the_fmu_has_the_rotational_ports_and_the_coil_and_steps_as_the_simulato
     """Variables: the drive F (V), the moment Mz (N.m), the angle rz (rad), the coil current
     (A) and the actuator's tunable keys with their units; stepped at 2 ms under fmpy, the angle
     and the current equal the in-process Simulator's bit for bit."""
-    from fmpy import extract, instantiate_fmu, read_model_description
+    from fmpy import read_model_description
+    from test_fmu import Slave
 
     from flexure.fmu import build_scene_fmu
     from flexure.fmu.scene_slave import DEFAULT_RTOL, METHODS
@@ -301,26 +285,20 @@ def test_the_fmu_has_the_rotational_ports_and_the_coil_and_steps_as_the_simulato
     assert variables["actuators.VCM1.amplifier_gain"].unit == "1"
     refs = [variables[name].valueReference for name in ("rz", "VCM1.current")]
     inputs = [variables[name].valueReference for name in ("F", "Mz")]
-    folder = extract(str(fmu))
-    slave = instantiate_fmu(folder, md, fmi_type="CoSimulation")
+    slave = Slave(fmu)
     try:
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.exitInitializationMode()
         sim = Simulator(build_model(data), method=METHODS[0], rtol=DEFAULT_RTOL)
         h = 2e-3
         signals = [(0.05, 1e-3), (0.05, 1e-3), (-0.02, 0.0), (0.0, -5e-4), (0.03, 5e-4)] * 2
         measured, expected = [], []
         for k, u in enumerate(signals):
-            slave.setReal(inputs, list(u))
-            slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
-            measured.append(slave.getReal(refs))
+            slave.fmu.setReal(inputs, list(u))
+            slave.fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            measured.append(slave.fmu.getReal(refs))
             sim.set_inputs(list(u))
             sim.advance(k * h + h)
             expected.append([sim.outputs()[1], sim.currents[0]])
         assert np.array_equal(np.array(measured), np.array(expected))
         assert np.abs(np.array(measured)[:, 0]).max() > 1e-5  # rad: it turns
-        slave.terminate()
     finally:
-        slave.freeInstance()
-        shutil.rmtree(folder, ignore_errors=True)
+        slave.close()

@@ -22,7 +22,7 @@ from flexure.core import ConstraintError, SceneError, build_model, load_scene, s
 from flexure.core.cli import atomic_output, write_outputs
 from flexure.core.errors import OutputError
 from flexure.core.reporting.tables import json_text
-from tests.cli_runs import run
+from tests.cli_runs import StubResult, run
 
 FLEXURE = str(Path(sys.executable).with_name("flexure"))  # the installed console script
 SCENES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
@@ -278,20 +278,12 @@ def test_one_failed_output_does_not_lose_the_others(tmp_path, capsys):
 def test_simulate_writes_its_outputs_atomically(capsys, places, monkeypatch):
     import flexure.core.simulation.simulation as simulation
 
-    class Result:
-        model_name, method, rtol = "truss_1dof_x", "cvode-bdf", 1e-8
-        times = np.array([0.0, 1.0])
-        output_names, output_units = ["x"], ["m"]
-        output_array = np.array([[0.1], [0.2]])
-        statistics = {"steps": 1, "rhs_evaluations": 2, "jacobian_evaluations": 1,
-                      "wall_time_s": 0.0}
-        warnings = []
-
+    class Result(StubResult):
         def to_csv(self, path):
             assert Path(path).name.startswith(".out.") and Path(path).parent.samefile(".")
             Path(path).write_text("time,x\n")
 
-        def plot(self, path):
+        def plot(self, path, **kwargs):
             assert Path(path).suffix == ".png"  # the format follows the temporary's suffix
             Path(path).write_bytes(b"png")
 

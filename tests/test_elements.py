@@ -44,6 +44,19 @@ def numerical_jacobian(function, x):
     return np.stack(columns, axis=-1)
 
 
+def deformed(element, seed):
+    """(x, ref): a random deformed configuration of 3 elements (`random_configuration` with
+    the generator of `seed`) and the reference of their undeformed one."""
+    x0, x = random_configuration(element, np.random.default_rng(seed))
+    return x, element.reference(x0)
+
+
+def differences_of(function, x, ref, order):
+    """Central differences, per element, of output `order` of function(x, ref, order=order)
+    (an element's deformations or inertia points, order 0, or their first derivatives, 1)."""
+    return numerical_jacobian(lambda y: function(y, ref, order=order)[order], x)
+
+
 @pytest.fixture(params=sorted(ELEMENT_TYPES), ids=str)
 def element(request):
     return ELEMENT_TYPES[request.param]
@@ -57,40 +70,32 @@ def test_deformations_are_zero_in_the_reference_configuration(element):
 
 
 def test_first_derivatives_of_deformations(element):
-    rng = np.random.default_rng(2)
-    x0, x = random_configuration(element, rng)
-    ref = element.reference(x0)
+    x, ref = deformed(element, seed=2)
     _, De = element.deformations(x, ref, order=1)
-    numeric = numerical_jacobian(lambda y: element.deformations(y, ref, order=0)[0], x)
+    numeric = differences_of(element.deformations, x, ref, 0)
     np.testing.assert_allclose(De, numeric, rtol=1e-6, atol=1e-8)
 
 
 def test_second_derivatives_of_deformations(element):
-    rng = np.random.default_rng(3)
-    x0, x = random_configuration(element, rng)
-    ref = element.reference(x0)
+    x, ref = deformed(element, seed=3)
     _, _, D2e = element.deformations(x, ref, order=2)
-    numeric = numerical_jacobian(lambda y: element.deformations(y, ref, order=1)[1], x)
+    numeric = differences_of(element.deformations, x, ref, 1)
     np.testing.assert_allclose(D2e, numeric, rtol=1e-6, atol=1e-7)
     np.testing.assert_allclose(D2e, np.swapaxes(D2e, -1, -2), atol=1e-14)
 
 
 def test_derivatives_of_inertia_points(element):
-    rng = np.random.default_rng(4)
-    x0, x = random_configuration(element, rng)
-    ref = element.reference(x0)
+    x, ref = deformed(element, seed=4)
     _, Dp, D2p = element.inertia_points(x, ref, order=2)
-    numeric = numerical_jacobian(lambda y: element.inertia_points(y, ref, order=0)[0], x)
+    numeric = differences_of(element.inertia_points, x, ref, 0)
     np.testing.assert_allclose(Dp, numeric, rtol=1e-6, atol=1e-8)
-    numeric2 = numerical_jacobian(lambda y: element.inertia_points(y, ref, order=1)[1], x)
+    numeric2 = differences_of(element.inertia_points, x, ref, 1)
     np.testing.assert_allclose(D2p, numeric2, rtol=1e-6, atol=1e-7)
 
 
 def test_deformations_are_invariant_under_rigid_translation(element):
     """A rigid translation leaves every deformation unchanged."""
-    rng = np.random.default_rng(5)
-    x0, x = random_configuration(element, rng)
-    ref = element.reference(x0)
+    x, ref = deformed(element, seed=5)
     translational = sum(1 for k in element.node_kinds if k == "translational")
     rotation_width = (element.coordinates_per_element - translational * element.dimension) // max(
         1, len(element.node_kinds) - translational)

@@ -6,8 +6,9 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from test_engine import check_compiled_loop_against_python_loop
 
-from flexure.core import Simulator, load_scene, run_sampled_loop, simulate
+from flexure.core import Simulator, load_scene, simulate
 from flexure.core.errors import SimulationError
 from flexure.core.simulation.esdirk import Esdirk
 from flexure.core.simulation.esdirk_method import ESDIRK3, ESDIRK4, TRBDF2
@@ -123,26 +124,7 @@ def test_three_dof_step_within_rtol_of_a_tight_cvode_run(method, bound):
 
 # -- the restart-free sampled loop ---------------------------------------------------------------
 def test_compiled_loop_on_esdirk_equals_a_python_loop_bit_for_bit():
-    from flexure.controllers import build_loop
-    from flexure.controllers.plants import InProcessPlant
-    from flexure.controllers.runner import simulate_loop
-
-    model = load_scene("stage_planar_3dof")
-    controller, design = build_loop(model, stroke=1e-3, duration=0.02, settle=0.005,
-                                    fs=4000.0)
-    plant = InProcessPlant(model, method="esdirk3", rtol=1e-7)
-    t, _, position, force = simulate_loop(plant, controller, design)
-    feedback = controller.controller
-    sim = Simulator(model, method="esdirk3", rtol=1e-7)
-    t_c, position_c, force_c = run_sampled_loop(
-        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
-        feedforward=controller.feedforward,
-        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
-        loop_inputs=[pair.input_index for pair in design.pairs],
-        loop_outputs=[pair.output_index for pair in design.pairs])
-    assert np.ptp(position) > 5e-4
-    assert np.array_equal(position_c, position) and np.array_equal(force_c, force)
-    assert sim.time == t[-1] and np.array_equal(t_c, t)
+    check_compiled_loop_against_python_loop("esdirk3")
 
 
 def test_an_input_change_costs_one_evaluation_not_a_restart():
@@ -241,11 +223,20 @@ def test_the_newton_matrix_through_its_schur_complement_solves_as_the_full_one(s
     J[m:, m:] = -rng.uniform(0.0, 10.0, (m, m)) / m  # -M^-1 C
     if not second_order:
         J[0, 0] = 1e-3
-    hg = 2e-4
-    LU, piv, flags = np.zeros(n * n), np.zeros(n, dtype=np.int64), np.zeros(esdirk.I_SIZE,
-                                                                             dtype=np.int64)
+    check_newton_solve(J, 2e-4, rng, reduced=second_order)
+
+
+def check_newton_solve(J, hg, rng, *, reduced):
+    """ESDIRK's factors of I - hg J (through the Schur complement if `reduced`, else the full
+    matrix), and its solution of (I - hg J) v = r for a random r against numpy's, to 10 times
+    the round-off that the matrix's condition number allows."""
+    from flexure.core.simulation import esdirk
+
+    n = J.shape[0]
+    LU, piv = np.zeros(n * n), np.zeros(n, dtype=np.int64)
+    flags = np.zeros(esdirk.I_SIZE, dtype=np.int64)
     assert esdirk.factor(J.ravel(), LU, piv, hg, flags)
-    assert flags[esdirk.I_REDUCED] == int(second_order)
+    assert flags[esdirk.I_REDUCED] == int(reduced)
     r = rng.standard_normal(n)
     v = r.copy()
     esdirk.newton_solve(J.ravel(), LU, piv, hg, flags, v)

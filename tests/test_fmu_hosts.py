@@ -180,32 +180,35 @@ vr = {v.name: v.valueReference for v in md.modelVariables}
 fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), instanceName="p",
                 modelIdentifier=md.coSimulation.modelIdentifier)
 fmu.instantiate(loggingOn=True)  # fmpy's own logger, which formats printf-style
-fmu.setupExperiment(startTime=0.0)
-fmu.enterInitializationMode()
-fmu.exitInitializationMode()
+
+
+def initialize():
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+
+
+def step_in_modes(modes, t):
+    """For each mode: set it, try a 0.25 s step from t, print its status."""
+    for mode in modes:
+        fmu.setReal([vr["mode"]], [mode])
+        try:
+            fmu.doStep(t, 0.25)
+            print("status ok", flush=True)
+        except FMICallException as error:
+            print("status", error, flush=True)
+
+
+initialize()
 fmu.doStep(0.0, 0.25)
-for mode in (1.0, 2.0, 0.0):
-    fmu.setReal([vr["mode"]], [mode])
-    try:
-        fmu.doStep(0.25, 0.25)
-        print("status ok", flush=True)
-    except FMICallException as error:
-        print("status", error, flush=True)
+step_in_modes((1.0, 2.0, 0.0), 0.25)
 print("y", fmu.getReal([vr["y"]])[0], flush=True)
 fmu.reset()
-fmu.setupExperiment(startTime=0.0)
-fmu.enterInitializationMode()
-fmu.exitInitializationMode()
+initialize()
 fmu.setReal([vr["mode"]], [0.0])
 fmu.doStep(0.0, 0.5)
 print("after reset", fmu.getReal([vr["y"]])[0], flush=True)
-for mode in (3.0, 0.0):
-    fmu.setReal([vr["mode"]], [mode])
-    try:
-        fmu.doStep(0.5, 0.25)
-        print("status ok", flush=True)
-    except FMICallException as error:
-        print("status", error, flush=True)
+step_in_modes((3.0, 0.0), 0.5)
 '''
 
 

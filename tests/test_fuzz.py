@@ -20,12 +20,12 @@ import math
 import tomllib
 from pathlib import Path
 
-import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from flexure.core import FlexureError, build_model, builtin_scenes, load_scene, scene_path
+from tests.cli_runs import StubResult
 
 pytestmark = pytest.mark.slow  # the slow tier (hypothesis runs ~1000 cases); .ci/run runs it
 
@@ -221,40 +221,6 @@ def command_lines(draw):
     return argv, draw(CSV_TEXTS), draw(CSV_TEXTS)
 
 
-class _Result:
-    """What the stubbed simulation, study and loop return (a few samples, all ok)."""
-
-    model_name, method, rtol = "truss_1dof_x", "cvode-bdf", 1e-8
-    times = np.array([0.0, 0.1])
-    output_names, output_units = ["x"], ["m"]
-    output_array = np.array([[0.1], [0.2]])
-    statistics = {"steps": 1, "rhs_evaluations": 2, "jacobian_evaluations": 1,
-                  "wall_time_s": 0.0}
-    rows = [{"method": "ida", "rtol": 1e-3, "status": "ok"}]
-    warnings = []
-
-    def to_csv(self, path):
-        Path(path).write_text("time,x\n0,0.1\n")
-
-    def plot(self, path, **kwargs):
-        Path(path).write_bytes(b"png")
-
-    def text(self):
-        return "table"
-
-    def markdown(self):
-        return "| table |"
-
-    def summary(self):
-        keys = ("stroke", "duration", "sample_rate_hz", "crossover_rad_s", "phase_margin_deg",
-                "modulus_margin", "max_abs_error", "error_ratio", "target", "wall_time_s")
-        return {**dict.fromkeys(keys, 1e-3), "scene": "truss_1dof_x", "plant": "inprocess",
-                "feedforward": True, "feedforward_kind": "modal", "passed": True,
-                "gain_margin": math.inf, "units": {"position": "m", "force": "N"},
-                "per_loop": [{"loop": "F -> x", "stroke": 1e-3, "max_abs_error": 1e-9,
-                              "error_ratio": 1e-6, "passed": True}]}
-
-
 def _fake_build(scene, dest, **kwargs):
     built = Path(dest) / "truss_1dof_x.fmu"
     built.write_bytes(b"PK")
@@ -310,9 +276,9 @@ def test_random_command_lines(cli_folder, case):
     (cli_folder / "fuzz_ref.csv").write_text(reference_text)
     with pytest.MonkeyPatch.context() as patch:
         patch.chdir(cli_folder)
-        patch.setattr(simulation, "simulate", lambda *a, **k: _Result())
-        patch.setattr(cli_bench, "work_precision", lambda *a, **k: _Result())
-        patch.setattr(loop_cli, "run_loop", lambda *a, **k: _Result())
+        patch.setattr(simulation, "simulate", lambda *a, **k: StubResult())
+        patch.setattr(cli_bench, "work_precision", lambda *a, **k: StubResult())
+        patch.setattr(loop_cli, "run_loop", lambda *a, **k: StubResult())
         patch.setattr(fmu_cli, "build_scene_fmu", _fake_build)
         patch.setattr(fmu_cli, "write_reference", lambda fmu, i, ref, **k: Path(ref))
         code, out, err = _run_cli(argv)

@@ -49,6 +49,15 @@ def nan(*shape):
     return np.full(shape, np.nan)
 
 
+def filled_to_order(order, actual, desired):
+    """Each `actual[i]` close to `desired[i]` for i <= order, and untouched (NaN) past it."""
+    for i, array in enumerate(actual):
+        if i <= order:
+            close(array, desired[i])
+        else:
+            assert np.all(np.isnan(array))
+
+
 def python(kernel):
     """The kernel as plain Python, where indexing is bounds-checked (already so without JIT)."""
     return getattr(kernel, "py_func", kernel)
@@ -67,53 +76,30 @@ def test_beam_deformations_kernel(beams, order):
     for n in range(COUNT):
         e, De, D2e = nan(6), nan(6, 14), nan(6, 14, 14)
         beam.deformations_kernel(x[n], packed[n], order, e, De, D2e)
-        close(e, expected[0][n])
-        if order >= 1:
-            close(De, expected[1][n])
-        else:
-            assert np.all(np.isnan(De))
-        if order >= 2:
-            close(D2e, expected[2][n])
-        else:
-            assert np.all(np.isnan(D2e))
+        filled_to_order(order, (e, De, D2e), [part[n] for part in expected])
+
+
+def check_inertia_kernel(module, case, order, points, coordinates):
+    """One element's inertia points (points,), their Jacobian (points, coordinates) and
+    convective accelerations v' D2p v (points,) by `module.inertia_kernel`, against
+    `module.inertia_points` for every element of `case` (x, v, ref, packed)."""
+    x, v, ref, packed = case
+    expected = module.inertia_points(x, ref, 2)
+    acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
+    for n in range(COUNT):
+        p, Dp, acc = nan(points), nan(points, coordinates), nan(points)
+        module.inertia_kernel(x[n], v[n], packed[n], order, p, Dp, acc)
+        filled_to_order(order, (p, Dp, acc), (expected[0][n], expected[1][n], acc_expected[n]))
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])
 def test_beam_inertia_kernel(beams, order):
-    x, v, ref, packed = beams
-    expected = beam.inertia_points(x, ref, 2)
-    acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
-    for n in range(COUNT):
-        p, Dp, acc = nan(24), nan(24, 14), nan(24)
-        beam.inertia_kernel(x[n], v[n], packed[n], order, p, Dp, acc)
-        close(p, expected[0][n])
-        if order >= 1:
-            close(Dp, expected[1][n])
-        else:
-            assert np.all(np.isnan(Dp))
-        if order >= 2:
-            close(acc, acc_expected[n])
-        else:
-            assert np.all(np.isnan(acc))
+    check_inertia_kernel(beam, beams, order, 24, 14)
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])
 def test_node_inertia_kernel(nodes, order):
-    lam, v, ref, packed = nodes
-    expected = rotary_inertia.inertia_points(lam, ref, 2)
-    acc_expected = np.einsum("npij,ni,nj->np", expected[2], v, v)
-    for n in range(COUNT):
-        p, Dp, acc = nan(9), nan(9, 4), nan(9)
-        rotary_inertia.inertia_kernel(lam[n], v[n], packed[n], order, p, Dp, acc)
-        close(p, expected[0][n])
-        if order >= 1:
-            close(Dp, expected[1][n])
-        else:
-            assert np.all(np.isnan(Dp))
-        if order >= 2:
-            close(acc, acc_expected[n])
-        else:
-            assert np.all(np.isnan(acc))
+    check_inertia_kernel(rotary_inertia, nodes, order, 9, 4)
 
 
 def test_lower_orders_do_not_index_the_higher_arrays(beams, nodes):

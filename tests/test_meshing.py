@@ -79,26 +79,6 @@ def test_a_meshed_spatial_leaf_bends_like_the_planar_one():
     assert nearest == pytest.approx(analytic_hz(0), rel=1e-4)
 
 
-def hand_refined_stage(n):
-    """stage_planar_3dof with each leaf written out as n PLBEAMs, interior node coordinates
-    as DOFs and every leaf deformation released (examples/benchmarks/compare.py's
-    refined_stage)."""
-    data = copy.deepcopy(parse_toml(scene_path("stage_planar_3dof")))
-    elements = data["elements"]
-    for side, bottom, top, x in (("left", ("1", "2"), ("3", "4"), 0.0),
-                                 ("right", ("7", "8"), ("5", "6"), LENGTH)):
-        leaf = elements.pop(f"leaf_{side}")
-        chain = [bottom]
-        for j in range(1, n):
-            data["nodes"][f"{side}_{j}"] = {"position": [x, LENGTH * j / n], "dof": ["x", "y"]}
-            data["nodes"][f"{side}_{j}r"] = {"angle": 0.0, "dof": ["phi"]}
-            chain.append((f"{side}_{j}", f"{side}_{j}r"))
-        chain.append(top)
-        for j in range(n):
-            elements[f"leaf_{side}_{j}"] = {**leaf, "nodes": [*chain[j], *chain[j + 1]]}
-    return build_model(data, source="hand-refined")
-
-
 def meshed_stage(n):
     data = copy.deepcopy(parse_toml(scene_path("stage_planar_3dof")))
     for side in ("left", "right"):
@@ -109,8 +89,12 @@ def meshed_stage(n):
 def test_segments_give_the_model_written_out_by_hand():
     """Segments (interior nodes dependent, the segments' deformations DOFs) and the same
     refinement by hand (interior coordinates DOFs, deformations released) are one mechanism
-    in two sets of coordinates: the same DOF count and natural frequencies."""
-    meshed, by_hand = meshed_stage(4), hand_refined_stage(4)
+    in two sets of coordinates: the same DOF count and natural frequencies. By hand:
+    examples/benchmarks/compare.py's refined_stage, each leaf written out as n PLBEAMs with
+    the interior node coordinates as DOFs."""
+    from examples.benchmarks.compare import refined_stage
+
+    meshed, by_hand = meshed_stage(4), refined_stage(4)
     assert meshed.ndof == by_hand.ndof == 21
     np.testing.assert_allclose(natural_frequencies(meshed).frequencies_hz,
                                natural_frequencies(by_hand).frequencies_hz, rtol=1e-9)

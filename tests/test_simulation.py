@@ -218,12 +218,18 @@ def test_finite_difference_jacobian_gives_the_same_motion():
     assert a.statistics["jacobian_evaluations"] > 0 and b.statistics["jacobian_evaluations"] > 0
 
 
-def test_restored_state_continues_bit_for_bit():
+def saved_state_at(t):
+    """stage_planar_1dof under F = 1 N from rest at rtol 1e-7: the model, its Simulator at
+    time t (s), and the state it gives there (pickled and unpickled, as a host stores it)."""
     model = load_scene("stage_planar_1dof")
     sim = Simulator(model, rtol=1e-7)
     sim.set_inputs([1.0])
-    sim.advance(0.05)
-    state = pickle.loads(pickle.dumps(sim.get_state()))
+    sim.advance(t)
+    return model, sim, pickle.loads(pickle.dumps(sim.get_state()))
+
+
+def test_restored_state_continues_bit_for_bit():
+    model, sim, state = saved_state_at(0.05)
     sim.advance(0.1)
     sim.set_inputs([-0.5])
     sim.advance(0.15)

@@ -1,10 +1,10 @@
 """The integrator's state is the deviation from the start configuration, so that rtol acts on
 the motion: against the analytic step response, the saved state and the outputs cache."""
 
-import pickle
 
 import numpy as np
 import pytest
+from test_simulation import saved_state_at
 
 from flexure.core import Simulator, build_model, default_atol, load_scene, simulate
 from flexure.core.mechanics.kinematics import Kinematics
@@ -72,11 +72,7 @@ def test_the_state_is_the_deviation_from_the_start_configuration():
 def test_a_restored_state_keeps_its_reference_and_continues_bit_for_bit():
     """A state restored into a simulator that started elsewhere (another q_ref) continues
     exactly like the original; an old (version 1, absolute) state is still accepted."""
-    model = load_scene("stage_planar_1dof")
-    sim = Simulator(model, rtol=1e-7)
-    sim.set_inputs([1.0])
-    sim.advance(0.03)
-    state = pickle.loads(pickle.dumps(sim.get_state()))
+    model, sim, state = saved_state_at(0.03)
     sim.advance(0.06)
     other = Simulator(model, rtol=1e-7)
     other.reset(q0=[2e-3])

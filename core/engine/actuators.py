@@ -103,28 +103,35 @@ def current_residual(table, yp, res, n):
         res[2 * n + k] = yp[2 * n + k] - res[2 * n + k]
 
 
+@kernel(inline="always")
+def _coil(table, j, n, row):
+    """The coil of voltage-driven input j after the tangent: (its index in the state y,
+    Km (N/A), L (H), R (ohm)), and b_j^T DF, the port's velocity per qdot, into row (n,)."""
+    kinds, coefficients = _i(table, slot.ACTUATORS), _f(table, slot.ACTUATOR_DATA)
+    port_row(_i(table, slot.INPUT_PORTS), j, _f(table, slot.X), _f(table, slot.DF), n, row)
+    base = j * ed.A_WIDTH
+    return (2 * n + kinds[2 * j + 1], coefficients[base + ed.A_KM],
+            coefficients[base + ed.A_L], coefficients[base + ed.A_R])
+
+
 @kernel
 def first_order_blocks(table, J, N, n, column_major):
     """The coils' blocks of d ydot / d y (N = 2n + currents) after the tangent (DF and the LU
     of M_bar current): d qddot / d i, d idot / d qdot, d idot / d i."""
-    specs, kinds = _i(table, slot.INPUT_PORTS), _i(table, slot.ACTUATORS)
-    coefficients, DF, x = _f(table, slot.ACTUATOR_DATA), _f(table, slot.DF), _f(table, slot.X)
+    kinds = _i(table, slot.ACTUATORS)
     mass_lu, piv = _f(table, slot.MASS_LU), _i(table, slot.MASS_PIVOTS)
     column = _f(table, slot.REDUCED_FORCE)
     for j in range(kinds.size // 2):
         if kinds[2 * j] != ed.VOLTAGE_DRIVE:
             continue
-        state = 2 * n + kinds[2 * j + 1]
-        base = j * ed.A_WIDTH
-        km, inductance = coefficients[base + ed.A_KM], coefficients[base + ed.A_L]
-        port_row(specs, j, x, DF, n, column)  # b_j^T DF: the port's velocity per qdot
+        state, km, inductance, resistance = _coil(table, j, n, column)
         for i in range(n):
             put(J, N, state, n + i, -km / inductance * column[i], column_major)
             column[i] *= km
         lu_solve(mass_lu, n, piv, column)
         for i in range(n):
             put(J, N, n + i, state, column[i], column_major)
-        put(J, N, state, state, -coefficients[base + ed.A_R] / inductance, column_major)
+        put(J, N, state, state, -resistance / inductance, column_major)
 
 
 @kernel
@@ -132,17 +139,13 @@ def implicit_blocks(table, J, N, n, cj):
     """The coils' blocks of IDA's d res / d y + cj d res / d yp (column-major, N = 2n +
     currents) after the tangent: -Km DF^T b_j (the force in the mechanical rows),
     Km / L b_j^T DF and cj + R / L (the coil rows)."""
-    specs, kinds = _i(table, slot.INPUT_PORTS), _i(table, slot.ACTUATORS)
-    coefficients, DF, x = _f(table, slot.ACTUATOR_DATA), _f(table, slot.DF), _f(table, slot.X)
+    kinds = _i(table, slot.ACTUATORS)
     row = _f(table, slot.REDUCED_FORCE)
     for j in range(kinds.size // 2):
         if kinds[2 * j] != ed.VOLTAGE_DRIVE:
             continue
-        state = 2 * n + kinds[2 * j + 1]
-        base = j * ed.A_WIDTH
-        km, inductance = coefficients[base + ed.A_KM], coefficients[base + ed.A_L]
-        port_row(specs, j, x, DF, n, row)
+        state, km, inductance, resistance = _coil(table, j, n, row)
         for i in range(n):
             J[state * N + n + i] = -km * row[i]
             J[(n + i) * N + state] = km / inductance * row[i]
-        J[state * N + state] = cj + coefficients[base + ed.A_R] / inductance
+        J[state * N + state] = cj + resistance / inductance

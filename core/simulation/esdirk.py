@@ -48,7 +48,7 @@ the last accepted one.
 import numpy as np
 
 from ..engine import data as ed
-from ..engine import engine
+from ..engine import engine, slots
 from ..errors import SimulationError, StepBudgetSpent
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
@@ -78,17 +78,14 @@ LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factor
 REDUCED_FROM = 200        # DOFs from which the Newton matrix is solved by its Schur complement
 SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
 
-_DIMS = ed.INT_SLOTS.index("dims")
-_COUNTERS = ed.INT_SLOTS.index("counters")
-
 
 @kernel
 def _f(table, y, out, flags):
     """out = f(y) by the engine; its status."""
     flags[I_RHS] += 1
-    counters = engine.int_array(table, _COUNTERS)
+    counters = engine.int_array(table, slots.COUNTERS)
     counters[ed.RHS_COUNT] += 1
-    status = call_engine(engine.int_array(table, _DIMS)[ed.ENGINE], engine.OP_RHS, table, 0.0,
+    status = call_engine(engine.int_array(table, slots.DIMS)[ed.ENGINE], engine.OP_RHS, table, 0.0,
                          y.ctypes.data, out.ctypes.data, 0, 0.0)
     if status != ed.OK:
         counters[ed.FAILED_STATUS] = status
@@ -99,9 +96,9 @@ def _f(table, y, out, flags):
 def _jacobian(table, y, J, flags):
     """J = d f / d y (row-major, flat) at y from the model's tangent; its status."""
     flags[I_JACOBIANS] += 1
-    counters = engine.int_array(table, _COUNTERS)
+    counters = engine.int_array(table, slots.COUNTERS)
     counters[ed.JACOBIAN_COUNT] += 1
-    status = call_engine(engine.int_array(table, _DIMS)[ed.ENGINE], engine.OP_JACOBIAN, table,
+    status = call_engine(engine.int_array(table, slots.DIMS)[ed.ENGINE], engine.OP_JACOBIAN, table,
                          0.0, y.ctypes.data, J.ctypes.data, 0, 0.0)
     if status != ed.OK:
         counters[ed.FAILED_STATUS] = status

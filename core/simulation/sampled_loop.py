@@ -27,7 +27,7 @@ import numpy as np
 from numba import carray
 
 from ..engine import data as ed
-from ..engine import engine
+from ..engine import engine, slots
 from ..engine.ports import port_specs, position_value
 from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
@@ -44,13 +44,6 @@ from ..numerics.native import (
 from . import esdirk
 from .esdirk import Esdirk
 from .sundials import STATUS_MESSAGES, Cvode
-
-_DIMS_SLOT = ed.INT_SLOTS.index("dims")
-_Q_REF_SLOT = ed.FLOAT_SLOTS.index("q_ref")
-_X_SLOT = ed.FLOAT_SLOTS.index("x")
-_X_START_SLOT = ed.FLOAT_SLOTS.index("x_start")
-_INPUTS_SLOT = ed.FLOAT_SLOTS.index("inputs")
-_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
 
 
 def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, loop_inputs,
@@ -182,29 +175,28 @@ def _failure(sim, solver, flag, t):
     return SimulationError(f"simulation of {sim.model.name!r} in the sampled loop: {error}")
 
 
+@kernel(inline="always")
+def _state_space_row(P, Q, state, error, i):
+    """Row i of P x + Q e: the two dot products each summed in index order, then added."""
+    s = 0.0
+    for j in range(P.shape[1]):
+        s += P[i, j] * state[j]
+    d = 0.0
+    for j in range(Q.shape[1]):
+        d += Q[i, j] * error[j]
+    return s + d
+
+
 @kernel
 def controller_step(A, B, C, D, state, error, output):
     """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e
     (state x updated in place). Arrays 2-D (A, B, C, D) and 1-D; the sums run in index order,
     so every caller gets the same numbers."""
-    n_out, n_state, n_in = C.shape[0], A.shape[0], B.shape[1]
-    for i in range(n_out):
-        s = 0.0
-        for j in range(n_state):
-            s += C[i, j] * state[j]
-        d = 0.0
-        for j in range(n_in):
-            d += D[i, j] * error[j]
-        output[i] = s + d
-    new_state = np.empty(n_state)
-    for i in range(n_state):
-        s = 0.0
-        for j in range(n_state):
-            s += A[i, j] * state[j]
-        b = 0.0
-        for j in range(n_in):
-            b += B[i, j] * error[j]
-        new_state[i] = s + b
+    for i in range(C.shape[0]):
+        output[i] = _state_space_row(C, D, state, error, i)
+    new_state = np.empty(A.shape[0])
+    for i in range(A.shape[0]):
+        new_state[i] = _state_space_row(A, B, state, error, i)
     state[:] = new_state
 
 
@@ -221,23 +213,23 @@ def _measure(addresses, y, scratch, coordinates, out):
     DOF, else full Newton from the plant's last coordinates. coordinates: the outputs' packed
     rows (`engine.ports.port_specs`, flat), then the DOF of each output or -1
     (`mechanics.ports.output_dofs`)."""
-    q_ref = engine.float_array(addresses[_PLANT], _Q_REF_SLOT)
+    q_ref = engine.float_array(addresses[_PLANT], slots.Q_REF)
     dofs = coordinates[coordinates.size - out.size:]
     if np.all(dofs >= 0):
         for j in range(out.size):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
-    ndof = engine.int_array(addresses[_PLANT], _DIMS_SLOT)[ed.NDOF]  # y: [.., coil currents]
-    x_plant = engine.float_array(addresses[_PLANT], _X_SLOT)
-    engine.float_array(addresses[_OUTPUT], _X_START_SLOT)[:] = x_plant
-    engine.int_array(addresses[_OUTPUT], _DIMS_SLOT)[ed.WARM] = 0
+    ndof = engine.int_array(addresses[_PLANT], slots.DIMS)[ed.NDOF]  # y: [.., coil currents]
+    x_plant = engine.float_array(addresses[_PLANT], slots.X)
+    engine.float_array(addresses[_OUTPUT], slots.X_START)[:] = x_plant
+    engine.int_array(addresses[_OUTPUT], slots.DIMS)[ed.WARM] = 0
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
     status = call_engine(addresses[_ENGINE], engine.OP_POSITIONS, addresses[_OUTPUT], 0.0,
                          scratch.ctypes.data, 0, 0, 0.0)
     if status != ed.OK:
         return status
-    x = engine.float_array(addresses[_OUTPUT], _X_SLOT)
+    x = engine.float_array(addresses[_OUTPUT], slots.X)
     for j in range(out.size):
         out[j] = position_value(coordinates, j, x)
     return ed.OK
@@ -280,9 +272,9 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
     _MEASURE_FAILED) with loop_state[0] the time reached."""
     plant = addresses[_PLANT]
-    plant_inputs = engine.float_array(plant, _INPUTS_SLOT)
-    x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
-    dims = engine.int_array(plant, _DIMS_SLOT)
+    plant_inputs = engine.float_array(plant, slots.INPUTS)
+    x_plant, x_start = engine.float_array(plant, slots.X), engine.float_array(plant, slots.X_START)
+    dims = engine.int_array(plant, slots.DIMS)
     tret = carray(as_float_pointer(addresses[_TRET]), (1,))
     t = loop_state[0]
     restart = loop_state[1] != 0.0
@@ -334,10 +326,10 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
     inputs, the integrator's state re-entered (its first stage recomputed)."""
     plant = addresses[_PLANT]
-    plant_inputs = engine.float_array(plant, _INPUTS_SLOT)
-    x_plant, x_start = engine.float_array(plant, _X_SLOT), engine.float_array(plant, _X_START_SLOT)
-    dims = engine.int_array(plant, _DIMS_SLOT)
-    counters = engine.int_array(plant, _COUNTERS_SLOT)
+    plant_inputs = engine.float_array(plant, slots.INPUTS)
+    x_plant, x_start = engine.float_array(plant, slots.X), engine.float_array(plant, slots.X_START)
+    dims = engine.int_array(plant, slots.DIMS)
+    counters = engine.int_array(plant, slots.COUNTERS)
     y = vectors[esdirk.V_Y]
     t = loop_state[0]
     error, output = np.empty(inputs.size), np.empty(inputs.size)

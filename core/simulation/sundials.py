@@ -25,7 +25,7 @@ import numpy as np
 from numba import carray, cfunc, types
 
 from ..engine import data as ed
-from ..engine import engine
+from ..engine import engine, slots
 from ..errors import SimulationError, StepBudgetSpent
 from ..numerics.jit import kernel
 from ..numerics.native import (
@@ -37,14 +37,11 @@ from ..numerics.native import (
 from .methods import SUNDIALS_METHODS
 from .sundials_libraries import function_address, libraries
 
-_DIMS_SLOT = ed.INT_SLOTS.index("dims")
-_COUNTERS_SLOT = ed.INT_SLOTS.index("counters")
-_JACOBIAN_CACHE_SLOT = ed.FLOAT_SLOTS.index("jacobian_cache")
-
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
 NORMAL, ONE_STEP = 1, 2
 TOO_MUCH_WORK = -1  # CV_TOO_MUCH_WORK, IDA_TOO_MUCH_WORK: the step limit of one call reached
+MAX_STEPS_PER_CALL = 1_000_000  # the step limit of a call without a budget of its own
 METHODS = SUNDIALS_METHODS  # the methods this module runs
 JACOBIANS = ("analytic", "finite-difference")
 
@@ -66,8 +63,8 @@ def _callback(op, user_data, t, a, b, c, s, counter):
     """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
     1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
     table = address_of(user_data)
-    dims = engine.int_array(table, _DIMS_SLOT)
-    counters = engine.int_array(table, _COUNTERS_SLOT)
+    dims = engine.int_array(table, slots.DIMS)
+    counters = engine.int_array(table, slots.COUNTERS)
     counters[counter] += 1
     status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
     if status == ed.OK:
@@ -90,10 +87,10 @@ def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     jacobian_cache. After a restart in a sampled loop (dims[JACOBIAN_REUSE] = 1) the kept
     Jacobian is handed back once instead."""
     table = address_of(user_data)
-    dims = engine.int_array(table, _DIMS_SLOT)
+    dims = engine.int_array(table, slots.DIMS)
     n = 2 * dims[ed.NDOF] + dims[ed.NEL]
     J = carray(dense_matrix_data(matrix), (n * n,))
-    kept = engine.float_array(table, _JACOBIAN_CACHE_SLOT)
+    kept = engine.float_array(table, slots.JAC_CACHE)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
         J[:] = kept
@@ -130,9 +127,17 @@ _IDA_JAC = ctypes.CFUNCTYPE(_INT, _D, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP, _VP
 
 # -- the integrators ----------------------------------------------------------------------------
 class _Solver:
-    """What CVODE and IDA share: the context, the vectors, the dense linear solver, and the
-    Python callbacks used instead of the compiled ones when an input varies within an
-    interval (`input_function(t)` -> inputs (N), set before each compiled evaluation)."""
+    """What CVODE and IDA share: the context, the vectors, the dense linear solver, the
+    options, the stepping and the counts, and the Python callbacks used instead of the
+    compiled ones when an input varies within an interval (`input_function(t)` -> inputs (N),
+    set before each compiled evaluation).
+
+    SUNDIALS names the functions of both modules alike, `prefix` + what they do
+    ("CVodeSetMaxStep", "IDASetMaxStep"); a subclass names its module (`library`), its prefix
+    and its count of right-hand-side (or residual) evaluations, and makes and solves its
+    problem (`_solve`)."""
+
+    library = prefix = rhs_count = ""  # set by the subclass
 
     def __init__(self, data, *, rtol, atol, input_function=None):
         lib = libraries()
@@ -157,6 +162,29 @@ class _Solver:
         self.input_error = None
         self._totals = {"steps": 0, "solver_rhs_evaluations": 0,
                         "solver_jacobian_evaluations": 0}
+
+    def _function(self, name):
+        """The module's function `prefix + name`."""
+        return getattr(getattr(self.lib, self.library), self.prefix + name)
+
+    def _call(self, name, *args):
+        """Call `prefix + name` on this solver's memory; a negative flag raises."""
+        _check(self._function(name)(self.memory, *args), self.prefix + name)
+
+    def _set_options(self, jacobian_function, *, jacobian, max_step, max_order):
+        """After Init: the tolerances, the user data (the packed model), the dense linear
+        solver with the analytic Jacobian if asked for, the step limits and the largest
+        order."""
+        self._call("SVtolerances", self.rtol, self.atol)
+        self._call("SetUserData", self.data.address)
+        self._call("SetLinearSolver", self.linear_solver, self.matrix)
+        if jacobian == "analytic":
+            self._call("SetJacFn", jacobian_function)
+        self._call("SetMaxNumSteps", MAX_STEPS_PER_CALL)
+        if max_step:
+            self._call("SetMaxStep", float(max_step))
+        if max_order is not None:
+            self._call("SetMaxOrd", int(max_order))
 
     def _with_inputs(self, compiled, prototype):
         """A ctypes callback that sets the inputs at time t, then calls the compiled one."""
@@ -191,6 +219,35 @@ class _Solver:
         """Steps since the solver was made (for a step budget)."""
         return self.statistics()["steps"]
 
+    def advance(self, t_stop, *, one_step=False, max_steps=None):
+        """Integrate to t_stop (s), never past it (one step only with one_step; at most
+        max_steps steps, else StepBudgetSpent); returns t and a view of y (valid until the next
+        call). Raises SimulationError on failure."""
+        self._function("SetStopTime")(self.memory, float(t_stop))
+        if max_steps:
+            self._function("SetMaxNumSteps")(self.memory, int(max_steps))
+        flag = self._solve(float(t_stop), ONE_STEP if one_step else NORMAL)
+        if max_steps:
+            self._function("SetMaxNumSteps")(self.memory, MAX_STEPS_PER_CALL)
+        if flag == TOO_MUCH_WORK and max_steps:
+            raise self.budget_spent(max_steps, self.tret.value)
+        if flag < 0:
+            raise self.failure(flag, self.tret.value)
+        t = self.tret.value
+        return (t_stop if flag == 1 else t), self.y_array
+
+    def _current(self):
+        """The counts since the last (re)start."""
+        def count(name):
+            return _get_long(self._function(name), self.memory)
+
+        return {"steps": count("GetNumSteps"), "solver_rhs_evaluations": count(self.rhs_count),
+                "solver_jacobian_evaluations": count("GetNumJacEvals")}
+
+    def flag_name(self, flag):
+        """SUNDIALS' name of a return flag (e.g. "CV_CONV_FAILURE")."""
+        return self._function("GetReturnFlagName")(flag).decode()
+
     def budget_spent(self, max_steps, t):
         """The StepBudgetSpent of a call that took max_steps steps, at the time t (s) it
         reached; its `last_good` is (t, y) there."""
@@ -218,7 +275,7 @@ class _Solver:
     def close(self):
         """Free the SUNDIALS objects (idempotent)."""
         if getattr(self, "memory", None):
-            self._free_memory(_VP(self.memory))
+            self._function("Free")(ctypes.byref(_VP(self.memory)))
             self.memory = None
         if getattr(self, "linear_solver", None):
             self._free_common()
@@ -261,6 +318,8 @@ class Cvode(_Solver):
         Largest order (SUNDIALS' default: 5 for BDF, 12 for Adams).
     """
 
+    library, prefix, rhs_count = "cvode", "CVode", "GetNumRhsEvals"
+
     def __init__(self, data, *, method="BDF", rtol, atol, max_step=None, jacobian="analytic",
                  max_order=None, input_function=None):
         super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
@@ -272,23 +331,13 @@ class Cvode(_Solver):
                                self._with_inputs(cvode_jacobian.ctypes, _CV_JAC))
             rhs, jac = (ctypes.cast(c, _VP).value for c in self._callbacks)
         self.memory = cv.CVodeCreate(CV_BDF if method == "BDF" else CV_ADAMS, self.context)
-        _check(cv.CVodeInit(self.memory, rhs, 0.0, self.y), "CVodeInit")
-        _check(cv.CVodeSVtolerances(self.memory, self.rtol, self.atol), "CVodeSVtolerances")
-        _check(cv.CVodeSetUserData(self.memory, data.address), "CVodeSetUserData")
-        _check(cv.CVodeSetLinearSolver(self.memory, self.linear_solver, self.matrix),
-               "CVodeSetLinearSolver")
-        if jacobian == "analytic":
-            _check(cv.CVodeSetJacFn(self.memory, jac), "CVodeSetJacFn")
-        _check(cv.CVodeSetMaxNumSteps(self.memory, 1_000_000), "CVodeSetMaxNumSteps")
+        self._call("Init", rhs, 0.0, self.y)
+        self._set_options(jac, jacobian=jacobian, max_step=max_step, max_order=max_order)
         # up to 10 Newton iterations (SUNDIALS' default is 3): with the lightly damped kHz
         # modes of a stage, 3 iterations on a reused Jacobian often fail and each failure cuts
         # the step (stage_planar_3dof, 0.3 s of a 1 N step at rtol 1e-6: 2731 steps with 3,
         # 159 with 10)
-        _check(cv.CVodeSetMaxNonlinIters(self.memory, 10), "CVodeSetMaxNonlinIters")
-        if max_step:
-            _check(cv.CVodeSetMaxStep(self.memory, float(max_step)), "CVodeSetMaxStep")
-        if max_order is not None:
-            _check(cv.CVodeSetMaxOrd(self.memory, int(max_order)), "CVodeSetMaxOrd")
+        self._call("SetMaxNonlinIters", 10)
         self.analytic = jacobian == "analytic"
         self.initial_step = 0.0
         self._jacobians_at_forget = 0
@@ -299,9 +348,6 @@ class Cvode(_Solver):
             "actual_init_step": function_address(cv.CVodeGetActualInitStep),
             "num_steps": function_address(cv.CVodeGetNumSteps),
             "y": self.y, "tret": ctypes.addressof(self.tret)}
-
-    def flag_name(self, flag):
-        return self.lib.cvode.CVodeGetReturnFlagName(flag).decode()
 
     def reset(self, t, y):
         """(Re)start at time t (s) from y (2 NDOF + coil currents,) at order 1.
@@ -314,10 +360,9 @@ class Cvode(_Solver):
         self._accumulate()
         self.y_array[:] = y
         self.counters[ed.FAILED_STATUS] = 0
-        cv = self.lib.cvode
-        _check(cv.CVodeReInit(self.memory, float(t), self.y), "CVodeReInit")
+        self._call("ReInit", float(t), self.y)
         if self.initial_step > 0.0:
-            _check(cv.CVodeSetInitStep(self.memory, self.initial_step), "CVodeSetInitStep")
+            self._call("SetInitStep", self.initial_step)
         if self.jacobian_cached():
             self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 1
 
@@ -327,7 +372,7 @@ class Cvode(_Solver):
         self._jacobians_at_forget = int(self.counters[ed.JACOBIAN_COUNT])
         self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 0
         self.data.float_array("jacobian_cache")[:] = 0.0
-        _check(self.lib.cvode.CVodeSetInitStep(self.memory, 0.0), "CVodeSetInitStep")
+        self._call("SetInitStep", 0.0)
 
     def jacobian_cached(self):
         """Whether a Jacobian has been computed since `forget` (analytic Jacobians only)."""
@@ -357,37 +402,14 @@ class Cvode(_Solver):
             self.lib.cvode.CVodeGetActualInitStep(self.memory, ctypes.byref(value))
             self.initial_step = float(value.value)
 
-    def advance(self, t_stop, *, one_step=False, max_steps=None):
-        """Integrate to t_stop (s), never past it (one step only with one_step; at most
-        max_steps steps, else StepBudgetSpent); returns t and a view of y (valid until the next
-        call). Raises SimulationError on failure."""
-        cv = self.lib.cvode
-        cv.CVodeSetStopTime(self.memory, float(t_stop))
-        if max_steps:
-            cv.CVodeSetMaxNumSteps(self.memory, int(max_steps))
-        flag = cv.CVode(self.memory, float(t_stop), self.y, ctypes.byref(self.tret),
-                        ONE_STEP if one_step else NORMAL)
-        if max_steps:
-            cv.CVodeSetMaxNumSteps(self.memory, 1_000_000)
-        if flag == TOO_MUCH_WORK and max_steps:
-            raise self.budget_spent(max_steps, self.tret.value)
-        if flag < 0:
-            raise self.failure(flag, self.tret.value)
-        t = self.tret.value
-        return (t_stop if flag == 1 else t), self.y_array
-
-    def _current(self):
-        cv = self.lib.cvode
-        return {"steps": _get_long(cv.CVodeGetNumSteps, self.memory),
-                "solver_rhs_evaluations": _get_long(cv.CVodeGetNumRhsEvals, self.memory),
-                "solver_jacobian_evaluations": _get_long(cv.CVodeGetNumJacEvals, self.memory)}
-
-    def _free_memory(self, memory):
-        self.lib.cvode.CVodeFree(ctypes.byref(memory))
+    def _solve(self, t_stop, task):
+        return self.lib.cvode.CVode(self.memory, t_stop, self.y, ctypes.byref(self.tret), task)
 
 
 class Ida(_Solver):
     """IDA on the implicit form res(t, y, yp) = 0 with the engine; arguments as `Cvode`."""
+
+    library, prefix, rhs_count = "ida", "IDA", "GetNumResEvals"
 
     def __init__(self, data, *, rtol, atol, max_step=None, jacobian="analytic", max_order=None,
                  input_function=None):
@@ -400,22 +422,9 @@ class Ida(_Solver):
                                self._with_inputs(ida_jacobian.ctypes, _IDA_JAC))
             residual, jac = (ctypes.cast(c, _VP).value for c in self._callbacks)
         self.memory = ida.IDACreate(self.context)
-        _check(ida.IDAInit(self.memory, residual, 0.0, self.y, self.yp), "IDAInit")
-        _check(ida.IDASVtolerances(self.memory, self.rtol, self.atol), "IDASVtolerances")
-        _check(ida.IDASetUserData(self.memory, data.address), "IDASetUserData")
-        _check(ida.IDASetLinearSolver(self.memory, self.linear_solver, self.matrix),
-               "IDASetLinearSolver")
-        if jacobian == "analytic":
-            _check(ida.IDASetJacFn(self.memory, jac), "IDASetJacFn")
-        _check(ida.IDASetMaxNumSteps(self.memory, 1_000_000), "IDASetMaxNumSteps")
-        if max_step:
-            _check(ida.IDASetMaxStep(self.memory, float(max_step)), "IDASetMaxStep")
-        if max_order is not None:
-            _check(ida.IDASetMaxOrd(self.memory, int(max_order)), "IDASetMaxOrd")
+        self._call("Init", residual, 0.0, self.y, self.yp)
+        self._set_options(jac, jacobian=jacobian, max_step=max_step, max_order=max_order)
         self._ydot = np.zeros(self.n)
-
-    def flag_name(self, flag):
-        return self.lib.ida.IDAGetReturnFlagName(flag).decode()
 
     def reset(self, t, y):
         """(Re)start at t from y with the consistent yp = f(t, y) (both halves differential)."""
@@ -430,33 +439,11 @@ class Ida(_Solver):
         self.y_array[:] = y
         self.yp_array[:] = self._ydot
         self.counters[ed.FAILED_STATUS] = 0
-        _check(self.lib.ida.IDAReInit(self.memory, float(t), self.y, self.yp), "IDAReInit")
+        self._call("ReInit", float(t), self.y, self.yp)
 
-    def advance(self, t_stop, *, one_step=False, max_steps=None):
-        """As `Cvode.advance`."""
-        ida = self.lib.ida
-        ida.IDASetStopTime(self.memory, float(t_stop))
-        if max_steps:
-            ida.IDASetMaxNumSteps(self.memory, int(max_steps))
-        flag = ida.IDASolve(self.memory, float(t_stop), ctypes.byref(self.tret), self.y,
-                            self.yp, ONE_STEP if one_step else NORMAL)
-        if max_steps:
-            ida.IDASetMaxNumSteps(self.memory, 1_000_000)
-        if flag == TOO_MUCH_WORK and max_steps:
-            raise self.budget_spent(max_steps, self.tret.value)
-        if flag < 0:
-            raise self.failure(flag, self.tret.value)
-        t = self.tret.value
-        return (t_stop if flag == 1 else t), self.y_array
-
-    def _current(self):
-        ida = self.lib.ida
-        return {"steps": _get_long(ida.IDAGetNumSteps, self.memory),
-                "solver_rhs_evaluations": _get_long(ida.IDAGetNumResEvals, self.memory),
-                "solver_jacobian_evaluations": _get_long(ida.IDAGetNumJacEvals, self.memory)}
-
-    def _free_memory(self, memory):
-        self.lib.ida.IDAFree(ctypes.byref(memory))
+    def _solve(self, t_stop, task):
+        return self.lib.ida.IDASolve(self.memory, t_stop, ctypes.byref(self.tret), self.y,
+                                     self.yp, task)
 
 
 def make_solver(data, method, *, rtol, atol, max_step=None, jacobian="analytic",
