@@ -213,10 +213,23 @@ def _state_space_row(P, Q, state, error, i):
 
 
 @kernel
-def controller_step(A, B, C, D, state, error, output):
-    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e
-    (state x updated in place). Arrays 2-D (A, B, C, D) and 1-D; the sums run in index order,
-    so every caller gets the same numbers."""
+def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                    state: np.ndarray, error: np.ndarray, output: np.ndarray) -> None:
+    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e.
+
+    Compiled (numba); the sums run in index order, so every caller gets the same numbers.
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray, 2-D, float64
+        The controller's matrices: (s, s), (s, n), (m, s), (m, n).
+    state : ndarray (s,), float64
+        x, updated in place.
+    error : ndarray (n,), float64
+        e, in the loops' output units (m, rad).
+    output : ndarray (m,), float64
+        Receives u, in the loops' input units (N, N m, V).
+    """
     for i in range(C.shape[0]):
         output[i] = _state_space_row(C, D, state, error, i)
     new_state = np.empty(A.shape[0])
