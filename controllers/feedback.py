@@ -35,8 +35,9 @@ from .robustness import Robustness, check_robustness, delay_block
 
 if TYPE_CHECKING:  # python-control takes 0.5 s to import: imported where it is used
     import control
+    from numpy.typing import ArrayLike
 
-    from flexure.core import Model
+    from flexure.core import LinearModel, Model
 
 
 class ControlDesignError(FlexureError, ValueError):
@@ -80,15 +81,23 @@ class FeedbackDesign:
     kind: str = "designed"
 
     @property
-    def spectral_radius(self):
+    def spectral_radius(self) -> float:
         """The largest closed-loop pole magnitude (< 1: stable; nan when not known)."""
         poles = np.asarray(self.closed_loop_poles)
         return float(np.max(np.abs(poles))) if poles.size else float("nan")
 
-    def summary(self):
-        """The numbers the CLI and the report print (the margins: the worst loop's, the other
-        loops open; with several loops also with the others closed, and the MIMO
-        sensitivity peak)."""
+    def summary(self) -> dict[str, object]:
+        """The numbers the CLI and the report print.
+
+        Returns
+        -------
+        dict
+            "crossover_rad_s" (rad/s), "sample_rate_hz" (Hz), "phase_margin_deg" (degrees),
+            "gain_margin" and "modulus_margin" (unitless): the worst loop's, the other loops
+            open; "closed_loop_spectral_radius", "loops", "controller_kind",
+            "robustness_checked"; with several loops also the margins with the others
+            closed and the MIMO "sensitivity_peak".
+        """
         summary = {"crossover_rad_s": self.crossover_rad_s,
                    "sample_rate_hz": self.sample_rate_hz,
                    "phase_margin_deg": self.phase_margin_deg, "gain_margin": self.gain_margin,
@@ -141,13 +150,41 @@ def pid_lowpass(crossover: float, *, gain: float = 1.0, integral_ratio: float = 
 
 @blas_threads()
 def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.0,
-                    delay_samples: int = 1, linear_model=None, plant=None,
-                    **shape) -> FeedbackDesign:
-    """Design the discrete loops of `model` for the cross-over `crossover` (rad/s) at `fs` Hz.
+                    delay_samples: int = 1, linear_model: LinearModel | None = None,
+                    plant: control.StateSpace | None = None,
+                    **shape: float) -> FeedbackDesign:
+    """Design the discrete colocated loops of `model` for a cross-over at a sample rate.
 
-    `plant` overrides the linear model (a continuous control.StateSpace with the model's
-    inputs and outputs); `shape` passes integral_ratio, lead_ratio, lowpass_ratio and
-    lowpass_damping to `pid_lowpass`. Raises ControlDesignError for an unstable closed loop.
+    Parameters
+    ----------
+    model : Model
+        With a position output on the coordinate (or about the axis) of every input.
+    crossover : float
+        The cross-over frequency w_c, rad/s, below the Nyquist frequency pi fs.
+    fs : float
+        The sample rate, Hz.
+    delay_samples : int
+        Samples of computation delay in the loop (>= 0).
+    linear_model : LinearModel, optional
+        The linearisation for the plant (default: at the static equilibrium).
+    plant : control.StateSpace, optional
+        A continuous plant with the model's inputs and outputs, instead of the linear model.
+    **shape : float
+        integral_ratio, lead_ratio, lowpass_ratio, lowpass_damping for `pid_lowpass`
+        (unitless).
+
+    Returns
+    -------
+    FeedbackDesign
+        The discrete controller from errors (m, rad) to forces (N, N m; V for a drive
+        signal) and its margins.
+
+    Raises
+    ------
+    ControlDesignError
+        A sample rate or cross-over out of range, a negative delay, an input without a
+        colocated position output, a plant without gain at the cross-over, or an unstable
+        closed loop.
     """
     import control  # python-control takes 0.5 s to import: only where it is used
 
@@ -211,21 +248,39 @@ class DiscreteController:
     """A discrete state-space controller stepped one sample at a time (plain numpy).
 
     `step(e_k)` returns u_k = C x_k + D e_k and moves to x_(k+1) = A x_k + B e_k.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        A discrete system (anything with A, B, C, D), from errors (m, rad) to forces (N,
+        N m, or V for a drive signal); its time step is the caller's sample period.
     """
 
-    def __init__(self, sys):
+    def __init__(self, sys: control.StateSpace) -> None:
         self.A, self.B, self.C, self.D = (np.ascontiguousarray(np.atleast_2d(
             np.asarray(m, float))) for m in (sys.A, sys.B, sys.C, sys.D))
         self.x = np.zeros(self.A.shape[0])
 
-    def reset(self):
+    def reset(self) -> None:
+        """Set the state back to zero."""
         self.x = np.zeros(self.A.shape[0])
 
-    def step(self, e):
-        """The output u_k for the error e_k, advancing the state; arrays (n_loops,).
+    def step(self, e: ArrayLike) -> np.ndarray:
+        """The output u_k for the error e_k, advancing the state.
 
         The arithmetic is flexure.core's compiled `controller_step`, which the compiled
-        in-process loop uses too, so every plant sees the same forces bit for bit."""
+        in-process loop uses too, so every plant sees the same forces bit for bit.
+
+        Parameters
+        ----------
+        e : array_like (n_loops,)
+            The errors r - y, in the loops' output units (m, rad).
+
+        Returns
+        -------
+        ndarray (n_loops,)
+            u_k, in the loops' input units (N, N m, V).
+        """
         from flexure.core import controller_step
 
         e = np.ascontiguousarray(np.atleast_1d(np.asarray(e, float)))
@@ -233,14 +288,31 @@ class DiscreteController:
         controller_step(self.A, self.B, self.C, self.D, self.x, e, u)
         return u
 
-    def to_dict(self):
-        """The matrices as nested lists (JSON), with the shape of each."""
+    def to_dict(self) -> dict[str, dict[str, list]]:
+        """The matrices for JSON.
+
+        Returns
+        -------
+        dict
+            {"A": {"shape": [rows, columns], "values": row-major list}, "B": ..., "C": ...,
+            "D": ...}.
+        """
         return {k: {"shape": list(getattr(self, k).shape),
                     "values": getattr(self, k).ravel().tolist()} for k in "ABCD"}
 
     @classmethod
-    def from_dict(cls, data):
-        """The controller of `to_dict` (at its zero initial state)."""
+    def from_dict(cls, data: dict[str, dict[str, list]]) -> DiscreteController:
+        """The controller of `to_dict`, at its zero initial state.
+
+        Parameters
+        ----------
+        data : dict
+            As `to_dict` writes it.
+
+        Returns
+        -------
+        DiscreteController
+        """
         obj = cls.__new__(cls)
         for k in "ABCD":
             setattr(obj, k, np.asarray(data[k]["values"], float).reshape(data[k]["shape"]))

@@ -41,7 +41,10 @@ import numpy as np
 from .feedback import ControlDesignError, colocated_pairs
 
 if TYPE_CHECKING:  # names for the annotations only
-    from flexure.core import Model
+    import control
+    from numpy.typing import ArrayLike
+
+    from flexure.core import LinearModel, Model
 
 
 @dataclass(frozen=True)
@@ -60,20 +63,52 @@ class LowFrequencyModel:
     frequencies_hz: np.ndarray  # the modes it keeps
     equilibrium: np.ndarray = None  # (n_loops,) m; None means zeros
 
-    def scaled(self, *, mass=1.0, damping=1.0, stiffness=1.0):
-        """The same model with its matrices multiplied by factors (a model error study)."""
+    def scaled(self, *, mass: float = 1.0, damping: float = 1.0,
+               stiffness: float = 1.0) -> LowFrequencyModel:
+        """The same model with its matrices multiplied by factors (a model error study).
+
+        Parameters
+        ----------
+        mass, damping, stiffness : float
+            The factors on each matrix (unitless).
+
+        Returns
+        -------
+        LowFrequencyModel
+        """
         return replace(self, mass=self.mass * mass, damping=self.damping * damping,
                        stiffness=self.stiffness * stiffness)
 
-    def force(self, position, velocity, acceleration):
-        """The forces (N), arrays (..., n_loops), for the output motion (m, m/s, m/s^2)."""
+    def force(self, position: ArrayLike, velocity: ArrayLike,
+              acceleration: ArrayLike) -> np.ndarray:
+        """The forces for an output motion.
+
+        Parameters
+        ----------
+        position : array_like (..., n_loops)
+            The outputs, m (rad for an angle).
+        velocity : array_like (..., n_loops)
+            m/s (rad/s).
+        acceleration : array_like (..., n_loops)
+            m/s^2 (rad/s^2).
+
+        Returns
+        -------
+        ndarray (..., n_loops)
+            N (N m for a moment).
+        """
         p, v, a = (np.asarray(x, float) for x in (position, velocity, acceleration))
         eq = 0.0 if self.equilibrium is None else np.asarray(self.equilibrium, float)
         return a @ self.mass.T + v @ self.damping.T + (p - eq) @ self.stiffness.T
 
-    def state_space(self):
-        """The model as a continuous control.StateSpace from the forces (N) to the outputs'
-        displacements from equilibrium (m): states [y, y'], y'' = M^-1 (u - C y' - K y)."""
+    def state_space(self) -> control.StateSpace:
+        """The model as a continuous state space: states [y, y'], y'' = M^-1 (u - C y' - K y).
+
+        Returns
+        -------
+        control.StateSpace
+            From the forces (N) to the outputs' displacements from equilibrium (m).
+        """
         import control
 
         n = self.mass.shape[0]
@@ -83,18 +118,59 @@ class LowFrequencyModel:
         B = np.vstack([np.zeros((n, n)), inverse])
         return control.ss(A, B, np.hstack([np.eye(n), np.zeros((n, n))]), np.zeros((n, n)))
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, list]:
+        """The matrices for JSON.
+
+        Returns
+        -------
+        dict of str to list
+            "mass" (kg), "damping" (N s/m), "stiffness" (N/m), "frequencies_hz" (Hz) and,
+            when set, "equilibrium" (m), as nested lists.
+        """
         return {k: np.asarray(getattr(self, k)).tolist()
                 for k in ("mass", "damping", "stiffness", "frequencies_hz", "equilibrium")
                 if getattr(self, k) is not None}
 
     @classmethod
-    def from_dict(cls, data):
+    def from_dict(cls, data: dict[str, list]) -> LowFrequencyModel:
+        """The model of `to_dict`.
+
+        Parameters
+        ----------
+        data : dict of str to list
+            As `to_dict` writes it.
+
+        Returns
+        -------
+        LowFrequencyModel
+        """
         return cls(**{k: np.asarray(v, float) for k, v in data.items()})
 
 
-def low_frequency_model(model: Model, *, linear_model=None) -> LowFrequencyModel:
-    """The low-frequency model of `model` on its colocated loops (see the module docstring)."""
+def low_frequency_model(model: Model, *,
+                        linear_model: LinearModel | None = None) -> LowFrequencyModel:
+    """The low-frequency model of `model` on its colocated loops (module docstring): its n
+    lowest modes for n loops.
+
+    Parameters
+    ----------
+    model : Model
+        With a position output on the coordinate (or about the axis) of every input.
+    linear_model : LinearModel, optional
+        The linearisation to use (default: at the static equilibrium).
+
+    Returns
+    -------
+    LowFrequencyModel
+        Mass (kg), damping (N s/m), stiffness (N/m) on the loops' outputs (kg m^2, N m s/rad,
+        N m/rad for an angle), the modes' frequencies (Hz) and the outputs at equilibrium (m).
+
+    Raises
+    ------
+    ControlDesignError
+        An input without a colocated position output, or lowest modes the loops do not
+        drive or see.
+    """
     # the models on first use
     from flexure.core import (
         input_columns,
@@ -156,9 +232,18 @@ class StableInverse:
     min_damping : float
         Zeros inside the unit circle with a damping ratio below this (as poles of the inverse)
         count as lightly damped and are not inverted; nor are zeros at |z| >= 1.
+    radius : float
+        Zeros with |z| between `radius` and 1 / `radius` (near the unit circle) are mirrored
+        rather than inverted; zeros beyond 1 / `radius` are inverted backwards in time.
+
+    Raises
+    ------
+    ControlDesignError
+        The plant is not a discrete SISO model.
     """
 
-    def __init__(self, plant, *, min_damping=0.05, radius=0.999):
+    def __init__(self, plant: control.TransferFunction | control.StateSpace, *,
+                 min_damping: float = 0.05, radius: float = 0.999) -> None:
         import control  # 0.5 s to import: only where it is used
 
         tf = control.tf(plant)
@@ -182,13 +267,22 @@ class StableInverse:
         self.bad_dc = float(np.sum(self.bad))
         self.dc_gain = float(np.sum(num) / np.sum(den))
 
-    def apply(self, reference):
-        """The inputs u_k (N) such that the model output follows `reference` (m).
-
-        `reference` holds r at the samples k = 0..N-1, at rest at r_0 before and held at its
-        last value after; u_k uses the samples up to k + d + m (preview, m mirrored zeros):
+    def apply(self, reference: ArrayLike) -> np.ndarray:
+        """The inputs u_k such that the model output follows `reference`; u_k uses the
+        samples up to k + d + m (preview, m mirrored zeros):
 
             u = A(z^-1) B_u(z) z^d r / (b_0 B_a(z^-1) B_u(1)^2)
+
+        Parameters
+        ----------
+        reference : array_like (N,)
+            r at the samples k = 0..N-1, m; at rest at r_0 before and held at its last value
+            after.
+
+        Returns
+        -------
+        ndarray (N,)
+            u_k, N.
         """
         from scipy.signal import lfilter, lfilter_zi
 

@@ -40,6 +40,10 @@ added to the held force:
 `open_loop_forces` holds u_ff + d (u_ff alone without a disturbance, the very same array).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .disturbances import Disturbances
@@ -49,6 +53,11 @@ from .feedforward import LowFrequencyModel, forces
 from .move_path import MovePath
 from .profiles import ThirdOrderProfile
 from .user_reference import reference_forces
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from .user_controller import CallableFeedback
 
 _GAUSS_POINTS, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(4)
 
@@ -68,29 +77,38 @@ class LoopController:
         Sample rate (Hz).
     samples : int
         The number of intervals N (the run ends at N / fs).
-    offsets : array (n_loops,)
+    offsets : array_like (n_loops,)
         The initial positions of the loops (m): the reference is offsets + profile.
     feedforward : LowFrequencyModel or None
         The model whose inverse gives the feedforward; None for feedback alone.
     axis : int
         The loop that follows the profile.
-    feedforward_forces : array (samples + 2, n_loops), optional
+    feedforward_forces : array_like (samples + 2, n_loops), optional
         Precomputed feedforward forces (N) held from each sample, instead of `feedforward`
         (e.g. from a `StableInverse` of the full linear model).
     path : MovePath, optional
         Every loop follows its displacement along this path, `profile` (of stroke 1) giving
         the progress s(t); `axis` is then unused.
-    reference : array (samples + 2, n_loops), optional
+    reference : array_like (samples + 2, n_loops), optional
         The loops' positions (m, rad) at the samples k = 0 .. samples + 1, instead of a
         profile or a path (`user_reference.reference_samples` makes it).
     disturbances : Disturbances, optional
         Encoder quantisation and a sinusoidal force at the actuators.
+
+    Raises
+    ------
+    LoopError
+        No profile, path or reference; both a path and a reference; or a reference of the
+        wrong shape.
     """
 
-    def __init__(self, controller, profile: ThirdOrderProfile | None = None, *,
-                 fs: float, samples: int, offsets, feedforward: LowFrequencyModel | None = None,
-                 axis: int = 0, feedforward_forces=None, path: MovePath | None = None,
-                 reference=None, disturbances: Disturbances | None = None):
+    def __init__(self, controller: DiscreteController | CallableFeedback,
+                 profile: ThirdOrderProfile | None = None, *,
+                 fs: float, samples: int, offsets: ArrayLike,
+                 feedforward: LowFrequencyModel | None = None, axis: int = 0,
+                 feedforward_forces: ArrayLike | None = None, path: MovePath | None = None,
+                 reference: ArrayLike | None = None,
+                 disturbances: Disturbances | None = None) -> None:
         self.controller, self.profile, self.path = controller, profile, path
         self.fs, self.samples, self.axis = float(fs), int(samples), int(axis)
         self.offsets = np.asarray(offsets, float).reshape(-1)
@@ -147,12 +165,33 @@ class LoopController:
         self.controller.reset()
 
     def initial_output(self) -> np.ndarray:
-        """u_0 (N): the force on [t_0, t_1), before anything is measured."""
+        """u_0: the force on [t_0, t_1), before anything is measured.
+
+        Returns
+        -------
+        ndarray (n_loops,)
+            N (N m for a moment, V for a drive signal).
+        """
         return self.open_loop_forces[0].copy()
 
-    def step(self, k: int, y) -> tuple[np.ndarray, np.ndarray]:
-        """u_k+1 (N) from the measurement y_k (m) at sample k; also returns e_k (m), the error
-        the controller sees (of the quantised position with encoder quantisation)."""
+    def step(self, k: int, y: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """The next force from the measurement at sample k.
+
+        Parameters
+        ----------
+        k : int
+            The sample index (past `samples` the reference and force are held).
+        y : array_like (n_loops,)
+            The measured positions y_k, m (rad for an angle).
+
+        Returns
+        -------
+        u : ndarray (n_loops,)
+            u_k+1, N (N m, V).
+        e : ndarray (n_loops,)
+            e_k, m (rad): the error the controller sees (of the quantised position with
+            encoder quantisation).
+        """
         k = min(int(k), self.samples)  # past the end: the reference and force are held
         y = np.asarray(y, float)
         if self.disturbances is not None:
@@ -163,7 +202,15 @@ class LoopController:
 
     # -- serialisation (the controller FMU is configured by this dictionary) ---------------
     def to_dict(self) -> dict:
-        """The JSON-able settings `from_dict` rebuilds this controller from."""
+        """The JSON-able settings `from_dict` rebuilds this controller from.
+
+        Returns
+        -------
+        dict
+            "controller", "profile", "fs" (Hz), "samples", "offsets" (m), "axis",
+            "feedforward", "feedforward_forces" (N), "path", "reference" (m),
+            "disturbances".
+        """
         p = self.profile
         return {
             "controller": self.controller.to_dict(),
@@ -182,8 +229,18 @@ class LoopController:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> "LoopController":
-        """The controller of `to_dict` (at its zero initial state)."""
+    def from_dict(cls, data: dict) -> LoopController:
+        """The controller of `to_dict`, at its zero initial state.
+
+        Parameters
+        ----------
+        data : dict
+            As `to_dict` writes it.
+
+        Returns
+        -------
+        LoopController
+        """
         ff, profile, disturbances = (data.get(key) for key in ("feedforward", "profile",
                                                                 "disturbances"))
         return cls(DiscreteController.from_dict(data["controller"]),

@@ -13,6 +13,11 @@ every loop, or given as samples or a callable (`reference`, user_reference.py). 
 quantisation and a sinusoidal force at the actuators (disturbances.py) are optional.
 """
 
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from .disturbances import MAINS_HZ, Disturbances, loop_disturbances
@@ -23,6 +28,15 @@ from .loop_controller import LoopController
 from .profiles import ThirdOrderProfile
 from .user_controller import user_design
 from .user_reference import reference_samples
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from flexure.core import Model
+
+    from .feedback import FeedbackDesign
+    from .feedforward import LowFrequencyModel
+    from .move_path import MovePath
 
 
 def feedforward_kind(feedforward) -> str | None:
@@ -39,11 +53,17 @@ def feedforward_kind(feedforward) -> str | None:
     raise LoopError(f"feedforward must be 'modal', 'inverse' or False, got {feedforward!r}")
 
 
-def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
-               crossover: float = 300.0, feedforward=True, settle: float = 0.25, axis: int = 0,
-               feedforward_model=None, path=None, design=None, controller=None,
-               reference=None, quantum=None, disturbance=None,
-               disturbance_hz: float = MAINS_HZ, **design_options):
+def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
+               fs: float = 4000.0, crossover: float = 300.0, feedforward: bool | str = True,
+               settle: float = 0.25, axis: int = 0,
+               feedforward_model: LowFrequencyModel | None = None,
+               path: MovePath | None = None, design: FeedbackDesign | None = None,
+               controller: object | None = None,
+               reference: ArrayLike | Callable[[float], ArrayLike] | None = None,
+               quantum: float | Sequence[float] | None = None,
+               disturbance: float | Sequence[float] | None = None,
+               disturbance_hz: float = MAINS_HZ, **design_options: Any,
+               ) -> tuple[LoopController, FeedbackDesign]:
     """Design the feedback and the feedforward of `model`; returns (LoopController, design).
 
     Parameters
@@ -97,6 +117,17 @@ def build_loop(model, *, stroke: float = 1e-3, duration: float = 1.0, fs: float 
     Returns
     -------
     (LoopController, FeedbackDesign)
+        The controller, ready to run at fs, and the feedback's design with its margins.
+
+    Raises
+    ------
+    LoopError
+        A bad stroke, duration, settle, axis, feedforward setting, reference, quantum or
+        disturbance; design options with one's own controller; a path together with a
+        reference or the "inverse" feedforward.
+    ControlDesignError
+        The feedback or feedforward cannot be designed (no colocated output, an unstable
+        closed loop, a sample rate or cross-over out of range).
     """
     if not np.isfinite(stroke) or stroke == 0:
         raise LoopError(f"stroke must be a finite, non-zero distance (m), got {stroke}")

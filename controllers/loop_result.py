@@ -4,7 +4,10 @@ The error reported is max_k |e_k| over the samples, during the move and a settli
 it, against the target `TARGET` (0.1 % of the stroke).
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass, field
+from os import PathLike
 
 import numpy as np
 
@@ -61,8 +64,15 @@ class LoopResult:
         return self.force - open_loop
 
     def per_loop(self) -> list[dict]:
-        """Each loop's stroke, largest |error| and their ratio against the target, and its
-        units (m and N, or rad and N m on an angle) where the run recorded them."""
+        """Each loop's stroke, largest |error| and their ratio against the target.
+
+        Returns
+        -------
+        list of dict
+            Per loop: "loop" (its name), "stroke" and "max_abs_error" (m, rad on an angle),
+            "error_ratio" (unitless), "passed", and "units" ("m" and "N", or "rad" and
+            "N m") where the run recorded them.
+        """
         names = self.design.get("loops", [])
         units = self.settings.get("loop_units", [])
         rows = []
@@ -78,7 +88,14 @@ class LoopResult:
         return rows
 
     def summary(self) -> dict:
-        """The dictionary `flexure loop --json` prints (SI units)."""
+        """The dictionary `flexure loop --json` prints.
+
+        Returns
+        -------
+        dict
+            SI units: errors, strokes and positions m (rad), forces N (N m), margins as
+            `FeedbackDesign.summary`, "wall_time_s" s; "units" names the moving loop's.
+        """
         ratio = self.max_abs_error / abs(self.stroke)
         axis = self.settings.get("axis", 0)
         return {
@@ -113,8 +130,21 @@ class LoopResult:
                if key in self.settings},
         }
 
-    def plot(self, path, *, title: str | None = None):
-        """Reference, position, error and force against time, saved as a PNG; returns path."""
+    def plot(self, path: str | PathLike, *, title: str | None = None) -> str | PathLike:
+        """Reference, position, error and force against time (s), saved as a PNG.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The image file.
+        title : str, optional
+            The figure's title (default: the scene, plant and error ratio).
+
+        Returns
+        -------
+        str or path-like
+            `path`.
+        """
         import matplotlib  # 0.5 s to import: only where it is used
 
         matplotlib.use("Agg")

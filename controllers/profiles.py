@@ -13,11 +13,17 @@ piecewise polynomials (degree 3, 2, 1, 0), evaluated at any times; before the st
 is at rest at 0, after the end at rest at S.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexure.core import FlexureError
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
 
 
 class ProfileError(FlexureError, ValueError):
@@ -30,7 +36,14 @@ class ThirdOrderProfile:
 
     `jerk_time` and `acceleration_time` (s) are the lengths of each constant-jerk and each
     constant-acceleration segment (default T/8 each); the constant-velocity segment takes the
-    rest, T - 4 t_j - 2 t_a >= 0. `start` (s) delays the move.
+    rest, T - 4 t_j - 2 t_a >= 0. `start` (s) delays the move. Below, m stands for the
+    stroke's unit (rad for a rotation).
+
+    Raises
+    ------
+    ProfileError
+        A duration that is not positive, a stroke that is not finite, or segment times that
+        do not fit in the duration.
     """
 
     stroke: float
@@ -79,27 +92,39 @@ class ThirdOrderProfile:
         object.__setattr__(self, "_integrals", integrals)
 
     @property
-    def peak_velocity(self):
+    def peak_velocity(self) -> float:
         """The largest velocity magnitude (m/s)."""
         return float(np.max(np.abs(self._states[:, 1])))
 
     @property
-    def peak_acceleration(self):
+    def peak_acceleration(self) -> float:
         """The largest acceleration magnitude (m/s^2)."""
         return float(np.max(np.abs(self._states[:, 2])))
 
     @property
-    def peak_jerk(self):
+    def peak_jerk(self) -> float:
         """The jerk magnitude J (m/s^3)."""
         return float(abs(self._jerks[0]))
 
     @property
-    def end(self):
+    def end(self) -> float:
         """The time (s) at which the move ends."""
         return float(self._knots[-1])
 
-    def evaluate(self, t):
-        """Position, velocity, acceleration and jerk at the times `t` (s): four arrays."""
+    def evaluate(self, t: ArrayLike,
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Position, velocity, acceleration and jerk at given times.
+
+        Parameters
+        ----------
+        t : array_like
+            Times, s.
+
+        Returns
+        -------
+        (ndarray, ndarray, ndarray, ndarray)
+            Shaped as t: m, m/s, m/s^2, m/s^3.
+        """
         t = np.asarray(t, dtype=float)
         segment = np.clip(np.searchsorted(self._knots, t, side="right") - 1, 0, 6)
         before, after = t < self._knots[0], t >= self._knots[-1]
@@ -113,20 +138,62 @@ class ThirdOrderProfile:
                      for value, rest in ((position, float(self.stroke)), (velocity, 0.0),
                                          (acceleration, 0.0), (j, 0.0)))
 
-    def position(self, t):
-        """Position (m) at the times `t` (s)."""
+    def position(self, t: ArrayLike) -> np.ndarray:
+        """The position at given times.
+
+        Parameters
+        ----------
+        t : array_like
+            Times, s.
+
+        Returns
+        -------
+        ndarray
+            Shaped as t, m.
+        """
         return self.evaluate(t)[0]
 
-    def sample(self, fs, *, stop=None):
-        """Times (s) and the four signals sampled at `fs` Hz from `start` up to `stop` (s)."""
+    def sample(self, fs: float, *, stop: float | None = None,
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The profile sampled from `start` up to `stop`.
+
+        Parameters
+        ----------
+        fs : float
+            The sample rate, Hz.
+        stop : float, optional
+            The last time, s (default: the end of the move).
+
+        Returns
+        -------
+        (ndarray, ndarray, ndarray, ndarray, ndarray)
+            The times (s), then position, velocity, acceleration and jerk (m, m/s, m/s^2,
+            m/s^3).
+
+        Raises
+        ------
+        ProfileError
+            A sample rate that is not a positive number.
+        """
         if not (np.isfinite(fs) and fs > 0):
             raise ProfileError(f"sample rate must be a positive number of Hz, got {fs}")
         stop = self.end if stop is None else float(stop)
         t = self.start + np.arange(int(np.floor((stop - self.start) * fs + 1e-9)) + 1) / fs
         return (t, *self.evaluate(t))
 
-    def position_integral(self, t):
-        """The integral of the position from the start to the times `t` (m s), exact."""
+    def position_integral(self, t: ArrayLike) -> np.ndarray:
+        """The integral of the position from the start to given times, exact.
+
+        Parameters
+        ----------
+        t : array_like
+            Times, s.
+
+        Returns
+        -------
+        ndarray
+            Shaped as t, m s.
+        """
         t = np.asarray(t, dtype=float)
         segment = np.clip(np.searchsorted(self._knots, t, side="right") - 1, 0, 6)
         h = np.clip(t - self._knots[segment], 0.0, None)
@@ -138,11 +205,22 @@ class ThirdOrderProfile:
         after = self._integrals[-1] + float(self.stroke) * (t - end)
         return np.where(t >= end, after, np.where(t < self._knots[0], 0.0, inside))
 
-    def interval_average(self, t0, t1):
-        """Mean position, velocity and acceleration over the intervals [t0, t1) (arrays).
+    def interval_average(self, t0: ArrayLike, t1: ArrayLike,
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Mean position, velocity and acceleration over the intervals [t0, t1).
 
         All three are exact: (P(t1) - P(t0)) / h with P the integral of the position,
         (p(t1) - p(t0)) / h and (v(t1) - v(t0)) / h. This is what a zero-order hold applies.
+
+        Parameters
+        ----------
+        t0, t1 : array_like
+            The start and end times of each interval, s (t1 > t0).
+
+        Returns
+        -------
+        (ndarray, ndarray, ndarray)
+            The means, m, m/s and m/s^2.
         """
         t0, t1 = np.asarray(t0, dtype=float), np.asarray(t1, dtype=float)
         h = t1 - t0

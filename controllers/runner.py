@@ -13,9 +13,14 @@ Simulator (sample_loop.simulate_loop, the same numbers the compiled loop would g
 Python call per sample); the designed controller and a python-control system run compiled.
 """
 
+from __future__ import annotations
+
 import contextlib
 import tempfile
 import time
+from collections.abc import Callable, Sequence
+from os import PathLike
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,6 +34,15 @@ from .plants import FmuPlant, InProcessPlant
 from .sample_loop import compiled_loop, simulate_loop
 from .user_reference import reference_stroke
 
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from flexure.core import Model
+
+    from .feedback import FeedbackDesign
+    from .feedforward import LowFrequencyModel
+    from .move_path import MovePath
+
 PLANTS = ("inprocess", "fmu", "libcosim")
 
 # What was defined here before the split stays importable from here
@@ -37,19 +51,25 @@ __all__ = ["PLANTS", "TARGET", "LoopController", "LoopError", "LoopResult", "bui
            "run_loop", "simulate_loop"]
 
 
-def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 4000.0,
-             crossover: float = 300.0, feedforward=True, plant: str = "inprocess",
-             settle: float = 0.25, axis: int = 0, method: str = LOOP_METHOD,
-             rtol: float = LOOP_RTOL,
-             feedforward_model=None, workdir=None, progress=None,
-             overrides: dict | None = None, path=None, design=None, controller=None,
-             reference=None, quantum=None, disturbance=None, disturbance_hz: float = 50.0,
-             **design_options) -> LoopResult:
+def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: float = 1.0,
+             fs: float = 4000.0, crossover: float = 300.0, feedforward: bool | str = True,
+             plant: str = "inprocess", settle: float = 0.25, axis: int = 0,
+             method: str = LOOP_METHOD, rtol: float = LOOP_RTOL,
+             feedforward_model: LowFrequencyModel | None = None,
+             workdir: str | PathLike | None = None,
+             progress: Callable[[float], None] | None = None,
+             overrides: dict | None = None, path: MovePath | None = None,
+             design: FeedbackDesign | None = None, controller: object | None = None,
+             reference: ArrayLike | Callable[[float], ArrayLike] | None = None,
+             quantum: float | Sequence[float] | None = None,
+             disturbance: float | Sequence[float] | None = None,
+             disturbance_hz: float = 50.0, **design_options: Any) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
     Parameters
     ----------
-    scene : Model or str
+    scene : Model, str or path-like
+        A built model, a scene file or a built-in scene's name.
     stroke, duration : float
         The third-order move (m, s).
     fs : float
@@ -59,7 +79,8 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
     feedforward : bool or str
         True or "modal": the inverse of the low-frequency model; "inverse": the stable
         approximate inverse of the full linear model (see `build_loop`); False: none.
-    plant : "inprocess", "fmu" or "libcosim"
+    plant : {"inprocess", "fmu", "libcosim"}
+        The in-process compiled loop, the scene FMU under fmpy, or both FMUs in libcosim.
     settle : float
         Time (s) simulated after the move.
     axis : int
@@ -106,6 +127,19 @@ def run_loop(scene, *, stroke: float = 1e-3, duration: float = 1.0, fs: float = 
     Returns
     -------
     LoopResult
+        The samples (s; m, rad; N, N m) and the summary against the 0.1 % target.
+
+    Raises
+    ------
+    LoopError
+        An unknown plant or method, a bad rtol, overrides on a built Model, a controller
+        the chosen plant cannot run, or a bad loop setting (`build_loop`).
+    ControlDesignError
+        The feedback or feedforward cannot be designed.
+    SceneError
+        The scene cannot be loaded.
+    SimulationError
+        The plant's integration fails.
     """
     if plant not in PLANTS:
         raise LoopError(f"unknown plant {plant!r}; expected one of {', '.join(PLANTS)}")

@@ -9,6 +9,8 @@ fixed, dependent or a DOF; each deformation is zero (prescribed), released or a 
 vector q lists the DOF coordinates first, then the DOF deformations, each in model order.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass, field
 from types import ModuleType
 
@@ -33,7 +35,7 @@ class Node:
     axes: tuple
 
     @property
-    def units(self):
+    def units(self) -> tuple[str, ...]:
         """The unit of each coordinate: m on translations, rad on a planar rotation, 1 on
         Euler parameters."""
         if self.kind == "translational":
@@ -56,8 +58,19 @@ class ElementGroup:
     reference: dict
     properties: dict
 
-    def local(self, vector):
-        """The element-local slices (n, m) of a model coordinate vector."""
+    def local(self, vector: np.ndarray) -> np.ndarray:
+        """The element-local slices of a model coordinate vector.
+
+        Parameters
+        ----------
+        vector : ndarray (NX,)
+            A vector on the model's coordinates (any unit).
+
+        Returns
+        -------
+        ndarray (n, m)
+            Its entries at each element's m local coordinates.
+        """
         return vector[self.coordinate_index]
 
 
@@ -86,12 +99,12 @@ class Port:
     axis: str = ""
 
     @property
-    def about_axis(self):
+    def about_axis(self) -> bool:
         """Whether the port is a rotation about a global axis of a 3-D rotational node."""
         return bool(self.euler)
 
     @property
-    def location(self):
+    def location(self) -> int | tuple[tuple[int, ...], str]:
         """What the port acts on or measures, comparable between ports: the coordinate
         index, or (the Euler parameter indices, the axis)."""
         return (self.euler, self.axis) if self.euler else self.coordinate
@@ -180,45 +193,45 @@ class Model:
         self.stressed_deformations = np.flatnonzero(dstatus != ZERO)
 
     @property
-    def nx(self):
+    def nx(self) -> int:
         """NX: the number of nodal coordinates."""
         return len(self.coordinate_names)
 
     @property
-    def nxo(self):
+    def nxo(self) -> int:
         """NXO: the number of fixed coordinates (absolute constraints)."""
         return self.fixed_coordinates.size
 
     @property
-    def neo(self):
+    def neo(self) -> int:
         """NEO: the number of deformations prescribed zero (relative constraints)."""
         return self.rigid_deformations.size
 
     @property
-    def ndof(self):
+    def ndof(self) -> int:
         """NDOF = NX - NXO - NEO."""
         return self.nx - self.nxo - self.neo
 
     @property
-    def coil_actuators(self):
+    def coil_actuators(self) -> list[Actuator]:
         """The voltage-driven actuators, in scene order: each has one electrical state, its
         coil current (A), after [q - q_ref, qdot] in the integrators' state."""
         return [a for a in self.actuators if a.drive == VOLTAGE]
 
     @property
-    def dof_names(self):
+    def dof_names(self) -> list[str]:
         """Names of the DOFs, in the order of q."""
         return [self.coordinate_names[i] for i in self.dof_coordinates] + [
             self.deformation_names[i] for i in self.dof_deformations
         ]
 
     @property
-    def declared_dof_count(self):
+    def declared_dof_count(self) -> int:
         """The number of DOFs the scene declares (coordinates plus deformations)."""
         return self.dof_coordinates.size + self.dof_deformations.size
 
-    def dof_count(self):
-        """The SPACAR count as a dict: nx, nxo, neo, ndof, in the course notes' convention.
+    def dof_count(self) -> dict[str, int]:
+        """The SPACAR count in the course notes' convention.
 
         A 3-D rotational node has four Euler parameters and, when free, one normalisation
         constraint (a rigid deformation "NODE.norm"); the course notes count it as three
@@ -226,6 +239,11 @@ class Model:
         fixed one and NEO leaves the normalisation constraints out; NDOF is the same either
         way: (NX - n) - (NXO - n_fixed) - (NEO - n_free) = NX - NXO - NEO. The internal counts
         are the properties nx, nxo, neo.
+
+        Returns
+        -------
+        dict of str to int
+            "nx", "nxo", "neo" and "ndof".
         """
         euler = [i for i, name in enumerate(self.coordinate_names) if name.endswith(".lambda0")]
         fixed = sum(1 for i in euler if self.coordinate_status[i] == FIXED)
@@ -234,8 +252,24 @@ class Model:
         return {"nx": self.nx - len(euler), "nxo": self.nxo - fixed, "neo": self.neo - norms,
                 "ndof": self.ndof}
 
-    def coordinate_index(self, name):
-        """Index of the coordinate "NODE.COORD" (KeyError naming it if absent)."""
+    def coordinate_index(self, name: str) -> int:
+        """The index of a coordinate in the model's coordinate vectors.
+
+        Parameters
+        ----------
+        name : str
+            The coordinate, "NODE.COORD" ("3.x", "4.phi", "5.lambda0").
+
+        Returns
+        -------
+        int
+            Its index into x (NX,).
+
+        Raises
+        ------
+        KeyError
+            The model has no such coordinate (the message names it).
+        """
         try:
             return self.coordinate_names.index(name)
         except ValueError:

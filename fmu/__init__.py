@@ -25,7 +25,7 @@ _LAZY = {
     "fmu_environment": "env",
     "fix_model_description": "model_description",
     "check_fmu": "regression", "write_reference": "regression",
-    "SafeSlave": "slave", "UnitReal": "slave", "escape_log": "slave",
+    "SafeSlave": "slave", "UnitReal": "slave_variables", "escape_log": "slave",
 }
 
 __all__ = [

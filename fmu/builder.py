@@ -26,12 +26,16 @@ The model identifier is the slave class name (pythonfmu's rule); for a scene it 
 name, so FMUs of different scenes coexist in one process.
 """
 
+from __future__ import annotations
+
 import hashlib
 import shutil
 import sys
 import tempfile
 import zipfile
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 from flexure.core import FlexureError
 
@@ -97,9 +101,12 @@ def _requirements_header(bundle):
             "FMU` checks.")
 
 
-def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=(),
-                    bundle=("core", "fmu"), validate: bool = True, requirements=(),
-                    platforms=TRIED_PLATFORMS, units=None, **options) -> Path:
+def build_slave_fmu(script_path: str | Path, dest: str | Path, *,
+                    project_files: Iterable[str | Path] = (),
+                    bundle: Iterable[str] = ("core", "fmu"), validate: bool = True,
+                    requirements: Iterable[str] = (),
+                    platforms: Iterable[str] = TRIED_PLATFORMS,
+                    units: Mapping[str, str] | None = None, **options: Any) -> Path:
     """Build an FMI 2.0 co-simulation FMU from a pythonfmu slave script.
 
     Parameters
@@ -134,6 +141,12 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
     -------
     Path
         The FMU written.
+
+    Raises
+    ------
+    FMUBuildError
+        An unknown bundle part, a script pythonfmu cannot build, no binary for the
+        platforms, or (with `validate`) the problems fmpy's validation reports.
     """
     from pythonfmu import FmuBuilder
 
@@ -205,7 +218,18 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *, project_files=
 
 
 def validate_fmu_file(path: str | Path) -> list[str]:
-    """fmpy's validation problems of an FMU (an empty list when it is valid)."""
+    """fmpy's validation problems of an FMU.
+
+    Parameters
+    ----------
+    path : str or Path
+        The .fmu file.
+
+    Returns
+    -------
+    list of str
+        The problems; empty when the FMU is valid.
+    """
     from fmpy.validation import validate_fmu
 
     return [str(p) for p in validate_fmu(str(path))]
@@ -242,11 +266,21 @@ class FMUBuildError(FlexureError):
     """An FMU could not be built or does not validate."""
 
 
-def default_tunable(scene):
+def default_tunable(scene: Mapping[str, Any]) -> list[str]:
     """The scene keys a scene FMU exposes as parameters by default.
 
     Damping (EdA, EdI of every section that declares it), which a user fits to measurements,
     and every key the scene marks tunable in `[scene] tunable` (e.g. a payload mass).
+
+    Parameters
+    ----------
+    scene : mapping
+        The scene dictionary.
+
+    Returns
+    -------
+    list of str
+        Dotted scene keys ("sections.leaf.EdA" in N s, "nodes.3.mass" in kg).
     """
     keys = []
     for name, section in scene.get("sections", {}).items():
@@ -255,7 +289,8 @@ def default_tunable(scene):
     return keys + [key for key in marked if key not in keys]
 
 
-def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunable=None,
+def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
+                    tunable: Iterable[str] | None = None,
                     von_mises: bool = False, validate: bool = True,
                     overrides: dict | None = None) -> Path:
     """Build the co-simulation FMU of a scene.
@@ -282,6 +317,17 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *, tunabl
     -------
     Path
         The FMU written; its model identifier is the scene name.
+
+    Raises
+    ------
+    FMUBuildError
+        A scene that cannot be read, a name that cannot be a model identifier, a tunable key
+        the scene does not declare or that is not a number, a von Mises output without
+        beams, or a build or validation failure.
+    SceneError
+        The scene (with its overrides) does not build.
+    ConstraintError
+        The model is not exactly constrained.
     """
     import keyword
 

@@ -12,11 +12,13 @@ before the FMU's requirements are checked.
 import hashlib
 import importlib.util
 import re
+from collections.abc import Iterable
 from pathlib import Path
 
 # The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
-FMU_RUNTIME_MODULES = ("slave.py", "slave_states.py", "pythonfmu_workarounds.py",
-                       "scene_slave.py", "state_format.py", "requirements.py")
+FMU_RUNTIME_MODULES = ("slave.py", "slave_states.py", "slave_values.py", "slave_variables.py",
+                       "pythonfmu_workarounds.py", "scene_slave.py", "state_format.py",
+                       "requirements.py")
 # Lazy (PEP 562), as flexure.fmu's own: the launcher imports `requirements` (the standard
 # library only) before anything may import numpy.
 FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""
@@ -66,8 +68,19 @@ def rewrite_imports(text, package):
                   flags=re.MULTILINE)
 
 
-def bundle_name(parts=("core", "fmu")) -> str:
-    """The package name `_flexure_<hash>` a bundle of `parts` gets (hash of its sources)."""
+def bundle_name(parts: Iterable[str] = ("core", "fmu")) -> str:
+    """The package name a bundle of flexure's packages gets.
+
+    Parameters
+    ----------
+    parts : iterable of str
+        Any of "core", "fmu", "controllers".
+
+    Returns
+    -------
+    str
+        "_flexure_<12 hex digits>", of the SHA-256 of the bundled sources.
+    """
     digest = hashlib.sha256()
     for path, text in sorted(_bundle_sources(parts).items()):
         digest.update(path.encode() + b"\0" + text.encode() + b"\0")

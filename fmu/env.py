@@ -35,7 +35,18 @@ def libpython_path():
 
 
 def fmu_environment() -> dict[str, str]:
-    """{variable: value} a non-Python host needs to run flexure's FMUs on this machine."""
+    """What a non-Python host needs to run flexure's FMUs on this machine.
+
+    Returns
+    -------
+    dict of str to str
+        {environment variable: value}: LD_PRELOAD (libpython), PYTHONHOME, PYTHONPATH.
+
+    Raises
+    ------
+    FlexureError
+        This Python's shared libpython cannot be found.
+    """
     paths = [p for p in site.getsitepackages() if Path(p).is_dir()]
     return {
         "LD_PRELOAD": str(libpython_path()),

@@ -19,7 +19,14 @@ default variabilities and initials. `fix_model_description` adds them:
   schema validation accepts it).
 """
 
+from __future__ import annotations
+
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # names for the annotations only
+    from .requirements import Requirements
 
 # SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the units flexure declares.
 BASE_UNITS = {
@@ -63,7 +70,9 @@ _ORDER = ["ModelExchange", "CoSimulation", "UnitDefinitions", "TypeDefinitions",
           "ModelStructure"]
 
 
-def fix_model_description(xml_text: str, *, requirements=None, units=None) -> bytes:
+def fix_model_description(xml_text: str | bytes, *,
+                          requirements: Requirements | None = None,
+                          units: Mapping[str, str] | None = None) -> bytes:
     """Return the completed modelDescription.xml text (see the module docstring).
 
     Parameters
@@ -72,8 +81,9 @@ def fix_model_description(xml_text: str, *, requirements=None, units=None) -> by
         The modelDescription.xml pythonfmu wrote.
     requirements : flexure.fmu.requirements.Requirements, optional
         The FMU's Python requirements, to describe.
-    units : dict, optional
-        {variable name: unit} for Real variables that have none.
+    units : mapping of str to str, optional
+        {variable name: unit} for Real variables that have none (SI, as FMI writes it:
+        "m", "N", "N.m", "rad/s").
 
     Returns
     -------

@@ -133,7 +133,30 @@ def simulate(fmu, input_csv, *, output_interval=DEFAULT_INTERVAL, stop_time=None
 
 def write_reference(fmu: str | Path, input_csv: str | Path, reference_csv: str | Path, *,
                     output_interval: float = DEFAULT_INTERVAL) -> Path:
-    """Simulate and write the reference CSV (time and every output); returns its path."""
+    """Simulate the FMU on an input file and write the reference CSV (time and every output).
+
+    Parameters
+    ----------
+    fmu : str or Path
+        The .fmu file.
+    input_csv : str or Path
+        "time" (s) and one column per FMU input, in its unit (module docstring).
+    reference_csv : str or Path
+        The file to write, atomically (a failed write leaves the old one as it was).
+    output_interval : float
+        The communication step, s.
+
+    Returns
+    -------
+    Path
+        `reference_csv`.
+
+    Raises
+    ------
+    FMUCheckError
+        Not an FMU, an input file that cannot be read or names no input of the FMU, or a
+        failed simulation.
+    """
     from fmpy.util import write_csv
 
     result = simulate(fmu, input_csv, output_interval=output_interval)
@@ -166,7 +189,33 @@ def compare(result, reference, *, rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL):
 
 def check_fmu(fmu: str | Path, input_csv: str | Path, reference_csv: str | Path, *,
               rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL) -> list[str]:
-    """Simulate `fmu` on the reference's grid and compare; returns the list of problems."""
+    """Simulate `fmu` on the reference's grid and compare every output with it:
+    |y - y_ref| <= rtol (max(y_ref) - min(y_ref)) + atol at every sample.
+
+    Parameters
+    ----------
+    fmu : str or Path
+        The .fmu file.
+    input_csv : str or Path
+        "time" (s) and one column per FMU input, in its unit.
+    reference_csv : str or Path
+        "time" (s, evenly spaced: the communication step) and one column per output.
+    rtol : float
+        Relative to each signal's range (unitless).
+    atol : float
+        In each signal's unit (1e-8: 10 nm on a position).
+
+    Returns
+    -------
+    list of str
+        The problems (an output missing, or where and by how much it misses); empty when
+        all pass.
+
+    Raises
+    ------
+    FMUCheckError
+        Not an FMU, a CSV file that cannot be read or does not fit, or a failed simulation.
+    """
     model_description(fmu)  # not an FMU: say so before reading the CSV files
     reference = read_csv(reference_csv, min_rows=2, steps_allowed=False)
     interval = float(reference["time"][1] - reference["time"][0])

@@ -54,18 +54,23 @@ What the base does, Reference-FMUs style:
   stays exactly as it was (a state that validates but that the model refuses is rolled back);
 - '%' is escaped in every logged message: pythonfmu passes messages to the host's logger as
   a printf format (libcosim and fmpy crash on "%s").
+
+The variables' registration is in `slave_variables`, the value getters and setters in
+`slave_values`, the FMU states in `slave_states`: mixins of `SafeSlave`.
 """
+
+from __future__ import annotations
 
 import hashlib
 import math
 import time as _time
 import traceback
+from typing import Any
 
-from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Real, String
+from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
-from pythonfmu.variables import Boolean, Integer
 
-from .pythonfmu_workarounds import guard_exit, tidy_sys_path, weakly_bound
+from .pythonfmu_workarounds import guard_exit, tidy_sys_path
 from .slave_states import (
     INITIALIZATION,
     INSTANTIATED,
@@ -73,6 +78,8 @@ from .slave_states import (
     TERMINATED,
     StateSnapshots,
 )
+from .slave_values import SlaveValues
+from .slave_variables import SlaveVariables, UnitReal
 
 # Relative tolerance on the communication point a do_step starts from (hosts that count time
 # in integer nanoseconds, e.g. libcosim, round it).
@@ -80,30 +87,22 @@ TIME_TOLERANCE = 1e-9
 
 
 
-class UnitReal(Real):
-    """A pythonfmu `Real` that also declares its unit (pythonfmu 0.7.0 has no unit attribute).
+def escape_log(message: object) -> str:
+    """A message safe to hand to a printf-style FMI logger: every '%' doubled.
 
-    The unit is written on the <Real> element; `fix_model_description` adds the matching
-    <UnitDefinitions> entry.
+    Parameters
+    ----------
+    message : object
+        The message (str() of it is taken).
+
+    Returns
+    -------
+    str
     """
-
-    def __init__(self, name, start=None, *, unit=None, **kwargs):
-        super().__init__(name, start=start, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        element = super().to_xml()
-        if self.unit:
-            element.find("Real").set("unit", self.unit)
-        return element
-
-
-def escape_log(message):
-    """A message safe to hand to a printf-style FMI logger: every '%' doubled."""
     return str(message).replace("%", "%%")
 
 
-class SafeSlave(StateSnapshots, Fmi2Slave):
+class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
     """Base of a co-simulation slave whose failures become FMI statuses, never exceptions.
 
     Subclasses implement `advance(t, h)` and, for state save/restore, `save_state()` and
@@ -111,9 +110,15 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
     variables with `add_real` / `add_string`. The attribute `time` (s) is the current
     communication point; `advance` need not update it (the base sets it to `t + h` on
     success, or to `last_good_time()` after a failure).
+
+    Parameters
+    ----------
+    **kwargs
+        pythonfmu's instantiation arguments (instance_name, resources, visible, ...), passed
+        to `Fmi2Slave`.
     """
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         try:
             tidy_sys_path(self.resources)
@@ -130,102 +135,123 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
 
     # -- to override -------------------------------------------------------------------------
 
-    def advance(self, t, h):
-        """Integrate over [t, t + h] (s) with the inputs held. Raise on failure."""
+    def advance(self, t: float, h: float) -> None:
+        """Integrate over [t, t + h] with the inputs held (to override).
+
+        Parameters
+        ----------
+        t : float
+            The communication point, s.
+        h : float
+            The step, s, > 0.
+
+        Raises
+        ------
+        FlexureError
+            A model failure: logged, the step answered fmi2Discard, the model staying at
+            `last_good_time()`. Any other exception is a bug: the instance enters the error
+            state.
+        """
         raise NotImplementedError
 
-    def last_good_time(self):
-        """The time (s) the model is at after a failed `advance` (default: unchanged)."""
+    def last_good_time(self) -> float:
+        """The time the model is at after a failed `advance` (default: unchanged).
+
+        Returns
+        -------
+        float
+            s.
+        """
         return self.time
 
-    def initialize(self, start_time):
-        """Prepare to step from `start_time` (s), after the parameters are set."""
+    def initialize(self, start_time: float) -> None:
+        """Prepare to step from `start_time`, after the parameters are set (to override).
 
-    def check_value(self, name, value):
-        """Why the value a host sets for variable `name` is refused, or None to accept it."""
+        Parameters
+        ----------
+        start_time : float
+            s.
+        """
+
+    def check_value(self, name: str, value: object) -> str | None:
+        """Why the value a host sets for a variable is refused (to override).
+
+        Parameters
+        ----------
+        name : str
+            The variable's name.
+        value : float, int, bool or str
+            The value, in the variable's unit.
+
+        Returns
+        -------
+        str or None
+            What is wrong with it, or None to accept it.
+        """
         return None
 
-    def save_state(self):
-        """The model's state beyond the registered variables, as data `state_format` can store
-        (None, bool, int, float, str, numpy arrays, and dicts, lists, tuples of those)."""
+    def save_state(self) -> object:
+        """The model's state beyond the registered variables (to override).
+
+        Returns
+        -------
+        object
+            Data `state_format` can store: None, bool, int, float, str, numpy arrays, and
+            dicts, lists, tuples of those.
+        """
         return None
 
-    def load_state(self, state):
-        """Restore what `save_state` returned (decoded from bytes: a private copy). Raise if
-        the state does not fit the model; the base then puts the instance back as it was."""
+    def load_state(self, state: object) -> None:
+        """Restore what `save_state` returned (to override).
+
+        Parameters
+        ----------
+        state : object
+            Decoded from bytes: a private copy.
+
+        Raises
+        ------
+        Exception
+            When the state does not fit the model; the base then puts the instance back as
+            it was.
+        """
 
     @classmethod
-    def identity_text(cls):
-        """What the FMU is built from, for the identity a state carries (default: the class's
-        module and name). A state is accepted only by an FMU of the same identity."""
+    def identity_text(cls) -> str:
+        """What the FMU is built from, for the identity a state carries. A state is accepted
+        only by an FMU of the same identity.
+
+        Returns
+        -------
+        str
+            Default: the class's module and qualified name.
+        """
         return f"{cls.__module__}.{cls.__qualname__}"
 
     @classmethod
-    def state_identity(cls):
-        """"<model identifier> <12 hex digits of identity_text's SHA-256>"."""
+    def state_identity(cls) -> str:
+        """The identity a state carries.
+
+        Returns
+        -------
+        str
+            "<model identifier> <12 hex digits of identity_text's SHA-256>".
+        """
         digest = hashlib.sha256(cls.identity_text().encode()).hexdigest()[:12]
         return f"{cls.__name__} {digest}"
 
-    # -- variables ---------------------------------------------------------------------------
-
-    def add_real(self, name, *, causality, unit=None, start=None, variability=None,
-                 initial=None, description=None, getter=None, setter=None):
-        """Register a Real variable; causality is "input", "output", "parameter" or "local".
-
-        Defaults follow FMI 2.0: inputs are continuous with a start value, outputs
-        continuous and calculated, parameters fixed and exact. `getter` / `setter` default to
-        the attribute of the same name.
-        """
-        causality = Fmi2Causality[causality]
-        if variability is None:
-            variability = (Fmi2Variability.fixed if causality == Fmi2Causality.parameter
-                           else Fmi2Variability.continuous)
-        if initial is None and causality == Fmi2Causality.parameter:
-            initial = Fmi2Initial.exact
-        if getter is None:
-            def getter():
-                return getattr(self, name)
-        if setter is None and causality != Fmi2Causality.output:
-            def setter(value):
-                setattr(self, name, value)
-        self.register_variable(UnitReal(
-            name, start=start, unit=unit, causality=causality, variability=variability,
-            initial=initial, description=description, getter=getter, setter=setter),
-            nested=False)
-
-    def add_integer(self, name, *, start, description=None, getter=None, setter=None):
-        """Register a fixed Integer parameter (e.g. the integrator's step budget)."""
-        self._add_fixed(Integer, name, start, description, getter, setter)
-
-    def add_string(self, name, *, start, description=None, getter=None, setter=None):
-        """Register a fixed String parameter (e.g. the integration method)."""
-        self._add_fixed(String, name, start, description, getter, setter)
-
-    def _add_fixed(self, kind, name, start, description, getter, setter):
-        """Register a fixed, exact parameter of pythonfmu's variable class `kind`; getter and
-        setter default to the attribute of the same name."""
-        if getter is None:
-            def getter():
-                return getattr(self, name)
-        if setter is None:
-            def setter(value):
-                setattr(self, name, value)
-        self.register_variable(kind(
-            name, start=start, causality=Fmi2Causality.parameter,
-            variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
-            description=description, getter=getter, setter=setter), nested=False)
-
-    def register_variable(self, var, nested=True):
-        """pythonfmu's registration, with the getter and setter holding the instance weakly
-        (`weakly_bound`): fmi2FreeInstance then frees the instance at once."""
-        super().register_variable(var, nested=nested)
-        var.getter = weakly_bound(var.getter, self)
-        var.setter = weakly_bound(var.setter, self)
-
     # -- logging and the error state -----------------------------------------------------------
 
-    def log_message(self, message, status=Fmi2Status.ok):
-        """Queue a message for the host's logger, '%' escaped."""
+    def log_message(self, message: object, status: Fmi2Status = Fmi2Status.ok) -> None:
+        """Queue a message for the host's logger, '%' escaped.
+
+        Parameters
+        ----------
+        message : object
+            The message (str() of it is taken).
+        status : Fmi2Status
+            The status it is logged at.
+        """
         self.log(escape_log(message), status=status)
 
     def _error(self, message):
@@ -267,7 +293,19 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
     # -- FMI calls ---------------------------------------------------------------------------
     # Every method pythonfmu calls catches BaseException: anything escaping is fatal (above).
 
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+    def setup_experiment(self, start_time: float, stop_time: float | None = None,
+                         tolerance: float | None = None) -> None:
+        """fmi2SetupExperiment; refused arguments enter the error state.
+
+        Parameters
+        ----------
+        start_time : float
+            s, finite.
+        stop_time : float, optional
+            s, >= start_time.
+        tolerance : float, optional
+            > 0 (relative).
+        """
         try:
             if self.broken or self.phase != INSTANTIATED:
                 return self._illegal("fmi2SetupExperiment", "state instantiated")
@@ -279,7 +317,8 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
         except BaseException as error:  # noqa: BLE001
             self._fail("fmi2SetupExperiment", error)
 
-    def enter_initialization_mode(self):
+    def enter_initialization_mode(self) -> None:
+        """fmi2EnterInitializationMode."""
         try:
             if self.broken or self.phase != INSTANTIATED:
                 return self._illegal("fmi2EnterInitializationMode", "state instantiated")
@@ -287,7 +326,8 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
         except BaseException as error:  # noqa: BLE001
             self._fail("fmi2EnterInitializationMode", error)
 
-    def exit_initialization_mode(self):
+    def exit_initialization_mode(self) -> None:
+        """fmi2ExitInitializationMode: `initialize(start_time)`, then step complete."""
         try:
             if self.broken or self.phase != INITIALIZATION:
                 return self._illegal("fmi2ExitInitializationMode",
@@ -298,7 +338,8 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
         except BaseException as error:  # noqa: BLE001
             self._fail("initialization", error)
 
-    def terminate(self):
+    def terminate(self) -> None:
+        """fmi2Terminate."""
         try:
             if self.broken or self.phase != STEP_COMPLETE:
                 return self._illegal("fmi2Terminate", "state step complete")
@@ -306,7 +347,21 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
         except BaseException as error:  # noqa: BLE001
             self._fail("fmi2Terminate", error)
 
-    def do_step(self, current_time, step_size):
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        """fmi2DoStep: `advance` over [current_time, current_time + step_size].
+
+        Parameters
+        ----------
+        current_time : float
+            The communication point, s: the current `time` (relative tolerance 1e-9).
+        step_size : float
+            h, s, > 0 and finite.
+
+        Returns
+        -------
+        bool
+            True for fmi2OK; False for fmi2Discard (a refused or failed step, logged).
+        """
         start = _time.perf_counter()
         try:
             return self._do_step(current_time, step_size)
@@ -352,109 +407,6 @@ class SafeSlave(StateSnapshots, Fmi2Slave):
         self.time = current_time + step_size
         return True
 
-    # -- values ------------------------------------------------------------------------------
-
-    def get_real(self, vrs):
-        return self._get("fmi2GetReal", vrs, Real, float, math.nan)
-
-    def get_integer(self, vrs):
-        return self._get("fmi2GetInteger", vrs, Integer, int, 0)
-
-    def get_boolean(self, vrs):
-        return self._get("fmi2GetBoolean", vrs, Boolean, bool, False)
-
-    def get_string(self, vrs):
-        return self._get("fmi2GetString", vrs, String, str, "")
-
-    def _get(self, call, vrs, kind, convert, default):
-        """One value per reference, always (the binary reads exactly that many); a reference
-        that cannot be read gives `default` and a logged error."""
-        values = []
-        try:
-            for vr in vrs:
-                value = default
-                try:
-                    problem = self._variable_problem(vr, kind)
-                    if problem:
-                        self._error(f"{call}: {problem}")
-                    else:
-                        value = convert(self.vars[vr].getter())
-                except BaseException as error:  # noqa: BLE001
-                    self._error(f"{call}: reading value reference {vr!r} failed: "
-                                f"{type(error).__name__}: {error}")
-                values.append(value)
-        except BaseException as error:  # noqa: BLE001 -- vrs itself unreadable
-            self._error(f"{call}: {type(error).__name__}: {error}")
-        return values
-
-    def set_real(self, vrs, values):
-        self._set("fmi2SetReal", vrs, values, Real)
-
-    def set_integer(self, vrs, values):
-        self._set("fmi2SetInteger", vrs, values, Integer)
-
-    def set_boolean(self, vrs, values):
-        self._set("fmi2SetBoolean", vrs, values, Boolean)
-
-    def set_string(self, vrs, values):
-        self._set("fmi2SetString", vrs, values, String)
-
-    def _set(self, call, vrs, values, kind):
-        """Set values in order; the first one refused stops the call and enters the error
-        state (see the module docstring: the setter itself can only answer fmi2OK)."""
-        try:
-            if self.broken or self.phase not in (INSTANTIATED, INITIALIZATION, STEP_COMPLETE):
-                return self._illegal(call, "states instantiated, initialization mode and "
-                                           "step complete")
-            inputs = self._inputs_of(kind)
-            for vr, value in zip(vrs, values, strict=True):
-                # an input of this kind is always settable: only its value is checked
-                problem = None if vr in inputs else (self._variable_problem(vr, kind)
-                                                     or self._settable_problem(vr))
-                if not problem:
-                    problem = self.check_value(self.vars[vr].name, value)
-                if problem:
-                    return self._break(f"{call} refused: {problem}")
-                self.vars[vr].setter(value)
-        except BaseException as error:  # noqa: BLE001
-            self._fail(call, error)
-
-    def _inputs_of(self, kind):
-        """The value references of the settable inputs of `kind` (found once per kind: the
-        variables are registered in __init__, before any set)."""
-        found = self._settable_inputs.get(kind)
-        if found is None:
-            found = self._settable_inputs[kind] = frozenset(
-                vr for vr, variable in self.vars.items()
-                if isinstance(variable, kind) and variable.causality == Fmi2Causality.input
-                and variable.setter is not None)
-        return found
-
-    def _variable_problem(self, vr, kind):
-        variable = self.vars.get(vr)
-        if variable is None:
-            return (f"unknown value reference {vr!r} (this FMU has value references 0 to "
-                    f"{len(self.vars) - 1})")
-        if not isinstance(variable, kind):
-            return (f"{variable.name!r} (value reference {vr}) is a "
-                    f"{_kind_name(type(variable))}, not a {kind.__name__}")
-        return None
-
-    def _settable_problem(self, vr):
-        variable = self.vars[vr]
-        causality, variability = variable.causality, variable.variability
-        if variable.setter is None or causality in (Fmi2Causality.output,
-                                                    Fmi2Causality.calculatedParameter):
-            name = causality.name if causality is not None else "read-only"
-            return f"{variable.name!r} (value reference {vr}) is {_article(name)}: it cannot " \
-                   "be set"
-        if variability == Fmi2Variability.constant:
-            return f"{variable.name!r} (value reference {vr}) is a constant"
-        if variability == Fmi2Variability.fixed and self.phase == STEP_COMPLETE:
-            return (f"{variable.name!r} (value reference {vr}) is a fixed parameter: it can be "
-                    "set before fmi2ExitInitializationMode only")
-        return None
-
 
 def _experiment_problem(start_time, stop_time, tolerance):
     """Why setupExperiment's arguments are refused, or None."""
@@ -467,17 +419,6 @@ def _experiment_problem(start_time, stop_time, tolerance):
     return None
 
 
-def _kind_name(cls):
-    for kind in (Real, Integer, Boolean, String):
-        if issubclass(cls, kind):
-            return kind.__name__
-    return cls.__name__
-
-
-def _article(word):
-    return ("an " if word[:1] in "aeiou" else "a ") + word
-
-
 def _is_model_error(error):
     """True for the errors a model reports on purpose (flexure's FlexureError family).
 
@@ -485,3 +426,8 @@ def _is_model_error(error):
     is recognised as well.
     """
     return any(cls.__name__ == "FlexureError" for cls in type(error).__mro__)
+
+
+# UnitReal is defined in slave_variables and kept importable from here (the bundled
+# flexure.fmu of an FMU takes its public names from this module)
+__all__ = ["TIME_TOLERANCE", "SafeSlave", "UnitReal", "escape_log"]

@@ -75,8 +75,15 @@ class Compliance:
     unreachable: list
     note: str = ""
 
-    def as_dict(self):
-        """The result as plain lists and strings (the `--json` entry)."""
+    def as_dict(self) -> dict[str, object]:
+        """The result as plain lists and strings (the `--json` entry).
+
+        Returns
+        -------
+        dict
+            "coordinates", "matrix" (m/N, ...), "units", "stiffness" (N/m, ..., or None),
+            "stiffness_units", "unreachable" and "note", JSON-ready.
+        """
         return {"coordinates": self.coordinates, "matrix": self.matrix.tolist(),
                 "units": self.units,
                 "stiffness": None if self.stiffness is None else self.stiffness.tolist(),
@@ -143,10 +150,31 @@ def compliance(model: Model, node: str, *, solution: StaticSolution | None = Non
                linear_model: LinearModel | None = None) -> Compliance:
     """The compliance matrix of `node` and its support stiffness, from K = K0 + G0.
 
-    In the configuration of `solution` (default: the static equilibrium under the scene's
-    loads), or of `linear_model` when given (it is reused, as `flexure analyze` does for
-    several nodes). Returns a Compliance (m/N, rad/(N m), ...). SceneError names an unknown
-    node; FlexureError a singular tangent stiffness (a buckling or a mechanism).
+    Parameters
+    ----------
+    model : Model
+    node : str
+        The node's name: a translational node (with, in the plane, the angle of the
+        rotational node joined to it) or a rotational node (module docstring).
+    solution : StaticSolution, optional
+        The configuration (default: the static equilibrium under the scene's loads).
+    linear_model : LinearModel, optional
+        The linearisation to use instead; it is reused, as `flexure analyze` does for
+        several nodes.
+
+    Returns
+    -------
+    Compliance
+        The matrix (m/N, rad/(N m), m/(N m), rad/N) and, where it is regular, the support
+        stiffness (N/m, N m/rad, ...).
+
+    Raises
+    ------
+    SceneError
+        `node` is not a node of the model.
+    FlexureError
+        The tangent stiffness is singular (at a buckling load, a mechanism, or DOFs without
+        stiffness).
     """
     from .linearization import linearize
 

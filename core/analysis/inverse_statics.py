@@ -22,7 +22,9 @@ nonlinear statics (the forces) for free.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -34,6 +36,9 @@ from ..model import Model
 from ..numerics.blas import blas_threads
 from .linearization import linearize
 from .statics import StaticSolution, static_equilibrium
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
 
 
 class InverseStaticsError(FlexureError, ValueError):
@@ -50,7 +55,23 @@ class InverseStatics:
     residual: float  # the largest |x_t - x_t*| at the solution, m or rad
 
     def coordinate(self, name: str) -> float:
-        """The value of the coordinate "NODE.AXIS" at the solution (m or rad)."""
+        """The value of one coordinate at the solution.
+
+        Parameters
+        ----------
+        name : str
+            The coordinate, "NODE.AXIS" ("3.x", "4.phi").
+
+        Returns
+        -------
+        float
+            Its value, m or rad (an Euler parameter: unitless).
+
+        Raises
+        ------
+        KeyError
+            The model has no such coordinate.
+        """
         return float(self.solution.x[self.solution.model.coordinate_index(name)])
 
 
@@ -62,37 +83,45 @@ def _indices(model, names, what):
 
 
 @blas_threads()
-def inverse_statics(model: Model, targets: dict, *, inputs=None, initial=None,
-                    start: InverseStatics | None = None, tolerance: float = 1e-10,
-                    max_iterations: int = 20) -> InverseStatics:
+def inverse_statics(model: Model, targets: dict[str, float], *,
+                    inputs: Sequence[str] | None = None,
+                    initial: ArrayLike | None = None, start: InverseStatics | None = None,
+                    tolerance: float = 1e-10, max_iterations: int = 20) -> InverseStatics:
     """The input forces that put the `targets` coordinates at their values at equilibrium
     (for an input an actuator drives: its drive signal, at the actuator's steady state).
 
     Parameters
     ----------
     model : Model
-    targets : dict
+    targets : dict of str to float
         {"NODE.AXIS": value (m or rad)}, as many as there are inputs used.
     inputs : sequence of str, optional
         The names of the inputs to use (default: all of the model's inputs).
-    initial : array, optional
-        The forces (N, N m) to start Newton from (default: zero, or those of `start`).
+    initial : array_like, optional
+        The forces (n,) to start Newton from: N, N m, or V for an actuator's drive signal
+        (default: zero, or those of `start`).
     start : InverseStatics, optional
         The solution for neighbouring targets (a previous point along a path): Newton starts
         from its forces and each equilibrium from its configuration.
     tolerance : float
         The largest allowed |x_t - x_t*| (m or rad).
     max_iterations : int
+        Newton iterations on the forces before ConvergenceError.
 
     Returns
     -------
     InverseStatics
+        The forces (N, N m or V, in the order of `inputs`), the equilibrium they give, the
+        iterations taken and the largest target error (m or rad).
 
     Raises
     ------
-    InverseStaticsError for unknown names or a count that does not match; ConvergenceError
-    when Newton does not converge or the compliance between inputs and targets is singular
-    (the inputs cannot move the targets independently).
+    InverseStaticsError
+        An unknown input or target name, a count of targets or initial forces that does not
+        match the inputs, or a target that is not finite.
+    ConvergenceError
+        Newton does not converge, or the compliance between inputs and targets is singular
+        (the inputs cannot move the targets independently).
     """
     ports = {port.name: port for port in model.inputs}
     names = list(ports) if inputs is None else list(inputs)

@@ -48,7 +48,7 @@ if TYPE_CHECKING:  # names for the annotations only
 class LinearModel:
     """The linearised equations of motion of a model in one configuration."""
 
-    model: object
+    model: Model
     solution: StaticSolution
     M0: np.ndarray
     C0: np.ndarray
@@ -56,20 +56,28 @@ class LinearModel:
     G0: np.ndarray
 
     @property
-    def K(self):
-        """The full tangent stiffness K0 + G0 (N/m)."""
+    def K(self) -> np.ndarray:
+        """The full tangent stiffness K0 + G0 (NDOF, NDOF), N/m in the DOF units (m, rad)."""
         return self.K0 + self.G0
 
     @property
-    def DF(self):
+    def DF(self) -> np.ndarray:
         """The first-order transfer function dx/dq (NX, NDOF) of the configuration."""
         return self.solution.config.DF
 
-    def state_matrices(self):
-        """(A, B, state names) of the first-order linear system dz/dt = A z + B du, z =
-        [dq, dq', di] (module docstring; di the coil currents, A): A (N, N), B (N, n_inputs)
-        with N = 2 NDOF + the coils, inputs N, N m for forces and moments and V for drive
-        signals."""
+    def state_matrices(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
+        """The first-order linear system dz/dt = A z + B du (module docstring).
+
+        Returns
+        -------
+        A : ndarray (N, N)
+            With N = 2 NDOF + the voltage-driven coils; the state z = [dq, dq', di] in the
+            DOF units (m, rad), their rates (m/s, rad/s) and the coil currents (A).
+        B : ndarray (N, n_inputs)
+            The inputs du: N, N m for forces and moments, V for drive signals.
+        names : list of str
+            The states: the DOF names, then "<dof>_dot", then "<actuator>.current".
+        """
         model, DF = self.model, self.DF
         n, coils = self.M0.shape[0], model.coil_actuators
         N = 2 * n + len(coils)
@@ -105,7 +113,26 @@ class LinearModel:
 @blas_threads()
 def linearize(model: Model, solution: StaticSolution | None = None, *,
               mechanics: Mechanics | None = None) -> LinearModel:
-    """Linearise `model` at `solution` (default: its static equilibrium under its loads)."""
+    """Linearise `model` at `solution`: M0, C0, K0 and G0 on the DOFs.
+
+    Parameters
+    ----------
+    model : Model
+    solution : StaticSolution, optional
+        The configuration (default: the static equilibrium under the model's loads).
+    mechanics : Mechanics, optional
+        The model's mechanics to reuse (default: a new one).
+
+    Returns
+    -------
+    LinearModel
+        M0 (kg), C0 (N s/m), K0 and G0 (N/m), all in the DOF units (m, rad).
+
+    Raises
+    ------
+    ConvergenceError
+        The static equilibrium, when it is solved here, does not converge.
+    """
     mech = mechanics or Mechanics(model)
     if solution is None:
         solution = static_equilibrium(model, mechanics=mech)

@@ -43,7 +43,29 @@ class Modes:
 @blas_threads()
 def natural_frequencies(model: Model, count: int | None = None, *,
                         linear_model: LinearModel | None = None) -> Modes:
-    """The lowest `count` (default: all) natural frequencies and mode shapes of `model`."""
+    """The lowest natural frequencies and mass-normalised mode shapes of `model`.
+
+    Parameters
+    ----------
+    model : Model
+    count : int, optional
+        How many, lowest first (default: all NDOF).
+    linear_model : LinearModel, optional
+        The linearisation to use (default: at the static equilibrium under the scene's
+        loads).
+
+    Returns
+    -------
+    Modes
+        Frequencies in Hz (negative for an unstable mode, omega^2 < 0), shapes on the DOFs
+        and on all coordinates, normalised to unit modal mass (kg).
+
+    Raises
+    ------
+    ConvergenceError
+        The model has no DOFs, its reduced mass matrix is not positive definite, or its
+        static equilibrium does not converge.
+    """
     lin = linear_model or linearize(model)
     if lin.M0.size == 0:
         raise ConvergenceError(f"{model.name!r} has no DOFs: no natural frequencies")
@@ -69,7 +91,25 @@ def buckling_load_factors(model: Model, count: int | None = None, *,
                           loads: np.ndarray | None = None) -> np.ndarray:
     """Load factors lambda (smallest first) at which the reference load buckles `model`.
 
-    The reference load is `loads` (NX,), else the scene's [buckling] forces, else its loads.
+    Parameters
+    ----------
+    model : Model
+    count : int, optional
+        How many, smallest first (default: all positive ones).
+    loads : ndarray (NX,), optional
+        The reference load on the coordinates, N (N m on rotations); default the scene's
+        [buckling] forces, else its loads.
+
+    Returns
+    -------
+    ndarray
+        The positive load factors (unitless multiples of the reference load), ascending.
+
+    Raises
+    ------
+    ConvergenceError
+        The structural stiffness K0 is singular, or the equilibrium under the reference load
+        does not converge.
     """
     if loads is None:
         loads = model.buckling_loads if model.buckling_loads is not None else model.loads

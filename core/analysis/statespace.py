@@ -29,13 +29,37 @@ from ..numerics.blas import blas_threads
 from .linearization import linearize
 
 if TYPE_CHECKING:  # names for the annotations only
+    import control
+    from numpy.typing import ArrayLike
+
     from ..model import Model
     from .linearization import LinearModel
 
 
 @blas_threads()
-def state_space(model: Model, *, linear_model: LinearModel | None = None):
-    """The linearised model as a control.StateSpace with named inputs, outputs and states."""
+def state_space(model: Model, *, linear_model: LinearModel | None = None) -> control.StateSpace:
+    """The linearised model as a control.StateSpace with named inputs, outputs and states.
+
+    Parameters
+    ----------
+    model : Model
+        With [inputs] and [outputs].
+    linear_model : LinearModel, optional
+        The linearisation to use (default: at the static equilibrium under the scene's
+        loads).
+
+    Returns
+    -------
+    control.StateSpace
+        States [dq, dq'] (m, rad; m/s, rad/s), plus the coil currents (A) of voltage-driven
+        actuators; inputs N, N m (V for an actuator's drive signal); outputs m, rad, m/s,
+        rad/s; D = 0.
+
+    Raises
+    ------
+    SceneError
+        The model declares no inputs or no outputs.
+    """
     import control  # 0.5 s to import (scipy.signal, matplotlib): only where it is used
 
     if not model.inputs or not model.outputs:
@@ -72,17 +96,39 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None):
 
 
 @blas_threads()
-def principal_gains(model: Model, frequencies_hz, *,
+def principal_gains(model: Model, frequencies_hz: ArrayLike, *,
                     linear_model: LinearModel | None = None) -> np.ndarray:
     """The singular values of the transfer matrix G(j w) = C (j w I - A)^-1 B of
-    `state_space(model)` (inputs N or N m, outputs m, m/s, rad, rad/s) at the frequencies (Hz):
-    an array (frequencies, min(outputs, inputs)), largest first at each frequency; the
-    principal gains whose peaks are the natural frequencies the inputs excite and the
-    outputs see (the chapter's Fig. 3.5).
+    `state_space(model)`: the principal gains whose peaks are the natural frequencies the
+    inputs excite and the outputs see (the chapter's Fig. 3.5).
 
     Evaluated through the eigenvectors of A, G(j w) = (C V) diag(1 / (j w - lambda))
     (V^-1 B), O(n) per frequency instead of a 2 NDOF solve, unless V is ill-conditioned
-    (cond > 1e8: defective or nearly so), where each frequency solves (j w I - A) X = B."""
+    (cond > 1e8: defective or nearly so), where each frequency solves (j w I - A) X = B.
+
+    Parameters
+    ----------
+    model : Model
+        With [inputs] and [outputs].
+    frequencies_hz : array_like
+        The frequencies, Hz, finite and >= 0.
+    linear_model : LinearModel, optional
+        The linearisation to use (default: at the static equilibrium under the scene's
+        loads).
+
+    Returns
+    -------
+    ndarray (n_frequencies, min(n_outputs, n_inputs))
+        The singular values, largest first at each frequency, in output units per input
+        unit (m/N, rad/(N m), m/(s N), ...).
+
+    Raises
+    ------
+    SceneError
+        The model declares no inputs or no outputs.
+    ValueError
+        A frequency is negative or not finite.
+    """
     system = state_space(model, linear_model=linear_model)
     A, B, C, D = (np.asarray(m, dtype=float) for m in (system.A, system.B, system.C, system.D))
     omega = 2.0 * np.pi * np.asarray(frequencies_hz, dtype=float).reshape(-1)

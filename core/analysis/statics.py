@@ -28,6 +28,7 @@ from ..mechanics.ports import input_values
 from ..numerics.blas import blas_threads
 
 if TYPE_CHECKING:  # names for the annotations only
+    from ..mechanics.kinematics import Configuration
     from ..model import Model
 
 
@@ -35,8 +36,8 @@ if TYPE_CHECKING:  # names for the annotations only
 class StaticSolution:
     """A static equilibrium: DOFs q, coordinates x, deformations e and stress resultants."""
 
-    model: object
-    config: object  # the kinematics Configuration
+    model: Model
+    config: Configuration
     stress_resultants: np.ndarray  # (NE,) N (truss, elongation), N (bending, as e2, e3 are m)
     load_factor: float
     iterations: int
@@ -47,19 +48,35 @@ class StaticSolution:
     port_values: np.ndarray | None = None
 
     @property
-    def q(self):
+    def q(self) -> np.ndarray:
+        """The DOFs (NDOF,) at the equilibrium, m or rad."""
         return self.config.q
 
     @property
-    def x(self):
+    def x(self) -> np.ndarray:
+        """The nodal coordinates (NX,) at the equilibrium, m or rad (Euler parameters
+        unitless)."""
         return self.config.x
 
-    def coordinates(self):
-        """{"NODE.COORD": value} in m and rad."""
+    def coordinates(self) -> dict[str, float]:
+        """The coordinates by name.
+
+        Returns
+        -------
+        dict of str to float
+            {"NODE.COORD": value} in m and rad (Euler parameters unitless).
+        """
         return dict(zip(self.model.coordinate_names, self.config.x.tolist(), strict=True))
 
-    def stresses(self):
-        """{"ELEMENT.eK": stress resultant} in N."""
+    def stresses(self) -> dict[str, float]:
+        """The stress resultants by deformation name.
+
+        Returns
+        -------
+        dict of str to float
+            {"ELEMENT.eK": stress resultant}, N: every deformation is a length, so a
+            bending or torsion resultant is a moment over l0.
+        """
         return dict(zip(self.model.deformation_names, self.stress_resultants.tolist(),
                         strict=True))
 
@@ -70,19 +87,46 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        mechanics: Mechanics | None = None,
                        inputs: dict | np.ndarray | None = None,
                        start: StaticSolution | None = None) -> StaticSolution:
-    """Solve the static equilibrium of `model` under its loads (or `loads`, (NX,) N).
+    """Solve the static equilibrium of `model` under its loads, stepped with Newton.
 
-    `inputs` ({name: value} or (n_inputs,): N, N m for a force or moment, V for the drive
-    signal of an input a voice-coil actuator drives) are held as well, stepped with the
-    loads: a force on its coordinate, a moment about a global axis through its generalised
-    force on the Euler parameters (`flexure.core.mechanics.ports`; it depends on the
-    orientation, so it cannot be given as `loads`), an actuator's force or moment at rest
-    (module docstring). `start`, an equilibrium of the same model under nearby loads and
-    inputs, is where Newton starts at the full load (a path of equilibria, e.g. inverse
-    statics along a move); if it does not converge from there, the load is stepped from the
-    unloaded configuration as without it. Returns a StaticSolution;
-    raises ConvergenceError naming the load step that failed, SceneError naming an unknown
-    input.
+    Parameters
+    ----------
+    model : Model
+    loads : ndarray (NX,), optional
+        Nodal forces on the coordinates, N (N m on rotations), instead of the scene's loads
+        (gravity is applied either way).
+    load_steps : int
+        Equal load increments (one when there is no load).
+    tolerance : float
+        Convergence when |dq| <= tolerance times the model's length scale (relative,
+        rotations counted as lengths through that scale).
+    max_iterations : int
+        Newton iterations per load step before the step is halved.
+    mechanics : Mechanics, optional
+        The model's mechanics to reuse (default: a new one).
+    inputs : dict of str to float or ndarray (n_inputs,), optional
+        Held inputs, stepped with the loads: N, N m for a force or moment, V for the drive
+        signal of an input a voice-coil actuator drives. A force acts on its coordinate, a
+        moment about a global axis through its generalised force on the Euler parameters
+        (`flexure.core.mechanics.ports`; it depends on the orientation, so it cannot be
+        given as `loads`), an actuator by its force or moment at rest (module docstring).
+    start : StaticSolution, optional
+        An equilibrium of the same model under nearby loads and inputs, where Newton starts
+        at the full load (a path of equilibria, e.g. inverse statics along a move); if it
+        does not converge from there, the load is stepped from the unloaded configuration.
+
+    Returns
+    -------
+    StaticSolution
+        The DOFs and coordinates (m, rad), stress resultants (N) and the held inputs.
+
+    Raises
+    ------
+    ConvergenceError
+        A load step does not converge after four halvings (it names the step and the load
+        factor).
+    SceneError
+        `inputs` names an unknown input or has the wrong length.
     """
     held = values = None
     if inputs is not None:

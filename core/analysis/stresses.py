@@ -23,13 +23,22 @@ released and DOF deformations plus the multipliers of the rigid ones (reaction f
 motion.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..mechanics.actuators import port_values
 from ..mechanics.ports import input_forces
 from ..numerics.blas import blas_threads
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from ..mechanics.mechanics import Mechanics
+    from ..model import Model
 
 
 @dataclass
@@ -43,12 +52,24 @@ class BeamStresses:
     lengths: np.ndarray  # (n,) m
     along: np.ndarray  # (n, POINTS) Pa at the fractions FRACTIONS of the length, p to q
 
-    def as_dict(self):
-        """{element: [s_vm at p, s_vm at q]} in Pa."""
+    def as_dict(self) -> dict[str, list[float]]:
+        """The end stresses by element.
+
+        Returns
+        -------
+        dict of str to list of float
+            {element: [s_vm at p, s_vm at q]} in Pa.
+        """
         return {name: row.tolist() for name, row in zip(self.names, self.von_mises, strict=True)}
 
-    def maximum(self):
-        """(element, end "p" or "q", s_vm in Pa) of the largest von Mises stress."""
+    def maximum(self) -> tuple[str, str, float]:
+        """The largest von Mises stress and where it is.
+
+        Returns
+        -------
+        (str, str, float)
+            The element, its end "p" or "q", and s_vm in Pa.
+        """
         flat = np.nanargmax(self.von_mises)
         i, j = divmod(int(flat), 2)
         return self.names[i], "pq"[j], float(self.von_mises[i, j])
@@ -86,8 +107,24 @@ def von_mises(forces, props, fractions=(0.0, 1.0)):
     return stress
 
 
-def beam_stresses(model, x, sigma):
-    """BeamStresses of `model` at coordinates x (NX,) with stress resultants sigma (NE,)."""
+def beam_stresses(model: Model, x: np.ndarray, sigma: np.ndarray) -> BeamStresses:
+    """Von Mises stresses at both ends of, and along, every beam and truss with a section.
+
+    Parameters
+    ----------
+    model : Model
+    x : ndarray (NX,)
+        The nodal coordinates, m and rad (Euler parameters unitless).
+    sigma : ndarray (NE,)
+        The stress resultants of every deformation, N (`StaticSolution.stress_resultants`,
+        `dynamic_stress_resultants`).
+
+    Returns
+    -------
+    BeamStresses
+        Von Mises stresses in Pa of the elements whose section has A > 0, with their end
+        nodes and lengths (m).
+    """
     names, stresses, starts, ends, lengths, along = [], [], [], [], [], []
     for group in model.groups:
         forces_of = getattr(group.kind, "section_forces", None)
@@ -136,14 +173,34 @@ def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=N
 
 
 @blas_threads()
-def stresses_along(model, states, *, inputs=None, mechanics=None):
-    """Von Mises stresses along a trajectory: (names, (n_times, n_beams, 2) Pa).
+def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None = None,
+                   mechanics: Mechanics | None = None) -> tuple[list[str], np.ndarray]:
+    """Von Mises stresses along a trajectory; the accelerations follow from the equations of
+    motion in each state.
 
-    states (n_times, 2 NDOF) = [q, qdot] as `SimulationResult` holds them (q, qdot side by
-    side), followed by the coil currents (A) of a model with voltage-driven actuators (zero
-    when left out); inputs (n_times, n_inputs) the held inputs (N, N m: the scene's forces
-    and moments; V for an actuator's drive signal; default zero). The accelerations follow
-    from the equations of motion in each state.
+    Parameters
+    ----------
+    model : Model
+    states : array_like (n_times, 2 NDOF [+ n_coils])
+        [q, qdot] as `SimulationResult` holds them (m, rad; m/s, rad/s), followed by the coil
+        currents (A) of a model with voltage-driven actuators (zero when left out).
+    inputs : array_like (n_times, n_inputs), optional
+        The held inputs: N, N m for the scene's forces and moments, V for an actuator's
+        drive signal (default zero).
+    mechanics : Mechanics, optional
+        The model's mechanics to reuse (default: a new one).
+
+    Returns
+    -------
+    names : list of str
+        The beams with a section, as in `BeamStresses.names`.
+    stresses : ndarray (n_times, n_beams, 2)
+        Von Mises stresses at the ends p and q, Pa.
+
+    Raises
+    ------
+    ConvergenceError
+        The kinematics of a state do not converge.
     """
     from ..mechanics.mechanics import Mechanics
 

@@ -34,9 +34,18 @@ An input without an actuator is a force or moment (N, N m) on its port, as witho
 actuator part (`flexure.core.engine.actuators`), used by the static and linear analyses.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..model import CURRENT, VOLTAGE
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from ..model import Model
 
 
 def amplifier_output(actuator, u):
@@ -73,19 +82,42 @@ def port_values(model, u, currents=None):
     return values
 
 
-def steady_port_values(model, u):
-    """The value (n_inputs,) of each port at rest under held inputs u (n_inputs,): u itself
-    for a force or moment, Km a(u) for a current drive, Km a(u) / R for a voltage drive
-    (i = a(u) / R)."""
+def steady_port_values(model: Model, u: ArrayLike) -> np.ndarray:
+    """The value each port carries at rest under held inputs u: u itself for a force or
+    moment, Km a(u) for a current drive, Km a(u) / R for a voltage drive (i = a(u) / R).
+
+    Parameters
+    ----------
+    model : Model
+    u : array_like (n_inputs,)
+        The held inputs: N, N m for a force or moment, V for an actuator's drive signal.
+
+    Returns
+    -------
+    ndarray (n_inputs,)
+        The forces and moments on the ports, N or N m (`ports.input_forces` makes them the
+        generalised force).
+    """
     return port_values(model, u, steady_currents(model, u))
 
 
-def steady_slopes(model, u):
-    """d (steady port value) / d u (n_inputs,) at held inputs u: 1 for a force or moment
-    input, Km a'(u) for a current drive (N/V, N m/V), Km a'(u) / R for a voltage drive; a'
-    the amplifier's slope (`amplifier_slope`). Times an input's unit generalised force
-    (`ports.input_columns`), the static generalised force per unit of the input (per V for a
-    drive signal)."""
+def steady_slopes(model: Model, u: ArrayLike) -> np.ndarray:
+    """d (steady port value) / d u at held inputs u: 1 for a force or moment input,
+    Km a'(u) for a current drive, Km a'(u) / R for a voltage drive; a' the amplifier's slope
+    (`amplifier_slope`). Times an input's unit generalised force (`ports.input_columns`),
+    the static generalised force per unit of the input (per V for a drive signal).
+
+    Parameters
+    ----------
+    model : Model
+    u : array_like (n_inputs,)
+        The held inputs: N, N m for a force or moment, V for an actuator's drive signal.
+
+    Returns
+    -------
+    ndarray (n_inputs,)
+        1 (unitless) for a force or moment input; N/V or N m/V for a drive signal.
+    """
     u = np.asarray(u, dtype=float).reshape(-1)
     slopes = np.ones(len(model.inputs))
     for actuator in model.actuators:

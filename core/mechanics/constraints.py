@@ -39,11 +39,26 @@ CLEAR_RCOND = 1e-7
 
 
 @blas_threads()
-def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict:
+def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[str, int]:
     """Raise ConstraintError unless `model` is exactly constrained at coordinates x.
 
-    The message names the DOF counts, the redundant constraints (element deformations) and the
-    free coordinates, as far as they apply. Returns the model's dof_count() when it passes.
+    Parameters
+    ----------
+    model : Model
+    x : ndarray (NX,), optional
+        The coordinates to check at, m and rad (default: the initial ones).
+
+    Returns
+    -------
+    dict of str to int
+        The model's `dof_count()`: "nx", "nxo", "neo", "ndof".
+
+    Raises
+    ------
+    ConstraintError
+        The model is over- or under-constrained, or its DOF count is wrong; the message
+        names the DOF counts, the redundant constraints (element deformations) and the free
+        coordinates, as far as they apply.
     """
     kin = Kinematics(model)
     if x is None:
@@ -109,10 +124,9 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict:
 
 
 @blas_threads()
-def choose_dofs(model: Model, x: np.ndarray | None = None) -> tuple | None:
-    """A valid set of DOFs for a model whose scene lists none: (coordinate_status,
-    deformation_status, names of the chosen DOFs), or None when the prescribed deformations
-    alone are dependent (over-constrained: `check_exact_constraint` then names them).
+def choose_dofs(model: Model, x: np.ndarray | None = None,
+                ) -> tuple[np.ndarray, np.ndarray, list[str]] | None:
+    """A valid set of DOFs for a model whose scene lists none.
 
     The DOFs must complete the rigid rows R of the constraint Jacobian (prescribed
     deformations x free coordinates, at x, default the initial coordinates) to a regular
@@ -123,7 +137,22 @@ def choose_dofs(model: Model, x: np.ndarray | None = None) -> tuple | None:
     deformations become DOF deformations. Among the candidates the choice is a QR
     factorisation with column pivoting of their projections: the ones that move most along
     the allowed motions first, ties in the scene's order. Rotations are scaled by the model's
-    length scale, as in the check."""
+    length scale, as in the check.
+
+    Parameters
+    ----------
+    model : Model
+    x : ndarray (NX,), optional
+        The coordinates to choose at, m and rad (default: the initial ones).
+
+    Returns
+    -------
+    (ndarray, ndarray, list of str) or None
+        The new coordinate statuses (NX,), deformation statuses (NE,) and the names of the
+        chosen DOFs; None when the prescribed deformations alone are dependent
+        (over-constrained) or no DOFs can take the allowed motions:
+        `check_exact_constraint` then names the problem.
+    """
     import scipy.linalg
 
     kin = Kinematics(model)
@@ -205,7 +234,20 @@ def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
     one by one, those that cannot be released first (their section has no stiffness for
     them), then the others in the scene's order; a row that adds nothing to the span of the
     rows kept before it is redundant and proposed for release. The rows kept are independent,
-    so the proposal releases exactly as many deformations as there are over-constraints."""
+    so the proposal releases exactly as many deformations as there are over-constraints.
+
+    Parameters
+    ----------
+    model : Model
+    x : ndarray (NX,), optional
+        The coordinates to check at, m and rad (default: the initial ones).
+
+    Returns
+    -------
+    list of str
+        The deformation names ("leaf.e2") to release; empty when the prescribed
+        deformations are independent.
+    """
     kin = Kinematics(model)
     x = model.initial_coordinates if x is None else x
     _, De = assembly.deformation_jacobian(model, x)

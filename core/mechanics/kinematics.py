@@ -14,8 +14,11 @@ First order: DF = dx/dq solves J DF = [0; I].  Second order: with the constraint
 H_i = d2 g_i / dx2, (D2F qdot) qdot = -J^-1 [ (DF qdot)^T H_i (DF qdot) ]_i.
 """
 
+from __future__ import annotations
+
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -24,6 +27,12 @@ import scipy.sparse.linalg
 
 from ..errors import ConvergenceError
 from . import assembly
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import ElementGroup, Model
+
+    # the constraint Hessians of `assembly.deformation_hessians`: (group, D2e (n, k, m, m))
+    Hessians = list[tuple[ElementGroup, np.ndarray]]
 
 # From this many free coordinates on, J is factored as a sparse matrix (SuperLU): a deformation
 # depends on at most 14 coordinates, so a large J is almost empty and its dense LU (O(n^3))
@@ -75,9 +84,20 @@ class Configuration:
 
 
 class Kinematics:
-    """Solves a model's constraints; one instance per model, reused across evaluations."""
+    """Solves a model's constraints; one instance per model, reused across evaluations.
 
-    def __init__(self, model, *, tolerance=1e-12, max_iterations=30):
+    Parameters
+    ----------
+    model : Model
+    tolerance : float
+        Newton stops when its correction is below `tolerance` times the model's length
+        scale (relative; m through that scale).
+    max_iterations : int
+        Newton iterations before ConvergenceError.
+    """
+
+    def __init__(self, model: Model, *, tolerance: float = 1e-12,
+                 max_iterations: int = 30) -> None:
         self.model = model
         self.tolerance = tolerance
         self.max_iterations = max_iterations
@@ -96,22 +116,56 @@ class Kinematics:
         self.selector[self.n_rigid + n_edof + np.arange(n_xdof), np.arange(n_xdof)] = 1.0
         self.selector = self.selector[:n_free]  # J is square only in an exactly counted model
 
-    def dofs_of(self, x):
-        """The DOF values q (NDOF,) of coordinates x."""
+    def dofs_of(self, x: np.ndarray) -> np.ndarray:
+        """The DOF values of coordinates x: the DOF coordinates, then the DOF deformations.
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates, m and rad (Euler parameters unitless).
+
+        Returns
+        -------
+        ndarray (NDOF,)
+            q, m or rad.
+        """
         e = assembly.deformations(self.model, x)
         return np.concatenate([x[self.model.dof_coordinates], e[self.model.dof_deformations]])
 
-    def constraint_jacobian(self, De):
-        """J (free x free): rows of rigid and DOF deformations, then unit rows of DOF coords."""
+    def constraint_jacobian(self, De: np.ndarray) -> np.ndarray:
+        """The dense constraint Jacobian J on the free coordinates: the rows of the rigid and
+        DOF deformations, then unit rows of the DOF coordinates.
+
+        Parameters
+        ----------
+        De : ndarray (NE, NX)
+            The deformation Jacobian de/dx (m/m, m/rad).
+
+        Returns
+        -------
+        ndarray (n_free, n_free)
+            J, in the units of De.
+        """
         J = np.zeros((self.free.size, self.free.size))
         n_def = self.constraint_rows.size
         J[:n_def] = De[np.ix_(self.constraint_rows, self.free)]
         J[n_def + np.arange(self.dof_positions.size), self.dof_positions] = 1.0
         return J
 
-    def factor(self, De):
+    def factor(self, De: np.ndarray) -> JacobianFactor:
         """The LU factors of J at the deformation Jacobian De: sparse from SPARSE_FROM free
-        coordinates on (its pattern, the elements' coordinates, is the same at every x)."""
+        coordinates on (its pattern, the elements' coordinates, is the same at every x).
+
+        Parameters
+        ----------
+        De : ndarray (NE, NX)
+            The deformation Jacobian de/dx (m/m, m/rad).
+
+        Returns
+        -------
+        JacobianFactor
+            Whose `solve` gives non-finite values where J is singular.
+        """
         if self.free.size < SPARSE_FROM:
             return JacobianFactor(self.constraint_jacobian(De))
         if self._pattern is None:
@@ -140,8 +194,24 @@ class Kinematics:
         source_rows, source_columns = source_rows[keep], source_columns[keep]
         return source_rows, source_columns, row_of[source_rows], column_of[source_columns]
 
-    def residual(self, x, e, q):
-        """Constraint residual g (free,) of coordinates x with deformations e for DOFs q."""
+    def residual(self, x: np.ndarray, e: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The constraint residual g: the rigid deformations, the DOF deformations minus
+        their DOF values, the DOF coordinates minus theirs.
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates, m and rad.
+        e : ndarray (NE,)
+            Their deformations, m.
+        q : ndarray (NDOF,)
+            The DOF values, m or rad.
+
+        Returns
+        -------
+        ndarray (n_free,)
+            g, m (rad on a DOF angle).
+        """
         model = self.model
         n_xdof = model.dof_coordinates.size
         return np.concatenate([
@@ -150,11 +220,26 @@ class Kinematics:
             x[model.dof_coordinates] - q[:n_xdof],
         ])
 
-    def solve(self, q, x_start):
-        """The configuration for DOFs q (NDOF,), by Newton's method from x_start (NX,).
+    def solve(self, q: np.ndarray, x_start: np.ndarray) -> Configuration:
+        """The configuration for DOFs q, by Newton's method on the constraints.
 
-        Raises ConvergenceError (with the residual) when the constraints cannot be solved,
-        e.g. beyond a singular configuration.
+        Parameters
+        ----------
+        q : ndarray (NDOF,)
+            The DOF values, m or rad.
+        x_start : ndarray (NX,)
+            The coordinates to start from (m, rad), e.g. the previous solution.
+
+        Returns
+        -------
+        Configuration
+            x, e, De, the factors of J and DF at q.
+
+        Raises
+        ------
+        ConvergenceError
+            The constraints cannot be solved (J singular, or Newton does not converge:
+            beyond the mechanism's reach or at a singular configuration).
         """
         x = np.array(x_start, dtype=float)
         step_tolerance = self.tolerance * self.length_scale
@@ -182,16 +267,45 @@ class Kinematics:
             )
         return self.configuration(q, x)
 
-    def configuration(self, q, x):
-        """First-order kinematics at coordinates x that satisfy the constraints for q."""
+    def configuration(self, q: np.ndarray, x: np.ndarray) -> Configuration:
+        """First-order kinematics at coordinates x that satisfy the constraints for q.
+
+        Parameters
+        ----------
+        q : ndarray (NDOF,)
+            The DOF values, m or rad.
+        x : ndarray (NX,)
+            Coordinates that satisfy the constraints for q (m, rad); not checked.
+
+        Returns
+        -------
+        Configuration
+            With e, De, the factors of J and DF = dx/dq (NX, NDOF).
+        """
         e, De = assembly.deformation_jacobian(self.model, x)
         lu = self.factor(De)
         DF = np.zeros((self.model.nx, self.selector.shape[1]))
         DF[self.free] = lu.solve(self.selector)
         return Configuration(q=np.asarray(q, float), x=x, e=e, De=De, lu=lu, DF=DF)
 
-    def convective_acceleration(self, config, qdot, hessians=None):
-        """(D2F qdot) qdot (NX,): the coordinate acceleration at zero DOF acceleration."""
+    def convective_acceleration(self, config: Configuration, qdot: np.ndarray,
+                                hessians: Hessians | None = None) -> np.ndarray:
+        """(D2F qdot) qdot: the coordinate acceleration at zero DOF acceleration.
+
+        Parameters
+        ----------
+        config : Configuration
+        qdot : ndarray (NDOF,)
+            The DOF velocities, m/s or rad/s.
+        hessians : list of (ElementGroup, ndarray), optional
+            The deformation Hessians at config.x (`assembly.deformation_hessians`), if
+            already computed.
+
+        Returns
+        -------
+        ndarray (NX,)
+            m/s^2 or rad/s^2 (1/s^2 on Euler parameters).
+        """
         if hessians is None:
             hessians = assembly.deformation_hessians(self.model, config.x)
         xdot = config.DF @ qdot
@@ -202,8 +316,22 @@ class Kinematics:
         result[self.free] = -config.lu.solve(rhs)
         return result
 
-    def second_order(self, config, hessians=None):
-        """D2F (NX, NDOF, NDOF): d2x / dq_j dq_k."""
+    def second_order(self, config: Configuration,
+                     hessians: Hessians | None = None) -> np.ndarray:
+        """The second-order transfer function D2F = d2x / dq_j dq_k.
+
+        Parameters
+        ----------
+        config : Configuration
+        hessians : list of (ElementGroup, ndarray), optional
+            The deformation Hessians at config.x (`assembly.deformation_hessians`), if
+            already computed.
+
+        Returns
+        -------
+        ndarray (NX, NDOF, NDOF)
+            In coordinate units per DOF unit squared (1/m, m/rad^2, ...).
+        """
         if hessians is None:
             hessians = assembly.deformation_hessians(self.model, config.x)
         ndof = config.DF.shape[1]
@@ -219,11 +347,23 @@ class Kinematics:
         D2F[self.free] = -solved.reshape(self.free.size, ndof, ndof)
         return D2F
 
-    def multipliers(self, config, generalized_force):
-        """lambda = J^-T r on the free coordinates, for a coordinate-space force r (NX,).
+    def multipliers(self, config: Configuration, generalized_force: np.ndarray) -> np.ndarray:
+        """lambda = J^-T r on the free coordinates, for a coordinate-space force r.
 
         The entries of rigid deformations are their stress resultants (reaction forces);
         those of the DOFs are the unbalanced generalised forces DF^T r.
+
+        Parameters
+        ----------
+        config : Configuration
+        generalized_force : ndarray (NX,)
+            r, N (N m on rotations).
+
+        Returns
+        -------
+        ndarray (n_free,)
+            N for the deformation rows (every deformation is a length); N or N m for the
+            DOF coordinates.
         """
         return config.lu.solve(generalized_force[self.free], transposed=True)
 

@@ -15,7 +15,10 @@ they form the stress resultants sigma of every deformation. The tangent stiffnes
                                     DOF forces enter through the DOF-deformation rows)
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,12 +26,16 @@ from . import assembly
 from .kinematics import Kinematics
 from .ports import input_forces, input_stiffness
 
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+    from .kinematics import Configuration, Hessians
+
 
 @dataclass
 class Mechanics:
     """A model's kinematics, inertia and constitutive matrices, built once and reused."""
 
-    model: object
+    model: Model
 
     def __post_init__(self):
         model = self.model
@@ -41,22 +48,59 @@ class Mechanics:
         self.D = D[np.ix_(stressed, stressed)]
         self.has_damping = bool(np.any(self.D))
 
-    def initial_configuration(self):
-        """The configuration of the scene's initial coordinates."""
+    def initial_configuration(self) -> Configuration:
+        """The configuration of the scene's initial coordinates.
+
+        Returns
+        -------
+        Configuration
+            At the model's initial coordinates (m, rad), with their DOF values.
+        """
         x0 = self.model.initial_coordinates
         return self.kinematics.configuration(self.kinematics.dofs_of(x0), x0.copy())
 
-    def external_force(self, x, load_factor=1.0, loads=None, inputs=None):
-        """Nodal loads plus gravity (NX,), both scaled by load_factor; with `inputs`
-        (n_inputs,) N, N m also their generalised force at x (`ports.input_forces`)."""
+    def external_force(self, x: np.ndarray, load_factor: float = 1.0,
+                       loads: np.ndarray | None = None,
+                       inputs: np.ndarray | None = None) -> np.ndarray:
+        """Nodal loads plus gravity, and the inputs' generalised force, scaled by a factor.
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates, m and rad (Euler parameters unitless).
+        load_factor : float
+            The factor on every load (unitless).
+        loads : ndarray (NX,), optional
+            Nodal forces, N (N m on rotations); default the model's loads.
+        inputs : ndarray (n_inputs,), optional
+            Values on the input ports, N or N m (`ports.input_forces` at x).
+
+        Returns
+        -------
+        ndarray (NX,)
+            f, N (N m on rotations).
+        """
         loads = self.model.loads if loads is None else loads
         force = load_factor * (loads + self.inertia.gravity_force(x))
         if inputs is not None:
             force += load_factor * input_forces(self.model, x, inputs)
         return force
 
-    def constitutive_stress(self, config, edot=None):
-        """sigma_c (NE,): S e (+ D edot) on stressed deformations, zero on rigid ones."""
+    def constitutive_stress(self, config: Configuration,
+                            edot: np.ndarray | None = None) -> np.ndarray:
+        """sigma_c = S e (+ D edot) on the stressed deformations, zero on the rigid ones.
+
+        Parameters
+        ----------
+        config : Configuration
+        edot : ndarray (NE,), optional
+            The deformation rates, m/s, for the damping (default: none).
+
+        Returns
+        -------
+        ndarray (NE,)
+            sigma_c, N.
+        """
         sigma = np.zeros(config.e.size)
         stressed = self.stressed
         sigma[stressed] = self.S @ config.e[stressed]
@@ -64,36 +108,111 @@ class Mechanics:
             sigma[stressed] += self.D @ edot[stressed]
         return sigma
 
-    def stress_resultants(self, config, force_balance, sigma_c):
-        """sigma (NE,) of every deformation: sigma_c plus the multipliers lambda = J^-T r_x."""
+    def stress_resultants(self, config: Configuration, force_balance: np.ndarray,
+                          sigma_c: np.ndarray) -> np.ndarray:
+        """sigma of every deformation: sigma_c plus the multipliers lambda = J^-T r_x.
+
+        Parameters
+        ----------
+        config : Configuration
+        force_balance : ndarray (NX,)
+            r_x, the coordinate-space force balance, N (N m on rotations).
+        sigma_c : ndarray (NE,)
+            The constitutive stress resultants, N.
+
+        Returns
+        -------
+        ndarray (NE,)
+            sigma, N (reaction forces on the rigid deformations).
+        """
         kin = self.kinematics
         multipliers = kin.multipliers(config, force_balance)
         sigma = sigma_c.copy()
         sigma[kin.constraint_rows] += multipliers[: kin.constraint_rows.size]
         return sigma
 
-    def static_balance(self, config, load_factor=1.0, loads=None, inputs=None):
-        """(Q, r_x, sigma): the generalised force on the DOFs at rest, its coordinate-space
-        force balance and the stress resultants of all deformations (under the loads and,
-        if given, the inputs (n_inputs,) N, N m)."""
+    def static_balance(self, config: Configuration, load_factor: float = 1.0,
+                       loads: np.ndarray | None = None, inputs: np.ndarray | None = None,
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The force balance at rest under the loads and, if given, the inputs.
+
+        Parameters
+        ----------
+        config : Configuration
+        load_factor : float
+            The factor on every load (unitless).
+        loads : ndarray (NX,), optional
+            Nodal forces, N (N m on rotations); default the model's loads.
+        inputs : ndarray (n_inputs,), optional
+            Values on the input ports, N or N m.
+
+        Returns
+        -------
+        Q : ndarray (NDOF,)
+            The unbalanced generalised force on the DOFs, N or N m.
+        r_x : ndarray (NX,)
+            Its coordinate-space force balance, N (N m on rotations).
+        sigma : ndarray (NE,)
+            The stress resultants of every deformation, N.
+        """
         sigma_c = self.constitutive_stress(config)
         r_x = self.external_force(config.x, load_factor, loads, inputs) - config.De.T @ sigma_c
         Q = config.DF.T @ r_x
         return Q, r_x, self.stress_resultants(config, r_x, sigma_c)
 
-    def structural_stiffness(self, config):
-        """K0 = DF^T De_s^T S De_s DF (NDOF, NDOF)."""
+    def structural_stiffness(self, config: Configuration) -> np.ndarray:
+        """The structural stiffness K0 = DF^T De_s^T S De_s DF.
+
+        Parameters
+        ----------
+        config : Configuration
+
+        Returns
+        -------
+        ndarray (NDOF, NDOF)
+            N/m in the DOF units (N m/rad on an angle DOF).
+        """
         DeF = config.De[self.stressed] @ config.DF
         return DeF.T @ self.S @ DeF
 
-    def damping_matrix(self, config):
-        """C0 = DF^T De_s^T D De_s DF (NDOF, NDOF)."""
+    def damping_matrix(self, config: Configuration) -> np.ndarray:
+        """The damping matrix C0 = DF^T De_s^T D De_s DF.
+
+        Parameters
+        ----------
+        config : Configuration
+
+        Returns
+        -------
+        ndarray (NDOF, NDOF)
+            N s/m in the DOF units (N m s/rad on an angle DOF).
+        """
         DeF = config.De[self.stressed] @ config.DF
         return DeF.T @ self.D @ DeF
 
-    def geometric_stiffness(self, config, sigma, load_factor=1.0, hessians=None, inputs=None):
-        """G0 = DF^T (sum_i sigma_i d2e_i/dx2 - df/dx) DF (NDOF, NDOF); df/dx includes the
-        load stiffness of the moment inputs when `inputs` (n_inputs,) are given."""
+    def geometric_stiffness(self, config: Configuration, sigma: np.ndarray,
+                            load_factor: float = 1.0, hessians: Hessians | None = None,
+                            inputs: np.ndarray | None = None) -> np.ndarray:
+        """The geometric stiffness G0 = DF^T (sum_i sigma_i d2e_i/dx2 - df/dx) DF.
+
+        Parameters
+        ----------
+        config : Configuration
+        sigma : ndarray (NE,)
+            The stress resultants of every deformation, N.
+        load_factor : float
+            The factor on gravity and the inputs in df/dx (unitless).
+        hessians : list of (ElementGroup, ndarray), optional
+            The deformation Hessians at config.x, if already computed.
+        inputs : ndarray (n_inputs,), optional
+            Values on the input ports, N or N m: df/dx then includes the load stiffness of
+            the moment inputs.
+
+        Returns
+        -------
+        ndarray (NDOF, NDOF)
+            N/m in the DOF units (N m/rad on an angle DOF).
+        """
         if hessians is None:
             hessians = assembly.deformation_hessians(self.model, config.x)
         H = assembly.weighted_hessian(self.model, hessians, sigma)
@@ -102,6 +221,16 @@ class Mechanics:
             H -= load_factor * input_stiffness(self.model, config.x, inputs)
         return config.DF.T @ H @ config.DF
 
-    def mass_matrix(self, config):
-        """M0 = DF^T M DF (NDOF, NDOF) in kg (and kg m, kg m^2 for rotations)."""
+    def mass_matrix(self, config: Configuration) -> np.ndarray:
+        """The reduced mass matrix M0 = DF^T M DF.
+
+        Parameters
+        ----------
+        config : Configuration
+
+        Returns
+        -------
+        ndarray (NDOF, NDOF)
+            kg (kg m, kg m^2 where an angle DOF is involved).
+        """
         return config.DF.T @ self.inertia.mass_matrix(config.x) @ config.DF

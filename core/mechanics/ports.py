@@ -27,17 +27,44 @@ from `input_direction` and `output_gradient`. The compiled twins are in
 `flexure.core.engine.ports`.
 """
 
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..errors import SceneError
 from ..numerics.rotations import RATES_TENSOR, global_rates_matrix, rotation_vector_derivatives
 
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from ..model import Model, Port
+
 AXIS_INDEX = {"rx": 0, "ry": 1, "rz": 2}
 
 
-def input_values(model, inputs):
-    """The inputs (n_inputs,) N, N m of `inputs`: a {name: value} dict (the others zero) or a
-    sequence in the model's order. SceneError names an unknown input or a wrong length."""
+def input_values(model: Model, inputs: Mapping[str, float] | ArrayLike) -> np.ndarray:
+    """The model's inputs as an array, from a dict by name or a sequence.
+
+    Parameters
+    ----------
+    model : Model
+    inputs : dict of str to float or array_like (n_inputs,)
+        {name: value} (the others zero) or the values in the model's order: N, N m for a
+        force or moment, V for an actuator's drive signal.
+
+    Returns
+    -------
+    ndarray (n_inputs,)
+        The inputs in the model's order, in the same units.
+
+    Raises
+    ------
+    SceneError
+        An unknown input name, a wrong length, or a value that is not finite.
+    """
     names = [port.name for port in model.inputs]
     if isinstance(inputs, dict):
         u = np.zeros(len(names))
@@ -90,9 +117,31 @@ def input_stiffness(model, x, u):
     return H
 
 
-def output_value(model, port, x, xdot=None):
-    """The output `port` at coordinates x (and velocities xdot, for a velocity output): x_c
-    or xdot_c; phi_k (rad) or omega_k = 2 E_k lambda_dot (rad/s) about axis k."""
+def output_value(model: Model, port: Port, x: np.ndarray,
+                 xdot: np.ndarray | None = None) -> float:
+    """The value of an output: x_c or xdot_c; phi_k or omega_k = 2 E_k lambda_dot about a
+    global axis k.
+
+    Parameters
+    ----------
+    model : Model
+    port : Port
+        One of the model's outputs.
+    x : ndarray (NX,)
+        The coordinates, m and rad (Euler parameters unitless).
+    xdot : ndarray (NX,), optional
+        Their rates (m/s, rad/s, 1/s); needed by a velocity output.
+
+    Returns
+    -------
+    float
+        m or rad for a position output, m/s or rad/s for a velocity output.
+
+    Raises
+    ------
+    ValueError
+        A velocity output without `xdot`.
+    """
     velocity = port.quantity == "velocity"
     if velocity and xdot is None:
         raise ValueError(f"output {port.name!r} is a velocity: it needs the velocities xdot")
@@ -122,10 +171,26 @@ def output_gradient(model, port, x):
     return row
 
 
-def output_rows(model, x, DF, ports=None):
-    """C (n_outputs, NDOF): d y / d q of the outputs (`ports`, default the model's) at a
-    configuration with coordinates x and DF = dx/dq; position and velocity outputs alike (a
-    velocity output's row multiplies qdot)."""
+def output_rows(model: Model, x: np.ndarray, DF: np.ndarray,
+                ports: Sequence[Port] | None = None) -> np.ndarray:
+    """C = d y / d q of the outputs at a configuration; position and velocity outputs alike
+    (a velocity output's row multiplies qdot).
+
+    Parameters
+    ----------
+    model : Model
+    x : ndarray (NX,)
+        The coordinates, m and rad (Euler parameters unitless).
+    DF : ndarray (NX, NDOF)
+        The first-order transfer function dx/dq at x.
+    ports : sequence of Port, optional
+        The outputs (default: the model's).
+
+    Returns
+    -------
+    ndarray (n_ports, NDOF)
+        The output per unit DOF: m/m, m/rad, rad/m or rad/rad (the same for their rates).
+    """
     ports = model.outputs if ports is None else ports
     C = np.zeros((len(ports), DF.shape[1]))
     for row, port in enumerate(ports):
@@ -147,9 +212,26 @@ def output_dofs(model, ports=None):
                     dtype=np.int64)
 
 
-def input_columns(model, x, ports=None):
-    """b (NX, n_inputs): the generalised force of a unit value of each input (`ports`,
-    default the model's) at coordinates x (`input_direction`)."""
+def input_columns(model: Model, x: np.ndarray,
+                  ports: Sequence[Port] | None = None) -> np.ndarray:
+    """b: the generalised force of a unit value of each input at coordinates x
+    (`input_direction`).
+
+    Parameters
+    ----------
+    model : Model
+    x : ndarray (NX,)
+        The coordinates, m and rad (Euler parameters unitless); a moment's column depends on
+        its node's orientation.
+    ports : sequence of Port, optional
+        The inputs (default: the model's).
+
+    Returns
+    -------
+    ndarray (NX, n_ports)
+        Unitless: a unit force (per N) on a coordinate, or 2 E_k(lambda)^T (per N m) on the
+        Euler parameters of a moment about axis k.
+    """
     ports = model.inputs if ports is None else ports
     b = np.zeros((model.nx, len(ports)))
     for column, port in enumerate(ports):
@@ -160,8 +242,22 @@ def input_columns(model, x, ports=None):
     return b
 
 
-def port_description(model, port, *, is_input):
-    """What a port is, in words (the FMU's variable descriptions)."""
+def port_description(model: Model, port: Port, *, is_input: bool) -> str:
+    """What a port is, in words (the FMU's variable descriptions).
+
+    Parameters
+    ----------
+    model : Model
+    port : Port
+        One of the model's inputs or outputs.
+    is_input : bool
+        Whether `port` is an input (a force or moment) or an output (a position or velocity).
+
+    Returns
+    -------
+    str
+        E.g. "force on coordinate 3.x", "moment about the global z axis on node 4".
+    """
     if port.about_axis:
         node = model.coordinate_node[port.euler[0]]
         axis = port.axis[1]

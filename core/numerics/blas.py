@@ -83,11 +83,26 @@ class _BlasThreads(ContextDecorator):
         return False
 
 
-def blas_threads(threads=None):
-    """A context (and decorator) that limits the BLAS thread pools to `threads` (default
-    `default_threads()`) while it is open and restores the previous limits when it closes.
+def blas_threads(threads: int | None = None) -> ContextDecorator:
+    """A context (and decorator) that limits the BLAS thread pools while it is open and
+    restores the previous limits when it closes.
 
     Nested contexts are cheap and change nothing: the outermost one sets the limit.
+
+    Parameters
+    ----------
+    threads : int, optional
+        The BLAS thread count, >= 1 (default `default_threads()`: FLEXURE_BLAS_THREADS, or 1).
+
+    Returns
+    -------
+    contextlib.ContextDecorator
+        Use it in a `with` statement or as a function decorator.
+
+    Raises
+    ------
+    ValueError
+        `threads` is not a positive integer; on entry, FLEXURE_BLAS_THREADS is not one.
     """
     if threads is not None and (not isinstance(threads, int) or threads < 1):
         raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")

@@ -27,7 +27,8 @@ built from (`Model.scene`).
 from __future__ import annotations
 
 import copy
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 from ..errors import SceneError
 from .building import build_model
@@ -40,10 +41,27 @@ __all__ = ["Scene", "to_toml"]
 
 
 class Scene:
-    """A scene being built in Python; `build()` makes its Model, `to_toml()` its file."""
+    """A scene being built in Python; `build()` makes its Model, `to_toml()` its file.
 
-    def __init__(self, name: str, *, dimension: int = 2, gravity=None, description: str = "",
-                 tunable=()):
+    Every method that adds something returns the scene, so calls can be chained.
+
+    Parameters
+    ----------
+    name : str
+        The scene's name ([scene] name).
+    dimension : int
+        2 (planar) or 3 (spatial).
+    gravity : sequence of float, optional
+        The gravitational acceleration, m/s^2, one component per dimension (default none).
+    description : str
+        A line that says what the scene is.
+    tunable : sequence of str
+        Dotted scene keys a user may tune without rebuilding ([scene] tunable).
+    """
+
+    def __init__(self, name: str, *, dimension: int = 2,
+                 gravity: Sequence[float] | None = None, description: str = "",
+                 tunable: Sequence[str] = ()) -> None:
         header = {"name": name, "dimension": dimension}
         if description:
             header["description"] = description
@@ -58,62 +76,237 @@ class Scene:
         """How messages name this scene."""
         return f"<scene {self.data['scene']['name']}>"
 
-    def section(self, name: str, **properties) -> Scene:
-        """A [sections.NAME]: E (Pa), width, height, diameter (m), rho (kg/m^3), or the
-        properties directly (EA N, EI N m^2, rho_A kg/m, damping EdA N s, ...)."""
+    def section(self, name: str, **properties: Any) -> Scene:
+        """Add a [sections.NAME].
+
+        Parameters
+        ----------
+        name : str
+        **properties : float or str
+            E (Pa), width, height, diameter (m), rho (kg/m^3), or the properties directly
+            (EA N, EI N m^2, rho_A kg/m, damping EdA N s, ...): the scene format's keys.
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            A section of that name was added already.
+        """
         return self._add("sections", name, properties)
 
-    def node(self, name: str, **keys) -> Scene:
-        """A [nodes.NAME]: position (m) for a translational node, angle (rad, planar) or
-        rotation (rotation vector, rad, spatial) for a rotational one; fixed, dof (a spatial
-        rotational node's "rx", "ry", "rz"), mass (kg), inertia (kg m^2), force (N), moment
-        (N m, planar)."""
+    def node(self, name: str, **keys: Any) -> Scene:
+        """Add a [nodes.NAME].
+
+        Parameters
+        ----------
+        name : str
+        **keys
+            position (m) for a translational node, angle (rad, planar) or rotation (rotation
+            vector, rad, spatial) for a rotational one; fixed, dof (a spatial rotational
+            node's "rx", "ry", "rz"), mass (kg), inertia (kg m^2), force (N), moment (N m,
+            planar).
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            A node of that name was added already.
+        """
         return self._add("nodes", name, keys)
 
-    def element(self, name: str, type: str, nodes, *, section: str, **keys) -> Scene:
-        """An [elements.NAME] of `type` (PLTRUSS, PLBEAM, TRUSS, BEAM) on `nodes`; released,
-        dof, segments, y_axis (BEAM) as in the scene format."""
+    def element(self, name: str, type: str, nodes: Sequence[str], *, section: str,
+                **keys: Any) -> Scene:
+        """Add an [elements.NAME].
+
+        Parameters
+        ----------
+        name : str
+        type : str
+            A registered element type (`flexure.core.elements.ELEMENT_TYPES`): PLTRUSS,
+            PLBEAM, PLSPRING, TRUSS, BEAM, SPRING.
+        nodes : sequence of str
+            Its nodes, in the element's order.
+        section : str
+            The name of its section.
+        **keys
+            released, dof, segments, y_axis (BEAM) as in the scene format.
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            An element of that name was added already.
+        """
         return self._add("elements", name, {"type": type, "nodes": list(nodes),
                                             "section": section, **keys})
 
     def release(self, element: str, *deformations: str) -> Scene:
-        """Release deformations of an element already added (SPACAR's RLSE)."""
+        """Release deformations of an element already added (SPACAR's RLSE).
+
+        Parameters
+        ----------
+        element : str
+            The element's name.
+        *deformations : str
+            Its deformations to release ("e2", "e3").
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            No element of that name was added yet.
+        """
         table = self._existing("elements", element)
         released = list(table.get("released", []))
         table["released"] = released + [d for d in deformations if d not in released]
         return self
 
     def input(self, name: str, *, node: str, coordinate: str) -> Scene:
-        """An [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate, or on a
-        3-D rotational node a moment (N m) about a global axis (coordinate "rx", "ry", "rz")."""
+        """Add an [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate, or
+        on a 3-D rotational node a moment (N m) about a global axis.
+
+        Parameters
+        ----------
+        name : str
+        node : str
+        coordinate : str
+            "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            An input of that name was added already.
+        """
         return self._add("inputs", name, {"node": node, "coordinate": coordinate})
 
-    def actuator(self, name: str, *, input: str, **keys) -> Scene:
-        """An [actuators.NAME]: a voice-coil actuator driving the input `input` (which becomes
-        its drive signal, V); force_constant (N/A), resistance (ohm), inductance (H), drive
-        ("voltage" or "current"), amplifier_gain (V/V or A/V), saturation (V or A)."""
+    def actuator(self, name: str, *, input: str, **keys: Any) -> Scene:
+        """Add an [actuators.NAME]: a voice-coil actuator driving an input.
+
+        Parameters
+        ----------
+        name : str
+        input : str
+            The input it drives, which becomes its drive signal (V).
+        **keys
+            force_constant (N/A), resistance (ohm), inductance (H), drive ("voltage" or
+            "current"), amplifier_gain (V/V or A/V), saturation (V or A).
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            An actuator of that name was added already.
+        """
         return self._add("actuators", name, {"input": input, **keys})
 
     def output(self, name: str, *, node: str, coordinate: str,
                quantity: str = "position") -> Scene:
-        """An [outputs.NAME]: the position (m, rad) or velocity of one coordinate, or on a 3-D
-        rotational node the angle (rad) or angular velocity about a global axis ("rx", ...)."""
+        """Add an [outputs.NAME]: the position or velocity of one coordinate, or on a 3-D
+        rotational node the angle or angular velocity about a global axis.
+
+        Parameters
+        ----------
+        name : str
+        node : str
+        coordinate : str
+            "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
+        quantity : str
+            "position" (m, rad) or "velocity" (m/s, rad/s).
+
+        Returns
+        -------
+        Scene
+            This scene.
+
+        Raises
+        ------
+        SceneError
+            An output of that name was added already.
+        """
         return self._add("outputs", name, {"node": node, "coordinate": coordinate,
                                            "quantity": quantity})
 
-    def buckling_load(self, node: str, force) -> Scene:
-        """Add a force (N) to the buckling analysis' reference load ([buckling] forces)."""
+    def buckling_load(self, node: str, force: Sequence[float]) -> Scene:
+        """Add a force to the buckling analysis' reference load ([buckling] forces).
+
+        Parameters
+        ----------
+        node : str
+            A translational node.
+        force : sequence of float
+            The force on it, N, one component per dimension.
+
+        Returns
+        -------
+        Scene
+            This scene.
+        """
         forces = self.data.setdefault("buckling", {"forces": []})["forces"]
         forces.append({"node": node, "force": list(force)})
         return self
 
     def build(self, *, check: bool = True) -> Model:
-        """The Model, built and checked as `build_model` checks a scene file."""
+        """The Model, built and checked as `build_model` checks a scene file.
+
+        Parameters
+        ----------
+        check : bool
+            Whether to check that the model is exactly constrained
+            (`check_exact_constraint`).
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        SceneError
+            A key is missing, unknown or has a bad value (the message names it as a file
+            would: "<scene NAME>: nodes.3.mass: ...").
+        ConstraintError
+            With `check`, the model is not exactly constrained.
+        """
         return build_model(copy.deepcopy(self.data), source=self.source,
                            default_name=self.data["scene"]["name"], check=check)
 
     def to_toml(self, header: str = "") -> str:
-        """The scene file's text (`load_scene` of it builds the same Model)."""
+        """The scene file's text (`load_scene` of it builds the same Model).
+
+        Parameters
+        ----------
+        header : str
+            Comment lines for the top of the file, without "#".
+
+        Returns
+        -------
+        str
+            The TOML text.
+        """
         return scene_toml(self.data, header)
 
     def _add(self, table, name, entry):
@@ -134,7 +327,25 @@ class Scene:
 
 def to_toml(model: Model, header: str = "") -> str:
     """The scene file of the scene `model` was built from (after its overrides, before
-    meshing and DOF choice, which building it again repeats)."""
+    meshing and DOF choice, which building it again repeats).
+
+    Parameters
+    ----------
+    model : Model
+        A model built from a scene (`Model.scene`).
+    header : str
+        Comment lines for the top of the file, without "#".
+
+    Returns
+    -------
+    str
+        The TOML text.
+
+    Raises
+    ------
+    SceneError
+        `model` was not built from a scene.
+    """
     if getattr(model, "scene", None) is None:
         raise SceneError(f"{getattr(model, 'source', '<to_toml>')}: to_toml: expected a Model "
                          f"built from a scene, got {type(model).__name__} without one")

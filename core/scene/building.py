@@ -54,13 +54,34 @@ SEGMENTS_KEY = SchemaKey("segments", "1", "the number of elements a meshed eleme
 
 
 def builtin_scenes() -> list[str]:
-    """Names of the scenes that ship with flexure (usable without a checkout)."""
+    """Names of the scenes that ship with flexure (usable without a checkout).
+
+    Returns
+    -------
+    list of str
+        The scene names, sorted, for `load_scene`.
+    """
     folder = importlib.resources.files("flexure.scenes")
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
 def scene_path(name_or_path: str | Path) -> Path:
-    """The path of a scene file: an existing path, or the name of a built-in scene."""
+    """The path of a scene file: an existing path, or the name of a built-in scene.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A scene file, or a built-in scene's name (with or without ".toml").
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    SceneError
+        Neither a file nor a built-in scene (the message lists the built-in ones).
+    """
     path = Path(name_or_path)
     if path.is_file():
         return path
@@ -78,9 +99,28 @@ def load_scene(name_or_path: str | Path, *, overrides: dict | None = None,
                check: bool = True) -> Model:
     """Load and validate a scene file or built-in scene name into a `Model`.
 
-    `overrides` {dotted scene key: value} are set on the scene before it is built and checked
-    as the file's own keys are (`flexure.core.scene.overrides`), e.g.
-    {"sections.leaf.height": 0.3e-3, "nodes.3.mass": 0.2} (SI units: m, kg).
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A TOML scene file, a SPACAR input file (.dat), or a built-in scene's name.
+    overrides : dict of str to value, optional
+        {dotted scene key: value}, set on the scene before it is built and checked as the
+        file's own keys are (`flexure.core.scene.overrides`), e.g.
+        {"sections.leaf.height": 0.3e-3, "nodes.3.mass": 0.2} (SI units: m, kg).
+    check : bool
+        Whether to check that the model is exactly constrained.
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    SceneError
+        No such scene, a file that is not UTF-8 or not valid TOML, or a key that is missing,
+        unknown or has a bad value (the message names the file and the key).
+    ConstraintError
+        With `check`, the model is not exactly constrained.
     """
     path = scene_path(name_or_path)
     data = parse_toml(path)
@@ -141,8 +181,30 @@ def build_model(data: dict, *, overrides: dict | None = None, source: str = "<di
                 default_name: str = "scene", check: bool = True) -> Model:
     """Build a `Model` from a scene dictionary, validating every key.
 
-    `overrides` {dotted scene key: value} are set on a copy of `data` first (`data` is not
-    changed); an error in one names it as `--set KEY` (`flexure.core.scene.overrides`).
+    Parameters
+    ----------
+    data : dict
+        The scene dictionary, as `tomllib` reads a scene file (docs/scene-format.md).
+    overrides : dict of str to value, optional
+        {dotted scene key: value}, set on a copy of `data` first (`data` is not changed); an
+        error in one names it as `--set KEY` (`flexure.core.scene.overrides`).
+    source : str
+        How messages name the scene (a file path).
+    default_name : str
+        The model's name when [scene] gives none.
+    check : bool
+        Whether to check that the model is exactly constrained.
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    SceneError
+        Every key that is missing, unknown or has a bad value, collected into one message.
+    ConstraintError
+        With `check`, the model is not exactly constrained.
     """
     builder = _SceneBuilder(data, source, default_name)
     if overrides:

@@ -34,13 +34,33 @@ PLAIN_TABLES = ("scene", "buckling")
 EXAMPLE = "e.g. sections.leaf.height or nodes.3.mass"
 
 
-def apply_overrides(data: dict, overrides, *, source: str = "<dict>") -> dict:
+def apply_overrides(data: dict, overrides: Mapping[str, object] | None, *,
+                    source: str = "<dict>") -> dict:
     """A copy of scene dictionary `data` with each dotted key of `overrides` set to its value.
 
     Checks where each key points (a table of the scene format, a name the scene declares) and
     that each value is one a TOML file could hold; the key itself and the value's type, range
     and unit (SI) are checked by the scene builder (`build_model(data, overrides=...)`).
-    SceneError "`source`: --set KEY: what is wrong" otherwise. `data` is not changed.
+
+    Parameters
+    ----------
+    data : dict
+        The scene dictionary; it is not changed.
+    overrides : mapping of str to value, optional
+        {dotted scene key: value}, e.g. {"sections.leaf.height": 0.3e-3} (SI units).
+    source : str
+        How messages name the scene (a file path).
+
+    Returns
+    -------
+    dict
+        The changed copy.
+
+    Raises
+    ------
+    SceneError
+        "`source`: --set KEY: what is wrong": `overrides` is not a mapping, a key points
+        nowhere in the scene format or the scene, or a value no TOML file could hold.
     """
     result = copy.deepcopy(data)
     if not isinstance(overrides or {}, Mapping):

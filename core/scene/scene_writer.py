@@ -12,8 +12,27 @@ import math
 __all__ = ["scene_toml", "toml_value"]
 
 
-def scene_toml(data, header=""):
-    """The TOML text of scene dictionary `data`, after `header` (comment lines, without #)."""
+def scene_toml(data: dict, header: str = "") -> str:
+    """The TOML text of a scene dictionary; `tomllib.loads` of it gives `data` back.
+
+    Parameters
+    ----------
+    data : dict
+        The scene dictionary (docs/scene-format.md).
+    header : str
+        Comment lines for the top of the file, without "#".
+
+    Returns
+    -------
+    str
+        The TOML text.
+
+    Raises
+    ------
+    ValueError
+        A value the scene format cannot hold (not finite, or of another type), naming its
+        key.
+    """
     lines = [f"# {line}".rstrip() for line in header.splitlines()]
     _table(lines, [], data)
     return "\n".join(lines).lstrip("\n") + "\n"

@@ -61,12 +61,26 @@ STATUS_WORDS = {"fixed": "fixed", "input": "an input", "dof": "a DOF", "released
                 "edof": "a DOF"}
 
 
-def read_spacar(path) -> dict:
-    """The flexure scene dictionary of the SPACAR input file `path` (SI units, as the file).
+def read_spacar(path: str | Path) -> dict:
+    """The flexure scene dictionary of a SPACAR input file; `load_scene` reads a `.dat` path
+    through this.
 
-    The result is what `build_model` takes (and `scene_toml` writes); `load_scene` reads a
-    `.dat` path through this. SceneError "`path`: line N: KEYWORD: what is wrong" for a
-    mistake or for what flexure does not support (the module docstring lists the syntax).
+    Parameters
+    ----------
+    path : str or Path
+        The SPACAR input file (.dat), in SI units; the module docstring lists its syntax.
+
+    Returns
+    -------
+    dict
+        The scene dictionary, in the file's (SI) units: what `build_model` takes and
+        `scene_toml` writes.
+
+    Raises
+    ------
+    SceneError
+        "`path`: line N: KEYWORD: what is wrong" for an unreadable file, a mistake, or what
+        flexure does not support.
     """
     path = Path(path)
     try:

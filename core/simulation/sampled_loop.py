@@ -21,7 +21,11 @@ default) a changed force costs one evaluation and the integrator steps on with i
 Newton matrix; with CVODE it restarts at every changed force (its C functions called directly).
 """
 
+from __future__ import annotations
+
 import time
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import carray
@@ -45,23 +49,32 @@ from . import esdirk
 from .esdirk import Esdirk
 from .sundials import STATUS_MESSAGES, Cvode
 
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
 
-def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, loop_inputs,
-                     loop_outputs, progress=None):
+    from .simulator import Simulator
+
+
+def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: ArrayLike,
+                     feedforward: ArrayLike,
+                     controller: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike],
+                     loop_inputs: Sequence[int], loop_outputs: Sequence[int],
+                     progress: Callable[[float], None] | None = None,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Run the loop from the simulator's current state (t = 0 after `reset`).
 
     Parameters
     ----------
     sim : Simulator
-        The plant, with the CVODE method (the loop's integrator restarts are CVODE's).
+        The plant, with an ESDIRK or CVODE method.
     fs : float
         Sample rate (Hz).
     samples : int
         The number of intervals N; the run ends at t_N = N / fs.
-    reference, feedforward : arrays (>= 1, n_loops)
+    reference, feedforward : array_like (>= 1, n_loops)
         r_k (m) and u_ff,k (N, or V for an actuator's drive signal) per sample (the last row
         holds past the end).
-    controller : tuple of arrays (A, B, C, D)
+    controller : tuple of array_like (A, B, C, D)
         The discrete controller from errors (m) to forces (N) or drive signals (V): A (s, s),
         B (s, n_loops), C (n_loops, s), D (n_loops, n_loops).
     loop_inputs, loop_outputs : sequences of int
@@ -72,8 +85,20 @@ def run_sampled_loop(sim, *, fs, samples, reference, feedforward, controller, lo
 
     Returns
     -------
-    (t (N+1,), position (N+1, n_loops), force (N+1, n_loops)): y_k, and u_k held from t_k (the
-    last row repeats the one before).
+    t : ndarray (N+1,)
+        The sample times, s.
+    position : ndarray (N+1, n_loops)
+        y_k, m (rad for an angle).
+    force : ndarray (N+1, n_loops)
+        u_k held from t_k, N (N m, or V for a drive signal); the last row repeats the one
+        before.
+
+    Raises
+    ------
+    SimulationError
+        The simulator's method is not ESDIRK or CVODE, a loop output is not a position,
+        the reference or feedforward has the wrong number of columns, or the integration
+        or a measurement fails (naming the time).
     """
     solver, plant, outputs, restart_needed, restart_kinematics = sim.hand_over()
     if not isinstance(solver, (Cvode, Esdirk)):
@@ -188,10 +213,23 @@ def _state_space_row(P, Q, state, error, i):
 
 
 @kernel
-def controller_step(A, B, C, D, state, error, output):
-    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e
-    (state x updated in place). Arrays 2-D (A, B, C, D) and 1-D; the sums run in index order,
-    so every caller gets the same numbers."""
+def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                    state: np.ndarray, error: np.ndarray, output: np.ndarray) -> None:
+    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e.
+
+    Compiled (numba); the sums run in index order, so every caller gets the same numbers.
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray, 2-D, float64
+        The controller's matrices: (s, s), (s, n), (m, s), (m, n).
+    state : ndarray (s,), float64
+        x, updated in place.
+    error : ndarray (n,), float64
+        e, in the loops' output units (m, rad).
+    output : ndarray (m,), float64
+        Receives u, in the loops' input units (N, N m, V).
+    """
     for i in range(C.shape[0]):
         output[i] = _state_space_row(C, D, state, error, i)
     new_state = np.empty(A.shape[0])

@@ -8,7 +8,9 @@ are in `flexure.core.simulation.tolerances`.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from os import PathLike
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,6 +20,8 @@ from .simulator import STATE_VERSION, Simulator
 from .tolerances import default_atol
 
 if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
     from ..model import Model
 
 __all__ = ["STATE_VERSION", "SimulationResult", "Simulator", "default_atol", "simulate",
@@ -50,20 +54,32 @@ class SimulationResult:
     currents: np.ndarray = field(default=None)  # (n, n_coils) A
 
     @property
-    def outputs(self):
-        """{output name: (n,) array}."""
+    def outputs(self) -> dict[str, np.ndarray]:
+        """{output name: (n,) array}, in the output's unit (`output_units`)."""
         return {name: self.output_array[:, i] for i, name in enumerate(self.output_names)}
 
-    def to_csv(self, path):
-        """Write `time` and one column per output (units in the header) to a CSV file."""
+    def to_csv(self, path: str | PathLike) -> None:
+        """Write the time and one column per output to a CSV file.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file; its header names each column with its unit ("time [s]", "x [m]").
+        """
         header = ",".join(["time [s]"] + [f"{n} [{u}]" for n, u in
                                           zip(self.output_names, self.output_units,
                                               strict=True)])
         data = np.column_stack([self.times, self.output_array])
         np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.12g")
 
-    def plot(self, path):
-        """Plot every output against time to a PNG file."""
+    def plot(self, path: str | PathLike) -> None:
+        """Plot every output against time (s) to a PNG file.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The image file.
+        """
         import matplotlib
 
         matplotlib.use("Agg")
@@ -82,32 +98,53 @@ class SimulationResult:
         plt.close(fig)
 
 
-def simulate(model: Model, t_end: float, *, inputs: dict | None = None,
-             method: str = "cvode-bdf", rtol: float = 1e-8, atol=None,
-             max_step: float | None = None, output_times=None, jacobian: str = "analytic",
-             max_order: int | None = None, q0=None, qdot0=None, deadline: float | None = None,
-             progress=None, i0=None) -> SimulationResult:
-    """Simulate `model` from rest (or q0, qdot0 and the coil currents i0, A) at t = 0 to
-    t_end (s).
+def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None = None,
+             method: str = "cvode-bdf", rtol: float = 1e-8,
+             atol: float | ArrayLike | None = None, max_step: float | None = None,
+             output_times: ArrayLike | None = None, jacobian: str = "analytic",
+             max_order: int | None = None, q0: ArrayLike | None = None,
+             qdot0: ArrayLike | None = None, deadline: float | None = None,
+             progress: Callable[[float], None] | None = None,
+             i0: ArrayLike | None = None) -> SimulationResult:
+    """Simulate `model` from rest (or q0, qdot0 and the coil currents i0) at t = 0 to t_end.
 
     Parameters
     ----------
+    model : Model
+    t_end : float
+        The end time, s, > 0.
     inputs : dict, optional
-        {input name: constant N (V for an actuator's drive signal) | callable(t) -> N |
-        (times, values) held constant from each
-        sample time to the next (zero-order hold; values[0] before the first sample)}.
-        Unnamed inputs are zero.
-    output_times : array, optional
-        Times (s) at which to record; default every accepted integrator step.
+        {input name: constant N (N m; V for an actuator's drive signal) | callable(t) -> N |
+        (times, values) held constant from each sample time to the next (zero-order hold;
+        values[0] before the first sample)}. Unnamed inputs are zero.
+    method, rtol, atol, max_step, jacobian, max_order
+        As `Simulator` (rtol relative; atol in the states' units; max_step s).
+    output_times : array_like, optional
+        Times (s) at which to record, strictly increasing within [0, t_end]; default every
+        accepted integrator step.
+    q0 : array_like (NDOF,), optional
+        The initial DOFs, m or rad (default: the scene's configuration).
+    qdot0 : array_like (NDOF,), optional
+        The initial DOF velocities, m/s or rad/s (default zero).
     deadline : float, optional
-        A `time.perf_counter()` value after which the run stops with a SimulationError.
+        A `time.perf_counter()` value (s) after which the run stops with a SimulationError.
     progress : callable, optional
         Called with the fraction of t_end reached (0 to 1) after every accepted step, e.g. a
         `flexure.core.reporting.progress.Progress`.
+    i0 : array_like (n_coils,), optional
+        The initial coil currents of the voltage-driven actuators, A (default zero).
 
     Returns
     -------
     SimulationResult
+        Times (s), DOFs, velocities, coil currents (A), the outputs in their units and the
+        held inputs at each recorded time.
+
+    Raises
+    ------
+    SimulationError
+        A bad t_end, output_times or input specification (naming the input), a bad option
+        (`Simulator`), or a failure of the integration (naming the time).
     """
     if not (np.isfinite(t_end) and t_end > 0):
         raise SimulationError(f"t_end must be a positive time (s), got {t_end!r}")

@@ -21,12 +21,16 @@ y = [q - q_ref, qdot, i].
 
 A snapshot `get_state()` (`simulator_state`) is a restart point: the next `advance` restarts
 the integrator from it, with the kinematics started afresh from the snapshot's coordinates, so
-a run restored with `set_state` continues bit for bit like the original.
+a run restored with `set_state` continues bit for bit like the original. The measuring
+methods are in `simulator_outputs`, the snapshots in `simulator_state`, and the first-order
+system for other solvers and the hand-over to the compiled sampled loop in
+`simulator_system`.
 """
 
 from __future__ import annotations
 
 import time as _time
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -40,15 +44,16 @@ from .esdirk import Esdirk
 from .methods import METHODS, ONE_STEP_METHODS
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
+from .simulator_system import SimulatorSystem
 from .sundials import STATUS_MESSAGES, make_solver
 from .tolerances import atol_vector
 
 if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
     from ..model import Model
 
-
-
-class Simulator(SimulatorOutputs, SimulatorState):
+class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
     """Integrates a model's nonlinear equations of motion step by step.
 
     Parameters
@@ -75,13 +80,23 @@ class Simulator(SimulatorOutputs, SimulatorState):
     max_order : int, optional
         Largest order of the multistep formulas (default SUNDIALS': 5 for BDF and IDA, 12
         for Adams). 2 makes BDF A-stable (docs/decisions.md: why it is not the default).
-    input_functions : dict, optional
+    input_functions : dict of int to callable, optional
         {input index: callable(t) -> N or V}: inputs that vary within an interval. They are
         evaluated in Python at every evaluation (the compiled path is for held inputs).
+
+    Raises
+    ------
+    SimulationError
+        An unknown method, an rtol outside (0, 1), a max_step or atol that is not positive,
+        an option the one-step methods do not take, or a scene configuration the DOFs
+        cannot be assembled in.
     """
 
-    def __init__(self, model, *, method="cvode-bdf", rtol=1e-8, atol=None, max_step=None,
-                 jacobian="analytic", max_order=None, input_functions=None):
+    def __init__(self, model: Model, *, method: str = "cvode-bdf", rtol: float = 1e-8,
+                 atol: float | ArrayLike | None = None, max_step: float | None = None,
+                 jacobian: str = "analytic", max_order: int | None = None,
+                 input_functions: Mapping[int, Callable[[float], float]] | None = None,
+                 ) -> None:
         if method not in METHODS:
             raise SimulationError(f"unknown method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}")
@@ -127,11 +142,27 @@ class Simulator(SimulatorOutputs, SimulatorState):
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
-    def reset(self, *, t0=0.0, q0=None, qdot0=None, i0=None):
-        """Start again at t0 (s) from q0, qdot0 and the coil currents i0 (A; default: the
-        scene's configuration at rest, no current).
+    def reset(self, *, t0: float = 0.0, q0: ArrayLike | None = None,
+              qdot0: ArrayLike | None = None, i0: ArrayLike | None = None) -> None:
+        """Start again at t0 from q0, qdot0 and the coil currents i0 (default: the scene's
+        configuration at rest, no current). The inputs are kept; the statistics restart.
 
-        The inputs are kept; the statistics restart from zero.
+        Parameters
+        ----------
+        t0 : float
+            The start time, s.
+        q0 : array_like (NDOF,), optional
+            The DOFs, m or rad; they become the reference q_ref.
+        qdot0 : array_like (NDOF,), optional
+            The DOF velocities, m/s or rad/s.
+        i0 : array_like (n_coils,), optional
+            The coil currents of the voltage-driven actuators, A.
+
+        Raises
+        ------
+        SimulationError
+            A vector of the wrong size or not finite, or DOFs q0 the kinematics cannot be
+            assembled at.
         """
         q = self._initial_dofs() if q0 is None else _vector(q0, self.ndof, "q0")
         qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
@@ -172,52 +203,72 @@ class Simulator(SimulatorOutputs, SimulatorState):
         data.int_array("dims")[ed.WARM] = 0
 
     @property
-    def time(self):
+    def time(self) -> float:
         """The current time (s)."""
         return self._t
 
     @property
-    def q(self):
+    def q(self) -> np.ndarray:
         """The current DOFs (NDOF,) m, rad (a copy)."""
         return self._q_ref + self._y[: self.ndof]
 
     @property
-    def q_ref(self):
+    def q_ref(self) -> np.ndarray:
         """The reference DOFs (NDOF,) m, rad the integrator's state is taken from (a copy)."""
         return self._q_ref.copy()
 
     @property
-    def state(self):
+    def state(self) -> np.ndarray:
         """The integrator's state [q - q_ref, qdot, coil currents] (2 NDOF + currents,) (a
         copy)."""
         return self._y.copy()
 
-    def absolute(self, y):
-        """States [q, qdot(, i)] (..., 2 NDOF + currents) of integrator states
-        [q - q_ref, qdot(, i)] (a copy)."""
+    def absolute(self, y: ArrayLike) -> np.ndarray:
+        """Absolute states [q, qdot(, i)] of integrator states [q - q_ref, qdot(, i)].
+
+        Parameters
+        ----------
+        y : array_like (..., 2 NDOF + n_coils)
+            Integrator states: m, rad; m/s, rad/s; A.
+
+        Returns
+        -------
+        ndarray (..., 2 NDOF + n_coils)
+            A copy with q_ref added to the DOFs.
+        """
         y = np.array(y, dtype=float)
         y[..., : self.ndof] += self._q_ref
         return y
 
     @property
-    def qdot(self):
+    def qdot(self) -> np.ndarray:
         """The current DOF velocities (NDOF,) m/s, rad/s (a copy)."""
         return self._y[self.ndof: 2 * self.ndof].copy()
 
     @property
-    def currents(self):
+    def currents(self) -> np.ndarray:
         """The coil currents now (A, one per voltage-driven actuator, `Model.coil_actuators`;
         a copy)."""
         return self._y[2 * self.ndof:].copy()
 
     @property
-    def inputs(self):
+    def inputs(self) -> np.ndarray:
         """The inputs held now (n_inputs,) N or V (a copy)."""
         return self._u.copy()
 
-    def set_inputs(self, u):
-        """Hold the inputs u (n_inputs,) N (V for a drive signal) from now on; a change
-        restarts the integrator."""
+    def set_inputs(self, u: ArrayLike) -> None:
+        """Hold the inputs from now on (zero-order hold); a change restarts the integrator.
+
+        Parameters
+        ----------
+        u : array_like (n_inputs,)
+            N, N m for forces and moments, V for actuators' drive signals.
+
+        Raises
+        ------
+        SimulationError
+            The wrong number of inputs, or one that is not finite.
+        """
         u = np.array(u, dtype=float).reshape(-1)
         if u.size != self._u.size:
             raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
@@ -231,7 +282,7 @@ class Simulator(SimulatorOutputs, SimulatorState):
             self._needs_init = True
 
     @property
-    def statistics(self):
+    def statistics(self) -> dict[str, float]:
         """Solver statistics since `reset`: steps, rhs and Jacobian evaluations, wall time (s)."""
         now, start = self._counts(), self._counters_at_reset
         return {"steps": now["steps"] - start["steps"],
@@ -276,12 +327,24 @@ class Simulator(SimulatorOutputs, SimulatorState):
         set or a failure."""
         return self._restart_kinematics or self.method not in ONE_STEP_METHODS
 
-    def advance(self, t_end, *, max_steps=None, _record=None, _progress=None):
-        """Integrate from `time` to t_end (s), stopping exactly there.
+    def advance(self, t_end: float, *, max_steps: int | None = None,
+                _record: Callable[[float, np.ndarray], None] | None = None,
+                _progress: Callable[[float], None] | None = None) -> None:
+        """Integrate from `time` to t_end, stopping exactly there.
 
-        max_steps: a budget of integrator steps for this call; exceeding it raises a
-        SimulationError (the simulator then stays at its last good state). Raises
-        SimulationError (naming the time and the cause) on any failure, likewise.
+        Parameters
+        ----------
+        t_end : float
+            The end time, s, after the current one.
+        max_steps : int, optional
+            A budget of integrator steps for this call.
+
+        Raises
+        ------
+        SimulationError
+            A t_end not after the current time, a spent step budget, the deadline passed,
+            or a failure of the integrator or the kinematics (naming the time and the
+            cause); the simulator then stays at its last good state.
         """
         t_end = float(t_end)
         if not np.isfinite(t_end) or t_end <= self._t:
@@ -351,55 +414,6 @@ class Simulator(SimulatorOutputs, SimulatorState):
             raise SimulationError(f"t = {self._t:.9g} s: the step budget of {max_steps} "
                                   "integrator steps is spent")
 
-    # -- handing the integrator to a compiled driver (flexure.core.simulation.sampled_loop) -------
-    def hand_over(self):
-        """The state into the integrator's vector and the kinematic reference set, for a
-        compiled driver; returns (integrator, plant data, output data, restart needed,
-        kinematics restart needed): the driver's first interval restarts as `_restart`."""
-        self._q_ref_array[:] = self._q_ref
-        self.integrator.y_array[:] = self._y
-        return (self.integrator, self.data, self._output_data, self._needs_init,
-                self._kinematics_restart_due())
-
-    def take_back(self, t, y, u, *, restart_needed, wall):
-        """Continue from where a compiled driver left the integrator: time t (s), state y
-        (2 NDOF + currents,), held inputs u (N, V); wall the driver's time (s), for the
-        statistics."""
-        self._t, self._y, self._u = float(t), np.array(y, dtype=float), np.array(u, dtype=float)
-        self._x = self.data.float_array("x").copy()
-        self._outputs_cache = None
-        self._needs_init = bool(restart_needed)
-        self._restart_kinematics = self._needs_init
-        self._wall += wall
-
-    # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ----------------
-    def derivative(self, t, y):
-        """ydot (2 NDOF + currents,) at time t (s) and integrator state y = [q - q_ref, qdot,
-        i]; raises SimulationError when the state cannot be evaluated."""
-        self._prepare(t)
-        ydot = np.empty(self.nstate)
-        status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
-                             ydot)
-        if status != ed.OK:
-            raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
-        return ydot
-
-    def jacobian_matrix(self, t, y):
-        """d ydot / d y (N, N; N = 2 NDOF + currents) from the model's tangent at (t, y)."""
-        self._prepare(t)
-        J = np.empty(self.nstate ** 2)
-        status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
-                             J, s=0.0)
-        if status != ed.OK:
-            raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
-        return J.reshape(self.nstate, self.nstate)
-
-    def _prepare(self, t):
-        if self.deadline is not None and _time.perf_counter() > self.deadline:
-            raise SimulationError(f"t = {t:.9g} s: the time limit of the run is over")
-        self._inputs[:] = self._inputs_at(t) if self._input_functions else self._u
-        self._q_ref_array[:] = self._q_ref
-
 
 def prepare(model: Model, *, loop_method: str | None = None) -> float:
     """Compile, or load from the on-disk cache, the compiled code a Simulator of `model` runs
@@ -408,7 +422,20 @@ def prepare(model: Model, *, loop_method: str | None = None) -> float:
     loop (`run_sampled_loop`) of that method, by running one sample of it on a throwaway
     simulator. The first use on a machine compiles (about 20-50 s); later ones load the cache
     (well under a second). A Simulator does this itself; call it first to keep the latency
-    out of a timed run."""
+    out of a timed run.
+
+    Parameters
+    ----------
+    model : Model
+    loop_method : str, optional
+        A METHODS name whose integrator and compiled sampled loop to prepare as well (only
+        for a model with inputs and a position output).
+
+    Returns
+    -------
+    float
+        The time it took, s.
+    """
     start = _time.perf_counter()
     EngineData(model)
     if loop_method is not None and model.inputs and any(

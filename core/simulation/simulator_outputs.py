@@ -3,6 +3,10 @@ states, and the range-of-validity warnings (`plausibility`) of its states. The p
 `Simulator` that solves the kinematics on its second packed model (`_output_data`), so that
 measuring never disturbs the integrator's own."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..engine import data as ed
@@ -12,17 +16,29 @@ from ..mechanics.ports import output_value
 from .plausibility import RangeCheck
 from .sundials import STATUS_MESSAGES
 
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
 
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
     the last evaluation's `_last_x`, `_last_e`)."""
 
-    def outputs(self):
-        """The declared outputs at the current state (n_outputs,): positions m, velocities m/s
-        (angles rad, angular velocities rad/s).
+    def outputs(self) -> np.ndarray:
+        """The declared outputs at the current state, computed once per state (`advance`,
+        `reset` and `set_state` start a new one).
 
-        Computed once per state (`advance`, `reset` and `set_state` start a new one)."""
+        Returns
+        -------
+        ndarray (n_outputs,)
+            Positions m, velocities m/s (angles rad, angular velocities rad/s).
+
+        Raises
+        ------
+        SimulationError
+            The kinematics cannot be solved at the state.
+        """
         if self._outputs_cache is None:
             if self._output_dofs is not None:  # every output a coordinate DOF: q itself
                 dofs = self._output_dofs
@@ -47,26 +63,69 @@ class SimulatorOutputs:
             return np.array([output_value(self.model, port, x) for port in self.model.outputs])
         return x[self._output_coordinates]
 
-    def outputs_along(self, states, *, start=None):
-        """Outputs (n, n_outputs) along absolute states [q, qdot(, i)] (n, 2 NDOF plus the coil
-        currents), solving the kinematics point by point (warm-started from one to the
-        next)."""
+    def outputs_along(self, states: ArrayLike, *,
+                      start: np.ndarray | None = None) -> np.ndarray:
+        """The declared outputs along a path of states, solving the kinematics point by point
+        (warm-started from one to the next).
+
+        Parameters
+        ----------
+        states : array_like (n, 2 NDOF + n_coils)
+            Absolute states [q, qdot(, i)]: m, rad; m/s, rad/s; A.
+        start : ndarray (NX,), optional
+            The coordinates (m, rad) the first kinematic solve starts from (default: the
+            scene's initial ones).
+
+        Returns
+        -------
+        ndarray (n, n_outputs)
+            Positions m, velocities m/s (angles rad, angular velocities rad/s).
+
+        Raises
+        ------
+        SimulationError
+            The kinematics cannot be solved at a state.
+        """
         return self._along(states, start, None)
 
-    def outputs_and_warnings(self, states):
-        """(outputs_along(states), the range-of-validity warnings of those states
-        (`flexure.core.simulation.plausibility`))."""
+    def outputs_and_warnings(self, states: ArrayLike) -> tuple[np.ndarray, list[str]]:
+        """The declared outputs along a path of states, and the range-of-validity warnings
+        of those states (`flexure.core.simulation.plausibility`).
+
+        Parameters
+        ----------
+        states : array_like (n, 2 NDOF + n_coils)
+            Absolute states [q, qdot(, i)]: m, rad; m/s, rad/s; A.
+
+        Returns
+        -------
+        outputs : ndarray (n, n_outputs)
+            As `outputs_along`.
+        warnings : list of str
+            One message per kind of violation ("strain", "distance"); empty within the
+            range.
+
+        Raises
+        ------
+        SimulationError
+            The kinematics cannot be solved at a state.
+        """
         n_points = len(states)
         path = (np.zeros((n_points, self.model.nx)),
                 np.zeros((n_points, len(self.model.deformation_names))))
         outputs = self._along(states, None, path)
         return outputs, list(self._range_check().warnings(*path).values())
 
-    def range_warnings(self):
+    def range_warnings(self) -> dict[str, str]:
         """The range-of-validity warnings of the current state
-        (`flexure.core.simulation.plausibility`): {kind ("strain", "distance"): message}, empty
-        within the range. The coordinates and deformations are the integrator's last evaluation,
-        at the end of the last step."""
+        (`flexure.core.simulation.plausibility`). The coordinates and deformations are the
+        integrator's last evaluation, at the end of the last step.
+
+        Returns
+        -------
+        dict of str to str
+            {kind ("strain", "distance"): message}, empty within the range.
+        """
         x, e = self._last_x, self._last_e
         check = self._range_check()
         return {} if check.within(x, e) else check.warnings(x, e)

@@ -7,6 +7,10 @@ Jacobian; `esdirk.Esdirk.restart_memory`). Taking one marks a restart point, so 
 restored with `set_state` continues bit for bit like the original.
 """
 
+from __future__ import annotations
+
+from collections.abc import Mapping
+
 import numpy as np
 
 from ..errors import SimulationError
@@ -22,9 +26,16 @@ class SimulatorState:
     `_u`, `_x`, with its restart flags `_needs_init`, `_restart_kinematics` and the outputs'
     `_outputs_cache`)."""
 
-    def get_state(self):
-        """A snapshot of the whole state (plain numbers and arrays); the next `advance`
-        restarts from it."""
+    def get_state(self) -> dict[str, object]:
+        """A snapshot of the whole state; the next `advance` restarts from it.
+
+        Returns
+        -------
+        dict
+            Plain numbers and arrays (module docstring): "version", "model", "t" (s), "y"
+            (the integrator state), "q_ref" (m, rad), "u" (N, N m, V), "x" (m, rad) and what
+            a one-step integrator has learnt.
+        """
         self._needs_init = self._restart_kinematics = True
         memory = getattr(self.integrator, "restart_memory", {})
         return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
@@ -33,11 +44,22 @@ class SimulatorState:
                 "jacobian": memory.get("jacobian", np.zeros(0)),
                 **{key: value for key, value in memory.items() if key in MEMORY_KEYS}}
 
-    def set_state(self, state):
+    def set_state(self, state: Mapping[str, object]) -> None:
         """Restore a snapshot of `get_state` (of a simulator of the same model).
 
         A version-1 snapshot (absolute y = [q, qdot]) is taken from the configuration it
-        holds."""
+        holds.
+
+        Parameters
+        ----------
+        state : mapping
+            A snapshot of `get_state`.
+
+        Raises
+        ------
+        SimulationError
+            Not a snapshot, one of another model or size, or one with non-finite numbers.
+        """
         try:
             version = int(state.get("version", 1))
             y = np.array(state["y"], dtype=float).reshape(-1)

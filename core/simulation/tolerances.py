@@ -34,6 +34,18 @@ def default_atol(model: Model, rtol: float) -> np.ndarray:
     motion, through the static compliance c = b^T DF K0^-1 DF^T b of the port (b its unit
     generalised force, `ports.input_direction`) in the initial configuration (where K0 is
     singular, through M0 times the reference frequency squared).
+
+    Parameters
+    ----------
+    model : Model
+    rtol : float
+        The integrator's relative tolerance.
+
+    Returns
+    -------
+    ndarray (2 NDOF + n_coils,)
+        atol per state: m or rad on the DOF deviations, m/s or rad/s on the velocities, A on
+        the coil currents.
     """
     from ..mechanics.kinematics import length_scale
     from ..mechanics.mechanics import Mechanics

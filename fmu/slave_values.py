@@ -1,0 +1,224 @@
+"""The values of a SafeSlave: fmi2Get* and fmi2Set* that never raise into pythonfmu's binary.
+
+A getter answers one value per reference, always (the binary reads exactly that many); a
+reference that cannot be read gives a default (NaN, 0, false, "") and a logged error. A setter
+refuses an unknown value reference, a variable of another type, an output, a fixed parameter
+after initialization, or a value the model refuses (`SafeSlave.check_value`), and the instance
+then enters the error state: the setter itself can only answer fmi2OK, so the next doStep
+answers fmi2Discard naming the refused value (see `slave`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from pythonfmu import Fmi2Causality, Fmi2Variability, Real, String
+from pythonfmu.variables import Boolean, Integer
+
+from .slave_states import INITIALIZATION, INSTANTIATED, STEP_COMPLETE
+
+
+class SlaveValues:
+    """The value getters and setters of `SafeSlave` (which sets up what they use: `vars`,
+    `phase`, `broken`, `_settable_inputs`, `check_value` and the error state's `_error`,
+    `_illegal`, `_break`, `_fail`). Each is called by pythonfmu's binary and catches
+    everything."""
+
+    def get_real(self, vrs: list[int]) -> list[float]:
+        """fmi2GetReal.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+
+        Returns
+        -------
+        list of float
+            One value per reference, in each variable's unit; NaN where it cannot be read.
+        """
+        return self._get("fmi2GetReal", vrs, Real, float, math.nan)
+
+    def get_integer(self, vrs: list[int]) -> list[int]:
+        """fmi2GetInteger.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+
+        Returns
+        -------
+        list of int
+            One value per reference; 0 where it cannot be read.
+        """
+        return self._get("fmi2GetInteger", vrs, Integer, int, 0)
+
+    def get_boolean(self, vrs: list[int]) -> list[bool]:
+        """fmi2GetBoolean.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+
+        Returns
+        -------
+        list of bool
+            One value per reference; False where it cannot be read.
+        """
+        return self._get("fmi2GetBoolean", vrs, Boolean, bool, False)
+
+    def get_string(self, vrs: list[int]) -> list[str]:
+        """fmi2GetString.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+
+        Returns
+        -------
+        list of str
+            One value per reference; "" where it cannot be read.
+        """
+        return self._get("fmi2GetString", vrs, String, str, "")
+
+    def _get(self, call, vrs, kind, convert, default):
+        """One value per reference, always (the binary reads exactly that many); a reference
+        that cannot be read gives `default` and a logged error."""
+        values = []
+        try:
+            for vr in vrs:
+                value = default
+                try:
+                    problem = self._variable_problem(vr, kind)
+                    if problem:
+                        self._error(f"{call}: {problem}")
+                    else:
+                        value = convert(self.vars[vr].getter())
+                except BaseException as error:  # noqa: BLE001
+                    self._error(f"{call}: reading value reference {vr!r} failed: "
+                                f"{type(error).__name__}: {error}")
+                values.append(value)
+        except BaseException as error:  # noqa: BLE001 -- vrs itself unreadable
+            self._error(f"{call}: {type(error).__name__}: {error}")
+        return values
+
+    def set_real(self, vrs: list[int], values: list[float]) -> None:
+        """fmi2SetReal; a refused value enters the error state (module docstring).
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+        values : list of float
+            One per reference, in each variable's unit.
+        """
+        self._set("fmi2SetReal", vrs, values, Real)
+
+    def set_integer(self, vrs: list[int], values: list[int]) -> None:
+        """fmi2SetInteger; a refused value enters the error state.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+        values : list of int
+            One per reference.
+        """
+        self._set("fmi2SetInteger", vrs, values, Integer)
+
+    def set_boolean(self, vrs: list[int], values: list[bool]) -> None:
+        """fmi2SetBoolean; a refused value enters the error state.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+        values : list of bool
+            One per reference.
+        """
+        self._set("fmi2SetBoolean", vrs, values, Boolean)
+
+    def set_string(self, vrs: list[int], values: list[str]) -> None:
+        """fmi2SetString; a refused value enters the error state.
+
+        Parameters
+        ----------
+        vrs : list of int
+            Value references.
+        values : list of str
+            One per reference.
+        """
+        self._set("fmi2SetString", vrs, values, String)
+
+    def _set(self, call, vrs, values, kind):
+        """Set values in order; the first one refused stops the call and enters the error
+        state (see the module docstring: the setter itself can only answer fmi2OK)."""
+        try:
+            if self.broken or self.phase not in (INSTANTIATED, INITIALIZATION, STEP_COMPLETE):
+                return self._illegal(call, "states instantiated, initialization mode and "
+                                           "step complete")
+            inputs = self._inputs_of(kind)
+            for vr, value in zip(vrs, values, strict=True):
+                # an input of this kind is always settable: only its value is checked
+                problem = None if vr in inputs else (self._variable_problem(vr, kind)
+                                                     or self._settable_problem(vr))
+                if not problem:
+                    problem = self.check_value(self.vars[vr].name, value)
+                if problem:
+                    return self._break(f"{call} refused: {problem}")
+                self.vars[vr].setter(value)
+        except BaseException as error:  # noqa: BLE001
+            self._fail(call, error)
+
+    def _inputs_of(self, kind):
+        """The value references of the settable inputs of `kind` (found once per kind: the
+        variables are registered in __init__, before any set)."""
+        found = self._settable_inputs.get(kind)
+        if found is None:
+            found = self._settable_inputs[kind] = frozenset(
+                vr for vr, variable in self.vars.items()
+                if isinstance(variable, kind) and variable.causality == Fmi2Causality.input
+                and variable.setter is not None)
+        return found
+
+    def _variable_problem(self, vr, kind):
+        variable = self.vars.get(vr)
+        if variable is None:
+            return (f"unknown value reference {vr!r} (this FMU has value references 0 to "
+                    f"{len(self.vars) - 1})")
+        if not isinstance(variable, kind):
+            return (f"{variable.name!r} (value reference {vr}) is a "
+                    f"{_kind_name(type(variable))}, not a {kind.__name__}")
+        return None
+
+    def _settable_problem(self, vr):
+        variable = self.vars[vr]
+        causality, variability = variable.causality, variable.variability
+        if variable.setter is None or causality in (Fmi2Causality.output,
+                                                    Fmi2Causality.calculatedParameter):
+            name = causality.name if causality is not None else "read-only"
+            return f"{variable.name!r} (value reference {vr}) is {_article(name)}: it cannot " \
+                   "be set"
+        if variability == Fmi2Variability.constant:
+            return f"{variable.name!r} (value reference {vr}) is a constant"
+        if variability == Fmi2Variability.fixed and self.phase == STEP_COMPLETE:
+            return (f"{variable.name!r} (value reference {vr}) is a fixed parameter: it can be "
+                    "set before fmi2ExitInitializationMode only")
+        return None
+
+
+def _kind_name(cls):
+    for kind in (Real, Integer, Boolean, String):
+        if issubclass(cls, kind):
+            return kind.__name__
+    return cls.__name__
+
+
+def _article(word):
+    return ("an " if word[:1] in "aeiou" else "a ") + word
+
+
+__all__ = ["SlaveValues"]
