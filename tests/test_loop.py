@@ -235,6 +235,11 @@ def test_loop_cli_text(capsys):
     (["no_such_scene"], "no_such_scene"),
 ])
 def test_loop_cli_errors_are_messages(argv, message, capsys):
+    assert_loop_cli_refuses(argv, message, capsys)
+
+
+def assert_loop_cli_refuses(argv, message, capsys):
+    """`flexure loop --no-plot ARGV` exits 2 with `message` on stderr and no traceback."""
     try:  # an option's value is refused by argparse (exit 2), the rest by the command
         code = main(["loop", "--no-plot", *argv])
     except SystemExit as stop:
@@ -274,18 +279,10 @@ def test_a_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, capsys):
     """The cross-flexure pivot of the tutorial driven by a moment on its body and measured by
     its angle: the loop tracks 1 mrad, and the summary, the table and the plot's labels say
     rad and N m, not m and N (issue 15)."""
-    import copy
 
-    from examples.tutorials import cross_flexure
-    from flexure.core import scene_toml
     from flexure.core.cli import main
 
-    data = copy.deepcopy(cross_flexure.SCENE)
-    data["nodes"]["m_r"].pop("moment")
-    data["inputs"] = {"M": {"node": "m_r", "coordinate": "phi"}}
-    data["outputs"] = {"theta": {"node": "m_r", "coordinate": "phi"}}
-    path = tmp_path / "pivot.toml"
-    path.write_text(scene_toml(data))
+    path = pivot_on_a_moment(tmp_path)
     assert main(["loop", str(path), "--stroke", "1e-3", "--duration", "0.5", "--settle", "0.1",
                  "--plot", str(tmp_path / "pivot.png"), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
@@ -296,3 +293,20 @@ def test_a_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "stroke (rad)" in out and "max |error| (rad)" in out and "(m)" not in out
     assert (tmp_path / "pivot.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def pivot_on_a_moment(folder):
+    """The tutorial's cross-flexure pivot with a moment input M and its angle theta as output
+    (its constant moment load removed), written as pivot.toml into `folder`; its path."""
+    import copy
+
+    from examples.tutorials import cross_flexure
+    from flexure.core import scene_toml
+
+    data = copy.deepcopy(cross_flexure.SCENE)
+    data["nodes"]["m_r"].pop("moment")
+    data["inputs"] = {"M": {"node": "m_r", "coordinate": "phi"}}
+    data["outputs"] = {"theta": {"node": "m_r", "coordinate": "phi"}}
+    path = folder / "pivot.toml"
+    path.write_text(scene_toml(data))
+    return path

@@ -9,6 +9,7 @@ import json
 import control
 import numpy as np
 import pytest
+from test_loop import assert_loop_cli_refuses, pivot_on_a_moment
 
 from flexure.controllers import LoopController, LoopError, build_loop, run_loop
 from flexure.controllers.disturbances import Disturbances
@@ -215,29 +216,15 @@ def test_loop_cli_with_quantum_and_disturbance(capsys):
     (["--disturbance", "0.01@2500"], "Nyquist frequency fs / 2 = 2000 Hz"),
 ])
 def test_loop_cli_refuses_bad_disturbances(argv, message, capsys):
-    try:  # an option's value is refused by argparse (exit 2), the rest by the command
-        code = main(["loop", "--no-plot", *argv])
-    except SystemExit as stop:
-        code = stop.code
-    assert code == 2
-    err = capsys.readouterr().err
-    assert message in err and "Traceback" not in err
+    assert_loop_cli_refuses(argv, message, capsys)
 
 
 def test_a_disturbed_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, capsys):
     """The tutorial's cross-flexure pivot on a moment and its angle: the quantum in rad and
     the disturbance in N m, in the table and the summary (issue 15's units)."""
-    import copy
 
-    from examples.tutorials import cross_flexure
-    from flexure.core import scene_toml
 
-    data = copy.deepcopy(cross_flexure.SCENE)
-    data["nodes"]["m_r"].pop("moment")
-    data["inputs"] = {"M": {"node": "m_r", "coordinate": "phi"}}
-    data["outputs"] = {"theta": {"node": "m_r", "coordinate": "phi"}}
-    path = tmp_path / "pivot.toml"
-    path.write_text(scene_toml(data))
+    path = pivot_on_a_moment(tmp_path)
     assert main(["loop", str(path), "--stroke", "1e-3", "--duration", "0.2", "--settle",
                  "0.05", "--quantum", "1e-7", "--disturbance", "1e-5", "--plot",
                  str(tmp_path / "pivot.png")]) == 0
