@@ -174,14 +174,15 @@ class SlaveValues:
             self._fail(call, error)
 
     def _inputs_of(self, kind):
-        """The value references of the settable inputs of `kind` (found once per kind: the
-        variables are registered in __init__, before any set)."""
+        """The value references of the inputs of `kind` that pass the variable checks (found
+        once per kind, by those checks: the variables are registered in __init__, before any
+        set, and an input's settability does not depend on the phase)."""
         found = self._settable_inputs.get(kind)
         if found is None:
             found = self._settable_inputs[kind] = frozenset(
                 vr for vr, variable in self.vars.items()
-                if isinstance(variable, kind) and variable.causality == Fmi2Causality.input
-                and variable.setter is not None)
+                if variable.causality == Fmi2Causality.input
+                and not (self._variable_problem(vr, kind) or self._settable_problem(vr)))
         return found
 
     def _variable_problem(self, vr, kind):

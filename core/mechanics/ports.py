@@ -235,10 +235,7 @@ def input_columns(model: Model, x: np.ndarray,
     ports = model.inputs if ports is None else ports
     b = np.zeros((model.nx, len(ports)))
     for column, port in enumerate(ports):
-        if port.about_axis:
-            b[:, column] = input_direction(model, port, x)
-        else:
-            b[port.coordinate, column] = 1.0
+        b[:, column] = input_direction(model, port, x)
     return b
 
 
