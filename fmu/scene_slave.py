@@ -117,6 +117,7 @@ class SceneSlave(SafeSlave):
         self._build()
         model = self._model
         self.inputs = np.zeros(len(model.inputs))
+        self._inputs_changed = True  # the simulator does not hold `inputs` yet
         self._refresh()
 
         drivers = {a.input: a for a in model.actuators}
@@ -129,7 +130,7 @@ class SceneSlave(SafeSlave):
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
                           description=description,
                           getter=lambda i=i: float(self.inputs[i]),
-                          setter=lambda value, i=i: self.inputs.__setitem__(i, value))
+                          setter=lambda value, i=i: self._hold_input(i, value))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
                           description=port_description(model, port, is_input=False),
@@ -216,11 +217,21 @@ class SceneSlave(SafeSlave):
         self.simulator.reset(t0=self.start_time)
         self._mechanics = Mechanics(self._model) if self.von_mises else None
         self._built_with = self._settings()
+        self.currents = self.simulator.currents
+        self._inputs_changed = True
+
+    def _hold_input(self, i, value):
+        """Input i = value from the next doStep on; the simulator is told only of a change
+        (a host that sets every input before every doStep mostly repeats the held value)."""
+        if value != self.inputs[i]:  # true for a NaN too, which the next doStep refuses
+            self.inputs[i] = value
+            self._inputs_changed = True
 
     def _refresh(self):
         """Read the outputs (and the stress) from the simulator's current state."""
         self.outputs = self.simulator.outputs()  # a float array of its own
-        self.currents = self.simulator.currents
+        if self.currents.size:  # a model without coils has no currents to copy
+            self.currents = self.simulator.currents
         self.stress = float("nan")
         if self.von_mises:
             state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
@@ -232,10 +243,13 @@ class SceneSlave(SafeSlave):
         if self._settings() != self._built_with:
             self._build()
         self.simulator.reset(t0=start_time)
+        self._inputs_changed = True
         self._refresh()
 
     def advance(self, t, h):
-        self.simulator.set_inputs(self.inputs)
+        if self._inputs_changed:
+            self.simulator.set_inputs(self.inputs)
+            self._inputs_changed = False
         self.simulator.advance(t + h, max_steps=int(self.max_steps))
         self._refresh()
         for kind, message in self.simulator.range_warnings().items():  # once per kind
@@ -262,6 +276,7 @@ class SceneSlave(SafeSlave):
         if self._built_with != settings:
             self._build()
         self.simulator.set_state(state["simulator"])
+        self._inputs_changed = True
         self.outputs = outputs
         self.currents = self.simulator.currents
         self.stress = float(state["stress"])

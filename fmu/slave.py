@@ -132,6 +132,7 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self.broken = ""  # why this instance is in the error state ("" while it is not)
         self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
         self._settable_inputs = {}  # {variable kind: its inputs' value references}
+        self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
 
     # -- to override -------------------------------------------------------------------------
 

@@ -20,8 +20,8 @@ from .slave_states import INITIALIZATION, INSTANTIATED, STEP_COMPLETE
 
 class SlaveValues:
     """The value getters and setters of `SafeSlave` (which sets up what they use: `vars`,
-    `phase`, `broken`, `_settable_inputs`, `check_value` and the error state's `_error`,
-    `_illegal`, `_break`, `_fail`). Each is called by pythonfmu's binary and catches
+    `phase`, `broken`, `_settable_inputs`, `_getters`, `check_value` and the error state's
+    `_error`, `_illegal`, `_break`, `_fail`). Each is called by pythonfmu's binary and catches
     everything."""
 
     def get_real(self, vrs: list[int]) -> list[float]:
@@ -87,6 +87,11 @@ class SlaveValues:
     def _get(self, call, vrs, kind, convert, default):
         """One value per reference, always (the binary reads exactly that many); a reference
         that cannot be read gives `default` and a logged error."""
+        try:  # the common case: every reference readable and every getter answering
+            getters = self._getters_of(kind)
+            return [convert(getters[vr]()) for vr in vrs]
+        except BaseException:  # noqa: BLE001 -- then value by value, naming what failed
+            pass
         values = []
         try:
             for vr in vrs:
@@ -172,6 +177,16 @@ class SlaveValues:
                 self.vars[vr].setter(value)
         except BaseException as error:  # noqa: BLE001
             self._fail(call, error)
+
+    def _getters_of(self, kind):
+        """{value reference: getter} of the variables of `kind` that pass the variable checks
+        (found once per kind, as `_inputs_of`)."""
+        found = self._getters.get(kind)
+        if found is None:
+            found = self._getters[kind] = {
+                vr: variable.getter for vr, variable in self.vars.items()
+                if variable.getter is not None and not self._variable_problem(vr, kind)}
+        return found
 
     def _inputs_of(self, kind):
         """The value references of the inputs of `kind` that pass the variable checks (found

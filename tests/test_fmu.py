@@ -282,6 +282,35 @@ def test_state_get_set_and_serialize_replay_bit_for_bit(scene_fmus):
     b.close()
 
 
+def test_an_input_set_once_holds_and_a_restored_state_holds_its_own_inputs(scene_fmus):
+    """Setting an input once or before every doStep gives the same numbers (the slave tells
+    its simulator only of a change). An FMU state holds every settable variable: after
+    fmi2SetFMUstate the inputs are the saved ones again, held by the next doStep without a
+    set, although the host had set others since."""
+    path = scene_fmus("stage_planar_3dof")
+    once, every = Slave(path, "once"), Slave(path, "every")
+    once.set(0.7)
+    held_once, set_every = [], []
+    for k in range(6):
+        held_once.append(once.step(k * 1e-3, 1e-3))
+        every.set(0.7)
+        set_every.append(every.step(k * 1e-3, 1e-3))
+    assert np.array_equal(np.array(held_once), np.array(set_every))
+    state = once.fmu.getFMUstate()
+    every.fmu.freeFMUstate(every.fmu.getFMUstate())  # taking a state restarts the kinematics
+    once.set(0.2)
+    changed = [once.step(k * 1e-3, 1e-3) for k in range(6, 9)]
+    once.fmu.setFMUstate(state)
+    assert once.fmu.getReal([once.vr[once.inputs[0]]]) == [0.7]
+    restored = [once.step(k * 1e-3, 1e-3) for k in range(6, 9)]  # no set: 0.7 N held
+    continued = [every.step(k * 1e-3, 1e-3) for k in range(6, 9)]
+    assert np.array_equal(np.array(restored), np.array(continued))
+    assert not np.array_equal(np.array(restored), np.array(changed))
+    once.fmu.freeFMUstate(state)
+    once.close()
+    every.close()
+
+
 def test_reset_starts_over(scene_fmus):
     scene = "stage_planar_1dof"
     slave = Slave(scene_fmus(scene))

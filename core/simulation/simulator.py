@@ -29,6 +29,7 @@ system for other solvers and the hand-over to the compiled sampled loop in
 
 from __future__ import annotations
 
+import math
 import time as _time
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
@@ -273,11 +274,12 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         if u.size != self._u.size:
             raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
                                   f"({', '.join(self.input_names)}), got {u.size}")
-        if not np.isfinite(u).all():
-            i = int(np.flatnonzero(~np.isfinite(u))[0])
-            raise SimulationError(f"t = {self._t:.9g} s: input {self.input_names[i]!r} is "
-                                  f"not finite ({u[i]})")
-        if (u != self._u).any():
+        values = u.tolist()  # a few numbers: Python's loop beats numpy's per-call cost here
+        for i, value in enumerate(values):
+            if not math.isfinite(value):
+                raise SimulationError(f"t = {self._t:.9g} s: input {self.input_names[i]!r} is "
+                                      f"not finite ({value})")
+        if values != self._u.tolist():
             self._u = u
             self._needs_init = True
 
@@ -347,7 +349,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
             cause); the simulator then stays at its last good state.
         """
         t_end = float(t_end)
-        if not np.isfinite(t_end) or t_end <= self._t:
+        if not math.isfinite(t_end) or t_end <= self._t:
             raise SimulationError(f"t = {self._t:.9g} s: advance to t_end = {t_end!r}: expected "
                                   "a finite time after the current one")
         start = _time.perf_counter()
