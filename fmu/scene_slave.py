@@ -232,7 +232,7 @@ class SceneSlave(SafeSlave):
         self.outputs = self.simulator.outputs()  # a float array of its own
         if self.currents.size:  # a model without coils has no currents to copy
             self.currents = self.simulator.currents
-        self.stress = float("nan")
+        self.stress = math.nan
         if self.von_mises:
             state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
             _, stresses = stresses_along(self._model, [state], inputs=[self.inputs],

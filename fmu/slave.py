@@ -131,7 +131,7 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self.phase = INSTANTIATED  # where the instance is in the FMI call sequence
         self.broken = ""  # why this instance is in the error state ("" while it is not)
         self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
-        self._settable_inputs = {}  # {variable kind: its inputs' value references}
+        self._settable_inputs = {}  # {variable kind: {value reference: (name, setter)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
 
     # -- to override -------------------------------------------------------------------------

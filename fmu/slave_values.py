@@ -168,13 +168,16 @@ class SlaveValues:
             inputs = self._inputs_of(kind)
             for vr, value in zip(vrs, values, strict=True):
                 # an input of this kind is always settable: only its value is checked
-                problem = None if vr in inputs else (self._variable_problem(vr, kind)
-                                                     or self._settable_problem(vr))
-                if not problem:
-                    problem = self.check_value(self.vars[vr].name, value)
+                name, setter = inputs.get(vr) or (None, None)
+                problem = None
+                if setter is None:
+                    problem = self._variable_problem(vr, kind) or self._settable_problem(vr)
+                    if not problem:
+                        name, setter = self.vars[vr].name, self.vars[vr].setter
+                problem = problem or self.check_value(name, value)
                 if problem:
                     return self._break(f"{call} refused: {problem}")
-                self.vars[vr].setter(value)
+                setter(value)
         except BaseException as error:  # noqa: BLE001
             self._fail(call, error)
 
@@ -189,15 +192,15 @@ class SlaveValues:
         return found
 
     def _inputs_of(self, kind):
-        """The value references of the inputs of `kind` that pass the variable checks (found
-        once per kind, by those checks: the variables are registered in __init__, before any
-        set, and an input's settability does not depend on the phase)."""
+        """{value reference: (name, setter)} of the inputs of `kind` that pass the variable
+        checks (found once per kind, by those checks: the variables are registered in
+        __init__, before any set, and an input's settability does not depend on the phase)."""
         found = self._settable_inputs.get(kind)
         if found is None:
-            found = self._settable_inputs[kind] = frozenset(
-                vr for vr, variable in self.vars.items()
+            found = self._settable_inputs[kind] = {
+                vr: (variable.name, variable.setter) for vr, variable in self.vars.items()
                 if variable.causality == Fmi2Causality.input
-                and not (self._variable_problem(vr, kind) or self._settable_problem(vr)))
+                and not (self._variable_problem(vr, kind) or self._settable_problem(vr))}
         return found
 
     def _variable_problem(self, vr, kind):
