@@ -116,7 +116,7 @@ class SceneSlave(SafeSlave):
         self.simulator = None
         self._build()
         model = self._model
-        self.inputs = np.zeros(len(model.inputs))
+        self.inputs = [0.0] * len(model.inputs)  # N, N m or V; floats, compared cheaply
         self._inputs_changed = True  # the simulator does not hold `inputs` yet
         self._refresh()
 
@@ -129,7 +129,7 @@ class SceneSlave(SafeSlave):
                                f"amplifier) of the {acting}")
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
                           description=description,
-                          getter=lambda i=i: float(self.inputs[i]),
+                          getter=lambda i=i: self.inputs[i],
                           setter=lambda value, i=i: self._hold_input(i, value))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
@@ -224,7 +224,7 @@ class SceneSlave(SafeSlave):
         """Input i = value from the next doStep on; the simulator is told only of a change
         (a host that sets every input before every doStep mostly repeats the held value)."""
         if value != self.inputs[i]:  # true for a NaN too, which the next doStep refuses
-            self.inputs[i] = value
+            self.inputs[i] = float(value)
             self._inputs_changed = True
 
     def _refresh(self):
