@@ -26,8 +26,9 @@ class SimulatorOutputs:
     the last evaluation's `_last_x`, `_last_e`)."""
 
     def outputs(self) -> np.ndarray:
-        """The declared outputs at the current state, computed once per state (`advance`,
-        `reset` and `set_state` start a new one).
+        """The declared outputs at the current state: read from q when every output is a
+        coordinate DOF, else solved once per state (`advance`, `reset` and `set_state` start
+        a new one).
 
         Returns
         -------
@@ -39,11 +40,11 @@ class SimulatorOutputs:
         SimulationError
             The kinematics cannot be solved at the state.
         """
+        dofs = self._output_dofs
+        if dofs is not None:  # every output a coordinate DOF: q itself, a new array, uncached
+            return self._q_ref[dofs] + self._y[dofs]
         if self._outputs_cache is None:
-            if self._output_dofs is not None:  # every output a coordinate DOF: q itself
-                dofs = self._output_dofs
-                self._outputs_cache = self._q_ref[dofs] + self._y[dofs]
-            elif self._positions_only:
+            if self._positions_only:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
