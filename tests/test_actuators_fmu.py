@@ -5,7 +5,7 @@ import tomllib
 
 import numpy as np
 from fmpy import read_model_description
-from test_fmu import Slave
+from fmpy_slave import Slave
 
 from flexure.core import Simulator, build_model, scene_path, scene_toml
 from flexure.fmu import build_scene_fmu

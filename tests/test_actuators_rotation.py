@@ -260,7 +260,7 @@ def test_the_fmu_has_the_rotational_ports_and_the_coil_and_steps_as_the_simulato
     (A) and the actuator's tunable keys with their units; stepped at 2 ms under fmpy, the angle
     and the current equal the in-process Simulator's bit for bit."""
     from fmpy import read_model_description
-    from test_fmu import Slave
+    from fmpy_slave import Slave
 
     from flexure.fmu import build_scene_fmu
     from flexure.fmu.scene_slave import DEFAULT_RTOL, METHODS

@@ -66,7 +66,7 @@ def test_the_stages_and_tutorials_keep_the_banded_lu():
     """Every built-in scene but the manipulator's, and the refined 93-DOF stage: banded, so
     their numbers are those of before the sparse LU (their banded LUs cost at most 1e5
     multiplications, under sparse_packing.SPARSE_FROM)."""
-    from examples.benchmarks.compare import refined_stage
+    from examples.benchmarks.stage_models import refined_stage
 
     models = [factory() for factory in MODELS.values()] + [refined_stage(16)]
     for model in models:

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import read_model_description
-from test_fmu import Slave
+from fmpy_slave import Slave
 
 from flexure.fmu import (
     FMUBuildError,

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
-from test_fmu import Slave
+from fmpy_slave import Slave
 
 from flexure.fmu import build_slave_fmu
 

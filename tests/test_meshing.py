@@ -90,9 +90,9 @@ def test_segments_give_the_model_written_out_by_hand():
     """Segments (interior nodes dependent, the segments' deformations DOFs) and the same
     refinement by hand (interior coordinates DOFs, deformations released) are one mechanism
     in two sets of coordinates: the same DOF count and natural frequencies. By hand:
-    examples/benchmarks/compare.py's refined_stage, each leaf written out as n PLBEAMs with
+    examples/benchmarks/stage_models.py's refined_stage, each leaf written out as n PLBEAMs with
     the interior node coordinates as DOFs."""
-    from examples.benchmarks.compare import refined_stage
+    from examples.benchmarks.stage_models import refined_stage
 
     meshed, by_hand = meshed_stage(4), refined_stage(4)
     assert meshed.ndof == by_hand.ndof == 21

@@ -1,0 +1,80 @@
+"""How the benchmark measures: the progress log, timed runs alternating between the cases
+(`alternate`, `Timing`), a whole process's wall time, and the peer side when it is installed."""
+
+import statistics
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+_START = time.perf_counter()
+
+
+def log(message):
+    """Progress on stderr, with the seconds since the start."""
+    print(f"[{time.perf_counter() - _START:7.1f} s] {message}", file=sys.stderr, flush=True)
+
+
+@dataclass
+class Timing:
+    """Wall times (s) of repeated runs and what the last run returned."""
+
+    walls: list
+    info: object = None
+
+    @property
+    def median(self):
+        return statistics.median(self.walls)
+
+    @property
+    def best(self):
+        return min(self.walls)
+
+    def text(self, unit="s"):
+        if unit == "ms":
+            return f"{1e3 * self.median:.1f} ms (min {1e3 * self.best:.1f})"
+        return f"{self.median:.3f} s (min {self.best:.3f})"
+
+
+def alternate(cases, repeat, label="", *, budget=120.0):
+    """Run the callables of `cases` ({name: f() -> (wall, info)}) in turn, `repeat` rounds.
+
+    Returns {name: Timing}; the runs of different cases interleave so that they share the
+    machine's load. No further round starts once the runs took `budget` seconds (a run of
+    a minute is timed once)."""
+    timings = {name: Timing([]) for name in cases}
+    spent = 0.0
+    for i in range(repeat):
+        if spent > budget:
+            log(f"{label}: {i} round(s) of {repeat}, the budget of {budget:g} s is spent")
+            break
+        for name, run in cases.items():
+            if run is None:
+                continue
+            log(f"{label} {name}: run {i + 1}/{repeat}")
+            start = time.perf_counter()
+            wall, info = run()
+            spent += time.perf_counter() - start
+            timings[name].walls.append(wall)
+            timings[name].info = info
+    return {name: t for name, t in timings.items() if t.walls}
+
+
+def peer():
+    """The Exudyn side (peer_exudyn), or None when exudyn is not installed."""
+    try:
+        from . import peer_exudyn
+    except ImportError as error:
+        log(f"exudyn not available ({error}): the peer columns stay empty")
+        return None
+    return peer_exudyn
+
+
+def command_wall(command):
+    """(wall s, None) of running `command` (a list) in a new process; raises on its failure."""
+    start = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(command)} failed: {done.stderr[-2000:]}")
+    return wall, None

@@ -1,0 +1,43 @@
+"""Fixtures shared by the FMU test modules: the scene FMUs, each built once per session.
+
+The imports are inside the fixtures, so that a run of tests that use none of them does not
+load flexure.fmu or fmpy."""
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def scene_fmus(tmp_path_factory):
+    """{scene name: FMU path}, each built once, on first use."""
+    from flexure.fmu import build_scene_fmu
+
+    folder = tmp_path_factory.mktemp("fmus")
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            cache[name] = build_scene_fmu(name, folder / f"{name}.fmu")
+        return cache[name]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def fmus(tmp_path_factory):
+    """The extracted folders of stage_planar_3dof.fmu and truss_1dof_x.fmu for the abuse cases
+    (test_fmu_abuse.py, test_fmu_memory.py), built once. Every case's process loads the FMUs
+    from these folders, so what the bundled flexure compiles and caches next to its sources
+    (numba) is compiled once, by the warm-up run."""
+    from fmpy import extract
+    from fmu_abuse_runs import run
+
+    from flexure.fmu import build_scene_fmu
+
+    folder = tmp_path_factory.mktemp("abuse")
+    paths = []
+    for scene in ("stage_planar_3dof", "truss_1dof_x"):
+        fmu = build_scene_fmu(scene, folder / f"{scene}.fmu")
+        paths.append(extract(str(fmu), unzipdir=str(folder / scene)))
+    warm_up = run("interleaved", paths, timeout=1200)
+    assert warm_up.code == 0, warm_up.out[-2000:] + warm_up.err[-2000:]
+    return paths
