@@ -88,7 +88,7 @@ def keep_script_namespace(namespace, local_namespace=None):
     matched by one reference taken here (`hold_namespace`, never released). In a re-execution the
     locals are emptied down to the slave class's name bound to `SlaveMarker`. A scene script
     creates no class when it is re-executed (it looks its class up in the module, see
-    `flexure.fmu.builder._scene_script`); a class that another script does create again dies
+    `flexure.fmu.builder.scene_script`); a class that another script does create again dies
     with the locals (at a collection of the garbage collector's youngest generation: a class
     is a reference cycle) instead of being kept by findClass's leaked lists.
     """
@@ -173,7 +173,7 @@ def weakly_bound(function, owner):
     cycle is freed only by the cyclic garbage collector, whose full collections a host that
     instantiates and frees an FMU in a loop reaches every few hundred instances: the freed
     instances, their models and arrays pile up in between (0.6 MB of the 1.7 MB the RSS of
-    tests/test_fmu_abuse.py's leak case grew over 1000 cycles). So the closure is copied
+    tests/test_fmu_memory.py's leak case grew over 1000 cycles). So the closure is copied
     with cells that hold a weak proxy of the instance instead of the instance (the original
     function is left as it is: its cells may be shared), and a bound method is bound to the
     proxy; anything else is returned unchanged.

@@ -118,10 +118,10 @@ def test_findclass_sees_a_two_entry_mro_with_stored_reprs():
 
 def test_scene_script_creates_no_class_when_executed_again():
     from flexure.fmu import scene_slave
-    from flexure.fmu.builder import KEEP_NAMESPACE, _scene_script
+    from flexure.fmu.builder import KEEP_NAMESPACE, scene_script
     from flexure.fmu.pythonfmu_workarounds import SlaveMarker
 
-    code = compile(_scene_script("probe_scene", "", (), False) + KEEP_NAMESPACE,
+    code = compile(scene_script("probe_scene", "", (), False) + KEEP_NAMESPACE,
                    "probe_scene", "exec")
     namespace = {"__name__": "probe_scene"}
     exec(code, namespace)  # the import
