@@ -259,7 +259,7 @@ def test_collinear_trusses_get_one_release_proposed():
 def test_the_quick_regularity_test_clears_only_well_conditioned_matrices():
     """check_exact_constraint skips its SVD when an LU condition estimate clears the
     constraint Jacobian by a margin; a matrix near singular or singular goes to the SVD."""
-    from flexure.core.mechanics.constraints import CLEAR_RCOND, RANK_TOLERANCE, _clearly_regular
+    from flexure.core.mechanics.constraints import CLEAR_RCOND, RANK_TOLERANCE, clearly_regular
 
     rng = np.random.default_rng(3)
     u, _ = np.linalg.qr(rng.normal(size=(40, 40)))
@@ -269,9 +269,9 @@ def test_the_quick_regularity_test_clears_only_well_conditioned_matrices():
         matrix = u @ np.diag(np.geomspace(1.0, max(smallest, 1e-300), 40)) @ v.T
         if smallest == 0.0:
             matrix[:, -1] = matrix[:, 0]  # exactly dependent columns
-        assert _clearly_regular(matrix) == cleared, smallest
+        assert clearly_regular(matrix) == cleared, smallest
     assert CLEAR_RCOND >= 50 * RANK_TOLERANCE  # a margin over the SVD threshold
-    assert not _clearly_regular(np.full((3, 3), np.nan)) and not _clearly_regular(np.ones((2, 3)))
+    assert not clearly_regular(np.full((3, 3), np.nan)) and not clearly_regular(np.ones((2, 3)))
 
 
 def test_the_quick_test_and_the_svd_agree_on_meshed_stages():
@@ -281,7 +281,7 @@ def test_the_quick_test_and_the_svd_agree_on_meshed_stages():
     import scipy.linalg
 
     from flexure.core.mechanics import assembly
-    from flexure.core.mechanics.constraints import _column_scale
+    from flexure.core.mechanics.constraints import column_scale
     from flexure.core.mechanics.kinematics import Kinematics
     from flexure.core.scene.building import parse_toml
 
@@ -292,7 +292,7 @@ def test_the_quick_test_and_the_svd_agree_on_meshed_stages():
         model = build_model(data, check=False)
         kin = Kinematics(model)
         _, De = assembly.deformation_jacobian(model, model.initial_coordinates)
-        scale = _column_scale(model, kin.length_scale)[kin.free]
+        scale = column_scale(model, kin.length_scale)[kin.free]
         dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
         dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
         full = np.vstack([De[np.ix_(kin.constraint_rows, kin.free)] * scale, dof_rows])

@@ -73,12 +73,12 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
             f"but the scene declares {model.declared_dof_count} DOF(s): {declared}"
         )
     _, De = assembly.deformation_jacobian(model, x)
-    scale = _column_scale(model, kin.length_scale)[kin.free]
+    scale = column_scale(model, kin.length_scale)[kin.free]
     rows = De[np.ix_(kin.constraint_rows, kin.free)] * scale
     dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
     dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
     full = np.vstack([rows, dof_rows])
-    if not problems and _clearly_regular(full):
+    if not problems and clearly_regular(full):
         # a regular J has independent rigid rows and no free motion: nothing to name
         return model.dof_count()
     rigid_rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
@@ -160,7 +160,7 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     _, De = assembly.deformation_jacobian(model, x)
     if not np.all(np.isfinite(De)):
         return None  # a degenerate configuration: the check reports it
-    scale = _column_scale(model, kin.length_scale)
+    scale = column_scale(model, kin.length_scale)
     free = model.free_coordinates
     rigid = De[np.ix_(model.rigid_deformations, free)] * scale[free]
     if model.rigid_deformations.size and np.linalg.matrix_rank(
@@ -215,11 +215,22 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     return coordinate_status, deformation_status, names
 
 
-def _clearly_regular(matrix):
+def clearly_regular(matrix: np.ndarray) -> bool:
     """Whether the square `matrix` is regular by a margin: its LU's reciprocal condition
     estimate (LAPACK's gecon, 1-norm) above CLEAR_RCOND. An O(n^3 / 3) test where the SVD
     costs about ten times more (1.5 s on a 1 700-coordinate model); whatever it does not
-    clear goes to the SVD, which decides with RANK_TOLERANCE and names what is wrong."""
+    clear goes to the SVD, which decides with RANK_TOLERANCE and names what is wrong.
+
+    Parameters
+    ----------
+    matrix : ndarray (n, m)
+        A constraint Jacobian with its columns in metres (`column_scale`).
+
+    Returns
+    -------
+    bool
+        False for a matrix that is not square (unless empty) or not clearly regular.
+    """
     if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
         return matrix.shape == (0, 0)
     return lu_and_rcond(matrix)[1] > CLEAR_RCOND
@@ -251,7 +262,7 @@ def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
     kin = Kinematics(model)
     x = model.initial_coordinates if x is None else x
     _, De = assembly.deformation_jacobian(model, x)
-    scale = _column_scale(model, kin.length_scale)[kin.free]
+    scale = column_scale(model, kin.length_scale)[kin.free]
     rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
     redundant = _independent_rows(rows, _release_preference(model))[1]
     return [model.deformation_names[model.rigid_deformations[i]] for i in redundant]
@@ -273,7 +284,7 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
     x = model.initial_coordinates if x is None else x
     _, De = assembly.deformation_jacobian(model, x)
     columns = kin.free
-    scale = _column_scale(model, kin.length_scale)[columns]
+    scale = column_scale(model, kin.length_scale)[columns]
     prescribed = De[np.ix_(model.rigid_deformations, columns)] * scale
     top = max(np.abs(De[:, columns] * scale).max(initial=0.0), 1e-300)
     # an orthonormal basis of the prescribed rows' span (they are independent in a model
@@ -373,8 +384,20 @@ def _counted(index_sets):
     return list(counts.items())
 
 
-def _column_scale(model, length_scale):
-    """Scale rotation coordinates (rad) by a length so every column is in metres."""
+def column_scale(model: Model, length_scale: float) -> np.ndarray:
+    """Scale rotation coordinates (rad) by a length so every column is in metres.
+
+    Parameters
+    ----------
+    model : Model
+    length_scale : float
+        m per rad, the model's length scale (`Kinematics.length_scale`).
+
+    Returns
+    -------
+    ndarray (NX,)
+        1 for a translational coordinate, `length_scale` for a rotational one.
+    """
     scale = np.full(model.nx, float(length_scale))
     scale[model.translations] = 1.0
     return scale
