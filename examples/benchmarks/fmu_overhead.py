@@ -39,6 +39,43 @@ fmu.freeInstance()
 print(json.dumps({"first_step_s": done - ready, "x": x}))
 """
 
+# The floor of any pythonfmu slave around the same simulator: setReal keeps the values,
+# doStep hands a changed input over and advances, getReal reads the output; no call-sequence
+# or value checks, no range-of-validity check, no error handling
+BARE_SLAVE = '''
+from pythonfmu import Fmi2Causality, Fmi2Slave, Real
+
+from flexure.core import Simulator, load_scene
+from flexure.fmu.scene_slave import DEFAULT_RTOL, METHODS
+
+
+class BareStage(Fmi2Slave):
+    author = "flexure benchmarks"
+    description = "stage_planar_3dof in the least a pythonfmu slave can be"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.F, self.x = 0.0, 0.0
+        self.register_variable(Real("F", causality=Fmi2Causality.input))
+        self.register_variable(Real("x", causality=Fmi2Causality.output))
+        self.simulator = Simulator(load_scene("stage_planar_3dof"), method=METHODS[0],
+                                   rtol=DEFAULT_RTOL)
+        self.held = None
+
+    def set_real(self, vrs, values):
+        self.F = values[0]
+
+    def get_real(self, vrs):
+        return [float(self.simulator.outputs()[0])]
+
+    def do_step(self, current_time, step_size):
+        if self.F != self.held:
+            self.simulator.set_inputs([self.F])
+            self.held = self.F
+        self.simulator.advance(current_time + step_size)
+        return True
+'''
+
 
 class FmuMaster:
     """An extracted FMU, instantiated and initialised by fmpy's FMU2Slave per `run`."""
@@ -101,7 +138,8 @@ class FmuMaster:
             wall = time.perf_counter() - start
         inside = None
         if len(new) == 1:  # (its simulator's time inside advance, its time inside do_step)
-            inside = (new[0].simulator.statistics["wall_time_s"], new[0].step_seconds)
+            inside = (new[0].simulator.statistics["wall_time_s"],
+                      getattr(new[0], "step_seconds", None))
         fmu.terminate()
         fmu.freeInstance()
         return wall, (x, inside)
@@ -144,7 +182,7 @@ def first_instantiate(path, cache_dir=None):
 def fmu(*, repeat=5, quick=False):
     """stage_planar_3dof's FMU stepped by fmpy at 1 ms: x real time, overhead, latency."""
     from flexure.core import load_scene
-    from flexure.fmu import build_scene_fmu
+    from flexure.fmu import build_scene_fmu, build_slave_fmu
     from flexure.fmu.scene_slave import DEFAULT_RTOL, METHODS
 
     steps = int(round(1.0 / FMU_STEP))
@@ -154,6 +192,9 @@ def fmu(*, repeat=5, quick=False):
         log("fmu: building stage_planar_3dof.fmu")
         path = build_scene_fmu("stage_planar_3dof", temp / "stage_planar_3dof.fmu")
         master = FmuMaster(path)
+        script = temp / "BareStage.py"
+        script.write_text(BARE_SLAVE)
+        bare = FmuMaster(build_slave_fmu(script, temp / "BareStage.fmu", bundle=("core",)))
         model = load_scene("stage_planar_3dof")
         engine_times = []
 
@@ -163,19 +204,24 @@ def fmu(*, repeat=5, quick=False):
             return wall, x
 
         try:
-            master.run(10)  # loads the slave into this process
-            beyond = {"fmu": [], "fmu direct": []}  # per run: 1 - its simulator's time / wall
+            master.run(10)  # loads the slaves into this process
+            bare.run(10)
+            # per run: 1 - its simulator's time / wall
+            beyond = {"fmu": [], "fmu direct": [], "bare direct": []}
 
-            def fmu_run(direct):
-                wall, (x, inside) = master.run(steps, direct=direct)
+            def fmu_run(direct, fmu=master, name=None):
+                wall, (x, inside) = fmu.run(steps, direct=direct)
                 if inside is not None:
-                    beyond["fmu direct" if direct else "fmu"].append(1.0 - inside[0] / wall)
+                    name = name or ("fmu direct" if direct else "fmu")
+                    beyond[name].append(1.0 - inside[0] / wall)
                 return wall, (x, inside)
 
             t = alternate({"fmu": lambda: fmu_run(False), "fmu direct": lambda: fmu_run(True),
+                           "bare direct": lambda: fmu_run(True, bare, "bare direct"),
                            "in-process": ours}, repeat, "fmu")
         finally:
             master.close()
+            bare.close()
         f, d, p = t["fmu"], t["fmu direct"], t["in-process"]
         log("fmu: the accuracy reference (CVODE BDF at rtol 1e-11, in process)")
         exact = in_process_steps(model, steps, method="cvode-bdf", rtol=1e-11)[1][1]
@@ -209,6 +255,12 @@ def fmu(*, repeat=5, quick=False):
                         f"time / its wall; FMU {d.text()}; the in-process loop {p.text()}, "
                         f"its engine {engine:.3f} s; |x_FMU - x| = {same:.0e} m)", "<= 10 %",
                         overhead / 0.10, overhead <= 0.10))
+        rows.append(Row("the floor: the same simulator in a bare pythonfmu slave (setReal "
+                        "keeps the value, doStep advances, getReal reads the output; no "
+                        "checks), its C functions called directly",
+                        f"{100 * statistics.median(beyond['bare direct']):.1f} % (FMU "
+                        f"{t['bare direct'].text()}; x {t['bare direct'].info[0]:.9g} m, "
+                        f"flexure's FMU {d.info[0]:.9g} m)", "(information)"))
         rows.append(Row("the same through fmpy's FMU2Slave methods (the master's Python "
                         "wrapper included)",
                         f"{100 * overhead_python_master:.1f} % (FMU {f.text()}{split})",
