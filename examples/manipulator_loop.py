@@ -118,9 +118,9 @@ def robustness(crossover=300.0, fs=4000.0, *, coils=False):
     """The design on the low-frequency model and its robustness on each plant; `coils`: on
     the models whose inputs voice coils drive."""
     control_model = load_scene(COILS if coils else CONTROL)
-    design, lf = design_loops(control_model, crossover, fs)
+    design, low = design_loops(control_model, crossover, fs)
     rows = []
-    for name, plant in ((f"low-frequency (6 DOFs{', 6 coils' if coils else ''})", lf),
+    for name, plant in ((f"low-frequency (6 DOFs{', 6 coils' if coils else ''})", low),
                         (f"{control_model.name} ({control_model.ndof} DOFs)",
                          plant_of(control_model)),
                         (f"{REDUCED}", None)):

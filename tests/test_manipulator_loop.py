@@ -84,7 +84,7 @@ def test_the_six_mm_xy_move_stays_within_the_target_with_encoders_and_mains_hum(
     import control
 
     model = manipulator_loop.load_scene(manipulator_loop.CONTROL)
-    design, lf = manipulator_loop.design_loops(model)
+    design, plant = manipulator_loop.design_loops(model)  # the low-frequency state space
     dx, dy = manipulator_loop.MOVES["6 mm xy"]
     path = manipulator_loop.move_path(model, manipulator_loop.targets(dx, dy),
                                       kind="nonlinear")
@@ -96,7 +96,7 @@ def test_the_six_mm_xy_move_stays_within_the_target_with_encoders_and_mains_hum(
         assert row["max_abs_error"] > 10 * clean_row["max_abs_error"]
     settings = manipulator_loop.DISTURBANCES
     fs, w = design.sample_rate_hz, 2 * np.pi * settings["disturbance_hz"]
-    P = control.c2d(lf.state_space(), 1.0 / fs, method="zoh")
+    P = control.c2d(plant, 1.0 / fs, method="zoh")
     z = np.exp(1j * w / fs)
     PS = np.linalg.solve(np.eye(6) + P(z) @ design.controller(z) / z, P(z))
     predicted = settings["disturbance"] * PS.sum(axis=1)  # the same hum at every actuator
