@@ -206,6 +206,63 @@ def low_frequency_model(model: Model, *,
     )
 
 
+def low_frequency_plant(lf_model: LowFrequencyModel, model: Model,
+                        pairs: list | None = None) -> control.StateSpace:
+    """The low-frequency model as the loops drive it: from the forces (N), or where a voice
+    coil of `model` drives a loop's input, from its drive signal (V).
+
+    A voltage-driven coil adds its current i (A) to the states [y, y'], acting as the force
+    Km i and driven by L di/dt = G u - R i - Km y' (the port's velocity is its colocated
+    output's); its back-EMF damps the modes by Km^2 / R (N s/m) at low frequency. A
+    current-driven coil is the gain Km G (N/V), no state. The amplifiers' saturation is not
+    modelled (their slope G inside the limits).
+
+    Parameters
+    ----------
+    lf_model : LowFrequencyModel
+        Of `model`'s loops (`low_frequency_model`).
+    model : Model
+        Whose `actuators` drive the loops' inputs.
+    pairs : list of LoopPair, optional
+        The loops (default: `colocated_pairs(model)`).
+
+    Returns
+    -------
+    control.StateSpace
+        Continuous, states [y (m), y' (m/s), the coil currents (A)], from the loops' inputs
+        (N or V) to their outputs' displacements from equilibrium (m).
+    """
+    import control
+
+    pairs = colocated_pairs(model) if pairs is None else pairs
+    plain = lf_model.state_space()
+    n = len(pairs)
+    gain = np.ones(n)  # N per unit input
+    coils = []  # (loop, actuator) of every voltage-driven coil
+    for actuator in model.actuators:
+        loops = [k for k, pair in enumerate(pairs) if pair.input_index == actuator.input]
+        if not loops:
+            continue
+        if actuator.drive == "current":
+            gain[loops[0]] = actuator.force_constant * actuator.amplifier_gain
+        else:
+            coils.append((loops[0], actuator))
+    c = len(coils)
+    A = np.zeros((2 * n + c, 2 * n + c))
+    A[:2 * n, :2 * n] = plain.A
+    B = np.zeros((2 * n + c, n))
+    B[:2 * n] = plain.B * gain
+    for row, (k, actuator) in enumerate(coils, start=2 * n):
+        force_column = plain.B[:, k].copy()  # the force of loop k's port, per N
+        B[:2 * n, k] = 0.0
+        A[:2 * n, row] = actuator.force_constant * force_column
+        A[row, n + k] = -actuator.force_constant / actuator.inductance
+        A[row, row] = -actuator.resistance / actuator.inductance
+        B[row, k] = actuator.amplifier_gain / actuator.inductance
+    C = np.hstack([np.eye(n), np.zeros((n, n + c))])
+    return control.ss(A, B, C, np.zeros((n, n)))
+
+
 def forces(lf_model: LowFrequencyModel, profile, t0: float, t1: float, *, direction=None,
            offsets=None) -> np.ndarray:
     """Feedforward forces (N), (n_samples, n_loops), held over the intervals [t0, t1).

@@ -155,10 +155,14 @@ class LoopController:
 
     @property
     def compiled(self) -> bool:
-        """Whether flexure.core.run_sampled_loop can run this controller: a state space
-        without encoder quantisation (a callable, or rounding, needs the Python loop)."""
-        return not self.sample_indexed and (self.disturbances is None
-                                             or self.disturbances.quantum is None)
+        """Whether flexure.core.run_sampled_loop can run this controller: a state space (its
+        quantum and disturbance included); a callable needs the Python loop."""
+        return not self.sample_indexed
+
+    @property
+    def quantum(self) -> np.ndarray | None:
+        """The encoders' quantum per loop (m, rad), or None (exact measurements)."""
+        return None if self.disturbances is None else self.disturbances.quantum
 
     def reset(self) -> None:
         """Back to the zero state of the feedback, before sample 0."""

@@ -8,9 +8,9 @@
 
 Every plant runs the same controller with the same timing (loop_controller.py), the same
 integrator and tolerance, so the three agree to the integrator's tolerance. On "inprocess" a
-callable controller or encoder quantisation runs the Python loop around the in-process
-Simulator (sample_loop.simulate_loop, the same numbers the compiled loop would give, plus a
-Python call per sample); the designed controller and a python-control system run compiled.
+callable controller runs the Python loop around the in-process Simulator
+(sample_loop.simulate_loop, a Python call per sample); the designed controller and a
+python-control system run compiled, with their encoder quantisation and disturbance.
 """
 
 from __future__ import annotations

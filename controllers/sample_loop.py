@@ -9,9 +9,10 @@ Two implementations of the same loop (the timing is in loop_controller.py):
   `InProcessPlant`; the tests hold one against the other.
 
 Both return t (N+1,) s, reference and position (N+1, n_loops) m, force (N+1, n_loops) N.
-`compiled_loop` runs a state-space feedback with exact measurements (`LoopController.compiled`);
-a callable feedback, called with the sample index, or encoder quantisation, which rounds the
-measurement before the error is formed, take `simulate_loop` (a Python call per sample).
+`compiled_loop` runs a state-space feedback (`LoopController.compiled`), with its encoder
+quantisation (run_sampled_loop's `quantum`: the same q * round(y / q)) and its disturbance
+force (on the feedforward array); a callable feedback, called with the sample index, takes
+`simulate_loop` (a Python call per sample).
 """
 
 import numpy as np
@@ -65,9 +66,9 @@ def simulate_loop(plant, controller: LoopController, design, *, progress=None):
 def compiled_loop(model, controller: LoopController, design, *, method: str, rtol: float,
                   progress=None):
     """The in-process loop of `model` as one compiled run; returns t, r, y, u like
-    `simulate_loop`. The controller's feedback is a state space and it rounds no measurement
-    (`controller.compiled`); its disturbance force rides on the feedforward, as in
-    `LoopController.step`.
+    `simulate_loop`, to the bit. The controller's feedback is a state space
+    (`controller.compiled`); its encoders' quantum goes to run_sampled_loop and its
+    disturbance force rides on the feedforward, as in `LoopController.step`.
 
     Parameters
     ----------
@@ -82,9 +83,8 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
     from flexure.core import Simulator, run_sampled_loop  # the models (numba) on first use
 
     if not controller.compiled:
-        raise LoopError("the compiled loop runs a state-space feedback with exact "
-                        "measurements; a callable controller or encoder quantisation takes "
-                        "simulate_loop")
+        raise LoopError("the compiled loop runs a state-space feedback; a callable "
+                        "controller takes simulate_loop")
     sim = Simulator(model, method=method, rtol=rtol)
     feedback = controller.controller
     t, position, force = run_sampled_loop(
@@ -92,5 +92,6 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
         feedforward=controller.open_loop_forces,  # u_ff (+ the disturbance d)
         controller=(feedback.A, feedback.B, feedback.C, feedback.D),
         loop_inputs=[pair.input_index for pair in design.pairs],
-        loop_outputs=[pair.output_index for pair in design.pairs], progress=progress)
+        loop_outputs=[pair.output_index for pair in design.pairs],
+        quantum=controller.quantum, progress=progress)
     return t, controller.reference[: len(t)].copy(), position, force

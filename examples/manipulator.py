@@ -1,7 +1,8 @@
-"""The six-DOF flexure manipulator of the chapter, reconstructed: one parameter table, five scenes.
+"""The six-DOF flexure manipulator of the chapter, reconstructed: one parameter table, six scenes.
 
     python examples/manipulator.py            # writes the scenes into examples/scenes/
     python examples/manipulator.py --table    # prints the parameter table (docs/manipulator.md)
+    python examples/manipulator.py --coils    # prints the voice coils' table
 
 The chapter (Jonker, Aarts and van Dijk, "Flexible multibody modelling for exact constraint
 design of compliant mechanisms", section 3) gives the architecture, not the dimensions; the
@@ -40,6 +41,9 @@ The scenes written (all `flexure` built-ins once written into examples/scenes/):
 - `manipulator_e1`: the same with every elongation prescribed zero (its 315-DOF analogue).
 - `manipulator_control`: one beam per flexure, every elongation prescribed zero (75 DOFs): the
   plant of the closed loop, its ten lowest frequencies within 0.5 % of the full model's.
+- `manipulator_control_vcm`: the control model with its six actuators voltage-driven voice
+  coils (the table `COILS`): the inputs are the amplifiers' drive signals (V), the coil
+  currents states, the back-EMF damps the suspension modes.
 - `manipulator_reduced`: written by `flexure reduce manipulator_e1 --keep 7 --tol 1`
   (its 237-DOF analogue), not by this script: the six suspension modes and the first
   parasitic one within 1 % (keeping six only, the reduction freezes what the parasitic mode
@@ -94,6 +98,17 @@ PARAMETERS = {
     "effector_mass": (0.25, "kg", "end effector E"),
     "body_size": (0.04, "m", "edge of the cube whose inertia each rigid body is given"),
     "segments": (3, "-", "beams per flexure in the dynamic models"),
+}
+
+# The voice coils of `manipulator_control_vcm`, one per carriage, voltage-driven. The chapter
+# names VCMs and their back-EMF's damping, not their data; these are a small moving-coil
+# actuator's (docs/manipulator.md, "Through its voice coils", gives the reasoning).
+COILS = {
+    "force_constant": (6.0, "N/A", "Km, force per current (= back-EMF constant, V s/m)"),
+    "resistance": (3.0, "ohm", "R, the coil's resistance"),
+    "inductance": (3e-4, "H", "L, the coil's inductance"),
+    "amplifier_gain": (1.0, "V/V", "G, the voltage amplifier's gain from the drive signal"),
+    "saturation": (24.0, "V", "the amplifier's output limit"),
 }
 
 BODY_ANGLES = (90.0, 210.0, 330.0)  # degrees, the intermediate bodies C1, C2, C3
@@ -383,6 +398,20 @@ def scene_control(parameters=PARAMETERS):
                     "flexure, every elongation prescribed zero")
 
 
+def scene_control_vcm(parameters=PARAMETERS, coils=COILS):
+    """The control model with its six forces driven by voltage-driven voice coils (`coils`):
+    each input F1 ... F6 becomes the drive signal (V) of the amplifier of coil VCM1 ... VCM6,
+    and each coil's current (A) a state; its back-EMF damps the suspension modes."""
+    scene = scene_control(parameters)
+    scene["scene"] |= {"name": "manipulator_control_vcm",
+                       "description": scene["scene"]["description"] + "; its six actuators "
+                       "voltage-driven voice coils"}
+    keys = {name: coils[name][0] for name in coils}
+    scene["actuators"] = {f"VCM{name[1:]}": {"input": name, "drive": "voltage", **keys}
+                          for name in scene["inputs"]}
+    return scene
+
+
 def _scene(parts, name, description, *, dynamic):
     scene = {"scene": {"name": name, "description": description, "dimension": 3},
              "sections": sections(parts.p, dynamic=dynamic),
@@ -400,7 +429,7 @@ def all_scenes(parameters=PARAMETERS, *, angle_outputs=False):
     scenes = [scene_guidance(parameters), scene_stage(parameters),
               scene_manipulator(parameters, angle_outputs=angle_outputs),
               scene_manipulator(parameters, frozen=("e1",), angle_outputs=angle_outputs),
-              scene_control(parameters)]
+              scene_control(parameters), scene_control_vcm(parameters)]
     return {f"{s['scene']['name']}.toml": s for s in scenes}
 
 
@@ -409,7 +438,7 @@ HEADER = ("Written by examples/manipulator.py from its parameter table; edit the
 
 
 def parameter_table(parameters=PARAMETERS):
-    """The parameter table as Markdown (docs/manipulator.md)."""
+    """The parameter table as Markdown (docs/manipulator.md); also the coil table's form."""
     rows = ["| parameter | value | unit | what |", "| --- | --- | --- | --- |"]
     rows += [f"| `{name}` | {val:g} | {unit} | {what} |"
              for name, (val, unit, what) in parameters.items()]
@@ -419,6 +448,8 @@ def parameter_table(parameters=PARAMETERS):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--table", action="store_true", help="print the parameter table")
+    parser.add_argument("--coils", action="store_true",
+                        help="print the voice coils' table (manipulator_control_vcm)")
     parser.add_argument("--out", type=Path, default=SCENES, help="folder for the scenes")
     parser.add_argument("--angle-outputs", action="store_true",
                         help="add the end effector's angles about x, y, z (E_rx, E_ry, E_rz, "
@@ -427,6 +458,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.table:
         sys.stdout.write(parameter_table())
+        return 0
+    if args.coils:
+        sys.stdout.write(parameter_table(COILS))
         return 0
     for file_name, scene in all_scenes(angle_outputs=args.angle_outputs).items():
         text = scene_toml(scene, HEADER.format(description=scene["scene"]["description"]))

@@ -3,6 +3,7 @@
     python examples/manipulator_loop.py                      # robustness and moves, a minute
     python examples/manipulator_loop.py --loop               # + the 6 mm xy move, closed loop
     python examples/manipulator_loop.py --loop --plant libcosim   # + the same loop as FMUs
+    python examples/manipulator_loop.py --loop --coils       # the loops through voice coils
 
 1. **Design and robust stability.** One PID-like loop per actuator on its colocated encoder,
    its gain set for 300 rad/s on the low-frequency model (the six suspension modes alone,
@@ -30,6 +31,17 @@
    --disturbance 0.03@50`), the linear loop's 50 Hz response to it about 2 um per actuator,
    half the target.
 
+4. **Through the voice coils** (`--coils`): the same study on `manipulator_control_vcm`, the
+   control model with its six actuators voltage-driven voice coils (examples/manipulator.py's
+   `COILS`). The damping ratios of the six suspension modes from the state space's poles
+   without and with the coils, against the modal formula (c_i + sum_j Km^2/R g_ij^2) /
+   (2 w_i) (unit modal mass, g_ij the mode's displacement at coil j: the back-EMF's damping
+   Km^2 / R, N s/m, per mode, where the coil's pole R / L lies far above the mode and the
+   modes' damping does not couple them); the loops designed on the low-frequency model with
+   the coils' equations (`low_frequency_plant`), now from the drive signals (V), and their
+   robustness on the control model with its coils; with `--loop` the 6 mm xy move through
+   the coils, the feedforward turned into drive signals by the coils' equations.
+
 Lengths in mm, rotations in mrad (the end effector's rotation-vector components), margins in
 degrees and ratios.
 """
@@ -38,19 +50,31 @@ import argparse
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from flexure.controllers.feedback import colocated_pairs, design_feedback
-from flexure.controllers.feedforward import low_frequency_model
+from flexure.controllers.feedforward import low_frequency_model, low_frequency_plant
 from flexure.controllers.move_path import move_path
 from flexure.controllers.robustness import check_robustness
 from flexure.controllers.runner import run_loop
-from flexure.core import inverse_statics, load_scene, output_value, state_space
+from flexure.core import (
+    build_model,
+    input_columns,
+    inverse_statics,
+    linearize,
+    load_scene,
+    natural_frequencies,
+    output_value,
+    scene_path,
+    state_space,
+)
 from flexure.core.reporting.progress import Progress
 
 CONTROL, REDUCED = "manipulator_control", "manipulator_reduced"
+COILS = "manipulator_control_vcm"  # CONTROL with its actuators voltage-driven voice coils
 FIGURES = Path(__file__).resolve().parent / "figures"
 HELD = ("E.z", "E_M1.z", "E_M2.z")  # the end effector's height and its tilts held
 MOVES = {"1 mm x": (1e-3, 0.0), "4 mm x": (4e-3, 0.0), "6 mm x": (6e-3, 0.0),
@@ -77,27 +101,85 @@ def plant_of(model):
 
 
 def design_loops(control_model, crossover=300.0, fs=4000.0):
-    """The six loops designed on the low-frequency model; returns (design, that model)."""
-    lf = low_frequency_model(control_model)
-    return design_feedback(control_model, crossover=crossover, fs=fs,
-                           plant=lf.state_space()), lf
+    """The six loops designed on the low-frequency model (with the coils' equations where
+    voice coils drive the inputs); returns (design, that model's state space)."""
+    lf = low_frequency_plant(low_frequency_model(control_model), control_model)
+    return design_feedback(control_model, crossover=crossover, fs=fs, plant=lf), lf
 
 
-def robustness(crossover=300.0, fs=4000.0):
-    """The design on the low-frequency model and its robustness on each plant."""
-    control_model = load_scene(CONTROL)
-    design, lf = design_loops(control_model, crossover, fs)
+def with_coils(name):
+    """The built-in scene `name` with the voice coils of the COILS scene on its inputs."""
+    data = tomllib.loads(scene_path(name).read_text())
+    data["actuators"] = tomllib.loads(scene_path(COILS).read_text())["actuators"]
+    return build_model(data, source=f"{name} + the voice coils of {COILS}")
+
+
+def robustness(crossover=300.0, fs=4000.0, *, coils=False):
+    """The design on the low-frequency model and its robustness on each plant; `coils`: on
+    the models whose inputs voice coils drive."""
+    control_model = load_scene(COILS if coils else CONTROL)
+    design, low = design_loops(control_model, crossover, fs)
     rows = []
-    for name, plant in (("low-frequency (6 DOFs)", lf.state_space()),
-                        (f"{CONTROL} ({control_model.ndof} DOFs)", plant_of(control_model)),
+    for name, plant in ((f"low-frequency (6 DOFs{', 6 coils' if coils else ''})", low),
+                        (f"{control_model.name} ({control_model.ndof} DOFs)",
+                         plant_of(control_model)),
                         (f"{REDUCED}", None)):
         start = time.perf_counter()
         if plant is None:
-            reduced = load_scene(REDUCED)
-            name, plant = f"{REDUCED} ({reduced.ndof} DOFs)", plant_of(reduced)
+            reduced = with_coils(REDUCED) if coils else load_scene(REDUCED)
+            name = f"{REDUCED}{' + coils' if coils else ''} ({reduced.ndof} DOFs)"
+            plant = plant_of(reduced)
         rows.append(check_robustness(design, plant, name=name))
         log(f"  robustness on {name}: {time.perf_counter() - start:.1f} s")
     return design, rows
+
+
+def suspension_modes(model, count=6):
+    """The `count` lowest oscillating poles of the model's state space (with its coils'
+    currents where it has voice coils): their frequencies |s| / 2 pi (Hz) and damping ratios
+    -Re(s) / |s|."""
+    poles = np.linalg.eigvals(state_space(model).A)
+    poles = poles[poles.imag > 0]
+    poles = poles[np.argsort(np.abs(poles))][:count]
+    return np.abs(poles) / (2 * np.pi), -poles.real / np.abs(poles)
+
+
+def modal_damping(model, count=6):
+    """The `count` lowest modes' frequencies (Hz, the coils open) and damping ratios by the
+    modal formula zeta_i = (c_i + sum_j Km_j^2 / R_j g_ij^2) / (2 w_i): unit modal mass, c_i
+    the flexures' modal damping, g_ij the mode's displacement at coil j's port (m per unit
+    modal coordinate), Km^2 / R (N s/m) the back-EMF's damping of a voltage-driven coil at
+    frequencies far below its pole R / L. It neglects the damping's coupling of the modes."""
+    lin = linearize(model)
+    modes = natural_frequencies(model, linear_model=lin)
+    phi = modes.shapes[:, :count]
+    omega = 2 * np.pi * modes.frequencies_hz[:count]
+    damping = np.einsum("ji,jk,ki->i", phi, lin.C0, phi)  # N s/m per unit modal mass
+    ports = input_columns(model, lin.solution.config.x, model.inputs)
+    g = (lin.DF.T @ ports).T @ phi  # (inputs, modes)
+    for coil in model.coil_actuators:
+        damping = damping + coil.force_constant**2 / coil.resistance * g[coil.input] ** 2
+    return modes.frequencies_hz[:count], damping / (2 * omega)
+
+
+def coil_damping():
+    """Per suspension mode: (frequency Hz, damping ratio) without the coils and with them
+    (the state spaces' poles), and the modal formula's damping ratio with them."""
+    plain, coiled = load_scene(CONTROL), load_scene(COILS)
+    (f0, z0), (f1, z1) = suspension_modes(plain), suspension_modes(coiled)
+    _, formula = modal_damping(coiled)
+    return [{"mode": i + 1, "frequency_hz": f0[i], "zeta": z0[i], "frequency_coils_hz": f1[i],
+             "zeta_coils": z1[i], "zeta_formula": formula[i]} for i in range(len(f0))]
+
+
+def print_coil_damping(rows):
+    print("| mode | without coils: f (Hz) | damping ratio | with coils: f (Hz) | damping ratio "
+          "| modal formula | formula / state space |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for r in rows:
+        print(f"| {r['mode']} | {r['frequency_hz']:.2f} | {r['zeta']:.4f} | "
+              f"{r['frequency_coils_hz']:.2f} | {r['zeta_coils']:.4f} | "
+              f"{r['zeta_formula']:.4f} | {r['zeta_formula'] / r['zeta_coils']:.3f} |")
 
 
 def print_robustness(rows):
@@ -164,7 +246,8 @@ def closed_loop(design, figures, *, plant="inprocess", duration=1.0, settle=0.25
     """The 6 mm xy move in `duration` (s) in closed loop on the control model, `settle` (s)
     after it, on `plant` (a `run_loop` plant); returns the LoopResult. `disturbed`: with the
     encoders' quantum and the 50 Hz force of `DISTURBANCES`. An in-process run writes its
-    plot to `figures` (None: no plot). `path`: the move's MovePath if made before."""
+    plot to `figures` (None: no plot). `path`: the move's MovePath if made before. `model`:
+    the control model, or the one through its voice coils (COILS; `design` then from it)."""
     model = load_scene(CONTROL) if model is None else model
     if path is None:
         dx, dy = MOVES["6 mm xy"]
@@ -175,7 +258,8 @@ def closed_loop(design, figures, *, plant="inprocess", duration=1.0, settle=0.25
                                         f"{', disturbed' if disturbed else ''})"),
                       **(DISTURBANCES if disturbed else {}))
     if figures is not None and plant == "inprocess":
-        result.plot(figures / ("manipulator_loop_disturbed.png" if disturbed
+        result.plot(figures / ("manipulator_loop_coils.png" if model.actuators
+                               else "manipulator_loop_disturbed.png" if disturbed
                                else "manipulator_loop.png"))
     return result
 
@@ -226,6 +310,36 @@ def print_closed_loop(clean, disturbed):
               f"{'yes' if noisy['passed'] else 'NO'} |")
 
 
+def print_coil_loop(result):
+    """Each actuator's tracking error through its coil and the largest drive signal."""
+    print("| loop | stroke (mm) | max error (nm) | error / stroke | within 0.1 % | "
+          "largest drive signal (V) |")
+    print("| --- | ---: | ---: | ---: | --- | ---: |")
+    drive = np.max(np.abs(result.force), axis=0)
+    for row, volts in zip(result.per_loop(), drive, strict=True):
+        print(f"| {row['loop']} | {row['stroke'] * 1e3:.4f} | "
+              f"{row['max_abs_error'] * 1e9:.1f} | {row['error_ratio']:.2e} | "
+              f"{'yes' if row['passed'] else 'NO'} | {volts:.3f} |")
+
+
+def coils_study(loop, figures):
+    """--coils: the back-EMF's damping, the loops through the coils, with `loop` the move."""
+    log("suspension modes without and with the coils")
+    print("Damping of the suspension modes by the voice coils' back-EMF\n")
+    print_coil_damping(coil_damping())
+    log("design and robustness through the coils")
+    design, rows = robustness(coils=True)
+    print("\nRobust stability through the coils (design: 300 rad/s on the low-frequency model "
+          "with the coils' equations, 4 kHz)\n")
+    print_robustness(rows)
+    if loop:
+        log("closed loop through the coils: 6 mm xy")
+        result = closed_loop(design, figures, model=load_scene(COILS))
+        print(f"\nClosed loop through the coils, 6 mm xy in 1 s ({result.wall_time_s:.1f} s "
+              "wall)\n")
+        print_coil_loop(result)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--loop", action="store_true",
@@ -235,10 +349,18 @@ def main(argv=None):
                         help="with --loop: also run the loop on this plant (fmu: the "
                              "manipulator's FMU under fmpy; libcosim: it and a controller FMU "
                              "in libcosim) and compare it with the in-process loop")
+    parser.add_argument("--coils", action="store_true",
+                        help=f"the study through the voice coils ({COILS}): their damping, "
+                             "the design and its robustness; with --loop the 6 mm xy move")
     parser.add_argument("--figures", type=Path, default=FIGURES, help="folder for the PNG")
     args = parser.parse_args(argv)
     if args.plant != "inprocess" and not args.loop:
         parser.error("--plant compares the closed loop: give --loop too")
+    if args.coils and args.plant != "inprocess":
+        parser.error("--coils runs the loop in process: give no --plant")
+    if args.coils:
+        coils_study(args.loop, args.figures)
+        return 0
     log("design and robustness")
     design, rows = robustness()
     print("Robust stability (design: 300 rad/s on the low-frequency model, 4 kHz)\n")

@@ -46,3 +46,28 @@ def test_the_drive_signals_are_the_coils_equations():
     current = drive_signals(stage(drive="current", amplifier_gain=2.0), pairs, forces,
                             reference, fs)[:, 0]
     np.testing.assert_allclose(current, forces[:, 0] / (KM * 2.0), rtol=1e-14)
+
+
+@pytest.mark.parametrize("drive", ["voltage", "current"])
+def test_the_low_frequency_plant_takes_the_coils_equations(drive):
+    """On the 1-DOF stage the low-frequency model is the whole linear model (M0, C0, K), so
+    with the coil's equations added it has the scene's state space's poles and DC gain: the
+    voltage-driven coil's current a third state (its pole near -R / L, the back-EMF's
+    Km^2 / R damping the mode), a current-driven coil the gain Km G."""
+    import control
+
+    from flexure.controllers.feedforward import low_frequency_model, low_frequency_plant
+    from flexure.core import state_space
+
+    model = stage(drive=drive, amplifier_gain=2.0)
+    pairs = colocated_pairs(model)
+    plant = low_frequency_plant(low_frequency_model(model), model, pairs)
+    full = state_space(model)[pairs[0].output_index, pairs[0].input_index]
+    states = 3 if drive == "voltage" else 2
+    assert plant.nstates == states and full.nstates == states
+    np.testing.assert_allclose(np.sort_complex(control.poles(plant)),
+                               np.sort_complex(control.poles(full)), rtol=1e-9)
+    assert control.dcgain(plant) == pytest.approx(control.dcgain(full), rel=1e-9)
+    k = 945.0  # N/m, the stage's spring (closed-loop.md)
+    gain = KM * 2.0 / R if drive == "voltage" else KM * 2.0  # N per V at rest
+    assert control.dcgain(plant) == pytest.approx(gain / k, rel=1e-2)

@@ -149,7 +149,7 @@ def test_the_controller_serialises_with_its_disturbances_and_reference(stage):
         assert np.array_equal(getattr(again, name), getattr(loop, name)), name
     y = loop.offsets + 3.3e-8
     assert np.array_equal(again.step(3, y)[0], loop.step(3, y)[0])
-    assert not again.compiled and loop.disturbances.frequency_hz == 60.0
+    assert again.compiled and loop.disturbances.frequency_hz == 60.0  # a state space
 
 
 @pytest.mark.parametrize("options, message", [
@@ -259,3 +259,43 @@ def test_the_per_loop_table_puts_the_units_in_the_cells_when_the_loops_differ():
     rows[1]["units"] = rows[0]["units"]
     table = render(summary).split("\n\n")[1]
     assert "stroke (m)" in table.splitlines()[0] and " rad" not in table
+
+
+@pytest.mark.parametrize("method", ["esdirk2", "cvode-bdf"])
+def test_the_compiled_loop_quantises_and_disturbs_as_the_python_loop_does(method):
+    """The quantised, disturbed loop runs compiled (flexure.core.run_sampled_loop with its
+    quantum) and gives the Python loop around the same Simulator, bit for bit: the same
+    q * round(y / q) (rint, halves to even) and the same held d_k on the feedforward.
+
+    On stage_planar_3dof, whose outputs are all DOFs, so that the Python loop's
+    `Simulator.outputs` reads y as the compiled loop does (q_ref + y); on stage_planar_1dof
+    its y output is a dependent coordinate and `outputs` solves the kinematics for both,
+    which differs in the last bits (5e-16 m after one sample, without a quantum too)."""
+    from flexure.controllers.plants import InProcessPlant
+    from flexure.controllers.sample_loop import compiled_loop, simulate_loop
+
+    model = load_scene("stage_planar_3dof")
+    loop, design = build_loop(model, quantum=1e-8, disturbance=0.01, disturbance_hz=60.0,
+                              **SHORT)
+    assert loop.compiled
+    compiled = compiled_loop(model, loop, design, method=method, rtol=1e-7)
+    python = simulate_loop(InProcessPlant(model, method=method, rtol=1e-7), loop, design)
+    for a, b, name in zip(compiled, python, ("t", "reference", "position", "force"),
+                          strict=True):
+        assert np.array_equal(a, b), name
+    # the quantum acts: the same loop with exact encoders differs, by less than a quantum
+    exact, _ = build_loop(model, disturbance=0.01, disturbance_hz=60.0, **SHORT)
+    position = compiled_loop(model, exact, design, method=method, rtol=1e-7)[2]
+    assert 1e-10 < np.max(np.abs(position - compiled[2])) < 1e-8
+
+
+@pytest.mark.parametrize("quantum", [[1e-8, 1e-8], [0.0], [float("nan")], "fine"])
+def test_the_compiled_loop_refuses_a_wrong_quantum(stage, quantum):
+    from flexure.core import SimulationError, Simulator, run_sampled_loop
+
+    with pytest.raises(SimulationError, match="quantum: expected 1 positive finite values"):
+        run_sampled_loop(Simulator(stage, method="esdirk2"), fs=FS, samples=2,
+                         reference=np.zeros((1, 1)), feedforward=np.zeros((1, 1)),
+                         controller=(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
+                                     np.ones((1, 1))),
+                         loop_inputs=[0], loop_outputs=[0], quantum=quantum)

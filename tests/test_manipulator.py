@@ -44,6 +44,23 @@ def test_the_generator_writes_the_committed_files(tmp_path, capsys):
 def test_the_docs_show_the_parameter_table():
     docs = Path(__file__).resolve().parents[1] / "docs" / "manipulator.md"
     assert manipulator.parameter_table() in docs.read_text()
+    assert manipulator.parameter_table(manipulator.COILS) in docs.read_text()
+
+
+def test_the_coil_scene_is_the_control_model_with_a_voltage_driven_coil_on_each_input(capsys):
+    plain = manipulator.scene_control()
+    coiled = manipulator.scene_control_vcm()
+    actuators = coiled.pop("actuators")
+    assert coiled.pop("scene")["name"] == "manipulator_control_vcm"
+    plain.pop("scene")
+    assert coiled == plain
+    assert [a["input"] for a in actuators.values()] == [f"F{k}" for k in range(1, 7)]
+    assert all(a["drive"] == "voltage" and a["force_constant"] == 6.0 for a in
+               actuators.values())
+    model = load_scene("manipulator_control_vcm")
+    assert [a.name for a in model.coil_actuators] == [f"VCM{k}" for k in range(1, 7)]
+    assert manipulator.main(["--coils"]) == 0
+    assert capsys.readouterr().out == manipulator.parameter_table(manipulator.COILS)
 
 
 def guidance_with(releases):

@@ -3,12 +3,16 @@
 At the samples t_k = k / fs (k = 0 .. N), with y_k the loop outputs (positions, m) measured at
 t_k, r_k the reference and x_c the state of a discrete linear controller (A, B, C, D):
 
-    e_k   = r_k - y_k
+    e_k   = r_k - y_k                    (or r_k - q round(y_k / q), an encoder's quantum q)
     u_k+1 = C x_c + D e_k + u_ff,k+1,    x_c <- A x_c + B e_k      (computed at t_k)
     plant: u_k held over [t_k, t_k+1)                            (zero-order hold)
 
 so the force acts one sample after the measurement it comes from (one sample of computation
-delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. An
+delay, as in a real-time controller and in a co-simulation master), and u_0 = u_ff,0. With a
+quantum (m, rad) the controller sees each measured output rounded to the nearest multiple of
+it, halves to even (numpy's `round`: q * rint(y / q), the same two roundings of IEEE
+arithmetic whoever computes them); the positions returned stay the true y_k. Any other
+additive input, e.g. a disturbance force, rides on u_ff: it is known per sample. An
 input that a voice-coil actuator drives (`flexure.core.mechanics.actuators`) takes u_k as its
 drive signal (V), held likewise; its coil current is part of the integrator's state. Past
 the last sample of the reference and feedforward arrays their last entries hold.
@@ -59,6 +63,7 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
                      feedforward: ArrayLike,
                      controller: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike],
                      loop_inputs: Sequence[int], loop_outputs: Sequence[int],
+                     quantum: ArrayLike | None = None,
                      progress: Callable[[float], None] | None = None,
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Run the loop from the simulator's current state (t = 0 after `reset`).
@@ -80,6 +85,9 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     loop_inputs, loop_outputs : sequences of int
         The model input driven by each loop, and the model output (a position, or an angle
         about a global axis) it measures.
+    quantum : array_like (n_loops,), optional
+        Each loop's encoder quantum q (m, rad; > 0): the controller's error is
+        r_k - q rint(y_k / q). Default: exact measurements.
     progress : callable, optional
         Called with the fraction of samples done, about 100 times.
 
@@ -97,8 +105,9 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     ------
     SimulationError
         The simulator's method is not ESDIRK or CVODE, a loop output is not a position,
-        the reference or feedforward has the wrong number of columns, or the integration
-        or a measurement fails (naming the time).
+        the reference or feedforward has the wrong number of columns, a quantum is not one
+        positive finite number per loop, or the integration or a measurement fails (naming
+        the time).
     """
     solver, plant, outputs, restart_needed, restart_kinematics = sim.hand_over()
     if not isinstance(solver, (Cvode, Esdirk)):
@@ -114,6 +123,7 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     if reference.shape[1] != n_loops or feedforward.shape[1] != n_loops:
         raise SimulationError(f"reference and feedforward: expected {n_loops} columns, got "
                               f"{reference.shape[1]} and {feedforward.shape[1]}")
+    quanta = _quanta(quantum, n_loops)
     N = int(samples)
     position = np.zeros((N + 1, n_loops))
     force = np.zeros((N + 1, n_loops))
@@ -122,7 +132,7 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     coordinates = np.concatenate([port_specs(ports).ravel(),
                                   output_dofs(sim.model, ports)])
     loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
-            np.array(loop_inputs, dtype=np.int64), coordinates, position, force)
+            np.array(loop_inputs, dtype=np.int64), coordinates, quanta, position, force)
     # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
     loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
     held = np.array(sim.inputs, dtype=float)
@@ -149,6 +159,20 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     sim.take_back(loop_state[0], solver.y_array, held, restart_needed=loop_state[1] != 0.0,
                   wall=time.perf_counter() - start_time)
     return np.arange(N + 1) / fs, position, force
+
+
+def _quanta(quantum, n_loops):
+    """The quanta (n_loops,) the kernels take: q > 0 per loop, or zeros for exact ones."""
+    if quantum is None:
+        return np.zeros(n_loops)
+    try:
+        quanta = np.asarray(quantum, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        quanta = np.full(0, np.nan)
+    if quanta.shape != (n_loops,) or not np.all(np.isfinite(quanta) & (quanta > 0)):
+        raise SimulationError(f"quantum: expected {n_loops} positive finite values (m, rad), "
+                              f"one per loop, got {quantum!r}")
+    return np.ascontiguousarray(quanta)
 
 
 def _esdirk_samples(sim, solver, plant, addresses, loop_state, held, loop):
@@ -275,9 +299,10 @@ def _measure(addresses, y, scratch, coordinates, out):
 
 @kernel
 def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state, inputs,
-            coordinates, position, force, held, error, output):
+            coordinates, quanta, position, force, held, error, output):
     """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
-    stepped), and put u_k into the held plant inputs (the others zero) for [t_k, t_k+1).
+    stepped; e_k of y_k rounded to its quantum where quanta > 0), and put u_k into the held
+    plant inputs (the others zero) for [t_k, t_k+1).
     Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
     error, output: scratch (n_loops,)."""
     if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
@@ -288,7 +313,10 @@ def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
     r = reference[min(k, reference.shape[0] - 1)]
     ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
     for i in range(n_loops):
-        error[i] = r[i] - position[k, i]
+        measured = position[k, i]
+        if quanta[i] > 0.0:  # as numpy's q * round(y / q): rint rounds halves to even
+            measured = quanta[i] * np.rint(measured / quanta[i])
+        error[i] = r[i] - measured
     controller_step(A, B, C, D, state, error, output)
     for i in range(n_loops):
         force[k + 1, i] = output[i] + ff[i]
@@ -306,7 +334,7 @@ def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
 
 @kernel
 def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, reference,
-          feedforward, A, B, C, D, state, inputs, coordinates, position, force):
+          feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force):
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
     _MEASURE_FAILED) with loop_state[0] the time reached."""
     plant = addresses[_PLANT]
@@ -319,7 +347,7 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     error, output = np.empty(inputs.size), np.empty(inputs.size)
     for k in range(start, stop):
         changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
-                          inputs, coordinates, position, force, held, error, output)
+                          inputs, coordinates, quanta, position, force, held, error, output)
         if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
@@ -358,7 +386,7 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
 @kernel
 def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, pivots, atol,
                  tableau_A, tableau_EW, tableau_P, scratch, start, stop, fs, reference,
-                 feedforward, A, B, C, D, state, inputs, coordinates, position, force):
+                 feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force):
     """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
     status (or _MEASURE_FAILED) with loop_state[0] the time reached. Each change of the held
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
@@ -373,7 +401,7 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     error, output = np.empty(inputs.size), np.empty(inputs.size)
     for k in range(start, stop):
         changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
-                          inputs, coordinates, position, force, held, error, output)
+                          inputs, coordinates, quanta, position, force, held, error, output)
         if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
