@@ -2,6 +2,7 @@
 
     python examples/manipulator_loop.py                      # robustness and moves, a minute
     python examples/manipulator_loop.py --loop               # + the 6 mm xy move, closed loop
+    python examples/manipulator_loop.py --loop --moves       # + every move, closed loop
     python examples/manipulator_loop.py --loop --plant libcosim   # + the same loop as FMUs
     python examples/manipulator_loop.py --loop --coils       # the loops through voice coils
 
@@ -13,7 +14,7 @@
    DOFs). For each: the margins of each loop with the others open and closed, the peak of the
    MIMO sensitivity and the closed-loop spectral radius (flexure.controllers.robustness).
 2. **Moves and feedforward.** For 1 mm and 4 mm along x (the chapter's Fig. 3.8), 6 mm along
-   x and 6 mm diagonally in the xy plane, with the end effector's height and rotations held:
+   x, along y and diagonally in the xy plane, with the end effector's height and rotations held:
    the actuator strokes from the nonlinear inverse statics of the control model and from its
    linearisation, and where the end effector ends up when the actuators follow the linear
    strokes exactly (the forward statics). The chapter saw its end effector deviate more than
@@ -21,8 +22,10 @@
    nonlinear path puts it where it was asked to within 1e-10 m.
 3. **Closed loop** (`--loop`): the 6 mm xy move in 1 s on the nonlinear control model with the
    nonlinear path and its feedforward (`flexure loop manipulator_control --move ...`), each
-   actuator's largest error against 0.1 % of its stroke. With `--plant libcosim` the same
-   loop runs again as the manipulator's FMU and a controller FMU co-simulated in libcosim
+   actuator's largest error against 0.1 % of its stroke (`--moves`: every move, and where
+   the end effector ends up: the forward statics of the actuators' last positions). With
+   `--plant libcosim` the same loop runs again as the manipulator's FMU and a controller FMU
+   co-simulated in libcosim
    (`--plant fmu`: the manipulator's FMU stepped by fmpy), and each actuator's error / stroke
    is compared with the in-process one (the issue: within 1e-6 of the stroke). Without
    `--plant`, the same move again with what the chapter's experiment met (section 3.4:
@@ -78,7 +81,7 @@ COILS = "manipulator_control_vcm"  # CONTROL with its actuators voltage-driven v
 FIGURES = Path(__file__).resolve().parent / "figures"
 HELD = ("E.z", "E_M1.z", "E_M2.z")  # the end effector's height and its tilts held
 MOVES = {"1 mm x": (1e-3, 0.0), "4 mm x": (4e-3, 0.0), "6 mm x": (6e-3, 0.0),
-         "6 mm xy": (6e-3 / np.sqrt(2), 6e-3 / np.sqrt(2))}
+         "6 mm y": (0.0, 6e-3), "6 mm xy": (6e-3 / np.sqrt(2), 6e-3 / np.sqrt(2))}
 # the experiment's noise: 50 nm encoder counts, 30 mN of mains hum at every actuator
 DISTURBANCES = {"quantum": 50e-9, "disturbance": 0.03, "disturbance_hz": 50.0}
 
@@ -203,14 +206,19 @@ def effector(model, x):
     return np.array(position) * 1e3, np.array(angles) * 1e3
 
 
-def moves(model):
-    """Per move: the actuator strokes of both paths and the end effector under each."""
-    pairs = colocated_pairs(model)
-    encoders = [model.outputs[p.output_index] for p in pairs]
-    names = [model.coordinate_names[port.coordinate] for port in encoders]  # "g1_H.x", ...
+def at_rest(model):
+    """(the encoders' coordinate names ("g1_H.x", ...), the static solution with the actuators
+    at rest, the end effector's position (mm) and rotation (mrad) there)."""
+    encoders = [model.outputs[p.output_index] for p in colocated_pairs(model)]
+    names = [model.coordinate_names[port.coordinate] for port in encoders]
     rest = inverse_statics(model, {name: model.initial_coordinates[port.coordinate]
                                    for name, port in zip(names, encoders, strict=True)})
-    p0, a0 = effector(model, rest.solution.x)
+    return names, rest, *effector(model, rest.solution.x)
+
+
+def moves(model):
+    """Per move: the actuator strokes of both paths and the end effector under each."""
+    names, rest, p0, a0 = at_rest(model)
     rows = []
     for label, (dx, dy) in MOVES.items():
         start = time.perf_counter()
@@ -219,8 +227,8 @@ def moves(model):
         linear = move_path(model, wanted, kind="linear")
         end_n, end_l = nonlinear.displacement([1.0])[0], linear.displacement([1.0])[0]
         # the actuators held exactly on the linear strokes: where the end effector goes
-        held = {name: rest.solution.x[port.coordinate] + d
-                for name, port, d in zip(names, encoders, end_l, strict=True)}
+        held = {name: rest.solution.x[model.coordinate_index(name)] + d
+                for name, d in zip(names, end_l, strict=True)}
         forward = inverse_statics(model, held, start=rest)
         p, a = effector(model, forward.solution.x)
         error = p - p0 - np.array([dx, dy, 0.0]) * 1e3
@@ -298,6 +306,39 @@ def print_comparison(inprocess, other):
           f"{plant} (with building its FMUs)")
 
 
+def closed_loop_moves(design):
+    """--moves: every move in closed loop on the nonlinear path and its feedforward. Per move
+    each actuator's error / stroke, and where the end effector ends up: the forward statics
+    of the actuators' last measured positions, against where it was sent."""
+    model = load_scene(CONTROL)
+    names, rest, p0, a0 = at_rest(model)
+    rows = []
+    for label, (dx, dy) in MOVES.items():
+        log(f"  closed loop: {label}")
+        path = move_path(model, targets(dx, dy), kind="nonlinear")
+        result = closed_loop(design, None, model=model, path=path)
+        end = inverse_statics(model, dict(zip(names, result.position[-1], strict=True)),
+                              start=rest)
+        p, a = effector(model, end.solution.x)
+        rows.append({"move": label, "loops": result.per_loop(), "wall": result.wall_time_s,
+                     "position_error": p - p0 - np.array([dx, dy, 0.0]) * 1e3,
+                     "rotation": a - a0})
+    return rows
+
+
+def print_closed_loop_moves(rows):
+    """Per move: the six errors / stroke, and the end effector at the end of the move."""
+    print("| move | error / stroke, actuators 1 to 6 | within 0.1 % | end effector at the end: "
+          "position error x y z (um) | its rotation x y z (mrad) | loop wall (s) |")
+    print("| --- | --- | --- | --- | --- | ---: |")
+    for row in rows:
+        ratios = " ".join(f"{loop['error_ratio']:.1e}" for loop in row["loops"])
+        passed = all(loop["passed"] for loop in row["loops"])
+        print(f"| {row['move']} | {ratios} | {'yes' if passed else 'NO'} | "
+              f"{' '.join(f'{v:+.3f}' for v in row['position_error'] * 1e3)} | "
+              f"{' '.join(f'{v:+.4f}' for v in row['rotation'])} | {row['wall']:.1f} |")
+
+
 def print_closed_loop(clean, disturbed):
     """Each actuator's tracking error without and with the disturbances."""
     print("| loop | stroke (mm) | max error (nm) | error / stroke | with 50 nm encoders and "
@@ -352,10 +393,14 @@ def main(argv=None):
     parser.add_argument("--coils", action="store_true",
                         help=f"the study through the voice coils ({COILS}): their damping, "
                              "the design and its robustness; with --loop the 6 mm xy move")
+    parser.add_argument("--moves", action="store_true",
+                        help="with --loop: every move in closed loop, not the 6 mm xy alone")
     parser.add_argument("--figures", type=Path, default=FIGURES, help="folder for the PNG")
     args = parser.parse_args(argv)
     if args.plant != "inprocess" and not args.loop:
         parser.error("--plant compares the closed loop: give --loop too")
+    if args.moves and (not args.loop or args.plant != "inprocess" or args.coils):
+        parser.error("--moves runs every move in closed loop in process: give --loop alone")
     if args.coils and args.plant != "inprocess":
         parser.error("--coils runs the loop in process: give no --plant")
     if args.coils:
@@ -373,6 +418,10 @@ def main(argv=None):
         results = compare_plants(design, [args.plant], args.figures)
         print(f"\nClosed loop, 6 mm xy in 1 s, in process and {args.plant}\n")
         print_comparison(results["inprocess"], results[args.plant])
+    elif args.moves:
+        log("closed loop: every move")
+        print("\nClosed loop, every move in 1 s (+ 0.25 s), nonlinear path and feedforward\n")
+        print_closed_loop_moves(closed_loop_moves(design))
     elif args.loop:
         log("closed loop: 6 mm xy, then with the disturbances")
         model = load_scene(CONTROL)
