@@ -166,27 +166,16 @@ def test_controller_serialises_to_the_same_numbers(stage):
 
 
 def test_controller_fmu_refuses_a_step_off_its_sample_grid(plants, workdir):
-    from fmpy import extract, read_model_description
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy_slave import Slave
 
-    path = workdir / "flexure_controller.fmu"
-    md = read_model_description(str(path))
-    unzipped = extract(str(path))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    first = fmu.getReal([vr["F"]])[0]
+    host = Slave(workdir / "flexure_controller.fmu", "c")
+    first = host.fmu.getReal([host.vr["F"]])[0]
     assert first == pytest.approx(plants["inprocess"].force[0, 0], rel=1e-15)
-    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=2.5e-4)
+    host.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=2.5e-4)
     with pytest.raises(FMICallException, match="discard"):
-        fmu.doStep(currentCommunicationPoint=2.5e-4, communicationStepSize=5e-4)
-    fmu.terminate()
-    fmu.freeInstance()
+        host.fmu.doStep(currentCommunicationPoint=2.5e-4, communicationStepSize=5e-4)
+    host.close()
 
 
 def test_loop_cli_json_and_plot(tmp_path, capsys):
