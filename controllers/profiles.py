@@ -126,17 +126,23 @@ class ThirdOrderProfile:
             Shaped as t: m, m/s, m/s^2, m/s^3.
         """
         t = np.asarray(t, dtype=float)
-        segment = np.clip(np.searchsorted(self._knots, t, side="right") - 1, 0, 6)
+        _, h, p0, v0, a0, j = self._segment_start(t)
         before, after = t < self._knots[0], t >= self._knots[-1]
-        h = np.clip(t - self._knots[segment], 0.0, None)
-        p0, v0, a0 = (self._states[segment, i] for i in range(3))
-        j = self._jerks[segment]
         position = p0 + v0 * h + a0 * h**2 / 2 + j * h**3 / 6
         velocity = v0 + a0 * h + j * h**2 / 2
         acceleration = a0 + j * h
         return tuple(np.where(after, rest, np.where(before, 0.0, value))
                      for value, rest in ((position, float(self.stroke)), (velocity, 0.0),
                                          (acceleration, 0.0), (j, 0.0)))
+
+    def _segment_start(self, t):
+        """For times t (s, an array): the segment each lies in (the first before the start,
+        the last after the end), the time since that segment's start (s, >= 0), the position,
+        velocity and acceleration there (m, m/s, m/s^2) and the segment's jerk (m/s^3)."""
+        segment = np.clip(np.searchsorted(self._knots, t, side="right") - 1, 0, 6)
+        h = np.clip(t - self._knots[segment], 0.0, None)
+        p0, v0, a0 = (self._states[segment, i] for i in range(3))
+        return segment, h, p0, v0, a0, self._jerks[segment]
 
     def position(self, t: ArrayLike) -> np.ndarray:
         """The position at given times.
@@ -195,10 +201,7 @@ class ThirdOrderProfile:
             Shaped as t, m s.
         """
         t = np.asarray(t, dtype=float)
-        segment = np.clip(np.searchsorted(self._knots, t, side="right") - 1, 0, 6)
-        h = np.clip(t - self._knots[segment], 0.0, None)
-        p0, v0, a0 = (self._states[segment, i] for i in range(3))
-        j = self._jerks[segment]
+        segment, h, p0, v0, a0, j = self._segment_start(t)
         inside = (self._integrals[segment] + p0 * h + v0 * h**2 / 2 + a0 * h**3 / 6
                   + j * h**4 / 24)
         end = self._knots[-1]

@@ -61,6 +61,7 @@ The variables' registration is in `slave_variables`, the value getters and sette
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import time as _time
@@ -100,6 +101,24 @@ def escape_log(message: object) -> str:
     str
     """
     return str(message).replace("%", "%%")
+
+
+def _fmi_call(call, phase, allowed, *, failure=None):
+    """Decorate a `SafeSlave` method of the FMI call sequence: it runs only in `phase` and out
+    of the error state, else the call is refused as an illegal call sequence (`allowed` says
+    where it is allowed) and changes nothing; whatever it raises enters the error state,
+    logged under `failure` (default `call`), instead of reaching pythonfmu's binary."""
+    def decorate(method):
+        @functools.wraps(method)
+        def guarded(self, *args, **kwargs):
+            try:
+                if self.broken or self.phase != phase:
+                    return self._illegal(call, allowed)
+                return method(self, *args, **kwargs)
+            except BaseException as error:  # noqa: BLE001
+                self._fail(failure or call, error)
+        return guarded
+    return decorate
 
 
 class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
@@ -293,7 +312,9 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
 
     # -- FMI calls ---------------------------------------------------------------------------
     # Every method pythonfmu calls catches BaseException: anything escaping is fatal (above).
+    # The calls of the call sequence state the states they are allowed in (`_fmi_call`).
 
+    @_fmi_call("fmi2SetupExperiment", INSTANTIATED, "state instantiated")
     def setup_experiment(self, start_time: float, stop_time: float | None = None,
                          tolerance: float | None = None) -> None:
         """fmi2SetupExperiment; refused arguments enter the error state.
@@ -307,46 +328,30 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         tolerance : float, optional
             > 0 (relative).
         """
-        try:
-            if self.broken or self.phase != INSTANTIATED:
-                return self._illegal("fmi2SetupExperiment", "state instantiated")
-            problem = _experiment_problem(start_time, stop_time, tolerance)
-            if problem:
-                return self._break(f"fmi2SetupExperiment refused: {problem}")
-            self.start_time = float(start_time)
-            self.time = self.start_time
-        except BaseException as error:  # noqa: BLE001
-            self._fail("fmi2SetupExperiment", error)
+        problem = _experiment_problem(start_time, stop_time, tolerance)
+        if problem:
+            return self._break(f"fmi2SetupExperiment refused: {problem}")
+        self.start_time = float(start_time)
+        self.time = self.start_time
 
+    @_fmi_call("fmi2EnterInitializationMode", INSTANTIATED, "state instantiated")
     def enter_initialization_mode(self) -> None:
         """fmi2EnterInitializationMode."""
-        try:
-            if self.broken or self.phase != INSTANTIATED:
-                return self._illegal("fmi2EnterInitializationMode", "state instantiated")
-            self.phase = INITIALIZATION
-        except BaseException as error:  # noqa: BLE001
-            self._fail("fmi2EnterInitializationMode", error)
+        self.phase = INITIALIZATION
 
+    @_fmi_call("fmi2ExitInitializationMode", INITIALIZATION,
+               "initialization mode (after fmi2EnterInitializationMode)",
+               failure="initialization")
     def exit_initialization_mode(self) -> None:
         """fmi2ExitInitializationMode: `initialize(start_time)`, then step complete."""
-        try:
-            if self.broken or self.phase != INITIALIZATION:
-                return self._illegal("fmi2ExitInitializationMode",
-                                     "initialization mode (after fmi2EnterInitializationMode)")
-            self.initialize(self.start_time)
-            self.time = self.start_time
-            self.phase = STEP_COMPLETE
-        except BaseException as error:  # noqa: BLE001
-            self._fail("initialization", error)
+        self.initialize(self.start_time)
+        self.time = self.start_time
+        self.phase = STEP_COMPLETE
 
+    @_fmi_call("fmi2Terminate", STEP_COMPLETE, "state step complete")
     def terminate(self) -> None:
         """fmi2Terminate."""
-        try:
-            if self.broken or self.phase != STEP_COMPLETE:
-                return self._illegal("fmi2Terminate", "state step complete")
-            self.phase = TERMINATED
-        except BaseException as error:  # noqa: BLE001
-            self._fail("fmi2Terminate", error)
+        self.phase = TERMINATED
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         """fmi2DoStep: `advance` over [current_time, current_time + step_size].

@@ -1,4 +1,5 @@
-"""Fixtures shared by the FMU test modules: the scene FMUs, each built once per session.
+"""Fixtures shared by the test modules: the scene FMUs, each built once per session, and the
+1-DOF stage that the loop, profile and inverse-statics tests take.
 
 The imports are inside the fixtures, so that a run of tests that use none of them does not
 load flexure.fmu or fmpy."""
@@ -41,3 +42,11 @@ def fmus(tmp_path_factory):
     warm_up = run("interleaved", paths, timeout=1200)
     assert warm_up.code == 0, warm_up.out[-2000:] + warm_up.err[-2000:]
     return paths
+
+
+@pytest.fixture(scope="module")
+def stage():
+    """stage_planar_1dof, the loops' and the profiles' plant, loaded once per test module."""
+    from flexure.core import load_scene
+
+    return load_scene("stage_planar_1dof")

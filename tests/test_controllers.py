@@ -23,11 +23,6 @@ warnings.filterwarnings("ignore", module="scipy.signal")
 
 
 @pytest.fixture(scope="module")
-def stage1():
-    return load_scene("stage_planar_1dof")
-
-
-@pytest.fixture(scope="module")
 def stage3():
     return load_scene("stage_planar_3dof")
 
@@ -111,7 +106,7 @@ def _siso_plant(model):
     return state_space(model)["x", "F"]
 
 
-@pytest.mark.parametrize("name", ["stage1", "stage3"])
+@pytest.mark.parametrize("name", ["stage", "stage3"])
 def test_design_meets_the_crossover_with_margins(name, request):
     model = request.getfixturevalue(name)
     d = design_feedback(model, crossover=300.0, fs=4000.0)
@@ -127,17 +122,17 @@ def test_design_meets_the_crossover_with_margins(name, request):
     assert d.spectral_radius < 1
 
 
-def test_design_refuses_an_unstable_loop(stage1):
+def test_design_refuses_an_unstable_loop(stage):
     with pytest.raises(ControlDesignError, match="unstable"):
-        design_feedback(stage1, crossover=300.0, fs=600.0)
+        design_feedback(stage, crossover=300.0, fs=600.0)
     with pytest.raises(ControlDesignError, match="Nyquist"):
-        design_feedback(stage1, crossover=5000.0, fs=1000.0)
+        design_feedback(stage, crossover=5000.0, fs=1000.0)
     with pytest.raises(ControlDesignError, match="sample rate"):
-        design_feedback(stage1, fs=0.0)
+        design_feedback(stage, fs=0.0)
 
 
-def test_discrete_controller_steps_like_python_control(stage1):
-    d = design_feedback(stage1)
+def test_discrete_controller_steps_like_python_control(stage):
+    d = design_feedback(stage)
     c = DiscreteController(d.controller)
     e = np.sin(np.arange(200) / 7.0) * 1e-6
     u = np.array([c.step([ek])[0] for ek in e])
@@ -150,9 +145,9 @@ def test_discrete_controller_steps_like_python_control(stage1):
 # -- feedforward ----------------------------------------------------------------------------
 
 
-def test_low_frequency_model_of_one_dof_is_its_linear_model(stage1):
-    lin = linearize(stage1)
-    lf = low_frequency_model(stage1, linear_model=lin)
+def test_low_frequency_model_of_one_dof_is_its_linear_model(stage):
+    lin = linearize(stage)
+    lf = low_frequency_model(stage, linear_model=lin)
     assert lf.mass[0, 0] == pytest.approx(lin.M0[0, 0], rel=1e-12)
     assert lf.damping[0, 0] == pytest.approx(lin.C0[0, 0], rel=1e-12)
     assert lf.stiffness[0, 0] == pytest.approx(lin.K[0, 0], rel=1e-12)
@@ -170,14 +165,14 @@ def test_low_frequency_model_of_three_dofs_is_its_first_mode(stage3):
     assert lf.stiffness[0, 0] == pytest.approx(945.0, rel=1e-3)
 
 
-def test_held_feedforward_has_no_half_sample_lag(stage1):
+def test_held_feedforward_has_no_half_sample_lag(stage):
     """Open loop on the exact ZOH model: interval means track far better than point values."""
-    lf = low_frequency_model(stage1)
+    lf = low_frequency_model(stage)
     fs = 1000.0
     p = ThirdOrderProfile(1e-3, 0.2)
     k = np.arange(301)
     t = k / fs
-    P = control.c2d(_siso_plant(stage1), 1 / fs, method="zoh")
+    P = control.c2d(_siso_plant(stage), 1 / fs, method="zoh")
     means = forces(lf, p, t, t + 1 / fs)[:, 0]
     points = lf.force(*(x[:, None] for x in (p.evaluate(t)[0], p.evaluate(t)[1],
                                               p.evaluate(t)[2])))[:, 0]

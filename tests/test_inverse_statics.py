@@ -14,11 +14,6 @@ from flexure.core import (
 from flexure.core.analysis.inverse_statics import InverseStaticsError
 
 
-@pytest.fixture(scope="module")
-def stage():
-    return load_scene("stage_planar_1dof")
-
-
 def test_a_small_displacement_takes_the_force_the_compliance_says(stage):
     x0 = stage.initial_coordinates[stage.coordinate_index("3.x")]
     d = 1e-7  # m: far inside the linear range of the 1 mm stage

@@ -20,17 +20,12 @@ from flexure.controllers import (
     low_frequency_model,
     run_loop,
 )
-from flexure.core import load_scene, state_space
+from flexure.core import state_space
 from flexure.core.cli import main
 
 warnings.filterwarnings("ignore", module="scipy.signal")
 
 SHORT = {"stroke": 1e-3, "duration": 0.05, "settle": 0.01}
-
-
-@pytest.fixture(scope="module")
-def stage1():
-    return load_scene("stage_planar_1dof")
 
 
 @pytest.fixture(scope="module")
@@ -65,13 +60,13 @@ def linear_loop(model, controller, design):
 
 
 @pytest.fixture(scope="module")
-def moves(stage1):
+def moves(stage):
     """A 1 mm move in 0.1 s: feedback + feedforward, feedback alone, a 10 % wrong model."""
     options = {"stroke": 1e-3, "duration": 0.1, "settle": 0.02}
-    wrong = low_frequency_model(stage1).scaled(mass=1.1, stiffness=1.1)
-    return {"exact": run_loop(stage1, **options),
-            "alone": run_loop(stage1, feedforward=False, **options),
-            "wrong": run_loop(stage1, feedforward_model=wrong, **options)}
+    wrong = low_frequency_model(stage).scaled(mass=1.1, stiffness=1.1)
+    return {"exact": run_loop(stage, **options),
+            "alone": run_loop(stage, feedforward=False, **options),
+            "wrong": run_loop(stage, feedforward_model=wrong, **options)}
 
 
 def test_feedforward_makes_the_target_feedback_alone_does_not(moves):
@@ -89,13 +84,13 @@ def test_feedforward_makes_the_target_feedback_alone_does_not(moves):
 
 
 @pytest.mark.parametrize("stroke", [1e-3, 10e-3])
-def test_the_issue_move_1_s_on_the_nonlinear_plant(stage1, stroke):
+def test_the_issue_move_1_s_on_the_nonlinear_plant(stage, stroke):
     """1 mm and 10 mm in 1 s at 300 rad/s and 4 kHz (the defaults): within 0.1 % of the stroke.
 
     At 10 mm the stage departs from the linear model of the feedforward only slightly along
     x: the feedback adds less than 1e-4 of the feedforward force.
     """
-    s = run_loop(stage1, stroke=stroke).summary()
+    s = run_loop(stage, stroke=stroke).summary()
     assert s["duration"] == 1.0 and s["crossover_rad_s"] == 300.0
     assert s["passed"] and s["error_ratio"] < 1e-3 / 100
     assert s["max_abs_feedback_force"] < 1e-4 * s["max_abs_force"]
@@ -103,14 +98,14 @@ def test_the_issue_move_1_s_on_the_nonlinear_plant(stage1, stroke):
 
 @pytest.mark.parametrize("case, passes", [("exact", True), ("alone", False),
                                           ("+10 %", True), ("-10 %", True)])
-def test_the_issue_move_1_s_on_the_linear_sampled_loop(stage1, case, passes):
+def test_the_issue_move_1_s_on_the_linear_sampled_loop(stage, case, passes):
     """The 1 mm / 1 s cases of the report on the sampled linear loop (fast, independent)."""
-    lf = low_frequency_model(stage1)
+    lf = low_frequency_model(stage)
     model = {"exact": lf, "alone": None, "+10 %": lf.scaled(mass=1.1, stiffness=1.1),
              "-10 %": lf.scaled(mass=0.9, stiffness=0.9)}[case]
-    controller, design = build_loop(stage1, feedforward=model is not None,
+    controller, design = build_loop(stage, feedforward=model is not None,
                                     feedforward_model=model)
-    position = linear_loop(stage1, controller, design)
+    position = linear_loop(stage, controller, design)
     ratio = np.max(np.abs(controller.reference[: position.size, 0] - position)) / 1e-3
     assert (ratio <= 1e-3) == passes
     if case == "exact":  # the nonlinear run's 1.7e-6 is integrator error (rtol 1e-8)
@@ -120,12 +115,12 @@ def test_the_issue_move_1_s_on_the_linear_sampled_loop(stage1, case, passes):
         assert ratio == pytest.approx(expected, rel=1e-3)
 
 
-def test_nonlinear_loop_matches_the_linear_sampled_loop(stage1):
+def test_nonlinear_loop_matches_the_linear_sampled_loop(stage):
     """At 1 mm the plant is linear to ~1e-4: the runner reproduces the linear loop's errors."""
     options = {"stroke": 1e-3, "duration": 0.1, "settle": 0.02, "feedforward": False}
-    result = run_loop(stage1, **options)
-    controller, design = build_loop(stage1, **options)
-    position = linear_loop(stage1, controller, design)
+    result = run_loop(stage, **options)
+    controller, design = build_loop(stage, **options)
+    position = linear_loop(stage, controller, design)
     error_linear = controller.reference[: position.size, 0] - position
     assert np.max(np.abs(result.position[:, 0] - position)) < 1e-3 * np.max(
         np.abs(error_linear))
@@ -160,9 +155,9 @@ def test_inverse_feedforward_on_the_3dof_stage_mirrors_its_lightly_damped_zeros(
     assert s["error_ratio"] < 1e-3 / 10
 
 
-def test_controller_serialises_to_the_same_numbers(stage1):
+def test_controller_serialises_to_the_same_numbers(stage):
     for kind in ("modal", "inverse"):
-        controller, _ = build_loop(stage1, feedforward=kind, **SHORT)
+        controller, _ = build_loop(stage, feedforward=kind, **SHORT)
         again = LoopController.from_dict(json.loads(json.dumps(controller.to_dict())))
         assert np.array_equal(again.reference, controller.reference)
         assert np.array_equal(again.feedforward, controller.feedforward)
@@ -171,27 +166,16 @@ def test_controller_serialises_to_the_same_numbers(stage1):
 
 
 def test_controller_fmu_refuses_a_step_off_its_sample_grid(plants, workdir):
-    from fmpy import extract, read_model_description
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy_slave import Slave
 
-    path = workdir / "flexure_controller.fmu"
-    md = read_model_description(str(path))
-    unzipped = extract(str(path))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    first = fmu.getReal([vr["F"]])[0]
+    host = Slave(workdir / "flexure_controller.fmu", "c")
+    first = host.fmu.getReal([host.vr["F"]])[0]
     assert first == pytest.approx(plants["inprocess"].force[0, 0], rel=1e-15)
-    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=2.5e-4)
+    host.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=2.5e-4)
     with pytest.raises(FMICallException, match="discard"):
-        fmu.doStep(currentCommunicationPoint=2.5e-4, communicationStepSize=5e-4)
-    fmu.terminate()
-    fmu.freeInstance()
+        host.fmu.doStep(currentCommunicationPoint=2.5e-4, communicationStepSize=5e-4)
+    host.close()
 
 
 def test_loop_cli_json_and_plot(tmp_path, capsys):
@@ -249,17 +233,17 @@ def assert_loop_cli_refuses(argv, message, capsys):
     assert message in err and "Traceback" not in err
 
 
-def test_runner_errors(stage1):
+def test_runner_errors(stage):
     with pytest.raises(LoopError, match="unknown plant"):
-        run_loop(stage1, plant="hardware", **SHORT)
+        run_loop(stage, plant="hardware", **SHORT)
     with pytest.raises(LoopError, match="rtol must be"):
-        run_loop(stage1, rtol="1e-6", **SHORT)
+        run_loop(stage, rtol="1e-6", **SHORT)
     with pytest.raises(LoopError, match="axis"):
-        build_loop(stage1, axis=2, **SHORT)
+        build_loop(stage, axis=2, **SHORT)
     with pytest.raises(ControlDesignError, match="unstable"):
-        build_loop(stage1, fs=600.0, **SHORT)
+        build_loop(stage, fs=600.0, **SHORT)
     with pytest.raises(LoopError, match="feedforward must be"):
-        build_loop(stage1, feedforward="magic", **SHORT)
+        build_loop(stage, feedforward="magic", **SHORT)
 
 
 def test_closed_loop_example_runs(tmp_path, capsys):

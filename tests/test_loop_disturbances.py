@@ -20,11 +20,6 @@ FS = 4000.0
 SHORT = {"stroke": 1e-3, "duration": 0.1, "settle": 0.02}
 
 
-@pytest.fixture(scope="module")
-def stage():
-    return load_scene("stage_planar_1dof")
-
-
 def sampled_loop(model, design):
     """The sampled plant P(z) (ZOH of the linear model, F -> x) and the loop's delay z^-1."""
     plant = control.c2d(state_space(model)["x", "F"], 1.0 / FS, method="zoh")

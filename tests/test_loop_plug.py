@@ -12,15 +12,9 @@ from flexure.controllers import LoopError, build_loop, design_feedback, run_loop
 from flexure.controllers.profiles import ThirdOrderProfile
 from flexure.controllers.user_controller import discrete_system
 from flexure.controllers.user_reference import interval_means
-from flexure.core import load_scene
 
 FS = 4000.0
 SHORT = {"stroke": 1e-3, "duration": 0.1, "settle": 0.02}
-
-
-@pytest.fixture(scope="module")
-def stage():
-    return load_scene("stage_planar_1dof")
 
 
 @pytest.fixture(scope="module")

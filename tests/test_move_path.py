@@ -12,11 +12,6 @@ from flexure.controllers.profiles import ThirdOrderProfile
 from flexure.core import load_scene, static_equilibrium
 
 
-@pytest.fixture(scope="module")
-def stage():
-    return load_scene("stage_planar_1dof")
-
-
 @pytest.mark.parametrize("kind", ["linear", "nonlinear"])
 def test_moving_the_loops_own_output_is_that_output(stage, kind):
     path = move_path(stage, {"3.x": 1e-3}, kind=kind, points=5)

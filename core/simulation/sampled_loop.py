@@ -131,8 +131,12 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     # axis; then the DOF each one is, or -1 (`_measure`)
     coordinates = np.concatenate([port_specs(ports).ravel(),
                                   output_dofs(sim.model, ports)])
-    loop = (float(fs), reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
-            np.array(loop_inputs, dtype=np.int64), coordinates, quanta, position, force)
+    # what `_sample` reads and writes, one tuple that the integrators' loops hand on; the
+    # last two are its scratch (n_loops,): the errors and the controller's outputs
+    controller = (reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
+                  np.array(loop_inputs, dtype=np.int64), coordinates, quanta, position, force,
+                  np.empty(n_loops), np.empty(n_loops))
+    loop = (float(fs), controller)
     # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
     loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
     held = np.array(sim.inputs, dtype=float)
@@ -298,13 +302,16 @@ def _measure(addresses, y, scratch, coordinates, out):
 
 
 @kernel
-def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state, inputs,
-            coordinates, quanta, position, force, held, error, output):
+def _sample(addresses, y, scratch, k, controller, held):
     """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
     stepped; e_k of y_k rounded to its quantum where quanta > 0), and put u_k into the held
     plant inputs (the others zero) for [t_k, t_k+1).
     Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
-    error, output: scratch (n_loops,)."""
+    controller: (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta,
+    position, force, error, output) as `run_sampled_loop` packs it, error and output scratch
+    (n_loops,)."""
+    (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force,
+     error, output) = controller
     if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
         return -1
     n_loops = inputs.size
@@ -333,8 +340,7 @@ def _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
 
 
 @kernel
-def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, reference,
-          feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force):
+def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, controller):
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
     _MEASURE_FAILED) with loop_state[0] the time reached."""
     plant = addresses[_PLANT]
@@ -344,10 +350,8 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     tret = carray(as_float_pointer(addresses[_TRET]), (1,))
     t = loop_state[0]
     restart = loop_state[1] != 0.0
-    error, output = np.empty(inputs.size), np.empty(inputs.size)
     for k in range(start, stop):
-        changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
-                          inputs, coordinates, quanta, position, force, held, error, output)
+        changed = _sample(addresses, y, scratch, k, controller, held)
         if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
@@ -385,8 +389,7 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
 
 @kernel
 def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, pivots, atol,
-                 tableau_A, tableau_EW, tableau_P, scratch, start, stop, fs, reference,
-                 feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force):
+                 tableau_A, tableau_EW, tableau_P, scratch, start, stop, fs, controller):
     """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
     status (or _MEASURE_FAILED) with loop_state[0] the time reached. Each change of the held
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
@@ -398,10 +401,8 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     counters = engine.int_array(plant, slots.COUNTERS)
     y = vectors[esdirk.V_Y]
     t = loop_state[0]
-    error, output = np.empty(inputs.size), np.empty(inputs.size)
     for k in range(start, stop):
-        changed = _sample(addresses, y, scratch, k, reference, feedforward, A, B, C, D, state,
-                          inputs, coordinates, quanta, position, force, held, error, output)
+        changed = _sample(addresses, y, scratch, k, controller, held)
         if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
