@@ -20,7 +20,7 @@ from flexure.controllers import (
     low_frequency_model,
     run_loop,
 )
-from flexure.core import state_space
+from flexure.core import load_scene, state_space
 from flexure.core.cli import main
 
 warnings.filterwarnings("ignore", module="scipy.signal")
