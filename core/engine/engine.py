@@ -11,6 +11,9 @@ has its module; this one holds the forms the integrators call and the one entry 
                      (`sparse_packing`: their patterns and scatter maps, packed per model)
     motion           qddot from M_bar qddot = DF^T r (or the augmented system), M_bar
     tangent          stiffness K0 + G0 and damping C0 of the dynamic balance
+    rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
+                     rows out of J and the augmented system (`rigid_kernels`: the slaves
+                     explicit in their masters, x_s = S(z), and the chain rule through T)
     engine (here)    the first-order and implicit forms, `engine_entry`, `call`
 
 with the dense LU of small matrices (M_bar, the integrators' Newton matrices) from

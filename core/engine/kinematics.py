@@ -6,10 +6,16 @@ on the free coordinates,
     g(x) = [e_o(x); e_m(x) - q_e; x_m - q_x] = 0
 
 (the deformations e_o prescribed zero, the DOF deformations e_m and the DOF coordinates x_m
-equal to their DOFs). Warm start: the first-order prediction x_prev + DF_prev (q - q_prev);
-if its residual exceeds the tolerance, chord iterations with the previous LU of the
-constraint Jacobian J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton
-from there if they stall. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the
+equal to their DOFs). With rigid clusters (`rigid`) the free coordinates are those but the
+slaves', whose coordinates follow their masters' in closed form before every evaluation of
+the deformations, and the rows the clusters make identically zero are out: J = dg/dz holds
+the touching elements' De T_e and, for a DOF coordinate on a slave, T's row.
+
+Warm start: the first-order prediction x_prev + DF_prev (q - q_prev); if its residual
+exceeds the tolerance, chord iterations with the previous LU of the constraint Jacobian
+J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton from there if they
+stall, stopping on the residual or on the step. J DF = [0; I] gives DF = dx/dq (NX, NDOF)
+where it is needed (the
 reduced form, the tangent, the kinematics operation).
 
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`

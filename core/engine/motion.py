@@ -15,6 +15,11 @@ inertia points p of the element masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, an
 qdot = -J^-1 [xdot^T H_i xdot] on the constraint rows. Gravity acts on the position points of
 the inertia, which are linear in x for every element, so it has no tangent stiffness.
 
+With rigid clusters (`rigid`) xdot, conv and xddot are solved on the reduced coordinates z and
+filled on the slaves' rows (T zdot; T conv_z + c; T zddot + c), the augmented system is the
+one on z (a touching element's mass Dp_z^T Mp Dp_z, the forces T^T (r - M c)), and the
+reduced form is unchanged on x with DF's slave rows T DF_z.
+
 M_bar is accumulated element by element from (Dp DF_e)^T Mp (Dp DF_e), never from a dense
 (NX, NX) M; the augmented system is assembled and factored banded or sparse as the model was
 packed (`factors`), so an evaluation in the augmented form costs in proportion to the element
