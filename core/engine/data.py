@@ -185,7 +185,7 @@ class EngineData:
             offsets["data"] += size
             max_m, max_k, max_p = max(max_m, m), max(max_k, k), max(max_p, P)
         # the rigid clusters: their slaves leave the free coordinates, their rows the rows
-        packing = RigidPacking(model, all_groups, set(inertia), enabled=rigid)
+        packing = RigidPacking(model, all_groups, inertia, enabled=rigid)
         self.rigid = packing
         free, rows = packing.free, packing.rows
         n_rigid = packing.rigid_rows.size

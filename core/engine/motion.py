@@ -290,6 +290,10 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
         Me = local[o: o + m * m]
         for i in range(n):
+            t = rigid_element(table, row, i) if rigid else -1
+            if t >= 0 and touching(table, t)[5] < 0:  # a massless touching element
+                mass_entry += m * m
+                continue
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
                 vl[a] = xdot[coords[i * m + a]]
@@ -305,7 +309,6 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                 for u in range(counts[pp]):
                     a = columns[pp * m + u]
                     r[coords[i * m + a]] += Dp[pp, a] * w[pp]
-            t = rigid_element(table, row, i) if rigid else -1
             if t < 0:  # M_ff += Me on the free coordinates
                 add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
                                  position)

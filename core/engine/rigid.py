@@ -23,7 +23,8 @@ The packed tables (slots of `data`, read by `rigid_kernels`):
     rigid_element_of    per packed element (group by group): -1, or its touching index t
     rigid_elements      per touching element: E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET,
                         E_DE_OFFSET (into rigid_de, -1: no rows), E_MASS_OFFSET (into the
-                        rigid part of the augmented map, -1: no mass), E_GROUP, E_ELEMENT
+                        rigid part of the augmented map, -1: no mass, not evaluated),
+                        E_GROUP, E_ELEMENT
                         (its packed group and index there)
     rigid_z             the touching elements' z-coordinates (model indices), flat
     rigid_terms         per touching element and local coordinate a: DEPENDENCIES pairs
@@ -50,8 +51,8 @@ class RigidPacking:
     groups : list of ElementGroup
         Every packed element group, in the engine's order (the model's, then the node
         inertias').
-    inertia : set of int
-        The ids of the groups with inertia points.
+    inertia : dict
+        {id of a group with inertia points: its Mp (n, P, P)}.
     enabled : bool
         False: no cluster is eliminated (the tables empty; the engine as without clusters).
     """
@@ -108,7 +109,7 @@ class RigidPacking:
                 if k and not is_internal:
                     row[E_DE_OFFSET] = de_size
                     de_size += k * mz
-                if id(group) in inertia:
+                if id(group) in inertia and np.any(inertia[id(group)][i]):  # massless: none
                     row[E_MASS_OFFSET] = mass_size
                     mass_size += mz * mz
                 element_of.append(len(elements))

@@ -31,7 +31,7 @@ import numpy as np
 from ..mechanics import assembly
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics.sparse_lu import StaticLU
-from .rigid import E_DE_OFFSET
+from .rigid import E_DE_OFFSET, E_MASS_OFFSET
 
 # banded multiplications (the LU of J plus that of the augmented system) from which the
 # sparse LU is analysed and weighed against the banded one: below it the banded LU costs a
@@ -162,6 +162,7 @@ class SparseFactors:
                     element = packing.element_row(gp, i)
                     if element is not None:
                         cols[i] = -1
+                    if element is not None and element[E_MASS_OFFSET] >= 0:
                         z = col_of_coord[packing.touching[packing.element_of[
                             packing.element_offsets[gp] + i]][2]]
                         rigid_mass.append((np.repeat(z, z.size), np.tile(z, z.size)))
