@@ -136,7 +136,9 @@ def register(subparsers):
                         help="write reference, position, error and force (default loop.png)")
     parser.add_argument("--no-plot", action="store_true", help="write no plot")
     parser.add_argument("--workdir", default=None,
-                        help="folder for the FMUs (default: a temporary folder)")
+                        help="folder for the FMUs, kept for the next run: the scene's FMU is "
+                             "built again when the scene, --set or flexure changed (default: a "
+                             "temporary folder)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(run=run)
 

@@ -5,9 +5,12 @@ the dictionary `LoopController.to_dict()` embedded in the generated script, so i
 same numbers. Variables, per loop (named after the plant's ports so that connections read
 plainly):
 
-- input  `<output>` (m): the measured position y, e.g. "x";
-- output `<input>` (N): the force u, e.g. "F";
-- outputs `<output>_reference` and `<output>_error` (m): r_k and e_k = r_k - y_k.
+- input  `<output>` (m, or rad on an angle): the measured position y, e.g. "x";
+- output `<input>` (N, N m on an angle, or V where a voice coil's drive signal is the plant's
+  input): the force u, e.g. "F";
+- outputs `<output>_reference` and `<output>_error` (as y): r_k and e_k = r_k - y_k.
+
+Each variable carries the unit of the plant's port it connects to.
 
 Timing: a doStep over [t_k, t_k+1] (t_k = k / fs, the step must be exactly 1 / fs) reads y_k
 and sets the force output to u_k+1 = C e_k + u_ff,k+1, the force for the next interval. A
@@ -56,22 +59,24 @@ class ControllerSlave(SafeSlave):
         self.loop = LoopController.from_dict(data)
         self.names = [tuple(pair) for pair in data["loops"]]  # (input name, output name)
         n = len(self.names)
+        units = [tuple(pair) for pair in data["units"]]  # the plant's: (input, output)
         self.y = self.loop.offsets.copy()
         self.u = self.loop.initial_output()
         self.r = self.loop.reference[0].copy()
         self.e = np.zeros(n)
-        for i, (force, position) in enumerate(self.names):
-            self.add_real(position, causality="input", unit="m", start=float(self.y[i]),
+        for i, ((force, position), (force_unit, unit)) in enumerate(
+                zip(self.names, units, strict=True)):
+            self.add_real(position, causality="input", unit=unit, start=float(self.y[i]),
                           description=f"measured position of loop {i}",
                           getter=lambda i=i: float(self.y[i]),
                           setter=lambda value, i=i: self.y.__setitem__(i, value))
-            self.add_real(force, causality="output", unit="N",
+            self.add_real(force, causality="output", unit=force_unit,
                           description=f"force of loop {i}, for the next sample interval",
                           getter=lambda i=i: float(self.u[i]))
-            self.add_real(f"{position}_reference", causality="output", unit="m",
+            self.add_real(f"{position}_reference", causality="output", unit=unit,
                           description=f"reference of loop {i} at the last step's start",
                           getter=lambda i=i: float(self.r[i]))
-            self.add_real(f"{position}_error", causality="output", unit="m",
+            self.add_real(f"{position}_error", causality="output", unit=unit,
                           description=f"tracking error of loop {i} at the last step's start",
                           getter=lambda i=i: float(self.e[i]))
 
@@ -102,6 +107,10 @@ def controller_config(controller, design, model):
     """The JSON-able dictionary a controller FMU is generated from."""
     data = controller.to_dict()
     data["loops"] = [(p.input_name, p.output_name) for p in design.pairs]
+    # each loop's units as the plant's ports have them: N or N m, or V where a voice coil's
+    # drive signal is the input; m or rad
+    data["units"] = [(model.inputs[p.input_index].unit, model.outputs[p.output_index].unit)
+                     for p in design.pairs]
     data["scene"] = model.name
     return data
 

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from flexure.core import SimulationError
+from flexure.core import SceneError, SimulationError, scene_path
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
-from flexure.fmu import build_scene_fmu
+from flexure.fmu import build_scene_fmu, bundle_name
 
 from .controller_fmu import build_controller_fmu
 
@@ -32,19 +32,32 @@ def _scene_source(scene, model):
     return model.source
 
 
+def scene_fmu_path(scene, model, workdir, *, overrides=None):
+    """Where `scene_fmu` keeps the scene's FMU: workdir / <digest> / <model name>.fmu, the
+    digest of what the FMU is built from (the scene file's text, the overrides and the
+    sources of the flexure it bundles), so that a kept workdir never hands a run the FMU of an
+    edited scene, of other values or of another flexure (the FMU keeps the scene's name: its
+    model identifier)."""
+    source = _scene_source(scene, model)
+    digest = hashlib.sha256()
+    try:
+        digest.update(scene_path(source).read_bytes())
+    except (SceneError, OSError):  # not a file: the builder names what is wrong
+        digest.update(str(source).encode())
+    digest.update(repr(sorted((overrides or {}).items())).encode())
+    digest.update(bundle_name().encode())
+    return Path(workdir) / f"fmu_{digest.hexdigest()[:12]}" / f"{model.name}.fmu"
+
+
 def scene_fmu(scene, model, workdir=None, *, overrides=None):
-    """The scene's FMU in `workdir` (built once; rebuilt when absent), of the scene with
-    `overrides` ({dotted scene key: value}) if given."""
+    """The scene's FMU in `workdir` (a new temporary folder if None), of the scene with
+    `overrides` ({dotted scene key: value}) if given: built once, reused while the scene's
+    file, the overrides and flexure's sources are those it was built from (`scene_fmu_path`)."""
     folder = Path(workdir) if workdir is not None else Path(
         tempfile.mkdtemp(prefix="flexure_loop_"))
-    if overrides:
-        # a folder of its own per set of overrides, so that a kept workdir never hands an
-        # FMU of other values to this run (the FMU keeps the scene's name: its identifier)
-        digest = hashlib.sha256(repr(sorted(overrides.items())).encode()).hexdigest()[:10]
-        folder = folder / f"set_{digest}"
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{model.name}.fmu"
+    path = scene_fmu_path(scene, model, folder, overrides=overrides)
     if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
         build_scene_fmu(_scene_source(scene, model), path, overrides=overrides)
     return path
 

@@ -147,6 +147,11 @@ def guard_exit(resources, model_identifier):
     _GUARDED_BINARIES[path] = release
 
 
+def guarded_binaries():
+    """The paths of the FMU binaries whose interpreter guard is released at interpreter exit."""
+    return list(_GUARDED_BINARIES)
+
+
 def _release_guards():
     for release in _GUARDED_BINARIES.values():
         release()

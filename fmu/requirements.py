@@ -232,12 +232,20 @@ def stand_in(message: str):
     through the host's logger at status fmi2Error and fails (fmi2Instantiate returns NULL)."""
     from pythonfmu import Fmi2Slave  # pythonfmu's Python part, shipped in the FMU
 
-    from .pythonfmu_workarounds import log_to_host
+    from .pythonfmu_workarounds import guard_exit, log_to_host
 
     class MissingRequirements(Fmi2Slave):
         """Stands in for the slave class when the FMU's requirements are unmet."""
 
         def __init__(self, **kwargs):
+            # the binary made its interpreter guard before calling this, and releases it twice
+            # at exit unless guarded (`guard_exit`), an instance made or not; this instance's
+            # own folder, as the script module may be the first instance's
+            resources = kwargs.get("resources") or ""
+            try:
+                guard_exit(resources, model_identifier(resources))
+            except Exception:  # noqa: BLE001 -- naming what is missing matters more
+                pass
             if not log_to_host(kwargs, message):
                 print(message, file=sys.stderr)  # no way into the host's logger: at least here
             raise RequirementError(message)

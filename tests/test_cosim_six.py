@@ -11,8 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy import read_model_description
 
 from flexure.controllers.controller_fmu import build_controller_fmu, controller_config
+from flexure.controllers.cosim import scene_fmu, scene_fmu_path
 from flexure.controllers.feedback import ControlDesignError, DiscreteController, design_feedback
 from flexure.controllers.feedforward import low_frequency_model
 from flexure.controllers.loop_controller import LoopController
@@ -123,14 +125,31 @@ def test_a_move_path_dictionary_that_does_not_fit_is_named(change, match):
 
 @pytest.fixture(scope="module")
 def stale_workdir(tmp_path_factory):
-    """A workdir whose truss_1dof_x.fmu is of an older truss_1dof_x, its output named
-    "position" where the scene now has "x" (an FMU kept from before an edit)."""
+    """A workdir where the loop finds, in the place of truss_1dof_x's FMU, the FMU of another
+    truss_1dof_x, its output named "position" where the scene has "x" (an FMU put there by
+    hand: one kept from before an edit of the scene is not reused, the next test)."""
     folder = tmp_path_factory.mktemp("stale")
     scene = Path(__file__).parents[1] / "examples" / "scenes" / "truss_1dof_x.toml"
     older = folder / "older.toml"
     older.write_text(scene.read_text().replace("[outputs.x]", "[outputs.position]"))
-    build_scene_fmu(older, folder / "truss_1dof_x.fmu")
+    place = scene_fmu_path("truss_1dof_x", load_scene("truss_1dof_x"), folder)
+    place.parent.mkdir()
+    build_scene_fmu(older, place)
     return folder
+
+
+def test_a_kept_workdir_builds_the_fmu_of_the_scene_as_edited(tmp_path):
+    scene = tmp_path / "truss_1dof_x.toml"
+    text = (Path(__file__).parents[1] / "examples" / "scenes" / "truss_1dof_x.toml").read_text()
+    scene.write_text(text)
+    first = scene_fmu(scene, load_scene(scene), tmp_path)
+    assert scene_fmu(scene, load_scene(scene), tmp_path) == first  # unchanged: reused
+    scene.write_text(text.replace("[outputs.x]", "[outputs.position]"))
+    edited = scene_fmu(scene, load_scene(scene), tmp_path)
+    assert edited != first and first.exists()
+    outputs = {v.name for v in read_model_description(str(edited)).modelVariables
+               if v.causality == "output"}
+    assert "position" in outputs and "x" not in outputs
 
 
 @pytest.mark.parametrize("plant, match", [

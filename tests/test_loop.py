@@ -295,6 +295,21 @@ def test_a_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, capsys):
     assert (tmp_path / "pivot.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_the_controller_fmu_of_an_angle_loop_carries_radians_and_newton_metres(tmp_path):
+    """Its variables carry the units of the plant's ports they connect to."""
+    from fmpy import read_model_description
+
+    from flexure.controllers import build_loop
+    from flexure.controllers.controller_fmu import build_controller_fmu
+
+    model = load_scene(pivot_on_a_moment(tmp_path))
+    controller, design = build_loop(model, stroke=1e-3, duration=0.05, settle=0.0)
+    path = build_controller_fmu(controller, design, model, tmp_path / "pivot_controller.fmu")
+    units = {v.name: v.unit for v in read_model_description(str(path)).modelVariables}
+    assert {name: units[name] for name in ("theta", "M", "theta_reference", "theta_error")} == {
+        "theta": "rad", "M": "N.m", "theta_reference": "rad", "theta_error": "rad"}
+
+
 def pivot_on_a_moment(folder):
     """The tutorial's cross-flexure pivot with a moment input M and its angle theta as output
     (its constant moment load removed), written as pivot.toml into `folder`; its path."""

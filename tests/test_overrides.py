@@ -267,9 +267,13 @@ def test_the_loop_builds_its_fmu_plants_from_the_overridden_scene(tmp_path):
         assert np.max(np.abs(result.position - reference.position)) < 1e-9 * stroke, plant
     # the loop on the scene as the file has it ends 3e-6 of the stroke away from this one
     assert np.max(np.abs(plain.position - reference.position)) > 1e-6 * stroke
-    [built] = tmp_path.glob(f"set_*/{SCENE}.fmu")
+    from flexure.controllers.cosim import scene_fmu_path
+
+    model = load_scene(SCENE)
+    built = scene_fmu_path(SCENE, model, tmp_path, overrides=heavier["overrides"])
     assert embedded_scene(built)["nodes"]["3"]["mass"] == 0.2
-    assert "mass" not in embedded_scene(tmp_path / f"{SCENE}.fmu")["nodes"]["3"]
+    assert "mass" not in embedded_scene(scene_fmu_path(SCENE, model, tmp_path))["nodes"]["3"]
+    assert len(list(tmp_path.glob(f"*/{SCENE}.fmu"))) == 2
 
 
 def test_the_loop_refuses_overrides_of_a_built_model():
