@@ -183,30 +183,37 @@ def engine_results(model, rigid, form, seed):
         assert engine.call(data, engine.OP_EVALUATE, q, qdot) == ed.OK
         qddot = data.float_array("qddot").copy()
         assert engine.call(data, engine.OP_TANGENT, 0.5 * qddot + 1.0) == ed.OK
+        jacobian = np.zeros((2 * q0.size) ** 2)
+        y = np.concatenate([q, qdot])  # q_ref is zero
+        assert engine.call(data, engine.OP_JACOBIAN, y, jacobian, s=1.0) == ed.OK
         out.append({name: data.float_array(name).copy() for name in (
-            "stiffness", "damping", "x", "DF", "xdot")} | {"qddot": qddot})
+            "stiffness", "damping", "x", "DF", "xdot")} | {"qddot": qddot,
+                                                           "jacobian": jacobian})
     return out, data
 
 
 # relative tolerances of the elimination against the full system, per quantity: round-off of
 # the full system's kinematics (solved to 1e-14 of the length scale) through each quantity;
-# the reduced form of stage_spatial_19dof has a mass matrix of condition 1e9 (its stiff
-# flexures' DOFs), and its qddot follows the full system's to that over 1e-14
+# stage_spatial_19dof's M_bar has a condition of 1e9 (its stiff flexures' DOFs): its qddot in the
+# reduced form and its Jacobian (M_bar^-1 K) follow the full system's to 1e-9, the round-off
+# of the kinematics times that condition
 TOLERANCES = {"qddot": 1e-12, "stiffness": 1e-12, "damping": 1e-13, "x": 1e-14, "DF": 1e-13,
-              "xdot": 1e-13}
+              "xdot": 1e-13, "jacobian": 1e-12}
 
 
 @pytest.mark.parametrize("form", ["reduced", "augmented"])
 def test_engine_matches_the_full_system(scene, form):
-    """qddot, the tangent (K at another qddot, C), x, DF and xdot with the elimination
-    against the engine without it, relative to each quantity's largest entry."""
+    """qddot, the tangent (K at another qddot, C), the first-order Jacobian (CVODE's), x, DF
+    and xdot with the elimination against the engine without it, relative to each
+    quantity's largest entry."""
     name, model, _ = scene
     full, full_data = engine_results(model, False, form, seed=6)
     reduced, data = engine_results(model, True, form, seed=6)
     assert data.int_array("dims")[ed.NFREE] < full_data.int_array("dims")[ed.NFREE]
     for a, b in zip(full, reduced, strict=True):
         for quantity, tolerance in TOLERANCES.items():
-            if quantity == "qddot" and form == "reduced" and name == "stage_spatial_19dof":
+            if name == "stage_spatial_19dof" and (
+                    quantity == "jacobian" or (quantity == "qddot" and form == "reduced")):
                 tolerance = 1e-9
             scale = max(np.max(np.abs(a[quantity])), 1e-300)
             error = np.max(np.abs(a[quantity] - b[quantity]))
@@ -244,3 +251,17 @@ def test_simulation_matches_the_full_system(name):
         runs.append(np.array(trajectory))
     scale = np.max(np.ptp(runs[1], axis=0))
     assert np.max(np.abs(runs[0] - runs[1])) <= 1e-7 * scale
+
+
+def test_full_newton_stops_on_the_residual():
+    """A cold start at a solution takes no Newton step: x stays bit for bit the start (the
+    step-size test alone would take one step of round-off first)."""
+    for name in ("truss_1dof_x", "stage_spatial_1dof"):
+        model = load_scene(name)
+        data = EngineData(model)
+        x0 = data.rigid.layout.fill(model.initial_coordinates.astype(float))
+        data.float_array("x_start")[:] = x0
+        data.int_array("dims")[ed.WARM] = 0
+        q0 = Mechanics(model).kinematics.dofs_of(x0)
+        assert engine.call(data, engine.OP_KINEMATICS, q0) == ed.OK
+        assert np.array_equal(data.float_array("x"), x0)
