@@ -42,6 +42,7 @@ from .factors import (
     mass_entries_start,
 )
 from .kinematics import compute_DF, dof_rows, solve_kinematics
+from .point_masses import element_mass, point_columns, point_forces
 from .ports import add_input_forces
 from .rigid_kernels import (
     condense,
@@ -302,8 +303,12 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                          acc.ctypes.data, m, P, width)
             for pp in range(P):
                 point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
-            _element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w, Me,
-                          columns)
+            if t < 0:
+                element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w,
+                              Me, columns)
+            else:  # w alone: its mass goes on its z-coordinates (`_touching_mass`)
+                point_columns(P, m, Dp, columns)
+                point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, point, w)
             counts, position = columns[P * m: P * m + P], columns[P * m + P: P * m + P + m]
             for pp in range(P):  # r += Dp^T w
                 for u in range(counts[pp]):
@@ -331,7 +336,7 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
             for a in range(m):
                 s += Dp[pp, a] * c[coords[a]]
             point[pp] = s
-        _point_forces(Mp, pattern, P, point, w)
+        point_forces(Mp, pattern, P, point, w)
         for a in range(m):
             s = 0.0
             for pp in range(P):
@@ -342,48 +347,10 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
     Dz = local[: P * mz]
     Me = local[P * mz: P * mz + mz * mz]
     element_transform(table, t, Dp.reshape(P * m), P, m, Dz)
-    _element_mass(Mp, pattern, P, mz, Dz.reshape((P, mz)), point, w, Me, columns)
+    element_mass(Mp, pattern, P, mz, Dz.reshape((P, mz)), point, w, Me, columns)
     position = columns[P * mz + P: P * mz + P + mz]
     entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
     add_element_mass(table, A, na, entry, z, mz, Me, position)
-
-
-@kernel
-def _element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
-    """One element's w = Mp point (P,) and Me = Dp^T Mp Dp (m * m, row by row), visiting
-    only the entries of Mp in `pattern` (flat p P + q) and the non-zero entries of Dp (each
-    point moves with few coordinates: a BEAM's with 1 or 4 of 14). Leaves in `columns` the
-    non-zero columns of each row p of Dp (at p m ...) and their counts (at P m + p)."""
-    counts = columns[P * m:]
-    for pp in range(P):
-        k = 0
-        for a in range(m):
-            if Dp[pp, a] != 0.0:
-                columns[pp * m + k] = a
-                k += 1
-        counts[pp] = k
-    _point_forces(Mp, pattern, P, point, w)
-    for a in range(m * m):
-        Me[a] = 0.0
-    for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        mpq = Mp[pattern[e]]
-        for u in range(counts[pp]):
-            a = columns[pp * m + u]
-            da = mpq * Dp[pp, a]
-            for v in range(counts[qq]):
-                b = columns[qq * m + v]
-                Me[a * m + b] += da * Dp[qq, b]
-
-
-@kernel
-def _point_forces(Mp, pattern, P, point, w):
-    """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
-    for pp in range(P):
-        w[pp] = 0.0
-    for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        w[pp] += Mp[pattern[e]] * point[qq]
 
 
 @kernel
@@ -470,7 +437,7 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
                         if order == 2:
                             f -= d * conv[coords[i * m + a]]
                 point[pp] = f - acc[pp] if order == 2 else f
-            _point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
+            point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
             MpB[: P * ndof] = 0.0
             for e in range(pattern.size):
                 pp, qq = divmod(pattern[e], P)
