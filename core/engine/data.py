@@ -27,6 +27,7 @@ import numpy as np
 from ..mechanics import assembly
 from . import sparse_packing
 from .ports import port_specs
+from .rigid import RigidPacking, positions_among
 
 # the banded orders of a model's J and augmented system, computed once per live model (read
 # only): {id(model): (weak reference to the model, orders)}
@@ -39,24 +40,27 @@ INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformat
              "mass_pivots", "counters", "augmented_pivots", "j_row_position",
              "j_column_position", "augmented_position", "mass_pattern", "point_columns",
              "j_sparse", "j_map", "aug_sparse", "aug_map", "stress_pointers", "stress_columns",
-             "actuators")
+             "actuators", "rigid_slaves", "slave_index", "rigid_dependencies",
+             "rigid_element_of", "rigid_elements", "rigid_z", "rigid_terms", "rigid_units",
+             "rigid_coordinates")
 # float64 slots (`floats`)
 FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
                "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
                "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot",
                "augmented", "augmented_rhs", "band_scratch", "j_sparse_values",
-               "aug_sparse_values", "actuator_data", "currents", "port_values")
+               "aug_sparse_values", "actuator_data", "currents", "port_values", "rigid_data",
+               "rigid_weights", "rigid_de", "rigid_c", "rigid_h", "rigid_force", "rigid_local")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
  MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, ENGINE, AUGMENTED, REDUCED,
- MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, J_SPARSE, A_SPARSE, J_FACTORS, NEL,
- DIMS_SIZE) = range(32)
+ MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, J_SPARSE, A_SPARSE, J_FACTORS, NEL, NSLAVES, A_RIGID,
+ DIMS_SIZE) = range(34)
 # per-group row of `groups`
 (G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
  G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
- G_INERTIA_ENTRY, G_PATTERN_OFFSET, G_PATTERN_COUNT, G_WIDTH) = range(18)
+ G_INERTIA_ENTRY, G_PATTERN_OFFSET, G_PATTERN_COUNT, G_ELEMENT_OFFSET, G_WIDTH) = range(19)
 # per input: its kind in slot actuators (with the index of its coil current), and its
 # coefficients in slot actuator_data (`engine.actuators`)
 FORCE_INPUT, CURRENT_DRIVE, VOLTAGE_DRIVE = range(3)
@@ -100,10 +104,14 @@ class EngineData:
         (False); default: per matrix, whichever needs fewer (weighted) multiplications, the
         sparse LU analysed only for models whose banded LUs cost at least
         `sparse_packing.SPARSE_FROM`.
+    rigid : bool
+        Whether the rigid clusters' slaves leave the kinematics and the augmented system
+        (`rigid`; default True); False solves for every free coordinate, as for a model
+        without clusters.
     """
 
     def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6, augmented=None,
-                 sparse=None):
+                 sparse=None, rigid=True):
         from ..mechanics.kinematics import length_scale
 
         self.model = model
@@ -127,7 +135,7 @@ class EngineData:
         inertia = {id(group): Mp for group, Mp in inertia_groups}
         all_groups = list(model.groups) + [group for group, _ in inertia_groups
                                            if group.kind.type_name == "NODE_INERTIA"]
-        offsets = {"coord": 0, "def": 0, "data": 0, "pattern": 0}
+        offsets = {"coord": 0, "def": 0, "data": 0, "pattern": 0, "element": 0}
         max_m = max_k = max_p = 1
         for group in all_groups:
             kind = group.kind
@@ -145,6 +153,8 @@ class EngineData:
             row[G_COORD_OFFSET] = offsets["coord"]
             row[G_DEF_OFFSET] = offsets["def"]
             row[G_DATA_OFFSET] = offsets["data"]
+            row[G_ELEMENT_OFFSET] = offsets["element"]
+            offsets["element"] += n
             pieces = [packed.ravel()]
             size = packed.size
             row[G_MASS_OFFSET] = row[G_GRAVITY_OFFSET] = -1
@@ -174,6 +184,12 @@ class EngineData:
             offsets["def"] += n * k
             offsets["data"] += size
             max_m, max_k, max_p = max(max_m, m), max(max_k, k), max(max_p, P)
+        # the rigid clusters: their slaves leave the free coordinates, their rows the rows
+        packing = RigidPacking(model, all_groups, inertia, enabled=rigid)
+        self.rigid = packing
+        free, rows = packing.free, packing.rows
+        n_rigid = packing.rigid_rows.size
+        max_m = max(max_m, packing.max_mz)
         row_of_def = np.full(ne, -1, dtype=np.int64)
         row_of_def[rows] = np.arange(rows.size)
         col_of_coord = np.full(nx, -1, dtype=np.int64)
@@ -186,7 +202,7 @@ class EngineData:
             constant_force += lumped * per_coordinate
         dims = np.zeros(DIMS_SIZE, dtype=np.int64)
         dims[[NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS]] = (
-            nx, ne, ndof, free.size, model.rigid_deformations.size, model.dof_coordinates.size,
+            nx, ne, ndof, free.size, n_rigid, model.dof_coordinates.size,
             model.dof_deformations.size, len(model.inputs), stressed.size, len(groups))
         dims[NEL] = len(model.coil_actuators)  # the electrical states after [q - q_ref, qdot]
         nstate = 2 * ndof + dims[NEL]
@@ -195,15 +211,15 @@ class EngineData:
         dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
         # banded orders of J and of the augmented system (core/numerics/banded.py), and
         # their sparse LUs where those pay (sparse_packing), found once per model
-        known = _ORDERS.get(id(model))  # a Simulator packs its model twice (plant, outputs)
+        known = _ORDERS.get((id(model), rigid))  # a Simulator packs its model twice
         if known is not None and known[0]() is model:
             found = known[1]
         else:
             found = {"orders": (
-                _constraint_order(model, free, rows, row_of_def, col_of_coord),
-                _augmented_order(model, free.size, row_of_def, col_of_coord,
-                                 [group for group in all_groups if id(group) in inertia]))}
-            key = id(model)
+                _constraint_order(model, free, rows, row_of_def, col_of_coord, packing),
+                _augmented_order(model, free.size, n_rigid, row_of_def, col_of_coord,
+                                 all_groups, inertia, packing))}
+            key = (id(model), rigid)
             _ORDERS[key] = (weakref.ref(model, lambda _, key=key: _ORDERS.pop(key, None)),
                             found)
         (j_rows, j_cols, dims[J_KL], dims[J_KU]), (aug_position, dims[A_KL], dims[A_KU]) = \
@@ -211,13 +227,13 @@ class EngineData:
         bands = (int(dims[J_KL]), int(dims[J_KU]), int(dims[A_KL]), int(dims[A_KU]))
         if sparse is not False and "sparse" not in found:
             banded_lu = (banded_multiplications(free.size, *bands[:2]) + banded_multiplications(
-                free.size + model.rigid_deformations.size, *bands[2:]))
+                free.size + n_rigid, *bands[2:]))
             found["sparse"] = sparse_packing.analyse(
                 model, de_groups, [group for group in all_groups if id(group) in inertia],
                 free, rows, row_of_def, col_of_coord, de_size,
-                np.inf if sparse else banded_lu)
+                np.inf if sparse else banded_lu, packing)
         factors = found.get("sparse") if sparse is not False else None
-        costs = evaluation_cost(free.size, model.rigid_deformations.size, ndof,
+        costs = evaluation_cost(free.size, n_rigid, ndof,
                                 [(row[G_COUNT], row[G_M], row[G_P]) for row in groups], bands,
                                 None if factors is None else factors.multiplications())
         if sparse and factors is not None:  # forced: both matrices sparse
@@ -248,13 +264,16 @@ class EngineData:
                    + max(nx, ne, 2 * ndof))
         # the augmented system of the accelerations: free coordinates and the multipliers of
         # the rigid constraint rows (engine.evaluate)
-        augmented = free.size + model.rigid_deformations.size
+        augmented = free.size + n_rigid
+        dims[NSLAVES] = packing.slaves.shape[0]
+        # where the touching elements' entries begin in the augmented map (`sparse_packing`)
+        dims[A_RIGID] = -1 if factors is None else factors.rigid_start
         actuator_kinds, actuator_data = _actuator_arrays(model)
         ints = {
             "dims": dims, "free": free.astype(np.int64), "constraint_rows": rows.astype(np.int64),
             "dof_coordinates": model.dof_coordinates.astype(np.int64),
             "dof_deformations": model.dof_deformations.astype(np.int64),
-            "dof_positions": np.searchsorted(free, model.dof_coordinates).astype(np.int64),
+            "dof_positions": positions_among(free, model.dof_coordinates),
             "stressed": stressed.astype(np.int64), "input_ports": input_ports,
             "groups": np.concatenate(groups) if groups else np.zeros(0, np.int64),
             "coordinate_index": _concat_int(coord_index), "deformation_index": _concat_int(
@@ -281,6 +300,7 @@ class EngineData:
                 stress_rows, minlength=stressed.size))]).astype(np.int64),
             "stress_columns": stress_columns.astype(np.int64),
             "actuators": actuator_kinds,
+            **packing.ints(),
         }
         floats = {
             "settings": settings, "S": S[stress_rows, stress_columns],
@@ -309,6 +329,7 @@ class EngineData:
             # the value each input puts on its port in the last evaluation (N, N m; only
             # with actuators: without, the inputs themselves; `actuators.port_values`)
             "port_values": np.zeros(len(model.inputs) if model.actuators else 0),
+            **packing.floats(nx, free.size, max_p),
         }
         self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)
         self.floats = tuple(np.ascontiguousarray(floats[name], dtype=float)
@@ -374,7 +395,7 @@ def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None, sparse=None):
     return {"reduced": reduced, "augmented": augmented, **lu_kinds}
 
 
-def _constraint_order(model, free, rows, row_of_def, col_of_coord):
+def _constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
     """Positions of J's rows and columns in its banded order, and its (kl, ku): each row
     matched to a column (a structurally nonsingular J has a perfect matching), then reverse
     Cuthill-McKee on the matched pattern (core/numerics/banded.py). The identity order, dense, when
@@ -386,15 +407,19 @@ def _constraint_order(model, free, rows, row_of_def, col_of_coord):
 
     nf = free.size
     entries = []
-    for group in model.groups:
-        for coords, defs in zip(group.coordinate_index, group.deformation_index, strict=True):
+    for gp, group in enumerate(model.groups):
+        for coords, defs in zip(packing.pattern_coordinates(gp, group),
+                                group.deformation_index, strict=True):
             cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
             for d in defs:
                 if row_of_def[d] >= 0:
                     entries.extend((row_of_def[d], c) for c in cols)
     n_def = rows.size
     for j, c in enumerate(model.dof_coordinates):
-        entries.append((n_def + j, col_of_coord[c]))
+        s = packing.units[j]
+        sources = [c] if s < 0 else packing.layout.dependencies[s]
+        entries.extend((n_def + j, col_of_coord[d]) for d in sources
+                       if d >= 0 and col_of_coord[d] >= 0)
     identity = np.arange(nf, dtype=np.int64)
     if nf == 0 or not entries:
         return identity, identity.copy(), max(nf - 1, 0), max(nf - 1, 0)
@@ -414,22 +439,24 @@ def _constraint_order(model, free, rows, row_of_def, col_of_coord):
             int(max(0, -offsets.min())))
 
 
-def _augmented_order(model, nf, row_of_def, col_of_coord, inertia_groups):
+def _augmented_order(model, nf, n_rigid, row_of_def, col_of_coord, groups, inertia, packing):
     """Positions of the augmented system's unknowns (the free coordinates, then the rigid
     rows' multipliers) in its banded order, and its (kl, ku)."""
     from scipy.sparse import csr_matrix
 
     from ..numerics.banded import bandwidth_order
 
-    n_rigid = model.rigid_deformations.size
     na = nf + n_rigid
     entries = [(a, a) for a in range(nf)]
-    for group in inertia_groups:
-        for coords in group.coordinate_index:
+    for gp, group in enumerate(groups):
+        if id(group) not in inertia:
+            continue
+        for coords in packing.pattern_coordinates(gp, group):
             cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
             entries.extend((a, b) for a in cols for b in cols)
-    for group in model.groups:
-        for coords, defs in zip(group.coordinate_index, group.deformation_index, strict=True):
+    for gp, group in enumerate(model.groups):
+        for coords, defs in zip(packing.pattern_coordinates(gp, group),
+                                group.deformation_index, strict=True):
             cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
             for d in defs:
                 o = row_of_def[d]

@@ -10,7 +10,11 @@ has its module; this one holds the forms the integrators call and the one entry 
     factors          J and the augmented system: assembled and factored banded, or sparse
                      (`sparse_packing`: their patterns and scatter maps, packed per model)
     motion           qddot from M_bar qddot = DF^T r (or the augmented system), M_bar
+    point_masses     an element's point forces and mass Dp^T Mp Dp through its inertia points
     tangent          stiffness K0 + G0 and damping C0 of the dynamic balance
+    rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
+                     rows out of J and the augmented system (`rigid_kernels`: the slaves
+                     explicit in their masters, x_s = S(z), and the chain rule through T)
     engine (here)    the first-order and implicit forms, `engine_entry`, `call`
 
 with the dense LU of small matrices (M_bar, the integrators' Newton matrices) from

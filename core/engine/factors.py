@@ -20,13 +20,18 @@ Both solve in the model's order: `j_solve` takes vectors on J's rows (or, transp
 free coordinates), `augmented_solve` on the free coordinates then the rigid rows.
 """
 
+from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
+from .rigid import ELEMENT_WIDTH
+from .rigid_kernels import rigid_de, touching
 from .slots import float_array as _f
-from .slots import group_deformations
+from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
+
+EW = ELEMENT_WIDTH
 
 
 @kernel
@@ -54,9 +59,13 @@ def _constraint_jacobian(table, J):
     J[:] = 0.0
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
     row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
+    rigid = dims[ed.NSLAVES] > 0
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        row = group(table, g)
         for i in range(n):
+            if rigid and rigid_element(table, row, i) >= 0:
+                continue  # from its De_z below
             for b in range(k):
                 r = row_of_def[defs[i * k + b]]
                 if r < 0:
@@ -67,22 +76,66 @@ def _constraint_jacobian(table, J):
                         J[rpos[r] * nf + cpos[c]] = De[(i * k + b) * m + a]
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
     positions = _i(table, slot.DOF_POS)
+    units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
+    deps = _i(table, slot.RIGID_DEPS)
     for j in range(dims[ed.NXDOF]):
-        J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
+        if rigid and units[j] >= 0:  # x_s(z) = q: T's row
+            for d in range(DEPENDENCIES):
+                u = units[j] * DEPENDENCIES + d
+                c = col_of_coord[deps[u]] if deps[u] >= 0 else -1
+                if c >= 0:
+                    J[rpos[n_def + j] * nf + cpos[c]] += W[u]
+        else:
+            J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
+    if not rigid:
+        return
+    rde = _f(table, slot.RIGID_DE)
+    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
+        g, i, mz, z, offset, _ = touching(table, t)
+        if offset < 0:
+            continue
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for b in range(k):
+            r = row_of_def[defs[i * k + b]]
+            if r < 0:
+                continue
+            for a in range(mz):
+                c = col_of_coord[z[a]]
+                if c >= 0:
+                    J[rpos[r] * nf + cpos[c]] += rde[offset + b * mz + a]
 
 
 @kernel
 def _sparse_constraint_jacobian(table, values):
     """J's sparse values from the elements' De in slot de through the J map."""
     De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
+    dims = _i(table, slot.DIMS)
     values[:] = 0.0
-    n_de = De.size
+    n_de, n_xdof = De.size, dims[ed.NXDOF]
     for e in range(n_de):
         s = jmap[e]
         if s >= 0:
             values[s] = De[e]
-    for j in range(jmap.size - n_de):
-        values[jmap[n_de + j]] = 1.0
+    for j in range(n_xdof):
+        s = jmap[n_de + j]
+        if s >= 0:
+            values[s] = 1.0
+    if dims[ed.NSLAVES] == 0:
+        return
+    rde, base = _f(table, slot.RIGID_DE), n_de + n_xdof
+    for e in range(rde.size):
+        s = jmap[base + e]
+        if s >= 0:
+            values[s] += rde[e]
+    base += rde.size
+    units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
+    for j in range(n_xdof):
+        if units[j] < 0:
+            continue
+        for d in range(DEPENDENCIES):
+            s = jmap[base + DEPENDENCIES * j + d]
+            if s >= 0:
+                values[s] += W[units[j] * DEPENDENCIES + d]
 
 
 @kernel
@@ -91,6 +144,8 @@ def j_factor(table):
     smallest to the largest pivot magnitude."""
     dims = _i(table, slot.DIMS)
     lu, nf = _f(table, slot.LU), dims[ed.NFREE]
+    if dims[ed.NSLAVES] > 0:
+        rigid_de(table)
     if dims[ed.J_SPARSE] == 1:
         ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
         _sparse_constraint_jacobian(table, sparse_lu.matrix_values(ints, floats))
@@ -205,6 +260,8 @@ def add_rigid_rows(table, A, na):
     coordinates) into A as [., J_o^T; J_o, 0] beside the mass block of the free coordinates."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
+    rigid = dims[ed.NSLAVES] > 0
+    rde = _f(table, slot.RIGID_DE)
     if dims[ed.A_SPARSE] == 1:
         De, amap = _f(table, slot.DE), _i(table, slot.AUG_MAP)
         n_de = De.size
@@ -213,13 +270,39 @@ def add_rigid_rows(table, A, na):
             if s >= 0:
                 A[s] = De[e]
                 A[amap[nf + n_de + e]] = De[e]
+        if rigid:
+            base, n_rde = dims[ed.A_RIGID], rde.size
+            for e in range(n_rde):
+                s = amap[base + e]
+                if s >= 0:
+                    A[s] += rde[e]
+                    A[amap[base + n_rde + e]] += rde[e]
         return
     row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
     n_rigid = dims[ed.NRIGID]
     apos = _i(table, slot.AUG_POS)
+    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW if rigid else 0):
+        g, i, mz, z, offset, _ = touching(table, t)
+        if offset < 0:
+            continue
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for b in range(k):
+            o = row_of_def[defs[i * k + b]]
+            if o < 0 or o >= n_rigid:
+                continue
+            po = apos[nf + o]
+            for a in range(mz):
+                c = col_of_coord[z[a]]
+                if c >= 0:
+                    v = rde[offset + b * mz + a]
+                    A[po * na + apos[c]] += v
+                    A[apos[c] * na + po] += v
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        row = group(table, g)
         for i in range(n):
+            if rigid and rigid_element(table, row, i) >= 0:
+                continue
             for b in range(k):
                 o = row_of_def[defs[i * k + b]]
                 if o < 0 or o >= n_rigid:

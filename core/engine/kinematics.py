@@ -6,10 +6,16 @@ on the free coordinates,
     g(x) = [e_o(x); e_m(x) - q_e; x_m - q_x] = 0
 
 (the deformations e_o prescribed zero, the DOF deformations e_m and the DOF coordinates x_m
-equal to their DOFs). Warm start: the first-order prediction x_prev + DF_prev (q - q_prev);
-if its residual exceeds the tolerance, chord iterations with the previous LU of the
-constraint Jacobian J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton
-from there if they stall. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the
+equal to their DOFs). With rigid clusters (`rigid`) the free coordinates are those but the
+slaves', whose coordinates follow their masters' in closed form before every evaluation of
+the deformations, and the rows the clusters make identically zero are out: J = dg/dz holds
+the touching elements' De T_e and, for a DOF coordinate on a slave, T's row.
+
+Warm start: the first-order prediction x_prev + DF_prev (q - q_prev); if its residual
+exceeds the tolerance, chord iterations with the previous LU of the constraint Jacobian
+J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton from there if they
+stall, stopping on the residual or on the step. J DF = [0; I] gives DF = dx/dq (NX, NDOF)
+where it is needed (the
 reduced form, the tangent, the kinematics operation).
 
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
@@ -22,18 +28,24 @@ import numpy as np
 from ..numerics.jit import kernel
 from ..numerics.native import call_deformations
 from . import data as ed
+from . import rigid as rg
 from . import slots as slot
 from .factors import j_factor, j_solve
+from .rigid_kernels import expand_columns, fill_slaves
 from .slots import float_array as _f
-from .slots import group, group_coordinates
+from .slots import group, group_coordinates, rigid_element
 from .slots import int_array as _i
 
 
 # -- deformations of every element ---------------------------------------------------------------
 @kernel
-def deformations(table, x, order):
-    """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e."""
+def deformations(table, x, order, skip_internal=False):
+    """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e;
+    with skip_internal, not those of the elements a rigid cluster makes identically zero
+    (`rigid`: their rows are out of the system, their stresses zero)."""
     dims = _i(table, slot.DIMS)
+    skipping = skip_internal and dims[ed.NSLAVES] > 0
+    touching = _i(table, slot.RIGID_ELEMENTS)
     e = _f(table, slot.E)
     local = _f(table, slot.LOCAL)
     max_m = dims[ed.MAX_M]
@@ -51,6 +63,10 @@ def deformations(table, x, order):
         xl = local[:m]
         el = local[max_m: max_m + k]
         for i in range(n):
+            if skipping:
+                t = rigid_element(table, row, i)
+                if t >= 0 and touching[t * rg.ELEMENT_WIDTH + rg.E_INTERNAL] == 1:
+                    continue
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
             call_deformations(function, xl.ctypes.data, refs + 8 * i * width, order,
@@ -58,6 +74,15 @@ def deformations(table, x, order):
                               m, k, width)
             for b in range(k):
                 e[defs[i * k + b]] = el[b]
+
+
+@kernel
+def _elements(table, x, order):
+    """The slaves of the rigid clusters from their masters in x (`rigid_kernels`), then the
+    deformations of order `order` at x."""
+    if _i(table, slot.DIMS)[ed.NSLAVES] > 0:
+        fill_slaves(table, x)
+    deformations(table, x, order, True)
 
 
 # -- kinematics -----------------------------------------------------------------------------------
@@ -125,6 +150,8 @@ def compute_DF(table):
         j_solve(table, column)
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
+    if dims[ed.NSLAVES] > 0:  # the slaves' rows: T DF
+        expand_columns(table, DF, ndof)
 
 
 @kernel
@@ -155,7 +182,7 @@ def solve_positions(table, q):
     if not np.all(np.isfinite(x)):
         x[:] = _f(table, slot.X)
     for _ in range(dims[ed.MAX_NEWTON]):
-        deformations(table, x, 1)
+        _elements(table, x, 1)
         if _residual(table, x, q, g) <= tolerance:
             _f(table, slot.X)[:nx] = x[:nx]
             return ed.OK
@@ -196,30 +223,32 @@ def solve_kinematics(table, q):
             x[:nx] = x_prev[:nx]
             for a in range(nf):
                 x[free[a]] += dx[a]
-        deformations(table, x, 2)  # with the derivatives: usually x needs no correction
+        _elements(table, x, 2)  # with the derivatives: usually x needs no correction
         if _residual(table, x, q, g) <= tolerance:
             return _store(table, q, x)
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             step = _newton_step(table, x, g, dx)
             if not np.isfinite(step):
                 break
-            deformations(table, x, 2)
+            _elements(table, x, 2)
             if _residual(table, x, q, g) <= tolerance or step <= tolerance:
                 return _store(table, q, x)
     else:
         x[:] = _f(table, slot.X_START)
     if not np.all(np.isfinite(x)):
         x[:] = _f(table, slot.X)
-    for _ in range(dims[ed.MAX_NEWTON]):  # full Newton
-        deformations(table, x, 1)
-        _residual(table, x, q, g)
+    for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does
+        _elements(table, x, 1)
+        if _residual(table, x, q, g) <= tolerance:
+            _elements(table, x, 2)
+            return _store(table, q, x)
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         step = _newton_step(table, x, g, dx)
         if not np.isfinite(step):
             return ed.NOT_CONVERGED
         if step <= tolerance:
-            deformations(table, x, 2)
+            _elements(table, x, 2)
             return _store(table, q, x)
     return ed.NOT_CONVERGED
 

@@ -15,6 +15,11 @@ inertia points p of the element masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, an
 qdot = -J^-1 [xdot^T H_i xdot] on the constraint rows. Gravity acts on the position points of
 the inertia, which are linear in x for every element, so it has no tangent stiffness.
 
+With rigid clusters (`rigid`) xdot, conv and xddot are solved on the reduced coordinates z and
+filled on the slaves' rows (T zdot; T conv_z + c; T zddot + c), the augmented system is the
+one on z (a touching element's mass Dp_z^T Mp Dp_z, the forces T^T (r - M c)), and the
+reduced form is unchanged on x with DF's slave rows T DF_z.
+
 M_bar is accumulated element by element from (Dp DF_e)^T Mp (Dp DF_e), never from a dense
 (NX, NX) M; the augmented system is assembled and factored banded or sparse as the model was
 packed (`factors`), so an evaluation in the augmented form costs in proportion to the element
@@ -37,13 +42,23 @@ from .factors import (
     mass_entries_start,
 )
 from .kinematics import compute_DF, dof_rows, solve_kinematics
+from .point_masses import element_mass, point_columns, point_forces
 from .ports import add_input_forces
+from .rigid_kernels import (
+    condense,
+    convective,
+    element_transform,
+    expand,
+    rigid_rates,
+    touching,
+)
 from .slots import float_array as _f
 from .slots import (
     group,
     group_deformations,
     group_inertia,
     inertia_scratch,
+    rigid_element,
 )
 from .slots import int_array as _i
 
@@ -76,6 +91,7 @@ def evaluate(table, q, qdot):
         if qdot[j] != 0.0:
             moving = True
     reduced = dims[ed.AUGMENTED] == 0
+    rigid = dims[ed.NSLAVES] > 0
     if reduced:  # xdot = DF qdot
         compute_DF(table)
         DF = _f(table, slot.DF)
@@ -90,6 +106,10 @@ def evaluate(table, q, qdot):
         xdot[:] = 0.0
         for a in range(nf):
             xdot[free[a]] = dx[a]
+        if rigid:  # the slaves': T zdot
+            expand(table, xdot, False)
+    if rigid:  # the slaves' second-order accelerations c (zero at rest)
+        convective(table, x, xdot)
     # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
     _element_rates(table, xdot, moving)
     # sigma_c = S e_s + D edot_s (S, D by compressed rows)
@@ -114,12 +134,20 @@ def evaluate(table, q, qdot):
     _scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0
+    rigid_h = _f(table, slot.RIGID_H)
     if moving:  # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows], for the tangent
-        for a in range(nf):
-            dx[a] = quad[a]
+        if rigid:  # h of the reduced coordinates: with the slaves' c
+            rigid_rates(table)
+            for a in range(nf):
+                dx[a] = quad[a] + rigid_h[a]
+        else:
+            for a in range(nf):
+                dx[a] = quad[a]
         j_solve(table, dx)
         for a in range(nf):
             conv[free[a]] = -dx[a]
+        if rigid:
+            expand(table, conv, True)
     qddot = _f(table, slot.QDDOT)
     if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
         _inertia_reduced(table, x, xdot, conv, moving, r)  # r -= M conv + g_conv here
@@ -142,19 +170,31 @@ def evaluate(table, q, qdot):
     A, rhs = augmented_matrix(table), _f(table, slot.AUG_RHS)
     _inertia_forces(table, x, xdot, moving, r, A, na)
     add_rigid_rows(table, A, na)
-    for a in range(nf):
-        rhs[a] = r[free[a]]
+    if rigid:  # T^T (r - M c): the slaves' forces on their masters
+        total = _f(table, slot.X_TRIAL)
+        rigid_force = _f(table, slot.RIGID_FORCE)
+        for a in range(nx):
+            total[a] = r[a] + rigid_force[a]
+        condense(table, total, rhs[:nf])
+    else:
+        for a in range(nf):
+            rhs[a] = r[free[a]]
     for o in range(n_rigid):
-        rhs[nf + o] = -quad[o] if moving else 0.0
+        if not moving:
+            rhs[nf + o] = 0.0
+        else:
+            rhs[nf + o] = -(quad[o] + rigid_h[o]) if rigid else -quad[o]
     if not augmented_solve(table, A, na, rhs):
         return ed.SINGULAR_MASS
     xddot = _f(table, slot.XDDOT)
     xddot[:] = 0.0
     for a in range(nf):
         xddot[free[a]] = rhs[a]
-    positions = _i(table, slot.DOF_POS)
+    if rigid:  # the slaves': T zddot + c
+        expand(table, xddot, True)
+    positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
     for j in range(n_xdof):
-        qddot[j] = rhs[positions[j]]
+        qddot[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
     _dof_deformation_accelerations(table, xddot, quad, moving, qddot)
     return ed.OK
 
@@ -238,6 +278,9 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
     local = _f(table, slot.LOCAL)
     columns = _i(table, slot.POINT_COLUMNS)
     mass_entry = mass_entries_start(table)
+    rigid = dims[ed.NSLAVES] > 0
+    if rigid:
+        _f(table, slot.RIGID_FORCE)[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         if row[ed.G_P] == 0:
@@ -248,6 +291,10 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
         Me = local[o: o + m * m]
         for i in range(n):
+            t = rigid_element(table, row, i) if rigid else -1
+            if t >= 0 and touching(table, t)[5] < 0:  # a massless touching element
+                mass_entry += m * m
+                continue
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
                 vl[a] = xdot[coords[i * m + a]]
@@ -256,55 +303,54 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                          acc.ctypes.data, m, P, width)
             for pp in range(P):
                 point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
-            _element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w, Me,
-                          columns)
+            if t < 0:
+                element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w,
+                              Me, columns)
+            else:  # w alone: its mass goes on its z-coordinates (`_touching_mass`)
+                point_columns(P, m, Dp, columns)
+                point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, point, w)
             counts, position = columns[P * m: P * m + P], columns[P * m + P: P * m + P + m]
             for pp in range(P):  # r += Dp^T w
                 for u in range(counts[pp]):
                     a = columns[pp * m + u]
                     r[coords[i * m + a]] += Dp[pp, a] * w[pp]
-            # M_ff += Me on the free coordinates
-            add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
-                             position)
+            if t < 0:  # M_ff += Me on the free coordinates
+                add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
+                                 position)
+            else:
+                _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
+                               (i + 1) * P * P], pattern, P, m, Dp, point, w, moving, A, na)
             mass_entry += m * m
 
 
 @kernel
-def _element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
-    """One element's w = Mp point (P,) and Me = Dp^T Mp Dp (m * m, row by row), visiting
-    only the entries of Mp in `pattern` (flat p P + q) and the non-zero entries of Dp (each
-    point moves with few coordinates: a BEAM's with 1 or 4 of 14). Leaves in `columns` the
-    non-zero columns of each row p of Dp (at p m ...) and their counts (at P m + p)."""
-    counts = columns[P * m:]
-    for pp in range(P):
-        k = 0
+def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A, na):
+    """A touching element's mass on its z-coordinates, Me_z = Dp_z^T Mp Dp_z with Dp_z =
+    Dp T_e, onto A; if moving, -Dp^T Mp Dp c_e (the slaves' c) into slot rigid_force."""
+    dims = _i(table, slot.DIMS)
+    columns = _i(table, slot.POINT_COLUMNS)
+    if moving:
+        c, rigid_force = _f(table, slot.RIGID_C), _f(table, slot.RIGID_FORCE)
+        for pp in range(P):
+            s = 0.0
+            for a in range(m):
+                s += Dp[pp, a] * c[coords[a]]
+            point[pp] = s
+        point_forces(Mp, pattern, P, point, w)
         for a in range(m):
-            if Dp[pp, a] != 0.0:
-                columns[pp * m + k] = a
-                k += 1
-        counts[pp] = k
-    _point_forces(Mp, pattern, P, point, w)
-    for a in range(m * m):
-        Me[a] = 0.0
-    for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        mpq = Mp[pattern[e]]
-        for u in range(counts[pp]):
-            a = columns[pp * m + u]
-            da = mpq * Dp[pp, a]
-            for v in range(counts[qq]):
-                b = columns[qq * m + v]
-                Me[a * m + b] += da * Dp[qq, b]
-
-
-@kernel
-def _point_forces(Mp, pattern, P, point, w):
-    """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
-    for pp in range(P):
-        w[pp] = 0.0
-    for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        w[pp] += Mp[pattern[e]] * point[qq]
+            s = 0.0
+            for pp in range(P):
+                s += Dp[pp, a] * w[pp]
+            rigid_force[coords[a]] -= s
+    g, i, mz, z, _, mass_offset = touching(table, t)
+    local = _f(table, slot.RIGID_LOCAL)
+    Dz = local[: P * mz]
+    Me = local[P * mz: P * mz + mz * mz]
+    element_transform(table, t, Dp.reshape(P * m), P, m, Dz)
+    element_mass(Mp, pattern, P, mz, Dz.reshape((P, mz)), point, w, Me, columns)
+    position = columns[P * mz + P: P * mz + P + mz]
+    entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
+    add_element_mass(table, A, na, entry, z, mz, Me, position)
 
 
 @kernel
@@ -391,7 +437,7 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
                         if order == 2:
                             f -= d * conv[coords[i * m + a]]
                 point[pp] = f - acc[pp] if order == 2 else f
-            _point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
+            point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
             MpB[: P * ndof] = 0.0
             for e in range(pattern.size):
                 pp, qq = divmod(pattern[e], P)

@@ -4,7 +4,8 @@
 `INT_SLOTS` and `FLOAT_SLOTS`, and lists (address, length) of each in one address table. The
 engine's modules take every array they read or write from that table's address, through
 `int_array` and `float_array` with the slot indices below (compile-time constants, named as
-the slots they index: `DIMS` is "dims", `DF` is "DF", `AUG` is "augmented"), and the arrays
+the slots they index: `DIMS` is "dims", `DF` is "DF", `AUG` is "augmented", `RIGID_DEPS`
+"rigid_dependencies", `RIGID_COORDS` "rigid_coordinates"), and the arrays
 of one element group through `group` and `group_deformations`. Nothing here computes; units
 are those of the arrays (SI, as the model's).
 """
@@ -20,12 +21,14 @@ from . import data as ed
  COORD_INDEX, DEF_INDEX, ROW_OF_DEF, COL_OF_COORD, PIVOTS, MASS_PIVOTS,
  COUNTERS, AUG_PIVOTS, J_ROW_POS, J_COL_POS, AUG_POS, MASS_PATTERN,
  POINT_COLUMNS, J_SPARSE, J_MAP, AUG_SPARSE, AUG_MAP, STRESS_POINTERS,
- STRESS_COLUMNS, ACTUATORS) = range(len(ed.INT_SLOTS))
+ STRESS_COLUMNS, ACTUATORS, RIGID_SLAVES, SLAVE_INDEX, RIGID_DEPS, RIGID_ELEMENT_OF,
+ RIGID_ELEMENTS, RIGID_Z, RIGID_TERMS, RIGID_UNITS, RIGID_COORDS) = range(len(ed.INT_SLOTS))
 (SETTINGS, S, D, LUMPED, CONST_FORCE, GROUP_DATA, INPUTS, Q_REF, X, Q, DF, LU,
  E, DE, D2E, X_TRIAL, G, DX, XDOT, EDOT, SIGMA, FORCE, MASS, MASS_LU,
  REDUCED_FORCE, QDDOT, CONV, LOCAL, DEF, STIFFNESS, DAMPING, JAC_CACHE,
  X_START, XDDOT, AUG, AUG_RHS, BAND_SCRATCH, J_SPARSE_VALUES,
- AUG_SPARSE_VALUES, ACTUATOR_DATA, CURRENTS, PORT_VALUES) = range(len(ed.FLOAT_SLOTS))
+ AUG_SPARSE_VALUES, ACTUATOR_DATA, CURRENTS, PORT_VALUES, RIGID_DATA, RIGID_WEIGHTS,
+ RIGID_DE, RIGID_C, RIGID_H, RIGID_FORCE, RIGID_LOCAL) = range(len(ed.FLOAT_SLOTS))
 _N_INT, _N_FLOAT = len(ed.INT_SLOTS), len(ed.FLOAT_SLOTS)
 
 
@@ -80,6 +83,12 @@ def group_deformations(table, g):
     De = float_array(table, DE)[row[ed.G_DE_OFFSET]: row[ed.G_DE_OFFSET] + n * k * m]
     D2e = float_array(table, D2E)[row[ed.G_D2E_OFFSET]: row[ed.G_D2E_OFFSET] + n * k * m * m]
     return n, m, k, coords, defs, De, D2e
+
+
+@kernel
+def rigid_element(table, row, i):
+    """The touching index of element i of the group with the row `row` (`rigid`), or -1."""
+    return int_array(table, RIGID_ELEMENT_OF)[row[ed.G_ELEMENT_OFFSET] + i]
 
 
 @kernel

@@ -20,6 +20,7 @@ from .actuators import evaluated_port_values
 from .factors import j_solve
 from .motion import reduced_mass
 from .ports import has_moment_inputs, subtract_input_stiffness
+from .rigid_kernels import condense, rigid_geometric
 from .slots import float_array as _f
 from .slots import (
     group,
@@ -54,8 +55,12 @@ def tangent(table, qddot):
     r_full[:] = _f(table, slot.FORCE)
     _mass_times(table, x, acc, r_full)
     free, lam = _i(table, slot.FREE), _f(table, slot.DX)
-    for a in range(nf):
-        lam[a] = r_full[free[a]]
+    rigid = dims[ed.NSLAVES] > 0
+    if rigid:  # on the reduced coordinates: T^T r_full
+        condense(table, r_full, lam)
+    else:
+        for a in range(nf):
+            lam[a] = r_full[free[a]]
     j_solve(table, lam, True)  # J^-T
     sigma = _f(table, slot.EDOT)  # reused: the full stress resultants
     sigma[:] = _f(table, slot.SIGMA)
@@ -127,6 +132,8 @@ def tangent(table, qddot):
                 K[i * ndof + j] += v * SD[j]
                 if damped:
                     C[i * ndof + j] += v * DD[j]
+    if rigid:  # what the eliminated rigid rows' multipliers added
+        rigid_geometric(table, r_full, lam, K)
     # the moments of the last evaluation: an input's, or an actuator's (Km sat(G u), Km i)
     specs, inputs = _i(table, slot.INPUT_PORTS), evaluated_port_values(table)
     if has_moment_inputs(specs, inputs):  # - DF^T df/dx DF: a moment's force depends on x

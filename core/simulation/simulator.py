@@ -84,6 +84,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
     input_functions : dict of int to callable, optional
         {input index: callable(t) -> N or V}: inputs that vary within an interval. They are
         evaluated in Python at every evaluation (the compiled path is for held inputs).
+    rigid : bool
+        Whether the engine eliminates the rigid clusters' slave coordinates (default True;
+        False solves for every free coordinate, for comparison: `engine.rigid`).
 
     Raises
     ------
@@ -97,7 +100,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
                  atol: float | ArrayLike | None = None, max_step: float | None = None,
                  jacobian: str = "analytic", max_order: int | None = None,
                  input_functions: Mapping[int, Callable[[float], float]] | None = None,
-                 ) -> None:
+                 rigid: bool = True) -> None:
         if method not in METHODS:
             raise SimulationError(f"unknown method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}")
@@ -107,7 +110,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
-        self.data = EngineData(model)
+        self.data = EngineData(model, rigid=rigid)
         self.ndof = model.declared_dof_count
         # the integrator's states: [q - q_ref, qdot] and the coil currents (A)
         self.ncurrents = len(model.coil_actuators)
@@ -127,7 +130,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
             self.data, method, rtol=rtol, atol=self.atol, max_step=max_step, jacobian=jacobian,
             max_order=max_order,
             input_function=self._inputs_at if self._input_functions else None)
-        self._output_data = EngineData(model)
+        self._output_data = EngineData(model, rigid=rigid)
         # the coordinates of the outputs on one coordinate (-1 for those about an axis, which
         # `_port_value` measures)
         self._output_coordinates = np.array([-1 if port.about_axis else port.coordinate

@@ -1,0 +1,294 @@
+"""The rigid clusters' maps in the compiled engine: slaves explicit in their masters.
+
+For the packed clusters (`rigid`; their plain twin `mechanics.rigid_bodies.RigidLayout`) and
+coordinates x (m, Euler parameters or rad) whose masters are current:
+
+    fill_slaves         x_s = S(x_master) on every slave coordinate, and T's weights there
+                        (slot rigid_weights: dx_s / dx_master, DEPENDENCIES per coordinate)
+    expand              v_s = T v_master (+ c) on the slave rows of a coordinate vector
+    expand_columns      the same on the rows of DF (NX, NDOF)
+    convective          c (slot rigid_c): xddot_s - T xddot_master, quadratic in the
+                        masters' velocities (zero but on slave translations)
+    condense            T^T v on the reduced free coordinates (a force (N, N m) on x)
+    element_transform   D_z = D T_e for the rows of a touching element's De or Dp
+    rigid_de            every touching element's De_z into slot rigid_de
+    rigid_rates         the slaves' second-order terms on the constraint rows (slot rigid_h)
+    rigid_geometric     the slaves' geometric stiffness -DF^T (sum_s rho_s d2x_s) DF
+
+Every function leaves the model without clusters untouched (its tables are empty).
+"""
+
+import numpy as np
+
+from ..mechanics.rigid_bodies import (
+    DEPENDENCIES,
+    PLANAR_ROTATION,
+    PLANAR_TRANSLATION,
+    SPATIAL_ROTATION,
+    SPATIAL_TRANSLATION,
+)
+from ..numerics.jit import kernel
+from . import data as ed
+from . import rigid as rg
+from . import slots as slot
+from .slots import float_array as _f
+from .slots import group_deformations
+from .slots import int_array as _i
+
+SW, DW, EW = rg.SLAVE_WIDTH, 48, rg.ELEMENT_WIDTH
+
+
+@kernel
+def fill_slaves(table, x):
+    """x_s = S(x_master) on every slave coordinate of x (NX,), and T's weights at x."""
+    slaves, data = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA)
+    W = _f(table, slot.RIGID_WEIGHTS)
+    row = 0
+    for j in range(slaves.size // SW):
+        kind = slaves[j * SW]
+        own, mt, mr = slaves[j * SW + 1: j * SW + 5], slaves[j * SW + 5: j * SW + 8], \
+            slaves[j * SW + 8: j * SW + 12]
+        d = data[j * DW: (j + 1) * DW]
+        if kind == SPATIAL_TRANSLATION:  # x_m + C_r lambda lambda / 2
+            for k in range(3):
+                w = W[(row + k) * DEPENDENCIES: (row + k + 1) * DEPENDENCIES]
+                w[0] = 1.0
+                s = 0.0
+                for a in range(4):
+                    t = 0.0
+                    for b in range(4):
+                        t += d[k * 16 + a * 4 + b] * x[mr[b]]
+                    w[1 + a] = t
+                    s += t * x[mr[a]]
+                x[own[k]] = x[mt[k]] + 0.5 * s
+            row += 3
+        elif kind == SPATIAL_ROTATION:  # Q lambda_m
+            for k in range(4):
+                s = 0.0
+                for a in range(4):
+                    W[(row + k) * DEPENDENCIES + a] = d[k * 4 + a]
+                    s += d[k * 4 + a] * x[mr[a]]
+                x[own[k]] = s
+            row += 4
+        elif kind == PLANAR_TRANSLATION:  # x_m + R(phi) r
+            c, s = np.cos(x[mr[0]]), np.sin(x[mr[0]])
+            x[own[0]] = x[mt[0]] + c * d[0] - s * d[1]
+            x[own[1]] = x[mt[1]] + s * d[0] + c * d[1]
+            W[row * DEPENDENCIES], W[row * DEPENDENCIES + 1] = 1.0, -s * d[0] - c * d[1]
+            W[(row + 1) * DEPENDENCIES] = 1.0
+            W[(row + 1) * DEPENDENCIES + 1] = c * d[0] - s * d[1]
+            row += 2
+        elif kind == PLANAR_ROTATION:  # phi_m + phi_rel
+            x[own[0]] = x[mr[0]] + d[0]
+            W[row * DEPENDENCIES] = 1.0
+            row += 1
+
+
+@kernel
+def expand(table, v, with_c):
+    """v_s = T v_master on the slave rows of v (NX,), plus c (slot rigid_c) if with_c."""
+    coords, deps = _i(table, slot.RIGID_COORDS), _i(table, slot.RIGID_DEPS)
+    W, c = _f(table, slot.RIGID_WEIGHTS), _f(table, slot.RIGID_C)
+    for s in range(coords.size):
+        t = c[coords[s]] if with_c else 0.0
+        for d in range(DEPENDENCIES):
+            dep = deps[s * DEPENDENCIES + d]
+            if dep >= 0:
+                t += W[s * DEPENDENCIES + d] * v[dep]
+        v[coords[s]] = t
+
+
+@kernel
+def expand_columns(table, DF, ndof):
+    """DF_s = T DF_master on the slave rows of DF (NX, NDOF; flat, row by row)."""
+    coords, deps = _i(table, slot.RIGID_COORDS), _i(table, slot.RIGID_DEPS)
+    W = _f(table, slot.RIGID_WEIGHTS)
+    for s in range(coords.size):
+        out = coords[s] * ndof
+        for j in range(ndof):
+            DF[out + j] = 0.0
+        for d in range(DEPENDENCIES):
+            dep = deps[s * DEPENDENCIES + d]
+            if dep < 0:
+                continue
+            w = W[s * DEPENDENCIES + d]
+            for j in range(ndof):
+                DF[out + j] += w * DF[dep * ndof + j]
+
+
+@kernel
+def convective(table, x, xdot):
+    """c (slot rigid_c, NX; m/s^2) for the masters' velocities in xdot: C_r lambdadot
+    lambdadot on a spatial slave translation, -R(phi) r phidot^2 on a planar one."""
+    slaves, data, c = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA), \
+        _f(table, slot.RIGID_C)
+    for j in range(slaves.size // SW):
+        kind = slaves[j * SW]
+        own, mr = slaves[j * SW + 1: j * SW + 5], slaves[j * SW + 8: j * SW + 12]
+        d = data[j * DW: (j + 1) * DW]
+        if kind == SPATIAL_TRANSLATION:
+            for k in range(3):
+                s = 0.0
+                for a in range(4):
+                    t = 0.0
+                    for b in range(4):
+                        t += d[k * 16 + a * 4 + b] * xdot[mr[b]]
+                    s += t * xdot[mr[a]]
+                c[own[k]] = s
+        elif kind == PLANAR_TRANSLATION:
+            co, si, w2 = np.cos(x[mr[0]]), np.sin(x[mr[0]]), xdot[mr[0]] ** 2
+            c[own[0]] = -(co * d[0] - si * d[1]) * w2
+            c[own[1]] = -(si * d[0] + co * d[1]) * w2
+
+
+@kernel
+def condense(table, v, out):
+    """out (n_free,) = T^T v on the reduced free coordinates, for v (NX,) on x."""
+    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    coords, deps = _i(table, slot.RIGID_COORDS), _i(table, slot.RIGID_DEPS)
+    W = _f(table, slot.RIGID_WEIGHTS)
+    for a in range(free.size):
+        out[a] = v[free[a]]
+    for s in range(coords.size):
+        vs = v[coords[s]]
+        if vs == 0.0:
+            continue
+        for d in range(DEPENDENCIES):
+            dep = deps[s * DEPENDENCIES + d]
+            if dep >= 0 and col_of_coord[dep] >= 0:
+                out[col_of_coord[dep]] += W[s * DEPENDENCIES + d] * vs
+
+
+@kernel
+def element_transform(table, t, Dx, rows, m, Dz):
+    """Dz (rows, mz; flat) = Dx (rows, m; flat) T_e for touching element t."""
+    element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
+    mz, start = element[rg.E_MZ], element[rg.E_TERM_OFFSET]
+    terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
+    for r in range(rows * mz):
+        Dz[r] = 0.0
+    for a in range(m):
+        for u in range(DEPENDENCIES):
+            p = start + 2 * (a * DEPENDENCIES + u)
+            zl, w = terms[p], terms[p + 1]
+            if w == -2:
+                continue
+            weight = 1.0 if w == -1 else W[w]
+            for r in range(rows):
+                Dz[r * mz + zl] += Dx[r * m + a] * weight
+
+
+@kernel
+def touching(table, t):
+    """(group, element, mz, z-coordinates, De_z offset, mass offset) of touching element t."""
+    element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
+    mz, zo = element[rg.E_MZ], element[rg.E_Z_OFFSET]
+    return (element[rg.E_GROUP], element[rg.E_ELEMENT], mz,
+            _i(table, slot.RIGID_Z)[zo: zo + mz], element[rg.E_DE_OFFSET],
+            element[rg.E_MASS_OFFSET])
+
+
+@kernel
+def rigid_de(table):
+    """Every touching element's De_z = De T_e (k, mz) into slot rigid_de."""
+    out = _f(table, slot.RIGID_DE)
+    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
+        g, i, mz, z, offset, _ = touching(table, t)
+        if offset < 0:
+            continue
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        element_transform(table, t, De[i * k * m: (i + 1) * k * m], k, m,
+                          out[offset: offset + k * mz])
+
+
+@kernel
+def rigid_rates(table):
+    """slot rigid_h (n_free, on J's rows) = De_s c_s on the rows of the touching elements
+    and c_s on the DOF coordinate rows of slaves: what the slaves' second-order terms add to
+    the constraints' xdot^T D2e xdot in the reduced coordinates (c from `convective`)."""
+    dims = _i(table, slot.DIMS)
+    h, c = _f(table, slot.RIGID_H), _f(table, slot.RIGID_C)
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    h[:] = 0.0
+    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
+        g, i, mz, z, offset, _ = touching(table, t)
+        if offset < 0:
+            continue
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for b in range(k):
+            r = row_of_def[defs[i * k + b]]
+            if r < 0:
+                continue
+            s = 0.0
+            for a in range(m):
+                s += De[(i * k + b) * m + a] * c[coords[i * m + a]]
+            h[r] = s
+    units, dof_coords = _i(table, slot.RIGID_UNITS), _i(table, slot.DOF_COORDS)
+    n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
+    for j in range(units.size):
+        if units[j] >= 0:
+            h[n_def + j] = c[dof_coords[j]]
+
+
+@kernel
+def rigid_geometric(table, r_full, lam, K):
+    """K -= DF_m^T (sum_s rho_s d2 x_s / d lambda_m2) DF_m over the slave translations: the
+    forces rho (N) the eliminated rigid rows carried (r_full on x less the other rows' J^T
+    lam), acting through the curvature of the slaves' positions in their master's rotation."""
+    dims = _i(table, slot.DIMS)
+    ndof = dims[ed.NDOF]
+    rho = _f(table, slot.RIGID_FORCE)
+    rho[:] = r_full
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
+        g, i, mz, z, offset, _ = touching(table, t)
+        if offset < 0:
+            continue
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for b in range(k):
+            r = row_of_def[defs[i * k + b]]
+            if r < 0:
+                continue
+            for a in range(m):
+                rho[coords[i * m + a]] -= De[(i * k + b) * m + a] * lam[r]
+    units, dof_coords = _i(table, slot.RIGID_UNITS), _i(table, slot.DOF_COORDS)
+    n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
+    for j in range(units.size):
+        if units[j] >= 0:
+            rho[dof_coords[j]] -= lam[n_def + j]
+    slaves, data = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA)
+    DF, x = _f(table, slot.DF), _f(table, slot.X)
+    H = _f(table, slot.RIGID_LOCAL)[:16]
+    H[:] = 0.0
+    n_slaves = slaves.size // SW
+    for j in range(n_slaves):
+        kind = slaves[j * SW]
+        own, mr = slaves[j * SW + 1: j * SW + 5], slaves[j * SW + 8: j * SW + 12]
+        d = data[j * DW: (j + 1) * DW]
+        if kind == SPATIAL_TRANSLATION:
+            for k in range(3):
+                f = rho[own[k]]
+                for a in range(16):
+                    H[a] += f * d[k * 16 + a]
+        elif kind == PLANAR_TRANSLATION:
+            co, si = np.cos(x[mr[0]]), np.sin(x[mr[0]])
+            H[0] -= (rho[own[0]] * (co * d[0] - si * d[1])
+                     + rho[own[1]] * (si * d[0] + co * d[1]))
+        # the slaves of one master follow each other: one product per master
+        last = j == n_slaves - 1 or slaves[(j + 1) * SW + 8] != mr[0]
+        if not last:
+            continue
+        size = 4 if kind in (SPATIAL_TRANSLATION, SPATIAL_ROTATION) else 1
+        for a in range(size):
+            for b in range(size):
+                h = H[a * size + b]
+                if h == 0.0:
+                    continue
+                ra, rb = mr[a] * ndof, mr[b] * ndof
+                for j1 in range(ndof):
+                    fa = h * DF[ra + j1]
+                    if fa == 0.0:
+                        continue
+                    for j2 in range(ndof):
+                        K[j1 * ndof + j2] -= fa * DF[rb + j2]
+        H[:] = 0.0
