@@ -304,9 +304,15 @@ def test_statuses_and_their_messages():
     """Each failure comes back as its status code (nothing raises in compiled code), and
     Simulator turns it into a SimulationError with the time and the documented message."""
     assert set(STATUS_MESSAGES) == {ed.NOT_CONVERGED, ed.SINGULAR_CONSTRAINTS,
-                                    ed.SINGULAR_MASS, ed.NONFINITE_STATE, ed.NONFINITE_RESULT}
+                                    ed.SINGULAR_MASS, ed.NONFINITE_STATE, ed.NONFINITE_RESULT,
+                                    ed.NOT_CONNECTED}
     model = truss_pendulum()
     data = EngineData(model)
+    # the forms run the evaluation through the entry's address, which `connect` gives (and
+    # `call` with it): without it the entry answers with a status instead of jumping to 0
+    y, ydot = np.zeros(2), np.empty(2)
+    assert engine.engine_entry.ctypes(engine.OP_RHS, data.address, 0.0, y.ctypes.data,
+                                      ydot.ctypes.data, None, 0.0) == ed.NOT_CONNECTED
 
     def kinematics(y):
         data.int_array("dims")[ed.WARM] = 0  # full Newton from the scene's coordinates

@@ -15,6 +15,7 @@ has its module; this one holds the forms the integrators call and the one entry 
     rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
                      rows out of J and the augmented system (`rigid_kernels`: the slaves
                      explicit in their masters, x_s = S(z), and the chain rule through T)
+    operations       the codes of the entry's operations, and `run`: one through its address
     engine (here)    the first-order and implicit forms, `engine_entry`, `call`
 
 with the dense LU of small matrices (M_bar, the integrators' Newton matrices) from
@@ -54,14 +55,30 @@ from .actuators import (
 )
 from .kinematics import compute_DF, deformations, solve_kinematics, solve_positions
 from .motion import evaluate, reduced_mass
+from .operations import (
+    OP_ACCELERATIONS,
+    OP_CONFIGURATION,
+    OP_DEFORMATIONS,
+    OP_EVALUATE,
+    OP_JACOBIAN,
+    OP_KINEMATICS,
+    OP_MASS,
+    OP_POSITIONS,
+    OP_RESIDUAL,
+    OP_RESIDUAL_JACOBIAN,
+    OP_RHS,
+    OP_TANGENT,
+    run,
+)
 from .slots import float_array, int_array
 from .tangent import tangent
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
-__all__ = ["ENGINE_ENTRY", "OP_DEFORMATIONS", "OP_EVALUATE", "OP_JACOBIAN", "OP_KINEMATICS",
-           "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call",
-           "engine_entry", "first_order_jacobian", "first_order_rhs", "float_array",
-           "implicit_jacobian", "implicit_residual", "int_array", "lu_factor", "lu_solve"]
+__all__ = ["ENGINE_ENTRY", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
+           "OP_EVALUATE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS", "OP_POSITIONS",
+           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call", "engine_entry",
+           "first_order_jacobian", "first_order_rhs", "float_array", "implicit_jacobian",
+           "implicit_residual", "int_array", "lu_factor", "lu_solve"]
 
 _i, _f = int_array, float_array  # the short names of the many uses below
 
@@ -72,7 +89,7 @@ def first_order_rhs(table, y, ydot):
     """ydot = [qdot, qddot(, di/dt)] for the state y = [q - q_ref, qdot(, i)]; a status code.
 
     The absolute DOFs are formed in the last NDOF entries of the scratch array, which no
-    other part of an evaluation uses."""
+    other part of an evaluation uses. ydot may be empty: the evaluation only."""
     dims = _i(table, slot.DIMS)
     n, n_el = dims[ed.NDOF], dims[ed.NEL]
     for j in range(2 * n + n_el):
@@ -84,7 +101,7 @@ def first_order_rhs(table, y, ydot):
         q_abs[j] = q_ref[j] + y[j]
     if n_el:
         set_currents(table, y, n)
-    status = evaluate(table, q_abs, y[n: 2 * n])
+    status = run(table, OP_ACCELERATIONS, q_abs.ctypes.data, y.ctypes.data + 8 * n, 0.0)
     if status != ed.OK:
         return status
     qddot = _f(table, slot.QDDOT)
@@ -105,11 +122,11 @@ def first_order_jacobian(table, y, J, column_major):
     """d ydot / d y (N, N; N = 2n plus the coil currents) into J (flat; column-major for
     SUNDIALS' dense matrix): [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at
     y, and the coils' blocks (`actuators.first_order_blocks`); a status code."""
-    status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
+    status = run(table, OP_RHS, y.ctypes.data, 0, 0.0)  # the evaluation only
     if status != ed.OK:
         return status
     n = _i(table, slot.DIMS)[ed.NDOF]
-    status = tangent(table, _f(table, slot.QDDOT))
+    status = run(table, OP_TANGENT, _f(table, slot.QDDOT).ctypes.data, 0, 0.0)
     if status != ed.OK:
         return status
     K, C = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
@@ -140,10 +157,10 @@ def first_order_jacobian(table, y, J, column_major):
 def implicit_residual(table, y, yp, res):
     """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot, i)); ip - di/dt] (the last
     rows for the coil currents only); a status code."""
-    status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
+    status = run(table, OP_RHS, y.ctypes.data, 0, 0.0)  # the evaluation only
     if status != ed.OK:
         return status
-    status = reduced_mass(table)
+    status = run(table, OP_MASS, 0, 0, 0.0)  # motion.reduced_mass
     if status != ed.OK:
         return status
     n = _i(table, slot.DIMS)[ed.NDOF]
@@ -164,11 +181,11 @@ def implicit_jacobian(table, y, yp, cj, J):
     """IDA's d res / d y + cj d res / d yp, column-major (N, N; N = 2n plus the coil
     currents): [[cj I, -I], [K, C + cj M_bar]] with the tangent's dynamic balance at
     qddot = yp[n: 2n], and the coils' blocks (`actuators.implicit_blocks`); a status code."""
-    status = first_order_rhs(table, y, _f(table, slot.DX)[: 0])
+    status = run(table, OP_RHS, y.ctypes.data, 0, 0.0)  # the evaluation only
     if status != ed.OK:
         return status
     n = _i(table, slot.DIMS)[ed.NDOF]
-    status = tangent(table, yp[n: 2 * n])
+    status = run(table, OP_TANGENT, yp.ctypes.data + 8 * n, 0, 0.0)
     if status != ed.OK:
         return status
     K, C, mass = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING), _f(table, slot.MASS)
@@ -187,8 +204,6 @@ def implicit_jacobian(table, y, yp, cj, J):
 
 
 # -- the one entry point: every operation through one compiled C function ---------------------
-(OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
- OP_EVALUATE, OP_TANGENT, OP_POSITIONS) = range(9)
 # (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number
 ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.voidptr,
                            types.voidptr, types.voidptr, types.float64)
@@ -196,20 +211,17 @@ ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.void
 
 @entry(ENGINE_ENTRY)
 def engine_entry(op, user_data, t, a, b, c, s):
-    """Every operation of the engine on the packed model at user_data (an address table):
-
-    OP_RHS (y, ydot), OP_JACOBIAN (y, J; s = 1 column-major; y of 2 NDOF plus the coil
-    currents), OP_RESIDUAL (y, yp, res),
-    OP_RESIDUAL_JACOBIAN (y, yp, J; s = cj), OP_KINEMATICS (q; with DF), OP_DEFORMATIONS (x;
-    s = order), OP_EVALUATE (q, qdot; with DF and M_bar), OP_TANGENT (qddot), OP_POSITIONS
-    (q; x by Newton from slot x_start, nothing else). Returns the status code."""
+    """Every operation of the engine (`operations`: the codes and their arrays a, b, c and
+    number s) on the packed model at user_data (an address table); y of 2 NDOF plus the coil
+    currents. Returns the status code."""
     table = address_of(user_data)
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     n = 2 * ndof + dims[ed.NEL]  # the integrators' state: [q - q_ref, qdot, coil currents]
     f8 = np.float64
-    if op == OP_RHS:
-        return first_order_rhs(table, carray(a, (n,), f8), carray(b, (n,), f8))
+    if op == OP_RHS:  # b null: the evaluation only
+        return first_order_rhs(table, carray(a, (n,), f8),
+                               carray(b, (n if address_of(b) else 0,), f8))
     if op == OP_JACOBIAN:
         return first_order_jacobian(table, carray(a, (n,), f8), carray(b, (n * n,), f8),
                                     s != 0.0)
@@ -234,6 +246,12 @@ def engine_entry(op, user_data, t, a, b, c, s):
         return tangent(table, carray(a, (ndof,), f8))
     if op == OP_POSITIONS:
         return solve_positions(table, carray(a, (ndof,), f8))
+    if op == OP_ACCELERATIONS:
+        return evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
+    if op == OP_CONFIGURATION:
+        return solve_kinematics(table, carray(a, (ndof,), f8))
+    if op == OP_MASS:
+        return reduced_mass(table)
     return -1
 
 
@@ -248,7 +266,9 @@ def connect(data):
 
 def call(data, op, a=None, b=None, c=None, s=0.0, t=0.0):
     """Run one engine operation from Python (a ctypes call, about 1 us): data an
-    `EngineData`, a, b, c contiguous float64 arrays of the operation. Returns the status."""
+    `EngineData` (connected here), a, b, c contiguous float64 arrays of the operation.
+    Returns the status."""
+    connect(data)
     return engine_entry.ctypes(op, data.address, t, _address(a), _address(b), _address(c),
                                float(s))
 

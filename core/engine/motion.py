@@ -41,7 +41,8 @@ from .factors import (
     j_solve,
     mass_entries_start,
 )
-from .kinematics import compute_DF, dof_rows, solve_kinematics
+from .kinematics import compute_DF, dof_rows
+from .operations import OP_CONFIGURATION, run
 from .point_masses import element_mass, point_columns, point_forces
 from .ports import add_input_forces
 from .rigid_kernels import (
@@ -78,7 +79,7 @@ def evaluate(table, q, qdot):
     of J_o). Leaves in the packed arrays what the tangent needs: the kinematics with J's LU,
     the constitutive stress resultants (slot sigma), r (slot force), xdot, conv = (D2F qdot)
     qdot (slot conv) and xddot (slot xddot); a status. `reduced_mass` adds DF and M_bar."""
-    status = solve_kinematics(table, q)
+    status = run(table, OP_CONFIGURATION, q.ctypes.data, 0, 0.0)  # solve_kinematics
     if status != ed.OK:
         return status
     dims = _i(table, slot.DIMS)
@@ -86,10 +87,7 @@ def evaluate(table, q, qdot):
     n_rigid, n_xdof = dims[ed.NRIGID], dims[ed.NXDOF]
     x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
     dx = _f(table, slot.DX)
-    moving = False
-    for j in range(ndof):
-        if qdot[j] != 0.0:
-            moving = True
+    moving = _any_nonzero(qdot)
     reduced = dims[ed.AUGMENTED] == 0
     rigid = dims[ed.NSLAVES] > 0
     if reduced:  # xdot = DF qdot
@@ -197,6 +195,17 @@ def evaluate(table, q, qdot):
         qddot[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
     _dof_deformation_accelerations(table, xddot, quad, moving, qddot)
     return ed.OK
+
+
+@kernel
+def _any_nonzero(v):
+    """Whether any entry of v is nonzero; a bool that numba types as bool throughout (a flag
+    set to False and then maybe True in a loop is typed Literal[False] first, and each
+    callee it is passed to was compiled once more for that type)."""
+    for value in v:
+        if value != 0.0:
+            return True
+    return False
 
 
 @kernel

@@ -18,7 +18,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
-from .motion import reduced_mass
+from .operations import OP_MASS, run
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .rigid_kernels import condense, rigid_geometric
 from .slots import float_array as _f
@@ -36,7 +36,7 @@ def tangent(table, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,
     M_bar and its LU as `reduced_mass` does. A status."""
-    status = reduced_mass(table)
+    status = run(table, OP_MASS, 0, 0, 0.0)  # motion.reduced_mass
     if status != ed.OK:
         return status
     dims = _i(table, slot.DIMS)

@@ -54,6 +54,7 @@ STATUS_MESSAGES = {
     ed.NONFINITE_STATE: "the state became non-finite",
     ed.NONFINITE_RESULT: "non-finite accelerations (a singular configuration or a non-finite "
                          "force)",
+    ed.NOT_CONNECTED: "the engine was called before engine.connect gave it its entry's address",
 }
 
 
@@ -70,7 +71,7 @@ def _callback(op, user_data, t, a, b, c, s, counter):
     if status == ed.OK:
         return 0
     counters[ed.FAILED_STATUS] = status
-    return -1 if status in (ed.NONFINITE_STATE, ed.SINGULAR_CONSTRAINTS) else 1
+    return -1 if status in (ed.NONFINITE_STATE, ed.SINGULAR_CONSTRAINTS, ed.NOT_CONNECTED) else 1
 
 
 @cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)

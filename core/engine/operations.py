@@ -1,0 +1,46 @@
+"""The engine's operations: their codes, and how compiled code runs one through the entry.
+
+Every operation of the engine reaches compiled code through the one C function
+`engine.engine_entry`, whose address `engine.connect` puts in dims[ENGINE] of the packed model.
+The engine's own functions call each other's heavy parts (the evaluation, the kinematics, the
+tangent) through that address too, with `run`, rather than directly: numba links a callee's
+compiled code into each caller and optimises it again there, so direct calls made the first
+compilation optimise the whole evaluation once per form of the equations (a third of it). A
+call through an address costs a few nanoseconds and inlines nothing that mattered.
+
+The operations and their arrays (a, b, c: addresses of float64 arrays; s: a number):
+
+    RHS                  y, ydot (0: evaluate only, for a Jacobian or a residual)
+    JACOBIAN             y, J; s = 1 for column-major
+    RESIDUAL             y, yp, res
+    RESIDUAL_JACOBIAN    y, yp, J; s = cj
+    KINEMATICS           q; x = F(q) and DF
+    DEFORMATIONS         x; s = the order of the derivatives
+    EVALUATE             q, qdot; qddot, DF and M_bar
+    TANGENT              qddot; K0 + G0 and C0
+    POSITIONS            q; x by Newton from slot x_start, nothing else
+    ACCELERATIONS        q, qdot; qddot (`motion.evaluate`: no DF or M_bar unless its form has
+                         them)
+    CONFIGURATION        q; x = F(q) and J's factors (`kinematics.solve_kinematics`: no DF)
+    MASS                 DF, M_bar and its LU at the last evaluation (`motion.reduced_mass`)
+"""
+
+from ..numerics.jit import kernel
+from ..numerics.native import call_engine
+from . import data as ed
+from .slots import DIMS, int_array
+
+(OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
+ OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS) = range(12)
+
+
+@kernel
+def run(table, op, a, b, s):
+    """Operation `op` on the packed model at the address `table`, with the arrays at the
+    addresses a and b (int64; 0 for none) and the number s, through the engine's entry;
+    its status code (ed.NOT_CONNECTED when `engine.connect` has not given the entry's
+    address)."""
+    address = int_array(table, DIMS)[ed.ENGINE]
+    if address == 0:
+        return ed.NOT_CONNECTED
+    return call_engine(address, op, table, 0.0, a, b, 0, s)
