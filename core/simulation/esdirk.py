@@ -58,7 +58,7 @@ from .esdirk_method import MAX_STAGES, TABLEAUS
 (M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
 # int64 flags and counters
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
- I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_SIZE) = range(13)
+ I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_SIZE) = range(15)
 # rows of the vector workspace (the stage derivatives after them)
 (V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
 V_ROWS = V_F + MAX_STAGES
@@ -249,10 +249,11 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
 
 
 @kernel
-def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, one_step,
-            max_steps):
+def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     """Integrate from memory[M_T] towards t_stop (s): to t_stop exactly, or one accepted step
-    with one_step; at most max_steps steps (0: no limit). The state y is vectors[V_Y]; returns
+    with flags[I_ONE_STEP] = 1; at most flags[I_MAX_STEPS] steps (0: no limit); flags, not
+    arguments, so that the compiled loop's constant 0s do not compile the integrator a second
+    time for their literal types. The state y is vectors[V_Y]; returns
     OK or a negative status, with y and memory[M_T] the last accepted state. The tableau:
     A (s, s), EW = b - b_hat (s,), P the predictor weights (s, s) (`esdirk_method`)."""
     n = piv.size
@@ -260,6 +261,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop, o
     y, z, err, weight, F = vectors[V_Y], vectors[V_Z], vectors[V_ERR], vectors[V_WEIGHT], \
         vectors[V_F:]
     rtol = memory[M_RTOL]
+    one_step, max_steps = flags[I_ONE_STEP] != 0, flags[I_MAX_STEPS]
     steps = 0
     failures = 0
     while memory[M_T] < t_stop:
@@ -401,9 +403,9 @@ class Esdirk:
         """Integrate to t_stop (s), landing on it exactly (one accepted step only with
         one_step; at most max_steps steps, else StepBudgetSpent); returns t and a view of y.
         Raises SimulationError on failure."""
+        self.flags[I_ONE_STEP], self.flags[I_MAX_STEPS] = bool(one_step), int(max_steps or 0)
         status = advance(self.data.address, self.memory, self.flags, self.vectors, self.J,
-                         self.LU, self.pivots, self.atol, *self.tables, float(t_stop),
-                         bool(one_step), int(max_steps or 0))
+                         self.LU, self.pivots, self.atol, *self.tables, float(t_stop))
         if status == TOO_MUCH_WORK and max_steps:
             error = StepBudgetSpent(f"t = {self.memory[M_T]:.9g} s: the step budget of "
                                     f"{max_steps} integrator steps is spent")

@@ -417,8 +417,9 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
             counters[ed.FAILED_STATUS] = 0
             loop_state[1] = 0.0
         t_next = (k + 1) / fs
+        flags[esdirk.I_ONE_STEP] = flags[esdirk.I_MAX_STEPS] = 0  # to t_next, no budget
         status = esdirk.advance(plant, memory, flags, vectors, J, LU, pivots, atol, tableau_A,
-                                tableau_EW, tableau_P, t_next, False, 0)
+                                tableau_EW, tableau_P, t_next)
         if status != esdirk.OK:
             loop_state[0] = memory[esdirk.M_T]
             loop_state[1] = loop_state[2] = 1.0
