@@ -39,8 +39,8 @@ MAX_LINES = 300
 SETUP_LINES = (
     "python3 -m venv .venv && .venv/bin/pip install . && .venv/bin/flexure loop"
     "              # the closed-loop demo",
-    "python3 -m venv .venv && .venv/bin/pip install \".[test]\" && .venv/bin/pytest -q"
-    "         # the tests",
+    "python3 -m venv .venv && .venv/bin/pip install \".[test]\" && .venv/bin/pytest -q -n auto"
+    " # the tests",
 )
 SHELL = {"bash", "sh", "shell", "console"}
 PYTHON = {"python", "python3"}

@@ -257,8 +257,11 @@ def _run_on_dask(scene, tasks, options, workers, scheduler, done):
         # processes, not threads: an analysis of a small model spends most of its time in
         # Python and in numba kernels that hold the GIL; one thread each, as flexure's BLAS
         # calls use one (flexure.core.numerics.blas)
+        # no dashboard, and the scheduler's HTTP server (health, metrics) on a free port:
+        # two sweeps at once on one machine would both ask for 8787
         cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
                                processes=True, dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": ":0"},
                                silence_logs=logging.ERROR)
         client = Client(cluster)
     try:
