@@ -25,6 +25,7 @@ deformations e, De = de/dx and D2e come from each element module's compiled entr
 
 import numpy as np
 
+from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_deformations
 from . import data as ed
@@ -115,8 +116,8 @@ def _store(table, q, x):
     ratio = j_factor(table)
     if not ratio > _f(table, slot.SETTINGS)[ed.SINGULAR_RATIO]:
         return ed.SINGULAR_CONSTRAINTS
-    _f(table, slot.X)[:nx] = x[:nx]
-    _f(table, slot.Q)[:] = q
+    copy(_f(table, slot.X)[:nx], x[:nx])
+    copy(_f(table, slot.Q), q)
     dims[ed.WARM] = 1
     return ed.OK
 
@@ -159,7 +160,7 @@ def _newton_step(table, x, g, dx):
     """x -= J^-1 g on the free coordinates, with the factors in slot lu (the step into dx,
     n_free); the step's largest magnitude (m, rad; not finite if the step is not)."""
     free = _i(table, slot.FREE)
-    dx[:] = g
+    copy(dx, g)
     j_solve(table, dx)
     step = 0.0
     for a in range(_i(table, slot.DIMS)[ed.NFREE]):
@@ -178,13 +179,13 @@ def solve_positions(table, q):
     nx = dims[ed.NX]
     tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
-    x[:] = _f(table, slot.X_START)
+    copy(x, _f(table, slot.X_START))
     if not np.all(np.isfinite(x)):
-        x[:] = _f(table, slot.X)
+        copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):
         _elements(table, x, 1)
         if _residual(table, x, q, g) <= tolerance:
-            _f(table, slot.X)[:nx] = x[:nx]
+            copy(_f(table, slot.X)[:nx], x[:nx])
             return ed.OK
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
@@ -220,7 +221,7 @@ def solve_kinematics(table, q):
         else:
             dof_rows(table, dq, dx)
             j_solve(table, dx)
-            x[:nx] = x_prev[:nx]
+            copy(x[:nx], x_prev[:nx])
             for a in range(nf):
                 x[free[a]] += dx[a]
         _elements(table, x, 2)  # with the derivatives: usually x needs no correction
@@ -234,9 +235,9 @@ def solve_kinematics(table, q):
             if _residual(table, x, q, g) <= tolerance or step <= tolerance:
                 return _store(table, q, x)
     else:
-        x[:] = _f(table, slot.X_START)
+        copy(x, _f(table, slot.X_START))
     if not np.all(np.isfinite(x)):
-        x[:] = _f(table, slot.X)
+        copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does
         _elements(table, x, 1)
         if _residual(table, x, q, g) <= tolerance:

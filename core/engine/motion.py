@@ -26,7 +26,7 @@ packed (`factors`), so an evaluation in the augmented form costs in proportion t
 count.
 """
 
-from ..numerics.dense import lu_factor, lu_solve
+from ..numerics.dense import copy, lu_factor, lu_solve
 from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
@@ -126,7 +126,7 @@ def evaluate(table, q, qdot):
         sigma[stressed[a]] = s
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
-    r[:] = _f(table, slot.CONST_FORCE)
+    copy(r, _f(table, slot.CONST_FORCE))
     # the inputs' forces and moments, or the actuators' (`actuators.port_values`)
     add_input_forces(_i(table, slot.INPUT_PORTS), port_values(table), x, r)
     _scatter_stress(table, sigma, r)
@@ -156,11 +156,11 @@ def evaluate(table, q, qdot):
                 s += DF[a * ndof + j] * r[a]
             rq[j] = s
         mass_lu = _f(table, slot.MASS_LU)
-        mass_lu[:] = _f(table, slot.MASS)
+        copy(mass_lu, _f(table, slot.MASS))
         dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 1
         if not lu_factor(mass_lu, ndof, _i(table, slot.MASS_PIVOTS)) > 0.0:
             return ed.SINGULAR_MASS
-        qddot[:] = rq
+        copy(qddot, rq)
         lu_solve(mass_lu, ndof, _i(table, slot.MASS_PIVOTS), qddot)
         return ed.OK
     dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
@@ -382,7 +382,7 @@ def reduced_mass(table):
     _reduced_mass_of(table, x, x, x, False, x, False)
     ndof = dims[ed.NDOF]
     mass_lu = _f(table, slot.MASS_LU)
-    mass_lu[:] = _f(table, slot.MASS)
+    copy(mass_lu, _f(table, slot.MASS))
     if not lu_factor(mass_lu, ndof, _i(table, slot.MASS_PIVOTS)) > 0.0:
         return ed.SINGULAR_MASS
     dims[ed.MASS_CURRENT] = 1

@@ -27,6 +27,7 @@ from ..mechanics.rigid_bodies import (
     SPATIAL_ROTATION,
     SPATIAL_TRANSLATION,
 )
+from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from . import data as ed
 from . import rigid as rg
@@ -238,7 +239,7 @@ def rigid_geometric(table, r_full, lam, K):
     dims = _i(table, slot.DIMS)
     ndof = dims[ed.NDOF]
     rho = _f(table, slot.RIGID_FORCE)
-    rho[:] = r_full
+    copy(rho, r_full)
     row_of_def = _i(table, slot.ROW_OF_DEF)
     for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
         g, i, mz, z, offset, _ = touching(table, t)

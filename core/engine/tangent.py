@@ -12,6 +12,7 @@ with sigma the stress resultants of the full dynamic balance: sigma_c plus the m
 J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed deformations).
 """
 
+from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 from . import data as ed
@@ -52,7 +53,7 @@ def tangent(table, qddot):
             s += DF[a * ndof + j] * qddot[j]
         acc[a] = s
     r_full = _f(table, slot.X_TRIAL)
-    r_full[:] = _f(table, slot.FORCE)
+    copy(r_full, _f(table, slot.FORCE))
     _mass_times(table, x, acc, r_full)
     free, lam = _i(table, slot.FREE), _f(table, slot.DX)
     rigid = dims[ed.NSLAVES] > 0
@@ -63,7 +64,7 @@ def tangent(table, qddot):
             lam[a] = r_full[free[a]]
     j_solve(table, lam, True)  # J^-T
     sigma = _f(table, slot.EDOT)  # reused: the full stress resultants
-    sigma[:] = _f(table, slot.SIGMA)
+    copy(sigma, _f(table, slot.SIGMA))
     rows = _i(table, slot.ROWS)
     for j in range(rows.size):
         sigma[rows[j]] += lam[j]

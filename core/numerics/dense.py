@@ -5,7 +5,8 @@ and the integrators' Newton matrices (2 NDOF, 2 NDOF).
 diagonal and U on and above it, in the one array) and returns the ratio of the smallest to
 the largest pivot magnitude, which callers compare with a threshold to call a matrix
 singular; `lu_solve` solves with those factors. The banded matrices (J, the augmented
-system) have their own LU in `core/numerics/banded.py`.
+system) have their own LU in `core/numerics/banded.py`. `copy` is how compiled code copies
+one array into another.
 """
 
 import numpy as np
@@ -68,3 +69,14 @@ def put(J, N, i, j, value, column_major):
         J[j * N + i] = value
     else:
         J[i * N + j] = value
+
+
+@kernel
+def copy(destination, source):
+    """destination[i] = source[i] for each i < source.size (destination at least as long).
+
+    A loop rather than `destination[:] = source`: numba compiles that slice assignment's
+    shape check with a formatted error message into every function that has one, which cost
+    the first compilation several seconds, and a mismatch is a bug that tests catch."""
+    for i in range(source.size):
+        destination[i] = source[i]

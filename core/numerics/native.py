@@ -54,15 +54,21 @@ def as_int_pointer(typingctx, address):
     return sig, codegen
 
 
+def _content_data(builder, pointer, offset):
+    """The double* at byte `offset` of the content struct of a SUNDIALS object (an N_Vector or
+    a SUNMatrix: a pointer to a struct whose first member is `content`)."""
+    content = builder.load(builder.bitcast(pointer, _I8P.as_pointer()))
+    field = builder.gep(content, [ir.Constant(ir.IntType(64), offset)])
+    return builder.load(builder.bitcast(field, _DOUBLE.as_pointer().as_pointer()))
+
+
 @intrinsic
 def nvector_data(typingctx, vector):
     """The sunrealtype* data of a serial N_Vector given as a void pointer."""
     sig = types.CPointer(types.float64)(vector)
 
     def codegen(context, builder, signature, args):
-        content = builder.load(builder.bitcast(args[0], _I8P.as_pointer()))
-        field = builder.gep(content, [ir.Constant(ir.IntType(64), NVECTOR_DATA_OFFSET)])
-        return builder.load(builder.bitcast(field, _DOUBLE.as_pointer().as_pointer()))
+        return _content_data(builder, args[0], NVECTOR_DATA_OFFSET)
 
     return sig, codegen
 
@@ -75,9 +81,7 @@ def dense_matrix_data(typingctx, matrix):
     sig = types.CPointer(types.float64)(matrix)
 
     def codegen(context, builder, signature, args):
-        content = builder.load(builder.bitcast(args[0], _I8P.as_pointer()))
-        field = builder.gep(content, [ir.Constant(ir.IntType(64), 8)])
-        return builder.load(builder.bitcast(field, _DOUBLE.as_pointer().as_pointer()))
+        return _content_data(builder, args[0], 8)
 
     return sig, codegen
 

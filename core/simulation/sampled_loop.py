@@ -39,6 +39,7 @@ from ..engine import engine, slots
 from ..engine.ports import port_specs, position_value
 from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
+from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import (
     as_float_pointer,
@@ -263,7 +264,7 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     new_state = np.empty(A.shape[0])
     for i in range(A.shape[0]):
         new_state[i] = _state_space_row(A, B, state, error, i)
-    state[:] = new_state
+    copy(state, new_state)
 
 
 # the addresses handed to the compiled loop, in this order
@@ -287,7 +288,7 @@ def _measure(addresses, y, scratch, coordinates, out):
         return ed.OK
     ndof = engine.int_array(addresses[_PLANT], slots.DIMS)[ed.NDOF]  # y: [.., coil currents]
     x_plant = engine.float_array(addresses[_PLANT], slots.X)
-    engine.float_array(addresses[_OUTPUT], slots.X_START)[:] = x_plant
+    copy(engine.float_array(addresses[_OUTPUT], slots.X_START), x_plant)
     engine.int_array(addresses[_OUTPUT], slots.DIMS)[ed.WARM] = 0
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
@@ -356,8 +357,8 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
             loop_state[0] = t
             return _MEASURE_FAILED
         if changed or restart:  # as Simulator.set_inputs and its restart in advance
-            plant_inputs[:] = held
-            x_start[:] = x_plant
+            copy(plant_inputs, held)
+            copy(x_start, x_plant)
             dims[ed.WARM] = 0
             call_get_long(addresses[_NUM_STEPS], addresses[_MEMORY], steps[1:].ctypes.data)
             steps[0] += steps[1]
@@ -407,9 +408,9 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
             loop_state[0] = t
             return _MEASURE_FAILED
         if changed or loop_state[1] != 0.0:  # as Simulator._restart and Esdirk.reset
-            plant_inputs[:] = held
+            copy(plant_inputs, held)
             if loop_state[2] != 0.0:
-                x_start[:] = x_plant
+                copy(x_start, x_plant)
                 dims[ed.WARM] = 0
                 loop_state[2] = 0.0
             memory[esdirk.M_T] = t

@@ -27,6 +27,7 @@ from numba import carray, cfunc, types
 from ..engine import data as ed
 from ..engine import engine, slots
 from ..errors import SimulationError, StepBudgetSpent
+from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import (
     address_of,
@@ -94,12 +95,12 @@ def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     kept = engine.float_array(table, slots.JAC_CACHE)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
-        J[:] = kept
+        copy(J, kept)
         return 0
     status = _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
                        dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
     if status == 0:
-        kept[:] = J
+        copy(kept, J)
     return status
 
 
