@@ -1,7 +1,10 @@
 """Latencies: the first simulation in this process (`warmup`, the table's first row) and the
 whole-process wall of `import flexure.core` and `flexure analyze` (the startup row group)."""
 
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -23,16 +26,39 @@ def warmup(*, repeat=5, quick=False):
     start = time.perf_counter()
     run_loop("stage_planar_1dof", duration=0.01, settle=0.0)
     first_loop = time.perf_counter() - start
+    cold = "not measured (--quick)" if quick else f"{_first_call_compiling():.1f} s"
     rows = [Row("first call in this process: import + engine load (compiled once into "
-                "~/.cache/flexure; ~30-40 s when that cache is empty) + a 10 ms simulation",
-                f"{first:.2f} s; then a first short loop {first_loop:.2f} s", "(latency, "
-                "not in any figure below)")]
+                "~/.cache/flexure) + a 10 ms simulation",
+                f"{first:.2f} s; then a first short loop {first_loop:.2f} s; in a fresh process "
+                f"with an empty cache (compiling) {cold}", "(latency, not in any figure "
+                "below)")]
     exu = peer()
     if exu is not None:
         start = time.perf_counter()
         exu.step_response(1, 1e-3, t_end=0.01)
         rows[0].peer += f"; Exudyn's first 10 ms run {time.perf_counter() - start:.3f} s"
     return rows
+
+
+FIRST_CALL = """import time
+start = time.perf_counter()
+from flexure.core import load_scene, simulate
+simulate(load_scene("stage_planar_3dof"), 0.01, inputs={"F": 1.0}, rtol=1e-6)
+print(time.perf_counter() - start)
+"""
+
+
+def _first_call_compiling():
+    """Wall (s) of the warm-up's first simulation in a fresh process whose compile cache
+    (FLEXURE_CACHE_DIR) is empty: what a new machine's first run waits for."""
+    log("warm-up: the first simulation with an empty FLEXURE_CACHE_DIR (compiles)")
+    with tempfile.TemporaryDirectory(prefix="flexure_cold_cache_") as cold:
+        done = subprocess.run([sys.executable, "-c", FIRST_CALL], capture_output=True,
+                              text=True, check=False, env=dict(os.environ,
+                                                               FLEXURE_CACHE_DIR=cold))
+    if done.returncode != 0:
+        raise RuntimeError(f"the first call with an empty cache failed: {done.stderr[-2000:]}")
+    return float(done.stdout.split()[-1])
 
 
 def startup(*, repeat=5, quick=False):
