@@ -15,11 +15,13 @@ codes, the compiled sampled loop against a Python loop of Simulator calls (bit f
 the on-disk cache of compiled code found again by a copy of the package elsewhere.
 """
 
+import io
 import json
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import textwrap
 import tomllib
 from pathlib import Path
@@ -432,6 +434,33 @@ def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_pat
     assert first == {"hits": 0, "misses": 1}
     assert run(copy("second")) == {"hits": 1, "misses": 0}
     assert run(copy("changed", change=True)) == {"hits": 0, "misses": 1}
+
+
+def test_the_first_compilation_is_announced_on_a_terminal_only():
+    """A first run waits about a minute for the compiler: `is_cached` tells a compiled entry
+    from one that is not (an empty cache folder, in a fresh process), and the notice is
+    written once, and only to a terminal."""
+    from flexure.core.numerics.jit import announce_compilation, is_cached
+
+    engine.connect(EngineData(truss_pendulum()))  # the entry compiled or loaded
+    assert is_cached(engine.engine_entry.function)
+    probe = ("from flexure.core.engine import engine; from flexure.core.numerics import jit; "
+             "print(jit.is_cached(engine.engine_entry.function))")
+    with tempfile.TemporaryDirectory() as empty:
+        done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                              env={**os.environ, "FLEXURE_CACHE_DIR": empty}, check=True)
+    assert done.stdout.split() == ["False"]
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    terminal, log = Terminal(), io.StringIO()
+    announce_compilation(terminal)
+    announce_compilation(terminal)
+    announce_compilation(log)
+    assert terminal.getvalue().count("\n") == 1 and "compiling" in terminal.getvalue()
+    assert log.getvalue() == ""
 
 
 def test_positions_operation_matches_the_full_kinematics(case):

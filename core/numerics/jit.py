@@ -17,8 +17,11 @@ not writable.
 """
 
 import functools
+import glob
 import hashlib
+import inspect
 import os
+import sys
 import tempfile
 
 from numba import cfunc, njit, types
@@ -131,8 +134,10 @@ class _Entry:
 
     @property
     def compiled(self):
-        """The numba CFunc (compiled on first use)."""
+        """The numba CFunc (compiled on first use, or loaded from the cache)."""
         if self._compiled is None:
+            if not is_cached(self.function):
+                announce_compilation()
             self._compiled = cfunc(self.signature, cache=True,
                                    error_model="numpy")(self.function)
         return self._compiled
@@ -146,6 +151,31 @@ class _Entry:
     def ctypes(self):
         """The C function as a ctypes function."""
         return self.compiled.ctypes
+
+
+def is_cached(function):
+    """Whether the on-disk cache holds compiled code of `function` (a kernel's or entry's
+    Python function of flexure's core) for this copy's sources and this Python: numba's
+    index file of it exists (its name: module.qualname-line.pyXY.nbi)."""
+    path = inspect.getfile(function)
+    locator = _SourceHashLocator.from_function(function, path)
+    if locator is None:
+        return False
+    module = os.path.splitext(os.path.basename(path))[0]
+    name = f"{module}.{function.__qualname__}-*.py{sys.version_info[0]}{sys.version_info[1]}*.nbi"
+    return bool(glob.glob(os.path.join(glob.escape(locator.get_cache_path()), name)))
+
+
+@functools.cache
+def announce_compilation(stream=None):
+    """Say once per process, on a terminal, that the first compilation begins: the first run
+    of this version of flexure on a machine waits about a minute for it with nothing else to
+    show. Silent when the stream is not a terminal (a log, a test, an FMU's host)."""
+    stream = stream if stream is not None else sys.stderr
+    if getattr(stream, "isatty", lambda: False)():
+        stream.write("flexure: compiling its engine for this machine, once per version of "
+                     f"flexure (about a minute; kept in {cache_root()})\n")
+        stream.flush()
 
 
 def entry(signature):
