@@ -42,7 +42,7 @@ INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformat
              "j_sparse", "j_map", "aug_sparse", "aug_map", "stress_pointers", "stress_columns",
              "actuators", "rigid_slaves", "slave_index", "rigid_dependencies",
              "rigid_element_of", "rigid_elements", "rigid_z", "rigid_terms", "rigid_units",
-             "rigid_coordinates")
+             "rigid_coordinates", "touching_rows")
 # float64 slots (`floats`)
 FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
                "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",

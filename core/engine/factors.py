@@ -26,7 +26,7 @@ from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
 from .rigid import ELEMENT_WIDTH
-from .rigid_kernels import rigid_de, touching
+from .rigid_kernels import rigid_de, touching, touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
@@ -90,19 +90,12 @@ def _constraint_jacobian(table, J):
     if not rigid:
         return
     rde = _f(table, slot.RIGID_DE)
-    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
-        g, i, mz, z, offset, _ = touching(table, t)
-        if offset < 0:
-            continue
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for b in range(k):
-            r = row_of_def[defs[i * k + b]]
-            if r < 0:
-                continue
-            for a in range(mz):
-                c = col_of_coord[z[a]]
-                if c >= 0:
-                    J[rpos[r] * nf + cpos[c]] += rde[offset + b * mz + a]
+    for j in range(_i(table, slot.TOUCHING_ROWS).size // 3):
+        r, coords, de, z, at = touching_row(table, j)
+        for a in range(z.size):
+            c = col_of_coord[z[a]]
+            if c >= 0:
+                J[rpos[r] * nf + cpos[c]] += rde[at + a]
 
 
 @kernel

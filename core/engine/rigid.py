@@ -31,6 +31,8 @@ The packed tables (slots of `data`, read by `rigid_kernels`):
                         (z-local column, weight index: -1 a unit weight, -2 none)
     rigid_units         per DOF coordinate: its slave coordinate row, or -1
     rigid_coordinates   the slave coordinates (model indices)
+    touching_rows       per deformation of a touching element on a row of J: (that row, the
+                        touching index t, the deformation's index in its element), flat
 """
 
 import numpy as np
@@ -125,6 +127,14 @@ class RigidPacking:
         self.z = np.concatenate(zs) if zs else np.zeros(0, dtype=np.int64)
         self.terms = np.concatenate(terms) if terms else np.zeros(0, dtype=np.int64)
         self.de_size, self.mass_size = de_size, mass_size
+        # the rows of J that touching elements' deformations have (`rigid_kernels.
+        # touching_row`): the three kernels that walk them read one list
+        row_of = {int(d): r for r, d in enumerate(self.rows)}
+        self.touching_rows = np.array(
+            [(row_of[int(d)], t, b) for t, (gp, i, _) in enumerate(self.touching)
+             if self.elements[t * ELEMENT_WIDTH + E_DE_OFFSET] >= 0
+             for b, d in enumerate(groups[gp].deformation_index[i]) if int(d) in row_of],
+            dtype=np.int64).reshape(-1, 3).ravel()
         # the internal elements' deformations: never evaluated (identically zero)
         self.internal_elements = {(gp, i) for gp, i, _ in self.touching
                                   if self.element_row(gp, i)[E_INTERNAL]}
@@ -161,7 +171,8 @@ class RigidPacking:
                 "rigid_dependencies": self.layout.dependencies.ravel(),
                 "rigid_element_of": self.element_of, "rigid_elements": self.elements,
                 "rigid_z": self.z, "rigid_terms": self.terms, "rigid_units": self.units,
-                "rigid_coordinates": self.layout.slave_coordinates}
+                "rigid_coordinates": self.layout.slave_coordinates,
+                "touching_rows": self.touching_rows}
 
     @property
     def max_mz(self):

@@ -190,6 +190,20 @@ def touching(table, t):
 
 
 @kernel
+def touching_row(table, j):
+    """(r, coords, de, z, at) of entry j of slot touching_rows: row r of J is a deformation of
+    a touching element with the coordinates `coords` (model indices, m) and `de` its row of
+    De (m,); the element's z-coordinates are z (mz,) and that row of its De_z is at `at` in
+    slot rigid_de (mz entries)."""
+    rows = _i(table, slot.TOUCHING_ROWS)
+    r, t, b = rows[3 * j], rows[3 * j + 1], rows[3 * j + 2]
+    g, i, mz, z, offset, _ = touching(table, t)
+    n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+    return (r, coords[i * m: (i + 1) * m], De[(i * k + b) * m: (i * k + b + 1) * m], z,
+            offset + b * mz)
+
+
+@kernel
 def rigid_de(table):
     """Every touching element's De_z = De T_e (k, mz) into slot rigid_de."""
     out = _f(table, slot.RIGID_DE)
@@ -209,21 +223,13 @@ def rigid_rates(table):
     the constraints' xdot^T D2e xdot in the reduced coordinates (c from `convective`)."""
     dims = _i(table, slot.DIMS)
     h, c = _f(table, slot.RIGID_H), _f(table, slot.RIGID_C)
-    row_of_def = _i(table, slot.ROW_OF_DEF)
     h[:] = 0.0
-    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
-        g, i, mz, z, offset, _ = touching(table, t)
-        if offset < 0:
-            continue
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for b in range(k):
-            r = row_of_def[defs[i * k + b]]
-            if r < 0:
-                continue
-            s = 0.0
-            for a in range(m):
-                s += De[(i * k + b) * m + a] * c[coords[i * m + a]]
-            h[r] = s
+    for j in range(_i(table, slot.TOUCHING_ROWS).size // 3):
+        r, coords, de, z, at = touching_row(table, j)
+        s = 0.0
+        for a in range(coords.size):
+            s += de[a] * c[coords[a]]
+        h[r] = s
     units, dof_coords = _i(table, slot.RIGID_UNITS), _i(table, slot.DOF_COORDS)
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
     for j in range(units.size):
@@ -240,18 +246,10 @@ def rigid_geometric(table, r_full, lam, K):
     ndof = dims[ed.NDOF]
     rho = _f(table, slot.RIGID_FORCE)
     copy(rho, r_full)
-    row_of_def = _i(table, slot.ROW_OF_DEF)
-    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
-        g, i, mz, z, offset, _ = touching(table, t)
-        if offset < 0:
-            continue
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for b in range(k):
-            r = row_of_def[defs[i * k + b]]
-            if r < 0:
-                continue
-            for a in range(m):
-                rho[coords[i * m + a]] -= De[(i * k + b) * m + a] * lam[r]
+    for j in range(_i(table, slot.TOUCHING_ROWS).size // 3):
+        r, coords, de, z, at = touching_row(table, j)
+        for a in range(coords.size):
+            rho[coords[a]] -= de[a] * lam[r]
     units, dof_coords = _i(table, slot.RIGID_UNITS), _i(table, slot.DOF_COORDS)
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
     for j in range(units.size):
