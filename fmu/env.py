@@ -40,7 +40,8 @@ def fmu_environment() -> dict[str, str]:
     Returns
     -------
     dict of str to str
-        {environment variable: value}: LD_PRELOAD (libpython), PYTHONHOME, PYTHONPATH.
+        {environment variable: value}: LD_PRELOAD (libpython), PYTHONHOME, PYTHONPATH, and
+        in a venv PYTHONUSERBASE (the venv, so that its .pth files run).
 
     Raises
     ------
@@ -48,11 +49,17 @@ def fmu_environment() -> dict[str, str]:
         This Python's shared libpython cannot be found.
     """
     paths = [p for p in site.getsitepackages() if Path(p).is_dir()]
-    return {
+    environment = {
         "LD_PRELOAD": str(libpython_path()),
         "PYTHONHOME": sys.base_prefix,
         "PYTHONPATH": ":".join(paths),
     }
+    if sys.prefix != sys.base_prefix:
+        # In a venv, the venv is the embedded interpreter's user site too: a PYTHONPATH entry
+        # is not a site folder, so its .pth files (an editable install's, `pip install -e`)
+        # would not run, and the FMU would not find that flexure and compile its own copy.
+        environment["PYTHONUSERBASE"] = sys.prefix
+    return environment
 
 
 def format_environment(environment, *, style="sh"):

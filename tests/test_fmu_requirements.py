@@ -466,7 +466,13 @@ def test_the_launcher_runs_again_without_a_new_class_even_when_its_folder_is_gon
 def test_fmu_env_says_what_a_native_host_needs(capsys):
     code, out, _ = run(capsys, "fmu", "env")
     lines = out.splitlines()
-    assert code == 0 and [line.split("=")[0] for line in lines[:3]] == [
-        "export LD_PRELOAD", "export PYTHONHOME", "export PYTHONPATH"]
-    assert all(line.startswith("# ") for line in lines[3:])
+    # in a venv its folder is the host's user site as well, so that the .pth files of its
+    # site-packages (an editable flexure's) run in the embedded interpreter
+    venv = ["export PYTHONUSERBASE"] if sys.prefix != sys.base_prefix else []
+    exports = [line.split("=")[0] for line in lines if line.startswith("export ")]
+    assert code == 0 and exports == [
+        "export LD_PRELOAD", "export PYTHONHOME", "export PYTHONPATH", *venv]
+    assert all(line.startswith("# ") for line in lines[len(exports):])
+    if venv:
+        assert f"export PYTHONUSERBASE='{sys.prefix}'" in lines
     assert "resources/requirements.txt" in out and "flexure fmu doctor FMU --native" in out
