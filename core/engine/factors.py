@@ -25,13 +25,10 @@ from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
-from .rigid import ELEMENT_WIDTH
-from .rigid_kernels import rigid_de, touching, touching_row
+from .rigid_kernels import rigid_de, touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
-
-EW = ELEMENT_WIDTH
 
 
 @kernel
@@ -274,22 +271,17 @@ def add_rigid_rows(table, A, na):
     row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
     n_rigid = dims[ed.NRIGID]
     apos = _i(table, slot.AUG_POS)
-    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW if rigid else 0):
-        g, i, mz, z, offset, _ = touching(table, t)
-        if offset < 0:
+    for j in range(_i(table, slot.TOUCHING_ROWS).size // 3):  # empty without clusters
+        o, coords, de, z, at = touching_row(table, j)
+        if o >= n_rigid:
             continue
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for b in range(k):
-            o = row_of_def[defs[i * k + b]]
-            if o < 0 or o >= n_rigid:
-                continue
-            po = apos[nf + o]
-            for a in range(mz):
-                c = col_of_coord[z[a]]
-                if c >= 0:
-                    v = rde[offset + b * mz + a]
-                    A[po * na + apos[c]] += v
-                    A[apos[c] * na + po] += v
+        po = apos[nf + o]
+        for a in range(z.size):
+            c = col_of_coord[z[a]]
+            if c >= 0:
+                v = rde[at + a]
+                A[po * na + apos[c]] += v
+                A[apos[c] * na + po] += v
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         row = group(table, g)
