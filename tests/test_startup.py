@@ -60,3 +60,24 @@ def test_submodules_still_import_through_the_package():
     from flexure.core.mechanics import assembly
 
     assert hasattr(assembly, "__file__") and hasattr(elements, "ELEMENT_TYPES")
+
+
+def test_a_command_imports_only_its_own_subcommand():
+    # `flexure analyze` must not pay for the loop's imports (scipy.interpolate, the
+    # co-simulation), nor the FMU's
+    probe = ("import json, sys\nfrom flexure.core.cli import build_parser\n"
+             "build_parser(['analyze', 'truss_1dof_x'])\n"
+             "print(json.dumps(sorted(m for m in sys.modules if m.startswith("
+             "('flexure.controllers', 'flexure.fmu')))))")
+    completed = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                               check=True)
+    assert json.loads(completed.stdout.splitlines()[-1]) == []
+
+
+def test_the_bare_command_still_lists_every_subcommand(capsys):
+    from flexure.core.cli import main
+
+    assert main([]) == 1  # the help, and exit code 1
+    listed = capsys.readouterr().out
+    for command in ("analyze", "bench", "fmu", "import", "loop", "reduce", "simulate", "sweep"):
+        assert f"    {command} " in listed, command

@@ -21,8 +21,14 @@ from pathlib import Path
 from ..errors import FlexureError, OutputError, UsageError
 
 
-def build_parser():
-    """The argument parser with every installed subcommand."""
+def build_parser(argv=None):
+    """The argument parser with the installed subcommands.
+
+    When `argv` names a subcommand, only that one is registered: importing every command's
+    module (the loop's pulls in scipy.interpolate and the co-simulation) would cost a
+    short command such as `flexure analyze` half its run time. Without one (help, a
+    mistyped name) every subcommand is registered, so argparse lists them all.
+    """
     parser = argparse.ArgumentParser(
         prog="flexure",
         description="Flexible multibody models of compliant mechanisms (SPACAR style).",
@@ -32,14 +38,17 @@ def build_parser():
     parser.add_argument("--version", action="version", version=f"flexure {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     entries = importlib.metadata.entry_points(group="flexure.commands")
-    for entry in sorted(entries, key=lambda e: e.name):
+    named = next((word for word in (argv or []) if not word.startswith("-")), None)
+    chosen = [entry for entry in entries if entry.name == named] or entries
+    for entry in sorted(chosen, key=lambda e: e.name):
         entry.load()(subparsers)
     return parser
 
 
 def main(argv=None):
     """Run the `flexure` command line; returns the exit code."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "run", None):
         parser.print_help()
