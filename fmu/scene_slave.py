@@ -48,6 +48,7 @@ import copy
 import math
 import tomllib
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 from pythonfmu import DefaultExperiment
@@ -116,8 +117,15 @@ class SceneSlave(SafeSlave):
         self.simulator = None
         self._build()
         model = self._model
-        self.inputs = [0.0] * len(model.inputs)  # N, N m or V; floats, compared cheaply
-        self._inputs_changed = True  # the simulator does not hold `inputs` yet
+        # What the getters and setters read and write, lists of floats kept for the life of
+        # the instance (a variable's getter and setter are that list's own item access, the
+        # cheapest call there is): the inputs the host set (N, N m or V), held from the next
+        # doStep on; the outputs and coil currents of the current state (`_refresh`).
+        self.inputs = [0.0] * len(model.inputs)
+        self.outputs = [math.nan] * len(model.outputs)
+        self.currents = [math.nan] * len(model.coil_actuators)
+        self.unchecked_inputs = frozenset(port.name for port in model.inputs)
+        self.stress = math.nan  # Pa, with von_mises
         self._refresh()
 
         drivers = {a.input: a for a in model.actuators}
@@ -129,16 +137,16 @@ class SceneSlave(SafeSlave):
                                f"amplifier) of the {acting}")
             self.add_real(port.name, causality="input", unit=port.unit, start=0.0,
                           description=description,
-                          getter=lambda i=i: self.inputs[i],
-                          setter=lambda value, i=i: self._hold_input(i, value))
+                          getter=partial(self.inputs.__getitem__, i),
+                          setter=partial(self.inputs.__setitem__, i))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
                           description=port_description(model, port, is_input=False),
-                          getter=lambda j=j: float(self.outputs[j]))
+                          getter=partial(self.outputs.__getitem__, j))
         for k, actuator in enumerate(model.coil_actuators):
             self.add_real(f"{actuator.name}.current", causality="output", unit="A",
                           description=f"coil current of actuator {actuator.name}",
-                          getter=lambda k=k: float(self.currents[k]))
+                          getter=partial(self.currents.__getitem__, k))
         if self.von_mises:
             self.add_real("von_mises_max", causality="output", unit="Pa",
                           description="largest von Mises stress at the ends of the beams",
@@ -217,22 +225,14 @@ class SceneSlave(SafeSlave):
         self.simulator.reset(t0=self.start_time)
         self._mechanics = Mechanics(self._model) if self.von_mises else None
         self._built_with = self._settings()
-        self.currents = self.simulator.currents
-        self._inputs_changed = True
-
-    def _hold_input(self, i, value):
-        """Input i = value from the next doStep on; the simulator is told only of a change
-        (a host that sets every input before every doStep mostly repeats the held value)."""
-        if value != self.inputs[i]:  # true for a NaN too, which the next doStep refuses
-            self.inputs[i] = float(value)
-            self._inputs_changed = True
+        self._inputs_given = None  # the inputs the simulator holds: none of the host's yet
 
     def _refresh(self):
-        """Read the outputs (and the stress) from the simulator's current state."""
-        self.outputs = self.simulator.outputs()  # a float array of its own
-        if self.currents.size:  # a model without coils has no currents to copy
-            self.currents = self.simulator.currents
-        self.stress = math.nan
+        """Read the outputs, coil currents (and the stress) of the simulator's current state
+        into the lists the getters read."""
+        self.outputs[:] = self.simulator.outputs().tolist()
+        if self.currents:  # a model without coils has no currents to copy
+            self.currents[:] = self.simulator.currents.tolist()
         if self.von_mises:
             state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
             _, stresses = stresses_along(self._model, [state], inputs=[self.inputs],
@@ -243,19 +243,28 @@ class SceneSlave(SafeSlave):
         if self._settings() != self._built_with:
             self._build()
         self.simulator.reset(t0=start_time)
-        self._inputs_changed = True
+        self._inputs_given = None
         self._refresh()
 
     def advance(self, t, h):
-        if self._inputs_changed:
+        # a host sets every input before every doStep, mostly to the value held already; the
+        # simulator refuses a non-finite one here, and then again at every doStep until the
+        # host sets a finite value (`_inputs_given` is kept only once the simulator took it)
+        if self.inputs != self._inputs_given:
             self.simulator.set_inputs(self.inputs)
-            self._inputs_changed = False
-        self.simulator.advance(t + h, max_steps=int(self.max_steps))
+            self._inputs_given = self.inputs.copy()
+        self.simulator.advance(t + h, max_steps=self.max_steps)
         self._refresh()
-        for kind, message in self.simulator.range_warnings().items():  # once per kind
+        warnings = self.simulator.range_warnings()  # empty within the range
+        if warnings:
+            self._warn_once(t + h, warnings)
+
+    def _warn_once(self, t, warnings):
+        """Log each kind of range warning the first time it occurs (t in s)."""
+        for kind, message in warnings.items():
             if kind not in self._warned:
                 self._warned.add(kind)
-                self.log_message(f"{self.instance_name}: t = {t + h:.9g} s: {message}",
+                self.log_message(f"{self.instance_name}: t = {t:.9g} s: {message}",
                                  Fmi2Status.warning)
 
     def last_good_time(self):
@@ -266,7 +275,7 @@ class SceneSlave(SafeSlave):
 
     def save_state(self):
         return {"settings": self._built_with, "simulator": self.simulator.get_state(),
-                "outputs": self.outputs.copy(), "stress": self.stress}
+                "outputs": np.array(self.outputs), "stress": self.stress}
 
     def load_state(self, state):
         settings, outputs = self._checked_state(state)
@@ -276,9 +285,9 @@ class SceneSlave(SafeSlave):
         if self._built_with != settings:
             self._build()
         self.simulator.set_state(state["simulator"])
-        self._inputs_changed = True
-        self.outputs = outputs
-        self.currents = self.simulator.currents
+        self._inputs_given = None
+        self.outputs[:] = outputs.tolist()
+        self.currents[:] = self.simulator.currents.tolist()
         self.stress = float(state["stress"])
 
     def _checked_state(self, state):
@@ -311,9 +320,9 @@ class SceneSlave(SafeSlave):
                     np.isfinite(value)):
                 raise ValueError(f"the simulator state {key!r} is not finite")
         outputs = state["outputs"]
-        if not (isinstance(outputs, np.ndarray) and outputs.shape == self.outputs.shape):
+        if not (isinstance(outputs, np.ndarray) and outputs.shape == (len(self.outputs),)):
             raise ValueError(f"outputs of shape {getattr(outputs, 'shape', None)}: expected "
-                             f"{self.outputs.shape}")
+                             f"({len(self.outputs)},)")
         if not isinstance(state["stress"], float):
             raise ValueError(f"stress = {state['stress']!r}: expected a float")
         return settings, outputs.astype(float)

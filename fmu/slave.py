@@ -137,6 +137,11 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         to `Fmi2Slave`.
     """
 
+    # Names of inputs whose values `check_value` is not asked about: the model checks them
+    # when it takes them (SceneSlave: the next doStep refuses a non-finite input). An input's
+    # set is then a store and nothing more, the call a host makes before every doStep.
+    unchecked_inputs: frozenset[str] = frozenset()
+
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         try:
@@ -150,7 +155,7 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self.phase = INSTANTIATED  # where the instance is in the FMI call sequence
         self.broken = ""  # why this instance is in the error state ("" while it is not)
         self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
-        self._settable_inputs = {}  # {variable kind: {value reference: (name, setter)}}
+        self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
 
     # -- to override -------------------------------------------------------------------------
@@ -370,33 +375,25 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         """
         start = _time.perf_counter()
         try:
-            return self._do_step(current_time, step_size)
-        except BaseException as error:  # noqa: BLE001
-            self._fail(f"doStep at t = {current_time!r} s", error)
-            return False
+            time = self.time
+            # one test for the usual step (NaN fails every comparison), the refusals after it
+            if not (self.phase == STEP_COMPLETE and not self.broken
+                    and 0.0 < step_size < math.inf
+                    and abs(current_time - time) <= TIME_TOLERANCE * max(1.0, abs(time))):
+                return self._refuse_step(current_time, step_size)
+            self.advance(time, current_time + step_size - time)
+            self.time = current_time + step_size
+            return True
+        except BaseException as error:  # noqa: BLE001 -- a raise here would be fmi2Fatal
+            return self._step_failed(current_time, step_size, error)
         finally:
             self.step_seconds += _time.perf_counter() - start
 
-    def _do_step(self, current_time, step_size):
-        if self.broken:
-            self._error(f"step refused: {self.broken}")
-            return False
-        if self.phase != STEP_COMPLETE:
-            self._illegal("fmi2DoStep", "state step complete (after "
-                                        "fmi2ExitInitializationMode, before fmi2Terminate)")
-            return False
-        if not (math.isfinite(step_size) and step_size > 0.0):
-            self._error(f"doStep at t = {current_time!r} s: expected a step size h > 0, "
-                        f"got {step_size!r} s")
-            return False
-        if not (math.isfinite(current_time) and abs(current_time - self.time)
-                <= TIME_TOLERANCE * max(1.0, abs(self.time))):
-            self._error(f"doStep: expected the communication point t = {self.time!r} s, "
-                        f"got {current_time!r} s")
-            return False
+    def _step_failed(self, current_time, step_size, error):
+        """After `advance` raised: a model error is logged and the instance goes back to its
+        last good time; anything else is a bug and enters the error state. Answers False
+        (fmi2Discard)."""
         try:
-            self.advance(self.time, current_time + step_size - self.time)
-        except Exception as error:  # noqa: BLE001 -- a raise here would be fmi2Fatal
             if not _is_model_error(error):
                 self._fail(f"doStep at t = {current_time!r} s", error)
                 return False
@@ -409,9 +406,25 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
             self._error(f"doStep from t = {current_time!r} s over h = {step_size!r} s "
                         f"discarded: {error}; the instance stays at its last good time "
                         f"t = {self.time!r} s")
-            return False
-        self.time = current_time + step_size
-        return True
+        except BaseException as failure:  # noqa: BLE001
+            self._fail(f"doStep at t = {current_time!r} s", failure)
+        return False
+
+    def _refuse_step(self, current_time, step_size):
+        """Log why a doStep is refused (the error state, the call sequence, h or t) and
+        answer False (fmi2Discard)."""
+        if self.broken:
+            self._error(f"step refused: {self.broken}")
+        elif self.phase != STEP_COMPLETE:
+            self._illegal("fmi2DoStep", "state step complete (after "
+                                        "fmi2ExitInitializationMode, before fmi2Terminate)")
+        elif not (math.isfinite(step_size) and step_size > 0.0):
+            self._error(f"doStep at t = {current_time!r} s: expected a step size h > 0, "
+                        f"got {step_size!r} s")
+        else:
+            self._error(f"doStep: expected the communication point t = {self.time!r} s, "
+                        f"got {current_time!r} s")
+        return False
 
 
 def _experiment_problem(start_time, stop_time, tolerance):

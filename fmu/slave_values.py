@@ -17,10 +17,13 @@ from pythonfmu.variables import Boolean, Integer
 
 from .slave_states import INITIALIZATION, INSTANTIATED, STEP_COMPLETE
 
+SETTABLE_PHASES = frozenset((INSTANTIATED, INITIALIZATION, STEP_COMPLETE))
+
 
 class SlaveValues:
     """The value getters and setters of `SafeSlave` (which sets up what they use: `vars`,
-    `phase`, `broken`, `_settable_inputs`, `_getters`, `check_value` and the error state's
+    `phase`, `broken`, `_settable_inputs`, `_getters`, `check_value`, `unchecked_inputs` and
+    the error state's
     `_error`, `_illegal`, `_break`, `_fail`). Each is called by pythonfmu's binary and catches
     everything."""
 
@@ -88,7 +91,7 @@ class SlaveValues:
         """One value per reference, always (the binary reads exactly that many); a reference
         that cannot be read gives `default` and a logged error."""
         try:  # the common case: every reference readable and every getter answering
-            getters = self._getters_of(kind)
+            getters = self._getters.get(kind) or self._getters_of(kind)
             return [convert(getters[vr]()) for vr in vrs]
         except BaseException:  # noqa: BLE001 -- then value by value, naming what failed
             pass
@@ -162,21 +165,23 @@ class SlaveValues:
         """Set values in order; the first one refused stops the call and enters the error
         state (see the module docstring: the setter itself can only answer fmi2OK)."""
         try:
-            if self.broken or self.phase not in (INSTANTIATED, INITIALIZATION, STEP_COMPLETE):
+            if self.broken or self.phase not in SETTABLE_PHASES:
                 return self._illegal(call, "states instantiated, initialization mode and "
                                            "step complete")
-            inputs = self._inputs_of(kind)
+            inputs = self._settable_inputs.get(kind) or self._inputs_of(kind)
             for vr, value in zip(vrs, values, strict=True):
-                # an input of this kind is always settable: only its value is checked
-                name, setter = inputs.get(vr) or (None, None)
-                problem = None
-                if setter is None:
+                # an input of this kind is always settable: at most its value is checked
+                entry = inputs.get(vr)
+                if entry is None:
                     problem = self._variable_problem(vr, kind) or self._settable_problem(vr)
-                    if not problem:
-                        name, setter = self.vars[vr].name, self.vars[vr].setter
-                problem = problem or self.check_value(name, value)
-                if problem:
-                    return self._break(f"{call} refused: {problem}")
+                    if problem:
+                        return self._break(f"{call} refused: {problem}")
+                    entry = (self.vars[vr].name, self.vars[vr].setter, True)
+                name, setter, checked = entry
+                if checked:
+                    problem = self.check_value(name, value)
+                    if problem:
+                        return self._break(f"{call} refused: {problem}")
                 setter(value)
         except BaseException as error:  # noqa: BLE001
             self._fail(call, error)
@@ -192,13 +197,15 @@ class SlaveValues:
         return found
 
     def _inputs_of(self, kind):
-        """{value reference: (name, setter)} of the inputs of `kind` that pass the variable
-        checks (found once per kind, by those checks: the variables are registered in
-        __init__, before any set, and an input's settability does not depend on the phase)."""
+        """{value reference: (name, setter, whether `check_value` sees its values)} of the
+        inputs of `kind` that pass the variable checks (found once per kind, by those checks:
+        the variables are registered in __init__, before any set, and an input's settability
+        does not depend on the phase)."""
         found = self._settable_inputs.get(kind)
         if found is None:
             found = self._settable_inputs[kind] = {
-                vr: (variable.name, variable.setter) for vr, variable in self.vars.items()
+                vr: (variable.name, variable.setter, variable.name not in self.unchecked_inputs)
+                for vr, variable in self.vars.items()
                 if variable.causality == Fmi2Causality.input
                 and not (self._variable_problem(vr, kind) or self._settable_problem(vr))}
         return found

@@ -15,9 +15,10 @@ def test_non_finite_input_is_discarded_at_the_last_good_time(scene_fmus):
         good = slave.step(k * 1e-3, 1e-3)
     for bad in (np.nan, np.inf):
         slave.set(bad)
-        with pytest.raises(FMICallException, match="discard"):
-            slave.step(3e-3, 1e-3)
-        assert np.array_equal(slave.y(), good)
+        for _ in range(2):  # refused again while the host leaves the input as it is
+            with pytest.raises(FMICallException, match="discard"):
+                slave.step(3e-3, 1e-3)
+            assert np.array_equal(slave.y(), good)
     assert "not finite" in slave.logs[-1][1] and slave.logs[-1][0] == 3  # fmi2Error
     assert "last good time t = 0.003" in slave.logs[-1][1]
     slave.set(1.0)  # the instance goes on from its last good time
