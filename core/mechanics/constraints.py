@@ -60,9 +60,7 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
         names the DOF counts, the redundant constraints (element deformations) and the free
         coordinates, as far as they apply.
     """
-    kin = Kinematics(model)
-    if x is None:
-        x = model.initial_coordinates
+    kin, scaled_De = _scaled_jacobian(model, x)
     problems = []
     if model.declared_dof_count != model.ndof:
         declared = ", ".join(model.dof_names) or "none"
@@ -72,16 +70,14 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
             f"{count['ndof']}, "
             f"but the scene declares {model.declared_dof_count} DOF(s): {declared}"
         )
-    _, De = assembly.deformation_jacobian(model, x)
-    scale = column_scale(model, kin.length_scale)[kin.free]
-    rows = De[np.ix_(kin.constraint_rows, kin.free)] * scale
+    rows = scaled_De[np.ix_(kin.constraint_rows, kin.free)]
     dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
     dof_rows[np.arange(kin.dof_positions.size), kin.dof_positions] = 1.0
     full = np.vstack([rows, dof_rows])
     if not problems and clearly_regular(full):
         # a regular J has independent rigid rows and no free motion: nothing to name
         return model.dof_count()
-    rigid_rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
+    rigid_rows = scaled_De[np.ix_(model.rigid_deformations, kin.free)]
     # Several null-space vectors may involve the same rows: one line per set, with its count.
     dependencies = _counted(_dependent_row_sets(rigid_rows))
     for dependency, count in dependencies:
@@ -155,14 +151,12 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     """
     import scipy.linalg
 
-    kin = Kinematics(model)
-    x = model.initial_coordinates if x is None else x
-    _, De = assembly.deformation_jacobian(model, x)
-    if not np.all(np.isfinite(De)):
+    kin, scaled_De = _scaled_jacobian(model, x)
+    if not np.all(np.isfinite(scaled_De)):
         return None  # a degenerate configuration: the check reports it
     scale = column_scale(model, kin.length_scale)
     free = model.free_coordinates
-    rigid = De[np.ix_(model.rigid_deformations, free)] * scale[free]
+    rigid = scaled_De[np.ix_(model.rigid_deformations, free)]
     if model.rigid_deformations.size and np.linalg.matrix_rank(
             rigid, tol=RANK_TOLERANCE * max(np.abs(rigid).max(), 1e-300)) < rigid.shape[0]:
         return None
@@ -177,7 +171,7 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     for k, i in enumerate(coordinates):
         coordinate_rows[k, i] = scale[free[i]]
     released = model.released_deformations
-    deformation_rows = De[np.ix_(released, free)] * scale[free]
+    deformation_rows = scaled_De[np.ix_(released, free)]
 
     def pick(rows, basis, count):
         """Indices of up to `count` rows whose projections on `basis` are independent."""
@@ -259,11 +253,8 @@ def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
         The deformation names ("leaf.e2") to release; empty when the prescribed
         deformations are independent.
     """
-    kin = Kinematics(model)
-    x = model.initial_coordinates if x is None else x
-    _, De = assembly.deformation_jacobian(model, x)
-    scale = column_scale(model, kin.length_scale)[kin.free]
-    rows = De[np.ix_(model.rigid_deformations, kin.free)] * scale
+    kin, scaled_De = _scaled_jacobian(model, x)
+    rows = scaled_De[np.ix_(model.rigid_deformations, kin.free)]
     redundant = _independent_rows(rows, _release_preference(model))[1]
     return [model.deformation_names[model.rigid_deformations[i]] for i in redundant]
 
@@ -280,13 +271,10 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
     This is the over-constraint test of `check_exact_constraint` done incrementally: a model
     reduction can then freeze many deformations at once and know that the result builds.
     """
-    kin = Kinematics(model)
-    x = model.initial_coordinates if x is None else x
-    _, De = assembly.deformation_jacobian(model, x)
+    kin, scaled_De = _scaled_jacobian(model, x)
     columns = kin.free
-    scale = column_scale(model, kin.length_scale)[columns]
-    prescribed = De[np.ix_(model.rigid_deformations, columns)] * scale
-    top = max(np.abs(De[:, columns] * scale).max(initial=0.0), 1e-300)
+    prescribed = scaled_De[np.ix_(model.rigid_deformations, columns)]
+    top = max(np.abs(scaled_De[:, columns]).max(initial=0.0), 1e-300)
     # an orthonormal basis of the prescribed rows' span (they are independent in a model
     # that passed the check), grown by each group taken
     q, r = np.linalg.qr(prescribed.T)
@@ -296,7 +284,7 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
     basis[:, :count] = q[:, keep]
     taken = []
     for position, group in enumerate(groups):
-        rows = De[np.ix_(np.asarray(group, dtype=np.int64), columns)] * scale
+        rows = scaled_De[np.ix_(np.asarray(group, dtype=np.int64), columns)]
         norms = np.linalg.norm(rows, axis=1)
         if rows.shape[0] == 0 or count + rows.shape[0] > columns.size or not np.all(norms > 0):
             continue
@@ -308,6 +296,17 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
             count += rows.shape[0]
             taken.append(position)
     return taken
+
+
+def _scaled_jacobian(model, x):
+    """(kin, scaled_De): the model's Kinematics and its deformation Jacobian de/dx at
+    coordinates x (m, rad; default the initial ones), (NE, NX), with each rotation column
+    times the length scale (`column_scale`) so that every column is in m/m: the matrix whose
+    rows every rank decision of this module takes, on the free coordinates `kin.free`."""
+    kin = Kinematics(model)
+    x = model.initial_coordinates if x is None else x
+    _, De = assembly.deformation_jacobian(model, x)
+    return kin, De * column_scale(model, kin.length_scale)
 
 
 def _redundancies(model, rows, kept, redundant, shown=10):
