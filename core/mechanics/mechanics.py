@@ -172,8 +172,7 @@ class Mechanics:
         ndarray (NDOF, NDOF)
             N/m in the DOF units (N m/rad on an angle DOF).
         """
-        DeF = config.De[self.stressed] @ config.DF
-        return DeF.T @ self.S @ DeF
+        return self._on_dofs(config, self.S)
 
     def damping_matrix(self, config: Configuration) -> np.ndarray:
         """The damping matrix C0 = DF^T De_s^T D De_s DF.
@@ -187,8 +186,13 @@ class Mechanics:
         ndarray (NDOF, NDOF)
             N s/m in the DOF units (N m s/rad on an angle DOF).
         """
+        return self._on_dofs(config, self.D)
+
+    def _on_dofs(self, config, matrix):
+        """DF^T De_s^T `matrix` De_s DF: a matrix on the stressed deformations (S or D) carried
+        to the DOFs through the deformations' first-order transfer function De_s DF."""
         DeF = config.De[self.stressed] @ config.DF
-        return DeF.T @ self.D @ DeF
+        return DeF.T @ matrix @ DeF
 
     def geometric_stiffness(self, config: Configuration, sigma: np.ndarray,
                             load_factor: float = 1.0, hessians: Hessians | None = None,
