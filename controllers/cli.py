@@ -15,7 +15,7 @@ from pathlib import Path
 
 from flexure.core.cli import (
     PLOT_SUFFIXES,
-    add_set_option,
+    add_scene_arguments,
     check_output,
     fraction,
     nonnegative,
@@ -91,9 +91,7 @@ def register(subparsers):
                     "scene's linear model, add the feedforward of its low-frequency model, "
                     "and track a third-order move on the nonlinear plant. Reports the "
                     "largest tracking error against the target of 0.1 % of the stroke.")
-    parser.add_argument("scene", nargs="?", default="stage_planar_1dof",
-                        help="scene file or built-in scene name (default stage_planar_1dof)")
-    add_set_option(parser)
+    add_scene_arguments(parser, default="stage_planar_1dof")
     parser.add_argument("--stroke", type=stroke, default=1e-3, metavar="S",
                         help="stroke of the move in m, or in rad on an angle (default 0.001)")
     parser.add_argument("--duration", type=positive, default=1.0, metavar="T",

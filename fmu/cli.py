@@ -13,7 +13,7 @@ from pathlib import Path
 
 from flexure.core import FlexureError
 from flexure.core.cli import (
-    add_set_option,
+    add_scene_arguments,
     check_output,
     nonnegative,
     number,
@@ -37,8 +37,7 @@ def register(subparsers):
     build = commands.add_parser("build", help="build the FMU of a scene",
                                 description="Build the co-simulation FMU of a scene; its model "
                                             "identifier is the scene name.")
-    build.add_argument("scene", help="scene file or built-in scene name")
-    add_set_option(build)
+    add_scene_arguments(build)
     build.add_argument("-o", "--output", help="the .fmu to write (default: SCENE_NAME.fmu)")
     build.add_argument("--tunable", action="append", metavar="KEY",
                        help="a dotted scene key to expose as a parameter (repeatable; default: "

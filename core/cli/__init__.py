@@ -129,12 +129,19 @@ class _SetOption(argparse.Action):
         setattr(namespace, self.dest, overrides)
 
 
-def add_set_option(parser):
-    """Add `--set KEY=VALUE` (repeatable) to the parser of a command that takes a scene.
+def add_scene_arguments(parser, *, default=None):
+    """Add what a command that works on a scene takes: the positional SCENE (a scene file or a
+    built-in scene's name; optional when a `default` name is given) and `--set KEY=VALUE`
+    (repeatable).
 
     `args.set` is then {dotted scene key: value} for `load_scene(..., overrides=args.set)`
     (flexure.core.scene.overrides): VALUE is read as TOML (0.3e-3, [0, 1], "text", true), else taken
     as a string."""
+    if default is None:
+        parser.add_argument("scene", help="scene file or built-in scene name")
+    else:
+        parser.add_argument("scene", nargs="?", default=default,
+                            help=f"scene file or built-in scene name (default {default})")
     parser.add_argument("--set", action=_SetOption, default={}, metavar="KEY=VALUE",
                         help="set a scene value before the scene is built and checked, e.g. "
                              "--set sections.leaf.height=0.3e-3 --set nodes.3.mass=0.2 "

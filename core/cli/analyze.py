@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..reporting.tables import format_table, jsonable, print_json
-from . import PLOT_SUFFIXES, add_set_option, atomic_output, count, output_file
+from . import PLOT_SUFFIXES, add_scene_arguments, atomic_output, count, output_file
 
 
 def register(subparsers):
@@ -16,8 +16,7 @@ def register(subparsers):
         "analyze", help="static, modal, buckling and state-space analyses of a scene",
         description="Analyse a scene (a TOML file or the name of a built-in scene). Without an "
                     "analysis option, --static and --modes are run.")
-    parser.add_argument("scene", help="scene file or built-in scene name")
-    add_set_option(parser)
+    add_scene_arguments(parser)
     parser.add_argument("--static", action="store_true", help="static equilibrium under the loads")
     parser.add_argument("--modes", nargs="?", type=count, const=-1, metavar="N",
                         help="the lowest N (default all) natural frequencies")

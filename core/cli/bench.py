@@ -15,7 +15,7 @@ from ..errors import SimulationError
 from ..simulation.workprecision import ALL_METHODS, DEFAULT_METHODS, work_precision
 from . import (
     PLOT_SUFFIXES,
-    add_set_option,
+    add_scene_arguments,
     distinct_outputs,
     fraction,
     number,
@@ -68,8 +68,7 @@ def register(subparsers):
         description="Run every integrator over a range of tolerances against a tight "
                     "reference; print the table, and write it as CSV, markdown and a log-log "
                     "plot.")
-    parser.add_argument("scene", help="scene file or built-in scene name")
-    add_set_option(parser)
+    add_scene_arguments(parser)
     parser.add_argument("--t-end", type=positive, default=1.0, metavar="T",
                         help="end time (s)")
     parser.add_argument("--input", action="append", default=[], metavar="NAME=VALUE",

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..reporting.tables import format_table, print_json
 from . import (
-    add_set_option,
+    add_scene_arguments,
     count,
     number,
     output_file,
@@ -35,8 +35,7 @@ def register(subparsers):
                     "energy of its lowest N modes, prescribe zero as many of the smallest as "
                     "keep those N frequencies within the tolerance, and write the reduced "
                     "scene. Prints the frozen deformations and both sets of frequencies.")
-    parser.add_argument("scene", help="scene file or built-in scene name")
-    add_set_option(parser)
+    add_scene_arguments(parser)
     parser.add_argument("--keep", type=count, required=True, metavar="N",
                         help="the number of lowest natural frequencies to keep")
     parser.add_argument("--tol", type=number(0.0), default=DEFAULT_TOLERANCE, metavar="P",

@@ -18,7 +18,7 @@ from ..reporting.tables import format_table
 from ..simulation.methods import METHODS
 from . import (
     PLOT_SUFFIXES,
-    add_set_option,
+    add_scene_arguments,
     count,
     distinct_outputs,
     fraction,
@@ -38,8 +38,7 @@ def register(subparsers):
         "simulate", help="nonlinear time-domain simulation (SUNDIALS CVODE or IDA)",
         description="Simulate a scene from rest under its loads and the given inputs; print a "
                     "summary, and write the outputs to CSV (--out) and a plot (--plot).")
-    parser.add_argument("scene", help="scene file or built-in scene name")
-    add_set_option(parser)
+    add_scene_arguments(parser)
     parser.add_argument("--t-end", type=positive, required=True, metavar="T",
                         help="end time (s)")
     parser.add_argument("--input", action="append", default=[], metavar="NAME=VALUE|NAME=FILE",

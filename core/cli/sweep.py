@@ -34,7 +34,7 @@ from ..reporting.progress import Progress
 from ..reporting.tables import format_table
 from . import (
     PLOT_SUFFIXES,
-    add_set_option,
+    add_scene_arguments,
     atomic_output,
     check_output,
     count,
@@ -117,12 +117,11 @@ def register(subparsers):
                     "row per point to CSV (and Parquet when pyarrow is importable) with a plot "
                     "of each quantity. A point that fails gives its reason in the status "
                     "column; the others go on.")
-    parser.add_argument("scene", help="scene file or built-in scene name")
+    add_scene_arguments(parser)
     parser.add_argument("--param", type=parameter, action="append", required=True,
                         metavar="KEY=START:STOP:N|KEY=V1,V2,...",
                         help="a dotted scene key and its values: N linearly spaced from START "
                              "to STOP, or a list (repeatable; the grid is the product)")
-    add_set_option(parser)
     parser.add_argument("--analyses", type=analysis_list, default=("static", "modes"),
                         metavar="LIST",
                         help=f"some of {','.join(analysis_names())} (default static,modes)")
