@@ -44,7 +44,7 @@ _LAZY = {
     "controller_step": "simulation.sampled_loop", "run_sampled_loop": "simulation.sampled_loop",
     "SimulationResult": "simulation.simulation", "Simulator": "simulation.simulation",
     "simulate": "simulation.simulation",
-    "METHODS": "simulation.simulator", "prepare": "simulation.simulator",
+    "METHODS": "simulation.simulator", "prepare": "simulation.prepare",
     "default_atol": "simulation.tolerances",
 }
 

@@ -420,41 +420,6 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
                                   "integrator steps is spent")
 
 
-def prepare(model: Model, *, loop_method: str | None = None) -> float:
-    """Compile, or load from the on-disk cache, the compiled code a Simulator of `model` runs
-    (the engine, the model's element kernels, the SUNDIALS callbacks); returns the time it
-    took (s). With loop_method (a METHODS name) also the integrator and the compiled sampled
-    loop (`run_sampled_loop`) of that method, by running one sample of it on a throwaway
-    simulator. The first use on a machine compiles (about 20-50 s); later ones load the cache
-    (well under a second). A Simulator does this itself; call it first to keep the latency
-    out of a timed run.
-
-    Parameters
-    ----------
-    model : Model
-    loop_method : str, optional
-        A METHODS name whose integrator and compiled sampled loop to prepare as well (only
-        for a model with inputs and a position output).
-
-    Returns
-    -------
-    float
-        The time it took, s.
-    """
-    start = _time.perf_counter()
-    EngineData(model)
-    if loop_method is not None and model.inputs and any(
-            port.quantity == "position" for port in model.outputs):
-        from .sampled_loop import run_sampled_loop
-
-        output = next(j for j, port in enumerate(model.outputs) if port.quantity == "position")
-        zero = np.zeros((1, 1))
-        run_sampled_loop(Simulator(model, method=loop_method), fs=1e4, samples=1,
-                         reference=zero, feedforward=zero, controller=(zero, zero, zero, zero),
-                         loop_inputs=[0], loop_outputs=[output])
-    return _time.perf_counter() - start
-
-
 def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
                      input_function):
     if method not in ONE_STEP_METHODS:
