@@ -123,6 +123,7 @@ def run_cosimulation(model, scene, controller, design, *, method=LOOP_METHOD,
     chunk = N if progress is None else max(1, N // 100)
     for done in range(chunk, N + chunk, chunk):
         if not ex.simulate_until(target_time=min(done, N) * step):
+            # libcosim's own reason, which libcosimpy 0.0.6 offers from its _internal only
             from libcosimpy._internal import get_last_error_message
 
             raise SimulationError(f"libcosim stopped at t = "
