@@ -5,6 +5,7 @@
     python examples/manipulator_loop.py --loop --moves       # + every move, closed loop
     python examples/manipulator_loop.py --loop --plant libcosim   # + the same loop as FMUs
     python examples/manipulator_loop.py --loop --coils       # the loops through voice coils
+    python examples/manipulator_loop.py --loop --coils --plant libcosim   # ... also as FMUs
 
 1. **Design and robust stability.** One PID-like loop per actuator on its colocated encoder,
    its gain set for 300 rad/s on the low-frequency model (the six suspension modes alone,
@@ -43,7 +44,8 @@
    modes' damping does not couple them); the loops designed on the low-frequency model with
    the coils' equations (`low_frequency_plant`), now from the drive signals (V), and their
    robustness on the control model with its coils; with `--loop` the 6 mm xy move through
-   the coils, the feedforward turned into drive signals by the coils' equations.
+   the coils, the feedforward turned into drive signals by the coils' equations (with
+   `--plant`, in process and as FMUs, compared as above).
 
 Lengths in mm, rotations in mrad (the end effector's rotation-vector components), margins in
 degrees and ratios.
@@ -272,21 +274,23 @@ def closed_loop(design, figures, *, plant="inprocess", duration=1.0, settle=0.25
     return result
 
 
-def compare_plants(design, plants, figures, *, duration=1.0, settle=0.25):
+def compare_plants(design, plants, figures, *, duration=1.0, settle=0.25, model=None):
     """The move in process and on each of `plants` ("fmu", "libcosim"); returns
-    {plant: LoopResult}, "inprocess" first.
+    {plant: LoopResult}, "inprocess" first. `model`: the control model (default), or the one
+    through its voice coils (COILS; `design` then from it).
 
     All follow the same path with the same designed loops, so they differ only by how the
     plant is stepped (the same integrator and tolerance, inside the FMU)."""
-    model = load_scene(CONTROL)
+    model = load_scene(CONTROL) if model is None else model
     dx, dy = MOVES["6 mm xy"]
     path = move_path(model, targets(dx, dy), kind="nonlinear")
     results = {"inprocess": closed_loop(design, figures, duration=duration, settle=settle,
-                                        path=path)}
+                                        path=path, model=model)}
     with tempfile.TemporaryDirectory(prefix="manipulator_loop_") as workdir:  # FMUs, shared
         for plant in plants:
             results[plant] = closed_loop(design, figures, plant=plant, duration=duration,
-                                         settle=settle, path=path, workdir=workdir)
+                                         settle=settle, path=path, workdir=workdir,
+                                         model=model)
     return results
 
 
@@ -363,8 +367,9 @@ def print_coil_loop(result):
               f"{'yes' if row['passed'] else 'NO'} | {volts:.3f} |")
 
 
-def coils_study(loop, figures):
-    """--coils: the back-EMF's damping, the loops through the coils, with `loop` the move."""
+def coils_study(loop, figures, plant="inprocess"):
+    """--coils: the back-EMF's damping, the loops through the coils, with `loop` the move (in
+    process and on `plant` when that is "fmu" or "libcosim")."""
     log("suspension modes without and with the coils")
     print("Damping of the suspension modes by the voice coils' back-EMF\n")
     print_coil_damping(coil_damping())
@@ -373,7 +378,12 @@ def coils_study(loop, figures):
     print("\nRobust stability through the coils (design: 300 rad/s on the low-frequency model "
           "with the coils' equations, 4 kHz)\n")
     print_robustness(rows)
-    if loop:
+    if loop and plant != "inprocess":
+        log(f"closed loop through the coils: 6 mm xy, in process and {plant}")
+        results = compare_plants(design, [plant], figures, model=load_scene(COILS))
+        print(f"\nClosed loop through the coils, 6 mm xy in 1 s, in process and {plant}\n")
+        print_comparison(results["inprocess"], results[plant])
+    elif loop:
         log("closed loop through the coils: 6 mm xy")
         result = closed_loop(design, figures, model=load_scene(COILS))
         print(f"\nClosed loop through the coils, 6 mm xy in 1 s ({result.wall_time_s:.1f} s "
@@ -401,10 +411,8 @@ def main(argv=None):
         parser.error("--plant compares the closed loop: give --loop too")
     if args.moves and (not args.loop or args.plant != "inprocess" or args.coils):
         parser.error("--moves runs every move in closed loop in process: give --loop alone")
-    if args.coils and args.plant != "inprocess":
-        parser.error("--coils runs the loop in process: give no --plant")
     if args.coils:
-        coils_study(args.loop, args.figures)
+        coils_study(args.loop, args.figures, args.plant)
         return 0
     log("design and robustness")
     design, rows = robustness()
