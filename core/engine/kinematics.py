@@ -14,9 +14,10 @@ the touching elements' De T_e and, for a DOF coordinate on a slave, T's row.
 Warm start: the first-order prediction x_prev + DF_prev (q - q_prev); if its residual
 exceeds the tolerance, chord iterations with the previous LU of the constraint Jacobian
 J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton from there if they
-stall, stopping on the residual or on the step. J DF = [0; I] gives DF = dx/dq (NX, NDOF)
-where it is needed (the
-reduced form, the tangent, the kinematics operation).
+stall, stopping on the residual or on the step. The prediction and the chord iterates are
+checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and D2e are evaluated once,
+at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the reduced
+form, the tangent, the kinematics operation).
 
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
 (J^-1 or J^-T), which takes and gives vectors in the model's order). The element
@@ -183,10 +184,11 @@ def solve_positions(table, q):
     if not np.all(np.isfinite(x)):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):
-        _elements(table, x, 1)
+        _elements(table, x, 0)  # the residual needs e alone; De only for a step
         if _residual(table, x, q, g) <= tolerance:
             copy(_f(table, slot.X)[:nx], x[:nx])
             return ed.OK
+        deformations(table, x, 1, True)
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         if not np.isfinite(_newton_step(table, x, g, dx)):
@@ -224,15 +226,18 @@ def solve_kinematics(table, q):
             copy(x[:nx], x_prev[:nx])
             for a in range(nf):
                 x[free[a]] += dx[a]
-        _elements(table, x, 2)  # with the derivatives: usually x needs no correction
+        # the residual needs e alone; the chord steps use the kept factors
+        _elements(table, x, 0)
         if _residual(table, x, q, g) <= tolerance:
+            deformations(table, x, 2, True)  # the slaves are filled at this x
             return _store(table, q, x)
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             step = _newton_step(table, x, g, dx)
             if not np.isfinite(step):
                 break
-            _elements(table, x, 2)
+            _elements(table, x, 0)
             if _residual(table, x, q, g) <= tolerance or step <= tolerance:
+                deformations(table, x, 2, True)
                 return _store(table, q, x)
     else:
         copy(x, _f(table, slot.X_START))
