@@ -340,9 +340,11 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
     columns = _i(table, slot.POINT_COLUMNS)
     if moving:
         c, rigid_force = _f(table, slot.RIGID_C), _f(table, slot.RIGID_FORCE)
+        counts = columns[P * m: P * m + P]  # Dp's non-zero columns (`point_columns`)
         for pp in range(P):
             s = 0.0
-            for a in range(m):
+            for u in range(counts[pp]):
+                a = columns[pp * m + u]
                 s += Dp[pp, a] * c[coords[a]]
             point[pp] = s
         point_forces(Mp, pattern, P, point, w)

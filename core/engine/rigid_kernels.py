@@ -168,15 +168,19 @@ def element_transform(table, t, Dx, rows, m, Dz):
     terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
     for r in range(rows * mz):
         Dz[r] = 0.0
-    for a in range(m):
-        for u in range(DEPENDENCIES):
-            p = start + 2 * (a * DEPENDENCIES + u)
-            zl, w = terms[p], terms[p + 1]
-            if w == -2:
+    # row by row, skipping the zeros of Dx (most of a BEAM's Dp and De): each Dz entry sums
+    # the same products in the same order as the dense product would
+    for r in range(rows):
+        for a in range(m):
+            d = Dx[r * m + a]
+            if d == 0.0:
                 continue
-            weight = 1.0 if w == -1 else W[w]
-            for r in range(rows):
-                Dz[r * mz + zl] += Dx[r * m + a] * weight
+            for u in range(DEPENDENCIES):
+                p = start + 2 * (a * DEPENDENCIES + u)
+                zl, w = terms[p], terms[p + 1]
+                if w == -2:
+                    continue
+                Dz[r * mz + zl] += d * (1.0 if w == -1 else W[w])
 
 
 @kernel
