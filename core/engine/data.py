@@ -44,19 +44,19 @@ INT_SLOTS = ("dims", "free", "constraint_rows", "dof_coordinates", "dof_deformat
              "rigid_element_of", "rigid_elements", "rigid_z", "rigid_terms", "rigid_units",
              "rigid_coordinates", "touching_rows")
 # float64 slots (`floats`)
-FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs",
-               "q_ref", "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot",
-               "edot", "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv",
-               "local", "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot",
-               "augmented", "augmented_rhs", "band_scratch", "j_sparse_values",
-               "aug_sparse_values", "actuator_data", "currents", "port_values", "rigid_data",
-               "rigid_weights", "rigid_de", "rigid_c", "rigid_h", "rigid_force", "rigid_local")
+FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "inputs", "q_ref",
+               "x", "q", "DF", "lu", "e", "De", "D2e", "x_trial", "g", "dx", "xdot", "edot",
+               "sigma", "force", "mass", "mass_lu", "reduced_force", "qddot", "conv", "local",
+               "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot", "augmented",
+               "augmented_rhs", "band_scratch", "j_sparse_values", "aug_sparse_values",
+               "actuator_data", "currents", "port_values", "rigid_data", "rigid_weights",
+               "rigid_de", "rigid_c", "rigid_h", "rigid_force", "rigid_local", "evaluated_inputs")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
  MAX_P, CHORD_ITERATIONS, MAX_NEWTON, STATUS, WARM, JACOBIAN_REUSE, ENGINE, AUGMENTED, REDUCED,
  MASS_CURRENT, J_KL, J_KU, A_KL, A_KU, J_SPARSE, A_SPARSE, J_FACTORS, NEL, NSLAVES, A_RIGID,
- DIMS_SIZE) = range(34)
+ A_FACTORS, DIMS_SIZE) = range(35)
 # per-group row of `groups`
 (G_UNUSED, G_COUNT, G_M, G_K, G_P, G_REF_WIDTH, G_COORD_OFFSET, G_DEF_OFFSET, G_DATA_OFFSET,
  G_MASS_OFFSET, G_GRAVITY_OFFSET, G_DE_OFFSET, G_D2E_OFFSET, G_DEFORMATIONS_ENTRY,
@@ -67,16 +67,15 @@ FORCE_INPUT, CURRENT_DRIVE, VOLTAGE_DRIVE = range(3)
 (A_KM, A_R, A_L, A_GAIN, A_SATURATION, A_WIDTH) = range(6)
 # settings entries
 TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
-# counters entries
-# (SPARSE_PIVOTING: sparse LUs that pivoted afresh because a kept pivot failed its test;
-# SPARSE_FALLBACKS: those that could not, and were banded; numerics.sparse_lu)
-RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, SPARSE_PIVOTING, SPARSE_FALLBACKS, COUNTERS_SIZE = \
-    range(6)
-# dims[J_FACTORS]: which factors of J slot lu (banded) or slot j_sparse_values hold
-BANDED_FACTORS, SPARSE_FACTORS = range(2)
+# counters entries (SPARSE_PIVOTING: sparse LUs that pivoted afresh because a kept pivot failed
+# its test; SPARSE_FALLBACKS: those that could not, and were banded; numerics.sparse_lu)
+RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, SPARSE_PIVOTING, SPARSE_FALLBACKS, EVALUATIONS, \
+    COUNTERS_SIZE = range(7)
+# dims[J_FACTORS], dims[A_FACTORS]: which factors of J and of the augmented system are current
+NO_FACTORS, BANDED_FACTORS, SPARSE_FACTORS = range(-1, 2)
 # status codes returned by the engine's functions (messages: sundials.STATUS_MESSAGES)
 (OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT,
- NOT_CONNECTED) = range(7)
+ NOT_CONNECTED, NOT_AVAILABLE) = range(8)
 
 
 class EngineData:
@@ -208,7 +207,7 @@ class EngineData:
         nstate = 2 * ndof + dims[NEL]
         dims[HAS_DAMPING] = int(np.any(D))
         dims[[MAX_M, MAX_K, MAX_P]] = max_m, max_k, max_p
-        dims[CHORD_ITERATIONS], dims[MAX_NEWTON] = 6, 30
+        dims[CHORD_ITERATIONS], dims[MAX_NEWTON], dims[A_FACTORS] = 6, 30, NO_FACTORS
         # banded orders of J and of the augmented system (core/numerics/banded.py), and
         # their sparse LUs where those pay (sparse_packing), found once per model
         known = _ORDERS.get((id(model), rigid))  # a Simulator packs its model twice
@@ -329,6 +328,8 @@ class EngineData:
             # the value each input puts on its port in the last evaluation (N, N m; only
             # with actuators: without, the inputs themselves; `actuators.port_values`)
             "port_values": np.zeros(len(model.inputs) if model.actuators else 0),
+            # the inputs of the last evaluation, scratch for their change (`input_response`)
+            "evaluated_inputs": np.zeros(2 * len(model.inputs)),
             **packing.floats(nx, free.size, max_p),
         }
         self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)

@@ -10,6 +10,8 @@ has its module; this one holds the forms the integrators call and the one entry 
     factors          J and the augmented system: assembled and factored banded, or sparse
                      (`sparse_packing`: their patterns and scatter maps, packed per model)
     motion           qddot from M_bar qddot = DF^T r (or the augmented system), M_bar
+    input_response   the change of qddot that a change of the inputs makes, from the factors
+                     of the last evaluation
     point_masses     an element's point forces and mass Dp^T Mp Dp through its inertia points
     tangent          stiffness K0 + G0 and damping C0 of the dynamic balance
     rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
@@ -53,6 +55,7 @@ from .actuators import (
     implicit_blocks,
     set_currents,
 )
+from .input_response import input_response
 from .kinematics import compute_DF, deformations, solve_kinematics, solve_positions
 from .motion import evaluate, reduced_mass
 from .operations import (
@@ -60,6 +63,7 @@ from .operations import (
     OP_CONFIGURATION,
     OP_DEFORMATIONS,
     OP_EVALUATE,
+    OP_INPUT_RESPONSE,
     OP_JACOBIAN,
     OP_KINEMATICS,
     OP_MASS,
@@ -75,7 +79,8 @@ from .tangent import tangent
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
 __all__ = ["ENGINE_ENTRY", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
-           "OP_EVALUATE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS", "OP_POSITIONS",
+           "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
+           "OP_POSITIONS",
            "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call", "engine_entry",
            "first_order_jacobian", "first_order_rhs", "float_array", "implicit_jacobian",
            "implicit_residual", "int_array", "lu_factor", "lu_solve"]
@@ -252,6 +257,8 @@ def engine_entry(op, user_data, t, a, b, c, s):
         return solve_kinematics(table, carray(a, (ndof,), f8))
     if op == OP_MASS:
         return reduced_mass(table)
+    if op == OP_INPUT_RESPONSE:
+        return input_response(table, carray(a, (ndof,), f8))
     return -1
 
 

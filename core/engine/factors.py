@@ -183,6 +183,7 @@ def augmented_matrix(table):
     """The array the augmented system is assembled into, cleared: its sparse values when it
     is factored sparse, else the dense (na, na) slot augmented (row length na)."""
     dims = _i(table, slot.DIMS)
+    dims[ed.A_FACTORS] = ed.NO_FACTORS
     if dims[ed.A_SPARSE] == 1:
         A = sparse_lu.matrix_values(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES))
         A[:] = 0.0
@@ -306,21 +307,36 @@ def augmented_solve(table, A, na, rhs):
     """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
     then the rigid rows); False when A is singular."""
     dims = _i(table, slot.DIMS)
-    apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
-    dense = _f(table, slot.AUG)
+    apos, dense = _i(table, slot.AUG_POS), _f(table, slot.AUG)
     if dims[ed.A_SPARSE] == 1:
         ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
         if _sparse_factor(table, ints, floats) >= 0.0:
             sparse_lu.solve(ints, floats, rhs, False)
+            dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
             return True
         dense[: na * na] = 0.0
         sparse_lu.scatter_dense(ints, floats, dense, apos, apos)
+    if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
+                         dims[ed.A_KU]) > 0.0:
+        return False
+    dims[ed.A_FACTORS] = ed.BANDED_FACTORS
+    augmented_resolve(table, na, rhs)
+    return True
+
+
+@kernel
+def augmented_resolve(table, na, rhs):
+    """Solve A z = rhs in place (rhs (na,) as `augmented_solve`'s) with the factors the last
+    successful `augmented_solve` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:
+        sparse_lu.solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), rhs,
+                        False)
+        return
+    apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
     for u in range(na):
         t[apos[u]] = rhs[u]
-    kl, ku = dims[ed.A_KL], dims[ed.A_KU]
-    if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), kl, ku) > 0.0:
-        return False
-    banded.solve(dense, na, _i(table, slot.AUG_PIVOTS), kl, ku, t)
+    banded.solve(_f(table, slot.AUG), na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
+                 dims[ed.A_KU], t)
     for u in range(na):
         rhs[u] = t[apos[u]]
-    return True

@@ -177,6 +177,7 @@ def solve_positions(table, q):
     kept, no warm start set), for measuring outputs; a status code."""
     dims = _i(table, slot.DIMS)
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = 0
+    dims[ed.A_FACTORS] = ed.NO_FACTORS
     nx = dims[ed.NX]
     tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
@@ -201,6 +202,7 @@ def solve_kinematics(table, q):
     """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
     dims = _i(table, slot.DIMS)
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
+    dims[ed.A_FACTORS] = ed.NO_FACTORS  # and so are the augmented system's factors
     nx, nf = dims[ed.NX], dims[ed.NFREE]
     tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)

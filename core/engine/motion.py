@@ -78,7 +78,10 @@ def evaluate(table, q, qdot):
     h_m]. This is the reduced equation M_bar qddot = DF^T (r - M conv) (DF spans the null space
     of J_o). Leaves in the packed arrays what the tangent needs: the kinematics with J's LU,
     the constitutive stress resultants (slot sigma), r (slot force), xdot, conv = (D2F qdot)
-    qdot (slot conv) and xddot (slot xddot); a status. `reduced_mass` adds DF and M_bar."""
+    qdot (slot conv) and xddot (slot xddot); the augmented system's factors and the inputs
+    (`input_response`); a status. `reduced_mass` adds DF and M_bar. Counted in
+    counters[EVALUATIONS]."""
+    _i(table, slot.COUNTERS)[ed.EVALUATIONS] += 1
     status = run(table, OP_CONFIGURATION, q.ctypes.data, 0, 0.0)  # solve_kinematics
     if status != ed.OK:
         return status
@@ -184,6 +187,8 @@ def evaluate(table, q, qdot):
             rhs[nf + o] = -(quad[o] + rigid_h[o]) if rigid else -quad[o]
     if not augmented_solve(table, A, na, rhs):
         return ed.SINGULAR_MASS
+    inputs = _f(table, slot.INPUTS)  # for `input_response`, with the factors just made
+    copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     xddot = _f(table, slot.XDDOT)
     xddot[:] = 0.0
     for a in range(nf):
@@ -193,7 +198,7 @@ def evaluate(table, q, qdot):
     positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
     for j in range(n_xdof):
         qddot[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
-    _dof_deformation_accelerations(table, xddot, quad, moving, qddot)
+    dof_deformation_accelerations(table, xddot, quad, moving, qddot)
     return ed.OK
 
 
@@ -209,7 +214,7 @@ def _any_nonzero(v):
 
 
 @kernel
-def _dof_deformation_accelerations(table, xddot, quad, moving, qddot):
+def dof_deformation_accelerations(table, xddot, quad, moving, qddot):
     """qddot of the DOF deformations: De_m xddot + h_m (the constraint rows of those DOFs)."""
     dims = _i(table, slot.DIMS)
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]

@@ -23,6 +23,8 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          them)
     CONFIGURATION        q; x = F(q) and J's factors (`kinematics.solve_kinematics`: no DF)
     MASS                 DF, M_bar and its LU at the last evaluation (`motion.reduced_mass`)
+    INPUT_RESPONSE       out (NDOF,); the change of qddot that the change of the inputs since
+                         the last evaluation makes at its state (`input_response`)
 """
 
 from ..numerics.jit import kernel
@@ -31,7 +33,8 @@ from . import data as ed
 from .slots import DIMS, int_array
 
 (OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
- OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS) = range(12)
+ OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
+ OP_INPUT_RESPONSE) = range(13)
 
 
 @kernel

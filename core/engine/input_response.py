@@ -1,0 +1,74 @@
+"""The change of the accelerations that a change of the held inputs makes, at a fixed state.
+
+The inputs u (N, N m) enter the coordinate force r of `motion.evaluate` linearly, r = ... +
+B(x) u, and nothing else of the augmented system depends on them, so at the state of the last
+evaluation
+
+    [M_ff  J_o^T] [d xddot_f]   [T^T B(x) du]
+    [J_o   0    ] [d lambda ] = [0          ],    du = u - u_eval
+
+with the factors that evaluation left: one solve instead of an evaluation (the kinematics, the
+element masses and the factorisation). d qddot is then d xddot on the DOF coordinates and
+De_m d xddot on the DOF deformations. A one-step integrator uses it for the first stage after
+a change of the held inputs (`simulation.esdirk`). Exact but for round-off at the evaluation's
+state; only the augmented form keeps those factors, and only without actuators (whose forces
+depend on the coil currents, a state): otherwise NOT_AVAILABLE.
+"""
+
+from ..numerics.jit import kernel
+from . import data as ed
+from . import slots as slot
+from .factors import augmented_resolve
+from .motion import dof_deformation_accelerations
+from .ports import add_input_forces
+from .rigid_kernels import condense, expand
+from .slots import float_array as _f
+from .slots import int_array as _i
+
+
+@kernel
+def input_response(table, out):
+    """out (NDOF,) = d qddot (m/s^2, rad/s^2) for the change of the inputs in slot inputs since
+    the last evaluation, at that evaluation's state and with its factors; a status (OK, or
+    NOT_AVAILABLE when no evaluation's factors are current, in the reduced form, or with
+    actuators)."""
+    dims = _i(table, slot.DIMS)
+    if (dims[ed.A_FACTORS] == ed.NO_FACTORS or dims[ed.AUGMENTED] == 0
+            or _f(table, slot.PORT_VALUES).size != 0):
+        return ed.NOT_AVAILABLE
+    inputs = _f(table, slot.INPUTS)
+    nin = inputs.size
+    evaluated = _f(table, slot.EVALUATED_INPUTS)
+    du = evaluated[nin: 2 * nin]
+    out[:] = 0.0
+    changed = False
+    for j in range(nin):
+        du[j] = inputs[j] - evaluated[j]
+        changed = changed or du[j] != 0.0
+    if not changed:
+        return ed.OK
+    nf, n_rigid, n_xdof = dims[ed.NFREE], dims[ed.NRIGID], dims[ed.NXDOF]
+    rigid = dims[ed.NSLAVES] > 0
+    free = _i(table, slot.FREE)
+    force = _f(table, slot.X_TRIAL)  # scratch (NX,): B du, then d xddot
+    force[:] = 0.0
+    add_input_forces(_i(table, slot.INPUT_PORTS), du, _f(table, slot.X), force)
+    rhs = _f(table, slot.AUG_RHS)
+    if rigid:  # T^T: the slaves' forces on their masters
+        condense(table, force, rhs[:nf])
+    else:
+        for a in range(nf):
+            rhs[a] = force[free[a]]
+    rhs[nf: nf + n_rigid] = 0.0
+    augmented_resolve(table, nf + n_rigid, rhs)
+    xddot = force
+    xddot[:] = 0.0
+    for a in range(nf):
+        xddot[free[a]] = rhs[a]
+    if rigid:  # the slaves': T d zddot (c does not change with the inputs)
+        expand(table, xddot, False)
+    positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
+    for j in range(n_xdof):
+        out[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
+    dof_deformation_accelerations(table, xddot, rhs, False, out)
+    return ed.OK
