@@ -16,7 +16,8 @@ Kennedy & Carpenter 2003, and TR-BDF2 ("esdirk2", s = 3, g = 1 - 1/sqrt(2), orde
 3), all L-stable and stiffly accurate. One step from (t, y) with size h, f
 the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, m/s, rad/s):
 
-    F_1 = f(y)                                (F_s of the step before while inputs are held)
+    F_1 = f(y)                                (F_s of the step before while inputs are held;
+                                              after an input change see below)
     z_i = y + h sum_{j<i} a_ij F_j + h g f(z_i),  i = 2..s   (simplified Newton, started from
                                               f(z_i) extrapolated from the F_j in c)
     F_i = (z_i - y - h sum_{j<i} a_ij F_j) / (h g)       (the stage equation: no evaluation)
@@ -41,6 +42,11 @@ theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm
 Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
 (kinematics not converged) recomputes J or, with J fresh, quarters h and retries.
 
+After an input change du, F_1 = F_s + [0; M^-1 B du]: the inputs enter qddot linearly, and
+the engine solves for their change with the factors of its last evaluation (`engine.
+input_response`): one solve, not an evaluation, and F_s is what FSAL takes while inputs are
+held (within the Newton tolerance of f(y)). Where it cannot (reduced form, actuators): f(y).
+
 Status (the kernel's return): OK = 0 or one of the negative codes below; the state is always
 the last accepted one.
 """
@@ -56,9 +62,12 @@ from .esdirk_method import MAX_STAGES, TABLEAUS
 
 # float64 memory slots
 (M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
-# int64 flags and counters
+# int64 flags and counters; flags[I_FSAL]: F_1 to evaluate, F_1 current, F_1 = F_s of the inputs
+# of the engine's last evaluation (counters[EVALUATIONS] = flags[I_EVALUATION]): add the response
+FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
- I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_SIZE) = range(15)
+ I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
+ I_SIZE) = range(16)
 # rows of the vector workspace (the stage derivatives after them)
 (V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
 V_ROWS = V_F + MAX_STAGES
@@ -261,15 +270,24 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     y, z, err, weight, F = vectors[V_Y], vectors[V_Z], vectors[V_ERR], vectors[V_WEIGHT], \
         vectors[V_F:]
     rtol = memory[M_RTOL]
+    counters, dims = engine.int_array(table, slots.COUNTERS), engine.int_array(table, slots.DIMS)
     one_step, max_steps = flags[I_ONE_STEP] != 0, flags[I_MAX_STEPS]
     steps = 0
     failures = 0
     while memory[M_T] < t_stop:
         t = memory[M_T]
-        if flags[I_FSAL] == 0:
+        if flags[I_FSAL] == FSAL_INPUTS:  # valid while the engine evaluated nothing since
+            delta = vectors[V_DELTA]  # d qddot (NDOF,) of the inputs' change
+            ok = counters[ed.EVALUATIONS] == flags[I_EVALUATION] and call_engine(
+                dims[ed.ENGINE], engine.OP_INPUT_RESPONSE, table, 0.0, delta.ctypes.data, 0, 0,
+                0.0) == ed.OK
+            for j in range(dims[ed.NDOF] if ok else 0):
+                F[0, dims[ed.NDOF] + j] += delta[j]
+            flags[I_FSAL] = FSAL_CURRENT if ok else FSAL_NONE
+        if flags[I_FSAL] == FSAL_NONE:
             if _f(table, y, F[0], flags) != ed.OK:
                 return RHS_FAILURE
-            flags[I_FSAL] = 1
+            flags[I_FSAL] = FSAL_CURRENT
         if memory[M_H] <= 0.0:
             memory[M_H] = _initial_step(table, memory, flags, vectors, atol, t_stop)
         h = memory[M_H]
@@ -331,6 +349,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
         for k in range(n):
             y[k] = z[k]
             F[0, k] = F[stages - 1, k]
+        flags[I_EVALUATION] = counters[ed.EVALUATIONS]  # its last stage's
         memory[M_T] = t_stop if h == remaining else t + h
         memory[M_H] = (h * min(GROW, SAFETY * error ** -memory[M_EXPONENT]) if error > 0.0
                        else h * GROW)
@@ -385,19 +404,23 @@ class Esdirk:
         self.y_array = self.vectors[V_Y]
         self.counters = data.int_array("counters")
 
-    def reset(self, t, y):
+    def reset(self, t, y, *, inputs_changed=False):
         """Continue from time t (s) and state y (2 NDOF + coil currents,): the first stage's
-        derivative is recomputed, the step size, Jacobian and Newton matrix are kept."""
+        derivative is recomputed (with inputs_changed, at the integrator's own t and y: the
+        last one plus the engine's input response), the step size, Jacobian and Newton matrix
+        are kept."""
+        keep = (inputs_changed and self.flags[I_FSAL] != FSAL_NONE
+                and float(t) == self.memory[M_T] and np.array_equal(y, self.y_array))
         self.memory[M_T] = float(t)
         self.y_array[:] = y
-        self.flags[I_FSAL] = 0
+        self.flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
         self.counters[ed.FAILED_STATUS] = 0
 
     def forget(self):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
         self.memory[M_H] = 0.0
         self.memory[M_ETA] = 1.0
-        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU]] = 0
+        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL]] = 0  # FSAL_NONE
 
     def advance(self, t_stop, *, one_step=False, max_steps=None):
         """Integrate to t_stop (s), landing on it exactly (one accepted step only with

@@ -409,12 +409,16 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
             return _MEASURE_FAILED
         if changed or loop_state[1] != 0.0:  # as Simulator._restart and Esdirk.reset
             copy(plant_inputs, held)
+            # no state set since the last step (as Simulator._restart_kinematics): the first
+            # stage from the last one and the engine's input response (Esdirk.reset)
+            keep = (loop_state[2] == 0.0 and memory[esdirk.M_T] == t
+                    and flags[esdirk.I_FSAL] != esdirk.FSAL_NONE)
             if loop_state[2] != 0.0:
                 copy(x_start, x_plant)
                 dims[ed.WARM] = 0
                 loop_state[2] = 0.0
             memory[esdirk.M_T] = t
-            flags[esdirk.I_FSAL] = 0
+            flags[esdirk.I_FSAL] = esdirk.FSAL_INPUTS if keep else esdirk.FSAL_NONE
             counters[ed.FAILED_STATUS] = 0
             loop_state[1] = 0.0
         t_next = (k + 1) / fs

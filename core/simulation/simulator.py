@@ -323,7 +323,11 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self._q_ref_array[:] = self._q_ref
         if self._kinematics_restart_due():
             self._start_kinematics(self._x)
-        self.integrator.reset(self._t, self._y)
+        if self.method in ONE_STEP_METHODS:  # no state set: the first stage from the last one
+            self.integrator.reset(self._t, self._y,
+                                  inputs_changed=not self._restart_kinematics)
+        else:
+            self.integrator.reset(self._t, self._y)
         self._needs_init = self._restart_kinematics = False
 
     def _kinematics_restart_due(self):
