@@ -43,7 +43,7 @@ from .factors import (
 )
 from .kinematics import compute_DF, dof_rows
 from .operations import OP_CONFIGURATION, run
-from .point_masses import element_mass, point_columns, point_forces
+from .point_masses import dense_element_mass, element_mass, point_columns, point_forces
 from .ports import add_input_forces
 from .rigid_kernels import (
     condense,
@@ -363,7 +363,8 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
     Dz = local[: P * mz]
     Me = local[P * mz: P * mz + mz * mz]
     element_transform(table, t, Dp.reshape(P * m), P, m, Dz)
-    element_mass(Mp, pattern, P, mz, Dz.reshape((P, mz)), point, w, Me, columns)
+    dense_element_mass(Mp, pattern, P, mz, Dz.reshape((P, mz)),
+                       local[P * mz + mz * mz: 2 * P * mz + mz * mz], Me)
     position = columns[P * mz + P: P * mz + P + mz]
     entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
     add_element_mass(table, A, na, entry, z, mz, Me, position)

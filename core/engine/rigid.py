@@ -187,8 +187,9 @@ class RigidPacking:
                 "rigid_de": np.zeros(self.de_size), "rigid_c": np.zeros(nx if n_sc else 0),
                 "rigid_h": np.zeros(n_free if n_sc else 0),
                 "rigid_force": np.zeros(nx if n_sc else 0),
-                # a touching element's Dp_z (max_p, max_mz) and Me_z (max_mz, max_mz)
-                "rigid_local": np.zeros(max_p * self.max_mz + self.max_mz ** 2)}
+                # a touching element's Dp_z (max_p, max_mz), Me_z (max_mz, max_mz) and
+                # Mp Dp_z (max_p, max_mz)
+                "rigid_local": np.zeros(2 * max_p * self.max_mz + self.max_mz ** 2)}
 
     def pattern_coordinates(self, gp, group):
         """Per element of packed group gp, the coordinates its entries land on in the
