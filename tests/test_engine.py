@@ -36,7 +36,6 @@ from flexure.core import (
     build_model,
     builtin_scenes,
     load_scene,
-    run_sampled_loop,
     scene_path,
     static_equilibrium,
 )
@@ -44,6 +43,7 @@ from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
 from flexure.core.simulation.sundials import METHODS, STATUS_MESSAGES
+from tests.compiled_loops import run_compiled_loop
 
 CORE = Path(__file__).resolve().parents[1] / "core"
 
@@ -376,14 +376,8 @@ def check_compiled_loop_against_python_loop(method):
                                     fs=4000.0)
     t, _, position, force = simulate_loop(InProcessPlant(model, method=method, rtol=1e-7),
                                           controller, design)
-    feedback = controller.controller
     sim = Simulator(model, method=method, rtol=1e-7)
-    t_c, position_c, force_c = run_sampled_loop(
-        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
-        feedforward=controller.feedforward,
-        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
-        loop_inputs=[pair.input_index for pair in design.pairs],
-        loop_outputs=[pair.output_index for pair in design.pairs])
+    t_c, position_c, force_c = run_compiled_loop(sim, controller, design)
     assert position.shape == (101, 1) and np.ptp(position) > 5e-4  # it moved
     assert np.array_equal(t_c, t)
     assert np.array_equal(position_c, position)

@@ -4,10 +4,11 @@ stage after an input change that takes it instead of an evaluation."""
 import numpy as np
 import pytest
 
-from flexure.core import Mechanics, Simulator, load_scene, run_sampled_loop
+from flexure.core import Mechanics, Simulator, load_scene
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
+from tests.compiled_loops import run_compiled_loop
 from tests.test_engine import close, evaluate, random_states
 from tests.test_rotation_ports import build_model, cantilever
 
@@ -69,13 +70,7 @@ def loop_run(model, method, rtol, controller, design):
     """The compiled loop of `controller` on a Simulator: position, force, rhs evaluations."""
     sim = Simulator(model, method=method, rtol=rtol)
     assert sim.data.int_array("dims")[ed.AUGMENTED] == 1
-    feedback = controller.controller
-    _, position, force = run_sampled_loop(
-        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
-        feedforward=controller.feedforward,
-        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
-        loop_inputs=[pair.input_index for pair in design.pairs],
-        loop_outputs=[pair.output_index for pair in design.pairs])
+    _, position, force = run_compiled_loop(sim, controller, design)
     return position, force, sim.statistics["rhs_evaluations"]
 
 

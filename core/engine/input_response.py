@@ -19,9 +19,9 @@ from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
 from .factors import augmented_resolve
-from .motion import dof_deformation_accelerations
+from .motion import qddot_of_solution
 from .ports import add_input_forces
-from .rigid_kernels import condense, expand
+from .rigid_kernels import condense
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -47,7 +47,7 @@ def input_response(table, out):
         changed = changed or du[j] != 0.0
     if not changed:
         return ed.OK
-    nf, n_rigid, n_xdof = dims[ed.NFREE], dims[ed.NRIGID], dims[ed.NXDOF]
+    nf, n_rigid = dims[ed.NFREE], dims[ed.NRIGID]
     rigid = dims[ed.NSLAVES] > 0
     free = _i(table, slot.FREE)
     force = _f(table, slot.X_TRIAL)  # scratch (NX,): B du, then d xddot
@@ -61,14 +61,7 @@ def input_response(table, out):
             rhs[a] = force[free[a]]
     rhs[nf: nf + n_rigid] = 0.0
     augmented_resolve(table, nf + n_rigid, rhs)
-    xddot = force
-    xddot[:] = 0.0
-    for a in range(nf):
-        xddot[free[a]] = rhs[a]
-    if rigid:  # the slaves': T d zddot (c does not change with the inputs)
-        expand(table, xddot, False)
-    positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
-    for j in range(n_xdof):
-        out[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
-    dof_deformation_accelerations(table, xddot, rhs, False, out)
+    # d xddot in `force`'s room; the slaves' T d zddot without c, which the inputs leave as
+    # it is, and no h (the DOF deformations' De_m d xddot)
+    qddot_of_solution(table, rhs, force, False, rhs, False, out)
     return ed.OK

@@ -87,7 +87,7 @@ def evaluate(table, q, qdot):
         return status
     dims = _i(table, slot.DIMS)
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    n_rigid, n_xdof = dims[ed.NRIGID], dims[ed.NXDOF]
+    n_rigid = dims[ed.NRIGID]
     x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
     dx = _f(table, slot.DX)
     moving = _any_nonzero(qdot)
@@ -189,17 +189,27 @@ def evaluate(table, q, qdot):
         return ed.SINGULAR_MASS
     inputs = _f(table, slot.INPUTS)  # for `input_response`, with the factors just made
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
-    xddot = _f(table, slot.XDDOT)
+    qddot_of_solution(table, rhs, _f(table, slot.XDDOT), True, quad, moving, qddot)
+    return ed.OK
+
+
+@kernel
+def qddot_of_solution(table, rhs, xddot, with_c, quad, moving, qddot):
+    """qddot (NDOF,) from the augmented system's solution `rhs` (xddot on the free
+    coordinates first, in their order): xddot (NX,) filled from it (the slaves' T zddot, + c
+    `with_c`), then qddot on the DOF coordinates and De_m xddot (+ h_m when `moving`, h in
+    `quad`) on the DOF deformations."""
+    dims = _i(table, slot.DIMS)
+    free = _i(table, slot.FREE)
     xddot[:] = 0.0
-    for a in range(nf):
+    for a in range(dims[ed.NFREE]):
         xddot[free[a]] = rhs[a]
-    if rigid:  # the slaves': T zddot + c
-        expand(table, xddot, True)
+    if dims[ed.NSLAVES] > 0:
+        expand(table, xddot, with_c)
     positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
-    for j in range(n_xdof):
+    for j in range(dims[ed.NXDOF]):
         qddot[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
     dof_deformation_accelerations(table, xddot, quad, moving, qddot)
-    return ed.OK
 
 
 @kernel
