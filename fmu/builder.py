@@ -56,10 +56,11 @@ TRIED_PLATFORMS = ("linux64",)
 LAUNCHER = '''"""The slave script of this FMU, written by flexure's FMU builder.
 
 It checks that this Python has what the FMU imports ({requirements}), then runs the slave
-script {source} (a copy of it is beside this file); if something is missing, the slave class
-is a stand-in that logs what and fails.
+script {source} (a copy of it is beside this file); if something is missing, or the script
+fails as it runs, the slave class is a stand-in that logs what and fails.
 """
 
+from {package}.fmu.requirements import failed_script as _failed_script
 from {package}.fmu.requirements import stand_in as _stand_in
 from {package}.fmu.requirements import unmet_requirements as _unmet_requirements
 
@@ -68,7 +69,11 @@ _SOURCE = {source_text!r}
 
 _unmet = _unmet_requirements(_REQUIREMENTS, __file__)
 if _unmet is None:
-    exec(compile(_SOURCE, __file__[: -len(".py")] + ".slave.py", "exec"), globals(), locals())
+    try:
+        exec(compile(_SOURCE, __file__[: -len(".py")] + ".slave.py", "exec"), globals(),
+             locals())
+    except Exception as _error:  # noqa: BLE001 -- named by the stand-in, not fatal
+        ScriptFailed = _failed_script(_error, __file__, locals())
 else:
     MissingRequirements = _stand_in(_unmet)
 '''
@@ -85,6 +90,15 @@ from flexure.fmu.pythonfmu_workarounds import (  # noqa: E402
 
 _keep_script_namespace(globals(), locals())
 """
+
+
+def _run_once(script_path):
+    """Run the slave script once, here, so that an error in it is raised by the build with the
+    script's own traceback. In the FMU the launcher turns such an error into a stand-in that
+    names it in the host's log (`requirements.failed_script`): pythonfmu's build, which
+    imports the launcher, would then only say that it found no slave class."""
+    code = compile(script_path.read_text(), str(script_path), "exec")
+    exec(code, {"__name__": f"{script_path.stem}_checked", "__file__": str(script_path)})
 
 
 def _requirements_header(bundle):
@@ -164,6 +178,7 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *,
         needs = runtime_requirements(bundle, requirements)
     except ValueError as error:
         raise FMUBuildError(f"{script_path}: {error}") from None
+    _run_once(script_path)
     # pythonfmu imports the script by its name to find the class: a module of that name
     # already loaded in this process (another FMU's) would be taken instead. Set it aside.
     shadowed = sys.modules.pop(script_path.stem, None)

@@ -256,6 +256,28 @@ def stand_in(message: str):
     return MissingRequirements
 
 
+def failed_script(error: Exception, script_file: str, namespace: dict):
+    """The slave class of an FMU whose slave script raised `error` as it ran: a stand-in (see
+    `stand_in`) whose instantiation logs what failed and where, instead of pythonfmu's fatal
+    error, after which its binary would be left unguarded at exit. The slave classes the
+    script made before it failed are taken out of `namespace` (the launcher's locals), where
+    pythonfmu's binary would pick one of them over the stand-in."""
+    import traceback
+
+    source = os.path.basename(script_file)[: -len(".py")] + ".slave.py"
+    lines = [frame.lineno for frame in traceback.extract_tb(error.__traceback__)
+             if frame.filename.endswith(source)]
+    line = getattr(error, "lineno", None) if isinstance(error, SyntaxError) else (
+        lines[-1] if lines else None)
+    where = f"{source}, line {line}" if line else source
+    message = (f"{model_identifier(os.path.dirname(os.path.abspath(script_file)))}: its slave "
+               f"script failed as it ran ({where}): {type(error).__name__}: {error}")
+    for key, value in list(namespace.items()):
+        if isinstance(value, type) and any(c.__name__ == "Fmi2Slave" for c in value.__mro__[1:]):
+            del namespace[key]
+    return stand_in(message)
+
+
 def runtime_requirements(bundle, extra=()) -> Requirements:
     """The requirements of an FMU that bundles the flexure packages `bundle` (() for none:
     the host's flexure) and whose script imports the distributions `extra` ("NAME" or

@@ -295,6 +295,57 @@ def test_a_host_without_a_requirement_logs_one_line_naming_it(stage_fmu, tmp_pat
     assert results["on"]["logs"][1][0] == 4 and line in results["on"]["logs"][1][2]
 
 
+FAILS_IN_HOST = textwrap.dedent("""
+    import os
+
+    from flexure.fmu import SafeSlave
+
+
+    class FailsInHost(SafeSlave):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.y = 0.0
+            self.add_real("y", causality="output", unit="m")
+
+        def advance(self, t, h):
+            pass
+
+
+    if os.environ.get("BREAK_SLAVE"):  # as a host without something the script needs
+        raise RuntimeError("broken on purpose")
+""")
+
+
+def test_a_slave_script_that_fails_in_the_host_is_named_and_its_binary_guarded(tmp_path):
+    """The launcher turns the script's error into a stand-in: fmi2Instantiate fails with one
+    line naming the script's line and error, and the host exits cleanly with the binary
+    guarded (pythonfmu's fatal error alone left it unguarded: a crash at exit, now and then)."""
+    script = tmp_path / "FailsInHost.py"
+    script.write_text(FAILS_IN_HOST)
+    path = build_slave_fmu(script, tmp_path / "FailsInHost.fmu")
+    host = subprocess.run([sys.executable, "-c", HOST, str(path)], capture_output=True,
+                          text=True, timeout=300, env={**os.environ, "BREAK_SLAVE": "1"})
+    assert host.returncode == 0, host.stderr[-2000:]
+    printed = json.loads(host.stdout.splitlines()[-1])
+    assert sorted(printed["guarded"]) == sorted(printed["binaries"])
+    line = FAILS_IN_HOST.splitlines().index('    raise RuntimeError("broken on purpose")') + 1
+    for result in printed["runs"].values():
+        assert result["outcome"] == "Failed to instantiate model"
+        assert result["logs"][0] == [3, "host_a", "FailsInHost: its slave script failed as it "
+                                     f"ran (FailsInHost.slave.py, line {line}): RuntimeError: "
+                                     "broken on purpose"]
+
+
+def test_a_slave_script_that_fails_at_build_raises_its_own_error(tmp_path, monkeypatch):
+    script = tmp_path / "FailsAtBuild.py"
+    script.write_text(FAILS_IN_HOST.replace("FailsInHost", "FailsAtBuild"))
+    monkeypatch.setenv("BREAK_SLAVE", "1")
+    with pytest.raises(RuntimeError, match="broken on purpose") as raised:
+        build_slave_fmu(script, tmp_path / "FailsAtBuild.fmu")
+    assert raised.traceback[-1].path == script  # the script's own line, not the launcher's
+    assert not (tmp_path / "FailsAtBuild.fmu").exists()
+
+
 def test_the_host_logger_is_called_only_for_the_known_pythonfmu_binary(tmp_path):
     import hashlib
 
