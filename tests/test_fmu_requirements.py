@@ -173,20 +173,26 @@ def test_only_the_platforms_tried_are_in_the_fmu(stage_fmu, tmp_path):
     assert not (tmp_path / "mac.fmu").exists()
 
 
+TINY_SLAVE = textwrap.dedent("""
+    import os
+
+    from flexure.fmu.slave import SafeSlave
+
+
+    class TinyProbe(SafeSlave):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.y = 1.0
+            self.add_real("y", causality="output", unit="m")
+
+        def advance(self, t, h):
+            pass
+""")
+
+
 def _tiny_script(tmp_path):
     script = tmp_path / "tiny_slave_probe.py"
-    script.write_text(textwrap.dedent("""
-        from flexure.fmu.slave import SafeSlave
-
-        class TinyProbe(SafeSlave):
-            def __init__(self, **kwargs):
-                super().__init__(**kwargs)
-                self.y = 1.0
-                self.add_real("y", causality="output", unit="m")
-
-            def advance(self, t, h):
-                pass
-    """))
+    script.write_text(TINY_SLAVE)
     return script
 
 
@@ -295,23 +301,10 @@ def test_a_host_without_a_requirement_logs_one_line_naming_it(stage_fmu, tmp_pat
     assert results["on"]["logs"][1][0] == 4 and line in results["on"]["logs"][1][2]
 
 
-FAILS_IN_HOST = textwrap.dedent("""
-    import os
+# the tiny slave, and then an error as its script runs in a host without what it needs
+FAILS_IN_HOST = TINY_SLAVE.replace("TinyProbe", "FailsInHost") + textwrap.dedent("""
 
-    from flexure.fmu import SafeSlave
-
-
-    class FailsInHost(SafeSlave):
-        def __init__(self, **kwargs):
-            super().__init__(**kwargs)
-            self.y = 0.0
-            self.add_real("y", causality="output", unit="m")
-
-        def advance(self, t, h):
-            pass
-
-
-    if os.environ.get("BREAK_SLAVE"):  # as a host without something the script needs
+    if os.environ.get("BREAK_SLAVE"):
         raise RuntimeError("broken on purpose")
 """)
 
