@@ -23,9 +23,8 @@ SETTABLE_PHASES = frozenset((INSTANTIATED, INITIALIZATION, STEP_COMPLETE))
 class SlaveValues:
     """The value getters and setters of `SafeSlave` (which sets up what they use: `vars`,
     `phase`, `broken`, `_settable_inputs`, `_getters`, `check_value`, `unchecked_inputs` and
-    the error state's
-    `_error`, `_illegal`, `_break`, `_fail`). Each is called by pythonfmu's binary and catches
-    everything."""
+    the error state's `_error`, `_illegal`, `_break`, `_fail`). Each is called by pythonfmu's
+    binary and catches everything."""
 
     def get_real(self, vrs: list[int]) -> list[float]:
         """fmi2GetReal.
@@ -91,7 +90,9 @@ class SlaveValues:
         """One value per reference, always (the binary reads exactly that many); a reference
         that cannot be read gives `default` and a logged error."""
         try:  # the common case: every reference readable and every getter answering
-            getters = self._getters.get(kind) or self._getters_of(kind)
+            getters = self._getters.get(kind)
+            if getters is None:
+                getters = self._readable(kind)
             return [convert(getters[vr]()) for vr in vrs]
         except BaseException:  # noqa: BLE001 -- then value by value, naming what failed
             pass
@@ -168,7 +169,9 @@ class SlaveValues:
             if self.broken or self.phase not in SETTABLE_PHASES:
                 return self._illegal(call, "states instantiated, initialization mode and "
                                            "step complete")
-            inputs = self._settable_inputs.get(kind) or self._inputs_of(kind)
+            inputs = self._settable_inputs.get(kind)
+            if inputs is None:
+                inputs = self._settable(kind)
             for vr, value in zip(vrs, values, strict=True):
                 # an input of this kind is always settable: at most its value is checked
                 entry = inputs.get(vr)
@@ -186,28 +189,24 @@ class SlaveValues:
         except BaseException as error:  # noqa: BLE001
             self._fail(call, error)
 
-    def _getters_of(self, kind):
-        """{value reference: getter} of the variables of `kind` that pass the variable checks
-        (found once per kind, as `_inputs_of`)."""
-        found = self._getters.get(kind)
-        if found is None:
-            found = self._getters[kind] = {
-                vr: variable.getter for vr, variable in self.vars.items()
-                if variable.getter is not None and not self._variable_problem(vr, kind)}
+    def _readable(self, kind):
+        """{value reference: getter} of the variables of `kind` that pass the variable checks,
+        kept in `_getters` (made on a kind's first get, as `_settable`)."""
+        found = self._getters[kind] = {
+            vr: variable.getter for vr, variable in self.vars.items()
+            if variable.getter is not None and not self._variable_problem(vr, kind)}
         return found
 
-    def _inputs_of(self, kind):
+    def _settable(self, kind):
         """{value reference: (name, setter, whether `check_value` sees its values)} of the
-        inputs of `kind` that pass the variable checks (found once per kind, by those checks:
-        the variables are registered in __init__, before any set, and an input's settability
-        does not depend on the phase)."""
-        found = self._settable_inputs.get(kind)
-        if found is None:
-            found = self._settable_inputs[kind] = {
-                vr: (variable.name, variable.setter, variable.name not in self.unchecked_inputs)
-                for vr, variable in self.vars.items()
-                if variable.causality == Fmi2Causality.input
-                and not (self._variable_problem(vr, kind) or self._settable_problem(vr))}
+        inputs of `kind` that pass the variable checks, kept in `_settable_inputs` (made on a
+        kind's first set, by those checks: the variables are registered in __init__, before
+        any set, and an input's settability does not depend on the phase)."""
+        found = self._settable_inputs[kind] = {
+            vr: (variable.name, variable.setter, variable.name not in self.unchecked_inputs)
+            for vr, variable in self.vars.items()
+            if variable.causality == Fmi2Causality.input
+            and not (self._variable_problem(vr, kind) or self._settable_problem(vr))}
         return found
 
     def _variable_problem(self, vr, kind):
