@@ -323,11 +323,8 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self._q_ref_array[:] = self._q_ref
         if self._kinematics_restart_due():
             self._start_kinematics(self._x)
-        if self.method in ONE_STEP_METHODS:  # no state set: the first stage from the last one
-            self.integrator.reset(self._t, self._y,
-                                  inputs_changed=not self._restart_kinematics)
-        else:
-            self.integrator.reset(self._t, self._y)
+        # no state set since the last step: only the inputs changed
+        self.integrator.reset(self._t, self._y, inputs_changed=not self._restart_kinematics)
         self._needs_init = self._restart_kinematics = False
 
     def _kinematics_restart_due(self):

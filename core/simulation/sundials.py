@@ -351,8 +351,10 @@ class Cvode(_Solver):
             "num_steps": function_address(cv.CVodeGetNumSteps),
             "y": self.y, "tret": ctypes.addressof(self.tret)}
 
-    def reset(self, t, y):
-        """(Re)start at time t (s) from y (2 NDOF + coil currents,) at order 1.
+    def reset(self, t, y, *, inputs_changed=False):
+        """(Re)start at time t (s) from y (2 NDOF + coil currents,) at order 1, whether or not
+        only the inputs changed since the last step (`inputs_changed`, which the one-step
+        `Esdirk.reset` takes too): a multistep method's history is wrong after either.
 
         What the integrator learnt before is kept (`restart_memory`): the first restart
         estimates its initial step, later ones start with that step; and the Jacobian of the
@@ -428,8 +430,9 @@ class Ida(_Solver):
         self._set_options(jac, jacobian=jacobian, max_step=max_step, max_order=max_order)
         self._ydot = np.zeros(self.n)
 
-    def reset(self, t, y):
-        """(Re)start at t from y with the consistent yp = f(t, y) (both halves differential)."""
+    def reset(self, t, y, *, inputs_changed=False):
+        """(Re)start at t from y with the consistent yp = f(t, y) (both halves differential),
+        whether or not only the inputs changed (`inputs_changed`, as `Cvode.reset`)."""
         if self.input_function is not None:
             self.data.float_array("inputs")[:] = self.input_function(t)
         status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, float),
