@@ -230,7 +230,7 @@ class SceneSlave(SafeSlave):
     def _refresh(self):
         """Read the outputs, coil currents (and the stress) of the simulator's current state
         into the lists the getters read."""
-        self.outputs[:] = self.simulator.outputs().tolist()
+        self.outputs[:] = self.simulator.output_values()
         if self.currents:  # a model without coils has no currents to copy
             self.currents[:] = self.simulator.currents.tolist()
         if self.von_mises:

@@ -64,7 +64,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import math
-import time as _time
 import traceback
 from typing import Any
 
@@ -154,7 +153,6 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self.start_time = 0.0  # s
         self.phase = INSTANTIATED  # where the instance is in the FMI call sequence
         self.broken = ""  # why this instance is in the error state ("" while it is not)
-        self.step_seconds = 0.0  # wall time spent in do_step (s), for benchmarks
         self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
 
@@ -373,7 +371,6 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         bool
             True for fmi2OK; False for fmi2Discard (a refused or failed step, logged).
         """
-        start = _time.perf_counter()
         try:
             time = self.time
             # one test for the usual step (NaN fails every comparison), the refusals after it
@@ -386,8 +383,6 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
             return True
         except BaseException as error:  # noqa: BLE001 -- a raise here would be fmi2Fatal
             return self._step_failed(current_time, step_size, error)
-        finally:
-            self.step_seconds += _time.perf_counter() - start
 
     def _step_failed(self, current_time, step_size, error):
         """After `advance` raised: a model error is logged and the instance goes back to its

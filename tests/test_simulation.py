@@ -262,7 +262,8 @@ def test_zero_order_hold_samples_equal_manual_set_inputs():
 def test_outputs_that_are_dofs_are_read_from_q_and_equal_the_kinematics():
     """stage_planar_3dof's outputs x, y are its DOFs 3.x, 3.y: `outputs` reads them from q
     (no kinematics), equal to the kinematics' solution at that state to round-off; an
-    output that is not a DOF (truss_1dof_e's x, its DOF an elongation) is marked -1."""
+    output that is not a DOF (truss_1dof_e's x, its DOF an elongation) is marked -1.
+    `output_values` gives the same floats as a list, by either path."""
     from flexure.core.mechanics.ports import output_dofs
 
     model = load_scene("stage_planar_3dof")
@@ -273,7 +274,12 @@ def test_outputs_that_are_dofs_are_read_from_q_and_equal_the_kinematics():
     sim.set_inputs([1.0])
     sim.advance(0.02)
     direct = sim.outputs()
-    assert direct.tolist() == (sim.q[:2]).tolist()
+    assert direct.tolist() == (sim.q[:2]).tolist() == sim.output_values()
+    assert all(type(value) is float for value in sim.output_values())
+    kinematic = Simulator(load_scene("truss_1dof_e"), method="esdirk", rtol=1e-6)
+    kinematic.set_inputs([1.0])
+    kinematic.advance(0.02)
+    assert kinematic.output_values() == kinematic.outputs().tolist()
     solved = sim.outputs_along(sim.absolute(sim.state)[None])[0]
     np.testing.assert_allclose(direct, solved, rtol=0.0, atol=1e-15)
     assert abs(direct[0]) > 1e-6  # the stage moved

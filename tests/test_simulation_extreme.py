@@ -202,20 +202,34 @@ def test_the_compiled_range_test_agrees_with_the_warnings(scene):
     rng = np.random.default_rng(7)
     x0 = np.asarray(model.initial_coordinates, float)
     e0 = np.zeros(len(model.deformation_names))
+    # `watch` reads these two arrays in place at each call: they are overwritten below
+    x, e = x0.copy(), e0.copy()
+    watched = check.watch(x, e)
     seen = set()
     for _ in range(400):
-        x, e = x0.copy(), e0.copy()
+        x[:], e[:] = x0, e0
         x[check.translational] += rng.uniform(-1.2, 1.2, check.translational.size) * (
             DISTANCE_LIMIT * check.scale) * rng.uniform(0, 1)
         e[check.elongation] = rng.uniform(-1.2, 1.2, check.elongation.size) * check.strain_bound
         within = check.within(x, e)
-        assert within == (check.warnings(x, e) == {})
+        assert within == (check.warnings(x, e) == {}) == watched()
         seen.add(within)
     assert seen == {True, False}
     for which in ("strain", "distance"):
-        x, e = x0.copy(), e0.copy()
+        x[:], e[:] = x0, e0
         if which == "strain":
             e[check.elongation[-1]] = -1.01 * check.strain_bound[-1]
         else:
             x[check.translational[-1]] += 1.01 * DISTANCE_LIMIT * check.scale
-        assert not check.within(x, e) and set(check.warnings(x, e)) == {which}
+        assert not check.within(x, e) and not watched()
+        assert set(check.warnings(x, e)) == {which}
+
+
+def test_a_range_watch_needs_arrays_it_can_read_in_place():
+    """RangeCheck.watch refuses a strided view: its compiled check reads x and e by address."""
+    from flexure.core.simulation.plausibility import RangeCheck
+
+    model = load_scene("stage_planar_3dof")
+    x = np.repeat(np.asarray(model.initial_coordinates, float), 2)[::2]
+    with pytest.raises(TypeError, match="C-contiguous"):
+        RangeCheck(model).watch(x, np.zeros(len(model.deformation_names)))

@@ -140,7 +140,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         # every output a coordinate DOF (a stage's carriage): read from q, no kinematics
         dofs = output_dofs(model)
         self._output_dofs = dofs if dofs.size and np.all(dofs >= 0) else None
+        self._output_dof_list = [] if self._output_dofs is None else self._output_dofs.tolist()
         self._range = None  # plausibility.RangeCheck, made on first use
+        self._within = None  # its compiled check of the last evaluation, made on first use
         # views of the coordinates and deformations of the engine's last evaluation
         self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")
         self.reset()
