@@ -378,13 +378,13 @@ def test_the_steady_slopes_are_the_derivatives_of_the_steady_port_values():
 
 @pytest.mark.parametrize("coils", [1, 2])
 def test_a_large_model_with_coils_takes_the_full_newton_matrix_in_esdirk(coils):
-    """From esdirk.REDUCED_FROM DOFs on ESDIRK solves I - hg J through a Schur complement of
+    """From newton_matrix.SCHUR_FROM DOFs on ESDIRK solves I - hg J through a Schur complement of
     J = [[0, I], [A, B]]; J = [[0, I, 0], [A, B, E], [0, F, G]] with coil currents is not of
     that form (with one coil its first rows look so when split at n // 2): the full matrix,
     and numpy's solution to the round-off of either."""
-    from flexure.core.simulation import esdirk
+    from flexure.core.simulation import newton_matrix
 
-    m = esdirk.REDUCED_FROM
+    m = newton_matrix.SCHUR_FROM
     n = 2 * m + coils
     rng = np.random.default_rng(7)
     J = np.zeros((n, n))

@@ -82,6 +82,42 @@ def test_predictor_reproduces_polynomials_of_the_stage_time():
                 assert sum(P[i][j] * c[j] ** power for j in range(i)) == c[i] ** power
 
 
+def last_step_history(tableau, h, a, b, k):
+    """`keep_history` (compiled) after a step of size h whose stage derivatives are F(t) = a +
+    b t + k t^2 at the stage times: (mean slope, curvature)."""
+    from flexure.core.simulation import esdirk
+
+    A = tableau.arrays()[0]
+    vectors = np.zeros((esdirk.V_ROWS, a.size))
+    for j, c in enumerate(tableau.c):
+        t = float(c) * h
+        vectors[esdirk.V_F + j] = a + b * t + k * t * t
+    esdirk.keep_history(vectors, A, h)
+    return vectors[esdirk.V_SLOPE], vectors[esdirk.V_CURVATURE]
+
+
+@pytest.mark.parametrize("tableau", TABLEAUS, ids=lambda t: t.name)
+def test_the_last_steps_history_is_the_quadratic_through_its_stages(tableau):
+    """On stage derivatives that are a quadratic in t, F(t) = a + b t + k t^2: the mean slope
+    (F(h) - F(0)) / h = b + k h and the curvature k, per component, to round-off. With them
+    the next step's Newton start is exact where F goes on as it was: stage 2's F_1 + c2 h
+    slope for a linear F, stage 3's line through F_1, F_2 plus the curvature term for a
+    quadratic one."""
+    rng = np.random.default_rng(3)
+    h, c = 2.5e-4, [float(v) for v in tableau.c]
+    a, b, k = (rng.standard_normal(4) * scale for scale in (1.0, 1e3, 1e7))
+    slope, curvature = last_step_history(tableau, h, a, b, k)
+    np.testing.assert_allclose(slope, b + k * h, rtol=1e-9)
+    np.testing.assert_allclose(curvature, k, rtol=1e-6)
+    P = tableau.arrays()[2]
+    after = [a + b * t + k * t * t for t in h + np.array(c) * h]  # the next step's stages
+    third = P[2, 0] * after[0] + P[2, 1] * after[1] + c[2] * (c[2] - c[1]) * h * h * curvature
+    np.testing.assert_allclose(third, after[2], rtol=1e-9)
+    slope, _ = last_step_history(tableau, h, a, b, 0.0 * k)
+    np.testing.assert_allclose(a + b * h + c[1] * h * slope, a + b * (1 + c[1]) * h,
+                               rtol=1e-12)
+
+
 # -- convergence and accuracy on a model ----------------------------------------------------------
 @pytest.mark.parametrize("method, order", [("esdirk2", 2), ("esdirk3", 3), ("esdirk", 4)])
 def test_observed_order_with_fixed_steps(method, order):
@@ -105,12 +141,13 @@ def test_observed_order_with_fixed_steps(method, order):
     assert np.all(np.abs(observed - order) < 0.3), observed
 
 
-@pytest.mark.parametrize("method, bound", [("esdirk", 2.0), ("esdirk3", 50.0)])
+@pytest.mark.parametrize("method, bound", [("esdirk", 2.0), ("esdirk3", 50.0),
+                                           ("esdirk2", 50.0)])
 def test_three_dof_step_within_rtol_of_a_tight_cvode_run(method, bound):
     """stage_planar_3dof, 1 N for 0.2 s at rtol 1e-6: x within `bound` rtol of its motion.
     Measured at rtol 1e-5 to 1e-7: esdirk 0.2 to 0.7 rtol, esdirk3 23 to 28 rtol (its
     order-2 error estimate is conservative per step, the order-3 solution's global error
-    accumulates over ~400 steps)."""
+    accumulates over ~400 steps), esdirk2 (TR-BDF2) 24 to 26 rtol over 900 to 9000 steps."""
     model = load_scene("stage_planar_3dof")
     times = np.linspace(0.0, 0.2, 21)
     reference = simulate(model, 0.2, inputs={"F": 1.0}, rtol=1e-11, output_times=times)
@@ -209,12 +246,12 @@ def test_a_corrupt_integrator_memory_is_refused():
 # -- the Newton matrix of large models -----------------------------------------------------------
 @pytest.mark.parametrize("second_order", [True, False])
 def test_the_newton_matrix_through_its_schur_complement_solves_as_the_full_one(second_order):
-    """From esdirk.REDUCED_FROM DOFs on, (I - hg J) v = r with J = [[0, I], [A, B]] is solved
-    through I - hg B - hg^2 A: the same solution as numpy on the full matrix, to the round-off
-    of either; a J of another form takes the full matrix."""
-    from flexure.core.simulation import esdirk
+    """From newton_matrix.SCHUR_FROM DOFs on, (I - hg J) v = r with J = [[0, I], [A, B]] is
+    solved through I - hg B - hg^2 A: the same solution as numpy on the full matrix, to the
+    round-off of either; a J of another form takes the full matrix."""
+    from flexure.core.simulation import newton_matrix
 
-    m = esdirk.REDUCED_FROM
+    m = newton_matrix.SCHUR_FROM
     n = 2 * m
     rng = np.random.default_rng(5)
     J = np.zeros((n, n))
@@ -230,16 +267,16 @@ def check_newton_solve(J, hg, rng, *, reduced):
     """ESDIRK's factors of I - hg J (through the Schur complement if `reduced`, else the full
     matrix), and its solution of (I - hg J) v = r for a random r against numpy's, to 10 times
     the round-off that the matrix's condition number allows."""
-    from flexure.core.simulation import esdirk
+    from flexure.core.simulation import esdirk, newton_matrix
 
     n = J.shape[0]
     LU, piv = np.zeros(n * n), np.zeros(n, dtype=np.int64)
     flags = np.zeros(esdirk.I_SIZE, dtype=np.int64)
     assert esdirk.factor(J.ravel(), LU, piv, hg, flags)
-    assert flags[esdirk.I_REDUCED] == int(reduced)
+    assert flags[esdirk.I_REDUCED] == int(reduced) and flags[esdirk.I_FACTORIZATIONS] == 1
     r = rng.standard_normal(n)
     v = r.copy()
-    esdirk.newton_solve(J.ravel(), LU, piv, hg, flags, v)
+    newton_matrix.newton_solve(J.ravel(), LU, piv, hg, bool(reduced), v)
     matrix = np.eye(n) - hg * J
     expected = np.linalg.solve(matrix, r)
     bound = 10 * np.linalg.cond(matrix) * 2.2e-16 * np.max(np.abs(expected))

@@ -1,0 +1,76 @@
+"""The Newton matrix of the implicit integrators: I - hg J, factored and solved.
+
+J is the model's first-order Jacobian (n, n; row-major, flat) and hg the step size times the
+method's diagonal coefficient (s). For a second-order system, J = [[0, I], [A, B]] (A = d qddot
+/ d q, B = d qddot / d qdot), from SCHUR_FROM DOFs on the matrix is solved through its Schur
+complement: (I - hg J) [dq; dv] = [r1; r2] is dq = r1 + hg dv with
+
+    (I - hg B - hg^2 A) dv = r2 + hg A r1,
+
+an LU of NDOF^3 / 3 multiplications instead of 8 NDOF^3 / 3. Below it the full matrix keeps
+the small models' numbers as they were (its LU costs under a millisecond there). A state with
+coil currents ([q - q_ref, qdot, i], `engine.actuators`) is not of that form (with one coil n
+is odd, with more the identity block is not at n / 2): it takes the full matrix, as does a
+restored J of any other form (the form is checked, not assumed).
+"""
+
+from ..engine import engine
+from ..numerics.jit import kernel
+
+SCHUR_FROM = 200  # DOFs from which the Newton matrix is solved by its Schur complement
+SINGULAR, FULL, SCHUR = 0, 1, 2  # what `factor` made
+
+
+@kernel
+def factor(J, LU, piv, hg):
+    """LU (n * n,) = the factors of I - hg J (FULL), or of its Schur complement (SCHUR: in the
+    first NDOF^2 entries); SINGULAR when a pivot vanishes."""
+    n = piv.size
+    if second_order(J, n):
+        m = n // 2
+        for i in range(m):  # S = I - hg B - hg^2 A
+            for j in range(m):
+                a, b = J[(m + i) * n + j], J[(m + i) * n + m + j]
+                LU[i * m + j] = -hg * b - hg * hg * a
+            LU[i * m + i] += 1.0
+        return SCHUR if engine.lu_factor(LU, m, piv) > 1e-300 else SINGULAR
+    for i in range(n * n):
+        LU[i] = -hg * J[i]
+    for i in range(n):
+        LU[i * n + i] += 1.0
+    return FULL if engine.lu_factor(LU, n, piv) > 1e-300 else SINGULAR
+
+
+@kernel
+def second_order(J, n):
+    """Whether J (n * n,) is [[0, I], [A, B]] with at least SCHUR_FROM DOFs."""
+    m = n // 2
+    if m < SCHUR_FROM or n != 2 * m:
+        return False
+    for i in range(m):
+        for j in range(n):
+            if J[i * n + j] != (1.0 if j == m + i else 0.0):
+                return False
+    return True
+
+
+@kernel
+def newton_solve(J, LU, piv, hg, schur, v):
+    """v <- (I - hg J)^-1 v with the factors of `factor` (hg: the one they were made with;
+    schur: whether it answered SCHUR)."""
+    n = piv.size
+    if not schur:
+        engine.lu_solve(LU, n, piv, v)
+        return
+    m = n // 2
+    t = LU[m * m: m * m + m]  # scratch: the Schur complement uses the first m^2 entries
+    for i in range(m):  # t = r2 + hg A r1
+        s = v[m + i]
+        row = (m + i) * n
+        for j in range(m):
+            s += hg * J[row + j] * v[j]
+        t[i] = s
+    engine.lu_solve(LU, m, piv, t)
+    for i in range(m):
+        v[m + i] = t[i]
+        v[i] += hg * t[i]
