@@ -17,7 +17,7 @@ restored J of any other form (the form is checked, not assumed).
 from ..engine import engine
 from ..numerics.jit import kernel
 
-SCHUR_FROM = 200  # DOFs from which the Newton matrix is solved by its Schur complement
+SCHUR_FROM = 50  # DOFs from which the Newton matrix is solved by its Schur complement
 SINGULAR, FULL, SCHUR = 0, 1, 2  # what `factor` made
 
 
