@@ -120,3 +120,33 @@ def test_outputs_are_cached_per_state_and_equal_a_fresh_kinematic_solution(model
     before = sim.outputs()
     sim.advance(0.03)  # a new state: new outputs
     assert not np.array_equal(sim.outputs(), before)
+
+
+@pytest.mark.parametrize("scene", ["stage_planar_1dof", "stage_spatial_19dof"])
+def test_the_measurement_starts_second_order_close_to_the_kinematics(scene):
+    """`measuring.start_from_plant` moves the plant's last solution x_e to DOFs q = q_e + d u
+    with J's factors: its distance to x(q) (the numpy kinematics, full Newton) falls as d^2
+    on the free coordinates but the rigid clusters' slaves (which follow their masters in the
+    Newton's first evaluation) falls as d^2 (by 4 within 1.5 when d halves) and stays below
+    d^2 / 1 mm, where x_e is off by about d."""
+    from flexure.core.simulation.measuring import start_from_plant
+
+    model = load_scene(scene)
+    sim = Simulator(model, method="esdirk", rtol=1e-8)
+    sim.set_inputs(np.full(len(sim.inputs), 1.0))
+    sim.advance(0.01)
+    kinematics = Kinematics(model)
+    q_e = sim.data.float_array("q").copy()
+    direction = np.random.default_rng(2).standard_normal(sim.ndof)
+    distances = []
+    for d in (1e-5, 5e-6, 2.5e-6):
+        q = q_e + d * direction / np.linalg.norm(direction)
+        start_from_plant(sim.data.address, sim._output_data.address, q)
+        exact = kinematics.solve(q, sim.data.float_array("x").copy()).x
+        free = sim.data.int_array("free")  # the masters: the slaves follow at its first e
+        distances.append(np.max(np.abs(sim._output_data.float_array("x_start")[free]
+                                       - exact[free])))
+        assert distances[-1] <= d * d / 1e-3
+        assert np.max(np.abs(sim.data.float_array("x")[free] - exact[free])) > 10 * distances[-1]
+    ratios = np.array(distances[:-1]) / distances[1:]
+    assert np.all(np.abs(ratios - 4.0) < 1.5), ratios

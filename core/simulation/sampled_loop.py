@@ -52,6 +52,7 @@ from ..numerics.native import (
 )
 from . import esdirk
 from .esdirk import Esdirk
+from .measuring import start_from_plant
 from .sundials import STATUS_MESSAGES, Cvode
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -277,9 +278,9 @@ _MEASURE_FAILED = -1000
 def _measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
     status. As `Simulator.outputs`: q_ref + y at the DOFs when every output is a coordinate
-    DOF, else full Newton from the plant's last coordinates. coordinates: the outputs' packed
-    rows (`engine.ports.port_specs`, flat), then the DOF of each output or -1
-    (`mechanics.ports.output_dofs`)."""
+    DOF, else Newton from the plant's last coordinates moved to y (`measuring`).
+    coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat), then the DOF of
+    each output or -1 (`mechanics.ports.output_dofs`)."""
     q_ref = engine.float_array(addresses[_PLANT], slots.Q_REF)
     dofs = coordinates[coordinates.size - out.size:]
     if np.all(dofs >= 0):
@@ -287,11 +288,10 @@ def _measure(addresses, y, scratch, coordinates, out):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
     ndof = engine.int_array(addresses[_PLANT], slots.DIMS)[ed.NDOF]  # y: [.., coil currents]
-    x_plant = engine.float_array(addresses[_PLANT], slots.X)
-    copy(engine.float_array(addresses[_OUTPUT], slots.X_START), x_plant)
     engine.int_array(addresses[_OUTPUT], slots.DIMS)[ed.WARM] = 0
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
+    start_from_plant(addresses[_PLANT], addresses[_OUTPUT], scratch)
     status = call_engine(addresses[_ENGINE], engine.OP_POSITIONS, addresses[_OUTPUT], 0.0,
                          scratch.ctypes.data, 0, 0, 0.0)
     if status != ed.OK:

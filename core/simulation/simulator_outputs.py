@@ -13,6 +13,7 @@ from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
 from ..mechanics.ports import output_value
+from .measuring import start_from_plant
 from .plausibility import RangeCheck
 from .sundials import STATUS_MESSAGES
 
@@ -73,11 +74,12 @@ class SimulatorOutputs:
         return [q_ref.item(j) + y.item(j) for j in self._output_dof_list]
 
     def _positions_at(self, q):
-        """The position outputs at DOFs q: Newton from the plant's coordinates, positions
-        only (as the compiled sampled loop measures them)."""
-        data = self._output_data
+        """The position outputs at DOFs q: Newton from the plant's coordinates moved to q
+        (`measuring`), positions only, as the compiled sampled loop measures them."""
+        data, q = self._output_data, np.ascontiguousarray(q, dtype=float)
         self._start_kinematics(self._x, data)
-        status = engine.call(data, engine.OP_POSITIONS, np.ascontiguousarray(q))
+        start_from_plant(self.data.address, data.address, q)
+        status = engine.call(data, engine.OP_POSITIONS, q)
         if status != ed.OK:
             raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
         x = data.float_array("x")

@@ -1,0 +1,47 @@
+"""Where the measurement of a state's outputs starts its kinematics.
+
+The outputs that are not DOFs (an encoder on a rigid body, an end effector's position) need
+x = F(q) at the measured state's DOFs q. The measuring runs on a second packed model (the
+simulator's `_output_data`, the compiled loop's output table), so that it never disturbs the
+integrator's own, and it stops as soon as the constraint residual is within the tolerance
+(`engine.OP_POSITIONS`). It starts from the plant's last kinematic solution x_e at DOFs q_e,
+moved to q to first order with the factors of J that solution left:
+
+    x_start = x_e + J_e^-1 [0; q - q_e]   on the free coordinates
+
+(the slaves of rigid clusters follow their masters at the first evaluation). At the end of
+an integrator step q - q_e is the step's last Newton correction, within the Newton's
+tolerance (about 1e-9 m at the loop's rtol 1e-5), so the start's residual, of the order of
+|q - q_e|^2 over the flexures' lengths, passes at the first evaluation: one solve with J's
+factors and one evaluation of e instead of a Newton step's factorisation. When it does not
+pass, the Newton goes on from there as before.
+"""
+
+from ..engine import data as ed
+from ..engine import engine, slots
+from ..engine.factors import j_solve
+from ..engine.kinematics import dof_rows
+from ..numerics.dense import copy
+from ..numerics.jit import kernel
+
+
+@kernel
+def start_from_plant(plant, output, q):
+    """Slot x_start of the packed model `output` (its table's address) = the plant's last
+    kinematic solution moved to the DOFs q (NDOF,: m, rad), as the module says; x_e itself
+    when the plant holds no solution with its factors (before its first, after a restart)."""
+    x_start = engine.float_array(output, slots.X_START)
+    copy(x_start, engine.float_array(plant, slots.X))
+    dims = engine.int_array(plant, slots.DIMS)
+    if dims[ed.WARM] != 1:
+        return
+    q_e = engine.float_array(plant, slots.Q)
+    dq = engine.float_array(output, slots.REDUCED_FORCE)  # scratch of the output table
+    dx = engine.float_array(output, slots.DX)
+    for j in range(dims[ed.NDOF]):
+        dq[j] = q[j] - q_e[j]
+    dof_rows(plant, dq, dx)
+    j_solve(plant, dx)
+    free = engine.int_array(plant, slots.FREE)
+    for a in range(dims[ed.NFREE]):
+        x_start[free[a]] += dx[a]
