@@ -160,7 +160,7 @@ def test_compiled_maps_match_the_plain_ones(scene):
         coords = model.groups[gp].coordinate_index[i]
         Dx = rng.standard_normal((3, coords.size))
         Dz = np.zeros(3 * z.size)
-        rigid_kernels.element_transform(table, t, Dx.ravel(), 3, coords.size, Dz)
+        rigid_kernels.element_transform(table, t, Dx.ravel(), 3, coords.size, Dz, z.size)
         expected = Dx @ packing.element_transform(gp, i, coords, x)
         assert np.max(np.abs(Dz - expected.ravel())) <= 1e-14 * np.max(np.abs(expected))
         # and T_e is T's block: the element's rows, its z-columns

@@ -43,7 +43,13 @@ from .factors import (
 )
 from .kinematics import compute_DF, dof_rows
 from .operations import OP_CONFIGURATION, run
-from .point_masses import dense_element_mass, element_mass, point_columns, point_forces
+from .point_masses import (
+    dense_element_mass,
+    element_mass,
+    padded_width,
+    point_columns,
+    point_forces,
+)
 from .ports import add_input_forces
 from .rigid_kernels import (
     condense,
@@ -369,12 +375,11 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
                 s += Dp[pp, a] * w[pp]
             rigid_force[coords[a]] -= s
     g, i, mz, z, _, mass_offset = touching(table, t)
-    local = _f(table, slot.RIGID_LOCAL)
-    Dz = local[: P * mz]
-    Me = local[P * mz: P * mz + mz * mz]
-    element_transform(table, t, Dp.reshape(P * m), P, m, Dz)
-    dense_element_mass(Mp, pattern, P, mz, Dz.reshape((P, mz)),
-                       local[P * mz + mz * mz: 2 * P * mz + mz * mz], Me)
+    local, stride = _f(table, slot.RIGID_LOCAL), padded_width(mz)
+    Dz, MD = local[: P * stride], local[P * stride: 2 * P * stride]
+    Me = local[2 * P * stride: (2 * P + mz) * stride]
+    element_transform(table, t, Dp.reshape(P * m), P, m, Dz, stride)
+    dense_element_mass(Mp, pattern, P, mz, Dz, MD, Me, stride)
     position = columns[P * mz + P: P * mz + P + mz]
     entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
     add_element_mass(table, A, na, entry, z, mz, Me, position)

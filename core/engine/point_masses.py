@@ -21,9 +21,13 @@ def element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
     point_forces(Mp, pattern, P, point, w)
     for a in range(m * m):
         Me[a] = 0.0
+    pp, end = 0, P  # the pattern is ascending: its rows p in order
     for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        mpq = Mp[pattern[e]]
+        flat = pattern[e]
+        while flat >= end:
+            pp += 1
+            end += P
+        qq, mpq = flat - end + P, Mp[flat]
         for u in range(counts[pp]):
             a = columns[pp * m + u]
             da = mpq * Dp[pp, a]
@@ -33,28 +37,49 @@ def element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
 
 
 @kernel
-def dense_element_mass(Mp, pattern, P, m, D, MD, Me):
-    """Me = D^T Mp D (m * m, row by row) as D^T (Mp D), MD = Mp D (P * m) scratch, for a D
-    (P, m) whose rows are mostly full (a touching element's Dp T_e: a slave's point moves with
-    its master's translation and rotation): the inner loops run along contiguous rows, which
-    vectorise, instead of over the few non-zeros `element_mass` visits. The same products
-    summed in another order: equal to round-off."""
-    for r in range(P * m):
+def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
+    """Me = D^T Mp D (m * m, row by row) as D^T (Mp D), for a D (P, m) whose rows are mostly
+    full (a touching element's Dp T_e: a slave's point moves with its master's translation
+    and rotation), stored with the row length `stride` >= m (`padded_width`; D's entries past
+    m in a row zero). MD = Mp D (P * stride) scratch; Me needs room for m * stride. The
+    inner loops run along whole padded rows, which the compiler vectorises (a row of a
+    length it cannot know runs in vectors only when long enough: 16), instead of over the
+    few non-zeros `element_mass` visits. The same products summed in another order: equal
+    to round-off."""
+    for r in range(P * stride):
         MD[r] = 0.0
+    pp, end = 0, P  # the pattern is ascending: its rows p in order
     for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        mpq = Mp[pattern[e]]
-        for b in range(m):
-            MD[pp * m + b] += mpq * D[qq, b]
-    for a in range(m * m):
+        flat = pattern[e]
+        while flat >= end:
+            pp += 1
+            end += P
+        mpq = Mp[flat]
+        out, row = MD[pp * stride: (pp + 1) * stride], flat - end + P
+        source = D[row * stride: (row + 1) * stride]
+        for b in range(stride):
+            out[b] += mpq * source[b]
+    for a in range(m * stride):
         Me[a] = 0.0
     for pp in range(P):
+        source = MD[pp * stride: (pp + 1) * stride]
         for a in range(m):
-            d = D[pp, a]
+            d = D[pp * stride + a]
             if d == 0.0:
                 continue
-            for b in range(m):
-                Me[a * m + b] += d * MD[pp * m + b]
+            out = Me[a * stride: (a + 1) * stride]
+            for b in range(stride):
+                out[b] += d * source[b]
+    for a in range(1, m):  # the rows packed to length m (each moves to a lower index)
+        for b in range(m):
+            Me[a * m + b] = Me[a * stride + b]
+
+
+@kernel
+def padded_width(m):
+    """The row length `dense_element_mass` stores rows of m entries with: m rounded up to a
+    multiple of 16."""
+    return 16 * ((m + 15) // 16)
 
 
 @kernel
@@ -64,10 +89,9 @@ def point_columns(P, m, Dp, columns):
     counts = columns[P * m:]
     for pp in range(P):
         k = 0
-        for a in range(m):
-            if Dp[pp, a] != 0.0:
-                columns[pp * m + k] = a
-                k += 1
+        for a in range(m):  # without a branch: a stays written only where Dp is not zero
+            columns[pp * m + k] = a
+            k += Dp[pp, a] != 0.0
         counts[pp] = k
 
 
@@ -76,6 +100,10 @@ def point_forces(Mp, pattern, P, point, w):
     """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
     for pp in range(P):
         w[pp] = 0.0
+    pp, end = 0, P  # the pattern is ascending: its rows p in order
     for e in range(pattern.size):
-        pp, qq = divmod(pattern[e], P)
-        w[pp] += Mp[pattern[e]] * point[qq]
+        flat = pattern[e]
+        while flat >= end:
+            pp += 1
+            end += P
+        w[pp] += Mp[flat] * point[flat - end + P]

@@ -182,14 +182,15 @@ class RigidPacking:
     def floats(self, nx, n_free, max_p):
         """The float64 slots of the clusters, by name (constants and workspace)."""
         n_sc = self.layout.slave_coordinates.size
+        padded = 16 * ((self.max_mz + 15) // 16)
         return {"rigid_data": self.layout.data.ravel(),
                 "rigid_weights": np.zeros(n_sc * DEPENDENCIES),
                 "rigid_de": np.zeros(self.de_size), "rigid_c": np.zeros(nx if n_sc else 0),
                 "rigid_h": np.zeros(n_free if n_sc else 0),
                 "rigid_force": np.zeros(nx if n_sc else 0),
-                # a touching element's Dp_z (max_p, max_mz), Me_z (max_mz, max_mz) and
-                # Mp Dp_z (max_p, max_mz)
-                "rigid_local": np.zeros(2 * max_p * self.max_mz + self.max_mz ** 2)}
+                # a touching element's Dp_z and Mp Dp_z (max_p, each), Me_z (max_mz), in
+                # rows of the padded width (`point_masses.padded_width`)
+                "rigid_local": np.zeros((2 * max_p + self.max_mz) * padded)}
 
     def pattern_coordinates(self, gp, group):
         """Per element of packed group gp, the coordinates its entries land on in the

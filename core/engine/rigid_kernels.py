@@ -161,12 +161,13 @@ def condense(table, v, out):
 
 
 @kernel
-def element_transform(table, t, Dx, rows, m, Dz):
-    """Dz (rows, mz; flat) = Dx (rows, m; flat) T_e for touching element t."""
+def element_transform(table, t, Dx, rows, m, Dz, stride):
+    """Dz (rows, mz; flat, rows `stride` >= mz long, zero past mz) = Dx (rows, m; flat) T_e
+    for touching element t."""
     element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
-    mz, start = element[rg.E_MZ], element[rg.E_TERM_OFFSET]
+    start = element[rg.E_TERM_OFFSET]
     terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
-    for r in range(rows * mz):
+    for r in range(rows * stride):
         Dz[r] = 0.0
     # row by row, skipping the zeros of Dx (most of a BEAM's Dp and De): each Dz entry sums
     # the same products in the same order as the dense product would
@@ -180,7 +181,7 @@ def element_transform(table, t, Dx, rows, m, Dz):
                 zl, w = terms[p], terms[p + 1]
                 if w == -2:
                     continue
-                Dz[r * mz + zl] += d * (1.0 if w == -1 else W[w])
+                Dz[r * stride + zl] += d * (1.0 if w == -1 else W[w])
 
 
 @kernel
@@ -217,7 +218,7 @@ def rigid_de(table):
             continue
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         element_transform(table, t, De[i * k * m: (i + 1) * k * m], k, m,
-                          out[offset: offset + k * mz])
+                          out[offset: offset + k * mz], mz)
 
 
 @kernel

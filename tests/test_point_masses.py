@@ -1,0 +1,64 @@
+"""The element inertia kernels of core/engine/point_masses.py against plain numpy.
+
+An element's point forces w = Mp f and mass Me = Dp^T Mp Dp, for a symmetric Mp filled on a
+pattern of its entries and a Dp with exact zeros (as a BEAM's: each point moves with few
+coordinates), from `element_mass` (over Dp's non-zeros) and `dense_element_mass` (whole rows
+of a padded width), against the dense products.
+"""
+
+import numpy as np
+import pytest
+
+from flexure.core.engine.point_masses import (
+    dense_element_mass,
+    element_mass,
+    padded_width,
+    point_forces,
+)
+
+
+def element(P, m, seed):
+    """(Mp (P P,), pattern (ascending flat p P + q), Dp (P, m)) of a random element: Mp
+    symmetric with about half its entries zero, Dp with about two thirds zero."""
+    rng = np.random.default_rng(seed)
+    Mp = rng.standard_normal((P, P))
+    Mp = Mp + Mp.T
+    Mp[rng.random((P, P)) < 0.5] = 0.0
+    Mp = np.where(Mp.T == 0.0, 0.0, Mp)  # symmetric again: zero where either is
+    Dp = rng.standard_normal((P, m))
+    Dp[rng.random((P, m)) < 0.65] = 0.0
+    return Mp.ravel(), np.flatnonzero(Mp.ravel()).astype(np.int64), Dp
+
+
+@pytest.mark.parametrize("P, m", [(24, 14), (9, 4), (5, 17)])
+def test_element_mass(P, m):
+    """w = Mp f, Me = Dp^T Mp Dp and Dp's non-zero columns per row, to round-off."""
+    Mp, pattern, Dp = element(P, m, seed=P + m)
+    f = np.random.default_rng(1).standard_normal(P)
+    w, Me = np.zeros(P), np.zeros(m * m)
+    columns = np.full(P * (m + 1) + m, -7, dtype=np.int64)
+    element_mass(Mp, pattern, P, m, Dp, f, w, Me, columns)
+    M = Mp.reshape(P, P)
+    expected = Dp.T @ M @ Dp
+    assert np.max(np.abs(Me - expected.ravel())) <= 1e-13 * np.max(np.abs(expected))
+    assert np.max(np.abs(w - M @ f)) <= 1e-13 * np.max(np.abs(M @ f))
+    counts = columns[P * m: P * m + P]
+    for p in range(P):
+        assert list(columns[p * m: p * m + counts[p]]) == list(np.flatnonzero(Dp[p]))
+    w2 = np.zeros(P)
+    point_forces(Mp, pattern, P, f, w2)
+    assert np.array_equal(w2, w)
+
+
+@pytest.mark.parametrize("P, m", [(24, 14), (24, 16), (5, 17), (9, 4)])
+def test_dense_element_mass(P, m):
+    """Me = D^T Mp D from D in rows of the padded width, packed to m * m, to round-off."""
+    Mp, pattern, D = element(P, m, seed=2 * P + m)
+    stride = padded_width(m)
+    assert stride >= m and stride % 16 == 0
+    padded = np.zeros((P, stride))
+    padded[:, :m] = D
+    MD, Me = np.full(P * stride, np.nan), np.full(m * stride, np.nan)
+    dense_element_mass(Mp, pattern, P, m, padded.ravel(), MD, Me, stride)
+    expected = D.T @ Mp.reshape(P, P) @ D
+    assert np.max(np.abs(Me[: m * m] - expected.ravel())) <= 1e-13 * np.max(np.abs(expected))
