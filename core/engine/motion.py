@@ -369,11 +369,15 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
                 s += Dp[pp, a] * c[coords[a]]
             point[pp] = s
         point_forces(Mp, pattern, P, point, w)
+        # Dp^T w over Dp's non-zeros, each sum in the order of pp as over all of them
+        sums = _f(table, slot.RIGID_LOCAL)[:m]
+        sums[:] = 0.0
+        for pp in range(P):
+            for u in range(counts[pp]):
+                a = columns[pp * m + u]
+                sums[a] += Dp[pp, a] * w[pp]
         for a in range(m):
-            s = 0.0
-            for pp in range(P):
-                s += Dp[pp, a] * w[pp]
-            rigid_force[coords[a]] -= s
+            rigid_force[coords[a]] -= sums[a]
     g, i, mz, z, _, mass_offset = touching(table, t)
     local, stride = _f(table, slot.RIGID_LOCAL), padded_width(mz)
     Dz, MD = local[: P * stride], local[P * stride: 2 * P * stride]
