@@ -23,6 +23,7 @@ _REF_INERTIA = _REF_BEND + 4 * 48
 REFERENCE_WIDTH = _REF_INERTIA + 6 * 48  # 482 floats, 3.9 kB per element
 # x columns of the translations and Euler parameters of p and q
 _XP, _XLP, _XQ, _XLQ = 0, 3, 7, 10
+_TRANSLATIONS = (0, 1, 2, 7, 8, 9)  # the x columns of r^p and r^q
 
 
 def pack_reference(ref):
@@ -211,16 +212,35 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             mixed = half * (cross_03 - cross_21)
             D2e[1, _XLP + i, _XLQ + j] = mixed
             D2e[1, _XLQ + j, _XLP + i] = mixed
-    # elongation: c Db^T W Db + sum_k slope_k D2e_k + (I - u u^T) / |l| on the translations
+    # elongation: c Db^T W Db + sum_k slope_k D2e_k + (I - u u^T) / |l| on the translations,
+    # column by column, leaving out the terms that are zero by structure (the rows of e3, e5
+    # in De and D2e do not involve lambda^q, those of e4, e6 not lambda^p, and the D2e of
+    # e3 ... e6 are zero between translations): each entry the sum of the same non-zero
+    # terms in the same order as over all of them
     for j in range(14):
         w3 = c * (4.0 * De[2, j] + De[3, j])
         w4 = c * (De[2, j] + 4.0 * De[3, j])
         w5 = c * (4.0 * De[4, j] + De[5, j])
         w6 = c * (De[4, j] + 4.0 * De[5, j])
-        for i in range(14):
-            D2e[0, i, j] = ((((De[2, i] * w3 + De[3, i] * w4) + De[4, i] * w5) + De[5, i] * w6)
-                            + (((s3 * D2e[2, i, j] + s4 * D2e[3, i, j]) + s5 * D2e[4, i, j])
-                               + s6 * D2e[5, i, j]))
+        on_p = _XLP <= j < _XQ  # j a lambda^p column
+        on_q = j >= _XLQ
+        for i in _TRANSLATIONS:
+            value = ((De[2, i] * w3 + De[3, i] * w4) + De[4, i] * w5) + De[5, i] * w6
+            if on_p:
+                value += s3 * D2e[2, i, j] + s5 * D2e[4, i, j]
+            elif on_q:
+                value += s4 * D2e[3, i, j] + s6 * D2e[5, i, j]
+            D2e[0, i, j] = value
+        for i in range(_XLP, _XLP + 4):
+            value = De[2, i] * w3 + De[4, i] * w5
+            if not on_q:
+                value += s3 * D2e[2, i, j] + s5 * D2e[4, i, j]
+            D2e[0, i, j] = value
+        for i in range(_XLQ, _XLQ + 4):
+            value = De[3, i] * w4 + De[5, i] * w6
+            if not on_p:
+                value += s4 * D2e[3, i, j] + s6 * D2e[5, i, j]
+            D2e[0, i, j] = value
     for k in range(3):
         uk = (ux, uy, uz)[k]
         for m in range(3):
