@@ -256,27 +256,30 @@ def _element_rates(table, xdot, moving):
     dims = _i(table, slot.DIMS)
     edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
     row_of_def = _i(table, slot.ROW_OF_DEF)
+    v = _f(table, slot.LOCAL)  # the element's xdot, gathered once for its k rows
     quad[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         for i in range(n):
+            for a in range(m):
+                v[a] = xdot[coords[i * m + a]]
             for b in range(k):
                 s = 0.0
                 base = (i * k + b) * m
                 for a in range(m):
-                    s += De[base + a] * xdot[coords[i * m + a]]
+                    s += De[base + a] * v[a]
                 edot[defs[i * k + b]] = s
                 r = row_of_def[defs[i * k + b]]
                 if moving and r >= 0:
                     h = 0.0
                     base2 = (i * k + b) * m * m
                     for a in range(m):
-                        va = xdot[coords[i * m + a]]
+                        va = v[a]
                         if va == 0.0:
                             continue
                         t = 0.0
                         for c in range(m):
-                            t += D2e[base2 + a * m + c] * xdot[coords[i * m + c]]
+                            t += D2e[base2 + a * m + c] * v[c]
                         h += va * t
                     quad[r] = h
 
