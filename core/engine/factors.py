@@ -102,10 +102,17 @@ def _sparse_constraint_jacobian(table, values):
     dims = _i(table, slot.DIMS)
     values[:] = 0.0
     n_de, n_xdof = De.size, dims[ed.NXDOF]
-    for e in range(n_de):
-        s = jmap[e]
-        if s >= 0:
-            values[s] = De[e]
+    rigid = dims[ed.NSLAVES] > 0
+    for g in range(dims[ed.NGROUPS]):  # a touching element's entries come from its De_z
+        row = group(table, g)
+        size, first = row[ed.G_K] * row[ed.G_M], row[ed.G_DE_OFFSET]
+        for i in range(row[ed.G_COUNT]):
+            if rigid and rigid_element(table, row, i) >= 0:
+                continue
+            for e in range(first + i * size, first + (i + 1) * size):
+                s = jmap[e]
+                if s >= 0:
+                    values[s] = De[e]
     for j in range(n_xdof):
         s = jmap[n_de + j]
         if s >= 0:
@@ -256,11 +263,17 @@ def add_rigid_rows(table, A, na):
     if dims[ed.A_SPARSE] == 1:
         De, amap = _f(table, slot.DE), _i(table, slot.AUG_MAP)
         n_de = De.size
-        for e in range(n_de):
-            s = amap[nf + e]
-            if s >= 0:
-                A[s] = De[e]
-                A[amap[nf + n_de + e]] = De[e]
+        for g in range(dims[ed.NGROUPS]):  # a touching element's from its De_z below
+            row = group(table, g)
+            size, first = row[ed.G_K] * row[ed.G_M], row[ed.G_DE_OFFSET]
+            for i in range(row[ed.G_COUNT]):
+                if rigid and rigid_element(table, row, i) >= 0:
+                    continue
+                for e in range(first + i * size, first + (i + 1) * size):
+                    s = amap[nf + e]
+                    if s >= 0:
+                        A[s] = De[e]
+                        A[amap[nf + n_de + e]] = De[e]
         if rigid:
             base, n_rde = dims[ed.A_RIGID], rde.size
             for e in range(n_rde):
