@@ -13,7 +13,9 @@ from flexure.core.engine.point_masses import (
     dense_element_mass,
     element_mass,
     padded_width,
+    point_columns,
     point_forces,
+    sparse_rows_product,
 )
 
 
@@ -62,3 +64,21 @@ def test_dense_element_mass(P, m):
     dense_element_mass(Mp, pattern, P, m, padded.ravel(), MD, Me, stride)
     expected = D.T @ Mp.reshape(P, P) @ D
     assert np.max(np.abs(Me[: m * m] - expected.ravel())) <= 1e-13 * np.max(np.abs(expected))
+
+
+@pytest.mark.parametrize("P, m, mz", [(24, 14, 14), (9, 4, 7), (5, 17, 20)])
+def test_sparse_rows_product(P, m, mz):
+    """Dp T over Dp's non-zero columns, in rows of the padded width (zero past mz)."""
+    _, _, Dp = element(P, m, seed=3 * P + m)
+    T = np.random.default_rng(4).standard_normal((m, mz))
+    stride = padded_width(mz)
+    padded = np.zeros((m, stride))
+    padded[:, :mz] = T
+    columns = np.zeros(P * (m + 1) + m, dtype=np.int64)
+    point_columns(P, m, Dp, columns)
+    D = np.full(P * stride, np.nan)
+    sparse_rows_product(P, m, Dp, columns, padded.ravel(), stride, D)
+    D = D.reshape(P, stride)
+    expected = Dp @ T
+    assert np.max(np.abs(D[:, :mz] - expected)) <= 1e-14 * np.max(np.abs(expected))
+    assert np.array_equal(D[:, mz:], np.zeros((P, stride - mz)))

@@ -160,9 +160,17 @@ def test_compiled_maps_match_the_plain_ones(scene):
         coords = model.groups[gp].coordinate_index[i]
         Dx = rng.standard_normal((3, coords.size))
         Dz = np.zeros(3 * z.size)
-        rigid_kernels.element_transform(table, t, Dx.ravel(), 3, coords.size, Dz, z.size)
+        rigid_kernels.element_transform(table, t, Dx.ravel(), 3, coords.size, Dz)
         expected = Dx @ packing.element_transform(gp, i, coords, x)
         assert np.max(np.abs(Dz - expected.ravel())) <= 1e-14 * np.max(np.abs(expected))
+        # T_e itself in rows of a padded length, zero past mz
+        stride = z.size + 5
+        Te = np.full(coords.size * stride, np.nan)
+        rigid_kernels.transform_rows(table, t, coords.size, Te, stride)
+        Te = Te.reshape(coords.size, stride)
+        assert np.array_equal(Te[:, z.size:], np.zeros((coords.size, 5)))
+        assert np.allclose(Te[:, :z.size], packing.element_transform(gp, i, coords, x),
+                           rtol=0, atol=1e-15)
         # and T_e is T's block: the element's rows, its z-columns
         assert np.allclose(packing.element_transform(gp, i, coords, x), T[np.ix_(coords, z)],
                            rtol=0, atol=1e-15)

@@ -43,21 +43,15 @@ from .factors import (
 )
 from .kinematics import compute_DF, dof_rows
 from .operations import OP_CONFIGURATION, run
-from .point_masses import (
-    dense_element_mass,
-    element_mass,
-    padded_width,
-    point_columns,
-    point_forces,
-)
+from .point_masses import element_mass, point_columns, point_forces
 from .ports import add_input_forces
 from .rigid_kernels import (
     condense,
     convective,
-    element_transform,
     expand,
     rigid_rates,
     touching,
+    touching_mass,
 )
 from .slots import float_array as _f
 from .slots import (
@@ -382,11 +376,7 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
         for a in range(m):
             rigid_force[coords[a]] -= sums[a]
     g, i, mz, z, _, mass_offset = touching(table, t)
-    local, stride = _f(table, slot.RIGID_LOCAL), padded_width(mz)
-    Dz, MD = local[: P * stride], local[P * stride: 2 * P * stride]
-    Me = local[2 * P * stride: (2 * P + mz) * stride]
-    element_transform(table, t, Dp.reshape(P * m), P, m, Dz, stride)
-    dense_element_mass(Mp, pattern, P, mz, Dz, MD, Me, stride)
+    Me = touching_mass(table, t, Mp, pattern, P, m, Dp, columns)
     position = columns[P * mz + P: P * mz + P + mz]
     entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
     add_element_mass(table, A, na, entry, z, mz, Me, position)

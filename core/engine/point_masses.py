@@ -76,6 +76,24 @@ def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
 
 
 @kernel
+def sparse_rows_product(P, m, Dp, columns, T, stride, D):
+    """D = Dp T (P rows of length `stride`; flat) for T (m rows of length `stride`; flat),
+    row p of D summing Dp[p, a] T[a] over the non-zero columns a of Dp's row p that
+    `point_columns` left in `columns`, in their order."""
+    counts = columns[P * m:]
+    for r in range(P * stride):
+        D[r] = 0.0
+    for pp in range(P):
+        out = D[pp * stride: (pp + 1) * stride]
+        for u in range(counts[pp]):
+            a = columns[pp * m + u]
+            d = Dp[pp, a]
+            source = T[a * stride: (a + 1) * stride]
+            for b in range(stride):
+                out[b] += d * source[b]
+
+
+@kernel
 def padded_width(m):
     """The row length `dense_element_mass` stores rows of m entries with: m rounded up to a
     multiple of 16."""

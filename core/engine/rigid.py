@@ -81,6 +81,7 @@ class RigidPacking:
         self.slaves = slaves
         element_of, elements, zs, terms = [], [], [], []
         self.touching = []  # (packed group index, element index, z-coordinates)
+        self.groups_m = [group.coordinate_index.shape[1] for group in groups]
         self.element_offsets = []
         de_size = mass_size = z_size = term_size = 0
         for gp, group in enumerate(groups):
@@ -175,6 +176,11 @@ class RigidPacking:
                 "touching_rows": self.touching_rows}
 
     @property
+    def max_m(self):
+        """The most coordinates of a touching element (0 without any)."""
+        return max((self.groups_m[gp] for gp, _, _ in self.touching), default=0)
+
+    @property
     def max_mz(self):
         """The most z-coordinates of a touching element (0 without any)."""
         return max((z.size for _, _, z in self.touching), default=0)
@@ -188,9 +194,9 @@ class RigidPacking:
                 "rigid_de": np.zeros(self.de_size), "rigid_c": np.zeros(nx if n_sc else 0),
                 "rigid_h": np.zeros(n_free if n_sc else 0),
                 "rigid_force": np.zeros(nx if n_sc else 0),
-                # a touching element's Dp_z and Mp Dp_z (max_p, each), Me_z (max_mz), in
-                # rows of the padded width (`point_masses.padded_width`)
-                "rigid_local": np.zeros((2 * max_p + self.max_mz) * padded)}
+                # a touching element's Dp_z and Mp Dp_z (max_p rows each), Me_z (max_mz)
+                # and T_e (its m), in rows of the padded width (`point_masses.padded_width`)
+                "rigid_local": np.zeros((2 * max_p + self.max_mz + self.max_m) * padded)}
 
     def pattern_coordinates(self, gp, group):
         """Per element of packed group gp, the coordinates its entries land on in the

@@ -10,7 +10,9 @@ coordinates x (m, Euler parameters or rad) whose masters are current:
     convective          c (slot rigid_c): xddot_s - T xddot_master, quadratic in the
                         masters' velocities (zero but on slave translations)
     condense            T^T v on the reduced free coordinates (a force (N, N m) on x)
-    element_transform   D_z = D T_e for the rows of a touching element's De or Dp
+    element_transform   D_z = D T_e for the rows of a touching element's De
+    transform_rows      T_e itself, in rows of a padded length (for products along rows)
+    touching_mass       Me_z = Dp_z^T Mp Dp_z of a touching element, Dp_z = Dp T_e
     rigid_de            every touching element's De_z into slot rigid_de
     rigid_rates         the slaves' second-order terms on the constraint rows (slot rigid_h)
     rigid_geometric     the slaves' geometric stiffness -DF^T (sum_s rho_s d2x_s) DF
@@ -32,6 +34,7 @@ from ..numerics.jit import kernel
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
+from .point_masses import dense_element_mass, padded_width, sparse_rows_product
 from .slots import float_array as _f
 from .slots import group_deformations
 from .slots import int_array as _i
@@ -161,13 +164,12 @@ def condense(table, v, out):
 
 
 @kernel
-def element_transform(table, t, Dx, rows, m, Dz, stride):
-    """Dz (rows, mz; flat, rows `stride` >= mz long, zero past mz) = Dx (rows, m; flat) T_e
-    for touching element t."""
+def element_transform(table, t, Dx, rows, m, Dz):
+    """Dz (rows, mz; flat) = Dx (rows, m; flat) T_e for touching element t."""
     element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
-    start = element[rg.E_TERM_OFFSET]
+    mz, start = element[rg.E_MZ], element[rg.E_TERM_OFFSET]
     terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
-    for r in range(rows * stride):
+    for r in range(rows * mz):
         Dz[r] = 0.0
     # row by row, skipping the zeros of Dx (most of a BEAM's Dp and De): each Dz entry sums
     # the same products in the same order as the dense product would
@@ -181,7 +183,42 @@ def element_transform(table, t, Dx, rows, m, Dz, stride):
                 zl, w = terms[p], terms[p + 1]
                 if w == -2:
                     continue
-                Dz[r * stride + zl] += d * (1.0 if w == -1 else W[w])
+                Dz[r * mz + zl] += d * (1.0 if w == -1 else W[w])
+
+
+@kernel
+def transform_rows(table, t, m, T, stride):
+    """T_e (m, mz) of touching element t into T (m rows of length `stride` >= mz, zero past
+    mz; flat)."""
+    element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
+    start = element[rg.E_TERM_OFFSET]
+    terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
+    for r in range(m * stride):
+        T[r] = 0.0
+    for a in range(m):
+        for u in range(DEPENDENCIES):
+            p = start + 2 * (a * DEPENDENCIES + u)
+            zl, w = terms[p], terms[p + 1]
+            if w == -2:
+                continue
+            T[a * stride + zl] += 1.0 if w == -1 else W[w]
+
+
+@kernel
+def touching_mass(table, t, Mp, pattern, P, m, Dp, columns):
+    """Me_z = Dp_z^T Mp Dp_z (mz * mz, row by row; a view into slot rigid_local) of touching
+    element t with points Dp (P, m; the non-zero columns of its rows in `columns`,
+    `point_masses.point_columns`) and masses Mp on `pattern` (`point_masses`): Dp_z = Dp T_e
+    along T_e's rows, then the dense product, all in rows of the padded width."""
+    mz = _i(table, slot.RIGID_ELEMENTS)[t * EW + rg.E_MZ]
+    local, stride = _f(table, slot.RIGID_LOCAL), padded_width(mz)
+    Dz, MD = local[: P * stride], local[P * stride: 2 * P * stride]
+    Me = local[2 * P * stride: (2 * P + mz) * stride]
+    T = local[(2 * P + mz) * stride: (2 * P + mz + m) * stride]
+    transform_rows(table, t, m, T, stride)
+    sparse_rows_product(P, m, Dp, columns, T, stride, Dz)
+    dense_element_mass(Mp, pattern, P, mz, Dz, MD, Me, stride)
+    return Me[: mz * mz]
 
 
 @kernel
@@ -218,7 +255,7 @@ def rigid_de(table):
             continue
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         element_transform(table, t, De[i * k * m: (i + 1) * k * m], k, m,
-                          out[offset: offset + k * mz], mz)
+                          out[offset: offset + k * mz])
 
 
 @kernel
