@@ -4,7 +4,10 @@ For an element with P inertia points p = p(x_e) (m, or rad for rotary inertia; D
 (P, m)) and their constant mass matrix Mp (P, P; kg, kg m^2): the point forces w = Mp f for
 point values f (N per unit mass: gravity, minus the accelerations), and the element mass
 Me = Dp^T Mp Dp (m, m), visiting only the entries of Mp that the element's type fills and the
-entries of Dp that are not zero (`motion`, `rigid`'s touching elements).
+entries of Dp that are not zero (`motion`, `rigid`'s touching elements). A touching element's
+Dp_z = Dp T_e and its mass go along whole rows padded to a multiple of 16 entries
+(`padded_width`), the length from which the compiler runs a loop of unknown length in
+vectors. The pattern of Mp is ascending (flat p P + q), so its walks take p from its order.
 """
 
 from ..numerics.jit import kernel
@@ -107,7 +110,7 @@ def point_columns(P, m, Dp, columns):
     counts = columns[P * m:]
     for pp in range(P):
         k = 0
-        for a in range(m):  # without a branch: a stays written only where Dp is not zero
+        for a in range(m):  # no branch: the next place moves on where Dp is not zero
             columns[pp * m + k] = a
             k += Dp[pp, a] != 0.0
         counts[pp] = k

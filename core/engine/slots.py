@@ -100,7 +100,7 @@ def group_inertia(table, row):
     per element, reference width, inertia entry point, coordinate indices
     (`group_coordinates`), the address of its packed reference rows, the elements' Mp (n P P,
     flat, element by element), gravity on the points (P,) and the flat indices p P + q of the
-    entries of Mp that the group's elements fill."""
+    entries of Mp that the group's elements fill, ascending."""
     data = float_array(table, GROUP_DATA)
     n, m, P = row[ed.G_COUNT], row[ed.G_M], row[ed.G_P]
     masses = data[row[ed.G_MASS_OFFSET]: row[ed.G_MASS_OFFSET] + n * P * P]
