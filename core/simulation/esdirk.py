@@ -38,10 +38,10 @@ theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm
 Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
 (kinematics not converged) recomputes J or, with J fresh, quarters h and retries.
 
-Predictor: f(z_i) extrapolated from the F_j in c (through the last three stages), and the
-last accepted step's stage derivatives at c = 0, c2, 1 as a quadratic in t: stage 2 adds
-that step's mean slope, stage 3 its curvature (zero after a restart). In the loop at 4 kHz
-(TR-BDF2) this cuts the evaluations per step by about a fifth; the solution is the Newton's.
+Predictor: f(z_i) extrapolated from the F_j in c (through the last three stages); for
+TR-BDF2 also the last accepted step's stage derivatives at c = 0, c2, 1 as a quadratic in t:
+stage 2 adds that step's mean slope, stage 3 its curvature (zero after a restart). In the
+loop at 4 kHz this cuts the evaluations per step by about a fifth (docs/decisions.md).
 
 After an input change du, F_1 = F_s + [0; M^-1 B du]: the inputs enter qddot linearly, and
 the engine solves for their change with the factors of its last evaluation (`engine.
@@ -70,7 +70,7 @@ from .newton_matrix import newton_solve
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_SIZE) = range(16)
+ I_HISTORY, I_SIZE) = range(17)
 # rows of the vector workspace: the stage derivatives from V_F, then the last step's history
 (V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
 V_SLOPE, V_CURVATURE = V_F + MAX_STAGES, V_F + MAX_STAGES + 1
@@ -163,6 +163,8 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
         ci += A[i, j]
     history = vectors[V_SLOPE] if i == 1 else vectors[V_CURVATURE]
     weight_of_history = c2 * h if i == 1 else (ci * (ci - c2) * h * h if i == 2 else 0.0)
+    if flags[I_HISTORY] == 0:
+        weight_of_history = 0.0
     for k in range(n):
         s = y[k]
         for j in range(i):
@@ -305,7 +307,8 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             memory[M_H] = h * max(SHRINK, SAFETY * error ** -memory[M_EXPONENT])
             continue
         # accept: y_new = z_s, and its derivative F_s is the next step's F_1; the history
-        keep_history(vectors, A, h)
+        if flags[I_HISTORY] == 1:
+            keep_history(vectors, A, h)
         for k in range(n):
             y[k] = z[k]
             F[0, k] = F[stages - 1, k]
@@ -356,6 +359,7 @@ class Esdirk:
         self.memory[M_ETA] = 1.0
         self.memory[M_EXPONENT] = 1.0 / (min(tableau.order, tableau.embedded_order) + 1)
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
+        self.flags[I_HISTORY] = int(tableau.history)
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)
         self.LU = np.zeros(n * n)

@@ -37,6 +37,9 @@ class Tableau:
     b_hat: tuple
     order: int
     embedded_order: int
+    # whether the Newton starts of stages 2 and 3 take the last step's slope and curvature
+    # (`esdirk.keep_history`): measured to pay for TR-BDF2 alone (docs/decisions.md)
+    history: bool = False
 
     @property
     def stages(self):
@@ -123,7 +126,7 @@ TRBDF2 = Tableau(
        (_G2, _G2, 0),
        (_R2 / 4, _R2 / 4, _G2)),
     b_hat=((1 - _R2 / 4) / 3, (3 * _R2 / 4 + 1) / 3, _G2 / 3),
-    order=2, embedded_order=3)
+    order=2, embedded_order=3, history=True)
 
 # by method name (core/simulation/methods.py)
 TABLEAUS = {"esdirk": ESDIRK4, "esdirk3": ESDIRK3, "esdirk2": TRBDF2}
