@@ -96,23 +96,34 @@ def _constraint_jacobian(table, J):
 
 
 @kernel
-def _sparse_constraint_jacobian(table, values):
-    """J's sparse values from the elements' De in slot de through the J map."""
-    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
+def _scatter_de(table, De, emap, shift, mirror, out):
+    """out[emap[shift + e]] = De[e] for the entries e of slot de (and, with mirror >= 0, the
+    same at emap[mirror + e]: J_o^T beside J_o) where the map has a place (>= 0), skipping
+    the elements that touch a rigid cluster: their entries come from their De_z."""
     dims = _i(table, slot.DIMS)
-    values[:] = 0.0
-    n_de, n_xdof = De.size, dims[ed.NXDOF]
     rigid = dims[ed.NSLAVES] > 0
-    for g in range(dims[ed.NGROUPS]):  # a touching element's entries come from its De_z
+    for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         size, first = row[ed.G_K] * row[ed.G_M], row[ed.G_DE_OFFSET]
         for i in range(row[ed.G_COUNT]):
             if rigid and rigid_element(table, row, i) >= 0:
                 continue
             for e in range(first + i * size, first + (i + 1) * size):
-                s = jmap[e]
+                s = emap[shift + e]
                 if s >= 0:
-                    values[s] = De[e]
+                    out[s] = De[e]
+                    if mirror >= 0:
+                        out[emap[mirror + e]] = De[e]
+
+
+@kernel
+def _sparse_constraint_jacobian(table, values):
+    """J's sparse values from the elements' De in slot de through the J map."""
+    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
+    dims = _i(table, slot.DIMS)
+    values[:] = 0.0
+    n_de, n_xdof = De.size, dims[ed.NXDOF]
+    _scatter_de(table, De, jmap, 0, -1, values)
     for j in range(n_xdof):
         s = jmap[n_de + j]
         if s >= 0:
@@ -262,18 +273,7 @@ def add_rigid_rows(table, A, na):
     rde = _f(table, slot.RIGID_DE)
     if dims[ed.A_SPARSE] == 1:
         De, amap = _f(table, slot.DE), _i(table, slot.AUG_MAP)
-        n_de = De.size
-        for g in range(dims[ed.NGROUPS]):  # a touching element's from its De_z below
-            row = group(table, g)
-            size, first = row[ed.G_K] * row[ed.G_M], row[ed.G_DE_OFFSET]
-            for i in range(row[ed.G_COUNT]):
-                if rigid and rigid_element(table, row, i) >= 0:
-                    continue
-                for e in range(first + i * size, first + (i + 1) * size):
-                    s = amap[nf + e]
-                    if s >= 0:
-                        A[s] = De[e]
-                        A[amap[nf + n_de + e]] = De[e]
+        _scatter_de(table, De, amap, nf, nf + De.size, A)  # a touching element's below
         if rigid:
             base, n_rde = dims[ed.A_RIGID], rde.size
             for e in range(n_rde):
