@@ -24,12 +24,10 @@ def element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
     point_forces(Mp, pattern, P, point, w)
     for a in range(m * m):
         Me[a] = 0.0
-    pp, end = 0, P  # the pattern is ascending: its rows p in order
+    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_row`)
     for e in range(pattern.size):
         flat = pattern[e]
-        while flat >= end:
-            pp += 1
-            end += P
+        pp, end = pattern_row(flat, pp, end, P)
         qq, mpq = flat - end + P, Mp[flat]
         for u in range(counts[pp]):
             a = columns[pp * m + u]
@@ -51,12 +49,10 @@ def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
     to round-off."""
     for r in range(P * stride):
         MD[r] = 0.0
-    pp, end = 0, P  # the pattern is ascending: its rows p in order
+    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_row`)
     for e in range(pattern.size):
         flat = pattern[e]
-        while flat >= end:
-            pp += 1
-            end += P
+        pp, end = pattern_row(flat, pp, end, P)
         mpq = Mp[flat]
         out, row = MD[pp * stride: (pp + 1) * stride], flat - end + P
         source = D[row * stride: (row + 1) * stride]
@@ -97,6 +93,17 @@ def sparse_rows_product(P, m, Dp, columns, T, stride, D):
 
 
 @kernel
+def pattern_row(flat, pp, end, P):
+    """(p, (p + 1) P) of the pattern entry `flat` (= p P + q), walking on from the previous
+    entry's (pp, end): the pattern of Mp ascends, so its walks take p from its order instead
+    of a division per entry."""
+    while flat >= end:
+        pp += 1
+        end += P
+    return pp, end
+
+
+@kernel
 def padded_width(m):
     """The row length `dense_element_mass` stores rows of m entries with: m rounded up to a
     multiple of 16."""
@@ -121,10 +128,8 @@ def point_forces(Mp, pattern, P, point, w):
     """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
     for pp in range(P):
         w[pp] = 0.0
-    pp, end = 0, P  # the pattern is ascending: its rows p in order
+    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_row`)
     for e in range(pattern.size):
         flat = pattern[e]
-        while flat >= end:
-            pp += 1
-            end += P
+        pp, end = pattern_row(flat, pp, end, P)
         w[pp] += Mp[flat] * point[flat - end + P]
