@@ -28,13 +28,15 @@ from ..numerics.jit import kernel
 @kernel
 def start_from_plant(plant, output, q):
     """Slot x_start of the packed model `output` (its table's address) = the plant's last
-    kinematic solution moved to the DOFs q (NDOF,: m, rad), as the module says; x_e itself
-    when the plant holds no solution with its factors (before its first, after a restart)."""
-    x_start = engine.float_array(output, slots.X_START)
-    copy(x_start, engine.float_array(plant, slots.X))
+    kinematic solution moved to the DOFs q (NDOF,: m, rad), as the module says. Only for a
+    plant whose last solution is of the state measured (the caller knows: after a step, not
+    after a state was set); left as the caller set it when the plant holds no solution with
+    its factors (before its first, after a restart of its kinematics)."""
     dims = engine.int_array(plant, slots.DIMS)
     if dims[ed.WARM] != 1:
         return
+    x_start = engine.float_array(output, slots.X_START)
+    copy(x_start, engine.float_array(plant, slots.X))
     q_e = engine.float_array(plant, slots.Q)
     dq = engine.float_array(output, slots.REDUCED_FORCE)  # scratch of the output table
     dx = engine.float_array(output, slots.DX)

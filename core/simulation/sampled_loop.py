@@ -288,6 +288,8 @@ def _measure(addresses, y, scratch, coordinates, out):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
     ndof = engine.int_array(addresses[_PLANT], slots.DIMS)[ed.NDOF]  # y: [.., coil currents]
+    x_plant = engine.float_array(addresses[_PLANT], slots.X)
+    copy(engine.float_array(addresses[_OUTPUT], slots.X_START), x_plant)
     engine.int_array(addresses[_OUTPUT], slots.DIMS)[ed.WARM] = 0
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]

@@ -24,7 +24,8 @@ if TYPE_CHECKING:  # names for the annotations only
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
-    `_output_dofs` and `_output_dof_list`, the last evaluation's `_last_x`, `_last_e`, and
+    `_output_dofs` and `_output_dof_list`, `_restart_kinematics` (whether the plant's last
+    solution may be of another state), the last evaluation's `_last_x`, `_last_e`, and
     `_range`, `_within` made here on first use)."""
 
     def outputs(self) -> np.ndarray:
@@ -78,7 +79,8 @@ class SimulatorOutputs:
         (`measuring`), positions only, as the compiled sampled loop measures them."""
         data, q = self._output_data, np.ascontiguousarray(q, dtype=float)
         self._start_kinematics(self._x, data)
-        start_from_plant(self.data.address, data.address, q)
+        if not self._restart_kinematics:  # the plant's last solution is of this state's step
+            start_from_plant(self.data.address, data.address, q)
         status = engine.call(data, engine.OP_POSITIONS, q)
         if status != ed.OK:
             raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
