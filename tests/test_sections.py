@@ -31,6 +31,23 @@ def test_thin_strip_tends_to_one_third_and_the_orientation_does_not_matter():
     assert turned["Iz"] == strip["Iy"] and turned["Wz"] == strip["Wy"]
 
 
+def test_a_strip_of_any_thinness_sums_its_series_without_overflow():
+    """Width / height up to 1e308 (a mutated scene's): the torsion series' arguments overflow
+    no longer, and It, Wt stay finite; a strip past a / t = 446, where every argument has
+    reached its cap of 700 already, keeps the uncapped series' value; a thin strip's Wt tends
+    to a t^2 / 3."""
+    with np.errstate(over="raise"):
+        extreme = rectangle(width=1.0, height=1e-308)
+    assert np.isfinite(extreme["It"]) and np.isfinite(extreme["Wt"])
+    a, t = 10.0, 1e-3
+    n = np.arange(1, 4002, 2, dtype=float)
+    argument = np.minimum(n * np.pi * (a / t) / 2.0, 700.0)  # uncapped: finite at a / t = 1e4
+    series = np.sum(np.tanh(argument) / n**5)
+    it = a * t**3 / 3.0 * (1.0 - 192.0 / np.pi**5 / (a / t) * series)
+    assert rectangle(width=a, height=t)["It"] == it
+    np.testing.assert_allclose(rectangle(1.0, 1e-6)["Wt"], 1e-12 / 3, rtol=1e-5)
+
+
 def test_leaf_spring_section_of_the_stage():
     """18 mm x 0.5 mm steel: EIz' = 0.039375 N m^2 (figures.md), EA = 1.89e6 N,
     rho A = 0.07065 kg/m, G = E / 2.6."""

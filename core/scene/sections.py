@@ -49,7 +49,9 @@ def rectangle(width, height):
     long_side, short_side = max(width, height), min(width, height)
     ratio = long_side / short_side
     n = _odd_terms()
-    argument = np.minimum(n * np.pi * ratio / 2.0, 700.0)
+    # n pi ratio / 2 >= 700 for every n >= 1 once ratio > 446: capping the ratio there keeps the
+    # arguments as they were and their product finite for any strip, however thin
+    argument = np.minimum(n * np.pi * min(ratio, 1e3) / 2.0, 700.0)
     torsion_sum = np.sum(np.tanh(argument) / n**5)
     it = long_side * short_side**3 / 3.0 * (1.0 - 192.0 / np.pi**5 / ratio * torsion_sum)
     decay = np.exp(-argument)
