@@ -50,3 +50,19 @@ def stage():
     from flexure.core import load_scene
 
     return load_scene("stage_planar_1dof")
+
+
+@pytest.fixture(scope="session")
+def stage_fmu(tmp_path_factory):
+    """stage_planar_1dof.fmu with its default tunables and, beyond them, section dimensions
+    and a modulus (test_fmu_requirements.GEOMETRY), built once."""
+    import tomllib
+
+    from test_fmu_requirements import GEOMETRY, SCENE
+
+    from flexure.core import scene_path
+    from flexure.fmu import build_scene_fmu, default_tunable
+
+    data = tomllib.loads(scene_path(SCENE).read_text())
+    return build_scene_fmu(SCENE, tmp_path_factory.mktemp("fmu") / f"{SCENE}.fmu",
+                           tunable=default_tunable(data) + GEOMETRY)

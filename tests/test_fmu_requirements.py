@@ -1,5 +1,6 @@
 """A self-describing FMU: its Python requirements inside it, a readable line when the host's
-Python lacks one, `flexure fmu doctor`, only the platforms tried, a unit on every variable.
+Python lacks one, only the platforms tried, a unit on every variable (`flexure fmu doctor`:
+test_fmu_doctor.py).
 
 The requirements are checked against what the slave really imports (an import hook in a fresh
 interpreter, every integrator method stepped), and the missing-requirement line against a real
@@ -8,11 +9,9 @@ host: fmpy in a child Python whose `import threadpoolctl` fails (a sitecustomize
 
 import json
 import os
-import re
 import subprocess
 import sys
 import textwrap
-import tomllib
 import zipfile
 from xml.etree import ElementTree as ET
 
@@ -20,15 +19,12 @@ import pytest
 from cli_runs import run
 from fmpy import read_model_description
 
-from flexure.core import scene_path
 from flexure.core.elements import section_keys
 from flexure.core.scene.building import NODE_KEYS, scene_key
 from flexure.core.scene.sections import CALCULATORS
 from flexure.fmu import (
     FMUBuildError,
-    build_scene_fmu,
     build_slave_fmu,
-    default_tunable,
     validate_fmu_file,
 )
 from flexure.fmu.builder import TRIED_PLATFORMS
@@ -48,13 +44,6 @@ from flexure.fmu.scene_slave import METHODS
 SCENE = "stage_planar_1dof"
 # beyond the defaults, section dimensions and a modulus, whose units the slave does not give
 GEOMETRY = ["sections.leaf.height", "sections.leaf.width", "sections.leaf.E"]
-
-
-@pytest.fixture(scope="module")
-def stage_fmu(tmp_path_factory):
-    data = tomllib.loads(scene_path(SCENE).read_text())
-    return build_scene_fmu(SCENE, tmp_path_factory.mktemp("fmu") / f"{SCENE}.fmu",
-                           tunable=default_tunable(data) + GEOMETRY)
 
 
 def requirements_of(path):
@@ -276,7 +265,7 @@ def without_threadpoolctl(tmp_path):
 def test_a_host_without_a_requirement_logs_one_line_naming_it(stage_fmu, tmp_path):
     """fmpy in a child Python without threadpoolctl instantiates the FMU with debug logging off,
     then on (each from a folder of its own), and exits cleanly. (With every requirement, the
-    same FMU instantiates: test_fmu.py, and the doctor test below.)"""
+    same FMU instantiates: test_fmu.py, and test_fmu_doctor.py.)"""
     host = subprocess.run([sys.executable, "-c", HOST, str(stage_fmu)], capture_output=True,
                           text=True, timeout=300, env=without_threadpoolctl(tmp_path))
     assert host.returncode == 0, host.stderr[-2000:]
@@ -353,104 +342,6 @@ def test_the_host_logger_is_called_only_for_the_known_pythonfmu_binary(tmp_path)
     kwargs = {"logger": 12345, "instance_name": "a", "resources": str(tmp_path / "resources")}
     assert log_to_host(kwargs, "not read") is False  # unknown binary: no memory is read
     assert log_to_host({**kwargs, "logger": None}, "not read") is False
-
-
-# -- flexure fmu doctor ------------------------------------------------------------------------
-
-def test_doctor_passes_in_this_python(stage_fmu, capsys):
-    code, out, _ = run(capsys, "fmu", "doctor", stage_fmu)
-    assert code == 0, out
-    lines = out.splitlines()
-    assert lines[0].split() == ["check", "status", "found"]
-    assert len([line for line in lines[2:] if "  OK  " in line]) == 11
-    assert lines[2].startswith("platform ") and f"binary binaries/linux64/{SCENE}.so " in out
-    for item in requirements_of(stage_fmu).items:
-        needs = f", needs >= {item.minimum}" if item.minimum else ""
-        assert f"\n{item.pin()}{needs}  " in out
-    assert out.rstrip().endswith(f"{stage_fmu}: every check passed (11)")
-    code, out, _ = run(capsys, "fmu", "doctor", stage_fmu, "--json")
-    report = json.loads(out)
-    assert code == 0 and report["passed"] and len(report["checks"]) == 11
-    assert {row["status"] for row in report["checks"]} == {"OK"}
-
-
-def test_doctor_fails_in_a_python_without_threadpoolctl(stage_fmu, tmp_path):
-    doctor = subprocess.run(
-        [sys.executable, "-c", "import sys; from flexure.core.cli import main; "
-                               "sys.exit(main(sys.argv[1:]))", "fmu", "doctor", str(stage_fmu)],
-        capture_output=True, text=True, timeout=300, env=without_threadpoolctl(tmp_path))
-    assert doctor.returncode == 1, doctor.stderr
-    pin = next(i.pin() for i in requirements_of(stage_fmu).items
-               if i.distribution == "threadpoolctl")
-    row = next(line for line in doctor.stdout.splitlines() if line.startswith(pin))
-    assert row.split()[4:6] == ["MISSING", "import"]
-    assert f"  {pin}, needs >= 3.1 (MISSING): python -m pip install '{pin}'" in doctor.stdout
-    assert doctor.stdout.rstrip().endswith("1 of 11 checks failed")
-
-
-def _rewritten(source, target, replace):
-    """A copy of the FMU `source` with each member's bytes passed through replace(name, data)
-    (None drops the member)."""
-    with zipfile.ZipFile(source) as old, zipfile.ZipFile(target, "w") as new:
-        for item in old.infolist():
-            data = replace(item.filename, old.read(item.filename))
-            if data is not None:
-                new.writestr(item.filename, data)
-    return target
-
-
-def test_doctor_names_an_old_version_a_missing_package_and_another_platform(stage_fmu, tmp_path,
-                                                                           capsys):
-    def requirements(name, data):
-        if name != "resources/requirements.txt":
-            return data
-        return (data.decode().replace("needs >=1.26", "needs >=99.1")
-                + "no-such-dist==1.0  # import no_such_module; needs >=1.0\n").encode()
-
-    changed = _rewritten(stage_fmu, tmp_path / "changed.fmu", requirements)
-    code, out, _ = run(capsys, "fmu", "doctor", changed)
-    assert code == 1
-    numpy_row = next(line for line in out.splitlines() if line.startswith("numpy=="))
-    assert numpy_row.split()[2:4] == [">=", "99.1"] and " OLD " in numpy_row
-    assert re.search(r"\nno-such-dist==1\.0, needs >= 1\.0 +MISSING +import no_such_module: "
-                     r"ModuleNotFoundError: No module named 'no_such_module'", out)
-    assert "no-such-dist==1.0, needs >= 1.0 (MISSING): python -m pip install " \
-           "'no-such-dist==1.0'" in out
-    assert out.rstrip().endswith("2 of 12 checks failed")
-
-    elsewhere = _rewritten(stage_fmu, tmp_path / "win.fmu", lambda name, data: None if
-                           name.startswith("binaries/") else data)
-    code, out, _ = run(capsys, "fmu", "doctor", elsewhere)
-    assert code == 1
-    assert re.search(r"\nplatform +MISSING +this machine is linux64; the FMU has no binary", out)
-    assert "\nbinary " not in out  # nothing to load
-
-    old = _rewritten(stage_fmu, tmp_path / "old.fmu", lambda name, data: None if
-                     name == "resources/requirements.txt" else data)
-    code, out, _ = run(capsys, "fmu", "doctor", old)
-    assert code == 1
-    assert re.search(r"\nresources/requirements.txt +MISSING +the FMU lists no requirements", out)
-
-
-@pytest.mark.parametrize("make, message", [
-    (lambda p: p, "no such file"),
-    (lambda p: (p.write_text("not a zip"), p)[1], "not an FMU: File is not a zip file"),
-    (lambda p: zipfile.ZipFile(p, "w").close() or p,
-     "not an FMU: it has no modelDescription.xml"),
-])
-def test_doctor_refuses_what_is_not_an_fmu(make, message, tmp_path, capsys):
-    path = make(tmp_path / "x.fmu")
-    code, _, err = run(capsys, "fmu", "doctor", path)
-    assert (code, err) == (2, f"flexure fmu: error: {path}: {message}\n")
-
-
-def test_doctor_refuses_a_requirements_file_it_cannot_read(stage_fmu, tmp_path, capsys):
-    bad = _rewritten(stage_fmu, tmp_path / "bad.fmu", lambda name, data: b"numpy\n" if
-                     name == "resources/requirements.txt" else data)
-    code, _, err = run(capsys, "fmu", "doctor", bad)
-    assert code == 2
-    assert err == (f"flexure fmu: error: {bad}: resources/requirements.txt, line 1: expected "
-                   "'NAME==VERSION  # import MODULE; needs >=MINIMUM', got 'numpy'\n")
 
 
 # -- units --------------------------------------------------------------------------------------
