@@ -171,6 +171,24 @@ def _newton_step(table, x, g, dx):
 
 
 @kernel
+def predicted_coordinates(table, q, x, dq, dx):
+    """x (NX,) = the last kinematic solution (slot x, at the DOFs in slot q) moved to the DOFs
+    q to first order with the factors of J it left: x_prev + J^-1 [0; q - q_prev] on the free
+    coordinates, the others (the slaves) as they were. dq (NDOF,) and dx (n_free,) scratch."""
+    dims = _i(table, slot.DIMS)
+    x_prev, q_prev = _f(table, slot.X), _f(table, slot.Q)
+    for j in range(dims[ed.NDOF]):
+        dq[j] = q[j] - q_prev[j]
+    dof_rows(table, dq, dx)
+    j_solve(table, dx)
+    nx = dims[ed.NX]
+    copy(x[:nx], x_prev[:nx])
+    free = _i(table, slot.FREE)
+    for a in range(dims[ed.NFREE]):
+        x[free[a]] += dx[a]
+
+
+@kernel
 def solve_positions(table, q):
     """x = F(q) into slot x by full Newton from slot x_start, stopping as soon as the
     constraint residual is within the tolerance: the positions alone (no D2e, no factors or DF
@@ -203,31 +221,26 @@ def solve_kinematics(table, q):
     dims = _i(table, slot.DIMS)
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
     dims[ed.A_FACTORS] = ed.NO_FACTORS  # and so are the augmented system's factors
-    nx, nf = dims[ed.NX], dims[ed.NFREE]
+    nx = dims[ed.NX]
     tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
-    free = _i(table, slot.FREE)
     if dims[ed.WARM] == 1:
         # the first-order prediction x_prev + DF_prev (q - q_prev): with DF where the reduced
         # form keeps it (every solution computes it there), else as J_prev^-1 [0; dq] with the
         # factors kept from the previous solution
-        x_prev, q_prev, dq = _f(table, slot.X), _f(table, slot.Q), _f(table, slot.REDUCED_FORCE)
-        ndof = dims[ed.NDOF]
-        for j in range(ndof):
-            dq[j] = q[j] - q_prev[j]
+        dq = _f(table, slot.REDUCED_FORCE)
         if dims[ed.AUGMENTED] == 0:
-            DF = _f(table, slot.DF)
+            x_prev, q_prev, DF = _f(table, slot.X), _f(table, slot.Q), _f(table, slot.DF)
+            ndof = dims[ed.NDOF]
+            for j in range(ndof):
+                dq[j] = q[j] - q_prev[j]
             for a in range(nx):
                 s = x_prev[a]
                 for j in range(ndof):
                     s += DF[a * ndof + j] * dq[j]
                 x[a] = s
         else:
-            dof_rows(table, dq, dx)
-            j_solve(table, dx)
-            copy(x[:nx], x_prev[:nx])
-            for a in range(nf):
-                x[free[a]] += dx[a]
+            predicted_coordinates(table, q, x, dq, dx)
         # the residual needs e alone; the chord steps use the kept factors
         _elements(table, x, 0)
         if _residual(table, x, q, g) <= tolerance:

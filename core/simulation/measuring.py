@@ -9,7 +9,9 @@ moved to q to first order with the factors of J that solution left:
 
     x_start = x_e + J_e^-1 [0; q - q_e]   on the free coordinates
 
-(the slaves of rigid clusters follow their masters at the first evaluation). At the end of
+(`engine.kinematics.predicted_coordinates`, the kinematics' own warm start, here from another
+packed model's solution; the slaves of rigid clusters follow their masters at the first
+evaluation). At the end of
 an integrator step q - q_e is the step's last Newton correction, within the Newton's
 tolerance (about 1e-9 m at the loop's rtol 1e-5), so the start's residual, of the order of
 |q - q_e|^2 over the flexures' lengths, passes at the first evaluation: one solve with J's
@@ -19,9 +21,7 @@ pass, the Newton goes on from there as before.
 
 from ..engine import data as ed
 from ..engine import engine, slots
-from ..engine.factors import j_solve
-from ..engine.kinematics import dof_rows
-from ..numerics.dense import copy
+from ..engine.kinematics import predicted_coordinates
 from ..numerics.jit import kernel
 
 
@@ -32,18 +32,8 @@ def start_from_plant(plant, output, q):
     plant whose last solution is of the state measured (the caller knows: after a step, not
     after a state was set); left as the caller set it when the plant holds no solution with
     its factors (before its first, after a restart of its kinematics)."""
-    dims = engine.int_array(plant, slots.DIMS)
-    if dims[ed.WARM] != 1:
+    if engine.int_array(plant, slots.DIMS)[ed.WARM] != 1:
         return
-    x_start = engine.float_array(output, slots.X_START)
-    copy(x_start, engine.float_array(plant, slots.X))
-    q_e = engine.float_array(plant, slots.Q)
-    dq = engine.float_array(output, slots.REDUCED_FORCE)  # scratch of the output table
-    dx = engine.float_array(output, slots.DX)
-    for j in range(dims[ed.NDOF]):
-        dq[j] = q[j] - q_e[j]
-    dof_rows(plant, dq, dx)
-    j_solve(plant, dx)
-    free = engine.int_array(plant, slots.FREE)
-    for a in range(dims[ed.NFREE]):
-        x_start[free[a]] += dx[a]
+    predicted_coordinates(plant, q, engine.float_array(output, slots.X_START),
+                          engine.float_array(output, slots.REDUCED_FORCE),  # scratch of
+                          engine.float_array(output, slots.DX))  # the output's, not the plant's
