@@ -38,6 +38,7 @@ The packed tables (slots of `data`, read by `rigid_kernels`):
 import numpy as np
 
 from ..mechanics.rigid_bodies import DEPENDENCIES, RigidLayout, find_clusters
+from .point_masses import padded_width
 
 SLAVE_WIDTH = 12
 (E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET, E_DE_OFFSET, E_MASS_OFFSET, E_GROUP,
@@ -188,7 +189,7 @@ class RigidPacking:
     def floats(self, nx, n_free, max_p):
         """The float64 slots of the clusters, by name (constants and workspace)."""
         n_sc = self.layout.slave_coordinates.size
-        padded = 16 * ((self.max_mz + 15) // 16)
+        padded = padded_width.py_func(self.max_mz)  # the kernel's plain function: no compile
         return {"rigid_data": self.layout.data.ravel(),
                 "rigid_weights": np.zeros(n_sc * DEPENDENCIES),
                 "rigid_de": np.zeros(self.de_size), "rigid_c": np.zeros(nx if n_sc else 0),
