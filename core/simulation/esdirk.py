@@ -157,14 +157,17 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     base, z, delta, weight = vectors[V_BASE], vectors[V_Z], vectors[V_DELTA], vectors[V_WEIGHT]
     y, F = vectors[V_Y], vectors[V_F:]
     hg = h * A[1, 1]
-    # the last step's history: its mean slope for stage 2, its curvature for stage 3
-    c2, ci = A[1, 0] + A[1, 1], 0.0
-    for j in range(i + 1):
-        ci += A[i, j]
-    history = vectors[V_SLOPE] if i == 1 else vectors[V_CURVATURE]
-    weight_of_history = c2 * h if i == 1 else (ci * (ci - c2) * h * h if i == 2 else 0.0)
-    if flags[I_HISTORY] == 0:
-        weight_of_history = 0.0
+    # the last step's history (`keep_history`, where the tableau takes it): its mean slope
+    # for stage 2, its curvature for stage 3
+    history, weight_of_history = vectors[V_SLOPE], 0.0
+    if flags[I_HISTORY] == 1 and i <= 2:
+        c2, ci = A[1, 0] + A[1, 1], 0.0
+        for j in range(i + 1):
+            ci += A[i, j]
+        if i == 1:
+            weight_of_history = c2 * h
+        else:
+            history, weight_of_history = vectors[V_CURVATURE], ci * (ci - c2) * h * h
     for k in range(n):
         s = y[k]
         for j in range(i):
