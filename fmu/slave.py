@@ -155,6 +155,7 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self.broken = ""  # why this instance is in the error state ("" while it is not)
         self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
+        self._unchecked_reals = {}  # {value reference: setter} of the unchecked Real inputs
 
     # -- to override -------------------------------------------------------------------------
 
