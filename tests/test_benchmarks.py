@@ -24,3 +24,20 @@ def test_compare_prints_the_startup_and_loop_rows(tmp_path):
     # the loop's tracking error row: measured, and within the 1e-7 of the stroke it targets
     row = next(line for line in text.splitlines() if "error" in line and "stroke" in line)
     assert "| yes |" in row, row
+
+
+def test_the_compiled_master_steps_an_fmu_as_fmpy_does(stage_fmu):
+    """The benchmark's compiled master (numba calling the FMU's C functions) makes the same
+    calls as fmpy's FMU2Slave: the same position after 200 steps, to the bit; an FMU that
+    answers an error is reported at its step."""
+    from examples.benchmarks.fmu_overhead import FmuMaster
+
+    master = FmuMaster(stage_fmu)
+    try:
+        runs = {how: master.run(200, master=how)[1][0] for how in ("fmpy", "ctypes", "compiled")}
+        assert runs["compiled"] == runs["fmpy"] == runs["ctypes"]
+        assert abs(runs["compiled"] - master.run(100, master="fmpy")[1][0]) > 1e-9  # it moved
+        with pytest.raises(RuntimeError, match="error status at step 0"):
+            master.run(200, float("nan"), master="compiled")  # doStep answers fmi2Discard
+    finally:
+        master.close()

@@ -57,13 +57,14 @@ fmu       stage_planar_3dof's FMU (`flexure.fmu.build_scene_fmu`, its default in
           >= 10, with its error against a CVODE run at rtol 1e-11; the FMU's overhead =
           1 - engine / FMU wall <= 10 %, the engine time being the FMU's own simulator's time
           inside `advance` in the same run, and the master calling the FMU's C functions
-          directly (fmpy's ctypes handles, as a compiled master does); the median over the
-          runs. The same through FMU2Slave's Python methods, for information, split into
-          flexure's slave in Python beyond the engine (the slave's time inside do_step less
-          its simulator's) and the rest: fmpy's Python and ctypes calls and pythonfmu's
-          binary (setReal, doStep, getReal). Also
-          the latency of the first instantiate +
-          initialise + doStep in a fresh process, with an empty FLEXURE_CACHE_DIR (the
+          from compiled code (`compiled_master`, as libcosim does); the median over the
+          runs. For information: the floor (a bare pythonfmu slave around the same
+          simulator); the C functions called from a Python loop (the master's ctypes calls
+          included); FMU2Slave's Python methods, split into flexure's slave in Python
+          beyond the engine (the slave's time inside do_step less its simulator's) and the
+          rest: fmpy's Python and ctypes calls and pythonfmu's binary (setReal, doStep,
+          getReal). Also the latency of the first instantiate + initialise + doStep in a
+          fresh process, with an empty FLEXURE_CACHE_DIR (the
           engine compiles) and with the warm cache.
 startup   Whole-process wall of `python -c "import flexure.core"` (<= 0.5 s) and `flexure
           analyze truss_1dof_x` (<= 1 s), with `python -c pass` for scale.
