@@ -70,11 +70,14 @@ class WorkPrecision:
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(7, 5))
-        for method in dict.fromkeys(r["method"] for r in self.rows):
+        for i, method in enumerate(dict.fromkeys(r["method"] for r in self.rows)):
             points = [(r["wall_time_s"], r["error"]) for r in self.rows
                       if r["method"] == method and r["error"] is not None and r["error"] > 0]
+            # a marker and line per family, as the ten colours come round again
+            style = ("^--" if method in SCIPY_METHODS else
+                     "s-" if method in ONE_STEP_METHODS else "o-")
             if points:
-                ax.loglog(*zip(*points, strict=True), "o-", label=method)
+                ax.loglog(*zip(*points, strict=True), style, color=f"C{i % 10}", label=method)
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("max output error (m)")
         ax.set_title(f"{self.scene}: {self.t_end:g} s")
