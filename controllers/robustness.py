@@ -19,6 +19,7 @@ degrees; margins as ratios.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,15 +90,65 @@ def margin_grid(crossover, dt, poles, *, damping_below=0.1):
 
 def siso_margins(response, omega, dt, *, with_crossover: bool = False):
     """Gain margin, phase margin (deg) and modulus margin of a discrete SISO loop gain given
-    by its response on `omega` (python-control's 'frd' method); `with_crossover` adds the
-    gain cross-over (rad/s) where the phase margin is taken (nan if |L| never crosses 1)."""
-    import control
+    by its response on `omega` (rad/s); `with_crossover` adds the gain cross-over (rad/s)
+    where the phase margin is taken (nan if |L| never crosses 1). `dt` (s) is the loop's
+    sample period, which the response already carries.
 
-    gm, pm, sm, _, wgc, _ = control.stability_margins(control.frd(response, omega, dt=dt),
-                                                      method="frd")
+    python-control's 'frd' method (`control.stability_margins` of an interpolating FRD), on
+    the same interpolant: the cubic spline through the response's real and imaginary parts
+    (not-a-knot, as FITPACK's interpolating splprep), the crossings of the grid refined by
+    Brent's method on it, the local minima of |1 + L| by Brent's minimiser. That function
+    evaluates its spline point by point across the whole grid three times (0.5 s a loop
+    on the manipulator's 13 000-frequency grid); here the grid's values are the response
+    itself, and the spline is evaluated only where a crossing or minimum is refined.
+    tests/test_robustness.py checks the two agree.
+    """
+    from scipy.interpolate import make_interp_spline
+    from scipy.optimize import brentq, minimize_scalar
+
+    del dt  # the response is already that of the sampled loop
+    L, w = np.asarray(response, complex), np.asarray(omega, float)
+    spline = make_interp_spline(w, np.column_stack([L.real, L.imag]), k=3)
+
+    def at(x):
+        value = spline(x)
+        return complex(value[0], value[1])
+
+    def brent_roots(f, on_grid, keep=None):
+        (index,) = np.nonzero(np.diff(np.sign(on_grid)))
+        if keep is not None:
+            index = index[keep(index)]
+        return np.array([brentq(f, w[i], w[i + 1]) for i in index])
+
+    # where L crosses the negative real axis (angle(-L) changes sign), and |L| crosses 1
+    w_180 = brent_roots(lambda x: np.angle(-at(x)), np.angle(-L), lambda i: L.real[i] <= 0)
+    w_c = brent_roots(lambda x: abs(at(x)) - 1.0, np.abs(L) - 1.0)
+    distance = np.abs(L + 1.0)
+    (index,) = np.nonzero(np.diff(np.sign(np.diff(distance))) > 0)
+    w_s = np.array([minimize_scalar(lambda x: abs(at(x) + 1.0), bracket=(w[i], w[i + 1])).x
+                    for i in index])
+    w_s = w_s[(w_s >= w[0]) & (w_s <= w[-1])]
+
+    with np.errstate(divide="ignore"):  # |L| = 0 gives an infinite margin
+        gm_all = 1.0 / np.abs([at(x) for x in w_180]) if w_180.size else np.zeros(0)
+    pm_all = np.array([np.remainder(np.angle(at(x), deg=True), 360.0) - 180.0 for x in w_c])
+    sm_all = np.array([abs(at(x) + 1.0) for x in w_s])
+    # python-control's choice: the gain margin nearest 1 (in log), the smallest |phase
+    # margin| and its cross-over, the smallest modulus margin
+    if gm_all.size and not np.isinf(gm_all).all():
+        with np.errstate(divide="ignore"):
+            gm = float(gm_all[np.argmin(np.abs(np.log(gm_all)))])
+    else:
+        gm = math.inf
+    if pm_all.size:
+        k = int(np.argmin(np.abs(pm_all)))
+        pm, crossover = float(pm_all[k]), float(w_c[k])
+    else:
+        pm, crossover = math.inf, math.nan
+    sm = float(sm_all.min()) if sm_all.size else math.inf
     if with_crossover:
-        return float(gm), float(pm), float(sm), float(wgc)
-    return float(gm), float(pm), float(sm)
+        return gm, pm, sm, crossover
+    return gm, pm, sm
 
 
 def loop_response(plant_d, controller, delay_samples, omega, *, eigen=None):

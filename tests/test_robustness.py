@@ -13,6 +13,7 @@ from flexure.controllers.robustness import (
     frequency_response,
     loop_response,
     others_closed,
+    siso_margins,
 )
 from flexure.core import load_scene, state_space
 
@@ -56,6 +57,40 @@ def test_a_loop_with_the_other_closed_is_the_loop_around_the_closed_plant():
     expected = np.array([complex(p11(np.exp(1j * w * plant.dt))) * gains[0]
                          * np.exp(-1j * w * plant.dt) for w in omega])
     np.testing.assert_allclose(others_closed(L, 0), expected, rtol=1e-9)
+
+
+# (seed, gain, loop 1 alone or with loop 2 closed): random plants' loop gains with two or
+# more crossings of |L| = 1 and of the negative real axis and two or more local minima of
+# |1 + L|, so that the choice among them is tested too
+MARGIN_CASES = [(7, 0.3, True), (8, 0.3, True), (11, 0.3, False), (11, 1.0, False)]
+
+
+@pytest.mark.parametrize(("seed", "gain", "others_closed_too"), MARGIN_CASES)
+def test_the_margins_are_python_controls_frd_margins(seed, gain, others_closed_too):
+    """The same gain, phase and modulus margins and cross-over as python-control's 'frd'
+    method on the same response (both refine on the cubic spline through it)."""
+    plant = _random_plant(seed, states=10)
+    omega = np.geomspace(0.5, np.pi / plant.dt * 0.999, 400)
+    controller = control.append(*[control.ss([], [], [], [[gain]], plant.dt)] * 2)
+    L = loop_response(plant, controller, 1, omega)
+    response = others_closed(L, 1) if others_closed_too else L[0, 0]
+    frd = control.frd(response, omega, dt=plant.dt)
+    crossings = control.stability_margins(frd, method="frd", returnall=True)[:3]
+    assert min(len(c) for c in crossings) >= 2  # several of each to choose from
+    gm, pm, sm, _, wc, _ = control.stability_margins(frd, method="frd")
+    ours = siso_margins(response, omega, plant.dt, with_crossover=True)
+    np.testing.assert_allclose(ours, [gm, pm, sm, wc], rtol=1e-9)
+
+
+def test_a_loop_that_never_crosses_has_infinite_margins():
+    """|L| < 1 everywhere and never on the negative real axis: python-control's answer,
+    infinite gain and phase margins and no cross-over."""
+    omega = np.geomspace(1.0, 3000.0, 200)
+    response = 0.5 / (1.0 + 1j * omega / 100.0)  # a first-order lag, gain 0.5
+    gm, pm, sm, wc = siso_margins(response, omega, 1e-3, with_crossover=True)
+    expected = control.stability_margins(control.frd(response, omega, dt=1e-3), method="frd")
+    assert gm == expected[0] == np.inf and pm == expected[1] == np.inf and np.isnan(wc)
+    assert sm == pytest.approx(expected[2], rel=1e-9)
 
 
 def test_one_loop_has_one_set_of_margins_and_its_sensitivity_peak_is_one_over_the_modulus():
