@@ -129,15 +129,23 @@ class SlaveValues:
             One per reference, in each variable's unit.
         """
         # the call a host makes before every doStep, unchecked inputs while stepping, as one
-        # store each; anything else (or a failure part way, the stores before it being
-        # repeated) goes through `_set`
-        setters = self._unchecked_reals
+        # store each; at a reference that is not one (the stores before it are `_set`'s
+        # too) or lists that do not pair up, `_set`, which names what it refuses
         if self.phase == STEP_COMPLETE and not self.broken:
+            setters = self._unchecked_reals
             try:
                 for vr, value in zip(vrs, values, strict=True):
-                    setters[vr](value)
-                return
-            except BaseException:  # noqa: BLE001
+                    setter = setters.get(vr)
+                    if setter is None:
+                        break
+                    try:
+                        setter(value)
+                    except BaseException as error:  # noqa: BLE001 -- as `_set` answers it
+                        self._fail("fmi2SetReal", error)
+                        return
+                else:
+                    return
+            except BaseException:  # noqa: BLE001 -- lists of another length, or not lists
                 pass
         self._set("fmi2SetReal", vrs, values, Real)
 
