@@ -154,8 +154,10 @@ class FmuMaster:
                 inside = (new[0].simulator.statistics["wall_time_s"],
                           in_step.seconds if in_step is not None else None)
         finally:
-            fmu.terminate()
-            fmu.freeInstance()
+            try:
+                fmu.terminate()
+            finally:
+                fmu.freeInstance()
         return wall, (x, inside)
 
     def close(self):
