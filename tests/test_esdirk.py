@@ -237,7 +237,8 @@ def test_a_corrupt_integrator_memory_is_refused():
     sim = Simulator(model, method="esdirk")
     sim.advance(0.01)
     state = sim.get_state()
-    for key, value in (("lu_step", -1.0), ("initial_step", np.nan), ("newton_rate", np.inf)):
+    for key, value in (("lu_step", -1.0), ("initial_step", np.nan), ("newton_rate", np.inf),
+                       ("extra_iterations", -1.0)):
         with pytest.raises(SimulationError, match="integrator memory holds negative or "
                                                   "non-finite numbers"):
             Simulator(model, method="esdirk").set_state(dict(state, **{key: value}))
@@ -281,3 +282,25 @@ def check_newton_solve(J, hg, rng, *, reduced):
     expected = np.linalg.solve(matrix, r)
     bound = 10 * np.linalg.cond(matrix) * 2.2e-16 * np.max(np.abs(expected))
     assert np.max(np.abs(v - expected)) <= bound
+
+
+def test_a_jacobian_grown_stale_is_renewed_and_a_current_one_kept():
+    """Newton's iterations beyond the first that converge slowly (theta >= THETA_STALE) are
+    the Jacobian's age; once they add up to JACOBIAN_COST n evaluations, the next step takes
+    a new one. A 1 N step rings the 3-DOF stage's bar: new Jacobians along the way, the count
+    never a step's iterations past the threshold. Where every extra iteration converges
+    fast (the input changes of the 1-DOF test above), none is taken."""
+    from flexure.core.simulation.esdirk import JACOBIAN_COST, MAX_NEWTON
+
+    model = load_scene("stage_planar_3dof")
+    sim = Simulator(model, method="esdirk", rtol=1e-6)
+    threshold = max(1.0, JACOBIAN_COST * 2 * model.ndof)
+    one_step = (MAX_NEWTON - 1) * 5  # ESDIRK4's five implicit stages
+    counts = []
+    for k in range(1, 201):
+        sim.set_inputs([1.0])
+        sim.advance(k * 1e-3)
+        counts.append(sim.integrator.restart_memory["extra_iterations"])
+    assert sim.statistics["jacobian_evaluations"] >= 10
+    assert max(counts) < threshold + one_step
+    assert min(counts) == 0  # renewed, the count starts over
