@@ -218,7 +218,7 @@ class LoopResult:
         worst = max(self.per_loop(), key=lambda row: row["error_ratio"])
         return _save(fig, path, title or (
             f"{self.settings.get('scene')} ({self.settings.get('plant')}): every loop along "
-            f"the move; worst {worst['loop']}: {100 * worst['error_ratio']:.3g} % of its "
+            f"the move;\nworst {worst['loop']}: {100 * worst['error_ratio']:.3g} % of its "
             f"stroke (target 0.1 %){self._noise_note()}"))
 
     def _noise_note(self) -> str:
