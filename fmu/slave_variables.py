@@ -78,8 +78,9 @@ class SlaveVariables:
             Its SI unit as FMI writes it ("m", "N", "rad/s", "N.m").
         start : float, optional
             The start value, in `unit`.
-        variability : Fmi2Variability, optional
-            Default: fixed for a parameter, continuous otherwise.
+        variability : Fmi2Variability or its name, optional
+            Default: fixed for a parameter, continuous otherwise; an input's is continuous
+            or discrete (ValueError otherwise).
         initial : Fmi2Initial, optional
             Default: exact for a parameter, pythonfmu's otherwise.
         description : str, optional
@@ -93,6 +94,13 @@ class SlaveVariables:
         if variability is None:
             variability = (Fmi2Variability.fixed if causality == Fmi2Causality.parameter
                            else Fmi2Variability.continuous)
+        elif isinstance(variability, str):
+            variability = Fmi2Variability[variability]
+        if causality == Fmi2Causality.input and variability not in (
+                Fmi2Variability.continuous, Fmi2Variability.discrete):
+            # a host sets an input while stepping, which FMI 2.0 allows only for these
+            raise ValueError(f"{name}: an input is continuous or discrete (FMI 2.0), not "
+                             f"{variability.name}")
         if initial is None and causality == Fmi2Causality.parameter:
             initial = Fmi2Initial.exact
         if getter is None:

@@ -24,7 +24,7 @@ class Probe(SafeSlave):
         self.add_real("u", causality="input", start=0.0)
         self.add_real("w", causality="input", start=0.0)
         self.add_real("y", causality="output", getter=lambda: self.gain * self.u)
-        self.add_real("fixed", causality="parameter", variability="fixed", start=1.0)
+        self.add_real("fixed", causality="parameter", start=1.0)  # fixed: a parameter's default
         self.add_real("gain", causality="parameter", start=2.0)
         self.add_real("flaky", causality="input", start=0.0, setter=self.set_flaky)
         self.add_real("bad", causality="output", getter=self.fail)
@@ -89,15 +89,33 @@ def test_a_set_while_stepping_is_answered_as_an_instances_first_set(case):
     assert _outcome(warm) == _outcome(first)
 
 
-def test_the_usual_set_stores_and_a_raising_setter_enters_the_error_state():
-    """What the comparison above rests on, stated: the first stores, the second refuses
-    (it does not try the setter again, which would succeed)."""
+def test_the_usual_set_stores_and_a_refused_one_enters_the_error_state():
+    """What the comparison above rests on, stated: an unchecked input is stored; a fixed
+    parameter while stepping is refused; a setter that raises is refused (not tried again,
+    which would succeed)."""
+    probe = _stepping(warm=True)
+    probe.set_real([FIXED], [5.0])
+    assert probe.fixed == 1.0 and "'fixed' (value reference 3) is a fixed parameter" in \
+        probe.broken
     probe = _stepping(warm=True)
     probe.set_real([U], [2.0])
     assert probe.u == 2.0 and not probe.broken
     probe.set_real([U, FLAKY], [3.0, 4.0])
     assert probe.broken and "the setter failed once" in probe.broken
     assert probe.flaky == 0.0
+
+
+@pytest.mark.parametrize("variability", ["fixed", "tunable", "constant"])
+def test_an_input_that_a_host_could_not_set_while_stepping_is_refused_when_added(variability):
+    class Wrong(SafeSlave):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.u = 0.0
+            self.add_real("u", causality="input", variability=variability, start=0.0)
+
+    with pytest.raises(ValueError, match=f"u: an input is continuous or discrete "
+                                         rf"\(FMI 2.0\), not {variability}"):
+        Wrong(instance_name="w")
 
 
 GETS = {
