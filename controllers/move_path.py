@@ -158,10 +158,14 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     start_values = rest.x[target_index]
     s_values = np.linspace(0.0, 1.0, points)
     displacements, forces = [], []
-    point = None
+    point, previous = None, None
     for j, s in enumerate(s_values):
         wanted = dict(zip(names, start_values + s * delta, strict=True))
-        point = inverse_statics(model, wanted, inputs=inputs, start=point)
+        # Newton on the forces from the line through the last two points' forces (the
+        # points are equally spaced in s): one equilibrium and linearisation fewer a point
+        initial = None if previous is None else 2.0 * point.forces - previous.forces
+        previous, point = point, inverse_statics(model, wanted, inputs=inputs, start=point,
+                                                 initial=initial)
         displacements.append([output_value(model, port, point.solution.x)
                               - output_value(model, port, rest.x) for port in outputs])
         # the static forces (N, N m) on the ports, an actuator's drive signal turned into its
