@@ -18,7 +18,12 @@ def warmup(*, repeat=5, quick=False):
     log("warm-up: first flexure simulation in this process")
     start = time.perf_counter()
     from flexure.core import load_scene, simulate
+    from flexure.core.engine import engine
+    from flexure.core.numerics.jit import is_cached
 
+    # a cache without this copy's engine (a new machine, or sources changed since) makes
+    # this first call compile: a latency of another kind, which the row says
+    compiled_here = not is_cached(engine.engine_entry.function)
     simulate(load_scene("stage_planar_3dof"), 0.01, inputs={"F": 1.0}, rtol=1e-6)
     first = time.perf_counter() - start
     from flexure.controllers.runner import run_loop
@@ -27,9 +32,12 @@ def warmup(*, repeat=5, quick=False):
     run_loop("stage_planar_1dof", duration=0.01, settle=0.0)
     first_loop = time.perf_counter() - start
     cold = "not measured (--quick)" if quick else f"{_first_call_compiling():.1f} s"
+    compiled_note = (" (compiled in this process: the cache held no engine of these "
+                     "sources)") if compiled_here else ""
     rows = [Row("first call in this process: import + engine load (compiled once into "
                 "~/.cache/flexure) + a 10 ms simulation",
-                f"{first:.2f} s; then a first short loop {first_loop:.2f} s; in a fresh process "
+                f"{first:.2f} s{compiled_note}; then a first short loop {first_loop:.2f} s; "
+                "in a fresh process "
                 f"with an empty cache (compiling) {cold}", "(latency, not in any figure "
                 "below)")]
     exu = peer()
