@@ -303,8 +303,9 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
                 return CONVERGENCE_FAILURES
             if flags[I_FRESH] == 0:
                 flags[I_REFRESH] = 1
-            else:
+            else:  # not the Jacobian's age: a smaller step, with the count started over
                 memory[M_H] = 0.25 * h
+                flags[I_EXTRA] = 0
             memory[M_ETA] = 1.0
             continue
         # the error estimate, filtered by the Newton matrix
@@ -402,7 +403,7 @@ class Esdirk:
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
         self.memory[M_H] = 0.0
         self.memory[M_ETA] = 1.0
-        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL]] = 0  # FSAL_NONE
+        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA]] = 0  # FSAL_NONE
 
     def advance(self, t_stop, *, one_step=False, max_steps=None):
         """Integrate to t_stop (s), landing on it exactly (one accepted step only with
@@ -464,19 +465,28 @@ class Esdirk:
     @restart_memory.setter
     def restart_memory(self, memory):
         self.forget()
-        h = float(memory.get("initial_step", 0.0))
-        lu_step = float(memory.get("lu_step", 0.0))
-        rate = float(memory.get("newton_rate", 1.0))
-        extra = float(memory.get("extra_iterations", 0))
+        numbers = {key: float(memory.get(key, default)) for key, default in (
+            ("initial_step", 0.0), ("lu_step", 0.0), ("newton_rate", 1.0), ("refresh", 0.0),
+            ("extra_iterations", 0.0))}
         jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
-        if not all(np.isfinite(v) and v >= 0.0 for v in (h, lu_step, rate, extra)) \
-                or not np.all(np.isfinite(jacobian)):
-            raise SimulationError("the integrator memory holds negative or non-finite numbers")
-        self.memory[M_H], self.memory[M_ETA] = h, rate
+        for key, value in numbers.items():
+            if not (np.isfinite(value) and value >= 0.0):
+                raise SimulationError("the integrator memory holds negative or non-finite "
+                                      f"numbers: {key} = {value!r}")
+        if not np.all(np.isfinite(jacobian)):
+            raise SimulationError("the integrator memory holds negative or non-finite "
+                                  "numbers: in its jacobian")
+        refresh, extra = numbers["refresh"], numbers["extra_iterations"]
+        if refresh not in (0.0, 1.0) or extra != int(extra):
+            raise SimulationError(f"the integrator memory's refresh = {refresh!r} and "
+                                  f"extra_iterations = {extra!r}: expected 0 or 1 and a whole "
+                                  "number")
+        self.memory[M_H], self.memory[M_ETA] = numbers["initial_step"], numbers["newton_rate"]
+        lu_step = numbers["lu_step"]
         if jacobian.size == self.n * self.n:
             self.J[:] = jacobian
             self.flags[I_JACOBIAN] = 1
-            self.flags[I_REFRESH] = int(memory.get("refresh", 0))
+            self.flags[I_REFRESH] = int(refresh)
             self.flags[I_EXTRA] = min(int(extra), 2**62)
             if lu_step > 0.0 and factor(self.J, self.LU, self.pivots, lu_step, self.flags):
                 self.flags[I_LU] = 1
