@@ -89,8 +89,9 @@ def register(subparsers):
         "loop", help="closed-loop tracking of a third-order move (PID + feedforward)",
         description="Design a PID-like controller for the requested cross-over on the "
                     "scene's linear model, add the feedforward of its low-frequency model, "
-                    "and track a third-order move on the nonlinear plant. Reports the "
-                    "largest tracking error against the target of 0.1 % of the stroke.")
+                    "and track a third-order move on the nonlinear plant (or its "
+                    "linearisation). Reports the largest tracking error against the target "
+                    "of 0.1 % of the stroke.")
     add_scene_arguments(parser, default="stage_planar_1dof")
     parser.add_argument("--stroke", type=stroke, default=1e-3, metavar="S",
                         help="stroke of the move in m, or in rad on an angle (default 0.001)")
@@ -112,9 +113,10 @@ def register(subparsers):
                         help="move the coordinate COORD (e.g. E.x) by D (m or rad) while every "
                              "loop follows; one per loop, D = 0 holds it (repeatable; replaces "
                              "--stroke)")
-    parser.add_argument("--path", choices=("nonlinear", "linear"), default="nonlinear",
+    parser.add_argument("--path", choices=("nonlinear", "linear"), default=None,
                         help="how --move becomes the loops' references: the nonlinear inverse "
-                             "statics (default) or the linearised statics")
+                             "statics or the linearised statics (default: the plant's own, "
+                             "linear on --plant linear, nonlinear otherwise)")
     parser.add_argument("--quantum", type=quantum, default=None, metavar="Q",
                         help="encoder quantum in m (rad on an angle): the controller sees the "
                              "positions rounded to it; Q1,Q2,... gives one per loop")
@@ -122,8 +124,9 @@ def register(subparsers):
                         help="a sinusoidal force of amplitude A in N (N m on an angle) at "
                              f"every actuator, at HZ Hz (default {MAINS_HZ:g}: the mains)")
     parser.add_argument("--plant", choices=PLANTS, default="inprocess",
-                        help="in-process simulation, the scene FMU under fmpy, or the "
-                             "controller and scene FMUs in libcosim (default inprocess)")
+                        help="in-process simulation, the linearised model stepped exactly, the "
+                             "scene FMU under fmpy, or the controller and scene FMUs in "
+                             "libcosim (default inprocess)")
     parser.add_argument("--method", choices=LOOP_METHODS, default=LOOP_METHOD,
                         help=f"the plant's integrator (default {LOOP_METHOD}: one-step, no restart "
                              "when the force changes at a sample)")
@@ -182,9 +185,10 @@ def move_path_of(args):
         targets[name] = value
     if args.feedforward == "inverse" and not args.no_feedforward:
         raise UsageError("--move takes the modal feedforward or none, not --feedforward inverse")
+    kind = args.path or ("linear" if args.plant == "linear" else "nonlinear")
     model = load_scene(args.scene, overrides=args.set)
-    return move_path(model, targets, kind=args.path,
-                     progress=Progress(f"flexure loop: {args.path} move path"))
+    return move_path(model, targets, kind=kind,
+                     progress=Progress(f"flexure loop: {kind} move path"))
 
 
 def _per_loop_table(s):

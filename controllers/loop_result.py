@@ -94,7 +94,8 @@ class LoopResult:
         -------
         dict
             SI units: errors, strokes and positions m (rad), forces N (N m), margins as
-            `FeedbackDesign.summary`, "wall_time_s" s; "units" names the moving loop's.
+            `FeedbackDesign.summary`, "wall_time_s" s; "units" names the moving loop's;
+            "path" the move path's kind and targets (m, rad), or None.
         """
         ratio = self.max_abs_error / abs(self.stroke)
         axis = self.settings.get("axis", 0)
@@ -126,6 +127,7 @@ class LoopResult:
             "controller_kind": self.design.get("controller_kind", "designed"),
             "robustness_checked": self.design.get("robustness_checked", True),
             "reference_kind": self.settings.get("reference", "profile"),
+            "path": self.settings.get("path"),
             **{key: self.settings[key] for key in ("quantum", "disturbance")
                if key in self.settings},
         }

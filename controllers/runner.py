@@ -1,14 +1,15 @@
-"""`run_loop`: the closed loop on a scene, on one of three plants, timed and summarised.
+"""`run_loop`: the closed loop on a scene, on one of four plants, timed and summarised.
 
     scene -> build_loop (loop_design.py) -> a LoopController and its design
           -> the plant:  "inprocess"  the compiled in-process loop (sample_loop.py)
+                         "linear"     the linearised model, stepped exactly (linear_plant.py)
                          "fmu"        the scene FMU under fmpy (plants.py, sample_loop.py)
                          "libcosim"   the controller and scene FMUs in libcosim (cosim.py)
           -> LoopResult (loop_result.py)
 
-Every plant runs the same controller with the same timing (loop_controller.py), the same
-integrator and tolerance, so the three agree to the integrator's tolerance. On "inprocess" a
-callable controller runs the Python loop around the in-process Simulator
+Every plant runs the same controller with the same timing (loop_controller.py); the three
+nonlinear ones the same integrator and tolerance, so they agree to the integrator's
+tolerance. On "inprocess" a callable controller runs the Python loop around the Simulator
 (sample_loop.simulate_loop, a Python call per sample); the designed controller and a
 python-control system run compiled, with their encoder quantisation and disturbance.
 """
@@ -27,6 +28,7 @@ import numpy as np
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .cosim import run_cosimulation, scene_fmu
+from .linear_plant import LinearPlant
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
 from .loop_result import TARGET, LoopResult
@@ -43,7 +45,7 @@ if TYPE_CHECKING:  # names for the annotations only
     from .feedforward import LowFrequencyModel
     from .move_path import MovePath
 
-PLANTS = ("inprocess", "fmu", "libcosim")
+PLANTS = ("inprocess", "linear", "fmu", "libcosim")
 
 # What was defined here before the split stays importable from here
 # (examples/benchmarks/compare.py imports run_loop, tests simulate_loop).
@@ -79,8 +81,10 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     feedforward : bool or str
         True or "modal": the inverse of the low-frequency model; "inverse": the stable
         approximate inverse of the full linear model (see `build_loop`); False: none.
-    plant : {"inprocess", "fmu", "libcosim"}
-        The in-process compiled loop, the scene FMU under fmpy, or both FMUs in libcosim.
+    plant : {"inprocess", "linear", "fmu", "libcosim"}
+        The in-process compiled loop, the linearised model (`LinearPlant`: the state space
+        at the static equilibrium, stepped exactly; `method` and `rtol` unused), the scene
+        FMU under fmpy, or both FMUs in libcosim.
     settle : float
         Time (s) simulated after the move.
     axis : int
@@ -155,6 +159,14 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         raise LoopError("overrides apply to a scene file or name, not to a built Model: "
                         "build the model with them (build_model(data, overrides=...))")
     model = load_scene(scene, overrides=overrides) if named else scene
+    linear = None
+    if plant == "linear":  # one linearisation for the plant and for the design's checks
+        from flexure.core import linearize
+
+        lin = design_options.get("linear_model") or linearize(model)
+        if design is None:
+            design_options["linear_model"] = lin
+        linear = LinearPlant(model, linear_model=lin)
     loop, design = build_loop(
         model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
         feedforward=feedforward, settle=settle, axis=axis,
@@ -174,7 +186,9 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
                 "feedforward_kind": kind or "none",
                 "duration": duration, "settle": settle, "axis": axis, "move_end": duration,
-                "method": method, "rtol": rtol,
+                # the linear plant is stepped exactly: no integrator, no tolerance
+                "method": "exact" if plant == "linear" else method,
+                "rtol": None if plant == "linear" else rtol,
                 "path": None if path is None else {"kind": path.kind,
                                                    "targets": dict(path.targets)},
                 # the moving loop's units: a force (N) and a position (m), or on a planar
@@ -194,9 +208,12 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         if workdir is None and plant != "inprocess":  # FMUs built for this run only
             workdir = stack.enter_context(tempfile.TemporaryDirectory(
                 prefix="flexure_loop_", ignore_cleanup_errors=True))
-        t, r, position, force = _run_plant(plant, model, scene, loop, design,
-                                           method=method, rtol=rtol, workdir=workdir,
-                                           progress=progress, overrides=overrides)
+        if linear is not None:
+            t, r, position, force = simulate_loop(linear, loop, design, progress=progress)
+        else:
+            t, r, position, force = _run_plant(plant, model, scene, loop, design,
+                                               method=method, rtol=rtol, workdir=workdir,
+                                               progress=progress, overrides=overrides)
     wall = time.perf_counter() - start
     return LoopResult(t=t, reference=r, position=position, force=force,
                       feedforward=loop.feedforward[: len(t)].copy(), stroke=stroke,

@@ -1,0 +1,135 @@
+"""The linear plant: the scene's state space stepped exactly under the held input, against
+python-control's zero-order-hold discretisation, the matrix exponential, and the nonlinear
+plant where the model is nearly linear."""
+
+import numpy as np
+import pytest
+
+from flexure.controllers.linear_plant import LinearPlant
+from flexure.controllers.runner import run_loop
+from flexure.core import SimulationError, load_scene, state_space
+
+FS = 4000.0  # Hz
+
+
+def _drive(plant, inputs, fs=FS):
+    """The plant's outputs after each sample of held `inputs` (N, n_inputs)."""
+    out = []
+    for k, u in enumerate(inputs):
+        plant.set_input(u)
+        plant.advance((k + 1) / fs)
+        out.append(plant.output())
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def stage3():
+    return load_scene("stage_planar_3dof")
+
+
+def test_the_modal_step_is_python_controls_zero_order_hold(stage3):
+    """x_k+1 = Ad x_k + Bd u_k, y = C x with python-control's c2d (zoh) of the same state
+    space: the same outputs to 1e-10 of their range."""
+    import control
+
+    plant = LinearPlant(stage3)
+    assert plant.modal
+    sys_d = control.c2d(state_space(stage3), 1 / FS, method="zoh")
+    u = np.random.default_rng(1).normal(size=(300, len(plant.u0)))
+    x = np.zeros(sys_d.A.shape[0])
+    expected = []
+    for uk in u:
+        x = sys_d.A @ x + sys_d.B @ uk
+        expected.append(plant.y0 + sys_d.C @ x)
+    got = _drive(plant, u)
+    scale = np.max(np.abs(np.array(expected) - plant.y0))
+    assert np.max(np.abs(got - expected)) < 1e-10 * scale
+
+
+def test_the_modal_step_is_the_matrix_exponentials():
+    """The 19-DOF spatial stage (38 states, loaded away from its start): modal steps and the
+    Van Loan matrix exponential agree to 1e-9 of the motion, at two step lengths."""
+    model = load_scene("stage_spatial_19dof")
+    modal, dense = LinearPlant(model), LinearPlant(model, modal=False)
+    assert modal.modal and not dense.modal
+    u = np.random.default_rng(2).normal(size=(200, 1))
+    for fs in (FS, 1000.0):
+        modal.reset(), dense.reset()
+        a, b = _drive(modal, u, fs), _drive(dense, u, fs)
+        assert np.max(np.abs(a - b)) < 1e-9 * np.max(np.abs(b - b[0]))
+
+
+def test_it_starts_at_the_scenes_initial_coordinates_at_rest():
+    """Under the 19-DOF stage's constant 1 N the equilibrium is 1.06 mm away; the plant starts
+    at the initial coordinates as Simulator does, so its x output starts at 0 and, with no
+    input, swings toward the equilibrium."""
+    model = load_scene("stage_spatial_19dof")
+    plant = LinearPlant(model)
+    y = plant.reset()
+    assert abs(plant.y0[0] - 1.058e-3) < 1e-5  # m: the loaded equilibrium
+    assert abs(y[0]) < 1e-15
+    plant.set_input([0.0])
+    plant.advance(0.01)
+    assert 0 < plant.output()[0] < 2.2e-3
+
+
+@pytest.mark.parametrize("scene, tolerance", [
+    ("stage_planar_1dof", 1e-6 * 1e-5), ("stage_planar_3dof", 1e-6 * 1e-5),
+    # linearised at its loaded equilibrium 1.06 mm from where the loop holds it: measured
+    # 8.2 nm apart whatever the stroke, the stiffness's change over that 1.06 mm
+    ("stage_spatial_19dof", 1e-8)])
+def test_the_linear_loop_is_the_nonlinear_loop_for_a_small_move(scene, tolerance):
+    """A 10 um move: the loops' positions (m) on the linear plant and on the nonlinear plant
+    (at rtol 1e-9) agree (measured on the planar stages: 2.5e-8 of the stroke or better), and
+    the linear loop tracks."""
+    linear = run_loop(scene, stroke=1e-5, plant="linear")
+    nonlinear = run_loop(scene, stroke=1e-5, rtol=1e-9)
+    assert np.max(np.abs(linear.position - nonlinear.position)) < tolerance
+    assert linear.summary()["passed"]
+    assert linear.settings["method"] == "exact" and linear.settings["rtol"] is None
+
+
+def test_the_linear_loop_runs_through_a_coil():
+    """A voltage-driven coil adds its current to the state; the linear loop through it
+    follows the nonlinear one to 1e-6 of a 1 mm stroke."""
+    from test_loop_actuators import stage
+
+    model = stage(drive="voltage", amplifier_gain=2.0)
+    linear = run_loop(model, stroke=1e-3, plant="linear")
+    nonlinear = run_loop(model, stroke=1e-3, rtol=1e-9)
+    assert LinearPlant(model).A.shape[0] == 2 * model.ndof + 1
+    assert np.max(np.abs(linear.position - nonlinear.position)) < 1e-6 * 1e-3
+
+
+def test_bad_inputs_and_times_are_refused(stage3):
+    plant = LinearPlant(stage3)
+    n = len(plant.u0)
+    with pytest.raises(SimulationError, match=f"takes {n} finite inputs"):
+        plant.set_input(np.zeros(n + 1))
+    with pytest.raises(SimulationError, match="finite inputs"):
+        plant.set_input(np.full(n, np.nan))
+    plant.advance(1e-3)
+    with pytest.raises(SimulationError, match="cannot advance"):
+        plant.advance(1e-3)
+    with pytest.raises(SimulationError, match="cannot advance"):
+        plant.advance(0.5e-3)
+
+
+def test_flexure_loop_runs_on_the_linear_plant(capsys, tmp_path):
+    """`flexure loop --plant linear --move ...`: the path defaults to the linearised statics
+    (the plant's own), and the loop tracks."""
+    import json
+
+    from cli_runs import run
+
+    code, out, _ = run(capsys, "loop", "stage_planar_3dof", "--plant", "linear",
+                       "--move", "3.x=1e-3", "--duration", "0.2", "--settle", "0.05",
+                       "--no-plot", "--json")
+    assert code == 0
+    summary = json.loads(out)
+    assert summary["plant"] == "linear" and summary["passed"]
+    assert summary["path"]["kind"] == "linear"
+    code, out, _ = run(capsys, "loop", "stage_planar_3dof", "--plant", "linear",
+                       "--move", "3.x=1e-3", "--path", "nonlinear", "--duration", "0.2",
+                       "--settle", "0.05", "--no-plot", "--json")
+    assert code == 0 and json.loads(out)["path"]["kind"] == "nonlinear"
