@@ -42,3 +42,18 @@ def test_the_compiled_master_steps_an_fmu_as_fmpy_does(stage_fmu):
             master.run(200, float("nan"), master="compiled")
     finally:
         master.close()
+
+
+@pytest.mark.slow  # 25 s: two manipulator loops, one of them nonlinear
+def test_the_manipulator_rows_run_the_chapters_move_on_both_models():
+    """The manipulator group's rows: both loops measured, and both track the 6 mm xy move
+    within 0.1 % of every actuator's stroke (the speeds are the benchmark's, not asserted)."""
+    from examples.benchmarks.manipulator import manipulator
+
+    rows = manipulator(repeat=1, quick=True)
+    assert [r.met is not None for r in rows] == [True, False]
+    assert "manipulator_reduced (507 DOFs, --plant linear" in rows[0].target
+    assert "manipulator_control (75 DOFs, --plant inprocess" in rows[1].target
+    for row in rows:
+        error = float(row.flexure.split("tracking error ")[1].split()[0])
+        assert error < 1e-3, row.flexure

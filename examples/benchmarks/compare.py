@@ -66,6 +66,10 @@ fmu       stage_planar_3dof's FMU (`flexure.fmu.build_scene_fmu`, its default in
           getReal). Also the latency of the first instantiate + initialise + doStep in a
           fresh process, with an empty FLEXURE_CACHE_DIR (the
           engine compiles) and with the warm cache.
+manipulator
+          The chapter's 6 mm xy move (`manipulator.py`) on the reduced model's linearisation
+          (507 DOFs, stepped exactly): >= 1 x real time; the same move on the nonlinear
+          75-DOF control model for information.
 startup   Whole-process wall of `python -c "import flexure.core"` (<= 0.5 s) and `flexure
           analyze truss_1dof_x` (<= 1 s), with `python -c pass` for scale.
 
@@ -78,7 +82,7 @@ Usage
                                           [--markdown FILE]
 
 The row groups live in this folder's modules (loops, step_scan, refined, fmu_overhead,
-latency), the shared machinery in measure, table and stage_models.
+manipulator, latency), the shared machinery in measure, table and stage_models.
 
 Requires flexure and, for the peer columns, exudyn (``pip install ".[bench]"``); without
 exudyn the flexure side and the limits are still measured.
@@ -98,14 +102,15 @@ if not __package__:
 from .fmu_overhead import fmu  # noqa: E402
 from .latency import startup, warmup  # noqa: E402
 from .loops import loop, realtime  # noqa: E402
+from .manipulator import manipulator  # noqa: E402
 from .measure import log  # noqa: E402
 from .refined import refined  # noqa: E402
 from .step_scan import step  # noqa: E402
 from .table import environment, markdown, text_table  # noqa: E402
 
-GROUPS = ("loop", "realtime", "step", "refined", "fmu", "startup")
+GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "startup")
 FUNCTIONS = {"loop": loop, "realtime": realtime, "step": step, "refined": refined, "fmu": fmu,
-             "startup": startup}
+             "manipulator": manipulator, "startup": startup}
 
 
 def run(groups=GROUPS, *, repeat=5, quick=False):
