@@ -150,14 +150,16 @@ def run(args):
         args.plot, suffixes=PLOT_SUFFIXES, option="--plot")
     if args.workdir is not None:
         check_workdir(args.workdir)
-    path = None
+    scene, overrides, path = args.scene, args.set, None
     if args.move:
-        path = move_path_of(args)
+        model, path = move_path_of(args)
+        if args.plant in ("inprocess", "linear"):  # the FMU plants build from the scene file
+            scene, overrides = model, None  # loaded with --set once, not twice
     amplitude, hz = args.disturbance if args.disturbance is not None else (None, MAINS_HZ)
-    result = run_loop(args.scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
+    result = run_loop(scene, stroke=args.stroke, duration=args.duration, fs=args.fs,
                       crossover=args.crossover, feedforward=feedforward, plant=args.plant,
                       settle=args.settle, method=args.method, rtol=args.rtol,
-                      workdir=args.workdir, overrides=args.set, path=path,
+                      workdir=args.workdir, overrides=overrides, path=path,
                       quantum=args.quantum, disturbance=amplitude, disturbance_hz=hz,
                       progress=Progress(f"flexure loop ({args.plant})"))
     summary = result.summary()
@@ -173,7 +175,8 @@ def run(args):
 
 
 def move_path_of(args):
-    """The loops' path for the --move coordinates (UsageError for a repeated one)."""
+    """The scene's model (with --set) and the loops' path for the --move coordinates
+    (UsageError for a repeated one)."""
     from flexure.core import load_scene
 
     from .move_path import move_path
@@ -187,8 +190,8 @@ def move_path_of(args):
         raise UsageError("--move takes the modal feedforward or none, not --feedforward inverse")
     kind = args.path or ("linear" if args.plant == "linear" else "nonlinear")
     model = load_scene(args.scene, overrides=args.set)
-    return move_path(model, targets, kind=kind,
-                     progress=Progress(f"flexure loop: {kind} move path"))
+    return model, move_path(model, targets, kind=kind,
+                            progress=Progress(f"flexure loop: {kind} move path"))
 
 
 def _per_loop_table(s):
