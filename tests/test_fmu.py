@@ -164,15 +164,17 @@ def test_simulate_fmu_with_input_and_parameters(scene_fmus):
 
 
 def test_fmu_benchmark_example_runs():
-    """examples/fmu_benchmark.py on 50 ms: every part timed, the FMU equal to in-process (the
-    pythonfmu layer is a difference of two runs' differences, a few us a step: the best of
-    three runs of 50 steps each, for a sign that a scheduling hiccup cannot flip)."""
+    """examples/fmu_benchmark.py on 50 ms: every part timed, the parts adding up to the whole
+    doStep, the FMU equal to in-process. (The pythonfmu layer is a difference of two runs'
+    differences, a few us a step: a measurement, whose sign noise may flip, so it is not
+    asserted.)"""
     from examples import fmu_benchmark
 
     result = fmu_benchmark.benchmark(duration=0.05, repeats=3)
     assert result["steps"] == 50 and result["same_outputs"]
-    assert result["total_ms"] > result["integrator_ms"] > 0
-    assert result["model_io_ms"] > 0 and result["pythonfmu_ms"] > 0
+    assert result["total_ms"] > result["integrator_ms"] > 0 and result["model_io_ms"] > 0
+    parts = ("master_ms", "pythonfmu_ms", "glue_ms", "model_io_ms", "integrator_ms")
+    assert abs(sum(result[p] for p in parts) - result["total_ms"]) < 1e-9 * result["total_ms"]
     assert "overhead beyond our integrator" in fmu_benchmark.report(result)
 
 
