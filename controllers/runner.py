@@ -159,14 +159,10 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         raise LoopError("overrides apply to a scene file or name, not to a built Model: "
                         "build the model with them (build_model(data, overrides=...))")
     model = load_scene(scene, overrides=overrides) if named else scene
-    linear = None
-    if plant == "linear":  # one linearisation for the plant and for the design's checks
-        from flexure.core import linearize
+    if plant == "linear" and design is None and "linear_model" not in design_options:
+        from flexure.core import linearize  # one linearisation: the plant's and the design's
 
-        lin = design_options.get("linear_model") or linearize(model)
-        if design is None:
-            design_options["linear_model"] = lin
-        linear = LinearPlant(model, linear_model=lin)
+        design_options["linear_model"] = linearize(model)
     loop, design = build_loop(
         model, stroke=stroke, duration=duration, fs=fs, crossover=crossover,
         feedforward=feedforward, settle=settle, axis=axis,
@@ -203,9 +199,12 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
                 **_disturbance_settings(loop, quantum, disturbance)}
     if plant == "inprocess":  # the engine's compilation (first use only) is not the loop's
         prepare(model, loop_method=method)
+    linear = None
+    if plant == "linear":  # nor are the linear plant's eigenvectors
+        linear = LinearPlant(model, linear_model=design_options.get("linear_model"))
     start = time.perf_counter()
     with contextlib.ExitStack() as stack:
-        if workdir is None and plant != "inprocess":  # FMUs built for this run only
+        if workdir is None and plant in ("fmu", "libcosim"):  # FMUs built for this run only
             workdir = stack.enter_context(tempfile.TemporaryDirectory(
                 prefix="flexure_loop_", ignore_cleanup_errors=True))
         if linear is not None:

@@ -50,6 +50,6 @@ def manipulator(*, repeat=5, quick=False):
         rows.append(Row(
             f"6 mm xy move on {model.name} ({model.ndof} DOFs, --plant {plant}, 1.25 s at "
             f"4 kHz): " + (">= 1 x real time" if target else "x real time (information)"),
-            f"{speed:.2f} x ({timing.text()}; {error})", ">= 1 x" if target else "",
+            f"{speed:.2f} x ({timing.text()}; {error})", ">= 1 x" if target else "(information)",
             speed if target else None, speed >= 1.0 if target else None))
     return rows
