@@ -3,8 +3,9 @@
 `LOOP` is registered in the entry-point group "flexure.sweep_analyses" (pyproject.toml), so
 that flexure.core's sweep finds it by name without importing controllers
 (`flexure.core.analysis.sweep_analyses` says why). At each point it runs `run_loop` on the
-point's model, in process, with the options below, and reports (the moving loop's units: m and
-N, or rad and N m on a planar angle):
+point's model, in process (on the nonlinear model, or with `--loop-plant linear` on its
+linearisation, stepped exactly: far faster on a large model), with the options below, and
+reports (the moving loop's units: m and N, or rad and N m on a planar angle):
 
 - `loop.error_ratio [-]`: max |r - y| over the samples divided by the stroke (the target of
   `flexure loop` is 0.001);
@@ -36,6 +37,14 @@ def _units(model):
             model.inputs[pair.input_index].unit.replace(".", " "))
 
 
+def in_process_plant(text):
+    """"inprocess" or "linear", the plants a sweep point runs in its own process; ValueError
+    otherwise."""
+    if text not in ("inprocess", "linear"):
+        raise ValueError(f"expected inprocess or linear, got {text!r}")
+    return text
+
+
 def _columns(model, options):
     position, force = _units(model)
     return ["loop.error_ratio [-]", f"loop.max_abs_error [{position}]",
@@ -47,7 +56,7 @@ def _evaluate(model, options):
 
     result = run_loop(model, stroke=options["stroke"], duration=options["duration"],
                       settle=options["settle"], fs=options["fs"],
-                      crossover=options["crossover"])
+                      crossover=options["crossover"], plant=options["plant"])
     summary = result.summary()
     names = _columns(model, options)
     values = [summary["error_ratio"], summary["max_abs_error"], summary["max_abs_force"],
@@ -64,4 +73,6 @@ LOOP = SweepAnalysis(
         SweepOption("fs", 4000.0, positive, "sample rate of the controller (Hz)", "HZ"),
         SweepOption("crossover", 300.0, positive, "cross-over of the feedback (rad/s)",
                     "RAD_S"),
+        SweepOption("plant", "inprocess", in_process_plant,
+                    "inprocess (the nonlinear model) or linear (its linearisation)", "PLANT"),
     ))

@@ -65,6 +65,22 @@ def test_the_loop_columns_are_those_of_run_loop():
     assert 0 < row["loop.wall_time [s]"] < 60
 
 
+def test_the_loop_on_the_linear_plant_is_run_loops_on_it():
+    """--loop-plant linear: the columns of run_loop(plant="linear") at the point, and on the
+    nearly linear stage the nonlinear loop's error ratio to within 1e-5."""
+    from flexure.controllers import run_loop
+
+    settings = {"loop": {**SHORT_LOOP, "plant": "linear"}}
+    row = evaluate_point(STAGE, {"nodes.3.mass": 0.1}, analyses=("loop",), settings=settings)
+    summary = run_loop("stage_planar_1dof", overrides={"nodes.3.mass": 0.1}, plant="linear",
+                       **SHORT_LOOP).summary()
+    nonlinear = evaluate_point(STAGE, {"nodes.3.mass": 0.1}, analyses=("loop",),
+                               settings={"loop": SHORT_LOOP})
+    assert row["loop.error_ratio [-]"] == summary["error_ratio"]
+    assert row["loop.max_abs_force [N]"] == summary["max_abs_force"]
+    assert abs(row["loop.error_ratio [-]"] - nonlinear["loop.error_ratio [-]"]) < 1e-5
+
+
 def test_a_loop_that_cannot_be_closed_is_the_status_of_its_point():
     row = evaluate_point(STAGE, {}, analyses=("static", "loop"),
                          settings={"loop": {**SHORT_LOOP, "fs": 100.0}})
@@ -78,7 +94,7 @@ def test_the_registry_names_simulate_and_loop_and_refuses_the_unknown(monkeypatc
     assert analysis_names() == ("static", "modes", "buckling", "simulate", "loop")
     loop = sweep_analyses.find("loop")
     assert loop.defaults() == {"stroke": 1e-3, "duration": 1.0, "settle": 0.25, "fs": 4000.0,
-                               "crossover": 300.0}
+                               "crossover": 300.0, "plant": "inprocess"}
     assert columns(load_scene("stage_planar_1dof"), ("loop",)) == [
         "loop.error_ratio [-]", "loop.max_abs_error [m]", "loop.max_abs_force [N]",
         "loop.phase_margin [deg]", "loop.wall_time [s]"]
@@ -170,6 +186,7 @@ def test_analysis_options_that_do_not_fit_are_one_line(argv, message, tmp_path, 
     (["--simulate-method", "rk4"], "argument --simulate-method: expected one of cvode-bdf"),
     (["--simulate-input", "F"], "argument --simulate-input: expected NAME=VALUE[,NAME=VALUE"),
     (["--loop-fs", "0"], "argument --loop-fs: expected a number > 0, got '0'"),
+    (["--loop-plant", "fmu"], "argument --loop-plant: expected inprocess or linear, got 'fmu'"),
     (["--analyses", "static,stress"], "unknown analysis 'stress'; expected some of static, "
                                       "modes, buckling, simulate, loop"),
 ])
