@@ -13,16 +13,16 @@
   plant and inside the controller FMU (loop_controller.py); `build_loop` designs it for a
   scene (loop_design.py).
 - `run_loop`: the sampled loop (sample_loop.py) around the in-process simulation, the scene
-  FMU under fmpy (plants.py), the linearised model stepped exactly (linear_plant.py), or the
-  controller and scene FMUs in libcosim (cosim.py, controller_fmu.py); its `LoopResult`
-  (loop_result.py); `flexure loop` on the command line (cli.py).
+  FMU under fmpy, the linearised model stepped exactly (plants.py), or the controller and
+  scene FMUs in libcosim (cosim.py, controller_fmu.py); its `LoopResult` (loop_result.py);
+  `flexure loop` on the command line (cli.py).
 - One's own feedback (a discrete python-control system or callables, user_controller.py)
   and reference (samples or r(t), user_reference.py) in place of the designed ones; encoder
   quantisation and a sinusoidal (mains) force at the actuators (disturbances.py).
 
 The modules import one way: errors, profiles, feedback, feedforward, disturbances,
 user_reference -> loop_controller, user_controller -> loop_design, sample_loop, plants,
-linear_plant, controller_fmu -> cosim -> runner -> cli.
+controller_fmu -> cosim -> runner -> cli.
 
 Only flexure.core's public API is used: no physics here.
 """

@@ -1,9 +1,10 @@
-"""Plants of the closed-loop runner: the same tiny interface around three simulators.
+"""Plants of the closed-loop runner: the same tiny interface around four simulators.
 
     plant.reset() -> outputs at t0;  plant.set_input(u);  plant.advance(t_end);
     plant.output() -> outputs (n_outputs,);  plant.close()
 
 - `InProcessPlant`: flexure.core's Simulator in this process.
+- `LinearPlant`: flexure.core's LinearSimulator, the linearised model stepped exactly.
 - `FmuPlant`: the scene's co-simulation FMU (flexure.fmu.build_scene_fmu) stepped by fmpy.
 
 Both integrate the same nonlinear model with the same integrator and tolerances (the FMU runs
@@ -52,6 +53,45 @@ class InProcessPlant:
     @property
     def statistics(self):
         return self.simulator.statistics
+
+    def close(self):
+        pass
+
+
+class LinearPlant:
+    """The scene's linearisation stepped exactly by flexure.core.LinearSimulator: it starts
+    where InProcessPlant starts and takes and gives the same absolute inputs and outputs
+    (LinearSimulator says to what order off the DOFs).
+
+    Parameters
+    ----------
+    model : Model
+    linear_model : LinearModel, optional
+        The linearisation (default: at the static equilibrium under the scene's loads).
+    """
+
+    kind = "linear"
+
+    def __init__(self, model, *, linear_model=None):
+        from flexure.core import LinearSimulator  # scipy on first use
+
+        self.model = model
+        self.simulator = LinearSimulator(model, linear_model=linear_model)
+        self.input_names = list(self.simulator.input_names)
+        self.output_names = list(self.simulator.output_names)
+
+    def reset(self):
+        self.simulator.reset(t0=0.0)
+        return self.output()
+
+    def set_input(self, u):
+        self.simulator.set_inputs(u)
+
+    def advance(self, t_end):
+        self.simulator.advance(t_end)
+
+    def output(self):
+        return self.simulator.outputs()
 
     def close(self):
         pass

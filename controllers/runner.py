@@ -2,7 +2,7 @@
 
     scene -> build_loop (loop_design.py) -> a LoopController and its design
           -> the plant:  "inprocess"  the compiled in-process loop (sample_loop.py)
-                         "linear"     the linearised model, stepped exactly (linear_plant.py)
+                         "linear"     the linearised model, stepped exactly (plants.py)
                          "fmu"        the scene FMU under fmpy (plants.py, sample_loop.py)
                          "libcosim"   the controller and scene FMUs in libcosim (cosim.py)
           -> LoopResult (loop_result.py)
@@ -28,11 +28,10 @@ import numpy as np
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .cosim import run_cosimulation, scene_fmu
-from .linear_plant import LinearPlant
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
 from .loop_result import TARGET, LoopResult
-from .plants import FmuPlant, InProcessPlant
+from .plants import FmuPlant, InProcessPlant, LinearPlant
 from .sample_loop import compiled_loop, simulate_loop
 from .user_reference import reference_stroke
 

@@ -42,6 +42,7 @@ _LAZY = {
     "read_spacar": "scene.spacar_input",
     "Scene": "scene.api", "to_toml": "scene.api",
     "controller_step": "simulation.sampled_loop", "run_sampled_loop": "simulation.sampled_loop",
+    "LinearSimulator": "simulation.linear_simulator",
     "SimulationResult": "simulation.simulation", "Simulator": "simulation.simulation",
     "simulate": "simulation.simulation",
     "METHODS": "simulation.simulator", "prepare": "simulation.prepare",
@@ -51,7 +52,7 @@ _LAZY = {
 __all__ = [
     "Compliance", "ConstraintError", "ConvergenceError", "FlexureError", "InverseStatics",
     "Kinematics", "inverse_statics",
-    "LinearModel", "METHODS",
+    "LinearModel", "LinearSimulator", "METHODS",
     "Mechanics", "Model", "Modes", "blas_threads", "SceneError", "SimulationError",
     "SimulationResult",
     "Simulator", "StaticSolution", "apply_overrides", "beam_stresses", "buckling_load_factors",

@@ -1,24 +1,23 @@
-"""The linear plant: the scene's state space stepped exactly under the held input, against
+"""The LinearSimulator: the scene's state space stepped exactly under the held input, against
 python-control's zero-order-hold discretisation, the matrix exponential, and the nonlinear
-plant where the model is nearly linear."""
+Simulator where the model is nearly linear; and the loop's linear plant around it."""
 
 import numpy as np
 import pytest
 
-from flexure.controllers.linear_plant import LinearPlant
 from flexure.controllers.runner import run_loop
-from flexure.core import SimulationError, load_scene, state_space
+from flexure.core import LinearSimulator, SimulationError, load_scene, state_space
 
 FS = 4000.0  # Hz
 
 
-def _drive(plant, inputs, fs=FS):
-    """The plant's outputs after each sample of held `inputs` (N, n_inputs)."""
+def _drive(sim, inputs, fs=FS):
+    """The simulator's outputs after each sample of held `inputs` (N, n_inputs)."""
     out = []
     for k, u in enumerate(inputs):
-        plant.set_input(u)
-        plant.advance((k + 1) / fs)
-        out.append(plant.output())
+        sim.set_inputs(u)
+        sim.advance((k + 1) / fs)
+        out.append(sim.outputs())
     return np.array(out)
 
 
@@ -32,19 +31,19 @@ def test_the_modal_step_is_python_controls_zero_order_hold(stage3):
     space: the same outputs to 1e-10 of their range."""
     import control
 
-    plant = LinearPlant(stage3)
-    assert plant.modal
-    u = np.random.default_rng(1).normal(size=(300, len(plant.u0)))
+    sim = LinearSimulator(stage3)
+    assert sim.modal
+    u = np.random.default_rng(1).normal(size=(300, len(sim.u0)))
     for fs in (FS, 1000.0):  # a new step length: new factors
         sys_d = control.c2d(state_space(stage3), 1 / fs, method="zoh")
-        x = plant.initial_state.copy()
+        x = sim.initial_state.copy()
         expected = []
         for uk in u:
             x = sys_d.A @ x + sys_d.B @ uk
-            expected.append(plant.y_start + sys_d.C @ (x - plant.initial_state))
-        plant.reset()
-        got = _drive(plant, u, fs)
-        scale = np.max(np.abs(np.array(expected) - plant.y_start))
+            expected.append(sim.y_start + sys_d.C @ (x - sim.initial_state))
+        sim.reset()
+        got = _drive(sim, u, fs)
+        scale = np.max(np.abs(np.array(expected) - sim.y_start))
         assert np.max(np.abs(got - expected)) < 1e-10 * scale
 
 
@@ -52,7 +51,7 @@ def test_the_modal_step_is_the_matrix_exponentials():
     """The 19-DOF spatial stage (38 states, loaded away from its start): modal steps and the
     Van Loan matrix exponential agree to 1e-9 of the motion, at two step lengths."""
     model = load_scene("stage_spatial_19dof")
-    modal, dense = LinearPlant(model), LinearPlant(model, modal=False)
+    modal, dense = LinearSimulator(model), LinearSimulator(model, modal=False)
     assert modal.modal and not dense.modal
     u = np.random.default_rng(2).normal(size=(200, 1))
     for fs in (FS, 1000.0):
@@ -62,7 +61,7 @@ def test_the_modal_step_is_the_matrix_exponentials():
 
 
 def test_it_starts_at_the_scenes_initial_coordinates_at_rest():
-    """Under the 19-DOF stage's constant 1 N the equilibrium is 1.06 mm away; the plant starts
+    """Under the 19-DOF stage's constant 1 N the equilibrium is 1.06 mm away; it starts
     at the initial coordinates with the outputs Simulator starts with (x = 0 on its DOF,
     y = 0.1 m off the DOFs), and with no input settles where the nonlinear statics put the
     bar: x to 1e-7 (a DOF: measured 2.6e-11 m), y to the second order of the 1.06 mm
@@ -70,14 +69,14 @@ def test_it_starts_at_the_scenes_initial_coordinates_at_rest():
     from flexure.core import static_equilibrium
 
     model = load_scene("stage_spatial_19dof")
-    plant = LinearPlant(model)
-    np.testing.assert_allclose(plant.reset(), [0.0, 0.1], rtol=0, atol=1e-15)
-    plant.set_input([0.0])
-    plant.advance(0.01)
-    assert 0 < plant.output()[0] < 2.2e-3  # swinging toward 1.06 mm
-    plant.advance(200.0)  # the slowest mode's decay time is under 10 s
+    sim = LinearSimulator(model)
+    np.testing.assert_allclose(sim.outputs(), [0.0, 0.1], rtol=0, atol=1e-15)
+    sim.set_inputs([0.0])
+    sim.advance(0.01)
+    assert 0 < sim.outputs()[0] < 2.2e-3  # swinging toward 1.06 mm
+    sim.advance(200.0)  # the slowest mode's decay time is under 10 s
     coordinates = static_equilibrium(model).coordinates()
-    x, y = plant.output()
+    x, y = sim.outputs()
     assert abs(x - coordinates["3.x"]) < 1e-10  # m, 1e-7 of it: the statics and rounding
     assert 1e-6 < abs(y - coordinates["3.y"]) < 1e-5
 
@@ -106,43 +105,44 @@ def test_the_linear_loop_runs_through_a_coil():
     model = stage(drive="voltage", amplifier_gain=2.0)
     linear = run_loop(model, stroke=1e-3, plant="linear")
     nonlinear = run_loop(model, stroke=1e-3, rtol=1e-9)
-    assert LinearPlant(model).A.shape[0] == 2 * model.ndof + 1
+    assert LinearSimulator(model).A.shape[0] == 2 * model.ndof + 1
     assert np.max(np.abs(linear.position - nonlinear.position)) < 1e-6 * 1e-3
 
 
 def test_bad_inputs_and_times_are_refused(stage3):
-    plant = LinearPlant(stage3)
-    n = len(plant.u0)
-    with pytest.raises(SimulationError, match=f"takes {n} finite inputs"):
-        plant.set_input(np.zeros(n + 1))
-    with pytest.raises(SimulationError, match="finite inputs"):
-        plant.set_input(np.full(n, np.nan))
-    plant.advance(1e-3)
+    sim = LinearSimulator(stage3)
+    n = len(sim.u0)
+    with pytest.raises(SimulationError, match=rf"t = 0 s: expected {n} inputs \(F\), got 2"):
+        sim.set_inputs(np.zeros(n + 1))
+    with pytest.raises(SimulationError, match="t = 0 s: input 'F' is not finite"):
+        sim.set_inputs(np.full(n, np.nan))
+    sim.advance(1e-3)
     for t_end in (1e-3, 0.5e-3, np.inf, np.nan):
-        with pytest.raises(SimulationError, match="cannot advance"):
-            plant.advance(t_end)
+        with pytest.raises(SimulationError, match="t = 0.001 s: advance to t_end = .*: "
+                                                  "expected a finite time after the current"):
+            sim.advance(t_end)
 
 
 def test_long_runs_keep_one_set_of_factors(stage3):
     """k / fs - (k - 1) / fs wobbles by a rounding unit of t: 60 s at 4 kHz must not compute
     the step's factors again at every wobble (one set for the whole run)."""
-    plant = LinearPlant(stage3)
-    plant.set_input(np.zeros(len(plant.u0)))
+    sim = LinearSimulator(stage3)
+    sim.set_inputs(np.zeros(len(sim.u0)))
     for k in range(1, 240_001):
-        plant.advance(k / FS)
-    assert plant.factor_updates == 1
-    plant.advance(60.01)
-    assert plant.factor_updates == 2
+        sim.advance(k / FS)
+    assert sim.factor_updates == 1
+    sim.advance(60.01)
+    assert sim.factor_updates == 2
 
 
 def test_ill_conditioned_eigenvectors_take_the_matrix_exponential(stage3, monkeypatch):
-    """Above MODAL_CONDITION the plant steps with e^(Ah) (the switch, with the threshold
+    """Above MODAL_CONDITION it steps with e^(Ah) (the switch, with the threshold
     lowered below this model's condition number)."""
-    from flexure.controllers import linear_plant
+    from flexure.core.simulation import linear_simulator
 
-    assert LinearPlant(stage3).modal
-    monkeypatch.setattr(linear_plant, "MODAL_CONDITION", 1.0)
-    assert not LinearPlant(stage3).modal
+    assert LinearSimulator(stage3).modal
+    monkeypatch.setattr(linear_simulator, "MODAL_CONDITION", 1.0)
+    assert not LinearSimulator(stage3).modal
 
 
 def test_flexure_loop_runs_on_the_linear_plant(capsys, tmp_path):
