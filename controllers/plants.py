@@ -24,18 +24,15 @@ from flexure.core import SimulationError
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 
-class InProcessPlant:
-    """The scene's nonlinear model integrated by flexure.core.Simulator in this process."""
+class SimulatorPlant:
+    """A plant around a simulator with flexure.core.Simulator's interface (`reset`,
+    `set_inputs`, `advance`, `outputs`), in this process."""
 
-    kind = "inprocess"
-
-    def __init__(self, model, *, method=LOOP_METHOD, rtol=LOOP_RTOL):
-        from flexure.core import Simulator  # the models (numba, scipy) on first use
-
+    def __init__(self, model, simulator):
         self.model = model
-        self.simulator = Simulator(model, method=method, rtol=rtol)
-        self.input_names = list(self.simulator.input_names)
-        self.output_names = list(self.simulator.output_names)
+        self.simulator = simulator
+        self.input_names = list(simulator.input_names)
+        self.output_names = list(simulator.output_names)
 
     def reset(self):
         self.simulator.reset(t0=0.0)
@@ -50,15 +47,26 @@ class InProcessPlant:
     def output(self):
         return np.asarray(self.simulator.outputs(), float)
 
-    @property
-    def statistics(self):
-        return self.simulator.statistics
-
     def close(self):
         pass
 
 
-class LinearPlant:
+class InProcessPlant(SimulatorPlant):
+    """The scene's nonlinear model integrated by flexure.core.Simulator in this process."""
+
+    kind = "inprocess"
+
+    def __init__(self, model, *, method=LOOP_METHOD, rtol=LOOP_RTOL):
+        from flexure.core import Simulator  # the models (numba, scipy) on first use
+
+        super().__init__(model, Simulator(model, method=method, rtol=rtol))
+
+    @property
+    def statistics(self):
+        return self.simulator.statistics
+
+
+class LinearPlant(SimulatorPlant):
     """The scene's linearisation stepped exactly by flexure.core.LinearSimulator: it starts
     where InProcessPlant starts and takes and gives the same absolute inputs and outputs
     (LinearSimulator says to what order off the DOFs).
@@ -75,26 +83,7 @@ class LinearPlant:
     def __init__(self, model, *, linear_model=None):
         from flexure.core import LinearSimulator  # scipy on first use
 
-        self.model = model
-        self.simulator = LinearSimulator(model, linear_model=linear_model)
-        self.input_names = list(self.simulator.input_names)
-        self.output_names = list(self.simulator.output_names)
-
-    def reset(self):
-        self.simulator.reset(t0=0.0)
-        return self.output()
-
-    def set_input(self, u):
-        self.simulator.set_inputs(u)
-
-    def advance(self, t_end):
-        self.simulator.advance(t_end)
-
-    def output(self):
-        return self.simulator.outputs()
-
-    def close(self):
-        pass
+        super().__init__(model, LinearSimulator(model, linear_model=linear_model))
 
 
 class FmuPlant:

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SimulationError
+from .held_inputs import checked_inputs
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -155,26 +156,19 @@ class LinearSimulator:
         return self.u0 + self._du
 
     def set_inputs(self, u: ArrayLike) -> None:
-        """Hold the inputs from now on (zero-order hold).
+        """Hold the inputs u from now on; the next steps are driven by u - u0.
 
         Parameters
         ----------
         u : array_like (n_inputs,)
-            N, N m for forces and moments, V for actuators' drive signals.
+            The absolute inputs, as `Simulator.set_inputs` takes them (N, N m, V).
 
         Raises
         ------
         SimulationError
-            The wrong number of inputs, or one that is not finite.
+            As `Simulator.set_inputs`: a wrong count, or an input that is not finite.
         """
-        u = np.array(u, dtype=float).reshape(-1)
-        if u.size != self.u0.size:
-            raise SimulationError(f"t = {self._t:.9g} s: expected {self.u0.size} inputs "
-                                  f"({', '.join(self.input_names)}), got {u.size}")
-        for name, value in zip(self.input_names, u.tolist(), strict=True):
-            if not math.isfinite(value):
-                raise SimulationError(f"t = {self._t:.9g} s: input {name!r} is not finite "
-                                      f"({value})")
+        u, _ = checked_inputs(u, self.input_names, self._t)
         self._du = u - self.u0
 
     def advance(self, t_end: float) -> None:

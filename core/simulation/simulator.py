@@ -42,6 +42,7 @@ from ..engine.data import EngineData
 from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
 from .esdirk import Esdirk
+from .held_inputs import checked_inputs
 from .methods import METHODS, ONE_STEP_METHODS
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
@@ -275,15 +276,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         SimulationError
             The wrong number of inputs, or one that is not finite.
         """
-        u = np.array(u, dtype=float).reshape(-1)
-        if u.size != self._u.size:
-            raise SimulationError(f"t = {self._t:.9g} s: expected {self._u.size} inputs "
-                                  f"({', '.join(self.input_names)}), got {u.size}")
-        values = u.tolist()  # a few numbers: Python's loop beats numpy's per-call cost here
-        for i, value in enumerate(values):
-            if not math.isfinite(value):
-                raise SimulationError(f"t = {self._t:.9g} s: input {self.input_names[i]!r} is "
-                                      f"not finite ({value})")
+        u, values = checked_inputs(u, self.input_names, self._t)
         if values != self._u.tolist():
             self._u = u
             self._needs_init = True
