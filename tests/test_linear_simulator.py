@@ -123,6 +123,24 @@ def test_bad_inputs_and_times_are_refused(stage3):
             sim.advance(t_end)
 
 
+def test_a_state_that_overflows_is_refused_and_the_simulator_kept(recwarn):
+    """100 N on the 1-DOF stage's bar, above its buckling load of 78.75 N: the straight
+    equilibrium is unstable (growth rate 34.7 1/s), and 100 s of it overflow the state.
+    SimulationError naming the time and the rate, no numpy warning, and the simulator stays
+    at its last state."""
+    model = load_scene("stage_planar_1dof", overrides={"nodes.3.force": [0.0, -100.0]})
+    sim = LinearSimulator(model)
+    assert abs(sim.growth_rate - 34.66) < 0.05
+    sim.set_inputs([1e-3])
+    sim.advance(1e-3)
+    before = sim.outputs()
+    with pytest.raises(SimulationError, match=r"t = 0.001 s: the linearised state overflows "
+                                              r".* fastest growth rate: 34.6"):
+        sim.advance(100.0)
+    assert sim.time == 1e-3 and np.array_equal(sim.outputs(), before)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 def test_long_runs_keep_one_set_of_factors(stage3):
     """k / fs - (k - 1) / fs wobbles by a rounding unit of t: 60 s at 4 kHz must not compute
     the step's factors again at every wobble (one set for the whole run)."""

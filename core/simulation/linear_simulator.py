@@ -84,6 +84,9 @@ class LinearSimulator:
         Whether it steps in the eigenvector basis.
     condition : float
         The eigenvectors' 1-norm condition number.
+    growth_rate : float
+        The largest real part of the eigenvalues, 1/s: above 0 the linearisation is
+        unstable (a buckled or negatively stiff equilibrium).
     factor_updates : int
         How many times the step's factors were computed (once per step length).
 
@@ -118,6 +121,9 @@ class LinearSimulator:
                                  for port in model.outputs])
         self._output_constant = self.y_start - self.C @ self.initial_state
         eigenvalues, V = eig(self.A)
+        # > 0: an unstable linearisation (a buckled or negatively stiff equilibrium), whose
+        # state may overflow in a long run
+        self.growth_rate = float(np.max(eigenvalues.real))
         V_inv = np.linalg.inv(V)
         # the 1-norm condition number: from the inverse the modal step needs anyway, where
         # the 2-norm's SVD would take longer than the eigenvectors themselves
@@ -182,7 +188,9 @@ class LinearSimulator:
         Raises
         ------
         SimulationError
-            A t_end that is not a finite time after the current one.
+            A t_end that is not a finite time after the current one, or a state that
+            overflows (an unstable linearisation run long, or inputs near 1e308); the
+            simulator then stays where it was.
         """
         t_end = float(t_end)
         h = t_end - self._t
@@ -193,8 +201,17 @@ class LinearSimulator:
         # step's own rounding, cond * 1e-16) keeps one set of factors for a whole loop
         if self._h is None or abs(h - self._h) > 1e-9 * h:
             self._factors(h)
-        decayed = self._decay * self._z if self.modal else self._decay @ self._z
-        self._z = decayed + self._drive @ self._du
+        if self.growth_rate > 0:  # where it can overflow, without numpy's warnings
+            with np.errstate(over="ignore", invalid="ignore"):
+                z = self._step()
+        else:
+            z = self._step()
+        if not np.isfinite(z.sum()):  # an inf or NaN anywhere makes the sum one
+            raise SimulationError(f"t = {self._t:.9g} s: the linearised state overflows over "
+                                  f"the step to {t_end:.9g} s (the linearisation's fastest "
+                                  f"growth rate: {self.growth_rate:.6g} 1/s; the inputs' "
+                                  f"largest change: {np.max(np.abs(self._du), initial=0.0):.6g})")
+        self._z = z
         self._t = t_end
 
     def outputs(self) -> np.ndarray:
@@ -208,14 +225,21 @@ class LinearSimulator:
         z = (self._output_modes @ self._z).real if self.modal else self.C @ self._z
         return self._output_constant + z + self.D @ self._du
 
+    def _step(self):
+        """The state after one step with the current factors and inputs."""
+        decayed = self._decay * self._z if self.modal else self._decay @ self._z
+        return decayed + self._drive @ self._du
+
     def _factors(self, h):
         """The step's state factor and input factor for a step of h seconds."""
         if self.modal:
             x = self.eigenvalues * h
             small = np.abs(x) < 1e-8  # phi1(x) = 1 + x/2 + ..., to rounding there
-            phi1 = np.where(small, 1 + x / 2, np.expm1(x) / np.where(small, 1, x))
-            self._decay = np.exp(x)
-            self._drive = (h * phi1)[:, None] * self._input_modes
+            # an unstable mode over a long step overflows here: `advance` says so
+            with np.errstate(over="ignore", invalid="ignore"):
+                phi1 = np.where(small, 1 + x / 2, np.expm1(x) / np.where(small, 1, x))
+                self._decay = np.exp(x)
+                self._drive = (h * phi1)[:, None] * self._input_modes
         else:
             from scipy.linalg import expm
 
