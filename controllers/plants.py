@@ -1,4 +1,4 @@
-"""Plants of the closed-loop runner: the same tiny interface around four simulators.
+"""Plants of the closed-loop runner: the same tiny interface around three simulators.
 
     plant.reset() -> outputs at t0;  plant.set_input(u);  plant.advance(t_end);
     plant.output() -> outputs (n_outputs,);  plant.close()
@@ -7,11 +7,12 @@
 - `LinearPlant`: flexure.core's LinearSimulator, the linearised model stepped exactly.
 - `FmuPlant`: the scene's co-simulation FMU (flexure.fmu.build_scene_fmu) stepped by fmpy.
 
-Both integrate the same nonlinear model with the same integrator and tolerances (the FMU runs
-flexure's Simulator too, from its bundled copy of the same sources), and both hold the input
-over each step, so for the same inputs they give the same outputs to within the integrator's
-tolerance. The third plant, the controller FMU and this FMU connected in libcosim, is a whole
-co-simulation rather than a plant; it lives in `cosim.py`.
+InProcessPlant and FmuPlant integrate the same nonlinear model with the same integrator and
+tolerances (the FMU runs flexure's Simulator too, from its bundled copy of the same sources);
+all three hold the input over each step, so for the same inputs the two nonlinear plants give
+the same outputs to within the integrator's tolerance, and the linear plant what the
+linearisation does. The loop's fourth plant, the controller FMU and the scene FMU connected in
+libcosim, is a whole co-simulation rather than a plant; it lives in `cosim.py`.
 """
 
 import shutil

@@ -26,7 +26,7 @@ def simulate_loop(plant, controller: LoopController, design, *, progress=None):
 
     Parameters
     ----------
-    plant : InProcessPlant or FmuPlant
+    plant : InProcessPlant, LinearPlant or FmuPlant
     controller : LoopController
     design : FeedbackDesign
         Its `pairs` say which plant inputs and outputs the loops use.

@@ -123,13 +123,14 @@ def test_bad_inputs_and_times_are_refused(stage3):
             sim.advance(t_end)
 
 
-def test_a_state_that_overflows_is_refused_and_the_simulator_kept(recwarn):
+@pytest.mark.parametrize("modal", [True, False])
+def test_a_state_that_overflows_is_refused_and_the_simulator_kept(recwarn, modal):
     """100 N on the 1-DOF stage's bar, above its buckling load of 78.75 N: the straight
-    equilibrium is unstable (growth rate 34.7 1/s), and 100 s of it overflow the state.
-    SimulationError naming the time and the rate, no numpy warning, and the simulator stays
-    at its last state."""
+    equilibrium is unstable (growth rate 34.7 1/s), and 100 s of it overflow the state, in
+    either way of stepping. SimulationError naming the time and the rate, no numpy warning,
+    and the simulator stays at its last state."""
     model = load_scene("stage_planar_1dof", overrides={"nodes.3.force": [0.0, -100.0]})
-    sim = LinearSimulator(model)
+    sim = LinearSimulator(model, modal=modal)
     assert abs(sim.growth_rate - 34.66) < 0.05
     sim.set_inputs([1e-3])
     sim.advance(1e-3)
@@ -139,6 +140,22 @@ def test_a_state_that_overflows_is_refused_and_the_simulator_kept(recwarn):
         sim.advance(100.0)
     assert sim.time == 1e-3 and np.array_equal(sim.outputs(), before)
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_reset_keeps_the_inputs_as_simulator_does(stage3):
+    """After reset both simulators hold the inputs set before it, and from rest they agree
+    on a small motion (the stage is nearly linear: 1e-4 of it)."""
+    from flexure.core import Simulator
+
+    linear, nonlinear = LinearSimulator(stage3), Simulator(stage3, rtol=1e-10)
+    for sim in (linear, nonlinear):
+        sim.set_inputs([1e-3])
+        sim.reset()
+        sim.advance(0.05)
+    assert linear.inputs.tolist() == nonlinear.inputs.tolist() == [1e-3]
+    motion = np.max(np.abs(linear.outputs() - linear.y_start))
+    assert motion > 0
+    assert np.max(np.abs(linear.outputs() - nonlinear.outputs())) < 1e-4 * motion
 
 
 def test_long_runs_keep_one_set_of_factors(stage3):

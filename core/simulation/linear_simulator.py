@@ -72,6 +72,8 @@ class LinearSimulator:
 
     Attributes
     ----------
+    input_names, output_names : list of str
+        The model's inputs and outputs, in order.
     A, B, C, D : ndarray
         `state_space(model)`'s matrices (states [dq, dq', di]; see its units).
     u0 : ndarray (n_inputs,)
@@ -82,6 +84,8 @@ class LinearSimulator:
         z0, the start's deviation from the linearisation.
     modal : bool
         Whether it steps in the eigenvector basis.
+    eigenvalues : ndarray (n_states,), complex
+        Those of A, 1/s.
     condition : float
         The eigenvectors' 1-norm condition number.
     growth_rate : float
@@ -129,18 +133,19 @@ class LinearSimulator:
         # the 2-norm's SVD would take longer than the eigenvectors themselves
         self.condition = float(np.linalg.norm(V, 1) * np.linalg.norm(V_inv, 1))
         self.modal = self.condition < MODAL_CONDITION if modal is None else bool(modal)
+        self.eigenvalues = eigenvalues
         if self.modal:
-            self.eigenvalues = eigenvalues
             self._input_modes = V_inv @ self.B
             self._output_modes = self.C @ V
             self._initial_modes = V_inv @ self.initial_state
         self._h = None
         self.factor_updates = 0
+        self._du = np.zeros(self.B.shape[1])  # the inputs of the linearisation
         self.reset()
 
     def reset(self, *, t0: float = 0.0) -> None:
-        """Start again at rest at the scene's initial coordinates, with the inputs of the
-        linearisation.
+        """Start again at rest at the scene's initial coordinates; the inputs are kept, as
+        `Simulator.reset` keeps them.
 
         Parameters
         ----------
@@ -148,7 +153,6 @@ class LinearSimulator:
             The start time, s.
         """
         self._z = (self._initial_modes if self.modal else self.initial_state).copy()
-        self._du = np.zeros(self.B.shape[1])
         self._t = float(t0)
 
     @property
@@ -201,16 +205,16 @@ class LinearSimulator:
         # step's own rounding, cond * 1e-16) keeps one set of factors for a whole loop
         if self._h is None or abs(h - self._h) > 1e-9 * h:
             self._factors(h)
-        if self.growth_rate > 0:  # where it can overflow, without numpy's warnings
-            with np.errstate(over="ignore", invalid="ignore"):
-                z = self._step()
-        else:
+        # an overflow is refused below, by name, rather than warned of by numpy (1 us a step)
+        with np.errstate(over="ignore", invalid="ignore"):
             z = self._step()
-        if not np.isfinite(z.sum()):  # an inf or NaN anywhere makes the sum one
+            finite = np.isfinite(z.sum())  # an inf or NaN anywhere makes the sum one
+        if not finite:
             raise SimulationError(f"t = {self._t:.9g} s: the linearised state overflows over "
                                   f"the step to {t_end:.9g} s (the linearisation's fastest "
                                   f"growth rate: {self.growth_rate:.6g} 1/s; the inputs' "
-                                  f"largest change: {np.max(np.abs(self._du), initial=0.0):.6g})")
+                                  f"largest distance from the linearisation's: "
+                                  f"{np.max(np.abs(self._du), initial=0.0):.6g})")
         self._z = z
         self._t = t_end
 
@@ -246,7 +250,8 @@ class LinearSimulator:
             n, m = self.B.shape
             block = np.zeros((n + m, n + m))
             block[:n, :n], block[:n, n:] = self.A * h, self.B * h
-            E = expm(block)
+            with np.errstate(over="ignore", invalid="ignore"):  # as above
+                E = expm(block)
             self._decay, self._drive = E[:n, :n], E[:n, n:]
         self._h = h
         self.factor_updates += 1
