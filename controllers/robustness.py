@@ -88,11 +88,11 @@ def margin_grid(crossover, dt, poles, *, damping_below=0.1):
     return np.unique(np.concatenate(parts))
 
 
-def siso_margins(response, omega, dt, *, with_crossover: bool = False):
+def siso_margins(response, omega, *, with_crossover: bool = False):
     """Gain margin, phase margin (deg) and modulus margin of a discrete SISO loop gain given
-    by its response on `omega` (rad/s); `with_crossover` adds the gain cross-over (rad/s)
-    where the phase margin is taken (nan if |L| never crosses 1). `dt` (s) is the loop's
-    sample period, which the response already carries.
+    by its response on `omega` (rad/s), the sampled loop's (its sample period is in the
+    response already); `with_crossover` adds the gain cross-over (rad/s) where the phase
+    margin is taken (nan if |L| never crosses 1).
 
     python-control's 'frd' method (`control.stability_margins` of an interpolating FRD), on
     the same interpolant: the cubic spline through the response's real and imaginary parts
@@ -106,7 +106,6 @@ def siso_margins(response, omega, dt, *, with_crossover: bool = False):
     from scipy.interpolate import make_interp_spline
     from scipy.optimize import brentq, minimize_scalar
 
-    del dt  # the response is already that of the sampled loop
     L, w = np.asarray(response, complex), np.asarray(omega, float)
     spline = make_interp_spline(w, np.column_stack([L.real, L.imag]), k=3)
 
@@ -246,11 +245,11 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     eigen = np.linalg.eig(plant_d.A) if plant_d.nstates else None
     omega = margin_grid(design.crossover_rad_s, dt, eigen[0] if eigen is not None else np.zeros(0))
     L = loop_response(plant_d, design.controller, design.delay_samples, omega, eigen=eigen)
-    open_m = np.array([siso_margins(L[k, k], omega, dt, with_crossover=True)
+    open_m = np.array([siso_margins(L[k, k], omega, with_crossover=True)
                        for k in range(n)])
     open_m, crossovers = open_m[:, :3], open_m[:, 3]
     closed_m = open_m if n == 1 else np.array(
-        [siso_margins(others_closed(L, k), omega, dt) for k in range(n)])
+        [siso_margins(others_closed(L, k), omega) for k in range(n)])
     S = np.linalg.inv(np.eye(n)[None] + np.moveaxis(L, 2, 0))
     peaks = np.linalg.svd(S, compute_uv=False)[:, 0]
     delays = delay_block(n, design.delay_samples, dt)
