@@ -65,12 +65,15 @@ class Disturbances:
         return np.outer(np.sin(2.0 * np.pi * self.frequency_hz * k / fs), self.amplitude)
 
     def to_dict(self) -> dict:
+        """The disturbances for JSON: "quantum" and "amplitude" as lists (or None), and
+        "frequency_hz" (Hz)."""
         return {"quantum": None if self.quantum is None else self.quantum.tolist(),
                 "amplitude": None if self.amplitude is None else self.amplitude.tolist(),
                 "frequency_hz": self.frequency_hz}
 
     @classmethod
     def from_dict(cls, data: dict) -> Disturbances:
+        """The disturbances that `to_dict` wrote as `data`."""
         return cls(*(None if data[key] is None else np.asarray(data[key], float)
                      for key in ("quantum", "amplitude")), float(data["frequency_hz"]))
 
