@@ -28,6 +28,23 @@ def analysed(a):
     return sparse_lu.StaticLU(a.shape[0], rows, cols, a[rows, cols])
 
 
+def random_case(seed, n, density, zero_diagonal=False):
+    """A generator seeded with `seed`, a random matrix of it and that matrix analysed."""
+    rng = np.random.default_rng(seed)
+    a = random_matrix(rng, n, density, zero_diagonal)
+    return rng, a, analysed(a)
+
+
+def factor(lu):
+    """Factor with pivoting afresh: the pivot ratio (> 0), REJECTED or CAPACITY."""
+    return sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD)
+
+
+def refactor(lu):
+    """Factor on the kept pivots: the pivot ratio (> 0) or REJECTED."""
+    return sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD)
+
+
 def assert_solves(lu, a, rng, floats=None):
     """A z = b and A^T z = b against numpy.linalg.solve, to 100 cond(A) eps of the solution:
     the forward error bound of a backward-stable solve, with room for the growth that the
@@ -45,9 +62,7 @@ def assert_solves(lu, a, rng, floats=None):
 @pytest.mark.parametrize("n, density", [(1, 1.0), (12, 0.3), (60, 0.05), (150, 0.02)])
 @pytest.mark.parametrize("zero_diagonal", [False, True])
 def test_factors_at_the_reference_solve_as_numpy(n, density, zero_diagonal):
-    rng = np.random.default_rng(n)
-    a = random_matrix(rng, n, density, zero_diagonal)
-    lu = analysed(a)
+    rng, a, lu = random_case(n, n, density, zero_diagonal)
     assert lu.ordering in sparse_lu.ORDERINGS
     assert_solves(lu, a, rng)
     # the counted work: a solve visits each entry of L and U once, and U has the diagonal
@@ -58,14 +73,12 @@ def test_factors_at_the_reference_solve_as_numpy(n, density, zero_diagonal):
 def test_refactor_at_new_values_keeps_the_pivots_and_solves(n, density):
     """New values on the same pattern: the kept pivots pass their test (the values moved by
     10 %) and the factors solve as numpy; the matrix put back by scatter_dense is A."""
-    rng = np.random.default_rng(7)
-    a = random_matrix(rng, n, density)
-    lu = analysed(a)
+    rng, a, lu = random_case(7, n, density)
     rows, cols = np.nonzero(a)
     moved = a.copy()
     moved[rows, cols] *= 1.0 + 0.1 * rng.uniform(-1.0, 1.0, rows.size)
     lu.set_matrix(moved)
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert refactor(lu) > 0.0
     assert_solves(lu, moved, rng)
     dense = np.zeros(n * n)
     sparse_lu.scatter_dense(lu.ints, lu.floats, dense, np.arange(n), np.arange(n))
@@ -89,35 +102,33 @@ def test_a_kept_pivot_that_vanishes_is_rejected_and_the_matrix_pivots_afresh():
     moved = a.copy()
     moved[:2, :2] = [[1e-3, 1.0], [1.0, 1.0]]
     lu.set_matrix(moved)
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    assert refactor(lu) == sparse_lu.REJECTED
     x = lu.floats[-30:]  # the work vector is left clean
     assert np.all(x == 0.0)
-    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert factor(lu) > 0.0
     assert_solves(lu, moved, rng)
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert refactor(lu) > 0.0
     assert_solves(lu, moved, rng)
     # an exactly vanishing pivot too
     moved[:2, :2] = [[0.0, 1.0], [1.0, 1.0]]
     lu.set_matrix(moved)
-    refactored = sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD)
+    refactored = refactor(lu)
     if refactored == sparse_lu.REJECTED:
-        assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+        assert factor(lu) > 0.0
     assert_solves(lu, moved, rng)
 
 
 def test_a_singular_matrix_is_rejected_and_refused_at_packing():
-    rng = np.random.default_rng(4)
-    a = random_matrix(rng, 20, 0.1)
-    lu = analysed(a)
+    rng, a, lu = random_case(4, 20, 0.1)
     singular = a.copy()
     singular[:, 5] = 0.0
     lu.set_matrix(singular)
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
-    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    assert refactor(lu) == sparse_lu.REJECTED
+    assert factor(lu) == sparse_lu.REJECTED
     # no factorisation is kept: refactor refuses until a factor works
     lu.set_matrix(a)
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
-    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert refactor(lu) == sparse_lu.REJECTED
+    assert factor(lu) > 0.0
     with pytest.raises(ValueError, match="singular at the reference point"):
         rows, cols = np.nonzero(a)
         sparse_lu.StaticLU(20, rows, cols, singular[rows, cols])
@@ -139,25 +150,23 @@ def test_fill_beyond_the_packed_room_is_reported():
     swapped = a.copy()
     swapped[np.arange(1, n), np.arange(1, n)] = rng.uniform(1e-9, 2e-9, n - 1)
     lu.set_matrix(swapped)
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
-    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.CAPACITY
-    assert sparse_lu.refactor(lu.ints, lu.floats, sparse_lu.THRESHOLD) == sparse_lu.REJECTED
+    assert refactor(lu) == sparse_lu.REJECTED
+    assert factor(lu) == sparse_lu.CAPACITY
+    assert refactor(lu) == sparse_lu.REJECTED
     # with the default room the same matrix factors, and solves
     roomy = analysed(a)
     roomy.set_matrix(swapped)
-    assert sparse_lu.factor(roomy.ints, roomy.floats, sparse_lu.THRESHOLD) > 0.0
+    assert factor(roomy) > 0.0
     assert_solves(roomy, swapped, rng)
 
 
 def test_slots_name_the_entries_of_the_pattern():
-    rng = np.random.default_rng(5)
-    a = random_matrix(rng, 25, 0.1)
-    lu = analysed(a)
+    rng, a, lu = random_case(5, 25, 0.1)
     rows, cols = np.nonzero(a)
     values = sparse_lu.matrix_values(lu.ints, lu.floats)
     values[:] = 0.0
     values[lu.slot(rows, cols)] = a[rows, cols]
-    assert sparse_lu.factor(lu.ints, lu.floats, sparse_lu.THRESHOLD) > 0.0
+    assert factor(lu) > 0.0
     assert_solves(lu, a, rng)
     outside = np.argwhere(a == 0.0)[0]
     with pytest.raises(ValueError, match=rf"entry \({outside[0]}, {outside[1]}\) is not in"):
