@@ -2,7 +2,7 @@
 
 `LOOP` is registered in the entry-point group "flexure.sweep_analyses" (pyproject.toml), so
 that flexure.core's sweep finds it by name without importing controllers
-(`flexure.core.analysis.sweep_analyses` says why). At each point it runs `run_loop` on the
+(`flexure.core.sweep.analyses` says why). At each point it runs `run_loop` on the
 point's model, in process (on the nonlinear model, or with `--loop-plant linear` on its
 linearisation, stepped exactly: far faster on a large model), with the options below, and
 reports (the moving loop's units: m and N, or rad and N m on a planar angle):
@@ -16,7 +16,7 @@ reports (the moving loop's units: m and N, or rad and N m on a planar angle):
   the same sweep.
 """
 
-from flexure.core.analysis.sweep_analyses import (
+from flexure.core.sweep.analyses import (
     SweepAnalysis,
     SweepOption,
     nonnegative,

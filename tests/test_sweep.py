@@ -1,4 +1,4 @@
-"""Design sweeps (`flexure sweep`, flexure.core.analysis.sweep): the grid, one point's quantities
+"""Design sweeps (`flexure sweep`, flexure.core.sweep.sweep): the grid, one point's quantities
 against the analytic stage, Dask equal to the serial run, failed points, --resume, the files."""
 
 import csv
@@ -9,8 +9,8 @@ import tomllib
 import pytest
 
 from flexure.core import scene_path
-from flexure.core.analysis.sweep import evaluate_point, grid, parse_parameter, run_sweep
 from flexure.core.cli import main
+from flexure.core.sweep.sweep import evaluate_point, grid, parse_parameter, run_sweep
 
 SCENE = "stage_planar_1dof"
 DATA = tomllib.loads(scene_path(SCENE).read_text())
@@ -150,7 +150,7 @@ def test_dask_gives_the_serial_table_bit_for_bit(tmp_path, capsys):
 def test_a_running_scheduler_takes_the_points_and_a_lost_task_is_its_row(monkeypatch):
     from distributed import LocalCluster
 
-    import flexure.core.analysis.sweep as sweep
+    import flexure.core.sweep.sweep as sweep
 
     points = grid([("sections.leaf.height", [0.3e-3, 0.5e-3])])
     with LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
@@ -238,7 +238,7 @@ def test_the_plot_and_parquet_are_written_beside_the_table(tmp_path, capsys):
 
 def test_values_of_mixed_kinds_are_text_in_parquet_and_categories_in_the_plot(tmp_path):
     pyarrow = pytest.importorskip("pyarrow.parquet")
-    from flexure.core.analysis.sweep_table import SweepTable
+    from flexure.core.sweep.table import SweepTable
 
     table = SweepTable(["elements.bar.type"], ["mode.1 [Hz]"])
     rows = [["PLBEAM", "10.5", "ok"], ["2", "", "elements.bar.type: expected a string"]]
@@ -315,7 +315,7 @@ def test_bad_runs_are_one_line_before_any_point(argv, message, tmp_path, capsys,
 
 
 def test_an_unreachable_scheduler_is_given_up_after_the_timeout(monkeypatch, capsys, tmp_path):
-    import flexure.core.analysis.sweep as sweep
+    import flexure.core.sweep.sweep as sweep
 
     monkeypatch.setattr(sweep, "CONNECT_TIMEOUT", "0.5s")
     assert main(["sweep", SCENE, "--param", "nodes.3.mass=0,1", "--scheduler",

@@ -13,9 +13,9 @@ import pytest
 from cli_runs import run
 
 from flexure.core import load_scene, scene_path
-from flexure.core.analysis import sweep_analyses
-from flexure.core.analysis.sweep import analysis_names, columns, evaluate_point
 from flexure.core.errors import UsageError
+from flexure.core.sweep import analyses as sweep_analyses
+from flexure.core.sweep.sweep import analysis_names, columns, evaluate_point
 
 REPO = Path(__file__).resolve().parents[1]
 TRUSS = tomllib.loads(scene_path("truss_1dof_x").read_text())

@@ -1,2 +1,2 @@
 """Analyses of a model: static equilibrium, linearisation, modes and buckling, state space and
-principal gains, stresses, model reduction, design sweeps."""
+principal gains, stresses, model reduction."""

@@ -6,20 +6,23 @@
         --simulate-t-end 0.05 --loop-duration 0.1
 
 The options of the registered analyses (simulate; loop, registered by flexure.controllers:
-`flexure.core.analysis.sweep_analyses`) are added as --ANALYSIS-OPTION, from the registry.
+`flexure.core.sweep.analyses`) are added as --ANALYSIS-OPTION, from the registry.
 
 Every point of the grid (the Cartesian product of the --param values) is one scene with those
-overrides, analysed by `flexure.core.analysis.sweep.evaluate_point`, on a dask.distributed
+overrides, analysed by `flexure.core.sweep.sweep.evaluate_point`, on a dask.distributed
 LocalCluster of this machine's cores, on an existing cluster (--scheduler), or in this process
-(--serial). The table (`flexure.core.analysis.sweep_table`) goes to CSV, to Parquet when pyarrow
+(--serial). The table (`flexure.core.sweep.table`) goes to CSV, to Parquet when pyarrow
 is importable, and its quantities to a plot beside it.
 """
 
 import argparse
 import time
 
-from ..analysis import sweep_analyses
-from ..analysis.sweep import (
+from ..errors import FlexureError, UsageError
+from ..reporting.progress import Progress
+from ..reporting.tables import format_table
+from ..sweep import analyses as sweep_analyses
+from ..sweep.sweep import (
     DEFAULT_MODES,
     analysis_names,
     columns,
@@ -28,10 +31,7 @@ from ..analysis.sweep import (
     parse_parameter,
     run_sweep,
 )
-from ..analysis.sweep_table import SweepTable
-from ..errors import FlexureError, UsageError
-from ..reporting.progress import Progress
-from ..reporting.tables import format_table
+from ..sweep.table import SweepTable
 from . import (
     PLOT_SUFFIXES,
     add_scene_arguments,

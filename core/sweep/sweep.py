@@ -22,7 +22,7 @@ The quantities (columns after the parameters, SI units):
   the model's DOF count);
 - buckling: `buckling.1 [-]`, the first load factor of the reference load (blank if none);
 - simulate, loop, and any other registered analysis: the columns it declares
-  (`flexure.core.analysis.sweep_analyses`: a step response here; the closed loop registered by
+  (`flexure.core.sweep.analyses`: a step response here; the closed loop registered by
   flexure.controllers), with its options in `settings` {analysis: {option: value}}.
 
 A row keeps what was computed before a failure. Dask is imported only when a sweep runs on it.
@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import FlexureError, UsageError
 from ..scene.overrides import parse_value
-from . import sweep_analyses
+from . import analyses as registry
 
 __all__ = ["ANALYSES", "analysis_names", "columns", "evaluate_point", "grid",
            "parse_parameter", "run_sweep"]
@@ -94,7 +94,7 @@ def grid(parameters) -> list[dict]:
 
 def analysis_names() -> tuple[str, ...]:
     """Every analysis a sweep can run: ANALYSES, then the registered ones (simulate, loop...)."""
-    return ANALYSES + tuple(name for name in sweep_analyses.available() if name not in ANALYSES)
+    return ANALYSES + tuple(name for name in registry.available() if name not in ANALYSES)
 
 
 def columns(model, analyses, modes=DEFAULT_MODES, settings=None) -> list[str]:
@@ -109,8 +109,8 @@ def columns(model, analyses, modes=DEFAULT_MODES, settings=None) -> list[str]:
         names.append("buckling.1 [-]")
     for name in analyses:
         if name not in ANALYSES:
-            analysis = sweep_analyses.find(name)
-            names += analysis.columns(model, sweep_analyses.option_values(
+            analysis = registry.find(name)
+            names += analysis.columns(model, registry.option_values(
                 analysis, (settings or {}).get(name)))
     return names
 
@@ -137,12 +137,12 @@ def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes")
     file every row shares (the columns computed before it are kept). This is the function
     each Dask task runs; it raises nothing.
     """
+    from ..analysis.linearization import linearize
+    from ..analysis.modal import buckling_load_factors, natural_frequencies
+    from ..analysis.statics import static_equilibrium
     from ..mechanics.mechanics import Mechanics
     from ..mechanics.ports import output_value
     from ..scene.building import build_model
-    from .linearization import linearize
-    from .modal import buckling_load_factors, natural_frequencies
-    from .statics import static_equilibrium
 
     row = {}
     try:
@@ -171,8 +171,8 @@ def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes")
                 row["buckling.1 [-]"] = float(factors[0])
         for name in analyses:
             if name not in ANALYSES:
-                analysis = sweep_analyses.find(name)
-                row.update(analysis.evaluate(model, sweep_analyses.option_values(
+                analysis = registry.find(name)
+                row.update(analysis.evaluate(model, registry.option_values(
                     analysis, (settings or {}).get(name))))
     except FlexureError as error:
         # every row is of the same scene file: its name would only hide the reason
@@ -211,7 +211,7 @@ def run_sweep(scene: dict, points, *, overrides=None, analyses=("static", "modes
         finish (to save rows as they come, and report progress).
     settings : dict, optional
         {analysis: {option: value}}: the options of registered analyses such as "simulate"
-        (`flexure.core.analysis.sweep_analyses`); their defaults otherwise.
+        (`flexure.core.sweep.analyses`); their defaults otherwise.
     """
     tasks = [{**(overrides or {}), **point} for point in points]
     options = {"analyses": tuple(analyses), "modes": modes, "source": source,
