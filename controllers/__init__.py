@@ -29,24 +29,17 @@ Only flexure.core's public API is used: no physics here.
 
 from flexure.core.lazy_imports import lazy_exports
 
-# public name -> the submodule that defines it, imported on first use (PEP 562): importing
+# submodule -> the public names it defines, imported on first use (PEP 562): importing
 # flexure.controllers loads neither python-control nor the models
 _LAZY = {
-    "ControlDesignError": "feedback", "DiscreteController": "feedback",
-    "FeedbackDesign": "feedback", "design_feedback": "feedback",
-    "LowFrequencyModel": "feedforward", "StableInverse": "feedforward",
-    "low_frequency_model": "feedforward",
-    "ProfileError": "profiles", "ThirdOrderProfile": "profiles",
-    "LoopController": "loop_controller",
-    "LoopError": "loop_design", "build_loop": "loop_design",
-    "TARGET": "loop_result", "LoopResult": "loop_result",
-    "run_loop": "runner",
+    "feedback": ("ControlDesignError", "DiscreteController", "FeedbackDesign",
+                 "design_feedback"),
+    "feedforward": ("LowFrequencyModel", "StableInverse", "low_frequency_model"),
+    "loop_controller": ("LoopController",),
+    "loop_design": ("LoopError", "build_loop"),
+    "loop_result": ("TARGET", "LoopResult"),
+    "profiles": ("ProfileError", "ThirdOrderProfile"),
+    "runner": ("run_loop",),
 }
 
-__all__ = [
-    "TARGET", "ControlDesignError", "DiscreteController", "FeedbackDesign", "LoopController",
-    "LoopError", "LoopResult", "LowFrequencyModel", "ProfileError", "StableInverse",
-    "ThirdOrderProfile", "build_loop", "design_feedback", "low_frequency_model", "run_loop",
-]
-
-__getattr__, __dir__ = lazy_exports(__name__, _LAZY, __all__)
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _LAZY)

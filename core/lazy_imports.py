@@ -3,37 +3,44 @@ flexure.fmu and flexure.controllers: importing the package loads none of its hea
 submodules, while `from package import X`, `package.X` and `dir(package)` work for every
 name of its `__all__`.
 
-    __getattr__, __dir__ = lazy_exports(__name__, _LAZY, __all__)
+    # submodule -> the public names it defines
+    _LAZY = {"analysis.modal": ("Modes", "natural_frequencies"), ...}
+    __all__, __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
+
+A package that also imports names at once lists them in `__all__` beside the lazy ones:
+
+    _lazy, __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
+    __all__ = ["SceneError", *_lazy]
 """
 
 import importlib
 import sys
 
 
-def lazy_exports(package: str, submodules: dict[str, str], public: list[str]):
-    """The module-level `__getattr__` and `__dir__` of a package whose public names are
+def lazy_exports(package: str, submodules: dict[str, tuple[str, ...]]):
+    """The lazy public names, `__getattr__` and `__dir__` of a package whose public names are
     imported from their submodules on first use.
 
     Parameters
     ----------
     package : str
         The package's `__name__`.
-    submodules : dict of str to str
-        Public name -> the submodule that defines it, relative to the package
-        ("analysis.modal").
-    public : list of str
-        The package's `__all__`, which `dir(package)` lists.
+    submodules : dict of str to tuple of str
+        Submodule, relative to the package ("analysis.modal") -> the public names it defines.
 
     Returns
     -------
-    (callable, callable)
+    (list of str, callable, callable)
+        The names of `submodules`, in its order (the package's `__all__`, or part of it);
         `__getattr__(name)`, which imports the name's submodule and keeps the name in the
         package (so the import happens once), raising AttributeError for any other name; and
-        `__dir__()`.
+        `__dir__()`, which lists the lazy names beside those the package holds.
     """
+    module_of = {name: module for module, names in submodules.items() for name in names}
+    public = list(module_of)
 
     def __getattr__(name):
-        module = submodules.get(name)
+        module = module_of.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         value = getattr(importlib.import_module(f".{module}", package), name)
@@ -43,4 +50,4 @@ def lazy_exports(package: str, submodules: dict[str, str], public: list[str]):
     def __dir__():
         return sorted(set(vars(sys.modules[package])) | set(public))
 
-    return __getattr__, __dir__
+    return public, __getattr__, __dir__

@@ -17,21 +17,17 @@ any flexure slave as one.
 
 from flexure.core.lazy_imports import lazy_exports
 
-# public name -> the submodule that defines it, imported on first use (PEP 562): importing
+# submodule -> the public names it defines, imported on first use (PEP 562): importing
 # flexure.fmu loads neither pythonfmu nor fmpy
 _LAZY = {
-    "FMUBuildError": "builder", "build_scene_fmu": "builder", "build_slave_fmu": "builder",
-    "bundle_name": "bundle", "default_tunable": "builder", "validate_fmu_file": "builder",
-    "fmu_environment": "env",
-    "fix_model_description": "model_description",
-    "check_fmu": "regression", "write_reference": "regression",
-    "SafeSlave": "slave", "UnitReal": "slave_variables", "escape_log": "slave",
+    "builder": ("FMUBuildError", "build_scene_fmu", "build_slave_fmu", "default_tunable",
+                "validate_fmu_file"),
+    "bundle": ("bundle_name",),
+    "env": ("fmu_environment",),
+    "model_description": ("fix_model_description",),
+    "regression": ("check_fmu", "write_reference"),
+    "slave": ("SafeSlave", "escape_log"),
+    "slave_variables": ("UnitReal",),
 }
 
-__all__ = [
-    "FMUBuildError", "SafeSlave", "UnitReal", "build_scene_fmu", "build_slave_fmu",
-    "bundle_name", "check_fmu", "default_tunable", "escape_log", "fix_model_description",
-    "fmu_environment", "validate_fmu_file", "write_reference",
-]
-
-__getattr__, __dir__ = lazy_exports(__name__, _LAZY, __all__)
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
