@@ -29,15 +29,26 @@ def register(subparsers):
                              "stiffness of this node at the static equilibrium (repeatable, "
                              "or comma-separated: 3,5)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--plot", metavar="PNG", type=output_file(PLOT_SUFFIXES),
-                        help="plot the von Mises stresses along the beams at the static "
-                             "equilibrium to this PNG file (beams and trusses whose section "
-                             "has dimensions)")
-    parser.add_argument("--sigma", metavar="PNG", type=output_file(PLOT_SUFFIXES),
-                        help="plot the singular values (principal gains) of the transfer "
-                             "matrix from the inputs to the outputs against frequency")
-    add_picture_options(parser)
+    for option, draws in PICTURES.items():
+        parser.add_argument(option, metavar="PNG", type=output_file(PLOT_SUFFIXES), help=draws)
     parser.set_defaults(run=run_with_pictures)
+
+
+MODE_PANELS = 6  # the mode shapes drawn when --modes gives no count
+
+# The pictures, each to a PNG (or .pdf, .svg) file: option -> what it draws. `run` draws
+# --plot and --sigma from its analyses; `run_with_pictures` the others, around it.
+PICTURES = {
+    "--plot": "plot the von Mises stresses along the beams at the static equilibrium to this "
+              "PNG file (beams and trusses whose section has dimensions)",
+    "--sigma": "plot the singular values (principal gains) of the transfer matrix from the "
+               "inputs to the outputs against frequency",
+    "--plot-shape": "draw the static equilibrium's deformed shape over the undeformed model to "
+                    "this PNG (or .pdf, .svg) file, magnified so that the largest displacement "
+                    "is 10 %% of the model's size",
+    "--plot-modes": "draw the mode shapes, one panel each (the N of --modes, else the lowest "
+                    f"{MODE_PANELS}), to this PNG (or .pdf, .svg) file",
+}
 
 
 # The units of `static`: every stress resultant is in N, as every deformation is a length; a
@@ -267,19 +278,6 @@ def render_compliance(node, found):
 
 
 # -- pictures: --plot-shape and --plot-modes (kept apart from `run`, which they wrap) ---------
-
-MODE_PANELS = 6  # the mode shapes drawn when --modes gives no count
-
-
-def add_picture_options(parser):
-    """Add --plot-shape and --plot-modes to the `analyze` parser."""
-    parser.add_argument("--plot-shape", metavar="PNG", type=output_file(PLOT_SUFFIXES),
-                        help="draw the static equilibrium's deformed shape over the undeformed "
-                             "model to this PNG (or .pdf, .svg) file, magnified so that the "
-                             "largest displacement is 10 %% of the model's size")
-    parser.add_argument("--plot-modes", metavar="PNG", type=output_file(PLOT_SUFFIXES),
-                        help="draw the mode shapes, one panel each (the N of --modes, else "
-                             f"the lowest {MODE_PANELS}), to this PNG (or .pdf, .svg) file")
 
 
 def run_with_pictures(args):
