@@ -9,7 +9,6 @@
 """
 
 import argparse
-import math
 import os
 from pathlib import Path
 
@@ -54,17 +53,12 @@ def move(text):
 def quantum(text):
     """argparse type of --quantum: Q, one for every loop, or Q1,Q2,... one per loop (m or
     rad), each positive."""
-    values = []
-    for part in text.split(","):
-        try:
-            value = float(part)
-        except ValueError:
-            value = float("nan")
-        if not (math.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(
-                f"expected a positive quantum (m or rad), or one per loop separated by commas, "
-                f"got {text!r}")
-        values.append(value)
+    try:
+        values = [positive(part) for part in text.split(",")]
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"expected a positive quantum (m or rad), or one per loop separated by commas, "
+            f"got {text!r}") from None
     return values[0] if len(values) == 1 else values
 
 
@@ -73,14 +67,11 @@ def disturbance(text):
     positive frequency (Hz, default 50)."""
     amplitude, sep, hz = text.partition("@")
     try:
-        values = (float(amplitude), float(hz) if sep else MAINS_HZ)
-    except ValueError:
-        values = (float("nan"), float("nan"))
-    if not all(math.isfinite(v) and v > 0 for v in values):
+        return positive(amplitude), positive(hz) if sep else MAINS_HZ
+    except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(
             f"expected AMPLITUDE[@HZ], a positive force (N or N m) and a positive frequency "
-            f"(Hz, default {MAINS_HZ:g}), got {text!r}")
-    return values
+            f"(Hz, default {MAINS_HZ:g}), got {text!r}") from None
 
 
 def register(subparsers):
