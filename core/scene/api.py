@@ -43,7 +43,11 @@ __all__ = ["Scene", "to_toml"]
 class Scene:
     """A scene being built in Python; `build()` makes its Model, `to_toml()` its file.
 
-    Every method that adds something returns the scene, so calls can be chained.
+    The methods that add an entry (`section`, `node`, `element`, `input`, `actuator`,
+    `output`) take its name first and that table's keys of the scene format after. Each
+    returns this scene, so calls can be chained, and raises SceneError when an entry of that
+    name was added already (change it in `scene.data` instead). `release` and
+    `buckling_load` return this scene too.
 
     Parameters
     ----------
@@ -90,11 +94,6 @@ class Scene:
         -------
         Scene
             This scene.
-
-        Raises
-        ------
-        SceneError
-            A section of that name was added already.
         """
         return self._add("sections", name, properties)
 
@@ -114,11 +113,6 @@ class Scene:
         -------
         Scene
             This scene.
-
-        Raises
-        ------
-        SceneError
-            A node of that name was added already.
         """
         return self._add("nodes", name, keys)
 
@@ -143,11 +137,6 @@ class Scene:
         -------
         Scene
             This scene.
-
-        Raises
-        ------
-        SceneError
-            An element of that name was added already.
         """
         return self._add("elements", name, {"type": type, "nodes": list(nodes),
                                             "section": section, **keys})
@@ -185,6 +174,7 @@ class Scene:
         ----------
         name : str
         node : str
+            The node it acts on.
         coordinate : str
             "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
 
@@ -192,11 +182,6 @@ class Scene:
         -------
         Scene
             This scene.
-
-        Raises
-        ------
-        SceneError
-            An input of that name was added already.
         """
         return self._add("inputs", name, {"node": node, "coordinate": coordinate})
 
@@ -216,11 +201,6 @@ class Scene:
         -------
         Scene
             This scene.
-
-        Raises
-        ------
-        SceneError
-            An actuator of that name was added already.
         """
         return self._add("actuators", name, {"input": input, **keys})
 
@@ -233,6 +213,7 @@ class Scene:
         ----------
         name : str
         node : str
+            The node it measures.
         coordinate : str
             "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
         quantity : str
@@ -242,11 +223,6 @@ class Scene:
         -------
         Scene
             This scene.
-
-        Raises
-        ------
-        SceneError
-            An output of that name was added already.
         """
         return self._add("outputs", name, {"node": node, "coordinate": coordinate,
                                            "quantity": quantity})
@@ -271,41 +247,40 @@ class Scene:
         return self
 
     def build(self, *, check: bool = True) -> Model:
-        """The Model, built and checked as `build_model` checks a scene file.
+        """The Model: `build_model` of a copy of this scene's dictionary, checked as a scene
+        file is.
 
         Parameters
         ----------
         check : bool
-            Whether to check that the model is exactly constrained
-            (`check_exact_constraint`).
+            As in `build_model`.
 
         Returns
         -------
         Model
+            A new one at each call: later changes to the scene do not reach it.
 
         Raises
         ------
-        SceneError
-            A key is missing, unknown or has a bad value (the message names it as a file
-            would: "<scene NAME>: nodes.3.mass: ...").
-        ConstraintError
-            With `check`, the model is not exactly constrained.
+        SceneError, ConstraintError
+            As `build_model` raises them, the message naming the scene as a file would be
+            named: "<scene NAME>: nodes.3.mass: ...".
         """
         return build_model(copy.deepcopy(self.data), source=self.source,
                            default_name=self.data["scene"]["name"], check=check)
 
     def to_toml(self, header: str = "") -> str:
-        """The scene file's text (`load_scene` of it builds the same Model).
+        """The scene file's text, `scene_toml` of this scene's dictionary (`load_scene` of
+        it builds the same Model).
 
         Parameters
         ----------
         header : str
-            Comment lines for the top of the file, without "#".
+            As in `scene_toml`.
 
         Returns
         -------
         str
-            The TOML text.
         """
         return scene_toml(self.data, header)
 
@@ -327,19 +302,18 @@ class Scene:
 
 def to_toml(model: Model, header: str = "") -> str:
     """The scene file of the scene `model` was built from (after its overrides, before
-    meshing and DOF choice, which building it again repeats).
+    meshing and DOF choice, which building it again repeats): `scene_toml` of `Model.scene`.
 
     Parameters
     ----------
     model : Model
-        A model built from a scene (`Model.scene`).
+        A model built from a scene.
     header : str
-        Comment lines for the top of the file, without "#".
+        As in `scene_toml`.
 
     Returns
     -------
     str
-        The TOML text.
 
     Raises
     ------

@@ -97,7 +97,8 @@ def scene_path(name_or_path: str | Path) -> Path:
 
 def load_scene(name_or_path: str | Path, *, overrides: dict | None = None,
                check: bool = True) -> Model:
-    """Load and validate a scene file or built-in scene name into a `Model`.
+    """Load and validate a scene file or built-in scene name into a `Model`: `build_model`
+    of the file's dictionary, its messages naming the file.
 
     Parameters
     ----------
@@ -108,19 +109,18 @@ def load_scene(name_or_path: str | Path, *, overrides: dict | None = None,
         file's own keys are (`flexure.core.scene.overrides`), e.g.
         {"sections.leaf.height": 0.3e-3, "nodes.3.mass": 0.2} (SI units: m, kg).
     check : bool
-        Whether to check that the model is exactly constrained.
+        As in `build_model`.
 
     Returns
     -------
     Model
+        Named by [scene] name, or else by the file's stem.
 
     Raises
     ------
     SceneError
-        No such scene, a file that is not UTF-8 or not valid TOML, or a key that is missing,
-        unknown or has a bad value (the message names the file and the key).
-    ConstraintError
-        With `check`, the model is not exactly constrained.
+        No such scene, or a file that is not UTF-8 or not valid TOML; and what `build_model`
+        raises (SceneError, ConstraintError).
     """
     path = scene_path(name_or_path)
     data = parse_toml(path)
