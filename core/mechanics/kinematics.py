@@ -86,6 +86,14 @@ class Configuration:
 class Kinematics:
     """Solves a model's constraints; one instance per model, reused across evaluations.
 
+    The methods share their arguments' meanings and units: q (NDOF,) the DOF values, the DOF
+    coordinates first, then the DOF deformations (m or rad); x (NX,) the coordinates (m and
+    rad, Euler parameters unitless); e (NE,) their deformations (m); De (NE, NX) the
+    deformation Jacobian de/dx (m/m, m/rad); config a solved `Configuration`; hessians, where
+    a method takes them, the deformation Hessians at config.x
+    (`assembly.deformation_hessians`), passed when the caller has them already and computed
+    otherwise.
+
     Parameters
     ----------
     model : Model
@@ -122,7 +130,6 @@ class Kinematics:
         Parameters
         ----------
         x : ndarray (NX,)
-            The coordinates, m and rad (Euler parameters unitless).
 
         Returns
         -------
@@ -139,7 +146,6 @@ class Kinematics:
         Parameters
         ----------
         De : ndarray (NE, NX)
-            The deformation Jacobian de/dx (m/m, m/rad).
 
         Returns
         -------
@@ -159,7 +165,6 @@ class Kinematics:
         Parameters
         ----------
         De : ndarray (NE, NX)
-            The deformation Jacobian de/dx (m/m, m/rad).
 
         Returns
         -------
@@ -201,11 +206,8 @@ class Kinematics:
         Parameters
         ----------
         x : ndarray (NX,)
-            The coordinates, m and rad.
         e : ndarray (NE,)
-            Their deformations, m.
         q : ndarray (NDOF,)
-            The DOF values, m or rad.
 
         Returns
         -------
@@ -226,7 +228,6 @@ class Kinematics:
         Parameters
         ----------
         q : ndarray (NDOF,)
-            The DOF values, m or rad.
         x_start : ndarray (NX,)
             The coordinates to start from (m, rad), e.g. the previous solution.
 
@@ -273,7 +274,6 @@ class Kinematics:
         Parameters
         ----------
         q : ndarray (NDOF,)
-            The DOF values, m or rad.
         x : ndarray (NX,)
             Coordinates that satisfy the constraints for q (m, rad); not checked.
 
@@ -298,8 +298,6 @@ class Kinematics:
         qdot : ndarray (NDOF,)
             The DOF velocities, m/s or rad/s.
         hessians : list of (ElementGroup, ndarray), optional
-            The deformation Hessians at config.x (`assembly.deformation_hessians`), if
-            already computed.
 
         Returns
         -------
@@ -324,8 +322,6 @@ class Kinematics:
         ----------
         config : Configuration
         hessians : list of (ElementGroup, ndarray), optional
-            The deformation Hessians at config.x (`assembly.deformation_hessians`), if
-            already computed.
 
         Returns
         -------
