@@ -111,7 +111,7 @@ def steady_slopes(model: Model, u: ArrayLike) -> np.ndarray:
     ----------
     model : Model
     u : array_like (n_inputs,)
-        The held inputs: N, N m for a force or moment, V for an actuator's drive signal.
+        The held inputs, as in `steady_port_values`.
 
     Returns
     -------
