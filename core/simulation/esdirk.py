@@ -351,15 +351,8 @@ class Esdirk:
 
     Parameters
     ----------
-    data : EngineData
-        The packed model; its inputs array holds the forces (N) or drive signals (V) of the
-        current interval.
-    rtol : float
-        Relative tolerance.
-    atol : array (2 NDOF + coil currents,)
-        Absolute tolerances (m, rad, m/s, rad/s, A).
-    max_step : float or None
-        Largest step (s).
+    data, rtol, atol, max_step
+        As in `sundials.Cvode`.
     method : str
         "esdirk" (order 4, 6 stages), "esdirk3" (order 3, 4 stages) or "esdirk2" (TR-BDF2,
         order 2, 3 stages): the tableau of `esdirk_method.TABLEAUS`.
