@@ -116,36 +116,39 @@ def _coil(table, j, n, row):
 
 @kernel
 def first_order_blocks(table, J, N, n, column_major):
-    """The coils' blocks of d ydot / d y (N = 2n + currents) after the tangent (DF and the LU
-    of M_bar current): d qddot / d i, d idot / d qdot, d idot / d i."""
-    kinds = _i(table, slot.ACTUATORS)
-    mass_lu, piv = _f(table, slot.MASS_LU), _i(table, slot.MASS_PIVOTS)
-    column = _f(table, slot.REDUCED_FORCE)
-    for j in range(kinds.size // 2):
-        if kinds[2 * j] != ed.VOLTAGE_DRIVE:
-            continue
-        state, km, inductance, resistance = _coil(table, j, n, column)
-        for i in range(n):
-            put(J, N, state, n + i, -km / inductance * column[i], column_major)
-            column[i] *= km
-        lu_solve(mass_lu, n, piv, column)
-        for i in range(n):
-            put(J, N, n + i, state, column[i], column_major)
-        put(J, N, state, state, -resistance / inductance, column_major)
+    """The coils' blocks of d ydot / d y (N = 2n + currents; `_coil_blocks`)."""
+    _coil_blocks(table, J, N, n, column_major, False, 0.0)
 
 
 @kernel
 def implicit_blocks(table, J, N, n, cj):
     """The coils' blocks of IDA's d res / d y + cj d res / d yp (column-major, N = 2n +
-    currents) after the tangent: -Km DF^T b_j (the force in the mechanical rows),
-    Km / L b_j^T DF and cj + R / L (the coil rows)."""
+    currents; `_coil_blocks`)."""
+    _coil_blocks(table, J, N, n, True, True, cj)
+
+
+@kernel(inline="always")
+def _coil_blocks(table, J, N, n, column_major, implicit, cj):
+    """The coils' tangent blocks (the module's) in the integrators' Jacobian J (flat (N, N),
+    N = 2n + currents, column-major or row-major) after the tangent (DF and the LU of M_bar
+    current): those of d ydot / d y, or, `implicit`, of IDA's d res / d y + cj d res / d yp,
+    whose rows are yp - ydot on the coils and M_bar (qddot_p - qddot) on the mechanics: the
+    same blocks negated, the mechanical ones without M_bar^-1 (-Km DF^T b_j), and cj added
+    on the coils' diagonal."""
     kinds = _i(table, slot.ACTUATORS)
-    row = _f(table, slot.REDUCED_FORCE)
+    mass_lu, piv = _f(table, slot.MASS_LU), _i(table, slot.MASS_PIVOTS)
+    column = _f(table, slot.REDUCED_FORCE)
+    sign = -1.0 if implicit else 1.0
     for j in range(kinds.size // 2):
         if kinds[2 * j] != ed.VOLTAGE_DRIVE:
             continue
-        state, km, inductance, resistance = _coil(table, j, n, row)
+        state, km, inductance, resistance = _coil(table, j, n, column)
         for i in range(n):
-            J[state * N + n + i] = -km * row[i]
-            J[(n + i) * N + state] = km / inductance * row[i]
-        J[state * N + state] = cj + resistance / inductance
+            put(J, N, state, n + i, sign * (-km / inductance * column[i]), column_major)
+            column[i] *= km
+        if not implicit:
+            lu_solve(mass_lu, n, piv, column)
+        for i in range(n):
+            put(J, N, n + i, state, sign * column[i], column_major)
+        rate = -resistance / inductance
+        put(J, N, state, state, cj - rate if implicit else rate, column_major)
