@@ -12,6 +12,7 @@ import pytest
 from flexure.core.engine.point_masses import (
     dense_element_mass,
     element_mass,
+    mass_rows_product,
     padded_width,
     point_columns,
     point_forces,
@@ -64,6 +65,22 @@ def test_dense_element_mass(P, m):
     dense_element_mass(Mp, pattern, P, m, padded.ravel(), MD, Me, stride)
     expected = D.T @ Mp.reshape(P, P) @ D
     assert np.max(np.abs(Me[: m * m] - expected.ravel())) <= 1e-13 * np.max(np.abs(expected))
+
+
+@pytest.mark.parametrize("P, stride", [(24, 16), (9, 75), (5, 1)])
+def test_mass_rows_product(P, stride):
+    """MD = Mp D along rows of any length (the reduced form's Mp (Dp DF_e) has NDOF), to
+    round-off; one column is `point_forces`' w = Mp f, the same sums to the bit."""
+    Mp, pattern, _ = element(P, 3, seed=4 * P + stride)
+    D = np.random.default_rng(5).standard_normal((P, stride))
+    MD = np.full(P * stride, np.nan)
+    mass_rows_product(Mp, pattern, P, D.ravel(), stride, MD)
+    expected = Mp.reshape(P, P) @ D
+    assert np.max(np.abs(MD - expected.ravel())) <= 1e-13 * np.max(np.abs(expected))
+    w = np.full(P, np.nan)
+    point_forces(Mp, pattern, P, D[:, 0].copy(), w)
+    if stride == 1:
+        assert np.array_equal(w, MD)
 
 
 @pytest.mark.parametrize("P, m, mz", [(24, 14, 14), (9, 4, 7), (5, 17, 20)])

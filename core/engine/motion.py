@@ -43,7 +43,7 @@ from .factors import (
 )
 from .kinematics import compute_DF, dof_rows
 from .operations import OP_CONFIGURATION, run
-from .point_masses import element_mass, point_columns, point_forces
+from .point_masses import element_mass, mass_rows_product, point_columns, point_forces
 from .ports import add_input_forces
 from .rigid_kernels import (
     condense,
@@ -467,12 +467,7 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
                             f -= d * conv[coords[i * m + a]]
                 point[pp] = f - acc[pp] if order == 2 else f
             point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
-            MpB[: P * ndof] = 0.0
-            for e in range(pattern.size):
-                pp, qq = divmod(pattern[e], P)
-                mpq = Mp[pattern[e]]
-                for j in range(ndof):
-                    MpB[pp * ndof + j] += mpq * B[qq * ndof + j]
+            mass_rows_product(Mp, pattern, P, B, ndof, MpB)
             if with_forces:
                 for a in range(m):  # r += Dp^T w
                     s = 0.0

@@ -2,12 +2,13 @@
 
 For an element with P inertia points p = p(x_e) (m, or rad for rotary inertia; Dp = dp/dx_e,
 (P, m)) and their constant mass matrix Mp (P, P; kg, kg m^2): the point forces w = Mp f for
-point values f (N per unit mass: gravity, minus the accelerations), and the element mass
-Me = Dp^T Mp Dp (m, m), visiting only the entries of Mp that the element's type fills and the
-entries of Dp that are not zero (`motion`, `rigid`'s touching elements). A touching element's
-Dp_z = Dp T_e and its mass go along whole rows padded to a multiple of 16 entries
-(`padded_width`), the length from which the compiler runs a loop of unknown length in
-vectors. The pattern of Mp is ascending (flat p P + q), so its walks take p from its order.
+point values f (N per unit mass: gravity, minus the accelerations), the product Mp D with
+rows of any length, and the element mass Me = Dp^T Mp Dp (m, m), visiting only the entries
+of Mp that the element's type fills and the entries of Dp that are not zero (`motion`,
+`tangent`, `rigid`'s touching elements). A touching element's Dp_z = Dp T_e and its mass go
+along whole rows padded to a multiple of 16 entries (`padded_width`), the length from which
+the compiler runs a loop of unknown length in vectors. The pattern of Mp is ascending (flat
+p P + q), so its walks take p from its order.
 """
 
 from ..numerics.jit import kernel
@@ -24,11 +25,9 @@ def element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
     point_forces(Mp, pattern, P, point, w)
     for a in range(m * m):
         Me[a] = 0.0
-    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_row`)
+    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_entry`)
     for e in range(pattern.size):
-        flat = pattern[e]
-        pp, end = pattern_row(flat, pp, end, P)
-        qq, mpq = flat - end + P, Mp[flat]
+        pp, qq, mpq, end = pattern_entry(Mp, pattern[e], pp, end, P)
         for u in range(counts[pp]):
             a = columns[pp * m + u]
             da = mpq * Dp[pp, a]
@@ -42,22 +41,12 @@ def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
     """Me = D^T Mp D (m * m, row by row) as D^T (Mp D), for a D (P, m) whose rows are mostly
     full (a touching element's Dp T_e: a slave's point moves with its master's translation
     and rotation), stored with the row length `stride` >= m (`padded_width`; D's entries past
-    m in a row zero). MD = Mp D (P * stride) scratch; Me needs room for m * stride. The
-    inner loops run along whole padded rows, which the compiler vectorises (a row of a
-    length it cannot know runs in vectors only when long enough: 16), instead of over the
-    few non-zeros `element_mass` visits. The same products summed in another order: equal
-    to round-off."""
-    for r in range(P * stride):
-        MD[r] = 0.0
-    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_row`)
-    for e in range(pattern.size):
-        flat = pattern[e]
-        pp, end = pattern_row(flat, pp, end, P)
-        mpq = Mp[flat]
-        out, row = MD[pp * stride: (pp + 1) * stride], flat - end + P
-        source = D[row * stride: (row + 1) * stride]
-        for b in range(stride):
-            out[b] += mpq * source[b]
+    m in a row zero). MD = Mp D (P * stride; `mass_rows_product`) scratch; Me needs room
+    for m * stride. The inner loops run along whole padded rows, which the compiler
+    vectorises (a row of a length it cannot know runs in vectors only when long enough: 16),
+    instead of over the few non-zeros `element_mass` visits. The same products summed in
+    another order: equal to round-off."""
+    mass_rows_product(Mp, pattern, P, D, stride, MD)
     for a in range(m * stride):
         Me[a] = 0.0
     for pp in range(P):
@@ -93,14 +82,29 @@ def sparse_rows_product(P, m, Dp, columns, T, stride, D):
 
 
 @kernel
-def pattern_row(flat, pp, end, P):
-    """(p, (p + 1) P) of the pattern entry `flat` (= p P + q), walking on from the previous
-    entry's (pp, end): the pattern of Mp ascends, so its walks take p from its order instead
-    of a division per entry."""
+def mass_rows_product(Mp, pattern, P, D, stride, MD):
+    """MD = Mp D for D of P rows of length `stride` (flat; MD likewise), over the entries of
+    Mp in `pattern` (flat p P + q): row p of MD sums Mp[p, q] D[q] in the pattern's order,
+    along whole rows."""
+    for r in range(P * stride):
+        MD[r] = 0.0
+    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_entry`)
+    for e in range(pattern.size):
+        pp, qq, mpq, end = pattern_entry(Mp, pattern[e], pp, end, P)
+        out, source = MD[pp * stride: (pp + 1) * stride], D[qq * stride: (qq + 1) * stride]
+        for b in range(stride):
+            out[b] += mpq * source[b]
+
+
+@kernel
+def pattern_entry(Mp, flat, pp, end, P):
+    """(p, q, Mp[p, q], (p + 1) P) of the pattern entry `flat` (= p P + q) of Mp (P P,
+    flat), walking on from the previous entry's (pp, end): the pattern of Mp ascends, so its
+    walks take p from its order instead of a division per entry."""
     while flat >= end:
         pp += 1
         end += P
-    return pp, end
+    return pp, flat - end + P, Mp[flat], end
 
 
 @kernel
@@ -128,8 +132,7 @@ def point_forces(Mp, pattern, P, point, w):
     """w = Mp point (P,) over the entries of Mp in `pattern` (flat p P + q)."""
     for pp in range(P):
         w[pp] = 0.0
-    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_row`)
+    pp, end = 0, P  # the pattern is ascending: its rows p in order (`pattern_entry`)
     for e in range(pattern.size):
-        flat = pattern[e]
-        pp, end = pattern_row(flat, pp, end, P)
-        w[pp] += Mp[flat] * point[flat - end + P]
+        pp, qq, mpq, end = pattern_entry(Mp, pattern[e], pp, end, P)
+        w[pp] += mpq * point[qq]

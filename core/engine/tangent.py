@@ -20,6 +20,7 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
 from .operations import OP_MASS, run
+from .point_masses import point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .rigid_kernels import condense, rigid_geometric
 from .slots import float_array as _f
@@ -170,12 +171,7 @@ def _mass_times(table, x, v, out):
                 for a in range(m):
                     s += Dp[pp, a] * v[coords[i * m + a]]
                 acc[pp] = s
-            for pp in range(P):
-                w[pp] = 0.0
-            for e in range(pattern.size):  # w = Mp acc over the entries Mp has
-                flat = pattern[e]
-                pp = flat // P
-                w[pp] += Mp[flat] * acc[flat - pp * P]
+            point_forces(Mp, pattern, P, acc, w)  # w = Mp acc over the entries Mp has
             for a in range(m):
                 s = 0.0
                 for pp in range(P):
