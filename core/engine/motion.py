@@ -28,7 +28,6 @@ count.
 
 from ..numerics.dense import copy, lu_factor, lu_solve
 from ..numerics.jit import kernel
-from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
 from .actuators import port_values
@@ -43,7 +42,13 @@ from .factors import (
 )
 from .kinematics import compute_DF, dof_rows
 from .operations import OP_CONFIGURATION, run
-from .point_masses import element_mass, mass_rows_product, point_columns, point_forces
+from .point_masses import (
+    element_mass,
+    element_points,
+    mass_rows_product,
+    point_columns,
+    point_forces,
+)
 from .ports import add_input_forces
 from .rigid_kernels import (
     condense,
@@ -310,24 +315,18 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         _f(table, slot.RIGID_FORCE)[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
-        if row[ed.G_P] == 0:
-            continue
-        (n, m, P, width, function, coords, refs, masses, gravity,
-         pattern) = group_inertia(table, row)
+        inertia = group_inertia(table, g)
+        n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
-        xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
+        scratch = inertia_scratch(table, 0, P, m)
+        _, _, point, acc, w, Dp, o = scratch
         Me = local[o: o + m * m]
         for i in range(n):
             t = rigid_element(table, row, i) if rigid else -1
             if t >= 0 and touching(table, t)[5] < 0:  # a massless touching element
                 mass_entry += m * m
                 continue
-            for a in range(m):
-                xl[a] = x[coords[i * m + a]]
-                vl[a] = xdot[coords[i * m + a]]
-            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
-                         2 if moving else 1, point.ctypes.data, Dp.ctypes.data,
-                         acc.ctypes.data, m, P, width)
+            element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
             for pp in range(P):
                 point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
             if t < 0:
@@ -434,14 +433,12 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
     local = _f(table, slot.LOCAL)
     max_m, max_p = dims[ed.MAX_M], dims[ed.MAX_P]
     for g in range(dims[ed.NGROUPS]):
-        row = group(table, g)
-        if row[ed.G_P] == 0:
-            continue
-        (n, m, P, width, function, coords, refs, masses, gravity,
-         pattern) = group_inertia(table, row)
+        inertia = group_inertia(table, g)
+        n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), room for the Me of
         # `_inertia_forces` (max_p max_m >= m m), B = Dp DF_e and Mp B (P, ndof)
-        xl, vl, point, acc, w, Dp, o = inertia_scratch(table, 0, P, m)
+        scratch = inertia_scratch(table, 0, P, m)
+        _, _, point, acc, w, Dp, o = scratch
         o += max_p * max_m
         B = local[o: o + max_p * ndof]
         o += max_p * ndof
@@ -449,11 +446,7 @@ def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
         order = 2 if with_forces and moving else 1
         for i in range(n):
             Mp = masses[i * P * P: (i + 1) * P * P]
-            for a in range(m):
-                xl[a] = x[coords[i * m + a]]
-                vl[a] = xdot[coords[i * m + a]] if with_forces else 0.0
-            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width,
-                         order, point.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
+            element_points(inertia, scratch, i, x, xdot, order)
             B[: P * ndof] = 0.0
             for pp in range(P):  # B = Dp DF_e, and the point forces gravity - Dp conv - acc
                 f = gravity[pp]

@@ -12,6 +12,24 @@ p P + q), so its walks take p from its order.
 """
 
 from ..numerics.jit import kernel
+from ..numerics.native import call_inertia
+
+
+@kernel
+def element_points(inertia, scratch, i, x, xdot, order):
+    """Element i of an inertia group (`slots.group_inertia`'s tuple) through its inertia
+    entry: its point values (P,), Dp (P, m) and, for order 2, acc = (D2p v) v (P,) into the
+    buffers `scratch` (`slots.inertia_scratch`'s tuple), from the coordinates x (NX,; m,
+    rad) and, for order 2 only (the entries read v for acc alone), the velocities xdot (NX,;
+    m/s, rad/s) of its coordinates, gathered into the scratch's x and v."""
+    _, m, P, width, function, coords, refs, _, _, _ = inertia
+    xl, vl, point, acc, _, Dp, _ = scratch
+    for a in range(m):
+        xl[a] = x[coords[i * m + a]]
+        if order == 2:
+            vl[a] = xdot[coords[i * m + a]]
+    call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width, order,
+                 point.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
 
 
 @kernel

@@ -94,15 +94,19 @@ def rigid_element(table, row, i):
 
 
 @kernel
-def group_inertia(table, row):
-    """(n, m, P, width, entry, coords, refs, masses, gravity, pattern) of the group with the
-    row `row` (`group`) and P > 0 inertia points per element: its element count, coordinates
-    per element, reference width, inertia entry point, coordinate indices
-    (`group_coordinates`), the address of its packed reference rows, the elements' Mp (n P P,
-    flat, element by element), gravity on the points (P,) and the flat indices p P + q of the
-    entries of Mp that the group's elements fill, ascending."""
+def group_inertia(table, g):
+    """(n, m, P, width, entry, coords, refs, masses, gravity, pattern) of element group g: the
+    count of its elements with inertia points (all n of them, or 0 when it has none, P = 0:
+    a loop over the groups' inertia visits only those that have it), its coordinates per
+    element, inertia points per element, reference width, inertia entry point, coordinate
+    indices (`group_coordinates`), the address of its packed reference rows, the elements'
+    Mp (n P P, flat, element by element), gravity on the points (P,) and the flat indices
+    p P + q of the entries of Mp that the group's elements fill, ascending (all three empty
+    when P = 0)."""
+    row = group(table, g)
     data = float_array(table, GROUP_DATA)
-    n, m, P = row[ed.G_COUNT], row[ed.G_M], row[ed.G_P]
+    m, P = row[ed.G_M], row[ed.G_P]
+    n = row[ed.G_COUNT] if P > 0 else 0  # no element to visit without inertia points
     masses = data[row[ed.G_MASS_OFFSET]: row[ed.G_MASS_OFFSET] + n * P * P]
     gravity = data[row[ed.G_GRAVITY_OFFSET]: row[ed.G_GRAVITY_OFFSET] + P]
     start = row[ed.G_PATTERN_OFFSET]

@@ -14,18 +14,16 @@ J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed defo
 
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
-from ..numerics.native import call_inertia
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
 from .operations import OP_MASS, run
-from .point_masses import point_forces
+from .point_masses import element_points, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .rigid_kernels import condense, rigid_geometric
 from .slots import float_array as _f
 from .slots import (
-    group,
     group_deformations,
     group_inertia,
     inertia_scratch,
@@ -153,19 +151,14 @@ def _mass_times(table, x, v, out):
         out[a] -= lumped[a] * v[a]
     max_m, ndof = dims[ed.MAX_M], dims[ed.NDOF]
     for g in range(dims[ed.NGROUPS]):
-        row = group(table, g)
-        if row[ed.G_P] == 0:
-            continue
-        n, m, P, width, function, coords, refs, masses, _, pattern = group_inertia(table, row)
+        inertia = group_inertia(table, g)
+        n, m, P, _, _, coords, _, masses, _, pattern = inertia
         # scratch after the first 2 ndof entries, which `tangent` keeps for itself
-        base = 2 * ndof + max_m * max_m + max_m * ndof
-        xl, vl, pl, acc, w, Dp, _ = inertia_scratch(table, base, P, m)
+        scratch = inertia_scratch(table, 2 * ndof + max_m * max_m + max_m * ndof, P, m)
+        _, _, _, acc, w, Dp, _ = scratch
         for i in range(n):
             Mp = masses[i * P * P: (i + 1) * P * P]
-            for a in range(m):
-                xl[a] = x[coords[i * m + a]]
-            call_inertia(function, xl.ctypes.data, vl.ctypes.data, refs + 8 * i * width, 1,
-                         pl.ctypes.data, Dp.ctypes.data, acc.ctypes.data, m, P, width)
+            element_points(inertia, scratch, i, x, x, 1)
             for pp in range(P):
                 s = 0.0
                 for a in range(m):
