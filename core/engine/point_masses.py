@@ -15,7 +15,7 @@ from ..numerics.jit import kernel
 from ..numerics.native import call_inertia
 
 
-@kernel
+@kernel(inline="always")
 def element_points(inertia, scratch, i, x, xdot, order):
     """Element i of an inertia group (`slots.group_inertia`'s tuple) through its inertia
     entry: its point values (P,), Dp (P, m) and, for order 2, acc = (D2p v) v (P,) into the
