@@ -200,6 +200,8 @@ def test_simulate_animates_every_sample_of_a_short_run(tmp_path, capsys):
      "ending in .gif (not '.png'"),
     (["analyze", "stage_planar_3dof", "--plot-shape", "same.png", "--plot-modes", "same.png"],
      "the same file as --plot-shape"),
+    (["analyze", "stage_planar_3dof", "--plot", "same.png", "--sigma", "same.png"],
+     "--sigma same.png: the same file as --plot same.png"),
 ])
 def test_wrong_picture_files_are_refused_in_one_line(tmp_path, capsys, monkeypatch, argv, says):
     monkeypatch.chdir(tmp_path)

@@ -287,10 +287,11 @@ def run_with_pictures(args):
     from ..scene.building import load_scene
     from . import distinct_outputs
 
+    distinct_outputs(*((option, getattr(args, option[2:].replace("-", "_")))
+                       for option in PICTURES))
     wanted = [("--plot-shape", args.plot_shape), ("--plot-modes", args.plot_modes)]
     if not any(path for _, path in wanted):
         return run(args)
-    distinct_outputs(("--plot", args.plot), ("--sigma", args.sigma), *wanted)
     model = load_scene(args.scene, overrides=args.set)
     for option, path in wanted:
         if path:
