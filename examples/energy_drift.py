@@ -1,4 +1,4 @@
-"""Energy drift of the undamped stage_planar_3dof in free vibration (the issue's 10 s check).
+"""Energy drift of the undamped stage_planar_3dof in free vibration over 10 s.
 
 The damping of the leaf springs is removed; the stage is released from rest in the static
 equilibrium under the modal load M0 phi_1 (1 N sideways), so that it vibrates in its first

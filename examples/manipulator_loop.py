@@ -28,7 +28,7 @@
    `--plant libcosim` the same loop runs again as the manipulator's FMU and a controller FMU
    co-simulated in libcosim
    (`--plant fmu`: the manipulator's FMU stepped by fmpy), and each actuator's error / stroke
-   is compared with the in-process one (the issue: within 1e-6 of the stroke). Without
+   is compared with the in-process one (the target: within 1e-6 of the stroke). Without
    `--plant`, the same move again with what the chapter's experiment met (section 3.4:
    "below the desired 0.1 % although the signal is quite noisy ... a 50 Hz disturbance from
    the mains"): 50 nm encoders and 30 mN at 50 Hz on every actuator (`--quantum 5e-8

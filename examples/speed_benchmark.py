@@ -4,7 +4,7 @@ For each scene: 1 s (by default) of a 1 N step on the input F from rest, CVODE B
 rtol 1e-6 with the model Jacobian; for stage_planar_3dof also BDF limited to order 2, CVODE
 Adams, IDA and IDA limited to order 2. Printed: steps, right-hand-side (rhs) and Jacobian
 evaluations, wall and CPU time per simulated second, time per rhs evaluation and the
-real-time factor (simulated over wall time; the issue's target for stage_planar_3dof is 10).
+real-time factor (simulated over wall time; the target for stage_planar_3dof is 10).
 With --profile, the cProfile of the stage_planar_3dof run: what dominates.
 
     python examples/speed_benchmark.py [--t-end 1] [--rtol 1e-6] [--profile]

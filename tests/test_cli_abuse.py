@@ -1,5 +1,5 @@
-"""The command line and the scene loader under bad input: one test per case of the issue
-"FMU and CLI under bad input" (the fuzzing is in test_fuzz.py).
+"""The command line and the scene loader under bad input: one test per kind of mistake
+(the fuzzing is in test_fuzz.py).
 
 Every user mistake is one line naming the file, key or option and what is wrong, with exit
 code 2 (argparse's convention, kept for the project's own errors), and never a traceback;

@@ -1,8 +1,8 @@
 """The closed loop: tracking on the nonlinear plant, an independent linear simulation of the
 same sampled loop, the three plants against each other, the CLI and the controller FMU.
 
-Runs are short (0.05 to 0.2 s moves): every sample is an integrator call. The 1 s figures
-of the issue are produced by examples/closed_loop.py (README report).
+Runs are short (0.05 to 0.2 s moves): every sample is an integrator call. The 1 s moves'
+figures are produced by examples/closed_loop.py (README report).
 """
 
 import json
@@ -84,7 +84,7 @@ def test_feedforward_makes_the_target_feedback_alone_does_not(moves):
 
 
 @pytest.mark.parametrize("stroke", [1e-3, 10e-3])
-def test_the_issue_move_1_s_on_the_nonlinear_plant(stage, stroke):
+def test_a_1_s_move_tracks_within_0_1_percent_on_the_nonlinear_plant(stage, stroke):
     """1 mm and 10 mm in 1 s at 300 rad/s and 4 kHz (the defaults): within 0.1 % of the stroke.
 
     At 10 mm the stage departs from the linear model of the feedforward only slightly along
@@ -98,7 +98,7 @@ def test_the_issue_move_1_s_on_the_nonlinear_plant(stage, stroke):
 
 @pytest.mark.parametrize("case, passes", [("exact", True), ("alone", False),
                                           ("+10 %", True), ("-10 %", True)])
-def test_the_issue_move_1_s_on_the_linear_sampled_loop(stage, case, passes):
+def test_feedforward_errors_of_a_1_s_move_on_the_linear_sampled_loop(stage, case, passes):
     """The 1 mm / 1 s cases of the report on the sampled linear loop (fast, independent)."""
     lf = low_frequency_model(stage)
     model = {"exact": lf, "alone": None, "+10 %": lf.scaled(mass=1.1, stiffness=1.1),
@@ -262,7 +262,7 @@ def test_closed_loop_example_runs(tmp_path, capsys):
 def test_a_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, capsys):
     """The cross-flexure pivot of the tutorial driven by a moment on its body and measured by
     its angle: the loop tracks 1 mrad, and the summary, the table and the plot's labels say
-    rad and N m, not m and N (issue 15)."""
+    rad and N m, not m and N."""
 
     from flexure.core.cli import main
 

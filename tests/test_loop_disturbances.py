@@ -1,4 +1,4 @@
-"""Encoder quantisation and a 50 Hz disturbance force in the loop (issue 14): against the
+"""Encoder quantisation and a 50 Hz disturbance force in the loop: against the
 rounding they stand for, the linear closed loop's prediction, and the same numbers on every
 plant.
 
@@ -216,7 +216,7 @@ def test_loop_cli_refuses_bad_disturbances(argv, message, capsys):
 
 def test_a_disturbed_loop_on_an_angle_speaks_of_moments_and_radians(tmp_path, capsys):
     """The tutorial's cross-flexure pivot on a moment and its angle: the quantum in rad and
-    the disturbance in N m, in the table and the summary (issue 15's units)."""
+    the disturbance in N m, in the table and the summary."""
 
 
     path = pivot_on_a_moment(tmp_path)

@@ -1,4 +1,4 @@
-"""The loop for any mechanism (issue 15): one's own controller (a python-control system or
+"""The loop for any mechanism: one's own controller (a python-control system or
 callables) and one's own reference (samples or r(t)) in place of the designed PID-like
 feedback and the third-order profile.
 

@@ -1,4 +1,4 @@
-"""Moments, angles and rotation DOFs of 3-D rotational nodes (issue 13).
+"""Moments, angles and rotation DOFs of 3-D rotational nodes.
 
 A moment input about a global axis has the generalised force 2 E(lambda)^T M on the Euler
 parameters; an angle output is the rotation-vector component about a global axis; a rotation

@@ -3,7 +3,7 @@ settling, six loops at 300 rad/s and 4 kHz, `flexure loop`'s design) against rea
 
 - On the reduced model (`manipulator_reduced`, 507 DOFs, the chapter's 237-DOF model), its
   linearisation stepped exactly (`--plant linear`, the path by the linearised statics): the
-  issue's target, 1.25 s simulated in at most 1.25 s of the loop's wall.
+  target, 1.25 s simulated in at most 1.25 s of the loop's wall.
 - On the nonlinear control model (`manipulator_control`, 75 DOFs, `--plant inprocess`, the
   path by the nonlinear inverse statics), for information: its speed against real time.
 
