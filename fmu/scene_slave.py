@@ -63,7 +63,7 @@ from .slave import SafeSlave
 # The first is the default, with DEFAULT_RTOL. A host changes the inputs at most doSteps, and
 # the one-step esdirk takes a change without a restart (CVODE restarts at order 1). With the
 # inputs held too it is the faster at this tolerance: stage_planar_3dof, 1 N held, 1 ms doSteps
-# for 1 s (measured 2026-11-23, in process): esdirk at rtol 1e-6 0.062 s, error 3.1e-6 of the
+# for 1 s, in process (docs/decisions.md): esdirk at rtol 1e-6 0.062 s, error 3.1e-6 of the
 # motion; CVODE BDF at rtol 1e-6 or 1e-8 about 0.2 s (its high orders are unstable beside the
 # stage's lightly damped 2.1 and 3.6 kHz modes, so it takes ~50 steps per ms at any
 # tolerance), error 6e-9. A host that wants the smaller error sets the method and rtol.

@@ -25,15 +25,14 @@ def step_response(periods, samples):
 
 
 @pytest.mark.parametrize("method, rtol, bound", [
-    # error / (rtol x amplitude) measured 2026-11-21: before (absolute DOFs, atol rtol L) and
-    # now; the bound is about three times the new figure
-    ("cvode-adams", 1e-6, 10),   # 2.9 -> 2.3
-    ("cvode-adams", 1e-9, 10),   # 710 -> 7.7
-    ("cvode-bdf", 1e-6, 10),     # 25 -> 3.0
-    ("ida", 1e-6, 10),           # 959 -> 3.4
-    ("ida", 1e-9, 60),           # 4712 -> 18
-    ("cvode-bdf", 1e-9, 250),    # 43 297 -> 76: the global error of BDF on an oscillation
-])                               # builds up over the periods beyond the local tolerance
+    # the bound on error / (rtol x amplitude) is about three times the measured figure
+    ("cvode-adams", 1e-6, 10),   # 2.3
+    ("cvode-adams", 1e-9, 10),   # 7.7
+    ("cvode-bdf", 1e-6, 10),     # 3.0
+    ("ida", 1e-6, 10),           # 3.4
+    ("ida", 1e-9, 60),           # 18
+    ("cvode-bdf", 1e-9, 250),    # 76: the global error of BDF on an oscillation builds up
+])                               # over the periods beyond the local tolerance
 def test_five_periods_of_the_step_response_within_rtol_of_the_motion(method, rtol, bound):
     """Over five periods of the 1-DOF step response (x about 0.1 m, moving 2.1 mm), the error
     relative to the motion amplitude, not to the 0.1 m coordinate."""

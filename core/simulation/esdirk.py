@@ -94,8 +94,8 @@ LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factor
 # A new Jacobian J = df/dy at the next step once the Newton iterations its age cost since the
 # last one (beyond each stage's first, contracting by theta >= THETA_STALE: with a current J
 # Newton contracts quadratically, theta < 1e-3 on the stages measured) have cost as much as a
-# new J, about n / 4 evaluations of f for n states or less (measured 2026-11-24: 1.5 for
-# stage_planar_3dof's 6, 4.0 for stage_spatial_19dof's 38, 22 for manipulator_control's 150)
+# new J, about n / 4 evaluations of f for n states or less (1.5 for stage_planar_3dof's 6, 4.0
+# for stage_spatial_19dof's 38, 22 for manipulator_control's 150: docs/decisions.md)
 JACOBIAN_COST = 0.25      # evaluations per state
 THETA_STALE = 0.01
 SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2

@@ -12,7 +12,7 @@ METHODS = SUNDIALS_METHODS + ONE_STEP_METHODS
 # The plant integrator of a sampled loop, and its relative tolerance, unless chosen. A changed
 # force at every sample costs a one-step method one evaluation, and the sample period, not the
 # order, bounds its step; TR-BDF2 has two implicit stages where esdirk3 has three. Measured
-# 2026-11-23 at 4 kHz (1 mm in 1 s + 0.25 s), against the same loop on esdirk3 at rtol 1e-11:
+# at 4 kHz (1 mm in 1 s + 0.25 s; docs/decisions.md), against the loop on esdirk3 at 1e-11:
 # esdirk2 at rtol 1e-5 takes one step per sample on stage_planar_1dof, stage_planar_3dof and
 # stage_spatial_19dof, and their measured positions stay within 1.3e-9, 6.0e-9 and 1.3e-9 of the
 # stroke (the loop's target is 1e-3, `flexure loop`'s 1e-7); esdirk3 at rtol 1e-6 stays within

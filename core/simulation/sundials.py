@@ -5,7 +5,7 @@ side, the residual and their Jacobians run compiled, with no Python call per eva
 callbacks' user data is the address table of `data.EngineData`). The libraries are the
 SUNDIALS 7.9 shared libraries that scikit-sundae's wheel ships; they are loaded with ctypes.
 
-Why this route (measured on this machine, 2026-11-22, stage_planar_3dof): scikit-sundae's
+Why this route (measured on stage_planar_3dof; docs/decisions.md): scikit-sundae's
 Python callbacks cost 8-10 us per evaluation on top of the model, more than the whole compiled
 evaluation (about 1 us); sundials4py, SUNDIALS' own binding, needs Python 3.12 or later and
 still calls Python per evaluation. The C interface plus a compiled callback costs nothing per

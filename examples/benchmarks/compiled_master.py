@@ -3,7 +3,7 @@ fmi2GetReal, so that the FMU's overhead is measured without a Python master's ow
 
 A master written in Python pays for its own interpreter at every call: a loop over fmpy's
 ctypes handles (one setReal, doStep and getReal per step) spends about 3 us per step in
-ctypes' argument conversion, as much as pythonfmu's binary itself (measured 2026-11-24 on
+ctypes' argument conversion, as much as pythonfmu's binary itself (measured on
 stage_planar_3dof: 10.4 % beyond the engine through that loop, 7.0 % through this one). A
 compiled master (libcosim, a C++ or Modelica tool) does not, and this one does not either:
 numba compiles the calls through ctypes prototypes into plain C calls, the pointers (the
