@@ -224,7 +224,7 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
         loop_gain=first, phase_margin_deg=np.nan, gain_margin=np.nan, modulus_margin=np.nan,
         closed_loop_poles=np.zeros(0))
     # margins per loop with the other loops open (the worst of each reported) and closed
-    robust = check_robustness(design, sub, name=model.name)
+    robust = check_robustness(design, plant_d, name=model.name)
     gm, pm, sm = robust.open_margins.min(axis=0)
     poles = robust.closed_loop_poles
     design = replace(design, phase_margin_deg=float(pm), gain_margin=float(gm),

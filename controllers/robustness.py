@@ -231,15 +231,33 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     design : FeedbackDesign
         The loops (their controller, sample rate and delay).
     plant : control.StateSpace
-        Continuous, from the loops' inputs (N) to their outputs (m), in the loops' order
-        (e.g. ``state_space(model)[outputs, inputs]``); sampled here with a zero-order hold.
+        From the loops' inputs (N) to their outputs (m), in the loops' order: continuous
+        (e.g. ``state_space(model)[outputs, inputs]``), sampled here with a zero-order hold,
+        or already sampled so at the loops' period 1 / fs (the designer has it: sampling a
+        large plant is a matrix exponential of its size).
     name : str
         What the plant is, for the report.
+
+    Returns
+    -------
+    Robustness
+
+    Raises
+    ------
+    ValueError
+        A discrete plant at another sample period.
     """
     import control
 
     dt = 1.0 / design.sample_rate_hz
-    plant_d = control.c2d(control.ss(plant), dt, method="zoh")
+    plant = control.ss(plant)
+    if plant.isctime():
+        plant_d = control.c2d(plant, dt, method="zoh")
+    elif plant.dt is not True and math.isclose(plant.dt, dt, rel_tol=1e-12):
+        plant_d = plant
+    else:
+        raise ValueError(f"a discrete plant needs the loops' sample period {dt:.9g} s, got "
+                         f"{plant.dt}")
     n = len(design.pairs)
     # one eigendecomposition of the plant: its poles place the grid, its modes the response
     eigen = np.linalg.eig(plant_d.A) if plant_d.nstates else None

@@ -102,6 +102,24 @@ def test_one_loop_has_one_set_of_margins_and_its_sensitivity_peak_is_one_over_th
     assert robust.stable and robust.spectral_radius == pytest.approx(design.spectral_radius)
 
 
+def test_a_plant_sampled_at_the_loops_period_is_checked_as_its_continuous_one():
+    """The designer hands its sampled plant over: the same report as from the continuous
+    plant (sampled with a zero-order hold inside), and another period is refused."""
+    model = load_scene("stage_planar_3dof")
+    design = design_feedback(model)
+    pairs = colocated_pairs(model)
+    plant = state_space(model)[[p.output_index for p in pairs], [p.input_index for p in pairs]]
+    dt = 1.0 / design.sample_rate_hz
+    continuous = check_robustness(design, plant)
+    sampled = check_robustness(design, control.c2d(plant, dt, method="zoh"))
+    for field in ("open_margins", "closed_margins", "closed_loop_poles", "crossovers_rad_s"):
+        np.testing.assert_array_equal(getattr(sampled, field), getattr(continuous, field))
+    assert sampled.sensitivity_peak == continuous.sensitivity_peak
+    np.testing.assert_array_equal(design.robustness.open_margins, continuous.open_margins)
+    with pytest.raises(ValueError, match="needs the loops' sample period 0.00025 s, got 0.001"):
+        check_robustness(design, control.c2d(plant, 1e-3, method="zoh"))
+
+
 def test_a_zero_delay_block_is_the_identity():
     block = delay_block(3, 0, 1e-3)
     np.testing.assert_array_equal(block.D, np.eye(3))
