@@ -471,7 +471,7 @@ def test_sweep_column_of_an_angle_is_its_change():
     0.1 kg/m: (m L^2 / 2 + rho_A L^3 / 6) g / EIy about y); the tip starts turned by 0.1 rad
     about z, so the rotation vector's y component changes by that turn times
     1 - 0.1^2 / 12 (dphi / dtheta = I + [phi x] / 2 + [phi x]^2 / 12 + ...)."""
-    from flexure.core.sweep.sweep import columns, evaluate_point
+    from flexure.core.sweep.grid import columns, evaluate_point
 
     data = cantilever(rotation=(0.0, 0.0, 0.1))
     data["scene"]["gravity"] = [0.0, 0.0, -1.0]

@@ -1,4 +1,4 @@
-"""Design sweeps (`flexure sweep`, flexure.core.sweep.sweep): the grid, one point's quantities
+"""Design sweeps (`flexure sweep`, flexure.core.sweep.grid): the grid, one point's quantities
 against the analytic stage, Dask equal to the serial run, failed points, --resume, the files."""
 
 import csv
@@ -10,7 +10,7 @@ import pytest
 
 from flexure.core import scene_path
 from flexure.core.cli import main
-from flexure.core.sweep.sweep import evaluate_point, grid, parse_parameter, run_sweep
+from flexure.core.sweep.grid import evaluate_point, grid, parse_parameter, run_sweep
 
 SCENE = "stage_planar_1dof"
 DATA = tomllib.loads(scene_path(SCENE).read_text())
@@ -150,7 +150,7 @@ def test_dask_gives_the_serial_table_bit_for_bit(tmp_path, capsys):
 def test_a_running_scheduler_takes_the_points_and_a_lost_task_is_its_row(monkeypatch):
     from distributed import LocalCluster
 
-    import flexure.core.sweep.sweep as sweep
+    import flexure.core.sweep.grid as grid_module
 
     points = grid([("sections.leaf.height", [0.3e-3, 0.5e-3])])
     with LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
@@ -161,7 +161,7 @@ def test_a_running_scheduler_takes_the_points_and_a_lost_task_is_its_row(monkeyp
         def lost(*args, **kwargs):  # what a task that dies with its worker gives
             raise RuntimeError("worker gone")
 
-        monkeypatch.setattr(sweep, "evaluate_point", lost)
+        monkeypatch.setattr(grid_module, "evaluate_point", lost)
         rows = run_sweep(DATA, points, scheduler=cluster.scheduler_address)
     assert rows == [{"status": "dask: RuntimeError: worker gone"}] * 2
 
@@ -315,9 +315,9 @@ def test_bad_runs_are_one_line_before_any_point(argv, message, tmp_path, capsys,
 
 
 def test_an_unreachable_scheduler_is_given_up_after_the_timeout(monkeypatch, capsys, tmp_path):
-    import flexure.core.sweep.sweep as sweep
+    import flexure.core.sweep.grid as grid_module
 
-    monkeypatch.setattr(sweep, "CONNECT_TIMEOUT", "0.5s")
+    monkeypatch.setattr(grid_module, "CONNECT_TIMEOUT", "0.5s")
     assert main(["sweep", SCENE, "--param", "nodes.3.mass=0,1", "--scheduler",
                  "tcp://127.0.0.1:1", "--out", str(tmp_path / "s.csv")]) == 2
     assert capsys.readouterr().err == ("flexure sweep: error: --scheduler tcp://127.0.0.1:1: "

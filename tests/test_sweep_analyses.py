@@ -15,7 +15,7 @@ from cli_runs import run
 from flexure.core import load_scene, scene_path
 from flexure.core.errors import UsageError
 from flexure.core.sweep import analyses as sweep_analyses
-from flexure.core.sweep.sweep import analysis_names, columns, evaluate_point
+from flexure.core.sweep.grid import analysis_names, columns, evaluate_point
 
 REPO = Path(__file__).resolve().parents[1]
 TRUSS = tomllib.loads(scene_path("truss_1dof_x").read_text())

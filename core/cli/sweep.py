@@ -9,7 +9,7 @@ The options of the registered analyses (simulate; loop, registered by flexure.co
 `flexure.core.sweep.analyses`) are added as --ANALYSIS-OPTION, from the registry.
 
 Every point of the grid (the Cartesian product of the --param values) is one scene with those
-overrides, analysed by `flexure.core.sweep.sweep.evaluate_point`, on a dask.distributed
+overrides, analysed by `flexure.core.sweep.grid.evaluate_point`, on a dask.distributed
 LocalCluster of this machine's cores, on an existing cluster (--scheduler), or in this process
 (--serial). The table (`flexure.core.sweep.table`) goes to CSV, to Parquet when pyarrow
 is importable, and its quantities to a plot beside it.
@@ -21,8 +21,8 @@ import time
 from ..errors import FlexureError, UsageError
 from ..reporting.progress import Progress
 from ..reporting.tables import format_table
-from ..sweep import analyses as sweep_analyses
-from ..sweep.sweep import (
+from ..sweep import analyses as registry
+from ..sweep.grid import (
     DEFAULT_MODES,
     analysis_names,
     columns,
@@ -82,7 +82,7 @@ def option_type(option):
 def add_analysis_options(parser):
     """--ANALYSIS-OPTION for every option of every registered analysis (default None: the
     analysis's own default)."""
-    for analysis in sweep_analyses.available().values():
+    for analysis in registry.available().values():
         group = parser.add_argument_group(f"options of --analyses {analysis.name}")
         for option in analysis.options:
             default = "" if option.default in ("", None) else f" (default {option.default})"

@@ -1,5 +1,5 @@
 """The table of a design sweep (`flexure sweep`): one row per grid point, its parameter values,
-its quantities (`flexure.core.sweep.sweep`) and its status.
+its quantities (`flexure.core.sweep.grid`) and its status.
 
 Every cell is text that reads back to the value written: a float as its repr (the same bits),
 an integer, a string as is, a list as TOML; an absent quantity is blank. So a row read from
