@@ -5,6 +5,9 @@ An element module writes its maths as two numba kernels on one element's arrays,
     deformations_kernel(x, ref, order, e, De, D2e)     x (m,), ref (width,), e (k,), ...
     inertia_kernel(x, v, ref, order, p, Dp, acc)       p (P,), Dp (P, m), acc (P,)
 
+An inertia kernel reads the velocities v only at order 2, for acc = (D2p v) v: at order 1 the
+engine does not fill v.
+
 and gets the engine's entry points from them here:
 
     deformations_entry = entries.deformations_entry(deformations_kernel)

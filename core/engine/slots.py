@@ -95,9 +95,9 @@ def rigid_element(table, row, i):
 
 @kernel
 def group_inertia(table, g):
-    """(n, m, P, width, entry, coords, refs, masses, gravity, pattern) of element group g: the
-    count of its elements with inertia points (all n of them, or 0 when it has none, P = 0:
-    a loop over the groups' inertia visits only those that have it), its coordinates per
+    """(n, m, P, width, entry, coords, refs, masses, gravity, pattern) of element group g: n
+    the count of its elements to visit for inertia (all of them, or 0 when they have no
+    inertia points, P = 0; not an offset into the group's other arrays), its coordinates per
     element, inertia points per element, reference width, inertia entry point, coordinate
     indices (`group_coordinates`), the address of its packed reference rows, the elements'
     Mp (n P P, flat, element by element), gravity on the points (P,) and the flat indices

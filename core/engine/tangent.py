@@ -153,12 +153,13 @@ def _mass_times(table, x, v, out):
     for g in range(dims[ed.NGROUPS]):
         inertia = group_inertia(table, g)
         n, m, P, _, _, coords, _, masses, _, pattern = inertia
-        # scratch after the first 2 ndof entries, which `tangent` keeps for itself
+        # scratch past what `tangent` keeps in LOCAL: SD and DD (2 ndof), H and HD (max_m^2,
+        # max_m ndof), as if they were laid end to end
         scratch = inertia_scratch(table, 2 * ndof + max_m * max_m + max_m * ndof, P, m)
         _, _, _, acc, w, Dp, _ = scratch
         for i in range(n):
             Mp = masses[i * P * P: (i + 1) * P * P]
-            element_points(inertia, scratch, i, x, x, 1)
+            element_points(inertia, scratch, i, x, x, 1)  # order 1: no velocities are read
             for pp in range(P):
                 s = 0.0
                 for a in range(m):
