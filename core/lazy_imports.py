@@ -35,8 +35,19 @@ def lazy_exports(package: str, submodules: dict[str, tuple[str, ...]]):
         `__getattr__(name)`, which imports the name's submodule and keeps the name in the
         package (so the import happens once), raising AttributeError for any other name; and
         `__dir__()`, which lists the lazy names beside those the package holds.
+
+    Raises
+    ------
+    ValueError
+        A name listed under two submodules.
     """
-    module_of = {name: module for module, names in submodules.items() for name in names}
+    module_of = {}
+    for module, names in submodules.items():
+        for name in names:
+            if name in module_of:  # the last would win, silently
+                raise ValueError(f"{package}: {name!r} is listed under both "
+                                 f"{module_of[name]!r} and {module!r}")
+            module_of[name] = module
     public = list(module_of)
 
     def __getattr__(name):

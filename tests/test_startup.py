@@ -55,6 +55,14 @@ def test_every_public_name_resolves_and_is_listed(package):
         module.no_such_name  # noqa: B018
 
 
+def test_a_name_listed_under_two_submodules_is_refused():
+    from flexure.core.lazy_imports import lazy_exports
+
+    with pytest.raises(ValueError, match="^pkg: 'Model' is listed under both 'model' and "
+                                         "'scene.api'$"):
+        lazy_exports("pkg", {"model": ("Model",), "scene.api": ("Scene", "Model")})
+
+
 def test_submodules_still_import_through_the_package():
     from flexure.core import elements
     from flexure.core.mechanics import assembly
