@@ -29,26 +29,9 @@ def register(subparsers):
                              "stiffness of this node at the static equilibrium (repeatable, "
                              "or comma-separated: 3,5)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    for option, draws in PICTURES.items():
+    for option, draws in {**RESULT_PICTURES, **MODEL_PICTURES}.items():
         parser.add_argument(option, metavar="PNG", type=output_file(PLOT_SUFFIXES), help=draws)
     parser.set_defaults(run=run_with_pictures)
-
-
-MODE_PANELS = 6  # the mode shapes drawn when --modes gives no count
-
-# The pictures, each to a PNG (or .pdf, .svg) file: option -> what it draws. `run` draws
-# --plot and --sigma from its analyses; `run_with_pictures` the others, around it.
-PICTURES = {
-    "--plot": "plot the von Mises stresses along the beams at the static equilibrium to this "
-              "PNG file (beams and trusses whose section has dimensions)",
-    "--sigma": "plot the singular values (principal gains) of the transfer matrix from the "
-               "inputs to the outputs against frequency",
-    "--plot-shape": "draw the static equilibrium's deformed shape over the undeformed model to "
-                    "this PNG (or .pdf, .svg) file, magnified so that the largest displacement "
-                    "is 10 %% of the model's size",
-    "--plot-modes": "draw the mode shapes, one panel each (the N of --modes, else the lowest "
-                    f"{MODE_PANELS}), to this PNG (or .pdf, .svg) file",
-}
 
 
 # The units of `static`: every stress resultant is in N, as every deformation is a length; a
@@ -277,7 +260,31 @@ def render_compliance(node, found):
     return "\n".join(text)
 
 
-# -- pictures: --plot-shape and --plot-modes (kept apart from `run`, which they wrap) ---------
+# -- pictures: of the results (drawn by `run`) and of the model (around it) ------------------
+
+MODE_PANELS = 6  # the mode shapes drawn when --modes gives no count
+
+# The pictures, each to a PNG (or .pdf, .svg) file: option -> what it draws. `run` draws those
+# of its results; `run_with_pictures` draws the model's around it.
+RESULT_PICTURES = {
+    "--plot": "plot the von Mises stresses along the beams at the static equilibrium to this "
+              "PNG file (beams and trusses whose section has dimensions)",
+    "--sigma": "plot the singular values (principal gains) of the transfer matrix from the "
+               "inputs to the outputs against frequency",
+}
+MODEL_PICTURES = {
+    "--plot-shape": "draw the static equilibrium's deformed shape over the undeformed model to "
+                    "this PNG (or .pdf, .svg) file, magnified so that the largest displacement "
+                    "is 10 %% of the model's size",
+    "--plot-modes": "draw the mode shapes, one panel each (the N of --modes, else the lowest "
+                    f"{MODE_PANELS}), to this PNG (or .pdf, .svg) file",
+}
+
+
+def picture_files(args, options):
+    """[(option, path or None)] of picture options, read from argparse's namespace (where a
+    long option --plot-shape is the attribute plot_shape)."""
+    return [(option, getattr(args, option[2:].replace("-", "_"))) for option in options]
 
 
 def run_with_pictures(args):
@@ -287,9 +294,8 @@ def run_with_pictures(args):
     from ..scene.building import load_scene
     from . import distinct_outputs
 
-    distinct_outputs(*((option, getattr(args, option[2:].replace("-", "_")))
-                       for option in PICTURES))
-    wanted = [("--plot-shape", args.plot_shape), ("--plot-modes", args.plot_modes)]
+    distinct_outputs(*picture_files(args, {**RESULT_PICTURES, **MODEL_PICTURES}))
+    wanted = picture_files(args, MODEL_PICTURES)
     if not any(path for _, path in wanted):
         return run(args)
     model = load_scene(args.scene, overrides=args.set)
