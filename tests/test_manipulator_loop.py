@@ -71,8 +71,8 @@ def test_the_six_mm_xy_move_tracks_within_the_target_on_every_actuator(tmp_path)
 def test_the_six_loops_agree_in_process_through_fmpy_and_in_libcosim():
     """The 6 mm xy move made in 0.2 s (0.02 s after it, 880 samples) on the three plants:
     the manipulator's FMU stepped by fmpy, and it with the controller FMU in libcosim, track
-    like the in-process loop to within 1e-6 of every actuator's stroke (the agreement
-    the FMU promises), and within 0.1 % of it, even at five times the speed (measured 3.6e-4)."""
+    like the in-process loop to within 1e-6 of every actuator's stroke (the target,
+    docs/manipulator.md), and within 0.1 % of it, even at five times the speed (measured 3.6e-4)."""
     design, _ = manipulator_loop.design_loops(
         manipulator_loop.load_scene(manipulator_loop.CONTROL))
     results = manipulator_loop.compare_plants(design, ["fmu", "libcosim"], None,
