@@ -112,7 +112,8 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
         Its frequency f (Hz), below fs / 2; default 50 Hz (the mains).
     **design_options
         Passed on to `design_feedback` (with `controller`: only `plant` and
-        `linear_model`, the model the loops are checked on).
+        `linear_model`, the model the loops are checked on). A `linear_model` also serves
+        the modal feedforward, unless `feedforward_model` is given.
 
     Returns
     -------
@@ -178,7 +179,8 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
                for p in design.pairs]
     lf, explicit = None, None
     if kind == "modal":
-        lf = feedforward_model if feedforward_model is not None else low_frequency_model(model)
+        lf = feedforward_model if feedforward_model is not None else low_frequency_model(
+            model, linear_model=design_options.get("linear_model"))
     elif kind == "inverse":
         explicit = _inverse_forces(model, design, profile, fs, samples, offsets, given)
     options = {"fs": fs, "samples": samples, "offsets": offsets, "axis": axis, "path": path,

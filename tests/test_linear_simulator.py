@@ -97,6 +97,29 @@ def test_the_linear_loop_is_the_nonlinear_loop_for_a_small_move(scene, tolerance
     assert linear.settings["method"] == "exact" and linear.settings["rtol"] is None
 
 
+def test_the_linear_loop_linearises_once(monkeypatch):
+    """The plant, the feedback's design and the modal feedforward share one linearisation,
+    and the loop is the one a feedforward of its own linearisation gives."""
+    import flexure.core
+    from flexure.controllers import low_frequency_model
+
+    stage = load_scene("stage_planar_3dof")
+    reference = run_loop(stage, stroke=1e-5, plant="linear",
+                         feedforward_model=low_frequency_model(stage))
+    calls = []
+    linearize = flexure.core.linearize
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return linearize(*args, **kwargs)
+
+    monkeypatch.setattr(flexure.core, "linearize", counted)
+    shared = run_loop(stage, stroke=1e-5, plant="linear")
+    assert len(calls) == 1
+    np.testing.assert_array_equal(shared.position, reference.position)
+    np.testing.assert_array_equal(shared.force, reference.force)
+
+
 def test_the_linear_loop_runs_through_a_coil():
     """A voltage-driven coil adds its current to the state; the linear loop through it
     follows the nonlinear one to 1e-6 of a 1 mm stroke."""
