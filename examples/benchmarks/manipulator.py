@@ -14,9 +14,6 @@ plant's set-up (the linearisation and its eigenvectors, the engine's compilation
 from .measure import alternate, log
 from .table import Row
 
-MOVE = {"E.x": 0.0042426, "E.y": 0.0042426, "E_M1.x": 0.0042426,  # m: 6 mm along x = y
-        "E.z": 0.0, "E_M1.z": 0.0, "E_M2.z": 0.0}
-
 
 def manipulator(*, repeat=5, quick=False):
     """The 6 mm xy move on the reduced model's linearisation (target: >= 1 x real time) and
@@ -25,11 +22,14 @@ def manipulator(*, repeat=5, quick=False):
     from flexure.controllers.runner import run_loop
     from flexure.core import load_scene
 
+    from ..manipulator_loop import MOVES, targets  # the chapter's moves, as the report makes
+
+    move = targets(*MOVES["6 mm xy"])
     log("manipulator: scenes and move paths")
     cases = {"reduced, linear": (load_scene("manipulator_reduced"), "linear", "linear"),
              "control, nonlinear": (load_scene("manipulator_control"), "nonlinear",
                                     "inprocess")}
-    paths = {name: move_path(model, MOVE, kind=kind) for name, (model, kind, _) in cases.items()}
+    paths = {name: move_path(model, move, kind=kind) for name, (model, kind, _) in cases.items()}
 
     def case(name):
         model, _, plant = cases[name]
