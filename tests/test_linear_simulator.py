@@ -97,15 +97,14 @@ def test_the_linear_loop_is_the_nonlinear_loop_for_a_small_move(scene, tolerance
     assert linear.settings["method"] == "exact" and linear.settings["rtol"] is None
 
 
-def test_the_linear_loop_linearises_once(monkeypatch):
+def test_the_linear_loop_linearises_once(stage3, monkeypatch):
     """The plant, the feedback's design and the modal feedforward share one linearisation,
     and the loop is the one a feedforward of its own linearisation gives."""
     import flexure.core
     from flexure.controllers import low_frequency_model
 
-    stage = load_scene("stage_planar_3dof")
-    reference = run_loop(stage, stroke=1e-5, plant="linear",
-                         feedforward_model=low_frequency_model(stage))
+    reference = run_loop(stage3, stroke=1e-5, plant="linear",
+                         feedforward_model=low_frequency_model(stage3))
     calls = []
     linearize = flexure.core.linearize
 
@@ -114,7 +113,7 @@ def test_the_linear_loop_linearises_once(monkeypatch):
         return linearize(*args, **kwargs)
 
     monkeypatch.setattr(flexure.core, "linearize", counted)
-    shared = run_loop(stage, stroke=1e-5, plant="linear")
+    shared = run_loop(stage3, stroke=1e-5, plant="linear")
     assert len(calls) == 1
     np.testing.assert_array_equal(shared.position, reference.position)
     np.testing.assert_array_equal(shared.force, reference.force)
