@@ -133,7 +133,7 @@ class SceneParts:
 
     def point(self, name, position, *, fixed=False, dof=()):
         """A translational node and its rotational node `name_r` at `position` (m)."""
-        node = {"position": [float(c) for c in position]}
+        node = {"position": design(position)}
         if fixed:
             node["fixed"] = ["x", "y", "z"]
         if dof:
@@ -179,7 +179,7 @@ class SceneParts:
         direction); in a kinematic scene the deformations `prescribed` stay zero and the rest
         are released, in a dynamic scene everything is released and it has `segments` beams."""
         element = {"type": "BEAM", "nodes": [p, f"{p}_r", q, f"{q}_r"], "section": section,
-                   "y_axis": [float(c) for c in thin]}
+                   "y_axis": design(thin)}
         if self.dynamic:
             element["released"] = [e for e in DEFORMATIONS if e not in self.frozen]
             segments = int(value("segments", self.p))
@@ -198,7 +198,15 @@ WIRE = ("e1",)  # a wire flexure: stiff in elongation only
 def _normal_to(axis):
     axis = np.asarray(axis, float) / np.linalg.norm(axis)
     trial = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    return [float(c) for c in np.cross(axis, trial) / np.linalg.norm(np.cross(axis, trial))]
+    return design(np.cross(axis, trial) / np.linalg.norm(np.cross(axis, trial)))
+
+
+def design(values):
+    """Computed geometry (positions in m, the components of a unit vector) as the scene
+    states it: rounded to 1e-12, as a drawing would be. The trigonometry behind it differs
+    from one CPU to the next in its last bits (0.7071067811865476 or ...475); rounded, the
+    scenes written are the same on every machine, and a round-off zero (4e-17) is 0.0."""
+    return [round(float(c), 12) + 0.0 for c in values]  # + 0.0: no -0.0 from a -4e-17
 
 
 def sections(parameters, *, dynamic):

@@ -184,8 +184,10 @@ def test_a_nearly_singular_tangent_stiffness_is_reported_not_inverted(capsys):
     """The manipulator's kinematic stage: its DOFs (the bodies' in-plane positions) have no
     stiffness, so K0 + G0 has a condition number of about 1e17 and a solve still returns
     finite numbers (a compliance with negative diagonal entries); the condition estimate
-    refuses it in one line."""
-    with pytest.raises(FlexureError, match="tangent stiffness K0 \\+ G0 .* is singular"):
+    refuses it in one line. Whether the static equilibrium before it already stops at the
+    singular tangent (its Newton step on a residual of 1e-11 N) depends on the last bits of
+    that residual, so on the CPU: either refusal names the singular tangent stiffness."""
+    with pytest.raises(FlexureError, match="tangent stiffness (K0 \\+ G0 .* )?is singular"):
         compliance(load_scene("manipulator_stage"), "E")
     assert main(["analyze", "manipulator_stage", "--compliance", "E"]) == 2
     err = capsys.readouterr().err

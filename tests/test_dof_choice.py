@@ -33,8 +33,10 @@ def without_dofs(name):
 ])
 def test_chosen_dofs_describe_the_same_mechanism(name, expected):
     """As many DOFs as the listed ones, reported in model.chosen_dofs, and every natural
-    frequency the same to 1e-8 (another choice of coordinates linearises the same motion;
-    5.5e-9 measured on the 19-DOF spatial stage, round-off elsewhere)."""
+    frequency the same to 3e-8 (another choice of coordinates linearises the same motion at
+    the same equilibrium; the round-off of the 19-DOF spatial stage's lowest mode, 10.6 Hz
+    beside modes of several kHz, is amplified to 1.6e-8 with the chosen set, 5.5e-9 with
+    another; a wrong mechanism differs by percents)."""
     listed = load_scene(name)
     chosen = build_model(without_dofs(name), source=name)
     assert chosen.declared_dof_count == listed.declared_dof_count == chosen.ndof
@@ -42,7 +44,7 @@ def test_chosen_dofs_describe_the_same_mechanism(name, expected):
     if expected is not None:
         assert chosen.chosen_dofs == expected
     np.testing.assert_allclose(natural_frequencies(chosen).frequencies_hz,
-                               natural_frequencies(listed).frequencies_hz, rtol=1e-8)
+                               natural_frequencies(listed).frequencies_hz, rtol=3e-8)
 
 
 def test_a_free_rotation_in_space_gets_a_deformation_dof():

@@ -13,8 +13,9 @@ cost. SPACAR users freeze them by hand; `propose_reduction` does it by measureme
 2. A scene element's deformation (all its segments together, since the scene's `released`
    and `dof` lists apply to every segment) gets the largest share it has in any kept mode.
 3. Deformations are frozen (prescribed zero: removed from `released` and `dof`) in order of
-   increasing share, as many as keep the `keep` lowest frequencies within `tolerance` (%,
-   relative to each): the largest count that does, by bisection over the count (each trial
+   increasing share (equal shares, within `ties.TIE_RTOL`, in the scene's order), as many
+   as keep the `keep` lowest frequencies within `tolerance` (%, relative to each): the
+   largest count that does, by bisection over the count (each trial
    builds the reduced scene and computes its modes). A deformation whose freezing would
    over-constrain the model together with those before it (a release that removes an
    over-constraint, such as a leaf's local cut, or the second leaf of a parallel pair) is
@@ -42,6 +43,7 @@ import numpy as np
 from ..errors import FlexureError
 from ..mechanics import assembly
 from ..mechanics.constraints import freezable
+from ..numerics.ties import ordered
 from ..scene.building import build_model
 from ..scene.meshing import segment_names
 from .linearization import linearize
@@ -115,9 +117,13 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
     # Freezing a deformation adds a constraint; some sets of them together over-constrain
     # (both leaves of a parallel pair frozen in torsion). Keep, in the order of freezing, only
     # what keeps the constraints independent, so that every prefix of `order` builds.
-    forced = [key for key in sorted(shares) if key[1] in set(freeze)]
-    rest = sorted((key for key in shares if key not in set(forced)),
-                  key=lambda key: (shares[key], key))
+    # in the scene's order (element, then deformation); the rest by their share, smallest
+    # first, equal shares (`ties.ordered`: two symmetric leaves) staying in the scene's order
+    rank = {name: k for k, name in enumerate(data.get("elements", {}))}
+    in_scene = sorted(shares, key=lambda key: (rank.get(key[0], len(rank)), key))
+    forced = [key for key in in_scene if key[1] in set(freeze)]
+    rest = [key for key in in_scene if key not in set(forced)]
+    rest = [rest[k] for k in ordered([shares[key] for key in rest])]
     candidates = forced + rest
     rows = _deformation_rows(model, data)
     taken = freezable(model, [rows[key] for key in candidates])

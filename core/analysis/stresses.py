@@ -33,6 +33,7 @@ import numpy as np
 from ..mechanics.actuators import port_values
 from ..mechanics.ports import input_forces
 from ..numerics.blas import blas_threads
+from ..numerics.ties import best_first
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -70,7 +71,8 @@ class BeamStresses:
         (str, str, float)
             The element, its end "p" or "q", and s_vm in Pa.
         """
-        flat = np.nanargmax(self.von_mises)
+        # the first in the scene's order among equals (two symmetric leaves; `ties.py`)
+        flat = best_first(self.von_mises)
         i, j = divmod(int(flat), 2)
         return self.names[i], "pq"[j], float(self.von_mises[i, j])
 

@@ -24,6 +24,7 @@ from ..errors import ConstraintError
 from ..model import DOF
 from ..numerics.blas import blas_threads
 from ..numerics.conditioning import lu_and_rcond
+from ..numerics.ties import independent_rows
 from . import assembly
 from .kinematics import Kinematics
 
@@ -132,7 +133,9 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     cannot be DOFs); where they cannot span the motions (a free rotation in space), released
     deformations become DOF deformations. Among the candidates the choice is a QR
     factorisation with column pivoting of their projections: the ones that move most along
-    the allowed motions first, ties in the scene's order. Rotations are scaled by the model's
+    the allowed motions first. Candidates that move equally (within `ties.TIE_RTOL`, as the
+    two leaves of a symmetric guide) are taken in the scene's order, so that round-off, which
+    differs from one CPU to the next, never decides. Rotations are scaled by the model's
     length scale, as in the check.
 
     Parameters
@@ -149,8 +152,6 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
         (over-constrained) or no DOFs can take the allowed motions:
         `check_exact_constraint` then names the problem.
     """
-    import scipy.linalg
-
     kin, scaled_De = _scaled_jacobian(model, x)
     if not np.all(np.isfinite(scaled_De)):
         return None  # a degenerate configuration: the check reports it
@@ -177,16 +178,11 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
         """Indices of up to `count` rows whose projections on `basis` are independent."""
         if rows.shape[0] == 0 or count == 0:
             return []
-        projected = rows @ basis
-        _, r, order = scipy.linalg.qr(projected.T, pivoting=True, mode="economic")
-        diagonal = np.abs(np.diag(r))
-        top = max(diagonal.max(initial=0.0), 1e-300)
         # projections at the round-off of the rows themselves are zero: when no candidate
-        # takes a motion (the torsion of a beam whose end node starts rotated), `top` is
-        # that round-off, and 1e-6 of it would make a DOF of noise
+        # takes a motion (the torsion of a beam whose end node starts rotated), the largest
+        # projection is that round-off, and 1e-6 of it would make a DOF of noise
         floor = 1e-12 * np.linalg.norm(rows, axis=1).max()
-        rank = int(np.sum(diagonal > max(1e-6 * top, floor)))
-        return sorted(order[:min(rank, count)].tolist())
+        return independent_rows(rows @ basis, count, floor=floor, relative=1e-6)
 
     chosen_coordinates = pick(coordinate_rows, motions, ndof)
     remaining = motions

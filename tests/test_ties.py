@@ -1,0 +1,63 @@
+"""Choices made by comparing numbers: equals (within ties.TIE_RTOL) go to the first in order,
+so that the last bits of a CPU's round-off never decide (core/numerics/ties.py)."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from flexure.core import build_model
+from flexure.core.numerics.ties import TIE_RTOL, best_first, independent_rows, ordered
+from flexure.core.scene.building import parse_toml, scene_path
+
+ROUND_OFF = 4e-16  # a few ulps: what two CPUs' results of the same formula differ by
+
+
+@pytest.mark.parametrize("first, second", [(1.0, 1.0 + ROUND_OFF), (1.0 + ROUND_OFF, 1.0)])
+def test_best_first_takes_the_first_of_equals_whichever_is_larger_by_round_off(first, second):
+    assert best_first([0.5, first, second]) == 1
+    assert best_first([second, first, 0.5]) == 0
+    assert best_first([2.0, first, second], largest=False) == 1
+
+
+def test_best_first_keeps_a_real_difference_and_skips_nan():
+    assert best_first([1.0, 1.0 + 10 * TIE_RTOL]) == 1
+    assert best_first([np.nan, 1.0, 3.0, np.nan]) == 2
+    with pytest.raises(ValueError, match="no candidate"):
+        best_first([np.nan, np.nan])
+    with pytest.raises(ValueError, match="no candidate"):
+        best_first([])
+
+
+def test_ordered_keeps_equals_in_their_order_and_sorts_the_rest():
+    values = [3.0, 1.0 + ROUND_OFF, 2.0, 1.0, 1.0 - ROUND_OFF]
+    assert ordered(values) == [1, 3, 4, 2, 0]
+    assert ordered(values[::-1]) == [0, 1, 3, 2, 4]
+    assert ordered([]) == []
+
+
+def test_independent_rows_is_pivoted_qr_with_ties_in_order():
+    """Two equal rows (up to round-off) and a third independent one: the first of the two is
+    chosen whichever is larger by round-off, and the rank stops the choice."""
+    tie = np.array([[1.0, 0.0, 0.0], [1.0 + ROUND_OFF, 0.0, 0.0], [0.0, 0.5, 0.0]])
+    assert independent_rows(tie, 3) == [0, 2]
+    assert independent_rows(tie[[1, 0, 2]], 3) == [0, 2]
+    assert independent_rows(tie, 1) == [0]
+    # the largest remaining part first, as LAPACK's geqp3 chooses when nothing ties
+    rows = np.array([[0.1, 0.0], [0.0, 2.0], [1.0, 1.0]])
+    assert independent_rows(rows, 1) == [1] and independent_rows(rows, 2) == [1, 2]
+    assert independent_rows(np.zeros((2, 2)), 2) == []
+    assert independent_rows(rows, 2, floor=10.0) == []
+
+
+def test_a_dof_choice_tie_goes_to_the_first_node_of_the_scene():
+    """The planar 1-DOF stage without its DOF: its two leaves' top nodes 3 and 5 move alike,
+    so 3.x and 5.x tie; the one listed first in the scene is the DOF, and listing node 5
+    first makes it 5.x (the frequencies do not change: the same mechanism)."""
+    data = copy.deepcopy(parse_toml(scene_path("stage_planar_1dof")))
+    for node in data["nodes"].values():
+        node.pop("dof", None)
+    assert build_model(data).chosen_dofs == ("3.x",)
+    nodes = data["nodes"]
+    data["nodes"] = {"5": nodes["5"], **{k: v for k, v in nodes.items() if k != "5"}}
+    assert build_model(data).chosen_dofs == ("5.x",)
