@@ -89,3 +89,24 @@ def test_the_bare_command_still_lists_every_subcommand(capsys):
     listed = capsys.readouterr().out
     for command in ("analyze", "bench", "fmu", "import", "loop", "reduce", "simulate", "sweep"):
         assert f"    {command} " in listed, command
+
+
+def test_a_simulation_finds_sundials_without_importing_sksundae():
+    """CVODE and IDA come from the shared libraries scikit-sundae's wheel ships; importing
+    the package itself would cost 0.3 s of CPU (scipy.optimize) for nothing."""
+    loaded = loaded_after("from flexure.core import load_scene, simulate\n"
+                          "simulate(load_scene('truss_1dof_x'), 1e-3, method='cvode-bdf')")
+    assert "numba" in loaded and "sksundae" not in loaded, sorted(loaded)
+
+
+def test_sundials_missing_is_named(monkeypatch):
+    import importlib.util
+
+    from flexure.core.simulation import sundials_libraries
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *args: None if name == "sksundae" else real(name, *args))
+    with pytest.raises(ImportError, match="scikit-sundae is not installed: flexure needs its "
+                                          "SUNDIALS libraries"):
+        sundials_libraries.library_folder()

@@ -13,7 +13,8 @@ from ..numerics.native import NVECTOR_DATA_OFFSET
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 
 
-def _library_folder():
+def library_folder() -> str:
+    """The folder of scikit-sundae's SUNDIALS shared libraries (ImportError when missing)."""
     # found, not imported: importing sksundae costs 0.3 s of CPU (scipy.optimize), and only
     # its wheel's shared libraries are used
     spec = importlib.util.find_spec("sksundae")
@@ -41,7 +42,7 @@ class _Libraries:
     """The SUNDIALS functions flexure calls, with their C prototypes."""
 
     def __init__(self):
-        folder = _library_folder()
+        folder = library_folder()
         self.core = _load(folder, "core")
         self.nvec = _load(folder, "nvecserial")
         self.matrix = _load(folder, "sunmatrixdense")
