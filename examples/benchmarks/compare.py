@@ -70,8 +70,14 @@ manipulator
           The chapter's 6 mm xy move (`manipulator.py`) on the reduced model's linearisation
           (507 DOFs, stepped exactly): >= 1 x real time; the same move on the nonlinear
           75-DOF control model for information.
-startup   Whole-process wall of `python -c "import flexure.core"` (<= 0.5 s) and `flexure
-          analyze truss_1dof_x` (<= 1 s), with `python -c pass` for scale.
+startup   Whole processes as a user starts them, warm cache, in CPU seconds (user + system):
+          `python -c "import flexure.core"` (<= 0.5 s), `flexure analyze truss_1dof_x`
+          (<= 0.5 s), `flexure loop --no-plot` (<= 1.5 s) beside Exudyn's whole process for
+          the same loop (`exudyn_loop_process.py`: the controller's numbers from flexure's
+          design, saved beforehand), `flexure loop` writing its plot (for information),
+          `flexure simulate stage_planar_3dof --t-end 0.01 --input F=1` (<= 2 x Exudyn's
+          process for the same 10 ms step); and, but with --quick, the first `flexure loop`
+          with an empty FLEXURE_CACHE_DIR (<= 30 s of CPU: it compiles).
 
 Before any timing one warm-up run loads the compiled engine (compiling it when the on-disk
 cache is empty); its latency is the table's first row, not part of any other figure.

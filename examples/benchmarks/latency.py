@@ -1,5 +1,5 @@
-"""Latencies: the first simulation in this process (`warmup`, the table's first row) and the
-whole-process wall of `import flexure.core` and `flexure analyze` (the startup row group)."""
+"""Latencies: the first simulation in this process (`warmup`, the table's first row), and the
+whole processes a user starts, warm and cold, beside Exudyn's (the startup row group)."""
 
 import os
 import subprocess
@@ -8,7 +8,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .measure import alternate, command_wall, log, peer
+from .measure import alternate, command_cpu, log, peer
 from .table import Row
 
 
@@ -70,18 +70,96 @@ def _first_call_compiling():
 
 
 def startup(*, repeat=5, quick=False):
-    """Whole-process wall of `import flexure.core` and `flexure analyze truss_1dof_x`."""
-    script = Path(sys.executable).with_name("flexure")
-    analyze = ([str(script)] if script.exists() else
-               [sys.executable, "-c", "import sys; from flexure.core.cli import main; "
-                "sys.exit(main())"]) + ["analyze", "truss_1dof_x"]
+    """Whole processes as a user starts them, warm cache, CPU seconds (user + system: the
+    shared machine's other load inflates walls far more), side by side with Exudyn's whole
+    process for the same work where there is one, alternating; and the cold first use."""
+    flexure = _flexure_command()
     python = [sys.executable, "-c"]
-    t = alternate({"pass": lambda: command_wall([*python, "pass"]),
-                   "import": lambda: command_wall([*python, "import flexure.core"]),
-                   "analyze": lambda: command_wall(analyze)}, repeat, "startup")
-    scale = f"python -c pass: {1e3 * t['pass'].median:.0f} ms"
-    return [Row('python -c "import flexure.core": <= 0.5 s', t["import"].text("ms"),
-                f"<= 500 ms ({scale})", t["import"].median / 0.5, t["import"].median <= 0.5),
-            Row("flexure analyze truss_1dof_x: <= 1 s", t["analyze"].text("ms"),
-                f"<= 1000 ms ({scale})", t["analyze"].median / 1.0,
-                t["analyze"].median <= 1.0)]
+    with tempfile.TemporaryDirectory(prefix="flexure_startup_") as folder:
+        exu = peer()
+        exudyn_loop = exudyn_step = None
+        if exu is not None:
+            from .exudyn_loop_process import save_controller
+
+            numbers = Path(folder) / "controller.npz"
+            save_controller(numbers, _default_loop_controller())
+            here = Path(__file__).resolve().parent
+            exudyn_loop = [sys.executable, str(here / "exudyn_loop_process.py"), str(numbers)]
+            exudyn_step = [*python, EXUDYN_STEP.format(root=str(here.parents[1]))]
+        cases = {
+            "pass": lambda: command_cpu([*python, "pass"]),
+            "import": lambda: command_cpu([*python, "import flexure.core"]),
+            "analyze": lambda: command_cpu([*flexure, "analyze", "truss_1dof_x"]),
+            "loop": lambda: command_cpu([*flexure, "loop", "--no-plot"]),
+            "loop+plot": lambda: command_cpu([*flexure, "loop", "--plot", folder + "/loop.png"]),
+            "exudyn loop": exudyn_loop and (lambda: command_cpu(exudyn_loop)),
+            "simulate": lambda: command_cpu([*flexure, "simulate", "stage_planar_3dof",
+                                             "--t-end", "0.01", "--input", "F=1"]),
+            "exudyn step": exudyn_step and (lambda: command_cpu(exudyn_step)),
+        }
+        t = alternate(cases, repeat, "startup (CPU s)")
+    scale = f"python -c pass: {t['pass'].text()}"
+    rows = [Row('python -c "import flexure.core" (CPU): <= 0.5 s', t["import"].text(),
+                f"<= 0.5 s ({scale})", t["import"].median / 0.5, t["import"].median <= 0.5),
+            Row("flexure analyze truss_1dof_x (CPU): <= 0.5 s", t["analyze"].text(),
+                "<= 0.5 s", t["analyze"].median / 0.5, t["analyze"].median <= 0.5)]
+    loop = t["loop"].median
+    if "exudyn loop" in t:
+        peer_loop = t["exudyn loop"].median
+        rows.append(Row("flexure loop --no-plot (CPU): <= 1.5 s, against Exudyn's process "
+                        "for the same loop (exudyn_loop_process.py)", t["loop"].text(),
+                        f"Exudyn {t['exudyn loop'].text()}", loop / peer_loop, loop <= 1.5))
+    else:
+        rows.append(Row("flexure loop --no-plot (CPU): <= 1.5 s", t["loop"].text(), "<= 1.5 s",
+                        loop / 1.5, loop <= 1.5))
+    rows.append(Row("flexure loop, writing loop.png (CPU)", t["loop+plot"].text(),
+                    "(for information)"))
+    target = ("flexure simulate stage_planar_3dof --t-end 0.01 (CPU): <= 2 x Exudyn's "
+              "process for a 10 ms step")
+    if "exudyn step" in t:
+        ratio = t["simulate"].median / t["exudyn step"].median
+        rows.append(Row(target, t["simulate"].text(), f"Exudyn {t['exudyn step'].text()}",
+                        ratio, ratio <= 2.0))
+    else:
+        rows.append(Row(target, t["simulate"].text(), "(exudyn not installed)"))
+    if not quick:
+        rows.append(_cold_loop(flexure))
+    return rows
+
+
+def _flexure_command():
+    """The `flexure` command of this Python (its script, or the module's main)."""
+    script = Path(sys.executable).with_name("flexure")
+    return ([str(script)] if script.exists() else
+            [sys.executable, "-c", "import sys; from flexure.core.cli import main; "
+             "sys.exit(main())"])
+
+
+def _default_loop_controller():
+    """The LoopController of `flexure loop`'s defaults (its design, done once here)."""
+    from flexure.controllers import build_loop
+    from flexure.core import load_scene
+
+    controller, _ = build_loop(load_scene("stage_planar_1dof"), stroke=1e-3, duration=1.0,
+                               fs=4000.0, crossover=300.0, feedforward=True, settle=0.25)
+    return controller
+
+
+# Exudyn's whole process for a 10 ms, 1 N step of the stage (n = 4 cables per spring, h =
+# 0.1 ms): the work of `flexure simulate stage_planar_3dof --t-end 0.01 --input F=1`
+EXUDYN_STEP = """import sys
+sys.path.insert(0, {root!r})
+from examples.benchmarks.peer_exudyn import step_response
+step_response(4, 1e-4, t_end=0.01)
+"""
+
+
+def _cold_loop(flexure):
+    """The first `flexure loop --no-plot` on a machine: an empty FLEXURE_CACHE_DIR, so the
+    engine compiles; one run (it takes a minute or more)."""
+    log("startup: flexure loop with an empty FLEXURE_CACHE_DIR (compiles)")
+    with tempfile.TemporaryDirectory(prefix="flexure_cold_cache_") as cold:
+        cpu, wall = command_cpu([*flexure, "loop", "--no-plot"],
+                                env=dict(os.environ, FLEXURE_CACHE_DIR=cold))
+    return Row("first flexure loop --no-plot on an empty cache (CPU): <= 30 s",
+               f"{cpu:.1f} s (wall {wall:.1f} s)", "<= 30 s", cpu / 30.0, cpu <= 30.0)

@@ -1,6 +1,8 @@
 """How the benchmark measures: the progress log, timed runs alternating between the cases
-(`alternate`, `Timing`), a whole process's wall time, and the peer side when it is installed."""
+(`alternate`, `Timing`), a whole process's CPU and wall time, and the peer side when it is
+installed."""
 
+import resource
 import statistics
 import subprocess
 import sys
@@ -70,11 +72,15 @@ def peer():
     return peer_exudyn
 
 
-def command_wall(command):
-    """(wall s, None) of running `command` (a list) in a new process; raises on its failure."""
+def command_cpu(command, env=None):
+    """(CPU s, wall s) of running `command` (a list) in a new process: its user + system
+    time, which the other processes on a shared machine inflate far less than its wall;
+    raises on its failure."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    done = subprocess.run(command, capture_output=True, text=True, check=False, env=env)
     wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed: {done.stderr[-2000:]}")
-    return wall, None
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), wall

@@ -193,7 +193,7 @@ def closed_loop(n=4, *, scene="stage_planar_1dof", stroke=1e-3, duration=1.0, fs
     controller, _ = build_loop(load_scene(scene), stroke=stroke, duration=duration, fs=fs,
                                crossover=crossover, feedforward=True, settle=settle)
     options.setdefault("stage", Stage.from_scene(scene))
-    runs = [_run_loop(controller, n, substeps, **options) for _ in range(max(1, repeat))]
+    runs = [run_loop(controller, n, substeps, **options) for _ in range(max(1, repeat))]
     t, position, force, _ = runs[0]
     error = np.abs(controller.reference[: t.size, 0] - position)
     return {"max_abs_error": float(error.max()), "error_ratio": float(error.max() / abs(stroke)),
@@ -203,8 +203,11 @@ def closed_loop(n=4, *, scene="stage_planar_1dof", stroke=1e-3, duration=1.0, fs
             "force": force}
 
 
-def _run_loop(controller, n, substeps, **options):
-    """One closed-loop run: t (s), position (m), force (N) per sample and the wall time."""
+def run_loop(controller, n, substeps, **options):
+    """One closed-loop run: t (s), position (m), force (N) per sample and the wall time.
+
+    `controller` steps as flexure's `LoopController`: reset(), fs (Hz), samples,
+    initial_output() -> u_0 (N), step(k, [y_k]) -> (u_k+1, e_k)."""
     controller.reset()
     fs = controller.fs
     model = build(n, **options)
