@@ -150,12 +150,23 @@ def test_an_assignment_without_a_key_is_refused():
     (["--set", "nodes.3.mass"], "argument --set: expected KEY=VALUE"),
     (["--set", "nodes.3.mass=1", "--set", "nodes.3.mass=2"],
      "argument --set: nodes.3.mass is given twice"),
+    (["--set", "nodes.3.mass=" + "[" * 5000],
+     "argument --set: a value nested deeper than Python's recursion limit"),
 ])
 def test_a_malformed_set_option_is_refused_by_the_parser(argv, message, capsys):
     with pytest.raises(SystemExit) as raised:
         main(["analyze", SCENE, *argv])
     assert raised.value.code == 2
-    assert message in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_a_scene_file_nested_beyond_the_recursion_limit_is_refused(tmp_path, capsys):
+    path = tmp_path / "deep.toml"
+    path.write_text('[scene]\nname = "deep"\n[nodes.1]\nmass = ' + "[" * 5000 + "\n")
+    assert main(["analyze", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: not a scene: its arrays or inline tables are nested deeper" in err
 
 
 COMMANDS = {  # a quick run of each, before the --set options

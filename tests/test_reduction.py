@@ -104,6 +104,8 @@ def test_reduce_command_writes_a_scene_that_loads(tmp_path, capsys):
     (["--keep", "9"], "--keep 9: the model has only 3 DOFs"),
     (["--keep", "1", "--out", "reduced.txt"], "expected a file name ending in .toml"),
     (["--keep", "1", "--freeze", "x1"], "expected deformation names such as e1 or e1,e2"),
+    (["--keep", "1", "--freeze", "e1,e9"], "--freeze e9: no element of the model has it "
+                                           "(its deformations: e1, e2, e3)"),
 ])
 def test_reduce_command_refuses_bad_options_without_traceback(argv, message, tmp_path,
                                                              capsys, monkeypatch):

@@ -49,10 +49,19 @@ def test_linear_values_include_both_ends_and_read_plainly():
     ("k=0:1:1", "a count >= 2"),
     ("k=1:1:3", "START and STOP are equal"),
     ("k=1,2,1", "1 is listed 2 times"),
+    ("k=1e-3:2e-3:1000000000", "1000000000 values, more than a sweep runs \\(100000\\)"),
 ])
 def test_a_bad_parameter_says_what_is_expected(text, message):
     with pytest.raises(ValueError, match=message):
         parse_parameter(text)
+
+
+def test_a_grid_too_large_to_run_is_refused_before_it_is_made():
+    from flexure.core.errors import UsageError
+
+    with pytest.raises(UsageError, match="a grid of 10000 x 10000 = 100000000 points, more "
+                                         "than a sweep runs"):
+        grid([("a", list(range(10_000))), ("b", list(range(10_000)))])
 
 
 def test_the_grid_is_the_product_with_the_first_parameter_slowest():

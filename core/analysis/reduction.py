@@ -114,6 +114,14 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
         raise FlexureError(f"{source}: --keep {keep}: the model has only {model.ndof} DOFs")
     shares, modes = energy_shares(model, data, keep)
     full = modes.frequencies_hz
+    # a name no element has is a mistake; one every element prescribes already is not (the
+    # elongations of a model whose scene froze them): nothing more to freeze
+    existing = sorted({name.rsplit(".", 1)[1] for name in model.deformation_names})
+    unknown = [name for name in freeze if name not in existing]
+    if unknown:
+        raise FlexureError(f"{source}: --freeze {','.join(unknown)}: no element of the model "
+                           f"has {'it' if len(unknown) == 1 else 'them'} (its deformations: "
+                           f"{', '.join(existing)})")
     # Freezing a deformation adds a constraint; some sets of them together over-constrain
     # (both leaves of a parallel pair frozen in torsion). Keep, in the order of freezing, only
     # what keeps the constraints independent, so that every prefix of `order` builds.

@@ -155,6 +155,9 @@ def parse_toml(path):
         return tomllib.loads(text)
     except (tomllib.TOMLDecodeError, ValueError) as error:  # ValueError: an int too long
         raise SceneError(f"{path}: not valid TOML: {error}") from None
+    except RecursionError:  # tomllib recurses once per level of nested arrays or tables
+        raise SceneError(f"{path}: not a scene: its arrays or inline tables are nested "
+                         "deeper than Python's recursion limit") from None
 
 
 def scene_key(key: str, model: Model | None = None) -> SchemaKey | None:

@@ -124,11 +124,15 @@ def _toml_value(key, value, source):
 
 def parse_value(text: str):
     """The value of `--set KEY=VALUE`: VALUE read as a TOML value, or the text itself if it is
-    not one (so `0.3e-3` is a float, `[0, 1]` a list, `PLTRUSS` and `"PLTRUSS"` strings)."""
+    not one (so `0.3e-3` is a float, `[0, 1]` a list, `PLTRUSS` and `"PLTRUSS"` strings);
+    ValueError for a value nested beyond Python's recursion limit."""
     try:
         parsed = tomllib.loads(f"value = {text}")
     except tomllib.TOMLDecodeError:
         return text
+    except RecursionError:  # tomllib recurses once per level of nesting
+        raise ValueError(f"a value nested deeper than Python's recursion limit, "
+                         f"{text[:20]}...: no scene key takes one") from None
     # text such as "1\nx = 2" parses as two keys: it is not one value
     return parsed["value"] if parsed.keys() == {"value"} else text
 

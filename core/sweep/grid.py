@@ -47,6 +47,9 @@ DEFAULT_MODES = 6
 # linspace's 0.00039999999999999996 (a value the table and a user's --set both write plainly)
 DIGITS = 15
 CONNECT_TIMEOUT = "10s"  # to reach a --scheduler before the sweep is given up
+# the most points one sweep runs: each is a full analysis (0.1 s to minutes), so 1e5 is
+# already hours, while a grid of 1e8 would only fill the memory (3.4 GB) before the first
+MAX_POINTS = 100_000
 
 
 def parse_parameter(text: str) -> tuple[str, list]:
@@ -78,6 +81,9 @@ def _linear(text, spec):
         raise ValueError(expected) from None
     if not (math.isfinite(start) and math.isfinite(stop)) or count < 2:
         raise ValueError(expected)
+    if count > MAX_POINTS:
+        raise ValueError(f"{text!r}: {count} values, more than a sweep runs ({MAX_POINTS}): "
+                         "each is a full analysis")
     if start == stop:
         raise ValueError(f"{text!r}: START and STOP are equal; give a single value as KEY=V")
     return [float(f"{v:.{DIGITS}g}") for v in np.linspace(start, stop, count)]
@@ -85,7 +91,13 @@ def _linear(text, spec):
 
 def grid(parameters) -> list[dict]:
     """The points of the Cartesian product of `parameters` [(key, values)]: one
-    {key: value} per point, the first parameter varying slowest."""
+    {key: value} per point, the first parameter varying slowest; UsageError for more than
+    MAX_POINTS, before any is made."""
+    size = math.prod(len(values) for _, values in parameters)
+    if size > MAX_POINTS:
+        counts = " x ".join(str(len(values)) for _, values in parameters)
+        raise UsageError(f"--param: a grid of {counts} = {size} points, more than a sweep runs "
+                         f"({MAX_POINTS}): each is a full analysis; sweep fewer values")
     points = [{}]
     for key, values in parameters:
         points = [{**point, key: value} for point in points for value in values]
