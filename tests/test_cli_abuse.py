@@ -458,3 +458,15 @@ def test_help_shows_percent_signs_as_typed(command, capsys):
     prints doubled ("0.1 %%" in `loop --help`)."""
     code, out, err = run(capsys, *command, "--help")
     assert code == 0 and "%%" not in out + err
+
+
+@pytest.mark.parametrize("rows, says", [
+    ("-1,0\n0,1\n", "row 1 of the samples: time -1 s is before the simulation's start at 0 s"),
+    ("0,0\n0.5,1\n0.5,2\n", "row 3 of the samples: expected a time after 0.5 s"),
+    ("0,0\n1,nan\n", "row 2 of the samples: expected finite numbers"),
+])
+def test_an_input_file_out_of_time_is_refused(capsys, tmp_path, no_run, rows, says):
+    samples = tmp_path / "force.csv"
+    samples.write_text("time,F\n" + rows)
+    refused(capsys, "simulate", "truss_1dof_x", "--t-end", "1", "--input", f"F={samples}",
+            says=f"{samples}: {says}")

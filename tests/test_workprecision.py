@@ -121,6 +121,16 @@ def test_bench_command_prints_the_table(tmp_path):
     assert md.read_text().count("\n") == 4
 
 
+def test_bench_refuses_a_reference_no_tighter_than_what_it_judges(capsys):
+    from flexure.core.cli import main
+
+    assert main(["bench", "truss_1dof_x", "--rtols", "1e-4,1e-6", "--reference-rtol",
+                 "1e-6"]) == 2
+    err = capsys.readouterr().err
+    assert ("--reference-rtol 1e-06: the reference must be at least 10 times tighter than the "
+            "tightest of --rtols (1e-06): give at most 1e-07") in err
+
+
 def test_order_limits_in_the_study_and_the_commands():
     study = study_of(load_scene("truss_1dof_x"), 0.05, methods=["ida", "ida:2"],
                      rtols=[1e-6], reference_rtol=1e-10, samples=11)

@@ -11,7 +11,7 @@ CVODE Adams reference at equally spaced times.
 import argparse
 from pathlib import Path
 
-from ..errors import SimulationError
+from ..errors import SimulationError, UsageError
 from ..simulation.workprecision import ALL_METHODS, DEFAULT_METHODS, work_precision
 from . import (
     PLOT_SUFFIXES,
@@ -27,6 +27,7 @@ from .simulate import parse_inputs
 
 SAMPLES = number(2, 1_000_000, integer=True, low_open=False, high_open=False)
 TOP_ORDER = {"cvode-adams": 12, "cvode-bdf": 5, "ida": 5}
+REFERENCE_MARGIN = 10  # the reference's rtol at most a tenth of the tightest measured
 
 
 def method_list(text):
@@ -94,6 +95,13 @@ def register(subparsers):
 def run(args):
     from ..scene.building import load_scene
 
+    # each run's error is measured against the reference: a reference no tighter than the
+    # runs would measure its own error, not theirs
+    if args.reference_rtol * REFERENCE_MARGIN > min(args.rtols):
+        raise UsageError(f"--reference-rtol {args.reference_rtol:g}: the reference must be at "
+                         f"least {REFERENCE_MARGIN} times tighter than the tightest of --rtols "
+                         f"({min(args.rtols):g}): give at most "
+                         f"{min(args.rtols) / REFERENCE_MARGIN:g}")
     model = load_scene(args.scene, overrides=args.set)
     inputs = parse_inputs(args.input)
     if not args.input and "F" in [p.name for p in model.inputs]:

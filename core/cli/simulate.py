@@ -95,7 +95,8 @@ def parse_inputs(specs, *, source="--input"):
 
 
 def read_samples(path):
-    """(times, values) from a CSV file of two columns time,value (s, N)."""
+    """(times, values) from a CSV file of two columns time,value (s, N): finite numbers, the
+    times increasing from 0 or later; SimulationError naming the row otherwise."""
     try:
         lines = [line for line in Path(path).read_text().splitlines() if line.strip()]
         if lines and not _is_number(lines[0].split(",")[0]):
@@ -112,6 +113,9 @@ def read_samples(path):
     if bad.size:
         raise SimulationError(f"{path}: row {bad[0] + 1} of the samples: expected finite "
                               f"numbers, got {rows[bad[0]].tolist()}")
+    if rows[0, 0] < 0.0:  # a simulation starts at t = 0: an earlier sample is a mistake
+        raise SimulationError(f"{path}: row 1 of the samples: time {rows[0, 0]:g} s is before "
+                              "the simulation's start at 0 s")
     back = np.flatnonzero(np.diff(rows[:, 0]) <= 0)
     if back.size:
         raise SimulationError(f"{path}: row {back[0] + 2} of the samples: expected a time after "
