@@ -240,10 +240,13 @@ class _Importer(RecordReader):
                                 record)
 
     def set_status(self, table, key, status, record, name):
-        known = table.setdefault(key, (status, record))
-        if known[0] != status:
-            self.fail(record, f"{name} is already {STATUS_WORDS[known[0]]} "
-                              f"({known[1].keyword}, line {known[1].line})")
+        """Give a coordinate or deformation its status once: a second time, even the same
+        status (FIX 2 2 2), is refused as anything given twice is (which one was meant?)."""
+        if key in table:
+            known_status, known_record = table[key]
+            self.fail(record, f"{name} is already {STATUS_WORDS[known_status]} "
+                              f"({known_record.keyword}, line {known_record.line})")
+        table[key] = (status, record)
 
     def fix(self, record):
         self.at_least(record, 1, "node number, then optional directions")

@@ -52,6 +52,7 @@ AXES = {(T, 2): ("x", "y"), (T, 3): ("x", "y", "z"), (R, 2): ("phi",),
         (R, 3): ("lambda0", "lambda1", "lambda2", "lambda3")}
 COMMENT = re.compile(r"[%#]")
 INTEGER = re.compile(r"[-+]?\d+")
+MAX_DIGITS = 9  # of a node, element, direction or port number
 # a Fortran number: 1, -2.5, .5, 1e-3, 1.5D3 (Python's float() would take nan, inf and 1_0)
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?")
 
@@ -128,8 +129,11 @@ class RecordReader:
 
     def integer(self, record, word, what):
         """The positive integer `word` (a node, element, direction or port number)."""
-        if not INTEGER.fullmatch(word) or int(word) < 1:
-            self.fail(record, f"expected {what} (a positive integer), got {show(word)}")
+        # the length first: int() refuses more than 4300 digits with a ValueError of its own,
+        # and no model numbers its nodes beyond a billion
+        if not INTEGER.fullmatch(word) or len(word.lstrip("+-")) > MAX_DIGITS or int(word) < 1:
+            self.fail(record, f"expected {what} (a positive integer of at most {MAX_DIGITS} "
+                              f"digits), got {show(word)}")
         return int(word)
 
     def number(self, record, word, what, *, minimum=None):
