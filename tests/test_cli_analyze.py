@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flexure.core.cli import main
@@ -66,3 +67,52 @@ def test_a_kinematic_scene_is_checked_and_nothing_more(capsys):
     result = json.loads(capsys.readouterr().out)
     assert set(result) == {"scene", "dof_count", "dofs", "dofs_chosen"}
     assert result["dof_count"]["ndof"] == 6
+
+
+# -- an equilibrium Newton finds but the mechanism cannot rest in -----------------------------
+
+def test_past_the_buckling_load_the_equilibrium_is_named_unstable(capsys):
+    """stage_planar_1dof buckles at 78.75 N down on the bar; at 100 N Newton still finds the
+    straight equilibrium, whose frequency is imaginary (-5.53 Hz): named, in the JSON too."""
+    assert main(["analyze", "stage_planar_1dof", "--static", "--modes", "--json", "--set",
+                 "nodes.3.force=[0.0,-100.0]"]) == 0
+    captured = capsys.readouterr()
+    result = json.loads(captured.out)
+    assert result["modes"]["frequencies_hz"][0] == pytest.approx(-5.53, abs=0.01)
+    (warning,) = result["warnings"]
+    assert warning.startswith("unstable equilibrium: the tangent stiffness K0 + G0 has 1 "
+                              "negative eigenvalue")
+    assert "mode 1 (-5.53 Hz: 3 and 5 along x)" in warning
+    assert f"flexure analyze: warning: {warning}" in captured.err
+
+
+def test_below_the_buckling_load_there_is_no_warning(capsys):
+    # 50 N: K = K0 + G0 = 945 - 600 = 345 N/m > 0, a softened but stable stage
+    assert main(["analyze", "stage_planar_1dof", "--static", "--modes", "--json", "--set",
+                 "nodes.3.force=[0.0,-50.0]"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["warnings"] == [] and "warning" not in captured.err
+
+
+def test_a_stage_pushed_flat_is_unstable_and_out_of_its_range(capsys):
+    """stage_planar_3dof at 100 N sideways: the leaves lie flat (the bar 0.1 m down), an
+    unstable state far beyond the range of validity; a static analysis alone names both."""
+    assert main(["analyze", "stage_planar_3dof", "--static", "--json", "--set",
+                 "nodes.3.force=[100.0,0.0]"]) == 0
+    warnings = json.loads(capsys.readouterr().out)["warnings"]
+    assert len(warnings) == 2
+    assert warnings[0].startswith("unstable equilibrium") and "mode" not in warnings[0]
+    assert "beyond the model's range of validity (0.25 x its length scale 0.1 m)" in warnings[1]
+
+
+def test_a_singular_stiffness_is_not_mistaken_for_an_unstable_one():
+    from flexure.core.analysis.stability import NEGATIVE_RTOL, negative_stiffness
+
+    # a kinematic DOF: eigenvalues 1e3 and a round-off -1e-13
+    rotation = np.array([[0.6, -0.8], [0.8, 0.6]])
+    K = rotation @ np.diag([1e3, -1e-13]) @ rotation.T
+    assert negative_stiffness(K)[0] == 0
+    K = rotation @ np.diag([1e3, -10 * NEGATIVE_RTOL * 1e3]) @ rotation.T
+    count, lowest, largest = negative_stiffness(K)
+    assert count == 1 and lowest == pytest.approx(-1e-5) and largest == pytest.approx(1e3)
+    assert negative_stiffness(np.zeros((0, 0))) == (0, 0.0, 0.0)

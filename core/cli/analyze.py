@@ -2,6 +2,7 @@
 compliance at nodes."""
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -95,6 +96,9 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if compliance_nodes:
         result["compliance"] = {node: compliance(model, node, linear_model=lin).as_dict()
                                 for node in dict.fromkeys(compliance_nodes)}
+    if solution is not None:
+        result["warnings"] = equilibrium_warnings(model, solution, mech, lin,
+                                                  result.get("modes"))
     if buckling is not None:
         factors = buckling_load_factors(model, None if buckling < 0 else buckling)
         result["buckling"] = {"load_factors": factors}
@@ -117,6 +121,23 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
             "inputs": [p.name for p in model.inputs],
             "outputs": [p.name for p in model.outputs]}
     return jsonable(result)
+
+
+def equilibrium_warnings(model, solution, mech, lin, modes):
+    """What is wrong with a static equilibrium that Newton's method found all the same: it is
+    unstable (`analysis.stability`: past a buckling or snap-through load), or it lies beyond
+    the model's range of validity (`simulation.plausibility`: the strain or the distance
+    that `flexure simulate` and the FMU warn about too). A list of messages, empty when
+    neither."""
+    from ..analysis.stability import instability_warnings, tangent_stiffness
+    from ..simulation.plausibility import RangeCheck
+
+    K = lin.K if lin is not None else tangent_stiffness(model, solution, mech)
+    found = instability_warnings(
+        K, frequencies_hz=None if modes is None else modes["frequencies_hz"],
+        descriptions=None if modes is None else modes["descriptions"])
+    found += list(RangeCheck(model).warnings(solution.x, solution.config.e).values())
+    return found
 
 
 def run(args, model=None):
@@ -149,6 +170,8 @@ def run(args, model=None):
         print_json(result, command="flexure analyze")
     else:
         print(render(result))
+    for message in result.get("warnings", []):  # also where --json goes to a file or a pipe
+        print(f"flexure analyze: warning: {message}", file=sys.stderr)
     return 0
 
 
