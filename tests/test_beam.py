@@ -376,7 +376,8 @@ def test_beam_derivatives_at_large_rotations():
     assert ELEMENT_TYPES["BEAM"] is beam and "TRUSS" in ELEMENT_TYPES
     rng = np.random.default_rng(11)
     x0, _ = beam.random_coordinates(rng, 4)
-    ref = beam.reference(x0, y_axis=rng.normal(size=(4, 3)))
+    ref = beam.reference(x0, y_axis=rng.normal(size=(4, 3)),
+                         properties={"Ip_A": rng.uniform(0.01, 0.1, 4)})  # m^2, as in test_elements
     x = x0.copy()
     for cols in (slice(3, 7), slice(10, 14)):
         x[:, cols] = compose(from_rotation_vector(rng.uniform(-1.7, 1.7, (4, 3))), x0[:, cols])
@@ -443,7 +444,8 @@ def test_beam_matches_its_textbook_formulas_element_by_element():
     x0, x = beam.random_coordinates(rng, count)
     x[:, 3:7] *= 1.1  # |lambda| != 1: the quadratic form holds there as well
     y_axis = rng.normal(size=(count, 3))
-    ref = beam.reference(x0, y_axis=y_axis)
+    radius2 = rng.uniform(0.01, 0.1, count)  # Ip_A, m^2: the torsion term as large as the rest
+    ref = beam.reference(x0, y_axis=y_axis, properties={"Ip_A": radius2})
     (e,) = beam.deformations(x, ref, order=0)
     (p,) = beam.inertia_points(x, ref, order=0)
     for i in range(count):
@@ -463,7 +465,8 @@ def test_beam_matches_its_textbook_formulas_element_by_element():
         e2 = l0 / 2 * (nz_p @ ny_q - ny_p @ nz_q)
         e3, e4, e5, e6 = -(nz_p @ l_vec), nz_q @ l_vec, ny_p @ l_vec, -(ny_q @ l_vec)
         e1 = np.linalg.norm(l_vec) - l0 + (2 * e3**2 + e3 * e4 + 2 * e4**2 + 2 * e5**2
-                                           + e5 * e6 + 2 * e6**2) / (30 * l0)
+                                           + e5 * e6 + 2 * e6**2) / (30 * l0) + (
+            radius2[i] * e2**2 / (2 * l0**3))
         np.testing.assert_allclose(e[i], [e1, e2, e3, e4, e5, e6], rtol=1e-12, atol=1e-15)
         points = np.concatenate([x[i, 0:3], l0 * now["p"][0], x[i, 7:10], l0 * now["q"][0],
                                  ny_p, nz_p, ny_q, nz_q])

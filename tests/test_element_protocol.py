@@ -85,6 +85,8 @@ def test_a_malformed_element_is_refused_naming_the_module_and_each_problem():
     ({"inertia_entry": None}, "inertia_entry is missing (a C entry"),
     ({"needs_orientation": "yes"}, "needs_orientation = 'yes': expected True or False"),
     ({"reference_problems": []}, "reference_problems = []: expected a function"),
+    ({"reference_properties": ("Ip_A",)}, "reference_properties = ('Ip_A',): expected a "
+                                          "tuple of the section keys"),
 ])
 def test_each_malformed_attribute_is_named(changes, problem):
     with pytest.raises(ElementProtocolError) as error:

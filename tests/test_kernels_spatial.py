@@ -28,7 +28,8 @@ def beams(request):
     rng = np.random.default_rng(20240611)
     x0, x = beam.random_coordinates(rng, COUNT)
     y_axis = None if request.param == "default_axis" else rng.normal(size=(COUNT, 3))
-    ref = beam.reference(x0, y_axis)
+    # Ip_A of the order of the elements' length squared: e1's torsion term as large as the rest
+    ref = beam.reference(x0, y_axis, properties={"Ip_A": rng.uniform(0.01, 0.1, COUNT)})
     v = rng.normal(size=x.shape)
     return x, v, ref, beam.pack_reference(ref)
 

@@ -13,17 +13,37 @@ the reference configuration (so the deformations are zero there). With l = r^q -
     e3 = -(n_z'^p . l),   e4 = (n_z'^q . l)                         bending in x'z' (m)
     e5 =  (n_y'^p . l),   e6 = -(n_y'^q . l)                        bending in x'y' (m)
     e1 = |l| - l0 + (2 e3^2 + e3 e4 + 2 e4^2 + 2 e5^2 + e5 e6 + 2 e6^2) / (30 l0)
+                  + rp^2 e2^2 / (2 l0^3),      rp^2 = (Iy' + Iz') / A
 
-as in the course notes, with the second-order terms of the planar PLBEAM for both bending
-planes (the consistent geometric stiffness, 10 EI / l0^2 per clamped-guided spring). The
-torsion-related second-order term of SPACAR's elongation (the shortening of a twisted beam,
-quadratic in e2) is left out: it matters only for buckling under large torsion, and leaving it
-out keeps a planar motion of a spatial model identical to the planar model's.
+e2 ... e6 as in the course notes; e1 with the second-order terms of the planar PLBEAM for both
+bending planes (the consistent geometric stiffness, 10 EI / l0^2 per clamped-guided spring) and
+the term quadratic in the torsion that SPACAR's elongation carries, the shortening of a twisted
+beam (its published coefficient was not at hand; it is derived here). Derivation: twisted by
+the angle theta between its ends, at the rate theta / l0, a fibre at distance r from the axis
+is a helix whose length per unit of axis length is sqrt(1 + r^2 theta^2 / l0^2) = 1 + r^2
+theta^2 / (2 l0^2) + O(theta^4). The normal force, the resultant of the fibres' stresses E
+(eps_axis + r^2 theta^2 / (2 l0^2)), is EA (eps_axis + rp^2 theta^2 / (2 l0^2)), with rp^2 =
+integral r^2 dA / A = (Iy' + Iz') / A about the centroid: the elongation that it does work on
+is l0 times that strain, and e2 = l0 sin(theta) = l0 theta to first order gives the term above.
+Its Hessian times the normal force, sigma1 rp^2 / l0^3 on e2, adds to the torsional stiffness
+GIt / l0^3: a torque stiffness (GIt + N rp^2) / l, Biot's G It + T Ip / A of a bar under axial
+force T (Timoshenko and Gere, Theory of Elastic Stability, art. 5.3), which vanishes at the
+torsional buckling load N = -A G It / Ip. The term is exact to second order for a doubly
+symmetric section (shear centre on the centroid); the fourth-order stiffening of large twist
+(Wagner's E integral r^4 dA term) and warping are not modelled. rp^2 is the section key `Ip_A`
+(m^2), derived from the section's shape (`flexure.core.scene.sections`); reference() takes it
+(default 0: no torsion term). In a planar motion e2 = 0, where the term, its first derivative
+and the Hessian's part that multiplies e2 all vanish: the motion equals the planar PLBEAM
+model's, and only the stiffness against leaving the plane feels the normal force through the
+term.
 
 Stress resultants (all in N, as the deformations are lengths):
 
     sigma1 = EA / l0 e1                               normal force
     sigma2 = GIt / l0^3 e2                            torque / l0 (pure torsion: GIt / l)
+
+(sigma2 is Saint-Venant's torque, that of the shear stresses; the fibres' normal stresses,
+inclined on their helices, add N rp^2 theta / l0 to the moment about the axis, through e1.)
     [sigma3, sigma4] = EIy' / l0^3 [[4, -2], [-2, 4]] [e3, e4]
     [sigma5, sigma6] = EIz' / l0^3 [[4, -2], [-2, 4]] [e5, e6]
 
@@ -85,6 +105,8 @@ section_schema = (
     SchemaKey("rho_Iy", "kg.m", "rotational inertia of the section about y' per length"),
     SchemaKey("rho_Iz", "kg.m", "rotational inertia of the section about z' per length"),
     SchemaKey("A", "m2", "cross-section area, for the stresses"),
+    SchemaKey("Ip_A", "m2", "(Iy' + Iz') / A, the polar radius of gyration squared: e1's "
+              "torsion term (the shortening of a twisted beam)"),
     SchemaKey("Wy", "m3", "section modulus about y', for the bending stress"),
     SchemaKey("Wz", "m3", "section modulus about z', for the bending stress"),
     SchemaKey("Wt", "m3", "torsion modulus: the largest shear stress is T / Wt"),
@@ -93,6 +115,7 @@ section_schema = (
 )
 properties = property_names(section_schema)
 needs_orientation = True  # the scene gives the principal y' axis of every beam
+reference_properties = ("Ip_A",)  # section keys the deformations depend on (e1's torsion term)
 
 _P, _LP, _Q, _LQ = slice(0, 3), slice(3, 7), slice(7, 10), slice(10, 14)
 _DL = np.zeros((3, 14))
@@ -146,10 +169,12 @@ def default_y_axis(l_vec):
     return axes
 
 
-def reference(x0, y_axis=None):
-    """Reference data from the initial coordinates x0 (n, 14) and the y' axes (n, 3).
+def reference(x0, y_axis=None, properties=None):
+    """Reference data from the initial coordinates x0 (n, 14), the y' axes (n, 3) and the
+    section keys of `reference_properties` ({"Ip_A": (n,) m^2}; without it, zero).
 
-    l0 (m); c = 1 / (30 l0) (1/m), the factor of the second-order terms in e1; the element
+    l0 (m); c = 1 / (30 l0) (1/m), the factor of the bending terms in e1; c_t = Ip_A / (2 l0^3)
+    (1/m), the factor of its torsion term; the element
     frame in the body frames of p and q: ax_p, ay_p, az_p, ax_q, ay_q, az_q (n, 3). Constant
     tensors of the rotated vectors (`rotations.vector_tensor`, R(lambda) a = C lambda lambda):
     bend_tensors (n, 4, 3, 4, 4) of [az_p, az_q, ay_p, ay_q]; inertia_tensors (n, 6, 3, 4, 4)
@@ -168,8 +193,10 @@ def reference(x0, y_axis=None):
         raise ValueError("the y' axis of a beam must not lie along the beam")
     n_y = y / size[:, None]
     n_z = np.cross(n_x, n_y)
+    radius2 = np.zeros_like(l0) if properties is None else np.broadcast_to(
+        np.asarray(properties["Ip_A"], float), l0.shape)
     with np.errstate(divide="ignore"):  # a zero length is refused (`reference_problems`)
-        ref = {"l0": l0, "c": 1.0 / (30.0 * l0)}
+        ref = {"l0": l0, "c": 1.0 / (30.0 * l0), "c_t": radius2 / (2.0 * l0**3)}
     for node, cols in (("p", _LP), ("q", _LQ)):
         R = rotation_matrix(x0[:, cols])
         for axis, vector in (("x", n_x), ("y", n_y), ("z", n_z)):
@@ -231,11 +258,14 @@ def deformations(x, ref, order=2):
     order = 0, 1 or 2 returns (e,), (e, De) or (e, De, D2e). The derivatives are written in
     z = [l, lambda^p, lambda^q] (11), block by block, and mapped to x at the end (see _Z_OF_X).
     With u = C lambda lambda for each node vector: d(w . u) / d lambda = 2 w^T C lambda =
-    w^T Du, d2(w . u) / d lambda2 = 2 w . C. These functions run at every evaluation of the
+    w^T Du, d2(w . u) / d lambda2 = 2 w . C. e1 = |l| - l0 + c/2 b^T W b + c_t e2^2 (b = e3
+    ... e6, W = _BEND_MIX) by the chain rule: De1 = u^T Dl + c b^T W Db + 2 c_t e2 De2 and
+    D2e1 = (I - u u^T) / |l| + c Db^T W Db + sum_k (c W b)_k D2b_k + 2 c_t (De2^T De2
+    + e2 D2e2), u = l / |l|. These functions run at every evaluation of the
     equations of motion on a handful of elements, where the number of numpy calls sets the time.
     """
     n = x.shape[0]
-    l0, c = ref["l0"], ref["c"]
+    l0, c, c_t = ref["l0"], ref["c"], ref["c_t"]
     half = 0.5 * l0
     l_vec = x[:, _Q] - x[:, _P]
     axes, D_axes = _rotated(ref["bend_tensors"], x[:, _BEND_LAMBDA])  # (n, 4, 3), (n, 4, 3, 4)
@@ -248,7 +278,7 @@ def deformations(x, ref, order=2):
     e[:, 1] = half * (pairs[:, 0] - pairs[:, 2])
     length = np.sqrt((l_vec * l_vec).sum(axis=1))
     quadratic = (bend[:, _QUAD_FIRST] * bend[:, _QUAD_SECOND] * _QUAD_WEIGHT).sum(axis=1)
-    e[:, 0] = length - l0 + c * quadratic
+    e[:, 0] = length - l0 + c * quadratic + c_t * (e[:, 1] * e[:, 1])
     if order == 0:
         return (e,)
     # per node vector i the two vectors it is dotted with: l (bending), n_(3-i) (torsion)
@@ -268,6 +298,8 @@ def deformations(x, ref, order=2):
     slopes = c[:, None] * (4.0 * bend + bend[:, _BEND_PARTNER])  # d e1 / d[e3 ... e6]
     terms = slopes[:, :, None] * Dz[:, 2:]  # added left to right, as the formula is written
     Dz[:, 0] += ((terms[:, 0] + terms[:, 1]) + terms[:, 2]) + terms[:, 3]
+    twist_slope = 2.0 * c_t * e[:, 1]  # d e1 / d e2
+    Dz[:, 0] += twist_slope[:, None] * Dz[:, 1]
     De = Dz[:, :, _Z_OF_X] * _Z_SIGN
     if order == 1:
         return e, De
@@ -297,6 +329,8 @@ def deformations(x, ref, order=2):
     H1 += (slopes[:, None, :] @ Hz[:, 2:].reshape(n, 4, 121)).reshape(n, 11, 11)
     unit = l_vec / length[:, None]
     H1[:, _ZL, _ZL] += (_EYE3 - unit[:, :, None] * unit[:, None, :]) / length[:, None, None]
+    H1 += (2.0 * c_t)[:, None, None] * (Dz[:, 1, :, None] * Dz[:, 1, None, :])
+    H1 += twist_slope[:, None, None] * Hz[:, 1]
     Hz[:, 0] = H1
     D2e = (Hz.reshape(6 * n, 121).take(_HESSIAN_TAKE, axis=1) * _HESSIAN_SIGN)
     return e, De, D2e.reshape(n, 6, 14, 14)
@@ -370,7 +404,9 @@ def section_forces(e, sigma, ref):
     e, sigma (n, 6). Returns a dict of (n,) arrays: N (N), T (N m), My_p, My_q, Mz_p, Mz_q
     (N m). The end moments are the work conjugates of the end rotations, l0 times the
     bending stress resultants plus the share of the normal force through the second-order
-    terms of e1: M = l0 (sigma_k + sigma1 d e1 / d e_k).
+    terms of e1: M = l0 (sigma_k + sigma1 d e1 / d e_k). T is Saint-Venant's torque l0 sigma2,
+    the one the shear stresses carry (T / Wt); the normal force's share through e1's torsion
+    term, l0 sigma1 2 c_t e2, is carried by the normal stresses on their helices.
     """
     l0 = ref["l0"]
     c = 1.0 / (30.0 * l0)

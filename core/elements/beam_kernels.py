@@ -14,13 +14,13 @@ from ..numerics.jit import kernel
 from . import entries
 
 # The packed reference row is
-# [l0, c, bend_tensors (4 x 3 x 4 x 4), inertia_tensors (6 x 3 x 4 x 4)]; inertia_scale is l0 on
-# the vectors ax_p, ax_q and 1 on the others. A tensor C (3 x 4 x 4) sits at
+# [l0, c, c_t, bend_tensors (4 x 3 x 4 x 4), inertia_tensors (6 x 3 x 4 x 4)]; inertia_scale is
+# l0 on the vectors ax_p, ax_q and 1 on the others. A tensor C (3 x 4 x 4) sits at
 # ref[base + 16 k + 4 i + j] = C_kij.
 
-_REF_BEND = 2
+_REF_BEND = 3
 _REF_INERTIA = _REF_BEND + 4 * 48
-REFERENCE_WIDTH = _REF_INERTIA + 6 * 48  # 482 floats, 3.9 kB per element
+REFERENCE_WIDTH = _REF_INERTIA + 6 * 48  # 483 floats, 3.9 kB per element
 # x columns of the translations and Euler parameters of p and q
 _XP, _XLP, _XQ, _XLQ = 0, 3, 7, 10
 _TRANSLATIONS = (0, 1, 2, 7, 8, 9)  # the x columns of r^p and r^q
@@ -32,6 +32,7 @@ def pack_reference(ref):
     packed = np.empty((n, REFERENCE_WIDTH))
     packed[:, 0] = ref["l0"]
     packed[:, 1] = ref["c"]
+    packed[:, 2] = ref["c_t"]
     packed[:, _REF_BEND:_REF_INERTIA] = ref["bend_tensors"].reshape(n, 4 * 48)
     packed[:, _REF_INERTIA:] = ref["inertia_tensors"].reshape(n, 6 * 48)
     return packed
@@ -96,6 +97,7 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     """
     l0 = ref[0]
     c = ref[1]
+    c_t = ref[2]
     half = 0.5 * l0
     lx = x[_XQ] - x[_XP]
     ly = x[_XQ + 1] - x[_XP + 1]
@@ -119,14 +121,16 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     e[3] = e4
     e[4] = e5
     e[5] = e6
-    e[1] = half * ((a0 * d0 + a1 * d1 + a2 * d2) - (c0 * b0 + c1 * b1 + c2 * b2))
+    e2 = half * ((a0 * d0 + a1 * d1 + a2 * d2) - (c0 * b0 + c1 * b1 + c2 * b2))
+    e[1] = e2
     length = np.sqrt(lx * lx + ly * ly + lz * lz)
     quadratic = (e3 * e3 * 2.0 + e3 * e4 * 1.0 + e4 * e4 * 2.0 + e5 * e5 * 2.0
                  + e5 * e6 * 1.0 + e6 * e6 * 2.0)
-    e[0] = length - l0 + c * quadratic
+    e[0] = length - l0 + c * quadratic + c_t * (e2 * e2)
     if order < 1:
         return
-    s3 = c * (4.0 * e3 + e4)  # d e1 / d e3 ... e6
+    s2 = 2.0 * c_t * e2  # d e1 / d e2 ... e6
+    s3 = c * (4.0 * e3 + e4)
     s4 = c * (4.0 * e4 + e3)
     s5 = c * (4.0 * e5 + e6)
     s6 = c * (4.0 * e6 + e5)
@@ -171,10 +175,12 @@ def deformations_kernel(x, ref, order, e, De, D2e):
         g5 = lx * r0 + ly * r1 + lz * r2
         g4 = lx * q0 + ly * q1 + lz * q2
         g6 = -(lx * w0 + ly * w1 + lz * w2)
-        De[0, _XLP + i] = s3 * g3 + s5 * g5
-        De[0, _XLQ + i] = s4 * g4 + s6 * g6
-        De[1, _XLP + i] = half * ((d0 * p0 + d1 * p1 + d2 * p2) - (b0 * r0 + b1 * r1 + b2 * r2))
-        De[1, _XLQ + i] = half * ((a0 * w0 + a1 * w1 + a2 * w2) - (c0 * q0 + c1 * q1 + c2 * q2))
+        g2p = half * ((d0 * p0 + d1 * p1 + d2 * p2) - (b0 * r0 + b1 * r1 + b2 * r2))
+        g2q = half * ((a0 * w0 + a1 * w1 + a2 * w2) - (c0 * q0 + c1 * q1 + c2 * q2))
+        De[0, _XLP + i] = s3 * g3 + s5 * g5 + s2 * g2p
+        De[0, _XLQ + i] = s4 * g4 + s6 * g6 + s2 * g2q
+        De[1, _XLP + i] = g2p
+        De[1, _XLQ + i] = g2q
         De[2, _XLP + i] = g3
         De[2, _XLQ + i] = 0.0
         De[3, _XLP + i] = 0.0
@@ -212,12 +218,14 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             mixed = half * (cross_03 - cross_21)
             D2e[1, _XLP + i, _XLQ + j] = mixed
             D2e[1, _XLQ + j, _XLP + i] = mixed
-    # elongation: c Db^T W Db + sum_k slope_k D2e_k + (I - u u^T) / |l| on the translations,
-    # column by column, leaving out the terms that are zero by structure (the rows of e3, e5
-    # in De and D2e do not involve lambda^q, those of e4, e6 not lambda^p, and the D2e of
-    # e3 ... e6 are zero between translations): each entry the sum of the same non-zero
-    # terms in the same order as over all of them
+    # elongation: c Db^T W Db + sum_k slope_k D2e_k + (I - u u^T) / |l| on the translations
+    # and 2 c_t De2^T De2 + s2 D2e2 on the Euler parameters, column by column, leaving out
+    # the terms that are zero by structure (the rows of e3, e5 in De and D2e do not involve
+    # lambda^q, those of e4, e6 not lambda^p, e2 does not involve the translations, and the
+    # D2e of e2 ... e6 are zero between translations): each entry the sum of the same
+    # non-zero terms in the same order as over all of them
     for j in range(14):
+        w2 = 2.0 * c_t * De[1, j]
         w3 = c * (4.0 * De[2, j] + De[3, j])
         w4 = c * (De[2, j] + 4.0 * De[3, j])
         w5 = c * (4.0 * De[4, j] + De[5, j])
@@ -235,12 +243,12 @@ def deformations_kernel(x, ref, order, e, De, D2e):
             value = De[2, i] * w3 + De[4, i] * w5
             if not on_q:
                 value += s3 * D2e[2, i, j] + s5 * D2e[4, i, j]
-            D2e[0, i, j] = value
+            D2e[0, i, j] = value + (De[1, i] * w2 + s2 * D2e[1, i, j])
         for i in range(_XLQ, _XLQ + 4):
             value = De[3, i] * w4 + De[5, i] * w6
             if not on_p:
                 value += s4 * D2e[3, i, j] + s6 * D2e[5, i, j]
-            D2e[0, i, j] = value
+            D2e[0, i, j] = value + (De[1, i] * w2 + s2 * D2e[1, i, j])
     for k in range(3):
         uk = (ux, uy, uz)[k]
         for m in range(3):

@@ -31,6 +31,8 @@ Compiled kernels (for `flexure.core.engine`)
     `entries.inertia_entry` from the element's one-element kernels.
 
 Optional: needs_orientation (True: the scene gives a principal axis, reference(x0, y_axis)),
+reference_properties (a tuple of section keys of its schema that the deformations depend on:
+reference(x0, ..., properties={key: (n,) array}) takes them, as a BEAM's Ip_A),
 reference_problems(x0[, y_axis]) -> [(element index, scene key, message)] for reference
 configurations the element cannot take (a zero length, an axis along the beam: the scene
 names the element and refuses it), section_forces(e, sigma, ref) (stresses), and
@@ -184,6 +186,11 @@ def element_problems(kind):
                   f"a C entry with the engine's signature, {maker}")
     if hasattr(kind, "needs_orientation"):
         attribute("needs_orientation", lambda v: isinstance(v, bool), "True or False")
+    if hasattr(kind, "reference_properties"):
+        keys = property_names(schema) if schema is not None else ()
+        attribute("reference_properties",
+                  lambda v: names(v) and set(v) <= set(keys),
+                  "a tuple of the section keys (section_schema) that reference() takes")
     return problems
 
 

@@ -117,8 +117,11 @@ class ElementBuilding:
                 with self.entry():  # collected, so every such element is named
                     self.fail(f"elements.{entry['names'][i]}.{key}", message)
             self.raise_problems()
-            reference = kind.reference(x0, **orientation)
             props = {p: np.array([v[p] for v in entry["props"]]) for p in kind.properties}
+            section = getattr(kind, "reference_properties", ())
+            if section:  # section data the deformations depend on (a BEAM's Ip_A)
+                orientation["properties"] = {key: props[key] for key in section}
+            reference = kind.reference(x0, **orientation)
             groups.append(ElementGroup(kind=kind, names=tuple(entry["names"]),
                                        coordinate_index=coords,
                                        deformation_index=np.array(entry["defs"], dtype=int),
