@@ -91,3 +91,19 @@ def test_section_errors_name_the_section():
             build_model(data, source="s.toml", check=False)
         assert "s.toml: sections.leaf" in str(error.value)
         assert expected in str(error.value)
+
+
+def test_polar_radius_of_gyration_of_each_kind_of_section():
+    """Ip_A = (Iy + Iz) / A (m^2): (b^2 + h^2) / 12 of a rectangle, d^2 / 8 of a circle, and of
+    a section given by its properties (EIy + EIz) / EA, else (rho_Iy + rho_Iz) / rho_A; one
+    given directly is kept; none without any of them."""
+    strip = beam_properties({"E": 2.1e11, "width": 0.010, "height": 0.0003})
+    np.testing.assert_allclose(strip["Ip_A"], (0.010**2 + 0.0003**2) / 12, rtol=1e-14)
+    np.testing.assert_allclose(beam_properties({"E": 7e10, "diameter": 0.02})["Ip_A"],
+                               0.02**2 / 8, rtol=1e-14)
+    direct = beam_properties({"EA": 8.0, "GIt": 2.0, "EIy": 3.0, "EIz": 1.0})
+    assert direct["Ip_A"] == 0.5
+    inertias = beam_properties({"rho_A": 4.0, "rho_Iy": 1.0, "rho_Iz": 2.0})
+    assert inertias["Ip_A"] == 0.75
+    assert beam_properties({"EA": 8.0, "EIy": 3.0, "EIz": 1.0, "Ip_A": 0.1})["Ip_A"] == 0.1
+    assert "Ip_A" not in beam_properties({"GIt": 2.0})

@@ -20,6 +20,11 @@ A circle of diameter d: A = pi d^2 / 4, Iy' = Iz' = pi d^4 / 64, It = pi d^4 / 3
 Wy' = Wz' = pi d^3 / 32, Wt = pi d^3 / 16. Series terms are summed until they no longer change
 the result in double precision (they fall off as n^-5 and n^-2 exp(-n pi a / 2t)).
 
+The polar radius of gyration squared, the BEAM's Ip_A = (Iy' + Iz') / A (m^2, the factor of the
+torsion term of its elongation): (b^2 + h^2) / 12 for a rectangle, d^2 / 8 for a circle. A
+section given by its properties has it from (EIy + EIz) / EA (a homogeneous section), else from
+(rho_Iy + rho_Iz) / rho_A, else not at all (0: no torsion term).
+
 A planar section's rectangle has `height` in the plane (the bending thickness) and `width` out
 of it: A = width height, EI = E width height^3 / 12, Wz = width height^2 / 6 (`planar_properties`).
 
@@ -76,8 +81,10 @@ def beam_properties(values):
     Dimensions (`width` and `height`, or `diameter`) with `E` give A, EA, EIy, EIz, GIt and the
     section moduli; G from `G`, else from Poisson's ratio `nu` (default 0.3) as
     E / (2 (1 + nu)); `rho` gives rho_A, rho_Iy, rho_Iz; `beta` (s) gives stiffness-
-    proportional damping EdA = beta EA, GdIt = beta GIt, ... Properties the section gives
-    directly take precedence. Returns a new dict; raises ValueError naming what is missing.
+    proportional damping EdA = beta EA, GdIt = beta GIt, ... ; Ip_A = (Iy + Iz) / A from the
+    dimensions, else from the stiffnesses or the inertias (module docstring). Properties the
+    section gives directly take precedence. Returns a new dict; raises ValueError naming what
+    is missing.
     """
     result = dict(values)
     shape = None
@@ -94,6 +101,7 @@ def beam_properties(values):
     if shape is not None:
         for key in ("A", "Wy", "Wz", "Wt", "circular"):
             result.setdefault(key, shape[key])
+        result.setdefault("Ip_A", (shape["Iy"] + shape["Iz"]) / shape["A"])
         if "E" in values:
             E = values["E"]
             G = values.get("G", E / (2.0 * (1.0 + values.get("nu", 0.3))))
@@ -111,6 +119,9 @@ def beam_properties(values):
         for damping, stiffness in (("EdA", "EA"), ("GdIt", "GIt"), ("EdIy", "EIy"),
                                    ("EdIz", "EIz")):
             result.setdefault(damping, values["beta"] * result.get(stiffness, 0.0))
+    for whole, parts in (("EA", ("EIy", "EIz")), ("rho_A", ("rho_Iy", "rho_Iz"))):
+        if "Ip_A" not in result and result.get(whole, 0.0) > 0.0:
+            result["Ip_A"] = sum(result.get(part, 0.0) for part in parts) / result[whole]
     return result
 
 
@@ -168,6 +179,6 @@ SPATIAL = SectionCalculator(
             SchemaKey("beta", "s", "stiffness-proportional damping: EdA = beta EA, ...",
                       damping=True)),
     outputs=frozenset({"A", "Wy", "Wz", "Wt", "circular", "EA", "EIy", "EIz", "GIt", "rho_A",
-                       "rho_Iy", "rho_Iz", "EdA", "GdIt", "EdIy", "EdIz"}),
+                       "rho_Iy", "rho_Iz", "EdA", "GdIt", "EdIy", "EdIz", "Ip_A"}),
     derive=beam_properties)
 CALCULATORS = {2: PLANAR, 3: SPATIAL}  # by the scene's dimension
