@@ -30,12 +30,12 @@ GIt / l0^3: a torque stiffness (GIt + N rp^2) / l, Biot's G It + T Ip / A of a b
 force T (Timoshenko and Gere, Theory of Elastic Stability, art. 5.3), which vanishes at the
 torsional buckling load N = -A G It / Ip. The term is exact to second order for a doubly
 symmetric section (shear centre on the centroid); the fourth-order stiffening of large twist
-(Wagner's E integral r^4 dA term) and warping are not modelled. rp^2 is the section key `Ip_A`
-(m^2), derived from the section's shape (`flexure.core.scene.sections`); reference() takes it
-(default 0: no torsion term). In a planar motion e2 = 0, where the term, its first derivative
-and the Hessian's part that multiplies e2 all vanish: the motion equals the planar PLBEAM
-model's, and only the stiffness against leaving the plane feels the normal force through the
-term.
+(Wagner's, of order E integral r^4 dA (theta / l0)^4) and warping are not modelled. rp^2 is the
+section key `Ip_A` (m^2), derived from the section's shape (`flexure.core.scene.sections`);
+reference() takes it (default 0: no torsion term). In a planar motion e2 = 0, where the term,
+its first derivative and the Hessian's part that multiplies e2 all vanish: the motion equals
+the planar PLBEAM model's, and only the stiffness against leaving the plane feels the normal
+force through the term.
 
 Stress resultants (all in N, as the deformations are lengths):
 
