@@ -164,6 +164,10 @@ def test_a_listed_dof_that_leaves_the_mechanism_free_is_under_constrained():
         build_model(data)
     message = str(error.value)
     assert "under-constrained: the coordinates 3.x, 5.x can move" in message
+    # and the other side, so that following the advice keeps the count right
+    assert ("the DOF 3.y cannot move without changing the prescribed deformations "
+            "leaf_left.e1 (to first order, where the model starts): no DOF here; declare a DOF "
+            "among the coordinates that can move (3.x, 5.x) instead") in message
 
 
 def test_an_exactly_constrained_model_passes():

@@ -104,6 +104,7 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
         )
     motions = [tuple(np.flatnonzero(np.abs(motion) > 1e-6 * np.abs(motion).max()))
                for motion in _free_motions(full)]
+    problems += _fixed_dofs(model, kin, full, rows.shape[0], motions)
     for moving, count in _counted(motions):
         names = ", ".join(model.coordinate_names[kin.free[i]] for i in moving)
         ways = "" if count == 1 else f" in {count} independent ways"
@@ -203,6 +204,28 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
         deformation_status[released[k]] = DOF
         names.append(model.deformation_names[released[k]])
     return coordinate_status, deformation_status, names
+
+
+def _fixed_dofs(model, kin, full, n_constraints, motions):
+    """The lines naming DOFs that the prescribed deformations fix already (to first order at
+    the configuration checked): the other side of a right DOF count with a singular choice,
+    where some coordinates can move and some declared DOF cannot. `full` holds the
+    constraint rows, then one unit row per DOF; `motions` the free motions' coordinates."""
+    lines = []
+    moving = sorted({kin.free[i] for motion in motions for i in motion})
+    for dependency in _dependent_row_sets(full):
+        dofs = [model.dof_names[i - n_constraints] for i in dependency if i >= n_constraints]
+        if not dofs:
+            continue  # among the prescribed deformations alone: the over-constraint above
+        fixing = [model.deformation_names[kin.constraint_rows[i]] for i in dependency
+                  if i < n_constraints]
+        instead = (f"; declare a DOF among the coordinates that can move "
+                   f"({', '.join(model.coordinate_names[c] for c in moving)}) instead"
+                   if moving else "")
+        lines.append(f"the DOF{'s' * (len(dofs) > 1)} {', '.join(dofs)} cannot move without "
+                     f"changing the prescribed deformations {', '.join(fixing) or '(none)'} "
+                     f"(to first order, where the model starts): no DOF here{instead}")
+    return lines
 
 
 def clearly_regular(matrix: np.ndarray) -> bool:
