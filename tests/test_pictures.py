@@ -175,9 +175,12 @@ def test_a_spatial_animation_is_drawn_in_3d(tmp_path):
 
 def test_analyze_draws_the_shape_and_the_modes(tmp_path, capsys):
     shape, modes = tmp_path / "shape.png", tmp_path / "modes.png"
-    code, out, _ = run(capsys, "analyze", "stage_spatial_19dof", "--static", "--modes", "2",
-                       "--plot-shape", shape, "--plot-modes", modes)
+    code, out, err = run(capsys, "analyze", "stage_spatial_19dof", "--static", "--modes", "2",
+                         "--plot-shape", shape, "--plot-modes", modes)
     assert code == 0 and "static equilibrium" in out
+    # said where stdout (the tables, or the JSON) stays what it is
+    assert f"flexure analyze: wrote {shape} (the static equilibrium's deformed shape)" in err
+    assert f"flexure analyze: wrote {modes} (the 2 lowest mode shapes)" in err
     for path in (shape, modes):
         assert path.read_bytes()[:8] == PNG
     with Image.open(modes) as image:  # two panels side by side

@@ -3,6 +3,7 @@ against frequency (`flexure analyze --sigma`), against python-control's own freq
 and the static compliance of the nonlinear statics."""
 
 import copy
+import json
 
 import numpy as np
 import pytest
@@ -69,6 +70,41 @@ def test_analyze_plots_the_gains_and_names_the_peaks(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "principal gains from F to x, y" in out and "10.6447" in out
     assert path.stat().st_size > 10_000
+
+
+def test_analyze_sigma_over_a_band_of_ones_choice(tmp_path, capsys):
+    """--sigma-range FMIN:FMAX: the gains over that band only, the natural frequencies inside
+    it named (the 3-DOF stage's 2129 and 3586 Hz modes lie outside 1 to 100 Hz)."""
+    path = tmp_path / "sigma.png"
+    assert main(["analyze", "stage_planar_3dof", "--sigma", str(path), "--sigma-range",
+                 "1:100", "--json"]) == 0
+    gains = json.loads(capsys.readouterr().out)["principal_gains"]
+    assert min(gains["frequencies_hz"]) == pytest.approx(1.0, rel=1e-12)
+    assert max(gains["frequencies_hz"]) == pytest.approx(100.0, rel=1e-12)
+    assert main(["analyze", "stage_planar_3dof", "--sigma", str(path), "--sigma-range",
+                 "1:100"]) == 0
+    out = capsys.readouterr().out
+    assert "(401 frequencies, 1 to 100 Hz)" in out and "10.6447" in out and "2128" not in out
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--sigma-range", "1:100"], "--sigma-range: it sets the frequencies of --sigma, which is "
+                                 "not given"),
+    (["--sigma", "s.png", "--sigma-range", "100:1"], "argument --sigma-range: expected "
+                                                      "FMIN:FMAX in Hz with 0 < FMIN < FMAX, "
+                                                      "got '100:1'"),
+    (["--sigma", "s.png", "--sigma-range", "0:5"], "expected FMIN:FMAX in Hz"),
+    (["--sigma", "s.png", "--sigma-range", "5"], "expected FMIN:FMAX in Hz"),
+])
+def test_a_bad_sigma_range_is_refused(argv, says, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main(["analyze", "stage_planar_3dof", *argv])
+    except SystemExit as exit_:  # argparse refuses an option's value itself
+        code = exit_.code
+    err = capsys.readouterr().err
+    assert code == 2 and says in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())
 
 
 def test_analyze_sigma_needs_inputs_and_outputs(tmp_path, capsys):

@@ -181,11 +181,17 @@ def _names(ports):
     return ", ".join(names) if len(names) <= 3 else f"{names[0]} ... {names[-1]}"
 
 
-def frequency_grid(natural_hz, points=400):
+def frequency_grid(natural_hz, points=400, *, band=None):
     """Log-spaced frequencies (Hz) from a tenth of the lowest natural frequency to ten times
-    the highest, with the natural frequencies themselves added (so the peaks are hit)."""
+    the highest, or across `band` (f_min, f_max) Hz when given, with the natural frequencies
+    in that range themselves added (so the peaks are hit)."""
     natural = np.asarray([f for f in natural_hz if f > 0.0], dtype=float)
-    if natural.size == 0:
+    if band is not None:
+        low, high = band
+        natural = natural[(natural >= low) & (natural <= high)]
+    elif natural.size == 0:
         return np.logspace(-1, 4, points)
-    grid = np.logspace(np.log10(natural.min() / 10.0), np.log10(natural.max() * 10.0), points)
+    else:
+        low, high = natural.min() / 10.0, natural.max() * 10.0
+    grid = np.logspace(np.log10(low), np.log10(high), points)
     return np.unique(np.concatenate([grid, natural]))

@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, UsageError
 from ..reporting.tables import format_table, jsonable, print_json
 from . import PLOT_SUFFIXES, add_scene_arguments, atomic_output, count, output_file
 
@@ -30,6 +30,9 @@ def register(subparsers):
                              "stiffness of this node at the static equilibrium (repeatable, "
                              "or comma-separated: 3,5)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--sigma-range", type=frequency_band, metavar="FMIN:FMAX",
+                        help="the frequencies of --sigma, Hz (default: a tenth of the lowest "
+                             "to ten times the highest natural frequency)")
     for option, draws in {**RESULT_PICTURES, **MODEL_PICTURES}.items():
         parser.add_argument(option, metavar="PNG", type=output_file(PLOT_SUFFIXES), help=draws)
     parser.set_defaults(run=run_with_pictures)
@@ -44,6 +47,19 @@ STATIC_UNITS = {
     "von_mises_pa": "Pa"}
 
 
+def frequency_band(text):
+    """An argparse type: "FMIN:FMAX" in Hz, 0 < FMIN < FMAX, as a tuple of floats."""
+    low, sep, high = text.partition(":")
+    try:
+        band = (float(low), float(high)) if sep else None
+    except ValueError:
+        band = None
+    if band is None or not (np.all(np.isfinite(band)) and 0.0 < band[0] < band[1]):
+        raise argparse.ArgumentTypeError(f"expected FMIN:FMAX in Hz with 0 < FMIN < FMAX, got "
+                                         f"{text!r}")
+    return band
+
+
 def node_list(text):
     """An argparse type: "3" or "3,5" as a list of node names."""
     names = [name.strip() for name in text.split(",")]
@@ -54,10 +70,11 @@ def node_list(text):
 
 
 def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=False,
-            with_gains=False, compliance_nodes=()):
+            with_gains=False, compliance_nodes=(), gains_band=None):
     """Run the requested analyses; returns the dict that `--json` prints (SI units).
 
-    compliance_nodes: the nodes whose compliance (m/N, rad/(N m), ...) to give.
+    compliance_nodes: the nodes whose compliance (m/N, rad/(N m), ...) to give; gains_band:
+    (f_min, f_max) Hz of the principal gains (default: around the natural frequencies).
     """
     from ..analysis.compliance import compliance, node_coordinates
     from ..analysis.linearization import linearize
@@ -114,7 +131,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
         every_mode = result.get("modes") if modes is not None and modes < 0 else None
         natural = (every_mode["frequencies_hz"] if every_mode is not None
                    else natural_frequencies(model, linear_model=lin).frequencies_hz)
-        grid = frequency_grid(natural)
+        grid = frequency_grid(natural, band=gains_band)
         result["principal_gains"] = {
             "frequencies_hz": grid, "natural_hz": natural,
             "singular_values": principal_gains(model, grid, linear_model=lin),
@@ -144,6 +161,8 @@ def run(args, model=None):
     """Run `flexure analyze` on `args`; `model` is the scene's, when the caller loaded it."""
     from ..scene.building import load_scene
 
+    if args.sigma_range and not args.sigma:
+        raise UsageError("--sigma-range: it sets the frequencies of --sigma, which is not given")
     if model is None:
         model = load_scene(args.scene, overrides=args.set)
     static, modes = args.static, args.modes
@@ -155,7 +174,8 @@ def run(args, model=None):
         static, modes = (False, None) if is_kinematic(model) else (True, -1)
     result = analyze(model, static=static or bool(args.plot), modes=modes,
                      buckling=args.buckling, with_state_space=args.state_space,
-                     with_gains=bool(args.sigma), compliance_nodes=nodes)
+                     with_gains=bool(args.sigma), compliance_nodes=nodes,
+                     gains_band=args.sigma_range)
     if args.plot:
         plot_stresses(model, args.plot)
     if args.sigma:
@@ -166,6 +186,7 @@ def run(args, model=None):
             plot_principal_gains(model, np.array(gains["frequencies_hz"]),
                                  np.array(gains["singular_values"]), temporary,
                                  natural_hz=gains["natural_hz"])
+        wrote(args.sigma, "the principal gains")
     if args.json:
         print_json(result, command="flexure analyze")
     else:
@@ -173,6 +194,11 @@ def run(args, model=None):
     for message in result.get("warnings", []):  # also where --json goes to a file or a pipe
         print(f"flexure analyze: warning: {message}", file=sys.stderr)
     return 0
+
+
+def wrote(path, what):
+    """Say on stderr that a picture was written (stdout may be the JSON)."""
+    print(f"flexure analyze: wrote {path} ({what})", file=sys.stderr)
 
 
 def is_kinematic(model):
@@ -197,6 +223,7 @@ def plot_stresses(model, path):
                          "to plot")
     with atomic_output(path, "--plot") as temporary:
         plot_beam_stresses(model, stresses, temporary)
+    wrote(path, "the von Mises stresses along the beams")
 
 
 def render(result):
@@ -249,7 +276,8 @@ def render(result):
         gains = result["principal_gains"]
         f, sigma = np.array(gains["frequencies_hz"]), np.array(gains["singular_values"])
         rows = []
-        for natural in gains["natural_hz"][:10]:  # the largest gain at each natural frequency
+        inside = [n for n in gains["natural_hz"] if f.min() <= n <= f.max()]
+        for natural in inside[:10]:  # the largest gain at each natural frequency of the band
             k = int(np.argmin(np.abs(f - natural)))
             rows.append((f"{natural:.6g}", f"{sigma[k, 0]:.4g}"))
         parts.append(format_table(["natural frequency (Hz)", "largest singular value"], rows,
@@ -345,8 +373,11 @@ def draw_pictures(model, args):
     if args.plot_shape:
         with atomic_output(args.plot_shape, "--plot-shape") as temporary:
             plot_shape(model, solution.x, temporary)
+        wrote(args.plot_shape, "the static equilibrium's deformed shape")
     if args.plot_modes:
         panels = args.modes if args.modes is not None and args.modes > 0 else MODE_PANELS
         modes = natural_frequencies(model, panels, linear_model=linearize(model, solution))
         with atomic_output(args.plot_modes, "--plot-modes") as temporary:
             plot_modes(model, modes, temporary, count=panels)
+        drawn = min(panels, len(modes.frequencies_hz))
+        wrote(args.plot_modes, f"the {drawn} lowest mode shape{'s' * (drawn > 1)}")
