@@ -21,7 +21,7 @@ _LAZY = {
     "analysis.inverse_statics": ("InverseStatics", "inverse_statics"),
     "analysis.linearization": ("LinearModel", "linearize"),
     "analysis.modal": ("Modes", "buckling_load_factors", "natural_frequencies"),
-    "analysis.statespace": ("principal_gains", "state_space"),
+    "analysis.statespace": ("principal_gains", "state_space", "state_space_matrices"),
     "analysis.statics": ("StaticSolution", "static_equilibrium"),
     "analysis.stresses": ("beam_stresses", "stresses_along"),
     "mechanics.actuators": ("steady_port_values", "steady_slopes"),

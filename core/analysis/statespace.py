@@ -1,4 +1,5 @@
-"""State-space models of the declared inputs and outputs, as python-control objects.
+"""State-space models of the declared inputs and outputs, as python-control objects
+(`state_space`) or as their plain matrices (`state_space_matrices`).
 
 With the state [dq, dq'] (deviations from the configuration of the linear model):
 
@@ -62,6 +63,47 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None) -> con
     """
     import control  # 0.5 s to import (scipy.signal, matplotlib): only where it is used
 
+    A, B, C, D, states = _matrices(model, linear_model)
+    return control.ss(
+        A, B, C, D,
+        inputs=[p.name for p in model.inputs],
+        outputs=[p.name for p in model.outputs],
+        states=states,
+        name=model.name,
+    )
+
+
+@blas_threads()
+def state_space_matrices(model: Model, *, linear_model: LinearModel | None = None,
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The matrices A, B, C, D of `state_space(model)`, as numpy arrays, without importing
+    python-control (a second of a command's start-up that needs no more than the matrices).
+
+    Parameters
+    ----------
+    model : Model
+        With [inputs] and [outputs].
+    linear_model : LinearModel, optional
+        The linearisation to use (default: at the static equilibrium under the scene's
+        loads).
+
+    Returns
+    -------
+    (A, B, C, D) : tuple of ndarray
+        (n, n), (n, n_inputs), (n_outputs, n), (n_outputs, n_inputs) for the continuous
+        system x' = A x + B u, y = C x + D u; the states, inputs and outputs (and their
+        units) those of `state_space`.
+
+    Raises
+    ------
+    SceneError
+        The model declares no inputs or no outputs.
+    """
+    return _matrices(model, linear_model)[:4]
+
+
+def _matrices(model, linear_model):
+    """A, B, C, D and the states' names of the model's state space (module docstring)."""
     if not model.inputs or not model.outputs:
         raise SceneError(
             f"{model.source}: a state-space model needs [inputs] and [outputs]; "
@@ -86,13 +128,7 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None) -> con
         offset = 0 if port.quantity == "position" else n
         C[row, offset:offset + n] = rows[row]
     D = np.zeros((len(model.outputs), len(model.inputs)))
-    return control.ss(
-        A, B, C, D,
-        inputs=[p.name for p in model.inputs],
-        outputs=[p.name for p in model.outputs],
-        states=states,
-        name=model.name,
-    )
+    return A, B, C, D, states
 
 
 @blas_threads()
@@ -129,8 +165,7 @@ def principal_gains(model: Model, frequencies_hz: ArrayLike, *,
     ValueError
         A frequency is negative or not finite.
     """
-    system = state_space(model, linear_model=linear_model)
-    A, B, C, D = (np.asarray(m, dtype=float) for m in (system.A, system.B, system.C, system.D))
+    A, B, C, D = state_space_matrices(model, linear_model=linear_model)
     omega = 2.0 * np.pi * np.asarray(frequencies_hz, dtype=float).reshape(-1)
     if not np.all(np.isfinite(omega)) or np.any(omega < 0.0):
         raise ValueError("principal_gains: expected finite frequencies >= 0 (Hz)")
