@@ -6,7 +6,8 @@
 
 - `ThirdOrderProfile`: jerk-limited point-to-point moves (profiles.py).
 - `design_feedback`: PID-like loops for a cross-over on the scene's linear model, with phase,
-  gain and modulus margins of the sampled loop (feedback.py).
+  gain and modulus margins of the sampled loop (feedback.py, robustness.py), computed with
+  the plain-numpy state spaces of lti.py: the loop never imports python-control.
 - `low_frequency_model`, `StableInverse`: feedforward, the inverse of the low-frequency model
   and a stable approximate inverse of models with bad zeros (feedforward.py).
 - `LoopController`: feedback plus feedforward at one sample rate, the same object on every
@@ -20,9 +21,10 @@
   and reference (samples or r(t), user_reference.py) in place of the designed ones; encoder
   quantisation and a sinusoidal (mains) force at the actuators (disturbances.py).
 
-The modules import one way: errors, profiles, feedback, feedforward, disturbances,
-user_reference -> loop_controller, user_controller -> loop_design, sample_loop, plants,
-controller_fmu -> cosim -> runner -> cli.
+The modules import one way: errors, profiles, lti -> robustness -> feedback, feedforward,
+disturbances, user_reference -> loop_controller, user_controller -> loop_design,
+sample_loop, plants, controller_fmu -> cosim -> runner -> cli (runner imports cosim, and
+with it the FMU packages, only for the FMU plants).
 
 Only flexure.core's public API is used: no physics here.
 """

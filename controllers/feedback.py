@@ -18,8 +18,10 @@ values once per macro step (see loop_controller.py). k_p is set so that |L(e^(j 
 for the discrete loop gain L(z) = P_zoh(z) z^-1 C(z).
 
 The design reports phase margin, gain margin and modulus margin (1 / max |S|, the smallest
-distance of L to -1) from python-control, and refuses (ControlDesignError) a design whose
-closed loop has a pole on or outside the unit circle.
+distance of L to -1) of the sampled loop (robustness.py), and refuses (ControlDesignError) a
+design whose closed loop has a pole on or outside the unit circle. It computes with the plain
+numpy systems of lti.py; the python-control objects a user reads (`FeedbackDesign.controller`,
+`.continuous`, `.loop_gain`) are built from them on first access.
 """
 
 from __future__ import annotations
@@ -31,9 +33,10 @@ import numpy as np
 
 from flexure.core import FlexureError, blas_threads
 
+from .lti import LinearSystem, append, series, transfer_function, tustin, zoh
 from .robustness import Robustness, check_robustness, delay_block
 
-if TYPE_CHECKING:  # python-control takes 0.5 s to import: imported where it is used
+if TYPE_CHECKING:  # python-control takes a second to import: imported where it is used
     import control
     from numpy.typing import ArrayLike
 
@@ -58,19 +61,22 @@ class LoopPair:
 class FeedbackDesign:
     """A discrete decentralised controller and what its design found.
 
-    `controller` is a discrete control.StateSpace (dt = 1/fs) from the errors r - y (m) of
-    the loops to their forces (N); `continuous` the controllers C(s) before discretisation
-    (one per loop); the margins are the worst over the loops, each taken with the other
-    loops open (the closed-loop poles are those of all loops closed together).
+    `feedback` is the discrete controller (dt = 1/fs) from the errors r - y (m) of the loops
+    to their forces (N), a plain-numpy `LinearSystem`; `controller` the same as a
+    python-control StateSpace, `continuous` the controllers C(s) before discretisation (one
+    python-control TransferFunction per loop, from `shapes`) and `loop_gain` L(z) of the
+    first loop with the others open (from `first_loop`), each built on first access. The
+    margins are the worst over the loops, each taken with the other loops open (the
+    closed-loop poles are those of all loops closed together).
     """
 
     pairs: list
     crossover_rad_s: float
     sample_rate_hz: float
     delay_samples: int
-    continuous: list
-    controller: control.StateSpace
-    loop_gain: control.StateSpace  # L(z) of the first loop, the others open
+    shapes: list  # (num, den) of each loop's C(s), descending powers of s: N/m
+    feedback: LinearSystem | None  # the discrete controller, errors (m) to forces (N)
+    first_loop: LinearSystem | None  # L(z) of the first loop, the others open
     phase_margin_deg: float
     gain_margin: float
     modulus_margin: float
@@ -79,6 +85,29 @@ class FeedbackDesign:
     # "designed" here; "state space" or "callable" for a controller of one's own
     # (user_controller.py), whose callable kind has no margins (nan) and no poles
     kind: str = "designed"
+
+    @property
+    def controller(self) -> control.StateSpace | None:
+        """The discrete controller as a python-control StateSpace (dt = 1/fs), from the
+        errors (m, rad) to the forces (N, N m); None for a callable one. Imports
+        python-control."""
+        return None if self.feedback is None else self.feedback.to_control()
+
+    @property
+    def continuous(self) -> list:
+        """Each loop's C(s) before discretisation, a python-control TransferFunction (N/m);
+        empty for a controller of one's own. Imports python-control."""
+        if not self.shapes:
+            return []
+        import control
+
+        return [control.tf(num, den) for num, den in self.shapes]
+
+    @property
+    def loop_gain(self) -> control.StateSpace | None:
+        """L(z) = P_zoh(z) z^-d C(z) of the first loop, the others open, a python-control
+        StateSpace; None for a controller of one's own. Imports python-control."""
+        return None if self.first_loop is None else self.first_loop.to_control()
 
     @property
     def spectral_radius(self) -> float:
@@ -135,23 +164,37 @@ def colocated_pairs(model):
     return pairs
 
 
+def pid_lowpass_polynomials(crossover: float, *, gain: float = 1.0,
+                            integral_ratio: float = 10.0, lead_ratio: float = 3.0,
+                            lowpass_ratio: float = 10.0, lowpass_damping: float = 0.5,
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """The continuous PID-like controller C(s) around `crossover` (rad/s) as its numerator
+    and denominator (descending powers of s; C in N/m): the module docstring's product
+    k_p (s + w_i) (s / w_z + 1) w_lp^2 / (s (s / w_p + 1) (s^2 + 2 z w_lp s + w_lp^2))."""
+    wc = float(crossover)
+    wi, wz, wp, wlp = wc / integral_ratio, wc / lead_ratio, wc * lead_ratio, wc * lowpass_ratio
+    num = gain * np.polymul(np.polymul([1.0, wi], [1.0 / wz, 1.0]), [wlp**2])
+    den = np.polymul(np.polymul([1.0, 0.0], [1.0 / wp, 1.0]),
+                     [1.0, 2 * lowpass_damping * wlp, wlp**2])
+    return num, den
+
+
 def pid_lowpass(crossover: float, *, gain: float = 1.0, integral_ratio: float = 10.0,
                 lead_ratio: float = 3.0, lowpass_ratio: float = 10.0,
                 lowpass_damping: float = 0.5) -> control.TransferFunction:
-    """The continuous PID-like controller C(s) (N/m) around `crossover` (rad/s)."""
-    wc = float(crossover)
-    wi, wz, wp, wlp = wc / integral_ratio, wc / lead_ratio, wc * lead_ratio, wc * lowpass_ratio
+    """The continuous PID-like controller C(s) (N/m) around `crossover` (rad/s), a
+    python-control TransferFunction (`pid_lowpass_polynomials`)."""
     import control
 
-    s = control.tf("s")
-    return (gain * (s + wi) / s * (s / wz + 1) / (s / wp + 1)
-            * wlp**2 / (s**2 + 2 * lowpass_damping * wlp * s + wlp**2))
+    return control.tf(*pid_lowpass_polynomials(
+        crossover, gain=gain, integral_ratio=integral_ratio, lead_ratio=lead_ratio,
+        lowpass_ratio=lowpass_ratio, lowpass_damping=lowpass_damping))
 
 
 @blas_threads()
 def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.0,
                     delay_samples: int = 1, linear_model: LinearModel | None = None,
-                    plant: control.StateSpace | None = None,
+                    plant: control.StateSpace | LinearSystem | None = None,
                     **shape: float) -> FeedbackDesign:
     """Design the discrete colocated loops of `model` for a cross-over at a sample rate.
 
@@ -167,7 +210,7 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
         Samples of computation delay in the loop (>= 0).
     linear_model : LinearModel, optional
         The linearisation for the plant (default: at the static equilibrium).
-    plant : control.StateSpace, optional
+    plant : control.StateSpace or LinearSystem, optional
         A continuous plant with the model's inputs and outputs, instead of the linear model.
     **shape : float
         integral_ratio, lead_ratio, lowpass_ratio, lowpass_damping for `pid_lowpass`
@@ -186,42 +229,42 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
         colocated position output, a plant without gain at the cross-over, or an unstable
         closed loop.
     """
-    import control  # python-control takes 0.5 s to import: only where it is used
-
     if not (np.isfinite(fs) and fs > 0):
         raise ControlDesignError(f"sample rate must be a positive number of Hz, got {fs}")
     if not (np.isfinite(crossover) and 0 < crossover < np.pi * fs):
         raise ControlDesignError(
             f"cross-over must lie between 0 and the Nyquist frequency pi fs = {np.pi * fs:g} "
             f"rad/s, got {crossover}")
-    from flexure.core import state_space  # the models (numba, scipy) on first use
-
-    pairs = colocated_pairs(model)
-    full = plant if plant is not None else state_space(model, linear_model=linear_model)
-    Ts = 1.0 / fs
-    sub = full[[p.output_index for p in pairs], [p.input_index for p in pairs]]
-    plant_d = control.c2d(control.ss(sub), Ts, method="zoh")
-    z = np.exp(1j * crossover * Ts)
-    continuous, discrete = [], []
-    for k, _ in enumerate(pairs):
-        shape_c = pid_lowpass(crossover, **shape)
-        c_d = control.c2d(shape_c, Ts, method="tustin", prewarp_frequency=crossover)
-        p_kk = _siso(plant_d, k, k)
-        magnitude = abs(complex(p_kk(z)) * complex(c_d(z)))
-        if not np.isfinite(magnitude) or magnitude == 0:
-            raise ControlDesignError(f"loop {pairs[k].input_name}: the plant has no gain at "
-                                     f"{crossover} rad/s")
-        continuous.append(shape_c / magnitude)
-        discrete.append(control.ss(c_d / magnitude))
-    controller = control.append(*discrete) if len(discrete) > 1 else discrete[0]
     if delay_samples < 0:
         raise ControlDesignError(f"delay_samples must be >= 0, got {delay_samples}")
+    from flexure.core import state_space_matrices  # the models (numba, scipy) on first use
+
+    pairs = colocated_pairs(model)
+    full = (LinearSystem.of(plant) if plant is not None
+            else LinearSystem(*state_space_matrices(model, linear_model=linear_model)))
+    Ts = 1.0 / fs
+    sub = full.subsystem([p.output_index for p in pairs], [p.input_index for p in pairs])
+    plant_d = zoh(sub, Ts)
+    z = np.exp(1j * crossover * Ts)
+    shapes, discrete = [], []
+    for k, pair in enumerate(pairs):
+        num, den = pid_lowpass_polynomials(crossover, **shape)
+        num_z, den_z = tustin(num, den, Ts, prewarp=crossover)
+        c_z = np.polyval(num_z, z) / np.polyval(den_z, z)
+        magnitude = abs(complex(plant_d.response(z)[k, k]) * c_z)
+        if not np.isfinite(magnitude) or magnitude == 0:
+            raise ControlDesignError(f"loop {pair.input_name}: the plant has no gain at "
+                                     f"{crossover} rad/s")
+        shapes.append((num / magnitude, den))
+        discrete.append(transfer_function(num_z / magnitude, den_z, Ts))
+    controller = append(*discrete) if len(discrete) > 1 else discrete[0]
     delays = delay_block(len(pairs), delay_samples, Ts)
-    first = _siso(plant_d, 0, 0) * _siso(delays, 0, 0) * _siso(controller, 0, 0)
+    first = series(controller.subsystem([0], [0]), delays.subsystem([0], [0]),
+                   plant_d.subsystem([0], [0]))
     design = FeedbackDesign(
         pairs=pairs, crossover_rad_s=float(crossover), sample_rate_hz=float(fs),
-        delay_samples=int(delay_samples), continuous=continuous, controller=controller,
-        loop_gain=first, phase_margin_deg=np.nan, gain_margin=np.nan, modulus_margin=np.nan,
+        delay_samples=int(delay_samples), shapes=shapes, feedback=controller,
+        first_loop=first, phase_margin_deg=np.nan, gain_margin=np.nan, modulus_margin=np.nan,
         closed_loop_poles=np.zeros(0))
     # margins per loop with the other loops open (the worst of each reported) and closed
     robust = check_robustness(design, plant_d, name=model.name)
@@ -238,12 +281,6 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
     return design
 
 
-def _siso(sys, i, j):
-    import control
-
-    return control.ss(sys.A, sys.B[:, [j]], sys.C[[i], :], sys.D[[i], [j]], sys.dt)
-
-
 class DiscreteController:
     """A discrete state-space controller stepped one sample at a time (plain numpy).
 
@@ -251,12 +288,12 @@ class DiscreteController:
 
     Parameters
     ----------
-    sys : control.StateSpace
+    sys : LinearSystem or control.StateSpace
         A discrete system (anything with A, B, C, D), from errors (m, rad) to forces (N,
         N m, or V for a drive signal); its time step is the caller's sample period.
     """
 
-    def __init__(self, sys: control.StateSpace) -> None:
+    def __init__(self, sys: LinearSystem | control.StateSpace) -> None:
         self.A, self.B, self.C, self.D = (np.ascontiguousarray(np.atleast_2d(
             np.asarray(m, float))) for m in (sys.A, sys.B, sys.C, sys.D))
         self.x = np.zeros(self.A.shape[0])

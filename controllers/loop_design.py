@@ -148,7 +148,7 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
     else:
         if design is None:
             design = design_feedback(model, crossover=crossover, fs=fs, **design_options)
-        feedback = DiscreteController(design.controller)
+        feedback = DiscreteController(design.feedback)
     n = len(design.pairs)
     if not 0 <= axis < n:
         raise LoopError(f"axis {axis} out of range: {model.name} has {n} loop(s)")

@@ -26,6 +26,8 @@ import numpy as np
 
 from flexure.core import blas_threads
 
+from .lti import LinearSystem, delay, series, unity_feedback_poles, zoh
+
 
 def frequency_response(sys, omega, *, eigen=None):
     """The response (n_out, n_in, len(omega)) of a discrete state space at z = exp(j w dt).
@@ -173,16 +175,9 @@ def others_closed(L, k):
 
 
 def delay_block(n, samples, dt):
-    """z^-samples on each of n channels: a discrete control.StateSpace (n inputs, n outputs).
-    """
-    import control
-
-    if samples < 0:
-        raise ValueError(f"delay_samples must be >= 0, got {samples}")
-    if samples == 0:
-        return control.ss([], [], [], np.eye(n), dt)
-    one = control.ss(control.tf([1], [1] + [0] * samples, dt))
-    return control.append(*[one] * n) if n > 1 else one
+    """z^-samples on each of n channels: a discrete `LinearSystem` (n inputs, n outputs;
+    ValueError for a negative number of samples)."""
+    return delay(n, samples, dt)
 
 
 @dataclass(frozen=True)
@@ -230,7 +225,7 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     ----------
     design : FeedbackDesign
         The loops (their controller, sample rate and delay).
-    plant : control.StateSpace
+    plant : control.StateSpace or LinearSystem
         From the loops' inputs (N) to their outputs (m), in the loops' order: continuous
         (e.g. ``state_space(model)[outputs, inputs]``), sampled here with a zero-order hold,
         or already sampled so at the loops' period 1 / fs (the designer has it: sampling a
@@ -247,12 +242,10 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     ValueError
         A discrete plant at another sample period.
     """
-    import control
-
     dt = 1.0 / design.sample_rate_hz
-    plant = control.ss(plant)
-    if plant.isctime():
-        plant_d = control.c2d(plant, dt, method="zoh")
+    plant = LinearSystem.of(plant)
+    if not plant.discrete:
+        plant_d = zoh(plant, dt)
     elif plant.dt is not True and math.isclose(plant.dt, dt, rel_tol=1e-12):
         plant_d = plant
     else:
@@ -260,9 +253,9 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
                          f"{plant.dt}")
     n = len(design.pairs)
     # one eigendecomposition of the plant: its poles place the grid, its modes the response
-    eigen = np.linalg.eig(plant_d.A) if plant_d.nstates else None
+    eigen = np.linalg.eig(plant_d.A) if plant_d.states else None
     omega = margin_grid(design.crossover_rad_s, dt, eigen[0] if eigen is not None else np.zeros(0))
-    L = loop_response(plant_d, design.controller, design.delay_samples, omega, eigen=eigen)
+    L = loop_response(plant_d, design.feedback, design.delay_samples, omega, eigen=eigen)
     open_m = np.array([siso_margins(L[k, k], omega, with_crossover=True)
                        for k in range(n)])
     open_m, crossovers = open_m[:, :3], open_m[:, 3]
@@ -271,11 +264,11 @@ def check_robustness(design, plant, *, name: str = "") -> Robustness:
     S = np.linalg.inv(np.eye(n)[None] + np.moveaxis(L, 2, 0))
     peaks = np.linalg.svd(S, compute_uv=False)[:, 0]
     delays = delay_block(n, design.delay_samples, dt)
-    closed = control.feedback(plant_d * delays * design.controller, np.eye(n))
+    poles = unity_feedback_poles(series(design.feedback, delays, plant_d))
     return Robustness(
-        plant=name, states=int(plant_d.nstates),
+        plant=name, states=int(plant_d.states),
         loops=[f"{p.input_name} -> {p.output_name}" for p in design.pairs],
         open_margins=open_m, closed_margins=closed_m,
         sensitivity_peak=float(peaks.max()),
         peak_frequency_hz=float(omega[np.argmax(peaks)] / (2 * np.pi)),
-        closed_loop_poles=np.asarray(closed.poles()), crossovers_rad_s=crossovers)
+        closed_loop_poles=poles, crossovers_rad_s=crossovers)

@@ -31,18 +31,21 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from .errors import LoopError
 from .feedback import FeedbackDesign
+from .lti import LinearSystem
 from .robustness import check_robustness
 
 
 def is_system(value) -> bool:
-    """Whether `value` is a python-control LTI system (which is callable too)."""
-    import control
-
-    return isinstance(value, control.LTI)
+    """Whether `value` is a python-control LTI system (which is callable too). Without
+    python-control imported nothing is one: a callable alone does not import it."""
+    control = sys.modules.get("control")
+    return control is not None and isinstance(value, control.LTI)
 
 
 class CallableFeedback:
@@ -171,7 +174,7 @@ def user_design(model, controller, *, fs: float, crossover: float, plant=None,
     plant, linear_model : optional
         As for `design_feedback`: the continuous model the loops are checked on.
     """
-    from flexure.core import state_space  # the models (numba, scipy) on first use
+    from flexure.core import state_space_matrices  # the models (numba, scipy) on first use
 
     from .feedback import DiscreteController, colocated_pairs
 
@@ -187,7 +190,7 @@ def user_design(model, controller, *, fs: float, crossover: float, plant=None,
     functions = [c for c in entries if callable(c) and not is_system(c)]
     design = FeedbackDesign(
         pairs=pairs, crossover_rad_s=float(crossover), sample_rate_hz=float(fs),
-        delay_samples=1, continuous=[], controller=None, loop_gain=None,
+        delay_samples=1, shapes=[], feedback=None, first_loop=None,
         phase_margin_deg=np.nan, gain_margin=np.nan, modulus_margin=np.nan,
         closed_loop_poles=np.zeros(0), kind="callable")
     if functions:
@@ -200,9 +203,10 @@ def user_design(model, controller, *, fs: float, crossover: float, plant=None,
         design.crossover_rad_s = float("nan")  # not known without a linear model
         return CallableFeedback(functions, names), design
     system = discrete_system(controller, fs=fs, names=names)
-    full = plant if plant is not None else state_space(model, linear_model=linear_model)
-    sub = full[[p.output_index for p in pairs], [p.input_index for p in pairs]]
-    design.controller, design.kind = system, "state space"
+    full = (LinearSystem.of(plant) if plant is not None
+            else LinearSystem(*state_space_matrices(model, linear_model=linear_model)))
+    sub = full.subsystem([p.output_index for p in pairs], [p.input_index for p in pairs])
+    design.feedback, design.kind = LinearSystem.of(system), "state space"
     robust = check_robustness(design, sub, name=model.name)
     gm, pm, sm = robust.open_margins.min(axis=0)
     poles = robust.closed_loop_poles
@@ -217,4 +221,4 @@ def user_design(model, controller, *, fs: float, crossover: float, plant=None,
             f"unstable: pole z = {worst:.6g} (|z| = {abs(worst):.6f} >= 1); phase margin "
             f"{pm:.1f} deg, gain margin {gm:.3g} (loops {', '.join(names)}, one sample of "
             "computation delay, the scene's linear model)")
-    return DiscreteController(system), design
+    return DiscreteController(design.feedback), design
