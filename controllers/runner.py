@@ -27,7 +27,6 @@ import numpy as np
 
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
-from .cosim import run_cosimulation, scene_fmu
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
 from .loop_result import TARGET, LoopResult
@@ -239,6 +238,8 @@ def _disturbance_settings(loop, quantum, amplitude):
 def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir, progress,
                overrides):
     """t, reference, position, force of the loop on the plant named `plant`."""
+    if plant in ("fmu", "libcosim"):  # the FMU plants' packages (pythonfmu, ...) only here
+        from .cosim import run_cosimulation, scene_fmu
     if plant == "libcosim":
         return run_cosimulation(model, scene, controller, design, method=method, rtol=rtol,
                                 workdir=workdir, progress=progress, overrides=overrides)
