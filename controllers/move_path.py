@@ -24,7 +24,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from .feedback import ControlDesignError, colocated_pairs
 
@@ -42,6 +41,9 @@ class MovePath:
     targets: dict  # {coordinate: displacement at s = 1}
 
     def __post_init__(self):
+        from scipy.interpolate import CubicSpline  # for a path only: the loop without one
+        # imports neither scipy.interpolate nor scipy.optimize
+
         _check(self)
         object.__setattr__(self, "_spline", CubicSpline(self.s, self.displacements, axis=0))
         if self.forces is not None:

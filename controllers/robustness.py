@@ -97,38 +97,54 @@ def siso_margins(response, omega, *, with_crossover: bool = False):
     margin is taken (nan if |L| never crosses 1).
 
     python-control's 'frd' method (`control.stability_margins` of an interpolating FRD), on
-    the same interpolant: the cubic spline through the response's real and imaginary parts
-    (not-a-knot, as FITPACK's interpolating splprep), the crossings of the grid refined by
-    Brent's method on it, the local minima of |1 + L| by Brent's minimiser. That function
-    evaluates its spline point by point across the whole grid three times (0.5 s a loop
-    on the manipulator's 13 000-frequency grid); here the grid's values are the response
-    itself, and the spline is evaluated only where a crossing or minimum is refined.
-    tests/test_robustness.py checks the two agree.
+    the same interpolant: the not-a-knot cubic spline through the response (spline.py; the
+    interpolant of FITPACK's interpolating splprep, which python-control fits to the real
+    and imaginary parts), refined where the grid shows a crossing of the negative real axis,
+    a crossing of |L| = 1 or a local minimum of |1 + L|. python-control refines them with
+    Brent's root finder and minimiser; here each is a root of a polynomial of the spline's
+    piece on that interval (Im L, |L|^2 - 1, the derivative of |1 + L|^2): exact on the
+    interpolant, with numpy alone. tests/test_robustness.py checks the two agree.
     """
-    from scipy.interpolate import make_interp_spline
-    from scipy.optimize import brentq, minimize_scalar
+    from .spline import cubic_pieces, roots_within
 
     L, w = np.asarray(response, complex), np.asarray(omega, float)
-    spline = make_interp_spline(w, np.column_stack([L.real, L.imag]), k=3)
+    pieces = cubic_pieces(w, L)
+    h = np.diff(w)
+
+    def first_root(polynomial_of, index, keep=lambda i, t: True):
+        """On each interval of `index`, its first root of the polynomial `polynomial_of(c)`
+        of the piece's coefficients c (that `keep` accepts), as a frequency (rad/s)."""
+        found = []
+        for i in index:
+            roots = [t for t in roots_within(polynomial_of(pieces[i]), h[i]) if keep(i, t)]
+            if roots:
+                found.append(w[i] + roots[0])
+        return np.array(found)
 
     def at(x):
-        value = spline(x)
-        return complex(value[0], value[1])
+        i = int(np.clip(np.searchsorted(w, x, side="right") - 1, 0, h.size - 1))
+        return complex(np.polyval(pieces[i], x - w[i]))
 
-    def brent_roots(f, on_grid, keep=None):
-        (index,) = np.nonzero(np.diff(np.sign(on_grid)))
-        if keep is not None:
-            index = index[keep(index)]
-        return np.array([brentq(f, w[i], w[i + 1]) for i in index])
+    def squared(c):  # |c(t)|^2, a real polynomial of twice the degree
+        return np.polymul(c.real, c.real) + np.polymul(c.imag, c.imag)
 
-    # where L crosses the negative real axis (angle(-L) changes sign), and |L| crosses 1
-    w_180 = brent_roots(lambda x: np.angle(-at(x)), np.angle(-L), lambda i: L.real[i] <= 0)
-    w_c = brent_roots(lambda x: abs(at(x)) - 1.0, np.abs(L) - 1.0)
+    # where L crosses the negative real axis (Im L changes sign, Re L < 0), and |L| crosses 1
+    (index,) = np.nonzero(np.diff(np.sign(np.angle(-L))))
+    w_180 = first_root(lambda c: c.imag, index[L.real[index] <= 0],
+                       lambda i, t: np.polyval(pieces[i], t).real <= 0)
+    (index,) = np.nonzero(np.diff(np.sign(np.abs(L) - 1.0)))
+    w_c = first_root(lambda c: np.polysub(squared(c), [1.0]), index)
+    # the local minima of |1 + L| on the grid, each refined on the two pieces around it
     distance = np.abs(L + 1.0)
     (index,) = np.nonzero(np.diff(np.sign(np.diff(distance))) > 0)
-    w_s = np.array([minimize_scalar(lambda x: abs(at(x) + 1.0), bracket=(w[i], w[i + 1])).x
-                    for i in index])
-    w_s = w_s[(w_s >= w[0]) & (w_s <= w[-1])]
+    w_s = []
+    for i in index:
+        candidates = [w[i + 1]]
+        for j in (i, i + 1):
+            shifted = pieces[j] + np.array([0, 0, 0, 1.0])  # 1 + L
+            candidates += [w[j] + t for t in roots_within(np.polyder(squared(shifted)), h[j])]
+        w_s.append(min(candidates, key=lambda x: abs(at(x) + 1.0)))
+    w_s = np.array(w_s)
 
     with np.errstate(divide="ignore"):  # |L| = 0 gives an infinite margin
         gm_all = 1.0 / np.abs([at(x) for x in w_180]) if w_180.size else np.zeros(0)

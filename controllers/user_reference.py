@@ -32,7 +32,6 @@ own and does not combine with one given here.
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from .errors import LoopError
 
@@ -91,6 +90,8 @@ def reference_samples(reference, *, n_loops: int, fs: float, samples: int,
 def interval_means(reference, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean position, velocity and acceleration (m, m/s, m/s^2) of the reference's cubic spline
     over each interval [t_k, t_k+1), k = 0 .. len(reference) - 1; arrays like `reference`."""
+    from scipy.interpolate import CubicSpline  # for a given reference only
+
     r = np.asarray(reference, float)
     knots = np.vstack([r, r[-1:]])  # one more sample, held, closes the last interval
     h = 1.0 / fs

@@ -120,15 +120,16 @@ def test_sundials_missing_is_named(monkeypatch):
 def test_the_loop_command_imports_neither_python_control_nor_scipy_signal(
         arguments, plot, tmp_path):
     """The designed loop computes its controller, delays, closed-loop poles and margins with
-    numpy (controllers/lti.py, robustness.py): a whole `flexure loop` run, with or without
-    its plot, ends with python-control, scipy.signal and the FMU packages not imported."""
+    numpy (controllers/lti.py, robustness.py, spline.py): a whole `flexure loop` run, with or
+    without its plot, ends with python-control, scipy.signal, scipy.interpolate,
+    scipy.optimize and the FMU packages not imported."""
     png = tmp_path / "loop.png"
     arguments = [str(png) if a == "PLOT" else a for a in arguments]
     probe = ("import json, sys\nfrom flexure.core.cli import main\n"
              f"code = main({arguments!r})\n"
              "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] in "
-             "('control', 'fmpy', 'pythonfmu', 'libcosimpy') or m == 'scipy.signal' "
-             "or m.startswith('scipy.signal.'))]))")
+             "('control', 'fmpy', 'pythonfmu', 'libcosimpy') or m.split('.')[:2] in "
+             "(['scipy', 'signal'], ['scipy', 'interpolate'], ['scipy', 'optimize']))]))")
     completed = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                                check=True, cwd=tmp_path)
     code, loaded = json.loads(completed.stdout.splitlines()[-1])
