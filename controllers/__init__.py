@@ -21,10 +21,10 @@
   and reference (samples or r(t), user_reference.py) in place of the designed ones; encoder
   quantisation and a sinusoidal (mains) force at the actuators (disturbances.py).
 
-The modules import one way: errors, profiles, lti -> robustness -> feedback, feedforward,
-disturbances, user_reference -> loop_controller, user_controller -> loop_design,
-sample_loop, plants, controller_fmu -> cosim -> runner -> cli (runner imports cosim, and
-with it the FMU packages, only for the FMU plants).
+The modules import one way: errors, profiles, lti, spline -> robustness -> feedback,
+feedforward, disturbances, user_reference -> loop_controller, user_controller ->
+loop_design, sample_loop, plants, controller_fmu -> cosim -> runner -> cli (runner imports
+cosim, and with it the FMU packages, only for the FMU plants).
 
 Only flexure.core's public API is used: no physics here.
 """
