@@ -417,7 +417,7 @@ class Esdirk:
     def failure(self, status, t):
         """A SimulationError naming the time and the cause; `last_good` is (t, y) of the last
         accepted step."""
-        from .sundials import STATUS_MESSAGES
+        from .status import STATUS_MESSAGES
 
         cause = STATUS_MESSAGES.get(int(self.counters[ed.FAILED_STATUS]))
         detail = f" ({cause})" if cause else ""

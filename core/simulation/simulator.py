@@ -47,7 +47,7 @@ from .methods import METHODS, ONE_STEP_METHODS
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
-from .sundials import STATUS_MESSAGES, make_solver
+from .status import STATUS_MESSAGES
 from .tolerances import atol_vector
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -419,6 +419,8 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
 def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
                      input_function):
     if method not in ONE_STEP_METHODS:
+        from .sundials import make_solver  # its callbacks load with it: only where it runs
+
         return make_solver(data, method, rtol=rtol, atol=atol, max_step=max_step,
                            jacobian=jacobian, max_order=max_order, input_function=input_function)
     refused = {"max_order": max_order is not None, "jacobian": jacobian != "analytic",

@@ -15,7 +15,7 @@ from ..errors import SimulationError
 from ..mechanics.ports import output_value
 from .measuring import start_from_plant
 from .plausibility import RangeCheck
-from .sundials import STATUS_MESSAGES
+from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike

@@ -13,7 +13,7 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
-from .sundials import STATUS_MESSAGES
+from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike

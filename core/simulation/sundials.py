@@ -36,6 +36,7 @@ from ..numerics.native import (
     nvector_data,
 )
 from .methods import SUNDIALS_METHODS
+from .status import STATUS_MESSAGES
 from .sundials_libraries import function_address, libraries
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
@@ -46,17 +47,6 @@ MAX_STEPS_PER_CALL = 1_000_000  # the step limit of a call without a budget of i
 METHODS = SUNDIALS_METHODS  # the methods this module runs
 JACOBIANS = ("analytic", "finite-difference")
 
-STATUS_MESSAGES = {
-    ed.NOT_CONVERGED: "the constraints could not be solved (Newton did not converge: the DOFs "
-                      "may lie beyond the mechanism's reach or at a singular configuration)",
-    ed.SINGULAR_CONSTRAINTS: "a singular configuration: the constraint Jacobian is singular, "
-                             "the DOFs cannot describe the motion through it",
-    ed.SINGULAR_MASS: "the reduced mass matrix M_bar is singular (a DOF without mass)",
-    ed.NONFINITE_STATE: "the state became non-finite",
-    ed.NONFINITE_RESULT: "non-finite accelerations (a singular configuration or a non-finite "
-                         "force)",
-    ed.NOT_CONNECTED: "the engine was called before engine.connect gave it its entry's address",
-}
 
 
 # -- compiled callbacks ---------------------------------------------------------------------------
