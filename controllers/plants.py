@@ -43,7 +43,7 @@ class SimulatorPlant:
         self.simulator.set_inputs(u)
 
     def advance(self, t_end):
-        self.simulator.advance(t_end)
+        self.simulator.advance_to(t_end)
 
     def output(self):
         return np.asarray(self.simulator.outputs(), float)

@@ -49,7 +49,7 @@ def drift(*, t_end=10.0, rtol=1e-9, method="cvode-adams", interval=0.5):
     e0 = mechanical_energy(model, q0, np.zeros(q0.size))
     rows, start = [], time.perf_counter()
     for t in np.arange(interval, t_end + 0.5 * interval, interval):
-        sim.advance(t)
+        sim.advance_to(t)
         change = (mechanical_energy(model, sim.q, sim.qdot) - e0) / e0
         rows.append((t, change, sim.statistics["steps"], time.perf_counter() - start))
     return rows, max(abs(r[1]) for r in rows)

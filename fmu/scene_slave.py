@@ -27,7 +27,7 @@ Variables (only what the scene has):
 - one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
   by rebuilding the model from the scene with the new value when initialization ends.
 
-`advance(t, h)` is `simulator.set_inputs(u); simulator.advance(t + h)`: the simulator picks its
+`advance(t, h)` is `simulator.set_inputs(u); simulator.advance_to(t + h)`: the simulator picks its
 own internal steps; any h works. A `SimulationError` (non-finite input, integrator or Newton
 failure) leaves the simulator at its last good state and the step is answered with
 fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs,
@@ -253,7 +253,7 @@ class SceneSlave(SafeSlave):
         if self.inputs != self._inputs_given:
             self.simulator.set_inputs(self.inputs)
             self._inputs_given = self.inputs.copy()
-        self.simulator.advance(t + h, max_steps=self.max_steps)
+        self.simulator.advance_to(t + h, max_steps=self.max_steps)
         self._refresh()
         warnings = self.simulator.range_warnings()  # empty within the range
         if warnings:

@@ -300,13 +300,13 @@ def test_a_restored_state_with_a_coil_continues_bit_for_bit():
     model = build_model(truss())
     sim = Simulator(model, method="esdirk", rtol=1e-7)
     sim.set_inputs([1.0])
-    sim.advance(0.02)
+    sim.advance_to(0.02)
     state = sim.get_state()
     assert state["y"].size == 3 and state["y"][2] > 0.1
-    sim.advance(0.05)
+    sim.advance_to(0.05)
     other = Simulator(model, method="esdirk", rtol=1e-7)
     other.set_state(state)
-    other.advance(0.05)
+    other.advance_to(0.05)
     assert np.array_equal(other.state, sim.state) and np.array_equal(other.currents,
                                                                     sim.currents)
     plain = Simulator(build_model(truss(drive="current")))
@@ -326,7 +326,7 @@ def test_a_velocity_output_reads_the_velocity_beside_the_coil_current():
     data["outputs"]["v"] = {"node": "2", "coordinate": "x", "quantity": "velocity"}
     sim = Simulator(build_model(data), rtol=1e-9)
     sim.set_inputs([1.0])
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     x, v = sim.outputs()
     assert v == sim.qdot[0] and v > 0.0 and sim.currents[0] > 0.0
     assert x == sim.q[0]  # x is the DOF itself
@@ -352,7 +352,7 @@ def test_the_compiled_loop_holds_the_drive_signal_as_a_python_loop_does():
         other.set_inputs([u])
         assert u == drive[k, 0]
         u = gain * (reference[0, 0] - y)
-        other.advance((k + 1) / fs)
+        other.advance_to((k + 1) / fs)
     assert np.array_equal(other.state, sim.state) and other.time == t[-1]
     assert np.ptp(position) > 3e-4 and np.max(np.abs(sim.currents)) > 0
 

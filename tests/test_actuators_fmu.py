@@ -64,7 +64,7 @@ def test_the_fmu_steps_the_drive_signal_as_the_simulator_does_bit_for_bit(tmp_pa
             if k == half:
                 sim.get_state()  # as the FMU's: taking a state marks a restart point
             sim.set_inputs([u])
-            sim.advance(k * h + h)  # the FMU's t + h
+            sim.advance_to(k * h + h)  # the FMU's t + h
             expected.append([sim.outputs()[0], sim.currents[0]])
         assert np.array_equal(np.vstack([first, rest]), np.array(expected))
         assert np.max(np.abs(rest[:, 1])) > 0.5  # amperes: the coil carries current

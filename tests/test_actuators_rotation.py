@@ -296,7 +296,7 @@ def test_the_fmu_has_the_rotational_ports_and_the_coil_and_steps_as_the_simulato
             slave.fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
             measured.append(slave.fmu.getReal(refs))
             sim.set_inputs(list(u))
-            sim.advance(k * h + h)
+            sim.advance_to(k * h + h)
             expected.append([sim.outputs()[1], sim.currents[0]])
         assert np.array_equal(np.array(measured), np.array(expected))
         assert np.abs(np.array(measured)[:, 0]).max() > 1e-5  # rad: it turns

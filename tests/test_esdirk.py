@@ -168,11 +168,11 @@ def test_an_input_change_costs_one_evaluation_not_a_restart():
     model = load_scene("stage_planar_1dof")
     sim = Simulator(model, method="esdirk", rtol=1e-8)
     sim.set_inputs([1.0])
-    sim.advance(1e-3)
+    sim.advance_to(1e-3)
     before = sim.statistics
     for k in range(2, 12):  # ten samples, each with a new force
         sim.set_inputs([1.0 + 0.01 * k])
-        sim.advance(k * 1e-3 / 2 + 0.5e-3)
+        sim.advance_to(k * 1e-3 / 2 + 0.5e-3)
     after = sim.statistics
     assert after["jacobian_evaluations"] == before["jacobian_evaluations"]
     assert after["steps"] - before["steps"] <= 12
@@ -183,17 +183,17 @@ def test_restored_state_continues_bit_for_bit(method):
     model = load_scene("stage_planar_1dof")
     sim = Simulator(model, method=method, rtol=1e-7)
     sim.set_inputs([1.0])
-    sim.advance(0.05)
+    sim.advance_to(0.05)
     state = pickle.loads(pickle.dumps(sim.get_state()))
     assert state["jacobian"].size == 4 and state["lu_step"] > 0
-    sim.advance(0.1)
+    sim.advance_to(0.1)
     sim.set_inputs([-0.5])
-    sim.advance(0.15)
+    sim.advance_to(0.15)
     other = Simulator(model, method=method, rtol=1e-7)
     other.set_state(state)
-    other.advance(0.1)
+    other.advance_to(0.1)
     other.set_inputs([-0.5])
-    other.advance(0.15)
+    other.advance_to(0.15)
     assert other.time == sim.time
     assert np.array_equal(other.q, sim.q) and np.array_equal(other.qdot, sim.qdot)
 
@@ -209,16 +209,16 @@ def test_options_a_one_step_method_does_not_take_are_refused(options, name):
 
 @pytest.mark.parametrize("method", ["esdirk", "cvode-bdf", "ida"])
 def test_step_budget_stops_at_the_last_accepted_state(method):
-    """Simulator.advance(max_steps=5): the integrator counts its own steps (CVODE's and
+    """Simulator.advance_to(max_steps=5): the integrator counts its own steps (CVODE's and
     IDA's max_num_steps, the ESDIRK kernel's budget), the simulator stays at its last good
     state and goes on from there."""
     model = load_scene("stage_planar_3dof")
     sim = Simulator(model, method=method, rtol=1e-8)
     sim.set_inputs([1.0])
     with pytest.raises(SimulationError, match="step budget of 5 integrator steps"):
-        sim.advance(0.5, max_steps=5)
+        sim.advance_to(0.5, max_steps=5)
     assert 0.0 < sim.time < 0.5 and np.all(np.isfinite(sim.state))
-    sim.advance(0.01 if sim.time < 0.01 else sim.time + 0.01)  # and goes on from there
+    sim.advance_to(0.01 if sim.time < 0.01 else sim.time + 0.01)  # and goes on from there
 
 
 def test_a_state_it_cannot_evaluate_is_a_message_naming_the_cause():
@@ -235,7 +235,7 @@ def test_a_state_it_cannot_evaluate_is_a_message_naming_the_cause():
 def test_a_corrupt_integrator_memory_is_refused():
     model = load_scene("truss_1dof_x")
     sim = Simulator(model, method="esdirk")
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     state = sim.get_state()
     for key, value in (("lu_step", -1.0), ("initial_step", np.nan), ("newton_rate", np.inf),
                        ("extra_iterations", -1.0)):
@@ -306,7 +306,7 @@ def test_a_jacobian_grown_stale_is_renewed_and_a_current_one_kept():
     counts = []
     for k in range(1, 201):
         sim.set_inputs([1.0])
-        sim.advance(k * 1e-3)
+        sim.advance_to(k * 1e-3)
         counts.append(sim.integrator.restart_memory["extra_iterations"])
     assert sim.statistics["jacobian_evaluations"] >= 10
     assert threshold <= max(counts) < threshold + one_step  # reached, then renewed
@@ -322,7 +322,7 @@ def test_a_state_saved_with_stale_iterations_counted_replays_bit_for_bit():
     while True:  # to a state with iterations counted
         k += 1
         sim.set_inputs([np.sin(20.0 * k * 1e-3)])
-        sim.advance(k * 1e-3)
+        sim.advance_to(k * 1e-3)
         if sim.get_state()["extra_iterations"] > 0:
             break
     state = pickle.loads(pickle.dumps(sim.get_state()))
@@ -332,7 +332,7 @@ def test_a_state_saved_with_stale_iterations_counted_replays_bit_for_bit():
     for j in range(k + 1, k + 51):
         for s in (sim, other):
             s.set_inputs([np.sin(20.0 * j * 1e-3)])
-            s.advance(j * 1e-3)
+            s.advance_to(j * 1e-3)
     assert np.array_equal(other.q, sim.q) and np.array_equal(other.qdot, sim.qdot)
     renewed = sim.statistics["jacobian_evaluations"] - before
     assert renewed >= 1 and other.statistics["jacobian_evaluations"] == renewed

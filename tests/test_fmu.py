@@ -113,7 +113,7 @@ def test_fmu_equals_in_process_simulation_on_the_same_grid(scene, scene_fmus):
             slave.set(f)
             y_fmu = slave.step(t, h)
             sim.set_inputs([f])
-            sim.advance(t + h)
+            sim.advance_to(t + h)
             np.testing.assert_allclose(y_fmu, sim.outputs(), rtol=0, atol=1e-12)
     finally:
         slave.close()
@@ -128,7 +128,7 @@ def test_fmu_agrees_with_a_continuous_run_within_tolerance(scene_fmus):
     sim = Simulator(load_scene(scene), method=FMU_METHOD, rtol=FMU_RTOL)
     sim.reset(t0=0.0)
     sim.set_inputs([1.0])
-    sim.advance(0.05)
+    sim.advance_to(0.05)
     slave.set(1.0)
     h = 1e-3
     for k in range(50):
@@ -202,7 +202,7 @@ def test_velocity_and_rotation_ports_get_their_units(tmp_path):
     for k in range(5):
         slave.set([1.0, 0.01])
         sim.set_inputs([1.0, 0.01])
-        sim.advance((k + 1) * 1e-3)
+        sim.advance_to((k + 1) * 1e-3)
         np.testing.assert_allclose(slave.step(k * 1e-3, 1e-3), sim.outputs(), rtol=0,
                                    atol=1e-12)
     slave.close()
@@ -229,7 +229,7 @@ def test_von_mises_output_on_request(tmp_path):
         slave.set(0.5)
         y = slave.step(k * 1e-3, 1e-3)
         sim.set_inputs([0.5])
-        sim.advance((k + 1) * 1e-3)
+        sim.advance_to((k + 1) * 1e-3)
         _, expected = stresses_along(model, [np.concatenate([sim.q, sim.qdot])],
                                      inputs=[[0.5]])
         assert y[slave.outputs.index("von_mises_max")] == pytest.approx(

@@ -117,13 +117,13 @@ def test_an_input_change_costs_one_evaluation_less_than_a_restart(augmented_form
     n = len(model.inputs)
     for sim in sims:
         sim.set_inputs(np.ones(n))
-        sim.advance(1e-3)
+        sim.advance_to(1e-3)
     sims[1].set_state(sims[1].get_state())
     counts, states = [], []
     for sim in sims:
         before, start = sim.statistics["rhs_evaluations"], sim.state.copy()
         sim.set_inputs(np.full(n, -2.0))
-        sim.advance(1.25e-3)
+        sim.advance_to(1.25e-3)
         counts.append(sim.statistics["rhs_evaluations"] - before)
         states.append(sim.state - start)
     assert counts[0] == counts[1] - 1

@@ -16,7 +16,7 @@ def _drive(sim, inputs, fs=FS):
     out = []
     for k, u in enumerate(inputs):
         sim.set_inputs(u)
-        sim.advance((k + 1) / fs)
+        sim.advance_to((k + 1) / fs)
         out.append(sim.outputs())
     return np.array(out)
 
@@ -72,9 +72,9 @@ def test_it_starts_at_the_scenes_initial_coordinates_at_rest():
     sim = LinearSimulator(model)
     np.testing.assert_allclose(sim.outputs(), [0.0, 0.1], rtol=0, atol=1e-15)
     sim.set_inputs([0.0])
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     assert 0 < sim.outputs()[0] < 2.2e-3  # swinging toward 1.06 mm
-    sim.advance(200.0)  # the slowest mode's decay time is under 10 s
+    sim.advance_to(200.0)  # the slowest mode's decay time is under 10 s
     coordinates = static_equilibrium(model).coordinates()
     x, y = sim.outputs()
     assert abs(x - coordinates["3.x"]) < 1e-10  # m, 1e-7 of it: the statics and rounding
@@ -138,11 +138,11 @@ def test_bad_inputs_and_times_are_refused(stage3):
         sim.set_inputs(np.zeros(n + 1))
     with pytest.raises(SimulationError, match="t = 0 s: input 'F' is not finite"):
         sim.set_inputs(np.full(n, np.nan))
-    sim.advance(1e-3)
+    sim.advance_to(1e-3)
     for t_end in (1e-3, 0.5e-3, np.inf, np.nan):
         with pytest.raises(SimulationError, match="t = 0.001 s: advance to t_end = .*: "
                                                   "expected a finite time after the current"):
-            sim.advance(t_end)
+            sim.advance_to(t_end)
 
 
 @pytest.mark.parametrize("modal", [True, False])
@@ -155,11 +155,11 @@ def test_a_state_that_overflows_is_refused_and_the_simulator_kept(recwarn, modal
     sim = LinearSimulator(model, modal=modal)
     assert abs(sim.growth_rate - 34.66) < 0.05
     sim.set_inputs([1e-3])
-    sim.advance(1e-3)
+    sim.advance_to(1e-3)
     before = sim.outputs()
     with pytest.raises(SimulationError, match=r"t = 0.001 s: the linearised state overflows "
                                               r".* fastest growth rate: 34.6"):
-        sim.advance(100.0)
+        sim.advance_to(100.0)
     assert sim.time == 1e-3 and np.array_equal(sim.outputs(), before)
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
 
@@ -173,7 +173,7 @@ def test_reset_keeps_the_inputs_as_simulator_does(stage3):
     for sim in (linear, nonlinear):
         sim.set_inputs([1e-3])
         sim.reset()
-        sim.advance(0.05)
+        sim.advance_to(0.05)
     assert linear.inputs.tolist() == nonlinear.inputs.tolist() == [1e-3]
     motion = np.max(np.abs(linear.outputs() - linear.y_start))
     assert motion > 0
@@ -186,9 +186,9 @@ def test_long_runs_keep_one_set_of_factors(stage3):
     sim = LinearSimulator(stage3)
     sim.set_inputs(np.zeros(len(sim.u0)))
     for k in range(1, 240_001):
-        sim.advance(k / FS)
+        sim.advance_to(k / FS)
     assert sim.factor_updates == 1
-    sim.advance(60.01)
+    sim.advance_to(60.01)
     assert sim.factor_updates == 2
 
 

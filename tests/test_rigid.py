@@ -254,7 +254,7 @@ def test_simulation_matches_the_full_system(name):
         simulator.set_inputs(np.ones(len(model.inputs)))
         trajectory = []
         for t in np.linspace(0.002, 0.02, 10):
-            simulator.advance(t)
+            simulator.advance_to(t)
             trajectory.append(simulator.q.copy())
         runs.append(np.array(trajectory))
     scale = np.max(np.ptp(runs[1], axis=0))

@@ -344,7 +344,7 @@ def test_simulator_outputs_are_the_ports_of_the_state():
         "x": {"node": "3", "coordinate": "x"}}))
     sim = Simulator(model, method="esdirk", rtol=1e-8)
     sim.set_inputs([0.01, 0.02, -0.03])
-    sim.advance(0.002)
+    sim.advance_to(0.002)
     measured = sim.outputs()
     config = Mechanics(model).kinematics.solve(sim.q, model.initial_coordinates.copy())
     xdot = config.DF @ sim.qdot
@@ -419,7 +419,7 @@ def test_fmu_with_a_moment_input_and_angle_outputs_equals_the_simulator(tmp_path
     expected = [sim.outputs()]
     sim.set_inputs([moment])
     for k in range(steps):
-        sim.advance((k + 1) * h)
+        sim.advance_to((k + 1) * h)
         expected.append(sim.outputs())
     expected = np.array(expected)
     motion = np.abs(expected[:, 0] - expected[0, 0]).max()

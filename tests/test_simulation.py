@@ -86,7 +86,7 @@ def test_undamped_3dof_stage_conserves_energy():
     e0 = mechanical_energy(model, q0, np.zeros(3))
     drift, lowest = 0.0, q0[0]
     for t in np.linspace(0.05, 0.5, 10):
-        sim.advance(t)
+        sim.advance_to(t)
         drift = max(drift, abs(mechanical_energy(model, sim.q, sim.qdot) - e0) / e0)
         lowest = min(lowest, sim.q[0])
     assert drift < 1e-8
@@ -113,7 +113,7 @@ def test_pendulum_with_a_heavy_rod_conserves_energy_with_the_work_of_gravity():
     e0 = mechanical_energy(model, sim.q, sim.qdot)
     drift = 0.0
     for t in np.linspace(0.05, 0.4, 8):
-        sim.advance(t)
+        sim.advance_to(t)
         drift = max(drift, abs(mechanical_energy(model, sim.q, sim.qdot) - e0))
         assert 0.5 * sim.qdot @ sim.qdot > 1.0 or t < 0.2  # it did swing
     assert drift < 1e-8 * scale
@@ -126,7 +126,7 @@ def test_rigid_pendulum_period_matches_the_elliptic_integral():
     sim = Simulator(model, method="cvode-bdf", rtol=1e-11)
     crossings, previous = [], (0.0, sim.q[0], sim.qdot[0])
     while len(crossings) < 2:  # the angle passes -90 degrees at T/4 and 3T/4
-        sim.advance(sim.time + 2e-3)
+        sim.advance_to(sim.time + 2e-3)
         t, phi, w = sim.time, sim.q[0], sim.qdot[0]
         if (previous[1] + np.pi / 2) * (phi + np.pi / 2) < 0:
             crossings.append(_hermite_root(previous, (t, phi, w), -np.pi / 2))
@@ -224,21 +224,21 @@ def saved_state_at(t):
     model = load_scene("stage_planar_1dof")
     sim = Simulator(model, rtol=1e-7)
     sim.set_inputs([1.0])
-    sim.advance(t)
+    sim.advance_to(t)
     return model, sim, pickle.loads(pickle.dumps(sim.get_state()))
 
 
 def test_restored_state_continues_bit_for_bit():
     model, sim, state = saved_state_at(0.05)
-    sim.advance(0.1)
+    sim.advance_to(0.1)
     sim.set_inputs([-0.5])
-    sim.advance(0.15)
+    sim.advance_to(0.15)
     first = (sim.q, sim.qdot, sim.outputs())
     other = Simulator(model, rtol=1e-7)
     other.set_state(state)
-    other.advance(0.1)
+    other.advance_to(0.1)
     other.set_inputs([-0.5])
-    other.advance(0.15)
+    other.advance_to(0.15)
     assert other.time == sim.time
     for a, b in zip(first, (other.q, other.qdot, other.outputs()), strict=True):
         assert np.array_equal(a, b)
@@ -255,7 +255,7 @@ def test_zero_order_hold_samples_equal_manual_set_inputs():
     sim = Simulator(model, rtol=1e-8)
     for _t, u, t_next in zip(times, values, [0.02, 0.05, 0.08], strict=True):
         sim.set_inputs([u])
-        sim.advance(t_next)
+        sim.advance_to(t_next)
     assert np.allclose(result.outputs["x"][-1], sim.outputs()[0], atol=1e-12, rtol=0)
 
 
@@ -272,13 +272,13 @@ def test_outputs_that_are_dofs_are_read_from_q_and_equal_the_kinematics():
     assert output_dofs(load_scene("stage_planar_1dof")).tolist() == [0, -1]
     sim = Simulator(model, method="esdirk", rtol=1e-6)
     sim.set_inputs([1.0])
-    sim.advance(0.02)
+    sim.advance_to(0.02)
     direct = sim.outputs()
     assert direct.tolist() == (sim.q[:2]).tolist() == sim.output_values()
     assert all(type(value) is float for value in sim.output_values())
     kinematic = Simulator(load_scene("truss_1dof_e"), method="esdirk", rtol=1e-6)
     kinematic.set_inputs([1.0])
-    kinematic.advance(0.02)
+    kinematic.advance_to(0.02)
     assert kinematic.output_values() == kinematic.outputs().tolist()
     solved = sim.outputs_along(sim.absolute(sim.state)[None])[0]
     np.testing.assert_allclose(direct, solved, rtol=0.0, atol=1e-15)
@@ -296,7 +296,7 @@ def test_cvode_keeps_its_jacobian_for_the_restart_of_a_sampled_loop():
     model = load_scene("stage_planar_3dof")
     sim = Simulator(model, method="cvode-bdf", rtol=1e-6)
     at_start = sim.jacobian_matrix(0.0, sim.state)
-    sim.advance(2e-4)  # a few steps: one Jacobian, at the start
+    sim.advance_to(2e-4)  # a few steps: one Jacobian, at the start
     assert sim.statistics["jacobian_evaluations"] == 1
     kept = sim.integrator.restart_memory["jacobian"]
     n = 2 * sim.ndof
@@ -317,3 +317,21 @@ def test_cvode_keeps_its_jacobian_for_the_restart_of_a_sampled_loop():
     finally:
         Simulator.take_back = original
     assert result.summary()["passed"] and jacobians[-1] <= 2
+
+
+@pytest.mark.parametrize("kind", ["Simulator", "LinearSimulator"])
+def test_advance_is_the_deprecated_name_of_advance_to(kind):
+    """advance(t_end) read like a step length; advance_to(t_end) says it is the end time. The
+    old name still works, with a DeprecationWarning, to the same state bit for bit (the same
+    computation in one process)."""
+    import flexure.core as core
+
+    model = load_scene("stage_planar_3dof")
+    new, old = (getattr(core, kind)(model) for _ in range(2))
+    for sim in (new, old):
+        sim.set_inputs([1.0])
+    new.advance_to(0.01)
+    with pytest.warns(DeprecationWarning, match=r"advance\(t_end\) is renamed advance_to"):
+        old.advance(0.01)
+    assert old.time == new.time == 0.01
+    np.testing.assert_array_equal(old.outputs(), new.outputs())

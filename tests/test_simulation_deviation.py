@@ -62,7 +62,7 @@ def test_the_state_is_the_deviation_from_the_start_configuration():
     sim.reset(q0=q0)
     assert np.array_equal(sim.q_ref, q0) and not np.any(sim.state)
     sim.set_inputs([1.0])
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     assert np.array_equal(sim.q, sim.q_ref + sim.state[:3])
     state = sim.get_state()
     assert state["version"] == 2 and np.array_equal(state["q_ref"], q0)
@@ -72,11 +72,11 @@ def test_a_restored_state_keeps_its_reference_and_continues_bit_for_bit():
     """A state restored into a simulator that started elsewhere (another q_ref) continues
     exactly like the original; an old (version 1, absolute) state is still accepted."""
     model, sim, state = saved_state_at(0.03)
-    sim.advance(0.06)
+    sim.advance_to(0.06)
     other = Simulator(model, rtol=1e-7)
     other.reset(q0=[2e-3])
     other.set_state(state)
-    other.advance(0.06)
+    other.advance_to(0.06)
     assert np.array_equal(other.q, sim.q) and np.array_equal(other.qdot, sim.qdot)
     assert np.array_equal(other.outputs(), sim.outputs())
     old = dict(state, version=1, y=np.concatenate([state["q_ref"] + state["y"][:1],
@@ -85,7 +85,7 @@ def test_a_restored_state_keeps_its_reference_and_continues_bit_for_bit():
     legacy = Simulator(model, rtol=1e-7)
     legacy.set_state(old)
     assert np.array_equal(legacy.q, state["q_ref"] + state["y"][:1])
-    legacy.advance(0.06)
+    legacy.advance_to(0.06)
     assert np.allclose(legacy.q, sim.q, atol=1e-9, rtol=0)
 
 
@@ -106,7 +106,7 @@ def velocity_scene():
 def test_outputs_are_cached_per_state_and_equal_a_fresh_kinematic_solution(model):
     sim = Simulator(model, rtol=1e-8)
     sim.set_inputs([2.0])
-    sim.advance(0.02)
+    sim.advance_to(0.02)
     first = sim.outputs()
     first[:] = np.nan  # a copy: the cache is not exposed
     assert np.array_equal(sim.outputs(), sim.outputs()) and np.all(np.isfinite(sim.outputs()))
@@ -117,7 +117,7 @@ def test_outputs_are_cached_per_state_and_equal_a_fresh_kinematic_solution(model
              for p in model.outputs]
     assert np.allclose(sim.outputs(), fresh, rtol=1e-12, atol=1e-15)
     before = sim.outputs()
-    sim.advance(0.03)  # a new state: new outputs
+    sim.advance_to(0.03)  # a new state: new outputs
     assert not np.array_equal(sim.outputs(), before)
 
 
@@ -135,7 +135,7 @@ def test_the_measurement_starts_second_order_close_to_the_kinematics(scene):
     output = EngineData(model)  # the measuring's own packed model, as the simulator's
     sim = Simulator(model, method="esdirk", rtol=1e-8)
     sim.set_inputs(np.full(len(sim.inputs), 1.0))
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     kinematics = Kinematics(model)
     q_e = sim.data.float_array("q").copy()
     direction = np.random.default_rng(2).standard_normal(sim.ndof)
@@ -160,8 +160,8 @@ def test_outputs_after_a_set_state_do_not_start_from_the_plant_of_another_state(
     model = load_scene("stage_planar_1dof")  # its second output is not a DOF
     a, b = Simulator(model, rtol=1e-8), Simulator(model, rtol=1e-8)
     a.set_inputs([2.0])
-    a.advance(0.02)
+    a.advance_to(0.02)
     b.set_inputs([-2.0])
-    b.advance(0.05)
+    b.advance_to(0.05)
     b.set_state(a.get_state())
     np.testing.assert_allclose(b.outputs(), a.outputs(), rtol=1e-12, atol=1e-15)

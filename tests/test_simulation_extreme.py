@@ -76,7 +76,7 @@ def test_vertical_preload_at_95_percent_of_the_buckling_load():
     period = 2 * np.pi * np.sqrt(mass / k_eff)
     xs = []
     for t in np.linspace(0, period, 41)[1:]:
-        sim.advance(t)
+        sim.advance_to(t)
         xs.append(sim.outputs()[0] - x_static)
     xs = np.array(xs)
     # the step response of the softened stage: 0 .. 2 F / k_eff and back within one period
@@ -121,7 +121,7 @@ def test_a_singular_configuration_stops_with_the_time_and_the_cause():
     model = truss_pendulum()
     sim = Simulator(model, rtol=1e-6)
     with pytest.raises(SimulationError, match=r"t = 0\.\d+ s.*singular") as error:
-        sim.advance(1.0)
+        sim.advance_to(1.0)
     assert "truss_pendulum" in str(error.value)
     # left at the last good state: finite, before the bottom (y = -0.5 m) at t ~ 0.37 s
     assert 0.3 < sim.time < 0.45
@@ -132,11 +132,11 @@ def test_a_singular_configuration_stops_with_the_time_and_the_cause():
 def test_non_finite_inputs_are_refused_with_the_input_and_the_time():
     model = load_scene("stage_planar_1dof")
     sim = Simulator(model)
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     for bad in (np.nan, np.inf):
         with pytest.raises(SimulationError, match=r"t = 0\.01 s: input 'F' is not finite"):
             sim.set_inputs([bad])
-    sim.advance(0.02)  # still usable
+    sim.advance_to(0.02)  # still usable
     with pytest.raises(SimulationError, match=r"t = 0\.0[34]\d* s: input 'F' is not finite"):
         simulate(model, 0.1, inputs={"F": lambda t: 1.0 if t < 0.03 else np.nan})
     with pytest.raises(SimulationError, match=r"t = 0\.02 s: input 'F' is not finite"):
@@ -150,9 +150,9 @@ def test_simulator_misuse_is_a_clear_error():
     with pytest.raises(SimulationError, match="unknown method 'rk4'"):
         Simulator(model, method="rk4")
     sim = Simulator(model)
-    sim.advance(0.01)
+    sim.advance_to(0.01)
     with pytest.raises(SimulationError, match="expected a finite time after"):
-        sim.advance(0.005)
+        sim.advance_to(0.005)
     with pytest.raises(SimulationError, match="expected 1 inputs"):
         sim.set_inputs([1.0, 2.0])
     with pytest.raises(SimulationError, match="atol"):
@@ -183,7 +183,7 @@ def test_a_state_beyond_the_range_of_validity_is_reported_not_silent(capsys):
     assert calm.warnings == []
     sim = Simulator(model, rtol=1e-6)
     sim.set_inputs([1e9])
-    sim.advance(1e-3)
+    sim.advance_to(1e-3)
     assert set(sim.range_warnings()) == {"strain", "distance"}
     assert main(["simulate", "stage_planar_3dof", "--t-end", "1e-3", "--input", "F=1e9",
                  "--rtol", "1e-6"]) == 0

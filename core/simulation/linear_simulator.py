@@ -29,7 +29,7 @@ linearisation: zero, as in `Simulator`, unless it was made under held inputs.
 
     sim = LinearSimulator(model)
     sim.set_inputs([1.0])            # N, held
-    sim.advance(0.5)                 # s
+    sim.advance_to(0.5)              # s: the end time, not a step
     sim.outputs()                    # m, rad, m/s, rad/s
 
 Units: inputs N, N m (V for an actuator's drive signal); outputs m, rad, m/s, rad/s; time s.
@@ -38,6 +38,7 @@ Units: inputs N, N m (V for an actuator's drive signal); outputs m, rad, m/s, ra
 from __future__ import annotations
 
 import math
+import warnings
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -182,12 +183,19 @@ class LinearSimulator:
         self._du = u - self.u0
 
     def advance(self, t_end: float) -> None:
-        """Advance to t_end with the held inputs, exactly.
+        """Deprecated: `advance_to(t_end)`, the same call under a name that says its argument
+        is the absolute end time (s), not a step length."""
+        warnings.warn("LinearSimulator.advance(t_end) is renamed advance_to(t_end): t_end is "
+                      "the absolute end time, not a step", DeprecationWarning, stacklevel=2)
+        self.advance_to(t_end)
+
+    def advance_to(self, t_end: float) -> None:
+        """Advance to the absolute time t_end with the held inputs, exactly.
 
         Parameters
         ----------
         t_end : float
-            The end time, s, after the current one.
+            The end time, s, after the current one (an absolute time, not a step).
 
         Raises
         ------

@@ -182,7 +182,7 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
     for stop in stops:
         if stop <= sim.time:
             continue
-        sim.advance(stop, _record=record if grid is None else None,
+        sim.advance_to(stop, _record=record if grid is None else None,
                     _progress=report if progress is not None else None)
         if grid is not None and np.any(grid == stop):
             record(stop, sim.state)

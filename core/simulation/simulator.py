@@ -16,10 +16,10 @@ y = [q - q_ref, qdot, i].
 
     sim = Simulator(model, method="cvode-bdf", rtol=1e-8)
     sim.set_inputs([1.0])            # N
-    sim.advance(0.5)                 # s
+    sim.advance_to(0.5)              # s: the end time, not a step
     sim.outputs()                    # the scene's outputs, m and m/s
 
-A snapshot `get_state()` (`simulator_state`) is a restart point: the next `advance` restarts
+A snapshot `get_state()` (`simulator_state`) is a restart point: the next `advance_to` restarts
 the integrator from it, with the kinematics started afresh from the snapshot's coordinates, so
 a run restored with `set_state` continues bit for bit like the original. The measuring
 methods are in `simulator_outputs`, the snapshots in `simulator_state`, and the first-order
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+import warnings
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
@@ -328,15 +329,23 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         set or a failure."""
         return self._restart_kinematics or self.method not in ONE_STEP_METHODS
 
-    def advance(self, t_end: float, *, max_steps: int | None = None,
-                _record: Callable[[float, np.ndarray], None] | None = None,
-                _progress: Callable[[float], None] | None = None) -> None:
-        """Integrate from `time` to t_end, stopping exactly there.
+    def advance(self, t_end: float, **options) -> None:
+        """Deprecated: `advance_to(t_end)`, the same call under a name that says its argument
+        is the absolute end time (s), not a step length."""
+        warnings.warn("Simulator.advance(t_end) is renamed advance_to(t_end): t_end is the "
+                      "absolute end time, not a step", DeprecationWarning, stacklevel=2)
+        self.advance_to(t_end, **options)
+
+    def advance_to(self, t_end: float, *, max_steps: int | None = None,
+                   _record: Callable[[float, np.ndarray], None] | None = None,
+                   _progress: Callable[[float], None] | None = None) -> None:
+        """Integrate from `time` to the absolute time t_end, stopping exactly there.
 
         Parameters
         ----------
         t_end : float
-            The end time, s, after the current one.
+            The end time, s, after the current one (an absolute time: a step of h from the
+            current time is `advance_to(sim.time + h)`).
         max_steps : int, optional
             A budget of integrator steps for this call.
 

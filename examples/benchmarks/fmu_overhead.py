@@ -73,7 +73,7 @@ class BareStage(Fmi2Slave):
         if self.F != self.held:
             self.simulator.set_inputs([self.F])
             self.held = self.F
-        self.simulator.advance(current_time + step_size)
+        self.simulator.advance_to(current_time + step_size)
         return True
 '''
 
@@ -174,7 +174,7 @@ def in_process_steps(model, steps, force=1.0, *, method=None, rtol=None):
     start = time.perf_counter()
     for k in range(steps):
         sim.set_inputs([force])
-        sim.advance((k + 1) * FMU_STEP)
+        sim.advance_to((k + 1) * FMU_STEP)
         x = sim.outputs()[0]
     return time.perf_counter() - start, (sim.statistics["wall_time_s"], x)
 
