@@ -189,10 +189,25 @@ def cache_index_path(function):
 
 def is_cached(function):
     """Whether the on-disk cache holds compiled code of `function` (a kernel's or entry's
-    Python function of flexure's core) for this copy's sources and this Python: numba's
-    index file of it exists (`cache_index_path`)."""
+    Python function of flexure's core) that this process loads: numba's index of it
+    (`cache_index_path`) is of this numba and these sources, and has an entry for this
+    process's code-generation target (numba files code by CPU: a cache shared with another
+    machine may hold only that machine's)."""
+    import pickle
+
+    import numba
+    from numba.core.registry import cpu_target
+
     index = cache_index_path(function)
-    return index is not None and os.path.isfile(index)
+    try:
+        with open(index, "rb") as handle:
+            if pickle.load(handle) != numba.__version__:
+                return False
+            stamp, overloads = pickle.loads(handle.read())
+    except (OSError, TypeError, ValueError, EOFError, pickle.UnpicklingError):
+        return False  # none (index None or no file), or not numba's
+    target = cpu_target.target_context.codegen().magic_tuple()
+    return stamp == sources_hash() and any(key[1] == target for key in overloads)
 
 
 @functools.cache
