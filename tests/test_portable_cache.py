@@ -25,9 +25,13 @@ from flexure.core.numerics.portable_cache import (
 )
 
 # a child run: optionally install an export into its empty cache, then a 10 ms step of the
-# 1-DOF stage; it counts numba's compilations and the entry points that had to compile
+# 1-DOF stage; it counts numba's compilations and the entry points that had to compile. Its
+# numba compiles a function first, as a host using numba may have: numba's code generator is
+# made for this machine's CPU before anything is installed
 SIMULATE = textwrap.dedent("""
     import json, sys
+    import numba
+    numba.njit(lambda x: x + 1)(1)
     from numba.core import event
     from flexure.core.numerics import jit
     from flexure.core.numerics.portable_cache import export_compiled, install_compiled
