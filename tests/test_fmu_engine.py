@@ -189,6 +189,41 @@ def test_where_this_flexure_stands_in_the_carried_engine_is_not_used(scene_fmus,
         "(FLEXURE_FMU_OWN_COPY=1 uses it)"))]
 
 
+def test_the_engine_is_left_out_when_asked(tmp_path, monkeypatch):
+    """`flexure fmu build --no-engine` leaves it out whatever FLEXURE_FMU_ENGINE says, and
+    FLEXURE_FMU_ENGINE=0 makes that the default (this suite's)."""
+    from flexure.core.cli import main
+    from flexure.fmu import build_scene_fmu
+
+    def carried(fmu):
+        with zipfile.ZipFile(fmu) as archive:
+            return [n for n in archive.namelist() if n.startswith("resources/flexure-engine/")]
+
+    monkeypatch.setenv("FLEXURE_FMU_ENGINE", "1")
+    assert main(["fmu", "build", "truss_1dof_x", "--no-engine", "-o",
+                 str(tmp_path / "a.fmu")]) == 0
+    assert carried(tmp_path / "a.fmu") == []
+    monkeypatch.setenv("FLEXURE_FMU_ENGINE", "0")
+    assert carried(build_scene_fmu("truss_1dof_x", tmp_path / "b.fmu")) == []
+
+
+def test_a_failed_compilation_of_the_engine_fails_the_build(tmp_path):
+    """The child that compiles the engine fails (here: the file is not an FMU): the build
+    raises FMUBuildError with the child's last lines, and leaves the file as it was."""
+    from flexure.fmu import FMUBuildError
+    from flexure.fmu.portable_engine import add_compiled_engine
+
+    broken = tmp_path / "broken.fmu"
+    broken.write_bytes(b"not a zip file")
+    with pytest.raises(FMUBuildError) as error:
+        add_compiled_engine(broken)
+    message = str(error.value)
+    assert message.startswith(f"{broken}: compiling its engine for a portable CPU target "
+                              "failed (exit code 1):\n")
+    assert "BadZipFile" in message
+    assert broken.read_bytes() == b"not a zip file"
+
+
 @pytest.mark.slow  # ~3 minutes: a portable compilation, a venv with pip, the host
 def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(tmp_path):
     from fmpy import __version__ as fmpy_version
