@@ -163,11 +163,14 @@ class CompileNotice:
             self.leave(counted)
 
     def enter(self):
+        """A compilation begins (numba's event, or `unit`)."""
         if self._depth == 0:
             self._burst = (time.process_time(), time.perf_counter())
         self._depth += 1
 
     def leave(self, counted):
+        """A compilation ends: counted (unless `counted` is False: code loaded from the
+        cache), and when it was the outermost, its time added and the record written."""
         self._depth = max(self._depth - 1, 0)
         if counted and self.announced:
             self.functions += 1

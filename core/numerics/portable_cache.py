@@ -119,8 +119,10 @@ def export_compiled(dest) -> dict:
             not_cached.append(f"{function.__module__}.{function.__qualname__}")
             continue
         functions += 1
-        base = index[: -len(".nbi")]
-        files += [index, *sorted(glob.glob(glob.escape(base) + ".*.nbc"))]
+        _, _, overloads = _read_index(index)  # its data files (not stale ones beside them)
+        files += [index, *(os.path.join(os.path.dirname(index), name)
+                           for name in sorted(set(overloads.values())))]
+    os.makedirs(dest, exist_ok=True)
     size = 0
     for path in files:
         target = os.path.join(dest, os.path.relpath(path, folder))
@@ -221,11 +223,7 @@ def _install_index(index, destination, shipped, target):
     reading the cache meanwhile finds either no index or a complete one)."""
     from numba.core.serialize import dumps
 
-    with open(index, "rb") as handle:
-        version = pickle.load(handle)
-        stamp, overloads = pickle.loads(handle.read())
-    if not isinstance(overloads, dict):
-        raise ValueError("not a numba cache index")
+    version, stamp, overloads = _read_index(index)
     overloads = {(key[0], target if key[1] == shipped else key[1], *key[2:]): name
                  for key, name in overloads.items()}
     os.makedirs(os.path.dirname(destination), exist_ok=True)
@@ -237,3 +235,14 @@ def _install_index(index, destination, shipped, target):
         pickle.dump(version, handle, protocol=-1)
         handle.write(dumps((stamp, overloads)))
     os.replace(temporary, destination)
+
+
+def _read_index(path):
+    """(numba version, source stamp, {(signature, target, hashes): data file name}) of a
+    numba cache index; ValueError if it is not one."""
+    with open(path, "rb") as handle:
+        version = pickle.load(handle)
+        stamp, overloads = pickle.loads(handle.read())
+    if not isinstance(overloads, dict):
+        raise ValueError("not a numba cache index")
+    return version, stamp, overloads
