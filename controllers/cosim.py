@@ -58,7 +58,8 @@ def scene_fmu(scene, model, workdir=None, *, overrides=None):
     path = scene_fmu_path(scene, model, folder, overrides=overrides)
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
-        build_scene_fmu(_scene_source(scene, model), path, overrides=overrides)
+        # run here, where this flexure stands in for the FMU's copy: no portable engine
+        build_scene_fmu(_scene_source(scene, model), path, overrides=overrides, engine=False)
     return path
 
 

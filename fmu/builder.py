@@ -29,6 +29,7 @@ name, so FMUs of different scenes coexist in one process.
 from __future__ import annotations
 
 import hashlib
+import os
 import shutil
 import sys
 import tempfile
@@ -55,11 +56,13 @@ TRIED_PLATFORMS = ("linux64",)
 # tracebacks name.
 LAUNCHER = '''"""The slave script of this FMU, written by flexure's FMU builder.
 
-It checks that this Python has what the FMU imports ({requirements}), then runs the slave
-script {source} (a copy of it is beside this file); if something is missing, or the script
-fails as it runs, the slave class is a stand-in that logs what and fails.
+It checks that this Python has what the FMU imports ({requirements}), installs the compiled
+engine the FMU carries (resources/flexure-engine, where it fits this Python), then runs the
+slave script {source} (a copy of it is beside this file); if something is missing, or the
+script fails as it runs, the slave class is a stand-in that logs what and fails.
 """
 
+from {package}.fmu.compiled_engine import install as _install_engine
 from {package}.fmu.requirements import failed_script as _failed_script
 from {package}.fmu.requirements import stand_in as _stand_in
 from {package}.fmu.requirements import unmet_requirements as _unmet_requirements
@@ -69,6 +72,7 @@ _SOURCE = {source_text!r}
 
 _unmet = _unmet_requirements(_REQUIREMENTS, __file__)
 if _unmet is None:
+    _install_engine(__file__, {package!r})  # the compiled engine it carries, if it fits here
     try:
         exec(compile(_SOURCE, __file__[: -len(".py")] + ".slave.py", "exec"), globals(),
              locals())
@@ -307,7 +311,7 @@ def default_tunable(scene: Mapping[str, Any]) -> list[str]:
 def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
                     tunable: Iterable[str] | None = None,
                     von_mises: bool = False, validate: bool = True,
-                    overrides: dict | None = None) -> Path:
+                    overrides: dict | None = None, engine: bool | None = None) -> Path:
     """Build the co-simulation FMU of a scene.
 
     Parameters
@@ -327,6 +331,14 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
     overrides : dict, optional
         {dotted scene key: value} set on the scene first (`flexure.core.load_scene`); the FMU
         carries the scene with them, written by `flexure.core.scene_toml`.
+    engine : bool, optional
+        Put the engine into the FMU, compiled for a portable CPU target
+        (`flexure.fmu.portable_engine`): a host with the same Python, numpy and numba then
+        loads it instead of compiling for a minute at its first instantiation. It compiles
+        here once per version of flexure (about a minute of CPU; later builds load it, about
+        2 s) and adds about 0.7 MB (docs/fmu.md). Default: True, unless the environment
+        variable FLEXURE_FMU_ENGINE is "0" (for FMUs run only where flexure is installed,
+        e.g. a test suite's: that flexure runs in place of the FMU's copy).
 
     Returns
     -------
@@ -391,7 +403,14 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
     with tempfile.TemporaryDirectory(prefix="flexure_scene_") as temp:
         script = Path(temp) / f"{name}_{digest}.py"
         script.write_text(scene_script(name, text, tunable, von_mises))
-        return build_slave_fmu(script, dest, validate=validate)
+        built = build_slave_fmu(script, dest, validate=validate)
+    if engine is None:
+        engine = os.environ.get("FLEXURE_FMU_ENGINE", "").strip() != "0"
+    if engine:
+        from .portable_engine import add_compiled_engine
+
+        add_compiled_engine(built)
+    return built
 
 
 def _check_stresses(model, path):

@@ -18,7 +18,7 @@ from pathlib import Path
 # The modules of flexure.fmu a slave needs at run time (the builder, CLI and env stay out).
 FMU_RUNTIME_MODULES = ("slave.py", "slave_states.py", "slave_values.py", "slave_variables.py",
                        "pythonfmu_workarounds.py", "scene_slave.py", "state_format.py",
-                       "requirements.py")
+                       "requirements.py", "compiled_engine.py")
 # Lazy (PEP 562), as flexure.fmu's own: the launcher imports `requirements` (the standard
 # library only) before anything may import numpy.
 FMU_RUNTIME_INIT = '''"""flexure.fmu run-time part, bundled in an FMU."""

@@ -50,6 +50,10 @@ def register(subparsers):
                             "dimensions)")
     build.add_argument("--no-validate", action="store_true",
                        help="skip fmpy's validation of the result")
+    build.add_argument("--no-engine", action="store_true",
+                       help="leave the compiled engine out (a host then compiles it at its "
+                            "first instantiation; default: it is compiled for a portable CPU "
+                            "target and carried, unless FLEXURE_FMU_ENGINE=0)")
     build.set_defaults(run=run_build)
 
     env = commands.add_parser("env", help="print the environment a non-Python host needs",
@@ -126,7 +130,8 @@ def run_build(args):
                           f"{error.strerror}") from None
     try:
         built = build_scene_fmu(source, temporary, tunable=tunable, von_mises=args.von_mises,
-                                validate=not args.no_validate, overrides=args.set)
+                                validate=not args.no_validate, overrides=args.set,
+                                engine=False if args.no_engine else None)
         path = (folder / built.name if output is None or Path(output).is_dir()
                 else Path(output))
         if path.is_dir():

@@ -228,7 +228,9 @@ PYTHONFMU_LOGGER_LAYOUTS = {
     "4be156a552c16f30eb4395805c59855d8d4086056d0f165442565f6c5fbac0c9":
         {"name": 16, "callbacks": 72, "component_environment": 32},
 }
-FMI2_ERROR = 3  # fmi2Status
+FMI2_WARNING, FMI2_ERROR = 1, 3  # fmi2Status
+# the log categories pythonfmu declares, by status (logAll for the others)
+_CATEGORIES = {FMI2_WARNING: b"logStatusWarning", FMI2_ERROR: b"logStatusError"}
 
 
 def log_to_host(kwargs, message, status=FMI2_ERROR) -> bool:
@@ -272,7 +274,7 @@ def log_to_host(kwargs, message, status=FMI2_ERROR) -> bool:
             return False
         prototype = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int,
                                      ctypes.c_char_p, ctypes.c_char_p)
-        category = b"logStatusError" if status == FMI2_ERROR else b"logAll"
+        category = _CATEGORIES.get(status, b"logAll")
         # the host formats the message as printf does: '%' doubled
         prototype(logger)(word(callbacks + layout["component_environment"]), encoded, status,
                           category, str(message).replace("%", "%%").encode())

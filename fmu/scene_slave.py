@@ -55,6 +55,7 @@ from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
 from flexure.core import Mechanics, Simulator, build_model, port_description, stresses_along
+from flexure.core.numerics.jit import compile_notices
 from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 
@@ -115,7 +116,10 @@ class SceneSlave(SafeSlave):
         self._warned = set()  # the kinds of range warning already logged
         self.parameters = {key: float(scene_value(self.scene, key)) for key in self.tunable}
         self.simulator = None
-        self._build()
+        # the first model built in a process loads the compiled engine, or compiles it for a
+        # minute: the host's log says so then, and again when it is done
+        with compile_notices(partial(self.warn_host, kwargs)):
+            self._build()
         model = self._model
         # What the getters and setters read and write, lists of floats kept for the life of
         # the instance (a variable's getter and setter are that list's own item access, the

@@ -70,7 +70,8 @@ from typing import Any
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
-from .pythonfmu_workarounds import guard_exit, tidy_sys_path
+from .compiled_engine import WARNING, take_notes
+from .pythonfmu_workarounds import FMI2_WARNING, guard_exit, log_to_host, tidy_sys_path
 from .slave_states import (
     INITIALIZATION,
     INSTANTIATED,
@@ -156,6 +157,11 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
         self._unchecked_reals = {}  # {value reference: setter} of the unchecked Real inputs
+        for status, message in take_notes():  # what became of the compiled engine it carries
+            if status == WARNING:
+                self.warn_host(kwargs, message)
+            else:
+                self.log_message(f"{self.instance_name}: {message}", Fmi2Status.ok)
 
     # -- to override -------------------------------------------------------------------------
 
@@ -277,6 +283,23 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
             The status it is logged at.
         """
         self.log(escape_log(message), status=status)
+
+    def warn_host(self, constructor_kwargs: dict, message: object) -> None:
+        """Log a message at status warning through the host's logger now, from the
+        constructor, even with the host's debug logging off (`log_to_host`), e.g. that the
+        engine is about to compile for a minute; queued as `log_message` does when this
+        binary's logger cannot be reached.
+
+        Parameters
+        ----------
+        constructor_kwargs : dict
+            The constructor's keyword arguments (the host's logger is among them).
+        message : object
+            The message (str() of it is taken), after the instance name.
+        """
+        text = f"{self.instance_name}: {message}"
+        if not log_to_host(constructor_kwargs, text, FMI2_WARNING):
+            self.log_message(text, Fmi2Status.warning)
 
     def _error(self, message):
         """Log a refused call at status error (nothing else changes)."""

@@ -430,11 +430,13 @@ def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_pat
     assert run(copy("changed", change=True)) == {"hits": 0, "misses": 1}
 
 
-def test_the_first_compilation_is_announced_on_a_terminal_only():
+def test_the_first_compilation_is_announced_on_a_terminal_and_in_a_log_alike(tmp_path):
     """A first run waits about a minute for the compiler: `is_cached` tells a compiled entry
     from one that is not (an empty cache folder, in a fresh process), and the notice is
-    written once, and only to a terminal."""
-    from flexure.core.numerics.jit import announce_compilation, is_cached
+    written once per process, to a log (a pipe, CI, an FMU host's stderr) as to a terminal
+    (tests/test_compile_notice.py: its estimate, progress line and writers)."""
+    from flexure.core.numerics.compile_notice import CompileNotice
+    from flexure.core.numerics.jit import is_cached
 
     engine.connect(EngineData(truss_pendulum()))  # the entry compiled or loaded
     assert is_cached(engine.engine_entry.function)
@@ -449,12 +451,15 @@ def test_the_first_compilation_is_announced_on_a_terminal_only():
         def isatty(self):
             return True
 
-    terminal, log = Terminal(), io.StringIO()
-    announce_compilation(terminal)
-    announce_compilation(terminal)
-    announce_compilation(log)
-    assert terminal.getvalue().count("\n") == 1 and "compiling" in terminal.getvalue()
-    assert log.getvalue() == ""
+    for stream in (Terminal(), io.StringIO()):
+        notice = CompileNotice(str(tmp_path), "sources")
+        notice.announce(stream)
+        notice.announce(stream)
+        notice.close()
+        lines = stream.getvalue().splitlines()
+        assert len(lines) == 1, lines
+        assert lines[0].startswith("flexure: compiling its engine for ")
+        assert lines[0].endswith(f"kept in {tmp_path}")
 
 
 def test_positions_operation_matches_the_full_kinematics(case):

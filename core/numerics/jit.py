@@ -13,11 +13,15 @@ any copy with the same sources finds the same compiled code, wherever it is unpa
 change to any source file (a kernel's callee included, which numba's per-file stamp misses)
 starts a fresh cache. The folder is $FLEXURE_CACHE_DIR, else $NUMBA_CACHE_DIR, else the
 user's cache folder (~/.cache/flexure), else a folder in the temporary directory when that is
-not writable.
+not writable. `portable_cache` exports a copy's cache for another machine and installs it
+there (an FMU carries its engine so).
+
+The first compilation. When an entry point is not in the cache, the engine is about to
+compile for a minute: `announce_compilation` says so once per process, with an estimate
+measured on this machine and a progress line on a terminal (`compile_notice`).
 """
 
 import functools
-import glob
 import hashlib
 import inspect
 import os
@@ -27,12 +31,14 @@ import tempfile
 from numba import cfunc, njit, types
 from numba.core import caching
 
+from .compile_notice import CompileNotice
+
 _CORE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # core/, above numerics/
 _PACKAGE_ROOT = os.path.dirname(_CORE)  # holds core/
 
 
 @functools.cache
-def _sources_hash():
+def sources_hash():
     """SHA-256 (hex) of every Python source of this copy's core package."""
     digest = hashlib.sha256()
     for folder, _, files in sorted(os.walk(_CORE)):
@@ -45,7 +51,7 @@ def _sources_hash():
     return digest.hexdigest()
 
 
-def _package_name():
+def package_name():
     """The name this copy of flexure is imported under ("flexure", or an FMU's own name)."""
     return __name__.rsplit(".", 3)[0]  # <package>.core.numerics.jit
 
@@ -68,20 +74,26 @@ def cache_root():
     return None
 
 
+def package_cache_folder():
+    """This copy's folder in the cache (<cache root>/<package>/<sources hash>), or None when
+    there is no writable cache folder."""
+    root = cache_root()
+    return None if root is None else os.path.join(root, package_name(), sources_hash()[:20])
+
+
 class _SourceHashLocator(caching._CacheLocator):
     """numba cache locator for the files of this copy of flexure's core (see the module)."""
 
     def __init__(self, py_func, py_file):
         self._lineno = py_func.__code__.co_firstlineno
         relative = os.path.relpath(os.path.dirname(os.path.abspath(py_file)), _PACKAGE_ROOT)
-        self._path = os.path.join(cache_root(), _package_name(), _sources_hash()[:20],
-                                  relative)
+        self._path = os.path.join(package_cache_folder(), relative)
 
     def get_cache_path(self):
         return self._path
 
     def get_source_stamp(self):
-        return _sources_hash()
+        return sources_hash()
 
     def get_disambiguator(self):
         return str(self._lineno)
@@ -119,7 +131,7 @@ INERTIA_ENTRY = types.void(_POINTER, _POINTER, _POINTER, types.int64, _POINTER, 
                            _POINTER, types.int64, types.int64, types.int64)
 
 
-class _Entry:
+class CompiledEntry:
     """A numba cfunc compiled (or loaded from the cache) when its address is first asked for.
 
     Compiled code calls these through their addresses, never inlines them: each kernel and
@@ -136,11 +148,18 @@ class _Entry:
     def compiled(self):
         """The numba CFunc (compiled on first use, or loaded from the cache)."""
         if self._compiled is None:
-            if not is_cached(self.function):
+            cached = is_cached(self.function)
+            if not cached:
                 announce_compilation()
-            self._compiled = cfunc(self.signature, cache=True,
-                                   error_model="numpy")(self.function)
+            with compilation_notice().unit(counted=not cached):
+                self._compiled = cfunc(self.signature, cache=True,
+                                       error_model="numpy")(self.function)
         return self._compiled
+
+    @property
+    def is_compiled(self):
+        """Whether this process has compiled or loaded it."""
+        return self._compiled is not None
 
     @property
     def address(self):
@@ -153,31 +172,63 @@ class _Entry:
         return self.compiled.ctypes
 
 
-def is_cached(function):
-    """Whether the on-disk cache holds compiled code of `function` (a kernel's or entry's
-    Python function of flexure's core) for this copy's sources and this Python: numba's
-    index file of it exists (its name: module.qualname-line.pyXY.nbi)."""
+def cache_index_path(function):
+    """The path of numba's cache index of `function` (a kernel's or entry's Python function
+    of flexure's core) for this Python, whether it exists or not (numba's file name:
+    module.qualname-line.pyXY.nbi, '<' and '>' left out), or None outside the cache."""
     path = inspect.getfile(function)
     locator = _SourceHashLocator.from_function(function, path)
     if locator is None:
-        return False
+        return None
     module = os.path.splitext(os.path.basename(path))[0]
-    name = f"{module}.{function.__qualname__}-*.py{sys.version_info[0]}{sys.version_info[1]}*.nbi"
-    return bool(glob.glob(os.path.join(glob.escape(locator.get_cache_path()), name)))
+    qualname = function.__qualname__.replace("<", "").replace(">", "")
+    name = (f"{module}.{qualname}-{locator.get_disambiguator()}.py{sys.version_info[0]}"
+            f"{sys.version_info[1]}{getattr(sys, 'abiflags', '')}.nbi")
+    return os.path.join(locator.get_cache_path(), name)
+
+
+def is_cached(function):
+    """Whether the on-disk cache holds compiled code of `function` (a kernel's or entry's
+    Python function of flexure's core) that this process loads: numba's index of it
+    (`cache_index_path`) is of this numba and these sources, and has an entry for this
+    process's code-generation target (numba files code by CPU: a cache shared with another
+    machine may hold only that machine's)."""
+    import pickle
+
+    import numba
+    from numba.core.registry import cpu_target
+
+    index = cache_index_path(function)
+    try:
+        with open(index, "rb") as handle:
+            if pickle.load(handle) != numba.__version__:
+                return False
+            stamp, overloads = pickle.loads(handle.read())
+    except (OSError, TypeError, ValueError, EOFError, pickle.UnpicklingError):
+        return False  # none (index None or no file), or not numba's
+    target = cpu_target.target_context.codegen().magic_tuple()
+    return stamp == sources_hash() and any(key[1] == target for key in overloads)
 
 
 @functools.cache
+def compilation_notice():
+    """This process's `CompileNotice` (its record kept in the cache folder)."""
+    return CompileNotice(cache_root(), sources_hash())
+
+
 def announce_compilation(stream=None):
-    """Say once per process, on a terminal, that the first compilation begins: the first run
-    of this version of flexure on a machine waits about a minute for it with nothing else to
-    show. Silent when the stream is not a terminal (a log, a test, an FMU's host)."""
-    stream = stream if stream is not None else sys.stderr
-    if getattr(stream, "isatty", lambda: False)():
-        stream.write("flexure: compiling its engine for this machine, once per version of "
-                     f"flexure (about a minute; kept in {cache_root()})\n")
-        stream.flush()
+    """Say once per process that the engine compiles, with an estimate measured on this
+    machine: on `stream` (default stderr), terminal or not, with a progress line on a
+    terminal; or to the writer of an active `compile_notices` (see `compilation_notice`)."""
+    compilation_notice().announce(stream)
+
+
+def compile_notices(write):
+    """A context in which the compilation notice goes to `write(text)`, followed by a summary
+    when something compiled (an FMU's slave logs both through its host's FMI logger)."""
+    return compilation_notice().notices_to(write)
 
 
 def entry(signature):
-    """Decorator: a lazily compiled C entry point (`_Entry`) with the numba signature."""
-    return functools.partial(_Entry, signature=signature)
+    """Decorator: a lazily compiled C entry point (`CompiledEntry`) with the numba signature."""
+    return functools.partial(CompiledEntry, signature=signature)

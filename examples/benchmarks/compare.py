@@ -78,6 +78,13 @@ startup   Whole processes as a user starts them, warm cache, in CPU seconds (use
           `flexure simulate stage_planar_3dof --t-end 0.01 --input F=1` (<= 2 x Exudyn's
           process for the same 10 ms step); and, but with --quick, the first `flexure loop`
           with an empty FLEXURE_CACHE_DIR (<= 30 s of CPU: it compiles).
+portable  The engine compiled for the portable CPU target an FMU carries (NUMBA_CPU_NAME=
+          generic) against this machine's target: CPU seconds of the same work in child
+          processes of either target, alternating, the median of the pairs' ratios (1000
+          advances of 1 ms of stage_planar_3dof as an FMU steps it, and a 1 s step with
+          `simulate`). The FMU's first instantiate + initialise + doStep in a host without
+          flexure (FLEXURE_FMU_OWN_COPY=1) with an empty cache, with the engine it carries
+          (<= 5 s of CPU) and, once, compiling instead; what the engine adds to the FMU.
 
 Before any timing one warm-up run loads the compiled engine (compiling it when the on-disk
 cache is empty); its latency is the table's first row, not part of any other figure.
@@ -88,7 +95,7 @@ Usage
                                           [--markdown FILE]
 
 The row groups live in this folder's modules (loops, step_scan, refined, fmu_overhead,
-manipulator, latency), the shared machinery in measure, table and stage_models.
+manipulator, latency, portable), the shared machinery in measure, table and stage_models.
 
 Requires flexure and, for the peer columns, exudyn (``pip install ".[bench]"``); without
 exudyn the flexure side and the limits are still measured.
@@ -110,13 +117,14 @@ from .latency import startup, warmup  # noqa: E402
 from .loops import loop, realtime  # noqa: E402
 from .manipulator import manipulator  # noqa: E402
 from .measure import log  # noqa: E402
+from .portable import portable  # noqa: E402
 from .refined import refined  # noqa: E402
 from .step_scan import step  # noqa: E402
 from .table import environment, markdown, text_table  # noqa: E402
 
-GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "startup")
+GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "startup", "portable")
 FUNCTIONS = {"loop": loop, "realtime": realtime, "step": step, "refined": refined, "fmu": fmu,
-             "manipulator": manipulator, "startup": startup}
+             "manipulator": manipulator, "startup": startup, "portable": portable}
 
 
 def run(groups=GROUPS, *, repeat=5, quick=False):

@@ -1,0 +1,241 @@
+"""The notice a person gets while flexure's engine compiles, wherever they are.
+
+The first use of a version of flexure on a machine compiles its engine (numba) for about a
+minute of CPU, with nothing else to show for it. When an entry point of the engine is missing
+from the cache (`flexure.core.numerics.jit`), `CompileNotice.announce` says so, once per
+process:
+
+- by default on stderr, always (a terminal, a piped log, CI, a notebook): one line naming
+  what compiles, the estimate and the cache folder;
+- on a terminal, a progress line while it runs ("compiled 57 of ~200 functions"), redrawn in
+  place with a carriage return and erased when the compilation ends;
+- within `CompileNotice.notices_to(write)` the line goes to `write` instead, followed by a
+  summary when the compilation is done (an FMU's slave hands it the host's FMI logger).
+
+The estimate is measured on this machine: each compilation's CPU and wall seconds and the
+number of functions it compiled are kept in `compile-time.json` in the cache folder, and the
+next notice quotes them; without a record, DEFAULT_CPU_S (measured on the project's machine).
+A compiled function is a numba compilation event ("numba:compile", numba.core.event) or an
+entry point compiled by `jit`.
+"""
+
+import contextlib
+import datetime
+import json
+import os
+import sys
+import tempfile
+import time
+
+from numba.core import config, event
+
+# A cold `flexure loop` on the project's 2-core development machine, empty cache (2026-11-28):
+# 62 s of CPU, 203 functions compiled.
+DEFAULT_CPU_S = 60.0
+DEFAULT_FUNCTIONS = 200
+RECORD_NAME = "compile-time.json"
+
+
+class _Listener(event.Listener):
+    """Passes numba's compilation events on to a `CompileNotice`."""
+
+    def __init__(self, notice):
+        self.notice = notice
+
+    def on_start(self, ev):
+        self.notice.enter()
+
+    def on_end(self, ev):
+        self.notice.leave(counted=True)
+
+
+class CompileNotice:
+    """The compilation notice of one process (see the module).
+
+    Parameters
+    ----------
+    folder : str or None
+        The cache folder (where the record is kept; None: no record).
+    sources : str
+        The hash of the sources being compiled: a record of other sources is replaced by the
+        next compilation, one of these sources only by a compilation at least as large (a
+        later partial compilation does not make the estimate of a full one small).
+    """
+
+    def __init__(self, folder, sources=""):
+        self.folder, self.sources = folder, sources
+        self.stream = None  # where the notice and the progress go, unless `sink` is set
+        self.sink = None  # write(text), e.g. an FMU's logger, while `notices_to` is active
+        self.announced = False
+        self.functions = 0  # compiled since the notice
+        self.cpu_s = self.wall_s = 0.0  # spent compiling since the notice, s
+        self._depth = 0  # nested compilations running
+        self._burst = None  # (process time, wall time) when the outermost one began
+        self._progress = 0  # length of the progress line on the terminal (0: none shown)
+        self._total = DEFAULT_FUNCTIONS  # the estimate's count of functions
+        self._owns_record = False
+        self._listener = None
+
+    # -- what is said ----------------------------------------------------------------------
+
+    def record(self):
+        """The last compilation measured here: {"cpu_s", "wall_s", "functions", "date",
+        "sources"}, or None."""
+        if self.folder is None:
+            return None
+        try:
+            with open(os.path.join(self.folder, RECORD_NAME)) as handle:
+                record = json.load(handle)
+            float(record["cpu_s"]), float(record["wall_s"]), int(record["functions"])
+            return record
+        except (OSError, ValueError, KeyError, TypeError):  # none yet, or not ours
+            return None
+
+    def estimate(self):
+        """(CPU seconds, functions, words saying where the figure comes from)."""
+        record = self.record()
+        if record is None:
+            return (DEFAULT_CPU_S, DEFAULT_FUNCTIONS,
+                    "measured on flexure's 2-core development machine; none here yet")
+        return (float(record["cpu_s"]), int(record["functions"]),
+                f"{float(record['wall_s']):.0f} s of wall time when measured here on "
+                f"{record.get('date', '?')}")
+
+    def text(self):
+        """The notice: what compiles, for how long, and where it is kept."""
+        cpu, _, source = self.estimate()
+        target = ("this machine" if config.CPU_NAME is None
+                  else f"the CPU target {config.CPU_NAME!r}")
+        return (f"flexure: compiling its engine for {target}, once per version of flexure: "
+                f"about {cpu:.0f} s of CPU ({source}); kept in {self.folder}")
+
+    def summary(self):
+        """What the compilation took, once done."""
+        return (f"flexure: compiled {self.functions} functions in {self.cpu_s:.0f} s of CPU "
+                f"({self.wall_s:.0f} s of wall time); kept in {self.folder}")
+
+    def announce(self, stream=None):
+        """Give the notice, once per process, and follow the compilation from here on.
+
+        Parameters
+        ----------
+        stream : file, optional
+            Where the notice goes (default sys.stderr) unless `notices_to` is active; a
+            progress line is drawn there too when it is a terminal.
+        """
+        if self.announced:
+            return
+        self.announced = True
+        self.stream = stream
+        self._total = self.estimate()[1]
+        self._say(self.text())
+        self._listener = _Listener(self)
+        event.register("numba:compile", self._listener)
+
+    def close(self):
+        """Stop following numba's compilations (a notice made for a test)."""
+        if self._listener is not None:
+            event.unregister("numba:compile", self._listener)
+            self._listener = None
+
+    @contextlib.contextmanager
+    def notices_to(self, write):
+        """Within this block the notice goes to `write(text)` (no progress line), and a
+        summary follows when something was compiled in it."""
+        previous, self.sink = self.sink, write
+        before = self.functions
+        try:
+            yield
+        finally:
+            self.sink = previous
+            if self.functions > before:
+                write(self.summary())
+
+    # -- following the compilation ---------------------------------------------------------
+
+    @contextlib.contextmanager
+    def unit(self, counted=True):
+        """A compilation that numba's events do not report (a C entry point's)."""
+        self.enter()
+        try:
+            yield
+        finally:
+            self.leave(counted)
+
+    def enter(self):
+        """A compilation begins (numba's event, or `unit`)."""
+        if self._depth == 0:
+            self._burst = (time.process_time(), time.perf_counter())
+        self._depth += 1
+
+    def leave(self, counted):
+        """A compilation ends: counted (unless `counted` is False: code loaded from the
+        cache), and when it was the outermost, its time added and the record written."""
+        self._depth = max(self._depth - 1, 0)
+        if counted and self.announced:
+            self.functions += 1
+            self._show_progress()
+        if self._depth == 0 and self._burst is not None:
+            cpu, wall = self._burst
+            self._burst = None
+            if self.announced:
+                self.cpu_s += time.process_time() - cpu
+                self.wall_s += time.perf_counter() - wall
+                self._erase_progress()
+                self._write_record()
+
+    # -- where it goes ---------------------------------------------------------------------
+
+    def _target(self):
+        return self.stream if self.stream is not None else sys.stderr
+
+    def _terminal(self):
+        return self.sink is None and getattr(self._target(), "isatty", lambda: False)()
+
+    def _say(self, text):
+        if self.sink is not None:
+            self.sink(text)
+            return
+        self._erase_progress()
+        stream = self._target()
+        stream.write(text + "\n")
+        stream.flush()
+
+    def _show_progress(self):
+        if not self._terminal():
+            return
+        line = (f"flexure: compiled {self.functions} of ~{max(self._total, self.functions)} "
+                "functions")
+        stream = self._target()
+        stream.write("\r" + line.ljust(self._progress))
+        stream.flush()
+        self._progress = len(line)
+
+    def _erase_progress(self):
+        if self._progress and self._terminal():
+            stream = self._target()
+            stream.write("\r" + " " * self._progress + "\r")
+            stream.flush()
+        self._progress = 0
+
+    def _write_record(self):
+        """Keep this compilation's figures for the next notice's estimate (see `__init__`)."""
+        if self.folder is None:
+            return
+        old = self.record()
+        if not (self._owns_record or old is None or old.get("sources") != self.sources
+                or self.functions >= int(old["functions"])):
+            return
+        record = {"cpu_s": round(self.cpu_s, 1), "wall_s": round(self.wall_s, 1),
+                  "functions": self.functions, "date": datetime.date.today().isoformat(),
+                  "sources": self.sources}
+        temporary = None
+        try:
+            descriptor, temporary = tempfile.mkstemp(dir=self.folder, suffix=".tmp")
+            with os.fdopen(descriptor, "w") as handle:
+                json.dump(record, handle)
+            os.replace(temporary, os.path.join(self.folder, RECORD_NAME))
+            self._owns_record = True
+        except OSError:  # a read-only cache folder: the next notice quotes the default
+            if temporary is not None and os.path.exists(temporary):
+                os.unlink(temporary)
