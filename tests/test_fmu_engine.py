@@ -282,7 +282,7 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
     here = []
     for k in range(steps):
         simulator.set_inputs([1.0])
-        simulator.advance((k + 1) * 1e-3)
+        simulator.advance_to((k + 1) * 1e-3)
         here.append(simulator.output_values())
     here, there = np.array(here), np.array(result["y"])
     scale = np.ptp(here, axis=0).max()

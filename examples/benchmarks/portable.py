@@ -38,7 +38,7 @@ def advances():
     start = time.process_time()
     for k in range(1000):
         simulator.set_inputs([1.0])
-        simulator.advance((k + 1) * 1e-3)
+        simulator.advance_to((k + 1) * 1e-3)
     counts["advances"] = simulator.statistics["rhs_evaluations"]
     return time.process_time() - start
 
@@ -50,7 +50,7 @@ def step():
 
 simulator = Simulator(refined_stage(4), rtol=1e-6)
 simulator.set_inputs([1.0])
-simulator.advance(0.01)
+simulator.advance_to(0.01)
 y = np.ascontiguousarray(simulator.state, dtype=float)
 ydot = np.empty_like(y)
 simulator.derivative(0.0, y)
