@@ -242,7 +242,7 @@ def engine_entry(op, user_data, t, a, b, c, s):
             compute_DF(table)
         return status
     if op == OP_DEFORMATIONS:
-        deformations(table, carray(a, (nx,), f8), int(s))
+        deformations(table, carray(a, (nx,), f8), int(s), False)
         return ed.OK
     if op == OP_EVALUATE:
         status = evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))

@@ -171,7 +171,7 @@ def j_factor(table):
 
 
 @kernel
-def j_solve(table, b, transposed=False):
+def j_solve(table, b, transposed):
     """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
     b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
     factors of the last `j_factor`."""

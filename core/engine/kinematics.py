@@ -41,7 +41,7 @@ from .slots import int_array as _i
 
 # -- deformations of every element ---------------------------------------------------------------
 @kernel
-def deformations(table, x, order, skip_internal=False):
+def deformations(table, x, order, skip_internal):
     """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e;
     with skip_internal, not those of the elements a rigid cluster makes identically zero
     (`rigid`: their rows are out of the system, their stresses zero)."""
@@ -149,7 +149,7 @@ def compute_DF(table):
         unit[:] = 0.0
         unit[j] = 1.0
         dof_rows(table, unit, column)
-        j_solve(table, column)
+        j_solve(table, column, False)
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
     if dims[ed.NSLAVES] > 0:  # the slaves' rows: T DF
@@ -162,7 +162,7 @@ def _newton_step(table, x, g, dx):
     n_free); the step's largest magnitude (m, rad; not finite if the step is not)."""
     free = _i(table, slot.FREE)
     copy(dx, g)
-    j_solve(table, dx)
+    j_solve(table, dx, False)
     step = 0.0
     for a in range(_i(table, slot.DIMS)[ed.NFREE]):
         x[free[a]] -= dx[a]
@@ -180,7 +180,7 @@ def predicted_coordinates(table, q, x, dq, dx):
     for j in range(dims[ed.NDOF]):
         dq[j] = q[j] - q_prev[j]
     dof_rows(table, dq, dx)
-    j_solve(table, dx)
+    j_solve(table, dx, False)
     nx = dims[ed.NX]
     copy(x[:nx], x_prev[:nx])
     free = _i(table, slot.FREE)

@@ -108,7 +108,7 @@ def evaluate(table, q, qdot):
             xdot[a] = s
     else:  # xdot = J^-1 [0; qdot]
         dof_rows(table, qdot, dx)
-        j_solve(table, dx)
+        j_solve(table, dx, False)
         xdot[:] = 0.0
         for a in range(nf):
             xdot[free[a]] = dx[a]
@@ -149,7 +149,7 @@ def evaluate(table, q, qdot):
         else:
             for a in range(nf):
                 dx[a] = quad[a]
-        j_solve(table, dx)
+        j_solve(table, dx, False)
         for a in range(nf):
             conv[free[a]] = -dx[a]
         if rigid:
