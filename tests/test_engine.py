@@ -310,11 +310,13 @@ def test_statuses_and_their_messages():
                                     ed.NOT_CONNECTED}
     model = truss_pendulum()
     data = EngineData(model)
-    # the forms run the evaluation through the entry's address, which `connect` gives (and
-    # `call` with it): without it the entry answers with a status instead of jumping to 0
+    # the forms run the evaluation through the table of the operations' addresses, which
+    # `connect` gives (and `call` with it): without it the entry answers with a status
+    # instead of jumping to 0
     y, ydot = np.zeros(2), np.empty(2)
-    assert engine.engine_entry.ctypes(engine.OP_RHS, data.address, 0.0, y.ctypes.data,
-                                      ydot.ctypes.data, None, 0.0) == ed.NOT_CONNECTED
+    rhs = engine.ENTRIES[engine.OP_RHS]
+    assert rhs.ctypes(engine.OP_RHS, data.address, 0.0, y.ctypes.data, ydot.ctypes.data, None,
+                      0.0) == ed.NOT_CONNECTED
 
     def kinematics(y):
         data.int_array("dims")[ed.WARM] = 0  # full Newton from the scene's coordinates
@@ -437,9 +439,9 @@ def test_the_first_compilation_is_announced_on_a_terminal_only():
     from flexure.core.numerics.jit import announce_compilation, is_cached
 
     engine.connect(EngineData(truss_pendulum()))  # the entry compiled or loaded
-    assert is_cached(engine.engine_entry.function)
+    assert is_cached(engine.ENTRIES[engine.OP_RHS].function)
     probe = ("from flexure.core.engine import engine; from flexure.core.numerics import jit; "
-             "print(jit.is_cached(engine.engine_entry.function))")
+             "print(jit.is_cached(engine.ENTRIES[engine.OP_RHS].function))")
     with tempfile.TemporaryDirectory() as empty:
         done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                               env={**os.environ, "FLEXURE_CACHE_DIR": empty}, check=True)

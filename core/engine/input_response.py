@@ -26,7 +26,7 @@ from .slots import float_array as _f
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def input_response(table, out):
     """out (NDOF,) = d qddot (m/s^2, rad/s^2) for the change of the inputs in slot inputs since
     the last evaluation, at that evaluation's state and with its factors; a status (OK, or

@@ -188,7 +188,7 @@ def predicted_coordinates(table, q, x, dq, dx):
         x[free[a]] += dx[a]
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def solve_positions(table, q):
     """x = F(q) into slot x by full Newton from slot x_start, stopping as soon as the
     constraint residual is within the tolerance: the positions alone (no D2e, no factors or DF
@@ -215,7 +215,7 @@ def solve_positions(table, q):
     return ed.NOT_CONVERGED
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def solve_kinematics(table, q):
     """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
     dims = _i(table, slot.DIMS)

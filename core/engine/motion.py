@@ -69,7 +69,7 @@ from .slots import (
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def evaluate(table, q, qdot):
     """qddot (NDOF,) into slot qddot for DOFs q, velocities qdot and the inputs in slot inputs.
 
@@ -388,7 +388,7 @@ def _inertia_reduced(table, x, xdot, conv, moving, r):
     _reduced_mass_of(table, x, xdot, conv, moving, r, True)
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def reduced_mass(table):
     """DF (slot DF), M_bar = DF^T M DF (slot mass) and its LU (slot mass_lu) at the state of
     the last `evaluate`, for the tangent and the implicit form (already there when that took

@@ -1,12 +1,15 @@
-"""The engine's operations: their codes, and how compiled code runs one through the entry.
+"""The engine's operations: their codes, and how compiled code runs one through its entry.
 
-Every operation of the engine reaches compiled code through the one C function
-`engine.engine_entry`, whose address `engine.connect` puts in dims[ENGINE] of the packed model.
-The engine's own functions call each other's heavy parts (the evaluation, the kinematics, the
-tangent) through that address too, with `run`, rather than directly: numba links a callee's
-compiled code into each caller and optimises it again there, so direct calls made the first
-compilation optimise the whole evaluation once per form of the equations (a third of it). A
-call through an address costs a few nanoseconds and inlines nothing that mattered.
+Each operation of the engine is one C function (`engine.ENTRIES`); compiled code reaches it
+through the process's table of their addresses, whose address `engine.connect` puts in
+dims[ENGINE] of the packed model (`native.call_engine` takes the table and the operation's
+code). The engine's own functions call each other's heavy parts (the evaluation, the
+kinematics, the tangent) through that table too, with `run`, rather than directly: numba links
+a callee's compiled code into each caller and optimises it again there, so direct calls made
+the first compilation optimise the whole evaluation once per form of the equations (a third of
+it). A call through an address costs a few nanoseconds and inlines nothing that mattered; and
+an operation that no model of the process uses (the implicit form without IDA) is never
+compiled.
 
 The operations and their arrays (a, b, c: addresses of float64 arrays; s: a number):
 
@@ -40,10 +43,10 @@ from .slots import DIMS, int_array
 @kernel
 def run(table, op, a, b, s):
     """Operation `op` on the packed model at the address `table`, with the arrays at the
-    addresses a and b (int64; 0 for none) and the number s, through the engine's entry;
-    its status code (ed.NOT_CONNECTED when `engine.connect` has not given the entry's
-    address)."""
-    address = int_array(table, DIMS)[ed.ENGINE]
-    if address == 0:
+    addresses a and b (int64; 0 for none) and the number s, through its entry; its status
+    code (ed.NOT_CONNECTED when `engine.connect` has not given the table of the entries'
+    addresses, or not this operation's)."""
+    operations = int_array(table, DIMS)[ed.ENGINE]
+    if operations == 0:
         return ed.NOT_CONNECTED
-    return call_engine(address, op, table, 0.0, a, b, 0, s)
+    return call_engine(operations, op, table, 0.0, a, b, 0, s)

@@ -31,7 +31,7 @@ from .slots import (
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def tangent(table, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,

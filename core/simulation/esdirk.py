@@ -359,7 +359,8 @@ class Esdirk:
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
-        self.data = engine.connect(data)
+        self.data = engine.connect(data, engine.OP_RHS, engine.OP_JACOBIAN,
+                                   engine.OP_INPUT_RESPONSE)
         self.tableau = tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()
