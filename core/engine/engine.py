@@ -30,9 +30,9 @@ its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the resi
 = [[cj I, -I], [K, C + cj M_bar]]. A scene with voltage-driven actuators appends their coil
 currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tangent blocks
 from `actuators`. Every operation is a C function of its own (`ENTRIES`), compiled the first
-time a model needs it (`connect`); compiled code (a SUNDIALS callback, the sampled loop, the
-engine's own functions) reaches it through the process's table of their addresses, Python
-through `call`.
+time a model needs it (`connect`: the sparse factorisations only for models that use them);
+compiled code (a SUNDIALS callback, the sampled loop, the engine's own functions) reaches it
+through the process's table of their addresses, Python through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
@@ -51,6 +51,7 @@ from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of
 from . import data as ed
 from . import slots as slot
+from . import sparse_factors
 from .actuators import (
     current_rates,
     current_residual,
@@ -74,7 +75,10 @@ from .operations import (
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
     OP_RHS,
+    OP_SPARSE_FACTOR,
+    OP_SPARSE_SOLVE,
     OP_TANGENT,
+    SPARSE_AUGMENTED,
     run,
 )
 from .slots import float_array, int_array
@@ -332,6 +336,23 @@ def input_response_entry(op, user_data, t, a, b, c, s):
 
 
 @entry(ENGINE_ENTRY)
+def sparse_factor_entry(op, user_data, t, a, b, c, s):
+    """OP_SPARSE_FACTOR: out (a, (1,)); s = which matrix."""
+    sparse_factors.factor(address_of(user_data), int(s), carray(a, (1,), _F8))
+    return ed.OK
+
+
+@entry(ENGINE_ENTRY)
+def sparse_solve_entry(op, user_data, t, a, b, c, s):
+    """OP_SPARSE_SOLVE: b (a); s = which factors."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    n = dims[ed.NFREE] + (dims[ed.NRIGID] if int(s) == SPARSE_AUGMENTED else 0)
+    sparse_factors.solve(table, int(s), carray(a, (n,), _F8))
+    return ed.OK
+
+
+@entry(ENGINE_ENTRY)
 def missing_entry(op, user_data, t, a, b, c, s):
     """An operation that no `connect` has asked for: NOT_CONNECTED."""
     return ed.NOT_CONNECTED
@@ -340,7 +361,8 @@ def missing_entry(op, user_data, t, a, b, c, s):
 # each operation's entry, by code; and the operations each one calls through the table
 ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, kinematics_entry,
            deformations_entry, evaluate_entry, tangent_entry, positions_entry,
-           accelerations_entry, configuration_entry, mass_entry, input_response_entry)
+           accelerations_entry, configuration_entry, mass_entry, input_response_entry,
+           sparse_factor_entry, sparse_solve_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION,), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -360,13 +382,16 @@ def connect(data, *ops):
     `data`."""
     if not _TABLE.any():
         _TABLE[:] = missing_entry.address
+    dims = data.int_array("dims")
     wanted = list(ops) if ops else list(range(len(ENTRIES)))
+    if ops and (dims[ed.J_SPARSE] or dims[ed.A_SPARSE]):  # the factors' own operations
+        wanted += [OP_SPARSE_FACTOR, OP_SPARSE_SOLVE]
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:
             _TABLE[op] = ENTRIES[op].address
             wanted.extend(CALLS.get(op, ()))
-    data.int_array("dims")[ed.ENGINE] = _TABLE.ctypes.data
+    dims[ed.ENGINE] = _TABLE.ctypes.data
     return data
 
 

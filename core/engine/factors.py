@@ -25,6 +25,14 @@ from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
+from .operations import (
+    OP_SPARSE_FACTOR,
+    OP_SPARSE_SOLVE,
+    SPARSE_AUGMENTED,
+    SPARSE_J,
+    SPARSE_J_TRANSPOSED,
+    run,
+)
 from .rigid_kernels import rigid_de, touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
@@ -32,18 +40,15 @@ from .slots import int_array as _i
 
 
 @kernel
-def _sparse_factor(table, ints, floats):
-    """The sparse LU with the kept pivots, else pivoting afresh (counted); the pivot ratio, or
-    negative when the sparse LU cannot serve (counted: the caller factors banded)."""
-    ratio = sparse_lu.refactor(ints, floats, sparse_lu.THRESHOLD)
-    if ratio >= 0.0:
-        return ratio
-    counters = _i(table, slot.COUNTERS)
-    counters[ed.SPARSE_PIVOTING] += 1
-    ratio = sparse_lu.factor(ints, floats, sparse_lu.THRESHOLD)
-    if ratio < 0.0:
-        counters[ed.SPARSE_FALLBACKS] += 1
-    return ratio
+def _sparse_factor(table, which):
+    """The sparse LU of J (which = SPARSE_J) or of the augmented system (SPARSE_AUGMENTED)
+    through its operation (`sparse_factors.factor`, compiled only for models that use it);
+    the pivot ratio, negative when it cannot serve (the values are then in the dense
+    storage for the banded LU). The ratio comes back in the first entry of slot
+    band_scratch, which the banded solves use only after a factorisation."""
+    ratio = _f(table, slot.BAND_SCRATCH)
+    run(table, OP_SPARSE_FACTOR, ratio.ctypes.data, 0, float(which))
+    return ratio[0]
 
 
 # -- J ---------------------------------------------------------------------------------------------
@@ -117,36 +122,6 @@ def _scatter_de(table, De, emap, shift, mirror, out):
 
 
 @kernel
-def _sparse_constraint_jacobian(table, values):
-    """J's sparse values from the elements' De in slot de through the J map."""
-    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
-    dims = _i(table, slot.DIMS)
-    values[:] = 0.0
-    n_de, n_xdof = De.size, dims[ed.NXDOF]
-    _scatter_de(table, De, jmap, 0, -1, values)
-    for j in range(n_xdof):
-        s = jmap[n_de + j]
-        if s >= 0:
-            values[s] = 1.0
-    if dims[ed.NSLAVES] == 0:
-        return
-    rde, base = _f(table, slot.RIGID_DE), n_de + n_xdof
-    for e in range(rde.size):
-        s = jmap[base + e]
-        if s >= 0:
-            values[s] += rde[e]
-    base += rde.size
-    units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
-    for j in range(n_xdof):
-        if units[j] < 0:
-            continue
-        for d in range(DEPENDENCIES):
-            s = jmap[base + DEPENDENCIES * j + d]
-            if s >= 0:
-                values[s] += W[units[j] * DEPENDENCIES + d]
-
-
-@kernel
 def j_factor(table):
     """J at the deformations' De factored (sparse, or banded in slot lu); the ratio of the
     smallest to the largest pivot magnitude."""
@@ -154,16 +129,11 @@ def j_factor(table):
     lu, nf = _f(table, slot.LU), dims[ed.NFREE]
     if dims[ed.NSLAVES] > 0:
         rigid_de(table)
-    if dims[ed.J_SPARSE] == 1:
-        ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
-        _sparse_constraint_jacobian(table, sparse_lu.matrix_values(ints, floats))
-        ratio = _sparse_factor(table, ints, floats)
+    if dims[ed.J_SPARSE] == 1:  # else (or when it cannot serve) in lu for the banded LU
+        ratio = _sparse_factor(table, SPARSE_J)
         if ratio >= 0.0:
             dims[ed.J_FACTORS] = ed.SPARSE_FACTORS
             return ratio
-        lu[: nf * nf] = 0.0
-        sparse_lu.scatter_dense(ints, floats, lu, _i(table, slot.J_ROW_POS),
-                                _i(table, slot.J_COL_POS))
     else:
         _constraint_jacobian(table, lu)
     dims[ed.J_FACTORS] = ed.BANDED_FACTORS
@@ -177,8 +147,8 @@ def j_solve(table, b, transposed):
     factors of the last `j_factor`."""
     dims = _i(table, slot.DIMS)
     if dims[ed.J_FACTORS] == ed.SPARSE_FACTORS:
-        sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
-                        transposed)
+        run(table, OP_SPARSE_SOLVE, b.ctypes.data, 0,
+            float(SPARSE_J_TRANSPOSED if transposed else SPARSE_J))
         return
     nf = dims[ed.NFREE]
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
@@ -320,15 +290,12 @@ def augmented_solve(table, A, na, rhs):
     """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
     then the rigid rows); False when A is singular."""
     dims = _i(table, slot.DIMS)
-    apos, dense = _i(table, slot.AUG_POS), _f(table, slot.AUG)
-    if dims[ed.A_SPARSE] == 1:
-        ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
-        if _sparse_factor(table, ints, floats) >= 0.0:
-            sparse_lu.solve(ints, floats, rhs, False)
+    dense = _f(table, slot.AUG)
+    if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in dense for the banded LU
+        if _sparse_factor(table, SPARSE_AUGMENTED) >= 0.0:
+            run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
             dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
             return True
-        dense[: na * na] = 0.0
-        sparse_lu.scatter_dense(ints, floats, dense, apos, apos)
     if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
                          dims[ed.A_KU]) > 0.0:
         return False
@@ -343,8 +310,7 @@ def augmented_resolve(table, na, rhs):
     successful `augmented_solve` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
     dims = _i(table, slot.DIMS)
     if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:
-        sparse_lu.solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), rhs,
-                        False)
+        run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
         return
     apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
     for u in range(na):

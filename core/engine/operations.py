@@ -28,6 +28,10 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     MASS                 DF, M_bar and its LU at the last evaluation (`motion.reduced_mass`)
     INPUT_RESPONSE       out (NDOF,); the change of qddot that the change of the inputs since
                          the last evaluation makes at its state (`input_response`)
+    SPARSE_FACTOR        out (1,): the pivot ratio; s = SPARSE_J or SPARSE_AUGMENTED: factor
+                         that matrix's sparse LU (`sparse_factors.factor`)
+    SPARSE_SOLVE         b; s = SPARSE_J, SPARSE_J_TRANSPOSED or SPARSE_AUGMENTED: solve in
+                         place with its sparse factors (`sparse_factors.solve`)
 """
 
 from ..numerics.jit import kernel
@@ -37,7 +41,9 @@ from .slots import DIMS, int_array
 
 (OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
  OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
- OP_INPUT_RESPONSE) = range(13)
+ OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE) = range(15)
+# which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
+SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 
 
 @kernel

@@ -143,7 +143,7 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
     held = np.array(sim.inputs, dtype=float)
     addresses = np.zeros(_ADDRESSES, dtype=np.int64)
-    engine.connect(plant, engine.OP_POSITIONS)  # `_measure`'s, on the outputs' packed model
+    engine.connect(outputs, engine.OP_POSITIONS)  # `_measure`'s, on the outputs' packed model
     addresses[[_PLANT, _OUTPUT, _ENGINE]] = (plant.address, outputs.address,
                                              plant.int_array("dims")[ed.ENGINE])
     samples_of = _esdirk_samples if isinstance(solver, Esdirk) else _cvode_samples
