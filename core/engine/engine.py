@@ -30,9 +30,10 @@ its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the resi
 = [[cj I, -I], [K, C + cj M_bar]]. A scene with voltage-driven actuators appends their coil
 currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tangent blocks
 from `actuators`. Every operation is a C function of its own (`ENTRIES`), compiled the first
-time a model needs it (`connect`: the sparse factorisations only for models that use them);
-compiled code (a SUNDIALS callback, the sampled loop, the engine's own functions) reaches it
-through the process's table of their addresses, Python through `call`.
+time a model needs it (`connect`: the sparse factorisations and the rigid clusters' kernels
+only for models that use them); compiled code (a SUNDIALS callback, the sampled loop, the
+engine's own functions) reaches it through the process's table of their addresses, Python
+through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
@@ -50,8 +51,8 @@ from ..numerics.dense import lu_factor, lu_solve, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of
 from . import data as ed
+from . import rigid_kernels, sparse_factors
 from . import slots as slot
-from . import sparse_factors
 from .actuators import (
     current_rates,
     current_residual,
@@ -75,9 +76,18 @@ from .operations import (
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
     OP_RHS,
+    OP_RIGID_CONDENSE,
+    OP_RIGID_CONVECTIVE,
+    OP_RIGID_DE,
+    OP_RIGID_EXPAND,
+    OP_RIGID_EXPAND_COLUMNS,
+    OP_RIGID_FILL,
+    OP_RIGID_GEOMETRIC,
+    OP_RIGID_RATES,
     OP_SPARSE_FACTOR,
     OP_SPARSE_SOLVE,
     OP_TANGENT,
+    RIGID_OPERATIONS,
     SPARSE_AUGMENTED,
     run,
 )
@@ -353,6 +363,35 @@ def sparse_solve_entry(op, user_data, t, a, b, c, s):
 
 
 @entry(ENGINE_ENTRY)
+def rigid_entry(op, user_data, t, a, b, c, s):
+    """The rigid clusters' operations (OP_RIGID_...: `operations`, `rigid_kernels`), one entry
+    for all of them: a model has clusters or not."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    nx, nf = dims[ed.NX], dims[ed.NFREE]
+    if op == OP_RIGID_FILL:
+        rigid_kernels.fill_slaves(table, carray(a, (nx,), _F8))
+    elif op == OP_RIGID_EXPAND:
+        rigid_kernels.expand(table, carray(a, (nx,), _F8), s != 0.0)
+    elif op == OP_RIGID_EXPAND_COLUMNS:
+        rigid_kernels.expand_columns(table, _f(table, slot.DF), dims[ed.NDOF])
+    elif op == OP_RIGID_CONVECTIVE:
+        rigid_kernels.convective(table, carray(a, (nx,), _F8), carray(b, (nx,), _F8))
+    elif op == OP_RIGID_RATES:
+        rigid_kernels.rigid_rates(table)
+    elif op == OP_RIGID_CONDENSE:
+        rigid_kernels.condense(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8))
+    elif op == OP_RIGID_GEOMETRIC:
+        rigid_kernels.rigid_geometric(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8),
+                                      _f(table, slot.STIFFNESS))
+    elif op == OP_RIGID_DE:
+        rigid_kernels.rigid_de(table)
+    else:
+        return ed.NOT_CONNECTED
+    return ed.OK
+
+
+@entry(ENGINE_ENTRY)
 def missing_entry(op, user_data, t, a, b, c, s):
     """An operation that no `connect` has asked for: NOT_CONNECTED."""
     return ed.NOT_CONNECTED
@@ -362,7 +401,7 @@ def missing_entry(op, user_data, t, a, b, c, s):
 ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, kinematics_entry,
            deformations_entry, evaluate_entry, tangent_entry, positions_entry,
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
-           sparse_factor_entry, sparse_solve_entry)
+           sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION,), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -386,6 +425,8 @@ def connect(data, *ops):
     wanted = list(ops) if ops else list(range(len(ENTRIES)))
     if ops and (dims[ed.J_SPARSE] or dims[ed.A_SPARSE]):  # the factors' own operations
         wanted += [OP_SPARSE_FACTOR, OP_SPARSE_SOLVE]
+    if ops and dims[ed.NSLAVES] > 0:  # the rigid clusters'
+        wanted += RIGID_OPERATIONS
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

@@ -26,6 +26,7 @@ from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
 from .operations import (
+    OP_RIGID_DE,
     OP_SPARSE_FACTOR,
     OP_SPARSE_SOLVE,
     SPARSE_AUGMENTED,
@@ -33,7 +34,7 @@ from .operations import (
     SPARSE_J_TRANSPOSED,
     run,
 )
-from .rigid_kernels import rigid_de, touching_row
+from .rigid_kernels import touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
@@ -128,7 +129,7 @@ def j_factor(table):
     dims = _i(table, slot.DIMS)
     lu, nf = _f(table, slot.LU), dims[ed.NFREE]
     if dims[ed.NSLAVES] > 0:
-        rigid_de(table)
+        run(table, OP_RIGID_DE, 0, 0, 0.0)
     if dims[ed.J_SPARSE] == 1:  # else (or when it cannot serve) in lu for the banded LU
         ratio = _sparse_factor(table, SPARSE_J)
         if ratio >= 0.0:

@@ -33,7 +33,7 @@ from . import data as ed
 from . import rigid as rg
 from . import slots as slot
 from .factors import j_factor, j_solve
-from .rigid_kernels import expand_columns, fill_slaves
+from .operations import OP_RIGID_EXPAND_COLUMNS, OP_RIGID_FILL, run
 from .slots import float_array as _f
 from .slots import group, group_coordinates, rigid_element
 from .slots import int_array as _i
@@ -83,7 +83,7 @@ def _elements(table, x, order):
     """The slaves of the rigid clusters from their masters in x (`rigid_kernels`), then the
     deformations of order `order` at x."""
     if _i(table, slot.DIMS)[ed.NSLAVES] > 0:
-        fill_slaves(table, x)
+        run(table, OP_RIGID_FILL, x.ctypes.data, 0, 0.0)
     deformations(table, x, order, True)
 
 
@@ -153,7 +153,7 @@ def compute_DF(table):
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
     if dims[ed.NSLAVES] > 0:  # the slaves' rows: T DF
-        expand_columns(table, DF, ndof)
+        run(table, OP_RIGID_EXPAND_COLUMNS, 0, 0, 0.0)  # on slot DF
 
 
 @kernel

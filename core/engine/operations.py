@@ -32,6 +32,15 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          that matrix's sparse LU (`sparse_factors.factor`)
     SPARSE_SOLVE         b; s = SPARSE_J, SPARSE_J_TRANSPOSED or SPARSE_AUGMENTED: solve in
                          place with its sparse factors (`sparse_factors.solve`)
+    RIGID_...            the rigid clusters' kernels (`rigid_kernels`, one entry for all):
+      FILL               x (NX,): the slaves' coordinates from their masters' (`fill_slaves`)
+      EXPAND             v (NX,); s = 1 with the slaves' c (`expand`)
+      EXPAND_COLUMNS     the slaves' rows of slot DF (`expand_columns`)
+      CONVECTIVE         x, xdot (NX,) (`convective`)
+      RATES              `rigid_rates`
+      CONDENSE           v (NX,), out (n_free,) (`condense`)
+      GEOMETRIC          r_full (NX,), lam (n_free,); into slot stiffness (`rigid_geometric`)
+      DE                 `rigid_de`
 """
 
 from ..numerics.jit import kernel
@@ -41,7 +50,10 @@ from .slots import DIMS, int_array
 
 (OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
  OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
- OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE) = range(15)
+ OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE, OP_RIGID_FILL, OP_RIGID_EXPAND,
+ OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
+ OP_RIGID_GEOMETRIC, OP_RIGID_DE) = range(23)
+RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 
