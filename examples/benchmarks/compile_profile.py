@@ -38,7 +38,7 @@ class CompileRecorder:
     def __init__(self):
         self.stack = []  # [name, start, children's time, llvm time]
         self.kernels = defaultdict(lambda: {"n": 0, "self": 0.0, "llvm": 0.0, "total": 0.0,
-                                            "signatures": []})
+                                            "signatures": [], "callers": []})
         self._llvm_depth, self._llvm_start = 0, 0.0
 
     def start(self, name, signature):
@@ -55,6 +55,7 @@ class CompileRecorder:
         row["llvm"] += llvm
         row["total"] += total
         row["signatures"].append(signature)
+        row["callers"].append(self.stack[-1][0] if self.stack else "(Python)")
         if self.stack:
             self.stack[-1][2] += total
 
@@ -156,7 +157,8 @@ def main(argv=None):
     parser.add_argument("--fmu", action="store_true",
                         help="profile fmu build + instantiate (needs fmpy) instead")
     parser.add_argument("--signatures", action="store_true",
-                        help="list each kernel's signatures (the most specialised first)")
+                        help="list each kernel's signatures and who compiled it (the most "
+                        "specialised first)")
     parser.add_argument("--keep-cache", action="store_true",
                         help="use FLEXURE_CACHE_DIR as set (a warm run), not a new empty one")
     parser.add_argument("--json", help="also write every kernel's row to this JSON file")
@@ -192,8 +194,8 @@ def main(argv=None):
                                 key=lambda item: -item[1]["n"]):
             if row["n"] > 1:
                 print(f"{short(name)}:")
-                for signature in row["signatures"]:
-                    print(f"    {signature}")
+                for signature, caller in zip(row["signatures"], row["callers"], strict=True):
+                    print(f"    {signature}  <- {short(caller)}")
 
 
 if __name__ == "__main__":
