@@ -275,7 +275,7 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 _MEASURE_FAILED = -1000
 
 
-@kernel
+@kernel(inline="always")  # into `_sample`, its one caller
 def _measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
     status. As `Simulator.outputs`: q_ref + y at the DOFs when every output is a coordinate
@@ -305,7 +305,7 @@ def _measure(addresses, y, scratch, coordinates, out):
     return ed.OK
 
 
-@kernel
+@kernel(inline="always")  # into the loop of the integrator in use, its one caller
 def _sample(addresses, y, scratch, k, controller, held):
     """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
     stepped; e_k of y_k rounded to its quantum where quanta > 0), and put u_k into the held
@@ -319,8 +319,9 @@ def _sample(addresses, y, scratch, k, controller, held):
     if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
         return -1
     n_loops = inputs.size
-    if k == 0:
-        force[0, :] = feedforward[0]
+    if k == 0:  # element by element: a slice assignment compiles numba's shape-error message
+        for i in range(n_loops):
+            force[0, i] = feedforward[0, i]
     r = reference[min(k, reference.shape[0] - 1)]
     ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
     for i in range(n_loops):
