@@ -275,7 +275,7 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 _MEASURE_FAILED = -1000
 
 
-@kernel(inline="always")  # into `_sample`, its one caller
+@kernel
 def _measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
     status. As `Simulator.outputs`: q_ref + y at the DOFs when every output is a coordinate
