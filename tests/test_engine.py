@@ -473,3 +473,34 @@ def test_positions_operation_matches_the_full_kinematics(case):
         assert engine.call(data, engine.OP_POSITIONS, q) == ed.OK
         close(data.float_array("x"), expected, 1e-13, scale=max(L, np.max(np.abs(expected))))
         assert data.int_array("dims")[ed.WARM] == 0
+
+
+def test_connect_compiles_only_the_operations_a_model_uses():
+    """`connect` compiles the entries of the operations its caller names and of those they
+    call, nothing else: CVODE's form on a banded model without rigid clusters leaves the
+    implicit form, the positions, the sparse LU and the rigid clusters' kernels uncompiled;
+    a model packed sparse adds the sparse LU's two operations. In a fresh process (the table
+    of entries is the process's), loading what this process put into the cache."""
+    truss = load_scene("truss_1dof_x")
+    engine.connect(EngineData(truss), engine.OP_RHS, engine.OP_JACOBIAN)
+    engine.connect(EngineData(truss, sparse=True), engine.OP_POSITIONS)
+    probe = textwrap.dedent("""
+        from flexure.core import load_scene
+        from flexure.core.engine import engine
+        from flexure.core.engine.data import EngineData
+        def compiled():
+            print(sorted(op for op, entry in enumerate(engine.ENTRIES) if entry._compiled))
+        truss = load_scene("truss_1dof_x")
+        engine.connect(EngineData(truss), engine.OP_RHS, engine.OP_JACOBIAN)
+        compiled()
+        engine.connect(EngineData(truss, sparse=True), engine.OP_POSITIONS)
+        compiled()
+        """)
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          check=True)
+    first, second = (json.loads(line) for line in done.stdout.split("\n")[:2])
+    forms = {engine.OP_RHS, engine.OP_JACOBIAN, engine.OP_ACCELERATIONS,
+             engine.OP_CONFIGURATION, engine.OP_TANGENT, engine.OP_MASS}
+    assert set(first) == forms
+    assert set(second) == forms | {engine.OP_POSITIONS, engine.OP_SPARSE_FACTOR,
+                                   engine.OP_SPARSE_SOLVE}
