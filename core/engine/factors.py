@@ -20,6 +20,8 @@ Both solve in the model's order: `j_solve` takes vectors on J's rows (or, transp
 free coordinates), `augmented_solve` on the free coordinates then the rigid rows.
 """
 
+import numpy as np
+
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
@@ -45,10 +47,12 @@ def _sparse_factor(table, which):
     """The sparse LU of J (which = SPARSE_J) or of the augmented system (SPARSE_AUGMENTED)
     through its operation (`sparse_factors.factor`, compiled only for models that use it);
     the pivot ratio, negative when it cannot serve (the values are then in the dense
-    storage for the banded LU). The ratio comes back in the first entry of slot
+    storage for the banded LU), nan when `engine.connect` did not give its operation (the
+    callers stop as on a singular matrix). The ratio comes back in the first entry of slot
     band_scratch, which the banded solves use only after a factorisation."""
     ratio = _f(table, slot.BAND_SCRATCH)
-    run(table, OP_SPARSE_FACTOR, ratio.ctypes.data, 0, float(which))
+    if run(table, OP_SPARSE_FACTOR, ratio.ctypes.data, 0, float(which)) != ed.OK:
+        return np.nan
     return ratio[0]
 
 
@@ -132,7 +136,7 @@ def j_factor(table):
         run(table, OP_RIGID_DE, 0, 0, 0.0)
     if dims[ed.J_SPARSE] == 1:  # else (or when it cannot serve) in lu for the banded LU
         ratio = _sparse_factor(table, SPARSE_J)
-        if ratio >= 0.0:
+        if not ratio < 0.0:  # its factors, or nan (not connected)
             dims[ed.J_FACTORS] = ed.SPARSE_FACTORS
             return ratio
     else:
@@ -293,10 +297,13 @@ def augmented_solve(table, A, na, rhs):
     dims = _i(table, slot.DIMS)
     dense = _f(table, slot.AUG)
     if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in dense for the banded LU
-        if _sparse_factor(table, SPARSE_AUGMENTED) >= 0.0:
+        ratio = _sparse_factor(table, SPARSE_AUGMENTED)
+        if ratio >= 0.0:
             run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
             dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
             return True
+        if np.isnan(ratio):  # its operation not connected
+            return False
     if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
                          dims[ed.A_KU]) > 0.0:
         return False
