@@ -310,11 +310,13 @@ def test_statuses_and_their_messages():
                                     ed.NOT_CONNECTED}
     model = truss_pendulum()
     data = EngineData(model)
-    # the forms run the evaluation through the entry's address, which `connect` gives (and
-    # `call` with it): without it the entry answers with a status instead of jumping to 0
+    # the forms run the evaluation through the table of the operations' addresses, which
+    # `connect` gives (and `call` with it): without it the entry answers with a status
+    # instead of jumping to 0
     y, ydot = np.zeros(2), np.empty(2)
-    assert engine.engine_entry.ctypes(engine.OP_RHS, data.address, 0.0, y.ctypes.data,
-                                      ydot.ctypes.data, None, 0.0) == ed.NOT_CONNECTED
+    rhs = engine.ENTRIES[engine.OP_RHS]
+    assert rhs.ctypes(engine.OP_RHS, data.address, 0.0, y.ctypes.data, ydot.ctypes.data, None,
+                      0.0) == ed.NOT_CONNECTED
 
     def kinematics(y):
         data.int_array("dims")[ed.WARM] = 0  # full Newton from the scene's coordinates
@@ -439,9 +441,9 @@ def test_the_first_compilation_is_announced_on_a_terminal_and_in_a_log_alike(tmp
     from flexure.core.numerics.jit import is_cached
 
     engine.connect(EngineData(truss_pendulum()))  # the entry compiled or loaded
-    assert is_cached(engine.engine_entry.function)
+    assert is_cached(engine.ENTRIES[engine.OP_RHS].function)
     probe = ("from flexure.core.engine import engine; from flexure.core.numerics import jit; "
-             "print(jit.is_cached(engine.engine_entry.function))")
+             "print(jit.is_cached(engine.ENTRIES[engine.OP_RHS].function))")
     with tempfile.TemporaryDirectory() as empty:
         done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                               env={**os.environ, "FLEXURE_CACHE_DIR": empty}, check=True)
@@ -476,3 +478,35 @@ def test_positions_operation_matches_the_full_kinematics(case):
         assert engine.call(data, engine.OP_POSITIONS, q) == ed.OK
         close(data.float_array("x"), expected, 1e-13, scale=max(L, np.max(np.abs(expected))))
         assert data.int_array("dims")[ed.WARM] == 0
+
+
+def test_connect_compiles_only_the_operations_a_model_uses():
+    """`connect` compiles the entries of the operations its caller names and of those they
+    call, nothing else: CVODE's form on a banded model without rigid clusters leaves the
+    implicit form, the positions, the sparse LU and the rigid clusters' kernels uncompiled;
+    a model packed sparse adds the sparse LU's two operations. In a fresh process (the table
+    of entries is the process's), loading what this process put into the cache."""
+    engine.connect(EngineData(load_scene("truss_1dof_x")), engine.OP_RHS, engine.OP_JACOBIAN)
+    engine.connect(EngineData(load_scene("truss_1dof_x"), sparse=True), engine.OP_POSITIONS)
+    probe = textwrap.dedent("""
+        from flexure.core import load_scene
+        from flexure.core.engine import engine
+        from flexure.core.engine.data import EngineData
+        def compiled():
+            print(sorted(op for op, entry in enumerate(engine.ENTRIES) if entry._compiled))
+        engine.connect(EngineData(load_scene("truss_1dof_x")), engine.OP_RHS,
+                       engine.OP_JACOBIAN)
+        compiled()
+        # a model of its own: packed once banded, a model keeps its orders (`data._ORDERS`)
+        engine.connect(EngineData(load_scene("truss_1dof_x"), sparse=True),
+                       engine.OP_POSITIONS)
+        compiled()
+        """)
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          check=True)
+    first, second = (json.loads(line) for line in done.stdout.split("\n")[:2])
+    forms = {engine.OP_RHS, engine.OP_JACOBIAN, engine.OP_ACCELERATIONS,
+             engine.OP_CONFIGURATION, engine.OP_TANGENT, engine.OP_MASS}
+    assert set(first) == forms
+    assert set(second) == forms | {engine.OP_POSITIONS, engine.OP_SPARSE_FACTOR,
+                                   engine.OP_SPARSE_SOLVE}

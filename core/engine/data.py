@@ -249,7 +249,7 @@ class EngineData:
         empty = np.zeros(0, dtype=np.int64)
         j_lu = factors.constraints if dims[J_SPARSE] else None
         a_lu = factors.augmented if dims[A_SPARSE] else None
-        # dims[ENGINE], the address of the engine's entry for callbacks that call it, is set
+        # dims[ENGINE], the address of the engine's table of entries for callers, is set
         # by the integrators that make such callbacks (`engine.connect`): the engine imports
         # this module, not the other way round
         settings = np.zeros(SETTINGS_SIZE)

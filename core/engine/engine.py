@@ -2,7 +2,7 @@
 
 One place computes, for DOFs q and velocities qdot (m, rad, m/s, rad/s) and the held inputs u
 (N, N m), everything the integrators need, compiled with numba and cached on disk. Each job
-has its module; this one holds the forms the integrators call and the one entry point:
+has its module; this one holds the forms the integrators call and the operations' entries:
 
     data             the model packed into flat arrays (`EngineData`), status codes
     slots            the packed model's arrays by slot (indices, accessors)
@@ -17,8 +17,9 @@ has its module; this one holds the forms the integrators call and the one entry 
     rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
                      rows out of J and the augmented system (`rigid_kernels`: the slaves
                      explicit in their masters, x_s = S(z), and the chain rule through T)
-    operations       the codes of the entry's operations, and `run`: one through its address
-    engine (here)    the first-order and implicit forms, `engine_entry`, `call`
+    operations       the operations' codes, and `run`: one through its address
+    engine (here)    the first-order and implicit forms, one C entry point per operation
+                     (`ENTRIES`), `connect`, `call`
 
 with the dense LU of small matrices (M_bar, the integrators' Newton matrices) from
 `numerics.dense`.
@@ -28,8 +29,11 @@ its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the resi
 [qp - qdot; M_bar (qddot_p - qddot(q, qdot))] and its Jacobian d res / d y + cj d res / d yp
 = [[cj I, -I], [K, C + cj M_bar]]. A scene with voltage-driven actuators appends their coil
 currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tangent blocks
-from `actuators`. Every operation reaches compiled code (a SUNDIALS callback,
-the sampled loop, Python through `call`) through the one C function `engine_entry`.
+from `actuators`. Every operation is a C function of its own (`ENTRIES`), compiled the first
+time a model needs it (`connect`: the sparse factorisations and the rigid clusters' kernels
+only for models that use them); compiled code (a SUNDIALS callback, the sampled loop, the
+engine's own functions) reaches it through the process's table of their addresses, Python
+through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
@@ -47,6 +51,7 @@ from ..numerics.dense import lu_factor, lu_solve, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of
 from . import data as ed
+from . import rigid_kernels, sparse_factors
 from . import slots as slot
 from .actuators import (
     current_rates,
@@ -71,17 +76,29 @@ from .operations import (
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
     OP_RHS,
+    OP_RIGID_CONDENSE,
+    OP_RIGID_CONVECTIVE,
+    OP_RIGID_DE,
+    OP_RIGID_EXPAND,
+    OP_RIGID_EXPAND_COLUMNS,
+    OP_RIGID_FILL,
+    OP_RIGID_GEOMETRIC,
+    OP_RIGID_RATES,
+    OP_SPARSE_FACTOR,
+    OP_SPARSE_SOLVE,
     OP_TANGENT,
+    RIGID_OPERATIONS,
+    SPARSE_AUGMENTED,
     run,
 )
 from .slots import float_array, int_array
 from .tangent import tangent
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
-__all__ = ["ENGINE_ENTRY", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
+__all__ = ["ENGINE_ENTRY", "ENTRIES", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
            "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
            "OP_POSITIONS",
-           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call", "engine_entry",
+           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call", "connect",
            "first_order_jacobian", "first_order_rhs", "float_array", "implicit_jacobian",
            "implicit_residual", "int_array", "lu_factor", "lu_solve"]
 
@@ -89,7 +106,7 @@ _i, _f = int_array, float_array  # the short names of the many uses below
 
 
 # -- first-order form for the integrators ---------------------------------------------------------
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def first_order_rhs(table, y, ydot):
     """ydot = [qdot, qddot(, di/dt)] for the state y = [q - q_ref, qdot(, i)]; a status code.
 
@@ -122,7 +139,7 @@ def first_order_rhs(table, y, ydot):
     return ed.OK
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def first_order_jacobian(table, y, J, column_major):
     """d ydot / d y (N, N; N = 2n plus the coil currents) into J (flat; column-major for
     SUNDIALS' dense matrix): [[0, I], [-M_bar^-1 K, -M_bar^-1 C]] with the model's tangent at
@@ -158,7 +175,7 @@ def first_order_jacobian(table, y, J, column_major):
     return ed.OK
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def implicit_residual(table, y, yp, res):
     """IDA's residual [qp - qdot; M_bar (qddot_p - qddot(q, qdot, i)); ip - di/dt] (the last
     rows for the coil currents only); a status code."""
@@ -181,7 +198,7 @@ def implicit_residual(table, y, yp, res):
     return ed.OK
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def implicit_jacobian(table, y, yp, cj, J):
     """IDA's d res / d y + cj d res / d yp, column-major (N, N; N = 2n plus the coil
     currents): [[cj I, -I], [K, C + cj M_bar]] with the tangent's dynamic balance at
@@ -208,76 +225,224 @@ def implicit_jacobian(table, y, yp, cj, J):
     return ed.OK
 
 
-# -- the one entry point: every operation through one compiled C function ---------------------
-# (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number
+# -- the operations: one compiled C function each, compiled when a model first needs it ------
+# (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number; every
+# operation's entry has this signature, and compiled code calls it through the table of their
+# addresses (`native.call_engine`)
 ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.voidptr,
                            types.voidptr, types.voidptr, types.float64)
+_F8 = np.float64
+
+
+@kernel
+def _state_size(table):
+    """The integrators' state size: [q - q_ref, qdot, coil currents]."""
+    dims = _i(table, slot.DIMS)
+    return 2 * dims[ed.NDOF] + dims[ed.NEL]
 
 
 @entry(ENGINE_ENTRY)
-def engine_entry(op, user_data, t, a, b, c, s):
-    """Every operation of the engine (`operations`: the codes and their arrays a, b, c and
-    number s) on the packed model at user_data (an address table); y of 2 NDOF plus the coil
-    currents. Returns the status code."""
+def rhs_entry(op, user_data, t, a, b, c, s):
+    """OP_RHS: y (a), ydot (b; null: the evaluation only)."""
+    table = address_of(user_data)
+    n = _state_size(table)
+    return first_order_rhs(table, carray(a, (n,), _F8),
+                           carray(b, (n if address_of(b) else 0,), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def jacobian_entry(op, user_data, t, a, b, c, s):
+    """OP_JACOBIAN: y (a), J (b); s = 1 for column-major."""
+    table = address_of(user_data)
+    n = _state_size(table)
+    return first_order_jacobian(table, carray(a, (n,), _F8), carray(b, (n * n,), _F8),
+                                s != 0.0)
+
+
+@entry(ENGINE_ENTRY)
+def residual_entry(op, user_data, t, a, b, c, s):
+    """OP_RESIDUAL: y (a), yp (b), res (c)."""
+    table = address_of(user_data)
+    n = _state_size(table)
+    return implicit_residual(table, carray(a, (n,), _F8), carray(b, (n,), _F8),
+                             carray(c, (n,), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def residual_jacobian_entry(op, user_data, t, a, b, c, s):
+    """OP_RESIDUAL_JACOBIAN: y (a), yp (b), J (c); s = cj."""
+    table = address_of(user_data)
+    n = _state_size(table)
+    return implicit_jacobian(table, carray(a, (n,), _F8), carray(b, (n,), _F8), s,
+                             carray(c, (n * n,), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def kinematics_entry(op, user_data, t, a, b, c, s):
+    """OP_KINEMATICS: q (a); x = F(q) and DF."""
+    table = address_of(user_data)
+    status = run(table, OP_CONFIGURATION, address_of(a), 0, 0.0)
+    if status == ed.OK:
+        compute_DF(table)
+    return status
+
+
+@entry(ENGINE_ENTRY)
+def deformations_entry(op, user_data, t, a, b, c, s):
+    """OP_DEFORMATIONS: x (a); s = the order of the derivatives."""
+    table = address_of(user_data)
+    deformations(table, carray(a, (_i(table, slot.DIMS)[ed.NX],), _F8), int(s), False)
+    return ed.OK
+
+
+@entry(ENGINE_ENTRY)
+def evaluate_entry(op, user_data, t, a, b, c, s):
+    """OP_EVALUATE: q (a), qdot (b); qddot, DF and M_bar."""
+    table = address_of(user_data)
+    status = run(table, OP_ACCELERATIONS, address_of(a), address_of(b), 0.0)
+    return run(table, OP_MASS, 0, 0, 0.0) if status == ed.OK else status
+
+
+@entry(ENGINE_ENTRY)
+def tangent_entry(op, user_data, t, a, b, c, s):
+    """OP_TANGENT: qddot (a)."""
+    table = address_of(user_data)
+    return tangent(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def positions_entry(op, user_data, t, a, b, c, s):
+    """OP_POSITIONS: q (a)."""
+    table = address_of(user_data)
+    return solve_positions(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def accelerations_entry(op, user_data, t, a, b, c, s):
+    """OP_ACCELERATIONS: q (a), qdot (b)."""
+    table = address_of(user_data)
+    ndof = _i(table, slot.DIMS)[ed.NDOF]
+    return evaluate(table, carray(a, (ndof,), _F8), carray(b, (ndof,), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def configuration_entry(op, user_data, t, a, b, c, s):
+    """OP_CONFIGURATION: q (a)."""
+    table = address_of(user_data)
+    return solve_kinematics(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def mass_entry(op, user_data, t, a, b, c, s):
+    """OP_MASS."""
+    return reduced_mass(address_of(user_data))
+
+
+@entry(ENGINE_ENTRY)
+def input_response_entry(op, user_data, t, a, b, c, s):
+    """OP_INPUT_RESPONSE: out (a)."""
+    table = address_of(user_data)
+    return input_response(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
+
+
+@entry(ENGINE_ENTRY)
+def sparse_factor_entry(op, user_data, t, a, b, c, s):
+    """OP_SPARSE_FACTOR: out (a, (1,)); s = which matrix."""
+    sparse_factors.factor(address_of(user_data), int(s), carray(a, (1,), _F8))
+    return ed.OK
+
+
+@entry(ENGINE_ENTRY)
+def sparse_solve_entry(op, user_data, t, a, b, c, s):
+    """OP_SPARSE_SOLVE: b (a); s = which factors."""
     table = address_of(user_data)
     dims = _i(table, slot.DIMS)
-    nx, ndof = dims[ed.NX], dims[ed.NDOF]
-    n = 2 * ndof + dims[ed.NEL]  # the integrators' state: [q - q_ref, qdot, coil currents]
-    f8 = np.float64
-    if op == OP_RHS:  # b null: the evaluation only
-        return first_order_rhs(table, carray(a, (n,), f8),
-                               carray(b, (n if address_of(b) else 0,), f8))
-    if op == OP_JACOBIAN:
-        return first_order_jacobian(table, carray(a, (n,), f8), carray(b, (n * n,), f8),
-                                    s != 0.0)
-    if op == OP_RESIDUAL:
-        return implicit_residual(table, carray(a, (n,), f8), carray(b, (n,), f8),
-                                 carray(c, (n,), f8))
-    if op == OP_RESIDUAL_JACOBIAN:
-        return implicit_jacobian(table, carray(a, (n,), f8), carray(b, (n,), f8), s,
-                                 carray(c, (n * n,), f8))
-    if op == OP_KINEMATICS:
-        status = solve_kinematics(table, carray(a, (ndof,), f8))
-        if status == ed.OK:
-            compute_DF(table)
-        return status
-    if op == OP_DEFORMATIONS:
-        deformations(table, carray(a, (nx,), f8), int(s))
-        return ed.OK
-    if op == OP_EVALUATE:
-        status = evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
-        return reduced_mass(table) if status == ed.OK else status
-    if op == OP_TANGENT:
-        return tangent(table, carray(a, (ndof,), f8))
-    if op == OP_POSITIONS:
-        return solve_positions(table, carray(a, (ndof,), f8))
-    if op == OP_ACCELERATIONS:
-        return evaluate(table, carray(a, (ndof,), f8), carray(b, (ndof,), f8))
-    if op == OP_CONFIGURATION:
-        return solve_kinematics(table, carray(a, (ndof,), f8))
-    if op == OP_MASS:
-        return reduced_mass(table)
-    if op == OP_INPUT_RESPONSE:
-        return input_response(table, carray(a, (ndof,), f8))
-    return -1
+    n = dims[ed.NFREE] + (dims[ed.NRIGID] if int(s) == SPARSE_AUGMENTED else 0)
+    sparse_factors.solve(table, int(s), carray(a, (n,), _F8))
+    return ed.OK
 
 
-def connect(data):
-    """Put the engine entry's address into the packed model (dims[ENGINE]), for the compiled
-    callbacks (SUNDIALS', the ESDIRK's, the sampled loop's) that call the engine through it;
-    the address belongs to this process, so it is set at run time, never cached. Returns
+@entry(ENGINE_ENTRY)
+def rigid_entry(op, user_data, t, a, b, c, s):
+    """The rigid clusters' operations (OP_RIGID_...: `operations`, `rigid_kernels`), one entry
+    for all of them: a model has clusters or not."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    nx, nf = dims[ed.NX], dims[ed.NFREE]
+    if op == OP_RIGID_FILL:
+        rigid_kernels.fill_slaves(table, carray(a, (nx,), _F8))
+    elif op == OP_RIGID_EXPAND:
+        rigid_kernels.expand(table, carray(a, (nx,), _F8), s != 0.0)
+    elif op == OP_RIGID_EXPAND_COLUMNS:
+        rigid_kernels.expand_columns(table, _f(table, slot.DF), dims[ed.NDOF])
+    elif op == OP_RIGID_CONVECTIVE:
+        rigid_kernels.convective(table, carray(a, (nx,), _F8), carray(b, (nx,), _F8))
+    elif op == OP_RIGID_RATES:
+        rigid_kernels.rigid_rates(table)
+    elif op == OP_RIGID_CONDENSE:
+        rigid_kernels.condense(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8))
+    elif op == OP_RIGID_GEOMETRIC:
+        rigid_kernels.rigid_geometric(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8),
+                                      _f(table, slot.STIFFNESS))
+    elif op == OP_RIGID_DE:
+        rigid_kernels.rigid_de(table)
+    else:
+        return ed.NOT_CONNECTED
+    return ed.OK
+
+
+@entry(ENGINE_ENTRY)
+def missing_entry(op, user_data, t, a, b, c, s):
+    """An operation that no `connect` has asked for: NOT_CONNECTED."""
+    return ed.NOT_CONNECTED
+
+
+# each operation's entry, by code; and the operations each one calls through the table
+ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, kinematics_entry,
+           deformations_entry, evaluate_entry, tangent_entry, positions_entry,
+           accelerations_entry, configuration_entry, mass_entry, input_response_entry,
+           sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS)
+CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
+         OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
+         OP_KINEMATICS: (OP_CONFIGURATION,), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
+         OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION,)}
+# the addresses of the operations' entries in this process (missing_entry's until connected)
+_TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
+
+
+def connect(data, *ops):
+    """Compile (or load from the cache) the entries of the operations `ops` (all of them when
+    none is given) and of those they call, put their addresses into this process's table of
+    operations, and that table's address into the packed model (dims[ENGINE]), for the
+    compiled callers (SUNDIALS' callbacks, the ESDIRK's, the sampled loop's, `run`) that call
+    the engine through it. An operation no model of the process has asked for is not
+    compiled: a model without coil currents or IDA never compiles the implicit form. The
+    addresses belong to this process, so they are set at run time, never cached. Returns
     `data`."""
-    data.int_array("dims")[ed.ENGINE] = engine_entry.address
+    if not _TABLE.any():
+        _TABLE[:] = missing_entry.address
+    dims = data.int_array("dims")
+    wanted = list(ops) if ops else list(range(len(ENTRIES)))
+    if ops and (dims[ed.J_SPARSE] or dims[ed.A_SPARSE]):  # the factors' own operations
+        wanted += [OP_SPARSE_FACTOR, OP_SPARSE_SOLVE]
+    if ops and dims[ed.NSLAVES] > 0:  # the rigid clusters'
+        wanted += RIGID_OPERATIONS
+    while wanted:
+        op = wanted.pop()
+        if _TABLE[op] == missing_entry.address:
+            _TABLE[op] = ENTRIES[op].address
+            wanted.extend(CALLS.get(op, ()))
+    dims[ed.ENGINE] = _TABLE.ctypes.data
     return data
 
 
 def call(data, op, a=None, b=None, c=None, s=0.0, t=0.0):
     """Run one engine operation from Python (a ctypes call, about 1 us): data an
-    `EngineData` (connected here), a, b, c contiguous float64 arrays of the operation.
-    Returns the status."""
-    connect(data)
-    return engine_entry.ctypes(op, data.address, t, _address(a), _address(b), _address(c),
-                               float(s))
+    `EngineData` (connected here to the operation), a, b, c contiguous float64 arrays of the
+    operation. Returns the status."""
+    connect(data, op)
+    return ENTRIES[op].ctypes(op, data.address, t, _address(a), _address(b), _address(c),
+                              float(s))
 
 
 def _address(array):

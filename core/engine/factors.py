@@ -20,30 +20,40 @@ Both solve in the model's order: `j_solve` takes vectors on J's rows (or, transp
 free coordinates), `augmented_solve` on the free coordinates then the rigid rows.
 """
 
+import numpy as np
+
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
-from .rigid_kernels import rigid_de, touching_row
+from .operations import (
+    OP_RIGID_DE,
+    OP_SPARSE_FACTOR,
+    OP_SPARSE_SOLVE,
+    SPARSE_AUGMENTED,
+    SPARSE_J,
+    SPARSE_J_TRANSPOSED,
+    run,
+)
+from .rigid_kernels import touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
 
 
 @kernel
-def _sparse_factor(table, ints, floats):
-    """The sparse LU with the kept pivots, else pivoting afresh (counted); the pivot ratio, or
-    negative when the sparse LU cannot serve (counted: the caller factors banded)."""
-    ratio = sparse_lu.refactor(ints, floats, sparse_lu.THRESHOLD)
-    if ratio >= 0.0:
-        return ratio
-    counters = _i(table, slot.COUNTERS)
-    counters[ed.SPARSE_PIVOTING] += 1
-    ratio = sparse_lu.factor(ints, floats, sparse_lu.THRESHOLD)
-    if ratio < 0.0:
-        counters[ed.SPARSE_FALLBACKS] += 1
-    return ratio
+def _sparse_factor(table, which):
+    """The sparse LU of J (which = SPARSE_J) or of the augmented system (SPARSE_AUGMENTED)
+    through its operation (`sparse_factors.factor`, compiled only for models that use it);
+    the pivot ratio, negative when it cannot serve (the values are then in the dense
+    storage for the banded LU), nan when `engine.connect` did not give its operation (the
+    callers stop as on a singular matrix). The ratio comes back in the first entry of slot
+    band_scratch, which the banded solves use only after a factorisation."""
+    ratio = _f(table, slot.BAND_SCRATCH)
+    if run(table, OP_SPARSE_FACTOR, ratio.ctypes.data, 0, float(which)) != ed.OK:
+        return np.nan
+    return ratio[0]
 
 
 # -- J ---------------------------------------------------------------------------------------------
@@ -117,53 +127,18 @@ def _scatter_de(table, De, emap, shift, mirror, out):
 
 
 @kernel
-def _sparse_constraint_jacobian(table, values):
-    """J's sparse values from the elements' De in slot de through the J map."""
-    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
-    dims = _i(table, slot.DIMS)
-    values[:] = 0.0
-    n_de, n_xdof = De.size, dims[ed.NXDOF]
-    _scatter_de(table, De, jmap, 0, -1, values)
-    for j in range(n_xdof):
-        s = jmap[n_de + j]
-        if s >= 0:
-            values[s] = 1.0
-    if dims[ed.NSLAVES] == 0:
-        return
-    rde, base = _f(table, slot.RIGID_DE), n_de + n_xdof
-    for e in range(rde.size):
-        s = jmap[base + e]
-        if s >= 0:
-            values[s] += rde[e]
-    base += rde.size
-    units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
-    for j in range(n_xdof):
-        if units[j] < 0:
-            continue
-        for d in range(DEPENDENCIES):
-            s = jmap[base + DEPENDENCIES * j + d]
-            if s >= 0:
-                values[s] += W[units[j] * DEPENDENCIES + d]
-
-
-@kernel
 def j_factor(table):
     """J at the deformations' De factored (sparse, or banded in slot lu); the ratio of the
     smallest to the largest pivot magnitude."""
     dims = _i(table, slot.DIMS)
     lu, nf = _f(table, slot.LU), dims[ed.NFREE]
     if dims[ed.NSLAVES] > 0:
-        rigid_de(table)
-    if dims[ed.J_SPARSE] == 1:
-        ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
-        _sparse_constraint_jacobian(table, sparse_lu.matrix_values(ints, floats))
-        ratio = _sparse_factor(table, ints, floats)
-        if ratio >= 0.0:
+        run(table, OP_RIGID_DE, 0, 0, 0.0)
+    if dims[ed.J_SPARSE] == 1:  # else (or when it cannot serve) in lu for the banded LU
+        ratio = _sparse_factor(table, SPARSE_J)
+        if not ratio < 0.0:  # its factors, or nan (not connected)
             dims[ed.J_FACTORS] = ed.SPARSE_FACTORS
             return ratio
-        lu[: nf * nf] = 0.0
-        sparse_lu.scatter_dense(ints, floats, lu, _i(table, slot.J_ROW_POS),
-                                _i(table, slot.J_COL_POS))
     else:
         _constraint_jacobian(table, lu)
     dims[ed.J_FACTORS] = ed.BANDED_FACTORS
@@ -171,14 +146,14 @@ def j_factor(table):
 
 
 @kernel
-def j_solve(table, b, transposed=False):
+def j_solve(table, b, transposed):
     """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
     b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
     factors of the last `j_factor`."""
     dims = _i(table, slot.DIMS)
     if dims[ed.J_FACTORS] == ed.SPARSE_FACTORS:
-        sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
-                        transposed)
+        run(table, OP_SPARSE_SOLVE, b.ctypes.data, 0,
+            float(SPARSE_J_TRANSPOSED if transposed else SPARSE_J))
         return
     nf = dims[ed.NFREE]
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
@@ -320,15 +295,15 @@ def augmented_solve(table, A, na, rhs):
     """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
     then the rigid rows); False when A is singular."""
     dims = _i(table, slot.DIMS)
-    apos, dense = _i(table, slot.AUG_POS), _f(table, slot.AUG)
-    if dims[ed.A_SPARSE] == 1:
-        ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
-        if _sparse_factor(table, ints, floats) >= 0.0:
-            sparse_lu.solve(ints, floats, rhs, False)
+    dense = _f(table, slot.AUG)
+    if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in dense for the banded LU
+        ratio = _sparse_factor(table, SPARSE_AUGMENTED)
+        if ratio >= 0.0:
+            run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
             dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
             return True
-        dense[: na * na] = 0.0
-        sparse_lu.scatter_dense(ints, floats, dense, apos, apos)
+        if np.isnan(ratio):  # its operation not connected
+            return False
     if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
                          dims[ed.A_KU]) > 0.0:
         return False
@@ -343,8 +318,7 @@ def augmented_resolve(table, na, rhs):
     successful `augmented_solve` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
     dims = _i(table, slot.DIMS)
     if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:
-        sparse_lu.solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), rhs,
-                        False)
+        run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
         return
     apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
     for u in range(na):

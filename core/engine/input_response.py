@@ -20,13 +20,13 @@ from . import data as ed
 from . import slots as slot
 from .factors import augmented_resolve
 from .motion import qddot_of_solution
+from .operations import OP_RIGID_CONDENSE, run
 from .ports import add_input_forces
-from .rigid_kernels import condense
 from .slots import float_array as _f
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def input_response(table, out):
     """out (NDOF,) = d qddot (m/s^2, rad/s^2) for the change of the inputs in slot inputs since
     the last evaluation, at that evaluation's state and with its factors; a status (OK, or
@@ -55,7 +55,7 @@ def input_response(table, out):
     add_input_forces(_i(table, slot.INPUT_PORTS), du, _f(table, slot.X), force)
     rhs = _f(table, slot.AUG_RHS)
     if rigid:  # T^T: the slaves' forces on their masters
-        condense(table, force, rhs[:nf])
+        run(table, OP_RIGID_CONDENSE, force.ctypes.data, rhs.ctypes.data, 0.0)
     else:
         for a in range(nf):
             rhs[a] = force[free[a]]

@@ -33,7 +33,7 @@ from . import data as ed
 from . import rigid as rg
 from . import slots as slot
 from .factors import j_factor, j_solve
-from .rigid_kernels import expand_columns, fill_slaves
+from .operations import OP_RIGID_EXPAND_COLUMNS, OP_RIGID_FILL, run
 from .slots import float_array as _f
 from .slots import group, group_coordinates, rigid_element
 from .slots import int_array as _i
@@ -41,7 +41,7 @@ from .slots import int_array as _i
 
 # -- deformations of every element ---------------------------------------------------------------
 @kernel
-def deformations(table, x, order, skip_internal=False):
+def deformations(table, x, order, skip_internal):
     """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e;
     with skip_internal, not those of the elements a rigid cluster makes identically zero
     (`rigid`: their rows are out of the system, their stresses zero)."""
@@ -83,7 +83,7 @@ def _elements(table, x, order):
     """The slaves of the rigid clusters from their masters in x (`rigid_kernels`), then the
     deformations of order `order` at x."""
     if _i(table, slot.DIMS)[ed.NSLAVES] > 0:
-        fill_slaves(table, x)
+        run(table, OP_RIGID_FILL, x.ctypes.data, 0, 0.0)
     deformations(table, x, order, True)
 
 
@@ -149,11 +149,11 @@ def compute_DF(table):
         unit[:] = 0.0
         unit[j] = 1.0
         dof_rows(table, unit, column)
-        j_solve(table, column)
+        j_solve(table, column, False)
         for a in range(nf):
             DF[free[a] * ndof + j] = column[a]
     if dims[ed.NSLAVES] > 0:  # the slaves' rows: T DF
-        expand_columns(table, DF, ndof)
+        run(table, OP_RIGID_EXPAND_COLUMNS, 0, 0, 0.0)  # on slot DF
 
 
 @kernel
@@ -162,7 +162,7 @@ def _newton_step(table, x, g, dx):
     n_free); the step's largest magnitude (m, rad; not finite if the step is not)."""
     free = _i(table, slot.FREE)
     copy(dx, g)
-    j_solve(table, dx)
+    j_solve(table, dx, False)
     step = 0.0
     for a in range(_i(table, slot.DIMS)[ed.NFREE]):
         x[free[a]] -= dx[a]
@@ -180,7 +180,7 @@ def predicted_coordinates(table, q, x, dq, dx):
     for j in range(dims[ed.NDOF]):
         dq[j] = q[j] - q_prev[j]
     dof_rows(table, dq, dx)
-    j_solve(table, dx)
+    j_solve(table, dx, False)
     nx = dims[ed.NX]
     copy(x[:nx], x_prev[:nx])
     free = _i(table, slot.FREE)
@@ -188,7 +188,7 @@ def predicted_coordinates(table, q, x, dq, dx):
         x[free[a]] += dx[a]
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def solve_positions(table, q):
     """x = F(q) into slot x by full Newton from slot x_start, stopping as soon as the
     constraint residual is within the tolerance: the positions alone (no D2e, no factors or DF
@@ -215,7 +215,7 @@ def solve_positions(table, q):
     return ed.NOT_CONVERGED
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def solve_kinematics(table, q):
     """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
     dims = _i(table, slot.DIMS)

@@ -41,7 +41,14 @@ from .factors import (
     mass_entries_start,
 )
 from .kinematics import compute_DF, dof_rows
-from .operations import OP_CONFIGURATION, run
+from .operations import (
+    OP_CONFIGURATION,
+    OP_RIGID_CONDENSE,
+    OP_RIGID_CONVECTIVE,
+    OP_RIGID_EXPAND,
+    OP_RIGID_RATES,
+    run,
+)
 from .point_masses import (
     element_mass,
     element_points,
@@ -50,14 +57,7 @@ from .point_masses import (
     point_forces,
 )
 from .ports import add_input_forces
-from .rigid_kernels import (
-    condense,
-    convective,
-    expand,
-    rigid_rates,
-    touching,
-    touching_mass,
-)
+from .rigid_kernels import touching, touching_mass
 from .slots import float_array as _f
 from .slots import (
     group,
@@ -69,7 +69,7 @@ from .slots import (
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def evaluate(table, q, qdot):
     """qddot (NDOF,) into slot qddot for DOFs q, velocities qdot and the inputs in slot inputs.
 
@@ -108,14 +108,14 @@ def evaluate(table, q, qdot):
             xdot[a] = s
     else:  # xdot = J^-1 [0; qdot]
         dof_rows(table, qdot, dx)
-        j_solve(table, dx)
+        j_solve(table, dx, False)
         xdot[:] = 0.0
         for a in range(nf):
             xdot[free[a]] = dx[a]
         if rigid:  # the slaves': T zdot
-            expand(table, xdot, False)
+            run(table, OP_RIGID_EXPAND, xdot.ctypes.data, 0, 0.0)
     if rigid:  # the slaves' second-order accelerations c (zero at rest)
-        convective(table, x, xdot)
+        run(table, OP_RIGID_CONVECTIVE, x.ctypes.data, xdot.ctypes.data, 0.0)
     # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
     _element_rates(table, xdot, moving)
     # sigma_c = S e_s + D edot_s (S, D by compressed rows)
@@ -143,17 +143,17 @@ def evaluate(table, q, qdot):
     rigid_h = _f(table, slot.RIGID_H)
     if moving:  # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows], for the tangent
         if rigid:  # h of the reduced coordinates: with the slaves' c
-            rigid_rates(table)
+            run(table, OP_RIGID_RATES, 0, 0, 0.0)
             for a in range(nf):
                 dx[a] = quad[a] + rigid_h[a]
         else:
             for a in range(nf):
                 dx[a] = quad[a]
-        j_solve(table, dx)
+        j_solve(table, dx, False)
         for a in range(nf):
             conv[free[a]] = -dx[a]
         if rigid:
-            expand(table, conv, True)
+            run(table, OP_RIGID_EXPAND, conv.ctypes.data, 0, 1.0)
     qddot = _f(table, slot.QDDOT)
     if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
         _inertia_reduced(table, x, xdot, conv, moving, r)  # r -= M conv + g_conv here
@@ -181,7 +181,7 @@ def evaluate(table, q, qdot):
         rigid_force = _f(table, slot.RIGID_FORCE)
         for a in range(nx):
             total[a] = r[a] + rigid_force[a]
-        condense(table, total, rhs[:nf])
+        run(table, OP_RIGID_CONDENSE, total.ctypes.data, rhs.ctypes.data, 0.0)
     else:
         for a in range(nf):
             rhs[a] = r[free[a]]
@@ -210,7 +210,7 @@ def qddot_of_solution(table, rhs, xddot, with_c, quad, moving, qddot):
     for a in range(dims[ed.NFREE]):
         xddot[free[a]] = rhs[a]
     if dims[ed.NSLAVES] > 0:
-        expand(table, xddot, with_c)
+        run(table, OP_RIGID_EXPAND, xddot.ctypes.data, 0, 1.0 if with_c else 0.0)
     positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
     for j in range(dims[ed.NXDOF]):
         qddot[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
@@ -388,7 +388,7 @@ def _inertia_reduced(table, x, xdot, conv, moving, r):
     _reduced_mass_of(table, x, xdot, conv, moving, r, True)
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def reduced_mass(table):
     """DF (slot DF), M_bar = DF^T M DF (slot mass) and its LU (slot mass_lu) at the state of
     the last `evaluate`, for the tangent and the implicit form (already there when that took

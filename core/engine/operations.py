@@ -1,12 +1,15 @@
-"""The engine's operations: their codes, and how compiled code runs one through the entry.
+"""The engine's operations: their codes, and how compiled code runs one through its entry.
 
-Every operation of the engine reaches compiled code through the one C function
-`engine.engine_entry`, whose address `engine.connect` puts in dims[ENGINE] of the packed model.
-The engine's own functions call each other's heavy parts (the evaluation, the kinematics, the
-tangent) through that address too, with `run`, rather than directly: numba links a callee's
-compiled code into each caller and optimises it again there, so direct calls made the first
-compilation optimise the whole evaluation once per form of the equations (a third of it). A
-call through an address costs a few nanoseconds and inlines nothing that mattered.
+Each operation of the engine is one C function (`engine.ENTRIES`); compiled code reaches it
+through the process's table of their addresses, whose address `engine.connect` puts in
+dims[ENGINE] of the packed model (`native.call_engine` takes the table and the operation's
+code). The engine's own functions call each other's heavy parts (the evaluation, the
+kinematics, the tangent) through that table too, with `run`, rather than directly: numba links
+a callee's compiled code into each caller and optimises it again there, so direct calls made
+the first compilation optimise the whole evaluation once per form of the equations (a third of
+it). A call through an address costs a few nanoseconds and inlines nothing that mattered; and
+an operation that no model of the process uses (the implicit form without IDA) is never
+compiled.
 
 The operations and their arrays (a, b, c: addresses of float64 arrays; s: a number):
 
@@ -25,6 +28,19 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     MASS                 DF, M_bar and its LU at the last evaluation (`motion.reduced_mass`)
     INPUT_RESPONSE       out (NDOF,); the change of qddot that the change of the inputs since
                          the last evaluation makes at its state (`input_response`)
+    SPARSE_FACTOR        out (1,): the pivot ratio; s = SPARSE_J or SPARSE_AUGMENTED: factor
+                         that matrix's sparse LU (`sparse_factors.factor`)
+    SPARSE_SOLVE         b; s = SPARSE_J, SPARSE_J_TRANSPOSED or SPARSE_AUGMENTED: solve in
+                         place with its sparse factors (`sparse_factors.solve`)
+    RIGID_...            the rigid clusters' kernels (`rigid_kernels`, one entry for all):
+      FILL               x (NX,): the slaves' coordinates from their masters' (`fill_slaves`)
+      EXPAND             v (NX,); s = 1 with the slaves' c (`expand`)
+      EXPAND_COLUMNS     the slaves' rows of slot DF (`expand_columns`)
+      CONVECTIVE         x, xdot (NX,) (`convective`)
+      RATES              `rigid_rates`
+      CONDENSE           v (NX,), out (n_free,) (`condense`)
+      GEOMETRIC          r_full (NX,), lam (n_free,); into slot stiffness (`rigid_geometric`)
+      DE                 `rigid_de`
 """
 
 from ..numerics.jit import kernel
@@ -34,16 +50,21 @@ from .slots import DIMS, int_array
 
 (OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
  OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
- OP_INPUT_RESPONSE) = range(13)
+ OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE, OP_RIGID_FILL, OP_RIGID_EXPAND,
+ OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
+ OP_RIGID_GEOMETRIC, OP_RIGID_DE) = range(23)
+RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
+# which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
+SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 
 
 @kernel
 def run(table, op, a, b, s):
     """Operation `op` on the packed model at the address `table`, with the arrays at the
-    addresses a and b (int64; 0 for none) and the number s, through the engine's entry;
-    its status code (ed.NOT_CONNECTED when `engine.connect` has not given the entry's
-    address)."""
-    address = int_array(table, DIMS)[ed.ENGINE]
-    if address == 0:
+    addresses a and b (int64; 0 for none) and the number s, through its entry; its status
+    code (ed.NOT_CONNECTED when `engine.connect` has not given the table of the entries'
+    addresses, or not this operation's)."""
+    operations = int_array(table, DIMS)[ed.ENGINE]
+    if operations == 0:
         return ed.NOT_CONNECTED
-    return call_engine(address, op, table, 0.0, a, b, 0, s)
+    return call_engine(operations, op, table, 0.0, a, b, 0, s)

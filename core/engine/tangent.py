@@ -18,10 +18,9 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
-from .operations import OP_MASS, run
+from .operations import OP_MASS, OP_RIGID_CONDENSE, OP_RIGID_GEOMETRIC, run
 from .point_masses import element_points, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
-from .rigid_kernels import condense, rigid_geometric
 from .slots import float_array as _f
 from .slots import (
     group_deformations,
@@ -31,7 +30,7 @@ from .slots import (
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")  # into its operation's entry, its one caller
 def tangent(table, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,
@@ -57,7 +56,7 @@ def tangent(table, qddot):
     free, lam = _i(table, slot.FREE), _f(table, slot.DX)
     rigid = dims[ed.NSLAVES] > 0
     if rigid:  # on the reduced coordinates: T^T r_full
-        condense(table, r_full, lam)
+        run(table, OP_RIGID_CONDENSE, r_full.ctypes.data, lam.ctypes.data, 0.0)
     else:
         for a in range(nf):
             lam[a] = r_full[free[a]]
@@ -133,7 +132,7 @@ def tangent(table, qddot):
                 if damped:
                     C[i * ndof + j] += v * DD[j]
     if rigid:  # what the eliminated rigid rows' multipliers added
-        rigid_geometric(table, r_full, lam, K)
+        run(table, OP_RIGID_GEOMETRIC, r_full.ctypes.data, lam.ctypes.data, 0.0)
     # the moments of the last evaluation: an input's, or an actuator's (Km sat(G u), Km i)
     specs, inputs = _i(table, slot.INPUT_PORTS), evaluated_port_values(table)
     if has_moment_inputs(specs, inputs):  # - DF^T df/dx DF: a moment's force depends on x

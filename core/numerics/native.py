@@ -182,12 +182,16 @@ def call_inertia(typingctx, address, x, v, ref, order, p, Dp, acc, m, P, width):
 
 
 @intrinsic
-def call_engine(typingctx, address, op, user_data, t, a, b, c, s):
-    """The engine's entry point (engine.ENGINE_ENTRY) through its address; int32 status."""
-    sig = types.int32(address, op, user_data, t, a, b, c, s)
+def call_engine(typingctx, operations, op, user_data, t, a, b, c, s):
+    """Operation `op` of the engine: its entry point (engine.ENGINE_ENTRY) through the table
+    of the operations' addresses at `operations` (int64 each, by operation code); int32
+    status."""
+    sig = types.int32(operations, op, user_data, t, a, b, c, s)
 
     def codegen(context, builder, signature, args):
-        return _call_by_address(builder, args[0], args[1:], "ivdvvvd", _I32)
+        table = _cast(builder, args[0], ir.IntType(64).as_pointer())
+        address = builder.load(builder.gep(table, [args[1]]))
+        return _call_by_address(builder, address, args[1:], "ivdvvvd", _I32)
 
     return sig, codegen
 

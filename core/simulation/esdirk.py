@@ -102,7 +102,7 @@ SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
 
 
 @kernel
-def _f(table, y, out, flags, op=engine.OP_RHS):
+def _f(table, y, out, flags, op):
     """out = f(y) by the engine (op OP_JACOBIAN: J = d f / d y, row-major, flat, from the
     model's tangent); its status."""
     jacobian = op == engine.OP_JACOBIAN
@@ -149,7 +149,7 @@ def _initial_step(table, memory, flags, vectors, atol, t_stop):
     h0 = min(h0, t_stop - memory[M_T])
     for i in range(y.size):
         probe[i] = y[i] + h0 * F1[i]
-    if _f(table, probe, slope, flags) != ed.OK:
+    if _f(table, probe, slope, flags, engine.OP_RHS) != ed.OK:
         return h0
     for i in range(y.size):
         slope[i] = (slope[i] - F1[i]) / h0
@@ -190,7 +190,7 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     eta = max(memory[M_ETA], 1e-16) ** 0.8
     previous = 0.0
     for iteration in range(MAX_NEWTON):
-        if _f(table, z, F[i], flags) != ed.OK:
+        if _f(table, z, F[i], flags, engine.OP_RHS) != ed.OK:
             return False
         for k in range(n):
             delta[k] = base[k] + hg * F[i, k] - z[k]
@@ -260,7 +260,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
                 F[0, dims[ed.NDOF] + j] += delta[j]
             flags[I_FSAL] = FSAL_CURRENT if ok else FSAL_NONE
         if flags[I_FSAL] == FSAL_NONE:  # a restart: no history either
-            if _f(table, y, F[0], flags) != ed.OK:
+            if _f(table, y, F[0], flags, engine.OP_RHS) != ed.OK:
                 return RHS_FAILURE
             flags[I_FSAL] = FSAL_CURRENT
             vectors[V_SLOPE:] = 0.0
@@ -359,7 +359,8 @@ class Esdirk:
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
-        self.data = engine.connect(data)
+        self.data = engine.connect(data, engine.OP_RHS, engine.OP_JACOBIAN,
+                                   engine.OP_INPUT_RESPONSE)
         self.tableau = tableau = TABLEAUS[method]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()

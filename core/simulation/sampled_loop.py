@@ -145,6 +145,7 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
     held = np.array(sim.inputs, dtype=float)
     addresses = np.zeros(_ADDRESSES, dtype=np.int64)
+    engine.connect(outputs, engine.OP_POSITIONS)  # `_measure`'s, on the outputs' packed model
     addresses[[_PLANT, _OUTPUT, _ENGINE]] = (plant.address, outputs.address,
                                              plant.int_array("dims")[ed.ENGINE])
     samples_of = _esdirk_samples if isinstance(solver, Esdirk) else _cvode_samples
@@ -306,7 +307,7 @@ def _measure(addresses, y, scratch, coordinates, out):
     return ed.OK
 
 
-@kernel
+@kernel(inline="always")  # into the loop of the integrator in use, its one caller
 def _sample(addresses, y, scratch, k, controller, held):
     """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
     stepped; e_k of y_k rounded to its quantum where quanta > 0), and put u_k into the held
@@ -320,8 +321,9 @@ def _sample(addresses, y, scratch, k, controller, held):
     if _measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
         return -1
     n_loops = inputs.size
-    if k == 0:
-        force[0, :] = feedforward[0]
+    if k == 0:  # element by element: a slice assignment compiles numba's shape-error message
+        for i in range(n_loops):
+            force[0, i] = feedforward[0, i]
     r = reference[min(k, reference.shape[0] - 1)]
     ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
     for i in range(n_loops):

@@ -130,10 +130,11 @@ class _Solver:
     problem (`_solve`)."""
 
     library = prefix = rhs_count = ""  # set by the subclass
+    operations = ()  # the engine's operations its callbacks call (`engine.connect`)
 
     def __init__(self, data, *, rtol, atol, input_function=None):
         lib = libraries()
-        self.lib, self.data = lib, engine.connect(data)
+        self.lib, self.data = lib, engine.connect(data, *self.operations)
         dims = data.int_array("dims")
         self.n = 2 * int(dims[ed.NDOF]) + int(dims[ed.NEL])  # [q - q_ref, qdot, coil currents]
         self.context = _VP()
@@ -311,6 +312,7 @@ class Cvode(_Solver):
     """
 
     library, prefix, rhs_count = "cvode", "CVode", "GetNumRhsEvals"
+    operations = (engine.OP_RHS, engine.OP_JACOBIAN)
 
     def __init__(self, data, *, method="BDF", rtol, atol, max_step=None, jacobian="analytic",
                  max_order=None, input_function=None):
@@ -404,6 +406,7 @@ class Ida(_Solver):
     """IDA on the implicit form res(t, y, yp) = 0 with the engine; arguments as `Cvode`."""
 
     library, prefix, rhs_count = "ida", "IDA", "GetNumResEvals"
+    operations = (engine.OP_RESIDUAL, engine.OP_RESIDUAL_JACOBIAN)
 
     def __init__(self, data, *, rtol, atol, max_step=None, jacobian="analytic", max_order=None,
                  input_function=None):

@@ -23,7 +23,7 @@ def warmup(*, repeat=5, quick=False):
 
     # a cache without this copy's engine (a new machine, or sources changed since) makes
     # this first call compile: a latency of another kind, which the row says
-    compiled_here = not is_cached(engine.engine_entry.function)
+    compiled_here = not is_cached(engine.ENTRIES[engine.OP_RHS].function)
     simulate(load_scene("stage_planar_3dof"), 0.01, inputs={"F": 1.0}, rtol=1e-6)
     first = time.perf_counter() - start
     from flexure.controllers.runner import run_loop

@@ -1,0 +1,104 @@
+"""The sparse factorisations of J and the augmented system, compiled only for models that use
+them.
+
+A model whose J or augmented system is factored with the static-pivot sparse LU
+(`numerics.sparse_lu`; chosen at packing, dims J_SPARSE and A_SPARSE, `factors`) reaches it
+through two operations of the engine, `factor` and `solve`, each the body of its C entry
+(`engine.ENTRIES`); `factors` calls them through their addresses (`run`), so a model that
+factors banded, as the stages do, never compiles the sparse LU. `engine.connect` adds them for
+the models that need them. Which factors: SPARSE_J, SPARSE_J_TRANSPOSED (solves only) and
+SPARSE_AUGMENTED (`operations`).
+"""
+
+from ..mechanics.rigid_bodies import DEPENDENCIES
+from ..numerics import sparse_lu
+from ..numerics.jit import kernel
+from . import data as ed
+from . import slots as slot
+from .factors import _scatter_de
+from .operations import SPARSE_AUGMENTED, SPARSE_J_TRANSPOSED
+from .slots import float_array as _f
+from .slots import int_array as _i
+
+
+@kernel(inline="always")  # into its operation's entry, its one caller
+def factor(table, which, out):
+    """Factor the sparse LU of J (which = SPARSE_J, from the elements' De) or of the augmented
+    system (SPARSE_AUGMENTED, assembled by `motion`): out[0] = the pivot ratio, negative when
+    the sparse LU cannot serve, and then the values are in the dense storage (slot lu, slot
+    augmented) for the banded LU."""
+    dims = _i(table, slot.DIMS)
+    if which == SPARSE_AUGMENTED:
+        ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
+        dense, rows = _f(table, slot.AUG), _i(table, slot.AUG_POS)
+        columns = rows
+        n = dims[ed.NFREE] + dims[ed.NRIGID]
+    else:
+        ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
+        _constraint_values(table, sparse_lu.matrix_values(ints, floats))
+        dense, rows = _f(table, slot.LU), _i(table, slot.J_ROW_POS)
+        columns = _i(table, slot.J_COL_POS)
+        n = dims[ed.NFREE]
+    out[0] = _factor(table, ints, floats)
+    if out[0] < 0.0:
+        dense[: n * n] = 0.0
+        sparse_lu.scatter_dense(ints, floats, dense, rows, columns)
+
+
+@kernel(inline="always")  # into its operation's entry, its one caller
+def solve(table, which, b):
+    """b <- A^-1 b in place with the sparse factors of the last `factor` of A: J (which =
+    SPARSE_J; b (n_free,) on J's rows in, on the free coordinates out), J^T
+    (SPARSE_J_TRANSPOSED) or the augmented system (SPARSE_AUGMENTED; b (n_free + n_rigid,))."""
+    if which == SPARSE_AUGMENTED:
+        sparse_lu.solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), b, False)
+    else:
+        sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
+                        which == SPARSE_J_TRANSPOSED)
+
+
+@kernel
+def _factor(table, ints, floats):
+    """The sparse LU with the kept pivots, else pivoting afresh (counted); the pivot ratio, or
+    negative when the sparse LU cannot serve (counted: the caller factors banded)."""
+    ratio = sparse_lu.refactor(ints, floats, sparse_lu.THRESHOLD)
+    if ratio >= 0.0:
+        return ratio
+    counters = _i(table, slot.COUNTERS)
+    counters[ed.SPARSE_PIVOTING] += 1
+    ratio = sparse_lu.factor(ints, floats, sparse_lu.THRESHOLD)
+    if ratio < 0.0:
+        counters[ed.SPARSE_FALLBACKS] += 1
+    return ratio
+
+
+
+
+@kernel
+def _constraint_values(table, values):
+    """J's sparse values from the elements' De in slot de through the J map."""
+    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
+    dims = _i(table, slot.DIMS)
+    values[:] = 0.0
+    n_de, n_xdof = De.size, dims[ed.NXDOF]
+    _scatter_de(table, De, jmap, 0, -1, values)
+    for j in range(n_xdof):
+        s = jmap[n_de + j]
+        if s >= 0:
+            values[s] = 1.0
+    if dims[ed.NSLAVES] == 0:
+        return
+    rde, base = _f(table, slot.RIGID_DE), n_de + n_xdof
+    for e in range(rde.size):
+        s = jmap[base + e]
+        if s >= 0:
+            values[s] += rde[e]
+    base += rde.size
+    units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
+    for j in range(n_xdof):
+        if units[j] < 0:
+            continue
+        for d in range(DEPENDENCIES):
+            s = jmap[base + DEPENDENCIES * j + d]
+            if s >= 0:
+                values[s] += W[units[j] * DEPENDENCIES + d]
