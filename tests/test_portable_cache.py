@@ -99,7 +99,7 @@ def test_installed_code_is_loaded_without_compiling(export, tmp_path):
     folder, exported = export
     manifest = json.loads((folder / MANIFEST).read_text())
     assert manifest["functions"] >= 1 and manifest["not_cached"] == []
-    assert list(folder.rglob("engine.engine_entry-*.nbi"))
+    assert list(folder.rglob("engine.rhs_entry-*.nbi"))  # what CVODE's callback calls
     assert manifest["package"] == package_name() == "flexure"
     cache = tmp_path / "cache"
     installed = child("install", folder, cache)

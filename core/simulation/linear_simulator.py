@@ -183,8 +183,14 @@ class LinearSimulator:
         self._du = u - self.u0
 
     def advance(self, t_end: float) -> None:
-        """Deprecated: `advance_to(t_end)`, the same call under a name that says its argument
-        is the absolute end time (s), not a step length."""
+        """Deprecated: `advance_to`, the same call under a name that says its argument is the
+        absolute end time, not a step length.
+
+        Parameters
+        ----------
+        t_end : float
+            The end time, s, after the current one.
+        """
         warnings.warn("LinearSimulator.advance(t_end) is renamed advance_to(t_end): t_end is "
                       "the absolute end time, not a step", DeprecationWarning, stacklevel=2)
         self.advance_to(t_end)

@@ -329,12 +329,20 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         set or a failure."""
         return self._restart_kinematics or self.method not in ONE_STEP_METHODS
 
-    def advance(self, t_end: float, **options) -> None:
-        """Deprecated: `advance_to(t_end)`, the same call under a name that says its argument
-        is the absolute end time (s), not a step length."""
+    def advance(self, t_end: float, *, max_steps: int | None = None) -> None:
+        """Deprecated: `advance_to`, the same call under a name that says its argument is the
+        absolute end time, not a step length.
+
+        Parameters
+        ----------
+        t_end : float
+            The end time, s, after the current one.
+        max_steps : int, optional
+            A budget of integrator steps for this call.
+        """
         warnings.warn("Simulator.advance(t_end) is renamed advance_to(t_end): t_end is the "
                       "absolute end time, not a step", DeprecationWarning, stacklevel=2)
-        self.advance_to(t_end, **options)
+        self.advance_to(t_end, max_steps=max_steps)
 
     def advance_to(self, t_end: float, *, max_steps: int | None = None,
                    _record: Callable[[float, np.ndarray], None] | None = None,
