@@ -29,10 +29,10 @@ import time
 
 from numba.core import config, event
 
-# A cold `flexure loop` on the project's 2-core development machine, empty cache (2026-11-28):
-# 62 s of CPU, 203 functions compiled.
-DEFAULT_CPU_S = 60.0
-DEFAULT_FUNCTIONS = 200
+# A cold `flexure loop` on the project's 2-core development machine, empty cache (2026-11-28,
+# each engine operation compiled apart: docs/decisions.md): 42 s of CPU, 137 compilations.
+DEFAULT_CPU_S = 42.0
+DEFAULT_FUNCTIONS = 137
 RECORD_NAME = "compile-time.json"
 
 
