@@ -102,6 +102,9 @@ def register(subparsers):
 def run_build(args):
     from flexure.core.scene.building import parse_toml, scene_path
 
+    if args.no_tunable and args.tunable:  # which was meant: these keys, or none?
+        raise UsageError(f"--no-tunable and --tunable {args.tunable[0]}: give one, --tunable "
+                         "KEY for those keys or --no-tunable for none")
     tunable = [] if args.no_tunable else args.tunable
     for key in set(tunable or []):
         if tunable.count(key) > 1:

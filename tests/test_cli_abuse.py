@@ -229,6 +229,11 @@ def test_fmu_build_output_is_checked_before_the_build(capsys, places, no_run, pa
     refused(capsys, "fmu", "build", "truss_1dof_x", "-o", path, says=says)
 
 
+def test_fmu_build_refuses_tunable_keys_beside_no_tunable(capsys, places, no_run):
+    refused(capsys, "fmu", "build", "truss_1dof_x", "--tunable", "nodes.2.mass",
+            "--no-tunable", says="--no-tunable and --tunable nodes.2.mass: give one")
+
+
 def test_fmu_build_into_a_folder_moves_the_fmu_in_at_the_end(capsys, places, monkeypatch):
     import flexure.fmu.cli as fmu_cli
 
