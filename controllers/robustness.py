@@ -26,6 +26,7 @@ import numpy as np
 
 from flexure.core import blas_threads
 
+from .errors import LoopError
 from .lti import LinearSystem, delay, series, unity_feedback_poles, zoh
 
 
@@ -50,7 +51,14 @@ def frequency_response(sys, omega, *, eigen=None):
     eye = np.eye(A.shape[0])
 
     def solved(zk):
-        return C @ np.linalg.solve(zk * eye - A, B) + D
+        try:
+            return C @ np.linalg.solve(zk * eye - A, B) + D
+        except np.linalg.LinAlgError:  # z on a pole to round-off: nothing to evaluate there
+            raise LoopError(
+                f"the sampled plant's frequency response is singular at z = {zk:.17g}: at the "
+                f"sample rate {1.0 / sys.dt:g} Hz its poles lie within round-off of z = 1 "
+                "(a sample rate far above the plant's dynamics); lower the sample rate"
+            ) from None
 
     eigenvalues, V = np.linalg.eig(A) if eigen is None else eigen
     try:

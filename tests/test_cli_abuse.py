@@ -475,3 +475,11 @@ def test_an_input_file_out_of_time_is_refused(capsys, tmp_path, no_run, rows, sa
     samples.write_text("time,F\n" + rows)
     refused(capsys, "simulate", "truss_1dof_x", "--t-end", "1", "--input", f"F={samples}",
             says=f"{samples}: {says}")
+
+
+def test_a_sample_rate_far_above_the_plant_is_refused_not_a_traceback(capsys, places):
+    """At 1 GHz the 1-DOF stage's sampled poles lie within round-off of z = 1, where the
+    margins' frequency response cannot be evaluated: said, with what to do."""
+    refused(capsys, "loop", "stage_planar_1dof", "--no-plot", "--fs", "1e9", "--duration",
+            "0.001", "--settle", "0",
+            says=["its poles lie within round-off of z = 1", "lower the sample rate"])
