@@ -237,9 +237,10 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
         manifest = json.loads(archive.read("resources/flexure-engine/manifest.json"))
     assert (manifest["cpu_name"], manifest["cpu_features"]) == ("generic", "")
     assert manifest["not_cached"] == []
-    # what a host loads: the engine's entry and the functions that call it, whose code holds
-    # their callees' (nothing the first run compiled on the way)
-    assert 1 <= manifest["functions"] <= 20
+    # what a host loads: the entries of the engine's operations its integrator methods call
+    # (one per operation: 21 measured) and the functions that call them, whose code holds
+    # their callees'; not the 120 and more that a first compilation leaves in the cache
+    assert 1 <= manifest["functions"] <= 40
     # a fresh venv: the FMU's pinned requirements and the host's fmpy, from the registry (or
     # pip's local cache); no flexure
     home = tmp_path / "venv"
