@@ -102,9 +102,10 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
             f"prescribed zero: each needs its stiffness in the section, and the model gains "
             f"{len(names)} DOF(s); flexure chooses them when the scene lists none)"
         )
+    free_motions, row_dependencies = _null_spaces(full)  # one SVD for both sides
     motions = [tuple(np.flatnonzero(np.abs(motion) > 1e-6 * np.abs(motion).max()))
-               for motion in _free_motions(full)]
-    problems += _fixed_dofs(model, kin, full, rows.shape[0], motions)
+               for motion in free_motions]
+    problems += _fixed_dofs(model, kin, row_dependencies, rows.shape[0], motions)
     for moving, count in _counted(motions):
         names = ", ".join(model.coordinate_names[kin.free[i]] for i in moving)
         ways = "" if count == 1 else f" in {count} independent ways"
@@ -206,14 +207,15 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     return coordinate_status, deformation_status, names
 
 
-def _fixed_dofs(model, kin, full, n_constraints, motions):
+def _fixed_dofs(model, kin, row_dependencies, n_constraints, motions):
     """The lines naming DOFs that the prescribed deformations fix already (to first order at
     the configuration checked): the other side of a right DOF count with a singular choice,
-    where some coordinates can move and some declared DOF cannot. `full` holds the
-    constraint rows, then one unit row per DOF; `motions` the free motions' coordinates."""
+    where some coordinates can move and some declared DOF cannot. `row_dependencies` are the
+    left null-space vectors of the constraint rows followed by one unit row per DOF;
+    `motions` the free motions' coordinates."""
     lines = []
     moving = sorted({kin.free[i] for motion in motions for i in motion})
-    for dependency in _dependent_row_sets(full):
+    for dependency in _involved(row_dependencies):
         dofs = [model.dof_names[i - n_constraints] for i in dependency if i >= n_constraints]
         if not dofs:
             continue  # among the prescribed deformations alone: the over-constraint above
@@ -423,23 +425,27 @@ def column_scale(model: Model, length_scale: float) -> np.ndarray:
 
 def _dependent_row_sets(rows):
     """For each left null-space vector of `rows`, the indices of the rows taking part."""
-    return [list(np.flatnonzero(np.abs(v) > 1e-6 * np.abs(v).max()))
-            for v in _null_space(rows.T)]
+    return _involved(_null_space(rows.T))
 
 
-def _free_motions(matrix):
-    """Right null-space vectors of `matrix` (rows x free coordinates)."""
-    return _null_space(matrix)
+def _involved(vectors):
+    """For each vector, the indices of its entries beyond 1e-6 of its largest."""
+    return [list(np.flatnonzero(np.abs(v) > 1e-6 * np.abs(v).max())) for v in vectors]
 
 
 def _null_space(matrix):
     """An orthonormal basis (list of vectors) of the null space of `matrix`, by SVD with the
     relative rank threshold RANK_TOLERANCE."""
-    if matrix.shape[1] == 0:
-        return []
-    if matrix.shape[0] == 0:
-        return list(np.eye(matrix.shape[1]))
-    _, s, vt = np.linalg.svd(matrix)
+    return _null_spaces(matrix)[0]
+
+
+def _null_spaces(matrix):
+    """(right, left): orthonormal bases (lists of vectors) of the null spaces of `matrix` and
+    of its transpose, from one SVD with the relative rank threshold RANK_TOLERANCE."""
+    m, n = matrix.shape
+    if m == 0 or n == 0:
+        return list(np.eye(n)), list(np.eye(m))
+    u, s, vt = np.linalg.svd(matrix)
     top = max(s.max(initial=0.0), 1e-300)
     rank = int(np.sum(s > RANK_TOLERANCE * top))
-    return list(vt[rank:])
+    return list(vt[rank:]), list(u[:, rank:].T)
