@@ -114,9 +114,10 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     solver, plant, outputs, restart_needed, restart_kinematics = sim.hand_over()
     if not isinstance(solver, Esdirk):
         from .sundials import Cvode  # loaded only where CVODE runs (its compiled callbacks)
-    if not isinstance(solver, Esdirk) and not isinstance(solver, Cvode):
-        raise SimulationError("the compiled sampled loop drives CVODE or ESDIRK; use method "
-                              "'esdirk', 'cvode-bdf' or 'cvode-adams'")
+
+        if not isinstance(solver, Cvode):
+            raise SimulationError("the compiled sampled loop drives CVODE or ESDIRK; use "
+                                  "method 'esdirk', 'cvode-bdf' or 'cvode-adams'")
     ports = [sim.model.outputs[j] for j in loop_outputs]
     if any(port.quantity != "position" for port in ports):
         raise SimulationError("the compiled sampled loop measures positions only")
