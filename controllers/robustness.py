@@ -44,19 +44,19 @@ def frequency_response(sys, omega, *, eigen=None):
     only where that fails (a defective A, such as a chain of delays). `eigen`, the
     (eigenvalues, V) of A when the caller has them already, spares a second decomposition.
     """
-    A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (sys.A, sys.B, sys.C, sys.D))
-    z = np.exp(1j * np.asarray(omega, float) * sys.dt)
+    system = LinearSystem.of(sys)
+    A, B, C, D = system.A, system.B, system.C, system.D
+    z = np.exp(1j * np.asarray(omega, float) * system.dt)
     if A.size == 0:
         return np.repeat(D[:, :, None].astype(complex), z.size, axis=2)
-    eye = np.eye(A.shape[0])
 
     def solved(zk):
         try:
-            return C @ np.linalg.solve(zk * eye - A, B) + D
+            return system.response(zk)
         except np.linalg.LinAlgError:  # z on a pole to round-off: nothing to evaluate there
             raise LoopError(
                 f"the sampled plant's frequency response is singular at z = {zk:.17g}: at the "
-                f"sample rate {1.0 / sys.dt:g} Hz its poles lie within round-off of z = 1 "
+                f"sample rate {1.0 / system.dt:g} Hz its poles lie within round-off of z = 1 "
                 "(a sample rate far above the plant's dynamics); lower the sample rate"
             ) from None
 
