@@ -17,7 +17,7 @@ not writable. `portable_cache` exports a copy's cache for another machine and in
 there (an FMU carries its engine so).
 
 The first compilation. When an entry point is not in the cache, the engine is about to
-compile for a minute: `announce_compilation` says so once per process, with an estimate
+compile for tens of seconds: `announce_compilation` says so once per process, with an estimate
 measured on this machine and a progress line on a terminal (`compile_notice`).
 """
 
