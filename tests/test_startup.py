@@ -42,6 +42,32 @@ def test_analysis_loads_no_control_matplotlib_or_fmu():
     assert not loaded & {"control", "matplotlib", "fmpy", "libcosimpy"}, sorted(loaded)
 
 
+@pytest.mark.parametrize("arguments", [["analyze", "truss_1dof_x"],
+                                       ["analyze", "stage_planar_1dof", "--static", "--json"]])
+def test_the_analyze_command_imports_no_numba(arguments):
+    """Statics and modes run in numpy: an element module declares its compiled kernels
+    without importing numba (numerics/jit.py's `Kernel`), which costs about 0.2 s of CPU."""
+    loaded = loaded_after(f"from flexure.core.cli import main\nmain({arguments!r})")
+    assert "numba" not in loaded, f"flexure {' '.join(arguments)} imported numba"
+
+
+def test_a_kernel_is_compiled_where_another_kernel_calls_it():
+    """A `Kernel` called from compiled code is typed as numba's dispatcher, made then."""
+    from flexure.core.numerics.jit import kernel
+
+    def twice(x):
+        return 2.0 * x
+
+    inner = kernel(twice, cache=False)
+    assert not inner.is_made
+
+    def outer_function(x):
+        return inner(x) + 1.0
+
+    outer = kernel(outer_function, cache=False)
+    assert outer(3.0) == 7.0 and inner.is_made and len(inner.signatures) == 1
+
+
 @pytest.mark.parametrize("package", ["flexure.core", "flexure.controllers", "flexure.fmu"])
 def test_every_public_name_resolves_and_is_listed(package):
     module = __import__(package, fromlist=["__all__"])

@@ -21,15 +21,16 @@ globals when it compiles) and whose qualified name is the kernel's own, which ke
 the compiled-code cache: every element's entry is cached apart. (A closure over the kernel
 would compile the same, but numba keys a closure's cache entry on its pickled cell contents,
 which for a kernel change with every process: the entry would compile at every start.)
+The copy is made when the entry is compiled, so that declaring it does not import numba.
 """
 
 import types
 
-from numba import carray
+from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, CompiledEntry, numba_module
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, entry
-
-kernel = None  # the template's kernel: each entry's globals bind it to one element's kernel
+# the templates' globals, bound in each entry's copy: the element's kernel and numba.carray
+kernel = None
+carray = None
 
 
 def _deformations_template(x, ref, order, e, De, D2e, m, k, width):
@@ -47,12 +48,19 @@ def _bound(template, element_kernel, signature):
     after it, as a lazily compiled C entry."""
     module = element_kernel.__module__.rsplit(".", 1)[-1]
     name = f"{module}_{element_kernel.__name__}_entry"
-    function = types.FunctionType(template.__code__, {**template.__globals__,
-                                                      "kernel": element_kernel}, name)
-    function.__qualname__ = name
-    function.__doc__ = (f"C entry of {element_kernel.__module__}.{element_kernel.__name__} for "
-                        "the engine (pointers to one element's arrays).")
-    return entry(signature)(function)
+    doc = (f"C entry of {element_kernel.__module__}.{element_kernel.__name__} for the engine "
+           "(pointers to one element's arrays).")
+
+    def make():
+        bound = {"kernel": element_kernel, "carray": numba_module().carray}
+        function = types.FunctionType(template.__code__, {**template.__globals__, **bound},
+                                      name)
+        function.__qualname__, function.__doc__ = name, doc
+        return function
+
+    made = CompiledEntry(make, signature, make=True, name=name)
+    made.__doc__ = doc
+    return made
 
 
 def deformations_entry(deformations_kernel):

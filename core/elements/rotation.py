@@ -17,11 +17,11 @@ rotation vector's angle is taken in [0, pi]).
 """
 
 import numpy as np
-from numba import carray
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, entry, kernel
+from ..numerics.jit import kernel
 from ..numerics.rotation_kernels import rotation_vector_component
 from ..numerics.rotations import rotation_vector_derivatives
+from . import entries
 
 type_name = "ROTATION"
 dimension = 3
@@ -77,8 +77,4 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     e[0] = rotation_vector_component(x, int(ref[0]), order, De[0], D2e[0])
 
 
-@entry(DEFORMATIONS_ENTRY)
-def deformations_entry(x, ref, order, e, De, D2e, m, k, width):
-    """C entry of `deformations_kernel` for the engine (pointers to one element's arrays)."""
-    deformations_kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
-                        carray(De, (k, m)), carray(D2e, (k, m, m)))
+deformations_entry = entries.deformations_entry(deformations_kernel)

@@ -27,8 +27,6 @@ import sys
 import tempfile
 import time
 
-from numba.core import config, event
-
 # A cold `flexure loop` on the project's 2-core development machine, empty cache (2026-11-28,
 # each engine operation compiled apart: docs/decisions.md): 42 s of CPU, 137 compilations.
 DEFAULT_CPU_S = 42.0
@@ -36,17 +34,18 @@ DEFAULT_FUNCTIONS = 137
 RECORD_NAME = "compile-time.json"
 
 
-class _Listener(event.Listener):
-    """Passes numba's compilation events on to a `CompileNotice`."""
+def _listener(notice):
+    """A numba event listener that passes its compilation events on to `notice`."""
+    from numba.core import event
 
-    def __init__(self, notice):
-        self.notice = notice
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            notice.enter()
 
-    def on_start(self, ev):
-        self.notice.enter()
+        def on_end(self, ev):
+            notice.leave(counted=True)
 
-    def on_end(self, ev):
-        self.notice.leave(counted=True)
+    return Listener()
 
 
 class CompileNotice:
@@ -103,6 +102,8 @@ class CompileNotice:
 
     def text(self):
         """The notice: what compiles, for how long, and where it is kept."""
+        from numba.core import config
+
         cpu, _, source = self.estimate()
         target = ("this machine" if config.CPU_NAME is None
                   else f"the CPU target {config.CPU_NAME!r}")
@@ -129,12 +130,16 @@ class CompileNotice:
         self.stream = stream
         self._total = self.estimate()[1]
         self._say(self.text())
-        self._listener = _Listener(self)
+        from numba.core import event
+
+        self._listener = _listener(self)
         event.register("numba:compile", self._listener)
 
     def close(self):
         """Stop following numba's compilations (a notice made for a test)."""
         if self._listener is not None:
+            from numba.core import event
+
             event.unregister("numba:compile", self._listener)
             self._listener = None
 

@@ -19,6 +19,10 @@ there (an FMU carries its engine so).
 The first compilation. When an entry point is not in the cache, the engine is about to
 compile for tens of seconds: `announce_compilation` says so once per process, with an estimate
 measured on this machine and a progress line on a terminal (`compile_notice`).
+
+numba itself is imported when the first kernel is compiled or called, not when a module
+declares one: importing it takes about 0.2 s of CPU, and the analyses (statics, modes) run in
+numpy and never call a kernel (`flexure analyze` does not import numba).
 """
 
 import functools
@@ -27,9 +31,6 @@ import inspect
 import os
 import sys
 import tempfile
-
-from numba import cfunc, njit, types
-from numba.core import caching
 
 from .compile_notice import CompileNotice
 
@@ -81,35 +82,55 @@ def package_cache_folder():
     return None if root is None else os.path.join(root, package_name(), sources_hash()[:20])
 
 
-class _SourceHashLocator(caching._CacheLocator):
-    """numba cache locator for the files of this copy of flexure's core (see the module)."""
+@functools.cache
+def numba_module():
+    """numba, imported on first use with flexure's cache locator in place (`_source_locator`)."""
+    import numba
+    from numba.core import caching
 
-    def __init__(self, py_func, py_file):
-        self._lineno = py_func.__code__.co_firstlineno
-        relative = os.path.relpath(os.path.dirname(os.path.abspath(py_file)), _PACKAGE_ROOT)
-        self._path = os.path.join(package_cache_folder(), relative)
-
-    def get_cache_path(self):
-        return self._path
-
-    def get_source_stamp(self):
-        return sources_hash()
-
-    def get_disambiguator(self):
-        return str(self._lineno)
-
-    @classmethod
-    def from_function(cls, py_func, py_file):
-        inside = os.path.abspath(py_file).startswith(_CORE + os.sep)
-        if not inside or cache_root() is None:
-            return None
-        return cls(py_func, py_file)
+    # numba 0.61 renamed _CacheImpl to CacheImpl; its subclasses share the list of locators
+    implementation = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+    locator = _source_locator(caching._CacheLocator)
+    if locator not in implementation._locator_classes:
+        implementation._locator_classes.insert(0, locator)
+    return numba
 
 
-# numba 0.61 renamed _CacheImpl to CacheImpl; its subclasses share the list of locators
-_IMPL = getattr(caching, "CacheImpl", None) or caching._CacheImpl
-if _SourceHashLocator not in _IMPL._locator_classes:
-    _IMPL._locator_classes.insert(0, _SourceHashLocator)
+@functools.cache
+def _source_locator(base):
+    """The numba cache locator class for the files of this copy of flexure's core (see the
+    module), derived from numba's `base` class."""
+
+    class SourceHashLocator(base):
+        def __init__(self, py_func, py_file):
+            self._path, self._lineno = _cache_location(py_func, py_file)
+
+        def get_cache_path(self):
+            return self._path
+
+        def get_source_stamp(self):
+            return sources_hash()
+
+        def get_disambiguator(self):
+            return str(self._lineno)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if _cache_location(py_func, py_file) is None:
+                return None
+            return cls(py_func, py_file)
+
+    return SourceHashLocator
+
+
+def _cache_location(py_func, py_file):
+    """(folder, first line) of the cache entry of `py_func`, defined in `py_file`; None
+    outside this copy's core or without a cache folder."""
+    inside = os.path.abspath(py_file).startswith(_CORE + os.sep)
+    if not inside or cache_root() is None:
+        return None
+    relative = os.path.relpath(os.path.dirname(os.path.abspath(py_file)), _PACKAGE_ROOT)
+    return os.path.join(package_cache_folder(), relative), py_func.__code__.co_firstlineno
 
 
 def kernel(function=None, **options):
@@ -119,15 +140,55 @@ def kernel(function=None, **options):
     compile a C-callable wrapper of every kernel, which nothing of flexure calls: the C entry
     points are `entry`'s own; without it the first compilation takes about 8 % less CPU). A
     kernel is compiled once per type of its arguments, a constant argument's type being its
-    plain type (`_by_plain_types`)."""
+    plain type (`_by_plain_types`). The decorated function is a `Kernel`: numba's dispatcher
+    made when first needed."""
     options = {"cache": True, "error_model": "numpy", "no_cfunc_wrapper": True, **options}
     if function is None:
-        return lambda function: _by_plain_types(njit(**options)(function))
-    return _by_plain_types(njit(**options)(function))
+        return lambda function: Kernel(function, options)
+    return Kernel(function, options)
+
+
+class Kernel:
+    """A numba kernel whose dispatcher (and numba) is made when it is first needed: called
+    from Python, compiled into another kernel (numba types a global by its `_numba_type_`),
+    or asked for a dispatcher's attribute (`signatures`, `targetoptions`, ...)."""
+
+    def __init__(self, function, options):
+        self.py_func, self._options, self._dispatcher = function, options, None
+        functools.update_wrapper(self, function)
+
+    @property
+    def dispatcher(self):
+        """numba's dispatcher of this kernel (numba.njit with the kernel's options)."""
+        if self._dispatcher is None:
+            numba = numba_module()
+            self._dispatcher = _by_plain_types(numba.njit(**self._options)(self.py_func))
+        return self._dispatcher
+
+    @property
+    def is_made(self):
+        """Whether this process has made its dispatcher (compiled or loaded code or not)."""
+        return self._dispatcher is not None
+
+    @property
+    def _numba_type_(self):
+        from numba.core import types
+
+        return types.Dispatcher(self.dispatcher)
+
+    def __call__(self, *args, **kwargs):
+        return self.dispatcher(*args, **kwargs)
+
+    def __getattr__(self, name):
+        if name.startswith("__"):  # copy, pickle and inspect probe these: not the dispatcher's
+            raise AttributeError(name)
+        return getattr(self.dispatcher, name)
 
 
 def _plain(numba_type):
     """An integer or boolean constant's type as its plain type (Literal[int](3) as int64)."""
+    from numba.core import types
+
     if isinstance(numba_type, (types.IntegerLiteral, types.BooleanLiteral)):
         return types.unliteral(numba_type)
     return numba_type
@@ -151,13 +212,14 @@ def _by_plain_types(dispatcher):
 
 
 # -- compiled entry points: C functions that other compiled code calls by address ------------
-_POINTER = types.CPointer(types.float64)
+# numba signatures, as numba parses them (strings: declaring them does not import numba)
+_POINTER = "CPointer(float64)"
 # an element's deformations: (x, ref, order, e, De, D2e, m, k, width) -> void
-DEFORMATIONS_ENTRY = types.void(_POINTER, _POINTER, types.int64, _POINTER, _POINTER, _POINTER,
-                                types.int64, types.int64, types.int64)
+DEFORMATIONS_ENTRY = (f"void({_POINTER}, {_POINTER}, int64, {_POINTER}, {_POINTER}, "
+                      f"{_POINTER}, int64, int64, int64)")
 # an element's inertia points: (x, v, ref, order, p, Dp, acc, m, P, width) -> void
-INERTIA_ENTRY = types.void(_POINTER, _POINTER, _POINTER, types.int64, _POINTER, _POINTER,
-                           _POINTER, types.int64, types.int64, types.int64)
+INERTIA_ENTRY = (f"void({_POINTER}, {_POINTER}, {_POINTER}, int64, {_POINTER}, {_POINTER}, "
+                 f"{_POINTER}, int64, int64, int64)")
 
 
 class CompiledEntry:
@@ -166,23 +228,39 @@ class CompiledEntry:
     Compiled code calls these through their addresses, never inlines them: each kernel and
     the engine are compiled once, as separate units, which keeps the first compilation short
     (inlining every kernel into every caller made it minutes) and lets an element module plug
-    its kernels into the engine without the engine knowing it."""
+    its kernels into the engine without the engine knowing it.
 
-    def __init__(self, function, signature):
-        self.function, self.signature = function, signature
+    `function` is the Python function, or a function of no arguments that makes it (called
+    when the entry is compiled; `make=True`): an entry whose code needs numba's names (carray)
+    is made so without importing numba when it is declared."""
+
+    def __init__(self, function, signature, *, make=False, name=None):
+        self.signature = signature
+        self._function = None if make else function
+        self._make = function if make else None
         self._compiled = None
         functools.update_wrapper(self, function)
+        if name is not None:
+            self.__name__ = self.__qualname__ = name
+
+    @property
+    def function(self):
+        """The Python function compiled."""
+        if self._function is None:
+            self._function = self._make()
+        return self._function
 
     @property
     def compiled(self):
         """The numba CFunc (compiled on first use, or loaded from the cache)."""
         if self._compiled is None:
+            numba = numba_module()
             cached = is_cached(self.function)
             if not cached:
                 announce_compilation()
             with compilation_notice().unit(counted=not cached):
-                self._compiled = cfunc(self.signature, cache=True,
-                                       error_model="numpy")(self.function)
+                self._compiled = numba.cfunc(self.signature, cache=True,
+                                             error_model="numpy")(self.function)
         return self._compiled
 
     @property
@@ -206,14 +284,15 @@ def cache_index_path(function):
     of flexure's core) for this Python, whether it exists or not (numba's file name:
     module.qualname-line.pyXY.nbi, '<' and '>' left out), or None outside the cache."""
     path = inspect.getfile(function)
-    locator = _SourceHashLocator.from_function(function, path)
-    if locator is None:
+    location = _cache_location(function, path)
+    if location is None:
         return None
+    folder, first_line = location
     module = os.path.splitext(os.path.basename(path))[0]
     qualname = function.__qualname__.replace("<", "").replace(">", "")
-    name = (f"{module}.{qualname}-{locator.get_disambiguator()}.py{sys.version_info[0]}"
+    name = (f"{module}.{qualname}-{first_line}.py{sys.version_info[0]}"
             f"{sys.version_info[1]}{getattr(sys, 'abiflags', '')}.nbi")
-    return os.path.join(locator.get_cache_path(), name)
+    return os.path.join(folder, name)
 
 
 def is_cached(function):
@@ -224,7 +303,7 @@ def is_cached(function):
     machine may hold only that machine's)."""
     import pickle
 
-    import numba
+    numba = numba_module()
     from numba.core.registry import cpu_target
 
     index = cache_index_path(function)

@@ -77,7 +77,9 @@ def compiled_functions() -> list:
         if not name.startswith(prefix) or module is None:
             continue
         for value in list(vars(module).values()):
-            if isinstance(value, Dispatcher) and value.signatures:
+            if isinstance(value, jit.Kernel) and value.is_made and value.signatures:
+                function = value.py_func
+            elif isinstance(value, Dispatcher) and value.signatures:
                 function = value.py_func
             elif isinstance(value, CFunc):
                 function = value.__wrapped__

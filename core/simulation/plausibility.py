@@ -16,10 +16,6 @@ instead of being returned in silence:
 """
 
 import numpy as np
-from numba import carray
-
-from ..numerics.jit import kernel
-from ..numerics.native import as_float_pointer, as_int_pointer
 
 STRAIN_LIMIT = 1e-2
 DISTANCE_LIMIT = 0.25
@@ -55,7 +51,9 @@ class RangeCheck:
     def within(self, x, e):
         """Whether one state (x (NX,), e (NE,)) is within both limits: the cheap test an FMU
         makes after every doStep (a few microseconds); `warnings` says what is not."""
-        return _within(x, e, self._indices, self._bounds, self.elongation.size)
+        from .plausibility_kernels import within
+
+        return within(x, e, self._indices, self._bounds, self.elongation.size)
 
     def watch(self, x, e):
         """`within` of the arrays x (NX,) and e (NE,) as they are at each call, as a function
@@ -69,9 +67,10 @@ class RangeCheck:
         table = np.array([a.ctypes.data for a in arrays] + [a.size for a in arrays]
                          + [self.elongation.size], dtype=np.int64)
         address = int(table.ctypes.data)
+        from .plausibility_kernels import within_at
 
         def within(_keep=(table, arrays)):  # the table points into the arrays: keep both
-            return _within_at(address)
+            return within_at(address)
 
         return within
 
@@ -96,32 +95,3 @@ class RangeCheck:
                                      f"beyond the model's range of validity ({DISTANCE_LIMIT:g} x "
                                      f"its length scale {self.scale:.3g} m)")
         return found
-
-
-@kernel
-def _within(x, e, indices, bounds, n_elongations):
-    """`RangeCheck.within` compiled: a tenth of the numpy expression's time on a few
-    elements, where each numpy call's overhead dominated a doStep of the FMU. `indices` holds
-    the elongations' deformation indices (the first `n_elongations`), then the translational
-    coordinates'; `bounds` their bounds |e1| (m), then the coordinates' start values (m),
-    then the distance bound (m)."""
-    for i in range(n_elongations):
-        if abs(e[indices[i]]) > bounds[i]:
-            return False
-    distance_bound = bounds[bounds.size - 1]
-    for i in range(n_elongations, indices.size):
-        if abs(x[indices[i]] - bounds[i]) > distance_bound:
-            return False
-    return True
-
-
-@kernel
-def _within_at(address):
-    """`_within` of the arrays in the table at `address` (`RangeCheck.watch`): their four
-    addresses, their four sizes, the number of elongations."""
-    table = carray(as_int_pointer(address), (9,))
-    x = carray(as_float_pointer(table[0]), (table[4],))
-    e = carray(as_float_pointer(table[1]), (table[5],))
-    indices = carray(as_int_pointer(table[2]), (table[6],))
-    bounds = carray(as_float_pointer(table[3]), (table[7],))
-    return _within(x, e, indices, bounds, table[8])

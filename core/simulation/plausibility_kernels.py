@@ -1,0 +1,37 @@
+"""The compiled checks of `plausibility.RangeCheck`: whether a state is within the model's
+range of validity, in the few microseconds an FMU can spend on it after every doStep.
+(A module of their own: `plausibility` is imported by the analyses, which need no numba.)"""
+
+from numba import carray
+
+from ..numerics.jit import kernel
+from ..numerics.native import as_float_pointer, as_int_pointer
+
+
+@kernel
+def within(x, e, indices, bounds, n_elongations):
+    """`plausibility.RangeCheck.within` compiled: a tenth of the numpy expression's time on a
+    few elements, where each numpy call's overhead dominated a doStep of the FMU. `indices` holds
+    the elongations' deformation indices (the first `n_elongations`), then the translational
+    coordinates'; `bounds` their bounds |e1| (m), then the coordinates' start values (m),
+    then the distance bound (m)."""
+    for i in range(n_elongations):
+        if abs(e[indices[i]]) > bounds[i]:
+            return False
+    distance_bound = bounds[bounds.size - 1]
+    for i in range(n_elongations, indices.size):
+        if abs(x[indices[i]] - bounds[i]) > distance_bound:
+            return False
+    return True
+
+
+@kernel
+def within_at(address):
+    """`within` of the arrays in the table at `address` (`plausibility.RangeCheck.watch`):
+    their four addresses, their four sizes, the number of elongations."""
+    table = carray(as_int_pointer(address), (9,))
+    x = carray(as_float_pointer(table[0]), (table[4],))
+    e = carray(as_float_pointer(table[1]), (table[5],))
+    indices = carray(as_int_pointer(table[2]), (table[6],))
+    bounds = carray(as_float_pointer(table[3]), (table[7],))
+    return within(x, e, indices, bounds, table[8])
