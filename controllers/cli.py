@@ -152,7 +152,7 @@ def run(args):
                       settle=args.settle, method=args.method, rtol=args.rtol,
                       workdir=args.workdir, overrides=overrides, path=path,
                       quantum=args.quantum, disturbance=amplitude, disturbance_hz=hz,
-                      progress=Progress(f"flexure loop ({args.plant})"))
+                      progress=Progress(f"flexure loop ({args.plant})", after=1.0))
     summary = result.summary()
     code = write_outputs("flexure loop", [("--plot", plot, result.plot)],
                          announce=False) if plot else 0
@@ -182,7 +182,7 @@ def move_path_of(args):
     kind = args.path or ("linear" if args.plant == "linear" else "nonlinear")
     model = load_scene(args.scene, overrides=args.set)
     return model, move_path(model, targets, kind=kind,
-                            progress=Progress(f"flexure loop: {kind} move path"))
+                            progress=Progress(f"flexure loop: {kind} move path", after=1.0))
 
 
 def _per_loop_table(s):
