@@ -1,6 +1,7 @@
 """Progress of long runs: the reporter, and the closed loop reporting through it."""
 
 import io
+import time
 
 import numpy as np
 
@@ -36,6 +37,17 @@ def test_a_terminal_gets_one_line_rewritten_in_place():
 def test_a_short_run_says_nothing_with_after():
     stream = io.StringIO()
     report = Progress("run", stream=stream, after=3600.0)
+    for fraction in (0.0, 0.5, 1.0):
+        report(fraction)
+    assert stream.getvalue() == ""
+
+
+def test_the_set_up_before_the_first_report_is_not_the_run():
+    """A run's clock starts at its first report: a short run after a long set-up (the
+    engine compiling, with its own notice) says nothing, nor counts the set-up."""
+    stream = io.StringIO()
+    report = Progress("run", stream=stream, after=0.2)
+    time.sleep(0.3)  # the set-up
     for fraction in (0.0, 0.5, 1.0):
         report(fraction)
     assert stream.getvalue() == ""

@@ -11,19 +11,23 @@ import time
 class Progress:
     """A callable that takes the fraction done (0 to 1) and reports it to `stream`.
 
-    With `after` (s) a run that ends sooner reports nothing (a short `flexure simulate`)."""
+    With `after` (s) a run that ends sooner reports nothing (a short `flexure simulate`). The
+    run's clock starts at its first report: the set-up before it (loading a model, compiling
+    the engine, which has a notice of its own) is not the run's."""
 
     def __init__(self, label, *, stream=None, after=0.0):
         self.label = label
         self.after = after  # s: say nothing before the run has taken this long
         self.stream = stream if stream is not None else sys.stderr
         self.interactive = getattr(self.stream, "isatty", lambda: False)()
-        self.start = time.perf_counter()
+        self.start = None  # perf_counter at the first report
         self.last_percent = -1
         self.last_tenth = -1
 
     def __call__(self, fraction):
         percent = int(100 * min(max(fraction, 0.0), 1.0))
+        if self.start is None:
+            self.start = time.perf_counter()
         elapsed = time.perf_counter() - self.start
         if elapsed < self.after:
             return
