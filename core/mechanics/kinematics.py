@@ -22,8 +22,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse
-import scipy.sparse.linalg
 
 from ..errors import ConvergenceError
 from . import assembly
@@ -47,12 +45,14 @@ class JacobianFactor:
 
     def __init__(self, J):
         self.size = J.shape[0]
-        self.sparse = scipy.sparse.issparse(J)
+        self.sparse = not isinstance(J, np.ndarray)  # scipy.sparse's, imported by who made it
         if self.sparse:
+            from scipy.sparse.linalg import splu
+
             J = J.tocsc()
             try:
                 # SuperLU would factor non-finite entries into garbage (and BLAS complaints)
-                self.lu = scipy.sparse.linalg.splu(J) if np.all(np.isfinite(J.data)) else None
+                self.lu = splu(J) if np.all(np.isfinite(J.data)) else None
             except RuntimeError:  # "Factor is exactly singular"
                 self.lu = None
         else:
@@ -181,8 +181,10 @@ class Kinematics:
                                np.ones(self.dof_positions.size)])
         rows = np.concatenate([rows, n_def + np.arange(self.dof_positions.size)])
         columns = np.concatenate([columns, self.dof_positions])
-        return JacobianFactor(scipy.sparse.csc_matrix((data, (rows, columns)),
-                                                      shape=(self.free.size, self.free.size)))
+        from scipy.sparse import csc_matrix  # only for large models: 0.05 s to import
+
+        return JacobianFactor(csc_matrix((data, (rows, columns)),
+                                         shape=(self.free.size, self.free.size)))
 
     def _sparse_pattern(self):
         """(De rows, De columns, J rows, J columns) of every entry J takes from De."""
