@@ -106,8 +106,9 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     ----------
     model : Model
     targets : dict
-        One displacement per loop (input), of the coordinates "NODE.AXIS" to move; a held
-        coordinate has displacement 0.
+        One displacement per loop (input), of the coordinates "NODE.AXIS" to move, or of
+        angles about a global axis of 3-D rotational nodes ("Pr.rz"); a held one has
+        displacement 0.
     kind : "nonlinear" or "linear"
     points : int
         The number of points of the nonlinear path (its spline's knots), s = 0 .. 1.
@@ -120,6 +121,7 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
         linearize,
         output_rows,
         output_value,
+        position_port,
         static_equilibrium,
         steady_port_values,
         steady_slopes,
@@ -137,8 +139,8 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     inputs = [pair.input_name for pair in pairs]
     outputs = [model.outputs[pair.output_index] for pair in pairs]
     names = list(targets)
-    try:
-        target_index = [model.coordinate_index(name) for name in names]
+    try:  # a coordinate, or an angle about a global axis of a 3-D rotational node ("Pr.rz")
+        target_ports = [position_port(model, name) for name in names]
     except KeyError as error:
         raise ControlDesignError(f"{model.source}: move target: {error.args[0]}") from None
     delta = np.array([float(targets[name]) for name in names])
@@ -152,12 +154,12 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
             [p.input_index for p in pairs]]
         response = np.linalg.solve(lin.K, lin.DF.T @ columns)  # dq per unit input
         c_yu = output_rows(model, rest.x, lin.DF, outputs) @ response
-        c_tu = lin.DF[target_index] @ response
+        c_tu = output_rows(model, rest.x, lin.DF, target_ports) @ response
         end = c_yu @ np.linalg.solve(c_tu, delta)
         # a straight line: the spline through three collinear points is the line itself
         s_values = np.array([0.0, 0.5, 1.0])
         return MovePath(s_values, np.outer(s_values, end), None, kind, dict(targets))
-    start_values = rest.x[target_index]
+    start_values = np.array([output_value(model, port, rest.x) for port in target_ports])
     s_values = np.linspace(0.0, 1.0, points)
     displacements, forces = [], []
     point, previous = None, None

@@ -29,7 +29,7 @@ _LAZY = {
     "mechanics.kinematics": ("Kinematics",),
     "mechanics.mechanics": ("Mechanics",),
     "mechanics.ports": ("input_columns", "input_values", "output_rows", "output_value",
-                        "port_description"),
+                        "port_description", "position_port"),
     "model": ("Model",),
     "numerics.blas": ("blas_threads",),
     "scene.api": ("Scene", "to_toml"),

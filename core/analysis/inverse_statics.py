@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import ConvergenceError, FlexureError
 from ..mechanics.actuators import steady_slopes
 from ..mechanics.mechanics import Mechanics
-from ..mechanics.ports import input_columns
+from ..mechanics.ports import input_columns, output_rows, output_value, position_port
 from ..model import Model
 from ..numerics.blas import blas_threads
 from .linearization import linearize
@@ -60,7 +60,8 @@ class InverseStatics:
         Parameters
         ----------
         name : str
-            The coordinate, "NODE.AXIS" ("3.x", "4.phi").
+            The coordinate, "NODE.AXIS" ("3.x", "4.phi"), or an angle about a global axis
+            of a 3-D rotational node ("Pr.rz").
 
         Returns
         -------
@@ -72,12 +73,14 @@ class InverseStatics:
         KeyError
             The model has no such coordinate.
         """
-        return float(self.solution.x[self.solution.model.coordinate_index(name)])
+        model = self.solution.model
+        return output_value(model, position_port(model, name), self.solution.x)
 
 
-def _indices(model, names, what):
+def _ports(model, names, what):
+    """The position outputs (`position_port`) that read the coordinates or angles `names`."""
     try:
-        return np.array([model.coordinate_index(name) for name in names], dtype=int)
+        return [position_port(model, name) for name in names]
     except KeyError as error:
         raise InverseStaticsError(f"{model.source}: {what}: {error.args[0]}") from None
 
@@ -94,7 +97,9 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
     ----------
     model : Model
     targets : dict of str to float
-        {"NODE.AXIS": value (m or rad)}, as many as there are inputs used.
+        {"NODE.AXIS": value (m or rad)}, as many as there are inputs used: a coordinate
+        ("3.x"), or the angle about a global axis of a 3-D rotational node ("Pr.rz",
+        `position_port`).
     inputs : sequence of str, optional
         The names of the inputs to use (default: all of the model's inputs).
     initial : array_like, optional
@@ -132,7 +137,7 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
     if len(targets) != len(names):
         raise InverseStaticsError(f"{model.source}: {len(targets)} target(s) for {len(names)} "
                                   "input(s): inverse statics needs as many targets as inputs")
-    target_index = _indices(model, targets, "target")
+    target_ports = _ports(model, targets, "target")
     wanted = np.array([float(v) for v in targets.values()])
     if not np.all(np.isfinite(wanted)):
         raise InverseStaticsError(f"{model.source}: every target value must be finite")
@@ -148,7 +153,8 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
     for iteration in range(1, max_iterations + 1):
         held = dict.fromkeys(ports, 0.0) | dict(zip(names, u.tolist(), strict=True))
         solution = static_equilibrium(model, inputs=held, mechanics=mech, start=solution)
-        error = solution.x[target_index] - wanted
+        error = np.array([output_value(model, port, solution.x)
+                          for port in target_ports]) - wanted
         residual = float(np.max(np.abs(error)))
         if residual <= tolerance:
             return InverseStatics(u, solution, iteration, residual)
@@ -159,7 +165,7 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
         # an actuated input is its drive signal: its steady force per unit of it (Km/R ...)
         b = b * steady_slopes(model, np.array(list(held.values())))[order]
         response = np.linalg.solve(lin.K, DF.T @ b)  # dq per unit input
-        compliance = DF[target_index] @ response
+        compliance = output_rows(model, solution.x, DF, target_ports) @ response
         # the inputs' own compliance (work-conjugate: m/N, rad/(N m)) sets the scale of
         # "cannot move": the targets' must not be smaller by the round-off of the solve
         own = np.linalg.norm((DF.T @ b).T @ response, 2)

@@ -117,6 +117,28 @@ def input_stiffness(model, x, u):
     return H
 
 
+def position_port(model: Model, name: str) -> Port:
+    """The position output that reads "NODE.AXIS": a coordinate ("3.x", "4.phi"), or the
+    angle about a global axis of a 3-D rotational node ("Pr.rz", rad), whose coordinates are
+    Euler parameters. Its value is `output_value`, its row in dq `output_rows`.
+
+    Raises
+    ------
+    KeyError
+        The model has no such coordinate or rotational node (the message names it).
+    """
+    from ..model import GLOBAL_ROTATIONS, Port
+
+    node, _, axis = name.rpartition(".")
+    euler = [n for n in model.nodes if n.name == node and n.axes and
+             n.axes[0] == "lambda0"] if axis in GLOBAL_ROTATIONS else []
+    if euler:
+        return Port(name, None, "position", "rad", euler=tuple(euler[0].coordinates), axis=axis)
+    index = model.coordinate_index(name)  # KeyError naming it
+    unit = "m" if model.coordinate_axis[index] in ("x", "y", "z") else "rad"
+    return Port(name, index, "position", unit)
+
+
 def output_value(model: Model, port: Port, x: np.ndarray,
                  xdot: np.ndarray | None = None) -> float:
     """The value of an output: x_c or xdot_c; phi_k or omega_k = 2 E_k lambda_dot about a
