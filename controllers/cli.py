@@ -196,11 +196,15 @@ def _per_loop_table(s):
         return f"{value:.6g} {unit}" if mixed else value
 
     header = "" if mixed else f" ({units[0]})"
+    note = ""
+    if any(row.get("held") for row in rows):
+        note = ("\nheld: a loop that holds its position, its error over the moving stroke (an "
+                "angle's through the mechanism's size)")
     return format_table(
         ["loop", f"stroke{header}", f"max |error|{header}", "error / stroke", "within 0.1 %"],
-        [(row["loop"], cell(row["stroke"], unit), cell(row["max_abs_error"], unit),
-          row["error_ratio"], "yes" if row["passed"] else "NO")
-         for row, unit in zip(rows, units, strict=True)])
+        [(row["loop"], "held" if row.get("held") else cell(row["stroke"], unit),
+          cell(row["max_abs_error"], unit), row["error_ratio"], "yes" if row["passed"] else "NO")
+         for row, unit in zip(rows, units, strict=True)]) + note
 
 
 def _plugged_rows(s):

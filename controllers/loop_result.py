@@ -1,7 +1,9 @@
 """The result of a closed-loop run: its samples, the summary `flexure loop` prints, its plot.
 
 The error reported is max_k |e_k| over the samples, during the move and a settling time after
-it, against the target `TARGET` (0.1 % of the stroke).
+it, against the target `TARGET` (0.1 % of the stroke). A loop that holds its position while
+another moves (a stroke of zero) is judged on its absolute error against the target of the
+moving stroke in its own unit (`LoopResult.loop_bounds`); the run passes when every loop does.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from os import PathLike
 import numpy as np
 
 TARGET = 1e-3  # the tracking target: max |error| / stroke
+HELD_BELOW = 1e-9  # a loop whose stroke is below this times the run's holds its position
 
 
 @dataclass
@@ -47,8 +50,12 @@ class LoopResult:
 
     @property
     def max_abs_error(self) -> float:
-        """The largest |r - y| (m) over the samples and the loops."""
-        return float(np.max(np.abs(self.error)))
+        """The largest |r - y| over the samples and the loops in the moving loop's unit (m, or
+        rad on an angle: `units`); a loop in another unit is in `per_loop`."""
+        unit = self.units["position"]
+        units = [u["position"] for u in self.settings.get("loop_units", [])]
+        same = [k for k in range(self.error.shape[1]) if k >= len(units) or units[k] == unit]
+        return float(np.max(np.abs(self.error[:, same])))
 
     @property
     def loop_strokes(self) -> np.ndarray:
@@ -63,6 +70,53 @@ class LoopResult:
             self.feedforward + self.disturbance)
         return self.force - open_loop
 
+    @property
+    def held_loops(self) -> np.ndarray:
+        """Which loops hold their position (n_loops,) bool: a stroke below HELD_BELOW times
+        the largest stroke of the run, an angle's through the mechanism's size (a move's
+        path puts round-off, 1e-17 m, into the strokes of the coordinates it holds)."""
+        converted = self._in_run_unit(self.loop_strokes)
+        return converted <= HELD_BELOW * np.max(converted, initial=0.0)
+
+    def _in_run_unit(self, values):
+        """`values` (one per loop, each in its loop's unit) in the moving loop's unit: an
+        angle theta as theta L, a length l as l / L on an angle (L: the mechanism's size,
+        settings "size", m); unchanged without a size."""
+        run = self.units["position"]
+        units = [u["position"] for u in self.settings.get("loop_units", [])]
+        size = self.settings.get("size", 0.0)
+        factor = {("rad", "m"): size, ("m", "rad"): 1.0 / size if size > 0 else 0.0}
+        return np.array([v * factor.get((units[k] if k < len(units) else run, run), 1.0)
+                         for k, v in enumerate(values)])
+
+    @property
+    def loop_scales(self) -> np.ndarray:
+        """The stroke each loop's error is measured against (m, rad), (n_loops,): a moving
+        loop's own stroke; a held loop's (`held_loops`), the largest stroke of the moving
+        loops in its unit, or, where none moves in its unit, the largest moving stroke
+        converted through the mechanism's size L (settings "size", m): an angle theta moves
+        a point at L by theta L. Zero where nothing moves."""
+        strokes = self.loop_strokes
+        units = [u["position"] for u in self.settings.get("loop_units", [])]
+        units += [self.units["position"]] * (strokes.size - len(units))
+        held = self.held_loops
+        moving = np.flatnonzero(~held)
+        size = self.settings.get("size", 0.0)
+        scales = np.where(held, 0.0, strokes)
+        for k in np.flatnonzero(held):
+            same = [strokes[j] for j in moving if units[j] == units[k]]
+            if same:
+                scales[k] = max(same)
+            elif moving.size and size > 0:
+                scales[k] = max(strokes[j] / size if units[j] == "m" else strokes[j] * size
+                                for j in moving)
+        return scales
+
+    @property
+    def loop_bounds(self) -> np.ndarray:
+        """Each loop's largest allowed |error| (m, rad): TARGET times `loop_scales`."""
+        return TARGET * self.loop_scales
+
     def per_loop(self) -> list[dict]:
         """Each loop's stroke, largest |error| and their ratio against the target.
 
@@ -70,18 +124,21 @@ class LoopResult:
         -------
         list of dict
             Per loop: "loop" (its name), "stroke" and "max_abs_error" (m, rad on an angle),
-            "error_ratio" (unitless), "passed", and "units" ("m" and "N", or "rad" and
-            "N m") where the run recorded them.
+            "held" (`held_loops`: judged against the moving stroke, `loop_scales`),
+            "error_ratio" (unitless: the error over `loop_scales`, inf where nothing moves),
+            "passed", and "units" ("m" and "N", or "rad" and "N m") where the run recorded
+            them.
         """
         names = self.design.get("loops", [])
         units = self.settings.get("loop_units", [])
         rows = []
-        for k, (stroke, error) in enumerate(zip(self.loop_strokes,
-                                                np.max(np.abs(self.error), axis=0),
-                                                strict=True)):
-            ratio = float(error / stroke) if stroke > 0 else float("inf")
+        for k, (stroke, held, scale, error) in enumerate(zip(
+                self.loop_strokes, self.held_loops, self.loop_scales,
+                np.max(np.abs(self.error), axis=0), strict=True)):
+            ratio = float(error / scale) if scale > 0 else float("inf")
             rows.append({"loop": names[k] if k < len(names) else str(k),
-                         "stroke": float(stroke), "max_abs_error": float(error),
+                         "stroke": float(stroke), "held": bool(held),
+                         "max_abs_error": float(error),
                          "error_ratio": ratio, "passed": bool(ratio <= TARGET)})
             if k < len(units):
                 rows[-1]["units"] = units[k]
@@ -97,14 +154,16 @@ class LoopResult:
             `FeedbackDesign.summary`, "wall_time_s" s; "units" names the moving loop's;
             "path" the move path's kind and targets (m, rad), or None.
         """
-        ratio = self.max_abs_error / abs(self.stroke)
+        loops = self.per_loop()
+        ratio = max(row["error_ratio"] for row in loops)  # the worst loop's
         axis = self.settings.get("axis", 0)
         return {
             "scene": self.settings.get("scene"), "plant": self.settings.get("plant"),
             "feedforward": self.settings.get("feedforward"),
             "feedforward_kind": self.settings.get("feedforward_kind"),
             "max_abs_error": self.max_abs_error, "stroke": self.stroke,
-            "error_ratio": ratio, "target": TARGET, "passed": bool(ratio <= TARGET),
+            "error_ratio": ratio, "target": TARGET,
+            "passed": all(row["passed"] for row in loops),
             "max_abs_error_during_move": float(np.max(np.abs(
                 self.error[self.t <= self.settings.get("move_end", np.inf), axis]))),
             "final_error": float(np.max(np.abs(self.error[-1]))),
@@ -123,7 +182,7 @@ class LoopResult:
             "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
             "units": self.units,
-            "per_loop": self.per_loop(),
+            "per_loop": loops,
             "controller_kind": self.design.get("controller_kind", "designed"),
             "robustness_checked": self.design.get("robustness_checked", True),
             "reference_kind": self.settings.get("reference", "profile"),
@@ -147,8 +206,7 @@ class LoopResult:
         str or path-like
             `path`.
         """
-        given = self.settings.get("reference") in ("samples", "callable")
-        if self.settings.get("path") or (given and self.reference.shape[1] > 1):
+        if self.reference.shape[1] > 1:  # every loop, the held ones too
             return self._plot_loops(path, title=title)
         axis = self.settings.get("axis", 0)
         length, force_unit = self.units["position"], self.units["force"]
@@ -188,24 +246,30 @@ class LoopResult:
             f"(target 0.1 %), {'passed' if s['passed'] else 'FAILED'}{self._noise_note()}"))
 
     def _plot_loops(self, path, *, title=None):
-        """Every loop's reference, error (against 0.1 % of its stroke) and force."""
-        length, force_unit = self.units["position"], self.units["force"]
+        """Every loop's reference, error (against 0.1 % of its stroke, a held loop's against
+        that of the moving stroke: `loop_scales`) and force."""
         names = self.design.get("loops", [])
+        units = self.settings.get("loop_units", [])
+        units = [*units, *[self.units] * (self.reference.shape[1] - len(units))]
+        lengths = sorted({u["position"] for u in units})
+        forces = sorted({u["force"] for u in units})
         fig, axes = _figure(9)
         for k in range(self.reference.shape[1]):
-            label = names[k].split(" -> ")[-1] if k < len(names) else str(k)
+            name = names[k].split(" -> ")[-1] if k < len(names) else str(k)
+            held = ", held" if self.held_loops[k] else ""
+            label = f"{name} ({units[k]['position']}{held})" if len(lengths) > 1 or held \
+                else name
             axes[0].plot(self.t, (self.reference[:, k] - self.reference[0, k]) * 1e3,
                          label=label)
-            stroke = self.loop_strokes[k]
-            axes[1].plot(self.t, self.error[:, k] / (TARGET * stroke) if stroke > 0
-                         else 0 * self.t, label=label)
-            axes[2].step(self.t, self.force[:, k], where="post", label=label)
-        axes[0].set_ylabel(f"reference - start (m{length})")
+            bound = self.loop_bounds[k]
+            axes[1].plot(self.t, self.error[:, k] / bound if bound > 0 else 0 * self.t)
+            axes[2].step(self.t, self.force[:, k], where="post")
+        axes[0].set_ylabel(f"reference - start (m{', m'.join(lengths)})")
         axes[0].legend(loc="upper left", ncol=3, fontsize=8)
         axes[1].axhline(1.0, color="r", lw=0.8, ls=":")
         axes[1].axhline(-1.0, color="r", lw=0.8, ls=":", label="target")
-        axes[1].set_ylabel("error / (0.1 % of its stroke)")
-        axes[2].set_ylabel(f"force ({force_unit})")
+        axes[1].set_ylabel("error / (0.1 % of the stroke)")
+        axes[2].set_ylabel(f"force ({', '.join(forces)})")
         axes[2].set_xlabel("time (s)")
         worst = max(self.per_loop(), key=lambda row: row["error_ratio"])
         return _save(fig, path, title or (
@@ -248,3 +312,13 @@ def _save(fig, path, title):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     return path
+
+
+def mechanism_size(model) -> float:
+    """The size of a model's mechanism (m): the diagonal of the box around its nodes' start
+    positions (0.0 for a model without translational nodes)."""
+    positions = {}
+    for i in model.translations:
+        positions.setdefault(model.coordinate_axis[i], []).append(
+            float(model.initial_coordinates[i]))
+    return float(np.sqrt(sum((max(v) - min(v)) ** 2 for v in positions.values())))

@@ -29,7 +29,7 @@ from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
-from .loop_result import TARGET, LoopResult
+from .loop_result import TARGET, LoopResult, mechanism_size
 from .plants import FmuPlant, InProcessPlant, LinearPlant
 from .sample_loop import compiled_loop, simulate_loop
 from .user_reference import reference_stroke
@@ -192,6 +192,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
                 "loop_units": [{"force": model.inputs[p.input_index].unit.replace(".", " "),
                                 "position": model.outputs[p.output_index].unit}
                                for p in design.pairs],
+                "size": mechanism_size(model),  # m: a held angle's target (loop_result.py)
                 "reference": ("profile" if path is None else "path") if reference is None
                 else ("callable" if callable(reference) else "samples"),
                 **_disturbance_settings(loop, quantum, disturbance)}
