@@ -8,7 +8,8 @@ the static analyses use (Kinematics, assembly.Inertia, Mechanics), written out i
     r = f + B u + gravity - De^T sigma_c - M (D2F qdot) qdot - g_conv
     K = K0 + G0 (stress resultants of the dynamic balance r - M DF qddot),  C = C0
 
-on every built-in scene and on two with gravity (element masses under gravity), at random
+on every built-in scene, on two with gravity (element masses under gravity) and on two with
+shear-deformable leaves (Timoshenko bending stiffness and damping), at random
 states near the initial configuration; the tangent also against finite differences of qddot,
 and the CVODE Jacobian against finite differences of Simulator.derivative. Then the status
 codes, the compiled sampled loop against a Python loop of Simulator calls (bit for bit), and
@@ -54,6 +55,15 @@ def scene_with_gravity(name, gravity):
     return build_model(data, source=f"{name} with gravity")
 
 
+def scene_with_shear(name, shear):
+    """The scene with shear stiffnesses (N) on its leaf section, soft enough that the shear
+    ratio Phi = 12 EI / (G As l0^2) of the leaves is of order 1 (tests/test_shear.py)."""
+    data = tomllib.loads(scene_path(name).read_text())
+    data["scene"]["name"] = f"{name}_shear"
+    data["sections"]["leaf"].update(shear)
+    return build_model(data, source=f"{name} with shear")
+
+
 # the manipulator's scenes (hundreds of DOFs, one refused by design): tests/test_manipulator.py
 MODELS = {name: (lambda name=name: load_scene(name)) for name in builtin_scenes()
           if not name.startswith("manipulator")}
@@ -61,6 +71,10 @@ MODELS["stage_planar_3dof_gravity"] = lambda: scene_with_gravity("stage_planar_3
                                                                  [0.0, -9.81])
 MODELS["stage_spatial_1dof_gravity"] = lambda: scene_with_gravity("stage_spatial_1dof",
                                                                   [0.0, 0.0, -9.81])
+MODELS["stage_planar_3dof_shear"] = lambda: scene_with_shear("stage_planar_3dof",
+                                                             {"GAs": 50.0})
+MODELS["stage_spatial_19dof_shear"] = lambda: scene_with_shear(
+    "stage_spatial_19dof", {"GAs_y": 200.0, "GAs_z": 2.0e5})
 
 
 @pytest.fixture(scope="module", params=[(name, form) for name in sorted(MODELS)

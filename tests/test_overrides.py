@@ -187,8 +187,8 @@ def test_every_command_refuses_a_bad_set_in_one_line(command, tmp_path, capsys, 
     assert main([*argv, "--set", "sections.leaf.hieght=1e-3"]) == 2
     err = capsys.readouterr().err
     assert err == (f"flexure {command.split()[0]}: error: {SOURCE}: --set sections.leaf.hieght: "
-                   "unknown key; expected one of E, EA, EI, EdA, EdI, height, rho, rho_A, "
-                   "width\n")
+                   "unknown key; expected one of E, EA, EI, EdA, EdI, GAs, height, rho, "
+                   "rho_A, width\n")
     assert not list(tmp_path.iterdir())  # nothing written
 
 

@@ -56,8 +56,8 @@ def test_a_section_takes_the_keys_of_every_element_that_uses_it():
 def test_a_section_no_element_uses_takes_any_key_of_its_dimension():
     build_model(planar({"spare": {"kx": 1.0, "EI": 2.0, "rho": 7850.0}}, {}), check=False)
     assert refused(planar({"spare": {"kz": 1.0}}, {})) == (  # a 3-D key is none of 2-D's
-        "s.toml: sections.spare.kz: unknown key; expected one of E, EA, EI, EdA, EdI, cx, cy, "
-        "height, kx, ky, rho, rho_A, width")
+        "s.toml: sections.spare.kz: unknown key; expected one of E, EA, EI, EdA, EdI, GAs, cx, "
+        "cy, height, kx, ky, rho, rho_A, width")
 
 
 @pytest.mark.parametrize("value, message", [

@@ -49,7 +49,13 @@ inclined on their helices, add N rp^2 theta / l0 to the moment about the axis, t
 
 plus the same with EdA, GdIt, EdIy', EdIz' for damping. EIy' belongs to bending about y'
 (deflection along z', e3 and e4), EIz' to bending about z' (deflection along y', e5, e6); a
-planar motion in the x'y' plane is the planar PLBEAM with EI = EIz'.
+planar motion in the x'y' plane is the planar PLBEAM with EI = EIz'. With shear stiffnesses
+(N) GAs_z (the shear force along z', which bends about y': e3, e4) and GAs_y (along y': e5,
+e6) each bending block is the Timoshenko beam's, EI / (l0^3 (1 + Phi)) [[4 + Phi, Phi - 2],
+[Phi - 2, 4 + Phi]] with Phi_y' = 12 EIy' / (GAs_z l0^2) and Phi_z' = 12 EIz' / (GAs_y l0^2)
+(`timoshenko`, derived there), the damping blocks with the same Phi; the deformations and the
+mass do not change. Without them (infinite, the default) Phi = 0: the matrices above, to the
+bit.
 
 Distributed mass: the position along the beam is the cubic Hermite interpolation between r^p,
 r^q and the end tangents l0 n_x'^p, l0 n_x'^q, which gives the consistent mass
@@ -81,6 +87,7 @@ from .beam_kernels import (  # noqa: F401 (the element's compiled interface, rea
 )
 from .plbeam import HERMITE_MASS
 from .protocol import SchemaKey, property_names, zero_length_problems
+from .timoshenko import bending_block, shear_ratio
 
 type_name = "BEAM"
 dimension = 3
@@ -97,6 +104,10 @@ section_schema = (
     SchemaKey("GIt", "N.m2", "torsional stiffness G It"),
     SchemaKey("EIy", "N.m2", "bending stiffness about y' (deflection along z': e3, e4)"),
     SchemaKey("EIz", "N.m2", "bending stiffness about z' (deflection along y': e5, e6)"),
+    SchemaKey("GAs_y", "N", "shear stiffness G kappa A for the shear force along y' (bending "
+              "with EIz: e5, e6; default none, rigid in shear)", default=np.inf, positive=True),
+    SchemaKey("GAs_z", "N", "shear stiffness G kappa A for the shear force along z' (bending "
+              "with EIy: e3, e4; default none, rigid in shear)", default=np.inf, positive=True),
     SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
     SchemaKey("GdIt", "N.m2.s", "torsional damping, the counterpart of GIt", damping=True),
     SchemaKey("EdIy", "N.m2.s", "bending damping, the counterpart of EIy", damping=True),
@@ -338,21 +349,30 @@ def deformations(x, ref, order=2):
 
 def stiffness(ref, props):
     """Deformation stiffness (n, 6, 6) in N/m, see the module docstring."""
-    return _constitutive(ref["l0"], props["EA"], props["GIt"], props["EIy"], props["EIz"])
+    return _constitutive(ref["l0"], props["EA"], props["GIt"], props["EIy"], props["EIz"],
+                         _phis(ref, props))
 
 
 def damping(ref, props):
-    """Deformation damping (n, 6, 6) in N s/m from EdA, GdIt, EdIy, EdIz."""
-    return _constitutive(ref["l0"], props["EdA"], props["GdIt"], props["EdIy"], props["EdIz"])
+    """Deformation damping (n, 6, 6) in N s/m from EdA, GdIt, EdIy, EdIz (the stiffness's
+    Phi)."""
+    return _constitutive(ref["l0"], props["EdA"], props["GdIt"], props["EdIy"], props["EdIz"],
+                         _phis(ref, props))
 
 
-def _constitutive(l0, axial, torsional, flexural_y, flexural_z):
-    bending = np.array([[4.0, -2.0], [-2.0, 4.0]])
+def _phis(ref, props):
+    """(Phi_y', Phi_z'): the shear ratios of the bending about y' (e3, e4) and about z'."""
+    l0 = ref["l0"]
+    return (shear_ratio(props["EIy"], props["GAs_z"], l0),
+            shear_ratio(props["EIz"], props["GAs_y"], l0))
+
+
+def _constitutive(l0, axial, torsional, flexural_y, flexural_z, phis):
     matrix = np.zeros((l0.size, 6, 6))
     matrix[:, 0, 0] = axial / l0
     matrix[:, 1, 1] = torsional / l0**3
-    matrix[:, 2:4, 2:4] = (flexural_y / l0**3)[:, None, None] * bending
-    matrix[:, 4:6, 4:6] = (flexural_z / l0**3)[:, None, None] * bending
+    matrix[:, 2:4, 2:4] = bending_block(flexural_y, l0, phis[0])
+    matrix[:, 4:6, 4:6] = bending_block(flexural_z, l0, phis[1])
     return matrix
 
 

@@ -15,10 +15,15 @@ geometric stiffness, hence 10 EI / l0^2 per clamped-guided spring with one eleme
 
 Stress resultants: sigma1 = EA / l0 e1 (N), and the bending moments
 [sigma2, sigma3] = EI / l0^3 [[4, -2], [-2, 4]] [e2, e3] (N, as e2 and e3 are lengths: a
-moment over l0, where SPACAR's are N m). The end bending moments (N m) are their work
-conjugates of the end rotations (e2 = l0 theta^p to first order), with the normal force's share
-through the second-order terms of e1: M^p = l0 (sigma2 + sigma1 d e1 / d e2), M^q likewise
-(`section_forces`).
+moment over l0, where SPACAR's are N m). With a shear stiffness GAs (N) the bending matrix is
+the Timoshenko beam's, EI / (l0^3 (1 + Phi)) [[4 + Phi, Phi - 2], [Phi - 2, 4 + Phi]] with
+Phi = 12 EI / (GAs l0^2) (`timoshenko`, derived there); the deformations, their second-order
+terms in e1 (the geometric stiffness of the cubic bending line) and the mass do not change.
+Without GAs (infinite, the default) Phi = 0: the matrix above, to the bit.
+
+The end bending moments (N m) are the work conjugates of the end rotations (e2 = l0 theta^p to
+first order), with the normal force's share through the second-order terms of e1:
+M^p = l0 (sigma2 + sigma1 d e1 / d e2), M^q likewise (`section_forces`).
 
 Distributed mass: the position along the beam is the cubic (Hermite) interpolation between the
 end positions r^p, r^q and the end tangents l0 t^p, l0 t^q (t the initial element x axis rotated
@@ -33,6 +38,7 @@ import numpy as np
 from ..numerics.jit import kernel
 from . import entries
 from .protocol import SchemaKey, property_names, zero_length_problems
+from .timoshenko import bending_block, shear_ratio
 
 type_name = "PLBEAM"
 dimension = 2
@@ -45,6 +51,9 @@ inertia_point_kinds = ("position", "tangent", "position", "tangent")
 section_schema = (
     SchemaKey("EA", "N", "axial stiffness E A"),
     SchemaKey("EI", "N.m2", "bending stiffness E I in the plane"),
+    SchemaKey("GAs", "N", "shear stiffness G kappa A in the plane (default: none, rigid in "
+              "shear): the bending stiffness becomes the Timoshenko beam's", default=np.inf,
+              positive=True),
     SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
     SchemaKey("EdI", "N.m2.s", "bending damping, the counterpart of EI", damping=True),
     SchemaKey("rho_A", "kg/m", "mass per length"),
@@ -162,19 +171,25 @@ def deformations(x, ref, order=2):
 
 
 def stiffness(ref, props):
-    """Deformation stiffness (n, 3, 3): EA / l0 and EI / l0^3 [[4, -2], [-2, 4]] (N/m)."""
-    return _constitutive(ref["l0"], props["EA"], props["EI"])
+    """Deformation stiffness (n, 3, 3) in N/m: EA / l0 and EI / (l0^3 (1 + Phi)) [[4 + Phi,
+    Phi - 2], [Phi - 2, 4 + Phi]], Phi = 12 EI / (GAs l0^2) (0 without GAs)."""
+    return _constitutive(ref["l0"], props["EA"], props["EI"], _phi(ref, props))
 
 
 def damping(ref, props):
-    """Deformation damping (n, 3, 3) from EdA and EdI, as the stiffness (N s/m)."""
-    return _constitutive(ref["l0"], props["EdA"], props["EdI"])
+    """Deformation damping (n, 3, 3) in N s/m from EdA and EdI, as the stiffness (the same
+    Phi)."""
+    return _constitutive(ref["l0"], props["EdA"], props["EdI"], _phi(ref, props))
 
 
-def _constitutive(l0, axial, flexural):
+def _phi(ref, props):
+    return shear_ratio(props["EI"], props["GAs"], ref["l0"])
+
+
+def _constitutive(l0, axial, flexural, phi):
     matrix = np.zeros((l0.size, 3, 3))
     matrix[:, 0, 0] = axial / l0
-    matrix[:, 1:, 1:] = (flexural / l0**3)[:, None, None] * np.array([[4.0, -2.0], [-2.0, 4.0]])
+    matrix[:, 1:, 1:] = bending_block(flexural, l0, phi)
     return matrix
 
 

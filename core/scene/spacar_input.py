@@ -13,8 +13,8 @@ is the input "uk", OUTX / OUTXP number k the output "yk" (one numbering, SPACAR'
     PLTRUSS e p q             TRUSS e p q               FIX n [dir ...]
     PLBEAM e p rp q rq        BEAM e p rp q rq yx yy yz  INPUTX n dir [dir ...]
     X n x y [z]               DYNX n dir [dir ...]      DYNE e def [def ...]
-    RLSE e def [def ...]      ESTIFF e EA [EI]          ESTIFF e EA GIt EIy EIz [0 0]  (BEAM)
-    EDAMP e (as ESTIFF: EdA [EdI]; EdA GdIt EdIy EdIz [0 0])
+    RLSE e def [def ...]      ESTIFF e EA [EI [EI/GAs]]  ESTIFF e EA GIt EIy EIz [sy sz]  (BEAM)
+    EDAMP e (as ESTIFF: EdA [EdI [0]]; EdA GdIt EdIy EdIz [0 0])
     EM e rho_A [0]            EM e rho_A [rho(Iy+Iz) rho_Iy rho_Iz 0]  (BEAM)
     XM n m | J | Jxx Jxy Jxz Jyy Jyz Jzz    XF n fx fy [fz] | M    GRAVITY gx gy [gz]
     INPUTF k n dir            OUTX k n dir              OUTXP k n dir     ITERSTEP ... (ignored)
@@ -29,13 +29,15 @@ What this is based on (SPACAR's own manual was not at hand):
   earlier Spacar_light.m), the University of Twente's MATLAB front end that writes the .dat
   files SPACAR reads: `X n x y z`, `BEAM e p rp q rq yx yy yz` (the last three the principal
   y' axis), DYNE / RLSE with deformation numbers, `FIX n [dir]`, `INPUTX n dir ...`, ESTIFF
-  with EA GJ EIy EIz and two shear terms, EM with m/L Jxx/L Jyy/L Jzz/L Jyz/L, XM with a mass
+  with EA GJ EIy EIz and the two shear terms sy = EIy / (k G A), sz = EIz / (k G A) (m^2, k
+  the shear coefficient of its calc_stiffness; read as the shear stiffnesses GAs_z = EIy / sy
+  and GAs_y = EIz / sz, N), EM with m/L Jxx/L Jyy/L Jzz/L Jyz/L, XM with a mass
   or Ixx Ixy Ixz Iyy Iyz Izz, XF, GRAVITY, ITERSTEP, INPUTF / OUTX / OUTXP, the blocks
   END HALT ... END END and `#` comments.
-Where they are silent (the PLTRUSS, PLBEAM and TRUSS lines, EDAMP, DYNX, the planar counts)
-the choice made here follows the same pattern and is documented in docs/scene-format.md,
-with what is refused. Every mistake is a SceneError naming the file, the line and what is
-wrong; nothing is guessed.
+Where they are silent (the PLTRUSS, PLBEAM and TRUSS lines, EDAMP, DYNX, the planar counts,
+the PLBEAM's shear term, taken as EI / (k G A) after the BEAM's) the choice made here follows
+the same pattern and is documented in docs/scene-format.md, with what is refused. Every
+mistake is a SceneError naming the file, the line and what is wrong; nothing is guessed.
 """
 
 import re
@@ -311,17 +313,27 @@ class _Importer(RecordReader):
         number = self.element_number(record, record.words[0])
         syntax = ELEMENTS[self.elements[number]["type"]]
         keys = syntax.stiffness if record.keyword == "ESTIFF" else syntax.damping
-        allowed = {len(keys) + 1, len(keys) + 1 + syntax.shear_terms}
-        words = self.count(record, allowed, f"element number, then {' '.join(keys)}"
-                           + (" and optionally two shear terms, 0" if syntax.shear_terms
-                              else "") + f" for a {self.elements[number]['type']}")
+        shear_names = tuple(f"{bending}/{shear}" for shear, bending in syntax.shear)
+        allowed = {len(keys) + 1, len(keys) + 1 + len(syntax.shear)}
+        shear_text = f" and optionally {' '.join(shear_names)}" * bool(syntax.shear)
+        words = self.count(record, allowed, f"element number, then {' '.join(keys)}{shear_text} "
+                                            f"for a {self.elements[number]['type']}")
         self.once(record, number, "element")
         values = [self.number(record, w, name, minimum=0.0)
-                  for w, name in zip(words[1:], (*keys, "shear", "shear"), strict=False)]
-        if any(values[len(keys):]):
-            self.fail(record, "flexure's BEAM has no shear deformation: its two shear terms "
-                              f"must be 0, got {' '.join(words[1 + len(keys):])}")
-        self.sections.setdefault(number, {}).update(zip(keys, values, strict=False))
+                  for w, name in zip(words[1:], (*keys, *shear_names), strict=False)]
+        section = self.sections.setdefault(number, {})
+        section.update(zip(keys, values, strict=False))
+        shear_terms = values[len(keys):]
+        if record.keyword == "EDAMP":
+            if any(shear_terms):
+                self.fail(record, "flexure's damping has no shear terms of its own (it bends "
+                                  "with the stiffness's shear ratio): they must be 0, got "
+                                  f"{' '.join(words[1 + len(keys):])}")
+            return
+        for (shear, bending), term in zip(syntax.shear, shear_terms, strict=False):
+            if term > 0.0:  # 0: rigid in shear, the default
+                section[shear] = self.shear_stiffness(record, number, section[bending],
+                                                      (shear, bending), term)
 
     def mass_per_length(self, record):
         """EM: mass per length and, for a BEAM, the section's rotational inertia per length."""

@@ -21,18 +21,21 @@ class ElementSyntax:
     stiffness: tuple  # flexure's section key of each ESTIFF value, in order
     damping: tuple  # ... of each EDAMP value
     stiffness_of: tuple  # the stiffness key behind each deformation e1, e2, ...
-    shear_terms: int = 0  # trailing ESTIFF / EDAMP values flexure has no use for: must be 0
+    # the optional trailing ESTIFF values, SPACAR's shear terms EI / (G As) (m^2), one per
+    # bending plane: (flexure's shear stiffness key G As (N), the bending key EI it divides)
+    shear: tuple = ()
     orientation: bool = False  # the principal y' axis follows the nodes
 
 
 ELEMENTS = {
     "PLTRUSS": ElementSyntax(2, (T, T), ("EA",), ("EdA",), ("EA",)),
-    "PLBEAM": ElementSyntax(2, (T, R, T, R), ("EA", "EI"), ("EdA", "EdI"), ("EA", "EI", "EI")),
+    "PLBEAM": ElementSyntax(2, (T, R, T, R), ("EA", "EI"), ("EdA", "EdI"), ("EA", "EI", "EI"),
+                            shear=(("GAs", "EI"),)),
     "TRUSS": ElementSyntax(3, (T, T), ("EA",), ("EdA",), ("EA",)),
     "BEAM": ElementSyntax(3, (T, R, T, R), ("EA", "GIt", "EIy", "EIz"),
                           ("EdA", "GdIt", "EdIy", "EdIz"),
-                          ("EA", "GIt", "EIy", "EIy", "EIz", "EIz"), shear_terms=2,
-                          orientation=True),
+                          ("EA", "GIt", "EIy", "EIy", "EIz", "EIz"),
+                          shear=(("GAs_z", "EIy"), ("GAs_y", "EIz")), orientation=True),
 }
 KINEMATIC = {"X", "FIX", "INPUTX", "DYNX", "DYNE", "RLSE", *ELEMENTS}
 DYNAMIC = {"ESTIFF", "EDAMP", "EM", "XM", "XF", "GRAVITY", "INPUTF", "OUTX", "OUTXP",
@@ -147,4 +150,20 @@ class RecordReader:
                               f"got {word}")
         if minimum is not None and value < minimum:
             self.fail(record, f"{what}: expected a value >= {minimum:g}, got {word}")
+        return value
+
+    def shear_stiffness(self, record, number, bending, keys, term):
+        """G As (N) = EI / term from one of SPACAR's shear terms EI / (G As) (m^2, > 0);
+        keys: (the shear key, the bending key), bending: the EI value (N m^2)."""
+        shear_key, bending_key = keys
+        name = f"{bending_key}/{shear_key}"
+        if bending <= 0.0:
+            self.fail(record, f"element {number}: the shear term {name} = {term!r} m^2 needs "
+                              f"{bending_key} > 0 (the shear stiffness {shear_key} is "
+                              f"{bending_key} / ({name})), got {bending_key} = {bending!r}")
+        value = bending / term
+        if not value <= MAX_MAGNITUDE:
+            self.fail(record, f"element {number}: the shear term {name} = {term!r} m^2 gives "
+                              f"{shear_key} = {value:g} N, above {MAX_MAGNITUDE:g} (SI units); "
+                              "write 0 for a beam rigid in shear")
         return value
