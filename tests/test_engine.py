@@ -43,6 +43,7 @@ from flexure.core import (
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
+from flexure.core.mechanics.ports import input_forces, input_stiffness
 from flexure.core.simulation.sundials import METHODS, STATUS_MESSAGES
 from tests.compiled_loops import run_compiled_loop
 
@@ -109,9 +110,8 @@ def plain_dynamics(model, mechanics, q, qdot, u):
     x, DF, De = config.x, config.DF, config.De
     xdot = DF @ qdot
     sigma_c = mechanics.constitutive_stress(config, De @ xdot)  # S e_s + D edot_s
-    f = model.loads + inertia.gravity_force(x)
-    for port, value in zip(model.inputs, u, strict=True):
-        f[port.coordinate] += value
+    # the inputs' forces: on their coordinates, or a moment 2 u E_k^T on Euler parameters
+    f = model.loads + inertia.gravity_force(x) + input_forces(model, x, u)
     M = inertia.mass_matrix(x)
     conv = [M @ kinematics.convective_acceleration(config, qdot),
             inertia.convective_force(x, xdot)]
@@ -125,7 +125,7 @@ def plain_dynamics(model, mechanics, q, qdot, u):
     size = np.abs(DF.T) @ (np.abs(f) + np.abs(De.T) @ (np.abs(sigma_c) + rounding)
                            + np.abs(conv[0]) + np.abs(conv[1]))
     return {"config": config, "qddot": np.linalg.solve(mass, DF.T @ r), "M": M,
-            "mass": mass, "r": r, "sigma_c": sigma_c, "size": size}
+            "mass": mass, "r": r, "sigma_c": sigma_c, "size": size, "u": u}
 
 
 def plain_tangent(mechanics, plain, qddot):
@@ -133,8 +133,11 @@ def plain_tangent(mechanics, plain, qddot):
     config = plain["config"]
     r_full = plain["r"] - plain["M"] @ (config.DF @ qddot)
     sigma = mechanics.stress_resultants(config, r_full, plain["sigma_c"])
+    # a moment about a global axis turns its generalised force with the node: its load
+    # stiffness -DF^T (df/dx) DF (zero for forces on coordinates)
+    load = config.DF.T @ input_stiffness(mechanics.model, config.x, plain["u"]) @ config.DF
     K = (mechanics.structural_stiffness(config)
-         + mechanics.geometric_stiffness(config, sigma, 1.0))
+         + mechanics.geometric_stiffness(config, sigma, 1.0) - load)
     return K, mechanics.damping_matrix(config)
 
 

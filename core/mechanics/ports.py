@@ -120,7 +120,20 @@ def input_stiffness(model, x, u):
 def position_port(model: Model, name: str) -> Port:
     """The position output that reads "NODE.AXIS": a coordinate ("3.x", "4.phi"), or the
     angle about a global axis of a 3-D rotational node ("Pr.rz", rad), whose coordinates are
-    Euler parameters. Its value is `output_value`, its row in dq `output_rows`.
+    Euler parameters.
+
+    Parameters
+    ----------
+    model : Model
+    name : str
+        "NODE.AXIS": a coordinate's name, or a 3-D rotational node's name with "rx", "ry" or
+        "rz".
+
+    Returns
+    -------
+    Port
+        A position output (m or rad): its value is `output_value`, its row in dq
+        `output_rows`.
 
     Raises
     ------
