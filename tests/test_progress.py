@@ -4,6 +4,7 @@ import io
 import time
 
 import numpy as np
+import pytest
 
 from flexure.controllers import run_loop
 from flexure.core import load_scene, simulate
@@ -82,3 +83,38 @@ def test_inprocess_loop_reports_progress():
     # the compiled loop reports after each chunk of about 1 % of the samples
     assert 0.0 <= fractions[0] <= 0.02 and fractions[-1] == 1.0 and len(fractions) >= 50
     assert fractions == sorted(fractions)
+
+
+class Clock:
+    """A perf_counter that a test sets."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_a_slow_first_tenth_says_how_long_the_run_will_take(monkeypatch):
+    """1 % done after 61 s: the log gets a line every 30 s, projecting 1.7 h to go."""
+    from flexure.core.reporting import progress
+
+    clock = Clock()
+    monkeypatch.setattr(progress.time, "perf_counter", clock)
+    stream = io.StringIO()
+    report = Progress("run", stream=stream)
+    for now, fraction in ((0.0, 0.0), (29.0, 0.004), (31.0, 0.005), (45.0, 0.008),
+                          (61.0, 0.01)):
+        clock.now = now
+        report(fraction)
+    lines = stream.getvalue().splitlines()
+    assert lines == ["run: 0 % (0.0 s)", "run: 0 % (31.0 s, about 1.7 h to go)",
+                     "run: 1 % (61.0 s, about 1.7 h to go)"]
+
+
+@pytest.mark.parametrize(("seconds", "text"), [(42.0, "42 s"), (720.0, "12 min"),
+                                               (12600.0, "3.5 h"), (181440.0, "2.1 days")])
+def test_durations_read_as_a_person_reads_them(seconds, text):
+    from flexure.core.reporting.progress import _duration
+
+    assert _duration(seconds) == text
