@@ -142,6 +142,9 @@ def test_an_over_constraint_is_reported_once_with_its_count():
     (["simulate", "truss_1dof_x", "--t-end", "1", "--samples", "-5"],
      "argument --samples: expected an integer in [1, 1e+07], got '-5'"),
     (["simulate", "truss_1dof_x", "--t-end", "nan"], "argument --t-end: expected a number > 0"),
+    (["simulate", "truss_1dof_x", "--t-end", "1", "--max-step", "1e-12"],
+     "--max-step 1e-12 s with --t-end 1 s means at least 1e+12 steps (more than 1e+08): "
+     "raise --max-step or shorten --t-end"),
     (["simulate", "truss_1dof_x", "--t-end", "1", "--atol", "-1"],
      "argument --atol: expected a number > 0"),
     (["simulate", "truss_1dof_x", "--t-end", "1", "--input", "F=1", "--input", "F=2"],

@@ -30,6 +30,9 @@ from . import (
 )
 
 SAMPLES = number(1, 10_000_000, integer=True, low_open=False, high_open=False)
+# t_end / max_step above this is refused before the run: at a few microseconds a step of a
+# small model, 1e8 steps take longer than anyone waits for an answer on purpose
+MAX_STEPS = 1e8
 
 
 def register(subparsers):
@@ -141,6 +144,10 @@ def run(args):
     # the run
     outputs = [("--out", args.out), ("--plot", args.plot), ("--animate", args.animate)]
     distinct_outputs(*outputs)
+    if args.max_step is not None and args.t_end / args.max_step > MAX_STEPS:
+        raise UsageError(f"--max-step {args.max_step:g} s with --t-end {args.t_end:g} s means "
+                         f"at least {args.t_end / args.max_step:.3g} steps (more than "
+                         f"{MAX_STEPS:.0e}): raise --max-step or shorten --t-end")
     model = load_scene(args.scene, overrides=args.set)
     if args.animate:
         require_drawable(model, "--animate")  # before the run, not after it
