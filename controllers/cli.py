@@ -10,6 +10,7 @@
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from flexure.core.cli import (
@@ -142,8 +143,15 @@ def run(args):
     if args.workdir is not None:
         check_workdir(args.workdir)
     scene, overrides, path = args.scene, args.set, None
+    said = set()
+
+    def warn(message):  # on stderr as soon as found, once
+        if message not in said:
+            said.add(message)
+            print(f"flexure loop: warning: {message}", file=sys.stderr, flush=True)
+
     if args.move:
-        model, path = move_path_of(args)
+        model, path = move_path_of(args, warn)
         if args.plant in ("inprocess", "linear"):  # the FMU plants build from the scene file
             scene, overrides = model, None  # loaded with --set once, not twice
     amplitude, hz = args.disturbance if args.disturbance is not None else (None, MAINS_HZ)
@@ -152,7 +160,7 @@ def run(args):
                       settle=args.settle, method=args.method, rtol=args.rtol,
                       workdir=args.workdir, overrides=overrides, path=path,
                       quantum=args.quantum, disturbance=amplitude, disturbance_hz=hz,
-                      progress=Progress(f"flexure loop ({args.plant})", after=1.0))
+                      progress=Progress(f"flexure loop ({args.plant})", after=1.0), warn=warn)
     summary = result.summary()
     code = write_outputs("flexure loop", [("--plot", plot, result.plot)],
                          announce=False) if plot else 0
@@ -165,12 +173,14 @@ def run(args):
     return code
 
 
-def move_path_of(args):
+def move_path_of(args, warn):
     """The scene's model (with --set) and the loops' path for the --move coordinates
-    (UsageError for a repeated one)."""
+    (UsageError for a repeated one); `warn` gets the targets beyond the range of validity
+    before the path is computed."""
     from flexure.core import load_scene
 
     from .move_path import move_path
+    from .validity import motion_warnings
 
     targets = {}
     for name, value in args.move:
@@ -181,6 +191,8 @@ def move_path_of(args):
         raise UsageError("--move takes the modal feedforward or none, not --feedforward inverse")
     kind = args.path or ("linear" if args.plant == "linear" else "nonlinear")
     model = load_scene(args.scene, overrides=args.set)
+    for message in motion_warnings(model, targets):
+        warn(message)
     return model, move_path(model, targets, kind=kind,
                             progress=Progress(f"flexure loop: {kind} move path", after=1.0))
 
@@ -273,6 +285,7 @@ def render(s):
     if len(s["per_loop"]) > 1:
         text += "\n\n" + _per_loop_table(s)
     text += "\n" + verdict
+    text += "".join(f"\nwarning: {message}" for message in s.get("warnings", []))
     if "plot" in s:
         text += f"\nplot written to {s['plot']}"
     return text

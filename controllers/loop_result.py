@@ -187,6 +187,7 @@ class LoopResult:
             "robustness_checked": self.design.get("robustness_checked", True),
             "reference_kind": self.settings.get("reference", "profile"),
             "path": self.settings.get("path"),
+            "warnings": list(self.settings.get("warnings", [])),
             **{key: self.settings[key] for key in ("quantum", "disturbance")
                if key in self.settings},
         }

@@ -33,6 +33,7 @@ from .loop_result import TARGET, LoopResult, mechanism_size
 from .plants import FmuPlant, InProcessPlant, LinearPlant
 from .sample_loop import compiled_loop, simulate_loop
 from .user_reference import reference_stroke
+from .validity import loop_coordinates, motion_warnings
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -63,7 +64,8 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
              reference: ArrayLike | Callable[[float], ArrayLike] | None = None,
              quantum: float | Sequence[float] | None = None,
              disturbance: float | Sequence[float] | None = None,
-             disturbance_hz: float = 50.0, **design_options: Any) -> LoopResult:
+             disturbance_hz: float = 50.0, warn: Callable[[str], None] | None = None,
+             **design_options: Any) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
     Parameters
@@ -123,6 +125,10 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         (disturbances.py).
     disturbance_hz : float
         Its frequency (Hz), default 50.
+    warn : callable, optional
+        Called with each range-of-validity warning as it is found: before the run for the
+        strokes and move targets asked for, after it for the positions recorded
+        (validity.py). The summary lists them all ("warnings").
     **design_options
         Passed on to `design_feedback`.
 
@@ -175,6 +181,10 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         stroke = reference_stroke(loop.reference, loop.samples)
         if not callable(reference):  # the samples set the run
             duration, settle = loop.samples / fs, 0.0
+    coordinates = loop_coordinates(model, design)
+    planned = {coordinates[axis]: stroke} if path is None else {
+        **path.targets, **dict(zip(coordinates, path.displacement([1.0])[0], strict=True))}
+    found = _warned(motion_warnings(model, planned), [], warn)
     kind = feedforward_kind(feedforward)
     moving = design.pairs[axis]
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
@@ -213,11 +223,24 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
                                                method=method, rtol=rtol, workdir=workdir,
                                                progress=progress, overrides=overrides)
     wall = time.perf_counter() - start
+    recorded = dict(zip(coordinates, np.max(np.abs(position - position[0]), axis=0),
+                        strict=True))
+    settings["warnings"] = _warned(motion_warnings(model, recorded), found, warn)
     return LoopResult(t=t, reference=r, position=position, force=force,
                       feedforward=loop.feedforward[: len(t)].copy(), stroke=stroke,
                       design=design.summary(), settings=settings, wall_time_s=wall,
                       disturbance=None if loop.disturbance is None
                       else loop.disturbance[: len(t)].copy())
+
+
+def _warned(messages, found, warn):
+    """`found` and the `messages` about coordinates it does not name yet, each new one passed
+    to `warn` (None: kept only)."""
+    named = {message.split(" ", 1)[0] for message in found}
+    new = [message for message in messages if message.split(" ", 1)[0] not in named]
+    for message in new if warn is not None else ():
+        warn(message)
+    return [*found, *new]
 
 
 def _disturbance_settings(loop, quantum, amplitude):

@@ -41,6 +41,7 @@ _LAZY = {
     "simulation.prepare": ("prepare",),
     "simulation.sampled_loop": ("controller_step", "run_sampled_loop"),
     "simulation.simulation": ("SimulationResult", "Simulator", "simulate"),
+    "simulation.plausibility": ("RangeCheck",),
     "simulation.simulator": ("METHODS",),
     "simulation.tolerances": ("default_atol",),
 }

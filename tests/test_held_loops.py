@@ -111,3 +111,44 @@ def test_a_move_may_hold_an_angle(tripod, kind):
     end = path.displacement([1.0])[0]
     assert end[0] == pytest.approx(1e-3, rel=1e-9)
     assert np.max(np.abs(end[1:])) < 1e-15
+
+
+# -- the loop's motion against the range of validity -----------------------------------------
+
+def test_a_stroke_beyond_the_range_of_validity_is_said_before_and_in_the_summary():
+    """0.25 x the stage's 0.1 m length scale: 25 mm. A 40 mm stroke is warned about once,
+    before the run (as found) and in the summary; 1 mm is not."""
+    said = []
+    result = run_loop("stage_planar_1dof", stroke=0.04, duration=0.2, settle=0.05,
+                      warn=said.append)
+    (message,) = said
+    assert message.startswith("3.x moves 0.04 m, beyond the model's range of validity "
+                              "(0.025 m: 0.25 x its length scale 0.1 m)")
+    assert result.summary()["warnings"] == said
+    quiet = []
+    assert run_loop("stage_planar_1dof", duration=0.2, settle=0.05,
+                    warn=quiet.append).summary()["warnings"] == [] == quiet
+
+
+def test_motion_warnings_judge_translations_only(tripod):
+    from flexure.controllers.validity import motion_warnings
+
+    assert motion_warnings(tripod, {"Pr.rz": 10.0, "P.x": 1e-3}) == []
+    (message,) = motion_warnings(tripod, {"P.x": -0.02, "P.y": float("nan")})
+    assert message.startswith("P.x moves 0.02 m, beyond the model's range of validity")
+
+
+def test_the_cli_warns_of_a_move_target_before_computing_its_path(capsys, tmp_path,
+                                                                  monkeypatch):
+    from flexure.core.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["loop", "wire_tripod", "--move", "P.x=0.03", "--move", "P.y=0",
+                 "--move", "Pr.rz=0", "--duration", "0.2", "--settle", "0.05",
+                 "--no-plot"]) == 0  # the move is made: only its result is suspect
+    captured = capsys.readouterr()
+    warned = [line for line in captured.err.splitlines() if "warning" in line]
+    assert warned == ["flexure loop: warning: P.x moves 0.03 m, beyond the model's range of "
+                      "validity (0.0125 m: 0.25 x its length scale 0.05 m); the result is not "
+                      "that of the flexure the scene describes"]
+    assert "warning: P.x moves 0.03 m" in captured.out
