@@ -116,3 +116,19 @@ def test_a_singular_stiffness_is_not_mistaken_for_an_unstable_one():
     count, lowest, largest = negative_stiffness(K)
     assert count == 1 and lowest == pytest.approx(-1e-5) and largest == pytest.approx(1e3)
     assert negative_stiffness(np.zeros((0, 0))) == (0, 0.0, 0.0)
+
+
+def test_the_text_shows_the_free_coordinates_and_the_outputs_the_json_every_one(capsys):
+    """The tripod has 49 coordinates, 12 of them free translations; its rotation reads as
+    the output about z, not as four Euler parameters."""
+    assert main(["analyze", "wire_tripod", "--static"]) == 0
+    text = capsys.readouterr().out
+    table = text.split("static equilibrium: coordinates")[1].split("\n\n")[0]
+    rows = [line.split()[0] for line in table.splitlines()[3:]]
+    assert rows == ["P.x", "P.y", "P.z"] + [f"T{k}.{a}" for k in (1, 2, 3) for a in "xyz"]
+    assert "(the free ones; 9 fixed and 28 Euler parameters left out" in table
+    outputs = text.split("static equilibrium: outputs")[1].split("\n\n")[0]
+    assert [line.split()[0] for line in outputs.splitlines()[3:]] == ["x", "y", "z", "rz"]
+    assert main(["analyze", "wire_tripod", "--static", "--json"]) == 0
+    static = json.loads(capsys.readouterr().out)["static"]
+    assert len(static["coordinates"]) == 49 and static["outputs"]["z"] == pytest.approx(0.05)

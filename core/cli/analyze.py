@@ -83,6 +83,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     from ..analysis.statics import static_equilibrium
     from ..analysis.stresses import beam_stresses
     from ..mechanics.mechanics import Mechanics
+    from ..mechanics.ports import output_value
 
     result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
               "dofs_chosen": bool(model.chosen_dofs)}
@@ -97,7 +98,11 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
         resultants = {name: value for name, value in solution.stresses().items()
                       if not name.endswith(".norm")}
         result["static"] = {"coordinates": solution.coordinates(),
-                            "stress_resultants": resultants, "units": STATIC_UNITS}
+                            "stress_resultants": resultants, "units": STATIC_UNITS,
+                            "free_coordinates": _free_coordinates(model),
+                            "outputs": {port.name: output_value(model, port, solution.x)
+                                        for port in model.outputs
+                                        if port.quantity == "position"}}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
@@ -226,6 +231,14 @@ def plot_stresses(model, path):
     wrote(path, "the von Mises stresses along the beams")
 
 
+def _free_coordinates(model):
+    """The names of the coordinates a person reads in the text: neither fixed nor Euler
+    parameters (a 3-D node's rotation reads better as an output about an axis)."""
+    return [name for i, name in enumerate(model.coordinate_names)
+            if model.coordinate_status[i] != "fixed"
+            and not model.coordinate_axis[i].startswith("lambda")]
+
+
 def render(result):
     """The analyses of `analyze` as readable tables."""
     count = result["dof_count"]
@@ -239,9 +252,22 @@ def render(result):
                      "no equilibrium or mode to compute")
     if "static" in result:
         static = result["static"]
-        parts.append(format_table(["coordinate", "value (m, rad)"],
-                                  list(static["coordinates"].items()),
-                                  title="\nstatic equilibrium: coordinates"))
+        free = static.get("free_coordinates", list(static["coordinates"]))
+        euler = sum(".lambda" in name for name in static["coordinates"])
+        fixed = len(static["coordinates"]) - len(free) - euler + sum(
+            ".lambda" in name for name in free)
+        left_out = " and ".join(f"{n} {what}" for n, what in ((fixed, "fixed"),
+                                                             (euler, "Euler parameters")) if n)
+        parts.append(format_table(
+            ["coordinate", "value (m, rad)"],
+            [(name, static["coordinates"][name]) for name in free],
+            title="\nstatic equilibrium: coordinates" + (
+                f" (the free ones; {left_out} left out: --json lists every coordinate)"
+                if left_out else "")))
+        if static.get("outputs"):
+            parts.append(format_table(["output", "value (m, rad)"],
+                                      list(static["outputs"].items()),
+                                      title="\nstatic equilibrium: outputs"))
         parts.append(format_table(["deformation", "stress resultant (N)"],
                                   list(static["stress_resultants"].items()),
                                   title="\nstatic equilibrium: stress resultants (a "
