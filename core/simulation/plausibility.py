@@ -15,7 +15,17 @@ instead of being returned in silence:
   model's length scale (its longest element).
 """
 
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from ..model import Model
 
 STRAIN_LIMIT = 1e-2
 DISTANCE_LIMIT = 0.25
@@ -24,9 +34,17 @@ BEAMS = ("PLBEAM", "BEAM")
 
 class RangeCheck:
     """The limits above for one model; `warnings(x, e)` of a state (coordinates x (NX,) and
-    deformations e (NE,), SI units), or of many at once ((n, NX), (n, NE))."""
+    deformations e (NE,), SI units), or of many at once ((n, NX), (n, NE)).
 
-    def __init__(self, model):
+    Parameters
+    ----------
+    model : Model
+        Its beams' lengths and its translational coordinates' start values set the bounds:
+        `strain_bound` (m, per beam), `distance_bound` (m), `scale` (m, the longest
+        element, at least 1 mm).
+    """
+
+    def __init__(self, model: Model) -> None:
         self.model = model
         lengths, elongations = [], []
         for group in model.groups:
@@ -48,19 +66,49 @@ class RangeCheck:
         self._indices = np.concatenate([self.elongation, self.translational])
         self._bounds = np.concatenate([self.strain_bound, self.start, [self.distance_bound]])
 
-    def within(self, x, e):
-        """Whether one state (x (NX,), e (NE,)) is within both limits: the cheap test an FMU
-        makes after every doStep (a few microseconds); `warnings` says what is not."""
+    def within(self, x: np.ndarray, e: np.ndarray) -> bool:
+        """Whether one state is within both limits: the cheap test an FMU makes after every
+        doStep (a few microseconds); `warnings` says what is not.
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates, m and rad, float64.
+        e : ndarray (NE,)
+            The deformations, m and rad, float64.
+
+        Returns
+        -------
+        bool
+            True within both limits.
+        """
         from .plausibility_kernels import within
 
         return within(x, e, self._indices, self._bounds, self.elongation.size)
 
-    def watch(self, x, e):
-        """`within` of the arrays x (NX,) and e (NE,) as they are at each call, as a function
-        of no arguments: one compiled call with one integer argument (about 0.15 us against
-        0.45 us for `within`'s five array arguments; an FMU checks after every doStep). x and
-        e must stay where they are: the engine's own arrays (`Simulator` watches its last
-        evaluation's)."""
+    def watch(self, x: np.ndarray, e: np.ndarray) -> Callable[[], bool]:
+        """`within` of the arrays x and e as they are at each call, as a function of no
+        arguments: one compiled call with one integer argument (about 0.15 us against 0.45 us
+        for `within`'s five array arguments; an FMU checks after every doStep).
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates (m, rad), C-contiguous float64; it must stay where it is: the
+            engine's own array (`Simulator` watches its last evaluation's).
+        e : ndarray (NE,)
+            The deformations (m, rad), likewise.
+
+        Returns
+        -------
+        callable
+            () -> bool, `within(x, e)` of their values at the call.
+
+        Raises
+        ------
+        TypeError
+            x or e is not C-contiguous.
+        """
         arrays = (x, e, self._indices, self._bounds)
         if not all(a.flags.c_contiguous for a in arrays[:2]):
             raise TypeError("watch: x and e must be C-contiguous arrays")
@@ -74,9 +122,22 @@ class RangeCheck:
 
         return within
 
-    def warnings(self, x, e):
-        """{"strain" or "distance": a message naming the element or coordinate worst beyond
-        that limit, with its value}; empty when the states are within the range."""
+    def warnings(self, x: ArrayLike, e: ArrayLike) -> dict[str, str]:
+        """What is beyond the limits in one state or many.
+
+        Parameters
+        ----------
+        x : array_like (NX,) or (n, NX)
+            The coordinates, m and rad.
+        e : array_like (NE,) or (n, NE)
+            The deformations, m and rad.
+
+        Returns
+        -------
+        dict of str to str
+            {"strain" or "distance": a message naming the element or coordinate worst beyond
+            that limit, with its value}; empty when the states are within the range.
+        """
         x, e = np.atleast_2d(x), np.atleast_2d(e)
         found = {}
         if self.elongation.size:
