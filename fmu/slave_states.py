@@ -21,6 +21,16 @@ INITIALIZATION = "initialization mode"
 STEP_COMPLETE = "step complete"
 TERMINATED = "terminated"
 PHASES = (INSTANTIATED, INITIALIZATION, STEP_COMPLETE, TERMINATED)
+# The latest communication point a state may hold, in s after its start time: libcosim counts
+# time in int64 nanoseconds (9.2e9 s), and at 1e9 s a float still resolves 1e-7 s.
+TIME_SPAN = 1e9
+
+
+def _as_set(variable, value):
+    """A stored value as the host's setter would hand it over (an Integer as an int)."""
+    if type(variable).__name__ == "Integer" and float(value).is_integer():
+        return int(value)
+    return value
 
 
 class RefusedState:
@@ -94,7 +104,9 @@ class StateSnapshots:
             self._fail("fmi2SetFMUstate", error)
 
     def _state_problem(self, data):
-        """Why a decoded state cannot be this instance's, or None."""
+        """Why a decoded state cannot be this instance's, or None: its fields are checked as
+        strictly as a host's calls would be (a forged state with a valid checksum is still
+        only data)."""
         if not isinstance(data, dict) or set(data) != {"phase", "broken", "time",
                                                        "start_time", "variables", "model"}:
             return "the payload is not a SafeSlave state"
@@ -102,7 +114,11 @@ class StateSnapshots:
             return f"unknown call-sequence state {data['phase']!r}"
         for key in ("time", "start_time"):
             if not isinstance(data[key], float) or not math.isfinite(data[key]):
-                return f"{key} = {data[key]!r}: expected a finite float"
+                return f"{key} = {data[key]!r} s: expected a finite float"
+        start, time = data["start_time"], data["time"]
+        if not start <= time <= start + TIME_SPAN:
+            return (f"time = {time!r} s: expected a time from start_time = {start!r} s to "
+                    f"{TIME_SPAN:g} s after it")
         by_name = {v.name: v for v in self.vars.values() if v.setter is not None}
         values = data["variables"]
         if not isinstance(values, dict) or set(values) != set(by_name):
@@ -111,6 +127,12 @@ class StateSnapshots:
             expected = str if isinstance(by_name[name], String) else float
             if not isinstance(value, expected):
                 return f"variable {name!r} = {value!r}: expected a {expected.__name__}"
+            if expected is float and not math.isfinite(value):
+                return f"variable {name!r} = {value!r}: expected a finite number"
+            problem = (None if name in self.unchecked_inputs
+                       else self.check_value(name, _as_set(by_name[name], value)))
+            if problem:
+                return f"variable {problem}"
         return None
 
     def _apply(self, data):
