@@ -217,3 +217,36 @@ def test_von_mises_is_computed_only_when_read(tmp_path):
     slave.fmu.getReal([vr])
     assert instance.stress_evaluations == 2  # a new state: computed again
     slave.close()
+
+
+def test_a_freed_state_is_kept_valid_and_released_in_turn(monkeypatch):
+    """What fmi2FreeFMUstate's release of the last reference leaves (FMUState's finalizer):
+    the object kept, its bytes dropped and marked freed; beyond FREED_KEPT the oldest is
+    released, unless it was freed more than once (then it is kept for good: releasing it
+    would release more references than it holds)."""
+    import collections
+    import ctypes
+    import sys
+
+    from flexure.fmu import slave_states
+    from flexure.fmu.slave_states import FREED, HOLDS, FMUState
+
+    monkeypatch.setattr(slave_states, "FREED_KEPT", 2)
+    monkeypatch.setattr(slave_states, "_FREED", collections.deque())
+    monkeypatch.setattr(slave_states, "_OVER_FREED", [])
+    handle = FMUState(b"state")
+    address = id(handle)
+    del handle  # the host's free
+    kept = slave_states._FREED[0][0]
+    assert id(kept) == address and kept.data is FREED
+    assert sys.getrefcount(kept) == HOLDS + 2  # the tuple's, `kept` and the argument
+    ctypes.pythonapi.Py_DecRef(ctypes.py_object(kept))  # a second free by the host
+    del kept
+    for _ in range(2):
+        FMUState(b"other")  # freed at once: the first of them evicts the over-freed one
+    assert slave_states.freed_states() == (2, 1)
+    over = slave_states._OVER_FREED[0][0]
+    assert id(over) == address
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(over))  # give back what the test took away
+    FMUState(b"third")  # evicts one freed once: released, not kept
+    assert slave_states.freed_states() == (2, 1)
