@@ -32,8 +32,10 @@ Variables (only what the scene has):
 `advance(t, h)` is `simulator.set_inputs(u); simulator.advance_to(t + h)`: the simulator picks its
 own internal steps; any h works. A `SimulationError` (non-finite input, integrator or Newton
 failure) leaves the simulator at its last good state and the step is answered with
-fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs,
-parameters and outputs, stored as data (`flexure.fmu.state_format`); its identity is the scene
+fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs
+and parameters, stored as data (`flexure.fmu.state_format`); what follows from it (outputs,
+coil currents, stress) is computed again on a restore, and a restored state is range-checked
+(`restored_state_problem`) as a host's values are. Its identity is the scene
 name and a digest of the embedded scene text, tunable keys and outputs, so a state of another
 scene (or of the same scene built from another scene file) is refused by name.
 
