@@ -18,7 +18,9 @@ Variables (only what the scene has):
   current, a state of the FMU;
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
   stress at the ends of the scene's beams with a cross-section, in the current state
-  (`flexure.core.stresses_along`);
+  (`flexure.core.stresses_along`), computed when a host reads it and at most once per state:
+  it costs about ten times a doStep of the model (the wire tripod), so a host that steps
+  without reading it pays nothing for it;
 - parameters "integrator.method" (String: esdirk (default), esdirk3, cvode-bdf, cvode-adams,
   ida; the one-step esdirk takes a host's new inputs at each doStep without a restart),
   "integrator.rtol" (1, default 1e-6), "integrator.atol" (0 means the simulator's default) and
@@ -30,8 +32,10 @@ Variables (only what the scene has):
 `advance(t, h)` is `simulator.set_inputs(u); simulator.advance_to(t + h)`: the simulator picks its
 own internal steps; any h works. A `SimulationError` (non-finite input, integrator or Newton
 failure) leaves the simulator at its last good state and the step is answered with
-fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs,
-parameters and outputs, stored as data (`flexure.fmu.state_format`); its identity is the scene
+fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs
+and parameters, stored as data (`flexure.fmu.state_format`); what follows from it (outputs,
+coil currents, stress) is computed again on a restore, and a restored state is range-checked
+(`restored_state_problem`) as a host's values are. Its identity is the scene
 name and a digest of the embedded scene text, tunable keys and outputs, so a state of another
 scene (or of the same scene built from another scene file) is refused by name.
 
@@ -60,6 +64,7 @@ from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
+from .slave_states import STEP_COMPLETE, TERMINATED
 
 # The first is the default, with DEFAULT_RTOL. A host changes the inputs at most doSteps, and
 # the one-step esdirk takes a change without a restart (CVODE restarts at order 1). With the
@@ -73,6 +78,11 @@ DEFAULT_RTOL = 1e-6
 # a doStep's step budget: far above a normal step (the 3-DOF stage with CVODE: about 50 steps
 # per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
 DEFAULT_MAX_STEPS = 200_000
+# How far a restored state's nodes may be from their start, in times the model's extent: 400
+# times the range of validity (flexure.core.simulation.plausibility's quarter of the longest
+# element), so a run that went beyond that range with a warning still restores, and a forged
+# 1e300 m does not.
+RESTORE_DISTANCE = 100.0
 
 
 def scene_value(scene, key):
@@ -129,7 +139,8 @@ class SceneSlave(SafeSlave):
         self.outputs = [math.nan] * len(model.outputs)
         self.currents = [math.nan] * len(model.coil_actuators)
         self.unchecked_inputs = frozenset(port.name for port in model.inputs)
-        self.stress = math.nan  # Pa, with von_mises
+        self._stress = None  # Pa, von_mises_max of the current state, None until read
+        self.stress_evaluations = 0  # how often it was computed (each costs ~10 doSteps)
         self._refresh()
 
         drivers = {a.input: a for a in model.actuators}
@@ -154,7 +165,7 @@ class SceneSlave(SafeSlave):
         if self.von_mises:
             self.add_real("von_mises_max", causality="output", unit="Pa",
                           description="largest von Mises stress at the ends of the beams",
-                          getter=lambda: self.stress)
+                          getter=self.von_mises_max)
         self.add_string("integrator.method", start=self.method,
                         description="integration method: " + ", ".join(METHODS),
                         getter=lambda: self.method,
@@ -237,11 +248,31 @@ class SceneSlave(SafeSlave):
         self.outputs[:] = self.simulator.output_values()
         if self.currents:  # a model without coils has no currents to copy
             self.currents[:] = self.simulator.currents.tolist()
-        if self.von_mises:
-            state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
-            _, stresses = stresses_along(self._model, [state], inputs=[self.inputs],
-                                         mechanics=self._mechanics)
-            self.stress = float(np.nanmax(stresses))
+        self._stress = None  # of the state before: computed again when next read
+
+    def von_mises_max(self):
+        """The output von_mises_max: the largest von Mises stress at the beam ends in the
+        current state, computed on the first read after a change of state.
+
+        Returns
+        -------
+        float
+            Pa; NaN when it cannot be computed (logged at status error once per state: a
+            getter that raised would be fmi2Fatal).
+        """
+        if self._stress is None:
+            try:
+                # the inputs the state was reached with: those the simulator holds
+                state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
+                _, stresses = stresses_along(self._model, [state],
+                                             inputs=[self.simulator.inputs],
+                                             mechanics=self._mechanics)
+                self._stress = float(np.nanmax(stresses))
+            except Exception as error:  # noqa: BLE001
+                self._stress = math.nan
+                self._error(f"von_mises_max at t = {self.time!r} s: {error}")
+            self.stress_evaluations += 1
+        return self._stress
 
     def initialize(self, start_time):
         if self._settings() != self._built_with:
@@ -278,36 +309,38 @@ class SceneSlave(SafeSlave):
     # -- state ---------------------------------------------------------------------------------
 
     def save_state(self):
-        return {"settings": self._built_with, "simulator": self.simulator.get_state(),
-                "outputs": np.array(self.outputs), "stress": self.stress}
+        # what follows from the simulator's state (the outputs, the coil currents, the
+        # stress) is not stored: a restore computes it again, so no state can set it apart
+        return {"settings": self._built_with, "simulator": self.simulator.get_state()}
 
     def load_state(self, state):
-        settings, outputs = self._checked_state(state)
+        settings = self._checked_state(state)
         method, rtol, atol, parameters = settings
         self.method, self.rtol, self.atol = method, rtol, atol
         self.parameters = dict(parameters)
         if self._built_with != settings:
             self._build()
-        self.simulator.set_state(state["simulator"])
+        self.simulator.set_state(state["simulator"])  # sizes, model, finite: core checks
         self._inputs_given = None
-        self.outputs[:] = outputs.tolist()
-        self.currents[:] = self.simulator.currents.tolist()
-        self.stress = float(state["stress"])
+        self._refresh()  # raises when the kinematics cannot be solved at the state
+        problem = restored_state_problem(self, state["simulator"])
+        if problem:
+            raise ValueError(problem)
 
     def _checked_state(self, state):
-        """(settings, outputs) of a decoded model state; ValueError naming what does not fit."""
-        if not isinstance(state, dict) or set(state) != {"settings", "simulator", "outputs",
-                                                         "stress"}:
+        """The settings of a decoded model state; ValueError naming what does not fit."""
+        if not isinstance(state, dict) or set(state) != {"settings", "simulator"}:
             raise ValueError("the model part is not a scene slave's state")
         settings = state["settings"]
         if not (isinstance(settings, tuple) and len(settings) == 4
-                and isinstance(settings[3], tuple)):
+                and isinstance(settings[3], tuple)
+                and all(isinstance(p, tuple) and len(p) == 2 for p in settings[3])):
             raise ValueError(f"settings {settings!r}: expected (method, rtol, atol, "
                              "parameters)")
         method, rtol, atol, parameters = settings
         checks = [("integrator.method", method), ("integrator.rtol", rtol),
                   ("integrator.atol", atol)]
-        if sorted(key for key, _ in parameters) != sorted(self.tunable):
+        if sorted(str(key) for key, _ in parameters) != sorted(self.tunable):
             raise ValueError(f"the state's parameters {[k for k, _ in parameters]} are not "
                              f"this FMU's {list(self.tunable)}")
         for name, value in checks + list(parameters):
@@ -316,17 +349,67 @@ class SceneSlave(SafeSlave):
             problem = self.check_value(name, value)
             if problem:
                 raise ValueError(problem)
-        simulator = state["simulator"]
-        if not isinstance(simulator, dict):
+        if not isinstance(state["simulator"], dict):
             raise ValueError("the simulator state is not a dict")
-        for key, value in simulator.items():
-            if isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(
-                    np.isfinite(value)):
-                raise ValueError(f"the simulator state {key!r} is not finite")
-        outputs = state["outputs"]
-        if not (isinstance(outputs, np.ndarray) and outputs.shape == (len(self.outputs),)):
-            raise ValueError(f"outputs of shape {getattr(outputs, 'shape', None)}: expected "
-                             f"({len(self.outputs)},)")
-        if not isinstance(state["stress"], float):
-            raise ValueError(f"stress = {state['stress']!r}: expected a float")
-        return settings, outputs.astype(float)
+        return settings
+
+
+def restored_state_problem(slave, simulator_state):
+    """Why a simulator state, restored into `slave`'s simulator, is not one a run of this
+    model can reach, or None: checked after core's own checks (sizes, finite numbers) and
+    the kinematics (the outputs computed from it), against the limits of a host's input and
+    of the model's range of validity.
+
+    - its time must be the slave's communication point once initialized;
+    - every output finite, every node within RESTORE_DISTANCE times the model's size of its
+      start (the range of validity is a quarter of it: `flexure.core` only warns beyond
+      that, so a run can legitimately be there; a hundredfold is no flexure motion);
+    - the held inputs finite (core), the coil currents finite.
+    """
+    simulator = slave.simulator
+    if slave.phase in (STEP_COMPLETE, TERMINATED):
+        t = simulator.time
+        if abs(t - slave.time) > 1e-9 * max(1.0, abs(slave.time)):
+            return (f"simulator.t = {t!r} s: expected the state's communication point "
+                    f"time = {slave.time!r} s")
+    names = [port.name for port in slave._model.outputs]
+    for name, value in zip(names, slave.outputs, strict=True):
+        if not math.isfinite(value):
+            return f"output {name} = {value!r}: expected a finite number"
+    for actuator, value in zip(slave._model.coil_actuators, slave.currents, strict=True):
+        if not math.isfinite(value):
+            return f"{actuator.name}.current = {value!r} A: expected a finite number"
+    model = slave._model
+    translations = np.asarray(model.translations, dtype=np.int64)
+    if translations.size:
+        start = np.asarray(model.initial_coordinates, float)[translations]
+        # the coordinates the state stores, and its DOFs q in their places: q drives the
+        # outputs and x the kinematics' start, and a forged state may set either apart
+        for where, coordinates in (("x", np.asarray(simulator_state["x"], float)),
+                                   ("q", _with_dofs(model, simulator))):
+            problem = _moved_too_far(model, where, coordinates[translations], start,
+                                     translations)
+            if problem:
+                return problem
+    return None
+
+
+def _with_dofs(model, simulator):
+    """The initial coordinates with the simulator's DOFs q in their places (m, rad)."""
+    coordinates = np.array(model.initial_coordinates, float)
+    coordinates[model.dof_coordinates] = simulator.q
+    return coordinates
+
+
+def _moved_too_far(model, where, x, start, translations):
+    """Why translations x (m) are beyond RESTORE_DISTANCE times the model's extent from
+    their start, or None."""
+    size = max(1e-3, float(np.ptp(start)))  # m: the model's extent, at least 1 mm
+    moved = np.abs(x - start)
+    worst = int(np.argmax(moved))
+    if moved[worst] > RESTORE_DISTANCE * size:
+        name = model.coordinate_names[translations[worst]]
+        return (f"simulator.{where}: coordinate {name} = {float(x[worst])!r} m is "
+                f"{moved[worst]:.3g} m from its start; expected at most "
+                f"{RESTORE_DISTANCE:g} times the model's size ({size:.3g} m)")
+    return None

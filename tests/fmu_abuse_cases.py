@@ -6,6 +6,7 @@
 the FMU binary's teardown at exit).
 """
 
+import ctypes
 import gc
 import os
 import pickle
@@ -235,6 +236,72 @@ def case_fatal_history(host, other):
         step(fmu, k * 1e-3)
     call("fmi2Terminate", fmu.terminate)
     fmu.fmi2FreeInstance(fmu.component)
+
+
+def case_set_freed_state(host, other):
+    """fmi2SetFMUstate with a handle fmi2FreeFMUstate freed (pythonfmu leaves it non-NULL)."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    state = fmu.getFMUstate()
+    step(fmu, 1e-3)
+    call("fmi2FreeFMUstate", fmu.freeFMUstate, state)
+    say("VALUE handle-null", not state)
+    gc.collect()
+    for _ in range(200):  # what the freed memory would be reused for
+        fmu.freeFMUstate(fmu.getFMUstate())
+    before = outputs(host, fmu)
+    call("fmi2SetFMUstate", fmu.setFMUstate, state)
+    size = ctypes.c_size_t()
+    call("fmi2SerializedFMUstateSize", fmu.fmi2SerializedFMUstateSize, fmu.component, state,
+         ctypes.byref(size))
+    say("VALUE size", size.value)
+    check_unchanged(host, fmu, before, 2e-3)
+
+
+def case_free_state_twice(host, other):
+    """fmi2FreeFMUstate twice on one handle, then on with the instance and exit."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    state = fmu.getFMUstate()
+    call("fmi2FreeFMUstate", fmu.freeFMUstate, state)
+    call("fmi2FreeFMUstate", fmu.freeFMUstate, state)
+    gc.collect()
+    before = outputs(host, fmu)
+    check_unchanged(host, fmu, before, 1e-3)
+    call("fmi2Terminate", fmu.terminate)
+    fmu.fmi2FreeInstance(fmu.component)
+
+
+def case_set_null_state(host, other):
+    """fmi2SetFMUstate(NULL), then a doStep."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    call("fmi2SetFMUstate", fmu.fmi2SetFMUstate, fmu.component, None)
+    say("VALUE set-null-done")
+    step(fmu, 1e-3)
+    say("VALUE step-done")
+
+
+def case_size_null_state(host, other):
+    """fmi2SerializedFMUstateSize(NULL)."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    size = ctypes.c_size_t()
+    call("fmi2SerializedFMUstateSize", fmu.fmi2SerializedFMUstateSize, fmu.component, None,
+         ctypes.byref(size))
+    say("VALUE size-null-done")
+    step(fmu, 1e-3)
+    say("VALUE step-done")
+
+
+def case_free_null_state(host, other):
+    """fmi2FreeFMUstate of a NULL handle: FMI 2.0 says ignored."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    null = ctypes.c_void_p(None)
+    call("fmi2FreeFMUstate", fmu.fmi2FreeFMUstate, fmu.component, ctypes.byref(null))
+    before = outputs(host, fmu)
+    check_unchanged(host, fmu, before, 1e-3)
 
 
 def case_leak(host, other, cycles=1000, warmup=10):

@@ -176,4 +176,47 @@ def test_step_after_free_is_pythonfmus_c_layer(fmus):
     assert result.code < 0 and -result.code in (signal.SIGSEGV, signal.SIGABRT, signal.SIGBUS)
 
 
+# -- invalid state handles ------------------------------------------------------------------
+
+
+def test_a_freed_state_handle_is_refused_not_a_crash(fmus):
+    """pythonfmu's fmi2FreeFMUstate leaves the host's handle as it was: the FMU keeps the
+    freed handle's object valid, so setting it is refused by name (it was SIGSEGV) and its
+    serialized size is 0."""
+    result = run("set_freed_state", fmus).survived()
+    assert result.value("handle-null") == "False"  # the binary does not NULL it
+    assert result.calls("fmi2SetFMUstate") == ["OK"]
+    assert result.calls("fmi2SerializedFMUstateSize") == ["OK"]
+    assert result.value("size") == "0"
+    assert "a: fmi2SetFMUstate refused: the state was freed by fmi2FreeFMUstate; the " \
+           "instance is unchanged" in result.logs()
+    assert result.value("unchanged") == "True" and result.value("steps-on") == "OK"
+
+
+def test_freeing_a_state_twice_is_survived(fmus):
+    """A second fmi2FreeFMUstate of one handle only counts down the references the FMU keeps
+    (it was a heap corruption at exit: "malloc(): unsorted double linked list corrupted")."""
+    result = run("free_state_twice", fmus).survived()
+    assert result.calls("fmi2FreeFMUstate") == ["OK", "OK"]
+    assert result.value("steps-on") == "OK"
+
+
+def test_freeing_a_null_state_is_ignored(fmus):
+    result = run("free_null_state", fmus).survived()
+    assert result.calls("fmi2FreeFMUstate") == ["OK"] and result.value("steps-on") == "OK"
+
+
+@pytest.mark.parametrize("case, function", [("set_null_state", "fmi2SetFMUstate"),
+                                            ("size_null_state", "fmi2SerializedFMUstateSize")])
+def test_a_null_state_handle_is_pythonfmus_c_layer(fmus, case, function):
+    """A NULL state never reaches Python: the binary's Py_BuildValue refuses it, the binary
+    answers fmi2Fatal, releases the instance's objects, and the next doStep runs on freed
+    memory (docs/fmu.md's datasheet). Observed: Fatal, then the host dies by SIGSEGV."""
+    result = run(case, fmus)
+    assert result.calls(function) == ["FATAL"]
+    assert any("NULL object passed to Py_BuildValue" in m for m in result.logs())
+    assert "SURVIVED" not in result.lines and "VALUE step-done" not in result.lines
+    assert result.code < 0 and -result.code in (signal.SIGSEGV, signal.SIGABRT, signal.SIGBUS)
+
+
 # -- memory ---------------------------------------------------------------------------------
