@@ -156,3 +156,28 @@ def test_a_bad_flexure_blas_threads_names_the_variable(monkeypatch, value):
 def test_decorated_functions_keep_their_name_and_documentation():
     assert static_equilibrium.__name__ == "static_equilibrium"
     assert "static equilibrium" in static_equilibrium.__doc__
+
+
+def test_a_controller_looked_up_again_leaves_no_cyclic_garbage(monkeypatch):
+    """After an import the libraries are looked up again; the replaced threadpoolctl
+    controller is freed by reference counting (its libraries pointed back at it), which a
+    host running with the cyclic collector off relies on."""
+    import gc
+    import types
+    import weakref
+
+    from flexure.core.numerics import blas
+
+    with blas.blas_threads():
+        pass
+    replaced = weakref.ref(blas._libraries())
+    monkeypatch.setitem(sys.modules, "flexure_test_new_module", types.ModuleType("new"))
+    gc.collect()
+    gc.disable()
+    try:
+        with blas.blas_threads():
+            pass
+        assert replaced() is None
+        assert gc.collect() == 0
+    finally:
+        gc.enable()

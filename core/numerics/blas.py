@@ -115,6 +115,10 @@ def _libraries():
     if _controller is None or len(sys.modules) != _modules_seen:
         from threadpoolctl import ThreadpoolController
 
-        _controller = ThreadpoolController()
+        replaced, _controller = _controller, ThreadpoolController()
         _modules_seen = len(sys.modules)
+        # each library's controller points back at its parent: without the cycle, reference
+        # counting frees the replaced one (an FMU host may run with the cyclic collector off)
+        for library in getattr(replaced, "lib_controllers", ()):
+            library.parent = None
     return _controller
