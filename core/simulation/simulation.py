@@ -73,7 +73,8 @@ class SimulationResult:
         np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.12g")
 
     def plot(self, path: str | PathLike) -> None:
-        """Plot every output against time (s) to a PNG file.
+        """Plot every output against time (s) to a PNG file (an output that stays put to
+        round-off is drawn flat: `flexure.core.reporting.axes`).
 
         Parameters
         ----------
@@ -85,10 +86,14 @@ class SimulationResult:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
+        from ..reporting.axes import hold_round_off, unit_scales
+
         n = max(1, len(self.output_names))
         fig, axes = plt.subplots(n, 1, sharex=True, figsize=(7, 2.2 * n + 0.8), squeeze=False)
+        scales = unit_scales(self.output_array, self.output_units)
         for i, (name, unit) in enumerate(zip(self.output_names, self.output_units, strict=True)):
             axes[i, 0].plot(self.times, self.output_array[:, i])
+            hold_round_off(axes[i, 0], self.output_array[:, i], scales[unit])
             axes[i, 0].set_ylabel(f"{name} [{unit}]")
             axes[i, 0].grid(True, alpha=0.3)
         axes[-1, 0].set_xlabel("time [s]")
