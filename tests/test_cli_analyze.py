@@ -132,3 +132,26 @@ def test_the_text_shows_the_free_coordinates_and_the_outputs_the_json_every_one(
     assert main(["analyze", "wire_tripod", "--static", "--json"]) == 0
     static = json.loads(capsys.readouterr().out)["static"]
     assert len(static["coordinates"]) == 49 and static["outputs"]["z"] == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize(("yield_mpa", "named"), [(150.0, ["leaf_left", "leaf_right"]),
+                                                  (167.0, ["leaf_left"]), (1000.0, [])])
+def test_a_stress_above_the_sections_yield_stress_is_named(capsys, yield_mpa, named):
+    """5 N sideways on the stage: 168.7 MPa in the left leaf, 165.2 MPa in the right one
+    (the static table's von Mises stresses); each above the yield stress given is named."""
+    assert main(["analyze", "stage_planar_1dof", "--static", "--json",
+                 "--set", f"sections.leaf.yield_stress={yield_mpa * 1e6}",
+                 "--set", "nodes.3.force=[5.0, 0.0]"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    stresses = {name: max(ends) for name, ends in
+                result["static"]["von_mises_pa"].items() if name.startswith("leaf")}
+    assert stresses["leaf_left"] == pytest.approx(168.7e6, rel=1e-3)
+    yielded = [w.split(":")[0] for w in result["warnings"] if "yield stress" in w]
+    assert yielded == named
+    assert sorted(yielded) == sorted(n for n, s in stresses.items() if s > yield_mpa * 1e6)
+
+
+def test_a_yield_stress_must_be_positive(capsys):
+    assert main(["analyze", "stage_planar_1dof", "--set", "sections.leaf.yield_stress=0"]) == 2
+    assert capsys.readouterr().err.endswith(
+        "--set sections.leaf.yield_stress: expected a value > 0, got 0\n")

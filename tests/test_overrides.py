@@ -188,7 +188,7 @@ def test_every_command_refuses_a_bad_set_in_one_line(command, tmp_path, capsys, 
     err = capsys.readouterr().err
     assert err == (f"flexure {command.split()[0]}: error: {SOURCE}: --set sections.leaf.hieght: "
                    "unknown key; expected one of E, EA, EI, EdA, EdI, GAs, height, rho, "
-                   "rho_A, width\n")
+                   "rho_A, width, yield_stress\n")
     assert not list(tmp_path.iterdir())  # nothing written
 
 

@@ -38,7 +38,7 @@ def test_a_key_no_user_of_the_section_reads_is_unknown():
     # derive EA, A and rho_A
     assert refused(planar({"bar": {"EA": 1.0, "EI": 5.0}}, {"t": TRUSS})) == (
         "s.toml: sections.bar.EI: unknown key; expected one of E, EA, EdA, height, rho, "
-        "rho_A, width")
+        "rho_A, width, yield_stress")
 
 
 def test_a_section_takes_the_keys_of_every_element_that_uses_it():
@@ -57,7 +57,7 @@ def test_a_section_no_element_uses_takes_any_key_of_its_dimension():
     build_model(planar({"spare": {"kx": 1.0, "EI": 2.0, "rho": 7850.0}}, {}), check=False)
     assert refused(planar({"spare": {"kz": 1.0}}, {})) == (  # a 3-D key is none of 2-D's
         "s.toml: sections.spare.kz: unknown key; expected one of E, EA, EI, EdA, EdI, GAs, cx, "
-        "cy, height, kx, ky, rho, rho_A, width")
+        "cy, height, kx, ky, rho, rho_A, width, yield_stress")
 
 
 @pytest.mark.parametrize("value, message", [
@@ -104,7 +104,7 @@ def test_mistakes_of_several_sections_are_reported_together():
     assert message == ("s.toml: 2 mistakes:\n"
                        "  sections.soft.kx: expected a number, got 'a'\n"
                        "  sections.bar.EI: unknown key; expected one of E, EA, EdA, height, "
-                       "rho, rho_A, width")
+                       "rho, rho_A, width, yield_stress")
 
 
 def test_coincident_nodes_are_refused_by_a_truss_and_taken_by_a_spring():

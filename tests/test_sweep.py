@@ -281,7 +281,7 @@ def test_every_point_failing_is_an_error_after_the_table_is_written(tmp_path, ca
     err = capsys.readouterr().err
     assert err == ("flexure sweep: error: sweep stage_planar_1dof: every point failed (2); "
                    "first: --set sections.leaf.hieght: unknown key; expected one of E, EA, EI, "
-                   "EdA, EdI, GAs, height, rho, rho_A, width\n")
+                   "EdA, EdI, GAs, height, rho, rho_A, width, yield_stress\n")
     assert len(read(out)) == 3 and (tmp_path / "sweep.png").is_file()
 
 

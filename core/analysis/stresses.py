@@ -52,6 +52,25 @@ class BeamStresses:
     end_nodes: list  # the translational node at q
     lengths: np.ndarray  # (n,) m
     along: np.ndarray  # (n, POINTS) Pa at the fractions FRACTIONS of the length, p to q
+    yield_stress: np.ndarray | None = None  # (n,) Pa, the sections' (inf: none given)
+
+    def beyond_yield(self) -> list[str]:
+        """Messages naming each element whose von Mises stress exceeds its section's yield
+        stress (`yield_stress`), with both values (MPa); empty when none does or none is
+        given.
+
+        Returns
+        -------
+        list of str
+            One message per element, in the scene's order.
+        """
+        if self.yield_stress is None:
+            return []
+        worst = np.max(self.along, axis=1, initial=0.0)
+        return [f"{name}: von Mises stress {stress / 1e6:.4g} MPa is above its section's yield "
+                f"stress {bound / 1e6:.4g} MPa"
+                for name, stress, bound in zip(self.names, worst, self.yield_stress,
+                                               strict=True) if stress > bound]
 
     def as_dict(self) -> dict[str, list[float]]:
         """The end stresses by element.
@@ -127,7 +146,7 @@ def beam_stresses(model: Model, x: np.ndarray, sigma: np.ndarray) -> BeamStresse
         Von Mises stresses in Pa of the elements whose section has A > 0, with their end
         nodes and lengths (m).
     """
-    names, stresses, starts, ends, lengths, along = [], [], [], [], [], []
+    names, stresses, starts, ends, lengths, along, yields = [], [], [], [], [], [], []
     for group in model.groups:
         forces_of = getattr(group.kind, "section_forces", None)
         if forces_of is None or not np.any(group.properties.get("A", 0.0) > 0):
@@ -147,8 +166,10 @@ def beam_stresses(model: Model, x: np.ndarray, sigma: np.ndarray) -> BeamStresse
             ends.append(end_of[i])
             lengths.append(group.reference["l0"][i])
             along.append(profile[i])
+            yields.append(group.properties.get("yield_stress", np.full(len(keep), np.inf))[i])
     return BeamStresses(names, np.array(stresses).reshape(-1, 2), starts, ends,
-                        np.array(lengths), np.array(along).reshape(-1, FRACTIONS.size))
+                        np.array(lengths), np.array(along).reshape(-1, FRACTIONS.size),
+                        np.array(yields, dtype=float))
 
 
 def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=None):

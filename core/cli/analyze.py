@@ -106,6 +106,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
+        beyond_yield = stresses.beyond_yield()
     lin = linearize(model, solution, mechanics=mech) if needs_linear else None
     if modes is not None:
         found = natural_frequencies(model, None if modes < 0 else modes, linear_model=lin)
@@ -121,6 +122,8 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if solution is not None:
         result["warnings"] = equilibrium_warnings(model, solution, mech, lin,
                                                   result.get("modes"))
+        if static:
+            result["warnings"] += beyond_yield
     if buckling is not None:
         factors = buckling_load_factors(model, None if buckling < 0 else buckling)
         result["buckling"] = {"load_factors": factors}

@@ -86,7 +86,7 @@ from .beam_kernels import (  # noqa: F401 (the element's compiled interface, rea
     pack_reference,
 )
 from .plbeam import HERMITE_MASS
-from .protocol import SchemaKey, property_names, zero_length_problems
+from .protocol import YIELD_STRESS, SchemaKey, property_names, zero_length_problems
 from .timoshenko import bending_block, shear_ratio
 
 type_name = "BEAM"
@@ -115,6 +115,7 @@ section_schema = (
     SchemaKey("rho_A", "kg/m", "mass per length"),
     SchemaKey("rho_Iy", "kg.m", "rotational inertia of the section about y' per length"),
     SchemaKey("rho_Iz", "kg.m", "rotational inertia of the section about z' per length"),
+    YIELD_STRESS,
     SchemaKey("A", "m2", "cross-section area, for the stresses"),
     SchemaKey("Ip_A", "m2", "(Iy' + Iz') / A, the polar radius of gyration squared: e1's "
               "torsion term (the shortening of a twisted beam)"),

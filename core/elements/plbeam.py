@@ -37,7 +37,7 @@ import numpy as np
 
 from ..numerics.jit import kernel
 from . import entries
-from .protocol import SchemaKey, property_names, zero_length_problems
+from .protocol import YIELD_STRESS, SchemaKey, property_names, zero_length_problems
 from .timoshenko import bending_block, shear_ratio
 
 type_name = "PLBEAM"
@@ -57,6 +57,7 @@ section_schema = (
     SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
     SchemaKey("EdI", "N.m2.s", "bending damping, the counterpart of EI", damping=True),
     SchemaKey("rho_A", "kg/m", "mass per length"),
+    YIELD_STRESS,
     SchemaKey("A", "m2", "cross-section area, for the stresses (from width and height)",
               given=False),
     SchemaKey("Wz", "m3", "section modulus width height^2 / 6, for the bending stress (from "

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..numerics.jit import kernel
 from . import entries
-from .protocol import SchemaKey, property_names, zero_length_problems
+from .protocol import YIELD_STRESS, SchemaKey, property_names, zero_length_problems
 
 type_name = "PLTRUSS"
 dimension = 2
@@ -34,6 +34,7 @@ section_schema = (
     SchemaKey("EA", "N", "axial stiffness E A"),
     SchemaKey("EdA", "N.s", "axial damping, the counterpart of EA", damping=True),
     SchemaKey("rho_A", "kg/m", "mass per length"),
+    YIELD_STRESS,
     SchemaKey("A", "m2", "cross-section area, for the normal stress (from width and height)",
               given=False),
 )

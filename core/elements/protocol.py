@@ -94,6 +94,13 @@ class SchemaKey:
         return self.default is REQUIRED
 
 
+# the material's yield stress, on every element whose von Mises stress flexure computes: the
+# analyses name a stress above it (default: none given, nothing is compared)
+YIELD_STRESS = SchemaKey("yield_stress", "Pa", "the material's yield stress: a von Mises "
+                         "stress above it is named (default: none)", default=float("inf"),
+                         positive=True)
+
+
 def property_names(schema):
     """The names of a section schema's keys, in order: an element's `properties`."""
     return tuple(key.name for key in schema)
