@@ -35,8 +35,14 @@ amplification, grow with the periods.
 import numpy as np
 import pytest
 
-from flexure.core import (build_model, buckling_load_factors, load_scene,
-                          natural_frequencies, simulate, static_equilibrium)
+from flexure.core import (
+    buckling_load_factors,
+    build_model,
+    load_scene,
+    natural_frequencies,
+    simulate,
+    static_equilibrium,
+)
 from flexure.core.elements import ELEMENT_TYPES
 from flexure.core.simulation.methods import METHODS, SUNDIALS_METHODS
 

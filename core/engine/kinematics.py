@@ -15,11 +15,11 @@ Warm start: the first-order prediction x_prev + DF_prev (q - q_prev); if its res
 exceeds the tolerance, chord iterations with the previous LU of the constraint Jacobian
 J = dg/dx_free (converging at a rate of order |dq| / L; stopping on the residual or on the
 error that rate leaves after a step), and full Newton from there if they stall, stopping on
-the residual or on the step, each row and each unknown within its own
-tolerance (slots row_tolerance, step_tolerance: `mechanics.scales`, lengths through the
-length scale, Euler parameters and angles through 1, a floor 8 eps of the magnitude). The prediction and the chord iterates are
-checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and D2e are evaluated once,
-at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the reduced
+the residual or on the step, each row and each unknown within its own tolerance (slots
+row_tolerance, step_tolerance: `mechanics.scales`, lengths through the length scale, Euler
+parameters and angles through 1, a floor 8 eps of the magnitude). The prediction and the
+chord iterates are checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and
+D2e are evaluated once, at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the reduced
 form, the tangent, the kinematics operation).
 
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
@@ -29,9 +29,9 @@ deformations e, De = de/dx and D2e come from each element module's compiled entr
 
 import numpy as np
 
+from ..mechanics.scales import ROUND_OFF
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
-from ..mechanics.scales import ROUND_OFF
 from ..numerics.native import call_deformations
 from . import data as ed
 from . import rigid as rg

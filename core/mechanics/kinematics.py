@@ -8,8 +8,9 @@ For DOF values q the coordinates x = F(q) solve, on the free (non-fixed) coordin
 
 a square system whose Jacobian J is regular exactly when the model is exactly constrained.
 Newton's method, warm-started from the previous solution, converges quadratically; it stops
-when every unknown's correction is within `tolerance` of its own unit (lengths of the model's length scale, rotations and Euler parameters of 1), with a
-floor 8 eps of its magnitude (`scales`).
+when every unknown's correction is within `tolerance` of its own unit (lengths of the
+model's length scale, rotations and Euler parameters of 1), with a floor 8 eps of its
+magnitude (`scales`).
 
 First order: DF = dx/dq solves J DF = [0; I].  Second order: with the constraint Hessians
 H_i = d2 g_i / dx2, (D2F qdot) qdot = -J^-1 [ (DF qdot)^T H_i (DF qdot) ]_i.
