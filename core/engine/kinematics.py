@@ -19,8 +19,8 @@ the residual or on the step, each row and each unknown within its own tolerance 
 row_tolerance, step_tolerance: `mechanics.scales`, lengths through the length scale, Euler
 parameters and angles through 1, a floor 8 eps of the magnitude). The prediction and the
 chord iterates are checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and
-D2e are evaluated once, at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the reduced
-form, the tangent, the kinematics operation).
+D2e are evaluated once, at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it
+is needed (the reduced form, the tangent, the kinematics operation).
 
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
 (J^-1 or J^-T), which takes and gives vectors in the model's order). The element
