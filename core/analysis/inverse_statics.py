@@ -14,7 +14,8 @@ targets at the current equilibrium,
 (DF_t the rows of DF = dx/dq of the targets, DF_u^T the generalised forces of unit inputs: a
 force on its coordinate, a moment about a global axis on its node's Euler parameters), so the
 iteration
-converges quadratically; it stops when every target is within `tolerance` (m or rad). The
+converges quadratically; it stops when every target is within `tolerance` of its own unit
+(a position of the model's length scale L, an angle of 1 rad; `mechanics.scales`). The
 solution also gives every other coordinate there, e.g. the actuator positions that put the
 end effector at a pose: the nonlinear inverse kinematics of the mechanism, with its
 nonlinear statics (the forces) for free.
@@ -32,6 +33,7 @@ from ..errors import ConvergenceError, FlexureError
 from ..mechanics.actuators import steady_slopes
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_columns, output_rows, output_value, position_port
+from ..mechanics.scales import ROUND_OFF, coordinate_units
 from ..model import Model
 from ..numerics.blas import blas_threads
 from .linearization import linearize
@@ -109,7 +111,8 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
         The solution for neighbouring targets (a previous point along a path): Newton starts
         from its forces and each equilibrium from its configuration.
     tolerance : float
-        The largest allowed |x_t - x_t*| (m or rad).
+        The largest allowed |x_t - x_t*| relative to the target's unit: tolerance L (m) for
+        a position, tolerance (rad) for an angle (`mechanics.scales.coordinate_units`).
     max_iterations : int
         Newton iterations on the forces before ConvergenceError.
 
@@ -147,6 +150,12 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
     if u.size != len(names):
         raise InverseStaticsError(f"initial: expected {len(names)} forces, got {u.size}")
     mech = Mechanics(model)
+    units, magnitudes = coordinate_units(model)
+    # an angle about a global axis (no coordinate of its own) is in rad, of order 1
+    unit = np.array([1.0 if p.coordinate is None else units[p.coordinate] for p in target_ports])
+    size = np.array([1.0 if p.coordinate is None else magnitudes[p.coordinate]
+                     for p in target_ports])
+    allowed = np.maximum(tolerance * unit, ROUND_OFF * size)
     order = [list(ports).index(name) for name in names]  # the inputs' places in the model
     residual = np.inf
     solution = None if start is None else start.solution
@@ -156,7 +165,7 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
         error = np.array([output_value(model, port, solution.x)
                           for port in target_ports]) - wanted
         residual = float(np.max(np.abs(error)))
-        if residual <= tolerance:
+        if np.all(np.abs(error) <= allowed):
             return InverseStatics(u, solution, iteration, residual)
         lin = linearize(model, solution, mechanics=mech)
         DF = lin.DF
@@ -178,4 +187,4 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
         u = u - du
     raise ConvergenceError(f"{model.source}: inverse statics did not converge in "
                            f"{max_iterations} iterations (largest target error "
-                           f"{residual:.3e} > {tolerance:.1e})")
+                           f"{residual:.3e}, allowed {np.min(allowed):.1e})")

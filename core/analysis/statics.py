@@ -5,8 +5,8 @@ equal increments (one, when there is no load); in each the generalised force
 Q(q) = DF^T (f - De^T sigma) is driven to zero by Newton's method with the full tangent
 stiffness K0 + G0 (quadratic convergence). A step that does not converge is halved up to four
 times; then ConvergenceError names the load step and the load factor.
-Convergence: |dq| <= `tolerance` times the model's length scale (rotations count as lengths
-through that scale).
+Convergence: every |dq_j| within `tolerance` of its own unit: a length DOF of the model's length
+scale L (m), an angle of 1 rad, with a floor 8 eps of its magnitude (`mechanics.scales`).
 
 Held inputs (`inputs`) put their steady values on their ports: a force or moment input its
 value (N, N m); an input a voice-coil actuator drives its actuator's force or moment at rest
@@ -25,6 +25,7 @@ from ..errors import ConvergenceError
 from ..mechanics.actuators import steady_port_values
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_values
+from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -98,8 +99,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     load_steps : int
         Equal load increments (one when there is no load).
     tolerance : float
-        Convergence when |dq| <= tolerance times the model's length scale (relative,
-        rotations counted as lengths through that scale).
+        Convergence when every |dq_j| <= tolerance times its unit (relative: m through the
+        length scale, rad through 1; `mechanics.scales.dof_tolerances`).
     max_iterations : int
         Newton iterations per load step before the step is halved.
     mechanics : Mechanics, optional
@@ -133,12 +134,11 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         held = input_values(model, inputs)
         values = steady_port_values(model, held) if model.actuators else held
     mech = mechanics or Mechanics(model)
-    kin = mech.kinematics
-    scale = kin.length_scale
+    steps = dof_tolerances(model, tolerance)  # (NDOF,) m or rad
     if start is not None:
         try:
             config, iterations = _newton(mech, start.config, 1.0, loads, values,
-                                         tolerance * scale, max_iterations)
+                                         steps, max_iterations)
         except ConvergenceError:
             pass
         else:
@@ -156,7 +156,7 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         target = min(1.0, factor + step)
         try:
             config, iterations = _newton(mech, config, target, loads, values,
-                                         tolerance * scale, max_iterations)
+                                         steps, max_iterations)
         except ConvergenceError as error:
             if halvings == 4:
                 raise ConvergenceError(
@@ -175,7 +175,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
 
 
 def _newton(mech, config, load_factor, loads, values, step_tolerance, max_iterations):
-    """Newton's method at one load factor; values: the inputs' port values (N, N m)."""
+    """Newton's method at one load factor; values: the inputs' port values (N, N m);
+    step_tolerance (NDOF,) the largest converged |dq_j| (m or rad)."""
     kin = mech.kinematics
     for iteration in range(1, max_iterations + 1):
         Q, _, sigma = mech.static_balance(config, load_factor, loads, values)
@@ -188,7 +189,7 @@ def _newton(mech, config, load_factor, loads, values, step_tolerance, max_iterat
         if not np.all(np.isfinite(dq)):
             raise ConvergenceError("the tangent stiffness is singular")
         config = kin.solve(config.q + dq, config.x)
-        if np.max(np.abs(dq), initial=0.0) <= step_tolerance:
+        if within(dq, step_tolerance, magnitudes=config.q):
             return config, iteration
     raise ConvergenceError(f"Newton did not converge in {max_iterations} iterations "
                            f"(last |dq| = {np.max(np.abs(dq)):.3e})")

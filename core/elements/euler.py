@@ -21,6 +21,7 @@ dimension = 3
 node_kinds = ("rotational",)
 node_roles = ("p",)
 deformation_names = ("norm",)
+deformation_units = ("1",)  # dimensionless: its tolerance is not a length (mechanics.scales)
 deformation_stiffness = {"norm": "none"}
 coordinates_per_element = 4
 inertia_point_kinds = ()

@@ -30,7 +30,9 @@ Compiled kernels (for `flexure.core.engine`)
     deformations_entry and inertia_entry: C entries made by `entries.deformations_entry` /
     `entries.inertia_entry` from the element's one-element kernels.
 
-Optional: needs_orientation (True: the scene gives a principal axis, reference(x0, y_axis)),
+Optional: deformation_units (a tuple of "m" or "1" per deformation, default all "m": the
+unit its Newton tolerance is measured in, `mechanics.scales`), needs_orientation (True: the
+scene gives a principal axis, reference(x0, y_axis)),
 reference_properties (a tuple of section keys of its schema that the deformations depend on:
 reference(x0, ..., properties={key: (n,) array}) takes them, as a BEAM's Ip_A),
 reference_problems(x0[, y_axis]) -> [(element index, scene key, message)] for reference

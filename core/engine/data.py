@@ -12,10 +12,9 @@ module's compiled entry points (`deformations_entry`, `inertia_entry`), the loca
 and deformation indices, the packed reference rows (`pack_reference`) and, for groups with
 mass, the constant mass Mp of the inertia points and gravity on those points. J and the
 augmented system are factored banded or, for models whose band stays wide, sparse
-(`sparse_packing`, chosen by `evaluation_cost`). An element
-module that defines these plugs into the engine without the engine naming it. Workspace
-arrays (warm start of the kinematics, the last evaluation, scratch) live here too, so the
-engine never allocates in an evaluation.
+(`sparse_packing`, chosen by `evaluation_cost`). An element module that defines these plugs
+into the engine without the engine naming it. Workspace arrays (warm start of the
+kinematics, the last evaluation, scratch) live here too: no allocation in an evaluation.
 
 Units: SI throughout (m, rad, kg, N, s), as the model's.
 """
@@ -25,6 +24,7 @@ import weakref
 import numpy as np
 
 from ..mechanics import assembly
+from ..mechanics.scales import kinematic_tolerances
 from . import sparse_packing
 from .ports import port_specs
 from .rigid import RigidPacking, positions_among
@@ -50,7 +50,8 @@ FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "
                "DeF", "stiffness", "damping", "jacobian_cache", "x_start", "xddot", "augmented",
                "augmented_rhs", "band_scratch", "j_sparse_values", "aug_sparse_values",
                "actuator_data", "currents", "port_values", "rigid_data", "rigid_weights",
-               "rigid_de", "rigid_c", "rigid_h", "rigid_force", "rigid_local", "evaluated_inputs")
+               "rigid_de", "rigid_c", "rigid_h", "rigid_force", "rigid_local", "evaluated_inputs",
+               "row_tolerance", "step_tolerance")
 
 # dims entries
 (NX, NE, NDOF, NFREE, NRIGID, NXDOF, NEDOF, NIN, NS, NGROUPS, HAS_DAMPING, MAX_M, MAX_K,
@@ -66,7 +67,7 @@ FLOAT_SLOTS = ("settings", "S", "D", "lumped", "constant_force", "group_data", "
 FORCE_INPUT, CURRENT_DRIVE, VOLTAGE_DRIVE = range(3)
 (A_KM, A_R, A_L, A_GAIN, A_SATURATION, A_WIDTH) = range(6)
 # settings entries
-TOLERANCE, SINGULAR_RATIO, SETTINGS_SIZE = range(3)
+SINGULAR_RATIO, SETTINGS_SIZE = range(2)
 # counters entries (SPARSE_PIVOTING: sparse LUs that pivoted afresh because a kept pivot failed
 # its test; SPARSE_FALLBACKS: those that could not, and were banded; numerics.sparse_lu)
 RHS_COUNT, JACOBIAN_COUNT, FAILED_STATUS, SPARSE_PIVOTING, SPARSE_FALLBACKS, EVALUATIONS, \
@@ -88,8 +89,9 @@ class EngineData:
         about a global axis of a 3-D rotational node (`ports`), or the drive signals (V) of
         the voice-coil actuators that act on them (`actuators`).
     tolerance : float
-        Kinematic tolerance relative to the length scale (default 1e-14: near round-off, so
-        the kinematic error stays below the tightest integrator tolerance).
+        Kinematic tolerance relative to each row's and unknown's unit (`mechanics.scales`:
+        m through the length scale, Euler parameters and rad through 1; default 1e-14: near
+        round-off, so the kinematic error stays below the tightest integrator tolerance).
     singular_ratio : float
         Smallest ratio of the constraint Jacobian's LU pivots before a configuration counts
         as singular (a well-posed stage: 1e-2 to 1).
@@ -109,10 +111,8 @@ class EngineData:
         without clusters.
     """
 
-    def __init__(self, model, *, tolerance=1e-14, singular_ratio=1e-6, augmented=None,
+    def __init__(self, model, *, tolerance=1e-15, singular_ratio=1e-6, augmented=None,
                  sparse=None, rigid=True):
-        from ..mechanics.kinematics import length_scale
-
         self.model = model
         nx, ne = model.nx, len(model.deformation_names)
         ndof = model.declared_dof_count
@@ -253,8 +253,9 @@ class EngineData:
         # by the integrators that make such callbacks (`engine.connect`): the engine imports
         # this module, not the other way round
         settings = np.zeros(SETTINGS_SIZE)
-        settings[TOLERANCE] = tolerance * length_scale(model)
         settings[SINGULAR_RATIO] = singular_ratio
+        # the kinematics' Newton: per row of g and per free coordinate, in its own unit
+        tolerances = kinematic_tolerances(model, tolerance, rows=rows, free=free)
         # scratch of one evaluation: the largest of the element-local buffers the engine's
         # functions lay out one after the other (slots.inertia_scratch, tangent),
         # plus the absolute DOFs at the end
@@ -275,8 +276,8 @@ class EngineData:
             "dof_positions": positions_among(free, model.dof_coordinates),
             "stressed": stressed.astype(np.int64), "input_ports": input_ports,
             "groups": np.concatenate(groups) if groups else np.zeros(0, np.int64),
-            "coordinate_index": _concat_int(coord_index), "deformation_index": _concat_int(
-                def_index),
+            "coordinate_index": np.concatenate([*coord_index, empty]),
+            "deformation_index": np.concatenate([*def_index, empty]),
             "row_of_deformation": row_of_def, "column_of_coordinate": col_of_coord,
             "pivots": np.zeros(free.size, np.int64), "mass_pivots": np.zeros(ndof, np.int64),
             "counters": np.zeros(COUNTERS_SIZE, np.int64),
@@ -330,6 +331,7 @@ class EngineData:
             "port_values": np.zeros(len(model.inputs) if model.actuators else 0),
             # the inputs of the last evaluation, scratch for their change (`input_response`)
             "evaluated_inputs": np.zeros(2 * len(model.inputs)),
+            "row_tolerance": tolerances[0], "step_tolerance": tolerances[1],
             **packing.floats(nx, free.size, max_p),
         }
         self.ints = tuple(np.ascontiguousarray(ints[name]) for name in INT_SLOTS)
@@ -491,10 +493,6 @@ def _actuator_arrays(model):
             actuator.force_constant, actuator.resistance, actuator.inductance,
             actuator.amplifier_gain, actuator.saturation)
     return kinds, data
-
-
-def _concat_int(parts):
-    return np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)
 
 
 __all__ = ["EngineData"]

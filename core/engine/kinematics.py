@@ -13,11 +13,14 @@ the touching elements' De T_e and, for a DOF coordinate on a slave, T's row.
 
 Warm start: the first-order prediction x_prev + DF_prev (q - q_prev); if its residual
 exceeds the tolerance, chord iterations with the previous LU of the constraint Jacobian
-J = dg/dx_free (converging at a rate of order |dq| / L), and full Newton from there if they
-stall, stopping on the residual or on the step. The prediction and the chord iterates are
-checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and D2e are evaluated once,
-at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it is needed (the reduced
-form, the tangent, the kinematics operation).
+J = dg/dx_free (converging at a rate of order |dq| / L; stopping on the residual or on the
+error that rate leaves after a step), and full Newton from there if they stall, stopping on
+the residual or on the step, each row and each unknown within its own tolerance (slots
+row_tolerance, step_tolerance: `mechanics.scales`, lengths through the length scale, Euler
+parameters and angles through 1, a floor 8 eps of the magnitude). The prediction and the
+chord iterates are checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and
+D2e are evaluated once, at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it
+is needed (the reduced form, the tangent, the kinematics operation).
 
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
 (J^-1 or J^-T), which takes and gives vectors in the model's order). The element
@@ -26,6 +29,7 @@ deformations e, De = de/dx and D2e come from each element module's compiled entr
 
 import numpy as np
 
+from ..mechanics.scales import ROUND_OFF
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_deformations
@@ -90,7 +94,9 @@ def _elements(table, x, order):
 # -- kinematics -----------------------------------------------------------------------------------
 @kernel
 def _residual(table, x, q, g):
-    """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in slot e."""
+    """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in slot e;
+    returns the largest |g_i| over its row's tolerance (slot row_tolerance): at most 1 when
+    solved, NaN when g is not finite."""
     dims = _i(table, slot.DIMS)
     e = _f(table, slot.E)
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
@@ -102,8 +108,11 @@ def _residual(table, x, q, g):
         g[n_rigid + j] = e[rows[n_rigid + j]] - q[n_xdof + j]
     for j in range(n_xdof):
         g[n_rigid + n_edof + j] = x[_i(table, slot.DOF_COORDS)[j]] - q[j]
+    tolerance = _f(table, slot.ROW_TOLERANCE)
     for j in range(g.size):
-        worst = max(worst, abs(g[j]))
+        r = abs(g[j]) / tolerance[j]
+        if r > worst or r != r:  # a NaN stays (NaN <= 1 is False: not solved)
+            worst = r
     return worst
 
 
@@ -159,14 +168,19 @@ def compute_DF(table):
 @kernel
 def _newton_step(table, x, g, dx):
     """x -= J^-1 g on the free coordinates, with the factors in slot lu (the step into dx,
-    n_free); the step's largest magnitude (m, rad; not finite if the step is not)."""
+    n_free); the largest |dx_a| over its unknown's tolerance (slot step_tolerance, at least
+    ROUND_OFF |x_a|: a step below a few ulps of x_a cannot refine it): at most 1 when
+    converged, not finite if the step is not."""
     free = _i(table, slot.FREE)
+    tolerance = _f(table, slot.STEP_TOLERANCE)
     copy(dx, g)
     j_solve(table, dx, False)
     step = 0.0
     for a in range(_i(table, slot.DIMS)[ed.NFREE]):
         x[free[a]] -= dx[a]
-        step = max(step, abs(dx[a]))
+        r = abs(dx[a]) / max(tolerance[a], ROUND_OFF * abs(x[free[a]]))
+        if r > step or r != r:  # a NaN stays: not finite
+            step = r
     return step
 
 
@@ -197,14 +211,13 @@ def solve_positions(table, q):
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = 0
     dims[ed.A_FACTORS] = ed.NO_FACTORS
     nx = dims[ed.NX]
-    tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
     copy(x, _f(table, slot.X_START))
     if not np.all(np.isfinite(x)):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):
         _elements(table, x, 0)  # the residual needs e alone; De only for a step
-        if _residual(table, x, q, g) <= tolerance:
+        if _residual(table, x, q, g) <= 1.0:
             copy(_f(table, slot.X)[:nx], x[:nx])
             return ed.OK
         deformations(table, x, 1, True)
@@ -222,7 +235,6 @@ def solve_kinematics(table, q):
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
     dims[ed.A_FACTORS] = ed.NO_FACTORS  # and so are the augmented system's factors
     nx = dims[ed.NX]
-    tolerance = _f(table, slot.SETTINGS)[ed.TOLERANCE]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
     if dims[ed.WARM] == 1:
         # the first-order prediction x_prev + DF_prev (q - q_prev): with DF where the reduced
@@ -243,15 +255,22 @@ def solve_kinematics(table, q):
             predicted_coordinates(table, q, x, dq, dx)
         # the residual needs e alone; the chord steps use the kept factors
         _elements(table, x, 0)
-        if _residual(table, x, q, g) <= tolerance:
+        if _residual(table, x, q, g) <= 1.0:
             deformations(table, x, 2, True)  # the slaves are filled at this x
             return _store(table, q, x)
+        previous = 0.0  # no rate before the second step
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             step = _newton_step(table, x, g, dx)
             if not np.isfinite(step):
                 break
             _elements(table, x, 0)
-            if _residual(table, x, q, g) <= tolerance or step <= tolerance:
+            # chord steps contract linearly, at the rate of two successive steps: the error
+            # left after a step is step rate / (1 - rate), not the step itself (a small step
+            # of a slow contraction is no convergence)
+            rate = step / previous if previous > 0.0 else 1.0
+            previous = step
+            if _residual(table, x, q, g) <= 1.0 or step == 0.0 or (
+                    rate < 1.0 and step * rate <= 1.0 - rate):
                 deformations(table, x, 2, True)
                 return _store(table, q, x)
     else:
@@ -260,7 +279,7 @@ def solve_kinematics(table, q):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does
         _elements(table, x, 1)
-        if _residual(table, x, q, g) <= tolerance:
+        if _residual(table, x, q, g) <= 1.0:
             _elements(table, x, 2)
             return _store(table, q, x)
         if not j_factor(table) > 0.0:
@@ -268,7 +287,7 @@ def solve_kinematics(table, q):
         step = _newton_step(table, x, g, dx)
         if not np.isfinite(step):
             return ed.NOT_CONVERGED
-        if step <= tolerance:
+        if step <= 1.0:
             _elements(table, x, 2)
             return _store(table, q, x)
     return ed.NOT_CONVERGED

@@ -8,7 +8,9 @@ For DOF values q the coordinates x = F(q) solve, on the free (non-fixed) coordin
 
 a square system whose Jacobian J is regular exactly when the model is exactly constrained.
 Newton's method, warm-started from the previous solution, converges quadratically; it stops
-when the correction is below `tolerance` times the model's length scale.
+when every unknown's correction is within `tolerance` of its own unit (lengths of the
+model's length scale, rotations and Euler parameters of 1), with a floor 8 eps of its
+magnitude (`scales`).
 
 First order: DF = dx/dq solves J DF = [0; I].  Second order: with the constraint Hessians
 H_i = d2 g_i / dx2, (D2F qdot) qdot = -J^-1 [ (DF qdot)^T H_i (DF qdot) ]_i.
@@ -25,6 +27,7 @@ import scipy.linalg
 
 from ..errors import ConvergenceError
 from . import assembly
+from .scales import kinematic_tolerances, length_scale, within
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import ElementGroup, Model
@@ -98,8 +101,9 @@ class Kinematics:
     ----------
     model : Model
     tolerance : float
-        Newton stops when its correction is below `tolerance` times the model's length
-        scale (relative; m through that scale).
+        Newton stops when every correction is within `tolerance` of its own unit
+        (relative: m through the length scale, Euler parameters and rad through 1;
+        `scales.kinematic_tolerances`).
     max_iterations : int
         Newton iterations before ConvergenceError.
     """
@@ -114,6 +118,9 @@ class Kinematics:
         self.n_rigid = model.rigid_deformations.size
         self.dof_positions = np.searchsorted(self.free, model.dof_coordinates)
         self.length_scale = length_scale(model)
+        # per residual row and per unknown, in their own units (m, rad, unitless)
+        self.row_tolerance, self.step_tolerance = kinematic_tolerances(
+            model, tolerance, rows=self.constraint_rows, free=self.free)
         self._pattern = None  # the sparse J's entries, found on first use (`factor`)
         n_free, ndof = self.free.size, model.declared_dof_count
         # Right-hand side [0; I] of J DF = [0; I]: the rows of J are (rigid deformations, DOF
@@ -245,7 +252,6 @@ class Kinematics:
             beyond the mechanism's reach or at a singular configuration).
         """
         x = np.array(x_start, dtype=float)
-        step_tolerance = self.tolerance * self.length_scale
         for _ in range(self.max_iterations):
             # A singular J, or Newton running away from a configuration it cannot reach (x
             # overflowing on the way), is answered below with a ConvergenceError of our own.
@@ -259,14 +265,17 @@ class Kinematics:
                     f"at q = {np.array2string(q, precision=6)} (a singular configuration)"
                 )
             x[self.free] -= dx
-            if np.max(np.abs(dx)) <= step_tolerance:
+            # on the step alone, always one step past a small residual: the reference for
+            # the engine, which stops on either, is as accurate as Newton gets
+            if within(dx, self.step_tolerance, magnitudes=x[self.free]):
                 break
         else:
+            worst = np.max(np.abs(dx) / self.step_tolerance)
             raise ConvergenceError(
                 f"kinematics of {self.model.name!r}: Newton did not converge in "
                 f"{self.max_iterations} iterations at q = {np.array2string(q, precision=6)} "
-                f"(last correction {np.max(np.abs(dx)):.3e} m): these DOF values lie beyond "
-                "the reach of the mechanism or at a singular configuration"
+                f"(last correction {worst:.3e} times its tolerance): these DOF values lie "
+                "beyond the reach of the mechanism or at a singular configuration"
             )
         return self.configuration(q, x)
 
@@ -371,9 +380,3 @@ def _positions(order, values):
     lookup = np.full(max(order.max(initial=-1), values.max(initial=-1)) + 1, -1)
     lookup[order] = np.arange(order.size)
     return lookup[values]
-
-
-def length_scale(model):
-    """A characteristic length (m): the largest element reference length, at least 1e-3."""
-    lengths = [group.reference["l0"].max() for group in model.groups if "l0" in group.reference]
-    return max([1e-3, *lengths])

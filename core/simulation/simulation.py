@@ -205,7 +205,7 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
         else:
             keep[0] = False
         times, states, held = times[keep], states[keep], np.array(held)[keep]
-    outputs, warnings = sim.outputs_and_warnings(states)
+    outputs, warnings = sim.outputs_and_warnings(states, times=times)
     n = sim.ndof
     return SimulationResult(model_name=model.name, method=method, rtol=rtol, times=times,
                             q=states[:, :n], qdot=states[:, n: 2 * n],

@@ -51,7 +51,7 @@ class SimulatorOutputs:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
-                                                         start=self._x)[0]
+                                                         start=self._x, times=[self._t])[0]
         return self._outputs_cache.copy()
 
     def output_values(self) -> list[float]:
@@ -89,8 +89,8 @@ class SimulatorOutputs:
             return np.array([output_value(self.model, port, x) for port in self.model.outputs])
         return x[self._output_coordinates]
 
-    def outputs_along(self, states: ArrayLike, *,
-                      start: np.ndarray | None = None) -> np.ndarray:
+    def outputs_along(self, states: ArrayLike, *, start: np.ndarray | None = None,
+                      times: ArrayLike | None = None) -> np.ndarray:
         """The declared outputs along a path of states, solving the kinematics point by point
         (warm-started from one to the next).
 
@@ -101,6 +101,8 @@ class SimulatorOutputs:
         start : ndarray (NX,), optional
             The coordinates (m, rad) the first kinematic solve starts from (default: the
             scene's initial ones).
+        times : array_like (n,), optional
+            The time of each state (s), for the error that names the state that failed.
 
         Returns
         -------
@@ -110,11 +112,13 @@ class SimulatorOutputs:
         Raises
         ------
         SimulationError
-            The kinematics cannot be solved at a state.
+            The kinematics cannot be solved at a state (it names the state's time, or its
+            place along the path without `times`).
         """
-        return self._along(states, start, None)
+        return self._along(states, start, None, times)
 
-    def outputs_and_warnings(self, states: ArrayLike) -> tuple[np.ndarray, list[str]]:
+    def outputs_and_warnings(self, states: ArrayLike, *,
+                             times: ArrayLike | None = None) -> tuple[np.ndarray, list[str]]:
         """The declared outputs along a path of states, and the range-of-validity warnings
         of those states (`flexure.core.simulation.plausibility`).
 
@@ -122,6 +126,8 @@ class SimulatorOutputs:
         ----------
         states : array_like (n, 2 NDOF + n_coils)
             Absolute states [q, qdot(, i)]: m, rad; m/s, rad/s; A.
+        times : array_like (n,), optional
+            The time of each state (s), as `outputs_along` takes them.
 
         Returns
         -------
@@ -139,7 +145,7 @@ class SimulatorOutputs:
         n_points = len(states)
         path = (np.zeros((n_points, self.model.nx)),
                 np.zeros((n_points, len(self.model.deformation_names))))
-        outputs = self._along(states, None, path)
+        outputs = self._along(states, None, path, times)
         return outputs, list(self._range_check().warnings(*path).values())
 
     def range_warnings(self) -> dict[str, str]:
@@ -163,7 +169,7 @@ class SimulatorOutputs:
             self._range = RangeCheck(self.model)
         return self._range
 
-    def _along(self, states, start, path):
+    def _along(self, states, start, path, times=None):
         data = self._output_data
         self._start_kinematics(self.model.initial_coordinates if start is None else start,
                                data)
@@ -173,9 +179,10 @@ class SimulatorOutputs:
         x, DF = data.float_array("x"), data.float_array("DF").reshape(self.model.nx, n)
         for k, y in enumerate(np.asarray(states, float)):
             status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
-            if status != ed.OK:
-                raise SimulationError(f"t = {self._t:.9g} s: outputs: "
-                                      f"{STATUS_MESSAGES[status]}")
+            if status != ed.OK:  # name the state that failed, not the simulator's time
+                where = (f"t = {times[k]:.9g} s" if times is not None else "a state")
+                raise SimulationError(f"{where} (state {k + 1} of {len(states)} along the "
+                                      f"path): outputs: {STATUS_MESSAGES[status]}")
             for j, p in enumerate(ports):
                 if p.about_axis:  # an angle, or an angular velocity from lambda_dot = DF qdot
                     euler = list(p.euler)
