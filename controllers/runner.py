@@ -185,6 +185,9 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     planned = {coordinates[axis]: stroke} if path is None else {
         **path.targets, **dict(zip(coordinates, path.displacement([1.0])[0], strict=True))}
     found = _warned(motion_warnings(model, planned), [], warn)
+
+    def warn_during(message):  # the simulator's, while the run goes: once per coordinate
+        found[:] = _warned([message], found, warn)
     kind = feedforward_kind(feedforward)
     moving = design.pairs[axis]
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
@@ -221,7 +224,8 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         else:
             t, r, position, force = _run_plant(plant, model, scene, loop, design,
                                                method=method, rtol=rtol, workdir=workdir,
-                                               progress=progress, overrides=overrides)
+                                               progress=progress, overrides=overrides,
+                                               warn=warn_during)
     wall = time.perf_counter() - start
     recorded = dict(zip(coordinates, np.max(np.abs(position - position[0]), axis=0),
                         strict=True))
@@ -260,7 +264,7 @@ def _disturbance_settings(loop, quantum, amplitude):
 
 
 def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir, progress,
-               overrides):
+               overrides, warn=None):
     """t, reference, position, force of the loop on the plant named `plant`."""
     if plant in ("fmu", "libcosim"):  # the FMU plants' packages (pythonfmu, ...) only here
         from .cosim import run_cosimulation, scene_fmu
@@ -270,7 +274,7 @@ def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir
     if plant == "inprocess":
         if controller.compiled:
             return compiled_loop(model, controller, design, method=method, rtol=rtol,
-                                 progress=progress)
+                                 progress=progress, warn=warn)
         adapter = InProcessPlant(model, method=method, rtol=rtol)
         return simulate_loop(adapter, controller, design, progress=progress)
     adapter = FmuPlant(scene_fmu(scene, model, workdir, overrides=overrides), method=method,

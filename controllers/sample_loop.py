@@ -64,7 +64,7 @@ def simulate_loop(plant, controller: LoopController, design, *, progress=None):
 
 
 def compiled_loop(model, controller: LoopController, design, *, method: str, rtol: float,
-                  progress=None):
+                  progress=None, warn=None):
     """The in-process loop of `model` as one compiled run; returns t, r, y, u like
     `simulate_loop`, to the bit. The controller's feedback is a state space
     (`controller.compiled`); its encoders' quantum goes to run_sampled_loop and its
@@ -79,6 +79,10 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
         The integrator (a `flexure.core.METHODS` name) and its relative tolerance.
     progress : callable, optional
         Called with the fraction of samples done.
+    warn : callable, optional
+        Called with the simulator's range-of-validity warning of each kind (strain,
+        distance) the first time the run's state leaves the range, while it runs (checked
+        with each progress report, about 100 times).
     """
     from flexure.core import Simulator, run_sampled_loop  # the models (numba) on first use
 
@@ -87,11 +91,22 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
                         "controller takes simulate_loop")
     sim = Simulator(model, method=method, rtol=rtol)
     feedback = controller.controller
+    said = set()
+
+    def report(fraction):  # the progress, and the range of validity as the run leaves it
+        if progress is not None:
+            progress(fraction)
+        for kind, message in sim.range_warnings().items() if warn is not None else ():
+            if kind not in said:
+                said.add(kind)
+                warn(message)
+
     t, position, force = run_sampled_loop(
         sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
         feedforward=controller.open_loop_forces,  # u_ff (+ the disturbance d)
         controller=(feedback.A, feedback.B, feedback.C, feedback.D),
         loop_inputs=[pair.input_index for pair in design.pairs],
         loop_outputs=[pair.output_index for pair in design.pairs],
-        quantum=controller.quantum, progress=progress)
+        quantum=controller.quantum,
+        progress=report if progress is not None or warn is not None else None)
     return t, controller.reference[: len(t)].copy(), position, force

@@ -116,13 +116,14 @@ def test_a_move_may_hold_an_angle(tripod, kind):
 # -- the loop's motion against the range of validity -----------------------------------------
 
 def test_a_stroke_beyond_the_range_of_validity_is_said_before_and_in_the_summary():
-    """0.25 x the stage's 0.1 m length scale: 25 mm. A 40 mm stroke is warned about once,
-    before the run (as found) and in the summary; 1 mm is not."""
+    """0.25 x the stage's 0.1 m length scale: 25 mm. A 40 mm stroke is warned about before
+    the run (as found), the bar's other end (5.x) as the run takes it there, each once, and
+    the summary keeps both; 1 mm is not."""
     said = []
     result = run_loop("stage_planar_1dof", stroke=0.04, duration=0.2, settle=0.05,
                       warn=said.append)
-    (message,) = said
-    assert message.startswith("3.x moves 0.04 m, beyond the model's range of validity "
+    assert [message.split()[0] for message in said] == ["3.x", "5.x"]
+    assert said[0].startswith("3.x moves 0.04 m, beyond the model's range of validity "
                               "(0.025 m: 0.25 x its length scale 0.1 m)")
     assert result.summary()["warnings"] == said
     quiet = []
@@ -148,7 +149,23 @@ def test_the_cli_warns_of_a_move_target_before_computing_its_path(capsys, tmp_pa
                  "--no-plot"]) == 0  # the move is made: only its result is suspect
     captured = capsys.readouterr()
     warned = [line for line in captured.err.splitlines() if "warning" in line]
-    assert warned == ["flexure loop: warning: P.x moves 0.03 m, beyond the model's range of "
-                      "validity (0.0125 m: 0.25 x its length scale 0.05 m); the result is not "
-                      "that of the flexure the scene describes"]
+    # first the target, before the path; then the wires' tops, as the run takes them along
+    assert warned[0] == ("flexure loop: warning: P.x moves 0.03 m, beyond the model's range "
+                         "of validity (0.0125 m: 0.25 x its length scale 0.05 m); the result "
+                         "is not that of the flexure the scene describes")
+    assert len(warned) == len(set(warned)) >= 2
     assert "warning: P.x moves 0.03 m" in captured.out
+
+
+def test_a_disturbance_that_throws_the_stage_out_of_range_is_said_while_the_loop_runs():
+    """400 N at 50 Hz on the 3-DOF stage (its stroke 1 mm) moves 3.x by about 29 mm, past
+    0.25 x its 0.1 m length scale: the simulator's range check speaks during the run, once,
+    and the summary keeps it; the recorded motion does not say it again."""
+    said, reports = [], []
+    result = run_loop("stage_planar_3dof", disturbance=400.0, duration=0.1, settle=0.0,
+                      warn=said.append, progress=reports.append)
+    (message,) = said
+    assert message.startswith("3.x moved 0.0") and "0.25 x its length scale 0.1 m" in message
+    assert result.summary()["warnings"] == said
+    assert np.max(np.abs(result.position[:, 0] - result.position[0, 0])) > 0.025
+    assert len(reports) >= 50  # the check rides on the progress reports
