@@ -5,6 +5,7 @@
 #include "pythonfmu/PyState.hpp"
 #include "pythonfmu/SlaveInstance.hpp"
 
+#include <algorithm> // flexure patch: std::copy
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -206,6 +207,12 @@ public:
 
     void initialize(PyGILState_STATE gilState)
     {
+        // flexure patch: after a fmi2Fatal the class is released (see cleanPyObject); fmi2Reset
+        // would call NULL (SIGSEGV): answer fmi2Fatal again instead.
+        if (pClass_ == nullptr) {
+            PyErr_SetString(PyExc_RuntimeError, "the instance was released after fmi2Fatal");
+            handle_py_exception("[initialize]", gilState);
+        }
         Py_XDECREF(pInstance_);
         Py_XDECREF(pMessages_);
 
@@ -477,28 +484,62 @@ public:
         });
     }
 
+    // flexure patch, for the six FMU-state calls below: a Python exception answers fmi2Error
+    // and leaves the instance usable (handle_py_exception(..., fatal = false)); stock answered
+    // fmi2Fatal and released the instance's objects, so the next call died by SIGSEGV.
+
     void GetFMUstate(fmi2FMUstate& state) override
     {
         py_safe_run([this, &state](PyGILState_STATE gilState) {
             auto f = PyObject_CallMethod(pInstance_, "_get_fmu_state", nullptr);
             if (f == nullptr) {
-                handle_py_exception("[_get_fmu_state] PyObject_CallMethod", gilState);
+                handle_py_exception("[_get_fmu_state] PyObject_CallMethod", gilState, false);
             }
             state = reinterpret_cast<fmi2FMUstate*>(f);
             clearLogBuffer();
         });
     }
 
-    void SetFMUstate(const fmi2FMUstate& state) override
+    std::optional<double> SetFMUstate(const fmi2FMUstate& state) override
     {
-        py_safe_run([this, &state](PyGILState_STATE gilState) {
+        std::optional<double> time;
+        py_safe_run([this, &state, &time](PyGILState_STATE gilState) {
             auto pyState = reinterpret_cast<PyObject*>(state);
             auto f = PyObject_CallMethod(pInstance_, "_set_fmu_state", "(O)", pyState);
             if (f == nullptr) {
-                handle_py_exception("[_set_fmu_state] PyObject_CallMethod", gilState);
+                handle_py_exception("[_set_fmu_state] PyObject_CallMethod", gilState, false);
             }
             clearLogBuffer();
+            // flexure patch: _set_fmu_state returning False refuses the state (the slave has
+            // logged why): fmi2Error. Stock ignored the result (and leaked it), so a refusal
+            // could only answer fmi2OK.
+            const bool refused = f == Py_False;
+            Py_DECREF(f);
+            if (refused) {
+                fail("fmi2SetFMUstate: the slave refused the state (its log says why)", gilState);
+            }
+            // flexure patch: a slave with _last_successful_time() says the time it is at after
+            // the restore, for fmi2GetRealStatus(fmi2LastSuccessfulTime); None: it cannot say.
+            if (PyObject_HasAttrString(pInstance_, "_last_successful_time")) {
+                auto t = PyObject_CallMethod(pInstance_, "_last_successful_time", nullptr);
+                if (t == nullptr) {
+                    handle_py_exception("fmi2SetFMUstate: the state is restored, but "
+                                        "_last_successful_time failed", gilState, false);
+                }
+                if (t != Py_None) {
+                    const double value = PyFloat_AsDouble(t);
+                    Py_DECREF(t);
+                    if (value == -1.0 && PyErr_Occurred()) {
+                        handle_py_exception("fmi2SetFMUstate: the state is restored, but "
+                                            "_last_successful_time is not a number", gilState, false);
+                    }
+                    time = value;
+                } else {
+                    Py_DECREF(t);
+                }
+            }
         });
+        return time;
     }
 
     void FreeFMUstate(fmi2FMUstate& state) override
@@ -516,10 +557,15 @@ public:
             auto pyState = reinterpret_cast<PyObject*>(state);
             PyObject* pyStateBytes = PyObject_CallMethod(pClass_, "_fmu_state_to_bytes", "(O)", pyState);
             if (pyStateBytes == nullptr) {
-                handle_py_exception("[SerializedFMUstateSize] PyObject_CallMethod", gilState);
+                handle_py_exception("[SerializedFMUstateSize] PyObject_CallMethod", gilState, false);
             }
-            size = PyBytes_Size(pyStateBytes);
+            // flexure patch: not bytes (-1, an exception set) is an error, not a size of 2^64 - 1
+            const auto n = PyBytes_Size(pyStateBytes);
             Py_DECREF(pyStateBytes);
+            if (n < 0) {
+                handle_py_exception("[SerializedFMUstateSize] PyBytes_Size", gilState, false);
+            }
+            size = static_cast<size_t>(n);
             clearLogBuffer();
         });
         return size;
@@ -531,15 +577,24 @@ public:
             auto pyState = reinterpret_cast<PyObject*>(state);
             PyObject* pyStateBytes = PyObject_CallMethod(pClass_, "_fmu_state_to_bytes", "(O)", pyState);
             if (pyStateBytes == nullptr) {
-                handle_py_exception("[SerializeFMUstate] PyObject_CallMethod", gilState);
+                handle_py_exception("[SerializeFMUstate] PyObject_CallMethod", gilState, false);
             }
             char* c = PyBytes_AsString(pyStateBytes);
             if (c == nullptr) {
-                handle_py_exception("[SerializeFMUstate] PyBytes_AsString", gilState);
+                Py_DECREF(pyStateBytes);
+                handle_py_exception("[SerializeFMUstate] PyBytes_AsString", gilState, false);
             }
-            for (int i = 0; i < size; i++) {
-                bytes[i] = c[i];
+            // flexure patch: stock copied `size` bytes whatever the state's length: a larger
+            // array read past the end of the Python bytes, a smaller one truncated the state
+            // silently. Copy the state's bytes; an array too small for them is an error.
+            const auto n = static_cast<size_t>(PyBytes_Size(pyStateBytes));
+            if (n > size) {
+                Py_DECREF(pyStateBytes);
+                fail("fmi2SerializeFMUstate: the state has " + std::to_string(n) +
+                        " bytes, the array given " + std::to_string(size) +
+                        " (fmi2SerializedFMUstateSize says how many)", gilState);
             }
+            std::copy(c, c + n, bytes);
             Py_DECREF(pyStateBytes);
             clearLogBuffer();
         });
@@ -550,14 +605,14 @@ public:
         py_safe_run([this, &bytes, size, &state](PyGILState_STATE gilState) {
             PyObject* pyStateBytes = PyBytes_FromStringAndSize(bytes, size);
             if (pyStateBytes == nullptr) {
-                handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState);
+                handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState, false);
             }
             PyObject* pyState = PyObject_CallMethod(pClass_, "_fmu_state_from_bytes", "(O)", pyStateBytes);
+            Py_DECREF(pyStateBytes); // flexure patch: released before an error too (it leaked)
             if (pyState == nullptr) {
-                handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState);
+                handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState, false);
             }
             state = reinterpret_cast<fmi2FMUstate*>(pyState);
-            Py_DECREF(pyStateBytes);
             clearLogBuffer();
         });
     }
@@ -572,9 +627,10 @@ public:
 private:
     fmu_data data_;
 
-    PyObject* pClass_;
-    PyObject* pInstance_{};
-    PyObject* pMessages_{};
+    // flexure patch: mutable, so that cleanPyObject (const) can forget what it released
+    mutable PyObject* pClass_;
+    mutable PyObject* pInstance_{};
+    mutable PyObject* pMessages_{};
 
     mutable std::vector<PyObject*> strBuffer;
     mutable std::vector<PyObject*> logStrBuffer;
@@ -622,20 +678,29 @@ private:
         Py_XDECREF(pClass_);
         Py_XDECREF(pInstance_);
         Py_XDECREF(pMessages_);
+        // flexure patch: forget them. Stock kept the released pointers, so every call after a
+        // fmi2Fatal ran on freed objects (SIGSEGV) and fmi2FreeInstance released them again
+        // (heap corruption); with NULL, a later call answers fmi2Fatal again (CPython refuses a
+        // NULL object with SystemError) and the free releases nothing twice.
+        pClass_ = pInstance_ = pMessages_ = nullptr;
     }
 
 
-    void handle_py_exception(const std::string& what, PyGILState_STATE gilState) const
+    // flexure patch: `fatal` false for an error the instance survives: its objects are kept,
+    // the slave's queued messages delivered, and std::runtime_error thrown (fmi2Error), also
+    // when no Python exception is set (the caller must not go on with a NULL result).
+    void handle_py_exception(const std::string& what, PyGILState_STATE gilState, bool fatal = true) const
     {
         const auto err = PyErr_Occurred();
-        if (err != nullptr) {
-            cleanPyObject();
+        if (err != nullptr || !fatal) {
+            if (fatal) cleanPyObject();
 
             PyObject *pExcType, *pExcValue, *pExcTraceback;
             PyErr_Fetch(&pExcType, &pExcValue, &pExcTraceback);
+            if (!fatal) clearLogBuffer();
 
             std::ostringstream oss;
-            oss << "Fatal py exception encountered: ";
+            oss << (fatal ? "Fatal py exception encountered: " : "Py exception encountered: ");
             oss << what << "\n";
             if (pExcValue != nullptr) {
                 PyObject* pRepr = PyObject_Repr(pExcValue);
@@ -655,8 +720,17 @@ private:
 
             PyGILState_Release(gilState);
 
+            if (!fatal) throw std::runtime_error(oss.str());
             throw fatal_error(oss.str());
         }
+    }
+
+    // flexure patch: refuse a call the instance survives (fmi2Error): the GIL released first,
+    // as handle_py_exception does, since py_safe_run does not release it when f throws.
+    [[noreturn]] void fail(const std::string& message, PyGILState_STATE gilState) const
+    {
+        PyGILState_Release(gilState);
+        throw std::runtime_error(message);
     }
 };
 

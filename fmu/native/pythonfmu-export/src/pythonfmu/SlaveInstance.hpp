@@ -78,7 +78,9 @@ public:
     virtual bool Step(double currentTime, double dt) = 0;
 
     virtual void GetFMUstate(fmi2FMUstate& state) = 0;
-    virtual void SetFMUstate(const fmi2FMUstate& state) = 0;
+    // flexure patch: returns the time the restored slave is at, when it says (see
+    // PySlaveInstance::SetFMUstate); stock returned nothing.
+    virtual std::optional<double> SetFMUstate(const fmi2FMUstate& state) = 0;
     virtual void FreeFMUstate(fmi2FMUstate& state) = 0;
 
     virtual size_t SerializedFMUstateSize(const fmi2FMUstate& state) = 0;

@@ -7,8 +7,10 @@
 #include <exception>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <regex>
+#include <unordered_set>
 
 namespace
 {
@@ -49,6 +51,31 @@ struct Fmi2Component
     std::unique_ptr<pythonfmu::SlaveInstance> slave;
     std::unique_ptr<Fmi2Logger> logger;
 };
+
+// flexure patch: the instances fmi2Instantiate made and fmi2FreeInstance has not freed yet.
+// Stock pythonfmu dereferences any component a host passes, so a NULL or freed instance (a
+// second fmi2FreeInstance, a doStep after it) ran on freed memory: SIGSEGV or SIGABRT. Every
+// function now looks its component up here first and answers fmi2Error to one that is not
+// alive (there is no logger to tell). Both objects are allocated and never destroyed: a host
+// may free an instance from its own exit handlers, after this library's statics are gone.
+std::mutex& liveMutex = *new std::mutex;
+std::unordered_set<const void*>& liveComponents = *new std::unordered_set<const void*>;
+
+Fmi2Component* liveComponent(fmi2Component c)
+{
+    const auto lock = std::lock_guard{liveMutex};
+    return liveComponents.count(c) ? static_cast<Fmi2Component*>(c) : nullptr;
+}
+
+// flexure patch: a NULL argument of the FMU-state functions answers fmi2Error with a log line,
+// as the Reference FMUs do. Stock pythonfmu handed a NULL state to Py_BuildValue (fmi2Fatal,
+// and the instance's objects released: the next call died by SIGSEGV) or dereferenced it.
+bool refuseNull(Fmi2Component* component, const void* argument, const char* what)
+{
+    if (argument != nullptr) return false;
+    component->logger->log(fmi2Error, std::string(what) + " is NULL");
+    return true;
+}
 
 } // namespace
 
@@ -107,6 +134,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName,
                 nullptr});
 
         auto component = std::make_unique<Fmi2Component>(std::move(instance), std::move(logger));
+        {
+            const auto lock = std::lock_guard{liveMutex}; // flexure patch: see liveComponent
+            liveComponents.insert(component.get());
+        }
         return component.release();
     } catch (const std::exception& e) {
         logger->log(fmi2Fatal, e.what());
@@ -117,10 +148,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName,
 
 void fmi2FreeInstance(fmi2Component c)
 {
-    if (c) {
-        const auto component = static_cast<Fmi2Component*>(c);
-        delete component;
+    // flexure patch: only a live instance is deleted; a second free is ignored (was SIGABRT)
+    {
+        const auto lock = std::lock_guard{liveMutex};
+        if (liveComponents.erase(c) == 0) return;
     }
+    delete static_cast<Fmi2Component*>(c);
 }
 
 
@@ -130,7 +163,8 @@ fmi2Status fmi2SetDebugLogging(
     size_t nCategories,
     const fmi2String categories[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
 
     std::vector<std::string> categoriesVec;
     if (nCategories > 0) {
@@ -155,7 +189,8 @@ fmi2Status fmi2SetupExperiment(
     fmi2Boolean stopTimeDefined,
     fmi2Real stopTime)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->SetupExperiment(
             startTime,
@@ -174,7 +209,8 @@ fmi2Status fmi2SetupExperiment(
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->EnterInitializationMode();
         return fmi2OK;
@@ -190,7 +226,8 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->ExitInitializationMode();
         return fmi2OK;
@@ -206,7 +243,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 
 fmi2Status fmi2Terminate(fmi2Component c)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->Terminate();
         return fmi2OK;
@@ -222,7 +260,8 @@ fmi2Status fmi2Terminate(fmi2Component c)
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->Reset();
         return fmi2OK;
@@ -242,7 +281,8 @@ fmi2Status fmi2GetReal(
     size_t nvr,
     fmi2Real value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->GetReal(vr, nvr, value);
         return fmi2OK;
@@ -261,7 +301,8 @@ fmi2Status fmi2GetInteger(
     size_t nvr,
     fmi2Integer value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->GetInteger(vr, nvr, value);
         return fmi2OK;
@@ -280,7 +321,8 @@ fmi2Status fmi2GetBoolean(
     size_t nvr,
     fmi2Boolean value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->GetBoolean(vr, nvr, value);
         return fmi2OK;
@@ -299,7 +341,8 @@ fmi2Status fmi2GetString(
     size_t nvr,
     fmi2String value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->GetString(vr, nvr, value);
         return fmi2OK;
@@ -319,7 +362,8 @@ fmi2Status fmi2SetReal(
     size_t nvr,
     const fmi2Real value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->SetReal(vr, nvr, value);
         return fmi2OK;
@@ -338,7 +382,8 @@ fmi2Status fmi2SetInteger(
     size_t nvr,
     const fmi2Integer value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->SetInteger(vr, nvr, value);
         return fmi2OK;
@@ -357,7 +402,8 @@ fmi2Status fmi2SetBoolean(
     size_t nvr,
     const fmi2Boolean value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->SetBoolean(vr, nvr, value);
         return fmi2OK;
@@ -376,7 +422,8 @@ fmi2Status fmi2SetString(
     size_t nvr,
     const fmi2String value[])
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         component->slave->SetString(vr, nvr, value);
         return fmi2OK;
@@ -394,7 +441,9 @@ fmi2Status fmi2GetFMUstate(
     fmi2Component c,
     fmi2FMUstate* state)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    if (refuseNull(component, state, "fmi2GetFMUstate: the pointer to the state")) return fmi2Error;
     try {
         component->slave->GetFMUstate(*state);
         return fmi2OK;
@@ -411,9 +460,16 @@ fmi2Status fmi2SetFMUstate(
     fmi2Component c,
     fmi2FMUstate state)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    if (refuseNull(component, state, "fmi2SetFMUstate: the state")) return fmi2Error;
     try {
-        component->slave->SetFMUstate(state);
+        // flexure patch: the slave says the time it is at after the restore (if it can), and
+        // fmi2GetRealStatus(fmi2LastSuccessfulTime) reports it; stock pythonfmu kept the end
+        // of the last doStep until the next doStep.
+        if (const auto time = component->slave->SetFMUstate(state)) {
+            component->lastSuccessfulTime = *time;
+        }
         return fmi2OK;
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
@@ -428,9 +484,14 @@ fmi2Status fmi2FreeFMUstate(
     fmi2Component c,
     fmi2FMUstate* state)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    // flexure patch: FMI 2.0 ignores a NULL state and returns NULL in *state once freed, so a
+    // host that frees the handle again or sets it is refused instead of using freed memory.
+    if (state == nullptr || *state == nullptr) return fmi2OK;
     try {
         component->slave->FreeFMUstate(*state);
+        *state = nullptr;
         return fmi2OK;
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
@@ -446,7 +507,10 @@ fmi2Status fmi2SerializedFMUstateSize(
     fmi2FMUstate state,
     size_t* size)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    if (refuseNull(component, state, "fmi2SerializedFMUstateSize: the state")) return fmi2Error;
+    if (refuseNull(component, size, "fmi2SerializedFMUstateSize: the pointer to the size")) return fmi2Error;
     try {
         *size = component->slave->SerializedFMUstateSize(state);
         return fmi2OK;
@@ -465,7 +529,10 @@ fmi2Status fmi2SerializeFMUstate(
     fmi2Byte bytes[],
     size_t size)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    if (refuseNull(component, state, "fmi2SerializeFMUstate: the state")) return fmi2Error;
+    if (size > 0 && refuseNull(component, bytes, "fmi2SerializeFMUstate: the byte array")) return fmi2Error;
     try {
         component->slave->SerializeFMUstate(state, bytes, size);
         return fmi2OK;
@@ -484,7 +551,10 @@ fmi2Status fmi2DeSerializeFMUstate(
     size_t size,
     fmi2FMUstate* state)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    if (refuseNull(component, state, "fmi2DeSerializeFMUstate: the pointer to the state")) return fmi2Error;
+    if (size > 0 && refuseNull(component, bytes, "fmi2DeSerializeFMUstate: the byte array")) return fmi2Error;
     try {
         component->slave->DeSerializeFMUstate(bytes, size, *state);
         return fmi2OK;
@@ -507,7 +577,9 @@ fmi2Status fmi2GetDirectionalDerivative(
     const fmi2Real[],
     fmi2Real[])
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Error,
         "cppfmu",
         "FMI function not supported: fmi2GetDirectionalDerivative");
@@ -521,7 +593,9 @@ fmi2Status fmi2SetRealInputDerivatives(
     const fmi2Integer[],
     const fmi2Real[])
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Error,
         "cppfmu",
         "FMI function not supported: fmi2SetRealInputDerivatives");
@@ -535,7 +609,9 @@ fmi2Status fmi2GetRealOutputDerivatives(
     const fmi2Integer[],
     fmi2Real[])
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Error,
         "cppfmu",
         "FMI function not supported: fmiGetRealOutputDerivatives");
@@ -548,7 +624,8 @@ fmi2Status fmi2DoStep(
     fmi2Real communicationStepSize,
     fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     try {
         double endTime = currentCommunicationPoint;
         const auto ok = component->slave->DoStep(
@@ -574,7 +651,9 @@ fmi2Status fmi2DoStep(
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Error,
         "FMI function not supported: fmi2CancelStep");
     return fmi2Error;
@@ -587,7 +666,9 @@ fmi2Status fmi2GetStatus(
     const fmi2StatusKind,
     fmi2Status*)
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Error,
         "FMI function not supported: fmi2GetStatus");
     return fmi2Error;
@@ -598,7 +679,8 @@ fmi2Status fmi2GetRealStatus(
     const fmi2StatusKind s,
     fmi2Real* value)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     if (s == fmi2LastSuccessfulTime) {
         *value = component->lastSuccessfulTime;
         return fmi2OK;
@@ -615,7 +697,9 @@ fmi2Status fmi2GetIntegerStatus(
     const fmi2StatusKind,
     fmi2Integer*)
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Discard,
         "FMI function not supported: fmi2GetIntegerStatus");
     return fmi2Discard;
@@ -626,7 +710,8 @@ fmi2Status fmi2GetBooleanStatus(
     const fmi2StatusKind s,
     fmi2Boolean* value)
 {
-    const auto component = static_cast<Fmi2Component*>(c);
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
     if (s == fmi2Terminated) {
         *value = component->wantsToTerminate ? fmi2True : fmi2False;
         return fmi2OK;
@@ -641,7 +726,9 @@ fmi2Status fmi2GetStringStatus(
     const fmi2StatusKind,
     fmi2String*)
 {
-    static_cast<Fmi2Component*>(c)->logger->log(
+    const auto component = liveComponent(c); // flexure patch: see liveComponent
+    if (!component) return fmi2Error;
+    component->logger->log(
         fmi2Discard, "FMI function not supported: fmi2GetStringStatus");
     return fmi2Discard;
 }
