@@ -71,7 +71,13 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
 from .compiled_engine import WARNING, take_notes
-from .pythonfmu_workarounds import FMI2_WARNING, guard_exit, log_to_host, tidy_sys_path
+from .pythonfmu_workarounds import (
+    FMI2_WARNING,
+    binary_note,
+    guard_exit,
+    log_to_host,
+    tidy_sys_path,
+)
 from .slave_states import (
     INITIALIZATION,
     INSTANTIATED,
@@ -157,6 +163,9 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
         self._unchecked_reals = {}  # {value reference: setter} of the unchecked Real inputs
+        note = binary_note(self.resources) if self.resources else None
+        if note:
+            self.log_message(f"{self.instance_name}: {note}", Fmi2Status.ok)
         for status, message in take_notes():  # what became of the compiled engine it carries
             if status == WARNING:
                 self.warn_host(kwargs, message)
