@@ -21,7 +21,8 @@ case "$(uname -s)-$(uname -m)" in
     *) echo "build.sh: $(uname -s) $(uname -m) is not a platform this script builds" \
             "(only Linux x86_64); FMUs keep pythonfmu's stock binary there" >&2; exit 1 ;;
 esac
-include=$("$python" -c "import sysconfig; print(sysconfig.get_paths()['include'])")
+include=$("$python" -c "import sysconfig; print(sysconfig.get_paths()['include'])") || {
+    echo "build.sh: $python cannot say where its headers are: give a Python 3" >&2; exit 1; }
 [ -f "$include/Python.h" ] || {
     echo "build.sh: no Python.h in $include: install the Python headers (python3-dev)" >&2
     exit 1
