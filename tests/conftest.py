@@ -55,6 +55,21 @@ def fmus(tmp_path_factory):
     return paths
 
 
+@pytest.fixture(scope="session")
+def stock_fmus(tmp_path_factory, fmus):
+    """As `fmus`, with pythonfmu's stock binary (the fallback) instead of flexure's corrected
+    build: test_fmu_abuse.py shows what still crashes the host with it."""
+    from fmpy import extract
+
+    from flexure.fmu import build_scene_fmu
+
+    folder = tmp_path_factory.mktemp("abuse-stock")
+    return [extract(str(build_scene_fmu(scene, folder / f"{scene}.fmu",
+                                        pythonfmu_binary="stock")),
+                    unzipdir=str(folder / scene))
+            for scene in ("stage_planar_3dof", "truss_1dof_x")]
+
+
 @pytest.fixture(scope="module")
 def stage():
     """stage_planar_1dof, the loops' and the profiles' plant, loaded once per test module."""
