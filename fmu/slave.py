@@ -163,9 +163,11 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
         self._unchecked_reals = {}  # {value reference: setter} of the unchecked Real inputs
-        note = binary_note(self.resources) if self.resources else None
-        if note:
-            self.log_message(f"{self.instance_name}: {note}", Fmi2Status.ok)
+        # which pythonfmu binary this is, logged at fmi2EnterInitializationMode: a message
+        # queued here reaches the host only at its next call, or else from fmi2FreeInstance,
+        # where libcosim's logger is gone (SIGSEGV: an FMU libcosim instantiates and frees
+        # with nothing in between, test_cosim_six's stale FMU)
+        self._binary_note = binary_note(self.resources) if self.resources else None
         for status, message in take_notes():  # what became of the compiled engine it carries
             if status == WARNING:
                 self.warn_host(kwargs, message)
@@ -373,6 +375,9 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
     @_fmi_call("fmi2EnterInitializationMode", INSTANTIATED, "state instantiated")
     def enter_initialization_mode(self) -> None:
         """fmi2EnterInitializationMode."""
+        if self._binary_note:
+            self.log_message(f"{self.instance_name}: {self._binary_note}", Fmi2Status.ok)
+            self._binary_note = None
         self.phase = INITIALIZATION
 
     @_fmi_call("fmi2ExitInitializationMode", INITIALIZATION,
