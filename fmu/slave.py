@@ -25,7 +25,9 @@ a logged message and the best status that binary can carry:
 - doStep: fmi2OK or fmi2Discard (Python returns True / False);
 - every other call (setupExperiment, enter/exitInitializationMode, terminate, get/set of
   values, get/set/serialize/deserialize of FMU states): fmi2OK only. A refused call is logged
-  at status error; the binary gives the Python side no way to answer fmi2Error.
+  at status error; the stock binary gives the Python side no way to answer fmi2Error.
+  flexure's corrected build of it (fmu/native, `pythonfmu_binary`) answers fmi2Error when
+  `_set_fmu_state` returns False, and asks `_last_successful_time` after a restore.
 
 What the base does, Reference-FMUs style:
 
