@@ -42,6 +42,7 @@ from flexure.core import FlexureError
 
 from .bundle import bundle_name, rewrite_imports, write_bundle
 from .model_description import fix_model_description
+from .pythonfmu_binary import RECORD, choose_binary, record
 from .requirements import FILE_NAME, format_requirements, runtime_requirements
 
 # The platforms whose binaries an FMU keeps: those flexure's FMUs were run on (docs/fmu.md).
@@ -124,7 +125,8 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *,
                     bundle: Iterable[str] = ("core", "fmu"), validate: bool = True,
                     requirements: Iterable[str] = (),
                     platforms: Iterable[str] = TRIED_PLATFORMS,
-                    units: Mapping[str, str] | None = None, **options: Any) -> Path:
+                    units: Mapping[str, str] | None = None,
+                    pythonfmu_binary: str | None = None, **options: Any) -> Path:
     """Build an FMI 2.0 co-simulation FMU from a pythonfmu slave script.
 
     Parameters
@@ -152,6 +154,11 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *,
         those flexure's FMUs were run on); pythonfmu copies all it has.
     units : dict, optional
         {variable name: unit} for Real variables the slave declares without a unit.
+    pythonfmu_binary : str, optional
+        "auto": flexure's corrected build of pythonfmu's binary where it fits, else the stock
+        one (`flexure.fmu.pythonfmu_binary`); "corrected": that build or an FMUBuildError;
+        "stock": pythonfmu's own. Default: the environment variable FLEXURE_FMU_BINARY, else
+        "auto". The FMU records which in resources/pythonfmu-binary.json.
     **options
         pythonfmu's CoSimulation flags; state get/set and serialisation default to True.
 
@@ -164,11 +171,17 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *,
     ------
     FMUBuildError
         An unknown bundle part, a script pythonfmu cannot build, no binary for the
-        platforms, or (with `validate`) the problems fmpy's validation reports.
+        platforms, an unknown `pythonfmu_binary` or a corrected one asked for that does not
+        fit, or (with `validate`) the problems fmpy's validation reports.
     """
     from pythonfmu import FmuBuilder
 
     script_path = Path(script_path)
+    try:  # chosen first: a refusal costs no build
+        binaries = {platform: choose_binary(platform, pythonfmu_binary)
+                    for platform in platforms}
+    except ValueError as error:
+        raise FMUBuildError(f"{script_path}: {error}") from None
     options.setdefault("canGetAndSetFMUstate", True)
     options.setdefault("canSerializeFMUstate", True)
     bundle = tuple(bundle)
@@ -227,8 +240,7 @@ def build_slave_fmu(script_path: str | Path, dest: str | Path, *,
             sys.path[:] = path_before
             if shadowed is not None:
                 sys.modules[script_path.stem] = shadowed
-    _patch_model_description(built, requirements=needs, units=units,
-                             platforms=tuple(platforms))
+    _patch_model_description(built, requirements=needs, units=units, binaries=binaries)
     if validate:
         problems = validate_fmu_file(built)
         if problems:
@@ -254,30 +266,36 @@ def validate_fmu_file(path: str | Path) -> list[str]:
     return [str(p) for p in validate_fmu(str(path))]
 
 
-def _patch_model_description(path, *, requirements=None, units=None,
-                             platforms=TRIED_PLATFORMS):
+def _patch_model_description(path, *, requirements=None, units=None, binaries):
     """Rewrite the FMU zip with a completed modelDescription.xml (its requirements and the
-    missing units added) and the binaries of `platforms` only."""
+    missing units added), the binaries of the platforms `binaries` names only, each the
+    corrected build where `binaries` says so, and resources/pythonfmu-binary.json saying
+    which."""
     path = Path(path)
     temporary = path.with_suffix(".fmu.tmp")
-    kept = []
+    kept, stock_sha256 = [], {}
     with zipfile.ZipFile(path) as source, zipfile.ZipFile(
             temporary, "w", compression=zipfile.ZIP_DEFLATED) as target:
         for item in source.infolist():
             parts = item.filename.split("/")
+            data = source.read(item.filename)
             if parts[0] == "binaries" and len(parts) > 2:
-                if parts[1] not in platforms:
+                if parts[1] not in binaries:
                     continue
                 kept.append(parts[1])
-            data = source.read(item.filename)
+                stock_sha256[parts[1]] = hashlib.sha256(data).hexdigest()
+                if binaries[parts[1]].data is not None:
+                    data = binaries[parts[1]].data
             if item.filename == "modelDescription.xml":
                 data = fix_model_description(data, requirements=requirements, units=units)
             target.writestr(item, data)
+        chosen = {platform: binaries[platform] for platform in kept}
+        target.writestr(f"resources/{RECORD}", record(chosen, stock_sha256))
     if not kept:
         temporary.unlink()
         path.unlink()
         raise FMUBuildError(f"{path}: pythonfmu has no binary for the platforms "
-                            f"{', '.join(platforms) or '(none given)'}")
+                            f"{', '.join(binaries) or '(none given)'}")
     shutil.move(temporary, path)
 
 
@@ -311,7 +329,8 @@ def default_tunable(scene: Mapping[str, Any]) -> list[str]:
 def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
                     tunable: Iterable[str] | None = None,
                     von_mises: bool = False, validate: bool = True,
-                    overrides: dict | None = None, engine: bool | None = None) -> Path:
+                    overrides: dict | None = None, engine: bool | None = None,
+                    pythonfmu_binary: str | None = None) -> Path:
     """Build the co-simulation FMU of a scene.
 
     Parameters
@@ -339,6 +358,9 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
         2 s) and adds about 0.7 MB (docs/fmu.md). Default: True, unless the environment
         variable FLEXURE_FMU_ENGINE is "0" (for FMUs run only where flexure is installed,
         e.g. a test suite's: that flexure runs in place of the FMU's copy).
+    pythonfmu_binary : str, optional
+        Which pythonfmu binary the FMU carries: "auto", "corrected" or "stock"
+        (`build_slave_fmu`).
 
     Returns
     -------
@@ -403,7 +425,8 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
     with tempfile.TemporaryDirectory(prefix="flexure_scene_") as temp:
         script = Path(temp) / f"{name}_{digest}.py"
         script.write_text(scene_script(name, text, tunable, von_mises))
-        built = build_slave_fmu(script, dest, validate=validate)
+        built = build_slave_fmu(script, dest, validate=validate,
+                                pythonfmu_binary=pythonfmu_binary)
     if engine is None:
         engine = os.environ.get("FLEXURE_FMU_ENGINE", "").strip() != "0"
     if engine:

@@ -221,12 +221,16 @@ def _cell_holds(cell, owner):
 #     offset 72  const fmi2CallbackFunctions* f_  -> {logger, allocateMemory, freeMemory,
 #                                                     stepFinished, componentEnvironment}
 #
-# That layout is the one of the linux64 binary of pythonfmu 0.7.0, identified by its SHA-256;
-# any other binary (another version or platform) is not read, and the message goes to stderr.
+# That layout is the one of the linux64 binary of pythonfmu 0.7.0, and of flexure's corrected
+# build of it (fmu/native: its patch leaves Fmi2Logger and PyLogger as they are), identified by
+# their SHA-256; any other binary (another version or platform) is not read, and the message
+# goes to stderr. tests/test_fmu_native.py checks that the committed build is listed here.
+_LAYOUT_0_7_0 = {"name": 16, "callbacks": 72, "component_environment": 32}
 PYTHONFMU_LOGGER_LAYOUTS = {
     # pythonfmu 0.7.0, binaries/linux64/libpythonfmu-export.so
-    "4be156a552c16f30eb4395805c59855d8d4086056d0f165442565f6c5fbac0c9":
-        {"name": 16, "callbacks": 72, "component_environment": 32},
+    "4be156a552c16f30eb4395805c59855d8d4086056d0f165442565f6c5fbac0c9": _LAYOUT_0_7_0,
+    # flexure's corrected build of it, fmu/native/linux64/libpythonfmu-export.so (patch 1)
+    "0690858abe8b5dc7267a54529dad9327fd27e53606c76d4915baa0f7db5ff24f": _LAYOUT_0_7_0,
 }
 FMI2_WARNING, FMI2_ERROR = 1, 3  # fmi2Status
 # the log categories pythonfmu declares, by status (logAll for the others)
@@ -281,3 +285,35 @@ def log_to_host(kwargs, message, status=FMI2_ERROR) -> bool:
         return True
     except Exception:  # noqa: BLE001 -- a constructor that reports must not fail otherwise
         return False
+
+
+# Which pythonfmu binary the FMU carries (flexure.fmu.pythonfmu_binary writes the record):
+# the corrected build answers what the stock one crashes on, docs/fmu.md's datasheet.
+BINARY_RECORD = "pythonfmu-binary.json"
+
+
+def binary_note(resources) -> str | None:
+    """The log line saying which pythonfmu binary this FMU carries for this platform, or None
+    where the FMU has no record of it (built before flexure recorded it, or not by flexure).
+    """
+    import json
+    import os
+    import platform
+
+    platform_name = {"linux": "linux64", "win32": "win64", "darwin": "darwin64"}.get(
+        sys.platform, sys.platform) if platform.architecture()[0] == "64bit" else None
+    try:
+        with open(os.path.join(resources, BINARY_RECORD), encoding="utf-8") as handle:
+            entry = json.load(handle).get(platform_name)
+    except (OSError, ValueError, TypeError, AttributeError):
+        return None
+    if not isinstance(entry, dict):
+        return None
+    digest = str(entry.get("sha256"))[:12]
+    if entry.get("binary") == "corrected":
+        return (f"pythonfmu binary ({platform_name}): flexure's corrected build of pythonfmu "
+                f"{entry.get('pythonfmu')} (patch {entry.get('patch')}, SHA-256 {digest}): "
+                "NULL state handles and freed instances answer fmi2Error")
+    return (f"pythonfmu binary ({platform_name}): pythonfmu's stock build (SHA-256 {digest}), "
+            f"not flexure's corrected one: {entry.get('why')}; a NULL state handle or a freed "
+            "instance crashes the host (docs/fmu.md)")

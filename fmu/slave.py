@@ -25,7 +25,9 @@ a logged message and the best status that binary can carry:
 - doStep: fmi2OK or fmi2Discard (Python returns True / False);
 - every other call (setupExperiment, enter/exitInitializationMode, terminate, get/set of
   values, get/set/serialize/deserialize of FMU states): fmi2OK only. A refused call is logged
-  at status error; the binary gives the Python side no way to answer fmi2Error.
+  at status error; the stock binary gives the Python side no way to answer fmi2Error.
+  flexure's corrected build of it (fmu/native, `pythonfmu_binary`) answers fmi2Error when
+  `_set_fmu_state` returns False, and asks `_last_successful_time` after a restore.
 
 What the base does, Reference-FMUs style:
 
@@ -71,7 +73,13 @@ from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
 from .compiled_engine import WARNING, take_notes
-from .pythonfmu_workarounds import FMI2_WARNING, guard_exit, log_to_host, tidy_sys_path
+from .pythonfmu_workarounds import (
+    FMI2_WARNING,
+    binary_note,
+    guard_exit,
+    log_to_host,
+    tidy_sys_path,
+)
 from .slave_states import (
     INITIALIZATION,
     INSTANTIATED,
@@ -157,6 +165,11 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
         self._settable_inputs = {}  # {variable kind: {value reference: (name, setter, checked)}}
         self._getters = {}  # {variable kind: {value reference: getter} of the readable ones}
         self._unchecked_reals = {}  # {value reference: setter} of the unchecked Real inputs
+        # which pythonfmu binary this is, logged at fmi2EnterInitializationMode: a message
+        # queued here reaches the host only at its next call, or else from fmi2FreeInstance,
+        # where libcosim's logger is gone (SIGSEGV: an FMU libcosim instantiates and frees
+        # with nothing in between, test_cosim_six's stale FMU)
+        self._binary_note = binary_note(self.resources) if self.resources else None
         for status, message in take_notes():  # what became of the compiled engine it carries
             if status == WARNING:
                 self.warn_host(kwargs, message)
@@ -364,6 +377,9 @@ class SafeSlave(SlaveValues, SlaveVariables, StateSnapshots, Fmi2Slave):
     @_fmi_call("fmi2EnterInitializationMode", INSTANTIATED, "state instantiated")
     def enter_initialization_mode(self) -> None:
         """fmi2EnterInitializationMode."""
+        if self._binary_note:
+            self.log_message(f"{self.instance_name}: {self._binary_note}", Fmi2Status.ok)
+            self._binary_note = None
         self.phase = INITIALIZATION
 
     @_fmi_call("fmi2ExitInitializationMode", INITIALIZATION,

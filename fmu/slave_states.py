@@ -136,23 +136,25 @@ class StateSnapshots:
             return FMUState(RefusedState(reason))
 
     def _set_fmu_state(self, state):
+        """Restore `state`; False when it is refused (logged): flexure's corrected pythonfmu
+        binary then answers fmi2Error, the stock one ignores the result and answers fmi2OK."""
         try:
             if isinstance(state, FMUState):
                 state = state.data
             if isinstance(state, RefusedState):
-                return self._error(f"fmi2SetFMUstate refused: {state.reason}; the instance "
-                                   "is unchanged")
+                return self._refuse(f"fmi2SetFMUstate refused: {state.reason}; the instance "
+                                    "is unchanged")
             if not isinstance(state, bytes):
-                return self._error(f"fmi2SetFMUstate refused: not a state of this FMU "
-                                   f"({type(state).__name__}); the instance is unchanged")
+                return self._refuse(f"fmi2SetFMUstate refused: not a state of this FMU "
+                                    f"({type(state).__name__}); the instance is unchanged")
             try:
                 data = state_format.decode(state, self.state_identity())
                 problem = self._state_problem(data)
             except state_format.StateFormatError as error:
                 problem = str(error)
             if problem:
-                return self._error(f"fmi2SetFMUstate refused: {problem}; the instance is "
-                                   "unchanged")
+                return self._refuse(f"fmi2SetFMUstate refused: {problem}; the instance is "
+                                    "unchanged")
             before = self._capture()
             try:
                 self._apply(data)
@@ -160,12 +162,29 @@ class StateSnapshots:
                 try:
                     self._apply(before)
                 except Exception as inner:  # noqa: BLE001
-                    return self._fail(f"fmi2SetFMUstate ({error}); then restoring the "
-                                      "instance as it was", inner)
-                return self._error(f"fmi2SetFMUstate refused: the model does not accept the "
-                                   f"state: {error}; the instance is unchanged")
+                    self._fail(f"fmi2SetFMUstate ({error}); then restoring the "
+                               "instance as it was", inner)
+                    return False
+                return self._refuse(f"fmi2SetFMUstate refused: the model does not accept the "
+                                    f"state: {error}; the instance is unchanged")
+            return True
         except BaseException as error:  # noqa: BLE001
             self._fail("fmi2SetFMUstate", error)
+            return False
+
+    def _refuse(self, message):
+        """Log a refused fmi2SetFMUstate; False, the refusal flexure's binary answers."""
+        self._error(message)
+        return False
+
+    def _last_successful_time(self):
+        """The communication point, s: flexure's corrected pythonfmu binary asks it after
+        fmi2SetFMUstate, for fmi2GetRealStatus(fmi2LastSuccessfulTime) (the stock binary
+        reports the end of the last doStep until the next one)."""
+        try:
+            return float(self.time)
+        except BaseException:  # noqa: BLE001 -- nothing may raise into the binary
+            return None
 
     def _state_problem(self, data):
         """Why a decoded state cannot be this instance's, or None: its fields are checked as

@@ -16,16 +16,20 @@ os.environ.setdefault("FLEXURE_FMU_ENGINE", "0")
 
 @pytest.fixture(scope="session")
 def scene_fmus(tmp_path_factory):
-    """{scene name: FMU path}, each built once, on first use."""
+    """get(scene name, binary="auto"): its FMU's path, each built once, on first use; binary
+    "stock" carries pythonfmu's stock binary instead of flexure's corrected build (the
+    fallback, flexure.fmu.pythonfmu_binary)."""
     from flexure.fmu import build_scene_fmu
 
     folder = tmp_path_factory.mktemp("fmus")
     cache = {}
 
-    def get(name):
-        if name not in cache:
-            cache[name] = build_scene_fmu(name, folder / f"{name}.fmu")
-        return cache[name]
+    def get(name, binary="auto"):
+        if (name, binary) not in cache:
+            stem = name if binary == "auto" else f"{name}-{binary}"
+            cache[name, binary] = build_scene_fmu(name, folder / f"{stem}.fmu",
+                                                  pythonfmu_binary=binary)
+        return cache[name, binary]
 
     return get
 
@@ -49,6 +53,21 @@ def fmus(tmp_path_factory):
     warm_up = run("interleaved", paths, timeout=1200)
     assert warm_up.code == 0, warm_up.out[-2000:] + warm_up.err[-2000:]
     return paths
+
+
+@pytest.fixture(scope="session")
+def stock_fmus(tmp_path_factory, fmus):
+    """As `fmus`, with pythonfmu's stock binary (the fallback) instead of flexure's corrected
+    build: test_fmu_abuse.py shows what still crashes the host with it."""
+    from fmpy import extract
+
+    from flexure.fmu import build_scene_fmu
+
+    folder = tmp_path_factory.mktemp("abuse-stock")
+    return [extract(str(build_scene_fmu(scene, folder / f"{scene}.fmu",
+                                        pythonfmu_binary="stock")),
+                    unzipdir=str(folder / scene))
+            for scene in ("stage_planar_3dof", "truss_1dof_x")]
 
 
 @pytest.fixture(scope="module")

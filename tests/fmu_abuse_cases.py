@@ -304,6 +304,122 @@ def case_free_null_state(host, other):
     check_unchanged(host, fmu, before, 1e-3)
 
 
+def case_null_handles(host, other):
+    """Every FMU-state call given a NULL state or a NULL pointer, then a doStep."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    before = outputs(host, fmu)
+    component, null = fmu.component, ctypes.c_void_p(None)
+    size = ctypes.c_size_t()
+    call("fmi2SetFMUstate", fmu.fmi2SetFMUstate, component, None)
+    call("fmi2SerializedFMUstateSize", fmu.fmi2SerializedFMUstateSize, component, None,
+         ctypes.byref(size))
+    buffer = ctypes.create_string_buffer(64)
+    call("fmi2SerializeFMUstate", fmu.fmi2SerializeFMUstate, component, None, buffer, 64)
+    call("fmi2GetFMUstate", fmu.fmi2GetFMUstate, component, None)
+    state = fmu.getFMUstate()
+    call("fmi2SerializedFMUstateSize", fmu.fmi2SerializedFMUstateSize, component, state, None)
+    call("fmi2SerializeFMUstate", fmu.fmi2SerializeFMUstate, component, state, None, 64)
+    data = state_bytes(fmu)
+    call("fmi2DeSerializeFMUstate", fmu.fmi2DeSerializeFMUstate, component, data, len(data),
+         None)
+    call("fmi2DeSerializeFMUstate", fmu.fmi2DeSerializeFMUstate, component, None, len(data),
+         ctypes.byref(null))
+    fmu.freeFMUstate(state)
+    say("VALUE handle-null", not state)  # FMI 2.0: fmi2FreeFMUstate returns NULL in it
+    check_unchanged(host, fmu, before, 1e-3)
+
+
+def case_serialize_sizes(host, other):
+    """fmi2SerializeFMUstate into an array one byte short, and one 8 bytes long."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    state = fmu.getFMUstate()
+    size = ctypes.c_size_t()
+    call("fmi2SerializedFMUstateSize", fmu.fmi2SerializedFMUstateSize, fmu.component, state,
+         ctypes.byref(size))
+    n = size.value
+    short = ctypes.create_string_buffer(b"\x55" * (n - 1), n - 1)
+    call("fmi2SerializeFMUstate", fmu.fmi2SerializeFMUstate, fmu.component, state, short,
+         n - 1)
+    say("VALUE short-untouched", short.raw == b"\x55" * (n - 1))
+    long = ctypes.create_string_buffer(b"\x55" * (n + 8), n + 8)
+    call("fmi2SerializeFMUstate", fmu.fmi2SerializeFMUstate, fmu.component, state, long,
+         n + 8)
+    say("VALUE long-holds-the-state", long.raw[:n] == fmu.serializeFMUstate(state)
+        and long.raw[n:] == b"\x55" * 8)
+    before = outputs(host, fmu)
+    fmu.freeFMUstate(state)
+    check_unchanged(host, fmu, before, 1e-3)
+
+
+def case_freed_instance(host, other):
+    """fmi2FreeInstance twice, then a doStep and a getReal on the freed instance; then a new
+    instance works."""
+    fmu = host.instance()
+    step(fmu, 0.0)
+    component = fmu.component
+    fmu.fmi2FreeInstance(component)
+    say("VALUE first-free-done")
+    fmu.fmi2FreeInstance(component)
+    say("VALUE second-free-done")
+    step(fmu, 1e-3)
+    call("fmi2GetReal", fmu.getReal, [host.first("output")])
+    call("fmi2SetFMUstate", fmu.fmi2SetFMUstate, None, None)  # a NULL instance
+    gc.collect()
+    again = host.instance("b")
+    status, _ = step(again, 0.0)
+    say("VALUE new-instance-steps", status)
+    call("fmi2Terminate", again.terminate)
+    again.fmi2FreeInstance(again.component)
+
+
+def case_raising_state_calls(host, other):
+    """A plain pythonfmu slave (tests/test_fmu_native.py's Raiser) whose state methods raise
+    on demand (RAISE_IN): each call answers, and a doStep after it steps on."""
+    fmu = host.instance()
+    t = 0.0
+    step(fmu, t)
+    state = fmu.getFMUstate()
+    data = fmu.serializeFMUstate(state)
+    size = ctypes.c_size_t()
+    buffer = ctypes.create_string_buffer(len(data))
+    calls = {
+        "get": ("fmi2GetFMUstate", lambda: fmu.getFMUstate()),
+        "set": ("fmi2SetFMUstate", lambda: fmu.setFMUstate(state)),
+        "time": ("fmi2SetFMUstate", lambda: fmu.setFMUstate(state)),
+        "not-a-time": ("fmi2SetFMUstate", lambda: fmu.setFMUstate(state)),
+        "size": ("fmi2SerializedFMUstateSize", lambda: fmu.fmi2SerializedFMUstateSize(
+            fmu.component, state, ctypes.byref(size))),
+        "serialize": ("fmi2SerializeFMUstate", lambda: fmu.fmi2SerializeFMUstate(
+            fmu.component, state, buffer, len(data))),
+        "deserialize": ("fmi2DeSerializeFMUstate", lambda: fmu.deSerializeFMUstate(data)),
+    }
+    for where, (name, function) in calls.items():
+        os.environ["RAISE_IN"] = where
+        call(name, function)
+        os.environ["RAISE_IN"] = ""
+        t += 1e-3
+        status, _ = step(fmu, t)
+        say(f"VALUE steps-after-{where}", status)
+    fmu.freeFMUstate(state)
+    call("fmi2Terminate", fmu.terminate)
+    fmu.fmi2FreeInstance(fmu.component)
+
+
+def case_raising_step(host, other):
+    """A plain pythonfmu slave whose doStep raises: fmi2Fatal; the calls after it."""
+    fmu = host.instance()
+    os.environ["RAISE_IN"] = "do_step"
+    step(fmu, 0.0)
+    os.environ["RAISE_IN"] = ""
+    step(fmu, 0.0)
+    call("fmi2GetReal", fmu.getReal, [host.first("output")])
+    call("fmi2Reset", fmu.reset)
+    fmu.fmi2FreeInstance(fmu.component)
+    say("VALUE freed")
+
+
 def case_leak(host, other, cycles=1000, warmup=10):
     """RSS growth (MB) over `cycles` instantiate/initialize/step/terminate/free cycles."""
     import resource

@@ -9,8 +9,10 @@ instances: test_fmu_memory.py.
 What pythonfmu 0.7.0's C layer allows (see flexure.fmu.slave): only doStep can answer
 anything but fmi2OK without fmi2Fatal, so refused calls answer fmi2OK with a log line at
 status error (3), and a refused setter or parameter puts the instance into the error state,
-seen as fmi2Discard at the next doStep. fmi2FreeInstance is pure C: a second free and a call
-after free cannot be caught by anything in the FMU (test_double_free..., test_step_after_free).
+seen as fmi2Discard at the next doStep. flexure's corrected build of the binary (fmu/native,
+test_fmu_native.py) also answers a refused state with fmi2Error, and a NULL state handle or a
+freed instance; with pythonfmu's stock binary, the fallback (`stock_fmus`), those crash the
+host, as the cases marked "stock" show (docs/fmu.md's datasheet).
 """
 
 import re
@@ -43,6 +45,12 @@ def test_flipped_byte_is_refused_by_the_checksum(fmus):
     result = run("flipped_byte", fmus).survived()
     refused_then_unchanged(result, "checksum mismatch")
     assert len(result.calls("fmi2SetFMUstate")) == 3
+
+
+def test_a_refused_state_answers_ok_with_the_stock_binary(stock_fmus):
+    """The fallback ignores the slave's refusal: fmi2OK, the reason logged all the same."""
+    refused_then_unchanged(run("flipped_byte", stock_fmus).survived(), "checksum mismatch",
+                           answer="OK")
 
 
 def test_truncated_state_is_refused(fmus):
@@ -159,19 +167,32 @@ def test_interleaved_instances_of_two_scenes(fmus):
 # -- what only pythonfmu's C layer can answer --------------------------------------------
 
 
-def test_double_free_is_pythonfmus_c_layer(fmus):
-    """fmi2FreeInstance deletes the C++ component without calling Python: a second free is a
-    double delete the FMU's Python side never sees. Observed: the host dies in that call."""
-    result = run("double_free", fmus)
+def test_double_free_is_ignored(fmus):
+    """The corrected binary knows its live instances: a second free is ignored."""
+    result = run("double_free", fmus).survived()
+    assert "VALUE second-free-done" in result.lines
+
+
+def test_double_free_crashes_with_the_stock_binary(stock_fmus):
+    """Stock fmi2FreeInstance deletes the C++ component without calling Python: a second free
+    is a double delete the FMU's Python side never sees. Observed: the host dies in that
+    call."""
+    result = run("double_free", stock_fmus)
     assert "VALUE first-free-done" in result.lines
     assert "VALUE second-free-done" not in result.lines
     assert result.code < 0, (result.code, result.out[-2000:], result.err[-2000:])
     assert -result.code in (signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS)
 
 
-def test_step_after_free_is_pythonfmus_c_layer(fmus):
-    """fmi2DoStep on a freed component dereferences freed C++ memory before any Python runs."""
-    result = run("step_after_free", fmus)
+def test_step_after_free_answers_error(fmus):
+    result = run("step_after_free", fmus).survived()
+    assert result.calls("fmi2DoStep") == ["OK", "ERROR"]
+
+
+def test_step_after_free_crashes_with_the_stock_binary(stock_fmus):
+    """Stock fmi2DoStep on a freed component dereferences freed C++ memory before any Python
+    runs."""
+    result = run("step_after_free", stock_fmus)
     assert "VALUE free-done" in result.lines and "SURVIVED" not in result.lines
     assert result.code < 0 and -result.code in (signal.SIGSEGV, signal.SIGABRT, signal.SIGBUS)
 
@@ -179,11 +200,11 @@ def test_step_after_free_is_pythonfmus_c_layer(fmus):
 # -- invalid state handles ------------------------------------------------------------------
 
 
-def test_a_freed_state_handle_is_refused_not_a_crash(fmus):
-    """pythonfmu's fmi2FreeFMUstate leaves the host's handle as it was: the FMU keeps the
-    freed handle's object valid, so setting it is refused by name (it was SIGSEGV) and its
-    serialized size is 0."""
-    result = run("set_freed_state", fmus).survived()
+def test_a_freed_state_handle_is_refused_not_a_crash_with_the_stock_binary(stock_fmus):
+    """Stock fmi2FreeFMUstate leaves the host's handle as it was: the FMU keeps the freed
+    handle's object valid, so setting it is refused by name (it was SIGSEGV) and its
+    serialized size is 0. (The corrected binary NULLs the handle: test_fmu_native.py.)"""
+    result = run("set_freed_state", stock_fmus).survived()
     assert result.value("handle-null") == "False"  # the binary does not NULL it
     assert result.calls("fmi2SetFMUstate") == ["OK"]
     assert result.calls("fmi2SerializedFMUstateSize") == ["OK"]
@@ -193,26 +214,41 @@ def test_a_freed_state_handle_is_refused_not_a_crash(fmus):
     assert result.value("unchanged") == "True" and result.value("steps-on") == "OK"
 
 
-def test_freeing_a_state_twice_is_survived(fmus):
-    """A second fmi2FreeFMUstate of one handle only counts down the references the FMU keeps
-    (it was a heap corruption at exit: "malloc(): unsorted double linked list corrupted")."""
-    result = run("free_state_twice", fmus).survived()
+@pytest.mark.parametrize("binary", ["corrected", "stock"])
+def test_freeing_a_state_twice_is_survived(fmus, stock_fmus, binary):
+    """A second fmi2FreeFMUstate of one handle: the corrected binary NULLed the handle at the
+    first, so the second is ignored; with the stock one it only counts down the references
+    the FMU keeps (it was a heap corruption at exit: "malloc(): unsorted double linked list
+    corrupted")."""
+    result = run("free_state_twice", fmus if binary == "corrected" else stock_fmus).survived()
     assert result.calls("fmi2FreeFMUstate") == ["OK", "OK"]
     assert result.value("steps-on") == "OK"
 
 
-def test_freeing_a_null_state_is_ignored(fmus):
-    result = run("free_null_state", fmus).survived()
+@pytest.mark.parametrize("binary", ["corrected", "stock"])
+def test_freeing_a_null_state_is_ignored(fmus, stock_fmus, binary):
+    result = run("free_null_state", fmus if binary == "corrected" else stock_fmus).survived()
     assert result.calls("fmi2FreeFMUstate") == ["OK"] and result.value("steps-on") == "OK"
 
 
 @pytest.mark.parametrize("case, function", [("set_null_state", "fmi2SetFMUstate"),
                                             ("size_null_state", "fmi2SerializedFMUstateSize")])
-def test_a_null_state_handle_is_pythonfmus_c_layer(fmus, case, function):
-    """A NULL state never reaches Python: the binary's Py_BuildValue refuses it, the binary
-    answers fmi2Fatal, releases the instance's objects, and the next doStep runs on freed
-    memory (docs/fmu.md's datasheet). Observed: Fatal, then the host dies by SIGSEGV."""
-    result = run(case, fmus)
+def test_a_null_state_handle_answers_error(fmus, case, function):
+    """The corrected binary refuses a NULL state before Python: fmi2Error, and the next
+    doStep steps."""
+    result = run(case, fmus).survived()
+    assert result.calls(function) == ["ERROR"]
+    assert f"{function}: the state is NULL" in result.logs()
+    assert "VALUE step-done" in result.lines and result.calls("fmi2DoStep") == ["OK", "OK"]
+
+
+@pytest.mark.parametrize("case, function", [("set_null_state", "fmi2SetFMUstate"),
+                                            ("size_null_state", "fmi2SerializedFMUstateSize")])
+def test_a_null_state_handle_crashes_with_the_stock_binary(stock_fmus, case, function):
+    """Stock: a NULL state never reaches Python: the binary's Py_BuildValue refuses it, the
+    binary answers fmi2Fatal, releases the instance's objects, and the next doStep runs on
+    freed memory (docs/fmu.md's datasheet). Observed: Fatal, then the host dies by SIGSEGV."""
+    result = run(case, stock_fmus)
     assert result.calls(function) == ["FATAL"]
     assert any("NULL object passed to Py_BuildValue" in m for m in result.logs())
     assert "SURVIVED" not in result.lines and "VALUE step-done" not in result.lines

@@ -14,6 +14,7 @@ compilation notice in an FMU host's log.
   nothing more, and the outputs are those of the same steps run in this process.
 """
 
+import hashlib
 import json
 import os
 import shutil
@@ -28,10 +29,12 @@ import numpy as np
 import pytest
 
 from flexure.core.numerics.compile_notice import DEFAULT_CPU_S
+from flexure.fmu.pythonfmu_binary import LIBRARY, NATIVE
 
 # A child host: instantiate the FMU (debug logging off), step it, print every message its
 # logger gets as a JSON line as it comes, then a summary line: the numba compilations in the
 # process, the CPU seconds of instantiate + initialise + steps, the outputs.
+CORRECTED_SHA256 = hashlib.sha256((NATIVE / "linux64" / LIBRARY).read_bytes()).hexdigest()
 HOST = textwrap.dedent("""
     import json, sys, time
     from numba.core import event
@@ -185,7 +188,10 @@ def test_where_this_flexure_stands_in_the_carried_engine_is_not_used(scene_fmus,
     assert [(n["status"], n["message"]) for n in notes] == [(0, (
         "host: this Python's flexure has the FMU's sources and runs in place of its copy, "
         "with its own compiled-code cache; the compiled engine the FMU carries is not used "
-        "(FLEXURE_FMU_OWN_COPY=1 uses it)"))]
+        "(FLEXURE_FMU_OWN_COPY=1 uses it)")), (0, (
+        "host: pythonfmu binary (linux64): flexure's corrected build of pythonfmu 0.7.0 "
+        f"(patch 1, SHA-256 {CORRECTED_SHA256[:12]}): NULL state handles and freed instances "
+        "answer fmi2Error"))]
 
 
 def test_the_engine_is_left_out_when_asked(tmp_path, monkeypatch):

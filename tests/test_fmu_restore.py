@@ -24,24 +24,29 @@ def steps_to(slave, t_end, h=1e-3, force=0.5):
     return [slave.step(k * h, h) for k in range(round(t_end / h))]
 
 
-def test_a_restored_state_steps_from_its_own_time(scene_fmus):
+@pytest.mark.parametrize("binary, reported", [("auto", 5e-3), ("stock", 8e-3)])
+def test_a_restored_state_steps_from_its_own_time(scene_fmus, binary, reported):
     """Stepped to 8 ms, restored to the state of 5 ms: a doStep from 5 ms is accepted and
     repeats the original sixth step bit for bit, a doStep from 8 ms is discarded naming 5 ms.
-    fmi2LastSuccessfulTime is answered by pythonfmu 0.7.0's binary from its own record of
-    the last doStep (docs/fmu.md's datasheet): 8 ms until the next doStep."""
-    slave = Slave(scene_fmus("stage_planar_3dof"))
+    fmi2LastSuccessfulTime is answered by pythonfmu's binary from its own record: flexure's
+    corrected build asks the slave after the restore (5 ms); the stock binary, the fallback,
+    only writes it in doStep (8 ms until the next doStep; docs/fmu.md's datasheet)."""
+    slave = Slave(scene_fmus("stage_planar_3dof", binary))
     first = steps_to(slave, 5e-3)
     state = slave.fmu.getFMUstate()
     original = steps_to_from(slave, 5, 8)
     assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(8e-3, abs=1e-15)
     slave.fmu.setFMUstate(state)
     np.testing.assert_array_equal(slave.y(), first[-1])  # the outputs of 5 ms again
-    assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(8e-3, abs=1e-15)
+    assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(reported,
+                                                                             abs=1e-15)
     slave.logs.clear()
     assert steps_to_from(slave, 5, 8) == original  # accepted from 5 ms, the same numbers
     assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(8e-3, abs=1e-15)
     assert not [m for s, m in slave.logs if s == FMI2_ERROR]
     slave.fmu.setFMUstate(state)
+    assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(reported,
+                                                                             abs=1e-15)
     assert do_step(slave, 8e-3) == 2
     assert [m for s, m in slave.logs if "expected the communication point t = 0.005 s, got "
             "0.008 s" in m]
@@ -138,9 +143,42 @@ FORGERIES = [
                          ids=[f[0].replace(" ", "-") for f in FORGERIES])
 def test_a_forged_state_is_refused_naming_the_field(scene_fmus, what, change, message):
     """A state with a valid checksum is still only data: each field is checked as a host's
-    value would be, the refusal (fmi2OK, logged at status error: pythonfmu 0.7.0) names it,
-    and the instance goes on unchanged."""
-    slave = Slave(scene_fmus("stage_planar_3dof"))
+    value would be, the refusal (fmi2Error from flexure's corrected pythonfmu binary; logged
+    at status error) names it, and the instance goes on unchanged."""
+    slave, forged, before = forged_state(scene_fmus("stage_planar_3dof"), change)
+    with pytest.raises(FMICallException) as raised:
+        slave.fmu.setFMUstate(forged)
+    assert raised.value.status == FMI2_ERROR
+    refusals = [m for s, m in slave.logs if s == FMI2_ERROR]
+    assert len(refusals) == 2, slave.logs  # the slave's reason, then the binary's answer
+    assert "fmi2SetFMUstate refused" in refusals[0] and "the instance is unchanged" in \
+        refusals[0]
+    assert re.search(message, refusals[0]), refusals[0]
+    assert refusals[1] == "fmi2SetFMUstate: the slave refused the state (its log says why)"
+    assert slave.y().tolist() == before
+    assert do_step(slave, 5e-3) == 0
+    assert np.all(np.isfinite(slave.y()))
+    slave.fmu.freeFMUstate(forged)
+    slave.close()
+
+
+def test_a_forged_state_is_refused_with_fmi2ok_by_the_stock_binary(scene_fmus):
+    """The fallback: pythonfmu's stock binary ignores the slave's refusal and answers fmi2OK;
+    the log names the field and the instance is unchanged all the same."""
+    change, message = FORGERIES[0][1:]
+    slave, forged, before = forged_state(scene_fmus("stage_planar_3dof", "stock"), change)
+    assert slave.fmu.setFMUstate(forged) is None  # fmi2OK (fmpy raises on anything else)
+    refusals = [m for s, m in slave.logs if s == FMI2_ERROR]
+    assert len(refusals) == 1 and re.search(message, refusals[0]), slave.logs
+    assert slave.y().tolist() == before
+    assert do_step(slave, 5e-3) == 0
+    slave.fmu.freeFMUstate(forged)
+    slave.close()
+
+
+def forged_state(path, change):
+    """(slave stepped to 5 ms, a deserialized forged state of it, the outputs before)."""
+    slave = Slave(path)
     steps_to(slave, 5e-3)
     state = slave.fmu.getFMUstate()
     data = slave.fmu.serializeFMUstate(state)
@@ -148,17 +186,7 @@ def test_a_forged_state_is_refused_naming_the_field(scene_fmus, what, change, me
     forged = slave.fmu.deSerializeFMUstate(forge(data, change))
     before = slave.y().tolist()
     slave.logs.clear()
-    assert slave.fmu.setFMUstate(forged) is None  # fmi2OK (fmpy raises on anything else)
-    refusals = [m for s, m in slave.logs if s == FMI2_ERROR]
-    assert len(refusals) == 1, slave.logs
-    assert "fmi2SetFMUstate refused" in refusals[0] and "the instance is unchanged" in \
-        refusals[0]
-    assert re.search(message, refusals[0]), refusals[0]
-    assert slave.y().tolist() == before
-    assert do_step(slave, 5e-3) == 0
-    assert np.all(np.isfinite(slave.y()))
-    slave.fmu.freeFMUstate(forged)
-    slave.close()
+    return slave, forged, before
 
 
 def test_the_unforged_state_restores(scene_fmus):

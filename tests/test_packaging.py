@@ -35,3 +35,15 @@ def test_every_package_folder_is_shipped():
 def test_every_listed_package_exists():
     for name, folder in listed_packages().items():
         assert folder.is_dir(), f"{name}: no folder {folder.relative_to(ROOT)}"
+
+
+def test_the_corrected_pythonfmu_binary_is_package_data():
+    """The FMU builder puts fmu/native/linux64's library into FMUs (flexure.fmu.
+    pythonfmu_binary): an installed flexure must carry it, its manifest and pythonfmu's
+    license, so that no compiler is needed."""
+    table = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    patterns = table["package-data"]["flexure.fmu"]
+    shipped = {path.relative_to(ROOT / "fmu").as_posix() for pattern in patterns
+               for path in (ROOT / "fmu").glob(pattern)}
+    assert {"native/linux64/libpythonfmu-export.so", "native/linux64/libpythonfmu-export.json",
+            "native/pythonfmu-export/LICENSE"} <= shipped
