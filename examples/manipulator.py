@@ -119,6 +119,14 @@ def value(name, parameters=None):
     return (parameters or PARAMETERS)[name][0]
 
 
+def layout(length, parameters):
+    """A length of the layout that is not in the table (an offset between a body's centre and
+    its attachments, the base's height; m at the table's size) at the table's `scale` (1 when
+    the table has none: the macro design): examples/manipulator_mems.py scales the design
+    down as a whole, so the layout keeps its proportions."""
+    return length * (value("scale", parameters) if "scale" in parameters else 1.0)
+
+
 class SceneParts:
     """The nodes, sections and elements of one scene as it is being assembled."""
 
@@ -210,11 +218,16 @@ def design(values):
 
 
 def sections(parameters, *, dynamic):
-    """The scene's [sections]: the flexures' rectangles and circles, and the rigid links."""
+    """The scene's [sections]: the flexures' rectangles and circles, and the rigid links.
+
+    The flexures' material is the table's `E`, `nu` and `rho_steel` (or `rho`, a table of
+    another material); a table with `wire_side` makes the wire flexures square (m), as an
+    etched one is, instead of round."""
     p = parameters
     steel = {"E": value("E", p), "nu": value("nu", p)}
     if dynamic:
-        steel |= {"rho": value("rho_steel", p), "beta": value("beta", p)}
+        rho = value("rho", p) if "rho" in p else value("rho_steel", p)
+        steel |= {"rho": rho, "beta": value("beta", p)}
 
     def leaf(width, thickness):
         return steel | {"width": value(width, p), "height": value(thickness, p)}
@@ -224,7 +237,8 @@ def sections(parameters, *, dynamic):
         "pivot": leaf("pivot_width", "pivot_thickness"),
         "push": leaf("push_height", "push_thickness"),
         "slant": leaf("slant_width", "slant_thickness"),
-        "wire": steel | {"diameter": value("wire_diameter", p)},
+        "wire": steel | ({"width": value("wire_side", p), "height": value("wire_side", p)}
+                         if "wire_side" in p else {"diameter": value("wire_diameter", p)}),
         # no stiffness: nothing of a rigid link can be released, so the exact-constraint check
         # never proposes it, and names it as the link a redundancy runs through
         "rigid": {},
@@ -244,26 +258,27 @@ def guidance(parts, k, anchor, u, *, prescribed_leaf=LEAF, prescribed_wire=WIRE)
     r = value("lever_arm", p)
     lw = value("wire_length", p)
     ls = value("pivot_length", p) / 2.0
-    g = 0.04  # m, from H's in-plane attachment to the guidance's centre along u
-    base = -0.10  # m, the height of the base and of the carriage
+    g = layout(0.04, p)  # m, from H's in-plane attachment to the guidance's centre along u
+    base = layout(-0.10, p)  # m, the height of the base and of the carriage
+    above = layout(0.01, p)  # m, a body's centre from its flexures' attachments
 
     def at(du, dv, dw):
         return np.asarray(anchor, float) + (g + du) * u + dv * v + dw * w
 
     top, middle = base + h, base + h / 2.0
-    pivot = -c - 0.02  # the lever's pivot, behind the first pair along v
+    pivot = -c - layout(0.02, p)  # the lever's pivot, behind the first pair along v
     G = f"g{k}"
-    carriage = parts.body(f"{G}_H", at(0.0, c, base - 0.01), {
+    carriage = parts.body(f"{G}_H", at(0.0, c, base - above), {
         "leaf3": at(-a, c, base), "leaf4": at(a, c, base),
         "wireZ": at(lw, pivot + 2 * r, middle),
         "push": np.asarray(anchor, float)}, mass=value("carriage_mass", p))
-    body = parts.body(f"{G}_L", at(0.0, 0.0, top + 0.01), {
+    body = parts.body(f"{G}_L", at(0.0, 0.0, top + above), {
         "leaf1": at(-a, -c, top), "leaf2": at(a, -c, top),
         "leaf3": at(-a, c, top), "leaf4": at(a, c, top),
         "wireX": at(lw, pivot + r, middle)}, mass=value("guidance_body_mass", p))
     d1, d2 = (u + v) / math.sqrt(2.0), (u - v) / math.sqrt(2.0)
     centre = at(0.0, pivot, middle)
-    lever = parts.body(f"{G}_U", at(0.0, pivot + r, middle + 0.01), {
+    lever = parts.body(f"{G}_U", at(0.0, pivot + r, middle + above), {
         "S": centre + ls * d1, "T": centre + ls * d2,
         "wireX": at(0.0, pivot + r, middle), "wireZ": at(0.0, pivot + 2 * r, middle)},
         mass=value("lever_mass", p))
@@ -299,11 +314,12 @@ def effector(parts):
     points = {f"M{i}": [value("effector_radius", p) * math.cos(math.radians(angle)),
                         value("effector_radius", p) * math.sin(math.radians(angle)), height]
               for i, angle in enumerate(BODY_ANGLES, start=1)}
-    return parts.body("E", [0.0, 0.0, height + 0.01], points, mass=value("effector_mass", p))
+    return parts.body("E", [0.0, 0.0, height + layout(0.01, p)], points,
+                      mass=value("effector_mass", p))
 
 
 def _effector_height(p):
-    # the slanted springs at 45 degrees from the attachment on C, 0.01 m inside its centre
+    # the slanted springs at 45 degrees from the attachment on C, layout(0.01) inside its centre
     return value("slant_length", p) / math.sqrt(2.0)
 
 
@@ -359,12 +375,13 @@ def scene_manipulator(parameters=PARAMETERS, *, frozen=(), angle_outputs=False, 
     for i, angle in enumerate(BODY_ANGLES, start=1):
         radial = np.array([math.cos(math.radians(angle)), math.sin(math.radians(angle)), 0.0])
         tangential = np.array([-radial[1], radial[0], 0.0])
-        centre = (_slant_start_radius(parameters) + 0.01) * radial
+        inside = layout(0.01, parameters)  # m, the slanted spring's attachment inside C
+        centre = (_slant_start_radius(parameters) + inside) * radial
         ux, uy = actuator_axes(angle)
-        offset = 0.02
+        offset = layout(0.02, parameters)
         points = parts.body(f"C{i}", centre, {
             "A": centre + offset * ux, "D": centre + offset * uy,
-            "M": centre - 0.01 * radial + 0.0 * tangential}, mass=value("body_mass", parameters))
+            "M": centre - inside * radial + 0.0 * tangential}, mass=value("body_mass", parameters))
         for j, (label, axis) in enumerate((("A", ux), ("D", uy))):
             k = 2 * i - 1 + j
             anchor = centre + offset * axis + value("push_length", parameters) * axis
@@ -391,19 +408,20 @@ def scene_manipulator(parameters=PARAMETERS, *, frozen=(), angle_outputs=False, 
     return _scene(parts, name, description, dynamic=True)
 
 
-def scene_control(parameters=PARAMETERS):
+def scene_control(parameters=PARAMETERS, *, name="manipulator_control",
+                  description="the six-DOF flexure manipulator's control model: dynamic, 1 "
+                              "beam per flexure, every elongation prescribed zero"):
     """The control model: one beam per flexure, every elongation prescribed zero.
 
     75 DOFs; its ten lowest natural frequencies lie within 0.5 % of the 816-DOF model's (the
     six suspension modes and the parasitic cluster at 166 Hz), so it is the plant of the
     closed-loop studies, where every sample costs an evaluation of the nonlinear model. It
-    has the end effector's angles as outputs, for its parasitic rotations."""
+    has the end effector's angles as outputs, for its parasitic rotations. `name` and
+    `description` are the scene's (examples/manipulator_mems.py writes another table's)."""
     coarse = dict(parameters)
     coarse["segments"] = (1, "-", PARAMETERS["segments"][2])
-    return scene_manipulator(
-        coarse, frozen=("e1",), angle_outputs=True, name="manipulator_control",
-        description="the six-DOF flexure manipulator's control model: dynamic, 1 beam per "
-                    "flexure, every elongation prescribed zero")
+    return scene_manipulator(coarse, frozen=("e1",), angle_outputs=True, name=name,
+                             description=description)
 
 
 def scene_control_vcm(parameters=PARAMETERS, coils=COILS):
