@@ -232,3 +232,21 @@ def test_step_response_does_not_depend_on_size(built, name, method):
     for s in SCALES:
         close(motion(results[s]) / s, reference,
               f"{name} x{s:g} {method} step response over the size")
+
+
+@pytest.mark.parametrize("s", SCALES)
+def test_the_exact_constraint_check_and_the_dof_choice_do_not_depend_on_size(s):
+    """A planar scene and a spatial one with their DOFs removed, so that flexure chooses
+    them: the same DOFs and the same verdict at every size (the rank decisions' rotation
+    columns are per metre of motion: constraints.column_scale)."""
+    from flexure.core import check_exact_constraint
+
+    for name in ("stage_planar_1dof", "stage_spatial_1dof"):
+        scene = load_scene(name).scene
+        scene = {**scene, "nodes": {node: {k: v for k, v in values.items() if k != "dof"}
+                                    for node, values in scene["nodes"].items()}}
+        reference, resized = build_model(scene), build_model(scaled(scene, s))
+        assert resized.dof_names == reference.dof_names
+        keys = ("nx", "nxo", "neo", "ndof")
+        assert ([check_exact_constraint(resized)[k] for k in keys]
+                == [check_exact_constraint(reference)[k] for k in keys])

@@ -10,8 +10,10 @@ check of the seed chapter:
 - under-constrained: some motion of the free coordinates changes no rigid deformation and no
   DOF; the coordinates of that motion are named (a mechanism, or a missing DOF).
 
-Rank decisions use an SVD with the rotation columns scaled by the model's length scale, and a
-relative threshold of 1e-9 on the singular values.
+Rank decisions use an SVD with the rotation columns divided by the model's length scale L (a
+rotation theta moves a point at L by L theta: the column per metre of that motion), so that
+every column is in m/m and the decisions do not depend on the model's size, and a relative
+threshold of 1e-9 on the singular values.
 """
 
 from __future__ import annotations
@@ -137,7 +139,7 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     factorisation with column pivoting of their projections: the ones that move most along
     the allowed motions first. Candidates that move equally (within `ties.TIE_RTOL`, as the
     two leaves of a symmetric guide) are taken in the scene's order, so that round-off, which
-    differs from one CPU to the next, never decides. Rotations are scaled by the model's
+    differs from one CPU to the next, never decides. Rotations are in metres through the model's
     length scale, as in the check.
 
     Parameters
@@ -322,7 +324,7 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
 def _scaled_jacobian(model, x):
     """(kin, scaled_De): the model's Kinematics and its deformation Jacobian de/dx at
     coordinates x (m, rad; default the initial ones), (NE, NX), with each rotation column
-    times the length scale (`column_scale`) so that every column is in m/m: the matrix whose
+    divided by the length scale (`column_scale`) so that every column is in m/m: the matrix whose
     rows every rank decision of this module takes, on the free coordinates `kin.free`."""
     kin = Kinematics(model)
     x = model.initial_coordinates if x is None else x
@@ -405,7 +407,10 @@ def _counted(index_sets):
 
 
 def column_scale(model: Model, length_scale: float) -> np.ndarray:
-    """Scale rotation coordinates (rad) by a length so every column is in metres.
+    """The factors that put a Jacobian's columns in metres: a rotation theta (rad, or an Euler
+    parameter) moves a point at the length scale L by u = L theta, so its column per metre of
+    u is its column per radian divided by L. Under a change of the model's size every column
+    then keeps its value (a deformation's derivative by a rotation grows with the size).
 
     Parameters
     ----------
@@ -416,9 +421,9 @@ def column_scale(model: Model, length_scale: float) -> np.ndarray:
     Returns
     -------
     ndarray (NX,)
-        1 for a translational coordinate, `length_scale` for a rotational one.
+        1 for a translational coordinate, 1 / `length_scale` (rad/m) for a rotational one.
     """
-    scale = np.full(model.nx, float(length_scale))
+    scale = np.full(model.nx, 1.0 / float(length_scale))
     scale[model.translations] = 1.0
     return scale
 
