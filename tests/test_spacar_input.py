@@ -428,3 +428,26 @@ def test_an_fmu_builds_from_a_spacar_file_and_steps_like_the_scenes_fmu(tmp_path
         results.append(run[run.dtype.names[1]])
     assert np.ptp(results[1]) > 1e-6  # it moves
     np.testing.assert_allclose(results[0], results[1], rtol=0, atol=1e-12)
+
+
+def test_a_large_import_says_how_long_it_will_take_before_it_starts(tmp_path, capsys,
+                                                                    monkeypatch):
+    """A chain of PLBEAMs whose estimate (SECONDS_PER_ELEMENT per element) passes SAY_FROM_S:
+    the count and the estimate on stderr before the work; a small file says nothing."""
+    from flexure.core.cli import spacar_import
+
+    lines = [f"X {2 * i + 1} {i * 1e-3} 0.0" for i in range(11)]
+    lines += [f"PLBEAM {i + 1} {2 * i + 1} {2 * i + 2} {2 * i + 3} {2 * i + 4}"
+              for i in range(10)]
+    lines += ["FIX 1", "FIX 2", "END", "HALT"]
+    lines += [f"ESTIFF {i + 1} 1.0D6 1.0" for i in range(10)] + ["END", "END"]
+    source = tmp_path / "chain.dat"
+    source.write_text("\n".join(lines) + "\n")
+    monkeypatch.chdir(tmp_path)
+    assert main(["import", str(source)]) == 0
+    assert "about" not in capsys.readouterr().err
+    monkeypatch.setattr(spacar_import, "SECONDS_PER_ELEMENT", 1.0)  # as if 10 s
+    assert main(["import", str(source), "-o", "again.toml"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("flexure import: 10 elements and 22 nodes: about 10 s to build and "
+                          "write\n")

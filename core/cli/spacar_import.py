@@ -1,8 +1,14 @@
 """`flexure import FILE.dat [-o SCENE.toml]`: a SPACAR input file written as a scene file."""
 
+import sys
 from pathlib import Path
 
 from . import output_file, refuse_overwriting_inputs, write_outputs
+
+# CPU seconds per element of reading, building and writing a large file (a chain of PLBEAMs:
+# 80,000 in 9.9 s on the project's 2-core machine, 2026-11-29); linear in the element count
+SECONDS_PER_ELEMENT = 1.2e-4
+SAY_FROM_S = 5.0  # a file expected to take longer is announced with its estimate
 
 
 def register(subparsers):
@@ -29,6 +35,10 @@ def run(args):
     if path.suffix.lower() != ".dat":
         raise SceneError(f"{path}: expected a SPACAR input file ending in .dat")
     data = read_spacar(path)
+    expected = SECONDS_PER_ELEMENT * len(data["elements"])
+    if expected > SAY_FROM_S:  # the building and writing take most of it: say so first
+        print(f"flexure import: {len(data['elements'])} elements and {len(data['nodes'])} "
+              f"nodes: about {expected:.0f} s to build and write", file=sys.stderr, flush=True)
     # the scene must build; whether it is exactly constrained is `flexure analyze`'s report,
     # and a scene that is not is worth importing to edit
     model = build_model(data, source=str(path), check=False)
