@@ -27,10 +27,10 @@ import sys
 import tempfile
 import time
 
-# A cold `flexure loop` on the project's 2-core development machine, empty cache (2026-11-28,
-# each engine operation compiled apart: docs/decisions.md): 42 s of CPU, 137 compilations.
-DEFAULT_CPU_S = 42.0
-DEFAULT_FUNCTIONS = 137
+# A cold `flexure loop` on the project's 2-core development machine, empty cache, load 1.3
+# (2026-11-29, docs/benchmarks.md): 31 s of CPU, 132 compilations.
+DEFAULT_CPU_S = 31.0
+DEFAULT_FUNCTIONS = 132
 RECORD_NAME = "compile-time.json"
 
 
