@@ -314,12 +314,3 @@ def _save(fig, path, title):
     fig.savefig(path, dpi=110)
     return path
 
-
-def mechanism_size(model) -> float:
-    """The size of a model's mechanism (m): the diagonal of the box around its nodes' start
-    positions (0.0 for a model without translational nodes)."""
-    positions = {}
-    for i in model.translations:
-        positions.setdefault(model.coordinate_axis[i], []).append(
-            float(model.initial_coordinates[i]))
-    return float(np.sqrt(sum((max(v) - min(v)) ** 2 for v in positions.values())))

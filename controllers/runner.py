@@ -29,7 +29,7 @@ from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
-from .loop_result import TARGET, LoopResult, mechanism_size
+from .loop_result import TARGET, LoopResult
 from .plants import FmuPlant, InProcessPlant, LinearPlant
 from .sample_loop import compiled_loop, simulate_loop
 from .user_reference import reference_stroke
@@ -154,7 +154,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     if not (isinstance(rtol, (int, float, np.floating)) and np.isfinite(rtol) and 0 < rtol < 1):
         raise LoopError(f"rtol must be a number between 0 and 1, got {rtol!r}")
     # the models (numba, scipy) on first use
-    from flexure.core import METHODS, load_scene, prepare
+    from flexure.core import METHODS, RangeCheck, load_scene, prepare
 
     if method not in METHODS:
         raise LoopError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
@@ -205,7 +205,8 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
                 "loop_units": [{"force": model.inputs[p.input_index].unit.replace(".", " "),
                                 "position": model.outputs[p.output_index].unit}
                                for p in design.pairs],
-                "size": mechanism_size(model),  # m: a held angle's target (loop_result.py)
+                # m: a held angle's target (loop_result.py)
+                "size": RangeCheck(model).scale,
                 "reference": ("profile" if path is None else "path") if reference is None
                 else ("callable" if callable(reference) else "samples"),
                 **_disturbance_settings(loop, quantum, disturbance)}

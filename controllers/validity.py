@@ -1,5 +1,5 @@
 """A loop's motion against the model's range of validity (flexure.core.RangeCheck): a move or
-a stroke that takes a node farther than 0.25 times the model's length scale from where it
+a stroke that takes a node farther than 0.25 times the mechanism's size from where it
 started leaves the small-deformation flexure the scene describes. Said before the run (the
 requested strokes and move targets) and after it (the positions the loops recorded), as
 warnings: the run still goes, as `flexure simulate` does beyond the range."""
@@ -28,7 +28,7 @@ def motion_warnings(model, displacements):
     check = RangeCheck(model)
     translations = {model.coordinate_names[i] for i in model.translations}
     return [f"{name} moves {abs(value):.3g} m, beyond the model's range of validity "
-            f"({check.distance_bound:.3g} m: 0.25 x its length scale {check.scale:.3g} m); "
+            f"({check.distance_bound:.3g} m: 0.25 x its size {check.scale:.3g} m); "
             "the result is not that of the flexure the scene describes"
             for name, value in displacements.items()
             if name in translations and np.isfinite(value) and abs(value) > check.distance_bound]

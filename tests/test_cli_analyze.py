@@ -102,7 +102,7 @@ def test_a_stage_pushed_flat_is_unstable_and_out_of_its_range(capsys):
     warnings = json.loads(capsys.readouterr().out)["warnings"]
     assert len(warnings) == 2
     assert warnings[0].startswith("unstable equilibrium") and "mode" not in warnings[0]
-    assert "beyond the model's range of validity (0.25 x its length scale 0.1 m)" in warnings[1]
+    assert "beyond the model's range of validity (0.25 x its size 0.141 m)" in warnings[1]
 
 
 def test_a_singular_stiffness_is_not_mistaken_for_an_unstable_one():

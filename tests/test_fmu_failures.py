@@ -79,7 +79,7 @@ def test_a_state_beyond_the_range_of_validity_is_a_warning_in_the_log(scene_fmus
     warnings = [message for status, message in slave.logs if status == 1]
     assert len(warnings) == 2
     assert any("axial strain" in m and "range of validity" in m for m in warnings)
-    assert any("moved" in m and "0.25 x its length scale" in m for m in warnings)
+    assert any("moved" in m and "0.25 x its size" in m for m in warnings)
     slave.close()
 
 

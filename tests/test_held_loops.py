@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from flexure.controllers import run_loop
-from flexure.controllers.loop_result import TARGET, LoopResult, mechanism_size
+from flexure.controllers.loop_result import TARGET, LoopResult
 from flexure.controllers.move_path import move_path
 from flexure.core import inverse_statics, load_scene, output_value, position_port
+from flexure.core.simulation.plausibility import mechanism_size
 
 
 @pytest.fixture(scope="module")
@@ -116,15 +117,15 @@ def test_a_move_may_hold_an_angle(tripod, kind):
 # -- the loop's motion against the range of validity -----------------------------------------
 
 def test_a_stroke_beyond_the_range_of_validity_is_said_before_and_in_the_summary():
-    """0.25 x the stage's 0.1 m length scale: 25 mm. A 40 mm stroke is warned about before
-    the run (as found), the bar's other end (5.x) as the run takes it there, each once, and
-    the summary keeps both; 1 mm is not."""
+    """0.25 x the stage's size (the 0.1 m square's diagonal, 0.141 m): 35 mm. A 40 mm stroke
+    is warned about before the run (as found), the bar's other end (5.x) as the run takes it
+    there, each once, and the summary keeps both; 1 mm is not."""
     said = []
     result = run_loop("stage_planar_1dof", stroke=0.04, duration=0.2, settle=0.05,
                       warn=said.append)
     assert [message.split()[0] for message in said] == ["3.x", "5.x"]
     assert said[0].startswith("3.x moves 0.04 m, beyond the model's range of validity "
-                              "(0.025 m: 0.25 x its length scale 0.1 m)")
+                              "(0.0354 m: 0.25 x its size 0.141 m)")
     assert result.summary()["warnings"] == said
     quiet = []
     assert run_loop("stage_planar_1dof", duration=0.2, settle=0.05,
@@ -135,8 +136,8 @@ def test_motion_warnings_judge_translations_only(tripod):
     from flexure.controllers.validity import motion_warnings
 
     assert motion_warnings(tripod, {"Pr.rz": 10.0, "P.x": 1e-3}) == []
-    (message,) = motion_warnings(tripod, {"P.x": -0.02, "P.y": float("nan")})
-    assert message.startswith("P.x moves 0.02 m, beyond the model's range of validity")
+    (message,) = motion_warnings(tripod, {"P.x": -0.025, "P.y": float("nan")})
+    assert message.startswith("P.x moves 0.025 m, beyond the model's range of validity")
 
 
 def test_the_cli_warns_of_a_move_target_before_computing_its_path(capsys, tmp_path,
@@ -149,23 +150,22 @@ def test_the_cli_warns_of_a_move_target_before_computing_its_path(capsys, tmp_pa
                  "--no-plot"]) == 0  # the move is made: only its result is suspect
     captured = capsys.readouterr()
     warned = [line for line in captured.err.splitlines() if "warning" in line]
-    # first the target, before the path; then the wires' tops, as the run takes them along
-    assert warned[0] == ("flexure loop: warning: P.x moves 0.03 m, beyond the model's range "
-                         "of validity (0.0125 m: 0.25 x its length scale 0.05 m); the result "
-                         "is not that of the flexure the scene describes")
-    assert len(warned) == len(set(warned)) >= 2
+    # the target, before the path; the run's own motion of P.x is not said again
+    assert warned == ["flexure loop: warning: P.x moves 0.03 m, beyond the model's range "
+                      "of validity (0.0212 m: 0.25 x its size 0.085 m); the result is not "
+                      "that of the flexure the scene describes"]
     assert "warning: P.x moves 0.03 m" in captured.out
 
 
 def test_a_disturbance_that_throws_the_stage_out_of_range_is_said_while_the_loop_runs():
-    """400 N at 50 Hz on the 3-DOF stage (its stroke 1 mm) moves 3.x by about 29 mm, past
-    0.25 x its 0.1 m length scale: the simulator's range check speaks during the run, once,
-    and the summary keeps it; the recorded motion does not say it again."""
+    """600 N at 50 Hz on the 3-DOF stage (its stroke 1 mm) moves 3.x by more than 35 mm,
+    0.25 x its 0.141 m size: the simulator's range check speaks during the run, once, and the
+    summary keeps it; the recorded motion does not say it again."""
     said, reports = [], []
-    result = run_loop("stage_planar_3dof", disturbance=400.0, duration=0.1, settle=0.0,
+    result = run_loop("stage_planar_3dof", disturbance=600.0, duration=0.1, settle=0.0,
                       warn=said.append, progress=reports.append)
     (message,) = said
-    assert message.startswith("3.x moved 0.0") and "0.25 x its length scale 0.1 m" in message
+    assert message.startswith("3.x moved 0.0") and "0.25 x its size 0.141 m" in message
     assert result.summary()["warnings"] == said
-    assert np.max(np.abs(result.position[:, 0] - result.position[0, 0])) > 0.025
+    assert np.max(np.abs(result.position[:, 0] - result.position[0, 0])) > 0.0354
     assert len(reports) >= 50  # the check rides on the progress reports

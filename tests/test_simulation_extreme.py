@@ -177,7 +177,7 @@ def test_a_state_beyond_the_range_of_validity_is_reported_not_silent(capsys):
     wild = simulate(model, 1e-3, inputs={"F": 1e9}, rtol=1e-6, output_times=[0.0, 1e-3])
     assert any("beyond the model's range of validity" in w and "axial strain" in w
                for w in wild.warnings)
-    assert any(f"({DISTANCE_LIMIT:g} x its length scale 0.1 m)" in w for w in wild.warnings)
+    assert any(f"({DISTANCE_LIMIT:g} x its size 0.141 m)" in w for w in wild.warnings)
     assert f"|strain| <= {STRAIN_LIMIT:g}" in " ".join(wild.warnings)
     calm = simulate(model, 0.05, inputs={"F": 1.0}, rtol=1e-6)
     assert calm.warnings == []

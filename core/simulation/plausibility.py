@@ -12,7 +12,9 @@ instead of being returned in silence:
   0.5 % for spring steel). Trusses are left out: a scene uses them for springs too, whose
   linear law holds at any elongation;
 - translation of any node from the start configuration: <= DISTANCE_LIMIT (0.25) times the
-  model's length scale (its longest element).
+  mechanism's size (`mechanism_size`: the diagonal of the box around its nodes' start
+  positions). Its size, not its longest element: a leaf meshed into 16 beams is as long as
+  one, and moving a quarter of one segment is not leaving the range.
 """
 
 from __future__ import annotations
@@ -40,8 +42,7 @@ class RangeCheck:
     ----------
     model : Model
         Its beams' lengths and its translational coordinates' start values set the bounds:
-        `strain_bound` (m, per beam), `distance_bound` (m), `scale` (m, the longest
-        element, at least 1 mm).
+        `strain_bound` (m, per beam), `distance_bound` (m), `scale` (m, `mechanism_size`).
     """
 
     def __init__(self, model: Model) -> None:
@@ -55,9 +56,7 @@ class RangeCheck:
                            else np.zeros(0, np.int64))
         self.length = np.concatenate(lengths) if lengths else np.zeros(0)
         self.strain_bound = STRAIN_LIMIT * self.length  # |e1| beyond it: out of range (m)
-        # the length scale of the kinematics: the longest element, at least 1 mm
-        self.scale = max([1e-3, *(float(np.max(group.reference["l0"]))
-                                  for group in model.groups if "l0" in group.reference)])
+        self.scale = mechanism_size(model)
         self.translational = np.asarray(model.translations, dtype=np.int64)
         self.start = np.asarray(model.initial_coordinates, float)[self.translational]
         self.distance_bound = DISTANCE_LIMIT * self.scale
@@ -154,5 +153,30 @@ class RangeCheck:
                 name = self.model.coordinate_names[self.translational[worst[1]]]
                 found["distance"] = (f"{name} moved {distance[worst]:.3g} m from the start, "
                                      f"beyond the model's range of validity ({DISTANCE_LIMIT:g} x "
-                                     f"its length scale {self.scale:.3g} m)")
+                                     f"its size {self.scale:.3g} m)")
         return found
+
+
+def mechanism_size(model: Model) -> float:
+    """The size of a model's mechanism (m): the diagonal of the box around its translational
+    nodes' start positions; the longest element where that is zero (a single node on
+    springs), 1 m without either.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    float
+        m, > 0.
+    """
+    x0 = np.asarray(model.initial_coordinates, float)
+    axes = model.coordinate_axis[model.translations].astype(str)
+    spans = [np.ptp(x0[model.translations[axes == axis]]) for axis in np.unique(axes)]
+    size = float(np.sqrt(np.sum(np.square(spans)))) if spans else 0.0
+    if size > 0.0:
+        return size
+    lengths = [float(np.max(group.reference["l0"])) for group in model.groups
+               if "l0" in group.reference and group.reference["l0"].size]
+    return max(lengths) if lengths and max(lengths) > 0.0 else 1.0
