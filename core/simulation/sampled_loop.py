@@ -25,7 +25,7 @@ default) a changed force costs one evaluation and the integrator steps on with i
 Newton matrix; with CVODE it restarts at every changed force (its C functions called directly).
 The loop borrows the integrator through `Simulator.held_input_drive` and restarts it through
 the kernels `Simulator._restart` runs (`stepper.restart_plant`, `esdirk.restart`,
-`sundials.cvode_restart`); the methods it drives are those with `Method.compiled_loop`
+`sundials_restart.cvode_restart`); the methods it drives are those with `Method.compiled_loop`
 (`methods.COMPILED_LOOP_METHODS`), each by the driver of its stepper's module (`DRIVERS`).
 """
 
@@ -52,11 +52,23 @@ from ..numerics.native import (
     call_solve,
     call_with_time,
 )
-from . import esdirk, sundials
+from . import esdirk
 from .measuring import start_from_plant
 from .methods import COMPILED_LOOP_METHODS
 from .status import STATUS_MESSAGES
 from .stepper import restart_plant
+from .sundials_restart import (
+    A_ACTUAL_INIT_STEP,
+    A_ANALYTIC,
+    A_MEMORY,
+    A_SOLVE,
+    A_STOP,
+    A_TRET,
+    A_Y,
+    L_INITIAL_STEP,
+    L_JACOBIAN,
+    cvode_restart,
+)
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -197,10 +209,10 @@ def _esdirk_samples(sim, solver, addresses, loop_state, held, loop):
 
 def _cvode_samples(sim, solver, addresses, loop_state, held, loop):
     """run(start, stop) -> flag: samples start .. stop - 1 on CVODE, restarting it at every
-    change of the held force (`sundials.cvode_restart`, with what the solver has learnt in
+    change of the held force (`sundials_restart.cvode_restart`, with what the solver has learnt in
     its own arrays)."""
     # whether a Jacobian is kept for the next restart (sundials.Cvode.reset)
-    solver.learnt[sundials.L_JACOBIAN] = float(solver.jacobian_cached())
+    solver.learnt[L_JACOBIAN] = float(solver.jacobian_cached())
     scratch = np.zeros(2 * sim.ndof)
 
     def run(start, stop):
@@ -208,7 +220,7 @@ def _cvode_samples(sim, solver, addresses, loop_state, held, loop):
         flag = _loop(addresses, solver.address_table, loop_state, solver.learnt, solver.totals,
                      held, solver.y_array, scratch, start, stop, *loop)
         if sim.data.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
-            solver.learnt[sundials.L_JACOBIAN] = 1.0
+            solver.learnt[L_JACOBIAN] = 1.0
         return flag
 
     return run
@@ -266,7 +278,7 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 
 
 # the addresses handed to the compiled loop, in this order (CVODE's own are in its
-# `address_table`, sundials.A_...)
+# `address_table`, sundials_restart.A_...)
 (_PLANT, _OUTPUT, _ENGINE, _ADDRESSES) = range(4)
 _MEASURE_FAILED = -1000
 
@@ -349,8 +361,8 @@ def _loop(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start,
     `Simulator._restart` does, through the same kernels."""
     plant = addresses[_PLANT]
     x_plant = engine.float_array(plant, slots.X)
-    memory = cvode[sundials.A_MEMORY]
-    tret = carray(as_float_pointer(cvode[sundials.A_TRET]), (1,))
+    memory = cvode[A_MEMORY]
+    tret = carray(as_float_pointer(cvode[A_TRET]), (1,))
     t = loop_state[0]
     restart = loop_state[1] != 0.0
     for k in range(start, stop):
@@ -360,22 +372,22 @@ def _loop(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start,
             return _MEASURE_FAILED
         if changed or restart:  # as Simulator.set_inputs and its restart in advance
             restart_plant(plant, held, x_plant, True)
-            flag = sundials.cvode_restart(cvode, learnt, totals, t)
+            flag = cvode_restart(cvode, learnt, totals, t)
             if flag < 0:
                 loop_state[0] = t
                 return flag
             restart = False
         t_next = (k + 1) / fs
-        call_with_time(cvode[sundials.A_STOP], memory, t_next)
-        flag = call_solve(cvode[sundials.A_SOLVE], memory, t_next, cvode[sundials.A_Y],
-                          cvode[sundials.A_TRET], 1)
+        call_with_time(cvode[A_STOP], memory, t_next)
+        flag = call_solve(cvode[A_SOLVE], memory, t_next, cvode[A_Y],
+                          cvode[A_TRET], 1)
         if flag < 0:
             loop_state[0] = tret[0]
             loop_state[1] = 1.0
             return flag
-        if learnt[sundials.L_INITIAL_STEP] == 0.0:  # as sundials.Cvode.learn_initial_step
-            call_get_real(cvode[sundials.A_ACTUAL_INIT_STEP], memory, learnt.ctypes.data)
-        learnt[sundials.L_JACOBIAN] = 1.0 if cvode[sundials.A_ANALYTIC] != 0 else 0.0
+        if learnt[L_INITIAL_STEP] == 0.0:  # as sundials.Cvode.learn_initial_step
+            call_get_real(cvode[A_ACTUAL_INIT_STEP], memory, learnt.ctypes.data)
+        learnt[L_JACOBIAN] = 1.0 if cvode[A_ANALYTIC] != 0 else 0.0
         t = t_next
     loop_state[0] = t
     loop_state[1] = 1.0 if restart else 0.0

@@ -32,9 +32,6 @@ from ..numerics.jit import kernel
 from ..numerics.native import (
     address_of,
     call_engine,
-    call_get_long,
-    call_reinit,
-    call_with_time,
     dense_matrix_data,
     nvector_data,
 )
@@ -42,6 +39,29 @@ from .methods import REGISTRY, SUNDIALS_METHODS
 from .status import STATUS_MESSAGES
 from .stepper import Stepper
 from .sundials_libraries import function_address, libraries
+from .sundials_restart import (
+    A_ACTUAL_INIT_STEP,
+    A_ANALYTIC,
+    A_DATA,
+    A_INIT_STEP,
+    A_MEMORY,
+    A_NUM_JACOBIANS,
+    A_NUM_RHS,
+    A_NUM_STEPS,
+    A_REINIT,
+    A_SIZE,
+    A_SOLVE,
+    A_STOP,
+    A_TRET,
+    A_Y,
+    L_INITIAL_STEP,
+    L_JACOBIAN,
+    T_JACOBIANS,
+    T_RHS,
+    T_SCRATCH,
+    T_STEPS,
+    cvode_restart,
+)
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
@@ -50,15 +70,6 @@ TOO_MUCH_WORK = -1  # CV_TOO_MUCH_WORK, IDA_TOO_MUCH_WORK: the step limit of one
 MAX_STEPS_PER_CALL = 1_000_000  # the step limit of a call without a budget of its own
 METHODS = SUNDIALS_METHODS  # the methods this module runs
 JACOBIANS = ("analytic", "finite-difference")
-# Cvode.address_table: the addresses its compiled restart (`cvode_restart`) and the compiled
-# sampled loop call, in this order
-(A_SOLVE, A_REINIT, A_STOP, A_MEMORY, A_Y, A_TRET, A_INIT_STEP, A_ACTUAL_INIT_STEP,
- A_NUM_STEPS, A_NUM_RHS, A_NUM_JACOBIANS, A_DATA, A_ANALYTIC, A_SIZE) = range(14)
-# Cvode.learnt: what a restart keeps: [initial step (s; 0: SUNDIALS' estimate), 1.0 when a
-# Jacobian is kept for the next setup]
-L_INITIAL_STEP, L_JACOBIAN = range(2)
-# _Solver.totals: the counts before the last (re)start (ReInit zeroes SUNDIALS'), and a scratch
-T_STEPS, T_RHS, T_JACOBIANS, T_SCRATCH = range(4)
 
 
 
@@ -128,34 +139,6 @@ _CV_RHS = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP)
 _CV_JAC = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP)
 _IDA_RES = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP, _VP)
 _IDA_JAC = ctypes.CFUNCTYPE(_INT, _D, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP, _VP)
-
-
-@kernel
-def _add_count(function, memory, totals, slot):
-    call_get_long(function, memory, totals[T_SCRATCH:].ctypes.data)
-    totals[slot] += totals[T_SCRATCH]
-
-
-@kernel
-def cvode_restart(addresses, learnt, totals, t):
-    """Restart CVODE at time t (s) at order 1 from the state in its y vector, with the inputs
-    in the packed model: its counts since the last restart added to `totals`, ReInit, the
-    learnt initial step set, and the kept Jacobian handed back once at the next setup (see
-    `Cvode.reset`). `Cvode.reset` and the compiled sampled loop both restart through it.
-    Returns 0 or ReInit's negative flag."""
-    memory = addresses[A_MEMORY]
-    _add_count(addresses[A_NUM_STEPS], memory, totals, T_STEPS)
-    _add_count(addresses[A_NUM_RHS], memory, totals, T_RHS)
-    _add_count(addresses[A_NUM_JACOBIANS], memory, totals, T_JACOBIANS)
-    engine.int_array(addresses[A_DATA], slots.COUNTERS)[ed.FAILED_STATUS] = 0
-    flag = call_reinit(addresses[A_REINIT], memory, t, addresses[A_Y])
-    if flag < 0:
-        return flag
-    if learnt[L_INITIAL_STEP] > 0.0:
-        call_with_time(addresses[A_INIT_STEP], memory, learnt[L_INITIAL_STEP])
-    if learnt[L_JACOBIAN] != 0.0 and addresses[A_ANALYTIC] != 0:
-        engine.int_array(addresses[A_DATA], slots.DIMS)[ed.JACOBIAN_REUSE] = 1
-    return 0
 
 
 # -- the integrators ----------------------------------------------------------------------------
