@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from flexure.core.numerics.blas import blas_threads
 from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .loop_controller import LoopController
@@ -217,6 +218,9 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         linear = LinearPlant(model, linear_model=design_options.get("linear_model"))
     start = time.perf_counter()
     with contextlib.ExitStack() as stack:
+        # every plant's loop with one BLAS thread, the host's limits back after it
+        # (sample_loop.py: small per-sample calls; several threads spin under load)
+        stack.enter_context(blas_threads())
         if workdir is None and plant in ("fmu", "libcosim"):  # FMUs built for this run only
             workdir = stack.enter_context(tempfile.TemporaryDirectory(
                 prefix="flexure_loop_", ignore_cleanup_errors=True))

@@ -9,6 +9,12 @@ Two implementations of the same loop (the timing is in loop_controller.py):
   `InProcessPlant`; the tests hold one against the other.
 
 Both return t (N+1,) s, reference and position (N+1, n_loops) m, force (N+1, n_loops) N.
+Both run with one BLAS thread (`blas_threads`, scoped to the loop: the host's limits are back
+when it returns): a loop's BLAS calls are small, per sample (the linear plant's 1014-state
+modal step, the Newton solves of an analysis a controller calls), and several threads spin
+against other work on a loaded machine: `flexure loop manipulator_reduced --plant linear`
+took 6 to 127 s with OpenBLAS's two threads under load against 1.1 to 1.9 s with one
+(docs/benchmarks.md).
 `compiled_loop` runs a state-space feedback (`LoopController.compiled`), with its encoder
 quantisation (run_sampled_loop's `quantum`: the same q * round(y / q)) and its disturbance
 force (on the feedforward array); a callable feedback, called with the sample index, takes
@@ -17,10 +23,13 @@ force (on the feedforward array); a callable feedback, called with the sample in
 
 import numpy as np
 
+from flexure.core.numerics.blas import blas_threads
+
 from .errors import LoopError
 from .loop_controller import LoopController
 
 
+@blas_threads()
 def simulate_loop(plant, controller: LoopController, design, *, progress=None):
     """Step `plant` (plants.py interface) under `controller`; returns t, r, y, u arrays.
 
@@ -63,6 +72,7 @@ def simulate_loop(plant, controller: LoopController, design, *, progress=None):
     return t, controller.reference[: N + 1].copy(), position, force
 
 
+@blas_threads()
 def compiled_loop(model, controller: LoopController, design, *, method: str, rtol: float,
                   progress=None, warn=None):
     """The in-process loop of `model` as one compiled run; returns t, r, y, u like

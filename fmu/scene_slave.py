@@ -61,6 +61,7 @@ from pythonfmu.enums import Fmi2Status
 from flexure.core import Mechanics, Simulator, build_model, port_description, stresses_along
 from flexure.core.numerics.jit import compile_notices
 from flexure.core.scene.building import scene_key
+from flexure.core.simulation.methods import METHODS as CORE_METHODS
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 
 from .slave import SafeSlave
@@ -73,7 +74,8 @@ from .slave_states import STEP_COMPLETE, TERMINATED
 # motion; CVODE BDF at rtol 1e-6 or 1e-8 about 0.2 s (its high orders are unstable beside the
 # stage's lightly damped 2.1 and 3.6 kHz modes, so it takes ~50 steps per ms at any
 # tolerance), error 6e-9. A host that wants the smaller error sets the method and rtol.
-METHODS = (*ONE_STEP_METHODS, "cvode-bdf", "cvode-adams", "ida")  # flexure.core.METHODS
+# Every registered method (flexure.core.simulation.methods), the one-step ones first.
+METHODS = (*ONE_STEP_METHODS, *(name for name in CORE_METHODS if name not in ONE_STEP_METHODS))
 DEFAULT_RTOL = 1e-6
 # a doStep's step budget: far above a normal step (the 3-DOF stage with CVODE: about 50 steps
 # per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)

@@ -181,3 +181,47 @@ def test_a_controller_looked_up_again_leaves_no_cyclic_garbage(monkeypatch):
         assert gc.collect() == 0
     finally:
         gc.enable()
+
+
+def test_the_loops_around_a_plant_run_with_one_blas_thread(host):
+    """The Python sample loop (around the linear plant, the Simulator or an FMU) runs its
+    per-sample BLAS calls with one thread, and the host's limit is back after it (a
+    plant that records the limit at every step; docs/benchmarks.md: the linear 507-DOF loop
+    under load, 2.4 to 17 s with two threads against 0.3 to 0.5 s with one)."""
+    from types import SimpleNamespace
+
+    from flexure.controllers.sample_loop import simulate_loop
+
+    seen = set()
+
+    class Plant:
+        input_names, output_names = ["F"], ["x"]
+
+        def reset(self):
+            return np.zeros(1)
+
+        def set_input(self, u):
+            pass
+
+        def advance(self, t_end):
+            seen.update(blas_limits())
+
+        def output(self):
+            return np.zeros(1)
+
+    class Controller:
+        samples, fs, reference = 4, 1000.0, np.zeros((5, 1))
+
+        def reset(self):
+            pass
+
+        def initial_output(self):
+            return np.zeros(1)
+
+        def step(self, k, y):
+            return np.zeros(1), None
+
+    design = SimpleNamespace(pairs=[SimpleNamespace(input_index=0, output_index=0)])
+    simulate_loop(Plant(), Controller(), design)
+    assert seen == {1}
+    assert blas_limits() == {HOST_THREADS}

@@ -305,17 +305,17 @@ def test_cvode_keeps_its_jacobian_for_the_restart_of_a_sampled_loop():
                                atol=1e-12 * np.max(np.abs(at_start)))
     # the compiled sampled loop: 4000 restarts at 4 kHz, and CVODE computes 1 Jacobian
     jacobians = []
-    original = Simulator.take_back
+    original = Simulator._resume_after_drive  # where the simulator takes the loop's end back
 
-    def take_back(self, *args, **kwargs):
+    def resume(self, *args, **kwargs):
         original(self, *args, **kwargs)
         jacobians.append(self.statistics["jacobian_evaluations"])
 
-    Simulator.take_back = take_back
+    Simulator._resume_after_drive = resume
     try:
         result = run_loop(model, method="cvode-bdf", duration=0.5, settle=0.0)
     finally:
-        Simulator.take_back = original
+        Simulator._resume_after_drive = original
     assert result.summary()["passed"] and jacobians[-1] <= 2
 
 

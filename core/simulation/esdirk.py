@@ -65,6 +65,7 @@ from ..numerics.native import call_engine
 from . import newton_matrix
 from .esdirk_method import MAX_STAGES, TABLEAUS
 from .newton_matrix import newton_solve
+from .stepper import Stepper
 
 # float64 memory slots
 (M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
@@ -344,10 +345,22 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     return OK
 
 
-class Esdirk:
+@kernel
+def restart(table, memory, flags, t, inputs_only):
+    """Restart at time t (s) from the state in the vectors' V_Y row, with the inputs in the
+    packed model at address `table`: the first stage's derivative is recomputed, or with
+    inputs_only (nothing but the inputs changed since the step that ended at t) it is the last
+    stage's plus the engine's input response; the step size, Jacobian and Newton matrix are
+    kept. `Esdirk.reset` and the compiled sampled loop both restart through it."""
+    keep = inputs_only and memory[M_T] == t and flags[I_FSAL] != FSAL_NONE
+    memory[M_T] = t
+    flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
+    engine.int_array(table, slots.COUNTERS)[ed.FAILED_STATUS] = 0
+
+
+class Esdirk(Stepper):
     """The ESDIRK integrator on ydot = f(y), y = [q - q_ref, qdot(, coil currents)], with the
-    engine; the same interface as `sundials.Cvode` (reset, advance, statistics, restart
-    memory).
+    engine: a `Stepper` (reset, advance, statistics, restart memory).
 
     Parameters
     ----------
@@ -359,9 +372,12 @@ class Esdirk:
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
-        self.data = engine.connect(data, engine.OP_RHS, engine.OP_JACOBIAN,
-                                   engine.OP_INPUT_RESPONSE)
-        self.tableau = tableau = TABLEAUS[method]
+        from .methods import REGISTRY
+
+        self.method = REGISTRY[method]
+        self.data = engine.connect(data, *(getattr(engine, op)
+                                           for op in self.method.operations))
+        self.tableau = tableau = TABLEAUS[self.method.variant]
         self.label = self.tableau.name
         self.tables = self.tableau.arrays()
         dims = data.int_array("dims")
@@ -381,17 +397,21 @@ class Esdirk:
         self.y_array = self.vectors[V_Y]
         self.counters = data.int_array("counters")
 
+    @classmethod
+    def make(cls, data, method, *, rtol, atol, max_step=None, jacobian="analytic",
+             max_order=None, input_function=None):
+        """The ESDIRK of registry entry `method` (`Stepper.make`; it takes no max_order,
+        finite-difference Jacobian or input functions: `Simulator` refuses them)."""
+        return cls(data, rtol=rtol, atol=atol, max_step=max_step, method=method.name)
+
     def reset(self, t, y, *, inputs_changed=False):
         """Continue from time t (s) and state y (2 NDOF + coil currents,): the first stage's
         derivative is recomputed (with inputs_changed, at the integrator's own t and y: the
         last one plus the engine's input response), the step size, Jacobian and Newton matrix
-        are kept."""
-        keep = (inputs_changed and self.flags[I_FSAL] != FSAL_NONE
-                and float(t) == self.memory[M_T] and np.array_equal(y, self.y_array))
-        self.memory[M_T] = float(t)
+        are kept (`restart`)."""
+        inputs_only = bool(inputs_changed) and np.array_equal(y, self.y_array)
         self.y_array[:] = y
-        self.flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
-        self.counters[ed.FAILED_STATUS] = 0
+        restart(self.data.address, self.memory, self.flags, float(t), inputs_only)
 
     def forget(self):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
@@ -487,4 +507,4 @@ class Esdirk:
                 self.memory[M_H_LU] = lu_step
 
     def close(self):
-        """Nothing to free (numpy arrays only); for the interface of `sundials.Cvode`."""
+        """Nothing to free (numpy arrays only)."""

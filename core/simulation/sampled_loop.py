@@ -23,6 +23,10 @@ the difference is that here the whole run is one compiled function, with the con
 compiled code too. With the one-step ESDIRK (`flexure.core.simulation.esdirk`, the loop's
 default) a changed force costs one evaluation and the integrator steps on with its step size and
 Newton matrix; with CVODE it restarts at every changed force (its C functions called directly).
+The loop borrows the integrator through `Simulator.held_input_drive` and restarts it through
+the kernels `Simulator._restart` runs (`stepper.restart_plant`, `esdirk.restart`,
+`sundials_restart.cvode_restart`); the methods it drives are those with `Method.compiled_loop`
+(`methods.COMPILED_LOOP_METHODS`), each by the driver of its stepper's module (`DRIVERS`).
 """
 
 from __future__ import annotations
@@ -44,16 +48,27 @@ from ..numerics.jit import kernel
 from ..numerics.native import (
     as_float_pointer,
     call_engine,
-    call_get_long,
     call_get_real,
-    call_reinit,
     call_solve,
     call_with_time,
 )
 from . import esdirk
-from .esdirk import Esdirk
 from .measuring import start_from_plant
+from .methods import COMPILED_LOOP_METHODS
 from .status import STATUS_MESSAGES
+from .stepper import restart_plant
+from .sundials_restart import (
+    A_ACTUAL_INIT_STEP,
+    A_ANALYTIC,
+    A_MEMORY,
+    A_SOLVE,
+    A_STOP,
+    A_TRET,
+    A_Y,
+    L_INITIAL_STEP,
+    L_JACOBIAN,
+    cvode_restart,
+)
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -73,7 +88,7 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     Parameters
     ----------
     sim : Simulator
-        The plant, with an ESDIRK or CVODE method.
+        The plant, with a method of `methods.COMPILED_LOOP_METHODS` (ESDIRK or CVODE).
     fs : float
         Sample rate (Hz).
     samples : int
@@ -106,18 +121,14 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     Raises
     ------
     SimulationError
-        The simulator's method is not ESDIRK or CVODE, a loop output is not a position,
+        The simulator's method is not one the loop drives, a loop output is not a position,
         the reference or feedforward has the wrong number of columns, a quantum is not one
         positive finite number per loop, or the integration or a measurement fails (naming
         the time).
     """
-    solver, plant, outputs, restart_needed, restart_kinematics = sim.hand_over()
-    if not isinstance(solver, Esdirk):
-        from .sundials import Cvode  # loaded only where CVODE runs (its compiled callbacks)
-
-        if not isinstance(solver, Cvode):
-            raise SimulationError("the compiled sampled loop drives CVODE or ESDIRK; use "
-                                  "method 'esdirk', 'cvode-bdf' or 'cvode-adams'")
+    if not sim.integrator.method.compiled_loop:
+        raise SimulationError(f"the compiled sampled loop does not drive method "
+                              f"{sim.method!r}; use one of {', '.join(COMPILED_LOOP_METHODS)}")
     ports = [sim.model.outputs[j] for j in loop_outputs]
     if any(port.quantity != "position" for port in ports):
         raise SimulationError("the compiled sampled loop measures positions only")
@@ -142,32 +153,31 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
                   np.array(loop_inputs, dtype=np.int64), coordinates, quanta, position, force,
                   np.empty(n_loops), np.empty(n_loops))
     loop = (float(fs), controller)
-    # loop variables kept between chunks: [t, restart needed, kinematics restart needed]
-    loop_state = np.array([sim.time, float(restart_needed), float(restart_kinematics)])
-    held = np.array(sim.inputs, dtype=float)
-    addresses = np.zeros(_ADDRESSES, dtype=np.int64)
-    engine.connect(outputs, engine.OP_POSITIONS)  # `_measure`'s, on the outputs' packed model
-    addresses[[_PLANT, _OUTPUT, _ENGINE]] = (plant.address, outputs.address,
-                                             plant.int_array("dims")[ed.ENGINE])
-    samples_of = _esdirk_samples if isinstance(solver, Esdirk) else _cvode_samples
-    run = samples_of(sim, solver, plant, addresses, loop_state, held, loop)
-    chunk = max(1, N // 100 if progress is not None else N)
-    start_time = time.perf_counter()
-    for done in range(0, N, chunk):  # in chunks of samples, for the progress report
-        stop = min(N, done + chunk)
-        flag = run(done, stop)
-        if flag != 0:
-            raise _failure(sim, solver, flag, loop_state[0])
-        if progress is not None:
-            progress(stop / N)
-    # measure y_N and leave the simulator at t_N with the last force held
-    status = _measure(addresses, solver.y_array, np.zeros(2 * sim.ndof), coordinates,
-                      position[N])
-    if status != ed.OK:
-        raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: {STATUS_MESSAGES[status]}")
-    force[N] = force[N - 1]
-    sim.take_back(loop_state[0], solver.y_array, held, restart_needed=loop_state[1] != 0.0,
-                  wall=time.perf_counter() - start_time)
+    with sim.held_input_drive() as drive:  # the simulator continues from where it ends
+        solver, loop_state = drive.stepper, drive.loop_state
+        addresses = np.zeros(_ADDRESSES, dtype=np.int64)
+        # `_measure`'s, on the outputs' packed model
+        engine.connect(drive.outputs, engine.OP_POSITIONS)
+        addresses[[_PLANT, _OUTPUT, _ENGINE]] = (drive.plant.address, drive.outputs.address,
+                                                 drive.plant.int_array("dims")[ed.ENGINE])
+        run = DRIVERS[solver.method.module](sim, solver, addresses, loop_state, drive.held, loop)
+        chunk = max(1, N // 100 if progress is not None else N)
+        start_time = time.perf_counter()
+        for done in range(0, N, chunk):  # in chunks of samples, for the progress report
+            stop = min(N, done + chunk)
+            flag = run(done, stop)
+            if flag != 0:
+                raise _failure(sim, solver, flag, loop_state[0])
+            if progress is not None:
+                progress(stop / N)
+        # measure y_N and leave the simulator at t_N with the last force held
+        status = _measure(addresses, solver.y_array, np.zeros(2 * sim.ndof), coordinates,
+                          position[N])
+        if status != ed.OK:
+            raise SimulationError(f"t = {loop_state[0]:.9g} s: outputs: "
+                                  f"{STATUS_MESSAGES[status]}")
+        force[N] = force[N - 1]
+        drive.wall = time.perf_counter() - start_time
     return np.arange(N + 1) / fs, position, force
 
 
@@ -185,7 +195,7 @@ def _quanta(quantum, n_loops):
     return np.ascontiguousarray(quanta)
 
 
-def _esdirk_samples(sim, solver, plant, addresses, loop_state, held, loop):
+def _esdirk_samples(sim, solver, addresses, loop_state, held, loop):
     """run(start, stop) -> flag: samples start .. stop - 1 on the one-step integrator."""
     scratch = np.zeros(2 * sim.ndof)
 
@@ -197,33 +207,28 @@ def _esdirk_samples(sim, solver, plant, addresses, loop_state, held, loop):
     return run
 
 
-def _cvode_samples(sim, solver, plant, addresses, loop_state, held, loop):
+def _cvode_samples(sim, solver, addresses, loop_state, held, loop):
     """run(start, stop) -> flag: samples start .. stop - 1 on CVODE, restarting it at every
-    change of the held force; what it learns is handed back to the solver after each run."""
-    for key, slot in (("solve", _SOLVE), ("reinit", _REINIT), ("stop", _STOP),
-                      ("memory", _MEMORY), ("y", _Y), ("tret", _TRET),
-                      ("init_step", _INIT_STEP), ("actual_init_step", _ACTUAL_INIT_STEP),
-                      ("num_steps", _NUM_STEPS)):
-        addresses[slot] = solver.addresses[key]
-    addresses[_ANALYTIC] = int(solver.analytic)
-    steps = np.zeros(2, dtype=np.int64)  # [steps before the restarts in the loop, scratch]
-    # what the integrator keeps between restarts (sundials.Cvode.reset): [initial step,
-    # Jacobian cached (0 or 1)]
-    memory = np.array([solver.initial_step, float(solver.jacobian_cached())])
+    change of the held force (`sundials_restart.cvode_restart`, with what the solver has learnt in
+    its own arrays)."""
+    # whether a Jacobian is kept for the next restart (sundials.Cvode.reset)
+    solver.learnt[L_JACOBIAN] = float(solver.jacobian_cached())
     scratch = np.zeros(2 * sim.ndof)
 
     def run(start, stop):
-        jacobians = int(plant.int_array("counters")[ed.JACOBIAN_COUNT])
-        flag = _loop(addresses, loop_state, memory, steps, held, solver.y_array, scratch, start,
-                     stop, *loop)
-        solver.add_steps(steps[0])
-        steps[0] = 0
-        solver.initial_step = memory[0]
-        if plant.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
-            memory[1] = 1.0
+        jacobians = int(sim.data.int_array("counters")[ed.JACOBIAN_COUNT])
+        flag = _loop(addresses, solver.address_table, loop_state, solver.learnt, solver.totals,
+                     held, solver.y_array, scratch, start, stop, *loop)
+        if sim.data.int_array("counters")[ed.JACOBIAN_COUNT] > jacobians:
+            solver.learnt[L_JACOBIAN] = 1.0
         return flag
 
     return run
+
+
+# The compiled drivers by the module of the stepper they drive (`Method.module`); each
+# makes run(start, stop) -> flag for samples start .. stop - 1
+DRIVERS = {"esdirk": _esdirk_samples, "sundials": _cvode_samples}
 
 
 def _failure(sim, solver, flag, t):
@@ -272,9 +277,9 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     copy(state, new_state)
 
 
-# the addresses handed to the compiled loop, in this order
-(_SOLVE, _REINIT, _STOP, _MEMORY, _Y, _TRET, _PLANT, _OUTPUT, _ENGINE, _INIT_STEP,
- _ACTUAL_INIT_STEP, _NUM_STEPS, _ANALYTIC, _ADDRESSES) = range(14)
+# the addresses handed to the compiled loop, in this order (CVODE's own are in its
+# `address_table`, sundials_restart.A_...)
+(_PLANT, _OUTPUT, _ENGINE, _ADDRESSES) = range(4)
 _MEASURE_FAILED = -1000
 
 
@@ -348,14 +353,16 @@ def _sample(addresses, y, scratch, k, controller, held):
 
 
 @kernel
-def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, fs, controller):
-    """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
-    _MEASURE_FAILED) with loop_state[0] the time reached."""
+def _loop(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start, stop, fs,
+          controller):
+    """Samples start .. stop - 1 of the loop on CVODE (`cvode`: its `address_table`; learnt
+    and totals: its arrays); 0, or CVODE's failure flag (or _MEASURE_FAILED) with
+    loop_state[0] the time reached. Each change of the held force restarts it as
+    `Simulator._restart` does, through the same kernels."""
     plant = addresses[_PLANT]
-    plant_inputs = engine.float_array(plant, slots.INPUTS)
-    x_plant, x_start = engine.float_array(plant, slots.X), engine.float_array(plant, slots.X_START)
-    dims = engine.int_array(plant, slots.DIMS)
-    tret = carray(as_float_pointer(addresses[_TRET]), (1,))
+    x_plant = engine.float_array(plant, slots.X)
+    memory = cvode[A_MEMORY]
+    tret = carray(as_float_pointer(cvode[A_TRET]), (1,))
     t = loop_state[0]
     restart = loop_state[1] != 0.0
     for k in range(start, stop):
@@ -364,31 +371,23 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
             loop_state[0] = t
             return _MEASURE_FAILED
         if changed or restart:  # as Simulator.set_inputs and its restart in advance
-            copy(plant_inputs, held)
-            copy(x_start, x_plant)
-            dims[ed.WARM] = 0
-            call_get_long(addresses[_NUM_STEPS], addresses[_MEMORY], steps[1:].ctypes.data)
-            steps[0] += steps[1]
-            flag = call_reinit(addresses[_REINIT], addresses[_MEMORY], t, addresses[_Y])
+            restart_plant(plant, held, x_plant, True)
+            flag = cvode_restart(cvode, learnt, totals, t)
             if flag < 0:
                 loop_state[0] = t
                 return flag
-            if memory[0] > 0.0:  # as sundials.Cvode.reset
-                call_with_time(addresses[_INIT_STEP], addresses[_MEMORY], memory[0])
-            if memory[1] != 0.0 and addresses[_ANALYTIC] != 0:
-                dims[ed.JACOBIAN_REUSE] = 1
             restart = False
         t_next = (k + 1) / fs
-        call_with_time(addresses[_STOP], addresses[_MEMORY], t_next)
-        flag = call_solve(addresses[_SOLVE], addresses[_MEMORY], t_next, addresses[_Y],
-                          addresses[_TRET], 1)
+        call_with_time(cvode[A_STOP], memory, t_next)
+        flag = call_solve(cvode[A_SOLVE], memory, t_next, cvode[A_Y],
+                          cvode[A_TRET], 1)
         if flag < 0:
             loop_state[0] = tret[0]
             loop_state[1] = 1.0
             return flag
-        if memory[0] == 0.0:  # as sundials.Cvode.learn_initial_step
-            call_get_real(addresses[_ACTUAL_INIT_STEP], addresses[_MEMORY], memory.ctypes.data)
-        memory[1] = 1.0 if addresses[_ANALYTIC] != 0 else 0.0
+        if learnt[L_INITIAL_STEP] == 0.0:  # as sundials.Cvode.learn_initial_step
+            call_get_real(cvode[A_ACTUAL_INIT_STEP], memory, learnt.ctypes.data)
+        learnt[L_JACOBIAN] = 1.0 if cvode[A_ANALYTIC] != 0 else 0.0
         t = t_next
     loop_state[0] = t
     loop_state[1] = 1.0 if restart else 0.0
@@ -403,10 +402,7 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
     inputs, the integrator's state re-entered (its first stage recomputed)."""
     plant = addresses[_PLANT]
-    plant_inputs = engine.float_array(plant, slots.INPUTS)
-    x_plant, x_start = engine.float_array(plant, slots.X), engine.float_array(plant, slots.X_START)
-    dims = engine.int_array(plant, slots.DIMS)
-    counters = engine.int_array(plant, slots.COUNTERS)
+    x_plant = engine.float_array(plant, slots.X)
     y = vectors[esdirk.V_Y]
     t = loop_state[0]
     for k in range(start, stop):
@@ -414,20 +410,13 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
         if changed < 0:
             loop_state[0] = t
             return _MEASURE_FAILED
-        if changed or loop_state[1] != 0.0:  # as Simulator._restart and Esdirk.reset
-            copy(plant_inputs, held)
+        if changed or loop_state[1] != 0.0:  # as Simulator._restart, through its kernels
             # no state set since the last step (as Simulator._restart_kinematics): the first
-            # stage from the last one and the engine's input response (Esdirk.reset)
-            keep = (loop_state[2] == 0.0 and memory[esdirk.M_T] == t
-                    and flags[esdirk.I_FSAL] != esdirk.FSAL_NONE)
-            if loop_state[2] != 0.0:
-                copy(x_start, x_plant)
-                dims[ed.WARM] = 0
-                loop_state[2] = 0.0
-            memory[esdirk.M_T] = t
-            flags[esdirk.I_FSAL] = esdirk.FSAL_INPUTS if keep else esdirk.FSAL_NONE
-            counters[ed.FAILED_STATUS] = 0
-            loop_state[1] = 0.0
+            # stage from the last one and the engine's input response (esdirk.restart)
+            inputs_only = loop_state[2] == 0.0
+            restart_plant(plant, held, x_plant, not inputs_only)
+            esdirk.restart(plant, memory, flags, t, inputs_only)
+            loop_state[1] = loop_state[2] = 0.0
         t_next = (k + 1) / fs
         flags[esdirk.I_ONE_STEP] = flags[esdirk.I_MAX_STEPS] = 0  # to t_next, no budget
         status = esdirk.advance(plant, memory, flags, vectors, J, LU, pivots, atol, tableau_A,

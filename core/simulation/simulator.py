@@ -42,13 +42,13 @@ from ..engine import engine
 from ..engine.data import EngineData
 from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
-from .esdirk import Esdirk
 from .held_inputs import checked_inputs
-from .methods import METHODS, ONE_STEP_METHODS
+from .methods import METHODS, REGISTRY
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
 from .status import STATUS_MESSAGES
+from .stepper import Stepper, restart_plant
 from .tolerances import atol_vector
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -128,7 +128,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self._input_functions = dict(input_functions or {})
         self._inputs = self.data.float_array("inputs")
         self._q_ref_array = self.data.float_array("q_ref")
-        self.integrator = _make_integrator(
+        self.integrator: Stepper = _make_integrator(
             self.data, method, rtol=rtol, atol=self.atol, max_step=max_step, jacobian=jacobian,
             max_order=max_order,
             input_function=self._inputs_at if self._input_functions else None)
@@ -189,11 +189,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self._needs_init = self._restart_kinematics = True
         self._counters_at_reset = self._counts()
         self._wall = 0.0
-        self._forget()
-
-    def _forget(self):
-        if hasattr(self.integrator, "forget"):
-            self.integrator.forget()
+        self.integrator.forget()
 
     def _initial_dofs(self):
         x0 = self.model.initial_coordinates
@@ -310,24 +306,23 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         return u
 
     def _restart(self):
-        """Restart the integrator at the current state with the held inputs. The kinematics
-        start afresh from the state's coordinates after anything that sets a state (reset,
-        set_state, get_state, a failure), so that a restored run continues bit for bit; after
-        a mere input change the one-step method keeps the warm start of its last evaluation
-        (CVODE and IDA start afresh there too)."""
-        self._inputs[:] = self._u
+        """Restart the integrator at the current state with the held inputs: the one restart
+        of an integrator (`stepper`), which the compiled sampled loop runs through the same
+        kernels. The kinematics start afresh from the state's coordinates after anything that
+        sets a state (reset, set_state, get_state, a failure), so that a restored run
+        continues bit for bit; after a mere input change a one-step method keeps the warm
+        start of its last evaluation (CVODE and IDA start afresh there too)."""
         self._q_ref_array[:] = self._q_ref
-        if self._kinematics_restart_due():
-            self._start_kinematics(self._x)
+        restart_plant(self.data.address, self._u, self._x, self._kinematics_restart_due())
         # no state set since the last step: only the inputs changed
         self.integrator.reset(self._t, self._y, inputs_changed=not self._restart_kinematics)
         self._needs_init = self._restart_kinematics = False
 
     def _kinematics_restart_due(self):
         """Whether the next restart starts the kinematics afresh from the state's
-        coordinates: always for CVODE and IDA, for a one-step method only after a state was
-        set or a failure."""
-        return self._restart_kinematics or self.method not in ONE_STEP_METHODS
+        coordinates: always for the multistep methods, for a one-step method only after a
+        state was set or a failure."""
+        return self._restart_kinematics or not self.integrator.method.one_step
 
     def advance(self, t_end: float, *, max_steps: int | None = None) -> None:
         """Deprecated: `advance_to`, the same call under a name that says its argument is the
@@ -399,8 +394,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
                 self._t = t
                 self._y = np.array(y, dtype=float)
                 self._x = self._last_x.copy()
-                if hasattr(self.integrator, "learn_initial_step"):
-                    self.integrator.learn_initial_step()
+                self.integrator.learn_initial_step()
                 self._outputs_cache = None
                 if _record is not None:
                     _record(t, self._y)
@@ -435,19 +429,20 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
 
 def _make_integrator(data, method, *, rtol, atol, max_step, jacobian, max_order,
                      input_function):
-    if method not in ONE_STEP_METHODS:
-        from .sundials import make_solver  # its callbacks load with it: only where it runs
-
-        return make_solver(data, method, rtol=rtol, atol=atol, max_step=max_step,
-                           jacobian=jacobian, max_order=max_order, input_function=input_function)
-    refused = {"max_order": max_order is not None, "jacobian": jacobian != "analytic",
-               "input_functions": input_function is not None}
-    for name, given in refused.items():
-        if given:
+    """The registered method's `Stepper` (its module, e.g. SUNDIALS' callbacks, loaded only
+    where it runs), after refusing the options the method does not take."""
+    entry = REGISTRY[method]
+    refused = {"max_order": ("max_order", max_order is not None),
+               "jacobian": ("finite-difference", jacobian != "analytic"),
+               "input_functions": ("input_functions", input_function is not None)}
+    for name, (option, given) in refused.items():
+        if given and not entry.takes(option):
             raise SimulationError(f"method {method!r} takes no {name} (a one-step method "
                                   "with the analytic Jacobian and held inputs); use a CVODE "
                                   "or IDA method for that")
-    return Esdirk(data, rtol=rtol, atol=atol, max_step=max_step, method=method)
+    return entry.stepper_class().make(data, entry, rtol=rtol, atol=atol, max_step=max_step,
+                                      jacobian=jacobian, max_order=max_order,
+                                      input_function=input_function)
 
 
 def _vector(value, size, name):

@@ -37,7 +37,7 @@ class SimulatorState:
             a one-step integrator has learnt.
         """
         self._needs_init = self._restart_kinematics = True
-        memory = getattr(self.integrator, "restart_memory", {})
+        memory = self.integrator.restart_memory  # the stepper's restart point
         return {"version": STATE_VERSION, "model": self.model.name, "t": self._t,
                 "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
                 "x": self._x.copy(), "initial_step": memory.get("initial_step", 0.0),
@@ -85,14 +85,13 @@ class SimulatorState:
             y[: self.ndof] = 0.0
         self._t, self._y, self._u, self._x = t, y, u, x
         self._q_ref = q_ref
-        if hasattr(self.integrator, "restart_memory"):  # what the integrator had learnt
-            try:
-                self.integrator.restart_memory = {
-                    "initial_step": float(state.get("initial_step", 0.0)),
-                    "jacobian": np.asarray(state.get("jacobian", ()), dtype=float),
-                    **{key: float(state[key]) for key in MEMORY_KEYS if key in state}}
-            except (TypeError, ValueError) as error:
-                raise SimulationError(f"not a simulator state: {error}") from None
+        try:  # what the integrator had learnt (a stepper without a memory forgets)
+            self.integrator.restart_memory = {
+                "initial_step": float(state.get("initial_step", 0.0)),
+                "jacobian": np.asarray(state.get("jacobian", ()), dtype=float),
+                **{key: float(state[key]) for key in MEMORY_KEYS if key in state}}
+        except (TypeError, ValueError) as error:
+            raise SimulationError(f"not a simulator state: {error}") from None
         self._outputs_cache = None
         self._needs_init = self._restart_kinematics = True
 

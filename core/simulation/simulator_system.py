@@ -1,11 +1,13 @@
 """The stepping `Simulator` seen from outside its own `advance`: its first-order system
 ydot = f(t, y) and Jacobian for solvers outside SUNDIALS (the scipy baselines of the
-work-precision study, finite-difference checks), and the hand-over of its integrator to the
-compiled sampled loop (`flexure.core.simulation.sampled_loop`) and back."""
+work-precision study, finite-difference checks), and the loan of its integrator to a compiled
+driver with held inputs (`held_input_drive`: `flexure.core.simulation.sampled_loop`)."""
 
 from __future__ import annotations
 
 import time as _time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -14,60 +16,63 @@ from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
 from .status import STATUS_MESSAGES
+from .stepper import HeldInputDrive
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
 
-    from ..engine.data import EngineData
-    from .esdirk import Esdirk
-    from .sundials import Cvode, Ida
-
 
 class SimulatorSystem:
-    """The first-order system and hand-over methods of `Simulator` (which sets up the
+    """The first-order system and the integrator's loan of `Simulator` (which sets up the
     attributes they read and write: `data`, `_output_data`, `nstate`, the integrator, the
     state `_t`, `_y`, `_q_ref`, `_u`, `_x`, the engine's `_inputs` and `_q_ref_array`, the
     restart flags and `_wall`)."""
 
-    # -- handing the integrator to a compiled driver (flexure.core.simulation.sampled_loop)
-    def hand_over(self) -> tuple[Cvode | Ida | Esdirk, EngineData, EngineData, bool, bool]:
-        """Put the state into the integrator's vector and set the kinematic reference, for a
-        compiled driver; the driver's first interval restarts as `advance` would.
+    # -- lending the integrator to a compiled driver (flexure.core.simulation.sampled_loop)
+    @contextmanager
+    def held_input_drive(self) -> Iterator[HeldInputDrive]:
+        """Lend the integrator to a compiled driver that advances it with held inputs
+        (`stepper`: the compiled hook), and continue from where the driver left it.
 
-        Returns
-        -------
-        (integrator, EngineData, EngineData, bool, bool)
-            The integrator, the plant's packed data, the outputs' packed data, whether the
-            integrator needs a restart, and whether the kinematics do.
+        On entry the state goes into the integrator's vector and the kinematic reference
+        into the engine; the driver's first interval restarts as `advance_to` would
+        (`HeldInputDrive.loop_state`). When the block ends normally the simulator continues
+        from the drive's time, the integrator's state and the drive's held inputs; when it
+        raises, the simulator stays where it was and restarts from there.
+
+        Yields
+        ------
+        HeldInputDrive
+            The integrator, the plant's and the outputs' packed data, the loop state [t,
+            restart needed, kinematics restart needed] and the held inputs, for the driver
+            to keep current.
         """
         self._q_ref_array[:] = self._q_ref
         self.integrator.y_array[:] = self._y
-        return (self.integrator, self.data, self._output_data, self._needs_init,
-                self._kinematics_restart_due())
+        drive = HeldInputDrive(
+            stepper=self.integrator, plant=self.data, outputs=self._output_data,
+            loop_state=np.array([self._t, float(self._needs_init),
+                                 float(self._kinematics_restart_due())]),
+            held=np.array(self._u, dtype=float))
+        try:
+            yield drive
+        except BaseException:
+            self._needs_init = self._restart_kinematics = True
+            raise
+        self._resume_after_drive(drive)
 
-    def take_back(self, t: float, y: ArrayLike, u: ArrayLike, *, restart_needed: bool,
-                  wall: float) -> None:
-        """Continue from where a compiled driver left the integrator.
-
-        Parameters
-        ----------
-        t : float
-            The time reached, s.
-        y : array_like (2 NDOF + n_coils,)
-            The integrator state there, [q - q_ref, qdot, i] (m, rad; m/s, rad/s; A).
-        u : array_like (n_inputs,)
-            The inputs held there: N, N m, or V for a drive signal.
-        restart_needed : bool
-            Whether the integrator (and the kinematics) must restart before the next step.
-        wall : float
-            The driver's wall time, s, added to the statistics.
-        """
-        self._t, self._y, self._u = float(t), np.array(y, dtype=float), np.array(u, dtype=float)
+    def _resume_after_drive(self, drive: HeldInputDrive) -> None:
+        """Continue from where a compiled driver left the integrator: the time reached
+        (s), the integrator's state there, the inputs held there, whether the integrator
+        (and the kinematics) must restart before the next step, and its wall time."""
+        t, restart_needed = drive.loop_state[0], drive.loop_state[1] != 0.0
+        self._t, self._y = float(t), np.array(drive.stepper.y_array, dtype=float)
+        self._u = np.array(drive.held, dtype=float)
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
         self._needs_init = bool(restart_needed)
         self._restart_kinematics = self._needs_init
-        self._wall += wall
+        self._wall += drive.wall
 
     # -- the first-order system, for solvers outside SUNDIALS (scipy baselines) ------------
     def derivative(self, t: float, y: ArrayLike) -> np.ndarray:

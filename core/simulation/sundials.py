@@ -35,9 +35,33 @@ from ..numerics.native import (
     dense_matrix_data,
     nvector_data,
 )
-from .methods import SUNDIALS_METHODS
+from .methods import REGISTRY, SUNDIALS_METHODS
 from .status import STATUS_MESSAGES
+from .stepper import Stepper
 from .sundials_libraries import function_address, libraries
+from .sundials_restart import (
+    A_ACTUAL_INIT_STEP,
+    A_ANALYTIC,
+    A_DATA,
+    A_INIT_STEP,
+    A_MEMORY,
+    A_NUM_JACOBIANS,
+    A_NUM_RHS,
+    A_NUM_STEPS,
+    A_REINIT,
+    A_SIZE,
+    A_SOLVE,
+    A_STOP,
+    A_TRET,
+    A_Y,
+    L_INITIAL_STEP,
+    L_JACOBIAN,
+    T_JACOBIANS,
+    T_RHS,
+    T_SCRATCH,
+    T_STEPS,
+    cvode_restart,
+)
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
 CV_BDF, CV_ADAMS = 2, 1
@@ -118,7 +142,7 @@ _IDA_JAC = ctypes.CFUNCTYPE(_INT, _D, _D, _VP, _VP, _VP, _VP, _VP, _VP, _VP, _VP
 
 
 # -- the integrators ----------------------------------------------------------------------------
-class _Solver:
+class _Solver(Stepper):
     """What CVODE and IDA share: the context, the vectors, the dense linear solver, the
     options, the stepping and the counts, and the Python callbacks used instead of the
     compiled ones when an input varies within an interval (`input_function(t)` -> inputs (N),
@@ -131,6 +155,14 @@ class _Solver:
 
     library = prefix = rhs_count = ""  # set by the subclass
     operations = ()  # the engine's operations its callbacks call (`engine.connect`)
+
+    @classmethod
+    def make(cls, data, method, *, rtol, atol, max_step=None, jacobian="analytic",
+             max_order=None, input_function=None):
+        """The solver of registry entry `method` (`Stepper.make`, `make_solver`)."""
+        return make_solver(data, method.name, rtol=rtol, atol=atol, max_step=max_step,
+                           jacobian=jacobian, max_order=max_order,
+                           input_function=input_function)
 
     def __init__(self, data, *, rtol, atol, input_function=None):
         lib = libraries()
@@ -153,8 +185,7 @@ class _Solver:
         self.counters = data.int_array("counters")
         self.input_function = input_function
         self.input_error = None
-        self._totals = {"steps": 0, "solver_rhs_evaluations": 0,
-                        "solver_jacobian_evaluations": 0}
+        self.totals = np.zeros(T_SCRATCH + 1, dtype=np.int64)  # [steps, rhs, jacobians, -]
 
     def _function(self, name):
         """The module's function `prefix + name`."""
@@ -195,18 +226,15 @@ class _Solver:
 
     def _accumulate(self):
         """Add the counts since the last (re)start to the totals (ReInit zeroes SUNDIALS')."""
-        for key, value in self._current().items():
-            self._totals[key] += value
-
-    def add_steps(self, count):
-        """Count steps taken by a compiled driver before its restarts (ReInit zeroes
-        SUNDIALS' own count)."""
-        self._totals["steps"] += int(count)
+        for slot, value in zip((T_STEPS, T_RHS, T_JACOBIANS), self._current().values(),
+                               strict=True):
+            self.totals[slot] += value
 
     def statistics(self):
         """{"steps", "solver_rhs_evaluations", "solver_jacobian_evaluations"} since the
         solver was made."""
-        return {key: self._totals[key] + value for key, value in self._current().items()}
+        return {key: int(self.totals[slot]) + value for (key, value), slot in
+                zip(self._current().items(), (T_STEPS, T_RHS, T_JACOBIANS), strict=True)}
 
     def step_count(self):
         """Steps since the solver was made (for a step budget)."""
@@ -312,12 +340,13 @@ class Cvode(_Solver):
     """
 
     library, prefix, rhs_count = "cvode", "CVode", "GetNumRhsEvals"
-    operations = (engine.OP_RHS, engine.OP_JACOBIAN)
+    operations = tuple(getattr(engine, op) for op in REGISTRY["cvode-bdf"].operations)
 
     def __init__(self, data, *, method="BDF", rtol, atol, max_step=None, jacobian="analytic",
                  max_order=None, input_function=None):
         super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
         cv = self.lib.cvode
+        self.method = REGISTRY["cvode-bdf" if method == "BDF" else "cvode-adams"]
         self.label = f"CVODE {method}"
         rhs, jac = cvode_rhs.address, cvode_jacobian.address
         if input_function is not None:
@@ -333,15 +362,30 @@ class Cvode(_Solver):
         # 159 with 10)
         self._call("SetMaxNonlinIters", 10)
         self.analytic = jacobian == "analytic"
-        self.initial_step = 0.0
+        self.learnt = np.zeros(2)  # [initial step (s), Jacobian kept] (L_ slots)
         self._jacobians_at_forget = 0
-        self.addresses = {
-            "solve": function_address(cv.CVode), "reinit": function_address(cv.CVodeReInit),
-            "stop": function_address(cv.CVodeSetStopTime), "memory": self.memory,
-            "init_step": function_address(cv.CVodeSetInitStep),
-            "actual_init_step": function_address(cv.CVodeGetActualInitStep),
-            "num_steps": function_address(cv.CVodeGetNumSteps),
-            "y": self.y, "tret": ctypes.addressof(self.tret)}
+        self.address_table = np.zeros(A_SIZE, dtype=np.int64)
+        for slot, address in (
+                (A_SOLVE, function_address(cv.CVode)),
+                (A_REINIT, function_address(cv.CVodeReInit)),
+                (A_STOP, function_address(cv.CVodeSetStopTime)), (A_MEMORY, self.memory),
+                (A_Y, self.y), (A_TRET, ctypes.addressof(self.tret)),
+                (A_INIT_STEP, function_address(cv.CVodeSetInitStep)),
+                (A_ACTUAL_INIT_STEP, function_address(cv.CVodeGetActualInitStep)),
+                (A_NUM_STEPS, function_address(cv.CVodeGetNumSteps)),
+                (A_NUM_RHS, function_address(cv.CVodeGetNumRhsEvals)),
+                (A_NUM_JACOBIANS, function_address(cv.CVodeGetNumJacEvals)),
+                (A_DATA, self.data.address), (A_ANALYTIC, int(self.analytic))):
+            self.address_table[slot] = address
+
+    @property
+    def initial_step(self):
+        """The initial step (s) of the next restart; 0: SUNDIALS' estimate."""
+        return float(self.learnt[L_INITIAL_STEP])
+
+    @initial_step.setter
+    def initial_step(self, value):
+        self.learnt[L_INITIAL_STEP] = float(value)
 
     def reset(self, t, y, *, inputs_changed=False):
         """(Re)start at time t (s) from y (2 NDOF + coil currents,) at order 1, whether or not
@@ -352,15 +396,12 @@ class Cvode(_Solver):
         estimates its initial step, later ones start with that step; and the Jacobian of the
         last setup is handed back once instead of a new one (the tangent changes little
         between restarts at the samples of a loop, and CVODE asks for a fresh one when its
-        Newton iteration does not converge with it)."""
-        self._accumulate()
+        Newton iteration does not converge with it). The restart itself is `cvode_restart`,
+        the compiled sampled loop's too."""
         self.y_array[:] = y
-        self.counters[ed.FAILED_STATUS] = 0
-        self._call("ReInit", float(t), self.y)
-        if self.initial_step > 0.0:
-            self._call("SetInitStep", self.initial_step)
-        if self.jacobian_cached():
-            self.data.int_array("dims")[ed.JACOBIAN_REUSE] = 1
+        self.learnt[L_JACOBIAN] = float(self.jacobian_cached())
+        _check(cvode_restart(self.address_table, self.learnt, self.totals, float(t)),
+               "CVodeReInit")
 
     def forget(self):
         """Start the next restart from nothing: SUNDIALS' initial step, a new Jacobian."""
@@ -406,12 +447,13 @@ class Ida(_Solver):
     """IDA on the implicit form res(t, y, yp) = 0 with the engine; arguments as `Cvode`."""
 
     library, prefix, rhs_count = "ida", "IDA", "GetNumResEvals"
-    operations = (engine.OP_RESIDUAL, engine.OP_RESIDUAL_JACOBIAN)
+    operations = tuple(getattr(engine, op) for op in REGISTRY["ida"].operations)
 
     def __init__(self, data, *, rtol, atol, max_step=None, jacobian="analytic", max_order=None,
                  input_function=None):
         super().__init__(data, rtol=rtol, atol=atol, input_function=input_function)
         ida = self.lib.ida
+        self.method = REGISTRY["ida"]
         self.label = "IDA"
         residual, jac = ida_residual.address, ida_jacobian.address
         if input_function is not None:

@@ -20,11 +20,13 @@ import numpy as np
 from ..errors import FlexureError, SimulationError
 from ..numerics.blas import blas_threads
 from ..reporting.tables import format_table, markdown_table
-from .methods import ONE_STEP_METHODS, SUNDIALS_METHODS  # SUNDIALS' take ":ORDER"
+from .methods import METHOD_TABLE, ONE_STEP_METHODS, SUNDIALS_METHODS  # SUNDIALS' take ":ORDER"
 
 SCIPY_METHODS = {"scipy-radau": "Radau", "scipy-bdf": "BDF", "scipy-dop853": "DOP853"}
 ALL_METHODS = SUNDIALS_METHODS + ONE_STEP_METHODS + tuple(SCIPY_METHODS)
-DEFAULT_METHODS = ("cvode-bdf", "cvode-bdf:2", "cvode-adams", "ida", "ida:2",
+# every registered method; a stiff multistep one also at order 2 (A-stable BDF)
+DEFAULT_METHODS = (*(name for m in METHOD_TABLE if not m.one_step
+                     for name in ((m.name, f"{m.name}:2") if m.stiff else (m.name,))),
                    *ONE_STEP_METHODS, *SCIPY_METHODS)
 HEADERS = ["method", "rtol", "max output error (m)", "wall time (s)", "rhs evaluations",
            "steps", "status"]

@@ -1,0 +1,49 @@
+"""CVODE's restart, compiled: the one `sundials.Cvode.reset` and the compiled sampled loop
+(`sampled_loop`) both run. Apart from `sundials` so that the sampled loop on a one-step method
+does not load SUNDIALS' callbacks (they load only where CVODE or IDA runs)."""
+
+from ..engine import data as ed
+from ..engine import engine, slots
+from ..numerics.jit import kernel
+from ..numerics.native import call_get_long, call_reinit, call_with_time
+
+# Cvode.address_table: the addresses its compiled restart (`cvode_restart`) and the compiled
+# sampled loop call, in this order
+(A_SOLVE, A_REINIT, A_STOP, A_MEMORY, A_Y, A_TRET, A_INIT_STEP, A_ACTUAL_INIT_STEP,
+ A_NUM_STEPS, A_NUM_RHS, A_NUM_JACOBIANS, A_DATA, A_ANALYTIC, A_SIZE) = range(14)
+# Cvode.learnt: what a restart keeps: [initial step (s; 0: SUNDIALS' estimate), 1.0 when a
+# Jacobian is kept for the next setup]
+L_INITIAL_STEP, L_JACOBIAN = range(2)
+# _Solver.totals: the counts before the last (re)start (ReInit zeroes SUNDIALS'), and a scratch
+T_STEPS, T_RHS, T_JACOBIANS, T_SCRATCH = range(4)
+
+
+@kernel
+def _add_count(function, memory, totals, slot):
+    call_get_long(function, memory, totals[T_SCRATCH:].ctypes.data)
+    totals[slot] += totals[T_SCRATCH]
+
+
+@kernel
+def cvode_restart(addresses, learnt, totals, t):
+    """Restart CVODE at time t (s) at order 1 from the state in its y vector, with the inputs
+    in the packed model: its counts since the last restart added to `totals`, ReInit, the
+    learnt initial step set, and the kept Jacobian handed back once at the next setup (see
+    `Cvode.reset`). `Cvode.reset` and the compiled sampled loop both restart through it.
+    Returns 0 or ReInit's negative flag."""
+    memory = addresses[A_MEMORY]
+    _add_count(addresses[A_NUM_STEPS], memory, totals, T_STEPS)
+    _add_count(addresses[A_NUM_RHS], memory, totals, T_RHS)
+    _add_count(addresses[A_NUM_JACOBIANS], memory, totals, T_JACOBIANS)
+    engine.int_array(addresses[A_DATA], slots.COUNTERS)[ed.FAILED_STATUS] = 0
+    flag = call_reinit(addresses[A_REINIT], memory, t, addresses[A_Y])
+    if flag < 0:
+        return flag
+    if learnt[L_INITIAL_STEP] > 0.0:
+        call_with_time(addresses[A_INIT_STEP], memory, learnt[L_INITIAL_STEP])
+    if learnt[L_JACOBIAN] != 0.0 and addresses[A_ANALYTIC] != 0:
+        engine.int_array(addresses[A_DATA], slots.DIMS)[ed.JACOBIAN_REUSE] = 1
+    return 0
+
+
+__all__ = ["cvode_restart"]
