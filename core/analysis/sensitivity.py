@@ -142,7 +142,10 @@ def resolve_key(model: Model, text: str, *, option: str = "--sensitivity") -> Ke
             refuse(f"{key} has {len(value)} elements, so no element [{index}]")
         value = value[index]
     elif isinstance(value, list):
-        refuse(f"the value is a list of {len(value)}; name one element, e.g. {text}[0]")
+        numbers = all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+        refuse(f"the value is a list of {len(value)}" + (
+            f" numbers; name one element, e.g. {text}[0]" if numbers and value else
+            f", {value!r}"))
     if isinstance(value, bool) or not isinstance(value, int | float):
         refuse(f"the value is {type(value).__name__} {value!r}")
     if key.startswith("elements.") and key.endswith(".segments"):
