@@ -167,6 +167,20 @@ def _build(model, key, number):
                        default_name=model.name)
 
 
+def _linearity_models(model, key, d):
+    """The models at p + d and p + 2 d that `nonlinearity` compares with the base, or None
+    where the key cannot be linear: a position (the geometry), or a model that cannot be built
+    there (an element of zero length, a value out of its range)."""
+    from ..errors import FlexureError
+
+    if key.key.endswith(".position"):
+        return None
+    try:
+        return [_build(model, key, key.value + k * d) for k in (1, 2)]
+    except FlexureError:
+        return None
+
+
 def difference_step(model: Model, key: Key, step: float = STEP) -> float:
     """h of the difference scheme for `key` (module docstring), in the key's unit; SceneError
     where a value of 0 has no scale to take a relative step of."""
@@ -253,8 +267,8 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
     for j, key in enumerate(resolved):
         analytic = np.zeros(n, dtype=bool)
         d = abs(key.value) or 1.0  # any d: the quantities checked are affine in p
-        stepped = [_build(model, key, key.value + k * d) for k in (1, 2)]
-        if not nonlinearity((model, *stepped)):
+        stepped = _linearity_models(model, key, d)
+        if stepped and not nonlinearity((model, *stepped)):
             derivatives[:, j], analytic = analytic_derivatives(base, stepped[0], d,
                                                                preloaded=preloaded)
         steps[j] = difference_step(model, key, step) if not analytic.all() else 0.0

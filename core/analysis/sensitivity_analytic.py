@@ -22,7 +22,8 @@ evaluated at the base model's configuration: exact, not a difference quotient.
 
 The derivatives (`analytic_derivatives`), with K = K0 + G0 the tangent stiffness:
 
-    eigenvalue lambda = omega^2, phi mass-normalised:   dlambda/dp = phi^T (dK/dp - lambda dM/dp) phi
+    eigenvalue lambda = omega^2, phi mass-normalised:
+                                        dlambda/dp = phi^T (dK/dp - lambda dM/dp) phi
         and f = sign(lambda) sqrt|lambda| / (2 pi):     df/dp = dlambda/dp / (8 pi^2 |f|)
     static DOFs, Q(q(p), p) = 0:                        dq/dp = K^-1 dQ/dp
         (= -K^-1 dK/dp u for u = K^-1 f), and an output y(x(q)): dy/dp = (dy/dq) dq/dp
