@@ -29,6 +29,14 @@ def register(subparsers):
                         help="the compliance matrix (m/N, rad/(N m), ...) and support "
                              "stiffness of this node at the static equilibrium (repeatable, "
                              "or comma-separated: 3,5)")
+    parser.add_argument("--sensitivity", nargs="+", metavar="KEY",
+                        help="the derivatives of the analyses' results (the lowest "
+                             f"{SENSITIVITY_MODES} frequencies or the N of --modes, buckling "
+                             "factors, outputs, the largest von Mises stress, compliances, DC "
+                             "gains) with respect to these scene keys (sections.leaf.height, "
+                             "nodes.3.mass, nodes.3.position[1]): analytic where the "
+                             "matrices are linear in the key, else central differences with "
+                             "an error estimate")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--sigma-range", type=frequency_band, metavar="FMIN:FMAX",
                         help="the frequencies of --sigma, Hz (default: a tenth of the lowest "
@@ -45,6 +53,9 @@ STATIC_UNITS = {
     "stress_resultants": "N: e1 the normal force; bending (PLBEAM e2, e3; BEAM e3 to e6) and "
                          "torsion (BEAM e2) the moment in N m divided by l0",
     "von_mises_pa": "Pa"}
+
+
+SENSITIVITY_MODES = 6  # the frequencies --sensitivity differentiates when --modes gives no N
 
 
 def frequency_band(text):
@@ -180,10 +191,20 @@ def run(args, model=None):
         # a kinematic model (SPACAR's mode 1) has no equilibrium to find and no modes: the
         # exact-constraint check that loading it passed is the analysis
         static, modes = (False, None) if is_kinematic(model) else (True, -1)
+    keys = args.sensitivity or []
+    if keys:  # every key checked before any analysis: a mistake costs no run
+        from ..analysis.sensitivity import resolve_key
+
+        for key in keys:
+            resolve_key(model, key)
     result = analyze(model, static=static or bool(args.plot), modes=modes,
                      buckling=args.buckling, with_state_space=args.state_space,
                      with_gains=bool(args.sigma), compliance_nodes=nodes,
                      gains_band=args.sigma_range)
+    if keys:
+        result["sensitivity"] = sensitivity(model, keys, static=static, modes=modes,
+                                            buckling=args.buckling, nodes=nodes,
+                                            with_state_space=args.state_space)
     if args.plot:
         plot_stresses(model, args.plot)
     if args.sigma:
@@ -202,6 +223,19 @@ def run(args, model=None):
     for message in result.get("warnings", []):  # also where --json goes to a file or a pipe
         print(f"flexure analyze: warning: {message}", file=sys.stderr)
     return 0
+
+
+def sensitivity(model, keys, *, static, modes, buckling, nodes, with_state_space):
+    """The `sensitivity` entry of `--json`: the derivatives of the results of the analyses
+    asked for (`analysis.sensitivity`), SI units."""
+    from ..analysis.sensitivity import sensitivities
+
+    found = sensitivities(
+        model, keys, modes=0 if modes is None else (modes if modes > 0 else SENSITIVITY_MODES),
+        buckling=0 if buckling is None else (buckling if buckling > 0 else 1),
+        outputs=static, stress=static, compliance_nodes=tuple(dict.fromkeys(nodes)),
+        dc_gains=with_state_space)
+    return jsonable(found.as_dict())
 
 
 def wrote(path, what):
@@ -313,7 +347,28 @@ def render(result):
                                   title=f"\nprincipal gains from {', '.join(gains['inputs'])} to "
                                         f"{', '.join(gains['outputs'])} ({f.size} frequencies, "
                                         f"{f.min():.3g} to {f.max():.3g} Hz)"))
+    if "sensitivity" in result:
+        parts.append(render_sensitivity(result["sensitivity"]))
     return "\n".join(parts)
+
+
+def render_sensitivity(found):
+    """The `sensitivity` entry as a table: per quantity its value and, per key, the derivative
+    with its unit and the method (with the difference scheme's error estimate)."""
+    headers = ["quantity", "value"]
+    for key, unit in zip(found["keys"], found["key_units"], strict=True):
+        headers += [f"d/d{key} (per {unit})", "method"]
+    rows = []
+    for i, (name, unit) in enumerate(zip(found["quantities"], found["units"], strict=True)):
+        row = [f"{name} ({unit})", found["values"][i]]
+        for j in range(len(found["keys"])):
+            method = found["methods"][i][j]
+            if method != "analytic":
+                method = f"{method} ± {found['errors'][i][j]:.2g}"
+            row += [found["derivatives"][i][j], method]
+        rows.append(row)
+    return format_table(headers, rows, title="\ndesign sensitivities (SI units; a derivative's "
+                                             "unit is the quantity's per the key's)")
 
 
 def render_compliance(node, found):

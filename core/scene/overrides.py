@@ -25,7 +25,8 @@ import numpy as np
 
 from ..errors import SceneError
 
-__all__ = ["apply_overrides", "describe_overrides", "parse_assignment", "parse_value"]
+__all__ = ["apply_overrides", "declared_value", "describe_overrides", "parse_assignment",
+           "parse_value"]
 
 # the tables whose entries are named ([nodes.3], [sections.leaf]), and the singular for messages
 NAMED_TABLES = {"sections": "section", "nodes": "node", "elements": "element", "inputs": "input",
@@ -72,11 +73,48 @@ def apply_overrides(data: dict, overrides: Mapping[str, object] | None, *,
     return result
 
 
-def _target(data, key, source):
+def declared_value(data: dict, key: str, *, source: str = "<dict>",
+                   option: str = "--set") -> object:
+    """The value scene dictionary `data` gives for dotted key `key` (as the file holds it).
+
+    The key is checked as `apply_overrides` checks it (a table of the scene format, a name
+    the scene declares), and the scene must give the value itself: a key left to its default
+    has no value to read.
+
+    Parameters
+    ----------
+    data : dict
+        The scene dictionary; it is not changed.
+    key : str
+        A dotted scene key, e.g. "sections.leaf.height".
+    source : str
+        How messages name the scene (a file path).
+    option : str
+        How messages name the option that gave the key ("--set", "--sensitivity").
+
+    Returns
+    -------
+    object
+        The value: a number, a string, a boolean or a list (SI units).
+
+    Raises
+    ------
+    SceneError
+        "`source`: `option` KEY: what is wrong": the key points nowhere in the scene format
+        or the scene, or the scene gives no value for it.
+    """
+    table, name = _target(copy.deepcopy(data), key, source, option)
+    if name not in table:
+        raise SceneError(f"{source}: {option} {key}: the scene gives no value for it (its "
+                         f"entry has {', '.join(table) or 'no keys'})")
+    return table[name]
+
+
+def _target(data, key, source, option="--set"):
     """(the table that holds `key`, the name of the value in it); the table is made if the
     scene has none of it yet ([buckling], [scene])."""
     def fail(message):
-        raise SceneError(f"{source}: --set {key}: {message}")
+        raise SceneError(f"{source}: {option} {key}: {message}")
 
     if not isinstance(data, dict):
         raise SceneError(f"{source}: scene file: expected a table, got {type(data).__name__}")
