@@ -20,8 +20,7 @@ Units: SI throughout (m, rad, kg, N, s), as the model's.
 
 import numpy as np
 
-from . import layout, packing
-from .orders import banded_multiplications, evaluation_cost
+from . import layout, packing, sparse_packing
 from .packing import (
     A_GAIN,
     A_KM,
@@ -146,6 +145,48 @@ def _check_counted(model):
         raise ValueError(f"model {model.name!r} is not exactly counted: {free.size} free "
                          f"coordinates, {constraints + model.dof_coordinates.size} "
                          "constraints and DOFs")
+
+
+def banded_multiplications(n, kl, ku):
+    """Multiplications of the banded LU with partial pivoting of an (n, n) matrix with kl
+    sub- and ku super-diagonals, and of one solve with it."""
+    kl, ku = min(kl, n), min(ku, n)
+    return n * kl * (kl + ku) + 2 * n * (kl + ku)
+
+
+def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None, sparse=None):
+    """Multiplications of one evaluation's linear algebra by each way to the accelerations
+    (zeros counted):
+    {"reduced": DF (NDOF solves), M_bar = DF^T M DF element by element and its LU;
+    "augmented": the LU of the augmented system (n_free + n_rigid) and the free-coordinate
+    mass blocks}; both factor J. groups: (element count, coordinates m, inertia points P) per
+    element group; bands: (kl, ku) of J and of the augmented system (default: dense);
+    sparse: the multiplications of the static-pivot sparse LUs {"j_factor", "j_solve",
+    "a_factor", "a_solve"} (`sparse_packing.SparseFactors.multiplications`), weighed at
+    `sparse_packing.SPARSE_WEIGHT` banded ones each, or None. The reduced form wins on few
+    DOFs (a 1-DOF stage: M_bar is 1 x 1), the augmented one on many (M_bar costs NDOF^2 per
+    element). Also says which LU each matrix takes: {"constraint_lu", "augmented_lu"}, "banded"
+    or "sparse", whichever costs less."""
+    na = n_free + n_rigid
+    j_kl, j_ku, a_kl, a_ku = bands if bands is not None else (n_free, n_free, na, na)
+    j_solve = 2 * n_free * (min(j_kl, n_free) + min(j_ku, n_free))
+    j_lu = banded_multiplications(n_free, j_kl, j_ku)
+    a_lu = banded_multiplications(na, a_kl, a_ku)
+    lu_kinds = {"constraint_lu": "banded", "augmented_lu": "banded"}
+    if sparse is not None:
+        weight = sparse_packing.SPARSE_WEIGHT
+        sparse_j = weight * (sparse["j_factor"] + sparse["j_solve"])
+        sparse_a = weight * (sparse["a_factor"] + sparse["a_solve"])
+        if sparse_j < j_lu:
+            j_lu, j_solve = sparse_j, weight * sparse["j_solve"]
+            lu_kinds["constraint_lu"] = "sparse"
+        if sparse_a < a_lu:
+            a_lu = sparse_a
+            lu_kinds["augmented_lu"] = "sparse"
+    reduced = j_lu + ndof * j_solve + ndof ** 3 / 3 + sum(
+        n * (P * m * ndof + P * P * ndof + P * ndof * ndof) for n, m, P in groups)
+    augmented = j_lu + a_lu + sum(n * (P * P * m + P * m * m) for n, m, P in groups)
+    return {"reduced": reduced, "augmented": augmented, **lu_kinds}
 
 
 __all__ = ["A_GAIN", "A_KM", "A_L", "A_R", "A_SATURATION", "A_WIDTH", "BANDED_FACTORS",

@@ -3,8 +3,8 @@
 J (free x free) and the augmented system of the accelerations are factored banded in a
 bandwidth-reducing order (`numerics.banded`) or, where that band stays wide, by the
 static-pivot sparse LU (`sparse_packing`); the accelerations come from the reduced or the
-augmented form. `plan` chooses, by counting multiplications (`evaluation_cost`), and keeps
-the orders and the sparse analysis per live model (a Simulator packs its model twice).
+augmented form. `FactorPlan` chooses, by counting multiplications (`data.evaluation_cost`),
+and keeps the orders and the sparse analysis per live model (a Simulator packs its model twice).
 Nothing here is compiled; `packing` puts the choice into the slots.
 """
 
@@ -12,53 +12,11 @@ import weakref
 
 import numpy as np
 
-from . import sparse_packing
+from . import data, sparse_packing  # data: its cost model, which tests may replace
 
 # the banded orders of a model's J and augmented system, computed once per live model (read
 # only): {(id(model), rigid): (weak reference to the model, orders)}
 _ORDERS = {}
-
-
-def banded_multiplications(n, kl, ku):
-    """Multiplications of the banded LU with partial pivoting of an (n, n) matrix with kl
-    sub- and ku super-diagonals, and of one solve with it."""
-    kl, ku = min(kl, n), min(ku, n)
-    return n * kl * (kl + ku) + 2 * n * (kl + ku)
-
-
-def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None, sparse=None):
-    """Multiplications of one evaluation's linear algebra by each way to the accelerations
-    (zeros counted):
-    {"reduced": DF (NDOF solves), M_bar = DF^T M DF element by element and its LU;
-    "augmented": the LU of the augmented system (n_free + n_rigid) and the free-coordinate
-    mass blocks}; both factor J. groups: (element count, coordinates m, inertia points P) per
-    element group; bands: (kl, ku) of J and of the augmented system (default: dense);
-    sparse: the multiplications of the static-pivot sparse LUs {"j_factor", "j_solve",
-    "a_factor", "a_solve"} (`sparse_packing.SparseFactors.multiplications`), weighed at
-    `sparse_packing.SPARSE_WEIGHT` banded ones each, or None. The reduced form wins on few
-    DOFs (a 1-DOF stage: M_bar is 1 x 1), the augmented one on many (M_bar costs NDOF^2 per
-    element). Also says which LU each matrix takes: {"constraint_lu", "augmented_lu"}, "banded"
-    or "sparse", whichever costs less."""
-    na = n_free + n_rigid
-    j_kl, j_ku, a_kl, a_ku = bands if bands is not None else (n_free, n_free, na, na)
-    j_solve = 2 * n_free * (min(j_kl, n_free) + min(j_ku, n_free))
-    j_lu = banded_multiplications(n_free, j_kl, j_ku)
-    a_lu = banded_multiplications(na, a_kl, a_ku)
-    lu_kinds = {"constraint_lu": "banded", "augmented_lu": "banded"}
-    if sparse is not None:
-        weight = sparse_packing.SPARSE_WEIGHT
-        sparse_j = weight * (sparse["j_factor"] + sparse["j_solve"])
-        sparse_a = weight * (sparse["a_factor"] + sparse["a_solve"])
-        if sparse_j < j_lu:
-            j_lu, j_solve = sparse_j, weight * sparse["j_solve"]
-            lu_kinds["constraint_lu"] = "sparse"
-        if sparse_a < a_lu:
-            a_lu = sparse_a
-            lu_kinds["augmented_lu"] = "sparse"
-    reduced = j_lu + ndof * j_solve + ndof ** 3 / 3 + sum(
-        n * (P * m * ndof + P * P * ndof + P * ndof * ndof) for n, m, P in groups)
-    augmented = j_lu + a_lu + sum(n * (P * P * m + P * m * m) for n, m, P in groups)
-    return {"reduced": reduced, "augmented": augmented, **lu_kinds}
 
 
 def constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
@@ -165,15 +123,15 @@ class FactorPlan:
             found["orders"]
         self.bands = bands = (int(j_kl), int(j_ku), int(a_kl), int(a_ku))
         if sparse is not False and "sparse" not in found:
-            banded_lu = (banded_multiplications(free.size, *bands[:2]) + banded_multiplications(
-                free.size + n_rigid, *bands[2:]))
+            banded_lu = (data.banded_multiplications(free.size, *bands[:2])
+                         + data.banded_multiplications(free.size + n_rigid, *bands[2:]))
             found["sparse"] = sparse_packing.analyse(
                 model, groups.de_groups, [group for group in groups.all
                                           if id(group) in groups.inertia],
                 free, rows, topology.row_of_def, topology.col_of_coord, groups.de_size,
                 np.inf if sparse else banded_lu, rigid)
         factors = self.factors = found.get("sparse") if sparse is not False else None
-        costs = evaluation_cost(free.size, n_rigid, model.declared_dof_count,
+        costs = data.evaluation_cost(free.size, n_rigid, model.declared_dof_count,
                                 groups.cost_shapes(), bands,
                                 None if factors is None else factors.multiplications())
         if sparse and factors is not None:  # forced: both matrices sparse
