@@ -353,6 +353,26 @@ RECORDS = {"dims": DIMS_FIELDS, "groups": GROUP_FIELDS, "counters": COUNTER_FIEL
            "settings": SETTINGS_FIELDS}
 
 
+def table_problems():
+    """The problems of the tables themselves, as messages (empty: none): a name or an index
+    constant used twice (two slots would share an index), an unknown dtype or role."""
+    problems = []
+    for what, entries in (("slot", SLOTS), *((f"{name} field", fields)
+                                             for name, fields in RECORDS.items())):
+        for column in ("name", "constant"):
+            values = [getattr(entry, column) for entry in entries]
+            twice = sorted({v for v in values if values.count(v) > 1})
+            problems += [f"{what} {column} {v!r} used twice" for v in twice]
+    constants = [f.constant for fields in RECORDS.values() for f in fields]
+    problems += [f"field constant {c!r} used twice" for c in sorted(
+        {c for c in constants if constants.count(c) > 1})]
+    problems += [f"slot {s.name!r}: unknown dtype {s.dtype!r}" for s in SLOTS
+                 if s.dtype not in (INT, FLOAT)]
+    problems += [f"{e.name!r}: unknown role {e.role!r}" for e in SLOTS + sum(
+        RECORDS.values(), ()) if e.role not in (CONFIG, STATE, SCRATCH, MIXED)]
+    return problems
+
+
 def slot_indices():
     """{index constant: the slot's index among the slots of its dtype}: the constants that
     `slots` defines (compile-time ints for numba)."""
@@ -428,3 +448,7 @@ def check(packed, counts):
     problems += [f"slot {name!r} declared (packed by {BY_NAME[name].packer}) and never packed"
                  for name in BY_NAME if name not in seen]
     return problems
+
+
+if table_problems():  # never generate constants from a table that gives two slots one index
+    raise LayoutError("the layout tables: " + "; ".join(table_problems()))
