@@ -34,8 +34,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import carray
 
+from ..engine import access, engine
 from ..engine import data as ed
-from ..engine import engine, slots
 from ..engine.ports import port_specs, position_value
 from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
@@ -285,16 +285,14 @@ def _measure(addresses, y, scratch, coordinates, out):
     DOF, else Newton from the plant's last coordinates moved to y (`measuring`).
     coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat), then the DOF of
     each output or -1 (`mechanics.ports.output_dofs`)."""
-    q_ref = engine.float_array(addresses[_PLANT], slots.Q_REF)
+    q_ref = access.reference_dofs(addresses[_PLANT])
     dofs = coordinates[coordinates.size - out.size:]
     if np.all(dofs >= 0):
         for j in range(out.size):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
-    ndof = engine.int_array(addresses[_PLANT], slots.DIMS)[ed.NDOF]  # y: [.., coil currents]
-    x_plant = engine.float_array(addresses[_PLANT], slots.X)
-    copy(engine.float_array(addresses[_OUTPUT], slots.X_START), x_plant)
-    engine.int_array(addresses[_OUTPUT], slots.DIMS)[ed.WARM] = 0
+    ndof = access.dims(addresses[_PLANT])[ed.NDOF]  # y: [.., coil currents]
+    access.restart_kinematics(addresses[_OUTPUT], access.coordinates(addresses[_PLANT]))
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
     start_from_plant(addresses[_PLANT], addresses[_OUTPUT], scratch)
@@ -302,7 +300,7 @@ def _measure(addresses, y, scratch, coordinates, out):
                          scratch.ctypes.data, 0, 0, 0.0)
     if status != ed.OK:
         return status
-    x = engine.float_array(addresses[_OUTPUT], slots.X)
+    x = access.coordinates(addresses[_OUTPUT])
     for j in range(out.size):
         out[j] = position_value(coordinates, j, x)
     return ed.OK
@@ -352,9 +350,8 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
     """Samples start .. stop - 1 of the loop; 0, or CVODE's failure flag (or
     _MEASURE_FAILED) with loop_state[0] the time reached."""
     plant = addresses[_PLANT]
-    plant_inputs = engine.float_array(plant, slots.INPUTS)
-    x_plant, x_start = engine.float_array(plant, slots.X), engine.float_array(plant, slots.X_START)
-    dims = engine.int_array(plant, slots.DIMS)
+    plant_inputs, x_plant = access.inputs(plant), access.coordinates(plant)
+    dims = access.dims(plant)
     tret = carray(as_float_pointer(addresses[_TRET]), (1,))
     t = loop_state[0]
     restart = loop_state[1] != 0.0
@@ -365,8 +362,7 @@ def _loop(addresses, loop_state, memory, steps, held, y, scratch, start, stop, f
             return _MEASURE_FAILED
         if changed or restart:  # as Simulator.set_inputs and its restart in advance
             copy(plant_inputs, held)
-            copy(x_start, x_plant)
-            dims[ed.WARM] = 0
+            access.restart_kinematics(plant, x_plant)
             call_get_long(addresses[_NUM_STEPS], addresses[_MEMORY], steps[1:].ctypes.data)
             steps[0] += steps[1]
             flag = call_reinit(addresses[_REINIT], addresses[_MEMORY], t, addresses[_Y])
@@ -403,10 +399,8 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
     inputs, the integrator's state re-entered (its first stage recomputed)."""
     plant = addresses[_PLANT]
-    plant_inputs = engine.float_array(plant, slots.INPUTS)
-    x_plant, x_start = engine.float_array(plant, slots.X), engine.float_array(plant, slots.X_START)
-    dims = engine.int_array(plant, slots.DIMS)
-    counters = engine.int_array(plant, slots.COUNTERS)
+    plant_inputs, x_plant = access.inputs(plant), access.coordinates(plant)
+    counters = access.counters(plant)
     y = vectors[esdirk.V_Y]
     t = loop_state[0]
     for k in range(start, stop):
@@ -421,8 +415,7 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
             keep = (loop_state[2] == 0.0 and memory[esdirk.M_T] == t
                     and flags[esdirk.I_FSAL] != esdirk.FSAL_NONE)
             if loop_state[2] != 0.0:
-                copy(x_start, x_plant)
-                dims[ed.WARM] = 0
+                access.restart_kinematics(plant, x_plant)
                 loop_state[2] = 0.0
             memory[esdirk.M_T] = t
             flags[esdirk.I_FSAL] = esdirk.FSAL_INPUTS if keep else esdirk.FSAL_NONE
