@@ -450,5 +450,21 @@ def check(packed, counts):
     return problems
 
 
+def markdown():
+    """The slot table as Markdown (`python -m flexure.core.engine.layout`)."""
+    lines = ["| slot | dtype | constant | size | role | packed by | unit | meaning |",
+             "|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {s.name} | {s.dtype} | {s.constant} | {s.size} | {s.role} | {s.packer} | "
+              f"{s.unit} | {s.meaning} |" for s in SLOTS]
+    for record_name, fields in RECORDS.items():
+        lines += ["", f"| {record_name} field | constant | role | meaning |", "|---|---|---|---|"]
+        lines += [f"| {f.name} | {f.constant} | {f.role} | {f.meaning} |" for f in fields]
+    return "\n".join(lines)
+
+
 if table_problems():  # never generate constants from a table that gives two slots one index
     raise LayoutError("the layout tables: " + "; ".join(table_problems()))
+
+
+if __name__ == "__main__":
+    print(markdown())
