@@ -92,8 +92,8 @@ class ElementGroups:
         offsets["def"] += n * k
         offsets["data"] += sum(piece.size for piece in pieces)
         offsets["element"] += n
-        self.max_m, self.max_k, self.max_p = max(self.max_m, m), max(self.max_k, k), max(
-            self.max_p, P)
+        self.max_m, self.max_k = max(self.max_m, m), max(self.max_k, k)
+        self.max_p = max(self.max_p, P)
 
     def cost_shapes(self):
         """(element count, coordinates m, inertia points P) per group (`evaluation_cost`)."""
