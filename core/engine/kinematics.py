@@ -202,6 +202,21 @@ def predicted_coordinates(table, q, x, dq, dx):
         x[free[a]] += dx[a]
 
 
+@kernel
+def start_from_plant(plant, output, q):
+    """Slot x_start of the packed model `output` (its table's address) = the plant's last
+    kinematic solution moved to the DOFs q (NDOF,: m, rad) with its factors
+    (`predicted_coordinates`; why: `simulation.measuring`). Only for a plant whose last
+    solution is of the state measured (the caller knows: after a step, not after a state was
+    set); left as the caller set it when the plant holds no solution with its factors
+    (before its first, after a restart of its kinematics)."""
+    if _i(plant, slot.DIMS)[ed.WARM] != 1:
+        return
+    predicted_coordinates(plant, q, _f(output, slot.X_START),
+                          _f(output, slot.REDUCED_FORCE),  # scratch of the output's,
+                          _f(output, slot.DX))  # not the plant's
+
+
 @kernel(inline="always")  # into its operation's entry, its one caller
 def solve_positions(table, q):
     """x = F(q) into slot x by full Newton from slot x_start, stopping as soon as the

@@ -61,6 +61,7 @@ class RigidPacking:
     """
 
     def __init__(self, model, groups, inertia, *, enabled=True):
+        self.enabled = enabled
         self.clusters = find_clusters(model) if enabled else []
         layout = self.layout = RigidLayout(model, self.clusters)
         nx = model.nx

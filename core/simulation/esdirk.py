@@ -57,8 +57,8 @@ the last accepted one.
 
 import numpy as np
 
+from ..engine import access, engine
 from ..engine import data as ed
-from ..engine import engine, slots
 from ..errors import SimulationError, StepBudgetSpent
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
@@ -108,9 +108,9 @@ def _f(table, y, out, flags, op):
     model's tangent); its status."""
     jacobian = op == engine.OP_JACOBIAN
     flags[I_JACOBIANS if jacobian else I_RHS] += 1
-    counters = engine.int_array(table, slots.COUNTERS)
+    counters = access.counters(table)
     counters[ed.JACOBIAN_COUNT if jacobian else ed.RHS_COUNT] += 1
-    status = call_engine(engine.int_array(table, slots.DIMS)[ed.ENGINE], op, table, 0.0,
+    status = call_engine(access.dims(table)[ed.ENGINE], op, table, 0.0,
                          y.ctypes.data, out.ctypes.data, 0, 0.0)
     if status != ed.OK:
         counters[ed.FAILED_STATUS] = status
@@ -246,7 +246,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     y, z, err, weight, F = vectors[V_Y], vectors[V_Z], vectors[V_ERR], vectors[V_WEIGHT], \
         vectors[V_F:]
     rtol = memory[M_RTOL]
-    counters, dims = engine.int_array(table, slots.COUNTERS), engine.int_array(table, slots.DIMS)
+    counters, dims = access.counters(table), access.dims(table)
     one_step, max_steps = flags[I_ONE_STEP] != 0, flags[I_MAX_STEPS]
     steps = 0
     failures = 0
@@ -355,7 +355,7 @@ def restart(table, memory, flags, t, inputs_only):
     keep = inputs_only and memory[M_T] == t and flags[I_FSAL] != FSAL_NONE
     memory[M_T] = t
     flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
-    engine.int_array(table, slots.COUNTERS)[ed.FAILED_STATUS] = 0
+    access.counters(table)[ed.FAILED_STATUS] = 0
 
 
 class Esdirk(Stepper):

@@ -19,21 +19,6 @@ factors and one evaluation of e instead of a Newton step's factorisation. When i
 pass, the Newton goes on from there as before.
 """
 
-from ..engine import data as ed
-from ..engine import engine, slots
-from ..engine.kinematics import predicted_coordinates
-from ..numerics.jit import kernel
+from ..engine.kinematics import start_from_plant  # the engine's: it reads the plant's slots
 
-
-@kernel
-def start_from_plant(plant, output, q):
-    """Slot x_start of the packed model `output` (its table's address) = the plant's last
-    kinematic solution moved to the DOFs q (NDOF,: m, rad), as the module says. Only for a
-    plant whose last solution is of the state measured (the caller knows: after a step, not
-    after a state was set); left as the caller set it when the plant holds no solution with
-    its factors (before its first, after a restart of its kinematics)."""
-    if engine.int_array(plant, slots.DIMS)[ed.WARM] != 1:
-        return
-    predicted_coordinates(plant, q, engine.float_array(output, slots.X_START),
-                          engine.float_array(output, slots.REDUCED_FORCE),  # scratch of
-                          engine.float_array(output, slots.DX))  # the output's, not the plant's
+__all__ = ["start_from_plant"]

@@ -38,8 +38,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import carray
 
+from ..engine import access, engine
 from ..engine import data as ed
-from ..engine import engine, slots
 from ..engine.ports import port_specs, position_value
 from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
@@ -290,16 +290,14 @@ def _measure(addresses, y, scratch, coordinates, out):
     DOF, else Newton from the plant's last coordinates moved to y (`measuring`).
     coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat), then the DOF of
     each output or -1 (`mechanics.ports.output_dofs`)."""
-    q_ref = engine.float_array(addresses[_PLANT], slots.Q_REF)
+    q_ref = access.reference_dofs(addresses[_PLANT])
     dofs = coordinates[coordinates.size - out.size:]
     if np.all(dofs >= 0):
         for j in range(out.size):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
-    ndof = engine.int_array(addresses[_PLANT], slots.DIMS)[ed.NDOF]  # y: [.., coil currents]
-    x_plant = engine.float_array(addresses[_PLANT], slots.X)
-    copy(engine.float_array(addresses[_OUTPUT], slots.X_START), x_plant)
-    engine.int_array(addresses[_OUTPUT], slots.DIMS)[ed.WARM] = 0
+    ndof = access.dims(addresses[_PLANT])[ed.NDOF]  # y: [.., coil currents]
+    access.restart_kinematics(addresses[_OUTPUT], access.coordinates(addresses[_PLANT]))
     for j in range(ndof):
         scratch[j] = q_ref[j] + y[j]
     start_from_plant(addresses[_PLANT], addresses[_OUTPUT], scratch)
@@ -307,7 +305,7 @@ def _measure(addresses, y, scratch, coordinates, out):
                          scratch.ctypes.data, 0, 0, 0.0)
     if status != ed.OK:
         return status
-    x = engine.float_array(addresses[_OUTPUT], slots.X)
+    x = access.coordinates(addresses[_OUTPUT])
     for j in range(out.size):
         out[j] = position_value(coordinates, j, x)
     return ed.OK
@@ -360,7 +358,7 @@ def _loop(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start,
     loop_state[0] the time reached. Each change of the held force restarts it as
     `Simulator._restart` does, through the same kernels."""
     plant = addresses[_PLANT]
-    x_plant = engine.float_array(plant, slots.X)
+    x_plant = access.coordinates(plant)
     memory = cvode[A_MEMORY]
     tret = carray(as_float_pointer(cvode[A_TRET]), (1,))
     t = loop_state[0]
@@ -402,7 +400,7 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
     inputs, the integrator's state re-entered (its first stage recomputed)."""
     plant = addresses[_PLANT]
-    x_plant = engine.float_array(plant, slots.X)
+    x_plant = access.coordinates(plant)
     y = vectors[esdirk.V_Y]
     t = loop_state[0]
     for k in range(start, stop):

@@ -37,9 +37,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..engine import data as ed
-from ..engine import slots
-from ..engine.engine import float_array, int_array
+from ..engine import access
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
 
@@ -166,10 +164,9 @@ def restart_plant(table, inputs, x, kinematics):
     """The engine's side of a restart: the held inputs (N, N m, V) into the packed model at
     address `table`, and with `kinematics` the next kinematic solution started afresh (full
     Newton) from the coordinates x (NX,)."""
-    copy(float_array(table, slots.INPUTS), inputs)
+    copy(access.inputs(table), inputs)
     if kinematics:
-        copy(float_array(table, slots.X_START), x)
-        int_array(table, slots.DIMS)[ed.WARM] = 0
+        access.restart_kinematics(table, x)
 
 
 __all__ = ["HeldInputDrive", "Stepper", "restart_plant"]

@@ -24,8 +24,8 @@ import sys
 import numpy as np
 from numba import carray, cfunc, types
 
+from ..engine import access, engine
 from ..engine import data as ed
-from ..engine import engine, slots
 from ..errors import SimulationError, StepBudgetSpent
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
@@ -79,8 +79,8 @@ def _callback(op, user_data, t, a, b, c, s, counter):
     """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
     1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
     table = address_of(user_data)
-    dims = engine.int_array(table, slots.DIMS)
-    counters = engine.int_array(table, slots.COUNTERS)
+    dims = access.dims(table)
+    counters = access.counters(table)
     counters[counter] += 1
     status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
     if status == ed.OK:
@@ -103,10 +103,10 @@ def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     jacobian_cache. After a restart in a sampled loop (dims[JACOBIAN_REUSE] = 1) the kept
     Jacobian is handed back once instead."""
     table = address_of(user_data)
-    dims = engine.int_array(table, slots.DIMS)
+    dims = access.dims(table)
     n = 2 * dims[ed.NDOF] + dims[ed.NEL]
     J = carray(dense_matrix_data(matrix), (n * n,))
-    kept = engine.float_array(table, slots.JAC_CACHE)
+    kept = access.jacobian_cache(table)
     if dims[ed.JACOBIAN_REUSE] == 1:
         dims[ed.JACOBIAN_REUSE] = 0
         copy(J, kept)

@@ -2,8 +2,8 @@
 (`sampled_loop`) both run. Apart from `sundials` so that the sampled loop on a one-step method
 does not load SUNDIALS' callbacks (they load only where CVODE or IDA runs)."""
 
+from ..engine import access
 from ..engine import data as ed
-from ..engine import engine, slots
 from ..numerics.jit import kernel
 from ..numerics.native import call_get_long, call_reinit, call_with_time
 
@@ -35,14 +35,14 @@ def cvode_restart(addresses, learnt, totals, t):
     _add_count(addresses[A_NUM_STEPS], memory, totals, T_STEPS)
     _add_count(addresses[A_NUM_RHS], memory, totals, T_RHS)
     _add_count(addresses[A_NUM_JACOBIANS], memory, totals, T_JACOBIANS)
-    engine.int_array(addresses[A_DATA], slots.COUNTERS)[ed.FAILED_STATUS] = 0
+    access.counters(addresses[A_DATA])[ed.FAILED_STATUS] = 0
     flag = call_reinit(addresses[A_REINIT], memory, t, addresses[A_Y])
     if flag < 0:
         return flag
     if learnt[L_INITIAL_STEP] > 0.0:
         call_with_time(addresses[A_INIT_STEP], memory, learnt[L_INITIAL_STEP])
     if learnt[L_JACOBIAN] != 0.0 and addresses[A_ANALYTIC] != 0:
-        engine.int_array(addresses[A_DATA], slots.DIMS)[ed.JACOBIAN_REUSE] = 1
+        access.dims(addresses[A_DATA])[ed.JACOBIAN_REUSE] = 1
     return 0
 
 
