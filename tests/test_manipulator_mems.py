@@ -170,13 +170,16 @@ def test_a_short_step_is_the_linearisation_plus_a_second_order_part():
 
 @pytest.mark.slow
 def test_the_step_settles_as_its_linearisation_to_the_static_deflection(tmp_path, capsys):
-    """`flexure simulate manipulator_mems --t-end 0.1 --input F1=1e-5` as a user runs it
-    (about a minute): x1 settles into 2 % of the static deflection within the linearisation's
-    settling time (0.0746 s, 0.4 s stepped exactly) +- 5 %; the plot is written."""
+    """`flexure simulate manipulator_mems --t-end 0.1 --input F1=1e-5 --method esdirk3 --rtol
+    1e-7` as docs/manipulator.md runs it (about a minute): x1 settles into 2 % of the static
+    deflection within the linearisation's settling time (0.0746 s, 0.4 s stepped exactly)
+    +- 5 %; the plot is written. (The decay over some 60 periods needs an integrator whose
+    error stays small against the 2 % band: CVODE's BDF at rtol 1e-6 settles at 83.5 ms.)"""
     model = load_scene("manipulator_mems")
     csv, png = tmp_path / "step.csv", tmp_path / "step.png"
     code, out, err = run(capsys, "simulate", "manipulator_mems", "--t-end", 0.1, "--input",
-                         f"F1={manipulator_mems.STEP_FORCE}", "--rtol", 1e-6, "--samples",
+                         f"F1={manipulator_mems.STEP_FORCE}", "--method", "esdirk3", "--rtol",
+                         1e-7, "--samples",
                          5000, "--out", csv, "--plot", png)
     assert code == 0, err
     data = np.loadtxt(csv, delimiter=",", skiprows=1)
