@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..numerics.ties import best_first
+
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
 
@@ -141,20 +143,29 @@ class RangeCheck:
         found = {}
         if self.elongation.size:
             strain = e[:, self.elongation] / self.length
-            worst = np.unravel_index(np.argmax(np.abs(strain)), strain.shape)
+            worst = _worst(np.abs(strain))
             if abs(strain[worst]) > STRAIN_LIMIT:
                 name = self.model.deformation_names[self.elongation[worst[1]]]
                 found["strain"] = (f"axial strain {strain[worst]:.3g} of {name} is beyond the "
                                    f"model's range of validity (|strain| <= {STRAIN_LIMIT:g})")
         if self.translational.size:
             distance = np.abs(x[:, self.translational] - self.start)
-            worst = np.unravel_index(np.argmax(distance), distance.shape)
+            worst = _worst(distance)
             if distance[worst] > DISTANCE_LIMIT * self.scale:
                 name = self.model.coordinate_names[self.translational[worst[1]]]
                 found["distance"] = (f"{name} moved {distance[worst]:.3g} m from the start, "
                                      f"beyond the model's range of validity ({DISTANCE_LIMIT:g} x "
                                      f"its size {self.scale:.3g} m)")
         return found
+
+
+def _worst(values):
+    """The (state, column) of the largest of `values` (n, k), the scene's order deciding among
+    those within round-off of it (`ties.best_first`: the two ends of a rigid bar move alike,
+    and which one a warning names must not depend on the CPU); (0, 0) when all are NaN."""
+    if np.all(np.isnan(values)):
+        return (0, 0)
+    return np.unravel_index(best_first(values), values.shape)
 
 
 def mechanism_size(model: Model) -> float:
