@@ -22,22 +22,14 @@ import ctypes
 import sys
 
 import numpy as np
-from numba import carray, cfunc, types
 
-from ..engine import access, engine
 from ..engine import data as ed
+from ..engine import engine
 from ..errors import SimulationError, StepBudgetSpent
-from ..numerics.dense import copy
-from ..numerics.jit import kernel
-from ..numerics.native import (
-    address_of,
-    call_engine,
-    dense_matrix_data,
-    nvector_data,
-)
 from .methods import REGISTRY, SUNDIALS_METHODS
 from .status import STATUS_MESSAGES
 from .stepper import Stepper
+from .sundials_callbacks import cvode_jacobian, cvode_rhs, ida_jacobian, ida_residual
 from .sundials_libraries import function_address, libraries
 from .sundials_restart import (
     A_ACTUAL_INIT_STEP,
@@ -71,68 +63,6 @@ MAX_STEPS_PER_CALL = 1_000_000  # the step limit of a call without a budget of i
 METHODS = SUNDIALS_METHODS  # the methods this module runs
 JACOBIANS = ("analytic", "finite-difference")
 
-
-
-# -- compiled callbacks ---------------------------------------------------------------------------
-@kernel(inline="always")
-def _callback(op, user_data, t, a, b, c, s, counter):
-    """Count, call the engine through its address, and turn its status into SUNDIALS' 0 (OK),
-    1 (recoverable) or -1 (unrecoverable), keeping the failure's code."""
-    table = address_of(user_data)
-    dims = access.dims(table)
-    counters = access.counters(table)
-    counters[counter] += 1
-    status = call_engine(dims[ed.ENGINE], op, user_data, t, a, b, c, s)
-    if status == ed.OK:
-        return 0
-    counters[ed.FAILED_STATUS] = status
-    return -1 if status in (ed.NONFINITE_STATE, ed.SINGULAR_CONSTRAINTS, ed.NOT_CONNECTED) else 1
-
-
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)
-def cvode_rhs(t, y, ydot, user_data):
-    """CVRhsFn: ydot = f(t, y) by the engine."""
-    return _callback(engine.OP_RHS, user_data, t, nvector_data(y), nvector_data(ydot),
-                     nvector_data(y), 0.0, ed.RHS_COUNT)
-
-
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr,
-                  types.voidptr, types.voidptr, types.voidptr), cache=True)
-def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
-    """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent, kept in slot
-    jacobian_cache. After a restart in a sampled loop (dims[JACOBIAN_REUSE] = 1) the kept
-    Jacobian is handed back once instead."""
-    table = address_of(user_data)
-    dims = access.dims(table)
-    n = 2 * dims[ed.NDOF] + dims[ed.NEL]
-    J = carray(dense_matrix_data(matrix), (n * n,))
-    kept = access.jacobian_cache(table)
-    if dims[ed.JACOBIAN_REUSE] == 1:
-        dims[ed.JACOBIAN_REUSE] = 0
-        copy(J, kept)
-        return 0
-    status = _callback(engine.OP_JACOBIAN, user_data, t, nvector_data(y),
-                       dense_matrix_data(matrix), nvector_data(y), 1.0, ed.JACOBIAN_COUNT)
-    if status == 0:
-        copy(kept, J)
-    return status
-
-
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
-       cache=True)
-def ida_residual(t, y, yp, res, user_data):
-    """IDAResFn: the implicit form's residual by the engine."""
-    return _callback(engine.OP_RESIDUAL, user_data, t, nvector_data(y), nvector_data(yp),
-                     nvector_data(res), 0.0, ed.RHS_COUNT)
-
-
-@cfunc(types.intc(types.double, types.double, types.voidptr, types.voidptr, types.voidptr,
-                  types.voidptr, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
-       cache=True)
-def ida_jacobian(t, cj, y, yp, res, matrix, user_data, tmp1, tmp2, tmp3):
-    """IDALsJacFn: d res / d y + cj d res / d yp from the model's tangent."""
-    return _callback(engine.OP_RESIDUAL_JACOBIAN, user_data, t, nvector_data(y),
-                     nvector_data(yp), dense_matrix_data(matrix), cj, ed.JACOBIAN_COUNT)
 
 
 _CV_RHS = ctypes.CFUNCTYPE(_INT, _D, _VP, _VP, _VP)
