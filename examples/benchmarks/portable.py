@@ -13,6 +13,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
+from .fmu_overhead import FIRST_INSTANTIATE
 from .measure import log
 from .table import Row
 
@@ -71,29 +72,6 @@ print(json.dumps({"advances": statistics.median(advances() for _ in range(3)),
                   "counts": counts}))
 """
 
-# A host's first instantiate + initialise + doStep, then the whole process's CPU seconds.
-FIRST = r"""
-import json, resource, sys, time
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
-md = read_model_description(sys.argv[1])
-vr = {v.name: v.valueReference for v in md.modelVariables}
-folder = extract(sys.argv[1])
-start = time.process_time()
-fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder,
-                modelIdentifier=md.coSimulation.modelIdentifier, instanceName="first")
-fmu.instantiate()
-fmu.setupExperiment(startTime=0.0)
-fmu.enterInitializationMode()
-fmu.exitInitializationMode()
-fmu.setReal([vr["F"]], [1.0])
-fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
-first = time.process_time() - start
-fmu.terminate()
-fmu.freeInstance()
-usage = resource.getrusage(resource.RUSAGE_SELF)
-print(json.dumps({"first_cpu_s": first, "process_cpu_s": usage.ru_utime + usage.ru_stime}))
-"""
 
 
 def _child(script, args=(), **env):
@@ -135,12 +113,12 @@ def first_instantiates(carried, bare, *, repeat=3, quick=False):
     for i in range(repeat):
         with tempfile.TemporaryDirectory(prefix="flexure_empty_cache_") as cache:
             log(f"portable: first instantiate with the carried engine {i + 1}/{repeat}")
-            runs["carried"].append(_child(FIRST, [carried], FLEXURE_CACHE_DIR=cache,
+            runs["carried"].append(_child(FIRST_INSTANTIATE, [carried], FLEXURE_CACHE_DIR=cache,
                                           FLEXURE_FMU_OWN_COPY="1"))
     if not quick:
         with tempfile.TemporaryDirectory(prefix="flexure_empty_cache_") as cache:
             log("portable: first instantiate compiling its engine")
-            runs["compiling"].append(_child(FIRST, [bare], FLEXURE_CACHE_DIR=cache,
+            runs["compiling"].append(_child(FIRST_INSTANTIATE, [bare], FLEXURE_CACHE_DIR=cache,
                                             FLEXURE_FMU_OWN_COPY="1"))
     return runs
 
