@@ -110,7 +110,7 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                       if not name.endswith(".norm")}
         result["static"] = {"coordinates": solution.coordinates(),
                             "stress_resultants": resultants, "units": STATIC_UNITS,
-                            "free_coordinates": _free_coordinates(model),
+                            **_shown_coordinates(model),
                             "outputs": {port.name: output_value(model, port, solution.x)
                                         for port in model.outputs
                                         if port.quantity == "position"}}
@@ -268,12 +268,15 @@ def plot_stresses(model, path):
     wrote(path, "the von Mises stresses along the beams")
 
 
-def _free_coordinates(model):
-    """The names of the coordinates a person reads in the text: neither fixed nor Euler
-    parameters (a 3-D node's rotation reads better as an output about an axis)."""
-    return [name for i, name in enumerate(model.coordinate_names)
-            if model.coordinate_status[i] != "fixed"
-            and not model.coordinate_axis[i].startswith("lambda")]
+def _shown_coordinates(model):
+    """{"free_coordinates": the names of the coordinates a person reads in the text, neither
+    fixed nor Euler parameters (a 3-D node's rotation reads better as an output about an
+    axis); "left_out": how many of the others are {"fixed": ..., "Euler parameters": ...}}."""
+    euler = np.char.startswith(model.coordinate_axis.astype(str), "lambda")
+    fixed = (model.coordinate_status == "fixed") & ~euler
+    shown = ~euler & ~fixed
+    return {"free_coordinates": [model.coordinate_names[i] for i in np.flatnonzero(shown)],
+            "left_out": {"fixed": int(fixed.sum()), "Euler parameters": int(euler.sum())}}
 
 
 def render(result):
@@ -290,11 +293,8 @@ def render(result):
     if "static" in result:
         static = result["static"]
         free = static.get("free_coordinates", list(static["coordinates"]))
-        euler = sum(".lambda" in name for name in static["coordinates"])
-        fixed = len(static["coordinates"]) - len(free) - euler + sum(
-            ".lambda" in name for name in free)
-        left_out = " and ".join(f"{n} {what}" for n, what in ((fixed, "fixed"),
-                                                             (euler, "Euler parameters")) if n)
+        left_out = " and ".join(f"{n} {what}" for what, n in static.get("left_out", {}).items()
+                                if n)
         parts.append(format_table(
             ["coordinate", "value (m, rad)"],
             [(name, static["coordinates"][name]) for name in free],
