@@ -44,6 +44,13 @@ class LoopResult:
         return self.settings.get("units", {"position": "m", "force": "N"})
 
     @property
+    def loop_units(self) -> list[dict]:
+        """Each loop's {"position": ..., "force": ...} units: as the run recorded them, the
+        moving loop's (`units`) for a loop it did not record."""
+        recorded = self.settings.get("loop_units", [])
+        return [*recorded, *[self.units] * (self.reference.shape[1] - len(recorded))]
+
+    @property
     def error(self) -> np.ndarray:
         """r - y (m), (N+1, n_loops)."""
         return self.reference - self.position
@@ -53,8 +60,7 @@ class LoopResult:
         """The largest |r - y| over the samples and the loops in the moving loop's unit (m, or
         rad on an angle: `units`); a loop in another unit is in `per_loop`."""
         unit = self.units["position"]
-        units = [u["position"] for u in self.settings.get("loop_units", [])]
-        same = [k for k in range(self.error.shape[1]) if k >= len(units) or units[k] == unit]
+        same = [k for k, u in enumerate(self.loop_units) if u["position"] == unit]
         return float(np.max(np.abs(self.error[:, same])))
 
     @property
@@ -75,19 +81,20 @@ class LoopResult:
         """Which loops hold their position (n_loops,) bool: a stroke below HELD_BELOW times
         the largest stroke of the run, an angle's through the mechanism's size (a move's
         path puts round-off, 1e-17 m, into the strokes of the coordinates it holds)."""
-        converted = self._in_run_unit(self.loop_strokes)
+        run = self.units["position"]
+        converted = np.array([self._converted(stroke, u["position"], run) for stroke, u
+                              in zip(self.loop_strokes, self.loop_units, strict=True)])
         return converted <= HELD_BELOW * np.max(converted, initial=0.0)
 
-    def _in_run_unit(self, values):
-        """`values` (one per loop, each in its loop's unit) in the moving loop's unit: an
-        angle theta as theta L, a length l as l / L on an angle (L: the mechanism's size,
-        settings "size", m); unchanged without a size."""
-        run = self.units["position"]
-        units = [u["position"] for u in self.settings.get("loop_units", [])]
+    def _converted(self, value, unit, to):
+        """`value` in `unit` ("m" or "rad") in the unit `to`: an angle theta as theta L, a
+        length l as l / L (L: the mechanism's size, settings "size", m; 0 without one)."""
+        if unit == to:
+            return value
         size = self.settings.get("size", 0.0)
-        factor = {("rad", "m"): size, ("m", "rad"): 1.0 / size if size > 0 else 0.0}
-        return np.array([v * factor.get((units[k] if k < len(units) else run, run), 1.0)
-                         for k, v in enumerate(values)])
+        if size <= 0:
+            return 0.0
+        return value * size if unit == "rad" else value / size
 
     @property
     def loop_scales(self) -> np.ndarray:
@@ -97,19 +104,14 @@ class LoopResult:
         converted through the mechanism's size L (settings "size", m): an angle theta moves
         a point at L by theta L. Zero where nothing moves."""
         strokes = self.loop_strokes
-        units = [u["position"] for u in self.settings.get("loop_units", [])]
-        units += [self.units["position"]] * (strokes.size - len(units))
+        units = [u["position"] for u in self.loop_units]
         held = self.held_loops
         moving = np.flatnonzero(~held)
-        size = self.settings.get("size", 0.0)
         scales = np.where(held, 0.0, strokes)
         for k in np.flatnonzero(held):
             same = [strokes[j] for j in moving if units[j] == units[k]]
-            if same:
-                scales[k] = max(same)
-            elif moving.size and size > 0:
-                scales[k] = max(strokes[j] / size if units[j] == "m" else strokes[j] * size
-                                for j in moving)
+            converted = [self._converted(strokes[j], units[j], units[k]) for j in moving]
+            scales[k] = max(same) if same else max(converted, default=0.0)
         return scales
 
     @property
@@ -250,8 +252,7 @@ class LoopResult:
         """Every loop's reference, error (against 0.1 % of its stroke, a held loop's against
         that of the moving stroke: `loop_scales`) and force."""
         names = self.design.get("loops", [])
-        units = self.settings.get("loop_units", [])
-        units = [*units, *[self.units] * (self.reference.shape[1] - len(units))]
+        units = self.loop_units
         lengths = sorted({u["position"] for u in units})
         forces = sorted({u["force"] for u in units})
         fig, axes = _figure(9)
