@@ -50,11 +50,11 @@ def test_bandwidth_order_bands_a_shuffled_band():
     band = banded_matrix(rng, n, 1, 1) + np.eye(n)
     shuffle = rng.permutation(n)
     pattern = band[np.ix_(shuffle, shuffle)]
-    order, kl, ku = banded.bandwidth_order(pattern)
+    order, kl, ku = banded.bandwidth_order(*np.nonzero(pattern), n)
     assert sorted(order) == list(range(n)) and (kl, ku) == (1, 1)
     permuted = pattern[np.ix_(order, order)]
     i, j = np.nonzero(permuted)
     assert np.max(i - j) == kl and np.max(j - i) == ku
     random = sparse_random(30, 30, density=0.1, random_state=4) + np.eye(30)
-    order, kl, ku = banded.bandwidth_order(random)
+    order, kl, ku = banded.bandwidth_order(*np.nonzero(random), 30)
     assert sorted(order) == list(range(30)) and 0 <= kl < 30 and 0 <= ku < 30

@@ -22,12 +22,10 @@ _ORDERS = {}
 def constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
     """Positions of J's rows and columns in its banded order, and its (kl, ku): each row
     matched to a column (a structurally nonsingular J has a perfect matching), then reverse
-    Cuthill-McKee on the matched pattern (core/numerics/banded.py). The identity order, dense, when
-    there is no perfect matching."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import maximum_bipartite_matching
-
+    Cuthill-McKee on the matched pattern (core/numerics/banded.py). The identity order, dense,
+    when there is no perfect matching."""
     from ..numerics.banded import bandwidth_order
+    from ..numerics.graph_orders import matching
 
     nf = free.size
     entries = []
@@ -48,13 +46,10 @@ def constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
     if nf == 0 or not entries:
         return identity, identity.copy(), max(nf - 1, 0), max(nf - 1, 0)
     r, c = np.array(entries, dtype=np.int64).T
-    pattern = csr_matrix((np.ones(r.size), (r, c)), shape=(nf, nf))
-    column_of_row = maximum_bipartite_matching(pattern, perm_type="column")
+    column_of_row = matching(r, c, nf)
     if np.any(column_of_row < 0):
         return identity, identity.copy(), nf - 1, nf - 1
-    row_of_column = np.empty(nf, dtype=np.int64)
-    row_of_column[column_of_row] = np.arange(nf)
-    order, _, _ = bandwidth_order(pattern[row_of_column])  # rows renamed by their column
+    order, _, _ = bandwidth_order(column_of_row[r], c, nf)  # rows renamed by their column
     column_position = np.empty(nf, dtype=np.int64)
     column_position[order] = np.arange(nf)
     row_position = column_position[column_of_row]
@@ -66,8 +61,6 @@ def constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
 def augmented_order(model, nf, n_rigid, row_of_def, col_of_coord, groups, inertia, packing):
     """Positions of the augmented system's unknowns (the free coordinates, then the rigid
     rows' multipliers) in its banded order, and its (kl, ku)."""
-    from scipy.sparse import csr_matrix
-
     from ..numerics.banded import bandwidth_order
 
     na = nf + n_rigid
@@ -90,8 +83,7 @@ def augmented_order(model, nf, n_rigid, row_of_def, col_of_coord, groups, inerti
     if na == 0:
         return np.zeros(0, dtype=np.int64), 0, 0
     r, c = np.array(entries, dtype=np.int64).T
-    pattern = csr_matrix((np.ones(r.size), (r, c)), shape=(na, na))
-    order, kl, ku = bandwidth_order(pattern)
+    order, kl, ku = bandwidth_order(r, c, na)
     position = np.empty(na, dtype=np.int64)
     position[order] = np.arange(na)
     return position, kl, ku

@@ -89,23 +89,19 @@ def solve_transposed(a, n, piv, kl, ku, b):
             b[k], b[p] = b[p], b[k]
 
 
-def bandwidth_order(pattern):
-    """A symmetric permutation that makes the square sparsity `pattern` (scipy sparse, n x n)
-    banded: reverse Cuthill-McKee on pattern + pattern^T. Returns (order, kl, ku): order[i]
-    the original index at position i, kl and ku the sub- and super-diagonal widths of the
-    permuted pattern."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import reverse_cuthill_mckee
+def bandwidth_order(rows, cols, n):
+    """A symmetric permutation that makes the (n, n) sparsity pattern with the entries
+    (rows[k], cols[k]) banded: reverse Cuthill-McKee on the pattern and its transpose
+    (`graph_orders`). Returns (order, kl, ku): order[i] the original index at position i, kl
+    and ku the sub- and super-diagonal widths of the permuted pattern."""
+    from .graph_orders import reverse_cuthill_mckee
 
-    pattern = csr_matrix(pattern, dtype=float)
-    n = pattern.shape[0]
+    rows, cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
     if n == 0:
         return np.zeros(0, dtype=np.int64), 0, 0
-    symmetric = csr_matrix((abs(pattern) + abs(pattern.T)) > 0, dtype=float)
-    order = np.asarray(reverse_cuthill_mckee(symmetric, symmetric_mode=True), dtype=np.int64)
+    order = reverse_cuthill_mckee(rows, cols, n)
     position = np.empty(n, dtype=np.int64)
     position[order] = np.arange(n)
-    rows, cols = pattern.nonzero()
     offsets = position[rows] - position[cols]
     kl = int(max(0, offsets.max(initial=0)))
     ku = int(max(0, -offsets.min(initial=0)))
