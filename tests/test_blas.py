@@ -71,7 +71,8 @@ def spy(monkeypatch):
     """The BLAS limits seen by every call of the dense solvers flexure uses (a list)."""
     seen = []
     for module, name in [(scipy.linalg, "lu_factor"), (scipy.linalg, "eigh"),
-                         (np.linalg, "solve"), (np.linalg, "svd")]:
+                         (np.linalg, "solve"), (np.linalg, "svd"), (np.linalg, "inv"),
+                         (np.linalg, "cholesky"), (np.linalg, "eigvalsh")]:
         original = getattr(module, name)
 
         def probe(*args, _original=original, **kwargs):

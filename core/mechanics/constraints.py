@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import ConstraintError
 from ..model import DOF
 from ..numerics.blas import blas_threads
-from ..numerics.conditioning import lu_and_rcond
+from ..numerics.conditioning import reciprocal_condition
 from ..numerics.ties import independent_rows
 from . import assembly
 from .kinematics import Kinematics
@@ -34,10 +34,11 @@ if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
 
 RANK_TOLERANCE = 1e-9
-# A constraint Jacobian whose reciprocal condition estimate (LU, LAPACK's gecon, 1-norm) is above
-# CLEAR_RCOND is regular without an SVD; below it the SVD decides. Measured on meshed spatial
-# stages of 56 to 1 750 free coordinates, the estimate stays within a factor of 1.6 of the
-# SVD's sigma_min / sigma_max, so 1e-7 keeps a margin of about 60 over RANK_TOLERANCE
+# A constraint Jacobian whose reciprocal condition number (1-norm: exact, or LAPACK's gecon
+# estimate for large ones) is above CLEAR_RCOND is regular without an SVD; below it the SVD
+# decides. Measured on meshed spatial stages of 56 to 1 750 free coordinates, the estimate
+# stays within a factor of 1.6 of the SVD's sigma_min / sigma_max, and the exact number is at
+# most the estimate, so 1e-7 keeps a margin of about 60 over RANK_TOLERANCE
 CLEAR_RCOND = 1e-7
 
 
@@ -233,9 +234,10 @@ def _fixed_dofs(model, kin, row_dependencies, n_constraints, motions):
 
 
 def clearly_regular(matrix: np.ndarray) -> bool:
-    """Whether the square `matrix` is regular by a margin: its LU's reciprocal condition
-    estimate (LAPACK's gecon, 1-norm) above CLEAR_RCOND. An O(n^3 / 3) test where the SVD
-    costs about ten times more (1.5 s on a 1 700-coordinate model); whatever it does not
+    """Whether the square `matrix` is regular by a margin: its reciprocal condition number
+    in the 1-norm (`conditioning.reciprocal_condition`) above CLEAR_RCOND. An O(n^3) test
+    at most (an LU and its estimate beyond a few hundred unknowns) where the SVD costs
+    about ten times more (1.5 s on a 1 700-coordinate model); whatever it does not
     clear goes to the SVD, which decides with RANK_TOLERANCE and names what is wrong.
 
     Parameters
@@ -250,7 +252,7 @@ def clearly_regular(matrix: np.ndarray) -> bool:
     """
     if matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
         return matrix.shape == (0, 0)
-    return lu_and_rcond(matrix)[1] > CLEAR_RCOND
+    return reciprocal_condition(matrix) > CLEAR_RCOND
 
 
 def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:

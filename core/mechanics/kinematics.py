@@ -23,7 +23,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import ConvergenceError
 from . import assembly
@@ -59,6 +58,8 @@ class JacobianFactor:
             except RuntimeError:  # "Factor is exactly singular"
                 self.lu = None
         else:
+            import scipy.linalg  # here: a command that never factors J skips its import
+
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
                 self.lu = scipy.linalg.lu_factor(J, check_finite=False)
@@ -69,6 +70,8 @@ class JacobianFactor:
             return np.full(np.shape(b), np.nan)
         if self.sparse:
             return self.lu.solve(np.asarray(b, dtype=float), trans="T" if transposed else "N")
+        import scipy.linalg
+
         with np.errstate(all="ignore"):
             return scipy.linalg.lu_solve(self.lu, b, trans=1 if transposed else 0,
                                          check_finite=False)
