@@ -38,7 +38,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..engine import data as ed
-from ..engine import engine
 from ..engine.data import EngineData
 from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
@@ -47,6 +46,7 @@ from .methods import METHODS, REGISTRY
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
+from .start import scene_dofs, solve_start, start_kinematics
 from .status import STATUS_MESSAGES
 from .stepper import Stepper, restart_plant
 from .tolerances import atol_vector
@@ -117,7 +117,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         # the integrator's states: [q - q_ref, qdot] and the coil currents (A)
         self.ncurrents = len(model.coil_actuators)
         self.nstate = 2 * self.ndof + self.ncurrents
-        self.atol = atol_vector(model, rtol, atol, self.nstate)
+        self.atol = atol_vector(model, rtol, atol, self.nstate, self.data)
         self.input_names = [p.name for p in model.inputs]
         self.input_units = [p.unit for p in model.inputs]
         self.output_names = [p.name for p in model.outputs]
@@ -176,8 +176,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
         i = (np.zeros(self.ncurrents) if i0 is None
              else _vector(i0, self.ncurrents, "i0"))
-        self._start_kinematics(self.model.initial_coordinates)
-        status = engine.call(self.data, engine.OP_KINEMATICS, q)
+        status = solve_start(self.model, self.data, q)
         if status != ed.OK:
             raise SimulationError(f"t = {t0:.9g} s: the initial DOFs q0 cannot be assembled: "
                                   f"{STATUS_MESSAGES[status]} (q0 = {np.array2string(q)})")
@@ -192,19 +191,11 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self.integrator.forget()
 
     def _initial_dofs(self):
-        x0 = self.model.initial_coordinates
-        e = self._deformations(x0)
-        return np.concatenate([x0[self.model.dof_coordinates], e[self.model.dof_deformations]])
-
-    def _deformations(self, x):
-        engine.call(self.data, engine.OP_DEFORMATIONS, np.ascontiguousarray(x, float), s=0)
-        return self.data.float_array("e").copy()
+        return scene_dofs(self.model, self.data)
 
     def _start_kinematics(self, x, data=None):
         """The next kinematic solution starts with full Newton from x (NX,)."""
-        data = data or self.data
-        data.float_array("x_start")[:] = x
-        data.int_array("dims")[ed.WARM] = 0
+        start_kinematics(data or self.data, x)
 
     @property
     def time(self) -> float:

@@ -11,6 +11,7 @@ from ..mechanics.ports import input_direction
 from ..numerics.blas import blas_threads
 
 if TYPE_CHECKING:  # names for the annotations only
+    from ..engine.data import EngineData
     from ..model import Model
 
 # the smallest motion, as a fraction of the model's length scale, that rtol controls
@@ -18,7 +19,7 @@ MOTION_FRACTION = 1e-3
 
 
 @blas_threads()
-def default_atol(model: Model, rtol: float) -> np.ndarray:
+def default_atol(model: Model, rtol: float, data: EngineData | None = None) -> np.ndarray:
     """Per-state absolute tolerance (2 NDOF + coil currents,) from rtol and the model's scales.
 
     The integrator's state is the deviation from the start configuration, and its local
@@ -33,13 +34,18 @@ def default_atol(model: Model, rtol: float) -> np.ndarray:
     times the current whose steady force Km i moves the actuated coordinate by that smallest
     motion, through the static compliance c = b^T DF K0^-1 DF^T b of the port (b its unit
     generalised force, `ports.input_direction`) in the initial configuration (where K0 is
-    singular, through M0 times the reference frequency squared).
+    singular, through M0 times the reference frequency squared). M0 and K0 (the tangent
+    stiffness: the structure's and the geometric stiffness of gravity's load) come from the
+    engine, as the integrator's own do.
 
     Parameters
     ----------
     model : Model
     rtol : float
         The integrator's relative tolerance.
+    data : EngineData, optional
+        The model packed for the engine (a Simulator's), which evaluates the start
+        configuration; packed here when not given.
 
     Returns
     -------
@@ -48,26 +54,53 @@ def default_atol(model: Model, rtol: float) -> np.ndarray:
         the coil currents.
     """
     from ..mechanics.kinematics import length_scale
-    from ..mechanics.mechanics import Mechanics
 
     L = length_scale(model)
     names = model.dof_names
     position = MOTION_FRACTION * np.array([rtol if name.endswith(".phi") else rtol * L
                                            for name in names])
-    mech = Mechanics(model)
-    config = mech.initial_configuration()
-    M0, K0 = mech.mass_matrix(config), mech.structural_stiffness(config)
-    omega = _reference_frequency(mech, M0, K0, L)
-    currents = [rtol * _current_scale(model, actuator, config, M0, K0, omega, L)
+    x, DF, M0, K0 = _initial_matrices(model, data)
+    omega = _reference_frequency(model, M0, K0, L)
+    currents = [rtol * _current_scale(model, actuator, x, DF, M0, K0, omega, L)
                 for actuator in model.coil_actuators]
     return np.concatenate([position, position * omega, currents])
 
 
-def _current_scale(model, actuator, config, M0, K0, omega, L):
+def _initial_matrices(model, data):
+    """(x (NX,), DF (NX, NDOF), M0 and K0 (NDOF, NDOF)) in the start configuration, at rest
+    and with the inputs at zero, by the engine (`data`, or the model packed here) as the
+    integrators evaluate it: M0 the reduced mass matrix, K0 = -M0 times the first-order
+    Jacobian's block d qddot / d q (the structure's stiffness and the geometric stiffness of
+    what loads it there, gravity)."""
+    from ..engine import data as ed
+    from ..engine import engine
+    from ..engine.data import EngineData
+    from .start import scene_dofs, solve_start
+    from .status import STATUS_MESSAGES
+
+    data = EngineData(model) if data is None else data
+    n, size = model.declared_dof_count, 2 * model.declared_dof_count + len(model.coil_actuators)
+    q0 = scene_dofs(model, data)
+    status = solve_start(model, data, q0)
+    data.float_array("q_ref")[:] = q0
+    jacobian = np.zeros(size * size)
+    if status == ed.OK:
+        status = engine.call(data, engine.OP_JACOBIAN, np.zeros(size), jacobian)
+    if status != ed.OK:
+        raise SimulationError("the start configuration could not be evaluated for the default "
+                              f"tolerances: {STATUS_MESSAGES.get(status, status)}")
+    nx = data.int_array("dims")[ed.NX]
+    M0 = data.float_array("mass")[:n * n].reshape(n, n).copy()
+    K0 = -M0 @ jacobian.reshape(size, size)[n:2 * n, :n]
+    return (data.float_array("x")[:nx].copy(),
+            data.float_array("DF")[:nx * n].reshape(nx, n).copy(), M0, K0)
+
+
+def _current_scale(model, actuator, x, DF, M0, K0, omega, L):
     """The coil current (A) whose steady force moves the actuated port by MOTION_FRACTION of
     its scale (L on a translation, 1 rad on an angle or about a global axis)."""
     port = model.inputs[actuator.input]
-    row = input_direction(model, port, config.x) @ config.DF  # the port per DOF
+    row = input_direction(model, port, x) @ DF  # the port per DOF
     translation = not port.about_axis and port.coordinate in model.translations
     motion = MOTION_FRACTION * (L if translation else 1.0)
     compliance = 0.0
@@ -83,26 +116,29 @@ def _current_scale(model, actuator, config, M0, K0, omega, L):
     return motion / (compliance * actuator.force_constant)
 
 
-def _reference_frequency(mech, M0, K0, L):
-    import scipy.linalg
-
+def _reference_frequency(model, M0, K0, L):
+    """The lowest positive natural frequency (rad/s) of K0 and M0: the eigenvalues of
+    C^-1 K0 C^-T (C C^T = M0, Cholesky; K0 symmetrised); sqrt(g / L) under gravity or 1 rad/s
+    where M0 is not positive definite or no frequency is positive."""
     try:
-        eig = scipy.linalg.eigh(K0, M0, eigvals_only=True)
+        C = np.linalg.cholesky(M0)
+        A = np.linalg.solve(C, np.linalg.solve(C, 0.5 * (K0 + K0.T)).T)
+        eig = np.linalg.eigvalsh(0.5 * (A + A.T))
         positive = eig[eig > 1e-9 * max(1.0, np.max(np.abs(eig)))]
         if positive.size:
             return float(np.sqrt(positive.min()))
-    except (np.linalg.LinAlgError, ValueError):
+    except np.linalg.LinAlgError:
         pass
-    g = np.linalg.norm(mech.model.gravity)
+    g = np.linalg.norm(model.gravity)
     return float(np.sqrt(g / L)) if g > 0 else 1.0
 
 
-def atol_vector(model, rtol, atol, size):
+def atol_vector(model, rtol, atol, size, data=None):
     """The absolute tolerances (size,: the integrator's states, 2 NDOF plus the coil
     currents): `default_atol` for None, a number for every state, or one per state; a
     SimulationError for anything not positive and finite."""
     if atol is None:
-        return default_atol(model, rtol)
+        return default_atol(model, rtol, data)
     a = np.array(atol, dtype=float).reshape(-1)
     if a.size == 1:
         a = np.full(size, a[0])
