@@ -30,7 +30,7 @@ deformations e, De = de/dx and D2e come from each element module's compiled entr
 import numpy as np
 
 from ..mechanics.scales import ROUND_OFF
-from ..numerics.dense import copy
+from ..numerics.dense import all_finite, copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_deformations
 from . import data as ed
@@ -228,7 +228,7 @@ def solve_positions(table, q):
     nx = dims[ed.NX]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
     copy(x, _f(table, slot.X_START))
-    if not np.all(np.isfinite(x)):
+    if not all_finite(x):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):
         _elements(table, x, 0)  # the residual needs e alone; De only for a step
@@ -290,7 +290,7 @@ def solve_kinematics(table, q):
                 return _store(table, q, x)
     else:
         copy(x, _f(table, slot.X_START))
-    if not np.all(np.isfinite(x)):
+    if not all_finite(x):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does
         _elements(table, x, 1)

@@ -80,3 +80,14 @@ def copy(destination, source):
     the first compilation several seconds, and a mismatch is a bug that tests catch."""
     for i in range(source.size):
         destination[i] = source[i]
+
+
+@kernel
+def all_finite(v):
+    """Whether every entry of the vector v is finite (a loop: numba's np.all would make every
+    process that loads the compiled code import numba's array maths, and through it
+    scipy.linalg)."""
+    for value in v:
+        if not np.isfinite(value):
+            return False
+    return True
