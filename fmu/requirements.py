@@ -4,11 +4,13 @@ checked before the slave runs.
 A pythonfmu FMU runs in the host's Python, so the packages the bundled flexure imports must be
 installed there. Which ones is measured, not guessed: the slave of a scene FMU, instantiated
 and stepped with each integrator method, imports from outside the standard library and the
-FMU itself exactly numpy, scipy, numba, llvmlite (numba's code generator, whose IR builder
+FMU itself exactly numpy, numba, llvmlite (numba's code generator, whose IR builder
 flexure's intrinsics use directly: `core/numerics/native.py`), threadpoolctl (flexure's BLAS
 thread limits, on the first model built) and scikit-sundae (as `sksundae`, for the CVODE and
-IDA methods); pythonfmu's Python part travels inside the FMU (pythonfmu copies it into
-resources/), and python-control, matplotlib, fmpy are never imported by a slave.
+IDA methods), and scipy where the model is large (the sparse factorisation's ordering
+analysis, `core/numerics/sparse_lu.py`, above a few hundred coordinates); pythonfmu's Python
+part travels inside the FMU (pythonfmu copies it into resources/), and python-control,
+matplotlib, fmpy are never imported by a slave.
 `tests/test_fmu_requirements.py` repeats that measurement on a built FMU and compares it with
 `RUNTIME_IMPORTS`.
 

@@ -119,7 +119,10 @@ def test_the_requirements_are_what_the_slave_imports(stage_fmu):
     # by the default ESDIRK never imports scikit-sundae (0.6 s)
     assert METHODS[0] == "esdirk" and loaded_by_esdirk == []
     requirements = requirements_of(stage_fmu)
-    assert imported == sorted(item.module for item in requirements.items)
+    # scipy: only a large model's sparse ordering analysis imports it (numerics/sparse_lu.py);
+    # a small scene's FMU starts without it
+    assert imported == sorted(item.module for item in requirements.items
+                              if item.module != "scipy")
     assert [(i.distribution, i.module) for i in requirements.items] == list(
         RUNTIME_IMPORTS["core"])
     assert {i.module for i in requirements.items} == {"numpy", "scipy", "numba", "llvmlite",

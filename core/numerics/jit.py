@@ -93,7 +93,35 @@ def numba_module():
     locator = _source_locator(caching._CacheLocator)
     if locator not in implementation._locator_classes:
         implementation._locator_classes.insert(0, locator)
+        _load_without_refresh(caching.Cache, locator)
     return numba
+
+
+def _load_without_refresh(cache_class, locator):
+    """Let flexure's cached code load without numba's registry refresh.
+
+    numba refreshes its target before every load from a cache (`Cache.load_overload`): it
+    imports the lowering of every builtin and numpy function (scipy.linalg among them) and
+    installs their registries, 0.2 to 0.3 s of CPU, for code that is machine code already.
+    What a loaded function needs of the process is numba's runtime (NRT), initialised here;
+    a compilation refreshes the target itself (numba's compiler does at its start), so a cache
+    miss compiles as before. Only caches of flexure's locator are changed (a host's own numba
+    code loads as numba does it), and only where numba has the methods this wraps."""
+    original = cache_class.load_overload
+    if not (hasattr(cache_class, "_load_overload")
+            and hasattr(cache_class, "_guard_against_spurious_io_errors")):
+        return
+
+    def load_overload(self, sig, target_context):
+        if not isinstance(getattr(self._impl, "locator", None), locator):
+            return original(self, sig, target_context)
+        from numba.core.runtime import rtsys
+
+        rtsys.initialize(target_context)
+        with self._guard_against_spurious_io_errors():
+            return self._load_overload(sig, target_context)
+
+    cache_class.load_overload = load_overload
 
 
 @functools.cache
