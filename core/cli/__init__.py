@@ -11,7 +11,7 @@ exit code 2, never as a traceback.
 
 import argparse
 import contextlib
-import importlib.metadata
+import importlib
 import math
 import os
 import sys
@@ -37,12 +37,50 @@ def build_parser(argv=None):
 
     parser.add_argument("--version", action="version", version=f"flexure {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    entries = importlib.metadata.entry_points(group="flexure.commands")
+    entries = _entries("flexure.commands")
     named = next((word for word in (argv or []) if not word.startswith("-")), None)
-    chosen = [entry for entry in entries if entry.name == named] or entries
-    for entry in sorted(chosen, key=lambda e: e.name):
-        entry.load()(subparsers)
+    chosen = [entry for entry in entries if entry[0] == named] or entries
+    for _, value in sorted(chosen):
+        module, _, attribute = value.partition(":")
+        getattr(importlib.import_module(module), attribute)(subparsers)
     return parser
+
+
+def _entries(group):
+    """(name, "module:attribute") of the entry points of `group` that flexure's distribution
+    declares: read from its metadata's entry_points.txt, the first copy on sys.path (as the
+    import system finds the package), else through importlib.metadata (which imports email,
+    zipfile and csv: 0.03 to 0.04 s of CPU, a tenth of a short command)."""
+    for folder in sys.path:
+        try:
+            names = sorted(os.listdir(folder or "."))
+        except OSError:
+            continue
+        for name in names:
+            lowered = name.lower()
+            if lowered == "flexure.egg-info" or (lowered.startswith("flexure-")
+                                                 and lowered.endswith(".dist-info")):
+                try:
+                    with open(os.path.join(folder or ".", name, "entry_points.txt")) as handle:
+                        return _section(handle.read(), group)
+                except OSError:
+                    continue
+    import importlib.metadata
+
+    return [(entry.name, entry.value) for entry in importlib.metadata.entry_points(group=group)]
+
+
+def _section(text, group):
+    """The (name, value) lines of the section [group] of an entry_points.txt (INI)."""
+    found, inside = [], False
+    for line in text.splitlines():
+        line = line.strip()
+        if line.startswith("["):
+            inside = line == f"[{group}]"
+        elif inside and "=" in line and not line.startswith(("#", ";")):
+            name, value = line.split("=", 1)
+            found.append((name.strip(), value.strip()))
+    return found
 
 
 def main(argv=None):
