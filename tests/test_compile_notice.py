@@ -78,7 +78,7 @@ def test_numbas_own_compilations_are_counted(tmp_path, notices):
     assert notice.cpu_s > 0.0 and notice.wall_s > 0.0
 
 
-def test_the_estimate_is_the_last_compilation_recorded_on_this_machine(tmp_path, notices):
+def test_the_estimate_is_the_largest_recent_compilation_recorded_on_this_machine(tmp_path, notices):
     first = notices(tmp_path, "sources-1")
     assert f"about {DEFAULT_CPU_S:.0f} s of CPU" in first.text()
     assert "none here yet" in first.text()
@@ -100,9 +100,13 @@ def test_the_estimate_is_the_last_compilation_recorded_on_this_machine(tmp_path,
     assert json.loads((tmp_path / RECORD_NAME).read_text())["cpu_s"] == 123.4
     third = notices(tmp_path, "sources-2")
     third.announce(io.StringIO())
-    with third.unit():  # other sources: the record is theirs now
+    with third.unit():  # other sources, but a partial compilation: the record stays
         pass
-    assert json.loads((tmp_path / RECORD_NAME).read_text())["sources"] == "sources-2"
+    assert json.loads((tmp_path / RECORD_NAME).read_text())["sources"] == "sources-1"
+    with third.unit():  # half the recorded size: the record is theirs now
+        pass
+    record = json.loads((tmp_path / RECORD_NAME).read_text())
+    assert record["sources"] == "sources-2" and record["functions"] == 2
 
     (tmp_path / RECORD_NAME).write_text("{not json")
     assert notices(tmp_path).record() is None

@@ -56,9 +56,10 @@ class CompileNotice:
     folder : str or None
         The cache folder (where the record is kept; None: no record).
     sources : str
-        The hash of the sources being compiled: a record of other sources is replaced by the
-        next compilation, one of these sources only by a compilation at least as large (a
-        later partial compilation does not make the estimate of a full one small).
+        The hash of the sources being compiled. A record is replaced by a compilation at
+        least as large, or, when it was of other sources (an earlier version), by one at
+        least half as large: a later partial compilation (a script that packs a model
+        compiles a tenth of the engine) does not make the estimate of a full one small.
     """
 
     def __init__(self, folder, sources=""):
@@ -228,8 +229,10 @@ class CompileNotice:
         if self.folder is None:
             return
         old = self.record()
-        if not (self._owns_record or old is None or old.get("sources") != self.sources
-                or self.functions >= int(old["functions"])):
+        recorded = 0 if old is None else int(old["functions"])
+        if old is not None and old.get("sources") != self.sources:
+            recorded = recorded / 2  # an earlier version's: a compilation of about its size
+        if not (self._owns_record or self.functions >= recorded):
             return
         record = {"cpu_s": round(self.cpu_s, 1), "wall_s": round(self.wall_s, 1),
                   "functions": self.functions, "date": datetime.date.today().isoformat(),
