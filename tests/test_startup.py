@@ -164,3 +164,40 @@ def test_the_loop_command_imports_neither_python_control_nor_scipy_signal(
     assert code == 0, completed.stdout
     assert loaded == [], f"flexure {' '.join(arguments)} imported {loaded}"
     assert png.is_file() == plot
+
+
+def test_a_short_simulation_imports_neither_scipy_linalg_nor_scipy_sparse(tmp_path):
+    """A warm `flexure simulate` of a small scene needs no scipy: the packing orders its
+    matrices in plain Python (numerics/graph_orders.py), the constraint check's condition
+    number and the default atol's frequency come from numpy and the engine, the cached engine
+    loads without numba's registry refresh (numerics/jit.py) and names no numba module that
+    imports scipy.linalg. Each would cost 0.1 to 0.3 s of CPU of a 10 ms run."""
+    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
+             "code = main(['simulate', 'stage_planar_3dof', '--t-end', '0.01', '--input', "
+             "'F=1'])\n"
+             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[:2] in "
+             "(['scipy', 'linalg'], ['scipy', 'sparse']) or m.startswith('numba.np.linalg'))]))")
+    for _ in range(2):  # the first run may compile (and a compilation imports what it needs)
+        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
+                                   text=True, check=True, cwd=tmp_path)
+    code, loaded = json.loads(completed.stdout.splitlines()[-1])
+    assert code == 0, completed.stdout
+    assert loaded == [], f"flexure simulate imported {loaded}"
+
+
+def test_the_subcommands_are_read_from_flexures_own_entry_points():
+    """`flexure` reads its subcommands from its distribution's entry_points.txt (no
+    importlib.metadata); the same as importlib.metadata lists, and only its section's."""
+    import importlib.metadata
+
+    from flexure.core.cli import _entries, _section
+
+    expected = {(e.name, e.value) for e in importlib.metadata.entry_points(
+        group="flexure.commands")}
+    assert set(_entries("flexure.commands")) == expected
+    text = ("[console_scripts]\nflexure = flexure.core.cli:main\n\n[flexure.commands]\n"
+            "# a comment\nanalyze = flexure.core.cli.analyze:register\n"
+            "loop=flexure.controllers.cli:register\n[other]\nx = y:z\n")
+    assert _section(text, "flexure.commands") == [
+        ("analyze", "flexure.core.cli.analyze:register"),
+        ("loop", "flexure.controllers.cli:register")]
