@@ -4,8 +4,8 @@ page itself in a real headless browser (Debian's Chromium, driven by playwright)
 The browser tests need Chromium (`apt-get install chromium`; .ci/run installs it where it is
 missing): without it they FAIL, saying so, rather than skip, so that a CI without a browser
 cannot pass them unseen. FLEXURE_CHROMIUM names another executable. With
-FLEXURE_VIEW_SCREENSHOT=docs/view.png the screenshot of the spatial page is kept there (the
-picture of docs/view.md).
+FLEXURE_VIEW_SCREENSHOTS=docs the screenshots of the spatial stage's and (slow tier) the
+manipulator's pages are kept there, the pictures of docs/view.md.
 """
 
 import base64
@@ -216,17 +216,24 @@ def browser():
         launched.close()
 
 
-def open_page(browser, html_path):
+def open_page(browser, html_path, *, wait=True):
     """(page, problems): the page loaded and its script ready, the shape paused; problems
-    collects every console error and uncaught exception, now and later."""
+    collects every console error and uncaught exception, now and later. With wait=False the
+    page only starts loading: `ready(page)` waits for it (two pages load side by side)."""
     page = browser.new_page(viewport={"width": 900, "height": 640})
     problems = []
     page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
     page.on("pageerror", lambda error: problems.append(str(error)))
-    page.goto(Path(html_path).resolve().as_uri())
+    page.goto(Path(html_path).resolve().as_uri(), wait_until="commit")
+    if wait:
+        ready(page)
+    return page, problems
+
+
+def ready(page):
+    """Wait until the page's script is ready, and pause its animation."""
     page.wait_for_function("window.flexureView !== undefined", timeout=30_000)
     page.evaluate("window.flexureView.ready.then(() => window.flexureView.pause())")
-    return page, problems
 
 
 def pixels(png):
@@ -253,19 +260,39 @@ def frame(page, shape, step, magnification=None):
 
 
 @pytest.fixture(scope="module")
-def spatial_page(spatial, browser, tmp_path_factory):
-    """(page, problems) of the spatial page, loaded once for the tests below."""
-    path = tmp_path_factory.mktemp("view") / "spatial.html"
-    path.write_text(view_page(spatial[1]))
-    return open_page(browser, path)
+def pages(spatial, planar, browser, tmp_path_factory):
+    """{"spatial" or "planar": (page, problems)}: the spatial page and the planar one with its
+    simulated motion, loading side by side (the page's 4.8 MB of plotly.js takes seconds to
+    compile), once for the tests below."""
+    folder = tmp_path_factory.mktemp("view")
+    opened = {}
+    for name, (_, data) in [("spatial", spatial), ("planar", planar)]:
+        (folder / f"{name}.html").write_text(view_page(data))
+        opened[name] = open_page(browser, folder / f"{name}.html", wait=False)
+    for page, _ in opened.values():
+        ready(page)
+    return opened
 
 
 @pytest.fixture(scope="module")
-def planar_page(planar, browser, tmp_path_factory):
-    """(page, problems) of the planar page with its simulated motion, loaded once."""
-    path = tmp_path_factory.mktemp("view") / "planar.html"
-    path.write_text(view_page(planar[1]))
-    return open_page(browser, path)
+def spatial_page(pages):
+    """(page, problems) of the spatial page."""
+    return pages["spatial"]
+
+
+@pytest.fixture(scope="module")
+def planar_page(pages):
+    """(page, problems) of the planar page."""
+    return pages["planar"]
+
+
+def keep_screenshot(page, name, show):
+    """With FLEXURE_VIEW_SCREENSHOTS=FOLDER, `show()` and keep the screenshot there as
+    view_NAME.png (docs/view.md shows them)."""
+    folder = os.environ.get("FLEXURE_VIEW_SCREENSHOTS")
+    if folder:
+        show()
+        page.screenshot(path=str(Path(folder) / f"view_{name}.png"))
 
 
 def test_the_spatial_page_loads_shows_the_model_and_its_modes_move(spatial, spatial_page):
@@ -279,10 +306,7 @@ def test_the_spatial_page_loads_shows_the_model_and_its_modes_move(spatial, spat
     back = frame(page, mode, 3 * PHASES // 4)
     changed = np.mean(np.max(np.abs(swing - back), axis=-1) > 0.2)
     assert changed > 1e-3, f"a mode's opposite phases differ in {changed:.2%} of the pixels"
-    keep = os.environ.get("FLEXURE_VIEW_SCREENSHOT")
-    if keep:
-        frame(page, mode, PHASES // 4)
-        page.screenshot(path=keep)
+    keep_screenshot(page, data.name, lambda: frame(page, mode, PHASES // 4))
     assert problems == []
 
 
@@ -342,4 +366,5 @@ def test_the_manipulators_ten_modes_stay_responsive(browser, tmp_path, capsys):
               f"{per_frame_ms:.0f} ms per frame")
     assert size_mb < 12 and load_s < 30 and per_frame_ms < 250
     assert blue_pixels(pixels(page.screenshot())) > 400
+    keep_screenshot(page, "manipulator", lambda: page.evaluate("window.flexureView.setFrame(6)"))
     assert problems == []

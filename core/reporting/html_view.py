@@ -70,9 +70,9 @@ def payload(data: ViewData) -> dict:
 
 
 def axis_ranges(data: ViewData) -> np.ndarray:
-    """(dimension, 2) m: equal spans around every picture the page shows at its default
-    magnification (each mode at both extremes), with a margin, so that the axes stand still
-    while the model moves."""
+    """(dimension, 2) m: the range of each axis around every picture the page shows at its
+    default magnification (each mode at both extremes), with a margin of 5 % of the largest
+    span, so that the axes stand still while the model moves."""
     pictures = [c.lines for c in data.configurations.values()]
     for shape in data.shapes:
         base = data.configurations[shape.base].lines
@@ -80,9 +80,8 @@ def axis_ranges(data: ViewData) -> np.ndarray:
             pictures.extend(base + sign * shape.magnification * shape.line_fields)
     points = np.vstack([p.reshape(-1, data.dimension) for p in pictures])
     low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
-    half = 0.55 * max(float(np.max(high - low)), 1e-12)
-    centre = 0.5 * (low + high)
-    return np.column_stack([centre - half, centre + half])
+    margin = 0.05 * max(float(np.max(high - low)), 1e-12)
+    return np.column_stack([low - margin, high + margin])
 
 
 def figure(data: ViewData):
@@ -118,7 +117,10 @@ def figure(data: ViewData):
     if spatial:
         axes = {f"{axis}axis": {"range": list(r), "title": {"text": f"{axis} [m]"}}
                 for axis, r in zip("xyz", ranges, strict=True)}
-        layout["scene"] = {**axes, "aspectmode": "cube"}
+        spans = ranges[:, 1] - ranges[:, 0]  # drawn to scale: a flat model as a flat box
+        ratio = dict(zip("xyz", (spans / spans.max()).tolist(), strict=True))
+        layout["scene"] = {**axes, "aspectmode": "manual", "aspectratio": ratio,
+                           "camera": {"eye": {"x": 1.0, "y": 1.0, "z": 0.8}}}  # plotly's: 1.25
     else:
         layout["xaxis"] = {"range": list(ranges[0]), "title": {"text": "x [m]"}}
         layout["yaxis"] = {"range": list(ranges[1]), "title": {"text": "y [m]"},

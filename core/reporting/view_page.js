@@ -95,7 +95,7 @@ function show(index) {
   menu.value = String(index);
   const m0 = s ? s.magnification : 1;
   const slider = $('fv-magnification');
-  slider.min = Math.min(Math.log10(m0) - 3, 0); slider.max = Math.log10(m0) + 1;
+  slider.min = Math.min(Math.log10(m0) - 3, 0); slider.max = Math.max(Math.log10(m0) + 1, 0);
   state.magnification = m0; slider.value = Math.log10(m0);
   slider.disabled = !s;
   const frames = frameCount(s);
