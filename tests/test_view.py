@@ -368,3 +368,22 @@ def test_the_manipulators_ten_modes_stay_responsive(browser, tmp_path, capsys):
     assert blue_pixels(pixels(page.screenshot())) > 400
     keep_screenshot(page, "manipulator", lambda: page.evaluate("window.flexureView.setFrame(6)"))
     assert problems == []
+
+
+@pytest.mark.slow
+def test_a_simulated_run_from_the_command_line_to_the_page(browser, tmp_path, capsys):
+    """`flexure simulate --dofs` then `flexure view --simulation`: the file one writes is the
+    file the other reads, and the page steps through the run (the engine compiles on an empty
+    cache: the slow tier)."""
+    run = tmp_path / "run.csv"
+    assert main(["simulate", "stage_planar_3dof", "--t-end", "0.2", "--input", "F=1",
+                 "--samples", "40", "--dofs", str(run)]) == 0
+    code, out, _ = run_view(capsys, "stage_planar_3dof", "--simulation", run,
+                            "-o", tmp_path / "run.html")
+    assert code == 0 and "simulation" in out
+    page, problems = open_page(browser, tmp_path / "run.html")
+    assert page.evaluate("window.flexureView.data.shapes[0].frames") == 41
+    start, end = frame(page, 0, 0), frame(page, 0, 40)
+    assert np.mean(np.max(np.abs(start - end), axis=-1) > 0.2) > 1e-3
+    assert page.inner_text("#fv-frame-text") == "t = 0.20000 s"
+    assert problems == []
