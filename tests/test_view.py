@@ -218,12 +218,15 @@ def browser():
 
 def open_page(browser, html_path, *, wait=True):
     """(page, problems): the page loaded and its script ready, the shape paused; problems
-    collects every console error and uncaught exception, now and later. With wait=False the
+    collects every console error, uncaught exception and request beyond the file (the page
+    must open offline), now and later. With wait=False the
     page only starts loading: `ready(page)` waits for it (two pages load side by side)."""
     page = browser.new_page(viewport={"width": 900, "height": 640})
     problems = []
     page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
     page.on("pageerror", lambda error: problems.append(str(error)))
+    page.on("request", lambda request: problems.append(f"fetched {request.url}")  # offline?
+            if not request.url.startswith(("file:", "data:", "blob:")) else None)
     page.goto(Path(html_path).resolve().as_uri(), wait_until="commit")
     if wait:
         ready(page)
