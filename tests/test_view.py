@@ -157,6 +157,15 @@ def test_the_command_writes_one_page(tmp_path, capsys):
     assert "<script src=" not in page  # plotly.js inlined: the page needs no network
 
 
+def test_a_kinematic_model_is_shown_as_it_is(tmp_path, capsys):
+    """No mass and no load (as `flexure analyze`): no equilibrium or mode to show by default,
+    the page shows the model alone."""
+    code, out, _ = run_view(capsys, "truss_1dof_x", "--set", "sections.springs.rho_A=0",
+                            "--set", "nodes.2.mass=0", "--set", "nodes.2.force=[0.0, 0.0]",
+                            "-o", tmp_path / "truss.html")
+    assert code == 0 and "; the undeformed model)" in out
+
+
 @pytest.mark.parametrize("args, message", [
     (["no_such_scene"], "no_such_scene: no such scene file"),
     (["stage_planar_3dof", "--modes", "0"], "--modes: expected an integer >= 1, got '0'"),

@@ -57,7 +57,10 @@ def run(args):
     require_drawable(model, "view")
     static, modes = args.static, args.modes
     if not (static or modes or args.simulation):
-        static, modes = True, DEFAULT_MODES
+        # as `flexure analyze`: a kinematic model (no mass, no load) has no shape but its own
+        from .analyze import is_kinematic
+
+        static, modes = (False, None) if is_kinematic(model) else (True, DEFAULT_MODES)
     times = q = None
     if args.simulation is not None:  # the file is checked before any analysis runs
         times, q = read_dof_csv(args.simulation, model)
