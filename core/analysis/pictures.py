@@ -70,6 +70,12 @@ def _interpolation(group):
     return None
 
 
+def drawn_elements(model: Model) -> list[str]:
+    """The names of the elements `centre_lines` draws, in the order of its polylines."""
+    return [name for group in model.groups if _interpolation(group) is not None
+            for name in group.names]
+
+
 def hermite_weights(s: np.ndarray) -> np.ndarray:
     """The cubic Hermite weights (len(s), 4) of [r^p, l0 t^p, r^q, l0 t^q] at s in [0, 1]."""
     s = np.asarray(s, dtype=float)[:, None]

@@ -2,6 +2,7 @@
 
     flexure simulate stage_planar_3dof --t-end 1 --input F=1 --out step.csv --plot step.png
     flexure simulate stage_planar_1dof --t-end 2 --input F=force.csv --method ida
+    flexure simulate stage_planar_3dof --t-end 0.5 --input F=1 --dofs run.csv  # flexure view
 
 An input is a constant (N) or a CSV file of samples `time,value` (a header line is allowed),
 held from each sample time to the next (zero-order hold).
@@ -64,6 +65,9 @@ def register(subparsers):
                         help="record N + 1 equally spaced times (default: every solver step)")
     parser.add_argument("--out", type=output_file(),
                         help="CSV file: time and one column per output")
+    parser.add_argument("--dofs", type=output_file((".csv",)), metavar="CSV",
+                        help="CSV file: time and one column per DOF, what `flexure view "
+                             "--simulation` animates")
     parser.add_argument("--plot", type=output_file(PLOT_SUFFIXES),
                         help="PNG (or .pdf, .svg) file: the outputs against time")
     parser.add_argument("--animate", type=output_file((".gif",)), metavar="GIF",
@@ -140,11 +144,13 @@ def _is_number(text):
 def run(args):
     from ..analysis.pictures import animate, require_drawable
     from ..scene.building import load_scene
+    from ..simulation.dof_csv import write_dof_csv
     from ..simulation.simulation import simulate
 
     # --max-order above the method's largest order: refused by sundials.make_solver, before
     # the run
-    outputs = [("--out", args.out), ("--plot", args.plot), ("--animate", args.animate)]
+    outputs = [("--out", args.out), ("--dofs", args.dofs), ("--plot", args.plot),
+               ("--animate", args.animate)]
     distinct_outputs(*outputs)
     if args.max_step is not None and args.t_end / args.max_step > MAX_STEPS:
         raise UsageError(f"--max-step {args.max_step:g} s with --t-end {args.t_end:g} s means "
@@ -162,7 +168,9 @@ def run(args):
                       progress=Progress(f"flexure simulate {model.name}", after=1.0))
     print(render(result))
     return write_outputs("flexure simulate", [
-        ("--out", args.out, result.to_csv), ("--plot", args.plot, result.plot),
+        ("--out", args.out, result.to_csv),
+        ("--dofs", args.dofs, lambda path: write_dof_csv(path, model, result.times, result.q)),
+        ("--plot", args.plot, result.plot),
         ("--animate", args.animate, lambda path: animate(model, result, path))])
 
 
