@@ -118,8 +118,11 @@ def run(args):
         outputs.append(("the plot", plot, lambda t: plot_history(t, found, model.name)))
     code = write_outputs("flexure optimize", outputs)
     if not found.success:
-        print(f"flexure optimize: the optimiser stopped without success: {found.message}",
-              file=sys.stderr)
+        hint = (f"; the constraints were not met together (largest violation "
+                f"{found.violation:.2g} of its bound): widen --vary's bounds or loosen a "
+                "constraint" if found.violation > 0 else "")
+        print(f"flexure optimize: the optimiser stopped without success: {found.message}"
+              f"{hint}", file=sys.stderr)
         return code or 1
     return code
 
@@ -149,7 +152,8 @@ def summary(found):
     for key, unit, low, high, start, value in zip(found.keys, found.key_units, found.lower,
                                                   found.upper, found.start, found.x,
                                                   strict=True):
-        bound = " (at LO)" if value <= low else " (at HI)" if value >= high else ""
+        near = 1e-9 * (high - low)  # the optimiser's u in [0, 1] rounds back to within this
+        bound = " (at LO)" if value <= low + near else " (at HI)" if value >= high - near else ""
         rows.append((f"{key} [{unit}]", f"{value:.8g}{bound}  (from {start:.6g}; "
                                         f"{low:g}:{high:g})"))
     rows.append((f"{found.objective.text}", f"{found.objective_value:.8g} (from "
@@ -170,8 +174,9 @@ def write_history(path, header, rows):
 
 
 def plot_history(path, found, name):
-    """Three panels over the iterations: the objective, each constrained quantity with its
-    bounds dashed, and each key as the fraction of its range (0 at LO, 1 at HI)."""
+    """Three panels over the iterations: the objective, each constrained quantity divided by
+    its (upper, else lower) bound with the bounds dashed, and each key as the fraction of its
+    range (0 at LO, 1 at HI)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -184,14 +189,19 @@ def plot_history(path, found, name):
     axes[0].plot(steps, [s.objective for s in found.history], "o-", markersize=3)
     axes[0].set_ylabel(_label(found.objective.quantity), fontsize=8)
     axes[0].set_title(f"{name}: {found.objective.text}", fontsize=9)
-    if found.constraints:
+    if found.constraints:  # each over its bound, so that Hz, Pa and factors share an axis
         for k, constraint in enumerate(found.constraints):
-            line, = axes[1].plot(steps, [s.constraints[k] for s in found.history], "o-",
-                                 markersize=3, label=constraint.text)
+            scale = abs(constraint.upper if constraint.upper is not None else constraint.lower)
+            scale = scale or 1.0
+            line, = axes[1].plot(steps, [s.constraints[k] / scale for s in found.history],
+                                 "o-", markersize=3, label=constraint.text)
             for bound in (constraint.lower, constraint.upper):
                 if bound is not None:
-                    axes[1].axhline(bound, color=line.get_color(), linestyle="--", lw=0.8)
-        axes[1].set_ylabel("constrained", fontsize=8)
+                    axes[1].axhline(bound / scale, color=line.get_color(), linestyle="--",
+                                    lw=0.8)
+        if all(s.constraints.min() > 0 for s in found.history):
+            axes[1].set_yscale("log")
+        axes[1].set_ylabel("quantity / its bound (dashed)", fontsize=8)
         axes[1].legend(fontsize=7)
     share = np.array([(s.x - found.lower) / (found.upper - found.lower) for s in found.history])
     for j, key in enumerate(found.keys):
