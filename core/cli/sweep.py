@@ -31,6 +31,8 @@ from ..sweep.grid import (
     parse_parameter,
     run_sweep,
 )
+from ..sweep.stroke import PREFIX as STROKE
+from ..sweep.stroke import check_strokes
 from ..sweep.table import SweepTable
 from ..sweep.ties import parse_tie, tie_points
 from . import (
@@ -52,6 +54,15 @@ def parameter(text):
         return parse_parameter(text)
     except ValueError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def name_list(text):
+    """argparse type of --stroke-inputs: names separated by commas, each once."""
+    names = [name.strip() for name in text.split(",")]
+    if not all(names) or len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"expected input names separated by commas, each "
+                                         f"once, got {text!r}")
+    return names
 
 
 def analysis_list(text):
@@ -128,6 +139,9 @@ def register(subparsers):
                              "(elements.wire2.segments=elements.wire1.segments) or arithmetic "
                              "of them and numbers with + - * / and brackets "
                              "(sections.leaf.width=36*sections.leaf.height); repeatable")
+    parser.add_argument("--stroke-inputs", type=name_list, metavar="NAME[,NAME...]",
+                        help="the inputs that drive the stroke.NODE.AXIS parameters, as many "
+                             "(default: the scene's inputs)")
     parser.add_argument("--analyses", type=analysis_list, default=("static", "modes"),
                         metavar="LIST",
                         help=f"some of {','.join(analysis_names())} (default static,modes)")
@@ -182,7 +196,13 @@ def run(args):
     refuse_overwriting_inputs([("--out", out), ("the Parquet file", parquet),
                                ("the plot", plot)], [path])
     settings = analysis_settings(args)
-    table = SweepTable(keys + tied, columns(model, args.analyses, args.modes, settings),
+    strokes = [key.removeprefix(STROKE) for key in keys if key.startswith(STROKE)]
+    if strokes:
+        check_strokes(model, strokes, args.stroke_inputs)
+    elif args.stroke_inputs:
+        raise UsageError("--stroke-inputs: no --param stroke.NODE.AXIS to drive")
+    table = SweepTable(keys + tied, columns(model, args.analyses, args.modes, settings,
+                                            strokes, args.stroke_inputs),
                        units={key: parameter_unit(key, model) for key in keys + tied})
     points = tie_points(grid(args.param), ties)
     earlier, unreadable = table.read(out) if args.resume and out.exists() else ({}, 0)
@@ -209,7 +229,7 @@ def run(args):
         run_sweep(data, [points[i] for i in todo], overrides=args.set, analyses=args.analyses,
                   modes=args.modes, source=str(path), default_name=path.stem,
                   workers=args.workers, scheduler=args.scheduler, on_row=on_row,
-                  settings=settings)
+                  settings=settings, stroke_inputs=args.stroke_inputs)
     finally:
         for handle in appending:
             handle.close()
@@ -239,6 +259,13 @@ def parameter_unit(key, model):
     from ..analysis.sensitivity import LIST_UNITS
     from ..scene.building import scene_key
 
+    if key.startswith(STROKE):  # a displacement of a coordinate or a global angle
+        from ..mechanics.ports import position_port
+
+        try:
+            return position_port(model, key.removeprefix(STROKE)).unit
+        except KeyError:
+            return ""
     schema = scene_key(key, model)
     if schema is not None:
         return schema.unit
