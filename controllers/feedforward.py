@@ -147,8 +147,8 @@ class LowFrequencyModel:
         return cls(**{k: np.asarray(v, float) for k, v in data.items()})
 
 
-def low_frequency_model(model: Model, *,
-                        linear_model: LinearModel | None = None) -> LowFrequencyModel:
+def low_frequency_model(model: Model, *, linear_model: LinearModel | None = None,
+                        pairs: list | None = None) -> LowFrequencyModel:
     """The low-frequency model of `model` on its colocated loops (module docstring): its n
     lowest modes for n loops.
 
@@ -158,6 +158,8 @@ def low_frequency_model(model: Model, *,
         With a position output on the coordinate (or about the axis) of every input.
     linear_model : LinearModel, optional
         The linearisation to use (default: at the static equilibrium).
+    pairs : list of LoopPair, optional
+        The loops (default: every input with its colocated output, `colocated_pairs`).
 
     Returns
     -------
@@ -180,7 +182,7 @@ def low_frequency_model(model: Model, *,
         output_value,
     )
 
-    pairs = colocated_pairs(model)
+    pairs = colocated_pairs(model) if pairs is None else pairs
     lin = linear_model or linearize(model)
     modes = natural_frequencies(model, linear_model=lin)
     r = len(pairs)
