@@ -4,6 +4,7 @@ way the command refuses bad input (one line, exit code 2, no traceback)."""
 
 import csv
 import math
+import re
 import tomllib
 
 import pytest
@@ -149,7 +150,8 @@ def test_the_grammar_reads_what_the_docs_show():
     (parse_constraint, "frequency[1]<3", "expected QUANTITY<=BOUND"),
     (parse_constraint, "frequency[1]=30+-0", "the tolerance must be > 0"),
     (parse_constraint, "frequency[1]=30+-x", "the tolerance must be a finite number"),
-    (parse_constraint, "von_mises<=0.5*yield", "add --yield PA"),
+    (parse_constraint, "von_mises<=0.5*yield", "add --yield PA (e.g. --yield 1.1e9), or give "
+                                               "the scene's sections yield_stress"),
     (parse_constraint, "frequency[1]<=0.5*yield", "bounds von_mises, not frequency"),
     (parse_variable, "sections.leaf.height", "expected KEY=LO:HI"),
     (parse_variable, "sections.leaf.height=1e-3", "expected KEY=LO:HI"),
@@ -157,8 +159,25 @@ def test_the_grammar_reads_what_the_docs_show():
     (parse_variable, "sections.leaf.height=a:1", "LO < HI"),
 ])
 def test_a_bad_goal_names_its_option_and_what_is_wrong(parse, text, message):
-    with pytest.raises(UsageError, match=message.replace("(", r"\(").replace("*", r"\*")):
+    with pytest.raises(UsageError, match=re.escape(message)):
         parse(text)
+
+
+def test_yield_defaults_to_the_sections_yield_stress():
+    """The stage under 1 N sideways, its leaves given a yield stress: "von_mises<=0.5*yield"
+    bounds the stress at half of it; two sections with different ones are refused."""
+    from flexure.core.analysis.optimize_goals import scene_yield_stress
+
+    model = load_scene("stage_planar_1dof", overrides={
+        "nodes.3.force": [1.0, 0.0], "sections.leaf.yield_stress": 4e8})
+    found = optimize(model, {"sections.leaf.width": (0.01, 0.02)}, "max:frequency[1]",
+                     ["von_mises<=0.5*yield"])
+    assert found.constraints[0].upper == 2e8 and found.constraints[0].uses_yield
+    two = {"sections": {"a": {"yield_stress": 1e8}, "b": {"yield_stress": 2e8}}}
+    with pytest.raises(UsageError, match=r"different yield stresses \(a: 1e\+08 Pa, b: "
+                                         r"2e\+08 Pa\): say which with --yield PA"):
+        scene_yield_stress(two)
+    assert scene_yield_stress({"sections": {"a": {"E": 1.0}}}) is None
 
 
 def test_the_api_refuses_what_the_model_cannot_give():

@@ -33,7 +33,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConvergenceError, FlexureError, UsageError
-from .optimize_goals import Constraint, Objective, parse_constraint, parse_objective
+from .optimize_goals import (
+    Constraint,
+    Objective,
+    parse_constraint,
+    parse_objective,
+    scene_yield_stress,
+)
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
@@ -222,7 +228,8 @@ def optimize(model_or_scene: Model | Scene | str | Path,
     constraints : sequence of str or Constraint
         "QUANTITY<=BOUND", "QUANTITY>=BOUND", "QUANTITY=TARGET+-TOL".
     yield_stress : float, optional
-        The yield stress (Pa) a bound's "yield" stands for.
+        The yield stress (Pa) a bound's "yield" stands for (default: the one the scene's
+        sections give as yield_stress).
     method : str
         "SLSQP" or "trust-constr" (scipy.optimize.minimize).
     tolerance : float
@@ -259,6 +266,8 @@ def optimize(model_or_scene: Model | Scene | str | Path,
     if not vary:
         raise UsageError("--vary: expected at least one KEY=LO:HI")
     model = _model(model_or_scene)
+    if yield_stress is None and any(isinstance(c, str) for c in constraints):
+        yield_stress = scene_yield_stress(model.scene)
     goal = objective if isinstance(objective, Objective) else parse_objective(objective)
     limits = [c if isinstance(c, Constraint) else parse_constraint(c, yield_stress=yield_stress)
               for c in constraints]

@@ -9,7 +9,8 @@
                                                            static equilibrium
                  | "von_mises"                             Pa, the largest von Mises stress there
                  | "dc_gain[" IN "->" OUT "]"              the state space's DC gain
-    BOUND       := NUMBER | NUMBER "*yield" | "yield"      (yield: the --yield stress, Pa)
+    BOUND       := NUMBER | NUMBER "*yield" | "yield"      (yield: the --yield stress, Pa, or
+                                                           the sections' yield_stress)
     NUMBER      := a finite decimal number (1e-3, 30, -0.5)
 
     "max:frequency[2]"   "frequency[1]=30+-1"   "buckling[1]>=3"   "von_mises<=0.5*yield"
@@ -29,7 +30,7 @@ from dataclasses import dataclass
 from ..errors import UsageError
 
 __all__ = ["Constraint", "Objective", "Quantity", "parse_constraint", "parse_objective",
-           "parse_quantity"]
+           "parse_quantity", "scene_yield_stress"]
 
 QUANTITIES = "frequency[K], buckling[K], output[NAME], von_mises or dc_gain[IN->OUT]"
 _INDEXED = re.compile(r"^(?P<kind>frequency|buckling)\[(?P<k>\d+)\]$")
@@ -160,6 +161,19 @@ def parse_constraint(text: str, *, yield_stress: float | None = None) -> Constra
     return Constraint(quantity, centre - width, centre + width, text)
 
 
+def scene_yield_stress(scene: dict) -> float | None:
+    """The yield stress (Pa) the scene's sections give (`yield_stress`), or None where none
+    does; UsageError where they give different ones (which would "yield" be?)."""
+    given = {name: section["yield_stress"] for name, section in
+             (scene.get("sections") or {}).items()
+             if isinstance(section, dict) and "yield_stress" in section}
+    if len(set(given.values())) > 1:
+        raise UsageError("--constraint: the sections give different yield stresses ("
+                         + ", ".join(f"{k}: {v:g} Pa" for k, v in given.items())
+                         + "): say which with --yield PA")
+    return float(next(iter(given.values()))) if given else None
+
+
 def _bound(right, text, quantity, yield_stress):
     """(bound, whether it used yield) of BOUND := NUMBER | NUMBER*yield | yield."""
     factor, star, name = right.rpartition("*")
@@ -169,7 +183,8 @@ def _bound(right, text, quantity, yield_stress):
                              f"von_mises, not {quantity.text}")
         if yield_stress is None:
             raise UsageError(f"--constraint {text!r}: the bound uses yield but no yield stress "
-                             "is given: add --yield PA (e.g. --yield 1.1e9)")
+                             "is given: add --yield PA (e.g. --yield 1.1e9), or give the "
+                             "scene's sections yield_stress")
         scale = 1.0 if right == "yield" else _number(factor, text, "the factor of yield")
         if scale <= 0.0:
             raise UsageError(f"--constraint {text!r}: the factor of yield must be > 0, got "

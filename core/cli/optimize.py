@@ -48,7 +48,8 @@ def register(subparsers):
                         help="repeatable: frequency[1]=30+-1, buckling[1]>=3, "
                              "von_mises<=0.5*yield")
     parser.add_argument("--yield", type=positive, dest="yield_stress", metavar="PA",
-                        help="the yield stress (Pa) that 'yield' in a constraint stands for")
+                        help="the yield stress (Pa) that 'yield' in a constraint stands for "
+                             "(default: the sections' yield_stress)")
     parser.add_argument("--method", choices=("SLSQP", "trust-constr"), default="SLSQP",
                         help="scipy.optimize.minimize's method (default SLSQP)")
     parser.add_argument("--tol", type=positive, default=1e-9, metavar="TOL",
@@ -66,7 +67,11 @@ def register(subparsers):
 
 def run(args):
     from ..analysis.optimize import optimize, parse_variable
-    from ..analysis.optimize_goals import parse_constraint, parse_objective
+    from ..analysis.optimize_goals import (
+        parse_constraint,
+        parse_objective,
+        scene_yield_stress,
+    )
     from ..scene.building import load_scene, scene_path
     from ..scene.scene_writer import scene_toml
 
@@ -80,10 +85,13 @@ def run(args):
             raise UsageError(f"--vary {key}: also given to --set; a key is either varied or set")
         bounds[key] = (low, high)
     objective = parse_objective(args.objective)
-    constraints = [parse_constraint(text, yield_stress=args.yield_stress)
-                   for text in args.constraint]
     path = scene_path(args.scene)
     model = load_scene(path, overrides=args.set)
+    yield_stress = args.yield_stress
+    if yield_stress is None:
+        yield_stress = scene_yield_stress(model.scene)
+    constraints = [parse_constraint(text, yield_stress=yield_stress)
+                   for text in args.constraint]
     out = args.out or output_file((".toml",))(f"{model.name}_optimum.toml")
     history_path = args.history or output_file((".csv",))(f"{model.name}_optimize.csv")
     plot = None if args.no_plot else check_output(history_path.with_suffix(".png"),
