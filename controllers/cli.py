@@ -101,6 +101,10 @@ def register(subparsers):
                         help="modal: m a + c v + k x of the low-frequency model (default); "
                              "inverse: the stable approximate inverse (ZPETC) of the full "
                              "sampled linear model")
+    parser.add_argument("--loop", action="append", metavar="INPUT:OUTPUT", dest="loops",
+                        help="an input and the position output that close a loop (repeatable; "
+                             "default: every input with its colocated output); the other "
+                             "inputs stay open, at zero force")
     parser.add_argument("--move", type=move, action="append", metavar="COORD=D",
                         help="move the coordinate COORD (e.g. E.x) by D (m or rad) while every "
                              "loop follows; one per loop, D = 0 holds it (repeatable; replaces "
@@ -150,6 +154,9 @@ def run(args):
             said.add(message)
             print(f"flexure loop: warning: {message}", file=sys.stderr, flush=True)
 
+    if args.move and args.loops:
+        raise UsageError("--loop: a --move path is planned on every input's colocated loop; "
+                         "choose the loops without --move")
     if args.move:
         model, path = move_path_of(args, warn)
         if args.plant in ("inprocess", "linear"):  # the FMU plants build from the scene file
@@ -160,7 +167,8 @@ def run(args):
                       settle=args.settle, method=args.method, rtol=args.rtol,
                       workdir=args.workdir, overrides=overrides, path=path,
                       quantum=args.quantum, disturbance=amplitude, disturbance_hz=hz,
-                      progress=Progress(f"flexure loop ({args.plant})", after=1.0), warn=warn)
+                      progress=Progress(f"flexure loop ({args.plant})", after=1.0), warn=warn,
+                      **({"loops": args.loops} if args.loops else {}))
     summary = result.summary()
     code = write_outputs("flexure loop", [("--plot", plot, result.plot)],
                          announce=False) if plot else 0

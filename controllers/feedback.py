@@ -26,6 +26,7 @@ numpy systems of lti.py; the python-control objects a user reads (`FeedbackDesig
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -144,11 +145,19 @@ class FeedbackDesign:
         return summary
 
 
-def colocated_pairs(model):
-    """The (input, position output) pairs on the same coordinate (or about the same global
-    axis of a 3-D rotational node: a moment and its angle), one per input."""
+def colocated_pairs(model, loops: Sequence[str] | None = None) -> list:
+    """The (input, position output) pairs that form the loops.
+
+    Without `loops`: the pairs on the same coordinate (or about the same global axis of a 3-D
+    rotational node: a moment and its angle), one per input. With `loops`, the pairs they
+    name, "INPUT:OUTPUT" each (an input and a position output of the scene, each in one
+    loop at most), in their order; the other inputs stay open (held at zero force).
+    ControlDesignError naming what is wrong otherwise.
+    """
     from flexure.core import port_description
 
+    if loops is not None:
+        return _chosen_pairs(model, loops)
     pairs = []
     for i, port in enumerate(model.inputs):
         match = [j for j, out in enumerate(model.outputs)
@@ -161,6 +170,35 @@ def colocated_pairs(model):
                 f"coordinate ({where}); declare one in [outputs] to close a loop on it")
         j = match[0]
         pairs.append(LoopPair(i, j, port.name, model.outputs[j].name))
+    return pairs
+
+
+def _chosen_pairs(model, loops):
+    """The LoopPairs of "INPUT:OUTPUT" texts (`colocated_pairs`)."""
+    inputs = {port.name: i for i, port in enumerate(model.inputs)}
+    outputs = {port.name: j for j, port in enumerate(model.outputs)
+               if port.quantity == "position"}
+    if not loops:
+        raise ControlDesignError("--loop: expected at least one INPUT:OUTPUT pair")
+    pairs = []
+    for text in loops:
+        name, sep, output = (part.strip() for part in str(text).partition(":"))
+        if not sep or not name or not output:
+            raise ControlDesignError(f"--loop {text!r}: expected INPUT:OUTPUT, e.g. F:x")
+        if name not in inputs:
+            raise ControlDesignError(f"--loop {text}: {model.name} has no input {name!r}; its "
+                                     f"inputs are {', '.join(inputs) or 'none'}")
+        if output not in outputs:
+            raise ControlDesignError(
+                f"--loop {text}: {model.name} has no position output {output!r}; its position "
+                f"outputs are {', '.join(outputs) or 'none'}")
+        for pair in pairs:
+            if name == pair.input_name or output == pair.output_name:
+                raise ControlDesignError(
+                    f"--loop {text}: {name if name == pair.input_name else output} is in the "
+                    f"loop {pair.input_name}:{pair.output_name} already; each input and output "
+                    "closes one loop")
+        pairs.append(LoopPair(inputs[name], outputs[output], name, output))
     return pairs
 
 
@@ -195,7 +233,7 @@ def pid_lowpass(crossover: float, *, gain: float = 1.0, integral_ratio: float = 
 def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.0,
                     delay_samples: int = 1, linear_model: LinearModel | None = None,
                     plant: control.StateSpace | LinearSystem | None = None,
-                    **shape: float) -> FeedbackDesign:
+                    loops: Sequence[str] | None = None, **shape: float) -> FeedbackDesign:
     """Design the discrete colocated loops of `model` for a cross-over at a sample rate.
 
     Parameters
@@ -212,6 +250,9 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
         The linearisation for the plant (default: at the static equilibrium).
     plant : control.StateSpace or LinearSystem, optional
         A continuous plant with the model's inputs and outputs, instead of the linear model.
+    loops : sequence of str, optional
+        "INPUT:OUTPUT" pairs that form the loops, the other inputs open (default: every
+        input with its colocated position output; `colocated_pairs`).
     **shape : float
         integral_ratio, lead_ratio, lowpass_ratio, lowpass_damping for `pid_lowpass`
         (unitless).
@@ -239,7 +280,7 @@ def design_feedback(model: Model, *, crossover: float = 300.0, fs: float = 4000.
         raise ControlDesignError(f"delay_samples must be >= 0, got {delay_samples}")
     from flexure.core import state_space_matrices  # the models (numba, scipy) on first use
 
-    pairs = colocated_pairs(model)
+    pairs = colocated_pairs(model, loops)
     full = (LinearSystem.of(plant) if plant is not None
             else LinearSystem(*state_space_matrices(model, linear_model=linear_model)))
     Ts = 1.0 / fs

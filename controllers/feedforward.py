@@ -147,8 +147,8 @@ class LowFrequencyModel:
         return cls(**{k: np.asarray(v, float) for k, v in data.items()})
 
 
-def low_frequency_model(model: Model, *,
-                        linear_model: LinearModel | None = None) -> LowFrequencyModel:
+def low_frequency_model(model: Model, *, linear_model: LinearModel | None = None,
+                        pairs: list | None = None) -> LowFrequencyModel:
     """The low-frequency model of `model` on its colocated loops (module docstring): its n
     lowest modes for n loops.
 
@@ -158,6 +158,8 @@ def low_frequency_model(model: Model, *,
         With a position output on the coordinate (or about the axis) of every input.
     linear_model : LinearModel, optional
         The linearisation to use (default: at the static equilibrium).
+    pairs : list of LoopPair, optional
+        The loops (default: every input with its colocated output, `colocated_pairs`).
 
     Returns
     -------
@@ -180,7 +182,7 @@ def low_frequency_model(model: Model, *,
         output_value,
     )
 
-    pairs = colocated_pairs(model)
+    pairs = colocated_pairs(model) if pairs is None else pairs
     lin = linear_model or linearize(model)
     modes = natural_frequencies(model, linear_model=lin)
     r = len(pairs)
@@ -192,10 +194,11 @@ def low_frequency_model(model: Model, *,
     B_r = phi.T @ lin.DF.T @ b
     outputs = [model.outputs[p.output_index] for p in pairs]
     C_r = output_rows(model, x, lin.DF, outputs) @ phi
-    if np.linalg.cond(B_r) > 1e12 or np.linalg.cond(C_r) > 1e12:
-        raise ControlDesignError(
-            f"{model.name}: the {r} lowest mode(s) are not driven or not seen by the loops "
-            f"({', '.join(p.input_name for p in pairs)}); no low-frequency inverse")
+    # a degenerate r-th mode is refused even where B_r happens to be invertible: its inverse
+    # would be that of whichever r modes the eigensolver returned
+    if (np.linalg.cond(B_r) > 1e12 or np.linalg.cond(C_r) > 1e12
+            or _degenerate(modes.frequencies_hz, r)):
+        raise ControlDesignError(_refusal(model, pairs, modes.frequencies_hz, r))
     left, right = np.linalg.inv(B_r), np.linalg.inv(C_r)
     return LowFrequencyModel(
         mass=left @ right,
@@ -204,6 +207,40 @@ def low_frequency_model(model: Model, *,
         frequencies_hz=modes.frequencies_hz[:r].copy(),
         equilibrium=np.array([output_value(model, port, x) for port in outputs]),
     )
+
+
+DEGENERATE_RTOL = 1e-6  # frequencies this close are one eigenvalue to the eigensolver
+
+
+def _degenerate(frequencies_hz, r):
+    """Whether mode r + 1 has mode r's frequency (DEGENERATE_RTOL), so that the r lowest
+    modes are no unique set."""
+    return (len(frequencies_hz) > r and abs(frequencies_hz[r] - frequencies_hz[r - 1])
+            <= DEGENERATE_RTOL * abs(frequencies_hz[r - 1]))
+
+
+def _refusal(model, pairs, frequencies_hz, r):
+    """Why the modal feedforward has no inverse of the r lowest modes, and what to do: when
+    mode r has the frequency of mode r + 1 (a symmetric mechanism), "the r lowest modes" are
+    any r of a larger eigenspace, which the eigensolver picks at random; otherwise the
+    loops do not drive or see one of them."""
+    loops = ", ".join(f"{p.input_name}->{p.output_name}" for p in pairs)
+    lowest = ", ".join(f"{f:.6g}" for f in frequencies_hz[:r])
+    remedy = ("use --feedforward inverse (the inverse of the model's own linear dynamics), "
+              "or --no-feedforward")
+    if _degenerate(frequencies_hz, r):
+        equal = [k + 1 for k, f in enumerate(frequencies_hz)
+                 if abs(f - frequencies_hz[r - 1]) <= DEGENERATE_RTOL * abs(f)]
+        return (f"{model.name}: the modal feedforward inverts the {r} lowest mode(s) for "
+                f"{r} loop(s) ({loops}), but modes {', '.join(map(str, equal))} share one "
+                f"frequency ({frequencies_hz[r - 1]:.6g} Hz), so which of them count as the "
+                f"lowest {r} is the eigensolver's arbitrary choice. Close loops on the lowest "
+                f"{equal[-1]} modes (an input with its colocated position output for each), "
+                "break the symmetry (the scene's dimensions), or " + remedy)
+    return (f"{model.name}: the modal feedforward needs the {r} lowest mode(s) ({lowest} Hz) "
+            f"driven and seen by the {r} loop(s) ({loops}), and one is not (a mode the inputs "
+            "do not move, or the outputs do not see): close the loops on the inputs that move "
+            "the lowest modes, or " + remedy)
 
 
 def low_frequency_plant(lf_model: LowFrequencyModel, model: Model,

@@ -113,7 +113,8 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
     **design_options
         Passed on to `design_feedback` (with `controller`: only `plant` and
         `linear_model`, the model the loops are checked on). A `linear_model` also serves
-        the modal feedforward, unless `feedforward_model` is given.
+        the modal feedforward, unless `feedforward_model` is given; `loops` ("INPUT:OUTPUT"
+        pairs, `colocated_pairs`) chooses the loops, the other inputs held open.
 
     Returns
     -------
@@ -135,10 +136,16 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
     for name, value in (("duration", duration), ("fs", fs), ("settle", settle)):
         if not np.isfinite(value) or (value <= 0 if name != "settle" else value < 0):
             raise LoopError(f"{name} must be a positive finite number, got {value}")
+    if path is not None and design_options.get("loops") is not None:
+        raise LoopError("loops: a move path is planned on every input's colocated loop; "
+                        "choose the loops without --move")
     if controller is not None:
         if design is not None:
             raise LoopError("give a designed feedback (design) or a controller of one's own "
                             "(controller), not both")
+        if design_options.pop("loops", None) is not None:
+            raise LoopError("loops: a controller of one's own closes every input's colocated "
+                            "loop; choosing the loops takes the built-in feedback")
         unused = sorted(set(design_options) - {"plant", "linear_model"})
         if unused:
             raise LoopError(f"{', '.join(unused)}: design options of the built-in feedback, "
@@ -180,7 +187,7 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
     lf, explicit = None, None
     if kind == "modal":
         lf = feedforward_model if feedforward_model is not None else low_frequency_model(
-            model, linear_model=design_options.get("linear_model"))
+            model, linear_model=design_options.get("linear_model"), pairs=design.pairs)
     elif kind == "inverse":
         explicit = _inverse_forces(model, design, profile, fs, samples, offsets, given)
     options = {"fs": fs, "samples": samples, "offsets": offsets, "axis": axis, "path": path,

@@ -21,6 +21,7 @@ _LAZY = {
     "analysis.inverse_statics": ("InverseStatics", "inverse_statics"),
     "analysis.linearization": ("LinearModel", "linearize"),
     "analysis.modal": ("Modes", "buckling_load_factors", "natural_frequencies"),
+    "analysis.optimize": ("Optimum", "optimize"),
     "analysis.sensitivity": ("Sensitivities", "sensitivities"),
     "analysis.statespace": ("principal_gains", "state_space", "state_space_matrices"),
     "analysis.statics": ("StaticSolution", "static_equilibrium"),

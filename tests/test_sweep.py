@@ -287,7 +287,7 @@ def test_every_point_failing_is_an_error_after_the_table_is_written(tmp_path, ca
 
 @pytest.mark.parametrize("argv, message", [
     (["--param", "k"], "argument --param: expected KEY=START:STOP:N"),
-    (["--param", "nodes.3.mass=0,1", "--analyses", "modes,stress"], "unknown analysis 'stress'"),
+    (["--param", "nodes.3.mass=0,1", "--analyses", "modes,strain"], "unknown analysis 'strain'"),
     (["--param", "nodes.3.mass=0,1", "--analyses", "modes,modes"], "'modes' is listed 2 times"),
     (["--param", "nodes.3.mass=0,1", "--workers", "-1"], "argument --workers: expected an "
                                                          "integer >= 0"),

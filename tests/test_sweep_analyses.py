@@ -91,7 +91,7 @@ def test_a_loop_that_cannot_be_closed_is_the_status_of_its_point():
 
 
 def test_the_registry_names_simulate_and_loop_and_refuses_the_unknown(monkeypatch):
-    assert analysis_names() == ("static", "modes", "buckling", "simulate", "loop")
+    assert analysis_names() == ("static", "modes", "buckling", "stress", "simulate", "loop")
     loop = sweep_analyses.find("loop")
     assert loop.defaults() == {"stroke": 1e-3, "duration": 1.0, "settle": 0.25, "fs": 4000.0,
                                "crossover": 300.0, "plant": "inprocess"}
@@ -187,8 +187,8 @@ def test_analysis_options_that_do_not_fit_are_one_line(argv, message, tmp_path, 
     (["--simulate-input", "F"], "argument --simulate-input: expected NAME=VALUE[,NAME=VALUE"),
     (["--loop-fs", "0"], "argument --loop-fs: expected a number > 0, got '0'"),
     (["--loop-plant", "fmu"], "argument --loop-plant: expected inprocess or linear, got 'fmu'"),
-    (["--analyses", "static,stress"], "unknown analysis 'stress'; expected some of static, "
-                                      "modes, buckling, simulate, loop"),
+    (["--analyses", "static,strain"], "unknown analysis 'strain'; expected some of static, "
+                                      "modes, buckling, stress, simulate, loop"),
 ])
 def test_bad_analysis_options_are_refused_by_the_parser(argv, message, capsys):
     code, _, err = run(capsys, "sweep", "stage_planar_1dof", "--param", "nodes.3.mass=0,1",

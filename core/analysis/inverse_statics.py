@@ -87,6 +87,47 @@ def _ports(model, names, what):
         raise InverseStaticsError(f"{model.source}: {what}: {error.args[0]}") from None
 
 
+def target_compliance(model: Model, solution: StaticSolution, target_ports: list,
+                      names: Sequence[str], held: dict[str, float], *,
+                      mechanics: Mechanics | None = None) -> tuple[np.ndarray, float]:
+    """The static compliance between inputs and targets at an equilibrium (module docstring).
+
+    Parameters
+    ----------
+    model : Model
+    solution : StaticSolution
+        The equilibrium (under the inputs `held`).
+    target_ports : list of Port
+        The targets' position outputs (`position_port`).
+    names : sequence of str
+        The inputs whose forces move them.
+    held : dict of str to float
+        Every input's force at the equilibrium (N, N m, or V for a drive signal).
+    mechanics : Mechanics, optional
+        The model's Mechanics (made when not given).
+
+    Returns
+    -------
+    (ndarray, float)
+        d x_t / d u (n_targets, n_inputs), m/N or rad/(N m); and the 2-norm of the inputs'
+        own compliance, the scale against which the targets' one is singular.
+    """
+    lin = linearize(model, solution, mechanics=mechanics or Mechanics(model))
+    DF = lin.DF
+    ports = [port.name for port in model.inputs]
+    order = [ports.index(name) for name in names]  # the inputs' places in the model
+    # the generalised forces of unit inputs (a moment's depends on the orientation)
+    b = input_columns(model, solution.x, [model.inputs[i] for i in order])
+    # an actuated input is its drive signal: its steady force per unit of it (Km/R ...)
+    b = b * steady_slopes(model, np.array([held.get(p, 0.0) for p in ports]))[order]
+    response = np.linalg.solve(lin.K, DF.T @ b)  # dq per unit input
+    compliance = output_rows(model, solution.x, DF, target_ports) @ response
+    # the inputs' own compliance (work-conjugate: m/N, rad/(N m)) sets the scale of
+    # "cannot move": the targets' must not be smaller by the round-off of the solve
+    own = float(np.linalg.norm((DF.T @ b).T @ response, 2))
+    return compliance, own
+
+
 @blas_threads()
 def inverse_statics(model: Model, targets: dict[str, float], *,
                     inputs: Sequence[str] | None = None,
@@ -156,7 +197,6 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
     size = np.array([1.0 if p.coordinate is None else magnitudes[p.coordinate]
                      for p in target_ports])
     allowed = np.maximum(tolerance * unit, ROUND_OFF * size)
-    order = [list(ports).index(name) for name in names]  # the inputs' places in the model
     residual = np.inf
     solution = None if start is None else start.solution
     for iteration in range(1, max_iterations + 1):
@@ -167,17 +207,8 @@ def inverse_statics(model: Model, targets: dict[str, float], *,
         residual = float(np.max(np.abs(error)))
         if np.all(np.abs(error) <= allowed):
             return InverseStatics(u, solution, iteration, residual)
-        lin = linearize(model, solution, mechanics=mech)
-        DF = lin.DF
-        # the generalised forces of unit inputs (a moment's depends on the orientation)
-        b = input_columns(model, solution.x, [ports[name] for name in names])
-        # an actuated input is its drive signal: its steady force per unit of it (Km/R ...)
-        b = b * steady_slopes(model, np.array(list(held.values())))[order]
-        response = np.linalg.solve(lin.K, DF.T @ b)  # dq per unit input
-        compliance = output_rows(model, solution.x, DF, target_ports) @ response
-        # the inputs' own compliance (work-conjugate: m/N, rad/(N m)) sets the scale of
-        # "cannot move": the targets' must not be smaller by the round-off of the solve
-        own = np.linalg.norm((DF.T @ b).T @ response, 2)
+        compliance, own = target_compliance(model, solution, target_ports, names, held,
+                                            mechanics=mech)
         smallest = np.linalg.svd(compliance, compute_uv=False)[-1]
         if not smallest > 1e-9 * own:
             raise ConvergenceError(

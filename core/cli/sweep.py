@@ -31,7 +31,10 @@ from ..sweep.grid import (
     parse_parameter,
     run_sweep,
 )
+from ..sweep.stroke import PREFIX as STROKE
+from ..sweep.stroke import check_strokes
 from ..sweep.table import SweepTable
+from ..sweep.ties import parse_tie, tie_points
 from . import (
     PLOT_SUFFIXES,
     add_scene_arguments,
@@ -51,6 +54,15 @@ def parameter(text):
         return parse_parameter(text)
     except ValueError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def name_list(text):
+    """argparse type of --stroke-inputs: names separated by commas, each once."""
+    names = [name.strip() for name in text.split(",")]
+    if not all(names) or len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"expected input names separated by commas, each "
+                                         f"once, got {text!r}")
+    return names
 
 
 def analysis_list(text):
@@ -122,6 +134,14 @@ def register(subparsers):
                         metavar="KEY=START:STOP:N|KEY=V1,V2,...",
                         help="a dotted scene key and its values: N linearly spaced from START "
                              "to STOP, or a list (repeatable; the grid is the product)")
+    parser.add_argument("--tie", action="append", default=[], metavar="KEY=EXPRESSION",
+                        help="set KEY at every point from --param keys: another key "
+                             "(elements.wire2.segments=elements.wire1.segments) or arithmetic "
+                             "of them and numbers with + - * / and brackets "
+                             "(sections.leaf.width=36*sections.leaf.height); repeatable")
+    parser.add_argument("--stroke-inputs", type=name_list, metavar="NAME[,NAME...]",
+                        help="the inputs that drive the stroke.NODE.AXIS parameters, as many "
+                             "(default: the scene's inputs)")
     parser.add_argument("--analyses", type=analysis_list, default=("static", "modes"),
                         metavar="LIST",
                         help=f"some of {','.join(analysis_names())} (default static,modes)")
@@ -157,6 +177,13 @@ def run(args):
         if key in args.set:
             raise UsageError(f"--param {key}: also given to --set; a key is either swept or "
                              "set")
+    ties = [parse_tie(text, keys) for text in args.tie]
+    tied = [tie.key for tie in ties]
+    for key in tied:
+        if tied.count(key) > 1:
+            raise UsageError(f"--tie {key}: given {tied.count(key)} times; tie each key once")
+        if key in args.set:
+            raise UsageError(f"--tie {key}: also given to --set; a key is either tied or set")
     path = scene_path(args.scene)
     data = parse_toml(path)
     # the scene and its fixed overrides must stand on their own: a mistake there is one
@@ -169,8 +196,15 @@ def run(args):
     refuse_overwriting_inputs([("--out", out), ("the Parquet file", parquet),
                                ("the plot", plot)], [path])
     settings = analysis_settings(args)
-    table = SweepTable(keys, columns(model, args.analyses, args.modes, settings))
-    points = grid(args.param)
+    strokes = [key.removeprefix(STROKE) for key in keys if key.startswith(STROKE)]
+    if strokes:
+        check_strokes(model, strokes, args.stroke_inputs)
+    elif args.stroke_inputs:
+        raise UsageError("--stroke-inputs: no --param stroke.NODE.AXIS to drive")
+    table = SweepTable(keys + tied, columns(model, args.analyses, args.modes, settings,
+                                            strokes, args.stroke_inputs),
+                       units={key: parameter_unit(key, model) for key in keys + tied})
+    points = tie_points(grid(args.param), ties)
     earlier, unreadable = table.read(out) if args.resume and out.exists() else ({}, 0)
     todo = [i for i, point in enumerate(points) if table.key(point) not in earlier]
     finished = {}
@@ -195,7 +229,7 @@ def run(args):
         run_sweep(data, [points[i] for i in todo], overrides=args.set, analyses=args.analyses,
                   modes=args.modes, source=str(path), default_name=path.stem,
                   workers=args.workers, scheduler=args.scheduler, on_row=on_row,
-                  settings=settings)
+                  settings=settings, stroke_inputs=args.stroke_inputs)
     finally:
         for handle in appending:
             handle.close()
@@ -217,6 +251,25 @@ def run(args):
         raise FlexureError(f"sweep {model.name}: every point failed ({len(rows)}); first: "
                            f"{failed[0][-1]}")
     return code
+
+
+def parameter_unit(key, model):
+    """The SI unit of a swept or tied scene key ("" where the scene format gives none: a
+    type, a name)."""
+    from ..analysis.sensitivity import LIST_UNITS
+    from ..scene.building import scene_key
+
+    if key.startswith(STROKE):  # a displacement of a coordinate or a global angle
+        from ..mechanics.ports import position_port
+
+        try:
+            return position_port(model, key.removeprefix(STROKE)).unit
+        except KeyError:
+            return ""
+    schema = scene_key(key, model)
+    if schema is not None:
+        return schema.unit
+    return LIST_UNITS.get(key.rpartition(".")[2], "")
 
 
 def _parquet_path(out):

@@ -21,6 +21,11 @@ The quantities (columns after the parameters, SI units):
 - modes: `mode.1 [Hz]` ... `mode.N [Hz]`, the lowest N natural frequencies there (blank past
   the model's DOF count);
 - buckling: `buckling.1 [-]`, the first load factor of the reference load (blank if none);
+- stress: `stress.max [Pa]`, the largest von Mises stress at the equilibrium (blank without
+  sections that have dimensions);
+- with a `stroke.NODE.AXIS` parameter, the analyses run at the equilibrium the inputs hold
+  at that stroke, and the point gains the inputs' forces and the stiffness the stroke meets
+  (`flexure.core.sweep.stroke`);
 - simulate, loop, and any other registered analysis: the columns it declares
   (`flexure.core.sweep.analyses`: a step response here; the closed loop registered by
   flexure.controllers), with its options in `settings` {analysis: {option: value}}.
@@ -37,11 +42,14 @@ import numpy as np
 from ..errors import FlexureError, UsageError
 from ..scene.overrides import parse_value
 from . import analyses as registry
+from .stroke import split_strokes, stroke_columns, stroke_point
 
 __all__ = ["ANALYSES", "analysis_names", "columns", "evaluate_point", "grid",
            "parse_parameter", "run_sweep"]
 
-ANALYSES = ("static", "modes", "buckling")  # on the static equilibrium; the others registered
+# on the static equilibrium (or a stroke's, `stroke`); the others registered
+ANALYSES = ("static", "modes", "buckling", "stress")
+AT_A_STROKE = ("static", "modes", "stress")  # the analyses that run at a stroke's equilibrium
 DEFAULT_MODES = 6
 # the significant digits of a value of START:STOP:N, so that 0.3e-3:0.8e-3:6 gives 0.0004 and not
 # linspace's 0.00039999999999999996 (a value the table and a user's --set both write plainly)
@@ -109,16 +117,26 @@ def analysis_names() -> tuple[str, ...]:
     return ANALYSES + tuple(name for name in registry.available() if name not in ANALYSES)
 
 
-def columns(model, analyses, modes=DEFAULT_MODES, settings=None) -> list[str]:
+def columns(model, analyses, modes=DEFAULT_MODES, settings=None, strokes=(),
+            stroke_inputs=None) -> list[str]:
     """The quantity columns of a sweep of `model`'s scene (see the module's docstring); a
-    UsageError for an unknown analysis or options that do not fit the scene."""
+    UsageError for an unknown analysis or options that do not fit the scene. `strokes` the
+    stroke targets ("3.x") swept, `stroke_inputs` the inputs that drive them."""
     names = []
+    if strokes:
+        others = [name for name in analyses if name not in AT_A_STROKE]
+        if others:
+            raise UsageError(f"--param stroke.{strokes[0]}: the analyses at a stroke are "
+                             f"{', '.join(AT_A_STROKE)}; not {', '.join(others)}")
+        names += stroke_columns(model, list(strokes), stroke_inputs)
     if "static" in analyses:
         names += [f"static.{port.name} [{_unit(model, port)}]" for port in model.outputs]
     if "modes" in analyses:
         names += [f"mode.{i} [Hz]" for i in range(1, modes + 1)]
     if "buckling" in analyses:
         names.append("buckling.1 [-]")
+    if "stress" in analyses:
+        names.append("stress.max [Pa]")
     for name in analyses:
         if name not in ANALYSES:
             analysis = registry.find(name)
@@ -139,30 +157,42 @@ def _unit(model, port):
 
 def evaluate_point(scene: dict, overrides: dict, *, analyses=("static", "modes"),
                    modes: int = DEFAULT_MODES, source: str = "<dict>",
-                   default_name: str = "scene", settings: dict | None = None) -> dict:
+                   default_name: str = "scene", settings: dict | None = None,
+                   stroke_inputs: list | None = None) -> dict:
     """The quantities of one grid point: {column: value} (floats, SI units) and "status".
 
     `scene` is the scene dictionary, `overrides` the point's {dotted key: value} (its
     parameters and any fixed overrides); `source` and `default_name` as for `build_model`;
-    `settings` {analysis: {option: value}} the options of the registered analyses.
-    "status" is "ok", or the one-line reason the point failed, without the name of the scene
-    file every row shares (the columns computed before it are kept). This is the function
+    `settings` {analysis: {option: value}} the options of the registered analyses;
+    `stroke_inputs` the inputs that drive the point's `stroke.*` targets (default: the
+    scene's). "status" is "ok", or the one-line reason the point failed, without the name of
+    the scene file every row shares (the columns computed before it are kept). This is the function
     each Dask task runs; it raises nothing.
     """
     from ..analysis.linearization import linearize
     from ..analysis.modal import buckling_load_factors, natural_frequencies
     from ..analysis.statics import static_equilibrium
+    from ..analysis.stresses import beam_stresses
     from ..mechanics.mechanics import Mechanics
     from ..mechanics.ports import output_value
     from ..scene.building import build_model
 
     row = {}
+    overrides, strokes = split_strokes(overrides)
     try:
         model = build_model(scene, overrides=overrides, source=source,
                             default_name=default_name)
-        if "static" in analyses or "modes" in analyses:
+        if strokes or any(name in analyses for name in AT_A_STROKE):
             mechanics = Mechanics(model)
-            solution = static_equilibrium(model, mechanics=mechanics)
+            if strokes:
+                solution, found, _ = stroke_point(model, strokes, stroke_inputs, mechanics)
+                row.update(found)
+            else:
+                solution = static_equilibrium(model, mechanics=mechanics)
+            if "stress" in analyses:
+                stresses = beam_stresses(model, solution.x, solution.stress_resultants)
+                if stresses.names:
+                    row["stress.max [Pa]"] = stresses.maximum()[2]
             if "static" in analyses:
                 for port, name in zip(model.outputs, columns(model, ("static",)), strict=True):
                     if port.about_axis:  # the angle's change, whatever the quantity
@@ -205,7 +235,8 @@ def _one_line(text):
 def run_sweep(scene: dict, points, *, overrides=None, analyses=("static", "modes"),
               modes: int = DEFAULT_MODES, source: str = "<dict>", default_name: str = "scene",
               workers: int | None = None, scheduler: str | None = None,
-              on_row=None, settings: dict | None = None) -> list[dict]:
+              on_row=None, settings: dict | None = None,
+              stroke_inputs: list | None = None) -> list[dict]:
     """Evaluate `evaluate_point` at each of `points` ({key: value}); the rows in their order.
 
     Parameters
@@ -224,10 +255,12 @@ def run_sweep(scene: dict, points, *, overrides=None, analyses=("static", "modes
     settings : dict, optional
         {analysis: {option: value}}: the options of registered analyses such as "simulate"
         (`flexure.core.sweep.analyses`); their defaults otherwise.
+    stroke_inputs : list of str, optional
+        The inputs that drive the `stroke.*` parameters (default: the scene's inputs).
     """
     tasks = [{**(overrides or {}), **point} for point in points]
     options = {"analyses": tuple(analyses), "modes": modes, "source": source,
-               "default_name": default_name,
+               "default_name": default_name, "stroke_inputs": stroke_inputs,
                "settings": {name: dict(values) for name, values in (settings or {}).items()}}
     rows = [None] * len(tasks)
 

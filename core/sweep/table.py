@@ -36,8 +36,9 @@ def cell(value) -> str:
 class SweepTable:
     """The header of a sweep's table and its rows as lists of cells."""
 
-    def __init__(self, parameters, quantities):
+    def __init__(self, parameters, quantities, units=None):
         self.parameters = list(parameters)
+        self.units = dict(units or {})  # {parameter: SI unit}, for the plot's axes
         self.quantities = list(quantities)
         self.header = [*self.parameters, *self.quantities, "status"]
 
@@ -115,6 +116,16 @@ class SweepTable:
                 arrays[name] = pa.array([row[self.header.index(name)] for row in rows])
         pq.write_table(pa.table(arrays), path)
 
+    def label(self, parameter):
+        """A parameter's axis label: "KEY [UNIT]", or the key where it has no unit."""
+        unit = self.units.get(parameter)
+        return f"{parameter} [{unit}]" if unit else parameter
+
+    def unit_suffix(self, parameter):
+        """" UNIT" after a parameter's value in a legend, or ""."""
+        unit = self.units.get(parameter)
+        return f" {unit}" if unit and unit != "1" else ""
+
     def plot(self, path, rows, title=""):
         """Each quantity against the first parameter, one line per value of the others."""
         import matplotlib
@@ -144,12 +155,13 @@ class SweepTable:
         for ax, name in zip(axes.flat, shown, strict=False):
             for n, (group, members) in enumerate(groups.items()):
                 members = sorted(members, key=lambda i: position[i])
-                label = (", ".join(f"{k}={c}" for k, c in zip(others, group, strict=True))
+                label = (", ".join(f"{k}={c}{self.unit_suffix(k)}"
+                                   for k, c in zip(others, group, strict=True))
                          if others and n < LEGEND_LINES else None)
                 ax.plot([position[i] for i in members], [values[name][i] for i in members],
                         "o-", markersize=3, label=label)
             ax.set_title(name, fontsize=9)
-            ax.set_xlabel(first, fontsize=8)
+            ax.set_xlabel(self.label(first), fontsize=8)
             ax.tick_params(labelsize=7)
             if not numeric:
                 ax.set_xticks(range(len(categories)), categories)
