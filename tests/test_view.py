@@ -1,7 +1,8 @@
 """`flexure view`: the page's data against the pictures it stands for, its error paths, and the
 page itself in a real headless browser (Debian's Chromium, driven by playwright).
 
-The browser tests need Chromium (`apt-get install chromium`; .ci/run installs it where it is
+The browser tests are in the slow tier (`-m slow`: the README's test command needs no
+browser) and need Chromium (`apt-get install chromium`; .ci/run installs it where it is
 missing): without it they FAIL, saying so, rather than skip, so that a CI without a browser
 cannot pass them unseen. FLEXURE_CHROMIUM names another executable. With
 FLEXURE_VIEW_SCREENSHOTS=docs the screenshots of the spatial stage's and (slow tier) the
@@ -307,6 +308,7 @@ def keep_screenshot(page, name, show):
         page.screenshot(path=str(Path(folder) / f"view_{name}.png"))
 
 
+@pytest.mark.slow
 def test_the_spatial_page_loads_shows_the_model_and_its_modes_move(spatial, spatial_page):
     _, data = spatial
     page, problems = spatial_page
@@ -322,6 +324,7 @@ def test_the_spatial_page_loads_shows_the_model_and_its_modes_move(spatial, spat
     assert problems == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("which, shape, step, factor", [("spatial", 2, 5, 0.3),
                                                         ("planar", 0, 17, 2.0)])
 def test_the_page_evaluates_base_plus_m_a_d_as_the_python_data(which, shape, step, factor,
@@ -345,6 +348,7 @@ def test_the_page_evaluates_base_plus_m_a_d_as_the_python_data(which, shape, ste
     assert problems == []
 
 
+@pytest.mark.slow
 def test_the_simulation_slider_moves_the_planar_model(planar_page):
     page, problems = planar_page
     start, later = frame(page, 0, 0), frame(page, 0, 10)  # t = 0 and t = 0.1 s: a quarter swing
