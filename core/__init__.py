@@ -43,7 +43,7 @@ _LAZY = {
     "simulation.prepare": ("prepare",),
     "simulation.sampled_loop": ("controller_step", "run_sampled_loop"),
     "simulation.simulation": ("SimulationResult", "Simulator", "simulate"),
-    "simulation.plausibility": ("RangeCheck",),
+    "simulation.plausibility": ("RangeCheck", "mechanism_size"),
     "simulation.simulator": ("METHODS",),
     "simulation.tolerances": ("default_atol",),
 }

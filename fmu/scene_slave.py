@@ -58,7 +58,14 @@ import numpy as np
 from pythonfmu import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
 
-from flexure.core import Mechanics, Simulator, build_model, port_description, stresses_along
+from flexure.core import (
+    Mechanics,
+    Simulator,
+    build_model,
+    mechanism_size,
+    port_description,
+    stresses_along,
+)
 from flexure.core.numerics.jit import compile_notices
 from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import METHODS as CORE_METHODS
@@ -80,10 +87,10 @@ DEFAULT_RTOL = 1e-6
 # a doStep's step budget: far above a normal step (the 3-DOF stage with CVODE: about 50 steps
 # per ms, 50 000 for a 1 s doStep), far below a runaway (a 1e9 N input took 80 s)
 DEFAULT_MAX_STEPS = 200_000
-# How far a restored state's nodes may be from their start, in times the model's extent: 400
-# times the range of validity (flexure.core.simulation.plausibility's quarter of the longest
-# element), so a run that went beyond that range with a warning still restores, and a forged
-# 1e300 m does not.
+# How far a restored state's nodes may be from their start, in times the mechanism's size
+# (`flexure.core.mechanism_size`): 400 times the range of validity (a quarter of that size), so
+# a run that went beyond that range with a warning still restores, and a forged 1e300 m does
+# not; the same size at every scale (a MEMS model's too).
 RESTORE_DISTANCE = 100.0
 
 
@@ -404,9 +411,9 @@ def _with_dofs(model, simulator):
 
 
 def _moved_too_far(model, where, x, start, translations):
-    """Why translations x (m) are beyond RESTORE_DISTANCE times the model's extent from
+    """Why translations x (m) are beyond RESTORE_DISTANCE times the mechanism's size from
     their start, or None."""
-    size = max(1e-3, float(np.ptp(start)))  # m: the model's extent, at least 1 mm
+    size = mechanism_size(model)  # m
     moved = np.abs(x - start)
     worst = int(np.argmax(moved))
     if moved[worst] > RESTORE_DISTANCE * size:
