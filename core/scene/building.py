@@ -268,11 +268,17 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
             self.add_rotation_dofs(groups, deformation_names, deformation_status)
-        inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        # a kinematic input changes the status of its coordinate or deformation (`scene_ports`)
+        self.kinematic_deformation_names = deformation_names
+        self.kinematic_deformation_status = deformation_status
+        self.motion_values = {}
+        ports = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        kinematic = [port for port in ports if port.quantity == "motion"]
+        inputs = [port for port in ports if port.quantity != "motion"]
         actuators, inputs = self.build_actuators(data.get("actuators", {}), inputs)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
         for port in outputs:
-            if port.name in {p.name for p in inputs}:
+            if port.name in {p.name for p in ports}:
                 self.fail(f"outputs.{port.name}", f"the input inputs.{port.name} has the same "
                                                   "name; inputs and outputs need distinct names")
         self.check_unique("coordinate", self.coordinate_names)
@@ -299,6 +305,8 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             inputs=inputs,
             outputs=outputs,
             actuators=actuators,
+            kinematic_inputs=kinematic,
+            motion_values=np.array([self.motion_values[p.name] for p in kinematic]),
             buckling_loads=buckling,
             source=self.source,
             node_inertias=self.node_inertias,
