@@ -199,8 +199,12 @@ class Model:
         self.rigid_deformations = np.flatnonzero(dstatus == ZERO)
         self.released_deformations = np.flatnonzero(dstatus == RELEASED)
         self.dof_deformations = np.flatnonzero(dstatus == DOF)
-        # Deformations that carry a constitutive stress: released ones and DOF ones.
-        self.stressed_deformations = np.flatnonzero(dstatus != ZERO)
+        # Deformations that carry a constitutive stress: released ones and DOF ones, but not a
+        # kinematic input's: prescribed, it is a constraint (with a value), its stress
+        # resultant a reaction, as a deformation prescribed zero
+        prescribed = [port.deformation for port in self.kinematic_inputs
+                      if port.deformation is not None]
+        self.stressed_deformations = np.setdiff1d(np.flatnonzero(dstatus != ZERO), prescribed)
 
     @property
     def nx(self) -> int:

@@ -26,7 +26,8 @@ where D1, D2 are zero for positions, D1 = C_f E2 + C_k for a velocity, and for a
 D2 = M_kf E2 + M_kk (the inertia the input moves along) and D1 = M_kf E1 + C_kf E2 + C_kk:
 a position-driven mass needs the acceleration of its input, which no proper state space has.
 `MotionStateSpace.system()` gives the python-control object of the outputs that need no rate
-(D1 = D2 = 0), and `frequency_response` every output's exact transfer.
+(D1 = D2 = 0: the positions, the efforts of massless, undamped inputs), and
+`frequency_response` every output's exact transfer.
 """
 
 from __future__ import annotations
@@ -85,27 +86,41 @@ class MotionStateSpace:
                                                                                   self.B.shape[1]))
         return self.C @ states + self.D + self.D1 * s + self.D2 * s * s
 
-    def system(self) -> control.StateSpace:
-        """The python-control StateSpace of (A, B, C, D), for outputs that need no input rate.
+    def needs_rates(self) -> list[str]:
+        """The outputs that need the rate or acceleration of an input (D1 or D2 not zero, to
+        1e-12 of the largest |D| or of 1)."""
+        scale = max(np.abs(self.D).max(initial=0.0), 1.0)
+        return [name for name, d1, d2 in zip(self.outputs, self.D1, self.D2, strict=True)
+                if max(np.abs(d1).max(initial=0.0), np.abs(d2).max(initial=0.0)) > 1e-12 * scale]
+
+    def system(self, outputs: list[str] | None = None) -> control.StateSpace:
+        """The python-control StateSpace of (A, B, C, D) on outputs that need no input rate.
+
+        Parameters
+        ----------
+        outputs : list of str, optional
+            The outputs to keep (default: every one that needs no rate, `needs_rates`).
 
         Raises
         ------
         SceneError
-            An output needs the input's velocity or acceleration (D1 or D2 not zero); the
-            message names them (use `frequency_response`, or leave them out).
+            A named output is unknown, or needs the input's velocity or acceleration (D1 or
+            D2 not zero: no proper state space has it; use `frequency_response`).
         """
         import control
 
-        scale = max(np.abs(self.D).max(initial=0.0), 1.0)
-        improper = [name for name, d1, d2 in zip(self.outputs, self.D1, self.D2, strict=True)
-                    if np.abs(d1).max(initial=0.0) > 1e-12 * scale
-                    or np.abs(d2).max(initial=0.0) > 1e-12 * scale]
-        if improper:
-            raise SceneError(f"the outputs {', '.join(improper)} need the rate or acceleration "
-                             "of a kinematic input (D1, D2 non-zero): no proper state space "
-                             "has them; use frequency_response")
-        return control.ss(self.A, self.B, self.C, self.D, inputs=self.inputs,
-                          outputs=self.outputs, states=self.states)
+        improper = self.needs_rates()
+        names = [o for o in self.outputs if o not in improper] if outputs is None else outputs
+        for name in names:
+            if name not in self.outputs:
+                raise SceneError(f"no output {name!r}; expected one of {', '.join(self.outputs)}")
+            if name in improper:
+                raise SceneError(f"output {name!r} needs the rate or acceleration of a "
+                                 "kinematic input (D1, D2 not zero): no proper state space "
+                                 "has it; use frequency_response")
+        rows = [self.outputs.index(name) for name in names]
+        return control.ss(self.A, self.B, self.C[rows], self.D[rows], inputs=self.inputs,
+                          outputs=names, states=self.states)
 
 
 @blas_threads()

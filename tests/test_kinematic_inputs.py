@@ -1,0 +1,375 @@
+"""Kinematic inputs ([inputs.NAME] kind = "motion"): the scene, the count, statics at
+prescribed values against the force-driven scene, the state space from positions against
+closed-form transfer functions, and inverse dynamics against F = m a + c v + k x and a
+pendulum's torque."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from flexure.core import build_model, linearize, load_scene, natural_frequencies, static_equilibrium
+from flexure.core.analysis.inverse_dynamics import inverse_dynamics, sampled_path
+from flexure.core.analysis.motion_statespace import motion_state_space
+from flexure.core.errors import ConstraintError, SceneError, SimulationError
+from flexure.core.mechanics.motions import motion_values
+from flexure.core.scene.building import parse_toml, scene_path
+
+
+def scene(name):
+    return parse_toml(scene_path(name))
+
+
+def with_motion(name, node, coordinate, *, drop_dof=True, **keys):
+    """A built-in scene with a kinematic input X on node.coordinate (its DOF removed)."""
+    data = scene(name)
+    if drop_dof:
+        data["nodes"][node]["dof"] = [a for a in data["nodes"][node].get("dof", [])
+                                      if a != coordinate]
+    data.setdefault("inputs", {})["X"] = {"kind": "motion", "node": node,
+                                          "coordinate": coordinate, **keys}
+    return data
+
+
+def chain(*, rho_A=0.0):
+    """Ground -spring a- node 1 (mass m1, the kinematic input) -b- node 2 (mass m2, the DOF):
+    b a PLSPRING, or with rho_A a PLTRUSS with consistent mass (coupling M_fk)."""
+    b_type = "PLTRUSS" if rho_A else "PLSPRING"
+    b_section = ({"EA": K2 * 0.1, "EdA": C2 * 0.1, "rho_A": rho_A} if rho_A
+                 else {"kx": K2, "cx": C2})
+    return {
+        "scene": {"name": "chain"},
+        "sections": {"a": {"kx": K1, "cx": C1}, "b": b_section},
+        "nodes": {"0": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "1": {"position": [0.1, 0.0], "mass": M1},
+                  "2": {"position": [0.2, 0.0], "mass": M2, "dof": ["x"]}
+                  | ({"fixed": ["y"]} if rho_A else {})},
+        "elements": {"a": {"type": "PLSPRING", "nodes": ["0", "1"], "section": "a",
+                           "released": ["e1"]},
+                     "b": {"type": b_type, "nodes": ["1", "2"], "section": "b",
+                           "released": ["e1"]}},
+        "inputs": {"u": {"kind": "motion", "node": "1", "coordinate": "x"}},
+        "outputs": {"x2": {"node": "2", "coordinate": "x"},
+                    "v2": {"node": "2", "coordinate": "x", "quantity": "velocity"}},
+    }
+
+
+K1, C1, K2, C2, M1, M2 = 800.0, 0.3, 500.0, 0.2, 0.4, 0.25
+
+
+# -- the scene and the count ---------------------------------------------------------------
+
+def test_a_kinematic_input_takes_a_dof_from_the_count():
+    model = build_model(with_motion("truss_1dof_x", "2", "x", value=0.101))
+    assert model.dof_count() == {"nx": 4, "nxo": 3, "neo": 0, "nki": 1, "ndof": 0}
+    assert model.free_dof_names == [] and model.dof_names == ["2.x"]
+    assert [p.name for p in model.kinematic_inputs] == ["X"]
+    assert [p.name for p in model.inputs] == ["F"]  # the force input stays a force input
+    assert model.kinematic_inputs[0].unit == "m"
+    np.testing.assert_array_equal(model.motion_values, [0.101])
+    # the value defaults to the scene's coordinate
+    assert build_model(with_motion("truss_1dof_x", "2", "x")).motion_values[0] == 0.1
+
+
+def test_dofs_are_chosen_around_the_kinematic_inputs():
+    """stage_planar_3dof without DOF lists, 3.x prescribed: flexure chooses two DOFs among the
+    others (never 3.x again), and the model is exactly constrained."""
+    data = with_motion("stage_planar_3dof", "3", "x")
+    for node in data["nodes"].values():
+        node.pop("dof", None)
+    model = build_model(data)
+    assert model.dof_count()["ndof"] == 2 and model.dof_count()["nki"] == 1
+    assert "3.x" not in model.chosen_dofs and len(model.chosen_dofs) == 2
+    assert model.dof_names.count("3.x") == 1
+
+
+def test_a_deformation_input_and_its_effort():
+    """A truss whose elongation is prescribed (delta) pushes a spring k against a wall: the
+    effort is k delta, the truss's stress resultant -k delta (it pushes)."""
+    k, delta = 2000.0, 1e-3
+    data = {"sections": {"act": {"EA": 1e6}, "wall": {"kx": k}},
+            "nodes": {"0": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                      "1": {"position": [0.1, 0.0]},
+                      "2": {"position": [0.2, 0.0], "fixed": ["x", "y"]}},
+            "elements": {"act": {"type": "PLTRUSS", "nodes": ["0", "1"], "section": "act"},
+                         "wall": {"type": "PLSPRING", "nodes": ["1", "2"], "section": "wall",
+                                  "released": ["e1"]}},
+            "inputs": {"L": {"kind": "motion", "element": "act", "deformation": "e1",
+                             "value": delta}}}
+    model = build_model(data)
+    assert model.dof_count() == {"nx": 6, "nxo": 4, "neo": 1, "nki": 1, "ndof": 0}
+    solution = static_equilibrium(model)
+    assert solution.efforts()["L"] == pytest.approx(k * delta, rel=1e-12)
+    assert solution.stresses()["act.e1"] == pytest.approx(-k * delta, rel=1e-12)
+    assert solution.coordinates()["1.x"] == pytest.approx(0.1 + delta, rel=1e-14)
+
+
+@pytest.mark.parametrize("change, key, words", [
+    (lambda d: d["inputs"]["X"].update(kind="speed"), "inputs.X.kind", "expected one of"),
+    (lambda d: d["inputs"]["X"].update(coordinate="y"), "inputs.X.coordinate", "is fixed"),
+    (lambda d: d["inputs"]["X"].update(gain=2.0), "inputs.X", "gain"),
+    (lambda d: d["inputs"]["X"].update(value="far"), "inputs.X.value", "number"),
+    (lambda d: d["nodes"]["2"].update(dof=["x"]), "inputs.X.coordinate", "remove it from"),
+])
+def test_a_wrong_kinematic_input_is_named(change, key, words):
+    data = with_motion("truss_1dof_x", "2", "x")
+    change(data)
+    with pytest.raises(SceneError, match=key) as error:
+        build_model(data)
+    assert words in str(error.value)
+
+
+@pytest.mark.parametrize("port, key, words", [
+    ({"element": "spring", "deformation": "e1"}, "inputs.X.deformation", "released"),
+    ({"element": "spring", "deformation": "e7"}, "inputs.X.deformation", "no deformation"),
+    ({"element": "nothing", "deformation": "e1"}, "inputs.X.deformation", "no deformation"),
+])
+def test_a_wrong_deformation_input_is_named(port, key, words):
+    data = scene("truss_1dof_x")
+    data["inputs"]["X"] = {"kind": "motion", **port}
+    with pytest.raises(SceneError, match=key) as error:
+        build_model(data)
+    assert words in str(error.value)
+
+
+def test_a_kinematic_input_on_a_3d_rotational_node_is_refused():
+    data = scene("stage_spatial_1dof")
+    rotational = next(name for name, node in data["nodes"].items() if "position" not in node
+                      and node.get("fixed") is not True)
+    data["inputs"]["X"] = {"kind": "motion", "node": rotational, "coordinate": "rx"}
+    with pytest.raises(SceneError, match=r"inputs\.X\.node.*3-D rotational"):
+        build_model(data)
+
+
+def test_the_count_names_the_kinematic_inputs():
+    """3.x prescribed while the scene lists 5.x as a DOF: one DOF too many."""
+    data = with_motion("stage_planar_1dof", "3", "x")
+    data["nodes"]["5"]["dof"] = ["x"]
+    with pytest.raises(ConstraintError, match=r"NDOF = NX - NXO - NEO - NKI = 12 - 6 - 5 - 1 "
+                                              r"= 0, but the scene declares 1 DOF\(s\): 5.x"):
+        build_model(data)
+
+
+def test_motion_values_are_checked():
+    model = build_model(with_motion("truss_1dof_x", "2", "x"))
+    np.testing.assert_array_equal(motion_values(model, {"X": 0.2}), [0.2])
+    with pytest.raises(SceneError, match="unknown kinematic input 'Y'.*: X"):
+        motion_values(model, {"Y": 0.2})
+    with pytest.raises(SceneError, match="expected 1 kinematic input values"):
+        motion_values(model, [0.1, 0.2])
+    with pytest.raises(SceneError, match="must be finite"):
+        motion_values(model, [np.nan])
+
+
+def test_a_simulation_with_prescribed_motion_is_refused_before_compiling():
+    from flexure.core.engine.data import EngineData
+
+    model = build_model(with_motion("truss_1dof_x", "2", "x"))
+    with pytest.raises(SimulationError, match=r"kinematic inputs \(X\).*not supported"):
+        EngineData(model)
+
+
+# -- statics ------------------------------------------------------------------------------
+
+def test_statics_at_a_prescribed_position_equal_the_force_driven_scene():
+    """stage_planar_3dof under gravity with 3.x prescribed 5 mm: the pose and every stress
+    resultant equal those of the force-driven scene loaded by the computed effort, and its
+    3.x is the prescribed 5 mm."""
+    driven = with_motion("stage_planar_3dof", "3", "x", value=0.005)
+    driven["scene"]["gravity"] = [0.0, -9.81]
+    moved = static_equilibrium(build_model(driven))
+    forced_data = scene("stage_planar_3dof")
+    forced_data["scene"]["gravity"] = [0.0, -9.81]
+    forced_model = build_model(forced_data)
+    forced = static_equilibrium(forced_model, inputs={"F": moved.efforts()["X"]})
+    assert np.max(np.abs(moved.x - forced.x)) < 1e-13  # m and rad, on a 0.1 m stage
+    assert forced.coordinates()["3.x"] == pytest.approx(0.005, abs=1e-13)
+    scale = np.max(np.abs(forced.stress_resultants))
+    assert np.max(np.abs(moved.stress_resultants - forced.stress_resultants)) < 1e-9 * scale
+    # the value given to static_equilibrium replaces the scene's
+    again = static_equilibrium(build_model(driven), motions={"X": 0.0})
+    assert again.coordinates()["3.x"] == pytest.approx(0.0, abs=1e-16)
+
+
+def test_held_inputs_give_the_modes_of_the_rest():
+    """The chain with node 1 held: node 2 on spring b alone, f = sqrt(k2 / m2) / (2 pi)."""
+    model = build_model(chain())
+    found = natural_frequencies(model).frequencies_hz
+    assert found == pytest.approx([np.sqrt(K2 / M2) / (2 * np.pi)], rel=1e-12)
+    assert linearize(model).DF.shape == (model.nx, 1)
+
+
+# -- the state space from positions -------------------------------------------------------
+
+@pytest.mark.parametrize("rho_A", [0.0, 0.6])
+def test_state_space_from_positions_against_the_closed_form(rho_A):
+    """y2 / u = (k2 + c2 s - m12 s^2) / ((m2 + m22) s^2 + c2 s + k2) and the effort
+    F / u = (m1 + m11) s^2 + (c1 + c2) s + k1 + k2 - (c2 s + k2 - m12 s^2) y2 / u, with the
+    truss's consistent mass rho_A l / 6 [[2, 1], [1, 2]] (zero for the spring)."""
+    space = motion_state_space(build_model(chain(rho_A=rho_A)))
+    assert space.inputs == ["u"] and space.outputs == ["x2", "v2", "u.effort"]
+    m11 = m22 = rho_A * 0.1 / 3
+    m12 = rho_A * 0.1 / 6
+    for omega in (0.5, 30.0, 44.7, 300.0):
+        s = 1j * omega
+        y = (K2 + C2 * s - m12 * s * s) / ((M2 + m22) * s * s + C2 * s + K2)
+        force = ((M1 + m11) * s * s + (C1 + C2) * s + K1 + K2
+                 - (C2 * s + K2 - m12 * s * s) * y)
+        H = space.frequency_response(s)[:, 0]
+        np.testing.assert_allclose(H, [y, s * y, force], rtol=1e-12)
+    # with mass coupling the velocity needs u' (the feed-through of the input's rate)
+    assert space.needs_rates() == (["v2", "u.effort"] if rho_A else ["u.effort"])
+    plant = space.system()
+    assert plant.output_labels == ["x2"] + ([] if rho_A else ["v2"])
+    with pytest.raises(SceneError, match="u.effort.*frequency_response"):
+        space.system(["u.effort"])
+    with pytest.raises(SceneError, match="no output 'w'"):
+        space.system(["w"])
+
+
+def test_state_space_of_a_stage_moved_by_its_position():
+    """stage_planar_1dof with 3.x prescribed: nothing left to move, the effort is
+    m s^2 + c s + k with the leaves' 24 EI / L^3, 24 EdI / L^3 and the bar's mass plus
+    13/35 of each leaf's."""
+    data = with_motion("stage_planar_1dof", "3", "x")
+    leaf = data["sections"]["leaf"]
+    EI = leaf["E"] * leaf["width"] * leaf["height"] ** 3 / 12
+    m = 0.206 + 2 * 13 / 35 * leaf["rho"] * leaf["width"] * leaf["height"] * 0.1
+    space = motion_state_space(build_model(data))
+    assert space.A.shape == (0, 0)
+    effort = space.outputs.index("X.effort")
+    assert space.D[effort, 0] == pytest.approx(24 * EI / 0.1 ** 3, rel=1e-12)
+    assert space.D1[effort, 0] == pytest.approx(24 * leaf["EdI"] / 0.1 ** 3, rel=1e-12)
+    assert space.D2[effort, 0] == pytest.approx(m, rel=1e-12)
+
+
+def test_a_state_space_from_positions_needs_a_kinematic_input():
+    with pytest.raises(SceneError, match="needs a kinematic input"):
+        motion_state_space(load_scene("truss_1dof_x"))
+
+
+# -- inverse dynamics ---------------------------------------------------------------------
+
+def sine(x0, amplitude, omega):
+    return lambda t: ([x0 + amplitude * np.sin(omega * t)],
+                      [amplitude * omega * np.cos(omega * t)],
+                      [-amplitude * omega ** 2 * np.sin(omega * t)])
+
+
+def test_inverse_dynamics_of_the_truss_stage():
+    """truss_1dof_x: F = m a + c v + k u - f0 with m = 0.206 + rho_A l / 3, k = EA / l,
+    c = EdA / l and the scene's 1 N on node 2 (linear along x: exact)."""
+    model = load_scene("truss_1dof_x")
+    m, k, c = 0.206 + 0.1413 * 0.1 / 3, 94.5 / 0.1, 0.0036494 / 0.1
+    t = np.linspace(0.0, 1.0, 11)
+    stroke, omega = 1e-3, 7.0
+    result = inverse_dynamics(model, t, sine(0.1, stroke, omega))
+    u, v = stroke * np.sin(omega * t), stroke * omega * np.cos(omega * t)
+    exact = -m * omega ** 2 * u + c * v + k * u - 1.0
+    np.testing.assert_allclose(result.force("F"), exact, rtol=1e-12, atol=0)
+    # the same motion as a kinematic input: its effort is that force
+    moved = build_model(with_motion("truss_1dof_x", "2", "x"))
+    efforts = inverse_dynamics(moved, t, sine(0.1, stroke, omega), outputs=[], inputs=[])
+    np.testing.assert_allclose(efforts.force("X"), exact, rtol=1e-12, atol=0)
+    with pytest.raises(KeyError, match="no input 'Z'"):
+        result.force("Z")
+
+
+def test_inverse_dynamics_of_the_leaf_spring_stage():
+    """stage_planar_1dof, 1 um: F = m a + c v + k x with the closed-form m, c, k of
+    `test_state_space_of_a_stage_moved_by_its_position` (the leaves' geometric nonlinearity
+    is (1e-6 / 0.1)^2 = 1e-10 of the force here)."""
+    leaf = scene("stage_planar_1dof")["sections"]["leaf"]
+    k = 24 * leaf["E"] * leaf["width"] * leaf["height"] ** 3 / 12 / 0.1 ** 3
+    c = 24 * leaf["EdI"] / 0.1 ** 3
+    m = 0.206 + 2 * 13 / 35 * leaf["rho"] * leaf["width"] * leaf["height"] * 0.1
+    t = np.linspace(0.0, 1.0, 11)
+    stroke, omega = 1e-6, 7.0
+    result = inverse_dynamics(load_scene("stage_planar_1dof"), t, sine(0.0, stroke, omega),
+                              outputs=["x"])
+    u, v = stroke * np.sin(omega * t), stroke * omega * np.cos(omega * t)
+    exact = -m * omega ** 2 * u + c * v + k * u
+    error = np.max(np.abs(result.force("F") - exact)) / np.max(np.abs(exact))
+    assert error < 1e-9
+
+
+def pendulum(mass, length, g):
+    return build_model({
+        "scene": {"name": "pendulum", "gravity": [0.0, -g]},
+        "sections": {"link": {"EA": 1e6, "EI": 1e3}},
+        "nodes": {"pivot": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "hinge": {"angle": 0.0, "dof": ["phi"]},
+                  "bob": {"position": [0.0, -length], "mass": mass},
+                  "bob_r": {"angle": 0.0}},
+        "elements": {"link": {"type": "PLBEAM", "nodes": ["pivot", "hinge", "bob", "bob_r"],
+                              "section": "link"}},
+        "inputs": {"T": {"node": "hinge", "coordinate": "phi"}},
+        "outputs": {"theta": {"node": "hinge", "coordinate": "phi"}}})
+
+
+def test_inverse_dynamics_of_a_pendulum():
+    """A point mass on a rigid link, theta from hanging: T = m g l sin(theta) + m l^2
+    theta''; the link's tension m (g cos(theta) + l theta'^2)."""
+    mass, length, g, amplitude, omega = 0.3, 0.25, 9.81, 0.8, 3.0
+    t = np.linspace(0.0, 2.0, 21)
+    result = inverse_dynamics(pendulum(mass, length, g), t, sine(0.0, amplitude, omega))
+    theta = amplitude * np.sin(omega * t)
+    rate, acceleration = amplitude * omega * np.cos(omega * t), -omega ** 2 * theta
+    torque = mass * g * length * np.sin(theta) + mass * length ** 2 * acceleration
+    error = np.max(np.abs(result.force("T") - torque)) / np.max(np.abs(torque))
+    assert error < 1e-12
+    tension = mass * (g * np.cos(theta) + length * rate ** 2)
+    np.testing.assert_allclose(result.stress_resultants[:, 0], tension, rtol=1e-12)
+    np.testing.assert_allclose(result.q[:, 0], theta, atol=1e-15)
+
+
+def test_a_sampled_path_is_a_cubic_spline():
+    """A cubic in time sampled at 6 points: the spline is the cubic, its derivatives exact."""
+    model = load_scene("truss_1dof_x")
+    samples = np.linspace(0.0, 1.0, 6)
+    cubic = np.poly1d([2e-3, -1e-3, 5e-4, 0.1])
+    path = sampled_path(samples, cubic(samples)[:, None])
+    t = np.linspace(0.0, 1.0, 7)
+    result = inverse_dynamics(model, t, path)
+    m, k, c = 0.206 + 0.1413 * 0.1 / 3, 945.0, 0.036494
+    exact = m * cubic.deriv(2)(t) + c * cubic.deriv(1)(t) + k * (cubic(t) - 0.1) - 1.0
+    np.testing.assert_allclose(result.force("F"), exact, rtol=1e-10)
+
+
+X = ["x"]  # the truss's own position output (the test scene adds two more)
+
+
+@pytest.mark.parametrize("call, error, words", [
+    (lambda m: inverse_dynamics(m, [0.0], sine(0.1, 1e-3, 1.0), outputs=["v"]), SceneError,
+     "'v' is not a position output"),
+    (lambda m: inverse_dynamics(m, [0.0], sine(0.1, 1e-3, 1.0), outputs=X, inputs=["G"]),
+     SceneError, "unknown force input"),
+    (lambda m: inverse_dynamics(m, [0.0], sine(0.1, 1e-3, 1.0)), SceneError,
+     "as many force inputs as prescribed outputs"),
+    (lambda m: inverse_dynamics(m, [0.0, 0.0], sine(0.1, 1e-3, 1.0), outputs=X), SceneError,
+     "increasing times"),
+    (lambda m: inverse_dynamics(m, [0.0], lambda t: ([0.1], [0.0]), outputs=X), SceneError,
+     "must give three arrays"),
+    (lambda m: inverse_dynamics(m, [0.0], lambda t: ([np.nan], [0.0], [0.0]), outputs=X),
+     SceneError, "not finite"),
+    (lambda m: inverse_dynamics(m, [0.0], lambda t: ("far", 1, 2), outputs=X), SceneError,
+     "must give"),
+    (lambda m: inverse_dynamics(m, [0.0], sine(0.1, 1e-3, 1.0), outputs=[], inputs=[]),
+     ConstraintError, "fix 0 of the NDOF"),
+    (lambda m: inverse_dynamics(m, [0.0], sine(0.0, 1e-3, 1.0), outputs=["ground"]),
+     ConstraintError, "do not determine the DOFs"),
+])
+def test_inverse_dynamics_refuses_what_it_cannot_do(call, error, words):
+    data = scene("truss_1dof_x")
+    data["outputs"]["v"] = {"node": "2", "coordinate": "x", "quantity": "velocity"}
+    data["outputs"]["ground"] = {"node": "1", "coordinate": "x"}
+    with pytest.raises(error, match=words):
+        call(build_model(data))
+
+
+def test_inverse_dynamics_refuses_inputs_that_do_not_act():
+    """A force on the fixed wall cannot move the truss: DF^T b singular."""
+    data = copy.deepcopy(scene("truss_1dof_x"))
+    data["inputs"] = {"G": {"node": "1", "coordinate": "x"}}
+    with pytest.raises(ConstraintError, match="cannot balance the motion"):
+        inverse_dynamics(build_model(data), [0.0], sine(0.1, 1e-3, 1.0))
