@@ -373,3 +373,29 @@ def test_inverse_dynamics_refuses_inputs_that_do_not_act():
     data["inputs"] = {"G": {"node": "1", "coordinate": "x"}}
     with pytest.raises(ConstraintError, match="cannot balance the motion"):
         inverse_dynamics(build_model(data), [0.0], sine(0.1, 1e-3, 1.0))
+
+
+# -- where the other analyses meet them ----------------------------------------------------
+
+def test_analyze_prints_the_count_and_the_efforts():
+    """`flexure analyze`: the count with NKI, the held value and its effort (equal to the
+    statics'), the modes of the DOFs left with the input held."""
+    from flexure.core.cli.analyze import analyze, render
+
+    model = build_model(with_motion("stage_planar_3dof", "3", "x", value=0.002))
+    result = analyze(model, static=True, modes=2)
+    assert result["dofs"] == ["3.y", "4.phi"] and result["kinematic_inputs"] == ["X"]
+    effort = static_equilibrium(model).efforts()["X"]
+    assert result["static"]["kinematic_inputs"]["X"] == {"value": 0.002, "effort": effort}
+    assert len(result["modes"]["frequencies_hz"]) == 2
+    text = render(result)
+    assert "NDOF = NX - NXO - NEO - NKI = 12 - 6 - 3 - 1 = 2" in text
+    assert "kinematic inputs: X" in text
+
+
+def test_sensitivities_refuse_kinematic_inputs():
+    from flexure.core import sensitivities
+
+    model = build_model(with_motion("stage_planar_3dof", "3", "x"))
+    with pytest.raises(SceneError, match=r"kinematic inputs \(X\) are not supported"):
+        sensitivities(model, ["sections.leaf.E"])

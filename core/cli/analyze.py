@@ -96,8 +96,10 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     from ..mechanics.mechanics import Mechanics
     from ..mechanics.ports import output_value
 
-    result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
-              "dofs_chosen": bool(model.chosen_dofs)}
+    result = {"scene": model.name, "dof_count": model.dof_count(),
+              "dofs": model.free_dof_names, "dofs_chosen": bool(model.chosen_dofs)}
+    if model.kinematic_inputs:  # prescribed, in q but no DOF of the motion
+        result["kinematic_inputs"] = [port.name for port in model.kinematic_inputs]
     for node in compliance_nodes:  # an unknown node is refused before any computation
         node_coordinates(model, node)
     mech = Mechanics(model)
@@ -114,6 +116,11 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                             "outputs": {port.name: output_value(model, port, solution.x)
                                         for port in model.outputs
                                         if port.quantity == "position"}}
+        if model.kinematic_inputs:  # the held values and the force that realises each
+            result["static"]["kinematic_inputs"] = {
+                port.name: {"value": float(value), "effort": float(effort)}
+                for port, value, effort in zip(model.kinematic_inputs, solution.motions,
+                                               solution.input_efforts, strict=True)}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
@@ -282,8 +289,12 @@ def _shown_coordinates(model):
 def render(result):
     """The analyses of `analyze` as readable tables."""
     count = result["dof_count"]
-    parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} "
-             f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])}"
+    nki = ("- NKI ", f" - {count['nki']}") if "nki" in count else ("", "")
+    kinematic = result.get("kinematic_inputs")
+    parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO {nki[0]}= {count['nx']} - "
+             f"{count['nxo']} - {count['neo']}{nki[1]} = {count['ndof']}   (DOFs: "
+             f"{', '.join(result['dofs']) or 'none'}"
+             + (f"; kinematic inputs: {', '.join(kinematic)}" if kinematic else "")
              + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
                 else ")")]
     if not {"static", "modes", "buckling", "state_space", "principal_gains",
@@ -301,6 +312,12 @@ def render(result):
             title="\nstatic equilibrium: coordinates" + (
                 f" (the free ones; {left_out} left out: --json lists every coordinate)"
                 if left_out else "")))
+        if static.get("kinematic_inputs"):
+            parts.append(format_table(
+                ["kinematic input", "value (m, rad)", "effort (N, N m)"],
+                [(name, v["value"], v["effort"]) for name, v in
+                 static["kinematic_inputs"].items()],
+                title="\nstatic equilibrium: kinematic inputs and the force that realises each"))
         if static.get("outputs"):
             parts.append(format_table(["output", "value (m, rad)"],
                                       list(static["outputs"].items()),

@@ -94,4 +94,23 @@ def input_effort(model: Model, Q: np.ndarray) -> np.ndarray:
     return -np.asarray(Q)[..., model.prescribed_dofs]
 
 
-__all__ = ["input_effort", "motion_values"]
+def held(model: Model, matrix: np.ndarray) -> np.ndarray:
+    """A matrix on q with the kinematic inputs held: its rows and columns of the DOFs proper.
+
+    Parameters
+    ----------
+    model : Model
+    matrix : ndarray (NDOF, NDOF)
+        On q (stiffness, mass, damping; any unit).
+
+    Returns
+    -------
+    ndarray
+        (NDOF - NKI, NDOF - NKI); the matrix itself in a model without kinematic inputs.
+    """
+    if not model.kinematic_inputs:
+        return matrix
+    return matrix[np.ix_(model.free_dofs, model.free_dofs)]
+
+
+__all__ = ["held", "input_effort", "motion_values"]
