@@ -399,3 +399,52 @@ def test_sensitivities_refuse_kinematic_inputs():
     model = build_model(with_motion("stage_planar_3dof", "3", "x"))
     with pytest.raises(SceneError, match=r"kinematic inputs \(X\) are not supported"):
         sensitivities(model, ["sections.leaf.E"])
+
+
+def dc_gain(A, B, C, D):
+    """C (-A^-1) B + D: the static gain of a state space (A regular)."""
+    return C @ np.linalg.solve(-A, B) + D if A.size else D
+
+
+def test_state_space_from_positions_inverts_the_force_driven_one_at_dc():
+    """stage_planar_3dof at rest: with 3.x prescribed, the effort per metre is 1 / (x per N)
+    of the force-driven state space, and y per metre of 3.x is (y per N) / (x per N)."""
+    from flexure.core.analysis.statespace import state_space_matrices
+
+    forced = load_scene("stage_planar_3dof")
+    A, B, C, D = state_space_matrices(forced)[:4]
+    per_newton = dc_gain(A, B, C, D)[:, 0]  # outputs x (3.x), y (3.y) per N of F
+    space = motion_state_space(build_model(with_motion("stage_planar_3dof", "3", "x")))
+    per_metre = dc_gain(space.A, space.B, space.C, space.D)[:, 0]
+    assert space.outputs == ["x", "y", "X.effort"]
+    assert per_metre[0] == pytest.approx(1.0, rel=1e-12)
+    assert per_metre[1] == pytest.approx(per_newton[1] / per_newton[0], rel=1e-8, abs=1e-14)
+    assert per_metre[2] == pytest.approx(1.0 / per_newton[0], rel=1e-9)
+
+
+@pytest.mark.slow
+def test_the_manipulator_moved_by_its_six_carriages():
+    """The chapter's Fig. 3.4 model driven as the chapter drives it: the six carriage
+    positions prescribed (moved 0 to 0.2 mm), the pose and the six efforts out; the
+    force-driven scene under those six forces reaches the same pose (to the statics'
+    tolerance, 1e-11 of the 0.3 m size) and puts each carriage where it was prescribed.
+    About a minute: two loaded equilibria of 816 DOFs."""
+    base = scene("manipulator")
+    data = copy.deepcopy(base)
+    moves = {"F1": 2e-4, "F2": -1e-4, "F3": 1.5e-4, "F4": 0.0, "F5": -2e-4, "F6": 1e-4}
+    for name, port in base["inputs"].items():
+        axis = "xyz".index(port["coordinate"])
+        start = base["nodes"][port["node"]]["position"][axis]
+        data["inputs"][name] = {"kind": "motion", "node": port["node"],
+                                "coordinate": port["coordinate"], "value": start + moves[name]}
+    moved_model = build_model(data)
+    assert moved_model.dof_count()["nki"] == 6
+    assert moved_model.dof_count()["ndof"] == load_scene("manipulator").ndof - 6
+    moved = static_equilibrium(moved_model)
+    forced_model = build_model(base)
+    forced = static_equilibrium(forced_model, inputs=moved.input_efforts)
+    assert np.max(np.abs(moved.x - forced.x)) < 3e-11  # m, rad, Euler parameters
+    for name, port in base["inputs"].items():
+        i = forced_model.coordinate_index(f"{port['node']}.{port['coordinate']}")
+        assert forced.x[i] - forced_model.initial_coordinates[i] == pytest.approx(
+            moves[name], abs=3e-11)
