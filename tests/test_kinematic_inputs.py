@@ -448,3 +448,25 @@ def test_the_manipulator_moved_by_its_six_carriages():
         i = forced_model.coordinate_index(f"{port['node']}.{port['coordinate']}")
         assert forced.x[i] - forced_model.initial_coordinates[i] == pytest.approx(
             moves[name], abs=3e-11)
+
+
+def test_the_scene_api_and_an_fmu_build(tmp_path):
+    """Scene.input(kind="motion") builds a kinematic input; an FMU of it is refused at build,
+    naming the input (its engine cannot integrate prescribed motion)."""
+    from flexure.core import Scene, scene_toml
+    from flexure.fmu.builder import FMUBuildError, build_scene_fmu
+
+    s = Scene("pusher", dimension=2)
+    s.section("act", EA=1e6).section("wall", kx=2000.0)
+    s.node("0", position=[0.0, 0.0], fixed=["x", "y"]).node("1", position=[0.1, 0.0])
+    s.node("2", position=[0.2, 0.0], fixed=["x", "y"])
+    s.element("act", "PLTRUSS", ["0", "1"], section="act")
+    s.element("wall", "PLSPRING", ["1", "2"], section="wall").release("wall", "e1")
+    s.input("L", kind="motion", element="act", deformation="e1", value=1e-3)
+    model = s.build()
+    assert [p.name for p in model.kinematic_inputs] == ["L"]
+    assert static_equilibrium(model).efforts()["L"] == pytest.approx(2.0, rel=1e-12)
+    path = tmp_path / "moved.toml"
+    path.write_text(scene_toml(with_motion("truss_1dof_x", "2", "x"), "a test"))
+    with pytest.raises(FMUBuildError, match="kinematic inputs X .*no FMU"):
+        build_scene_fmu(path, tmp_path / "moved.fmu")
