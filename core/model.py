@@ -177,6 +177,9 @@ class Model:
     # a coordinate or deformation whose status is DOF (it is in q), with its held value
     kinematic_inputs: list = field(default_factory=list)
     motion_values: np.ndarray | None = None  # (n_kinematic,) m or rad: the scene's `value`s
+    # The outputs on elements (SPACAR's OUTE, OUTF): Ports of quantity "deformation" (m) or
+    # "stress" (N) with their deformation's index; apart from `outputs`, which the engine reads
+    element_outputs: list = field(default_factory=list)
     # The scene dictionary the model was built from (overrides applied; the scene's own
     # statuses, before meshing and DOF choice): what `to_toml` writes back
     scene: dict | None = field(default=None, repr=False, compare=False)

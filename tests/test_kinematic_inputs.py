@@ -304,7 +304,8 @@ def pendulum(mass, length, g):
         "elements": {"link": {"type": "PLBEAM", "nodes": ["pivot", "hinge", "bob", "bob_r"],
                               "section": "link"}},
         "inputs": {"T": {"node": "hinge", "coordinate": "phi"}},
-        "outputs": {"theta": {"node": "hinge", "coordinate": "phi"}}})
+        "outputs": {"theta": {"node": "hinge", "coordinate": "phi"},
+                    "tension": {"element": "link", "deformation": "e1", "quantity": "stress"}}})
 
 
 def test_inverse_dynamics_of_a_pendulum():
@@ -470,3 +471,76 @@ def test_the_scene_api_and_an_fmu_build(tmp_path):
     path.write_text(scene_toml(with_motion("truss_1dof_x", "2", "x"), "a test"))
     with pytest.raises(FMUBuildError, match="kinematic inputs X .*no FMU"):
         build_scene_fmu(path, tmp_path / "moved.fmu")
+
+
+# -- outputs on elements (SPACAR's OUTE, OUTF) --------------------------------------------
+
+def with_element_outputs(data):
+    data["outputs"] |= {"eb": {"element": "b", "deformation": "e1"},
+                        "fb": {"element": "b", "deformation": "e1", "quantity": "stress"},
+                        "fa": {"element": "a", "deformation": "e1", "quantity": "stress"}}
+    return data
+
+
+def test_element_outputs_in_the_state_space_from_positions():
+    """The chain: spring b's elongation y2 - u, its force (k2 + c2 s)(y2 - u); spring a's
+    force (k1 + c1 s) u; both forces need the input's rate through their dampers."""
+    model = build_model(with_element_outputs(chain()))
+    assert [p.name for p in model.element_outputs] == ["eb", "fb", "fa"]
+    assert [p.name for p in model.outputs] == ["x2", "v2"]  # what the engine reads
+    space = motion_state_space(model)
+    assert space.outputs == ["x2", "v2", "eb", "fb", "fa", "u.effort"]
+    for omega in (0.5, 44.7, 300.0):
+        s = 1j * omega
+        y = (C2 * s + K2) / (M2 * s * s + C2 * s + K2)
+        H = space.frequency_response(s)[2:5, 0]
+        expected = [y - 1.0, (K2 + C2 * s) * (y - 1.0), K1 + C1 * s]
+        np.testing.assert_allclose(H, expected, rtol=1e-12)
+    assert space.needs_rates() == ["fb", "fa", "u.effort"]  # the dampers see u'
+
+
+def test_element_outputs_of_a_static_solution_and_a_path():
+    """The pushing truss: its force is the reaction -k delta, the wall's elongation -delta;
+    the pendulum's link tension m (g cos(theta) + l theta'^2) along its path."""
+    k, delta = 2000.0, 1e-3
+    data = {"sections": {"act": {"EA": 1e6}, "wall": {"kx": k}},
+            "nodes": {"0": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                      "1": {"position": [0.1, 0.0]},
+                      "2": {"position": [0.2, 0.0], "fixed": ["x", "y"]}},
+            "elements": {"act": {"type": "PLTRUSS", "nodes": ["0", "1"], "section": "act"},
+                         "wall": {"type": "PLSPRING", "nodes": ["1", "2"], "section": "wall",
+                                  "released": ["e1"]}},
+            "inputs": {"L": {"kind": "motion", "element": "act", "deformation": "e1",
+                             "value": delta}},
+            "outputs": {"push": {"element": "act", "deformation": "e1", "quantity": "stress"},
+                        "squeeze": {"element": "wall", "deformation": "e1"}}}
+    model = build_model(data)
+    found = static_equilibrium(model).element_outputs()
+    assert found["push"] == pytest.approx(-k * delta, rel=1e-12)
+    assert found["squeeze"] == pytest.approx(-delta, rel=1e-12)
+    with pytest.raises(SceneError, match="outputs.push: the stress resultant of act.e1 is a "
+                                         "reaction"):
+        motion_state_space(model)
+    mass, length, g, amplitude, omega = 0.3, 0.25, 9.81, 0.8, 3.0
+    swinging = pendulum(mass, length, g)
+    t = np.linspace(0.0, 2.0, 5)
+    result = inverse_dynamics(swinging, t, sine(0.0, amplitude, omega))
+    theta, rate = amplitude * np.sin(omega * t), amplitude * omega * np.cos(omega * t)
+    np.testing.assert_allclose(result.element_output("tension"),
+                               mass * (g * np.cos(theta) + length * rate ** 2), rtol=1e-12)
+    with pytest.raises(KeyError, match="no output 'pull' on an element; the model has tension"):
+        result.element_output("pull")
+
+
+@pytest.mark.parametrize("port, key, words", [
+    ({"element": "spring", "deformation": "e1", "quantity": "torque"}, "outputs.s.quantity",
+     "deformation, stress"),
+    ({"element": "spring", "deformation": "e4"}, "outputs.s.deformation", "no deformation"),
+    ({"element": "spring", "deformation": "e1", "node": "2"}, "outputs.s", "node"),
+])
+def test_a_wrong_element_output_is_named(port, key, words):
+    data = scene("truss_1dof_x")
+    data["outputs"]["s"] = port
+    with pytest.raises(SceneError, match=key) as error:
+        build_model(data)
+    assert words in str(error.value)

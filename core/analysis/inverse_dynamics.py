@@ -42,6 +42,7 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import ConstraintError, ConvergenceError, SceneError
+from ..mechanics.element_outputs import element_output_values
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_columns, output_rows, output_value
 from ..mechanics.scales import dof_tolerances, within
@@ -63,7 +64,8 @@ class InverseDynamics:
     times (n_t,) s; forces (n_t, n_inputs) the force inputs' values, N or N m, in the order
     of `input_names`; efforts (n_t, n_kinematic) the force that realises each kinematic input
     (N, N m); q, qdot, qddot (n_t, NDOF) the motion on q (m, rad and their rates); x (n_t, NX)
-    the coordinates; stress_resultants (n_t, NE) every deformation's, N.
+    the coordinates; e (n_t, NE) the deformations, m; stress_resultants (n_t, NE) every
+    deformation's, N.
     """
 
     model: Model
@@ -76,7 +78,24 @@ class InverseDynamics:
     qdot: np.ndarray
     qddot: np.ndarray
     x: np.ndarray
+    e: np.ndarray
     stress_resultants: np.ndarray
+
+    def element_output(self, name: str) -> np.ndarray:
+        """An output on an element over time, by name: m for a deformation, N for a stress
+        resultant ([outputs.NAME] element, deformation, quantity).
+
+        Raises
+        ------
+        KeyError
+            No such output on an element (the message lists them).
+        """
+        names = [port.name for port in self.model.element_outputs]
+        if name not in names:
+            raise KeyError(f"no output {name!r} on an element; the model has "
+                           f"{', '.join(names) or 'none'}")
+        return element_output_values(self.model, self.e, self.stress_resultants)[
+            :, names.index(name)]
 
     def force(self, name: str) -> np.ndarray:
         """The force (N, N m) over time of a force input or a kinematic input, by name.
@@ -169,12 +188,13 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         qddot = scipy.linalg.lu_solve(lu, right) if ndof else np.zeros(0)
         forces, efforts, sigma = _balance(model, mech, config, qdot, qddot, in_ports,
                                           prescribed, t)
-        rows.append((config.q.copy(), qdot, qddot, config.x.copy(), forces, efforts, sigma))
-    q, qdot, qddot, x, forces, efforts, sigma = (np.array(column) for column in zip(*rows,
-                                                                                   strict=True))
+        rows.append((config.q.copy(), qdot, qddot, config.x.copy(), config.e.copy(), forces,
+                     efforts, sigma))
+    q, qdot, qddot, x, e, forces, efforts, sigma = (np.array(column)
+                                                    for column in zip(*rows, strict=True))
     return InverseDynamics(model, times, [p.name for p in in_ports], [p.name for p in out_ports],
                            forces.reshape(times.size, -1), efforts.reshape(times.size, -1),
-                           q, qdot, qddot, x, sigma)
+                           q, qdot, qddot, x, e, sigma)
 
 
 def sampled_path(times: ArrayLike, values: ArrayLike) -> Path:

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SceneError
+from ..mechanics.element_outputs import element_output_rows
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import output_rows
 from ..numerics.blas import blas_threads
@@ -53,9 +54,10 @@ if TYPE_CHECKING:  # names for the annotations only
 class MotionStateSpace:
     """z' = A z + B u; outputs C z + D u + D1 u' + D2 u'' (module docstring).
 
-    inputs: the kinematic inputs' names (u in m or rad); outputs: the model's outputs, then
-    "NAME.effort" for each kinematic input (N, N m); states: the DOFs proper and their
-    "_dot" (z1, z2 of the module docstring: y - E2 u and its rate less E1 u).
+    inputs: the kinematic inputs' names (u in m or rad); outputs: the model's outputs, its
+    outputs on elements (m, N), then "NAME.effort" for each kinematic input (N, N m);
+    states: the DOFs proper and their "_dot" (z1, z2 of the module docstring: y - E2 u and
+    its rate less E1 u).
     """
 
     A: np.ndarray
@@ -173,16 +175,19 @@ def motion_state_space(model: Model, *, solution: StaticSolution | None = None,
         A[n:, n:] = -np.linalg.solve(Mff, Cff)
     lower = np.linalg.solve(Mff, -part(K, f, k) - Cff @ E1 - Kff @ E2) if n else E1
     B = np.vstack([E1, lower])
+    # every output as a row on dq and one on dq' (a port is one or the other; an element's
+    # stress resultant may be both): y = z1 + E2 u, y' = z2 + E1 u + E2 u'
+    on_q, on_qdot = element_output_rows(model, mech, config)
     rows = output_rows(model, config.x, config.DF)
-    n_out = len(model.outputs)
-    Cz = np.zeros((n_out + m, 2 * n))
-    D, D1, D2 = (np.zeros((n_out + m, m)) for _ in range(3))
-    for row, port in enumerate(model.outputs):
-        Cf, Ck = rows[row, f], rows[row, k]
-        if port.quantity == "position":
-            Cz[row, :n], D[row] = Cf, Cf @ E2 + Ck
-        else:
-            Cz[row, n:], D[row], D1[row] = Cf, Cf @ E1, Cf @ E2 + Ck
+    velocity = np.array([port.quantity == "velocity" for port in model.outputs], dtype=bool)
+    on_q = np.vstack([np.where(velocity[:, None], 0.0, rows), on_q])
+    on_qdot = np.vstack([np.where(velocity[:, None], rows, 0.0), on_qdot])
+    n_out = on_q.shape[0]
+    Cz = np.hstack([on_q[:, f], on_qdot[:, f]])
+    D = on_q[:, f] @ E2 + on_q[:, k] + on_qdot[:, f] @ E1
+    D1 = on_qdot[:, f] @ E2 + on_qdot[:, k]
+    Cz, D, D1 = (np.vstack([a, np.zeros((m, a.shape[1]))]) for a in (Cz, D, D1))
+    D2 = np.zeros((n_out + m, m))
     # the efforts: y'' = A_lower z + B_lower u + E1 u' + E2 u''
     effort = slice(n_out, n_out + m)
     Mkf, Ckf, Kkf = part(M, k, f), part(C, k, f), part(K, k, f)
@@ -193,7 +198,7 @@ def motion_state_space(model: Model, *, solution: StaticSolution | None = None,
     names = model.free_dof_names
     return MotionStateSpace(
         A, B, Cz, D, D1, D2, inputs=[port.name for port in model.kinematic_inputs],
-        outputs=[port.name for port in model.outputs]
+        outputs=[port.name for port in model.outputs + model.element_outputs]
         + [f"{port.name}.effort" for port in model.kinematic_inputs],
         states=names + [f"{name}_dot" for name in names])
 

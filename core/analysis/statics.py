@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import ConvergenceError
 from ..mechanics.actuators import steady_port_values
+from ..mechanics.element_outputs import element_output_values
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.motions import input_effort, motion_values
 from ..mechanics.ports import input_values
@@ -57,6 +58,18 @@ class StaticSolution:
     # that realises each, N or N m (`motions.input_effort`); empty without kinematic inputs
     motions: np.ndarray | None = None
     input_efforts: np.ndarray | None = None
+
+    def element_outputs(self) -> dict[str, float]:
+        """The outputs on elements ([outputs.NAME] element, deformation, quantity), by name.
+
+        Returns
+        -------
+        dict of str to float
+            {output name: m for a deformation, N for a stress resultant}.
+        """
+        values = element_output_values(self.model, self.config.e, self.stress_resultants)
+        return dict(zip([port.name for port in self.model.element_outputs], values.tolist(),
+                        strict=True))
 
     def efforts(self) -> dict[str, float]:
         """The force that realises each kinematic input, by name.

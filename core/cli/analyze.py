@@ -116,6 +116,8 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                             "outputs": {port.name: output_value(model, port, solution.x)
                                         for port in model.outputs
                                         if port.quantity == "position"}}
+        if model.element_outputs:  # SPACAR's OUTE, OUTF: m or N
+            result["static"]["element_outputs"] = solution.element_outputs()
         if model.kinematic_inputs:  # the held values and the force that realises each
             result["static"]["kinematic_inputs"] = {
                 port.name: {"value": float(value), "effort": float(effort)}
@@ -318,6 +320,11 @@ def render(result):
                 [(name, v["value"], v["effort"]) for name, v in
                  static["kinematic_inputs"].items()],
                 title="\nstatic equilibrium: kinematic inputs and the force that realises each"))
+        if static.get("element_outputs"):
+            parts.append(format_table(
+                ["output", "value (m or N)"], list(static["element_outputs"].items()),
+                title="\nstatic equilibrium: outputs on elements (a deformation in m, a stress "
+                      "resultant in N)"))
         if static.get("outputs"):
             parts.append(format_table(["output", "value (m, rad)"],
                                       list(static["outputs"].items()),

@@ -277,6 +277,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
         inputs = [port for port in ports if port.quantity != "motion"]
         actuators, inputs = self.build_actuators(data.get("actuators", {}), inputs)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
+        element_outputs = [port for port in outputs if port.deformation is not None]
         for port in outputs:
             if port.name in {p.name for p in ports}:
                 self.fail(f"outputs.{port.name}", f"the input inputs.{port.name} has the same "
@@ -303,9 +304,10 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             loads=np.array(self.loads),
             gravity=gravity,
             inputs=inputs,
-            outputs=outputs,
+            outputs=[port for port in outputs if port.deformation is None],
             actuators=actuators,
             kinematic_inputs=kinematic,
+            element_outputs=element_outputs,
             motion_values=np.array([self.motion_values[p.name] for p in kinematic]),
             buckling_loads=buckling,
             source=self.source,

@@ -7,6 +7,10 @@ a node's coordinate (m, or rad on a planar angle) or an element's deformation (m
 takes the status DOF and is no DOF of the motion: NDOF = NX - NXO - NEO - NKI
 (`flexure.core.mechanics.motions`). Its optional `value` is the value it holds in a static
 solution (default: the scene's coordinate; a deformation's 0, the unstressed length).
+
+An output on an element (`element`, `deformation`, `quantity = "deformation"` or
+`"stress"`) reads that deformation (m) or its stress resultant (N; a bending or torsion one is
+the moment over l0): SPACAR's OUTE and OUTF (`flexure.core.mechanics.element_outputs`).
 """
 
 from ..model import DEPENDENT, DOF, FIXED, GLOBAL_ROTATIONS, ZERO, Port
@@ -14,6 +18,8 @@ from .scene_reader import show
 
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
 INPUT_KINDS = ("force", "motion")
+# an element's output (SPACAR's OUTE, OUTF): its deformation, or its stress resultant
+ELEMENT_QUANTITIES = {"deformation": "m", "stress": "N"}
 
 
 class PortBuilding:
@@ -42,6 +48,8 @@ class PortBuilding:
                                          f"{show(kind)}")
             if kind == "motion":
                 return self.motion_port(key, name, port)
+        elif "element" in port or "deformation" in port:
+            return self.element_output(key, name, port)
         self.check_keys(key, port, {"kind", "node", "coordinate"} if is_input
                         else {"node", "coordinate", "quantity"})
         quantity = "force"
@@ -113,8 +121,8 @@ class PortBuilding:
         unit = "m" if self._is_translation(port) else "rad"
         return Port(name, index, "motion", unit)
 
-    def _deformation_motion(self, key, name, port):
-        """A kinematic input on an element's deformation (prescribed zero in the scene)."""
+    def deformation_index(self, key, port):
+        """(label, index) of the deformation (element, deformation) a port names."""
         element, deformation = port.get("element"), port.get("deformation")
         label = f"{element}.{deformation}"
         names = self.kinematic_deformation_names
@@ -124,7 +132,22 @@ class PortBuilding:
                                             f"{show(element)}; expected an element of the scene "
                                             "(a meshed one by its segment, NAME_k) and one of "
                                             "its deformations, e.g. \"e1\"")
-        index = names.index(label)
+        return label, names.index(label)
+
+    def element_output(self, key, name, port):
+        """An output of an element's deformation (m) or stress resultant (N)."""
+        self.check_keys(key, port, {"element", "deformation", "quantity"})
+        quantity = port.get("quantity", "deformation")
+        if not isinstance(quantity, str) or quantity not in ELEMENT_QUANTITIES:
+            self.fail(f"{key}.quantity", f"an output on an element reads one of "
+                                         f"{', '.join(ELEMENT_QUANTITIES)}, got {show(quantity)}")
+        _, index = self.deformation_index(key, port)
+        return Port(name, None, quantity, ELEMENT_QUANTITIES[quantity], deformation=index)
+
+    def _deformation_motion(self, key, name, port):
+        """A kinematic input on an element's deformation (prescribed zero in the scene)."""
+        label, index = self.deformation_index(key, port)
+        element = port["element"]
         if self.kinematic_deformation_status[index] != ZERO:
             self.fail(f"{key}.deformation", f"deformation {label} is released or a DOF "
                                             f"(elements.{element}): a kinematic input takes a "
