@@ -544,3 +544,59 @@ def test_a_wrong_element_output_is_named(port, key, words):
     with pytest.raises(SceneError, match=key) as error:
         build_model(data)
     assert words in str(error.value)
+
+
+# -- the response to prescribed motion (numpy reference) -----------------------------------
+
+def test_the_response_of_the_chain_to_a_prescribed_move():
+    """Node 1 moved by u = A (1 - cos(w t)); node 2 obeys m2 y'' + c2 (y' - u') + k2 (y - u)
+    = 0, integrated here by hand (DOP853, rtol 1e-12), and the effort is
+    m1 u'' + c1 u' + k1 u - c2 (y' - u') - k2 (y - u). Within 1e-6 of the largest (the
+    response's own rtol is 1e-8; measured 1.3e-8 and 1.6e-8)."""
+    from scipy.integrate import solve_ivp
+
+    from flexure.core.analysis.motion_response import motion_response
+
+    A, w = 1e-3, 30.0
+    t = np.linspace(0.0, 0.2, 21)
+    motion = lambda s: ([0.1 + A * (1 - np.cos(w * s))], [A * w * np.sin(w * s)],  # noqa: E731
+                        [A * w * w * np.cos(w * s)])
+    result = motion_response(build_model(chain()), t, motion, rtol=1e-8)
+    u, ud, udd = A * (1 - np.cos(w * t)), A * w * np.sin(w * t), A * w * w * np.cos(w * t)
+    reference = solve_ivp(
+        lambda s, z: [z[1], (-C2 * (z[1] - A * w * np.sin(w * s))
+                             - K2 * (z[0] - A * (1 - np.cos(w * s)))) / M2],
+        (0.0, 0.2), [0.0, 0.0], t_eval=t, rtol=1e-12, atol=1e-16, method="DOP853")
+    y, yd = reference.y
+    assert np.max(np.abs(result.q[:, 1] - 0.2 - y)) < 1e-6 * np.max(np.abs(y))
+    effort = M1 * udd + C1 * ud + K1 * u - C2 * (yd - ud) - K2 * (y - u)
+    assert np.max(np.abs(result.efforts[:, 0] - effort)) < 1e-6 * np.max(np.abs(effort))
+    np.testing.assert_allclose(result.q[:, 0], 0.1 + u, rtol=0, atol=1e-15)
+
+
+def test_a_response_with_nothing_free_is_the_inverse_dynamics():
+    """truss_1dof_x moved by its kinematic input: no integration, the efforts are the closed
+    form F = m a + c v + k u - 1 N of `test_inverse_dynamics_of_the_truss_stage`."""
+    from flexure.core.analysis.motion_response import motion_response
+
+    t = np.linspace(0.0, 1.0, 11)
+    result = motion_response(build_model(with_motion("truss_1dof_x", "2", "x")), t,
+                             sine(0.1, 1e-3, 7.0))
+    m, k, c = 0.206 + 0.1413 * 0.1 / 3, 945.0, 0.036494
+    u, v = 1e-3 * np.sin(7.0 * t), 7e-3 * np.cos(7.0 * t)
+    np.testing.assert_allclose(result.efforts[:, 0], -49 * m * u + c * v + k * u - 1.0,
+                               rtol=1e-12)
+
+
+@pytest.mark.parametrize("data, times, words", [
+    (lambda: scene("truss_1dof_x"), [0.0, 1.0], "needs a kinematic input"),
+    (lambda: with_motion("truss_1dof_x", "2", "x"), [0.0], "at least two"),
+    (lambda: with_motion("truss_1dof_x", "2", "x")
+     | {"actuators": {"V": {"input": "F", "force_constant": 1.0, "resistance": 1.0,
+                            "inductance": 1e-3}}}, [0.0, 1.0], "actuators"),
+])
+def test_the_response_refuses_what_it_cannot_do(data, times, words):
+    from flexure.core.analysis.motion_response import motion_response
+
+    with pytest.raises(SceneError, match=words):
+        motion_response(build_model(data()), times, sine(0.1, 1e-3, 7.0))

@@ -177,7 +177,7 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
     config = mech.initial_configuration()
     rows = []
     for t in times:
-        values, rates, accelerations = _sample(model, path, t, n_out + n_kin)
+        values, rates, accelerations = sample_path(model, path, t, n_out + n_kin)
         config, jacobian = _positions(model, kin, config, out_ports, values, steps,
                                       max_iterations, t)
         lu = _factor(model, jacobian, t)
@@ -253,7 +253,7 @@ def _ports(model, outputs, inputs):
     return out_ports, [by_name[name] for name in names]
 
 
-def _sample(model, path, t, size):
+def sample_path(model, path, t, size):
     """(values, rates, accelerations) of the path at t, each (size,), checked."""
     try:
         parts = [np.asarray(part, dtype=float).reshape(-1) for part in path(t)]
