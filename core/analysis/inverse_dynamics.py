@@ -82,8 +82,18 @@ class InverseDynamics:
     stress_resultants: np.ndarray
 
     def element_output(self, name: str) -> np.ndarray:
-        """An output on an element over time, by name: m for a deformation, N for a stress
-        resultant ([outputs.NAME] element, deformation, quantity).
+        """An output on an element over time, by name ([outputs.NAME] element, deformation,
+        quantity).
+
+        Parameters
+        ----------
+        name : str
+            The output's name.
+
+        Returns
+        -------
+        ndarray (n_t,)
+            m for a deformation, N for a stress resultant.
 
         Raises
         ------
@@ -98,7 +108,17 @@ class InverseDynamics:
             :, names.index(name)]
 
     def force(self, name: str) -> np.ndarray:
-        """The force (N, N m) over time of a force input or a kinematic input, by name.
+        """The force over time of a force input or a kinematic input, by name.
+
+        Parameters
+        ----------
+        name : str
+            A force input's or a kinematic input's name.
+
+        Returns
+        -------
+        ndarray (n_t,)
+            N, or N m on an angle or a moment.
 
         Raises
         ------

@@ -89,8 +89,14 @@ class MotionStateSpace:
         return self.C @ states + self.D + self.D1 * s + self.D2 * s * s
 
     def needs_rates(self) -> list[str]:
-        """The outputs that need the rate or acceleration of an input (D1 or D2 not zero, to
-        1e-12 of the largest |D| or of 1)."""
+        """The outputs that need the rate or acceleration of an input.
+
+        Returns
+        -------
+        list of str
+            The outputs whose D1 or D2 row is not zero (beyond 1e-12 of the largest |D|, or
+            of 1), in output order.
+        """
         scale = max(np.abs(self.D).max(initial=0.0), 1.0)
         return [name for name, d1, d2 in zip(self.outputs, self.D1, self.D2, strict=True)
                 if max(np.abs(d1).max(initial=0.0), np.abs(d2).max(initial=0.0)) > 1e-12 * scale]
@@ -102,6 +108,11 @@ class MotionStateSpace:
         ----------
         outputs : list of str, optional
             The outputs to keep (default: every one that needs no rate, `needs_rates`).
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs the kinematic inputs (m, rad), outputs those kept, states `states`.
 
         Raises
         ------
