@@ -402,3 +402,19 @@ def test_the_manipulator_state_space_from_its_six_carriage_positions():
     f, k = moved.free_dofs, moved.prescribed_dofs
     schur = K[np.ix_(k, k)] - K[np.ix_(k, f)] @ np.linalg.solve(K[np.ix_(f, f)], K[np.ix_(f, k)])
     assert np.max(np.abs(schur @ per_newton - np.eye(6))) < 1e-9
+
+
+def test_analyze_gives_the_state_space_from_positions():
+    """`flexure analyze --state-space` on stage_planar_3dof with 3.x prescribed: the state
+    space from its position (the text names it), beside the force-driven one of the force
+    input F, which acts on the held coordinate only (B = 0)."""
+    from flexure.core.cli.analyze import analyze, render
+
+    model = build_model(with_motion("stage_planar_3dof", "3", "x"))
+    result = analyze(model, with_state_space=True)
+    space = result["state_space_from_positions"]
+    assert space["inputs"] == ["X"] and space["outputs"] == ["x", "y", "X.effort"]
+    expected = motion_state_space(model)
+    np.testing.assert_array_equal(space["D2"], expected.D2)
+    assert not np.any(result["state_space"]["B"])
+    assert "state space from the kinematic inputs' positions" in render(result)

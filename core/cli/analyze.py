@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import SceneError, UsageError
 from ..reporting.tables import format_table, jsonable, print_json
 from . import PLOT_SUFFIXES, add_scene_arguments, atomic_output, count, output_file
+from .analyze_motion import motion_space_result, render_motion_space
 
 
 def register(subparsers):
@@ -147,7 +148,9 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if buckling is not None:
         factors = buckling_load_factors(model, None if buckling < 0 else buckling)
         result["buckling"] = {"load_factors": factors}
-    if with_state_space:
+    if with_state_space and model.kinematic_inputs:  # their positions as inputs
+        result["state_space_from_positions"] = motion_space_result(model, solution)
+    if with_state_space and (model.inputs or not model.kinematic_inputs):
         sys = state_space(model, linear_model=lin)
         result["state_space"] = {"A": sys.A, "B": sys.B, "C": sys.C, "D": sys.D,
                                  "inputs": [p.name for p in model.inputs],
@@ -299,7 +302,8 @@ def render(result):
              + (f"; kinematic inputs: {', '.join(kinematic)}" if kinematic else "")
              + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
                 else ")")]
-    if not {"static", "modes", "buckling", "state_space", "principal_gains",
+    if not {"static", "modes", "buckling", "state_space", "state_space_from_positions",
+            "principal_gains",
             "compliance"} & result.keys():
         parts.append("exactly constrained; a kinematic model (no mass, no load), so there is "
                      "no equilibrium or mode to compute")
@@ -359,6 +363,8 @@ def render(result):
                 parts.append(f"\n{key} =\n{np.array(ss[key])}")
         parts.append(f"\ninputs: {', '.join(ss['inputs'])}   outputs: {', '.join(ss['outputs'])}"
                      f"   states: {', '.join(ss['states'])}")
+    if "state_space_from_positions" in result:
+        parts.append(render_motion_space(result["state_space_from_positions"]))
     if "principal_gains" in result:
         gains = result["principal_gains"]
         f, sigma = np.array(gains["frequencies_hz"]), np.array(gains["singular_values"])
