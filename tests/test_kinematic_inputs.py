@@ -418,3 +418,13 @@ def test_analyze_gives_the_state_space_from_positions():
     np.testing.assert_array_equal(space["D2"], expected.D2)
     assert not np.any(result["state_space"]["B"])
     assert "state space from the kinematic inputs' positions" in render(result)
+
+
+def test_a_kinematic_input_the_constraints_hold_is_named():
+    """stage_planar_1dof with 3.y prescribed instead of 3.x a DOF: the count is right (0), but
+    the leaves hold 3.y to first order; the message names the input and what can move."""
+    data = with_motion("stage_planar_1dof", "3", "y")
+    data["nodes"]["3"]["dof"] = []
+    with pytest.raises(ConstraintError, match=r"the DOFs? .*3\.y \(kinematic input X\).* cannot "
+                                              r"move without changing .*leaf_left\.e1.*3\.x"):
+        build_model(data)

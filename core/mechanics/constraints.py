@@ -238,8 +238,11 @@ def _fixed_dofs(model, kin, row_dependencies, n_constraints, motions):
     `motions` the free motions' coordinates."""
     lines = []
     moving = sorted({kin.free[i] for motion in motions for i in motion})
+    labels = list(model.dof_names)  # a kinematic input is a DOF row too: say which it is
+    for port, j in zip(model.kinematic_inputs, model.prescribed_dofs, strict=True):
+        labels[j] += f" (kinematic input {port.name})"
     for dependency in _involved(row_dependencies):
-        dofs = [model.dof_names[i - n_constraints] for i in dependency if i >= n_constraints]
+        dofs = [labels[i - n_constraints] for i in dependency if i >= n_constraints]
         if not dofs:
             continue  # among the prescribed deformations alone: the over-constraint above
         fixing = [model.deformation_names[kin.constraint_rows[i]] for i in dependency
