@@ -194,3 +194,35 @@ def test_the_forward_simulation_under_the_computed_torque_follows_the_path():
                       qdot0=[amplitude * omega], rtol=1e-10,
                       output_times=np.linspace(0.0, 1.0, 101))
     assert np.max(np.abs(result.q[:, 0] - amplitude * np.sin(omega * result.times))) < 1e-8
+
+
+def test_inverse_dynamics_of_a_body_turning_about_a_skew_axis():
+    """A free body (principal inertia J) whose rotation vector follows theta(t) n about the
+    fixed skew axis n = [1, 2, 2] / 3, its angles about x, y, z prescribed, its three moments
+    solved for: Euler's equations in the global frame, M = J_g theta'' n + omega x (J_g omega),
+    omega = theta' n, J_g = R J R^T with R = exp(theta [n x]) (Rodrigues), to 1e-12."""
+    J = np.diag([0.01, 0.02, 0.03])
+    model = build_model({
+        "scene": {"name": "body", "dimension": 3},
+        "nodes": {"B": {"rotation": [0.0, 0.0, 0.0], "inertia": np.diag(J).tolist(),
+                        "dof": ["rx", "ry", "rz"]}},
+        "inputs": {f"M{a}": {"node": "B", "coordinate": f"r{a}"} for a in "xyz"},
+        "outputs": {f"a{a}": {"node": "B", "coordinate": f"r{a}"} for a in "xyz"}})
+    n = np.array([1.0, 2.0, 2.0]) / 3.0
+    amplitude, omega = 1.2, 2.0
+    t = np.linspace(0.0, 2.0, 11)
+    result = inverse_dynamics(model, t, lambda s: tuple(
+        value * n for value in (amplitude * np.sin(omega * s),
+                                amplitude * omega * np.cos(omega * s),
+                                -amplitude * omega ** 2 * np.sin(omega * s))))
+    cross = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
+    expected = []
+    for s in t:
+        theta = amplitude * np.sin(omega * s)
+        rate, acceleration = amplitude * omega * np.cos(omega * s), -omega ** 2 * theta
+        R = np.eye(3) + np.sin(theta) * cross + (1.0 - np.cos(theta)) * cross @ cross
+        inertia = R @ J @ R.T
+        expected.append(inertia @ (acceleration * n)
+                        + np.cross(rate * n, inertia @ (rate * n)))
+    expected = np.array(expected)
+    assert np.max(np.abs(result.forces - expected)) < 1e-12 * np.max(np.abs(expected))

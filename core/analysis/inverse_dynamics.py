@@ -13,9 +13,13 @@ integration of its own dynamics: refused, naming the count). At each time t:
    (E_k the unit columns of the kinematic inputs in q), warm-started from the previous time.
 2. Velocities and accelerations: the same Jacobian, differentiated once and twice,
 
-       [C; E_k^T] qdot = [ydot; u_k'],   [C; E_k^T] qddot = [yddot - (dy/dx)(D2F qdot) qdot; u_k'']
+       [C; E_k^T] qdot = [ydot; u_k'],   [C; E_k^T] qddot = [yddot - c_y; u_k'']
 
-   xdot = DF qdot, xddot = DF qddot + (D2F qdot) qdot (`Kinematics.convective_acceleration`).
+   xdot = DF qdot, xddot = DF qddot + (D2F qdot) qdot (`Kinematics.convective_acceleration`),
+   and c_y the outputs' acceleration at qddot = 0: (D2F qdot) qdot on a coordinate; for an
+   angle about a global axis k of a 3-D rotational node, phi_k(lambda),
+   (d phi_k / d lambda) ((D2F qdot) qdot)_lambda + lambda'^T (d2 phi_k / d lambda2) lambda'
+   (`rotations.rotation_vector_derivatives`).
 3. The dynamic balance on q, with the inertia and damping of the motion,
 
        R = DF^T (f - M xddot - h(x, xdot) - De^T sigma_c(e, edot))
@@ -26,8 +30,6 @@ integration of its own dynamics: refused, naming the count). At each time t:
    resultants of every deformation then follow from the multipliers of the full balance
    (`stresses.dynamic_stress_resultants`): SPACAR's OUTF along the path.
 
-Only coordinate outputs (a node's x, y, z or planar angle) can be prescribed: an angle about
-a global axis of a 3-D node would need the second derivative of the rotation vector.
 The path's derivatives are the caller's (a profile's own), or a cubic spline's through
 samples (`sampled_path`): stated, not guessed.
 """
@@ -44,9 +46,10 @@ import scipy.linalg
 from ..errors import ConstraintError, ConvergenceError, SceneError
 from ..mechanics.element_outputs import element_output_values
 from ..mechanics.mechanics import Mechanics
-from ..mechanics.ports import input_columns, output_rows, output_value
+from ..mechanics.ports import AXIS_INDEX, input_columns, output_rows, output_value
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
+from ..numerics.rotations import rotation_vector_derivatives
 from .stresses import dynamic_stress_resultants
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -192,7 +195,6 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
             "entries of q; the path must determine the motion (DOFs left free need a time "
             "integration of their own dynamics, which this does not do)")
     prescribed = model.prescribed_dofs
-    coordinates = np.array([port.coordinate for port in out_ports], dtype=int)
     steps = dof_tolerances(model, tolerance)
     config = mech.initial_configuration()
     rows = []
@@ -202,9 +204,9 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
                                       max_iterations, t)
         lu = _factor(model, jacobian, t)
         qdot = scipy.linalg.lu_solve(lu, rates) if ndof else np.zeros(0)
-        convective = kin.convective_acceleration(config, qdot)
         right = accelerations.copy()
-        right[:n_out] -= convective[coordinates]
+        right[:n_out] -= _output_convective(model, out_ports, config, qdot,
+                                            kin.convective_acceleration(config, qdot))
         qddot = scipy.linalg.lu_solve(lu, right) if ndof else np.zeros(0)
         forces, efforts, sigma = _balance(model, mech, config, qdot, qddot, in_ports,
                                           prescribed, t)
@@ -251,10 +253,6 @@ def _ports(model, outputs, inputs):
             raise SceneError(f"{model.source}: {name!r} is not a position output of "
                              f"{model.name!r}; its position outputs: "
                              f"{', '.join(positions) or 'none'}")
-        if port.about_axis:
-            raise SceneError(f"{model.source}: outputs.{name}: inverse dynamics prescribes "
-                             "coordinates (x, y, z, a planar angle), not an angle about a "
-                             "global axis of a 3-D rotational node")
         out_ports.append(port)
     by_name = {port.name: port for port in model.inputs}
     names = list(by_name) if inputs is None else list(inputs)
@@ -287,6 +285,22 @@ def sample_path(model, path, t, size):
     if not all(np.all(np.isfinite(part)) for part in parts):
         raise SceneError(f"{model.source}: the path at t = {t:g} s is not finite")
     return parts
+
+
+def _output_convective(model, out_ports, config, qdot, convective):
+    """c_y (n_outputs,): each prescribed output's acceleration at qddot = 0 (module docstring),
+    m/s^2 or rad/s^2."""
+    xdot = config.DF @ qdot
+    result = np.zeros(len(out_ports))
+    for row, port in enumerate(out_ports):
+        if not port.about_axis:
+            result[row] = convective[port.coordinate]
+            continue
+        euler = list(port.euler)
+        _, first, second = rotation_vector_derivatives(config.x[euler], order=2)
+        k, rate = AXIS_INDEX[port.axis], xdot[euler]
+        result[row] = first[0, k] @ convective[euler] + rate @ second[0, k] @ rate
+    return result
 
 
 def _jacobian(model, config, out_ports):
