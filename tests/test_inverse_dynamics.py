@@ -226,3 +226,43 @@ def test_inverse_dynamics_of_a_body_turning_about_a_skew_axis():
                         + np.cross(rate * n, inertia @ (rate * n)))
     expected = np.array(expected)
     assert np.max(np.abs(result.forces - expected)) < 1e-12 * np.max(np.abs(expected))
+
+
+def test_the_effort_of_a_prescribed_rotation():
+    """The body of `test_inverse_dynamics_of_a_body_turning_about_a_skew_axis` with its
+    rotation-vector component about z prescribed (a kinematic input) and moments about x, y:
+    the effort is the generalised force on phi_z, the z row of J_l(phi)^T (M - [Mx, My, 0])
+    with M Euler's moments and J_l = I + (1 - cos t)/t^2 [phi x] + (t - sin t)/t^3 [phi x]^2
+    the left Jacobian (omega = J_l phi'), to 1e-12."""
+    J = np.diag([0.01, 0.02, 0.03])
+    model = build_model({
+        "scene": {"name": "body", "dimension": 3},
+        "nodes": {"B": {"rotation": [0.0, 0.0, 0.0], "inertia": np.diag(J).tolist(),
+                        "dof": ["rx", "ry"]}},
+        "inputs": {"Mx": {"node": "B", "coordinate": "rx"},
+                   "My": {"node": "B", "coordinate": "ry"},
+                   "Z": {"kind": "motion", "node": "B", "coordinate": "rz"}},
+        "outputs": {"ax": {"node": "B", "coordinate": "rx"},
+                    "ay": {"node": "B", "coordinate": "ry"}}})
+    n = np.array([1.0, 2.0, 2.0]) / 3.0
+    amplitude, omega = 1.2, 2.0
+    t = np.linspace(0.1, 2.0, 8)
+    result = inverse_dynamics(model, t, lambda s: tuple(
+        value * n for value in (amplitude * np.sin(omega * s),
+                                amplitude * omega * np.cos(omega * s),
+                                -amplitude * omega ** 2 * np.sin(omega * s))))
+    cross = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
+    expected = []
+    for k, s in enumerate(t):
+        theta = amplitude * np.sin(omega * s)
+        rate, acceleration = amplitude * omega * np.cos(omega * s), -omega ** 2 * theta
+        R = np.eye(3) + np.sin(theta) * cross + (1.0 - np.cos(theta)) * cross @ cross
+        inertia = R @ J @ R.T
+        moments = inertia @ (acceleration * n) + np.cross(rate * n, inertia @ (rate * n))
+        P = theta * cross
+        left = (np.eye(3) + (1.0 - np.cos(theta)) / theta ** 2 * P
+                + (theta - np.sin(theta)) / theta ** 3 * P @ P)
+        applied = np.array([result.forces[k, 0], result.forces[k, 1], 0.0])
+        expected.append((left.T @ (moments - applied))[2])
+    expected = np.array(expected)
+    assert np.max(np.abs(result.efforts[:, 0] - expected)) < 1e-12 * np.max(np.abs(expected))

@@ -90,13 +90,39 @@ def test_a_wrong_deformation_input_is_named(port, key, words):
     assert words in str(error.value)
 
 
-def test_a_kinematic_input_on_a_3d_rotational_node_is_refused():
-    data = scene("stage_spatial_1dof")
-    rotational = next(name for name, node in data["nodes"].items() if "position" not in node
-                      and node.get("fixed") is not True)
-    data["inputs"]["X"] = {"kind": "motion", "node": rotational, "coordinate": "rx"}
-    with pytest.raises(SceneError, match=r"inputs\.X\.node.*3-D rotational"):
-        build_model(data)
+def body(**inputs):
+    """A free body B (principal inertia 0.01, 0.02, 0.03 kg m^2) whose rotations about x and y
+    are DOFs, moments Mx, My on them, their angles as outputs, and `inputs` besides."""
+    return {"scene": {"name": "body", "dimension": 3},
+            "nodes": {"B": {"rotation": [0.0, 0.0, 0.0], "inertia": [0.01, 0.02, 0.03],
+                            "dof": ["rx", "ry"]},
+                      "G": {"rotation": [0.0, 0.0, 0.0], "fixed": True}},
+            "inputs": {"Mx": {"node": "B", "coordinate": "rx"},
+                       "My": {"node": "B", "coordinate": "ry"}} | inputs,
+            "outputs": {"ax": {"node": "B", "coordinate": "rx"},
+                        "ay": {"node": "B", "coordinate": "ry"}}}
+
+
+def test_a_rotation_about_a_global_axis_as_a_kinematic_input():
+    """B's rotation about z prescribed: its ROTATION angle, rad, counted as NKI."""
+    model = build_model(body(Z={"kind": "motion", "node": "B", "coordinate": "rz",
+                                "value": 0.1}))
+    assert model.dof_count() == {"nx": 6, "nxo": 3, "neo": 0, "nki": 1, "ndof": 2}
+    assert model.kinematic_inputs[0].unit == "rad"
+    assert model.free_dof_names == ["B.rx", "B.ry"]
+    np.testing.assert_array_equal(model.motion_values, [0.1])
+
+
+@pytest.mark.parametrize("port, key, words", [
+    ({"node": "G", "coordinate": "rz"}, "inputs.Z.node", "is fixed"),
+    ({"node": "B", "coordinate": "lambda1"}, "inputs.Z.coordinate", "expected one of rx"),
+    ({"node": "B", "coordinate": "rx"}, "inputs.Z.coordinate", "is a DOF"),
+    ({"node": "B", "coordinate": "rz", "gain": 1}, "inputs.Z", "gain"),
+])
+def test_a_wrong_rotation_input_is_named(port, key, words):
+    with pytest.raises(SceneError, match=key) as error:
+        build_model(body(Z={"kind": "motion"} | port))
+    assert words in str(error.value)
 
 
 def test_the_count_names_the_kinematic_inputs():

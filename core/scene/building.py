@@ -267,6 +267,9 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             self.table("elements", data.get("elements", {})))
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
+            # a rotation prescribed about a global axis is its ROTATION pseudo-element's angle
+            self.motion_rotations = self.prescribed_rotations(data.get("inputs", {}))
+            self.rotation_dofs += self.motion_rotations
             self.add_rotation_dofs(groups, deformation_names, deformation_status)
         # a kinematic input changes the status of its coordinate or deformation (`scene_ports`)
         self.kinematic_deformation_names = deformation_names

@@ -14,6 +14,7 @@ the moment over l0): SPACAR's OUTE and OUTF (`flexure.core.mechanics.element_out
 """
 
 from ..model import DEPENDENT, DOF, FIXED, GLOBAL_ROTATIONS, ZERO, Port
+from ..numerics.rotations import rotation_vector_derivatives
 from .scene_reader import show
 
 OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
@@ -101,9 +102,7 @@ class PortBuilding:
             return self._deformation_motion(key, name, port)
         node = self.node(f"{key}.node", port.get("node"))
         if self.dimension == 3 and self.node_kind[node] == "rotational":
-            self.fail(f"{key}.node", f"node {node!r} is a 3-D rotational node: a kinematic "
-                                     "input prescribes a translation or a planar angle; "
-                                     "prescribe the rotation through a deformation instead")
+            return self._rotation_motion(key, name, node, port)
         index = self.coordinate(key, port)
         axis = port["coordinate"]
         if self.status[index] == FIXED:
@@ -143,6 +142,45 @@ class PortBuilding:
                                          f"{', '.join(ELEMENT_QUANTITIES)}, got {show(quantity)}")
         _, index = self.deformation_index(key, port)
         return Port(name, None, quantity, ELEMENT_QUANTITIES[quantity], deformation=index)
+
+    def prescribed_rotations(self, inputs):
+        """(node, axis) of every kinematic input about a global axis of a free 3-D rotational
+        node, so that its ROTATION pseudo-element is made with the DOF rotations; what is
+        wrong with an input is said when the input is built (`_rotation_motion`)."""
+        found = []
+        for port in (inputs.values() if isinstance(inputs, dict) else []):
+            if not isinstance(port, dict) or port.get("kind") != "motion":
+                continue
+            node, axis = str(port.get("node")), port.get("coordinate")
+            if (self.node_kind.get(node) == "rotational" and axis in GLOBAL_ROTATIONS
+                    and (node, axis) not in self.rotation_dofs + found
+                    and self.status[self.node_coordinates[node]["lambda0"]] != FIXED):
+                found.append((node, axis))
+        return found
+
+    def _rotation_motion(self, key, name, node, port):
+        """A kinematic input about a global axis of a 3-D rotational node: the angle of its
+        ROTATION pseudo-element (rad, the rotation-vector component), prescribed."""
+        self.check_keys(key, port, {"kind", "node", "coordinate", "value"})
+        axis = port.get("coordinate")
+        if not isinstance(axis, str) or axis not in GLOBAL_ROTATIONS:
+            self.fail(f"{key}.coordinate", f"node {node!r} is a 3-D rotational node: expected "
+                                           f"one of {', '.join(GLOBAL_ROTATIONS)}, got "
+                                           f"{show(axis)}")
+        if self.status[self.node_coordinates[node]["lambda0"]] == FIXED:
+            self.fail(f"{key}.node", f"node {node!r} is fixed: a kinematic input prescribes a "
+                                     "free node's rotation")
+        if (node, axis) not in self.motion_rotations:
+            self.fail(f"{key}.coordinate", f"the rotation {node}.{axis} is a DOF "
+                                           f"(nodes.{node}.dof) or another kinematic input "
+                                           "already; remove it from the node's dof")
+        self.motion_rotations.remove((node, axis))  # a second input on it is refused above
+        index = self.kinematic_deformation_names.index(f"{node}.{axis}")
+        start = rotation_vector_derivatives(self.node_values(node), order=0)[0][0]
+        value = self.number(f"{key}.value",
+                            port.get("value", start[GLOBAL_ROTATIONS.index(axis)]))
+        self.motion_values[name] = value
+        return Port(name, None, "motion", "rad", deformation=index)
 
     def _deformation_motion(self, key, name, port):
         """A kinematic input on an element's deformation (prescribed zero in the scene)."""
