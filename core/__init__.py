@@ -18,9 +18,12 @@ __version__ = "0.1.0"
 # submodule -> the public names it defines (imported by __getattr__ on first use)
 _LAZY = {
     "analysis.compliance": ("Compliance", "compliance"),
+    "analysis.inverse_dynamics": ("InverseDynamics", "inverse_dynamics", "sampled_path"),
     "analysis.inverse_statics": ("InverseStatics", "inverse_statics"),
     "analysis.linearization": ("LinearModel", "linearize"),
     "analysis.modal": ("Modes", "buckling_load_factors", "natural_frequencies"),
+    "analysis.motion_response": ("MotionResponse", "motion_response"),
+    "analysis.motion_statespace": ("MotionStateSpace", "motion_state_space"),
     "analysis.optimize": ("Optimum", "optimize"),
     "analysis.sensitivity": ("Sensitivities", "sensitivities"),
     "analysis.statespace": ("principal_gains", "state_space", "state_space_matrices"),
@@ -29,6 +32,7 @@ _LAZY = {
     "mechanics.actuators": ("steady_port_values", "steady_slopes"),
     "mechanics.constraints": ("check_exact_constraint", "choose_dofs", "proposed_releases"),
     "mechanics.kinematics": ("Kinematics",),
+    "mechanics.motions": ("motion_values",),
     "mechanics.mechanics": ("Mechanics",),
     "mechanics.ports": ("input_columns", "input_values", "output_rows", "output_value",
                         "port_description", "position_port"),

@@ -89,14 +89,20 @@ class Port:
     the angular velocity about it (rad/s). `flexure.core.mechanics.ports` has their maths.
     An input a voice-coil actuator drives is its amplifier's drive signal, quantity "drive"
     and unit "V" (`Actuator`): the actuator's force or moment acts on the port.
+    A kinematic input (SPACAR's INPUTX / INPUTE), quantity "motion", prescribes the value of
+    one coordinate (m, rad) or, with `deformation` its index, of one deformation (m); it is
+    kept in `Model.kinematic_inputs`, not in `Model.inputs`
+    (`flexure.core.mechanics.motions`).
     """
 
     name: str
     coordinate: int | None
-    quantity: str = "force"  # "force", "moment" or "drive" for inputs; "position", "velocity"
-    unit: str = "N"
+    quantity: str = "force"  # "force", "moment", "drive" or "motion" for inputs; "position",
+    unit: str = "N"          # "velocity" for outputs
     euler: tuple = ()
     axis: str = ""
+    # a kinematic input (quantity "motion") on a deformation: its index (coordinate None)
+    deformation: int | None = None
 
     @property
     def about_axis(self) -> bool:
@@ -167,6 +173,13 @@ class Model:
     nodes: tuple = ()
     # The voice-coil actuators ([actuators.NAME]); an input without one is a force (N, N m)
     actuators: list = field(default_factory=list)
+    # The kinematic inputs ([inputs.NAME] kind = "motion"): Ports of quantity "motion", each on
+    # a coordinate or deformation whose status is DOF (it is in q), with its held value
+    kinematic_inputs: list = field(default_factory=list)
+    motion_values: np.ndarray | None = None  # (n_kinematic,) m or rad: the scene's `value`s
+    # The outputs on elements (SPACAR's OUTE, OUTF): Ports of quantity "deformation" (m) or
+    # "stress" (N) with their deformation's index; apart from `outputs`, which the engine reads
+    element_outputs: list = field(default_factory=list)
     # The scene dictionary the model was built from (overrides applied; the scene's own
     # statuses, before meshing and DOF choice): what `to_toml` writes back
     scene: dict | None = field(default=None, repr=False, compare=False)
@@ -189,8 +202,12 @@ class Model:
         self.rigid_deformations = np.flatnonzero(dstatus == ZERO)
         self.released_deformations = np.flatnonzero(dstatus == RELEASED)
         self.dof_deformations = np.flatnonzero(dstatus == DOF)
-        # Deformations that carry a constitutive stress: released ones and DOF ones.
-        self.stressed_deformations = np.flatnonzero(dstatus != ZERO)
+        # Deformations that carry a constitutive stress: released ones and DOF ones, but not a
+        # kinematic input's: prescribed, it is a constraint (with a value), its stress
+        # resultant a reaction, as a deformation prescribed zero
+        prescribed = [port.deformation for port in self.kinematic_inputs
+                      if port.deformation is not None]
+        self.stressed_deformations = np.setdiff1d(np.flatnonzero(dstatus != ZERO), prescribed)
 
     @property
     def nx(self) -> int:
@@ -209,14 +226,37 @@ class Model:
 
     @property
     def ndof(self) -> int:
-        """NDOF = NX - NXO - NEO."""
+        """NX - NXO - NEO: the length of q, the DOFs and the kinematic inputs together (a
+        kinematic input is a coordinate or deformation of status DOF whose value is
+        prescribed); the DOFs proper number ndof - len(kinematic_inputs) (`dof_count`)."""
         return self.nx - self.nxo - self.neo
+
+    @property
+    def prescribed_dofs(self) -> np.ndarray:
+        """int (n_kinematic,): the position in q of each kinematic input, in their order."""
+        where = {("x", int(c)): j for j, c in enumerate(self.dof_coordinates)}
+        n_x = self.dof_coordinates.size
+        where.update({("e", int(d)): n_x + j for j, d in enumerate(self.dof_deformations)})
+        return np.array([where[("x", p.coordinate) if p.deformation is None
+                               else ("e", p.deformation)] for p in self.kinematic_inputs],
+                        dtype=int)
+
+    @property
+    def free_dofs(self) -> np.ndarray:
+        """int: the positions in q of the DOFs proper (q without the kinematic inputs)."""
+        return np.setdiff1d(np.arange(self.declared_dof_count), self.prescribed_dofs)
 
     @property
     def coil_actuators(self) -> list[Actuator]:
         """The voltage-driven actuators, in scene order: each has one electrical state, its
         coil current (A), after [q - q_ref, qdot] in the integrators' state."""
         return [a for a in self.actuators if a.drive == VOLTAGE]
+
+    @property
+    def free_dof_names(self) -> list[str]:
+        """Names of the DOFs proper (q without the kinematic inputs), in the order of q."""
+        names = self.dof_names
+        return [names[j] for j in self.free_dofs]
 
     @property
     def dof_names(self) -> list[str]:
@@ -240,17 +280,23 @@ class Model:
         way: (NX - n) - (NXO - n_fixed) - (NEO - n_free) = NX - NXO - NEO. The internal counts
         are the properties nx, nxo, neo.
 
+        A kinematic input prescribes one coordinate or deformation: it takes one DOF,
+        NDOF = NX - NXO - NEO - NKI, and is counted as "nki" (the key only in a model that has
+        kinematic inputs, so that the count of every other model reads as before).
+
         Returns
         -------
         dict of str to int
-            "nx", "nxo", "neo" and "ndof".
+            "nx", "nxo", "neo", ("nki") and "ndof".
         """
         euler = [i for i, name in enumerate(self.coordinate_names) if name.endswith(".lambda0")]
         fixed = sum(1 for i in euler if self.coordinate_status[i] == FIXED)
         norms = sum(1 for i in self.rigid_deformations
                     if self.deformation_names[i].endswith(".norm"))
-        return {"nx": self.nx - len(euler), "nxo": self.nxo - fixed, "neo": self.neo - norms,
-                "ndof": self.ndof}
+        count = {"nx": self.nx - len(euler), "nxo": self.nxo - fixed, "neo": self.neo - norms}
+        if self.kinematic_inputs:
+            count["nki"] = len(self.kinematic_inputs)
+        return count | {"ndof": self.ndof - len(self.kinematic_inputs)}
 
     def coordinate_index(self, name: str) -> int:
         """The index of a coordinate in the model's coordinate vectors.

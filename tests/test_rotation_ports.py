@@ -104,7 +104,7 @@ def test_ports_about_global_axes_are_built_with_their_units():
     ({"outputs": {"a": {"node": "2", "coordinate": "rz"}}}, "outputs.a.node",
      "node '2' is fixed: a moment on it or its angle would do nothing"),
     ({"inputs": {"M": {"node": "4", "coordinate": "rz", "quantity": "position"}}},
-     "inputs.M.quantity", "unknown key; expected one of coordinate, node"),
+     "inputs.M.quantity", "unknown key; expected one of coordinate, kind, node"),
     ({"outputs": {"a": {"node": "4", "coordinate": "rz", "quantity": "force"}}},
      "outputs.a.quantity", "expected one of position, velocity"),
 ])

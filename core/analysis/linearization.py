@@ -25,6 +25,12 @@ stiffness of a moment at its steady value is in G0. The back-EMF Km^2 / R damps 
 motion and the coil adds its pole near -R / L. M0, C0 and K stay the mechanical matrices: the
 natural frequencies are those of the mechanism with its coils open (no current, no back-EMF
 force).
+
+Kinematic inputs (`flexure.core.mechanics.motions`) are held at their values: the matrices
+are those of the DOFs proper q_f (the rows and columns of q_k dropped) and `DF` has their
+columns only, so the modes, the force-driven state space and the compliance are those of the
+mechanism with its prescribed coordinates held. The state space whose inputs are the
+prescribed positions: `flexure.core.analysis.motion_statespace`.
 """
 
 from __future__ import annotations
@@ -62,7 +68,10 @@ class LinearModel:
 
     @property
     def DF(self) -> np.ndarray:
-        """The first-order transfer function dx/dq (NX, NDOF) of the configuration."""
+        """The first-order transfer function dx/dq (NX, NDOF) of the configuration; with
+        kinematic inputs dx/dq_f (NX, NDOF - NKI), on the DOFs proper."""
+        if self.model.kinematic_inputs:
+            return self.solution.config.DF[:, self.model.free_dofs]
         return self.solution.config.DF
 
     def state_matrices(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -104,7 +113,7 @@ class LinearModel:
             A[k, k] = -actuator.resistance / inductance
             B[k, j] = slope / inductance
         B[n: 2 * n] = np.linalg.solve(self.M0, DF.T @ forces)
-        dofs = model.dof_names
+        dofs = model.free_dof_names
         names = ([f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
                  + [f"{a.name}.current" for a in coils])
         return A, B, names
@@ -137,12 +146,12 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
     if solution is None:
         solution = static_equilibrium(model, mechanics=mech)
     config = solution.config
-    return LinearModel(
-        model=model,
-        solution=solution,
-        M0=mech.mass_matrix(config),
-        C0=mech.damping_matrix(config),
-        K0=mech.structural_stiffness(config),
-        G0=mech.geometric_stiffness(config, solution.stress_resultants, solution.load_factor,
-                                    inputs=solution.port_values),
-    )
+    matrices = (mech.mass_matrix(config), mech.damping_matrix(config),
+                mech.structural_stiffness(config),
+                mech.geometric_stiffness(config, solution.stress_resultants,
+                                         solution.load_factor, inputs=solution.port_values))
+    if model.kinematic_inputs:  # held: the DOFs proper alone (module docstring)
+        free = np.ix_(model.free_dofs, model.free_dofs)
+        matrices = tuple(matrix[free] for matrix in matrices)
+    M0, C0, K0, G0 = matrices
+    return LinearModel(model=model, solution=solution, M0=M0, C0=C0, K0=K0, G0=G0)

@@ -22,6 +22,7 @@ import scipy.linalg
 
 from ..errors import ConvergenceError
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.motions import held
 from ..numerics.blas import blas_threads
 from .linearization import LinearModel, linearize
 from .statics import static_equilibrium
@@ -116,8 +117,9 @@ def buckling_load_factors(model: Model, count: int | None = None, *,
     mech = Mechanics(model)
     solution = static_equilibrium(model, loads=loads, mechanics=mech)
     config = solution.config
-    K0 = mech.structural_stiffness(config)
-    G0 = mech.geometric_stiffness(config, solution.stress_resultants)
+    # with the kinematic inputs held
+    K0 = held(model, mech.structural_stiffness(config))
+    G0 = held(model, mech.geometric_stiffness(config, solution.stress_resultants))
     try:
         inverse = scipy.linalg.eigh(-G0, K0, eigvals_only=True)
     except np.linalg.LinAlgError:

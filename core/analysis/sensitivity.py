@@ -255,6 +255,10 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
         An analysis of the model, or of a perturbed one, does not converge.
     """
     model = _model(model_or_scene)
+    if model.kinematic_inputs:  # its analytic slopes are on all of q, the analyses on q_f
+        raise SceneError(f"{model.source}: design sensitivities of a model with kinematic "
+                         f"inputs ({', '.join(p.name for p in model.kinematic_inputs)}) are "
+                         "not supported yet; make them DOFs with force inputs instead")
     resolved = [resolve_key(model, key) for key in keys]  # every key checked before a solve
     request = Request(modes=modes, buckling=buckling, outputs=outputs, stress=stress,
                       compliance_nodes=tuple(compliance_nodes), dc_gains=dc_gains)

@@ -38,6 +38,7 @@ import scipy.linalg
 
 from ..errors import ConvergenceError, FlexureError
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.motions import held
 from ..numerics.ties import best_first
 from .compliance import compliance, measure_rows
 from .linearization import linearize
@@ -172,8 +173,8 @@ def buckling_modes(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     loads = model.buckling_loads if model.buckling_loads is not None else model.loads
     mech = Mechanics(model)
     solution = static_equilibrium(model, loads=loads, mechanics=mech)
-    K0 = mech.structural_stiffness(solution.config)
-    G0 = mech.geometric_stiffness(solution.config, solution.stress_resultants)
+    K0 = held(model, mech.structural_stiffness(solution.config))  # kinematic inputs held
+    G0 = held(model, mech.geometric_stiffness(solution.config, solution.stress_resultants))
     try:
         inverse, shapes = scipy.linalg.eigh(-G0, K0)
     except np.linalg.LinAlgError:

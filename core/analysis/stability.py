@@ -45,11 +45,12 @@ def tangent_stiffness(model: Model, solution: StaticSolution,
     """K0 + G0 (NDOF x NDOF) at a static equilibrium, with the loads that hold it (the
     matrix of the equilibrium's last Newton step)."""
     from ..mechanics.mechanics import Mechanics
+    from ..mechanics.motions import held
 
     mech = mechanics or Mechanics(model)
     config = solution.config
-    return mech.structural_stiffness(config) + mech.geometric_stiffness(
-        config, solution.stress_resultants, solution.load_factor, inputs=solution.port_values)
+    return held(model, mech.structural_stiffness(config) + mech.geometric_stiffness(
+        config, solution.stress_resultants, solution.load_factor, inputs=solution.port_values))
 
 
 def instability_warnings(K: np.ndarray, *, frequencies_hz=None, descriptions=None) -> list[str]:

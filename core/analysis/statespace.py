@@ -121,7 +121,8 @@ def _matrices(model, linear_model):
         M_inv_C = np.linalg.solve(lin.M0, lin.C0)
         A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
         B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
-        states = [f"{d}" for d in model.dof_names] + [f"{d}_dot" for d in model.dof_names]
+        dofs = model.free_dof_names  # the DOFs proper: kinematic inputs are held
+        states = [f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
     C = np.zeros((len(model.outputs), A.shape[0]))
     rows = output_rows(model, x, DF)
     for row, port in enumerate(model.outputs):

@@ -12,6 +12,11 @@ Held inputs (`inputs`) put their steady values on their ports: a force or moment
 value (N, N m); an input a voice-coil actuator drives its actuator's force or moment at rest
 (`flexure.core.mechanics.actuators.steady_port_values`): Km sat(G u) for a current drive,
 Km sat(G u) / R for a voltage drive, whose coil current settles at sat(G u) / R.
+
+Kinematic inputs (`flexure.core.mechanics.motions`) hold their prescribed values (`motions`,
+default the scene's), stepped with the load from the scene's configuration; Newton then runs
+on the DOFs proper q_f with K_ff dq_f = Q_f - K_fk dq_k, and the solution carries the force
+that realises each input, F = -Q_k (`StaticSolution.input_efforts`).
 """
 
 from __future__ import annotations
@@ -23,7 +28,9 @@ import numpy as np
 
 from ..errors import ConvergenceError
 from ..mechanics.actuators import steady_port_values
+from ..mechanics.element_outputs import element_output_values
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.motions import input_effort, motion_values
 from ..mechanics.ports import input_values
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
@@ -47,6 +54,33 @@ class StaticSolution:
     # the values they hold on their ports (n_inputs,) N, N m: the forces and moments, and the
     # actuators' at rest (`actuators.steady_port_values`); what the load stiffness takes
     port_values: np.ndarray | None = None
+    # the values the kinematic inputs hold (n_kinematic,) m or rad, and the generalised force
+    # that realises each, N or N m (`motions.input_effort`); empty without kinematic inputs
+    motions: np.ndarray | None = None
+    input_efforts: np.ndarray | None = None
+
+    def element_outputs(self) -> dict[str, float]:
+        """The outputs on elements ([outputs.NAME] element, deformation, quantity), by name.
+
+        Returns
+        -------
+        dict of str to float
+            {output name: m for a deformation, N for a stress resultant}.
+        """
+        values = element_output_values(self.model, self.config.e, self.stress_resultants)
+        return dict(zip([port.name for port in self.model.element_outputs], values.tolist(),
+                        strict=True))
+
+    def efforts(self) -> dict[str, float]:
+        """The force that realises each kinematic input, by name.
+
+        Returns
+        -------
+        dict of str to float
+            {input name: N on a translation or deformation, N m on a planar angle}.
+        """
+        names = [port.name for port in self.model.kinematic_inputs]
+        return dict(zip(names, np.asarray(self.input_efforts).tolist(), strict=True))
 
     @property
     def q(self) -> np.ndarray:
@@ -87,6 +121,7 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        tolerance: float = 1e-11, max_iterations: int = 30,
                        mechanics: Mechanics | None = None,
                        inputs: dict | np.ndarray | None = None,
+                       motions: dict | np.ndarray | None = None,
                        start: StaticSolution | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads, stepped with Newton.
 
@@ -111,6 +146,9 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         moment about a global axis through its generalised force on the Euler parameters
         (`flexure.core.mechanics.ports`; it depends on the orientation, so it cannot be
         given as `loads`), an actuator by its force or moment at rest (module docstring).
+    motions : dict of str to float or ndarray (n_kinematic,), optional
+        The values the kinematic inputs hold, m or rad (`motions.motion_values`; default the
+        scene's `value`s), stepped with the loads.
     start : StaticSolution, optional
         An equilibrium of the same model under nearby loads and inputs, where Newton starts
         at the full load (a path of equilibria, e.g. inverse statics along a move); if it
@@ -127,7 +165,7 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         A load step does not converge after four halvings (it names the step and the load
         factor).
     SceneError
-        `inputs` names an unknown input or has the wrong length.
+        `inputs` or `motions` names an unknown input or has the wrong length.
     """
     held = values = None
     if inputs is not None:
@@ -135,55 +173,74 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         values = steady_port_values(model, held) if model.actuators else held
     mech = mechanics or Mechanics(model)
     steps = dof_tolerances(model, tolerance)  # (NDOF,) m or rad
+    target = motion_values(model, motions)
+    prescribed = model.prescribed_dofs
+
+    def solution(config, iterations):
+        Q, _, sigma = mech.static_balance(config, 1.0, loads, values)
+        return StaticSolution(model, config, sigma, 1.0, iterations, held, values,
+                              target, input_effort(model, Q))
+
     if start is not None:
         try:
-            config, iterations = _newton(mech, start.config, 1.0, loads, values,
+            config, iterations = _newton(mech, start.config, 1.0, loads, values, target,
                                          steps, max_iterations)
         except ConvergenceError:
             pass
         else:
-            _, _, sigma = mech.static_balance(config, 1.0, loads, values)
-            return StaticSolution(model, config, sigma, 1.0, iterations, held, values)
+            return solution(config, iterations)
     config = mech.initial_configuration()
+    # the prescribed values go from the scene's configuration to `target` with the load
+    first = config.q[prescribed]
     total_iterations = 0
     # Without loads and gravity there is nothing to step: the reference configuration (all
     # deformations zero) balances, and one Newton step at full load confirms it.
-    unloaded = not np.any(mech.external_force(config.x, 1.0, loads, values))
+    unloaded = (not np.any(mech.external_force(config.x, 1.0, loads, values))
+                and np.array_equal(first, target))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     halvings = 0
     step_number = 0
     while factor < 1.0 - 1e-12:
-        target = min(1.0, factor + step)
+        target_factor = min(1.0, factor + step)
         try:
-            config, iterations = _newton(mech, config, target, loads, values,
+            config, iterations = _newton(mech, config, target_factor, loads, values,
+                                         first + target_factor * (target - first),
                                          steps, max_iterations)
         except ConvergenceError as error:
             if halvings == 4:
                 raise ConvergenceError(
                     f"{model.source}: static equilibrium of {model.name!r} did not converge in "
-                    f"load step {step_number + 1} (load factor {factor:.4g} -> {target:.4g}, "
+                    f"load step {step_number + 1} (load factor {factor:.4g} -> "
+                    f"{target_factor:.4g}, "
                     f"after {halvings} step halvings): {error}"
                 ) from None
             step *= 0.5
             halvings += 1
             continue
         total_iterations += iterations
-        factor = target
+        factor = target_factor
         step_number += 1
-    _, _, sigma = mech.static_balance(config, 1.0, loads, values)
-    return StaticSolution(model, config, sigma, 1.0, total_iterations, held, values)
+    return solution(config, total_iterations)
 
 
-def _newton(mech, config, load_factor, loads, values, step_tolerance, max_iterations):
+def _newton(mech, config, load_factor, loads, values, prescribed_values, step_tolerance,
+            max_iterations):
     """Newton's method at one load factor; values: the inputs' port values (N, N m);
-    step_tolerance (NDOF,) the largest converged |dq_j| (m or rad)."""
+    prescribed_values (n_kinematic,) the kinematic inputs' (m, rad), reached in the first
+    step; step_tolerance (NDOF,) the largest converged |dq_j| (m or rad)."""
     kin = mech.kinematics
+    model = mech.model
+    free, prescribed = model.free_dofs, model.prescribed_dofs
     for iteration in range(1, max_iterations + 1):
         Q, _, sigma = mech.static_balance(config, load_factor, loads, values)
         K = mech.structural_stiffness(config) + mech.geometric_stiffness(
             config, sigma, load_factor, inputs=values)
+        # Q - K dq = 0 on the DOFs proper, dq_k the move of the prescribed values
+        dq = np.zeros_like(Q)
+        dq[prescribed] = prescribed_values - config.q[prescribed]
         try:
-            dq = np.linalg.solve(K, Q)
+            dq[free] = np.linalg.solve(K[np.ix_(free, free)],
+                                       Q[free] - K[np.ix_(free, prescribed)] @ dq[prescribed])
         except np.linalg.LinAlgError:
             raise ConvergenceError("the tangent stiffness is singular") from None
         if not np.all(np.isfinite(dq)):

@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import SceneError, UsageError
 from ..reporting.tables import format_table, jsonable, print_json
 from . import PLOT_SUFFIXES, add_scene_arguments, atomic_output, count, output_file
+from .analyze_motion import motion_space_result, render_motion_space
 
 
 def register(subparsers):
@@ -96,8 +97,10 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     from ..mechanics.mechanics import Mechanics
     from ..mechanics.ports import output_value
 
-    result = {"scene": model.name, "dof_count": model.dof_count(), "dofs": model.dof_names,
-              "dofs_chosen": bool(model.chosen_dofs)}
+    result = {"scene": model.name, "dof_count": model.dof_count(),
+              "dofs": model.free_dof_names, "dofs_chosen": bool(model.chosen_dofs)}
+    if model.kinematic_inputs:  # prescribed, in q but no DOF of the motion
+        result["kinematic_inputs"] = [port.name for port in model.kinematic_inputs]
     for node in compliance_nodes:  # an unknown node is refused before any computation
         node_coordinates(model, node)
     mech = Mechanics(model)
@@ -114,6 +117,13 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                             "outputs": {port.name: output_value(model, port, solution.x)
                                         for port in model.outputs
                                         if port.quantity == "position"}}
+        if model.element_outputs:  # SPACAR's OUTE, OUTF: m or N
+            result["static"]["element_outputs"] = solution.element_outputs()
+        if model.kinematic_inputs:  # the held values and the force that realises each
+            result["static"]["kinematic_inputs"] = {
+                port.name: {"value": float(value), "effort": float(effort)}
+                for port, value, effort in zip(model.kinematic_inputs, solution.motions,
+                                               solution.input_efforts, strict=True)}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
@@ -138,7 +148,9 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
     if buckling is not None:
         factors = buckling_load_factors(model, None if buckling < 0 else buckling)
         result["buckling"] = {"load_factors": factors}
-    if with_state_space:
+    if with_state_space and model.kinematic_inputs:  # their positions as inputs
+        result["state_space_from_positions"] = motion_space_result(model, solution)
+    if with_state_space and (model.inputs or not model.kinematic_inputs):
         sys = state_space(model, linear_model=lin)
         result["state_space"] = {"A": sys.A, "B": sys.B, "C": sys.C, "D": sys.D,
                                  "inputs": [p.name for p in model.inputs],
@@ -282,11 +294,16 @@ def _shown_coordinates(model):
 def render(result):
     """The analyses of `analyze` as readable tables."""
     count = result["dof_count"]
-    parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} "
-             f"- {count['neo']} = {count['ndof']}   (DOFs: {', '.join(result['dofs'])}"
+    nki = ("- NKI ", f" - {count['nki']}") if "nki" in count else ("", "")
+    kinematic = result.get("kinematic_inputs")
+    parts = [f"scene {result['scene']}: NDOF = NX - NXO - NEO {nki[0]}= {count['nx']} - "
+             f"{count['nxo']} - {count['neo']}{nki[1]} = {count['ndof']}   (DOFs: "
+             f"{', '.join(result['dofs']) or 'none'}"
+             + (f"; kinematic inputs: {', '.join(kinematic)}" if kinematic else "")
              + ("; chosen by flexure, the scene lists none)" if result.get("dofs_chosen")
                 else ")")]
-    if not {"static", "modes", "buckling", "state_space", "principal_gains",
+    if not {"static", "modes", "buckling", "state_space", "state_space_from_positions",
+            "principal_gains",
             "compliance"} & result.keys():
         parts.append("exactly constrained; a kinematic model (no mass, no load), so there is "
                      "no equilibrium or mode to compute")
@@ -301,6 +318,17 @@ def render(result):
             title="\nstatic equilibrium: coordinates" + (
                 f" (the free ones; {left_out} left out: --json lists every coordinate)"
                 if left_out else "")))
+        if static.get("kinematic_inputs"):
+            parts.append(format_table(
+                ["kinematic input", "value (m, rad)", "effort (N, N m)"],
+                [(name, v["value"], v["effort"]) for name, v in
+                 static["kinematic_inputs"].items()],
+                title="\nstatic equilibrium: kinematic inputs and the force that realises each"))
+        if static.get("element_outputs"):
+            parts.append(format_table(
+                ["output", "value (m or N)"], list(static["element_outputs"].items()),
+                title="\nstatic equilibrium: outputs on elements (a deformation in m, a stress "
+                      "resultant in N)"))
         if static.get("outputs"):
             parts.append(format_table(["output", "value (m, rad)"],
                                       list(static["outputs"].items()),
@@ -335,6 +363,8 @@ def render(result):
                 parts.append(f"\n{key} =\n{np.array(ss[key])}")
         parts.append(f"\ninputs: {', '.join(ss['inputs'])}   outputs: {', '.join(ss['outputs'])}"
                      f"   states: {', '.join(ss['states'])}")
+    if "state_space_from_positions" in result:
+        parts.append(render_motion_space(result["state_space_from_positions"]))
     if "principal_gains" in result:
         gains = result["principal_gains"]
         f, sigma = np.array(gains["frequencies_hz"]), np.array(gains["singular_values"])

@@ -67,12 +67,15 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
     kin, scaled_De = _scaled_jacobian(model, x)
     problems = []
     if model.declared_dof_count != model.ndof:
-        declared = ", ".join(model.dof_names) or "none"
         count = model.dof_count()  # the course notes' count (3 per 3-D rotational node)
+        # a kinematic input has the status DOF (it is in q) but is no DOF of the motion
+        declared = ", ".join(model.free_dof_names) or "none"
+        nki = ("NKI ", f" - {count['nki']}") if "nki" in count else ("", "")
         problems.append(
-            f"NDOF = NX - NXO - NEO = {count['nx']} - {count['nxo']} - {count['neo']} = "
-            f"{count['ndof']}, "
-            f"but the scene declares {model.declared_dof_count} DOF(s): {declared}"
+            f"NDOF = NX - NXO - NEO {'- ' + nki[0] if nki[0] else ''}= {count['nx']} - "
+            f"{count['nxo']} - {count['neo']}{nki[1]} = {count['ndof']}, "
+            f"but the scene declares {model.declared_dof_count - count.get('nki', 0)} DOF(s): "
+            f"{declared}"
         )
     rows = scaled_De[np.ix_(kin.constraint_rows, kin.free)]
     dof_rows = np.zeros((kin.dof_positions.size, kin.free.size))
@@ -189,14 +192,32 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
         floor = 1e-12 * np.linalg.norm(rows, axis=1).max()
         return independent_rows(rows @ basis, count, floor=floor, relative=1e-6)
 
-    chosen_coordinates = pick(coordinate_rows, motions, ndof)
+    # The kinematic inputs (status DOF already) take their motions first; the DOFs are
+    # chosen among the other coordinates and deformations for the motions they leave free.
+    prescribed = np.zeros((0, free.size))
+    for port in model.kinematic_inputs:
+        if port.deformation is None:
+            row = np.zeros((1, free.size))
+            row[0, np.searchsorted(free, port.coordinate)] = scale[port.coordinate]
+        else:
+            row = scaled_De[np.ix_([port.deformation], free)]
+        prescribed = np.vstack([prescribed, row])
+    candidates = [k for k, i in enumerate(coordinates) if model.coordinate_status[free[i]] != DOF]
+    coordinate_rows = coordinate_rows[candidates]
     remaining = motions
+    if prescribed.shape[0]:
+        remaining = motions @ np.array(_null_space(prescribed @ motions)).reshape(-1, ndof).T
+        # (ndof, ndof - NKI) when the inputs' motions are independent; the check says if not
+    wanted = ndof - prescribed.shape[0]
+    chosen_coordinates = pick(coordinate_rows, remaining, wanted)
     if chosen_coordinates:  # the motions the chosen coordinates leave free
-        taken = coordinate_rows[chosen_coordinates] @ motions
-        remaining = motions @ np.array(_null_space(taken)).reshape(-1, ndof).T
-    chosen_deformations = pick(deformation_rows, remaining, ndof - len(chosen_coordinates))
-    if len(chosen_coordinates) + len(chosen_deformations) < ndof:
+        taken = coordinate_rows[chosen_coordinates] @ remaining
+        remaining = remaining @ np.array(_null_space(taken)).reshape(
+            -1, remaining.shape[1]).T
+    chosen_deformations = pick(deformation_rows, remaining, wanted - len(chosen_coordinates))
+    if len(chosen_coordinates) + len(chosen_deformations) < wanted:
         return None  # the check names the motion no DOF can take
+    chosen_coordinates = [candidates[k] for k in chosen_coordinates]
     coordinate_status = model.coordinate_status.copy()
     deformation_status = model.deformation_status.copy()
     names = []
@@ -218,8 +239,11 @@ def _fixed_dofs(model, kin, row_dependencies, n_constraints, motions):
     `motions` the free motions' coordinates."""
     lines = []
     moving = sorted({kin.free[i] for motion in motions for i in motion})
+    labels = list(model.dof_names)  # a kinematic input is a DOF row too: say which it is
+    for port, j in zip(model.kinematic_inputs, model.prescribed_dofs, strict=True):
+        labels[j] += f" (kinematic input {port.name})"
     for dependency in _involved(row_dependencies):
-        dofs = [model.dof_names[i - n_constraints] for i in dependency if i >= n_constraints]
+        dofs = [labels[i - n_constraints] for i in dependency if i >= n_constraints]
         if not dofs:
             continue  # among the prescribed deformations alone: the over-constraint above
         fixing = [model.deformation_names[kin.constraint_rows[i]] for i in dependency

@@ -166,24 +166,30 @@ class Scene:
         table["released"] = released + [d for d in deformations if d not in released]
         return self
 
-    def input(self, name: str, *, node: str, coordinate: str) -> Scene:
+    def input(self, name: str, *, node: str | None = None, coordinate: str | None = None,
+              **keys: Any) -> Scene:
         """Add an [inputs.NAME]: a force (N, or N m on a planar angle) on one coordinate, or
-        on a 3-D rotational node a moment (N m) about a global axis.
+        on a 3-D rotational node a moment (N m) about a global axis; with kind="motion" a
+        kinematic input that prescribes the coordinate, or (element=, deformation=) a
+        deformation (docs/scene-format.md).
 
         Parameters
         ----------
         name : str
-        node : str
+        node : str, optional
             The node it acts on.
-        coordinate : str
+        coordinate : str, optional
             "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
+        **keys
+            kind ("force" or "motion"), element, deformation, value (m or rad).
 
         Returns
         -------
         Scene
             This scene.
         """
-        return self._add("inputs", name, {"node": node, "coordinate": coordinate})
+        given = {"node": node, "coordinate": coordinate}
+        return self._add("inputs", name, {k: v for k, v in given.items() if v is not None} | keys)
 
     def actuator(self, name: str, *, input: str, **keys: Any) -> Scene:
         """Add an [actuators.NAME]: a voice-coil actuator driving an input.

@@ -267,12 +267,22 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             self.table("elements", data.get("elements", {})))
         if dimension == 3:
             self.add_normalisation(groups, deformation_names, deformation_status)
+            # a rotation prescribed about a global axis is its ROTATION pseudo-element's angle
+            self.motion_rotations = self.prescribed_rotations(data.get("inputs", {}))
+            self.rotation_dofs += self.motion_rotations
             self.add_rotation_dofs(groups, deformation_names, deformation_status)
-        inputs = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        # a kinematic input changes the status of its coordinate or deformation (`scene_ports`)
+        self.kinematic_deformation_names = deformation_names
+        self.kinematic_deformation_status = deformation_status
+        self.motion_values = {}
+        ports = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
+        kinematic = [port for port in ports if port.quantity == "motion"]
+        inputs = [port for port in ports if port.quantity != "motion"]
         actuators, inputs = self.build_actuators(data.get("actuators", {}), inputs)
         outputs = self.build_ports("outputs", data.get("outputs", {}), is_input=False)
+        element_outputs = [port for port in outputs if port.deformation is not None]
         for port in outputs:
-            if port.name in {p.name for p in inputs}:
+            if port.name in {p.name for p in ports}:
                 self.fail(f"outputs.{port.name}", f"the input inputs.{port.name} has the same "
                                                   "name; inputs and outputs need distinct names")
         self.check_unique("coordinate", self.coordinate_names)
@@ -297,8 +307,11 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             loads=np.array(self.loads),
             gravity=gravity,
             inputs=inputs,
-            outputs=outputs,
+            outputs=[port for port in outputs if port.deformation is None],
             actuators=actuators,
+            kinematic_inputs=kinematic,
+            element_outputs=element_outputs,
+            motion_values=np.array([self.motion_values[p.name] for p in kinematic]),
             buckling_loads=buckling,
             source=self.source,
             node_inertias=self.node_inertias,
