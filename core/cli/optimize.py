@@ -190,6 +190,7 @@ def plot_history(path, found, name):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.ticker import MaxNLocator
 
     steps = [step.number for step in found.history]
     panels = 2 + bool(found.constraints)
@@ -216,6 +217,7 @@ def plot_history(path, found, name):
         axes[-1].plot(steps, share[:, j], "o-", markersize=3, label=key)
     axes[-1].set_ylabel("(key - LO) / (HI - LO)", fontsize=8)
     axes[-1].set_xlabel("iteration", fontsize=8)
+    axes[-1].xaxis.set_major_locator(MaxNLocator(integer=True))  # no iteration 0.5
     axes[-1].legend(fontsize=7)
     for ax in axes:
         ax.grid(True, alpha=0.3)
