@@ -343,16 +343,18 @@ class _Importer(PortRecords, PropertyRecords, RecordReader):
         moving = self.moving()
         # held: an INPUTX coordinate fixed at its X position, an INPUTE deformation prescribed
         # zero (the spacar_ports docstring says why)
-        held = [f"{n}.{a}" for (n, a), (s, _) in sorted(self.coordinate_status.items())
+        held = [(n, a) for (n, a), (s, _) in sorted(self.coordinate_status.items())
                 if s == "input" and ("x", n, a) not in moving]
         held_e = [f"{e}.e{d}" for (e, d), (s, _) in sorted(self.deformation_status.items())
                   if s == "input" and ("e", e, d) not in moving]
-        self.notes += [f"INPUTX {c}: held (no INPUTX value, DELINPX or INX moves it): the fixed "
-                       f"coordinate {c}, at its X position" for c in held]
-        self.notes += [f"INPUTE {d}: held (no INPUTE value or DELINPE moves it): the "
-                       f"deformation {d} prescribed zero" for d in held_e]
+        self.notes += [f"INPUTX {c.replace('.', ' ')} -> the fixed coordinate {n}.{a}: held at "
+                       "its X position (no INPUTX value, DELINPX or INX moves it)"
+                       for c, (n, a) in ((self.spacar_coordinate(h), h) for h in held)]
+        self.notes += [f"INPUTE {d.replace('.e', ' ')} -> the deformation {d} prescribed zero: "
+                       "held (no INPUTE value or DELINPE moves it)" for d in held_e]
         description = f"imported from the SPACAR input file {self.path.name}" + (
-            f"; INPUTX held at the X position: {', '.join(held)}" if held else "") + (
+            f"; INPUTX held at the X position: {', '.join(f'{n}.{a}' for n, a in held)}"
+            if held else "") + (
             f"; INPUTE held at zero: {', '.join(held_e)}" if held_e else "")
         header = {"name": name, "description": description, "dimension": self.dimension}
         if self.gravity is not None:
@@ -368,6 +370,11 @@ class _Importer(PortRecords, PropertyRecords, RecordReader):
         if outputs:
             scene["outputs"] = outputs
         return scene
+
+    def spacar_coordinate(self, coordinate):
+        """"n.dir" of a (node, axis): its SPACAR numbers."""
+        node, axis = coordinate
+        return f"{node}.{self.axes(node).index(axis) + 1}"
 
     def node_table(self, node):
         kind = self.kinds[node][0]

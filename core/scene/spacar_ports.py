@@ -171,10 +171,13 @@ class PortRecords:
             table["start"] = start
         if given:  # where the run ends, and a static solution holds it
             table["value"] = start + given["increment"][0] if "increment" in given else start
-        increment = given.get("increment", (0.0,))[0]
-        said = (f"{what}: from {start!r} {unit} by {increment!r} {unit}" if "increment" in given
-                else f"{what}: held at {start!r} {unit}")
-        return table, said
+        delta = "DELINPX" if kind == "x" else "DELINPE"
+        if "increment" in given:
+            said = (f"from {start!r} {unit} by {given['increment'][0]!r} {unit} "
+                    f"({delta}) to {table['value']!r} {unit}, where a static solution holds it")
+        else:
+            said = f"held at {start!r} {unit} (no {delta})"
+        return table, f"{what} -> the kinematic input {{name}}: {said}"
 
     def port_tables(self):
         """The scene's "inputs" and "outputs" tables (those the file has), and one line per
@@ -184,7 +187,7 @@ class PortRecords:
 
         def motion(target):
             inputs[names[target]], said = self.motion_table(target)
-            notes.append(f"{said}: the kinematic input {names[target]}")
+            notes.append(said.format(name=names[target]))
 
         for k, (_, target, quantity) in self.numbered(self.ports["u"]):
             if quantity == "force":
