@@ -370,3 +370,37 @@ def test_an_input_on_an_euler_parameter_is_refused(tmp_path):
     with pytest.raises(SceneError, match=r"line 9: DELINPX: node 4 is a spatial rotational "
                                          "node: its Euler parameters cannot be inputs"):
         read_spacar(write(tmp_path, text))
+
+
+# -- the recorded move as a path in time -----------------------------------------------------------
+def test_the_recorded_increment_as_a_path_drives_inverse_dynamics(tmp_path):
+    """increment_path: the quintic from start to value, at rest at both ends, its rate and
+    acceleration the derivatives of its value; a mass m on a truss k moved along it takes
+    F = m u'' + k (u - X) from inverse dynamics (the truss massless: EM absent)."""
+    from flexure.core.analysis.inverse_dynamics import inverse_dynamics
+    from flexure.core.analysis.motion_paths import increment_path
+
+    mass, duration, t0 = 0.206, 0.05, 0.01
+    text = ("PLTRUSS 1 1 2\nX 1 0.0 0.0\nX 2 0.1 0.0\nFIX 1\nFIX 2 2\nINPUTX 2 1\nRLSE 1 1\n"
+            f"END\nESTIFF 1 {EA1}\nXM 2 {mass}\nINPUTX 2 1 0.1002\nDELINPX 2 1 {DELTA}\nEND\n")
+    model = load_scene(write(tmp_path, text))
+    path = increment_path(model, duration, t0=t0)
+    for t, value in ((0.0, 0.1002), (t0, 0.1002), (t0 + duration, 0.1012), (1.0, 0.1012)):
+        u, rate, acceleration = path(t)
+        assert u[0] == pytest.approx(value, rel=1e-15) and rate[0] == acceleration[0] == 0.0
+    h = 1e-6  # s: central differences of the quintic, exact to O(h^2) of its derivatives
+    peak_rate, peak_acceleration = 1.875 * DELTA / duration, 5.78 * DELTA / duration**2
+    for t in np.linspace(t0 + 0.1 * duration, t0 + 0.9 * duration, 5):
+        assert path(t)[1][0] == pytest.approx((path(t + h)[0][0] - path(t - h)[0][0]) / (2 * h),
+                                              abs=1e-6 * peak_rate)
+        assert path(t)[2][0] == pytest.approx((path(t + h)[1][0] - path(t - h)[1][0]) / (2 * h),
+                                              abs=1e-6 * peak_acceleration)
+    times = np.linspace(0.0, t0 + 1.2 * duration, 31)
+    result = inverse_dynamics(model, times, path)
+    u = np.array([path(t)[0][0] for t in times])
+    a = np.array([path(t)[2][0] for t in times])
+    expected = mass * a + K1 * (u - 0.1)
+    effort = result.efforts[:, 0]
+    assert np.max(np.abs(effort - expected)) < 1e-12 * np.max(np.abs(expected))
+    with pytest.raises(SceneError, match="duration must be a finite number of seconds > 0"):
+        increment_path(model, 0.0)
