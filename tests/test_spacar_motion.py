@@ -404,3 +404,16 @@ def test_the_recorded_increment_as_a_path_drives_inverse_dynamics(tmp_path):
     assert np.max(np.abs(effort - expected)) < 1e-12 * np.max(np.abs(expected))
     with pytest.raises(SceneError, match="duration must be a finite number of seconds > 0"):
         increment_path(model, 0.0)
+
+
+def test_a_scenes_start_key_is_checked_and_defaults_value(tmp_path):
+    """[inputs.NAME] start: a number (m, rad), the default of value; --set reaches it."""
+    data = read_spacar(write(tmp_path, CHAIN))
+    data["inputs"]["u1"] = {"kind": "motion", "node": "3", "coordinate": "x", "start": 0.2004}
+    model = build_model(data)
+    assert model.motion_starts[0] == model.motion_values[0] == 0.2004
+    data["inputs"]["u1"]["start"] = "far"
+    with pytest.raises(SceneError, match=r"inputs\.u1\.start: expected a number"):
+        build_model(data)
+    moved = load_scene(write(tmp_path, CHAIN), overrides={"inputs.u1.start": 0.1999})
+    assert moved.motion_starts[0] == 0.1999 and moved.motion_values[0] == 0.2 + DELTA
