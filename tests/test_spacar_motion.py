@@ -417,3 +417,18 @@ def test_a_scenes_start_key_is_checked_and_defaults_value(tmp_path):
         build_model(data)
     moved = load_scene(write(tmp_path, CHAIN), overrides={"inputs.u1.start": 0.1999})
     assert moved.motion_starts[0] == 0.1999 and moved.motion_values[0] == 0.2 + DELTA
+
+
+def test_delinpx_on_a_planar_angle_gives_4_ei_over_l(tmp_path):
+    """A beam clamped at its foot, its tip held in place and turned by 1 urad: the moment
+    4 EI / L theta (N m), within (theta)^2 of geometric nonlinearity."""
+    text = (LEAF_DAT.replace("FIX      4\nINPUTX   3   1", "FIX      3\nINPUTX   4   1")
+            .replace("DELINPX  3   1   1e-7", "DELINPX  4   1   1e-6")
+            .replace("RLSE     1   2 3", "RLSE     1   1 2 3"))  # the tip held: e1 elastic
+    data, notes = import_spacar(write(tmp_path, text))
+    assert notes == ["INPUTX 4 1 -> the kinematic input inputx_4_phi: from 0.0 rad by 1e-06 rad "
+                     "(DELINPX) to 1e-06 rad, where a static solution holds it"]
+    model = build_model(data)
+    assert model.kinematic_inputs[0].unit == "rad"
+    effort = static_equilibrium(model).efforts()["inputx_4_phi"]
+    assert effort == pytest.approx(4 * EI / LEAF * 1e-6, rel=1e-9)

@@ -36,9 +36,9 @@ STATUS_WORDS = {"fixed": "fixed", "input": "an input", "dof": "a DOF", "released
                 "edof": "a DOF"}
 
 # after the kinematic block, each keyword that gives a kinematic input's start or increment:
-# (what it moves, "start" or "increment", its declaring keyword)
-MOTION_VALUES = {"INPUTX": ("x", "start", "INPUTX"), "DELINPX": ("x", "increment", "INPUTX"),
-                 "INPUTE": ("e", "start", "INPUTE"), "DELINPE": ("e", "increment", "INPUTE")}
+# (what it moves, a coordinate "x" or a deformation "e"; "start" or "increment")
+MOTION_VALUES = {"INPUTX": ("x", "start"), "DELINPX": ("x", "increment"),
+                 "INPUTE": ("e", "start"), "DELINPE": ("e", "increment")}
 # each numbered port keyword: (its vector, "u" or "y", and what it reads)
 PORTS = {"INPUTF": ("u", "force"), "INX": ("u", "motion"), "OUTX": ("y", "position"),
          "OUTXP": ("y", "velocity"), "OUTE": ("y", "deformation"), "OUTF": ("y", "stress")}
@@ -59,7 +59,7 @@ class PortRecords:
     def motion_value(self, record):
         """INPUTX / INPUTE with a value (after the kinematic block), DELINPX, DELINPE: one
         kinematic input's start or increment, m (rad on a planar angle)."""
-        kind, which, declaring = MOTION_VALUES[record.keyword]
+        kind, which = MOTION_VALUES[record.keyword]
         if kind == "x":
             words = self.count(record, {3}, "node number, direction and value")
             node = self.node(record, words[0])
@@ -162,8 +162,8 @@ class PortRecords:
             axes = self.axes(owner)
             scene_start = (self.positions[owner][0][axes.index(which)]
                            if self.kinds[owner][0] != R else 0.0)
-            what, unit = f"INPUTX {owner} {axes.index(which) + 1}", "rad" if which == "phi" \
-                else "m"
+            what = f"INPUTX {owner} {axes.index(which) + 1}"
+            unit = "rad" if which == "phi" else "m"
         else:
             scene_start, what, unit = 0.0, f"INPUTE {owner} {which}", "m"
         start = given["start"][0] if "start" in given else scene_start
