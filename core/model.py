@@ -177,6 +177,9 @@ class Model:
     # a coordinate or deformation whose status is DOF (it is in q), with its held value
     kinematic_inputs: list = field(default_factory=list)
     motion_values: np.ndarray | None = None  # (n_kinematic,) m or rad: the scene's `value`s
+    # (n_kinematic,) m or rad: where each input's move starts (the scene's `start`s, SPACAR's
+    # INPUTX / INPUTE values); value - start is its increment over a run (DELINPX, DELINPE)
+    motion_starts: np.ndarray | None = None
     # The outputs on elements (SPACAR's OUTE, OUTF): Ports of quantity "deformation" (m) or
     # "stress" (N) with their deformation's index; apart from `outputs`, which the engine reads
     element_outputs: list = field(default_factory=list)

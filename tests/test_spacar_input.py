@@ -336,8 +336,9 @@ MISTAKES = [
      "FIX: belongs to the kinematic block, before the first END"),
     ("dynamics before END", TRUSS, edit(TRUSS, "DYNX 2 1", "DYNX 2 1\nXM 2 0.1"), 8,
      "XM: belongs after the kinematic block's END"),
-    ("an input value", TRUSS, edit(TRUSS, "XM 2 0.206", "INPUTX 2 1 0.2"), 12,
-     "INPUTX: a prescribed input value after the kinematic block is not supported"),
+    ("an input value for a DOF", TRUSS, edit(TRUSS, "XM 2 0.206", "INPUTX 2 1 0.2"), 12,
+     "INPUTX: x of node 2 is not a kinematic input: it is a DOF (DYNX, line 7); declare it "
+     "with INPUTX 2 1 before the first END"),
     ("an input number twice", TRUSS, edit(TRUSS, "OUTX 1 2 1", "INPUTF 1 2 2"), 17,
      "number 1 is given twice (first in INPUTF on line 16)"),
     ("a gap in the outputs", TRUSS, edit(TRUSS, "OUTX 1 2 1", "OUTXP 2 2 1"), 17,

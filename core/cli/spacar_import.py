@@ -16,9 +16,11 @@ def register(subparsers):
     parser = subparsers.add_parser(
         "import", help="write a SPACAR input file (.dat) as a scene file (TOML)",
         description="Read a SPACAR input file (X, PLTRUSS, PLBEAM, TRUSS, BEAM, FIX, INPUTX, "
-                    "DYNX, DYNE, RLSE, ESTIFF, EDAMP, EM, XM, XF, GRAVITY, INPUTF, OUTX, "
-                    "OUTXP; docs/scene-format.md) and write it as a scene file. Every command "
-                    "also reads a .dat file directly.")
+                    "INPUTE, DYNX, DYNE, RLSE, ESTIFF, EDAMP, EM, XM, XF, GRAVITY, DELINPX, "
+                    "DELINPE, INPUTF, INX, OUTX, OUTXP, OUTE, OUTF; docs/scene-format.md) and "
+                    "write it as a scene file; say what each INPUTX and INPUTE became (a "
+                    "kinematic input, or held). Every command also reads a .dat file "
+                    "directly.")
     parser.add_argument("file", help="the SPACAR input file (.dat)")
     parser.add_argument("-o", "--out", type=output_file((".toml",)), metavar="TOML",
                         help="the scene file to write (default: FILE's name with .toml, here)")
@@ -29,12 +31,12 @@ def run(args):
     from ..errors import SceneError
     from ..scene.building import build_model
     from ..scene.scene_writer import scene_toml
-    from ..scene.spacar_input import read_spacar
+    from ..scene.spacar_input import import_spacar
 
     path = Path(args.file)
     if path.suffix.lower() != ".dat":
         raise SceneError(f"{path}: expected a SPACAR input file ending in .dat")
-    data = read_spacar(path)
+    data, notes = import_spacar(path)
     expected = SECONDS_PER_ELEMENT * len(data["elements"])
     if expected > SAY_FROM_S:  # the building and writing take most of it: say so first
         print(f"flexure import: {len(data['elements'])} elements and {len(data['nodes'])} "
@@ -46,10 +48,22 @@ def run(args):
     refuse_overwriting_inputs([("--out", out)], [path])
     text = scene_toml(data, f"Imported by `flexure import` from the SPACAR input file "
                             f"{path.name}:\nnodes and elements keep SPACAR's numbers, input k is "
-                            "uk (INPUTF), output k is yk (OUTX, OUTXP).")
+                            "uk (INPUTF, INX),\noutput k is yk (OUTX, OUTXP, OUTE, OUTF); "
+                            "a kinematic input moves from its start to its value (DELINPX, "
+                            "DELINPE: value - start).")
     code = write_outputs("flexure import", [("--out", Path(out), lambda t: Path(t).write_text(
         text))])
     count = model.dof_count()
+    nki = f" - {count['nki']}" if "nki" in count else ""
     print(f"{len(data['nodes'])} nodes, {len(data['elements'])} elements; NDOF = NX - NXO - "
-          f"NEO = {count['nx']} - {count['nxo']} - {count['neo']} = {count['ndof']}")
+          f"NEO{' - NKI' * ('nki' in count)} = {count['nx']} - {count['nxo']} - "
+          f"{count['neo']}{nki} = {count['ndof']}")
+    for note in notes:  # what each INPUTX and INPUTE became
+        print(note)
+    if model.kinematic_inputs:
+        print(f"flexure import: warning: {path}: {len(model.kinematic_inputs)} kinematic "
+              "input(s): static_equilibrium (`flexure analyze --static`, at each input's value), "
+              "motion_state_space and inverse_dynamics take them; `flexure simulate`, `loop` "
+              "and `fmu build` refuse them until the compiled engine prescribes motion",
+              file=sys.stderr)
     return code

@@ -181,7 +181,8 @@ class Scene:
         coordinate : str, optional
             "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
         **keys
-            kind ("force" or "motion"), element, deformation, value (m or rad).
+            kind ("force" or "motion"), element, deformation, value (m or rad: what a static
+            solution holds, the end of the move), start (m or rad: where the move starts).
 
         Returns
         -------

@@ -274,7 +274,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
         # a kinematic input changes the status of its coordinate or deformation (`scene_ports`)
         self.kinematic_deformation_names = deformation_names
         self.kinematic_deformation_status = deformation_status
-        self.motion_values = {}
+        self.motion_values, self.motion_starts = {}, {}
         ports = self.build_ports("inputs", data.get("inputs", {}), is_input=True)
         kinematic = [port for port in ports if port.quantity == "motion"]
         inputs = [port for port in ports if port.quantity != "motion"]
@@ -312,6 +312,7 @@ class _SceneBuilder(SceneReader, SectionBuilding, ElementBuilding, RotationalNod
             kinematic_inputs=kinematic,
             element_outputs=element_outputs,
             motion_values=np.array([self.motion_values[p.name] for p in kinematic]),
+            motion_starts=np.array([self.motion_starts[p.name] for p in kinematic]),
             buckling_loads=buckling,
             source=self.source,
             node_inertias=self.node_inertias,

@@ -6,7 +6,9 @@ An input of `kind = "motion"` is a kinematic input (SPACAR's INPUTX, INPUTE): it
 a node's coordinate (m, or rad on a planar angle) or an element's deformation (m), which then
 takes the status DOF and is no DOF of the motion: NDOF = NX - NXO - NEO - NKI
 (`flexure.core.mechanics.motions`). Its optional `value` is the value it holds in a static
-solution (default: the scene's coordinate; a deformation's 0, the unstressed length).
+solution, the end of its move; its optional `start` the value the move starts from (SPACAR's
+INPUTX / INPUTE value, `value` - `start` its DELINPX / DELINPE increment). `start` defaults to
+the scene's coordinate (a deformation's 0, the unstressed length), `value` to `start`.
 
 An output on an element (`element`, `deformation`, `quantity = "deformation"` or
 `"stress"`) reads that deformation (m) or its stress resultant (N; a bending or torsion one is
@@ -94,10 +96,11 @@ class PortBuilding:
     def motion_port(self, key, name, port):
         """A kinematic input: on a coordinate (node, coordinate) or a deformation (element,
         deformation), which must be free and not listed as a DOF, and becomes a DOF whose value
-        is prescribed. Its held `value` goes to `self.motion_values`."""
+        is prescribed. Its held `value` goes to `self.motion_values`, its `start` to
+        `self.motion_starts` (`held_value`)."""
         on_element = "element" in port or "deformation" in port
-        self.check_keys(key, port, {"kind", "element", "deformation", "value"} if on_element
-                        else {"kind", "node", "coordinate", "value"})
+        self.check_keys(key, port, {"kind", "element", "deformation", "value", "start"}
+                        if on_element else {"kind", "node", "coordinate", "value", "start"})
         if on_element:
             return self._deformation_motion(key, name, port)
         node = self.node(f"{key}.node", port.get("node"))
@@ -114,9 +117,8 @@ class PortBuilding:
                                            "kinematic input already: a kinematic input takes "
                                            "a dependent coordinate; remove it from "
                                            f"nodes.{node}.dof")
-        value = self.number(f"{key}.value", port.get("value", self.initial[index]))
+        self.held_value(key, name, port, self.initial[index])
         self.status[index] = DOF
-        self.motion_values[name] = value
         unit = "m" if self._is_translation(port) else "rad"
         return Port(name, index, "motion", unit)
 
@@ -161,7 +163,7 @@ class PortBuilding:
     def _rotation_motion(self, key, name, node, port):
         """A kinematic input about a global axis of a 3-D rotational node: the angle of its
         ROTATION pseudo-element (rad, the rotation-vector component), prescribed."""
-        self.check_keys(key, port, {"kind", "node", "coordinate", "value"})
+        self.check_keys(key, port, {"kind", "node", "coordinate", "value", "start"})
         axis = port.get("coordinate")
         if not isinstance(axis, str) or axis not in GLOBAL_ROTATIONS:
             self.fail(f"{key}.coordinate", f"node {node!r} is a 3-D rotational node: expected "
@@ -177,9 +179,7 @@ class PortBuilding:
         self.motion_rotations.remove((node, axis))  # a second input on it is refused above
         index = self.kinematic_deformation_names.index(f"{node}.{axis}")
         start = rotation_vector_derivatives(self.node_values(node), order=0)[0][0]
-        value = self.number(f"{key}.value",
-                            port.get("value", start[GLOBAL_ROTATIONS.index(axis)]))
-        self.motion_values[name] = value
+        self.held_value(key, name, port, start[GLOBAL_ROTATIONS.index(axis)])
         return Port(name, None, "motion", "rad", deformation=index)
 
     def _deformation_motion(self, key, name, port):
@@ -191,10 +191,17 @@ class PortBuilding:
                                             f"(elements.{element}): a kinematic input takes a "
                                             "deformation the scene prescribes zero; remove it "
                                             "from released and dof")
-        value = self.number(f"{key}.value", port.get("value", 0.0))
+        self.held_value(key, name, port, 0.0)
         self.kinematic_deformation_status[index] = DOF
-        self.motion_values[name] = value
         return Port(name, None, "motion", "m", deformation=index)
+
+    def held_value(self, key, name, port, scene_value):
+        """The input's `start` (default `scene_value`, the scene's coordinate, rotation
+        component or 0 on a deformation) and `value` (default `start`: an input without a move
+        holds where it starts), m or rad, into `motion_starts` and `motion_values`."""
+        start = self.number(f"{key}.start", port.get("start", scene_value))
+        self.motion_starts[name] = start
+        self.motion_values[name] = self.number(f"{key}.value", port.get("value", start))
 
     def _is_translation(self, port):
         return port.get("coordinate") in ("x", "y", "z")[: self.dimension]

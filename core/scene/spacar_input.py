@@ -2,13 +2,16 @@
 
 A SPACAR input file holds one keyword per line followed by its numbers; `%` or `#` starts a
 comment, keywords may be in either case. Its data come in blocks, each closed by END: the
-kinematic block first (X, the elements, FIX, INPUTX, DYNX, DYNE, RLSE), then the dynamic
-data (ESTIFF, EDAMP, EM, XM, XF, GRAVITY, INPUTF, OUTX, OUTXP); HALT may follow an END, and
+kinematic block first (X, the elements, FIX, INPUTX, INPUTE, DYNX, DYNE, RLSE), then the
+dynamic data (ESTIFF, EDAMP, EM, XM, XF, GRAVITY: `spacar_properties`; the inputs' start
+values INPUTX, INPUTE and increments DELINPX, DELINPE, the inputs INPUTF, INX and the outputs
+OUTX, OUTXP, OUTE, OUTF: `spacar_ports`); HALT may follow an END, and
 END END ends the input (what follows, such as SPAVISUAL's VISUALIZATION data, is not read).
 Node numbers name flexure's nodes ("1", "2", ...), element numbers its elements and their
 sections; directions 1, 2, 3 are x, y, z (1 is phi on a planar rotational node, 1 to 4 the
-Euler parameters of a spatial one); deformation numbers n are flexure's "en"; INPUTF number k
-is the input "uk", OUTX / OUTXP number k the output "yk" (one numbering, SPACAR's vector y).
+Euler parameters of a spatial one); deformation numbers n are flexure's "en"; INPUTF / INX
+number k is the input "uk" (one numbering, SPACAR's vector u), OUTX / OUTXP / OUTE / OUTF
+number k the output "yk" (one numbering, SPACAR's vector y).
 
     PLTRUSS e p q             TRUSS e p q               FIX n [dir ...]
     PLBEAM e p rp q rq        BEAM e p rp q rq yx yy yz  INPUTX n dir [dir ...]
@@ -18,6 +21,9 @@ is the input "uk", OUTX / OUTXP number k the output "yk" (one numbering, SPACAR'
     EM e rho_A [0]            EM e rho_A [rho(Iy+Iz) rho_Iy rho_Iz 0]  (BEAM)
     XM n m | J | Jxx Jxy Jxz Jyy Jyz Jzz    XF n fx fy [fz] | M    GRAVITY gx gy [gz]
     INPUTF k n dir            OUTX k n dir              OUTXP k n dir     ITERSTEP ... (ignored)
+    INPUTE e def [def ...]    INPUTX n dir x | INPUTE e def v  (after END: the start values)
+    DELINPX n dir dx          DELINPE e def dv          INX k n dir
+    OUTE k e def              OUTF k e def
 
 What this is based on (SPACAR's own manual was not at hand):
 - The course notes "Prototype modelling of mechanic systems" (Aarts, Jonker, van Dijk,
@@ -33,7 +39,10 @@ What this is based on (SPACAR's own manual was not at hand):
   the shear coefficient of its calc_stiffness; read as the shear stiffnesses GAs_z = EIy / sy
   and GAs_y = EIz / sz, N), EM with m/L Jxx/L Jyy/L Jzz/L Jyz/L, XM with a mass
   or Ixx Ixy Ixz Iyy Iyz Izz, XF, GRAVITY, ITERSTEP, INPUTF / OUTX / OUTXP, the blocks
-  END HALT ... END END and `#` comments.
+  END HALT ... END END and `#` comments; `INPUTX n dir x` after the kinematic block (the
+  input's start, an absolute coordinate: the X position plus its initial displacement) and
+  `DELINPX n dir dx` (its increment over the load steps), and INX, OUTF in its draft of a
+  state space (commented out: INX k n dir numbered with INPUTF).
 Where they are silent (the PLTRUSS, PLBEAM and TRUSS lines, EDAMP, DYNX, the planar counts,
 the PLBEAM's shear term, taken as EI / (k G A) after the BEAM's) the choice made here follows
 the same pattern and is documented in docs/scene-format.md, with what is refused. Every
@@ -44,8 +53,11 @@ import re
 from pathlib import Path
 
 from ..errors import SceneError
+from .spacar_ports import STATUS_WORDS, PortRecords
+from .spacar_properties import PropertyRecords
 from .spacar_records import (
     AXES,
+    BOTH_BLOCKS,
     DYNAMIC,
     ELEMENTS,
     KINEMATIC,
@@ -57,10 +69,7 @@ from .spacar_records import (
     records,
 )
 
-__all__ = ["read_spacar"]
-
-STATUS_WORDS = {"fixed": "fixed", "input": "an input", "dof": "a DOF", "released": "released",
-                "edof": "a DOF"}
+__all__ = ["import_spacar", "read_spacar"]
 
 
 def read_spacar(path: str | Path) -> dict:
@@ -84,6 +93,28 @@ def read_spacar(path: str | Path) -> dict:
         "`path`: line N: KEYWORD: what is wrong" for an unreadable file, a mistake, or what
         flexure does not support.
     """
+    return import_spacar(path)[0]
+
+
+def import_spacar(path: str | Path) -> tuple[dict, list[str]]:
+    """The scene dictionary of a SPACAR input file (`read_spacar`) and what became of its
+    INPUTX and INPUTE coordinates and deformations, one line each (`flexure import` prints
+    them): a kinematic input with its start and increment, or held.
+
+    Parameters
+    ----------
+    path : str or Path
+        The SPACAR input file (.dat).
+
+    Returns
+    -------
+    tuple of (dict, list of str)
+
+    Raises
+    ------
+    SceneError
+        As `read_spacar`.
+    """
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -92,10 +123,11 @@ def read_spacar(path: str | Path) -> dict:
     # keywords and numbers are ASCII: a byte that is not UTF-8 (8-bit text in a comment) can
     # only matter outside a comment, where its replacement character is a named mistake
     found = records(path, raw.decode("utf-8", errors="replace"))
-    return _Importer(path, found).scene()
+    importer = _Importer(path, found)
+    return importer.scene(), importer.notes
 
 
-class _Importer(RecordReader):
+class _Importer(PortRecords, PropertyRecords, RecordReader):
     """Turns the records of one file into a scene dictionary, checking each."""
 
     def __init__(self, path, found):
@@ -112,7 +144,8 @@ class _Importer(RecordReader):
         self.given = {}  # (keyword, number) -> record: property lines given once
         self.first_element = None  # the record that set the dimension
         self.gravity = None
-        self.ports = {"INPUTF": {}, "OUTX": {}}  # number -> (record, node, axis, quantity)
+        self.notes = []  # what each INPUTX / INPUTE became (`import_spacar`)
+        self.init_ports()
 
     # -- the scene ------------------------------------------------------------------------
     def scene(self):
@@ -136,12 +169,17 @@ class _Importer(RecordReader):
                                                  "initial position)")
         handlers = {"FIX": self.fix, "INPUTX": self.coordinate_list, "DYNX": self.coordinate_list,
                     "DYNE": self.deformation_list, "RLSE": self.deformation_list,
+                    "INPUTE": self.deformation_list, "DELINPX": self.motion_value,
+                    "DELINPE": self.motion_value, "INX": self.port, "OUTE": self.port,
+                    "OUTF": self.port,
                     "ESTIFF": self.stiffness, "EDAMP": self.stiffness, "EM": self.mass_per_length,
                     "XM": self.lumped_mass, "XF": self.force, "GRAVITY": self.set_gravity,
                     "INPUTF": self.port, "OUTX": self.port, "OUTXP": self.port,
                     "ITERSTEP": lambda record: None}  # flexure's solver has its own steps
         for record in self.records:
-            if record.keyword in handlers:
+            if record.keyword in BOTH_BLOCKS and record.block > 0:
+                self.motion_value(record)  # a start value, after the declarations
+            elif record.keyword in handlers:
                 handlers[record.keyword](record)
         self.check_released_stiffness()
         return self.assemble()
@@ -156,9 +194,8 @@ class _Importer(RecordReader):
                 self.fail(record, "a line must start with a keyword, not a number")
             self.fail(record, f"unknown keyword (flexure reads "
                               f"{', '.join(sorted(KINEMATIC | DYNAMIC))}, END and HALT)")
-        if keyword == "INPUTX" and record.block > 0:
-            self.fail(record, "a prescribed input value after the kinematic block is not "
-                              "supported (an INPUTX coordinate stays at its X position)")
+        if keyword in BOTH_BLOCKS:
+            return  # declarations before the first END, start values after it
         if keyword in KINEMATIC and record.block > 0:
             self.fail(record, "belongs to the kinematic block, before the first END")
         if keyword in DYNAMIC and record.block == 0:
@@ -276,16 +313,13 @@ class _Importer(RecordReader):
                             f"{axis} of node {node}")
 
     def deformation_list(self, record):
-        """DYNE (DOF) or RLSE (released) deformations of one element."""
+        """DYNE (DOF), RLSE (released) or INPUTE (kinematic input) deformations of one
+        element."""
         words = self.at_least(record, 2, "element number and one or more deformation numbers")
         number = self.element_number(record, words[0])
-        count = len(ELEMENTS[self.elements[number]["type"]].stiffness_of)
-        status = "edof" if record.keyword == "DYNE" else "released"
+        status = {"DYNE": "edof", "RLSE": "released", "INPUTE": "input"}[record.keyword]
         for word in words[1:]:
-            deformation = self.integer(record, word, "a deformation number")
-            if deformation > count:
-                self.fail(record, f"element {number} ({self.elements[number]['type']}) has "
-                                  f"deformations 1 to {count}; got {deformation}")
+            deformation = self.deformation_number(record, number, word)
             self.set_status(self.deformation_status, (number, deformation), status, record,
                             f"deformation {deformation} of element {number}")
 
@@ -300,135 +334,28 @@ class _Importer(RecordReader):
                                   f"{needed} > 0 (a released deformation deforms elastically; "
                                   "a free one is a DOF: DYNE)")
 
-    # -- the dynamic data -------------------------------------------------------------------
-    def once(self, record, number, what):
-        """Refuse a property line given twice for the same element or node."""
-        first = self.given.setdefault((record.keyword, number), record)
-        if first is not record:
-            self.fail(record, f"{what} {number}: given twice (first on line {first.line})")
-
-    def stiffness(self, record):
-        """ESTIFF (stiffness) or EDAMP (damping) of one element."""
-        self.at_least(record, 1, "element number and the values")
-        number = self.element_number(record, record.words[0])
-        syntax = ELEMENTS[self.elements[number]["type"]]
-        keys = syntax.stiffness if record.keyword == "ESTIFF" else syntax.damping
-        shear_names = tuple(f"{bending}/{shear}" for shear, bending in syntax.shear)
-        allowed = {len(keys) + 1, len(keys) + 1 + len(syntax.shear)}
-        shear_text = f" and optionally {' '.join(shear_names)}" * bool(syntax.shear)
-        words = self.count(record, allowed, f"element number, then {' '.join(keys)}{shear_text} "
-                                            f"for a {self.elements[number]['type']}")
-        self.once(record, number, "element")
-        values = [self.number(record, w, name, minimum=0.0)
-                  for w, name in zip(words[1:], (*keys, *shear_names), strict=False)]
-        section = self.sections.setdefault(number, {})
-        section.update(zip(keys, values, strict=False))
-        shear_terms = values[len(keys):]
-        if record.keyword == "EDAMP":
-            if any(shear_terms):
-                self.fail(record, "flexure's damping has no shear terms of its own (it bends "
-                                  "with the stiffness's shear ratio): they must be 0, got "
-                                  f"{' '.join(words[1 + len(keys):])}")
-            return
-        for (shear, bending), term in zip(syntax.shear, shear_terms, strict=False):
-            if term > 0.0:  # 0: rigid in shear, the default
-                section[shear] = self.shear_stiffness(record, number, section[bending],
-                                                      (shear, bending), term)
-
-    def mass_per_length(self, record):
-        """EM: mass per length and, for a BEAM, the section's rotational inertia per length."""
-        self.at_least(record, 1, "element number and the values")
-        number = self.element_number(record, record.words[0])
-        kind = self.elements[number]["type"]
-        allowed = {"PLTRUSS": {2}, "TRUSS": {2}, "PLBEAM": {2, 3}, "BEAM": {2, 6}}[kind]
-        names = {"PLBEAM": ("rho_A", "J/L"),
-                 "BEAM": ("rho_A", "Jxx/L", "Jyy/L", "Jzz/L", "Jyz/L")}.get(kind, ("rho_A",))
-        words = self.count(record, allowed, f"element number, then {' '.join(names)} for a "
-                                            f"{kind}")
-        self.once(record, number, "element")
-        values = [self.number(record, w, name, minimum=None if name == "Jyz/L" else 0.0)
-                  for w, name in zip(words[1:], names, strict=False)]
-        section = self.sections.setdefault(number, {})
-        section["rho_A"] = values[0]
-        if kind == "PLBEAM" and len(values) == 2 and values[1] != 0.0:
-            self.fail(record, "flexure's PLBEAM neglects the section's rotational inertia: "
-                              f"J/L must be 0, got {words[2]}")
-        if kind == "BEAM" and len(values) == 5:
-            jxx, jyy, jzz, jyz = values[1:]
-            # flexure's torsional inertia is rho (Iy + Iz); the file's values carry about 15
-            # decimals (SPACAR Light writes %20.15f), so their sum may differ by round-off
-            if abs(jxx - (jyy + jzz)) > 1e-9 * jxx + 3e-15:
-                self.fail(record, f"Jxx/L = {words[2]} is not Jyy/L + Jzz/L = {jyy + jzz!r}: "
-                                  "flexure's torsional inertia of a section is rho (Iy + Iz)")
-            if jyz != 0.0:
-                self.fail(record, f"Jyz/L must be 0 (flexure takes principal axes), got "
-                                  f"{words[5]}")
-            section.update(rho_Iy=jyy, rho_Iz=jzz)
-
-    def lumped_mass(self, record):
-        """XM: a translational node's mass, a planar rotational node's inertia, or a spatial
-        rotational node's inertia tensor Ixx Ixy Ixz Iyy Iyz Izz (body frame)."""
-        self.at_least(record, 1, "node number and the values")
-        node = self.node(record, record.words[0])
-        kind = self.kinds[node][0]
-        if kind == R and self.dimension == 3:
-            words = self.count(record, {7}, "node number, then Ixx Ixy Ixz Iyy Iyz Izz")
-            xx, xy, xz, yy, yz, zz = (self.number(record, w, "inertia") for w in words[1:])
-            value = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
-        else:
-            what = "mass" if kind == T else "rotational inertia"
-            words = self.count(record, {2}, f"node number and its {what}")
-            # a lumped rotational inertia may be negative (SPACAR's lumped bar model)
-            value = self.number(record, words[1], what, minimum=0.0 if kind == T else None)
-        self.once(record, node, "node")
-        self.nodal[(node, "mass")] = (value, record)
-
-    def force(self, record):
-        """XF: a force on a translational node, a moment on a planar rotational node."""
-        self.at_least(record, 1, "node number and the values")
-        node = self.node(record, record.words[0])
-        if self.kinds[node][0] == R and self.dimension == 3:
-            self.fail(record, f"node {node} is a spatial rotational node: flexure applies no "
-                              "moments there")
-        axes = self.axes(node)
-        words = self.count(record, {1 + len(axes)}, f"node number and {', '.join(axes)}")
-        self.once(record, node, "node")
-        values = [self.number(record, w, a) for w, a in zip(words[1:], axes, strict=True)]
-        self.nodal[(node, "force")] = (values if self.kinds[node][0] == T else values[0], record)
-
-    def set_gravity(self, record):
-        words = self.count(record, {self.dimension},
-                           f"{self.dimension} components in this {self.dimension}-D model")
-        if self.gravity is not None:
-            self.fail(record, f"given twice (first on line {self.gravity[1].line})")
-        self.gravity = ([self.number(record, w, "gravity") for w in words], record)
-
-    def port(self, record):
-        """INPUTF k n dir (the input uk), OUTX / OUTXP k n dir (the output yk)."""
-        words = self.count(record, {3}, "number, node number and direction")
-        number = self.integer(record, words[0], "an input or output number")
-        node = self.node(record, words[1])
-        if self.kinds[node][0] == R and self.dimension == 3:
-            self.fail(record, f"node {node} is a spatial rotational node: inputs and outputs "
-                              "on its Euler parameters are not supported")
-        axis = self.direction(record, node, words[2])
-        table = self.ports["INPUTF" if record.keyword == "INPUTF" else "OUTX"]
-        if number in table:
-            first = table[number][0]
-            self.fail(record, f"number {number} is given twice (first in {first.keyword} on "
-                              f"line {first.line})")
-        table[number] = (record, node, axis, "velocity" if record.keyword == "OUTXP"
-                         else "position")
-
     # -- the scene dictionary ---------------------------------------------------------------
     def assemble(self):
         name = re.sub(r"[^A-Za-z0-9_]", "_", self.path.stem)
         if not name or name[0].isdigit():
             name = f"spacar_{name}"
-        held = [f"{n}.{a}" for (n, a), (s, _) in sorted(self.coordinate_status.items())
-                if s == "input"]
+        inputs, outputs, self.notes = self.port_tables()
+        moving = self.moving()
+        # held: an INPUTX coordinate fixed at its X position, an INPUTE deformation prescribed
+        # zero (the spacar_ports docstring says why)
+        held = [(n, a) for (n, a), (s, _) in sorted(self.coordinate_status.items())
+                if s == "input" and ("x", n, a) not in moving]
+        held_e = [f"{e}.e{d}" for (e, d), (s, _) in sorted(self.deformation_status.items())
+                  if s == "input" and ("e", e, d) not in moving]
+        self.notes += [f"INPUTX {c.replace('.', ' ')} -> the fixed coordinate {n}.{a}: held at "
+                       "its X position (no INPUTX value, DELINPX or INX moves it)"
+                       for c, (n, a) in ((self.spacar_coordinate(h), h) for h in held)]
+        self.notes += [f"INPUTE {d.replace('.e', ' ')} -> the deformation {d} prescribed zero: "
+                       "held (no INPUTE value or DELINPE moves it)" for d in held_e]
         description = f"imported from the SPACAR input file {self.path.name}" + (
-            f"; INPUTX held at the X position: {', '.join(held)}" if held else "")
+            f"; INPUTX held at the X position: {', '.join(f'{n}.{a}' for n, a in held)}"
+            if held else "") + (
+            f"; INPUTE held at zero: {', '.join(held_e)}" if held_e else "")
         header = {"name": name, "description": description, "dimension": self.dimension}
         if self.gravity is not None:
             header["gravity"] = self.gravity[0]
@@ -438,18 +365,23 @@ class _Importer(RecordReader):
         for number in sorted(self.elements):
             scene["sections"][str(number)] = dict(self.sections.get(number, {}))
             scene["elements"][str(number)] = self.element_table(number)
-        for table, prefix, section in ((self.ports["INPUTF"], "u", "inputs"),
-                                       (self.ports["OUTX"], "y", "outputs")):
-            ports = self.numbered(table)
-            if ports:
-                scene[section] = {f"{prefix}{k}": self.port_table(entry, section)
-                                  for k, entry in ports}
+        if inputs:
+            scene["inputs"] = inputs
+        if outputs:
+            scene["outputs"] = outputs
         return scene
+
+    def spacar_coordinate(self, coordinate):
+        """"n.dir" of a (node, axis): its SPACAR numbers."""
+        node, axis = coordinate
+        return f"{node}.{self.axes(node).index(axis) + 1}"
 
     def node_table(self, node):
         kind = self.kinds[node][0]
         status = {a: self.coordinate_status.get((node, a), (None,))[0] for a in self.axes(node)}
-        fixed = [a for a, s in status.items() if s in ("fixed", "input")]
+        moving = self.moving()
+        fixed = [a for a, s in status.items()
+                 if s == "fixed" or (s == "input" and ("x", node, a) not in moving)]
         dofs = [a for a, s in status.items() if s == "dof"]
         if kind == T:
             table = {"position": self.positions[node][0]}
@@ -479,22 +411,4 @@ class _Importer(RecordReader):
                 table[key] = [f"e{d}" for d in found]
         if "y_axis" in element:
             table["y_axis"] = element["y_axis"]
-        return table
-
-    def numbered(self, table):
-        """The entries of an input or output table in order, numbered 1, 2, ... as SPACAR's
-        vectors u and y are: a gap is refused."""
-        for k, number in enumerate(sorted(table), start=1):
-            if number != k:
-                record = table[number][0]
-                self.fail(record, f"number {number} without a number {k}: SPACAR numbers its "
-                                  "inputs (and its outputs) 1, 2, ... as positions in u (y)")
-        return [(k, table[k]) for k in sorted(table)]
-
-    @staticmethod
-    def port_table(entry, section):
-        _, node, axis, quantity = entry
-        table = {"node": str(node), "coordinate": axis}
-        if section == "outputs":
-            table["quantity"] = quantity
         return table

@@ -37,19 +37,14 @@ ELEMENTS = {
                           ("EA", "GIt", "EIy", "EIy", "EIz", "EIz"),
                           shear=(("GAs_z", "EIy"), ("GAs_y", "EIz")), orientation=True),
 }
-KINEMATIC = {"X", "FIX", "INPUTX", "DYNX", "DYNE", "RLSE", *ELEMENTS}
+KINEMATIC = {"X", "FIX", "INPUTX", "INPUTE", "DYNX", "DYNE", "RLSE", *ELEMENTS}
 DYNAMIC = {"ESTIFF", "EDAMP", "EM", "XM", "XF", "GRAVITY", "INPUTF", "OUTX", "OUTXP",
-           "ITERSTEP"}
+           "ITERSTEP", "INPUTX", "INPUTE", "DELINPX", "DELINPE", "INX", "OUTE", "OUTF"}
+# in the kinematic block they declare kinematic inputs, after it they give their start values
+BOTH_BLOCKS = {"INPUTX", "INPUTE"}
 # SPACAR keywords met in public files that flexure does not model: why, in one line each
 UNSUPPORTED = {
     "DELXF": "a load increment over the load steps is not supported; put the final load in XF",
-    "DELINPX": "a prescribed input motion is not supported (an INPUTX coordinate stays at "
-               "its X position)",
-    "INPUTE": "a prescribed input deformation is not supported",
-    "DELINPE": "a prescribed input deformation is not supported",
-    "INX": "kinematic inputs of a state-space model are not supported; use INPUTF",
-    "OUTF": "force outputs are not supported; use OUTX or OUTXP",
-    "OUTE": "deformation outputs are not supported; use OUTX or OUTXP",
 }
 AXES = {(T, 2): ("x", "y"), (T, 3): ("x", "y", "z"), (R, 2): ("phi",),
         (R, 3): ("lambda0", "lambda1", "lambda2", "lambda3")}
