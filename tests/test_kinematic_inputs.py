@@ -139,7 +139,7 @@ def test_motion_values_are_checked():
     np.testing.assert_array_equal(motion_values(model, {"X": 0.2}), [0.2])
     with pytest.raises(SceneError, match="unknown kinematic input 'Y'.*: X"):
         motion_values(model, {"Y": 0.2})
-    with pytest.raises(SceneError, match="expected 1 kinematic input values"):
+    with pytest.raises(SceneError, match="expected 1 kinematic inputs"):
         motion_values(model, [0.1, 0.2])
     with pytest.raises(SceneError, match="must be finite"):
         motion_values(model, [np.nan])

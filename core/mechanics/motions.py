@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import SceneError
+from .ports import named_values
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -58,22 +58,7 @@ def motion_values(model: Model, motions: Mapping[str, float] | ArrayLike | None)
     values = np.array(model.motion_values if model.motion_values is not None else [], float)
     if motions is None:
         return values
-    if isinstance(motions, Mapping):
-        for name, value in motions.items():
-            if name not in names:
-                raise SceneError(f"{model.source}: unknown kinematic input {name!r}; the model "
-                                 f"{model.name!r} has kinematic inputs: "
-                                 f"{', '.join(names) or '(none)'}")
-            values[names.index(name)] = value
-    else:
-        values = np.array(motions, dtype=float).reshape(-1)
-        if values.size != len(names):
-            raise SceneError(f"{model.source}: expected {len(names)} kinematic input values "
-                             f"({', '.join(names) or 'none'}), got {values.size}")
-    if not np.all(np.isfinite(values)):
-        raise SceneError(f"{model.source}: the kinematic inputs must be finite, got "
-                         f"{values.tolist()}")
-    return values
+    return named_values(model, motions, names, "kinematic input", values)
 
 
 def input_effort(model: Model, Q: np.ndarray) -> np.ndarray:

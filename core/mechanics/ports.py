@@ -65,22 +65,31 @@ def input_values(model: Model, inputs: Mapping[str, float] | ArrayLike) -> np.nd
     SceneError
         An unknown input name, a wrong length, or a value that is not finite.
     """
-    names = [port.name for port in model.inputs]
-    if isinstance(inputs, dict):
-        u = np.zeros(len(names))
-        for name, value in inputs.items():
+    return named_values(model, inputs, [port.name for port in model.inputs], "input",
+                        np.zeros(len(model.inputs)))
+
+
+def named_values(model: Model, given, names: list[str], what: str,
+                 defaults: np.ndarray) -> np.ndarray:
+    """The values of the ports `names`, in their order, from `given`: a mapping {name: value}
+    (the others at `defaults`) or every value in order (array_like); a SceneError naming the
+    model's file for an unknown name (listing `names`), a wrong length or a value that is
+    not finite. `what` names the ports in those messages ("input", "kinematic input")."""
+    if isinstance(given, Mapping):
+        values = np.array(defaults, dtype=float)
+        for name, value in given.items():
             if name not in names:
-                raise SceneError(f"{model.source}: unknown input {name!r}; the model "
-                                 f"{model.name!r} has inputs: {', '.join(names) or '(none)'}")
-            u[names.index(name)] = value
+                raise SceneError(f"{model.source}: unknown {what} {name!r}; the model "
+                                 f"{model.name!r} has {what}s: {', '.join(names) or '(none)'}")
+            values[names.index(name)] = value
     else:
-        u = np.array(inputs, dtype=float).reshape(-1)
-        if u.size != len(names):
-            raise SceneError(f"{model.source}: expected {len(names)} inputs "
-                             f"({', '.join(names)}), got {u.size}")
-    if not np.all(np.isfinite(u)):
-        raise SceneError(f"{model.source}: the inputs must be finite, got {u.tolist()}")
-    return u
+        values = np.array(given, dtype=float).reshape(-1)
+        if values.size != len(names):
+            raise SceneError(f"{model.source}: expected {len(names)} {what}s "
+                             f"({', '.join(names) or 'none'}), got {values.size}")
+    if not np.all(np.isfinite(values)):
+        raise SceneError(f"{model.source}: the {what}s must be finite, got {values.tolist()}")
+    return values
 
 
 def input_direction(model, port, x):
