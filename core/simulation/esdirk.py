@@ -62,7 +62,7 @@ from ..engine import data as ed
 from ..errors import SimulationError, StepBudgetSpent
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
-from . import esdirk_entry, newton_matrix
+from . import newton_matrix
 from .esdirk_method import MAX_STAGES, TABLEAUS
 from .newton_matrix import newton_solve
 from .stepper import Stepper
@@ -396,11 +396,13 @@ class Esdirk(Stepper):
         self.atol = np.ascontiguousarray(atol, dtype=float)
         self.y_array = self.vectors[V_Y]
         self.counters = data.int_array("counters")
-        # advance's arguments by address, for its C entry (`esdirk_entry`), which Python and
-        # the compiled sampled loop call
-        self.arguments = esdirk_entry.arguments(
-            data.address, self.memory, self.flags, self.vectors, self.J, self.LU,
-            self.pivots, self.atol, self.tables)
+        # advance's arguments by address, for its C entry (`esdirk_entry`, which imports
+        # this module), which Python and the compiled sampled loop call
+        from .esdirk_entry import advance_entry, arguments
+
+        self.advance_entry = advance_entry
+        self.arguments = arguments(data.address, self.memory, self.flags, self.vectors, self.J,
+                                   self.LU, self.pivots, self.atol, self.tables)
 
     @classmethod
     def make(cls, data, method, *, rtol, atol, max_step=None, jacobian="analytic",
@@ -429,7 +431,7 @@ class Esdirk(Stepper):
         one_step; at most max_steps steps, else StepBudgetSpent); returns t and a view of y.
         Raises SimulationError on failure."""
         self.flags[I_ONE_STEP], self.flags[I_MAX_STEPS] = bool(one_step), int(max_steps or 0)
-        status = esdirk_entry.advance_entry.ctypes(self.arguments.ctypes.data, float(t_stop))
+        status = self.advance_entry.ctypes(self.arguments.ctypes.data, float(t_stop))
         if status == TOO_MUCH_WORK and max_steps:
             error = StepBudgetSpent(f"t = {self.memory[M_T]:.9g} s: the step budget of "
                                     f"{max_steps} integrator steps is spent")

@@ -14,8 +14,11 @@ status (`esdirk.OK` or a negative code).
 """
 
 import numpy as np
+from numba import carray
 
-from ..numerics.jit import CompiledEntry
+from ..numerics.jit import entry
+from ..numerics.native import address_of, as_float_pointer, as_int_pointer
+from . import esdirk
 
 # the entries of the arguments array: the addresses of advance's arrays, then their sizes
 (A_TABLE, A_MEMORY, A_FLAGS, A_VECTORS, A_J, A_LU, A_PIVOTS, A_ATOL, A_TABLEAU, A_EW,
@@ -23,33 +26,24 @@ from ..numerics.jit import CompiledEntry
 ADVANCE_ENTRY = "int32(voidptr, float64)"
 
 
-def _make_entry():
-    """The entry's Python function (made when compiled: it needs numba's carray)."""
-    from numba import carray
-
-    from ..numerics.native import address_of, as_float_pointer, as_int_pointer
-    from . import esdirk
-
-    def advance_entry(arguments, t_stop):
-        """esdirk.advance on the arrays whose addresses and sizes `arguments` holds."""
-        a = carray(as_int_pointer(address_of(arguments)), (A_SIZE,))
-        n, s = a[A_N], a[A_STAGES]
-        return esdirk.advance(
-            a[A_TABLE], carray(as_float_pointer(a[A_MEMORY]), (esdirk.M_SIZE,)),
-            carray(as_int_pointer(a[A_FLAGS]), (esdirk.I_SIZE,)),
-            carray(as_float_pointer(a[A_VECTORS]), (esdirk.V_ROWS, n)),
-            carray(as_float_pointer(a[A_J]), (n * n,)),
-            carray(as_float_pointer(a[A_LU]), (n * n,)),
-            carray(as_int_pointer(a[A_PIVOTS]), (n,)),
-            carray(as_float_pointer(a[A_ATOL]), (n,)),
-            carray(as_float_pointer(a[A_TABLEAU]), (s, s)),
-            carray(as_float_pointer(a[A_EW]), (s,)),
-            carray(as_float_pointer(a[A_PREDICTOR]), (s, s)), t_stop)
-
-    return advance_entry
-
-
-advance_entry = CompiledEntry(_make_entry, ADVANCE_ENTRY, make=True, name="advance_entry")
+# A module-level function, not a closure: numba keys a closure's cache entry on its cells'
+# pickled contents, which differ in every process (the entry compiled at every start).
+@entry(ADVANCE_ENTRY)
+def advance_entry(arguments, t_stop):
+    """esdirk.advance on the arrays whose addresses and sizes `arguments` holds."""
+    a = carray(as_int_pointer(address_of(arguments)), (A_SIZE,))
+    n, s = a[A_N], a[A_STAGES]
+    return esdirk.advance(
+        a[A_TABLE], carray(as_float_pointer(a[A_MEMORY]), (esdirk.M_SIZE,)),
+        carray(as_int_pointer(a[A_FLAGS]), (esdirk.I_SIZE,)),
+        carray(as_float_pointer(a[A_VECTORS]), (esdirk.V_ROWS, n)),
+        carray(as_float_pointer(a[A_J]), (n * n,)),
+        carray(as_float_pointer(a[A_LU]), (n * n,)),
+        carray(as_int_pointer(a[A_PIVOTS]), (n,)),
+        carray(as_float_pointer(a[A_ATOL]), (n,)),
+        carray(as_float_pointer(a[A_TABLEAU]), (s, s)),
+        carray(as_float_pointer(a[A_EW]), (s,)),
+        carray(as_float_pointer(a[A_PREDICTOR]), (s, s)), t_stop)
 
 
 def arguments(address, memory, flags, vectors, J, LU, pivots, atol, tables):

@@ -53,7 +53,7 @@ from ..numerics.native import (
     call_stepper,
     call_with_time,
 )
-from . import esdirk, esdirk_entry
+from . import esdirk
 from .measuring import start_from_plant
 from .methods import COMPILED_LOOP_METHODS
 from .status import STATUS_MESSAGES
@@ -200,7 +200,7 @@ def _esdirk_samples(sim, solver, addresses, loop_state, held, loop):
     """run(start, stop) -> flag: samples start .. stop - 1 on the one-step integrator."""
     scratch = np.zeros(2 * sim.ndof)
 
-    addresses[_ADVANCE] = esdirk_entry.advance_entry.address
+    addresses[_ADVANCE] = solver.advance_entry.address
 
     def run(start, stop):
         return _loop_esdirk(addresses, loop_state, held, solver.memory, solver.flags,
