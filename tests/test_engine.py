@@ -523,7 +523,8 @@ def test_connect_compiles_only_the_operations_a_model_uses():
                           check=True)
     first, second = (json.loads(line) for line in done.stdout.split("\n")[:2])
     forms = {engine.OP_RHS, engine.OP_JACOBIAN, engine.OP_ACCELERATIONS,
-             engine.OP_CONFIGURATION, engine.OP_TANGENT, engine.OP_MASS}
+             engine.OP_CONFIGURATION, engine.OP_TANGENT, engine.OP_MASS, engine.OP_DF,
+             engine.OP_MASS_OF}
     assert set(first) == forms
     assert set(second) == forms | {engine.OP_POSITIONS, engine.OP_SPARSE_FACTOR,
                                    engine.OP_SPARSE_SOLVE}

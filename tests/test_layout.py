@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from flexure.core import Simulator, load_scene
+from flexure.core.engine import access, engine, layout, packing, slots
 from flexure.core.engine import data as ed
-from flexure.core.engine import engine, layout, packing, slots
 from flexure.core.engine.data import EngineData
 
 # a planar stage, a spatial one, rigid clusters with sparse factors, voice-coil actuators
@@ -106,7 +106,7 @@ def test_python_and_compiled_code_find_a_slot_by_name_and_by_constant():
         by_name = (data.int_array if slot.dtype == layout.INT else data.float_array)(slot.name)
         tuple_ = data.ints if slot.dtype == layout.INT else data.floats
         assert by_name is tuple_[getattr(slots, slot.constant)], slot.name
-    x = engine.float_array(data.address, slots.X)  # compiled accessor, from the table
+    x = access.coordinates(data.address)  # a compiled accessor, from the table
     assert x.ctypes.data == data.float_array("x").ctypes.data and x.size == data.model.nx
     with pytest.raises(ValueError, match="expected the name of a float64 slot"):
         data.float_array("dims")

@@ -16,43 +16,43 @@ from . import slots as slot
 from .slots import float_array, int_array
 
 
-@kernel
+@kernel(inline="always")
 def dims(table):
     """Slot dims (int64, `layout.DIMS_FIELDS`) of the packed model at the address table."""
     return int_array(table, slot.DIMS)
 
 
-@kernel
+@kernel(inline="always")
 def counters(table):
     """Slot counters (int64, `layout.COUNTER_FIELDS`)."""
     return int_array(table, slot.COUNTERS)
 
 
-@kernel
+@kernel(inline="always")
 def inputs(table):
     """Slot inputs (NIN,): the held inputs (N, N m, V)."""
     return float_array(table, slot.INPUTS)
 
 
-@kernel
+@kernel(inline="always")
 def coordinates(table):
     """Slot x (NX,): the coordinates of the last evaluation (m, and rotation parameters)."""
     return float_array(table, slot.X)
 
 
-@kernel
+@kernel(inline="always")
 def reference_dofs(table):
     """Slot q_ref (NDOF,): the DOFs the integrator's state is relative to (m, rad)."""
     return float_array(table, slot.Q_REF)
 
 
-@kernel
+@kernel(inline="always")
 def jacobian_cache(table):
     """Slot jacobian_cache (N N, N the state size): the integrator's kept Jacobian."""
     return float_array(table, slot.JAC_CACHE)
 
 
-@kernel
+@kernel(inline="always")
 def restart_kinematics(table, x):
     """The next kinematics starts from the coordinates x (NX,) instead of the last
     solution and its factors (slot x_start = x, dims.warm = 0)."""

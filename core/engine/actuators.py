@@ -33,7 +33,7 @@ from .slots import float_array as _f
 from .slots import int_array as _i
 
 
-@kernel
+@kernel(inline="always")
 def amplifier(coefficients, j, u):
     """sat(G u): the amplifier output (V or A) of input j for its drive signal u (V)."""
     s = coefficients[j * ed.A_WIDTH + ed.A_SATURATION]

@@ -61,17 +61,19 @@ from .actuators import (
     set_currents,
 )
 from .input_response import input_response
-from .kinematics import compute_DF, deformations, solve_kinematics, solve_positions
+from .kinematics import deformations, solve_kinematics, solve_positions
 from .motion import evaluate, reduced_mass
 from .operations import (
     OP_ACCELERATIONS,
     OP_CONFIGURATION,
     OP_DEFORMATIONS,
+    OP_DF,
     OP_EVALUATE,
     OP_INPUT_RESPONSE,
     OP_JACOBIAN,
     OP_KINEMATICS,
     OP_MASS,
+    OP_MASS_OF,
     OP_POSITIONS,
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
@@ -91,6 +93,7 @@ from .operations import (
     SPARSE_AUGMENTED,
     run,
 )
+from .part_entries import df_entry, mass_of_entry
 from .slots import float_array, int_array
 from .tangent import tangent
 
@@ -234,7 +237,7 @@ ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.void
 _F8 = np.float64
 
 
-@kernel
+@kernel(inline="always")
 def _state_size(table):
     """The integrators' state size: [q - q_ref, qdot, coil currents]."""
     dims = _i(table, slot.DIMS)
@@ -283,7 +286,7 @@ def kinematics_entry(op, user_data, t, a, b, c, s):
     table = address_of(user_data)
     status = run(table, OP_CONFIGURATION, address_of(a), 0, 0.0)
     if status == ed.OK:
-        compute_DF(table)
+        status = run(table, OP_DF, 0, 0, 0.0)
     return status
 
 
@@ -401,11 +404,13 @@ def missing_entry(op, user_data, t, a, b, c, s):
 ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, kinematics_entry,
            deformations_entry, evaluate_entry, tangent_entry, positions_entry,
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
-           sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS)
+           sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS) + (
+           df_entry, mass_of_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
-         OP_KINEMATICS: (OP_CONFIGURATION,), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
-         OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION,)}
+         OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
+         OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
+         OP_MASS: (OP_DF, OP_MASS_OF)}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
 _TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 

@@ -40,9 +40,11 @@ from .factors import (
     j_solve,
     mass_entries_start,
 )
-from .kinematics import compute_DF, dof_rows
+from .kinematics import dof_rows
 from .operations import (
     OP_CONFIGURATION,
+    OP_DF,
+    OP_MASS_OF,
     OP_RIGID_CONDENSE,
     OP_RIGID_CONVECTIVE,
     OP_RIGID_EXPAND,
@@ -99,7 +101,7 @@ def evaluate(table, q, qdot):
     reduced = dims[ed.AUGMENTED] == 0
     rigid = dims[ed.NSLAVES] > 0
     if reduced:  # xdot = DF qdot
-        compute_DF(table)
+        run(table, OP_DF, 0, 0, 0.0)  # kinematics.compute_DF
         DF = _f(table, slot.DF)
         for a in range(nx):
             s = 0.0
@@ -156,7 +158,8 @@ def evaluate(table, q, qdot):
             run(table, OP_RIGID_EXPAND, conv.ctypes.data, 0, 1.0)
     qddot = _f(table, slot.QDDOT)
     if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
-        _inertia_reduced(table, x, xdot, conv, moving, r)  # r -= M conv + g_conv here
+        # M_bar, and r -= M conv + g_conv (`reduced_mass_of`, on slots x, xdot, conv, force)
+        run(table, OP_MASS_OF, 0, 0, 2.0 if moving else 1.0)
         DF, rq = _f(table, slot.DF), _f(table, slot.REDUCED_FORCE)
         for j in range(ndof):
             s = 0.0
@@ -217,7 +220,7 @@ def qddot_of_solution(table, rhs, xddot, with_c, quad, moving, qddot):
     dof_deformation_accelerations(table, xddot, quad, moving, qddot)
 
 
-@kernel
+@kernel(inline="always")
 def _any_nonzero(v):
     """Whether any entry of v is nonzero; a bool that numba types as bool throughout (a flag
     set to False and then maybe True in a loop is typed Literal[False] first, and each
@@ -381,13 +384,6 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A,
     add_element_mass(table, A, na, entry, z, mz, Me, position)
 
 
-@kernel
-def _inertia_reduced(table, x, xdot, conv, moving, r):
-    """M_bar = DF^T M DF into slot mass (`_reduced_mass_of`); gravity on the element masses
-    into r; and, if moving, r -= M conv + g_conv."""
-    _reduced_mass_of(table, x, xdot, conv, moving, r, True)
-
-
 @kernel(inline="always")  # into its operation's entry, its one caller
 def reduced_mass(table):
     """DF (slot DF), M_bar = DF^T M DF (slot mass) and its LU (slot mass_lu) at the state of
@@ -396,9 +392,8 @@ def reduced_mass(table):
     dims = _i(table, slot.DIMS)
     if dims[ed.MASS_CURRENT] == 1:
         return ed.OK
-    compute_DF(table)
-    x = _f(table, slot.X)
-    _reduced_mass_of(table, x, x, x, False, x, False)
+    run(table, OP_DF, 0, 0, 0.0)  # kinematics.compute_DF
+    run(table, OP_MASS_OF, 0, 0, 0.0)  # reduced_mass_of, without forces
     ndof = dims[ed.NDOF]
     mass_lu = _f(table, slot.MASS_LU)
     copy(mass_lu, _f(table, slot.MASS))
@@ -409,7 +404,7 @@ def reduced_mass(table):
 
 
 @kernel
-def _reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
+def reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
     """M_bar = DF^T M DF into slot mass, element by element through the inertia points
     (M_bar += (Dp DF_e)^T Mp (Dp DF_e)) and the lumped masses; with_forces: also gravity on
     the element masses into r and, if moving, r -= M conv + g_conv (xdot, conv, r are not

@@ -41,6 +41,12 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
       CONDENSE           v (NX,), out (n_free,) (`condense`)
       GEOMETRIC          r_full (NX,), lam (n_free,); into slot stiffness (`rigid_geometric`)
       DE                 `rigid_de`
+    DF                   DF into slot DF from J's factors (`kinematics.compute_DF`)
+    MASS_OF              M_bar into slot mass; s = 1 with the element masses' forces into slot
+                         force, 2 also moving (`motion.reduced_mass_of`)
+
+DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
+own (`part_entries`) they are compiled once, not again inside each caller.
 """
 
 from ..numerics.jit import kernel
@@ -52,7 +58,7 @@ from .slots import DIMS, int_array
  OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
  OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE, OP_RIGID_FILL, OP_RIGID_EXPAND,
  OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
- OP_RIGID_GEOMETRIC, OP_RIGID_DE) = range(23)
+ OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF) = range(25)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)

@@ -125,7 +125,7 @@ def pattern_entry(Mp, flat, pp, end, P):
     return pp, flat - end + P, Mp[flat], end
 
 
-@kernel
+@kernel(inline="always")
 def padded_width(m):
     """The row length `dense_element_mass` stores rows of m entries with: m rounded up to a
     multiple of 16."""

@@ -13,10 +13,7 @@ through `group` and `group_deformations`. Nothing here computes; units are those
 arrays (SI, as the model's).
 """
 
-from numba import carray
-
 from ..numerics.jit import kernel
-from ..numerics.native import as_float_pointer, as_int_pointer
 from . import data as ed
 from . import layout
 
@@ -34,23 +31,64 @@ _N_INT, _N_FLOAT = len(layout.INT_SLOTS), len(layout.FLOAT_SLOTS)
 # Every function takes the table's address (`table`, int64) and takes from it the arrays it
 # uses: passing the arrays themselves from call to call made each call copy hundreds of
 # values, and the compiled code ten times larger.
-_TABLE_SIZE = 2 * (_N_INT + _N_FLOAT)
 
 
-@kernel
-def int_array(table, slot):
-    """The int64 array of `slot` (an index of layout.INT_SLOTS) of the packed model whose
-    table is at the address `table` (int64); for any compiled code that holds that address."""
-    entries = carray(as_int_pointer(table), (_TABLE_SIZE,))
-    return carray(as_int_pointer(entries[2 * slot]), (entries[2 * slot + 1],))
+def _slot_array(dtype, first):
+    """An intrinsic (table, slot) -> the 1-D C array of `dtype` of entry first + slot of the
+    packed model's address table at `table`: (address, length) pairs, ints first.
+
+    An intrinsic, not a kernel: it emits the two loads and the array's fields in its caller.
+    As a kernel each of its ~120 callers linked its module and numba compiled it as a unit
+    of its own (its fixed cost, about 0.1 s of CPU, twice: `int_array` and `float_array`);
+    the machine code is the same (LLVM inlined the kernel everywhere)."""
+    from llvmlite import ir
+    from numba import types
+    from numba.extending import intrinsic
+
+    array_type = types.Array(dtype, 1, "C")
+
+    @intrinsic
+    def accessor(typingctx, table, slot):
+        if not (isinstance(table, types.Integer) and isinstance(slot, types.Integer)):
+            return None
+        constant = getattr(slot, "literal_value", None)  # a slot constant: a fixed offset
+
+        def codegen(context, builder, signature, args):
+            from numba.np.arrayobj import make_array, populate_array
+
+            i64 = ir.IntType(64)
+            entries = builder.inttoptr(args[0], i64.as_pointer())
+            if constant is not None:
+                k = ir.Constant(i64, 2 * (first + constant))
+            else:
+                index = context.cast(builder, args[1], signature.args[1], types.int64)
+                k = builder.mul(builder.add(index, ir.Constant(i64, first)), ir.Constant(i64, 2))
+            address = builder.load(builder.gep(entries, [k]))
+            length = builder.load(builder.gep(entries, [builder.add(k, ir.Constant(i64, 1))]))
+            item = context.get_data_type(dtype)
+            itemsize = ir.Constant(i64, context.get_abi_sizeof(item))
+            array = make_array(array_type)(context, builder)
+            populate_array(array, data=builder.inttoptr(address, item.as_pointer()),
+                           shape=[length], strides=[itemsize], itemsize=itemsize, meminfo=None)
+            return array._getvalue()  # no meminfo: the packed model owns the memory
+
+        return array_type(table, slot), codegen
+
+    return accessor
 
 
-@kernel
-def float_array(table, slot):
-    """The float64 array of `slot` (an index of layout.FLOAT_SLOTS), as `int_array`."""
-    entries = carray(as_int_pointer(table), (_TABLE_SIZE,))
-    k = 2 * (_N_INT + slot)
-    return carray(as_float_pointer(entries[k]), (entries[k + 1],))
+def _accessors():
+    from numba import types
+
+    return _slot_array(types.int64, 0), _slot_array(types.float64, _N_INT)
+
+
+int_array, float_array = _accessors()
+int_array.__doc__ = """The int64 array of `slot` (an index of layout.INT_SLOTS) of the packed
+model whose table is at the address `table` (int64); for any compiled code that holds that
+address (an intrinsic: compiled code only)."""
+float_array.__doc__ = """The float64 array of `slot` (an index of layout.FLOAT_SLOTS), as
+`int_array`."""
 
 
 # -- one element group's arrays ------------------------------------------------------------------
@@ -61,7 +99,7 @@ def group(table, g):
     return groups[g * ed.G_WIDTH: (g + 1) * ed.G_WIDTH]
 
 
-@kernel
+@kernel(inline="always")
 def group_coordinates(table, row):
     """The model indices of the coordinates of the group with the row `row` (`group`), flat,
     element by element (n m entries)."""

@@ -27,10 +27,11 @@ import sys
 import tempfile
 import time
 
-# A cold `flexure loop` on the project's 2-core development machine, empty cache, load 1.3
-# (2026-11-29, docs/benchmarks.md): 31 s of CPU, 132 compilations.
-DEFAULT_CPU_S = 31.0
-DEFAULT_FUNCTIONS = 132
+# A cold `flexure loop` on the project's 2-core development machine, empty cache, load 3.8 to
+# 5 (2026-11-29, docs/benchmarks.md, "the cold first use again"): 28.6 s of CPU (the median of
+# three whole processes; main 30.4 s alternating with them), 129 compilations.
+DEFAULT_CPU_S = 28.6
+DEFAULT_FUNCTIONS = 129
 RECORD_NAME = "compile-time.json"
 
 

@@ -197,6 +197,18 @@ def call_engine(typingctx, operations, op, user_data, t, a, b, c, s):
 
 
 @intrinsic
+def call_stepper(typingctx, function, arguments, t):
+    """int32 f(void *arguments, double t) through its address (an integrator's advance
+    entry, `simulation.esdirk_entry`); arguments an address (int64)."""
+    sig = types.int32(function, arguments, t)
+
+    def codegen(context, builder, signature, args):
+        return _call_by_address(builder, args[0], args[1:], "vd", _I32)
+
+    return sig, codegen
+
+
+@intrinsic
 def call_get_real(typingctx, function, memory, out):
     """int f(void *mem, sunrealtype *out) (CVodeGetActualInitStep, ...) by address; out is
     an address."""

@@ -28,7 +28,7 @@ def rates_row(l0, l1, l2, l3, k):
     return -l3, -l2, l1, l0
 
 
-@kernel
+@kernel(inline="always")
 def rates_coefficient(k, a, b):
     """d E[k, a] / d lambda_b (E is linear in lambda: -1, 0 or 1), the load stiffness of a
     moment about axis k."""

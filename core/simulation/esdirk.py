@@ -117,7 +117,7 @@ def _f(table, y, out, flags, op):
     return status
 
 
-@kernel
+@kernel(inline="always")
 def factor(J, LU, piv, hg, flags):
     """LU = factors of I - hg J (`newton_matrix`), counted; flags[I_REDUCED] = 1 when they are
     its Schur complement's; False when singular."""
@@ -219,7 +219,7 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     return False
 
 
-@kernel
+@kernel(inline="always")
 def keep_history(vectors, A, h):
     """The accepted step's stage derivatives F at c = 0, c2 and 1 (the last stage) as a
     quadratic in t: its mean slope (F_s - F_1) / h and its curvature (1/s^2), for the next
@@ -396,6 +396,13 @@ class Esdirk(Stepper):
         self.atol = np.ascontiguousarray(atol, dtype=float)
         self.y_array = self.vectors[V_Y]
         self.counters = data.int_array("counters")
+        # advance's arguments by address, for its C entry (`esdirk_entry`, which imports
+        # this module), which Python and the compiled sampled loop call
+        from .esdirk_entry import advance_entry, arguments
+
+        self.advance_entry = advance_entry
+        self.arguments = arguments(data.address, self.memory, self.flags, self.vectors, self.J,
+                                   self.LU, self.pivots, self.atol, self.tables)
 
     @classmethod
     def make(cls, data, method, *, rtol, atol, max_step=None, jacobian="analytic",
@@ -424,8 +431,7 @@ class Esdirk(Stepper):
         one_step; at most max_steps steps, else StepBudgetSpent); returns t and a view of y.
         Raises SimulationError on failure."""
         self.flags[I_ONE_STEP], self.flags[I_MAX_STEPS] = bool(one_step), int(max_steps or 0)
-        status = advance(self.data.address, self.memory, self.flags, self.vectors, self.J,
-                         self.LU, self.pivots, self.atol, *self.tables, float(t_stop))
+        status = self.advance_entry.ctypes(self.arguments.ctypes.data, float(t_stop))
         if status == TOO_MUCH_WORK and max_steps:
             error = StepBudgetSpent(f"t = {self.memory[M_T]:.9g} s: the step budget of "
                                     f"{max_steps} integrator steps is spent")

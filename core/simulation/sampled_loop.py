@@ -50,6 +50,7 @@ from ..numerics.native import (
     call_engine,
     call_get_real,
     call_solve,
+    call_stepper,
     call_with_time,
 )
 from . import esdirk
@@ -199,10 +200,11 @@ def _esdirk_samples(sim, solver, addresses, loop_state, held, loop):
     """run(start, stop) -> flag: samples start .. stop - 1 on the one-step integrator."""
     scratch = np.zeros(2 * sim.ndof)
 
+    addresses[_ADVANCE] = solver.advance_entry.address
+
     def run(start, stop):
         return _loop_esdirk(addresses, loop_state, held, solver.memory, solver.flags,
-                            solver.vectors, solver.J, solver.LU, solver.pivots, solver.atol,
-                            *solver.tables, scratch, start, stop, *loop)
+                            solver.vectors, solver.arguments, scratch, start, stop, *loop)
 
     return run
 
@@ -279,7 +281,7 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 
 # the addresses handed to the compiled loop, in this order (CVODE's own are in its
 # `address_table`, sundials_restart.A_...)
-(_PLANT, _OUTPUT, _ENGINE, _ADDRESSES) = range(4)
+(_PLANT, _OUTPUT, _ENGINE, _ADVANCE, _ADDRESSES) = range(5)
 _MEASURE_FAILED = -1000
 
 
@@ -393,12 +395,14 @@ def _loop(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start,
 
 
 @kernel
-def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, pivots, atol,
-                 tableau_A, tableau_EW, tableau_P, scratch, start, stop, fs, controller):
+def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, scratch,
+                 start, stop, fs, controller):
     """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
     status (or _MEASURE_FAILED) with loop_state[0] the time reached. Each change of the held
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
-    inputs, the integrator's state re-entered (its first stage recomputed)."""
+    inputs, the integrator's state re-entered (its first stage recomputed). The integrator
+    steps through its C entry (`esdirk_entry`: at addresses[_ADVANCE], with the stepper's
+    `arguments`), not a linked copy of `esdirk.advance`."""
     plant = addresses[_PLANT]
     x_plant = access.coordinates(plant)
     y = vectors[esdirk.V_Y]
@@ -417,8 +421,7 @@ def _loop_esdirk(addresses, loop_state, held, memory, flags, vectors, J, LU, piv
             loop_state[1] = loop_state[2] = 0.0
         t_next = (k + 1) / fs
         flags[esdirk.I_ONE_STEP] = flags[esdirk.I_MAX_STEPS] = 0  # to t_next, no budget
-        status = esdirk.advance(plant, memory, flags, vectors, J, LU, pivots, atol, tableau_A,
-                                tableau_EW, tableau_P, t_next)
+        status = call_stepper(addresses[_ADVANCE], arguments.ctypes.data, t_next)
         if status != esdirk.OK:
             loop_state[0] = memory[esdirk.M_T]
             loop_state[1] = loop_state[2] = 1.0

@@ -1,0 +1,38 @@
+"""The entries of the operations that are parts of others: DF and M_bar.
+
+Each is a C function of the engine's signature (`engine.ENGINE_ENTRY`), in the process's table
+of operations (`engine.ENTRIES`), which the evaluation's own operations call through `run`.
+Why not plain kernels: numba links a kernel's compiled code into every caller and optimises
+and emits it again there, once per entry (and per kernel in between) that reaches it. DF
+(with J's solves) was so compiled four times, M_bar (through the reduced form's evaluation
+and the mass operation) four; as operations they are compiled twice (the kernel, its entry).
+A call by address costs a few nanoseconds beside either.
+"""
+
+from ..numerics.jit import entry
+from ..numerics.native import address_of
+from . import data as ed
+from . import slots as slot
+from .kinematics import compute_DF
+from .motion import reduced_mass_of
+from .slots import float_array as _f
+
+# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
+ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
+
+
+@entry(ENTRY)
+def df_entry(op, user_data, t, a, b, c, s):
+    """OP_DF: DF into slot DF (`kinematics.compute_DF`)."""
+    compute_DF(address_of(user_data))
+    return ed.OK
+
+
+@entry(ENTRY)
+def mass_of_entry(op, user_data, t, a, b, c, s):
+    """OP_MASS_OF: s = 0 M_bar only, 1 with the element masses' forces, 2 also moving; on
+    slots x, xdot, conv and force (`motion.reduced_mass_of`)."""
+    table = address_of(user_data)
+    reduced_mass_of(table, _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.CONV),
+                    s > 1.0, _f(table, slot.FORCE), s > 0.0)
+    return ed.OK
