@@ -69,3 +69,28 @@ def test_on_the_manipulator_the_blocks_give_the_svd_null_space():
     assert rank == expected_rank == rigid.shape[0]
     assert basis.shape == expected.shape == (1582, 816)
     assert np.abs(basis @ basis.T - expected @ expected.T).max() < 1e-11
+
+
+@pytest.mark.parametrize("deficient", [False, True])
+def test_a_large_block_by_qr_or_by_svd_where_the_qr_is_not_clear(deficient):
+    """A chain of 80 rows on 120 columns (one block, above SVD_UP_TO), beside small ones:
+    regular, it is cleared by its QR; with a dependent row the QR is not clear and the SVDs
+    decide; both as one SVD of the whole matrix."""
+    from flexure.core.mechanics import nullspace
+
+    rng = np.random.default_rng(7)
+    chain = np.zeros((80, 120))
+    for k in range(80):  # each row on three neighbouring columns: one connected block
+        chain[k, k: k + 3] = rng.normal(size=3)
+    if deficient:
+        chain[40] = chain[39] + chain[41]
+    matrix = np.zeros((90, 130))
+    matrix[:80, :120] = chain
+    matrix[80:, 120:] = rng.normal(size=(10, 10))
+    assert max(c.size for _, c in blocks(matrix)) > nullspace.SVD_UP_TO
+    assert (nullspace._by_blocks(matrix, RTOL, nullspace.SVD_UP_TO) is None) == deficient
+    rank, _, basis = rank_and_null_space(matrix, RTOL)
+    expected_rank, expected = reference(matrix)
+    assert rank == expected_rank == 90 - deficient
+    assert basis.shape == expected.shape
+    assert np.abs(basis @ basis.T - expected @ expected.T).max() < 1e-10
