@@ -204,12 +204,30 @@ class Mechanics:
         """DF^T De_s^T `matrix` De_s DF: a matrix on the stressed deformations (S or D) carried
         to the DOFs through the deformations' first-order transfer function De_s DF."""
         if self.sparse:
-            from scipy.sparse import csr_matrix
-
-            DeF = csr_matrix(config.De[self.stressed]) @ config.DF
+            DeF = self._stressed_jacobian(config.De) @ config.DF
             return DeF.T @ np.asarray(matrix @ DeF)
         DeF = config.De[self.stressed] @ config.DF
         return DeF.T @ matrix @ DeF
+
+    def _stressed_jacobian(self, De):
+        """De on the stressed deformations as a CSR matrix, gathered at the elements'
+        (deformation, coordinate) pairs: scanning the dense (NE, NX) De for its non-zeros
+        took 6 ms a call, 4 s of the manipulator report's 50."""
+        from scipy.sparse import csr_matrix
+
+        if getattr(self, "_pattern", None) is None:
+            row_of = np.full(len(self.model.deformation_names), -1)
+            row_of[self.stressed] = np.arange(self.stressed.size)
+            pairs = [np.broadcast_arrays(group.deformation_index[:, :, None],
+                                         group.coordinate_index[:, None, :])
+                     for group in self.model.groups]
+            rows = np.concatenate([d.ravel() for d, _ in pairs] or [np.zeros(0, int)])
+            columns = np.concatenate([c.ravel() for _, c in pairs] or [np.zeros(0, int)])
+            keep = row_of[rows] >= 0
+            self._pattern = (rows[keep], columns[keep], row_of[rows[keep]])
+        rows, columns, positions = self._pattern
+        return csr_matrix((De[rows, columns], (positions, columns)),
+                          shape=(self.stressed.size, De.shape[1]))
 
     def geometric_stiffness(self, config: Configuration, sigma: np.ndarray,
                             load_factor: float = 1.0, hessians: Hessians | None = None,
