@@ -1,6 +1,6 @@
 """The six-DOF manipulator's analyses: the chapter's Table 3.1 and Fig. 3.5, and its workspace.
 
-    python examples/manipulator_report.py                  # everything, about a minute
+    python examples/manipulator_report.py                  # everything, about 45 s of CPU
     python examples/manipulator_report.py --skip-workspace
 
 1. **Frequencies** (the chapter's Table 3.1 analogue): the lowest ten natural frequencies of the
@@ -22,6 +22,7 @@ Frequencies in Hz, displacements in mm, rotations in mrad, gains in mm/N.
 """
 
 import argparse
+import functools
 import math
 import sys
 import time
@@ -34,11 +35,15 @@ from flexure.core import (
     load_scene,
     natural_frequencies,
     principal_gains,
-    state_space,
     static_equilibrium,
 )
 from flexure.core.analysis.modal import describe_mode
-from flexure.core.analysis.statespace import frequency_grid, plot_principal_gains
+from flexure.core.analysis.statespace import (
+    frequency_grid,
+    plot_principal_gains,
+    state_space_matrices,
+)
+from flexure.core.numerics.blas import blas_threads
 from flexure.core.numerics.rotations import to_rotation_vector
 
 MODELS = ("manipulator", "manipulator_e1", "manipulator_reduced")
@@ -50,14 +55,31 @@ def log(text):
     print(text, file=sys.stderr, flush=True)
 
 
+@functools.cache
+def at_rest(name):
+    """(model, its static equilibrium, its linearisation there) of scene `name`: loaded and
+    solved once for the three parts of the report (each load chooses the DOFs of 1582 free
+    coordinates, a second or so)."""
+    model = load_scene(name)
+    solution = static_equilibrium(model)
+    return model, solution, linearize(model, solution)
+
+
+@blas_threads()  # one BLAS thread, as flexure's own analyses (`flexure.core.numerics.blas`)
+def static_gain(model, lin):
+    """The static gain -C A^-1 B (outputs per input) of the state space at `lin`, without
+    python-control (its import is 2 s of CPU)."""
+    A, B, C, D = state_space_matrices(model, linear_model=lin)
+    return D - C @ np.linalg.solve(A, B)
+
+
 def frequency_table(count=10):
     """{model: (NDOF, frequencies Hz)} and the descriptions of the full model's modes."""
     rows, descriptions = {}, []
     for name in MODELS:
         start = time.perf_counter()
-        model = load_scene(name)
-        solution = static_equilibrium(model)
-        modes = natural_frequencies(model, count, linear_model=linearize(model, solution))
+        model, solution, lin = at_rest(name)
+        modes = natural_frequencies(model, count, linear_model=lin)
         rows[name] = (model.ndof, modes.frequencies_hz)
         if name == MODELS[0]:
             descriptions = [describe_mode(model, shape, solution.x)
@@ -79,8 +101,7 @@ def print_frequency_table(rows, descriptions):
 
 def plot_gains(path):
     """The principal gains of the reduced model's 6 x 6 transfer matrix to `path` (PNG)."""
-    model = load_scene(MODELS[-1])
-    lin = linearize(model, static_equilibrium(model))
+    model, _, lin = at_rest(MODELS[-1])
     natural = natural_frequencies(model, 20, linear_model=lin).frequencies_hz
     grid = frequency_grid(natural)
     gains = principal_gains(model, grid, linear_model=lin)
@@ -115,11 +136,9 @@ def effector_pose(model, x, x0):
 def workspace(amplitudes):
     """Rows (direction, stroke mm, displacement mm (3), rotation mrad (3), the lowest seven
     frequencies Hz, largest and smallest static gain mm/N) of the reduced model."""
-    model = load_scene(MODELS[-1])
+    model, _, lin0 = at_rest(MODELS[-1])
     x0 = model.initial_coordinates
-    reference = static_equilibrium(model)
-    sys0 = state_space(model, linear_model=linearize(model, reference))
-    stiffness = np.linalg.inv(-sys0.C @ np.linalg.solve(sys0.A, sys0.B))  # N/m, 6 x 6
+    stiffness = np.linalg.inv(static_gain(model, lin0))  # N/m, 6 x 6
     inputs = [port.coordinate for port in model.inputs]
     rows = []
     for amplitude in amplitudes:
@@ -133,8 +152,7 @@ def workspace(amplitudes):
             solution = static_equilibrium(model, loads=loads, load_steps=2)
             lin = linearize(model, solution)
             frequencies = natural_frequencies(model, 7, linear_model=lin).frequencies_hz
-            sys = state_space(model, linear_model=lin)
-            gain = np.linalg.svd(-sys.C @ np.linalg.solve(sys.A, sys.B), compute_uv=False)
+            gain = np.linalg.svd(static_gain(model, lin), compute_uv=False)
             moved, turned = effector_pose(model, solution.x, x0)
             label = "reference" if amplitude == 0.0 else direction
             rows.append((label, amplitude * 1e3, *(moved * 1e3), *(turned * 1e3), *frequencies,

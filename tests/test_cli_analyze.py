@@ -118,6 +118,28 @@ def test_a_singular_stiffness_is_not_mistaken_for_an_unstable_one():
     assert negative_stiffness(np.zeros((0, 0))) == (0, 0.0, 0.0)
 
 
+def test_the_cholesky_shortcut_never_clears_an_unstable_stiffness():
+    """`clearly_stable` (one Cholesky of K + tau I) says stable only where the eigenvalues
+    say no negative one: random symmetric matrices with a lowest eigenvalue from clearly
+    positive to clearly negative, across NEGATIVE_RTOL."""
+    from flexure.core.analysis.stability import (
+        NEGATIVE_RTOL,
+        clearly_stable,
+        negative_stiffness,
+    )
+
+    rng = np.random.default_rng(3)
+    basis, _ = np.linalg.qr(rng.normal(size=(40, 40)))
+    for lowest in (1.0, 1e-6, 0.0, -1e-13, -0.1 * NEGATIVE_RTOL * 1e3,
+                   -10 * NEGATIVE_RTOL * 1e3, -1.0):
+        values = np.concatenate([[lowest], rng.uniform(1.0, 1e3, 38), [1e3]])
+        K = basis @ np.diag(values) @ basis.T
+        if clearly_stable(K):
+            assert negative_stiffness(K)[0] == 0
+    assert clearly_stable(np.diag([1.0, 2.0])) and not clearly_stable(np.diag([1.0, -2.0]))
+    assert clearly_stable(np.zeros((0, 0)))
+
+
 def test_the_text_shows_the_free_coordinates_and_the_outputs_the_json_every_one(capsys):
     """The tripod has 49 coordinates, 12 of them free translations; its rotation reads as
     the output about z, not as four Euler parameters."""

@@ -61,3 +61,37 @@ def test_a_dof_choice_tie_goes_to_the_first_node_of_the_scene():
     nodes = data["nodes"]
     data["nodes"] = {"5": nodes["5"], **{k: v for k, v in nodes.items() if k != "5"}}
     assert build_model(data).chosen_dofs == ("5.x",)
+
+
+def _plain_independent_rows(rows, count, *, floor=0.0, relative=1e-6):
+    """The greedy choice written out without dropping rows: the reference for the fast path,
+    which leaves the chosen rows and those below half the threshold out of the updates."""
+    remaining = np.array(rows, dtype=float)
+    chosen, threshold = [], None
+    available = np.ones(remaining.shape[0], dtype=bool)
+    while len(chosen) < count and available.any():
+        norms = np.where(available, np.linalg.norm(remaining, axis=1), np.nan)
+        k = best_first(norms)
+        threshold = max(relative * norms[k], floor) if threshold is None else threshold
+        if not norms[k] > threshold:
+            break
+        chosen.append(k)
+        available[k] = False
+        direction = remaining[k] / norms[k]
+        for _ in range(2):
+            remaining -= np.outer(remaining @ direction, direction)
+    return sorted(chosen)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_independent_rows_drops_nothing_it_could_choose(seed):
+    """Rank-deficient rows (copies, scaled copies and sums of others: many go to zero as
+    their partners are chosen, as a mechanism's linked coordinates do), exact ties among
+    them: the same choice as the plain loop."""
+    rng = np.random.default_rng(seed)
+    base = rng.normal(size=(30, 40))
+    rows = np.vstack([base, base[:20] * 1.0, 2.0 * base[5:25], base[:10] + base[10:20],
+                      1e-9 * rng.normal(size=(10, 40))])
+    rows = rows[rng.permutation(rows.shape[0])]
+    for count in (5, 30, 60):
+        assert independent_rows(rows, count) == _plain_independent_rows(rows, count)

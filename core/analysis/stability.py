@@ -40,6 +40,30 @@ def negative_stiffness(K: np.ndarray) -> tuple[int, float, float]:
     return count, float(eigenvalues[0]), largest
 
 
+def clearly_stable(K: np.ndarray) -> bool:
+    """Whether the tangent stiffness `K` (NDOF x NDOF) has no eigenvalue below
+    -NEGATIVE_RTOL times its largest magnitude, shown by one Cholesky factorisation.
+
+    With tau = NEGATIVE_RTOL max|K_ii| (at most NEGATIVE_RTOL times the largest eigenvalue
+    magnitude of the symmetric part: |K_ii| <= max|lambda|), K_s + tau I factors exactly when
+    every eigenvalue of K_s lies above -tau: then none lies below the threshold of
+    `negative_stiffness`. False means "not shown" (a K close to the threshold, or unstable):
+    the eigenvalues decide. At 816 DOFs 0.02 s against 1.6 s for the eigenvalues.
+    """
+    K = np.asarray(K, dtype=float)
+    if K.size == 0:
+        return True
+    symmetric = 0.5 * (K + K.T)
+    tau = NEGATIVE_RTOL * float(np.max(np.abs(np.diag(symmetric))))
+    if not (tau > 0.0 and np.all(np.isfinite(symmetric))):
+        return False
+    try:
+        np.linalg.cholesky(symmetric + tau * np.eye(K.shape[0]))
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
 def tangent_stiffness(model: Model, solution: StaticSolution,
                       mechanics: Mechanics | None = None) -> np.ndarray:
     """K0 + G0 (NDOF x NDOF) at a static equilibrium, with the loads that hold it (the
@@ -57,6 +81,8 @@ def instability_warnings(K: np.ndarray, *, frequencies_hz=None, descriptions=Non
     """The warning that an equilibrium with tangent stiffness `K` is unstable (empty when it
     is not), naming the modes whose frequency is imaginary (negative in `frequencies_hz`,
     Hz, with their `descriptions`) when the modes are known."""
+    if clearly_stable(K):  # the usual case, without the eigenvalues
+        return []
     count, lowest, largest = negative_stiffness(K)
     if count == 0:
         return []

@@ -1,8 +1,9 @@
 """Assembly of element quantities into model vectors and matrices.
 
 Each function evaluates every element group at once and scatters the result into the model's
-coordinate (NX) and deformation (NE) numbering. Dense matrices: the models this code serves
-have tens to a few hundred coordinates.
+coordinate (NX) and deformation (NE) numbering. Dense matrices for the models of tens to a
+few hundred coordinates; the (NX, NX) Hessian and mass matrix also as scipy.sparse ones for
+the large (`Mechanics.sparse`: from `kinematics.SPARSE_FROM` free coordinates on).
 
 Scattering: an entry (deformation, coordinate) belongs to one element, so De is assigned;
 elements share coordinates, so (coordinate, coordinate) entries and coordinate vectors are
@@ -79,14 +80,42 @@ def deformation_hessians(model, x):
     ]
 
 
-def weighted_hessian(model, hessians, weights):
-    """sum_i weights_i d2e_i/dx2 as an (NX, NX) matrix; weights (NE,)."""
+def weighted_hessian(model, hessians, weights, *, sparse=False):
+    """sum_i weights_i d2e_i/dx2 as an (NX, NX) matrix; weights (NE,). With `sparse`, a
+    scipy.sparse CSR matrix (its entries, the elements' coordinate pairs, summed)."""
+    if sparse:
+        return sparse_sum(model.nx, [
+            (group, (weights[group.deformation_index][:, None, :]
+                     @ D2e.reshape(D2e.shape[0], D2e.shape[1], -1)))
+            for group, D2e in hessians])
     result = np.zeros((model.nx, model.nx))
     for group, D2e in hessians:
         n, k, m, _ = D2e.shape
         local = weights[group.deformation_index][:, None, :] @ D2e.reshape(n, k, m * m)
         scatter_matrix(result, group, local)
     return result
+
+
+def sparse_sum(nx, parts, diagonal=None):
+    """The (NX, NX) CSR matrix of the element matrices of `parts`, [(group, local (n, m, m)
+    or (n, 1, m m))], summed where elements share coordinates, plus `diagonal` (NX,)."""
+    from scipy.sparse import coo_matrix  # large models only (`Mechanics.sparse`)
+
+    rows, columns, data = [], [], []
+    for group, local in parts:
+        idx = group.coordinate_index
+        m = idx.shape[1]
+        rows.append(np.broadcast_to(idx[:, :, None], (idx.shape[0], m, m)).ravel())
+        columns.append(np.broadcast_to(idx[:, None, :], (idx.shape[0], m, m)).ravel())
+        data.append(np.ravel(local))
+    if diagonal is not None:
+        rows.append(np.arange(nx))
+        columns.append(np.arange(nx))
+        data.append(np.asarray(diagonal, dtype=float))
+    if not data:
+        return coo_matrix((nx, nx)).tocsr()
+    return coo_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(columns))),
+                      shape=(nx, nx)).tocsr()
 
 
 def hessian_quadratic_forms(model, hessians, v):
@@ -145,6 +174,14 @@ class Inertia:
             _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
             scatter_matrix(M, group, np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp))
         return M
+
+    def sparse_mass_matrix(self, x):
+        """M(x) as a scipy.sparse CSR matrix (NX, NX): the same entries as `mass_matrix`."""
+        parts = []
+        for group, Mp in self.groups:
+            _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
+            parts.append((group, np.einsum("npi,npr,nrj->nij", Dp, Mp, Dp)))
+        return sparse_sum(self.model.nx, parts, diagonal=self.lumped)
 
     def convective_force(self, x, v):
         """The velocity-dependent inertia force sum Dp^T Mp (D2p v) v (NX,), in N."""

@@ -29,6 +29,7 @@ from ..numerics.conditioning import reciprocal_condition
 from ..numerics.ties import independent_rows
 from . import assembly
 from .kinematics import Kinematics
+from .nullspace import rank_and_null_space
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
@@ -166,10 +167,10 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     scale = column_scale(model, kin.length_scale)
     free = model.free_coordinates
     rigid = scaled_De[np.ix_(model.rigid_deformations, free)]
-    if model.rigid_deformations.size and np.linalg.matrix_rank(
-            rigid, tol=RANK_TOLERANCE * max(np.abs(rigid).max(), 1e-300)) < rigid.shape[0]:
+    # the rank and null space of the SVD of `rigid`, from its independent blocks (`nullspace`)
+    rank, _, motions = rank_and_null_space(rigid, RANK_TOLERANCE)  # motions (free, NDOF)
+    if rank < rigid.shape[0]:
         return None
-    motions = np.array(_null_space(rigid)).reshape(-1, free.size).T  # (free, NDOF)
     ndof = motions.shape[1]
     if ndof == 0:
         return None

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import assembly
-from .kinematics import Kinematics
+from .kinematics import SPARSE_FROM, Kinematics
 from .ports import input_forces, input_stiffness
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -36,6 +36,7 @@ class Mechanics:
     """A model's kinematics, inertia and constitutive matrices, built once and reused."""
 
     model: Model
+    sparse: bool | None = None  # None: by the rule below (set only to compare the paths)
 
     def __post_init__(self):
         model = self.model
@@ -47,6 +48,17 @@ class Mechanics:
         self.S = S[np.ix_(stressed, stressed)]
         self.D = D[np.ix_(stressed, stressed)]
         self.has_damping = bool(np.any(self.D))
+        # One rule for dense or sparse, the kinematics' (`SPARSE_FROM` free coordinates): a
+        # large model's (NX, NX) Hessian, mass matrix and block-diagonal S and D are almost
+        # empty, and their dense products with DF (NX, NDOF) took most of a Newton
+        # iteration of the 507-DOF manipulator (0.13 of 0.18 s). The same matrices to
+        # round-off (tests/test_sparse_mechanics.py).
+        if self.sparse is None:
+            self.sparse = model.free_coordinates.size >= SPARSE_FROM
+        if self.sparse:
+            from scipy.sparse import csr_matrix
+
+            self._sparse_S, self._sparse_D = csr_matrix(self.S), csr_matrix(self.D)
 
     def initial_configuration(self) -> Configuration:
         """The configuration of the scene's initial coordinates.
@@ -172,7 +184,7 @@ class Mechanics:
         ndarray (NDOF, NDOF)
             N/m in the DOF units (N m/rad on an angle DOF).
         """
-        return self._on_dofs(config, self.S)
+        return self._on_dofs(config, self._sparse_S if self.sparse else self.S)
 
     def damping_matrix(self, config: Configuration) -> np.ndarray:
         """The damping matrix C0 = DF^T De_s^T D De_s DF.
@@ -186,13 +198,36 @@ class Mechanics:
         ndarray (NDOF, NDOF)
             N s/m in the DOF units (N m s/rad on an angle DOF).
         """
-        return self._on_dofs(config, self.D)
+        return self._on_dofs(config, self._sparse_D if self.sparse else self.D)
 
     def _on_dofs(self, config, matrix):
         """DF^T De_s^T `matrix` De_s DF: a matrix on the stressed deformations (S or D) carried
         to the DOFs through the deformations' first-order transfer function De_s DF."""
+        if self.sparse:
+            DeF = self._stressed_jacobian(config.De) @ config.DF
+            return DeF.T @ np.asarray(matrix @ DeF)
         DeF = config.De[self.stressed] @ config.DF
         return DeF.T @ matrix @ DeF
+
+    def _stressed_jacobian(self, De):
+        """De on the stressed deformations as a CSR matrix, gathered at the elements'
+        (deformation, coordinate) pairs: scanning the dense (NE, NX) De for its non-zeros
+        took 6 ms a call, 4 s of the manipulator report's 50."""
+        from scipy.sparse import csr_matrix
+
+        if getattr(self, "_pattern", None) is None:
+            row_of = np.full(len(self.model.deformation_names), -1)
+            row_of[self.stressed] = np.arange(self.stressed.size)
+            pairs = [np.broadcast_arrays(group.deformation_index[:, :, None],
+                                         group.coordinate_index[:, None, :])
+                     for group in self.model.groups]
+            rows = np.concatenate([d.ravel() for d, _ in pairs] or [np.zeros(0, int)])
+            columns = np.concatenate([c.ravel() for _, c in pairs] or [np.zeros(0, int)])
+            keep = row_of[rows] >= 0
+            self._pattern = (rows[keep], columns[keep], row_of[rows[keep]])
+        rows, columns, positions = self._pattern
+        return csr_matrix((De[rows, columns], (positions, columns)),
+                          shape=(self.stressed.size, De.shape[1]))
 
     def geometric_stiffness(self, config: Configuration, sigma: np.ndarray,
                             load_factor: float = 1.0, hessians: Hessians | None = None,
@@ -219,11 +254,21 @@ class Mechanics:
         """
         if hessians is None:
             hessians = assembly.deformation_hessians(self.model, config.x)
+        DF = config.DF
+        if self.sparse:  # the Hessian sparse, the (rare) load stiffnesses dense beside it
+            G = DF.T @ np.asarray(assembly.weighted_hessian(self.model, hessians, sigma,
+                                                            sparse=True) @ DF)
+            if np.any(self.model.gravity):
+                G -= load_factor * (DF.T @ (self.inertia.gravity_stiffness(config.x) @ DF))
+            if inputs is not None and np.any(inputs):
+                G -= load_factor * (DF.T @ (input_stiffness(self.model, config.x, inputs)
+                                            @ DF))
+            return G
         H = assembly.weighted_hessian(self.model, hessians, sigma)
         H -= load_factor * self.inertia.gravity_stiffness(config.x)
         if inputs is not None:
             H -= load_factor * input_stiffness(self.model, config.x, inputs)
-        return config.DF.T @ H @ config.DF
+        return DF.T @ H @ DF
 
     def mass_matrix(self, config: Configuration) -> np.ndarray:
         """The reduced mass matrix M0 = DF^T M DF.
@@ -237,4 +282,7 @@ class Mechanics:
         ndarray (NDOF, NDOF)
             kg (kg m, kg m^2 where an angle DOF is involved).
         """
+        if self.sparse:
+            return config.DF.T @ np.asarray(self.inertia.sparse_mass_matrix(config.x)
+                                            @ config.DF)
         return config.DF.T @ self.inertia.mass_matrix(config.x) @ config.DF

@@ -69,7 +69,10 @@ fmu       stage_planar_3dof's FMU (`flexure.fmu.build_scene_fmu`, its default in
 manipulator
           The chapter's 6 mm xy move (`manipulator.py`) on the reduced model's linearisation
           (507 DOFs, stepped exactly): >= 1 x real time; the same move on the nonlinear
-          75-DOF control model for information.
+          75-DOF control model for information. The manipulator's analyses as whole
+          commands in CPU seconds (`manipulator_analyses.py`, issue 35): the 816-DOF
+          model's ten lowest modes <= 3 s, `flexure reduce manipulator_e1 --keep 7 --tol 1`
+          <= 5 s, `examples/manipulator_report.py` <= 20 s.
 startup   Whole processes as a user starts them, warm cache, in CPU seconds (user + system):
           `python -c "import flexure.core"` (<= 0.5 s), `flexure analyze truss_1dof_x`
           (<= 0.5 s), `flexure loop --no-plot` (<= 1.5 s) beside Exudyn's whole process for

@@ -7,6 +7,9 @@ settling, six loops at 300 rad/s and 4 kHz, `flexure loop`'s design) against rea
 - On the nonlinear control model (`manipulator_control`, 75 DOFs, `--plant inprocess`, the
   path by the nonlinear inverse statics), for information: its speed against real time.
 
+- The analyses of the six-DOF manipulator as whole commands in CPU seconds
+  (`manipulator_analyses`): its ten lowest modes, `flexure reduce`, the report.
+
 The loop's wall is `LoopResult.wall_time_s`: the samples, not the design, the path or the
 plant's set-up (the linearisation and its eigenvectors, the engine's compilation).
 """
@@ -40,7 +43,9 @@ def manipulator(*, repeat=5, quick=False):
         return run
 
     t = alternate({name: case(name) for name in cases}, 1 if quick else repeat, "manipulator")
-    rows = []
+    from .manipulator_analyses import manipulator_analyses  # issue 35's analysis targets
+
+    rows = manipulator_analyses(repeat=min(repeat, 3), quick=quick)
     for name, (model, _, plant) in cases.items():
         timing = t[name]
         result = timing.info
