@@ -196,35 +196,46 @@ def test_the_forward_simulation_under_the_computed_torque_follows_the_path():
     assert np.max(np.abs(result.q[:, 0] - amplitude * np.sin(omega * result.times))) < 1e-8
 
 
+# the body turning about a fixed skew axis: principal inertia J (kg m^2), the rotation vector
+# theta(t) n with theta = AMPLITUDE sin(OMEGA t) (rad)
+BODY_INERTIA = np.diag([0.01, 0.02, 0.03])
+SKEW_AXIS = np.array([1.0, 2.0, 2.0]) / 3.0
+AMPLITUDE, OMEGA = 1.2, 2.0
+
+
+def _skew_path(s):
+    """The rotation vector, its rate and acceleration at time s (rad, rad/s, rad/s^2)."""
+    return tuple(value * SKEW_AXIS for value in (
+        AMPLITUDE * np.sin(OMEGA * s), AMPLITUDE * OMEGA * np.cos(OMEGA * s),
+        -AMPLITUDE * OMEGA ** 2 * np.sin(OMEGA * s)))
+
+
+def _euler_moments(s):
+    """Euler's moments (N m, global frame) that turn the body along `_skew_path` at time s,
+    and theta: M = J_g theta'' n + omega x (J_g omega), omega = theta' n, J_g = R J R^T with
+    R = exp(theta [n x]) (Rodrigues)."""
+    n = SKEW_AXIS
+    cross = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
+    theta = AMPLITUDE * np.sin(OMEGA * s)
+    rate, acceleration = AMPLITUDE * OMEGA * np.cos(OMEGA * s), -OMEGA ** 2 * theta
+    R = np.eye(3) + np.sin(theta) * cross + (1.0 - np.cos(theta)) * cross @ cross
+    inertia = R @ BODY_INERTIA @ R.T
+    return inertia @ (acceleration * n) + np.cross(rate * n, inertia @ (rate * n)), theta
+
+
 def test_inverse_dynamics_of_a_body_turning_about_a_skew_axis():
-    """A free body (principal inertia J) whose rotation vector follows theta(t) n about the
-    fixed skew axis n = [1, 2, 2] / 3, its angles about x, y, z prescribed, its three moments
-    solved for: Euler's equations in the global frame, M = J_g theta'' n + omega x (J_g omega),
-    omega = theta' n, J_g = R J R^T with R = exp(theta [n x]) (Rodrigues), to 1e-12."""
-    J = np.diag([0.01, 0.02, 0.03])
+    """A free body whose rotation vector follows `_skew_path` about the fixed skew axis
+    n = [1, 2, 2] / 3, its angles about x, y, z prescribed, its three moments solved for:
+    Euler's equations in the global frame (`_euler_moments`), to 1e-12."""
     model = build_model({
         "scene": {"name": "body", "dimension": 3},
-        "nodes": {"B": {"rotation": [0.0, 0.0, 0.0], "inertia": np.diag(J).tolist(),
-                        "dof": ["rx", "ry", "rz"]}},
+        "nodes": {"B": {"rotation": [0.0, 0.0, 0.0],
+                        "inertia": np.diag(BODY_INERTIA).tolist(), "dof": ["rx", "ry", "rz"]}},
         "inputs": {f"M{a}": {"node": "B", "coordinate": f"r{a}"} for a in "xyz"},
         "outputs": {f"a{a}": {"node": "B", "coordinate": f"r{a}"} for a in "xyz"}})
-    n = np.array([1.0, 2.0, 2.0]) / 3.0
-    amplitude, omega = 1.2, 2.0
     t = np.linspace(0.0, 2.0, 11)
-    result = inverse_dynamics(model, t, lambda s: tuple(
-        value * n for value in (amplitude * np.sin(omega * s),
-                                amplitude * omega * np.cos(omega * s),
-                                -amplitude * omega ** 2 * np.sin(omega * s))))
-    cross = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
-    expected = []
-    for s in t:
-        theta = amplitude * np.sin(omega * s)
-        rate, acceleration = amplitude * omega * np.cos(omega * s), -omega ** 2 * theta
-        R = np.eye(3) + np.sin(theta) * cross + (1.0 - np.cos(theta)) * cross @ cross
-        inertia = R @ J @ R.T
-        expected.append(inertia @ (acceleration * n)
-                        + np.cross(rate * n, inertia @ (rate * n)))
-    expected = np.array(expected)
+    result = inverse_dynamics(model, t, _skew_path)
+    expected = np.array([_euler_moments(s)[0] for s in t])
     assert np.max(np.abs(result.forces - expected)) < 1e-12 * np.max(np.abs(expected))
 
 
@@ -234,31 +245,22 @@ def test_the_effort_of_a_prescribed_rotation():
     the effort is the generalised force on phi_z, the z row of J_l(phi)^T (M - [Mx, My, 0])
     with M Euler's moments and J_l = I + (1 - cos t)/t^2 [phi x] + (t - sin t)/t^3 [phi x]^2
     the left Jacobian (omega = J_l phi'), to 1e-12."""
-    J = np.diag([0.01, 0.02, 0.03])
     model = build_model({
         "scene": {"name": "body", "dimension": 3},
-        "nodes": {"B": {"rotation": [0.0, 0.0, 0.0], "inertia": np.diag(J).tolist(),
-                        "dof": ["rx", "ry"]}},
+        "nodes": {"B": {"rotation": [0.0, 0.0, 0.0],
+                        "inertia": np.diag(BODY_INERTIA).tolist(), "dof": ["rx", "ry"]}},
         "inputs": {"Mx": {"node": "B", "coordinate": "rx"},
                    "My": {"node": "B", "coordinate": "ry"},
                    "Z": {"kind": "motion", "node": "B", "coordinate": "rz"}},
         "outputs": {"ax": {"node": "B", "coordinate": "rx"},
                     "ay": {"node": "B", "coordinate": "ry"}}})
-    n = np.array([1.0, 2.0, 2.0]) / 3.0
-    amplitude, omega = 1.2, 2.0
     t = np.linspace(0.1, 2.0, 8)
-    result = inverse_dynamics(model, t, lambda s: tuple(
-        value * n for value in (amplitude * np.sin(omega * s),
-                                amplitude * omega * np.cos(omega * s),
-                                -amplitude * omega ** 2 * np.sin(omega * s))))
+    result = inverse_dynamics(model, t, _skew_path)
+    n = SKEW_AXIS
     cross = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
     expected = []
     for k, s in enumerate(t):
-        theta = amplitude * np.sin(omega * s)
-        rate, acceleration = amplitude * omega * np.cos(omega * s), -omega ** 2 * theta
-        R = np.eye(3) + np.sin(theta) * cross + (1.0 - np.cos(theta)) * cross @ cross
-        inertia = R @ J @ R.T
-        moments = inertia @ (acceleration * n) + np.cross(rate * n, inertia @ (rate * n))
+        moments, theta = _euler_moments(s)
         P = theta * cross
         left = (np.eye(3) + (1.0 - np.cos(theta)) / theta ** 2 * P
                 + (theta - np.sin(theta)) / theta ** 3 * P @ P)
