@@ -46,13 +46,26 @@ def test_the_compiled_master_steps_an_fmu_as_fmpy_does(stage_fmu):
         master.close()
 
 
+@pytest.mark.slow  # 50 s: the manipulator's ten modes, its reduction and its report
+def test_the_manipulator_analyses_rows_run_each_command():
+    """The manipulator group's analysis rows: each command ran (a CPU time was measured) and
+    is judged against its limit (the speeds are the benchmark's, not asserted)."""
+    from examples.benchmarks.manipulator_analyses import LIMITS, manipulator_analyses
+
+    rows = manipulator_analyses(repeat=1, quick=True)
+    assert len(rows) == len(LIMITS) == 3
+    for row, limit in zip(rows, LIMITS.values(), strict=True):
+        assert row.met is not None and row.target.endswith(f"(CPU): <= {limit:g} s")
+        assert float(row.flexure.split()[0]) > 0.0, row.flexure
+
+
 @pytest.mark.slow  # 25 s: two manipulator loops, one of them nonlinear
 def test_the_manipulator_rows_run_the_chapters_move_on_both_models():
     """The manipulator group's rows: both loops measured, and both track the 6 mm xy move
     within 0.1 % of every actuator's stroke (the speeds are the benchmark's, not asserted)."""
     from examples.benchmarks.manipulator import manipulator
 
-    rows = manipulator(repeat=1, quick=True)
+    rows = manipulator(repeat=1, quick=True, analyses=False)
     assert [r.met is not None for r in rows] == [True, False]
     assert "manipulator_reduced (507 DOFs, --plant linear" in rows[0].target
     assert "manipulator_control (75 DOFs, --plant inprocess" in rows[1].target

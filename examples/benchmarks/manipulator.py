@@ -18,9 +18,10 @@ from .measure import alternate, log
 from .table import Row
 
 
-def manipulator(*, repeat=5, quick=False):
+def manipulator(*, repeat=5, quick=False, analyses=True):
     """The 6 mm xy move on the reduced model's linearisation (target: >= 1 x real time) and
-    on the nonlinear control model (information)."""
+    on the nonlinear control model (information); first, with `analyses`, the rows of
+    `manipulator_analyses`."""
     from flexure.controllers.move_path import move_path
     from flexure.controllers.runner import run_loop
     from flexure.core import load_scene
@@ -45,7 +46,7 @@ def manipulator(*, repeat=5, quick=False):
     t = alternate({name: case(name) for name in cases}, 1 if quick else repeat, "manipulator")
     from .manipulator_analyses import manipulator_analyses  # issue 35's analysis targets
 
-    rows = manipulator_analyses(repeat=min(repeat, 3), quick=quick)
+    rows = manipulator_analyses(repeat=min(repeat, 3), quick=quick) if analyses else []
     for name, (model, _, plant) in cases.items():
         timing = t[name]
         result = timing.info
