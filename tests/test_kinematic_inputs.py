@@ -243,7 +243,8 @@ def test_analyze_prints_the_count_and_the_efforts():
     result = analyze(model, static=True, modes=2)
     assert result["dofs"] == ["3.y", "4.phi"] and result["kinematic_inputs"] == ["X"]
     effort = static_equilibrium(model).efforts()["X"]
-    assert result["static"]["kinematic_inputs"]["X"] == {"value": 0.002, "effort": effort}
+    assert result["static"]["kinematic_inputs"]["X"] == {"value": 0.002, "start": 0.0,
+                                                         "effort": effort}
     assert len(result["modes"]["frequencies_hz"]) == 2
     text = render(result)
     assert "NDOF = NX - NXO - NEO - NKI = 12 - 6 - 3 - 1 = 2" in text

@@ -156,6 +156,11 @@ def test_an_inputx_start_value_and_its_increment(tmp_path):
     assert "from 0.2005 m by 0.001 m (DELINPX) to 0.2015 m" in notes[0]
     solution = static_equilibrium(build_model(data))
     assert solution.efforts()["u1"] == pytest.approx(SERIES * 1.5e-3, rel=1e-11)
+    from flexure.core.cli.analyze import analyze  # --json: the value, its start and effort
+
+    held_input = analyze(build_model(data), static=True)["static"]["kinematic_inputs"]["u1"]
+    assert held_input["start"] == 0.2005 and held_input["value"] == 0.2005 + DELTA
+    assert held_input["effort"] == pytest.approx(SERIES * 1.5e-3, rel=1e-11)
     # a start value alone holds the input there
     held = edit(CHAIN, "DELINPX  3   1   0.001", "INPUTX   3   1   0.2005")
     data, notes = import_spacar(write(tmp_path, held))

@@ -119,11 +119,12 @@ def analyze(model, *, static=False, modes=None, buckling=None, with_state_space=
                                         if port.quantity == "position"}}
         if model.element_outputs:  # SPACAR's OUTE, OUTF: m or N
             result["static"]["element_outputs"] = solution.element_outputs()
-        if model.kinematic_inputs:  # the held values and the force that realises each
+        if model.kinematic_inputs:  # the held values, where each move starts, their forces
+            starts = solution.motions if model.motion_starts is None else model.motion_starts
             result["static"]["kinematic_inputs"] = {
-                port.name: {"value": float(value), "effort": float(effort)}
-                for port, value, effort in zip(model.kinematic_inputs, solution.motions,
-                                               solution.input_efforts, strict=True)}
+                port.name: {"value": float(value), "start": float(start), "effort": float(effort)}
+                for port, value, start, effort in zip(model.kinematic_inputs, solution.motions,
+                                                      starts, solution.input_efforts, strict=True)}
         stresses = beam_stresses(model, solution.x, solution.stress_resultants)
         if stresses.names:
             result["static"]["von_mises_pa"] = stresses.as_dict()
