@@ -100,17 +100,22 @@ def deformation_units(model: Model, scale: float | None = None) -> tuple[np.ndar
         L (m) for a length, 1 for a dimensionless deformation; the magnitudes likewise.
     """
     L = length_scale(model) if scale is None else scale
-    P = position_magnitude(model, L)
-    ne = len(model.deformation_names)
-    units, magnitudes = np.full(ne, L), np.full(ne, P)
+    dimensionless = np.array(deformation_unit_names(model)) == "1"
+    units = np.where(dimensionless, 1.0, L)
+    magnitudes = np.where(dimensionless, 1.0, position_magnitude(model, L))
+    return units, magnitudes
+
+
+def deformation_unit_names(model: Model) -> list[str]:
+    """The unit of every deformation, as its element declares it in `deformation_units` ("m",
+    or "1" for a dimensionless one); "m" where the element declares none."""
+    names = ["m"] * len(model.deformation_names)
     for group in model.groups:
         declared = getattr(group.kind, "deformation_units", None)
-        if declared is None:
-            continue
-        dimensionless = np.array([unit == "1" for unit in declared])
-        index = group.deformation_index[:, dimensionless]
-        units[index], magnitudes[index] = 1.0, 1.0
-    return units, magnitudes
+        for row in group.deformation_index if declared is not None else ():
+            for unit, index in zip(declared, row, strict=True):
+                names[int(index)] = unit
+    return names
 
 
 def kinematic_tolerances(model: Model, tolerance: float, *, rows: np.ndarray,
@@ -192,5 +197,6 @@ def within(values: np.ndarray, tolerances: np.ndarray, *, magnitudes=None) -> bo
         return bool(np.all(np.abs(values) <= bound))
 
 
-__all__ = ["ROUND_OFF", "coordinate_units", "deformation_units", "dof_tolerances",
-           "kinematic_tolerances", "length_scale", "position_magnitude", "within"]
+__all__ = ["ROUND_OFF", "coordinate_units", "deformation_unit_names", "deformation_units",
+           "dof_tolerances", "kinematic_tolerances", "length_scale", "position_magnitude",
+           "within"]

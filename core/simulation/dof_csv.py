@@ -33,17 +33,14 @@ UNIT = re.compile(r"\s*\[[^\]]*\]\s*$")  # a trailing " [unit]"
 def dof_units(model: Model) -> list[str]:
     """The unit of each DOF, in the order of q: the coordinates' (`Node.units`), then the
     deformations' ("m", or "1" where the element declares a dimensionless one)."""
+    from ..mechanics.scales import deformation_unit_names
+
     units = {}
     for node in model.nodes:
         units.update(zip(node.coordinates, node.units, strict=True))
-    deformation_units = {}
-    for group in model.groups:
-        declared = getattr(group.kind, "deformation_units", None)
-        for row in group.deformation_index:
-            for k, index in enumerate(row):
-                deformation_units[int(index)] = declared[k] if declared else "m"
+    deformations = deformation_unit_names(model)
     return ([units.get(int(i), "m") for i in model.dof_coordinates]
-            + [deformation_units.get(int(i), "m") for i in model.dof_deformations])
+            + [deformations[int(i)] for i in model.dof_deformations])
 
 
 def write_dof_csv(path, model: Model, times: np.ndarray, q: np.ndarray) -> None:
