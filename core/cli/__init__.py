@@ -1,8 +1,9 @@
 """The `flexure` command: a dispatcher over subcommands.
 
-Subcommands register themselves through the entry-point group "flexure.commands" (see
-pyproject.toml): each entry is a function `register(subparsers)` that adds one parser and
-sets `run=function(args) -> exit code`. That keeps `core` free of imports of `fmu` and
+Subcommands register themselves through the entry-point group "flexure.commands" of
+flexure's own distribution (pyproject.toml; read from its entry_points.txt, `_entries`): each
+entry is a function `register(subparsers)` that adds one parser and sets
+`run=function(args) -> exit code`. That keeps `core` free of imports of `fmu` and
 `controllers`, whose commands live beside their code.
 
 A FlexureError (a user's mistake or a failed computation) is printed as one clear message and
