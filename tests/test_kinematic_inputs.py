@@ -41,11 +41,10 @@ def test_dofs_are_chosen_around_the_kinematic_inputs():
     assert model.dof_names.count("3.x") == 1
 
 
-def test_a_deformation_input_and_its_effort():
-    """A truss whose elongation is prescribed (delta) pushes a spring k against a wall: the
-    effort is k delta, the truss's stress resultant -k delta (it pushes)."""
-    k, delta = 2000.0, 1e-3
-    data = {"sections": {"act": {"EA": 1e6}, "wall": {"kx": k}},
+def _pushing_truss(k, delta):
+    """A truss (EA 1e6 N) whose elongation is prescribed (delta, m) pushes a spring k (N/m)
+    against a wall."""
+    return {"sections": {"act": {"EA": 1e6}, "wall": {"kx": k}},
             "nodes": {"0": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
                       "1": {"position": [0.1, 0.0]},
                       "2": {"position": [0.2, 0.0], "fixed": ["x", "y"]}},
@@ -54,6 +53,13 @@ def test_a_deformation_input_and_its_effort():
                                   "released": ["e1"]}},
             "inputs": {"L": {"kind": "motion", "element": "act", "deformation": "e1",
                              "value": delta}}}
+
+
+def test_a_deformation_input_and_its_effort():
+    """A truss whose elongation is prescribed (delta) pushes a spring k against a wall: the
+    effort is k delta, the truss's stress resultant -k delta (it pushes)."""
+    k, delta = 2000.0, 1e-3
+    data = _pushing_truss(k, delta)
     model = build_model(data)
     assert model.dof_count() == {"nx": 6, "nxo": 4, "neo": 1, "nki": 1, "ndof": 0}
     solution = static_equilibrium(model)
@@ -360,15 +366,7 @@ def test_element_outputs_of_a_static_solution_and_a_path():
     """The pushing truss: its force is the reaction -k delta, the wall's elongation -delta;
     the pendulum's link tension m (g cos(theta) + l theta'^2) along its path."""
     k, delta = 2000.0, 1e-3
-    data = {"sections": {"act": {"EA": 1e6}, "wall": {"kx": k}},
-            "nodes": {"0": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
-                      "1": {"position": [0.1, 0.0]},
-                      "2": {"position": [0.2, 0.0], "fixed": ["x", "y"]}},
-            "elements": {"act": {"type": "PLTRUSS", "nodes": ["0", "1"], "section": "act"},
-                         "wall": {"type": "PLSPRING", "nodes": ["1", "2"], "section": "wall",
-                                  "released": ["e1"]}},
-            "inputs": {"L": {"kind": "motion", "element": "act", "deformation": "e1",
-                             "value": delta}},
+    data = {**_pushing_truss(k, delta),
             "outputs": {"push": {"element": "act", "deformation": "e1", "quantity": "stress"},
                         "squeeze": {"element": "wall", "deformation": "e1"}}}
     model = build_model(data)
