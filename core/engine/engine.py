@@ -45,7 +45,7 @@ nothing raises inside compiled code.
 """
 
 import numpy as np
-from numba import carray, types
+from numba import carray
 
 from ..numerics.dense import lu_factor, lu_solve, put
 from ..numerics.jit import entry, kernel
@@ -232,8 +232,7 @@ def implicit_jacobian(table, y, yp, cj, J):
 # (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number; every
 # operation's entry has this signature, and compiled code calls it through the table of their
 # addresses (`native.call_engine`)
-ENGINE_ENTRY = types.int32(types.int64, types.voidptr, types.float64, types.voidptr,
-                           types.voidptr, types.voidptr, types.float64)
+ENGINE_ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 _F8 = np.float64
 
 

@@ -266,7 +266,7 @@ class CompiledEntry:
         self.signature = signature
         self._function = None if make else function
         self._make = function if make else None
-        self._compiled = None
+        self._compiled = self._address = None
         functools.update_wrapper(self, function)
         if name is not None:
             self.__name__ = self.__qualname__ = name
@@ -294,17 +294,58 @@ class CompiledEntry:
     @property
     def is_compiled(self):
         """Whether this process has compiled or loaded it."""
-        return self._compiled is not None
+        return self._address is not None
 
     @property
     def address(self):
-        """The C function's address (int)."""
-        return self.compiled.address
+        """The C function's address (int): its object code loaded from the cache without numba
+        (`object_code`) where that can be, else numba's compiled or cached code (whose object
+        code is then kept for the next process)."""
+        if self._address is None:
+            from . import object_code
 
-    @property
+            address = object_code.load(self.function)
+            if address is None:
+                address = self.compiled.address
+                object_code.save(self.function, self._compiled)
+            self._address = address
+        return self._address
+
+    @functools.cached_property
     def ctypes(self):
-        """The C function as a ctypes function."""
-        return self.compiled.ctypes
+        """The C function as a ctypes function (pointers as void*: addresses or None)."""
+        return ctypes_function(self.signature)(self.address)
+
+
+_CTYPES = {"void": None, "int32": "c_int32", "intc": "c_int", "int64": "c_int64",
+           "float64": "c_double", "double": "c_double", "voidptr": "c_void_p"}
+
+
+def ctypes_function(signature):
+    """The ctypes function type of an entry's numba signature string ("int32(int64, voidptr,
+    CPointer(float64))"): pointers of any kind as c_void_p."""
+    import ctypes
+
+    def of(name):
+        name = name.strip()
+        if name.startswith("CPointer("):
+            return ctypes.c_void_p
+        if name not in _CTYPES:
+            raise ValueError(f"entry signature {signature!r}: type {name!r} has no ctypes twin")
+        return _CTYPES[name] and getattr(ctypes, _CTYPES[name])
+
+    result, _, arguments = signature.partition("(")
+    names, depth, current = [], 0, ""
+    for character in arguments[:-1]:
+        depth += (character == "(") - (character == ")")
+        if character == "," and depth == 0:
+            names.append(current)
+            current = ""
+        else:
+            current += character
+    if current.strip():
+        names.append(current)
+    return ctypes.CFUNCTYPE(of(result), *(of(name) for name in names))
 
 
 def cache_index_path(function):

@@ -5,12 +5,12 @@ turned into SUNDIALS' 0 (OK), 1 (recoverable: a kinematics that does not converg
 state) or -1 (unrecoverable: a non-finite state, a singular configuration). The code of the
 last failure is kept in the counters, so an error names its cause."""
 
-from numba import carray, cfunc, types
+from numba import carray
 
 from ..engine import access, engine
 from ..engine import data as ed
 from ..numerics.dense import copy
-from ..numerics.jit import kernel
+from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, call_engine, dense_matrix_data, nvector_data
 
 
@@ -29,15 +29,22 @@ def _callback(op, user_data, t, a, b, c, s, counter):
     return -1 if status in (ed.NONFINITE_STATE, ed.SINGULAR_CONSTRAINTS, ed.NOT_CONNECTED) else 1
 
 
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr), cache=True)
+# SUNDIALS' callback types (CVRhsFn, CVLsJacFn, IDAResFn, IDALsJacFn) as numba signatures
+_P = "voidptr"
+CV_RHS_ENTRY = f"intc(float64, {_P}, {_P}, {_P})"
+CV_JAC_ENTRY = f"intc(float64, {', '.join([_P] * 7)})"
+IDA_RES_ENTRY = f"intc(float64, {', '.join([_P] * 4)})"
+IDA_JAC_ENTRY = f"intc(float64, float64, {', '.join([_P] * 8)})"
+
+
+@entry(CV_RHS_ENTRY)
 def cvode_rhs(t, y, ydot, user_data):
     """CVRhsFn: ydot = f(t, y) by the engine."""
     return _callback(engine.OP_RHS, user_data, t, nvector_data(y), nvector_data(ydot),
                      nvector_data(y), 0.0, ed.RHS_COUNT)
 
 
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr,
-                  types.voidptr, types.voidptr, types.voidptr), cache=True)
+@entry(CV_JAC_ENTRY)
 def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     """CVLsJacFn: the dense d f / d y (column-major) from the model's tangent, kept in slot
     jacobian_cache. After a restart in a sampled loop (dims[JACOBIAN_REUSE] = 1) the kept
@@ -58,17 +65,14 @@ def cvode_jacobian(t, y, fy, matrix, user_data, tmp1, tmp2, tmp3):
     return status
 
 
-@cfunc(types.intc(types.double, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
-       cache=True)
+@entry(IDA_RES_ENTRY)
 def ida_residual(t, y, yp, res, user_data):
     """IDAResFn: the implicit form's residual by the engine."""
     return _callback(engine.OP_RESIDUAL, user_data, t, nvector_data(y), nvector_data(yp),
                      nvector_data(res), 0.0, ed.RHS_COUNT)
 
 
-@cfunc(types.intc(types.double, types.double, types.voidptr, types.voidptr, types.voidptr,
-                  types.voidptr, types.voidptr, types.voidptr, types.voidptr, types.voidptr),
-       cache=True)
+@entry(IDA_JAC_ENTRY)
 def ida_jacobian(t, cj, y, yp, res, matrix, user_data, tmp1, tmp2, tmp3):
     """IDALsJacFn: d res / d y + cj d res / d yp from the model's tangent."""
     return _callback(engine.OP_RESIDUAL_JACOBIAN, user_data, t, nvector_data(y),
