@@ -510,7 +510,7 @@ def test_connect_compiles_only_the_operations_a_model_uses():
         from flexure.core.engine import engine
         from flexure.core.engine.data import EngineData
         def compiled():
-            print(sorted(op for op, entry in enumerate(engine.ENTRIES) if entry._compiled))
+            print(sorted(op for op, entry in enumerate(engine.ENTRIES) if entry.is_compiled))
         engine.connect(EngineData(load_scene("truss_1dof_x")), engine.OP_RHS,
                        engine.OP_JACOBIAN)
         compiled()

@@ -185,6 +185,25 @@ def test_a_short_simulation_imports_neither_scipy_linalg_nor_scipy_sparse(tmp_pa
     assert loaded == [], f"flexure simulate imported {loaded}"
 
 
+@pytest.mark.parametrize("method", ["cvode-bdf", "ida", "esdirk"])
+def test_a_warm_short_simulation_imports_no_numba(tmp_path, method):
+    """A warm `flexure simulate` loads the engine's entries as object code (numerics/
+    object_code.py) and restarts its integrator through C entries (`restart_plant_now`,
+    `cvode_restart_now`, `esdirk_entry.restart_now`): numba, 0.15 s of CPU to import, is not
+    imported at all, nor llvmlite's IR builder's users (numba's intrinsics)."""
+    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
+             "code = main(['simulate', 'stage_planar_3dof', '--t-end', '0.005', '--input', "
+             f"'F=1', '--method', '{method}'])\n"
+             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] == "
+             "'numba' and m.count('.') < 2 and not m.startswith('numba._'))]))")
+    for _ in range(2):  # the first run may load through numba, which writes the object code
+        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
+                                   text=True, check=True, cwd=tmp_path)
+    code, loaded = json.loads(completed.stdout.splitlines()[-1])
+    assert code == 0, completed.stdout
+    assert loaded == [], f"flexure simulate --method {method} imported {loaded}"
+
+
 def test_the_subcommands_are_read_from_flexures_own_entry_points():
     """`flexure` reads its subcommands from its distribution's entry_points.txt (no
     importlib.metadata); the same as importlib.metadata lists, and only its section's."""

@@ -21,12 +21,14 @@ globals when it compiles) and whose qualified name is the kernel's own, which ke
 the compiled-code cache: every element's entry is cached apart. (A closure over the kernel
 would compile the same, but numba keys a closure's cache entry on its pickled cell contents,
 which for a kernel change with every process: the entry would compile at every start.)
-The copy is made when the entry is compiled, so that declaring it does not import numba.
+The copy is made when the entry's address is first asked for; neither declaring nor making
+it imports numba (`carray` is a `jit.CompiledName`).
 """
 
 import types
 
-from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, CompiledEntry, numba_module
+from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, CompiledEntry
+from ..numerics.native import carray as _carray
 
 # the templates' globals, bound in each entry's copy: the element's kernel and numba.carray
 kernel = None
@@ -52,7 +54,7 @@ def _bound(template, element_kernel, signature):
            "(pointers to one element's arrays).")
 
     def make():
-        bound = {"kernel": element_kernel, "carray": numba_module().carray}
+        bound = {"kernel": element_kernel, "carray": _carray}
         function = types.FunctionType(template.__code__, {**template.__globals__, **bound},
                                       name)
         function.__qualname__, function.__doc__ = name, doc

@@ -45,11 +45,10 @@ nothing raises inside compiled code.
 """
 
 import numpy as np
-from numba import carray
 
 from ..numerics.dense import lu_factor, lu_solve, put
 from ..numerics.jit import entry, kernel
-from ..numerics.native import address_of
+from ..numerics.native import address_of, carray
 from . import data as ed
 from . import rigid_kernels, sparse_factors
 from . import slots as slot

@@ -13,7 +13,7 @@ through `group` and `group_deformations`. Nothing here computes; units are those
 arrays (SI, as the model's).
 """
 
-from ..numerics.jit import kernel
+from ..numerics.jit import CompiledName, kernel
 from . import data as ed
 from . import layout
 
@@ -77,13 +77,17 @@ def _slot_array(dtype, first):
     return accessor
 
 
-def _accessors():
-    from numba import types
+def _accessor(dtype_name, first):
+    def make():
+        from numba import types
 
-    return _slot_array(types.int64, 0), _slot_array(types.float64, _N_INT)
+        return _slot_array(getattr(types, dtype_name), first)
+
+    return CompiledName(make, f"{dtype_name}_array")
 
 
-int_array, float_array = _accessors()
+# intrinsics made when numba first types code that calls them (`jit.CompiledName`)
+int_array, float_array = _accessor("int64", 0), _accessor("float64", _N_INT)
 int_array.__doc__ = """The int64 array of `slot` (an index of layout.INT_SLOTS) of the packed
 model whose table is at the address `table` (int64); for any compiled code that holds that
 address (an intrinsic: compiled code only)."""

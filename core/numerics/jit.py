@@ -213,6 +213,39 @@ class Kernel:
         return getattr(self.dispatcher, name)
 
 
+class CompiledName:
+    """A name of numba's that compiled code calls (an intrinsic, numba.carray), made by
+    `make()` when numba first types code that uses it: a module that declares kernels with it
+    imports neither numba nor llvmlite's IR builder (numba types a global by its
+    `_numba_type_`, as `Kernel`s)."""
+
+    def __init__(self, make, name):
+        self._make, self._made, self.__name__ = make, None, name
+
+    @property
+    def made(self):
+        """The intrinsic (or function) itself (numba imported first)."""
+        if self._made is None:
+            numba_module()
+            self._made = self._make()
+        return self._made
+
+    @property
+    def _numba_type_(self):
+        from numba.core.registry import cpu_target
+
+        made = self.made  # before the refresh: it installs what making it declared
+        context = cpu_target.typing_context
+        context.refresh()
+        return context.resolve_value_type(made)
+
+    def __call__(self, *args, **kwargs):
+        return self.made(*args, **kwargs)
+
+    def __repr__(self):
+        return f"<compiled name {self.__name__}>"
+
+
 def _plain(numba_type):
     """An integer or boolean constant's type as its plain type (Literal[int](3) as int64)."""
     from numba.core import types

@@ -398,9 +398,9 @@ class Esdirk(Stepper):
         self.counters = data.int_array("counters")
         # advance's arguments by address, for its C entry (`esdirk_entry`, which imports
         # this module), which Python and the compiled sampled loop call
-        from .esdirk_entry import advance_entry, arguments
+        from .esdirk_entry import advance_entry, arguments, restart_now
 
-        self.advance_entry = advance_entry
+        self.advance_entry, self._restart_now = advance_entry, restart_now
         self.arguments = arguments(data.address, self.memory, self.flags, self.vectors, self.J,
                                    self.LU, self.pivots, self.atol, self.tables)
 
@@ -418,7 +418,7 @@ class Esdirk(Stepper):
         are kept (`restart`)."""
         inputs_only = bool(inputs_changed) and np.array_equal(y, self.y_array)
         self.y_array[:] = y
-        restart(self.data.address, self.memory, self.flags, float(t), inputs_only)
+        self._restart_now(self.data.address, self.memory, self.flags, float(t), inputs_only)
 
     def forget(self):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""

@@ -14,10 +14,16 @@ status (`esdirk.OK` or a negative code).
 """
 
 import numpy as np
-from numba import carray
 
 from ..numerics.jit import entry
-from ..numerics.native import address_of, as_float_pointer, as_int_pointer
+from ..numerics.native import (
+    address_of,
+    as_float_pointer,
+    as_int_pointer,
+    carray,
+    float_address,
+    int_address,
+)
 from . import esdirk
 
 # the entries of the arguments array: the addresses of advance's arrays, then their sizes
@@ -60,3 +66,20 @@ def arguments(address, memory, flags, vectors, J, LU, pivots, atol, tables):
     out[A_MEMORY: A_PREDICTOR + 1] = [array.ctypes.data for array in arrays]
     out[A_N], out[A_STAGES] = pivots.size, tables[0].shape[0]
     return out
+
+
+@entry("void(int64, voidptr, voidptr, float64, int64)")
+def _restart_entry(table, memory, flags, t, inputs_only):
+    """`esdirk.restart` as a C entry, the arrays by address."""
+    esdirk.restart(table, carray(as_float_pointer(memory), (esdirk.M_SIZE,)),
+                   carray(as_int_pointer(flags), (esdirk.I_SIZE,)), t, inputs_only != 0)
+
+
+def restart_now(table, memory, flags, t, inputs_only):
+    """`esdirk.restart` from Python (through its C entry: a process that loads compiled code
+    from the cache calls it without numba); memory (M_SIZE,) float64, flags (I_SIZE,) int64."""
+    if memory.size != esdirk.M_SIZE or flags.size != esdirk.I_SIZE:
+        raise ValueError(f"esdirk restart: memory of {memory.size} and flags of {flags.size} "
+                         f"entries, not {esdirk.M_SIZE} and {esdirk.I_SIZE}")
+    _restart_entry.ctypes(table, float_address(memory), int_address(flags), float(t),
+                          int(bool(inputs_only)))

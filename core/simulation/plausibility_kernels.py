@@ -2,10 +2,9 @@
 range of validity, in the few microseconds an FMU can spend on it after every doStep.
 (A module of their own: `plausibility` is imported by the analyses, which need no numba.)"""
 
-from numba import carray
 
 from ..numerics.jit import kernel
-from ..numerics.native import as_float_pointer, as_int_pointer
+from ..numerics.native import as_float_pointer, as_int_pointer, carray
 
 
 @kernel

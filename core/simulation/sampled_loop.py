@@ -36,7 +36,6 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import carray
 
 from ..engine import access, engine
 from ..engine import data as ed
@@ -52,6 +51,7 @@ from ..numerics.native import (
     call_solve,
     call_stepper,
     call_with_time,
+    carray,
 )
 from . import esdirk
 from .measuring import start_from_plant

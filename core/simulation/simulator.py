@@ -48,7 +48,7 @@ from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
 from .start import scene_dofs, solve_start, start_kinematics
 from .status import STATUS_MESSAGES
-from .stepper import Stepper, restart_plant
+from .stepper import Stepper, restart_plant_now
 from .tolerances import atol_vector
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -304,7 +304,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         continues bit for bit; after a mere input change a one-step method keeps the warm
         start of its last evaluation (CVODE and IDA start afresh there too)."""
         self._q_ref_array[:] = self._q_ref
-        restart_plant(self.data.address, self._u, self._x, self._kinematics_restart_due())
+        restart_plant_now(self.data.address, self._u, self._x, self._kinematics_restart_due())
         # no state set since the last step: only the inputs changed
         self.integrator.reset(self._t, self._y, inputs_changed=not self._restart_kinematics)
         self._needs_init = self._restart_kinematics = False

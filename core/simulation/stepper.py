@@ -39,7 +39,8 @@ import numpy as np
 
 from ..engine import access
 from ..numerics.dense import copy
-from ..numerics.jit import kernel
+from ..numerics.jit import entry, kernel
+from ..numerics.native import as_float_pointer, carray, float_address
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -169,4 +170,18 @@ def restart_plant(table, inputs, x, kinematics):
         access.restart_kinematics(table, x)
 
 
-__all__ = ["HeldInputDrive", "Stepper", "restart_plant"]
+@entry("void(int64, voidptr, int64, voidptr, int64, int64)")
+def _restart_plant_entry(table, inputs, n_inputs, x, nx, kinematics):
+    """`restart_plant` as a C entry, the arrays by address and size."""
+    restart_plant(table, carray(as_float_pointer(inputs), (n_inputs,)),
+                  carray(as_float_pointer(x), (nx,)), kinematics != 0)
+
+
+def restart_plant_now(table, inputs, x, kinematics):
+    """`restart_plant` from Python (through its C entry: a process that loads compiled code
+    from the cache calls it without numba); inputs and x contiguous float64 arrays."""
+    _restart_plant_entry.ctypes(table, float_address(inputs), inputs.size, float_address(x),
+                                x.size, int(bool(kinematics)))
+
+
+__all__ = ["HeldInputDrive", "Stepper", "restart_plant", "restart_plant_now"]

@@ -52,7 +52,7 @@ from .sundials_restart import (
     T_RHS,
     T_SCRATCH,
     T_STEPS,
-    cvode_restart,
+    cvode_restart_now,
 )
 
 _VP, _D, _INT, _LONG = ctypes.c_void_p, ctypes.c_double, ctypes.c_int, ctypes.c_long
@@ -330,7 +330,7 @@ class Cvode(_Solver):
         the compiled sampled loop's too."""
         self.y_array[:] = y
         self.learnt[L_JACOBIAN] = float(self.jacobian_cached())
-        _check(cvode_restart(self.address_table, self.learnt, self.totals, float(t)),
+        _check(cvode_restart_now(self.address_table, self.learnt, self.totals, float(t)),
                "CVodeReInit")
 
     def forget(self):

@@ -5,13 +5,12 @@ turned into SUNDIALS' 0 (OK), 1 (recoverable: a kinematics that does not converg
 state) or -1 (unrecoverable: a non-finite state, a singular configuration). The code of the
 last failure is kept in the counters, so an error names its cause."""
 
-from numba import carray
 
 from ..engine import access, engine
 from ..engine import data as ed
 from ..numerics.dense import copy
 from ..numerics.jit import entry, kernel
-from ..numerics.native import address_of, call_engine, dense_matrix_data, nvector_data
+from ..numerics.native import address_of, call_engine, carray, dense_matrix_data, nvector_data
 
 
 @kernel(inline="always")

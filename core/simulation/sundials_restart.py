@@ -4,8 +4,17 @@ does not load SUNDIALS' callbacks (they load only where CVODE or IDA runs)."""
 
 from ..engine import access
 from ..engine import data as ed
-from ..numerics.jit import kernel
-from ..numerics.native import call_get_long, call_reinit, call_with_time
+from ..numerics.jit import entry, kernel
+from ..numerics.native import (
+    as_float_pointer,
+    as_int_pointer,
+    call_get_long,
+    call_reinit,
+    call_with_time,
+    carray,
+    float_address,
+    int_address,
+)
 
 # Cvode.address_table: the addresses its compiled restart (`cvode_restart`) and the compiled
 # sampled loop call, in this order
@@ -46,4 +55,22 @@ def cvode_restart(addresses, learnt, totals, t):
     return 0
 
 
-__all__ = ["cvode_restart"]
+@entry("int32(voidptr, voidptr, voidptr, float64)")
+def _cvode_restart_entry(addresses, learnt, totals, t):
+    """`cvode_restart` as a C entry, the arrays by address."""
+    return cvode_restart(carray(as_int_pointer(addresses), (A_SIZE,)),
+                         carray(as_float_pointer(learnt), (L_JACOBIAN + 1,)),
+                         carray(as_int_pointer(totals), (T_SCRATCH + 1,)), t)
+
+
+def cvode_restart_now(addresses, learnt, totals, t):
+    """`cvode_restart` from Python (through its C entry: a process that loads compiled code
+    from the cache calls it without numba). Returns 0 or ReInit's negative flag."""
+    for array, size in ((addresses, A_SIZE), (learnt, L_JACOBIAN + 1), (totals, T_SCRATCH + 1)):
+        if array.size != size:
+            raise ValueError(f"cvode_restart: an array of {array.size} entries, not {size}")
+    return _cvode_restart_entry.ctypes(int_address(addresses), float_address(learnt),
+                                       int_address(totals), float(t))
+
+
+__all__ = ["cvode_restart", "cvode_restart_now"]
