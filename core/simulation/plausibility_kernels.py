@@ -3,7 +3,7 @@ range of validity, in the few microseconds an FMU can spend on it after every do
 (A module of their own: `plausibility` is imported by the analyses, which need no numba.)"""
 
 
-from ..numerics.jit import kernel
+from ..numerics.jit import entry, kernel
 from ..numerics.native import as_float_pointer, as_int_pointer, carray
 
 
@@ -34,3 +34,10 @@ def within_at(address):
     indices = carray(as_int_pointer(table[2]), (table[6],))
     bounds = carray(as_float_pointer(table[3]), (table[7],))
     return within(x, e, indices, bounds, table[8])
+
+
+@entry("int32(int64)")
+def within_entry(address):
+    """`within_at` as a C entry (1 or 0), through which Python calls it: a process that loads
+    the compiled code from the cache checks without numba."""
+    return 1 if within_at(address) else 0

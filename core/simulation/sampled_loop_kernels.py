@@ -1,0 +1,301 @@
+"""The compiled side of the sampled loop (`sampled_loop`): the controller's step, the
+measurement of the loop outputs, one sample, and the loops over samples on CVODE and on the
+one-step ESDIRK, each with a C entry through which Python runs it (`run_loop`, `measure_now`:
+a process that loads the compiled code from the cache runs the loop without numba).
+"""
+
+import numpy as np
+
+from ..engine import access, engine
+from ..engine import data as ed
+from ..engine.ports import position_value
+from ..numerics.array_tables import array_table, floats, floats2d, ints
+from ..numerics.dense import copy
+from ..numerics.jit import entry, kernel
+from ..numerics.native import (
+    as_float_pointer,
+    as_int_pointer,
+    call_engine,
+    call_get_real,
+    call_solve,
+    call_stepper,
+    call_with_time,
+    carray,
+)
+from . import esdirk
+from .measuring import start_from_plant
+from .stepper import restart_plant
+from .sundials_restart import (
+    A_ACTUAL_INIT_STEP,
+    A_ANALYTIC,
+    A_MEMORY,
+    A_SOLVE,
+    A_STOP,
+    A_TRET,
+    A_Y,
+    L_INITIAL_STEP,
+    L_JACOBIAN,
+    cvode_restart,
+)
+
+
+@kernel(inline="always")
+def _state_space_row(P, Q, state, error, i):
+    """Row i of P x + Q e: the two dot products each summed in index order, then added."""
+    s = 0.0
+    for j in range(P.shape[1]):
+        s += P[i, j] * state[j]
+    d = 0.0
+    for j in range(Q.shape[1]):
+        d += Q[i, j] * error[j]
+    return s + d
+
+
+@kernel
+def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                    state: np.ndarray, error: np.ndarray, output: np.ndarray) -> None:
+    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e.
+
+    Compiled (numba); the sums run in index order, so every caller gets the same numbers.
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray, 2-D, float64
+        The controller's matrices: (s, s), (s, n), (m, s), (m, n).
+    state : ndarray (s,), float64
+        x, updated in place.
+    error : ndarray (n,), float64
+        e, in the loops' output units (m, rad).
+    output : ndarray (m,), float64
+        Receives u, in the loops' input units (N, N m, V).
+    """
+    for i in range(C.shape[0]):
+        output[i] = _state_space_row(C, D, state, error, i)
+    new_state = np.empty(A.shape[0])
+    for i in range(A.shape[0]):
+        new_state[i] = _state_space_row(A, B, state, error, i)
+    copy(state, new_state)
+
+
+# the addresses handed to the compiled loop, in this order (CVODE's own are in its
+# `address_table`, sundials_restart.A_...)
+(PLANT, OUTPUT, ENGINE, ADVANCE, ADDRESSES) = range(5)
+MEASURE_FAILED = -1000
+
+
+@kernel
+def measure(addresses, y, scratch, coordinates, out):
+    """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
+    status. As `Simulator.outputs`: q_ref + y at the DOFs when every output is a coordinate
+    DOF, else Newton from the plant's last coordinates moved to y (`measuring`).
+    coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat), then the DOF of
+    each output or -1 (`mechanics.ports.output_dofs`)."""
+    q_ref = access.reference_dofs(addresses[PLANT])
+    dofs = coordinates[coordinates.size - out.size:]
+    if np.all(dofs >= 0):
+        for j in range(out.size):
+            out[j] = q_ref[dofs[j]] + y[dofs[j]]
+        return ed.OK
+    ndof = access.dims(addresses[PLANT])[ed.NDOF]  # y: [.., coil currents]
+    access.restart_kinematics(addresses[OUTPUT], access.coordinates(addresses[PLANT]))
+    for j in range(ndof):
+        scratch[j] = q_ref[j] + y[j]
+    start_from_plant(addresses[PLANT], addresses[OUTPUT], scratch)
+    status = call_engine(addresses[ENGINE], engine.OP_POSITIONS, addresses[OUTPUT], 0.0,
+                         scratch.ctypes.data, 0, 0, 0.0)
+    if status != ed.OK:
+        return status
+    x = access.coordinates(addresses[OUTPUT])
+    for j in range(out.size):
+        out[j] = position_value(coordinates, j, x)
+    return ed.OK
+
+
+@kernel(inline="always")  # into the loop of the integrator in use, its one caller
+def _sample(addresses, y, scratch, k, controller, held):
+    """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
+    stepped; e_k of y_k rounded to its quantum where quanta > 0), and put u_k into the held
+    plant inputs (the others zero) for [t_k, t_k+1).
+    Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
+    controller: (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta,
+    position, force, error, output) as `run_sampled_loop` packs it, error and output scratch
+    (n_loops,)."""
+    (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force,
+     error, output) = controller
+    if measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
+        return -1
+    n_loops = inputs.size
+    if k == 0:  # element by element: a slice assignment compiles numba's shape-error message
+        for i in range(n_loops):
+            force[0, i] = feedforward[0, i]
+    r = reference[min(k, reference.shape[0] - 1)]
+    ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
+    for i in range(n_loops):
+        measured = position[k, i]
+        if quanta[i] > 0.0:  # as numpy's q * round(y / q): rint rounds halves to even
+            measured = quanta[i] * np.rint(measured / quanta[i])
+        error[i] = r[i] - measured
+    controller_step(A, B, C, D, state, error, output)
+    for i in range(n_loops):
+        force[k + 1, i] = output[i] + ff[i]
+    changed = 0
+    for j in range(held.size):
+        value = 0.0
+        for i in range(n_loops):
+            if inputs[i] == j:
+                value = force[k, i]
+        if value != held[j]:
+            changed = 1
+            held[j] = value
+    return changed
+
+
+@kernel
+def loop_cvode(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start, stop, fs,
+          controller):
+    """Samples start .. stop - 1 of the loop on CVODE (`cvode`: its `address_table`; learnt
+    and totals: its arrays); 0, or CVODE's failure flag (or MEASURE_FAILED) with
+    loop_state[0] the time reached. Each change of the held force restarts it as
+    `Simulator._restart` does, through the same kernels."""
+    plant = addresses[PLANT]
+    x_plant = access.coordinates(plant)
+    memory = cvode[A_MEMORY]
+    tret = carray(as_float_pointer(cvode[A_TRET]), (1,))
+    t = loop_state[0]
+    restart = loop_state[1] != 0.0
+    for k in range(start, stop):
+        changed = _sample(addresses, y, scratch, k, controller, held)
+        if changed < 0:
+            loop_state[0] = t
+            return MEASURE_FAILED
+        if changed or restart:  # as Simulator.set_inputs and its restart in advance
+            restart_plant(plant, held, x_plant, True)
+            flag = cvode_restart(cvode, learnt, totals, t)
+            if flag < 0:
+                loop_state[0] = t
+                return flag
+            restart = False
+        t_next = (k + 1) / fs
+        call_with_time(cvode[A_STOP], memory, t_next)
+        flag = call_solve(cvode[A_SOLVE], memory, t_next, cvode[A_Y],
+                          cvode[A_TRET], 1)
+        if flag < 0:
+            loop_state[0] = tret[0]
+            loop_state[1] = 1.0
+            return flag
+        if learnt[L_INITIAL_STEP] == 0.0:  # as sundials.Cvode.learn_initial_step
+            call_get_real(cvode[A_ACTUAL_INIT_STEP], memory, learnt.ctypes.data)
+        learnt[L_JACOBIAN] = 1.0 if cvode[A_ANALYTIC] != 0 else 0.0
+        t = t_next
+    loop_state[0] = t
+    loop_state[1] = 1.0 if restart else 0.0
+    return 0
+
+
+@kernel
+def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, scratch,
+                 start, stop, fs, controller):
+    """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
+    status (or MEASURE_FAILED) with loop_state[0] the time reached. Each change of the held
+    force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
+    inputs, the integrator's state re-entered (its first stage recomputed). The integrator
+    steps through its C entry (`esdirk_entry`: at addresses[ADVANCE], with the stepper's
+    `arguments`), not a linked copy of `esdirk.advance`."""
+    plant = addresses[PLANT]
+    x_plant = access.coordinates(plant)
+    y = vectors[esdirk.V_Y]
+    t = loop_state[0]
+    for k in range(start, stop):
+        changed = _sample(addresses, y, scratch, k, controller, held)
+        if changed < 0:
+            loop_state[0] = t
+            return MEASURE_FAILED
+        if changed or loop_state[1] != 0.0:  # as Simulator._restart, through its kernels
+            # no state set since the last step (as Simulator._restart_kinematics): the first
+            # stage from the last one and the engine's input response (esdirk.restart)
+            inputs_only = loop_state[2] == 0.0
+            restart_plant(plant, held, x_plant, not inputs_only)
+            esdirk.restart(plant, memory, flags, t, inputs_only)
+            loop_state[1] = loop_state[2] = 0.0
+        t_next = (k + 1) / fs
+        flags[esdirk.I_ONE_STEP] = flags[esdirk.I_MAX_STEPS] = 0  # to t_next, no budget
+        status = call_stepper(addresses[ADVANCE], arguments.ctypes.data, t_next)
+        if status != esdirk.OK:
+            loop_state[0] = memory[esdirk.M_T]
+            loop_state[1] = loop_state[2] = 1.0
+            return status
+        t = t_next
+    loop_state[0] = t
+    return 0
+
+
+# -- the C entries: the arrays of a run in one table (numerics.array_tables), the
+# controller's first, in `sample`'s order, then the driver's
+CONTROLLER_KINDS = "FFFFFFfiifFFff"  # reference .. output, as run_sampled_loop packs them
+ESDIRK_KINDS = "ifffiFif"  # addresses, loop_state, held, memory, flags, vectors, arguments,
+#                            scratch
+CVODE_KINDS = "iiffifff"  # addresses, cvode, loop_state, learnt, totals, held, y, scratch
+_N = len(CONTROLLER_KINDS)
+
+
+@kernel(inline="always")
+def _controller(table):
+    return (floats2d(table, 0), floats2d(table, 1), floats2d(table, 2), floats2d(table, 3),
+            floats2d(table, 4), floats2d(table, 5), floats(table, 6), ints(table, 7),
+            ints(table, 8), floats(table, 9), floats2d(table, 10), floats2d(table, 11),
+            floats(table, 12), floats(table, 13))
+
+
+@entry("int32(voidptr, int64, int64, float64)")
+def _esdirk_entry(address, start, stop, fs):
+    """`loop_esdirk` on the arrays of the table at `address` (CONTROLLER_KINDS, then
+    ESDIRK_KINDS)."""
+    table = carray(as_int_pointer(address), (3 * (_N + len(ESDIRK_KINDS)),))
+    return loop_esdirk(ints(table, _N), floats(table, _N + 1), floats(table, _N + 2),
+                       floats(table, _N + 3), ints(table, _N + 4), floats2d(table, _N + 5),
+                       ints(table, _N + 6), floats(table, _N + 7), start, stop, fs,
+                       _controller(table))
+
+
+@entry("int32(voidptr, int64, int64, float64)")
+def _cvode_entry(address, start, stop, fs):
+    """`loop_cvode` on the arrays of the table at `address` (CONTROLLER_KINDS, then
+    CVODE_KINDS)."""
+    table = carray(as_int_pointer(address), (3 * (_N + len(CVODE_KINDS)),))
+    return loop_cvode(ints(table, _N), ints(table, _N + 1), floats(table, _N + 2),
+                      floats(table, _N + 3), ints(table, _N + 4), floats(table, _N + 5),
+                      floats(table, _N + 6), floats(table, _N + 7), start, stop, fs,
+                      _controller(table))
+
+
+@entry("int32(voidptr)")
+def _measure_entry(address):
+    """`measure` on the arrays of the table at `address` (addresses, y, scratch,
+    coordinates, out)."""
+    table = carray(as_int_pointer(address), (15,))
+    return measure(ints(table, 0), floats(table, 1), floats(table, 2), ints(table, 3),
+                   floats(table, 4))
+
+
+LOOP_ENTRIES = {"esdirk": (_esdirk_entry, ESDIRK_KINDS), "sundials": (_cvode_entry, CVODE_KINDS)}
+
+
+def loop_runner(driver, controller, arrays):
+    """run(start, stop, fs) -> flag: the loop over samples start .. stop - 1 of `driver`
+    ("esdirk" or "sundials") through its C entry, on the controller's arrays (as
+    `run_sampled_loop` packs them) and the driver's (`ESDIRK_KINDS`, `CVODE_KINDS`)."""
+    function, kinds = LOOP_ENTRIES[driver]
+    kept = (*controller, *arrays)  # the table points into them
+    table = array_table(kept, CONTROLLER_KINDS + kinds)
+    address = table.ctypes.data
+
+    def run(start, stop, fs, _keep=(kept, table)):
+        return function.ctypes(address, start, stop, fs)
+
+    return run
+
+
+def measure_now(addresses, y, scratch, coordinates, out):
+    """`measure` from Python, through its C entry; a status."""
+    return _measure_entry.ctypes(array_table((addresses, y, scratch, coordinates, out),
+                                             "iffif").ctypes.data)
