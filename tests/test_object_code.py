@@ -1,6 +1,7 @@
 """Entry points loaded as object code without numba (core/numerics/object_code.py): the
 loader's checks on small objects that llvmlite compiles here, its CPU target against numba's
-own, and a simulation through loaded code against the same through numba, bit for bit."""
+own, a simulation through loaded code against the same through numba, bit for bit; and the
+tables through which Python hands a C entry its arrays (core/numerics/array_tables.py)."""
 
 import ctypes
 import json
@@ -8,9 +9,11 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from flexure.core.numerics import object_code
+from flexure.core.numerics.array_tables import array_table
 
 ANSWER = """
 define double @answer(double %x) {
@@ -152,3 +155,21 @@ def test_a_simulation_through_loaded_code_is_numbas_bit_for_bit(tmp_path, method
     assert all_loaded == "True" and int(count) >= 8
     assert none_loaded == "False"
     assert loaded == through_numba  # the same machine code: the same numbers
+
+
+def test_an_array_table_holds_each_arrays_address_and_shape():
+    floats, matrix, ints = np.arange(3.0), np.ones((2, 5)), np.arange(4, dtype=np.int64)
+    table = array_table((floats, matrix, ints), "fFi")
+    assert table.tolist() == [floats.ctypes.data, 3, 0, matrix.ctypes.data, 2, 5,
+                              ints.ctypes.data, 4, 0]
+
+
+@pytest.mark.parametrize("array, kind", [
+    pytest.param(np.arange(3), "f", id="int64 for float64"),
+    pytest.param(np.ones((2, 2)), "f", id="2-D for 1-D"),
+    pytest.param(np.ones((4, 4))[:, 1], "f", id="strided"),
+    pytest.param(np.ones(3, dtype=np.float32), "f", id="float32"),
+])
+def test_an_array_table_refuses_an_array_of_another_kind(array, kind):
+    with pytest.raises(TypeError, match="array 0 is"):
+        array_table((array,), kind)
