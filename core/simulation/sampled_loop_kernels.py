@@ -150,7 +150,7 @@ def _sample(addresses, y, scratch, k, controller, held):
     return changed
 
 
-@kernel
+@kernel(inline="always")  # into its C entry, its one caller: one compilation unit
 def loop_cvode(addresses, cvode, loop_state, learnt, totals, held, y, scratch, start, stop, fs,
           controller):
     """Samples start .. stop - 1 of the loop on CVODE (`cvode`: its `address_table`; learnt
@@ -192,7 +192,7 @@ def loop_cvode(addresses, cvode, loop_state, learnt, totals, held, y, scratch, s
     return 0
 
 
-@kernel
+@kernel(inline="always")  # into its C entry, its one caller: one compilation unit
 def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, scratch,
                  start, stop, fs, controller):
     """Samples start .. stop - 1 of the loop on the one-step integrator; 0, or its failure
