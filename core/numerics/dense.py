@@ -4,7 +4,8 @@ and the integrators' Newton matrices (2 NDOF, 2 NDOF).
 `lu_factor` is Gaussian elimination with partial pivoting (A = P^T L U, unit L below the
 diagonal and U on and above it, in the one array) and returns the ratio of the smallest to
 the largest pivot magnitude, which callers compare with a threshold to call a matrix
-singular; `lu_solve` solves with those factors. The banded matrices (J, the augmented
+singular; `lu_solve` solves with those factors, `lu_solve_rows` for many right-hand sides at
+once (the Jacobian's M_bar^-1 K and M_bar^-1 C). The banded matrices (J, the augmented
 system) have their own LU in `core/numerics/banded.py`. `copy` is how compiled code copies
 one array into another.
 """
@@ -59,6 +60,43 @@ def lu_solve(a, n, piv, b):
         for j in range(i + 1, n):
             s -= a[i * n + j] * b[j]
         b[i] = s / a[i * n + i]
+
+
+@kernel
+def lu_solve_rows(a, n, piv, B, start, stride, width):
+    """Solve A Z = B in place for the `width` columns of B with the factors of `lu_factor`:
+    row i of B is B[start + i stride: start + i stride + width] (flat; stride >= width), so a
+    block of a larger row-major matrix is solved where it lies.
+
+    Every column gets the same operations in the same order as `lu_solve` gives it (each
+    row's sum over j ascending), but row by row: the inner loops run along B's rows, which
+    the compiler vectorises, where a column at a time reads B with a stride. A zero factor
+    entry is skipped (0 times a finite number changes no sum)."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            rk, rp = start + k * stride, start + p * stride
+            for c in range(width):
+                B[rk + c], B[rp + c] = B[rp + c], B[rk + c]
+    for i in range(n):
+        target = B[start + i * stride: start + i * stride + width]
+        for j in range(i):
+            factor = a[i * n + j]
+            if factor != 0.0:
+                source = B[start + j * stride: start + j * stride + width]
+                for c in range(width):
+                    target[c] -= factor * source[c]
+    for i in range(n - 1, -1, -1):
+        target = B[start + i * stride: start + i * stride + width]
+        for j in range(i + 1, n):
+            factor = a[i * n + j]
+            if factor != 0.0:
+                source = B[start + j * stride: start + j * stride + width]
+                for c in range(width):
+                    target[c] -= factor * source[c]
+        pivot = a[i * n + i]
+        for c in range(width):
+            target[c] = target[c] / pivot
 
 
 @kernel
