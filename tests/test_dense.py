@@ -1,5 +1,10 @@
 """The dense LU kernels (flexure.core.numerics.dense) against numpy.
 
+`lu_factor` (blocked) against the textbook loop `lu_factor_unblocked` (the same operations
+on every entry in the same order: the same factors, pivots and pivot ratio to the bit on the
+machine that runs both) and against numpy (P A = L U to the backward error of partial
+pivoting), on sizes below, at and across the block, with exact zeros and a zero column.
+
 `lu_solve_rows` solves a block of a larger row-major array in place for many right-hand
 sides; it is checked against numpy.linalg.solve (to the backward error of partial pivoting)
 and against `lu_solve` column by column (the same operations in the same order: equal to the
@@ -9,7 +14,13 @@ last bit on the machine that runs both), and the entries outside the block stay 
 import numpy as np
 import pytest
 
-from flexure.core.numerics.dense import lu_factor, lu_solve, lu_solve_rows
+from flexure.core.numerics.dense import (
+    BLOCK,
+    lu_factor,
+    lu_factor_unblocked,
+    lu_solve,
+    lu_solve_rows,
+)
 
 
 @pytest.mark.parametrize("n, width, stride, start", [(1, 1, 1, 0), (5, 3, 7, 4),
@@ -43,3 +54,29 @@ def test_lu_solve_rows_solves_a_block_in_place(n, width, stride, start):
         lu_solve(lu, n, piv, column)
         np.testing.assert_allclose(Z[:, c], column, rtol=0.0,
                                    atol=4 * np.finfo(float).eps * np.max(np.abs(column)))
+
+
+@pytest.mark.parametrize("n", [1, 7, BLOCK, BLOCK + 1, 3 * BLOCK + 5, 200])
+def test_lu_factor_blocked_equals_the_textbook_loop(n):
+    rng = np.random.default_rng(100 + n)
+    A = rng.standard_normal((n, n))
+    A[rng.random((n, n)) < 0.2] = 0.0
+    if n > 3:
+        A[:, n // 2] = 0.0  # a zero column: a zero pivot step, skipped by both
+    blocked, reference = A.ravel().copy(), A.ravel().copy()
+    piv, piv_reference = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
+    ratio = lu_factor(blocked, n, piv)
+    assert ratio == lu_factor_unblocked(reference, n, piv_reference)
+    assert np.array_equal(piv, piv_reference)
+    assert np.array_equal(blocked, reference)
+    if n > 3:
+        assert ratio == 0.0  # singular
+    # P A = L U: the rows swapped in the order of the pivots
+    LU = blocked.reshape(n, n)
+    L, U = np.tril(LU, -1) + np.eye(n), np.triu(LU)
+    PA = A.copy()
+    for k in range(n):
+        PA[[k, piv[k]]] = PA[[piv[k], k]]
+    # backward error of Gaussian elimination: |L U - P A| <= n eps |L| |U| (Higham, 9.3)
+    bound = n * np.finfo(float).eps * (np.abs(L) @ np.abs(U))
+    assert np.all(np.abs(L @ U - PA) <= bound)

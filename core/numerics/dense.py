@@ -1,24 +1,77 @@
 """Dense LU of small matrices, row-major and in place: the reduced mass M_bar (NDOF, NDOF)
 and the integrators' Newton matrices (2 NDOF, 2 NDOF).
 
-`lu_factor` is Gaussian elimination with partial pivoting (A = P^T L U, unit L below the
-diagonal and U on and above it, in the one array) and returns the ratio of the smallest to
-the largest pivot magnitude, which callers compare with a threshold to call a matrix
-singular; `lu_solve` solves with those factors, `lu_solve_rows` for many right-hand sides at
-once (the Jacobian's M_bar^-1 K and M_bar^-1 C). The banded matrices (J, the augmented
-system) have their own LU in `core/numerics/banded.py`. `copy` is how compiled code copies
-one array into another.
+`lu_factor` is Gaussian elimination with partial pivoting, blocked for the cache (A = P^T L
+U, unit L below the diagonal and U on and above it, in the one array), and returns the ratio
+of the smallest to the largest pivot magnitude, which callers compare with a threshold to
+call a matrix singular; `lu_solve` solves with those factors, `lu_solve_rows` for many
+right-hand sides at once (the Jacobian's M_bar^-1 K and M_bar^-1 C). The banded matrices (J,
+the augmented system) have their own LU in `core/numerics/banded.py`. `copy` is how compiled
+code copies one array into another.
 """
 
 import numpy as np
 
 from .jit import kernel
 
+BLOCK = 32  # pivot steps `lu_factor` takes on a panel before it updates the rest
+
 
 @kernel
 def lu_factor(a, n, piv):
     """LU with partial pivoting of the (n, n) row-major a, in place; returns the ratio of the
-    smallest to the largest pivot magnitude (0 for an exactly singular matrix)."""
+    smallest to the largest pivot magnitude (0 for an exactly singular matrix).
+
+    Blocked: BLOCK pivot steps on a panel of BLOCK columns (the pivots chosen, whole rows
+    swapped, the panel eliminated), then the panel's rows of U and the trailing rows each
+    updated once by the BLOCK steps, row by row, where the textbook loop
+    (`lu_factor_unblocked`) runs over the whole trailing matrix at every step: the
+    matrix goes through the cache n / BLOCK times instead of n. Every entry gets the same
+    operations in the same order (a_ij -= l_ik u_kj for k ascending, the multipliers as
+    a_ik times 1 / u_kk, the same pivots), so the factors are those of the textbook loop to
+    the bit."""
+    smallest, largest = np.inf, 0.0
+    for k0 in range(0, n, BLOCK):
+        k1 = min(k0 + BLOCK, n)
+        for k in range(k0, k1):  # the panel: columns k0 .. k1 - 1, eliminated step by step
+            p, big = k, abs(a[k * n + k])
+            for i in range(k + 1, n):
+                value = abs(a[i * n + k])
+                if value > big:
+                    p, big = i, value
+            piv[k] = p
+            if p != k:
+                for j in range(n):
+                    a[k * n + j], a[p * n + j] = a[p * n + j], a[k * n + j]
+            smallest, largest = min(smallest, big), max(largest, big)
+            if big == 0.0:
+                continue
+            inverse = 1.0 / a[k * n + k]
+            for i in range(k + 1, n):
+                factor = a[i * n + k] * inverse
+                a[i * n + k] = factor
+                if factor != 0.0:
+                    for j in range(k + 1, k1):
+                        a[i * n + j] -= factor * a[k * n + j]
+        if k1 == n:
+            break
+        # the panel's steps on columns k1 .. n - 1: its own rows first (they become U's rows,
+        # each final before the next uses it), then every row below, one row at a time
+        for i in range(k0 + 1, n):
+            target = a[i * n + k1: (i + 1) * n]
+            for k in range(k0, min(i, k1)):
+                factor = a[i * n + k]
+                if factor != 0.0:
+                    source = a[k * n + k1: (k + 1) * n]
+                    for j in range(n - k1):
+                        target[j] -= factor * source[j]
+    return smallest / largest if largest > 0.0 else 0.0
+
+
+@kernel
+def lu_factor_unblocked(a, n, piv):
+    """`lu_factor` one elimination step at a time (right-looking, the textbook loop): the
+    reference `lu_factor` is tested against, to the bit."""
     smallest, largest = np.inf, 0.0
     for k in range(n):
         p, big = k, abs(a[k * n + k])
