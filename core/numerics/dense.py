@@ -24,12 +24,12 @@ def lu_factor(a, n, piv):
 
     Blocked: BLOCK pivot steps on a panel of BLOCK columns (the pivots chosen, whole rows
     swapped, the panel eliminated), then the panel's rows of U and the trailing rows each
-    updated once by the BLOCK steps, row by row, where the textbook loop
-    (`lu_factor_unblocked`) runs over the whole trailing matrix at every step: the
-    matrix goes through the cache n / BLOCK times instead of n. Every entry gets the same
-    operations in the same order (a_ij -= l_ik u_kj for k ascending, the multipliers as
-    a_ik times 1 / u_kk, the same pivots), so the factors are those of the textbook loop to
-    the bit."""
+    updated once by the BLOCK steps (four rows at a time, which read each row of U once),
+    where the textbook loop (`lu_factor_unblocked`) runs over the whole trailing matrix at
+    every step: the matrix goes through the cache n / BLOCK times instead of n. Every entry
+    gets the same operations in the same order (a_ij -= l_ik u_kj for k ascending, the
+    multipliers as a_ik times 1 / u_kk, the same pivots), so the factors are those of the
+    textbook loop to the bit."""
     smallest, largest = np.inf, 0.0
     for k0 in range(0, n, BLOCK):
         k1 = min(k0 + BLOCK, n)
@@ -56,16 +56,53 @@ def lu_factor(a, n, piv):
         if k1 == n:
             break
         # the panel's steps on columns k1 .. n - 1: its own rows first (they become U's rows,
-        # each final before the next uses it), then every row below, one row at a time
-        for i in range(k0 + 1, n):
-            target = a[i * n + k1: (i + 1) * n]
-            for k in range(k0, min(i, k1)):
-                factor = a[i * n + k]
-                if factor != 0.0:
-                    source = a[k * n + k1: (k + 1) * n]
-                    for j in range(n - k1):
-                        target[j] -= factor * source[j]
+        # each final before the next uses it), then the rows below, four at a time
+        for i in range(k0 + 1, k1):
+            _eliminate_row(a, n, i, k0, i, k1)
+        quads = (n - k1) // 4
+        for q in range(quads):
+            _eliminate_rows(a, n, k1 + 4 * q, k0, k1)
+        for i in range(k1 + 4 * quads, n):
+            _eliminate_row(a, n, i, k0, k1, k1)
     return smallest / largest if largest > 0.0 else 0.0
+
+
+@kernel(inline="always")
+def _eliminate_row(a, n, i, k0, k_end, k1):
+    """Row i of a from column k1 on: a_ij -= a_ik a_kj for k = k0 .. k_end - 1 in turn (a zero
+    multiplier skipped, as the textbook loop skips it)."""
+    target = a[i * n + k1: (i + 1) * n]
+    for k in range(k0, k_end):
+        factor = a[i * n + k]
+        if factor != 0.0:
+            source = a[k * n + k1: (k + 1) * n]
+            for j in range(n - k1):
+                target[j] -= factor * source[j]
+
+
+@kernel(inline="always")
+def _eliminate_rows(a, n, i, k0, k1):
+    """`_eliminate_row` on rows i .. i + 3 with k = k0 .. k1 - 1: each row of U read once for
+    the four (the operations on each entry as `_eliminate_row`'s; a step with a zero
+    multiplier goes row by row, which skips it)."""
+    w = n - k1
+    t0, t1 = a[i * n + k1: (i + 1) * n], a[(i + 1) * n + k1: (i + 2) * n]
+    t2, t3 = a[(i + 2) * n + k1: (i + 3) * n], a[(i + 3) * n + k1: (i + 4) * n]
+    for k in range(k0, k1):
+        f0, f1, f2, f3 = a[i * n + k], a[(i + 1) * n + k], a[(i + 2) * n + k], a[(i + 3) * n + k]
+        source = a[k * n + k1: (k + 1) * n]
+        if f0 != 0.0 and f1 != 0.0 and f2 != 0.0 and f3 != 0.0:
+            for j in range(w):
+                s = source[j]
+                t0[j] -= f0 * s
+                t1[j] -= f1 * s
+                t2[j] -= f2 * s
+                t3[j] -= f3 * s
+        else:
+            for target, factor in ((t0, f0), (t1, f1), (t2, f2), (t3, f3)):
+                if factor != 0.0:
+                    for j in range(w):
+                        target[j] -= factor * source[j]
 
 
 @kernel
