@@ -13,6 +13,7 @@ from flexure.core.engine.point_masses import (
     dense_element_mass,
     element_mass,
     mass_rows_product,
+    massless,
     padded_width,
     point_columns,
     point_forces,
@@ -98,3 +99,16 @@ def test_sparse_rows_product(P, m, mz):
     expected = Dp @ T
     assert np.max(np.abs(D[:, :mz] - expected)) <= 1e-14 * np.max(np.abs(expected))
     assert np.array_equal(D[:, mz:], np.zeros((P, stride - mz)))
+
+
+@pytest.mark.parametrize("P", [1, 9, 24])
+def test_massless(P):
+    """Whether Mp is zero on its pattern: as numpy says, for a massive Mp, one whose pattern
+    holds only zeros, and one with a single entry left."""
+    Mp, pattern, _ = element(P, 4, seed=P)
+    assert massless(Mp, pattern) == (not np.any(Mp[pattern]))
+    zero = np.zeros_like(Mp)
+    assert massless(zero, pattern)
+    one = zero.copy()
+    one[pattern[-1]] = 1e-30
+    assert not massless(one, pattern)

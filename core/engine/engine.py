@@ -46,7 +46,7 @@ nothing raises inside compiled code.
 
 import numpy as np
 
-from ..numerics.dense import lu_factor, lu_solve, put
+from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from . import data as ed
@@ -161,6 +161,20 @@ def first_order_jacobian(table, y, J, column_major):
     J[:] = 0.0
     for j in range(n):
         put(J, N, j, n + j, 1.0, column_major)
+    if not column_major:  # rows n.. of J = -M^-1 [K C], solved where they lie
+        for i in range(n):
+            row = (n + i) * N
+            for j in range(n):
+                J[row + j] = K[i * n + j]
+                J[row + n + j] = C[i * n + j]
+        lu_solve_rows(mass_lu, n, piv, J, n * N, N, 2 * n)
+        for i in range(n):
+            row = (n + i) * N
+            for j in range(2 * n):
+                J[row + j] = -J[row + j]
+        if n_el:
+            first_order_blocks(table, J, N, n, column_major)
+        return ed.OK
     for j in range(n):  # column j of -M^-1 K and of -M^-1 C
         for i in range(n):
             column[i] = K[i * n + j]

@@ -55,6 +55,7 @@ from .point_masses import (
     element_mass,
     element_points,
     mass_rows_product,
+    massless,
     point_columns,
     point_forces,
 )
@@ -441,6 +442,8 @@ def reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
         order = 2 if with_forces and moving else 1
         for i in range(n):
             Mp = masses[i * P * P: (i + 1) * P * P]
+            if massless(Mp, pattern):  # no mass, no forces (a rigid body's inner elements)
+                continue
             element_points(inertia, scratch, i, x, xdot, order)
             B[: P * ndof] = 0.0
             for pp in range(P):  # B = Dp DF_e, and the point forces gravity - Dp conv - acc

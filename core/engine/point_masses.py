@@ -154,3 +154,13 @@ def point_forces(Mp, pattern, P, point, w):
     for e in range(pattern.size):
         pp, qq, mpq, end = pattern_entry(Mp, pattern[e], pp, end, P)
         w[pp] += mpq * point[qq]
+
+
+@kernel
+def massless(Mp, pattern):
+    """Whether every entry of Mp in `pattern` (flat p P + q) is zero: an element without mass
+    (a rigid body's inner elements), whose point forces and mass are zero."""
+    for e in range(pattern.size):
+        if Mp[pattern[e]] != 0.0:
+            return False
+    return True

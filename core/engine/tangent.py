@@ -19,7 +19,7 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
 from .operations import OP_MASS, OP_RIGID_CONDENSE, OP_RIGID_GEOMETRIC, run
-from .point_masses import element_points, point_forces
+from .point_masses import element_points, massless, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .slots import float_array as _f
 from .slots import (
@@ -86,13 +86,17 @@ def tangent(table, qddot):
                         s += De[base + a] * DF[coords[i * m + a] * ndof + j]
                     DeF[d * ndof + j] = s
             H[:] = 0.0
+            unstressed = True
             for b in range(k):
                 s = sigma[defs[i * k + b]]
                 if s == 0.0:
                     continue
+                unstressed = False
                 base2 = (i * k + b) * m * m
                 for a in range(m * m):
                     H[a] += s * D2e[base2 + a]
+            if unstressed:  # H = 0 adds nothing to K (an element inside a rigid cluster)
+                continue
             for a in range(m):  # HD = H DF_e
                 for j in range(ndof):
                     s = 0.0
@@ -158,6 +162,8 @@ def _mass_times(table, x, v, out):
         _, _, _, acc, w, Dp, _ = scratch
         for i in range(n):
             Mp = masses[i * P * P: (i + 1) * P * P]
+            if massless(Mp, pattern):  # M v = 0 there
+                continue
             element_points(inertia, scratch, i, x, x, 1)  # order 1: no velocities are read
             for pp in range(P):
                 s = 0.0

@@ -1,23 +1,114 @@
 """Dense LU of small matrices, row-major and in place: the reduced mass M_bar (NDOF, NDOF)
 and the integrators' Newton matrices (2 NDOF, 2 NDOF).
 
-`lu_factor` is Gaussian elimination with partial pivoting (A = P^T L U, unit L below the
-diagonal and U on and above it, in the one array) and returns the ratio of the smallest to
-the largest pivot magnitude, which callers compare with a threshold to call a matrix
-singular; `lu_solve` solves with those factors. The banded matrices (J, the augmented
-system) have their own LU in `core/numerics/banded.py`. `copy` is how compiled code copies
-one array into another.
+`lu_factor` is Gaussian elimination with partial pivoting, blocked for the cache (A = P^T L
+U, unit L below the diagonal and U on and above it, in the one array), and returns the ratio
+of the smallest to the largest pivot magnitude, which callers compare with a threshold to
+call a matrix singular; `lu_solve` solves with those factors, `lu_solve_rows` for many
+right-hand sides at once (the Jacobian's M_bar^-1 K and M_bar^-1 C). The banded matrices (J,
+the augmented system) have their own LU in `core/numerics/banded.py`. `copy` is how compiled
+code copies one array into another.
 """
 
 import numpy as np
 
 from .jit import kernel
 
+BLOCK = 32  # pivot steps `lu_factor` takes on a panel before it updates the rest
+
 
 @kernel
 def lu_factor(a, n, piv):
     """LU with partial pivoting of the (n, n) row-major a, in place; returns the ratio of the
-    smallest to the largest pivot magnitude (0 for an exactly singular matrix)."""
+    smallest to the largest pivot magnitude (0 for an exactly singular matrix).
+
+    Blocked: BLOCK pivot steps on a panel of BLOCK columns (the pivots chosen, whole rows
+    swapped, the panel eliminated), then the panel's rows of U and the trailing rows each
+    updated once by the BLOCK steps (four rows at a time, which read each row of U once),
+    where the textbook loop (`lu_factor_unblocked`) runs over the whole trailing matrix at
+    every step: the matrix goes through the cache n / BLOCK times instead of n. Every entry
+    gets the same operations in the same order (a_ij -= l_ik u_kj for k ascending, the
+    multipliers as a_ik times 1 / u_kk, the same pivots), so the factors are those of the
+    textbook loop to the bit."""
+    smallest, largest = np.inf, 0.0
+    for k0 in range(0, n, BLOCK):
+        k1 = min(k0 + BLOCK, n)
+        for k in range(k0, k1):  # the panel: columns k0 .. k1 - 1, eliminated step by step
+            p, big = k, abs(a[k * n + k])
+            for i in range(k + 1, n):
+                value = abs(a[i * n + k])
+                if value > big:
+                    p, big = i, value
+            piv[k] = p
+            if p != k:
+                for j in range(n):
+                    a[k * n + j], a[p * n + j] = a[p * n + j], a[k * n + j]
+            smallest, largest = min(smallest, big), max(largest, big)
+            if big == 0.0:
+                continue
+            inverse = 1.0 / a[k * n + k]
+            for i in range(k + 1, n):
+                factor = a[i * n + k] * inverse
+                a[i * n + k] = factor
+                if factor != 0.0:
+                    for j in range(k + 1, k1):
+                        a[i * n + j] -= factor * a[k * n + j]
+        if k1 == n:
+            break
+        # the panel's steps on columns k1 .. n - 1: its own rows first (they become U's rows,
+        # each final before the next uses it), then the rows below, four at a time
+        for i in range(k0 + 1, k1):
+            _eliminate_row(a, n, i, k0, i, k1)
+        quads = (n - k1) // 4
+        for q in range(quads):
+            _eliminate_rows(a, n, k1 + 4 * q, k0, k1)
+        for i in range(k1 + 4 * quads, n):
+            _eliminate_row(a, n, i, k0, k1, k1)
+    return smallest / largest if largest > 0.0 else 0.0
+
+
+@kernel(inline="always")
+def _eliminate_row(a, n, i, k0, k_end, k1):
+    """Row i of a from column k1 on: a_ij -= a_ik a_kj for k = k0 .. k_end - 1 in turn (a zero
+    multiplier skipped, as the textbook loop skips it)."""
+    target = a[i * n + k1: (i + 1) * n]
+    for k in range(k0, k_end):
+        factor = a[i * n + k]
+        if factor != 0.0:
+            source = a[k * n + k1: (k + 1) * n]
+            for j in range(n - k1):
+                target[j] -= factor * source[j]
+
+
+@kernel(inline="always")
+def _eliminate_rows(a, n, i, k0, k1):
+    """`_eliminate_row` on rows i .. i + 3 with k = k0 .. k1 - 1: each row of U read once for
+    the four (the operations on each entry as `_eliminate_row`'s; a step with a zero
+    multiplier goes row by row, which skips it)."""
+    w = n - k1
+    t0, t1 = a[i * n + k1: (i + 1) * n], a[(i + 1) * n + k1: (i + 2) * n]
+    t2, t3 = a[(i + 2) * n + k1: (i + 3) * n], a[(i + 3) * n + k1: (i + 4) * n]
+    for k in range(k0, k1):
+        f0, f1, f2, f3 = a[i * n + k], a[(i + 1) * n + k], a[(i + 2) * n + k], a[(i + 3) * n + k]
+        source = a[k * n + k1: (k + 1) * n]
+        if f0 != 0.0 and f1 != 0.0 and f2 != 0.0 and f3 != 0.0:
+            for j in range(w):
+                s = source[j]
+                t0[j] -= f0 * s
+                t1[j] -= f1 * s
+                t2[j] -= f2 * s
+                t3[j] -= f3 * s
+        else:
+            for target, factor in ((t0, f0), (t1, f1), (t2, f2), (t3, f3)):
+                if factor != 0.0:
+                    for j in range(w):
+                        target[j] -= factor * source[j]
+
+
+@kernel
+def lu_factor_unblocked(a, n, piv):
+    """`lu_factor` one elimination step at a time (right-looking, the textbook loop): the
+    reference `lu_factor` is tested against, to the bit."""
     smallest, largest = np.inf, 0.0
     for k in range(n):
         p, big = k, abs(a[k * n + k])
@@ -59,6 +150,43 @@ def lu_solve(a, n, piv, b):
         for j in range(i + 1, n):
             s -= a[i * n + j] * b[j]
         b[i] = s / a[i * n + i]
+
+
+@kernel
+def lu_solve_rows(a, n, piv, B, start, stride, width):
+    """Solve A Z = B in place for the `width` columns of B with the factors of `lu_factor`:
+    row i of B is B[start + i stride: start + i stride + width] (flat; stride >= width), so a
+    block of a larger row-major matrix is solved where it lies.
+
+    Every column gets the same operations in the same order as `lu_solve` gives it (each
+    row's sum over j ascending), but row by row: the inner loops run along B's rows, which
+    the compiler vectorises, where a column at a time reads B with a stride. A zero factor
+    entry is skipped (0 times a finite number changes no sum)."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            rk, rp = start + k * stride, start + p * stride
+            for c in range(width):
+                B[rk + c], B[rp + c] = B[rp + c], B[rk + c]
+    for i in range(n):
+        target = B[start + i * stride: start + i * stride + width]
+        for j in range(i):
+            factor = a[i * n + j]
+            if factor != 0.0:
+                source = B[start + j * stride: start + j * stride + width]
+                for c in range(width):
+                    target[c] -= factor * source[c]
+    for i in range(n - 1, -1, -1):
+        target = B[start + i * stride: start + i * stride + width]
+        for j in range(i + 1, n):
+            factor = a[i * n + j]
+            if factor != 0.0:
+                source = B[start + j * stride: start + j * stride + width]
+                for c in range(width):
+                    target[c] -= factor * source[c]
+        pivot = a[i * n + i]
+        for c in range(width):
+            target[c] = target[c] / pivot
 
 
 @kernel

@@ -69,10 +69,15 @@ fmu       stage_planar_3dof's FMU (`flexure.fmu.build_scene_fmu`, its default in
 manipulator
           The chapter's 6 mm xy move (`manipulator.py`) on the reduced model's linearisation
           (507 DOFs, stepped exactly): >= 1 x real time; the same move on the nonlinear
-          75-DOF control model for information. The manipulator's analyses as whole
-          commands in CPU seconds (`manipulator_analyses.py`, issue 35): the 816-DOF
-          model's ten lowest modes <= 3 s, `flexure reduce manipulator_e1 --keep 7 --tol 1`
-          <= 5 s, `examples/manipulator_report.py` <= 20 s.
+          75-DOF control model: >= 1 x real time (issue 35, item 4). The manipulator's
+          analyses as whole commands in CPU seconds (`manipulator_analyses.py`, issue 35):
+          the 816-DOF model's ten lowest modes <= 3 s, `flexure reduce manipulator_e1 --keep 7
+          --tol 1` <= 5 s, `examples/manipulator_report.py` <= 20 s.
+spatial   Issue 35, item 4 (`spatial.py`): one rhs of manipulator_control per DOF against the
+          refined planar stage's (n = 16, 93 DOFs): <= 3; its Jacobian <= 20 rhs (one mass
+          matrix beside it); a spatial cantilever of 16 and 64 BEAMs (96, 384 DOFs): one
+          implicit step (esdirk, rtol 1e-6) at 384 DOFs <= Exudyn's (the issue's 3.4 ms, not
+          measured in the run), growing at most as n^1.2.
 startup   Whole processes as a user starts them, warm cache, in CPU seconds (user + system):
           `python -c "import flexure.core"` (<= 0.5 s), `flexure analyze truss_1dof_x`
           (<= 0.5 s), `flexure loop --no-plot` (<= 1.5 s) beside Exudyn's whole process for
@@ -98,7 +103,7 @@ Usage
                                           [--markdown FILE]
 
 The row groups live in this folder's modules (loops, step_scan, refined, fmu_overhead,
-manipulator, latency, portable), the shared machinery in measure, table and stage_models.
+manipulator, spatial, latency, portable), the shared machinery in measure, table and stage_models.
 
 Requires flexure and, for the peer columns, exudyn (``pip install ".[bench]"``); without
 exudyn the flexure side and the limits are still measured.
@@ -122,12 +127,15 @@ from .manipulator import manipulator  # noqa: E402
 from .measure import log  # noqa: E402
 from .portable import portable  # noqa: E402
 from .refined import refined  # noqa: E402
+from .spatial import spatial  # noqa: E402
 from .step_scan import step  # noqa: E402
 from .table import environment, markdown, text_table  # noqa: E402
 
-GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "startup", "portable")
+GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "spatial", "startup",
+          "portable")
 FUNCTIONS = {"loop": loop, "realtime": realtime, "step": step, "refined": refined, "fmu": fmu,
-             "manipulator": manipulator, "startup": startup, "portable": portable}
+             "manipulator": manipulator, "spatial": spatial, "startup": startup,
+             "portable": portable}
 
 
 def run(groups=GROUPS, *, repeat=5, quick=False):
