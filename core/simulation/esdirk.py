@@ -57,305 +57,43 @@ the last accepted one.
 
 import numpy as np
 
-from ..engine import access, engine
 from ..engine import data as ed
+from ..engine import engine
 from ..errors import SimulationError, StepBudgetSpent
-from ..numerics.jit import kernel
-from ..numerics.native import call_engine
-from . import newton_matrix
-from .esdirk_method import MAX_STAGES, TABLEAUS
-from .newton_matrix import newton_solve
+from .esdirk_kernels import (
+    FLAG_NAMES,
+    I_EXTRA,
+    I_FACTORIZATIONS,
+    I_FRESH,
+    I_FSAL,
+    I_HISTORY,
+    I_JACOBIAN,
+    I_JACOBIANS,
+    I_LU,
+    I_MAX_STEPS,
+    I_NEWTON_FAILURES,
+    I_ONE_STEP,
+    I_REFRESH,
+    I_REJECTED,
+    I_RHS,
+    I_SIZE,
+    I_STEPS,
+    M_ETA,
+    M_EXPONENT,
+    M_H,
+    M_H_LU,
+    M_H_MAX,
+    M_RTOL,
+    M_SIZE,
+    M_T,
+    OK,
+    TOO_MUCH_WORK,
+    V_ROWS,
+    V_Y,
+    factor,
+)
+from .esdirk_method import TABLEAUS
 from .stepper import Stepper
-
-# float64 memory slots
-(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
-# int64 flags and counters; flags[I_FSAL]: F_1 to evaluate, F_1 current, F_1 = F_s of the inputs
-# of the engine's last evaluation (counters[EVALUATIONS] = flags[I_EVALUATION]): add the response
-FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
-(I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
- I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_SIZE) = range(18)
-# rows of the vector workspace: the stage derivatives from V_F, then the last step's history
-(V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
-V_SLOPE, V_CURVATURE = V_F + MAX_STAGES, V_F + MAX_STAGES + 1
-V_ROWS = V_CURVATURE + 1
-
-OK = 0
-TOO_MUCH_WORK, STEP_TOO_SMALL, ERROR_TEST_FAILURES, CONVERGENCE_FAILURES, SINGULAR_MATRIX, \
-    RHS_FAILURE = -1, -2, -3, -4, -5, -8
-FLAG_NAMES = {TOO_MUCH_WORK: "TOO_MUCH_WORK", STEP_TOO_SMALL: "STEP_TOO_SMALL",
-              ERROR_TEST_FAILURES: "ERROR_TEST_FAILURES",
-              CONVERGENCE_FAILURES: "CONVERGENCE_FAILURES", SINGULAR_MATRIX: "SINGULAR_MATRIX",
-              RHS_FAILURE: "RHS_FAILURE"}
-
-NEWTON_TOLERANCE = 0.05   # eta |dz| in the weighted norm (1 = the error the step may make)
-MAX_NEWTON = 7
-MAX_FAILURES = 12         # consecutive failed attempts of one step
-LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factors
-# A new Jacobian J = df/dy at the next step once the Newton iterations its age cost since the
-# last one (beyond each stage's first, contracting by theta >= THETA_STALE: with a current J
-# Newton contracts quadratically, theta < 1e-3 on the stages measured) have cost as much as a
-# new J, about n / 4 evaluations of f for n states or less (1.5 for stage_planar_3dof's 6, 4.0
-# for stage_spatial_19dof's 38, 22 for manipulator_control's 150: docs/decisions.md)
-JACOBIAN_COST = 0.25      # evaluations per state
-THETA_STALE = 0.01
-SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
-
-
-@kernel
-def _f(table, y, out, flags, op):
-    """out = f(y) by the engine (op OP_JACOBIAN: J = d f / d y, row-major, flat, from the
-    model's tangent); its status."""
-    jacobian = op == engine.OP_JACOBIAN
-    flags[I_JACOBIANS if jacobian else I_RHS] += 1
-    counters = access.counters(table)
-    counters[ed.JACOBIAN_COUNT if jacobian else ed.RHS_COUNT] += 1
-    status = call_engine(access.dims(table)[ed.ENGINE], op, table, 0.0,
-                         y.ctypes.data, out.ctypes.data, 0, 0.0)
-    if status != ed.OK:
-        counters[ed.FAILED_STATUS] = status
-    return status
-
-
-@kernel(inline="always")
-def factor(J, LU, piv, hg, flags):
-    """LU = factors of I - hg J (`newton_matrix`), counted; flags[I_REDUCED] = 1 when they are
-    its Schur complement's; False when singular."""
-    form = newton_matrix.factor(J, LU, piv, hg)
-    flags[I_FACTORIZATIONS] += 1
-    flags[I_REDUCED] = 1 if form == newton_matrix.SCHUR else 0
-    return form != newton_matrix.SINGULAR
-
-
-@kernel
-def _norm(v, weight):
-    """Weighted RMS norm sqrt(mean((v_i weight_i)^2))."""
-    s = 0.0
-    for i in range(v.size):
-        s += (v[i] * weight[i]) ** 2
-    return np.sqrt(s / v.size)
-
-
-@kernel
-def _initial_step(table, memory, flags, vectors, atol, t_stop):
-    """A first step (s) from the size of y, f and an estimate of f' (Hairer, Norsett & Wanner,
-    Solving ODEs I, II.4), for the embedded order; the stage derivative F_1 must be current."""
-    y, F1 = vectors[V_Y], vectors[V_F]
-    weight, probe, slope = vectors[V_WEIGHT], vectors[V_Z], vectors[V_DELTA]
-    rtol = memory[M_RTOL]
-    for i in range(y.size):
-        weight[i] = 1.0 / (rtol * abs(y[i]) + atol[i])
-    d0, d1 = _norm(y, weight), _norm(F1, weight)
-    h0 = 0.01 * d0 / d1 if d0 > 1e-5 and d1 > 1e-5 else 1e-6
-    h0 = min(h0, t_stop - memory[M_T])
-    for i in range(y.size):
-        probe[i] = y[i] + h0 * F1[i]
-    if _f(table, probe, slope, flags, engine.OP_RHS) != ed.OK:
-        return h0
-    for i in range(y.size):
-        slope[i] = (slope[i] - F1[i]) / h0
-    d2 = _norm(slope, weight)
-    big = max(d1, d2)
-    h1 = (0.01 / big) ** memory[M_EXPONENT] if big > 1e-15 else max(1e-6, 1e-3 * h0)
-    return min(100.0 * h0, h1)
-
-
-@kernel
-def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
-    """Solve stage i: z = base + h g f(z) by simplified Newton; F_i from the stage equation.
-    True when it converged."""
-    n = piv.size
-    base, z, delta, weight = vectors[V_BASE], vectors[V_Z], vectors[V_DELTA], vectors[V_WEIGHT]
-    y, F = vectors[V_Y], vectors[V_F:]
-    hg = h * A[1, 1]
-    # the last step's history (`keep_history`, where the tableau takes it): its mean slope
-    # for stage 2, its curvature for stage 3
-    history, weight_of_history = vectors[V_SLOPE], 0.0
-    if flags[I_HISTORY] == 1 and i <= 2:
-        c2, ci = A[1, 0] + A[1, 1], 0.0
-        for j in range(i + 1):
-            ci += A[i, j]
-        if i == 1:
-            weight_of_history = c2 * h
-        else:
-            history, weight_of_history = vectors[V_CURVATURE], ci * (ci - c2) * h * h
-    for k in range(n):
-        s = y[k]
-        for j in range(i):
-            s += h * A[i, j] * F[j, k]
-        base[k] = s
-        p = weight_of_history * history[k]
-        for j in range(i):
-            p += P[i, j] * F[j, k]
-        z[k] = s + hg * p  # f(z_i) predicted by extrapolating the stages before
-    eta = max(memory[M_ETA], 1e-16) ** 0.8
-    previous = 0.0
-    for iteration in range(MAX_NEWTON):
-        if _f(table, z, F[i], flags, engine.OP_RHS) != ed.OK:
-            return False
-        for k in range(n):
-            delta[k] = base[k] + hg * F[i, k] - z[k]
-        newton_solve(J, LU, piv, memory[M_H_LU], flags[I_REDUCED] == 1, delta)
-        for k in range(n):
-            z[k] += delta[k]
-        norm = _norm(delta, weight)
-        if not np.isfinite(norm):
-            return False
-        if iteration > 0:
-            theta = norm / previous
-            if theta >= THETA_STALE:  # an iteration the Jacobian's age cost
-                flags[I_EXTRA] += 1
-            if theta >= 0.99:
-                return False
-            eta = theta / (1.0 - theta)
-            if iteration >= 3 or theta > 0.5:
-                flags[I_REFRESH] = 1  # converging slowly: a new J for the next step
-        if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:
-            memory[M_ETA] = eta
-            for k in range(n):
-                F[i, k] = (z[k] - base[k]) / hg
-            return True
-        previous = norm
-    return False
-
-
-@kernel(inline="always")
-def keep_history(vectors, A, h):
-    """The accepted step's stage derivatives F at c = 0, c2 and 1 (the last stage) as a
-    quadratic in t: its mean slope (F_s - F_1) / h and its curvature (1/s^2), for the next
-    step's predictor."""
-    F, c2 = vectors[V_F:], A[1, 0] + A[1, 1]
-    last = A.shape[0] - 1
-    slope, curvature = vectors[V_SLOPE], vectors[V_CURVATURE]
-    for k in range(slope.size):
-        slope[k] = (F[last, k] - F[0, k]) / h
-        bend = (F[last, k] - F[1, k]) / (1.0 - c2) - (F[1, k] - F[0, k]) / c2
-        curvature[k] = bend / (h * h)
-
-
-@kernel
-def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
-    """Integrate from memory[M_T] towards t_stop (s): to t_stop exactly, or one accepted step
-    with flags[I_ONE_STEP] = 1; at most flags[I_MAX_STEPS] steps (0: no limit); flags, not
-    arguments, so that the compiled loop's constant 0s do not compile the integrator a second
-    time for their literal types. The state y is vectors[V_Y]; returns
-    OK or a negative status, with y and memory[M_T] the last accepted state. The tableau:
-    A (s, s), EW = b - b_hat (s,), P the predictor weights (s, s) (`esdirk_method`)."""
-    n = piv.size
-    stages = A.shape[0]
-    y, z, err, weight, F = vectors[V_Y], vectors[V_Z], vectors[V_ERR], vectors[V_WEIGHT], \
-        vectors[V_F:]
-    rtol = memory[M_RTOL]
-    counters, dims = access.counters(table), access.dims(table)
-    one_step, max_steps = flags[I_ONE_STEP] != 0, flags[I_MAX_STEPS]
-    steps = 0
-    failures = 0
-    while memory[M_T] < t_stop:
-        t = memory[M_T]
-        if flags[I_FSAL] == FSAL_INPUTS:  # valid while the engine evaluated nothing since
-            delta = vectors[V_DELTA]  # d qddot (NDOF,) of the inputs' change
-            ok = counters[ed.EVALUATIONS] == flags[I_EVALUATION] and call_engine(
-                dims[ed.ENGINE], engine.OP_INPUT_RESPONSE, table, 0.0, delta.ctypes.data, 0, 0,
-                0.0) == ed.OK
-            for j in range(dims[ed.NDOF] if ok else 0):
-                F[0, dims[ed.NDOF] + j] += delta[j]
-            flags[I_FSAL] = FSAL_CURRENT if ok else FSAL_NONE
-        if flags[I_FSAL] == FSAL_NONE:  # a restart: no history either
-            if _f(table, y, F[0], flags, engine.OP_RHS) != ed.OK:
-                return RHS_FAILURE
-            flags[I_FSAL] = FSAL_CURRENT
-            vectors[V_SLOPE:] = 0.0
-        if memory[M_H] <= 0.0:
-            memory[M_H] = _initial_step(table, memory, flags, vectors, atol, t_stop)
-        h = memory[M_H]
-        if memory[M_H_MAX] > 0.0:
-            h = min(h, memory[M_H_MAX])
-        remaining = t_stop - t
-        if h >= remaining * (1.0 - 1e-10):
-            h = remaining
-        elif 2.0 * h > remaining:
-            h = 0.5 * remaining
-        if h <= 16.0 * 2.2e-16 * max(abs(t), abs(t_stop)):
-            return STEP_TOO_SMALL
-        if flags[I_EXTRA] >= max(1.0, JACOBIAN_COST * n):
-            flags[I_REFRESH] = 1
-        if flags[I_REFRESH] == 1 or flags[I_JACOBIAN] == 0:
-            if _f(table, y, J, flags, engine.OP_JACOBIAN) != ed.OK:
-                return RHS_FAILURE
-            flags[I_JACOBIAN], flags[I_FRESH], flags[I_REFRESH], flags[I_LU] = 1, 1, 0, 0
-            flags[I_EXTRA] = 0
-        hg = h * A[1, 1]
-        if flags[I_LU] == 0 or abs(hg / memory[M_H_LU] - 1.0) > LU_SLACK:
-            if not factor(J, LU, piv, hg, flags):
-                return SINGULAR_MATRIX
-            flags[I_LU] = 1
-            memory[M_H_LU] = hg
-        for k in range(n):
-            weight[k] = 1.0 / (rtol * abs(y[k]) + atol[k])
-        converged = True
-        for i in range(1, stages):
-            if not _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
-                converged = False
-                break
-        failures += 1
-        if not converged:
-            flags[I_NEWTON_FAILURES] += 1
-            if failures > MAX_FAILURES:
-                return CONVERGENCE_FAILURES
-            if flags[I_FRESH] == 0:
-                flags[I_REFRESH] = 1
-            else:  # not the Jacobian's age: a smaller step, with the count started over
-                memory[M_H] = 0.25 * h
-                flags[I_EXTRA] = 0
-            memory[M_ETA] = 1.0
-            continue
-        # the error estimate, filtered by the Newton matrix
-        for k in range(n):
-            s = 0.0
-            for j in range(stages):
-                s += EW[j] * F[j, k]
-            err[k] = h * s
-            weight[k] = 1.0 / (rtol * max(abs(y[k]), abs(z[k])) + atol[k])
-        newton_solve(J, LU, piv, memory[M_H_LU], flags[I_REDUCED] == 1, err)
-        error = _norm(err, weight)
-        if not np.isfinite(error):
-            error = 1e10
-        if error > 1.0:
-            flags[I_REJECTED] += 1
-            if failures > MAX_FAILURES:
-                return ERROR_TEST_FAILURES
-            memory[M_H] = h * max(SHRINK, SAFETY * error ** -memory[M_EXPONENT])
-            continue
-        # accept: y_new = z_s, and its derivative F_s is the next step's F_1; the history
-        if flags[I_HISTORY] == 1:
-            keep_history(vectors, A, h)
-        for k in range(n):
-            y[k] = z[k]
-            F[0, k] = F[stages - 1, k]
-        flags[I_EVALUATION] = counters[ed.EVALUATIONS]  # its last stage's
-        memory[M_T] = t_stop if h == remaining else t + h
-        memory[M_H] = (h * min(GROW, SAFETY * error ** -memory[M_EXPONENT]) if error > 0.0
-                       else h * GROW)
-        flags[I_STEPS] += 1
-        flags[I_FRESH] = 0
-        failures = 0
-        steps += 1
-        if one_step or (max_steps > 0 and steps >= max_steps and memory[M_T] < t_stop):
-            return OK if one_step else TOO_MUCH_WORK
-    return OK
-
-
-@kernel
-def restart(table, memory, flags, t, inputs_only):
-    """Restart at time t (s) from the state in the vectors' V_Y row, with the inputs in the
-    packed model at address `table`: the first stage's derivative is recomputed, or with
-    inputs_only (nothing but the inputs changed since the step that ended at t) it is the last
-    stage's plus the engine's input response; the step size, Jacobian and Newton matrix are
-    kept. `Esdirk.reset` and the compiled sampled loop both restart through it."""
-    keep = inputs_only and memory[M_T] == t and flags[I_FSAL] != FSAL_NONE
-    memory[M_T] = t
-    flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
-    access.counters(table)[ed.FAILED_STATUS] = 0
 
 
 class Esdirk(Stepper):

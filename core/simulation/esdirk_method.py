@@ -38,7 +38,7 @@ class Tableau:
     order: int
     embedded_order: int
     # whether the Newton starts of stages 2 and 3 take the last step's slope and curvature
-    # (`esdirk.keep_history`): measured to pay for TR-BDF2 alone (docs/decisions.md)
+    # (`esdirk_kernels.keep_history`): measured to pay for TR-BDF2 alone (docs/decisions.md)
     history: bool = False
 
     @property

@@ -24,7 +24,7 @@ compiled code too. With the one-step ESDIRK (`flexure.core.simulation.esdirk`, t
 default) a changed force costs one evaluation and the integrator steps on with its step size and
 Newton matrix; with CVODE it restarts at every changed force (its C functions called directly).
 The loop borrows the integrator through `Simulator.held_input_drive` and restarts it through
-the kernels `Simulator._restart` runs (`stepper.restart_plant`, `esdirk.restart`,
+the kernels `Simulator._restart` runs (`stepper.restart_plant`, `esdirk_kernels.restart`,
 `sundials_restart.cvode_restart`); the methods it drives are those with `Method.compiled_loop`
 (`methods.COMPILED_LOOP_METHODS`), each by the driver of its stepper's module (`DRIVERS`). The
 compiled side, and the C entries through which this module runs it, are in

@@ -22,7 +22,7 @@ from ..numerics.native import (
     call_with_time,
     carray,
 )
-from . import esdirk
+from . import esdirk_kernels
 from .measuring import start_from_plant
 from .stepper import restart_plant
 from .sundials_restart import (
@@ -200,10 +200,10 @@ def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, 
     force does what `Simulator.set_inputs` and the restart in `advance` do with it: the new
     inputs, the integrator's state re-entered (its first stage recomputed). The integrator
     steps through its C entry (`esdirk_entry`: at addresses[ADVANCE], with the stepper's
-    `arguments`), not a linked copy of `esdirk.advance`."""
+    `arguments`), not a linked copy of `esdirk_kernels.advance`."""
     plant = addresses[PLANT]
     x_plant = access.coordinates(plant)
-    y = vectors[esdirk.V_Y]
+    y = vectors[esdirk_kernels.V_Y]
     t = loop_state[0]
     for k in range(start, stop):
         changed = _sample(addresses, y, scratch, k, controller, held)
@@ -212,16 +212,17 @@ def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, 
             return MEASURE_FAILED
         if changed or loop_state[1] != 0.0:  # as Simulator._restart, through its kernels
             # no state set since the last step (as Simulator._restart_kinematics): the first
-            # stage from the last one and the engine's input response (esdirk.restart)
+            # stage from the last one and the engine's input response (esdirk_kernels.restart)
             inputs_only = loop_state[2] == 0.0
             restart_plant(plant, held, x_plant, not inputs_only)
-            esdirk.restart(plant, memory, flags, t, inputs_only)
+            esdirk_kernels.restart(plant, memory, flags, t, inputs_only)
             loop_state[1] = loop_state[2] = 0.0
         t_next = (k + 1) / fs
-        flags[esdirk.I_ONE_STEP] = flags[esdirk.I_MAX_STEPS] = 0  # to t_next, no budget
+        # to t_next, no step budget
+        flags[esdirk_kernels.I_ONE_STEP] = flags[esdirk_kernels.I_MAX_STEPS] = 0
         status = call_stepper(addresses[ADVANCE], arguments.ctypes.data, t_next)
-        if status != esdirk.OK:
-            loop_state[0] = memory[esdirk.M_T]
+        if status != esdirk_kernels.OK:
+            loop_state[0] = memory[esdirk_kernels.M_T]
             loop_state[1] = loop_state[2] = 1.0
             return status
         t = t_next

@@ -23,8 +23,8 @@ The compiled "advance with held inputs" hook. `run_sampled_loop` drives the meth
 `Method.compiled_loop` without a Python call per sample: `Simulator.held_input_drive()` lends
 it the stepper, the plant and the loop state (a `HeldInputDrive`) and takes them back after,
 and per sample the loop calls the family's compiled restart kernel (`restart_plant`, then
-`esdirk.restart` or `sundials_restart.cvode_restart`, the very kernels `Stepper.reset`
-calls) and its compiled advance (`esdirk.advance`; CVODE's `CVode` through its C address).
+`esdirk_kernels.restart` or `sundials_restart.cvode_restart`, the very kernels `Stepper.reset`
+calls) and its compiled advance (`esdirk_kernels.advance`; CVODE's `CVode` through its C address).
 So the loop and a Python loop of `set_inputs` and `advance_to` give the same numbers, bit for
 bit.
 """
