@@ -173,3 +173,37 @@ def test_an_array_table_holds_each_arrays_address_and_shape():
 def test_an_array_table_refuses_an_array_of_another_kind(array, kind):
     with pytest.raises(TypeError, match="array 0 is"):
         array_table((array,), kind)
+
+
+MIXED = """
+import sys
+import numpy as np
+from flexure.core import Simulator, load_scene
+from flexure.core.simulation import esdirk_kernels
+
+def final(method):
+    sim = Simulator(load_scene("stage_planar_3dof"), method=method, rtol=1e-8)
+    sim.set_inputs([1.0])
+    sim.advance_to(0.004)
+    return sim.outputs()[0]
+
+first = final("cvode-bdf")
+if sys.argv[1] == "mixed":  # numba now imported and loading a kernel beside the object code
+    flags = np.zeros(esdirk_kernels.I_SIZE, dtype=np.int64)
+    assert esdirk_kernels.factor(2.0 * np.eye(2).ravel(), np.zeros(4),
+                                 np.zeros(2, dtype=np.int64), 0.1, flags)
+    assert "numba" in sys.modules
+print(repr(first), repr(final("ida")))
+"""
+
+
+def test_numba_imported_after_loaded_object_code_runs_beside_it():
+    """A process that loaded entries as object code and then imports numba (a kernel called
+    from Python) keeps one runtime: later simulations there give the numbers of a process
+    that loaded everything through numba."""
+    def run(mode, **env):
+        return subprocess.run([sys.executable, "-c", MIXED, mode], env={**os.environ, **env},
+                              capture_output=True, text=True, check=True).stdout.split()
+
+    run("plain")  # the object code written
+    assert run("mixed") == run("plain", FLEXURE_OBJECT_CODE="0")
