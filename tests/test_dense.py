@@ -11,13 +11,13 @@ and against `lu_solve` column by column (the same operations in the same order: 
 last bit on the machine that runs both), and the entries outside the block stay as they were.
 """
 
+import numba
 import numpy as np
 import pytest
 
 from flexure.core.numerics.dense import (
     BLOCK,
     lu_factor,
-    lu_factor_unblocked,
     lu_solve,
     lu_solve_rows,
 )
@@ -54,6 +54,36 @@ def test_lu_solve_rows_solves_a_block_in_place(n, width, stride, start):
         lu_solve(lu, n, piv, column)
         np.testing.assert_allclose(Z[:, c], column, rtol=0.0,
                                    atol=4 * np.finfo(float).eps * np.max(np.abs(column)))
+
+
+def _lu_factor_unblocked(a, n, piv):
+    """`lu_factor` one elimination step at a time (right-looking, the textbook loop): the
+    reference the blocked `lu_factor` is held against, to the bit."""
+    smallest, largest = np.inf, 0.0
+    for k in range(n):
+        p, big = k, abs(a[k * n + k])
+        for i in range(k + 1, n):
+            value = abs(a[i * n + k])
+            if value > big:
+                p, big = i, value
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                a[k * n + j], a[p * n + j] = a[p * n + j], a[k * n + j]
+        smallest, largest = min(smallest, big), max(largest, big)
+        if big == 0.0:
+            continue
+        inverse = 1.0 / a[k * n + k]
+        for i in range(k + 1, n):
+            factor = a[i * n + k] * inverse
+            a[i * n + k] = factor
+            if factor != 0.0:
+                for j in range(k + 1, n):
+                    a[i * n + j] -= factor * a[k * n + j]
+    return smallest / largest if largest > 0.0 else 0.0
+
+
+lu_factor_unblocked = numba.njit(_lu_factor_unblocked)  # compiled as the kernel is
 
 
 @pytest.mark.parametrize("n", [1, 7, BLOCK, BLOCK + 1, 3 * BLOCK + 5, 200])

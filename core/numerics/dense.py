@@ -25,7 +25,7 @@ def lu_factor(a, n, piv):
     Blocked: BLOCK pivot steps on a panel of BLOCK columns (the pivots chosen, whole rows
     swapped, the panel eliminated), then the panel's rows of U and the trailing rows each
     updated once by the BLOCK steps (four rows at a time, which read each row of U once),
-    where the textbook loop (`lu_factor_unblocked`) runs over the whole trailing matrix at
+    where the textbook loop (tests/test_dense.py's reference) runs over the whole trailing matrix at
     every step: the matrix goes through the cache n / BLOCK times instead of n. Every entry
     gets the same operations in the same order (a_ij -= l_ik u_kj for k ascending, the
     multipliers as a_ik times 1 / u_kk, the same pivots), so the factors are those of the
@@ -103,34 +103,6 @@ def _eliminate_rows(a, n, i, k0, k1):
                 if factor != 0.0:
                     for j in range(w):
                         target[j] -= factor * source[j]
-
-
-@kernel
-def lu_factor_unblocked(a, n, piv):
-    """`lu_factor` one elimination step at a time (right-looking, the textbook loop): the
-    reference `lu_factor` is tested against, to the bit."""
-    smallest, largest = np.inf, 0.0
-    for k in range(n):
-        p, big = k, abs(a[k * n + k])
-        for i in range(k + 1, n):
-            value = abs(a[i * n + k])
-            if value > big:
-                p, big = i, value
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                a[k * n + j], a[p * n + j] = a[p * n + j], a[k * n + j]
-        smallest, largest = min(smallest, big), max(largest, big)
-        if big == 0.0:
-            continue
-        inverse = 1.0 / a[k * n + k]
-        for i in range(k + 1, n):
-            factor = a[i * n + k] * inverse
-            a[i * n + k] = factor
-            if factor != 0.0:
-                for j in range(k + 1, n):
-                    a[i * n + j] -= factor * a[k * n + j]
-    return smallest / largest if largest > 0.0 else 0.0
 
 
 @kernel
