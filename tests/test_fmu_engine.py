@@ -271,13 +271,18 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
     logged = [json.loads(line)["message"] for line in lines[:-1]]
     assert result["compiled"] == 0, logged
     assert not any("compil" in message for message in logged), logged
-    # what is in the cache is what was installed, nothing compiled was added
+    # what is in the cache is what was installed, nothing compiled was added: besides it
+    # only the object code of installed entries, copied out of numba's files for the next
+    # process (numerics/object_code.py)
     installed = {p.relative_to(cache).parts[2:] for p in cache.rglob("*") if p.is_file()}
     with zipfile.ZipFile(fmu) as archive:
         shipped = {tuple(Path(name).parts[2:]) for name in archive.namelist()
                    if name.startswith("resources/flexure-engine/")
                    and not name.endswith("manifest.json")}
-    assert installed == shipped
+    copied = {path for path in installed if path[-1].endswith(".fxo")}
+    assert installed - copied == shipped
+    indexes = {(*path[:-1], path[-1].rsplit(".", 2)[0] + ".nbi") for path in copied}
+    assert copied and indexes <= shipped
     print(f"first instantiate + initialise + {steps} steps: {result['cpu_s']:.2f} s of CPU")
     # the same steps here (this machine's CPU target): the same motion. The two compilations
     # differ in round-off (operations fused or reordered), on which the integrator's error

@@ -145,8 +145,11 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     with sim.held_input_drive() as drive:  # the simulator continues from where it ends
         solver, loop_state = drive.stepper, drive.loop_state
         addresses = np.zeros(ADDRESSES, dtype=np.int64)
-        # `measure`'s, on the outputs' packed model
-        engine.connect(drive.outputs, engine.OP_POSITIONS)
+        # `measure`'s, on the outputs' packed model: only where an output is not a DOF (a DOF
+        # is read from the state; a first loop then compiles the positions' entry only where
+        # it is used)
+        if np.any(coordinates[coordinates.size - n_loops:] < 0):
+            engine.connect(drive.outputs, engine.OP_POSITIONS)
         addresses[[PLANT, OUTPUT, ENGINE]] = (drive.plant.address, drive.outputs.address,
                                               drive.plant.int_array("dims")[ed.ENGINE])
         run = DRIVERS[solver.method.module](sim, solver, addresses, loop_state, drive.held, loop)
