@@ -1,5 +1,5 @@
-"""The statics tangent K0 + G0 is the exact Jacobian of the static residual, away from
-equilibrium (core/mechanics/mechanics.py, core/analysis/statics.py).
+"""The statics tangent K0 + G0 (`Mechanics.tangent_stiffness`) is the exact Jacobian of the
+static residual, away from equilibrium (core/mechanics/mechanics.py, core/analysis/statics.py).
 
 Newton's method in `static_equilibrium` converges quadratically only if the tangent it
 solves with is -dQ/dq, where Q(q) = DF^T (f - De^T sigma_c) at x = F(q): out of equilibrium
@@ -86,7 +86,9 @@ def tangent_and_differences(model, values, size, sparse):
 
     Q, _, sigma = mech.static_balance(config, 1.0, None, values)
     K0 = mech.structural_stiffness(config)
-    K = K0 + mech.geometric_stiffness(config, sigma, 1.0, inputs=values)
+    K = mech.tangent_stiffness(config, sigma, 1.0, inputs=values)  # what Newton solves with
+    separate = K0 + mech.geometric_stiffness(config, sigma, 1.0, inputs=values)
+    np.testing.assert_allclose(K, separate, rtol=0, atol=1e-12 * np.max(np.abs(separate)))
     differences = np.empty_like(K)
     for j in range(units.size):
         h = np.zeros(units.size)
