@@ -6,7 +6,9 @@
   much closer to the next equilibrium than the tangent predictor (error O(h^3) against
   O(h^2)): within a fifth of the tangent's error;
 - the equilibrium does not depend on it: load steps of 1, 2 and 5 give the same DOFs within
-  1e-10 of the length scale.
+  1e-10 of the length scale;
+- nor on where on its path of loads the stepping starts (`path`: equilibria under s times
+  the loads), which saves the iterations of the part of the path already solved.
 """
 
 import numpy as np
@@ -62,3 +64,25 @@ def test_the_equilibrium_does_not_depend_on_the_load_steps():
     assert np.max(np.abs(solutions[0].x - solutions[0].model.initial_coordinates)) > 0.04
     for other in solutions[1:]:
         np.testing.assert_allclose(other.q, solutions[0].q, rtol=0, atol=1e-10 * length)
+
+
+def test_a_path_of_equilibria_gives_the_same_equilibrium_in_fewer_iterations():
+    model, loads = bent_cantilever()
+    plain = static_equilibrium(model, loads=loads, load_steps=4)
+    half = static_equilibrium(model, loads=0.5 * loads, load_steps=2)
+    opposite = static_equilibrium(model, loads=-0.5 * loads, load_steps=2)
+    for path in ([(0.5, half)], [(-0.5, opposite)], [(-0.5, opposite), (0.5, half)]):
+        solution = static_equilibrium(model, loads=loads, load_steps=4, path=path)
+        np.testing.assert_allclose(solution.q, plain.q, rtol=0, atol=1e-10 * 0.2)
+    assert solution.iterations < plain.iterations  # the half already solved is skipped
+
+
+@pytest.mark.parametrize("s", [1.0, 0.0, 2.0])
+def test_a_path_point_off_the_path_is_refused(s):
+    model, loads = bent_cantilever()
+    half = static_equilibrium(model, loads=0.5 * loads)
+    with pytest.raises(ValueError, match="needs 0 != s < 1"):
+        static_equilibrium(model, loads=loads, path=[(s, half)])
+    other = bent_cantilever()[0]
+    with pytest.raises(ValueError, match="the same model"):
+        static_equilibrium(other, loads=loads, path=[(0.5, half)])

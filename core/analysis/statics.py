@@ -17,6 +17,15 @@ alone leaves O(h^2)). The statics tangent is exact (tests/test_static_tangent.py
 thin flexures' stiff directions make Q strongly nonlinear in q: on the manipulator's 6 mm
 workspace poses the tangent predictor left residuals that took up to 15 Newton iterations or
 failed, and the curvature term removes about a fifth of those iterations.
+
+A caller that solves several equilibria along one path of loads (the same loads, inputs and
+motions times s) passes those it has as `path`, (s, solution) pairs: the stepping then starts
+at the largest s below 1, the unloaded configuration being the path's point at s = 0, and its
+first step takes the curvature from the point before (negative s for the opposite loads).
+The manipulator's workspace solves each 6 mm pose from its 3 mm pose (the first half of its
+load, which the pose had stepped through again), 8 to 24 Newton iterations instead of 17 to
+33.
+
 Convergence: every |dq_j| within `tolerance` of its own unit: a length DOF of the model's length
 scale L (m), an angle of 1 rad, with a floor 8 eps of its magnitude (`mechanics.scales`).
 
@@ -33,6 +42,7 @@ that realises each input, F = -Q_k (`StaticSolution.input_efforts`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -134,7 +144,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        mechanics: Mechanics | None = None,
                        inputs: dict | np.ndarray | None = None,
                        motions: dict | np.ndarray | None = None,
-                       start: StaticSolution | None = None) -> StaticSolution:
+                       start: StaticSolution | None = None,
+                       path: Sequence[tuple[float, StaticSolution]] = ()) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads, stepped with Newton.
 
     Parameters
@@ -165,6 +176,11 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         An equilibrium of the same model under nearby loads and inputs, where Newton starts
         at the full load (a path of equilibria, e.g. inverse statics along a move); if it
         does not converge from there, the load is stepped from the unloaded configuration.
+    path : sequence of (float, StaticSolution), optional
+        Equilibria on the path of these loads, inputs and motions: (s, the equilibrium under
+        s times them), s < 1 and s != 0 (negative: the opposite loads), the same model. The
+        stepping starts at the largest s (or the unloaded configuration at s = 0), with the
+        curvature of the point before it (module docstring).
 
     Returns
     -------
@@ -178,6 +194,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         factor).
     SceneError
         `inputs` or `motions` names an unknown input or has the wrong length.
+    ValueError
+        A `path` point at s >= 1 or s = 0, or of another model.
     """
     held = values = None
     if inputs is not None:
@@ -210,9 +228,13 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     unloaded = (not np.any(mech.external_force(config.x, 1.0, loads, values))
                 and np.array_equal(first, target))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
+    # the path's points by load factor, the unloaded configuration at 0; the stepping starts
+    # at the last, the one before it (DOFs, load factor) gives the curvature
+    points = sorted([(0.0, config), *_path_points(model, path)], key=lambda point: point[0])
+    behind = (points[-2][1].q, points[-2][0]) if len(points) > 1 else None
+    factor, config = points[-1]
     halvings = 0
     step_number = 0
-    behind = None  # (DOFs, load factor) of the equilibrium before the last: the curvature
     while factor < 1.0 - 1e-12:
         target_factor = min(1.0, factor + step)
         predictor = None
@@ -238,6 +260,17 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         config, factor = reached, target_factor
         step_number += 1
     return solution(config, total_iterations)
+
+
+def _path_points(model, path):
+    """[(s, Configuration)] of `path` (static_equilibrium's parameter), checked."""
+    points = []
+    for s, solution in path:
+        if not (s < 1.0 and s != 0.0) or solution.model is not model:
+            raise ValueError(f"a path point of {model.name!r} needs 0 != s < 1 and the same "
+                             f"model, got s = {s} and model {solution.model.name!r}")
+        points.append((float(s), solution.config))
+    return points
 
 
 def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
