@@ -62,6 +62,8 @@ if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
 
 
+INTERMEDIATE_TOLERANCE = 1e-6  # relative, the load steps short of the full load
+
 @dataclass
 class StaticSolution:
     """A static equilibrium: DOFs q, coordinates x, deformations e and stress resultants."""
@@ -203,6 +205,9 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         values = steady_port_values(model, held) if model.actuators else held
     mech = mechanics or Mechanics(model)
     steps = dof_tolerances(model, tolerance)  # (NDOF,) m or rad
+    # a load step short of the full load is only the next one's start: converged to 1e-6 of
+    # each DOF's unit, two or three iterations fewer than to `tolerance`
+    loose = dof_tolerances(model, max(tolerance, INTERMEDIATE_TOLERANCE))
     target = motion_values(model, motions)
     prescribed = model.prescribed_dofs
 
@@ -243,7 +248,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         try:
             reached, iterations = _newton(mech, config, target_factor, loads, values,
                                           first + target_factor * (target - first),
-                                          steps, max_iterations, curvature=predictor)
+                                          steps if target_factor > 1.0 - 1e-12 else loose,
+                                          max_iterations, curvature=predictor)
         except ConvergenceError as error:
             if halvings == 4:
                 raise ConvergenceError(
