@@ -24,7 +24,8 @@ at the largest s below 1, the unloaded configuration being the path's point at s
 first step takes the curvature from the point before (negative s for the opposite loads).
 The manipulator's workspace solves each 6 mm pose from its 3 mm pose (the first half of its
 load, which the pose had stepped through again), 8 to 24 Newton iterations instead of 17 to
-33.
+33. A load step short of the full load, only the next one's start, converges to
+INTERMEDIATE_TOLERANCE (1e-6 of each DOF's unit); the last one to `tolerance`.
 
 Convergence: every |dq_j| within `tolerance` of its own unit: a length DOF of the model's length
 scale L (m), an angle of 1 rad, with a floor 8 eps of its magnitude (`mechanics.scales`).
