@@ -5,6 +5,28 @@ equal increments (one, when there is no load); in each the generalised force
 Q(q) = DF^T (f - De^T sigma) is driven to zero by Newton's method with the full tangent
 stiffness K0 + G0 (quadratic convergence). A step that does not converge is halved up to four
 times; then ConvergenceError names the load step and the load factor.
+
+Each load step after the first starts on the quadratic through the path so far: with q0, q1
+the equilibria at the load factors s0 < s1 and dq1 Newton's first step to s2 = s1 + h2 from
+q1 (dq1 = h2 q'(s1), the tangent at q1, since Q is affine in the load factor),
+
+    q(s2) ~ q1 + dq1 + (h2 / h1)^2 (q0 - q1 + (h1 / h2) dq1),        h1 = s1 - s0,
+
+the quadratic with q(s0) = q0, q(s1) = q1, q'(s1) = dq1 / h2 (error O(h^3) where the tangent
+alone leaves O(h^2)). The statics tangent is exact (tests/test_static_tangent.py), but the
+thin flexures' stiff directions make Q strongly nonlinear in q: on the manipulator's 6 mm
+workspace poses the tangent predictor left residuals that took up to 15 Newton iterations or
+failed, and the curvature term removes about a sixth of those iterations (286 -> 236).
+
+A caller that solves several equilibria along one path of loads (the same loads, inputs and
+motions times s) passes those it has as `path`, (s, solution) pairs: the stepping then starts
+at the largest s below 1, the unloaded configuration being the path's point at s = 0, and its
+first step takes the curvature from the point before (negative s for the opposite loads).
+The manipulator's workspace solves each 6 mm pose from its 3 mm pose (the first half of its
+load, which the pose had stepped through again), 8 to 24 Newton iterations instead of 17 to
+33. A load step short of the full load, only the next one's start, converges to
+INTERMEDIATE_TOLERANCE (1e-6 of each DOF's unit); the last one to `tolerance`.
+
 Convergence: every |dq_j| within `tolerance` of its own unit: a length DOF of the model's length
 scale L (m), an angle of 1 rad, with a floor 8 eps of its magnitude (`mechanics.scales`).
 
@@ -21,6 +43,7 @@ that realises each input, F = -Q_k (`StaticSolution.input_efforts`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -39,6 +62,8 @@ if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.kinematics import Configuration
     from ..model import Model
 
+
+INTERMEDIATE_TOLERANCE = 1e-6  # relative, the load steps short of the full load
 
 @dataclass
 class StaticSolution:
@@ -122,7 +147,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        mechanics: Mechanics | None = None,
                        inputs: dict | np.ndarray | None = None,
                        motions: dict | np.ndarray | None = None,
-                       start: StaticSolution | None = None) -> StaticSolution:
+                       start: StaticSolution | None = None,
+                       path: Sequence[tuple[float, StaticSolution]] = ()) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads, stepped with Newton.
 
     Parameters
@@ -153,6 +179,11 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         An equilibrium of the same model under nearby loads and inputs, where Newton starts
         at the full load (a path of equilibria, e.g. inverse statics along a move); if it
         does not converge from there, the load is stepped from the unloaded configuration.
+    path : sequence of (float, StaticSolution), optional
+        Equilibria on the path of these loads, inputs and motions: (s, the equilibrium under
+        s times them), s < 1 and s != 0 (negative: the opposite loads), the same model. The
+        stepping starts at the largest s (or the unloaded configuration at s = 0), with the
+        curvature of the point before it (module docstring).
 
     Returns
     -------
@@ -166,6 +197,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         factor).
     SceneError
         `inputs` or `motions` names an unknown input or has the wrong length.
+    ValueError
+        A `path` point at s >= 1 or s = 0, or of another model.
     """
     held = values = None
     if inputs is not None:
@@ -173,6 +206,9 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         values = steady_port_values(model, held) if model.actuators else held
     mech = mechanics or Mechanics(model)
     steps = dof_tolerances(model, tolerance)  # (NDOF,) m or rad
+    # a load step short of the full load is only the next one's start: converged to 1e-6 of
+    # each DOF's unit, two or three iterations fewer than to `tolerance`
+    loose = dof_tolerances(model, max(tolerance, INTERMEDIATE_TOLERANCE))
     target = motion_values(model, motions)
     prescribed = model.prescribed_dofs
 
@@ -198,14 +234,23 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     unloaded = (not np.any(mech.external_force(config.x, 1.0, loads, values))
                 and np.array_equal(first, target))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
+    # the path's points by load factor, the unloaded configuration at 0; the stepping starts
+    # at the last, the one before it (DOFs, load factor) gives the curvature
+    points = sorted([(0.0, config), *_path_points(model, path)], key=lambda point: point[0])
+    behind = (points[-2][1].q, points[-2][0]) if len(points) > 1 else None
+    factor, config = points[-1]
     halvings = 0
     step_number = 0
     while factor < 1.0 - 1e-12:
         target_factor = min(1.0, factor + step)
+        predictor = None
+        if behind is not None:  # (q0, h2 / h1): module docstring
+            predictor = (behind[0], (target_factor - factor) / (factor - behind[1]))
         try:
-            config, iterations = _newton(mech, config, target_factor, loads, values,
-                                         first + target_factor * (target - first),
-                                         steps, max_iterations)
+            reached, iterations = _newton(mech, config, target_factor, loads, values,
+                                          first + target_factor * (target - first),
+                                          steps if target_factor > 1.0 - 1e-12 else loose,
+                                          max_iterations, curvature=predictor)
         except ConvergenceError as error:
             if halvings == 4:
                 raise ConvergenceError(
@@ -218,23 +263,60 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
             halvings += 1
             continue
         total_iterations += iterations
-        factor = target_factor
+        behind = (config.q, factor)
+        config, factor = reached, target_factor
         step_number += 1
     return solution(config, total_iterations)
 
 
+def _path_points(model, path):
+    """[(s, Configuration)] of `path` (static_equilibrium's parameter), checked."""
+    points = []
+    for s, solution in path:
+        if not (s < 1.0 and s != 0.0) or solution.model is not model:
+            raise ValueError(f"a path point of {model.name!r} needs 0 != s < 1 and the same "
+                             f"model, got s = {s} and model {solution.model.name!r}")
+        points.append((float(s), solution.config))
+    return points
+
+
+def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
+                   ratio: float) -> np.ndarray:
+    """Newton's first step of a load step, with the curvature of the path added.
+
+    Parameters
+    ----------
+    before, q : ndarray (n,)
+        The equilibria at the load factors s0 and s1 (m or rad).
+    step : ndarray (n,)
+        Newton's first step from q to the load factor s2 = s1 + h2 (m or rad): the tangent
+        predictor h2 q'(s1).
+    ratio : float
+        h2 / h1, with h1 = s1 - s0 (unitless, positive).
+
+    Returns
+    -------
+    ndarray (n,)
+        The step to the quadratic through (s0, before) and (s1, q) with the slope step / h2
+        at s1, evaluated at s2 (module docstring), m or rad.
+    """
+    return step + ratio**2 * (before - q + step / ratio)
+
+
 def _newton(mech, config, load_factor, loads, values, prescribed_values, step_tolerance,
-            max_iterations):
+            max_iterations, *, curvature=None):
     """Newton's method at one load factor; values: the inputs' port values (N, N m);
     prescribed_values (n_kinematic,) the kinematic inputs' (m, rad), reached in the first
-    step; step_tolerance (NDOF,) the largest converged |dq_j| (m or rad)."""
+    step; step_tolerance (NDOF,) the largest converged |dq_j| (m or rad); curvature, if
+    given, (q0 (NDOF,), h2 / h1): the equilibrium before config's and the ratio of the load
+    steps, whose quadratic term is added to the first step on the DOFs proper (module
+    docstring)."""
     kin = mech.kinematics
     model = mech.model
     free, prescribed = model.free_dofs, model.prescribed_dofs
     for iteration in range(1, max_iterations + 1):
         Q, _, sigma = mech.static_balance(config, load_factor, loads, values)
-        K = mech.structural_stiffness(config) + mech.geometric_stiffness(
-            config, sigma, load_factor, inputs=values)
+        K = mech.tangent_stiffness(config, sigma, load_factor, inputs=values)
         # Q - K dq = 0 on the DOFs proper, dq_k the move of the prescribed values
         dq = np.zeros_like(Q)
         dq[prescribed] = prescribed_values - config.q[prescribed]
@@ -245,6 +327,9 @@ def _newton(mech, config, load_factor, loads, values, prescribed_values, step_to
             raise ConvergenceError("the tangent stiffness is singular") from None
         if not np.all(np.isfinite(dq)):
             raise ConvergenceError("the tangent stiffness is singular")
+        if iteration == 1 and curvature is not None:
+            before, ratio = curvature
+            dq[free] = curvature_step(before[free], config.q[free], dq[free], ratio)
         config = kin.solve(config.q + dq, config.x)
         if within(dq, step_tolerance, magnitudes=config.q):
             return config, iteration
