@@ -254,6 +254,11 @@ def _ports(model, outputs, inputs):
                              f"{model.name!r}; its position outputs: "
                              f"{', '.join(positions) or 'none'}")
         out_ports.append(port)
+    return out_ports, input_ports(model, inputs, out_ports)
+
+
+def input_ports(model, inputs, out_ports):
+    """The force inputs solved for, by name (default all), as many as `out_ports`; checked."""
     by_name = {port.name: port for port in model.inputs}
     names = list(by_name) if inputs is None else list(inputs)
     unknown = [name for name in names if name not in by_name]
@@ -268,7 +273,7 @@ def _ports(model, outputs, inputs):
                          f"prescribed outputs, got {len(names)} input(s) "
                          f"({', '.join(names) or 'none'}) and {len(out_ports)} output(s) "
                          f"({', '.join(p.name for p in out_ports) or 'none'})")
-    return out_ports, [by_name[name] for name in names]
+    return [by_name[name] for name in names]
 
 
 def sample_path(model, path, t, size):
