@@ -142,3 +142,17 @@ def test_a_non_minimum_phase_output_is_refused_where_the_step_cannot_damp_it():
 def test_free_inverse_dynamics_refuses_what_it_cannot_do(call, error, words):
     with pytest.raises(error, match=words):
         call()
+
+
+def test_with_nothing_free_it_is_the_inverse_dynamics():
+    """truss_1dof_x, its one DOF prescribed: the forces of `inverse_dynamics` to 1e-14 N."""
+    from flexure.core import inverse_dynamics, load_scene, static_equilibrium
+
+    model = load_scene("truss_1dof_x")
+    x0 = static_equilibrium(model).x[model.coordinate_index("2.x")]
+    path = lambda t: ([x0 + 1e-3 * np.sin(7 * t)], [7e-3 * np.cos(7 * t)],  # noqa: E731
+                      [-49e-3 * np.sin(7 * t)])
+    t = np.linspace(0.0, 1.0, 11)
+    free = free_inverse_dynamics(model, t, path)
+    np.testing.assert_allclose(free.forces, inverse_dynamics(model, t, path).forces,
+                               rtol=0, atol=1e-14)
