@@ -1,7 +1,8 @@
 """The manipulator's feedforward from the nonlinear inverse dynamics against the linear one
 (the chapter's Fig. 3.8: the end effector deviated more than linearly with the stroke).
 
-    python examples/manipulator_feedforward.py            # 1, 2, 4 and 6 mm x, 6 mm xy
+    python examples/manipulator_feedforward.py            # 1 and 4 mm x, 6 mm xy
+    python examples/manipulator_feedforward.py --moves "2 mm x,6 mm x"   # others
     python examples/manipulator_feedforward.py --quick    # 1 mm x in 0.1 s, coarser (tests)
     python examples/manipulator_feedforward.py --check    # + the forward check below
 
@@ -122,16 +123,18 @@ def summary(rows):
     return {kind: np.max(np.abs(row["deviation"]), axis=0) * 1e6 for kind, row in rows.items()}
 
 
-def print_table(results):
+def print_table(results, file=None):
     print("| move | stroke (mm) | feedforward | E dx | dy | dz (um) | E rx | ry | rz (urad) | "
-          "loops' error / stroke | replay - loop (nm) |")
-    print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+          "loops' error / stroke | replay - loop (nm) |", file=file)
+    print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+          file=file)
     for label, (move, rows) in results.items():
         stroke = np.hypot(*move) * 1e3
         for kind, values in summary(rows).items():
             print(f"| {label} | {stroke:.0f} | {kind} | "
                   + " | ".join(f"{v:.3f}" for v in values)
-                  + f" | {rows[kind]['loop']:.1e} | {rows[kind]['replay'] * 1e9:.2f} |")
+                  + f" | {rows[kind]['loop']:.1e} | {rows[kind]['replay'] * 1e9:.2f} |",
+                  file=file)
 
 
 def plot(results, path):
@@ -196,18 +199,27 @@ def main(argv=None):
     parser.add_argument("--check", action="store_true",
                         help="the forward check of the dynamic feedforward's forces")
     parser.add_argument("--no-figure", action="store_true", help="write no PNG")
+    parser.add_argument("--moves", default="1 mm x,4 mm x,6 mm xy",
+                        help=f"the moves, comma-separated, of: {', '.join(MOVES)} (default "
+                        "%(default)s; empty: none)")
     args = parser.parse_args(argv)
     duration, settle, step = (0.1, 0.02, 2.5e-3) if args.quick else (1.0, 0.25, 2e-3)
-    moves = {"1 mm x": MOVES["1 mm x"]} if args.quick else MOVES
+    labels = [label.strip() for label in args.moves.split(",") if label.strip()]
+    unknown = [label for label in labels if label not in MOVES]
+    if unknown:
+        parser.error(f"--moves: unknown {', '.join(unknown)}; expected of {', '.join(MOVES)}")
+    moves = {"1 mm x": MOVES["1 mm x"]} if args.quick else {label: MOVES[label]
+                                                             for label in labels}
     model = control_model()
-    design, _ = design_loops(model)
+    design, _ = design_loops(model) if moves else (None, None)
     results = {}
     for label, move in moves.items():
         log(f"{label}:")
         results[label] = (move, run_move(model, design, label, move, duration=duration,
                                          settle=settle, fs=4000.0, step=step))
+        print_table({label: results[label]}, file=sys.stderr)  # each move as it ends
     print_table(results)
-    if not args.no_figure and not args.quick:
+    if results and not args.no_figure and not args.quick:
         plot(results, FIGURES / "manipulator_feedforward.png")
     checks = None
     if args.check:

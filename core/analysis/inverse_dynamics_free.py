@@ -29,9 +29,10 @@ A-stable) with a fixed step, the given times' spacing h, its first step backward
 each step's implicit equation is solved by Newton on qdot_i with the matrix I - b (A_v + b A_q)
 (b = 2h/3, h on the first step) of the linearisation at the start (A_q, A_v the
 accelerations' derivatives by q_i and qdot_i), until every |b dqdot_i| is within `tolerance`
-of its DOF's unit. The outputs hold the path at every time to that tolerance; the free DOFs
-and the forces carry the global error O(h^2) (the order is measured in
-tests/test_inverse_dynamics_free.py).
+of its DOF's unit; a step still iterating after 8 iterations renews A_q, A_v by forward
+differences where it is (the rest's go stale along a long stroke: the manipulator's 6 mm).
+The outputs hold the path at every time to that tolerance; the free DOFs and the forces
+carry the global error O(h^2) (the order is measured in tests/test_inverse_dynamics_free.py).
 
 Zero dynamics. The free DOFs' motion with the outputs held is the system's zero dynamics,
 the eigenvalues of [[0, I], [A_q, A_v]] (its transmission zeros). A zero in the right half
@@ -73,6 +74,7 @@ if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
 
 CONDITION = 1e12  # the largest condition number of C_d and of the balance's matrix
+RENEW_AFTER = 8  # Newton iterations of a step before its matrix is renewed
 
 
 class _Partitioned:
@@ -174,6 +176,24 @@ def _linear_derivatives(part, model, mech, rest, config, t0):
     _check_reach(model, system, part.in_ports, t0)
     A_q = np.linalg.solve(system, -lin.K @ S_i)[:i.size]
     A_v = np.linalg.solve(system, -lin.C0 @ S_i)[:i.size]
+    return A_q, A_v
+
+
+def _numerical_derivatives(part, t, q_i, qdot_i, steps, h):
+    """(A_q, A_v) at (t, q_i, qdot_i) by forward differences of the accelerations, each DOF
+    moved by 1e3 times its Newton tolerance (and its rate by that over h): the Newton matrix
+    renewed where the linearisation at rest no longer converges (2 n_i + 1 evaluations)."""
+    i = part.independent
+    base = part.evaluate(t, q_i, qdot_i)[2][i]
+    A_q, A_v = np.empty((i.size, i.size)), np.empty((i.size, i.size))
+    for j in range(i.size):
+        delta = 1e3 * steps[j]
+        moved = q_i.copy()
+        moved[j] += delta
+        A_q[:, j] = (part.evaluate(t, moved, qdot_i)[2][i] - base) / delta
+        moved = qdot_i.copy()
+        moved[j] += delta / h
+        A_v[:, j] = (part.evaluate(t, q_i, moved)[2][i] - base) / (delta / h)
     return A_q, A_v
 
 
@@ -289,7 +309,7 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
     q_before = v_before = None
     rows = [_row(part, mech, times[0], q_now, v_now)]
     eye = np.eye(i.size)
-    factors = {}
+    factors, renewed = {}, False
     for t in times[1:]:
         if q_before is None:  # backward Euler
             b, q_base, v_base = h, q_now, v_now
@@ -301,11 +321,17 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
             factors[b] = scipy.linalg.lu_factor(eye - b * (A_v + b * A_q))
         # predicted: the rates extrapolated from the last two steps
         v = v_now.copy() if v_before is None else 2.0 * v_now - v_before
-        for _ in range(max_iterations):
+        for iteration in range(max_iterations):
+            if iteration == RENEW_AFTER and not renewed:
+                # the matrix of the rest has gone stale along a long stroke: renew it here
+                A_q, A_v = _numerical_derivatives(part, t, q_base + b * v, v, steps, h)
+                factors = {b: scipy.linalg.lu_factor(eye - b * (A_v + b * A_q))}
+                renewed = True
             _, _, qddot, _ = part.evaluate(t, q_base + b * v, v)
             dv = scipy.linalg.lu_solve(factors[b], v_base + b * qddot[i] - v)
             v = v + dv
             if within(b * dv, steps):
+                renewed = False  # converged: a later stall may renew it again
                 break
         else:
             raise ConvergenceError(f"{model.source}: inverse dynamics of {model.name!r}: the "
