@@ -22,9 +22,9 @@ manipulator_loop.py (300 rad/s, 4 kHz) on the nonlinear control model (manipulat
 The forces the loop applied are then replayed on the model in `simulate` (esdirk3, rtol 1e-8:
 tighter than the loop's own esdirk2 at 1e-5) to record E, and E's deviation from its intended
 path (its start plus the move, rotations zero) is taken over the move and the settling after
-it: position (um) and the three rotations about the global axes (urad).
+it: position (nm) and the three rotations about the global axes (nrad).
 
-`--check` (item 1's forward check): the dynamic feedforward's forces alone, without the loop,
+`--check` (the forward check): the dynamic feedforward's forces alone, without the loop,
 drive the model in `simulate` (CVODE BDF, rtol 1e-9, the forces a cubic spline through the
 inverse dynamics' steps), at two steps; E's largest deviation from the path shrinks with the
 step as BDF2's O(h^2).
@@ -124,7 +124,7 @@ def summary(rows):
 
 
 def print_table(results, file=None):
-    print("| move | stroke (mm) | feedforward | E dx | dy | dz (um) | E rx | ry | rz (urad) | "
+    print("| move | stroke (mm) | feedforward | E dx | dy | dz (nm) | E rx | ry | rz (nrad) | "
           "loops' error / stroke | replay - loop (nm) |", file=file)
     print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
           file=file)
@@ -132,7 +132,7 @@ def print_table(results, file=None):
         stroke = np.hypot(*move) * 1e3
         for kind, values in summary(rows).items():
             print(f"| {label} | {stroke:.0f} | {kind} | "
-                  + " | ".join(f"{v:.3f}" for v in values)
+                  + " | ".join(f"{v * 1e3:.1f}" for v in values)
                   + f" | {rows[kind]['loop']:.1e} | {rows[kind]['replay'] * 1e9:.2f} |",
                   file=file)
 
