@@ -62,7 +62,8 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
                reference: ArrayLike | Callable[[float], ArrayLike] | None = None,
                quantum: float | Sequence[float] | None = None,
                disturbance: float | Sequence[float] | None = None,
-               disturbance_hz: float = MAINS_HZ, **design_options: Any,
+               disturbance_hz: float = MAINS_HZ,
+               feedforward_forces: ArrayLike | None = None, **design_options: Any,
                ) -> tuple[LoopController, FeedbackDesign]:
     """Design the feedback and the feedforward of `model`; returns (LoopController, design).
 
@@ -110,6 +111,10 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
         coil drives by current it enters as the drive signal d / (Km G).
     disturbance_hz : float
         Its frequency f (Hz), below fs / 2; default 50 Hz (the mains).
+    feedforward_forces : array_like (N+2, n_loops), optional
+        The feedforward forces (N, N m) held from each sample k = 0 .. N+1, given instead of
+        designed (e.g. `dynamic_feedforward`'s, from the nonlinear inverse dynamics);
+        `feedforward` is then unused. Through voice coils they become drive signals.
     **design_options
         Passed on to `design_feedback` (with `controller`: only `plant` and
         `linear_model`, the model the loops are checked on). A `linear_model` also serves
@@ -185,7 +190,14 @@ def build_loop(model: Model, *, stroke: float = 1e-3, duration: float = 1.0,
     offsets = [output_value(model, model.outputs[p.output_index], model.initial_coordinates)
                for p in design.pairs]
     lf, explicit = None, None
-    if kind == "modal":
+    if feedforward_forces is not None:
+        explicit = np.asarray(feedforward_forces, float)
+        if explicit.shape != (samples + 2, n) or not np.all(np.isfinite(explicit)):
+            raise LoopError(f"feedforward_forces: expected finite forces of shape "
+                            f"({samples + 2}, {n}) (the samples k = 0 .. N+1, one column per "
+                            f"loop), got shape {explicit.shape}")
+        kind = "given"
+    elif kind == "modal":
         lf = feedforward_model if feedforward_model is not None else low_frequency_model(
             model, linear_model=design_options.get("linear_model"), pairs=design.pairs)
     elif kind == "inverse":

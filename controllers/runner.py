@@ -66,6 +66,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
              quantum: float | Sequence[float] | None = None,
              disturbance: float | Sequence[float] | None = None,
              disturbance_hz: float = 50.0, warn: Callable[[str], None] | None = None,
+             feedforward_forces: ArrayLike | None = None,
              **design_options: Any) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
@@ -130,6 +131,9 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         Called with each range-of-validity warning as it is found: before the run for the
         strokes and move targets asked for, after it for the positions recorded
         (validity.py). The summary lists them all ("warnings").
+    feedforward_forces : array_like (N+2, n_loops), optional
+        Given feedforward forces (N, N m), held from each sample (`build_loop`), e.g. from
+        the nonlinear inverse dynamics (`dynamic_feedforward`).
     **design_options
         Passed on to `design_feedback`.
 
@@ -173,7 +177,8 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         feedforward=feedforward, settle=settle, axis=axis,
         feedforward_model=feedforward_model, path=path, design=design, controller=controller,
         reference=reference, quantum=quantum, disturbance=disturbance,
-        disturbance_hz=disturbance_hz, **design_options)
+        disturbance_hz=disturbance_hz, feedforward_forces=feedforward_forces,
+        **design_options)
     if plant == "libcosim" and loop.sample_indexed:
         loop.controller.to_dict()  # raises the LoopError saying why, before any FMU is built
     if path is not None:
@@ -189,7 +194,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
 
     def warn_during(message):  # the simulator's, while the run goes: once per coordinate
         found[:] = _warned([message], found, warn)
-    kind = feedforward_kind(feedforward)
+    kind = "given" if feedforward_forces is not None else feedforward_kind(feedforward)
     moving = design.pairs[axis]
     settings = {"scene": model.name, "plant": plant, "feedforward": kind is not None,
                 "feedforward_kind": kind or "none",

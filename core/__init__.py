@@ -19,6 +19,7 @@ __version__ = "0.1.0"
 _LAZY = {
     "analysis.compliance": ("Compliance", "compliance"),
     "analysis.inverse_dynamics": ("InverseDynamics", "inverse_dynamics", "sampled_path"),
+    "analysis.inverse_dynamics_free": ("free_inverse_dynamics", "zero_dynamics"),
     "analysis.inverse_statics": ("InverseStatics", "inverse_statics"),
     "analysis.linearization": ("LinearModel", "linearize"),
     "analysis.modal": ("Modes", "buckling_load_factors", "natural_frequencies"),

@@ -2,8 +2,9 @@
 
 Prescribed are as many position outputs as force inputs (`outputs`, `inputs`: the model's,
 by default) and every kinematic input; together they must fix all NX - NXO - NEO entries of
-q, so that the path determines the motion (a flexible mode left free would need the time
-integration of its own dynamics: refused, naming the count). At each time t:
+q, so that the path determines the motion (a flexible mode left free needs the time
+integration of its own dynamics: refused here, naming the count; `free_inverse_dynamics`,
+inverse_dynamics_free.py, integrates it). At each time t:
 
 1. Positions: Newton's method on q for the prescribed values, the outputs as kinematic
    constraints,
@@ -192,8 +193,8 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         raise ConstraintError(
             f"{model.source}: inverse dynamics of {model.name!r}: {n_out} prescribed output(s) "
             f"and {n_kin} kinematic input(s) fix {n_out + n_kin} of the NDOF + NKI = {ndof} "
-            "entries of q; the path must determine the motion (DOFs left free need a time "
-            "integration of their own dynamics, which this does not do)")
+            "entries of q; the path must determine the motion (DOFs left free: "
+            "free_inverse_dynamics integrates their dynamics)")
     prescribed = model.prescribed_dofs
     steps = dof_tolerances(model, tolerance)
     config = mech.initial_configuration()
@@ -254,6 +255,11 @@ def _ports(model, outputs, inputs):
                              f"{model.name!r}; its position outputs: "
                              f"{', '.join(positions) or 'none'}")
         out_ports.append(port)
+    return out_ports, input_ports(model, inputs, out_ports)
+
+
+def input_ports(model, inputs, out_ports):
+    """The force inputs solved for, by name (default all), as many as `out_ports`; checked."""
     by_name = {port.name: port for port in model.inputs}
     names = list(by_name) if inputs is None else list(inputs)
     unknown = [name for name in names if name not in by_name]
@@ -268,7 +274,7 @@ def _ports(model, outputs, inputs):
                          f"prescribed outputs, got {len(names)} input(s) "
                          f"({', '.join(names) or 'none'}) and {len(out_ports)} output(s) "
                          f"({', '.join(p.name for p in out_ports) or 'none'})")
-    return out_ports, [by_name[name] for name in names]
+    return [by_name[name] for name in names]
 
 
 def sample_path(model, path, t, size):

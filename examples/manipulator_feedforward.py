@@ -1,0 +1,237 @@
+"""The manipulator's feedforward from the nonlinear inverse dynamics against the linear one
+(the chapter's Fig. 3.8: the end effector deviated more than linearly with the stroke).
+
+    python examples/manipulator_feedforward.py            # 1 and 4 mm x, 6 mm xy
+    python examples/manipulator_feedforward.py --moves "2 mm x,6 mm x"   # others
+    python examples/manipulator_feedforward.py --quick    # 1 mm x in 0.1 s, coarser (tests)
+    python examples/manipulator_feedforward.py --check    # + the forward check below
+
+For each move of the end effector E (its x and y moved along a third-order profile in
+`duration`, its height and tilts held: manipulator_loop.targets), the six PID-like loops of
+manipulator_loop.py (300 rad/s, 4 kHz) on the nonlinear control model (manipulator_control,
+75 DOFs) run with three feedforwards:
+
+- **linear**: the loops' strokes from the statics linearised at rest (`move_path(...,
+  kind="linear")`) and the forces of the low-frequency model, m y'' + c y' + k y: what the
+  chapter computed its actuator set-points from;
+- **static**: the strokes and static forces of the nonlinear inverse statics
+  (`move_path(..., kind="nonlinear")`) plus m y'' + c y' of the low-frequency model;
+- **dynamic**: the strokes and forces of the nonlinear inverse dynamics with the 69 other DOFs
+  free (`flexure.controllers.dynamic_feedforward`, BDF2 at `step`).
+
+The forces the loop applied are then replayed on the model in `simulate` (esdirk3, rtol 1e-8:
+tighter than the loop's own esdirk2 at 1e-5) to record E, and E's deviation from its intended
+path (its start plus the move, rotations zero) is taken over the move and the settling after
+it: position (nm) and the three rotations about the global axes (nrad).
+
+`--check` (the forward check): the dynamic feedforward's forces alone, without the loop,
+drive the model in `simulate` (CVODE BDF, rtol 1e-9, the forces a cubic spline through the
+inverse dynamics' steps), at two steps; E's largest deviation from the path shrinks with the
+step as BDF2's O(h^2).
+"""
+
+import argparse
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from examples.manipulator_loop import CONTROL, design_loops, targets
+from flexure.controllers.dynamic_feedforward import dynamic_feedforward
+from flexure.controllers.move_path import move_path
+from flexure.controllers.profiles import ThirdOrderProfile
+from flexure.controllers.runner import run_loop
+from flexure.core import build_model, output_value, position_port, scene_path, simulate
+
+FIGURES = Path(__file__).resolve().parent / "figures"
+MOVES = {"1 mm x": (1e-3, 0.0), "2 mm x": (2e-3, 0.0), "4 mm x": (4e-3, 0.0),
+         "6 mm x": (6e-3, 0.0), "6 mm xy": (6e-3 / np.sqrt(2), 6e-3 / np.sqrt(2))}
+KINDS = ("linear", "static", "dynamic")
+EFFECTOR = ("E.x", "E.y", "E.z", "E_r.rx", "E_r.ry", "E_r.rz")  # m, m, m, rad, rad, rad
+
+
+def log(text):
+    print(text, file=sys.stderr, flush=True)
+
+
+def control_model():
+    """manipulator_control with E's position and angles as outputs E_x ... E_rz (m, rad)."""
+    data = tomllib.loads(scene_path(CONTROL).read_text())
+    for axis in "xyz":
+        data["outputs"][f"E_{axis}"] = {"node": "E", "coordinate": axis}
+    return build_model(data, source=f"{CONTROL} + the end effector's position as outputs")
+
+
+def effector_start(model):
+    """E's position (m) and angles (rad) at rest: the intended path's start."""
+    from flexure.core import static_equilibrium
+
+    rest = static_equilibrium(model)
+    return np.array([output_value(model, position_port(model, name), rest.x)
+                     for name in EFFECTOR])
+
+
+def replay(model, result, *, rtol=1e-8):
+    """E (n, 6) at the loop's samples under the forces the loop applied (zero-order hold),
+    and the largest difference of the replayed encoders from the loop's (m)."""
+    t, force = result.t, result.force
+    inputs = {port.name: (t, force[:, j]) for j, port in enumerate(model.inputs)}
+    run = simulate(model, float(t[-1]), inputs=inputs, method="esdirk3", rtol=rtol,
+                   output_times=t)
+    outputs = run.outputs
+    encoders = np.column_stack([outputs[f"x{j + 1}"] for j in range(6)])
+    names = ("E_x", "E_y", "E_z", "E_rx", "E_ry", "E_rz")
+    return np.column_stack([outputs[name] for name in names]), float(
+        np.max(np.abs(encoders - result.position)))
+
+
+def deviation(model, start, move, t, effector, duration):
+    """E's deviation (n, 6) from the intended path: start + s(t) (dx, dy, 0), no rotation."""
+    s = ThirdOrderProfile(1.0, duration).position(t)
+    intended = start + np.outer(s, [move[0], move[1], 0.0, 0.0, 0.0, 0.0])
+    return effector - intended
+
+
+def run_move(model, design, label, move, *, duration, settle, fs, step):
+    """{kind: {"deviation": (n, 6), "t": (n,), "replay": m, "loop": max error / stroke}}."""
+    wanted = targets(*move)
+    start = effector_start(model)
+    rows = {}
+    for kind in KINDS:
+        begin = time.perf_counter()
+        if kind == "dynamic":
+            ff = dynamic_feedforward(model, wanted, duration=duration, settle=settle, fs=fs,
+                                     step=step)
+            result = run_loop(model, reference=ff.reference, feedforward_forces=ff.forces,
+                              design=design, fs=fs)
+        else:
+            path = move_path(model, wanted, kind="linear" if kind == "linear" else "nonlinear")
+            result = run_loop(model, path=path, design=design, duration=duration,
+                              settle=settle, fs=fs)
+        effector, replayed = replay(model, result)
+        rows[kind] = {"t": result.t, "replay": replayed,
+                      "deviation": deviation(model, start, move, result.t, effector, duration),
+                      "loop": max(loop["error_ratio"] for loop in result.per_loop())}
+        log(f"  {label}, {kind}: {time.perf_counter() - begin:.0f} s")
+    return rows
+
+
+def summary(rows):
+    """Per kind: the largest |deviation| of E's x, y, z (um) and rx, ry, rz (urad)."""
+    return {kind: np.max(np.abs(row["deviation"]), axis=0) * 1e6 for kind, row in rows.items()}
+
+
+def print_table(results, file=None):
+    print("| move | stroke (mm) | feedforward | E dx | dy | dz (nm) | E rx | ry | rz (nrad) | "
+          "loops' error / stroke | replay - loop (nm) |", file=file)
+    print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+          file=file)
+    for label, (move, rows) in results.items():
+        stroke = np.hypot(*move) * 1e3
+        for kind, values in summary(rows).items():
+            print(f"| {label} | {stroke:.0f} | {kind} | "
+                  + " | ".join(f"{v * 1e3:.1f}" for v in values)
+                  + f" | {rows[kind]['loop']:.1e} | {rows[kind]['replay'] * 1e9:.2f} |",
+                  file=file)
+
+
+def plot(results, path):
+    """E's largest position and rotation deviation against the stroke, per feedforward."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for kind, marker in zip(KINDS, "osd", strict=True):
+        x_moves = [(np.hypot(*move) * 1e3, summary(rows)[kind])
+                   for label, (move, rows) in results.items() if label.endswith(" x")]
+        xy = [(np.hypot(*move) * 1e3, summary(rows)[kind])
+              for label, (move, rows) in results.items() if label.endswith("xy")]
+        for ax, part in zip(axes, (slice(0, 3), slice(3, 6)), strict=True):
+            if x_moves:
+                ax.loglog([s for s, _ in x_moves], [np.max(v[part]) for _, v in x_moves],
+                          marker=marker, label=f"{kind}, x moves")
+            if xy:
+                ax.loglog([s for s, _ in xy], [np.max(v[part]) for _, v in xy], marker=marker,
+                          linestyle="none", markerfacecolor="none", label=f"{kind}, xy move")
+    axes[0].set_ylabel("largest position deviation of E (um)")
+    axes[1].set_ylabel("largest rotation of E (urad)")
+    for ax in axes:
+        ax.set_xlabel("stroke (mm)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("manipulator_control, six loops: the end effector's deviation from its path")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def forward_check(model, move, *, duration, settle, steps):
+    """The dynamic feedforward's forces alone in `simulate` (CVODE BDF, rtol 1e-9): per step
+    (s), E's largest deviation from its path (position m, rotation rad)."""
+    from scipy.interpolate import CubicSpline
+
+    start = effector_start(model)
+    rows = {}
+    for step in steps:
+        ff = dynamic_feedforward(model, targets(*move), duration=duration, settle=settle,
+                                 step=step)
+        inverse = ff.inverse
+        spline = CubicSpline(inverse.times, inverse.forces, axis=0)
+        t = np.linspace(0.0, duration + settle, 501)
+        inputs = {name: (lambda s, j=j, spline=spline: float(spline(s)[j]))
+                  for j, name in enumerate(inverse.input_names)}
+        run = simulate(model, float(t[-1]), inputs=inputs, rtol=1e-9, output_times=t)
+        effector = np.column_stack([run.outputs[name] for name in
+                                    ("E_x", "E_y", "E_z", "E_rx", "E_ry", "E_rz")])
+        error = np.abs(deviation(model, start, move, t, effector, duration))
+        rows[step] = (float(np.max(error[:, :3])), float(np.max(error[:, 3:])))
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="1 mm x in 0.1 s, step 2.5 ms: a coarse run (the tests')")
+    parser.add_argument("--check", action="store_true",
+                        help="the forward check of the dynamic feedforward's forces")
+    parser.add_argument("--no-figure", action="store_true", help="write no PNG")
+    parser.add_argument("--moves", default="1 mm x,4 mm x,6 mm xy",
+                        help=f"the moves, comma-separated, of: {', '.join(MOVES)} (default "
+                        "%(default)s; empty: none)")
+    args = parser.parse_args(argv)
+    duration, settle, step = (0.1, 0.02, 2.5e-3) if args.quick else (1.0, 0.25, 2e-3)
+    labels = [label.strip() for label in args.moves.split(",") if label.strip()]
+    unknown = [label for label in labels if label not in MOVES]
+    if unknown:
+        parser.error(f"--moves: unknown {', '.join(unknown)}; expected of {', '.join(MOVES)}")
+    moves = {"1 mm x": MOVES["1 mm x"]} if args.quick else {label: MOVES[label]
+                                                             for label in labels}
+    model = control_model()
+    design, _ = design_loops(model) if moves else (None, None)
+    results = {}
+    for label, move in moves.items():
+        log(f"{label}:")
+        results[label] = (move, run_move(model, design, label, move, duration=duration,
+                                         settle=settle, fs=4000.0, step=step))
+        print_table({label: results[label]}, file=sys.stderr)  # each move as it ends
+    print_table(results)
+    if results and not args.no_figure and not args.quick:
+        plot(results, FIGURES / "manipulator_feedforward.png")
+    checks = None
+    if args.check:
+        steps = (5e-3, 2.5e-3) if args.quick else (4e-3, 2e-3)
+        checks = forward_check(model, MOVES["4 mm x"] if not args.quick else MOVES["1 mm x"],
+                               duration=duration, settle=settle, steps=steps)
+        print("\n| step (ms) | E position, largest deviation (nm) | rotation (nrad) |")
+        print("| ---: | ---: | ---: |")
+        for step, (position, rotation) in checks.items():
+            print(f"| {step * 1e3:g} | {position * 1e9:.2f} | {rotation * 1e9:.2f} |")
+    return results, checks
+
+
+if __name__ == "__main__":
+    main()

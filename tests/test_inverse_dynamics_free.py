@@ -1,0 +1,172 @@
+"""Inverse dynamics with free DOFs (core/analysis/inverse_dynamics_free.py): a chain of two
+masses whose free mass's response is known in closed form, the method's order, the zero
+dynamics, and every refusal."""
+
+import numpy as np
+import pytest
+from kinematic_scenes import with_motion
+
+from flexure.core import build_model, free_inverse_dynamics, zero_dynamics
+from flexure.core.errors import ConstraintError, ConvergenceError, SceneError
+
+K1, C1, K2, M1, M2 = 800.0, 0.3, 500.0, 0.4, 0.25
+A, W = 1e-3, 30.0  # m, rad/s: the driven mass moves by A (1 - cos(W t))
+
+
+def two_masses(*, force_on="1", second_force=False, truss_mass=0.0):
+    """Ground -k1, c1- mass 1 -k2- mass 2 along x, a force F on `force_on`'s x (and G on
+    mass 2's with `second_force`), outputs x1 and x2; with `truss_mass` the second link is a
+    truss of that consistent mass (kg/m) instead of a massless spring."""
+    link = ({"type": "PLTRUSS", "section": "b", "released": ["e1"]} if truss_mass
+            else {"type": "PLSPRING", "section": "b", "released": ["e1"]})
+    inputs = {"F": {"node": force_on, "coordinate": "x"}}
+    if second_force:
+        inputs["G"] = {"node": "2", "coordinate": "x"}
+    return build_model({
+        "scene": {"name": "two_masses"},
+        "sections": {"a": {"kx": K1, "cx": C1},
+                     "b": ({"EA": K2 * 0.1, "EdA": 0.0, "rho_A": truss_mass} if truss_mass
+                           else {"kx": K2, "cx": 0.0})},
+        "nodes": {"0": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                  "1": {"position": [0.1, 0.0], "mass": M1, "dof": ["x"]},
+                  "2": {"position": [0.2, 0.0], "mass": M2, "dof": ["x"]}
+                  | ({"fixed": ["y"]} if truss_mass else {})},
+        "elements": {"a": {"type": "PLSPRING", "nodes": ["0", "1"], "section": "a",
+                           "released": ["e1"]},
+                     "b": {"nodes": ["1", "2"], **link}},
+        "inputs": inputs,
+        "outputs": {"x1": {"node": "1", "coordinate": "x"},
+                    "x2": {"node": "2", "coordinate": "x"}}})
+
+
+def moved(x0):
+    """x0 + A (1 - cos(W t)), its rate and acceleration: starts at rest."""
+    return lambda t: ([x0 + A * (1 - np.cos(W * t))], [A * W * np.sin(W * t)],
+                      [A * W * W * np.cos(W * t)])
+
+
+def closed_form(t):
+    """(y1, y2, F): mass 2 free under y1 = A (1 - cos(W t)) from rest,
+    y2'' + w2^2 y2 = w2^2 y1, so y2 = A (1 - (w2^2 cos(W t) - W^2 cos(w2 t)) / (w2^2 - W^2)),
+    and F = M1 y1'' + C1 y1' + K1 y1 - K2 (y2 - y1)."""
+    w2 = np.sqrt(K2 / M2)
+    y1 = A * (1 - np.cos(W * t))
+    y2 = A * (1 - (w2 ** 2 * np.cos(W * t) - W ** 2 * np.cos(w2 * t)) / (w2 ** 2 - W ** 2))
+    force = (M1 * A * W * W * np.cos(W * t) + C1 * A * W * np.sin(W * t) + K1 * y1
+             - K2 * (y2 - y1))
+    return y1, y2, force
+
+
+def errors(step):
+    """The free mass's and the force's largest errors against the closed form over 0.2 s,
+    relative to their largest values, at BDF2 step `step` (s)."""
+    t = np.arange(0.0, 0.2 + step / 2, step)
+    result = free_inverse_dynamics(two_masses(), t, moved(0.1), outputs=["x1"])
+    y1, y2, force = closed_form(t)
+    np.testing.assert_allclose(result.q[:, 0] - 0.1, y1, rtol=0, atol=1e-15)
+    return (np.max(np.abs(result.q[:, 1] - 0.2 - y2)) / np.max(np.abs(y2)),
+            np.max(np.abs(result.force("F") - force)) / np.max(np.abs(force)))
+
+
+def test_the_free_mass_follows_its_closed_form_at_order_two():
+    """Mass 1 prescribed, mass 2 free (w2 = 44.7 rad/s): BDF2 at h = 1 ms puts mass 2 and
+    the force within 3e-3 of the closed form, and halving h divides both errors by 4
+    (order 2: between 3.6 and 4.4). Measured 1.25e-3 and 1.58e-3 at 1 ms, ratios 3.9995."""
+    coarse, fine = errors(1e-3), errors(5e-4)
+    assert max(coarse) < 3e-3
+    for a, b in zip(coarse, fine, strict=True):
+        assert 3.6 < a / b < 4.4
+
+
+def test_outputs_may_be_coordinates_that_no_output_names():
+    """"1.x" prescribed is the output x1 prescribed: the same forces, bit for bit."""
+    t = np.linspace(0.0, 0.05, 11)
+    by_output = free_inverse_dynamics(two_masses(), t, moved(0.1), outputs=["x1"])
+    by_coordinate = free_inverse_dynamics(two_masses(), t, moved(0.1), outputs=["1.x"])
+    np.testing.assert_array_equal(by_output.forces, by_coordinate.forces)
+
+
+def test_the_zero_dynamics_of_the_chain():
+    """x1 held: mass 2 on k2 alone, so the zeros are +-i sqrt(k2 / m2) (to 1e-12)."""
+    w2 = np.sqrt(K2 / M2)
+    values = zero_dynamics(np.array([[-w2 ** 2]]), np.zeros((1, 1)))
+    np.testing.assert_allclose(np.sort(values.imag), [-w2, w2], rtol=1e-12)
+    np.testing.assert_allclose(values.real, 0.0, atol=1e-12)
+
+
+def test_a_non_minimum_phase_output_is_refused_where_the_step_cannot_damp_it():
+    """The force on mass 1, the output on mass 2 through a truss of consistent mass m12 =
+    rho_A l / 6: a real zero at sqrt(k2 / m12) = 548 1/s. At h = 1 ms (h lambda = 0.55) it
+    is refused, naming the zero; at h = 10 ms (h lambda = 5.5) BDF2 damps it, and the
+    output follows the path."""
+    model = two_masses(truss_mass=0.1)
+    lam = np.sqrt(K2 / (0.1 * 0.1 / 6))
+    with pytest.raises(ConstraintError, match=r"unstable mode at 547\.7"):
+        free_inverse_dynamics(model, np.linspace(0.0, 0.01, 11), moved(0.2), outputs=["x2"])
+    assert 4.0 < 0.01 * lam
+    t = np.linspace(0.0, 0.2, 21)
+    result = free_inverse_dynamics(model, t, moved(0.2), outputs=["x2"])
+    np.testing.assert_allclose(result.q[:, 1] - 0.2, A * (1 - np.cos(W * t)), atol=1e-15)
+    assert np.all(np.isfinite(result.forces))
+
+
+@pytest.mark.parametrize("call, error, words", [
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01], moved(0.2), outputs=["x2"]),
+     ConstraintError, "do not reach the accelerations"),
+    (lambda: free_inverse_dynamics(two_masses(second_force=True), [0.0, 0.01],
+                                   lambda t: ([0.2, 0.2], [0, 0], [0, 0]),
+                                   outputs=["x2", "2.x"]),
+     ConstraintError, "do not move independently"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01, 0.03], moved(0.1),
+                                   outputs=["x1"]),
+     SceneError, "equally spaced"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0], moved(0.1), outputs=["x1"]),
+     SceneError, "at least two"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01], moved(0.2), outputs=["x1"]),
+     SceneError, "output 'x1' is 0.1 there"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01], moved(0.1), outputs=["9.x"]),
+     SceneError, "'9.x' is neither a position output"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01], moved(0.1), outputs=["x1"],
+                                   inputs=["H"]),
+     SceneError, "unknown force input"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01], moved(0.1),
+                                   outputs=["x1", "x2"]),
+     SceneError, "as many force inputs as prescribed outputs"),
+    (lambda: free_inverse_dynamics(build_model(with_motion("truss_1dof_x", "2", "x")),
+                                   [0.0, 0.01], moved(0.1), outputs=[], inputs=[]),
+     SceneError, "kinematic inputs"),
+    (lambda: free_inverse_dynamics(two_masses(), [0.0, 0.01, 0.02], moved(0.1),
+                                   outputs=["x1"], max_iterations=1),
+     ConvergenceError, "did not converge"),
+])
+def test_free_inverse_dynamics_refuses_what_it_cannot_do(call, error, words):
+    with pytest.raises(error, match=words):
+        call()
+
+
+def test_with_nothing_free_it_is_the_inverse_dynamics():
+    """truss_1dof_x, its one DOF prescribed: the forces of `inverse_dynamics` to 1e-14 N."""
+    from flexure.core import inverse_dynamics, load_scene, static_equilibrium
+
+    model = load_scene("truss_1dof_x")
+    x0 = static_equilibrium(model).x[model.coordinate_index("2.x")]
+    path = lambda t: ([x0 + 1e-3 * np.sin(7 * t)], [7e-3 * np.cos(7 * t)],  # noqa: E731
+                      [-49e-3 * np.sin(7 * t)])
+    t = np.linspace(0.0, 1.0, 11)
+    free = free_inverse_dynamics(model, t, path)
+    np.testing.assert_allclose(free.forces, inverse_dynamics(model, t, path).forces,
+                               rtol=0, atol=1e-14)
+
+
+def test_a_renewed_newton_matrix_gives_the_same_motion(monkeypatch):
+    """Every step renewing its Newton matrix by forward differences at once (as a long
+    stroke's stalled steps do) converges to the same solution: the forces within 1e-9 of the
+    largest (both Newtons stop at 1e-12 of the DOFs' unit)."""
+    from flexure.core.analysis import inverse_dynamics_free
+
+    t = np.linspace(0.0, 0.05, 51)
+    plain = free_inverse_dynamics(two_masses(), t, moved(0.1), outputs=["x1"])
+    monkeypatch.setattr(inverse_dynamics_free, "RENEW_AFTER", 0)
+    renewed = free_inverse_dynamics(two_masses(), t, moved(0.1), outputs=["x1"])
+    scale = np.max(np.abs(plain.forces))
+    np.testing.assert_allclose(renewed.forces, plain.forces, rtol=0, atol=1e-9 * scale)
