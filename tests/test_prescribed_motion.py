@@ -173,6 +173,33 @@ def test_the_stage_follows_the_numpy_reference():
 
 
 @pytest.mark.parametrize("t", [0.0, 0.013, 0.05])
+def test_one_evaluation_equals_the_numpy_formulas(t):
+    """stage_planar_3dof with 3.x prescribed, at a state off equilibrium, before, during and
+    after the move: the compiled right-hand side's qddot and efforts against
+    `motion_response`'s numpy evaluation of M_ff qddot_f = Q_f - M_fk u'' and
+    F = M_kf qddot_f + M_kk u'' - Q_k at the same (t, q_f, qdot_f), to round-off: 1e-12 of
+    their largest (measured 1.0e-14; the efforts' scale at least 1 N)."""
+    from flexure.core.analysis.motion_response import _Balance
+    from flexure.core.mechanics.mechanics import Mechanics
+
+    model = build_model(with_motion("stage_planar_3dof", "3", "x", value=0.001))
+    sim = Simulator(model, rtol=1e-8, motion_duration=0.04)
+    n, free, k = sim.ndof, model.free_dofs, model.prescribed_dofs
+    rng = np.random.default_rng(5)
+    y = np.concatenate([1e-5 * rng.standard_normal(n), 1e-3 * rng.standard_normal(n)])
+    ydot = sim.derivative(t, y)
+    q, qdot = sim.q_ref + y[:n], y[n:]
+    balance = _Balance(model, Mechanics(model), increment_path(model, 0.04), np.zeros(1))
+    _, _, qddot, efforts, _ = balance.evaluate(t, q[free], qdot[free])
+    scale = np.max(np.abs(qddot))
+    assert np.max(np.abs(ydot[n:] - qddot)) <= 1e-12 * scale
+    assert np.max(np.abs(ydot[n + k] - qddot[k])) <= 1e-13 * 1.0  # u'' (0.001 / 0.04^2)
+    state = sim.on_path([t], [np.concatenate([q, qdot])])
+    compiled = sim.efforts_along([t], state)[0]
+    assert np.max(np.abs(compiled - efforts)) <= 1e-12 * max(np.max(np.abs(efforts)), 1.0)
+
+
+@pytest.mark.parametrize("t", [0.0, 0.013, 0.05])
 def test_the_prescribed_jacobian_against_finite_differences(t):
     """stage_planar_3dof with 3.x prescribed, mid-move and at rest: the analytic Jacobian of
     the prescribed form against central differences of its right-hand side (relative step
