@@ -244,6 +244,31 @@ def test_flexure_simulate_moves_a_scene_and_writes_its_effort(capsys, tmp_path):
     assert last[-1] == pytest.approx(945.0 * 0.001 - 1.0, rel=1e-12)
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_a_warm_simulation_with_prescribed_motion_imports_no_numba(tmp_path, method):
+    """The prescribed form's entries load as object code like the others': a warm `flexure
+    simulate` of a moved scene does not import numba (the first run may compile)."""
+    import json
+    import subprocess
+    import sys
+
+    from flexure.core import scene_toml
+
+    path = tmp_path / "moved.toml"
+    path.write_text(scene_toml(with_motion("truss_1dof_x", "2", "x", value=0.101), "a test"))
+    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
+             f"code = main(['simulate', {str(path)!r}, '--t-end', '0.02', '--motion-duration', "
+             f"'0.01', '--method', '{method}'])\n"
+             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] == "
+             "'numba' and m.count('.') < 2 and not m.startswith('numba._'))]))")
+    for _ in range(2):
+        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
+                                   text=True, check=True, cwd=tmp_path)
+    code, loaded = json.loads(completed.stdout.splitlines()[-1])
+    assert code == 0, completed.stdout
+    assert loaded == [], f"flexure simulate --method {method} imported {loaded}"
+
+
 def test_flexure_simulate_refuses_a_motion_duration_without_kinematic_inputs(capsys):
     code, _, err = run(capsys, "simulate", scene_path("truss_1dof_x"), "--t-end", "0.01",
                        "--motion-duration", "0.01")
