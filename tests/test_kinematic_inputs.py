@@ -151,12 +151,15 @@ def test_motion_values_are_checked():
         motion_values(model, [np.nan])
 
 
-def test_a_simulation_with_prescribed_motion_is_refused_before_compiling():
-    from flexure.core.engine.data import EngineData
+def test_a_simulation_with_prescribed_motion_needs_the_moves_duration():
+    """Without it (what the loop's plant and the FMU make) the Simulator refuses the model
+    before compiling; with it, test_prescribed_motion.py."""
+    from flexure.core.simulation.simulator import Simulator
 
     model = build_model(with_motion("truss_1dof_x", "2", "x"))
-    with pytest.raises(SimulationError, match=r"kinematic inputs \(X\).*not supported"):
-        EngineData(model)
+    with pytest.raises(SimulationError, match=r"kinematic inputs \(X\): a time simulation "
+                                              r"needs the duration of their move"):
+        Simulator(model)
 
 
 # -- statics ------------------------------------------------------------------------------

@@ -50,6 +50,10 @@ def register(subparsers):
     parser.add_argument("--input", action="append", default=[], metavar="NAME=VALUE|NAME=FILE",
                         help="an input force: a constant (N) or a CSV file time,value "
                              "(zero-order hold); repeat for several inputs")
+    parser.add_argument("--motion-duration", type=positive, default=None, metavar="T",
+                        help="a scene with kinematic inputs: the time (s) each takes to move "
+                             "from its start to its value (a rest-to-rest quintic from t = 0; "
+                             "default --t-end); their efforts become outputs NAME.effort")
     parser.add_argument("--method", choices=METHODS, default="cvode-bdf")
     parser.add_argument("--max-order", type=count, default=None,
                         help="largest order of the multistep formulas (default SUNDIALS': 5 "
@@ -159,12 +163,15 @@ def run(args):
     model = load_scene(args.scene, overrides=args.set)
     if args.animate:
         require_drawable(model, "--animate")  # before the run, not after it
+    if args.motion_duration is not None and not model.kinematic_inputs:
+        raise UsageError(f"--motion-duration {args.motion_duration:g}: {model.name!r} has no "
+                         "kinematic input ([inputs.NAME] kind = \"motion\") to move")
     inputs = parse_inputs(args.input)
     refuse_overwriting_inputs(outputs, [model.source, *_input_files(args.input)])
     output_times = (np.linspace(0.0, args.t_end, args.samples + 1) if args.samples else None)
     result = simulate(model, args.t_end, inputs=inputs, method=args.method, rtol=args.rtol,
                       atol=args.atol, max_step=args.max_step, output_times=output_times,
-                      max_order=args.max_order,
+                      max_order=args.max_order, motion_duration=args.motion_duration,
                       progress=Progress(f"flexure simulate {model.name}", after=1.0))
     print(render(result))
     return write_outputs("flexure simulate", [

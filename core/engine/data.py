@@ -84,8 +84,8 @@ class EngineData:
     ValueError
         The model is not exactly counted (free coordinates against constraints and DOFs).
     SimulationError
-        The model has kinematic inputs (prescribed motion): the engine integrates every
-        entry of q as a DOF and has no place for prescribed ones yet (docs/analyses.md).
+        The model has kinematic inputs (prescribed motion: `prescribed`) and actuators,
+        whose coils the prescribed form does not take (docs/analyses.md).
     layout.LayoutError
         The packing does not match the layout table (a bug of the engine's packing).
     """
@@ -93,14 +93,14 @@ class EngineData:
     def __init__(self, model, *, tolerance=1e-15, singular_ratio=1e-6, augmented=None,
                  sparse=None, rigid=True):
         self.model = model
-        if model.kinematic_inputs:
+        if model.kinematic_inputs and model.actuators:
             from ..errors import SimulationError
 
             names = ", ".join(port.name for port in model.kinematic_inputs)
             raise SimulationError(
-                f"{model.source}: model {model.name!r} has kinematic inputs ({names}): a time "
-                "simulation with prescribed motion is not supported yet; the static, linear "
-                "and inverse-dynamics analyses take them (docs/analyses.md)")
+                f"{model.source}: model {model.name!r} has kinematic inputs ({names}) and "
+                "actuators: a time simulation with prescribed motion takes force and moment "
+                "inputs only, not actuators' coils (docs/analyses.md)")
         _check_counted(model)
         context = packing.Context(model, tolerance=tolerance, singular_ratio=singular_ratio,
                                   augmented=augmented, sparse=sparse, rigid=rigid)

@@ -17,6 +17,8 @@ has its module; this one holds the forms the integrators call and the operations
     rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
                      rows out of J and the augmented system (`rigid_kernels`: the slaves
                      explicit in their masters, x_s = S(z), and the chain rule through T)
+    prescribed       the first-order form with kinematic inputs: u, u', u'' at the time
+                     given, the constrained accelerations, the efforts and the Jacobian
     operations       the operations' codes, and `run`: one through its address
     engine (here)    the first-order and implicit forms, one C entry point per operation
                      (`ENTRIES`), `connect`, `call`
@@ -48,7 +50,7 @@ import numpy as np
 
 from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
-from ..numerics.native import address_of, carray
+from ..numerics.native import address_of, call_engine, carray
 from . import data as ed
 from . import rigid_kernels, sparse_factors
 from . import slots as slot
@@ -74,6 +76,8 @@ from .operations import (
     OP_MASS,
     OP_MASS_OF,
     OP_POSITIONS,
+    OP_PRESCRIBED_JACOBIAN,
+    OP_PRESCRIBED_RHS,
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
     OP_RHS,
@@ -93,6 +97,7 @@ from .operations import (
     run,
 )
 from .part_entries import df_entry, mass_of_entry
+from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
 from .slots import float_array, int_array
 from .tangent import tangent
 
@@ -258,8 +263,11 @@ def _state_size(table):
 
 @entry(ENGINE_ENTRY)
 def rhs_entry(op, user_data, t, a, b, c, s):
-    """OP_RHS: y (a), ydot (b; null: the evaluation only)."""
+    """OP_RHS: y (a), ydot (b; null: the evaluation only); a model with kinematic inputs
+    runs OP_PRESCRIBED_RHS at time t."""
     table = address_of(user_data)
+    if _i(table, slot.DIMS)[ed.NKI]:
+        return run(table, OP_PRESCRIBED_RHS, address_of(a), address_of(b), t)
     n = _state_size(table)
     return first_order_rhs(table, carray(a, (n,), _F8),
                            carray(b, (n if address_of(b) else 0,), _F8))
@@ -267,8 +275,12 @@ def rhs_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENGINE_ENTRY)
 def jacobian_entry(op, user_data, t, a, b, c, s):
-    """OP_JACOBIAN: y (a), J (b); s = 1 for column-major."""
+    """OP_JACOBIAN: y (a), J (b); s = 1 for column-major; a model with kinematic inputs
+    runs OP_PRESCRIBED_JACOBIAN at time t."""
     table = address_of(user_data)
+    if _i(table, slot.DIMS)[ed.NKI]:
+        return call_engine(_i(table, slot.DIMS)[ed.ENGINE], OP_PRESCRIBED_JACOBIAN,
+                           user_data, t, a, b, c, s)
     n = _state_size(table)
     return first_order_jacobian(table, carray(a, (n,), _F8), carray(b, (n * n,), _F8),
                                 s != 0.0)
@@ -417,12 +429,13 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            deformations_entry, evaluate_entry, tangent_entry, positions_entry,
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
            sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS) + (
-           df_entry, mass_of_entry)
+           df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
          OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
-         OP_MASS: (OP_DF, OP_MASS_OF)}
+         OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
+         OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
 _TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 
@@ -444,6 +457,8 @@ def connect(data, *ops):
         wanted += [OP_SPARSE_FACTOR, OP_SPARSE_SOLVE]
     if ops and dims[ed.NSLAVES] > 0:  # the rigid clusters'
         wanted += RIGID_OPERATIONS
+    if ops and dims[ed.NKI] > 0:  # the kinematic inputs' forms (`prescribed`)
+        wanted += [OP_PRESCRIBED_RHS, OP_PRESCRIBED_JACOBIAN]
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

@@ -29,6 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 
 CONFIG, STATE, SCRATCH, MIXED = "config", "state", "scratch", "config and state"
+# the width of a kinematic input's path record in slot motion_path: t_start, t_end (s), then
+# the coefficients c_0 .. c_5 of its quintic (`prescribed`)
+PATH_WIDTH = 8
 INT, FLOAT = "int64", "float64"
 
 
@@ -230,6 +233,24 @@ SLOTS = (
         ("aug_sparse_values", "AUG_SPARSE_VALUES", "-", STATE, "kg, 1", "the augmented "
          "system's sparse LU's values"),
     )),
+    *_slots(INT, "prescribed", (
+        ("prescribed", "PRESCRIBED", "nki", CONFIG, "-", "each kinematic input's position in "
+         "q (`Model.prescribed_dofs`)"),
+        ("prescribed_pivots", "PRESCRIBED_PIVOTS", "nki", STATE, "-", "the pivots of the "
+         "efforts' matrix's LU"),
+    )),
+    *_slots(FLOAT, "prescribed", (
+        ("motion_path", "MOTION_PATH", "path_width * nki", STATE, "s, m, rad", "per kinematic "
+         "input its path: start and end time, then the coefficients of a quintic in t - start "
+         "(`prescribed`; written by the simulator)"),
+        ("efforts", "EFFORTS", "nki", STATE, "N, N m", "the efforts of the last evaluation"),
+        ("prescribed_columns", "PRESCRIBED_COLUMNS", "ndof * nki", STATE, "1/kg", "M_bar^-1 E "
+         "(ndof, nki), E the inputs' unit columns"),
+        ("prescribed_schur", "PRESCRIBED_SCHUR", "nki * nki", STATE, "1/kg", "the LU of "
+         "E^T M_bar^-1 E"),
+        ("prescribed_scratch", "PRESCRIBED_SCRATCH", "ndof + nki", SCRATCH, "-", "the "
+         "velocities with the inputs' rates; a vector on the inputs"),
+    )),
     *_slots(INT, "rigid", (
         ("rigid_slaves", "RIGID_SLAVES", "slave_width * nslaves", CONFIG, "-", "per slave "
          "node: kind, own, master translation and rotation coordinates (`rigid`)"),
@@ -305,6 +326,7 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
     ("a_rigid", "A_RIGID", CONFIG, "where the touching elements' entries begin in the "
      "augmented map, or -1"),
     ("a_factors", "A_FACTORS", STATE, "which of the augmented system's factors are current"),
+    ("nki", "NKI", CONFIG, "kinematic inputs (prescribed DOFs: `prescribed`)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------

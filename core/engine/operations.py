@@ -45,6 +45,11 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     MASS_OF              M_bar into slot mass; s = 1 with the element masses' forces into slot
                          force, 2 also moving (`motion.reduced_mass_of`)
 
+    PRESCRIBED_RHS       y, ydot (0: evaluate only); s = the time t (s): RHS with the
+                         kinematic inputs on their path (`prescribed`; RHS runs it on a
+                         model that has them)
+    PRESCRIBED_JACOBIAN  y, J; its t; s = 1 for column-major: JACOBIAN's (`prescribed`)
+
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller.
 """
@@ -58,7 +63,8 @@ from .slots import DIMS, int_array
  OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
  OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE, OP_RIGID_FILL, OP_RIGID_EXPAND,
  OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
- OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF) = range(25)
+ OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
+ OP_PRESCRIBED_JACOBIAN) = range(27)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)

@@ -158,6 +158,7 @@ def counts(c):
         "nrows": topology.rows.size, "nxdof": model.dof_coordinates.size,
         "nedof": model.dof_deformations.size, "nin": nin, "ns": c.stressed.size,
         "ngroups": len(groups.rows), "nel": nel, "nstate": 2 * ndof + nel,
+        "nki": len(model.kinematic_inputs), "path_width": layout.PATH_WIDTH,
         "nslaves": c.rigid.slaves.shape[0], "nsc": nsc, "max_m": max_m, "max_k": max_k,
         "max_p": max_p, "de_size": groups.de_size, "d2e_size": groups.d2e_size,
         "has_actuators": int(bool(model.actuators)),
@@ -297,6 +298,22 @@ def motion(c):
     }
 
 
+def prescribed(c):
+    """The kinematic inputs' positions in q, their path (held at the scene's `start` until
+    the simulator writes one: `prescribed.quintic_path`) and the efforts' workspace."""
+    n, model = c.counts, c.model
+    nki, ndof = n["nki"], n["ndof"]
+    path = np.zeros(layout.PATH_WIDTH * nki)
+    for i, start in enumerate(model.motion_starts if nki else ()):
+        path[layout.PATH_WIDTH * i + 2] = start
+    return {
+        "prescribed": np.asarray(model.prescribed_dofs if nki else (), dtype=np.int64),
+        "prescribed_pivots": np.zeros(nki, np.int64), "motion_path": path,
+        "efforts": np.zeros(nki), "prescribed_columns": np.zeros(ndof * nki),
+        "prescribed_schur": np.zeros(nki * nki), "prescribed_scratch": np.zeros(ndof + nki),
+    }
+
+
 def factors(c):
     """J's and the augmented system's banded orders and LUs, and their sparse LUs'
     patterns, scatter maps and values at the initial configuration (a copy per packing:
@@ -327,7 +344,8 @@ def rigid(c):
 
 PACKERS = {"dimensions": dimensions, "kinematics": kinematics, "groups": groups,
            "stiffness": stiffness, "inertia": inertia, "ports": ports,
-           "actuators": actuators, "motion": motion, "factors": factors, "rigid": rigid}
+           "actuators": actuators, "motion": motion, "prescribed": prescribed,
+           "factors": factors, "rigid": rigid}
 
 
 def pack(c):

@@ -51,14 +51,15 @@ SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
 
 
 @kernel
-def _f(table, y, out, flags, op):
-    """out = f(y) by the engine (op OP_JACOBIAN: J = d f / d y, row-major, flat, from the
-    model's tangent); its status."""
+def _f(table, y, out, flags, op, t):
+    """out = f(t, y) by the engine at time t (s; read by a model with kinematic inputs only)
+    (op OP_JACOBIAN: J = d f / d y, row-major, flat, from the model's tangent); its
+    status."""
     jacobian = op == engine.OP_JACOBIAN
     flags[I_JACOBIANS if jacobian else I_RHS] += 1
     counters = access.counters(table)
     counters[ed.JACOBIAN_COUNT if jacobian else ed.RHS_COUNT] += 1
-    status = call_engine(access.dims(table)[ed.ENGINE], op, table, 0.0,
+    status = call_engine(access.dims(table)[ed.ENGINE], op, table, t,
                          y.ctypes.data, out.ctypes.data, 0, 0.0)
     if status != ed.OK:
         counters[ed.FAILED_STATUS] = status
@@ -98,7 +99,7 @@ def _initial_step(table, memory, flags, vectors, atol, t_stop):
     h0 = min(h0, t_stop - memory[M_T])
     for i in range(y.size):
         probe[i] = y[i] + h0 * F1[i]
-    if _f(table, probe, slope, flags, engine.OP_RHS) != ed.OK:
+    if _f(table, probe, slope, flags, engine.OP_RHS, memory[M_T] + h0) != ed.OK:
         return h0
     for i in range(y.size):
         slope[i] = (slope[i] - F1[i]) / h0
@@ -136,10 +137,14 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
         for j in range(i):
             p += P[i, j] * F[j, k]
         z[k] = s + hg * p  # f(z_i) predicted by extrapolating the stages before
+    c_i = 0.0  # the stage's time is t + c_i h
+    for j in range(i + 1):
+        c_i += A[i, j]
+    t_stage = memory[M_T] + c_i * h
     eta = max(memory[M_ETA], 1e-16) ** 0.8
     previous = 0.0
     for iteration in range(MAX_NEWTON):
-        if _f(table, z, F[i], flags, engine.OP_RHS) != ed.OK:
+        if _f(table, z, F[i], flags, engine.OP_RHS, t_stage) != ed.OK:
             return False
         for k in range(n):
             delta[k] = base[k] + hg * F[i, k] - z[k]
@@ -209,7 +214,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
                 F[0, dims[ed.NDOF] + j] += delta[j]
             flags[I_FSAL] = FSAL_CURRENT if ok else FSAL_NONE
         if flags[I_FSAL] == FSAL_NONE:  # a restart: no history either
-            if _f(table, y, F[0], flags, engine.OP_RHS) != ed.OK:
+            if _f(table, y, F[0], flags, engine.OP_RHS, t) != ed.OK:
                 return RHS_FAILURE
             flags[I_FSAL] = FSAL_CURRENT
             vectors[V_SLOPE:] = 0.0
@@ -228,7 +233,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
         if flags[I_EXTRA] >= max(1.0, JACOBIAN_COST * n):
             flags[I_REFRESH] = 1
         if flags[I_REFRESH] == 1 or flags[I_JACOBIAN] == 0:
-            if _f(table, y, J, flags, engine.OP_JACOBIAN) != ed.OK:
+            if _f(table, y, J, flags, engine.OP_JACOBIAN, t) != ed.OK:
                 return RHS_FAILURE
             flags[I_JACOBIAN], flags[I_FRESH], flags[I_REFRESH], flags[I_LU] = 1, 1, 0, 0
             flags[I_EXTRA] = 0
@@ -300,7 +305,9 @@ def restart(table, memory, flags, t, inputs_only):
     inputs_only (nothing but the inputs changed since the step that ended at t) it is the last
     stage's plus the engine's input response; the step size, Jacobian and Newton matrix are
     kept. `Esdirk.reset` and the compiled sampled loop both restart through it."""
-    keep = inputs_only and memory[M_T] == t and flags[I_FSAL] != FSAL_NONE
+    # (the input response is that of the free equations: not with kinematic inputs)
+    keep = inputs_only and memory[M_T] == t and flags[I_FSAL] != FSAL_NONE and \
+        access.dims(table)[ed.NKI] == 0
     memory[M_T] = t
     flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
     access.counters(table)[ed.FAILED_STATUS] = 0

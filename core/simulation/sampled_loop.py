@@ -110,11 +110,16 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     Raises
     ------
     SimulationError
-        The simulator's method is not one the loop drives, a loop output is not a position,
+        The model has kinematic inputs, the simulator's method is not one the loop drives,
+        a loop output is not a position,
         the reference or feedforward has the wrong number of columns, a quantum is not one
         positive finite number per loop, or the integration or a measurement fails (naming
         the time).
     """
+    if sim.model.kinematic_inputs:
+        raise SimulationError(f"the compiled sampled loop does not take the kinematic inputs "
+                              f"({', '.join(p.name for p in sim.model.kinematic_inputs)}) of "
+                              f"{sim.model.name!r} yet (docs/analyses.md)")
     if not sim.integrator.method.compiled_loop:
         raise SimulationError(f"the compiled sampled loop does not drive method "
                               f"{sim.method!r}; use one of {', '.join(COMPILED_LOOP_METHODS)}")

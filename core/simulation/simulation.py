@@ -110,7 +110,8 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
              max_order: int | None = None, q0: ArrayLike | None = None,
              qdot0: ArrayLike | None = None, deadline: float | None = None,
              progress: Callable[[float], None] | None = None,
-             i0: ArrayLike | None = None) -> SimulationResult:
+             i0: ArrayLike | None = None,
+             motion_duration: float | None = None) -> SimulationResult:
     """Simulate `model` from rest (or q0, qdot0 and the coil currents i0) at t = 0 to t_end.
 
     Parameters
@@ -138,6 +139,11 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
         `flexure.core.reporting.progress.Progress`.
     i0 : array_like (n_coils,), optional
         The initial coil currents of the voltage-driven actuators, A (default zero).
+    motion_duration : float, optional
+        s: a model with kinematic inputs moves each from its `start` to its `value` by the
+        rest-to-rest quintic over this time from t = 0 (default t_end); q and qdot of the
+        inputs are the path's, and each input's effort (N, N m) is an output "NAME.effort"
+        after the scene's outputs. Refused for a model without kinematic inputs.
 
     Returns
     -------
@@ -154,8 +160,11 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
     if not (np.isfinite(t_end) and t_end > 0):
         raise SimulationError(f"t_end must be a positive time (s), got {t_end!r}")
     constants, functions, samples = split_inputs(model, inputs or {})
+    if model.kinematic_inputs and motion_duration is None:
+        motion_duration = t_end  # the move takes the run
     sim = Simulator(model, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                    jacobian=jacobian, max_order=max_order, input_functions=functions)
+                    jacobian=jacobian, max_order=max_order, input_functions=functions,
+                    motion_duration=motion_duration)
     sim.reset(q0=q0, qdot0=qdot0, i0=i0)
     sim.deadline = deadline
     u0 = np.zeros(len(sim.input_names))
@@ -205,15 +214,27 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
         else:
             keep[0] = False
         times, states, held = times[keep], states[keep], np.array(held)[keep]
+    states = sim.on_path(times, states)  # the kinematic inputs' entries exactly the path's
     outputs, warnings = sim.outputs_and_warnings(states, times=times)
+    names, units = sim.output_names, sim.output_units
+    if model.kinematic_inputs:  # their efforts as outputs after the scene's
+        outputs = np.column_stack([outputs, sim.efforts_along(times, states)])
+        names = names + [f"{port.name}.effort" for port in model.kinematic_inputs]
+        units = units + [effort_unit(port) for port in model.kinematic_inputs]
     n = sim.ndof
     return SimulationResult(model_name=model.name, method=method, rtol=rtol, times=times,
                             q=states[:, :n], qdot=states[:, n: 2 * n],
                             currents=states[:, 2 * n:], dof_names=sim.dof_names,
-                            output_names=sim.output_names, output_units=sim.output_units,
+                            output_names=names, output_units=units,
                             output_array=outputs, statistics=sim.statistics,
                             inputs=np.array(held), input_names=sim.input_names,
                             warnings=warnings)
+
+
+def effort_unit(port):
+    """The unit of the effort that realises a kinematic input: N on a length, N m on an
+    angle."""
+    return "N m" if port.unit == "rad" else "N"
 
 
 def _held(sim, functions, t):

@@ -43,6 +43,7 @@ from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
 from .held_inputs import checked_inputs
 from .methods import METHODS, REGISTRY
+from .simulator_motion import SimulatorMotion, check_motion_method
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
@@ -56,7 +57,7 @@ if TYPE_CHECKING:  # names for the annotations only
 
     from ..model import Model
 
-class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
+class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMotion):
     """Integrates a model's nonlinear equations of motion step by step.
 
     Parameters
@@ -89,20 +90,24 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
     rigid : bool
         Whether the engine eliminates the rigid clusters' slave coordinates (default True;
         False solves for every free coordinate, for comparison: `engine.rigid`).
+    motion_duration : float, optional
+        s: how long the scene's move of its kinematic inputs takes from t = 0 (required for,
+        and only for, a model with kinematic inputs: `simulator_motion`, `set_motion`).
 
     Raises
     ------
     SimulationError
         An unknown method, an rtol outside (0, 1), a max_step or atol that is not positive,
-        an option the one-step methods do not take, or a scene configuration the DOFs
-        cannot be assembled in.
+        an option the one-step methods do not take, a scene configuration the DOFs
+        cannot be assembled in, or kinematic inputs without a motion_duration or with a
+        method that does not take them (IDA), or a motion_duration without them.
     """
 
     def __init__(self, model: Model, *, method: str = "cvode-bdf", rtol: float = 1e-8,
                  atol: float | ArrayLike | None = None, max_step: float | None = None,
                  jacobian: str = "analytic", max_order: int | None = None,
                  input_functions: Mapping[int, Callable[[float], float]] | None = None,
-                 rigid: bool = True) -> None:
+                 rigid: bool = True, motion_duration: float | None = None) -> None:
         if method not in METHODS:
             raise SimulationError(f"unknown method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}")
@@ -110,6 +115,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
             raise SimulationError(f"rtol must be a number between 0 and 1, got {rtol!r}")
         if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
+        check_motion_method(model, method, motion_duration)
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model, rigid=rigid)
@@ -147,6 +153,8 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self._within = None  # its compiled check of the last evaluation, made on first use
         # views of the coordinates and deformations of the engine's last evaluation
         self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")
+        if model.kinematic_inputs:  # the scene's move from t = 0 (`simulator_motion`)
+            self._write_path(motion_duration, 0.0)
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -176,6 +184,8 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         qdot = np.zeros(self.ndof) if qdot0 is None else _vector(qdot0, self.ndof, "qdot0")
         i = (np.zeros(self.ncurrents) if i0 is None
              else _vector(i0, self.ncurrents, "i0"))
+        if self.model.kinematic_inputs:  # on their path at t0, whatever q0 says
+            q[self.model.prescribed_dofs] = self.prescribed_values(t0)[0]
         status = solve_start(self.model, self.data, q)
         if status != ed.OK:
             raise SimulationError(f"t = {t0:.9g} s: the initial DOFs q0 cannot be assembled: "
@@ -183,6 +193,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem):
         self._t = float(t0)
         self._q_ref = q.copy()
         self._y = np.concatenate([np.zeros(self.ndof), qdot, i])
+        self._put_on_path()  # the kinematic inputs' entries (`simulator_motion`)
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
         self._needs_init = self._restart_kinematics = True

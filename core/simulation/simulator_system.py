@@ -81,7 +81,8 @@ class SimulatorSystem:
         Parameters
         ----------
         t : float
-            The time, s (for the input functions and the deadline).
+            The time, s (for the input functions, the kinematic inputs' path and the
+            deadline).
         y : array_like (2 NDOF + n_coils,)
             The integrator state: m, rad; m/s, rad/s; A.
 
@@ -98,7 +99,7 @@ class SimulatorSystem:
         self._prepare(t)
         ydot = np.empty(self.nstate)
         status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
-                             ydot)
+                             ydot, t=float(t))
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
         return ydot
@@ -126,7 +127,7 @@ class SimulatorSystem:
         self._prepare(t)
         J = np.empty(self.nstate ** 2)
         status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
-                             J, s=0.0)
+                             J, s=0.0, t=float(t))
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
         return J.reshape(self.nstate, self.nstate)
