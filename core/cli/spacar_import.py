@@ -63,7 +63,7 @@ def run(args):
     if model.kinematic_inputs:
         print(f"flexure import: warning: {path}: {len(model.kinematic_inputs)} kinematic "
               "input(s): static_equilibrium (`flexure analyze --static`, at each input's value), "
-              "motion_state_space and inverse_dynamics take them; `flexure simulate`, `loop` "
-              "and `fmu build` refuse them until the compiled engine prescribes motion",
+              "motion_state_space, inverse_dynamics and `flexure simulate` (its "
+              "--motion-duration) take them; `flexure loop` and `fmu build` refuse them",
               file=sys.stderr)
     return code
