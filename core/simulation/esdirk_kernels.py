@@ -186,7 +186,7 @@ def keep_history(vectors, A, h):
         curvature[k] = bend / (h * h)
 
 
-@kernel
+@kernel(inline="always")  # into its C entry (esdirk_entry), its one caller: one unit
 def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     """Integrate from memory[M_T] towards t_stop (s): to t_stop exactly, or one accepted step
     with flags[I_ONE_STEP] = 1; at most flags[I_MAX_STEPS] steps (0: no limit); flags, not

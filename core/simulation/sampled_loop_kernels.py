@@ -1,6 +1,6 @@
 """The compiled side of the sampled loop (`sampled_loop`): the controller's step, the
 measurement of the loop outputs, one sample, and the loops over samples on CVODE and on the
-one-step ESDIRK, each with a C entry through which Python runs it (`run_loop`, `measure_now`:
+one-step ESDIRK, each with a C entry through which Python runs it (`loop_runner`:
 a process that loads the compiled code from the cache runs the loop without numba).
 """
 
@@ -81,6 +81,8 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 # `address_table`, sundials_restart.A_...)
 (PLANT, OUTPUT, ENGINE, ADVANCE, ADDRESSES) = range(5)
 MEASURE_FAILED = -1000
+# a failed measurement of y_N after the last sample: END_MEASURE - its status (data.OK ..)
+END_MEASURE = -2000
 
 
 @kernel
@@ -247,35 +249,45 @@ def _controller(table):
             floats(table, 12), floats(table, 13))
 
 
+@kernel(inline="always")
+def _measure_end(addresses, y, scratch, controller, stop):
+    """After the run's last sample (stop = N): y_N measured into position[N]; 0, or
+    END_MEASURE - the status of a measurement that failed."""
+    coordinates, position = controller[8], controller[10]
+    if stop != position.shape[0] - 1:
+        return 0
+    status = measure(addresses, y, scratch, coordinates, position[stop])
+    return 0 if status == ed.OK else END_MEASURE - status
+
+
 @entry("int32(voidptr, int64, int64, float64)")
 def _esdirk_entry(address, start, stop, fs):
     """`loop_esdirk` on the arrays of the table at `address` (CONTROLLER_KINDS, then
-    ESDIRK_KINDS)."""
+    ESDIRK_KINDS), and y_N measured after the last sample (`_measure_end`)."""
     table = carray(as_int_pointer(address), (3 * (_N + len(ESDIRK_KINDS)),))
-    return loop_esdirk(ints(table, _N), floats(table, _N + 1), floats(table, _N + 2),
-                       floats(table, _N + 3), ints(table, _N + 4), floats2d(table, _N + 5),
-                       ints(table, _N + 6), floats(table, _N + 7), start, stop, fs,
-                       _controller(table))
+    controller = _controller(table)
+    addresses, vectors, scratch = ints(table, _N), floats2d(table, _N + 5), floats(table, _N + 7)
+    flag = loop_esdirk(addresses, floats(table, _N + 1), floats(table, _N + 2),
+                       floats(table, _N + 3), ints(table, _N + 4), vectors,
+                       ints(table, _N + 6), scratch, start, stop, fs, controller)
+    if flag != 0:
+        return flag
+    return _measure_end(addresses, vectors[esdirk_kernels.V_Y], scratch, controller, stop)
 
 
 @entry("int32(voidptr, int64, int64, float64)")
 def _cvode_entry(address, start, stop, fs):
     """`loop_cvode` on the arrays of the table at `address` (CONTROLLER_KINDS, then
-    CVODE_KINDS)."""
+    CVODE_KINDS), and y_N measured after the last sample (`_measure_end`)."""
     table = carray(as_int_pointer(address), (3 * (_N + len(CVODE_KINDS)),))
-    return loop_cvode(ints(table, _N), ints(table, _N + 1), floats(table, _N + 2),
-                      floats(table, _N + 3), ints(table, _N + 4), floats(table, _N + 5),
-                      floats(table, _N + 6), floats(table, _N + 7), start, stop, fs,
-                      _controller(table))
-
-
-@entry("int32(voidptr)")
-def _measure_entry(address):
-    """`measure` on the arrays of the table at `address` (addresses, y, scratch,
-    coordinates, out)."""
-    table = carray(as_int_pointer(address), (15,))
-    return measure(ints(table, 0), floats(table, 1), floats(table, 2), ints(table, 3),
-                   floats(table, 4))
+    controller = _controller(table)
+    addresses, y, scratch = ints(table, _N), floats(table, _N + 6), floats(table, _N + 7)
+    flag = loop_cvode(addresses, ints(table, _N + 1), floats(table, _N + 2),
+                      floats(table, _N + 3), ints(table, _N + 4), floats(table, _N + 5), y,
+                      scratch, start, stop, fs, controller)
+    if flag != 0:
+        return flag
+    return _measure_end(addresses, y, scratch, controller, stop)
 
 
 LOOP_ENTRIES = {"esdirk": (_esdirk_entry, ESDIRK_KINDS), "sundials": (_cvode_entry, CVODE_KINDS)}
@@ -294,9 +306,3 @@ def loop_runner(driver, controller, arrays):
         return function.ctypes(address, start, stop, fs)
 
     return run
-
-
-def measure_now(addresses, y, scratch, coordinates, out):
-    """`measure` from Python, through its C entry; a status."""
-    return _measure_entry.ctypes(array_table((addresses, y, scratch, coordinates, out),
-                                             "iffif").ctypes.data)
