@@ -26,7 +26,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .feedback import ControlDesignError, colocated_pairs
+from .feedback import ControlDesignError
+from .move_path import move_targets, target_port
 from .profiles import ThirdOrderProfile
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -89,7 +90,6 @@ def dynamic_feedforward(model: Model, targets: dict, *, duration: float = 1.0,
     from flexure.core import (
         free_inverse_dynamics,
         output_value,
-        position_port,
         static_equilibrium,
     )
 
@@ -100,15 +100,10 @@ def dynamic_feedforward(model: Model, targets: dict, *, duration: float = 1.0,
     if not (np.isfinite(settle) and settle >= 0):
         raise ControlDesignError(f"dynamic feedforward: settle must be a finite number >= 0 "
                                  f"(s), got {settle!r}")
-    pairs = colocated_pairs(model)
-    if len(targets) != len(pairs):
-        raise ControlDesignError(f"{model.name}: {len(targets)} target(s) for {len(pairs)} "
-                                 "loop(s); a move needs one target coordinate per loop")
-    names = list(targets)
-    delta = np.array([float(targets[name]) for name in names])
+    pairs, names, delta = move_targets(model, targets)
     rest = static_equilibrium(model)
     own = {port.name: port for port in model.outputs}
-    start = np.array([output_value(model, own.get(name) or position_port(model, name), rest.x)
+    start = np.array([output_value(model, own.get(name) or target_port(model, name), rest.x)
                       for name in names])
     profile = ThirdOrderProfile(1.0, duration)
 

@@ -98,6 +98,40 @@ def _check(path: MovePath) -> None:
                                  f"{np.shape(path.forces)}")
 
 
+def move_targets(model, targets: dict):
+    """The loops of a move of `targets` {coordinate: displacement (m or rad)}, the targets'
+    names and displacements: (pairs, names, delta (n_loops,)).
+
+    Raises
+    ------
+    ControlDesignError
+        Not one target per loop.
+    """
+    pairs = colocated_pairs(model)
+    if len(targets) != len(pairs):
+        raise ControlDesignError(f"{model.name}: {len(targets)} target(s) for {len(pairs)} "
+                                 "loop(s); a move needs one target coordinate per loop")
+    names = list(targets)
+    return pairs, names, np.array([float(targets[name]) for name in names])
+
+
+def target_port(model, name: str):
+    """The position output of a move's target `name`: a coordinate, or an angle about a global
+    axis of a 3-D rotational node ("Pr.rz").
+
+    Raises
+    ------
+    ControlDesignError
+        No such coordinate or axis (naming the scene and the target).
+    """
+    from flexure.core import position_port
+
+    try:
+        return position_port(model, name)
+    except KeyError as error:
+        raise ControlDesignError(f"{model.source}: move target: {error.args[0]}") from None
+
+
 def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11,
               progress=None) -> MovePath:
     """The loops' path for moving `targets` {coordinate: displacement (m or rad)}.
@@ -121,7 +155,6 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
         linearize,
         output_rows,
         output_value,
-        position_port,
         static_equilibrium,
         steady_port_values,
         steady_slopes,
@@ -130,20 +163,12 @@ def move_path(model, targets: dict, *, kind: str = "nonlinear", points: int = 11
     if kind not in KINDS:
         raise ControlDesignError(f"move path kind must be one of {', '.join(KINDS)}, got "
                                  f"{kind!r}")
-    pairs = colocated_pairs(model)
-    if len(targets) != len(pairs):
-        raise ControlDesignError(f"{model.name}: {len(targets)} target(s) for {len(pairs)} "
-                                 "loop(s); a move needs one target coordinate per loop")
+    pairs, names, delta = move_targets(model, targets)
     if kind == "nonlinear" and points < 4:
         raise ControlDesignError(f"a nonlinear move path needs at least 4 points, got {points}")
     inputs = [pair.input_name for pair in pairs]
     outputs = [model.outputs[pair.output_index] for pair in pairs]
-    names = list(targets)
-    try:  # a coordinate, or an angle about a global axis of a 3-D rotational node ("Pr.rz")
-        target_ports = [position_port(model, name) for name in names]
-    except KeyError as error:
-        raise ControlDesignError(f"{model.source}: move target: {error.args[0]}") from None
-    delta = np.array([float(targets[name]) for name in names])
+    target_ports = [target_port(model, name) for name in names]
     # the move starts where the mechanism rests under its loads, the inputs at zero
     rest = static_equilibrium(model)
     if kind == "linear":

@@ -57,6 +57,7 @@ def test_the_given_forces_do_the_loops_work(stage, feedforward):
 @pytest.mark.parametrize("call, error, words", [
     (lambda m: dynamic_feedforward(m, {"3.x": 1e-5, "3.y": 0.0}), ControlDesignError,
      "2 target"),
+    (lambda m: dynamic_feedforward(m, {"9.q": 1e-5}), ControlDesignError, "move target"),
     (lambda m: dynamic_feedforward(m, {"3.x": 1e-5}, duration=0.0), ControlDesignError,
      "duration must be"),
     (lambda m: dynamic_feedforward(m, {"3.x": 1e-5}, step=np.nan), ControlDesignError,
