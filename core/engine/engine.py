@@ -50,7 +50,7 @@ import numpy as np
 
 from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
-from ..numerics.native import address_of, call_engine, carray
+from ..numerics.native import address_of, call_engine, carray, float_address
 from . import data as ed
 from . import rigid_kernels, sparse_factors
 from . import slots as slot
@@ -478,8 +478,4 @@ def call(data, op, a=None, b=None, c=None, s=0.0, t=0.0):
 
 
 def _address(array):
-    if array is None:
-        return None
-    if not (array.dtype == np.float64 and array.flags.c_contiguous):
-        raise TypeError("engine arrays must be C-contiguous float64")
-    return array.ctypes.data
+    return None if array is None else float_address(array)

@@ -112,8 +112,9 @@ class RangeCheck:
         arrays = (x, e, self._indices, self._bounds)
         if not all(a.flags.c_contiguous for a in arrays[:2]):
             raise TypeError("watch: x and e must be C-contiguous arrays")
-        table = np.array([a.ctypes.data for a in arrays] + [a.size for a in arrays]
-                         + [self.elongation.size], dtype=np.int64)
+        from ..numerics.array_tables import array_table
+
+        table = np.append(array_table(arrays, "ffif"), self.elongation.size)
         address = int(table.ctypes.data)
         from .plausibility_kernels import within_entry
 

@@ -3,8 +3,9 @@ range of validity, in the few microseconds an FMU can spend on it after every do
 (A module of their own: `plausibility` is imported by the analyses, which need no numba.)"""
 
 
+from ..numerics.array_tables import floats, ints
 from ..numerics.jit import entry, kernel
-from ..numerics.native import as_float_pointer, as_int_pointer, carray
+from ..numerics.native import as_int_pointer, carray
 
 
 @kernel
@@ -26,14 +27,12 @@ def within(x, e, indices, bounds, n_elongations):
 
 @kernel
 def within_at(address):
-    """`within` of the arrays in the table at `address` (`plausibility.RangeCheck.watch`):
-    their four addresses, their four sizes, the number of elongations."""
-    table = carray(as_int_pointer(address), (9,))
-    x = carray(as_float_pointer(table[0]), (table[4],))
-    e = carray(as_float_pointer(table[1]), (table[5],))
-    indices = carray(as_int_pointer(table[2]), (table[6],))
-    bounds = carray(as_float_pointer(table[3]), (table[7],))
-    return within(x, e, indices, bounds, table[8])
+    """`within` of the arrays in the table at `address` (`plausibility.RangeCheck.watch`): an
+    array table (`numerics.array_tables`) of x, e, indices and bounds ("ffif"), then the
+    number of elongations."""
+    table = carray(as_int_pointer(address), (13,))
+    return within(floats(table, 0), floats(table, 1), ints(table, 2), floats(table, 3),
+                  table[12])
 
 
 @entry("int32(int64)")
