@@ -32,6 +32,7 @@ import os
 import sys
 import tempfile
 
+from . import linked_code
 from .compile_notice import CompileNotice
 
 _CORE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # core/, above numerics/
@@ -94,6 +95,7 @@ def numba_module():
     if locator not in implementation._locator_classes:
         implementation._locator_classes.insert(0, locator)
         _load_without_refresh(caching.Cache, locator)
+    linked_code.install()
     return numba
 
 
@@ -190,7 +192,9 @@ class Kernel:
         """numba's dispatcher of this kernel (numba.njit with the kernel's options)."""
         if self._dispatcher is None:
             numba = numba_module()
-            self._dispatcher = _by_plain_types(numba.njit(**self._options)(self.py_func))
+            dispatcher = _by_plain_types(numba.njit(**self._options)(self.py_func))
+            dispatcher.compile = linked_code.compiled_as_kernel(dispatcher.compile)
+            self._dispatcher = dispatcher
         return self._dispatcher
 
     @property
@@ -319,7 +323,7 @@ class CompiledEntry:
             cached = is_cached(self.function)
             if not cached:
                 announce_compilation()
-            with compilation_notice().unit(counted=not cached):
+            with compilation_notice().unit(counted=not cached), linked_code.compiling(False):
                 self._compiled = numba.cfunc(self.signature, cache=True,
                                              error_model="numpy")(self.function)
         return self._compiled
