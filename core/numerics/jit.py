@@ -133,6 +133,7 @@ def _source_locator(base):
 
     class SourceHashLocator(base):
         def __init__(self, py_func, py_file):
+            self._py_file = py_file  # numba's warning of an uncachable function names it
             self._path, self._lineno = _cache_location(py_func, py_file)
 
         def get_cache_path(self):
