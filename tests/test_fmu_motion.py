@@ -499,3 +499,34 @@ def test_the_added_mass_limit():
     assert in_process_pair(1.5, 1e-3, predict=False) == np.inf
     assert in_process_pair(0.2, 1e-3, predict=True) == pytest.approx(largest, rel=0.01)
     assert in_process_pair(0.5, 1e-3, predict=True) == np.inf
+
+
+def test_an_angle_is_set_in_rad_and_its_effort_is_a_moment(tmp_path):
+    """A pendulum (0.3 kg at 0.25 m under gravity) turned at its pivot by a kinematic input on
+    the hinge's angle: the FMU's input is in rad, its effort in N.m; turned to 0.8 rad in the
+    first 1 ms step and held, after 5 steps (the last four angles equal: at rest) the effort
+    is m g l sin(0.8) to 1e-12."""
+    mass, length, g = 0.3, 0.25, 9.81
+    data = {"scene": {"name": "turned", "gravity": [0.0, -g]},
+            "sections": {"link": {"EA": 1e6, "EI": 1e3}},
+            "nodes": {"pivot": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                      "hinge": {"angle": 0.0},
+                      "bob": {"position": [0.0, -length], "mass": mass},
+                      "bob_r": {"angle": 0.0}},
+            "elements": {"link": {"type": "PLBEAM", "nodes": ["pivot", "hinge", "bob", "bob_r"],
+                                  "section": "link"}},
+            "inputs": {"A": {"kind": "motion", "node": "hinge", "coordinate": "phi"}},
+            "outputs": {"bob_x": {"node": "bob", "coordinate": "x"}}}
+    scene = tmp_path / "turned.toml"
+    scene.write_text(scene_toml(data, "a pendulum turned at its pivot"))
+    slave = Slave(build_scene_fmu(scene, tmp_path / "turned.fmu"))
+    try:
+        units = {v.name: v.unit for v in slave.md.modelVariables}
+        assert (units["A"], units["A.effort"]) == ("rad", "N.m")
+        for k in range(5):
+            slave.fmu.setReal([slave.vr["A"]], [0.8])
+            bob_x, effort = slave.step(k * 1e-3, 1e-3)
+    finally:
+        slave.close()
+    assert effort == pytest.approx(mass * g * length * np.sin(0.8), rel=1e-12)
+    assert bob_x == pytest.approx(length * np.sin(0.8), rel=1e-9)
