@@ -19,7 +19,11 @@ from scipy.integrate import solve_ivp
 
 from flexure.core import Simulator, build_model, scene_toml
 from flexure.core.errors import SimulationError
-from flexure.core.simulation.stepwise_motion import derivative_weights
+from flexure.core.simulation.stepwise_motion import (
+    derivative_weights,
+    end_derivatives,
+    next_piece,
+)
 from flexure.fmu import FMUBuildError, build_scene_fmu, validate_fmu_file
 
 FMI2_ERROR = 3
@@ -182,6 +186,32 @@ def test_fornbergs_weights_differentiate_cubics_exactly():
     assert np.all(np.abs(weights @ cubic(offsets) - expected) <= 1e-13 * scale)
     line = derivative_weights(offsets[-2:]) @ (1.0 + 3.0 * offsets[-2:])
     np.testing.assert_allclose(line, [1.0, 3.0, 0.0], rtol=1e-12, atol=1e-12)
+
+
+def test_a_piece_moves_at_both_its_ends_in_the_compiled_path():
+    """The engine's `path_point` and numpy's `path_values` on a step's piece (`next_piece`):
+    at the step's start, the rate and acceleration the piece starts with (not the held
+    path's zeros: the step's first evaluation is there); at its end (and an ulp past it,
+    where a stage time t + c h may round), the position set and the cubic's rate and
+    acceleration, to round-off (1e-12 of the stroke, stroke / h, stroke / h^2)."""
+    from flexure.core.engine.prescribed import path_point
+    from flexure.core.simulation.simulator_motion import path_values
+
+    t, t_end = 0.003, 0.004
+    times = np.array([0.0, 0.001, 0.002, t])
+    start = tuple(np.array([part]) for part in (X0 + 2e-4, 0.3, -40.0))
+    path, _ = next_piece((times, motion(times)[0][:, None]), start, t, t_end, [X0 + 5e-4])
+    rate, acceleration = end_derivatives([*times[1:], t_end],
+                                         [*motion(times[1:])[0], X0 + 5e-4])
+    h = t_end - t
+    scales = STROKE * np.array([1.0, 1 / h, 1 / h**2])
+    for when, expected in [(t, [X0 + 2e-4, 0.3, -40.0]),
+                           (t_end, [X0 + 5e-4, rate[0], acceleration[0]]),
+                           (np.nextafter(t_end, 1.0), [X0 + 5e-4, rate[0], acceleration[0]])]:
+        compiled = np.array(path_point(path, 0, when))
+        numpy = np.array([part[0] for part in path_values(path, when)])
+        assert np.all(np.abs(compiled - expected) <= 1e-12 * scales), (when, compiled)
+        assert np.all(np.abs(numpy - expected) <= 1e-12 * scales), (when, numpy)
 
 
 # -- the rule's order in h ----------------------------------------------------------------------
