@@ -560,3 +560,25 @@ def test_an_angle_is_set_in_rad_and_its_effort_is_a_moment(tmp_path):
         slave.close()
     assert effort == pytest.approx(mass * g * length * np.sin(0.8), rel=1e-12)
     assert bob_x == pytest.approx(length * np.sin(0.8), rel=1e-9)
+
+
+@pytest.mark.slow  # a portable compilation of the engine: a minute of CPU on an empty cache
+def test_a_motion_fmu_carries_the_prescribed_engine(tmp_path):
+    """Built with its compiled engine: the build's child host steps the FMU with each method
+    that integrates kinematic inputs (IDA would be refused), its inputs at their start (the
+    position where the input is, not 0 m), and the engine it carries holds the prescribed
+    form's entries, every function cached."""
+    import json
+    import zipfile
+
+    scene = tmp_path / "chain.toml"
+    scene.write_text(scene_toml(chain(), "a test of displacement-driven FMUs"))
+    fmu = build_scene_fmu(scene, tmp_path / "chain.fmu", engine=True)
+    with zipfile.ZipFile(fmu) as archive:
+        names = archive.namelist()
+        manifest = json.loads(archive.read("resources/flexure-engine/manifest.json"))
+    assert manifest["not_cached"] == []
+    carried = [name for name in names if name.startswith("resources/flexure-engine/core/"
+                                                         "engine/prescribed.")]
+    assert {name.split(".")[1].split("-")[0] for name in carried} == {
+        "prescribed_rhs_entry", "prescribed_jacobian_entry"}
