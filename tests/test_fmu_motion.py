@@ -5,8 +5,8 @@ path rule, docs/fmu.md).
 Checked in fmpy: the model description; the FMU against the in-process Simulator given the
 same positions, and the path against the rule worked out here with numpy's polynomials; the
 rule's order in the communication step h against a closed-form-driven reference (scipy);
-states that carry the path; the refusals; and a force-driven FMU and a displacement-driven
-one coupled by a master, against the one-scene model of the same chain.
+states that carry the path; the refusals; an angle's units; the engine it carries. A pair of
+FMUs coupled by a master: tests/test_fmu_motion_pair.py.
 """
 
 import numpy as np
@@ -14,7 +14,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy_slave import Slave
-from kinematic_scenes import C1, C2, K1, K2, M1, M2, chain
+from kinematic_scenes import C1, C2, K1, K2, M1, M2, STROKE, X0, chain, follower, motion
 from scipy.integrate import solve_ivp
 
 from flexure.core import Simulator, build_model, scene_toml
@@ -27,76 +27,6 @@ from flexure.core.simulation.stepwise_motion import (
 from flexure.fmu import FMUBuildError, build_scene_fmu, validate_fmu_file
 
 FMI2_ERROR = 3
-X0, STROKE, PERIOD = 0.1, 1e-3, 0.04  # node 1's start (m), the motion's stroke (m), period (s)
-
-
-def motion(t):
-    """A smooth motion of node 1 that starts at rest (its first three derivatives zero):
-    u = X0 + STROKE / 4 (1 - cos w t)^2; (u, u', u'') in m, m/s, m/s^2."""
-    w = 2 * np.pi / PERIOD
-    c, s = np.cos(w * t), np.sin(w * t)
-    return (X0 + STROKE / 4 * (1 - c) ** 2, STROKE / 2 * (1 - c) * w * s,
-            STROKE / 2 * w**2 * (s**2 + (1 - c) * c))
-
-
-# node 1's mass M1 split: the follower carries some of it, since the prescribed form solves
-# with the mass matrix of every DOF, the moved node's too (a massless one is singular); a
-# small part, since a coupling by positions and forces is stable only while the mass the
-# follower moves is small against the leader's (`test_the_added_mass_limit`)
-FOLLOWER_MASS = M1 / 10
-
-
-def leader():
-    """The chain's first half, force-driven: ground -k1, c1- node 1 (M1 - FOLLOWER_MASS), the
-    force F on 1.x; its position and velocity out."""
-    data = chain()
-    data["scene"]["name"] = "leader"
-    data["nodes"] = {"0": data["nodes"]["0"],
-                     "1": data["nodes"]["1"] | {"dof": ["x"], "mass": M1 - FOLLOWER_MASS}}
-    data["elements"] = {"a": data["elements"]["a"]}
-    data["sections"] = {"a": data["sections"]["a"]}
-    data["inputs"] = {"F": {"node": "1", "coordinate": "x"}}
-    data["outputs"] = {"x1": {"node": "1", "coordinate": "x"},
-                       "v1": {"node": "1", "coordinate": "x", "quantity": "velocity"}}
-    return data
-
-
-def follower():
-    """The chain's second half, displacement-driven: node 1 (FOLLOWER_MASS) moved (u), -k2,
-    c2- m2 (node 2); the force that moves node 1 is u.effort."""
-    data = chain()
-    data["scene"]["name"] = "follower"
-    data["nodes"] = {"1": {"position": [X0, 0.0], "fixed": ["y"], "mass": FOLLOWER_MASS},
-                     "2": data["nodes"]["2"]}
-    data["elements"] = {"b": data["elements"]["b"]}
-    data["sections"] = {"b": data["sections"]["b"]}
-    return data
-
-
-def whole():
-    """The chain in one scene: the force F on m1, both masses free."""
-    data = chain()
-    data["scene"]["name"] = "whole"
-    data["nodes"]["1"]["dof"] = ["x"]
-    data["inputs"] = {"F": {"node": "1", "coordinate": "x"}}
-    data["outputs"] = {"x1": {"node": "1", "coordinate": "x"},
-                       "x2": {"node": "2", "coordinate": "x"}}
-    return data
-
-
-@pytest.fixture(scope="module")
-def motion_fmus(tmp_path_factory):
-    """{name: FMU path} of the chain moved at node 1, the leader and the follower."""
-    folder = tmp_path_factory.mktemp("motion_fmus")
-    paths = {}
-    for data in (chain(), leader(), follower()):
-        name = data["scene"]["name"]
-        scene = folder / f"{name}.toml"
-        scene.write_text(scene_toml(data, "a test of displacement-driven FMUs"))
-        paths[name] = build_scene_fmu(scene, folder / f"{name}.fmu")
-    return paths
-
-
 def run(slave, times, positions):
     """Step an FMU from times[0] with the position of each next time set before each step;
     its outputs after each step (rows)."""
@@ -372,163 +302,6 @@ def test_a_moved_node_without_mass_is_refused_naming_the_input(tmp_path):
                                               r"M_bar is singular .* the kinematic inputs \(u\) "
                                               r"are DOFs of the mass matrix too"):
         build_scene_fmu(scene, tmp_path / "massless.fmu")
-
-
-# -- a coupled pair ------------------------------------------------------------------------------
-
-def coupled_pair(paths, h, t_end, force):
-    """The leader (force-driven) and the follower (displacement-driven) coupled by a
-    Gauss-Seidel master at step h: the leader steps with `force` minus the follower's last
-    effort held; its position at the end of the step is the follower's position to reach.
-    x1 and x2 (m) after each step."""
-    parameters = {"integrator.rtol": 1e-10}
-    first = Slave(paths["leader"], "leader", parameters=parameters)
-    second = Slave(paths["follower"], "follower", parameters=parameters)
-    rows = []
-    try:
-        effort = second.y()[second.outputs.index("u.effort")]
-        for k in range(round(t_end / h)):
-            first.set(force - effort)
-            x1 = first.step(k * h, h)[0]
-            second.fmu.setReal([second.vr["u"]], [x1])
-            x2, _, effort = second.step(k * h, h)
-            rows.append((x1, x2))
-    finally:
-        first.close()
-        second.close()
-    return np.array(rows)
-
-
-def whole_reference(times, force):
-    """x1, x2 (m) of the one-scene chain under `force` (N) from rest at times (CVODE BDF,
-    rtol 1e-10, in process)."""
-    sim = Simulator(build_model(whole()), method="cvode-bdf", rtol=1e-10)
-    sim.set_inputs([force])
-    reference = []
-    for t in times:
-        sim.advance_to(t)
-        reference.append(sim.outputs())
-    return np.array(reference)
-
-
-def test_a_force_driven_and_a_displacement_driven_fmu_make_the_chain(motion_fmus):
-    """1 N on m1 from rest: the pair, coupled at h = 1, 0.5 and 0.25 ms, against the chain in
-    one scene in process (CVODE BDF, rtol 1e-10), every 10 ms over 0.1 s: the error shrinks at
-    order 1 in h (the leader holds the follower's effort over a step; measured 1.00 and
-    1.00), to 5e-3 of the largest displacement at 0.25 ms (measured 4.9e-6 m of 3.1 mm)."""
-    t_end, force, common = 0.1, 1.0, np.linspace(0.01, 0.1, 10)
-    reference = whole_reference(common, force)
-    errors = []
-    for h in (1e-3, 5e-4, 2.5e-4):
-        rows = coupled_pair(motion_fmus, h, t_end, force)
-        at = np.rint(common / h).astype(int) - 1
-        errors.append(np.max(np.abs(rows[at] - reference)))
-    errors = np.array(errors)
-    orders = np.log2(errors[:-1] / errors[1:])
-    moved = np.max(np.abs(reference - [X0, 2 * X0]))  # m, the largest displacement
-    print("pair errors (m):", errors.tolist(), "orders:", orders.tolist(), "moved", moved)
-    assert np.all((0.9 <= orders) & (orders <= 1.1)), orders
-    assert errors[-1] <= 5e-3 * moved
-
-
-NS = 1_000_000_000  # libcosim counts time in integer nanoseconds
-
-
-def libcosim_pair(paths, h, t_end, force):
-    """The pair in libcosim, which steps its slaves side by side (Jacobi): before each step
-    the master sets the leader's force minus the follower's effort, and the follower's
-    position to reach, predicted from the leader's position and velocity now (x1 + h v1).
-    x1 and x2 (m) after each step."""
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimManipulator import CosimManipulator
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
-
-    log_output_level(CosimLogLevel.ERROR)
-    execution = CosimExecution.from_step_size(step_size=round(h * NS))
-    first = execution.add_local_slave(CosimLocalSlave(fmu_path=str(paths["leader"]),
-                                                      instance_name="leader"))
-    second = execution.add_local_slave(CosimLocalSlave(fmu_path=str(paths["follower"]),
-                                                       instance_name="follower"))
-    vr = {slave: {v.name.decode(): v.reference for v in execution.slave_variables(slave)}
-          for slave in (first, second)}
-    for slave in (first, second):
-        execution.real_initial_value(slave, vr[slave]["integrator.rtol"], 1e-10)
-    manipulator = CosimManipulator.create_override()
-    execution.add_manipulator(manipulator=manipulator)
-    last = CosimObserver.create_last_value()
-    execution.add_observer(observer=last)
-    x1, v1, effort = X0, 0.0, 0.0  # at rest at the start
-    rows = []
-    for _ in range(round(t_end / h)):
-        manipulator.slave_real_values(first, [vr[first]["F"]], [force - effort])
-        manipulator.slave_real_values(second, [vr[second]["u"]], [x1 + h * v1])
-        assert execution.step()
-        x1, v1 = last.last_real_values(first, [vr[first]["x1"], vr[first]["v1"]])
-        x2, effort = last.last_real_values(second, [vr[second]["x2"], vr[second]["u.effort"]])
-        rows.append((x1, x2))
-    execution.stop()
-    return np.array(rows)
-
-
-def test_the_pair_in_libcosim_side_by_side(motion_fmus):
-    """The same pair stepped side by side in libcosim, the follower's position predicted from
-    the leader's (x1 + h v1): against the one-scene chain every 10 ms, order 1 in h as well
-    (measured 1.01 and 1.01), to 5e-3 of the largest displacement at 0.25 ms (measured
-    5.0e-6 m of 3.1 mm)."""
-    t_end, force, common = 0.1, 1.0, np.linspace(0.01, 0.1, 10)
-    reference = whole_reference(common, force)
-    errors = []
-    for h in (1e-3, 5e-4, 2.5e-4):
-        rows = libcosim_pair(motion_fmus, h, t_end, force)
-        at = np.rint(common / h).astype(int) - 1
-        errors.append(np.max(np.abs(rows[at] - reference)))
-    errors = np.array(errors)
-    orders = np.log2(errors[:-1] / errors[1:])
-    moved = np.max(np.abs(reference - [X0, 2 * X0]))
-    print("libcosim pair errors (m):", errors.tolist(), "orders:", orders.tolist())
-    assert np.all((0.9 <= orders) & (orders <= 1.1)), orders
-    assert errors[-1] <= 5e-3 * moved
-
-
-def in_process_pair(ratio, h, *, predict, t_end=0.1, force=1.0):
-    """The pair coupled in process (the FMUs' simulators), the follower moving `ratio` times
-    the leader's mass at node 1 (M1 in all): Gauss-Seidel, or side by side with the position
-    predicted (`predict`). The largest displacement of node 1 (m), or inf once beyond 1 m."""
-    follower_mass = M1 * ratio / (1 + ratio)
-    first_scene, second_scene = leader(), follower()
-    first_scene["nodes"]["1"]["mass"] = M1 - follower_mass
-    second_scene["nodes"]["1"]["mass"] = follower_mass
-    first = Simulator(build_model(first_scene), method="esdirk", rtol=1e-9)
-    second = Simulator(build_model(second_scene), method="esdirk", rtol=1e-9,
-                       stepwise_motion=True)
-    x1, v1, effort, largest = X0, 0.0, 0.0, 0.0
-    for k in range(round(t_end / h)):
-        target = x1 + h * v1
-        first.set_inputs([force - effort])
-        first.advance_to((k + 1) * h)
-        x1, v1 = first.outputs()
-        second.move_to([target if predict else x1], (k + 1) * h)
-        effort = second.efforts()[0]
-        largest = max(largest, abs(x1 - X0))
-        if largest > 1.0:
-            return np.inf
-    return largest
-
-
-def test_the_added_mass_limit():
-    """A coupling by positions and forces is stable while the mass the displacement-driven
-    side moves at its input is small against the force-driven side's (the added-mass limit
-    of explicit coupling, whatever h): at h = 1 ms, Gauss-Seidel up to the same mass (0.8
-    times: node 1 moves at most 1.738 mm, the one-scene chain's 1.744 mm; 1.5 times:
-    diverges), side by side with the position predicted up to a third of it (0.2 times:
-    1.741 mm; 0.5 times: diverges). docs/fmu.md says so."""
-    largest = np.max(np.abs(whole_reference(np.linspace(1e-3, 0.1, 100), 1.0)[:, 0] - X0))
-    assert in_process_pair(0.8, 1e-3, predict=False) == pytest.approx(largest, rel=0.01)
-    assert in_process_pair(1.5, 1e-3, predict=False) == np.inf
-    assert in_process_pair(0.2, 1e-3, predict=True) == pytest.approx(largest, rel=0.01)
-    assert in_process_pair(0.5, 1e-3, predict=True) == np.inf
 
 
 def test_an_angle_is_set_in_rad_and_its_effort_is_a_moment(tmp_path):
