@@ -48,8 +48,8 @@ scene (or of the same scene built from another scene file) is refused by name.
 Values a host sets are checked when set (`check_value`): the method must be one of METHODS,
 0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, cx, ...) >= 0 and any other tunable
 value > 0, all finite; with kinematic inputs the method must be one that integrates them
-(not IDA: `MOTION_METHODS`). A refused value puts the instance in the error state (see `SafeSlave`).
-A tunable key's unit, and whether it is a damping, are its schema's
+(not IDA: `MOTION_METHODS`). A refused value puts the instance in the error state (see
+`SafeSlave`). A tunable key's unit, and whether it is a damping, are its schema's
 (`flexure.core.scene.building.scene_key`: the element section schemas, the node keys and the
 actuators').
 """
