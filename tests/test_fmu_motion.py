@@ -119,13 +119,14 @@ def test_fornbergs_weights_differentiate_cubics_exactly():
 
 
 def test_a_piece_moves_at_both_its_ends_in_the_compiled_path():
-    """The engine's `path_point` and numpy's `path_values` on a step's piece (`next_piece`):
+    """The engine's `path_point`, numpy's `path_values` and the simulator's plain-Python
+    `path_point_now` on a step's piece (`next_piece`):
     at the step's start, the rate and acceleration the piece starts with (not the held
     path's zeros: the step's first evaluation is there); at its end (and an ulp past it,
     where a stage time t + c h may round), the position set and the cubic's rate and
     acceleration, to round-off (1e-12 of the stroke, stroke / h, stroke / h^2)."""
     from flexure.core.engine.prescribed import path_point
-    from flexure.core.simulation.simulator_motion import path_values
+    from flexure.core.simulation.simulator_motion import path_point_now, path_values
 
     t, t_end = 0.003, 0.004
     times = np.array([0.0, 0.001, 0.002, t])
@@ -142,6 +143,8 @@ def test_a_piece_moves_at_both_its_ends_in_the_compiled_path():
         numpy = np.array([part[0] for part in path_values(path, when)])
         assert np.all(np.abs(compiled - expected) <= 1e-12 * scales), (when, compiled)
         assert np.all(np.abs(numpy - expected) <= 1e-12 * scales), (when, numpy)
+        now = np.array([part[0] for part in path_point_now(path, when)])
+        assert np.all(np.abs(now - compiled) <= 1e-15 * scales), (when, now)
 
 
 # -- the rule's order in h ----------------------------------------------------------------------
