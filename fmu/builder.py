@@ -392,11 +392,12 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
     except FlexureError as error:
         raise FMUBuildError(str(error)) from None
     model = build_model(data, overrides=overrides, source=str(path), default_name=path.stem)
-    if model.kinematic_inputs:  # its engine cannot integrate prescribed motion yet
+    if model.kinematic_inputs and model.actuators:  # the engine takes one or the other
         raise FMUBuildError(f"{path}: the kinematic inputs "
-                            f"{', '.join(p.name for p in model.kinematic_inputs)} need a time "
-                            "simulation with prescribed motion, which the engine does not do "
-                            "yet: no FMU of this scene")
+                            f"{', '.join(p.name for p in model.kinematic_inputs)} and the "
+                            f"actuators {', '.join(a.name for a in model.actuators)}: a time "
+                            "simulation takes kinematic inputs only without actuators; no FMU "
+                            "of this scene")
     # the FMU carries the scene it was built from: the file's own text where it is TOML as
     # given, otherwise the scene written back (an imported SPACAR file, overrides)
     if path.suffix.lower() == ".toml" and not overrides:

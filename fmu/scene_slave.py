@@ -12,6 +12,11 @@ Variables (only what the scene has):
 - one input per scene input (force N or moment N.m, start 0; a moment about a global axis of
   a 3-D rotational node too), held over each step; an input a voice-coil actuator drives is
   its amplifier's drive signal (V);
+- one input per kinematic input ([inputs.NAME] kind = "motion"; m, rad on an angle, start
+  the scene's `start`): the position at the end of each step (set before fmi2DoStep; set in
+  initialization mode, where it starts), which the simulator makes a smooth path
+  (`flexure.core.simulation.stepwise_motion`); and one output "NAME.effort" (N, N.m on an
+  angle): the generalised force that realises it in the current state;
 - one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
   global axis of a 3-D rotational node, rad, or its angular velocity, rad/s);
 - one output "NAME.current" (A) per voltage-driven actuator [actuators.NAME]: its coil
@@ -29,7 +34,8 @@ Variables (only what the scene has):
 - one parameter per tunable scene key, named by its key ("sections.leaf.EdA", N.s), applied
   by rebuilding the model from the scene with the new value when initialization ends.
 
-`advance(t, h)` is `simulator.set_inputs(u); simulator.advance_to(t + h)`: the simulator picks its
+`advance(t, h)` is `simulator.set_inputs(u); simulator.advance_to(t + h)` (with kinematic
+inputs `simulator.move_to(positions, t + h)` in place of advance_to): the simulator picks its
 own internal steps; any h works. A `SimulationError` (non-finite input, integrator or Newton
 failure) leaves the simulator at its last good state and the step is answered with
 fmi2Discard (see `SafeSlave`). The FMU state is the simulator's whole state plus the inputs
@@ -41,8 +47,9 @@ scene (or of the same scene built from another scene file) is refused by name.
 
 Values a host sets are checked when set (`check_value`): the method must be one of METHODS,
 0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, cx, ...) >= 0 and any other tunable
-value > 0, all finite. A refused value puts the instance in the error state (see `SafeSlave`).
-A tunable key's unit, and whether it is a damping, are its schema's
+value > 0, all finite; with kinematic inputs the method must be one that integrates them
+(not IDA: `MOTION_METHODS`). A refused value puts the instance in the error state (see
+`SafeSlave`). A tunable key's unit, and whether it is a damping, are its schema's
 (`flexure.core.scene.building.scene_key`: the element section schemas, the node keys and the
 actuators').
 """
@@ -70,6 +77,8 @@ from flexure.core.numerics.jit import compile_notices
 from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import METHODS as CORE_METHODS
 from flexure.core.simulation.methods import ONE_STEP_METHODS
+from flexure.core.simulation.simulation import effort_unit
+from flexure.core.simulation.simulator_motion import MOTION_METHODS
 
 from .slave import SafeSlave
 from .slave_states import STEP_COMPLETE, TERMINATED
@@ -147,7 +156,13 @@ class SceneSlave(SafeSlave):
         self.inputs = [0.0] * len(model.inputs)
         self.outputs = [math.nan] * len(model.outputs)
         self.currents = [math.nan] * len(model.coil_actuators)
-        self.unchecked_inputs = frozenset(port.name for port in model.inputs)
+        # the kinematic inputs' positions (m, rad) the host set: where each is at the end of
+        # the next step (where it starts, before the first); their efforts (N, N.m) now
+        self.motions = ([float(v) for v in model.motion_starts] if model.kinematic_inputs
+                        else [])
+        self.efforts = [math.nan] * len(model.kinematic_inputs)
+        self.unchecked_inputs = frozenset(port.name for port in
+                                          [*model.inputs, *model.kinematic_inputs])
         self._stress = None  # Pa, von_mises_max of the current state, None until read
         self.stress_evaluations = 0  # how often it was computed (each costs ~10 doSteps)
         self._refresh()
@@ -163,10 +178,24 @@ class SceneSlave(SafeSlave):
                           description=description,
                           getter=partial(self.inputs.__getitem__, i),
                           setter=partial(self.inputs.__setitem__, i))
+        for i, port in enumerate(model.kinematic_inputs):
+            self.add_real(port.name, causality="input", unit=port.unit,
+                          start=self.motions[i],
+                          description=f"kinematic input: the {motion_description(model, port)} "
+                                      "at the end of each step (set in initialization mode: "
+                                      "where it starts)",
+                          getter=partial(self.motions.__getitem__, i),
+                          setter=partial(self.motions.__setitem__, i))
         for j, port in enumerate(model.outputs):
             self.add_real(port.name, causality="output", unit=port.unit,
                           description=port_description(model, port, is_input=False),
                           getter=partial(self.outputs.__getitem__, j))
+        for i, port in enumerate(model.kinematic_inputs):
+            self.add_real(f"{port.name}.effort", causality="output",
+                          unit=effort_unit(port).replace(" ", "."),
+                          description=f"effort of kinematic input {port.name}: the "
+                                      "generalised force that realises it",
+                          getter=partial(self.efforts.__getitem__, i))
         for k, actuator in enumerate(model.coil_actuators):
             self.add_real(f"{actuator.name}.current", causality="output", unit="A",
                           description=f"coil current of actuator {actuator.name}",
@@ -212,6 +241,12 @@ class SceneSlave(SafeSlave):
         if name == "integrator.method":
             if value not in METHODS:
                 return f"integrator.method = {value!r}: expected one of {', '.join(METHODS)}"
+            kinematic = self._model.kinematic_inputs
+            if kinematic and value not in MOTION_METHODS:
+                names = ", ".join(port.name for port in kinematic)
+                return (f"integrator.method = {value!r} cannot integrate the kinematic inputs "
+                        f"({names}) of {self.scene_name!r}; expected one of "
+                        f"{', '.join(m for m in METHODS if m in MOTION_METHODS)}")
             return None
         if name == "integrator.rtol":
             if not (math.isfinite(value) and 0.0 < value < 1.0):
@@ -245,7 +280,8 @@ class SceneSlave(SafeSlave):
         self._model = build_model(scene, source=f"{self.scene_name}.fmu (embedded scene)",
                                   default_name=self.scene_name)
         self.simulator = Simulator(self._model, method=self.method, rtol=float(self.rtol),
-                                   atol=float(self.atol) if self.atol > 0 else None)
+                                   atol=float(self.atol) if self.atol > 0 else None,
+                                   stepwise_motion=bool(self._model.kinematic_inputs))
         self.simulator.reset(t0=self.start_time)
         self._mechanics = Mechanics(self._model) if self.von_mises else None
         self._built_with = self._settings()
@@ -257,6 +293,8 @@ class SceneSlave(SafeSlave):
         self.outputs[:] = self.simulator.output_values()
         if self.currents:  # a model without coils has no currents to copy
             self.currents[:] = self.simulator.currents.tolist()
+        if self.efforts:
+            self.efforts[:] = self.simulator.efforts().tolist()
         self._stress = None  # of the state before: computed again when next read
 
     def von_mises_max(self):
@@ -286,6 +324,8 @@ class SceneSlave(SafeSlave):
     def initialize(self, start_time):
         if self._settings() != self._built_with:
             self._build()
+        if self.motions:  # where the host put them in initialization mode
+            self.simulator.hold_motion(self.motions)
         self.simulator.reset(t0=start_time)
         self._inputs_given = None
         self._refresh()
@@ -297,7 +337,10 @@ class SceneSlave(SafeSlave):
         if self.inputs != self._inputs_given:
             self.simulator.set_inputs(self.inputs)
             self._inputs_given = self.inputs.copy()
-        self.simulator.advance_to(t + h, max_steps=self.max_steps)
+        if self.motions:  # the positions at t + h, made a path by the simulator
+            self.simulator.move_to(self.motions, t + h, max_steps=self.max_steps)
+        else:
+            self.simulator.advance_to(t + h, max_steps=self.max_steps)
         self._refresh()
         warnings = self.simulator.range_warnings()  # empty within the range
         if warnings:
@@ -388,6 +431,9 @@ def restored_state_problem(slave, simulator_state):
     for actuator, value in zip(slave._model.coil_actuators, slave.currents, strict=True):
         if not math.isfinite(value):
             return f"{actuator.name}.current = {value!r} A: expected a finite number"
+    for port, value in zip(slave._model.kinematic_inputs, slave.efforts, strict=True):
+        if not math.isfinite(value):
+            return f"{port.name}.effort = {value!r}: expected a finite number"
     model = slave._model
     translations = np.asarray(model.translations, dtype=np.int64)
     if translations.size:
@@ -401,6 +447,15 @@ def restored_state_problem(slave, simulator_state):
             if problem:
                 return problem
     return None
+
+
+def motion_description(model, port):
+    """What a kinematic input prescribes, in words: "position of coordinate 3.x",
+    "deformation actuator.e1" or, on a 3-D rotational node, "rotation 4.rz"."""
+    if port.coordinate is not None:
+        return f"position of coordinate {model.coordinate_names[port.coordinate]}"
+    kind = "rotation" if port.unit == "rad" else "deformation"
+    return f"{kind} {model.deformation_names[port.deformation]}"
 
 
 def _with_dofs(model, simulator):

@@ -35,6 +35,26 @@ def scene_fmus(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def motion_fmus(tmp_path_factory):
+    """{name: FMU path} of the displacement-driven FMUs' scenes (tests/kinematic_scenes.py):
+    "chain" (moved at node 1), "leader" (force-driven) and "follower" (displacement-driven),
+    built once."""
+    from kinematic_scenes import chain, follower, leader
+
+    from flexure.core import scene_toml
+    from flexure.fmu import build_scene_fmu
+
+    folder = tmp_path_factory.mktemp("motion_fmus")
+    paths = {}
+    for data in (chain(), leader(), follower()):
+        name = data["scene"]["name"]
+        scene = folder / f"{name}.toml"
+        scene.write_text(scene_toml(data, "a test of displacement-driven FMUs"))
+        paths[name] = build_scene_fmu(scene, folder / f"{name}.fmu")
+    return paths
+
+
+@pytest.fixture(scope="session")
 def fmus(tmp_path_factory):
     """The extracted folders of stage_planar_3dof.fmu and truss_1dof_x.fmu for the abuse cases
     (test_fmu_abuse.py, test_fmu_memory.py), built once. Every case's process loads the FMUs

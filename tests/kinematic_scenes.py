@@ -1,5 +1,7 @@
 """Scenes and paths the kinematic-input tests share: built-in scenes with a kinematic
-input, a chain of springs and masses, a pendulum, a sine path."""
+input, a chain of springs and masses, a pendulum, a sine path; the chain split into a
+force-driven leader and a displacement-driven follower, and a smooth motion of its node 1
+(the displacement-driven FMUs' tests)."""
 
 import numpy as np
 
@@ -69,3 +71,60 @@ def pendulum(mass, length, g):
         "inputs": {"T": {"node": "hinge", "coordinate": "phi"}},
         "outputs": {"theta": {"node": "hinge", "coordinate": "phi"},
                     "tension": {"element": "link", "deformation": "e1", "quantity": "stress"}}})
+
+
+X0, STROKE, PERIOD = 0.1, 1e-3, 0.04  # node 1's start (m), the motion's stroke (m), period (s)
+
+
+def motion(t):
+    """A smooth motion of node 1 that starts at rest (its first three derivatives zero):
+    u = X0 + STROKE / 4 (1 - cos w t)^2; (u, u', u'') in m, m/s, m/s^2."""
+    w = 2 * np.pi / PERIOD
+    c, s = np.cos(w * t), np.sin(w * t)
+    return (X0 + STROKE / 4 * (1 - c) ** 2, STROKE / 2 * (1 - c) * w * s,
+            STROKE / 2 * w**2 * (s**2 + (1 - c) * c))
+
+
+# node 1's mass M1 split: the follower carries some of it, since the prescribed form solves
+# with the mass matrix of every DOF, the moved node's too (a massless one is singular); a
+# small part, since a coupling by positions and forces is stable only while the mass the
+# follower moves is small against the leader's (tests/test_fmu_motion_pair.py)
+FOLLOWER_MASS = M1 / 10
+
+
+def leader():
+    """The chain's first half, force-driven: ground -k1, c1- node 1 (M1 - FOLLOWER_MASS), the
+    force F on 1.x; its position and velocity out."""
+    data = chain()
+    data["scene"]["name"] = "leader"
+    data["nodes"] = {"0": data["nodes"]["0"],
+                     "1": data["nodes"]["1"] | {"dof": ["x"], "mass": M1 - FOLLOWER_MASS}}
+    data["elements"] = {"a": data["elements"]["a"]}
+    data["sections"] = {"a": data["sections"]["a"]}
+    data["inputs"] = {"F": {"node": "1", "coordinate": "x"}}
+    data["outputs"] = {"x1": {"node": "1", "coordinate": "x"},
+                       "v1": {"node": "1", "coordinate": "x", "quantity": "velocity"}}
+    return data
+
+
+def follower():
+    """The chain's second half, displacement-driven: node 1 (FOLLOWER_MASS) moved (u), -k2,
+    c2- m2 (node 2); the force that moves node 1 is u.effort."""
+    data = chain()
+    data["scene"]["name"] = "follower"
+    data["nodes"] = {"1": {"position": [X0, 0.0], "fixed": ["y"], "mass": FOLLOWER_MASS},
+                     "2": data["nodes"]["2"]}
+    data["elements"] = {"b": data["elements"]["b"]}
+    data["sections"] = {"b": data["sections"]["b"]}
+    return data
+
+
+def whole():
+    """The chain in one scene: the force F on m1, both masses free."""
+    data = chain()
+    data["scene"]["name"] = "whole"
+    data["nodes"]["1"]["dof"] = ["x"]
+    data["inputs"] = {"F": {"node": "1", "coordinate": "x"}}
+    data["outputs"] = {"x1": {"node": "1", "coordinate": "x"},
+                       "x2": {"node": "2", "coordinate": "x"}}
+    return data

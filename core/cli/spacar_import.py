@@ -63,7 +63,8 @@ def run(args):
     if model.kinematic_inputs:
         print(f"flexure import: warning: {path}: {len(model.kinematic_inputs)} kinematic "
               "input(s): static_equilibrium (`flexure analyze --static`, at each input's value), "
-              "motion_state_space, inverse_dynamics and `flexure simulate` (its "
-              "--motion-duration) take them; `flexure loop` and `fmu build` refuse them",
+              "motion_state_space, inverse_dynamics, `flexure simulate` (its "
+              "--motion-duration) and `flexure fmu build` (positions in, efforts out) take "
+              "them; `flexure loop` refuses them",
               file=sys.stderr)
     return code

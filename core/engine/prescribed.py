@@ -21,7 +21,9 @@ it per evaluation.
 
 The path of each input is one polynomial piece in slot motion_path: [t_start, t_end, c_0 ..
 c_5], u(t) = sum_j c_j s^j with s = t - t_start clipped to [0, t_end - t_start], held (rate
-and acceleration zero) outside; `quintic_path` writes the scene's rest-to-rest move
+and acceleration zero) outside [t_start, t_end) (a piece that starts moving, a host's step of
+`simulation.stepwise_motion`, has its rate and acceleration at t_start itself, the time a
+step's first evaluation is at); `quintic_path` writes the scene's rest-to-rest move
 (`analysis.motion_paths.increment_path`, the reference for `path_point`) into it.
 
 The integrator's state stays y = [q - q_ref, qdot] on all of q: a prescribed entry of it is
@@ -70,7 +72,7 @@ def path_point(path, i, t):
     """(u, u', u'') of input i at time t (s) from its record in `path` (module docstring)."""
     base = PATH_WIDTH * i
     t_start, t_end = path[base], path[base + 1]
-    inside = t_start < t < t_end
+    inside = t_start <= t < t_end
     s = min(max(t, t_start), t_end) - t_start
     value, rate, acceleration = 0.0, 0.0, 0.0
     for j in range(5, -1, -1):  # Horner, from the highest power

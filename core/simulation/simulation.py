@@ -24,8 +24,8 @@ if TYPE_CHECKING:  # names for the annotations only
 
     from ..model import Model
 
-__all__ = ["STATE_VERSION", "SimulationResult", "Simulator", "default_atol", "simulate",
-           "split_inputs"]
+__all__ = ["STATE_VERSION", "SimulationResult", "Simulator", "default_atol", "effort_unit",
+           "simulate", "split_inputs"]
 
 
 @dataclass

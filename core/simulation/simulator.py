@@ -50,6 +50,7 @@ from .simulator_system import SimulatorSystem
 from .start import scene_dofs, solve_start, start_kinematics
 from .status import STATUS_MESSAGES
 from .stepper import Stepper, restart_plant_now
+from .stepwise_motion import held_path
 from .tolerances import atol_vector
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -91,23 +92,29 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         Whether the engine eliminates the rigid clusters' slave coordinates (default True;
         False solves for every free coordinate, for comparison: `engine.rigid`).
     motion_duration : float, optional
-        s: how long the scene's move of its kinematic inputs takes from t = 0 (required for,
-        and only for, a model with kinematic inputs: `simulator_motion`, `set_motion`).
+        s: how long the scene's move of its kinematic inputs takes from t = 0 (a model with
+        kinematic inputs needs it or `stepwise_motion`: `simulator_motion`, `set_motion`).
+    stepwise_motion : bool
+        The kinematic inputs are moved by a host step by step (`move_to`: the position at
+        the end of each step, `stepwise_motion`), held at their `start` until then (default
+        False; only for a model with kinematic inputs, and not with motion_duration).
 
     Raises
     ------
     SimulationError
         An unknown method, an rtol outside (0, 1), a max_step or atol that is not positive,
         an option the one-step methods do not take, a scene configuration the DOFs
-        cannot be assembled in, or kinematic inputs without a motion_duration or with a
-        method that does not take them (IDA), or a motion_duration without them.
+        cannot be assembled in, or kinematic inputs without a motion_duration or
+        stepwise_motion (or with both) or with a method that does not take them (IDA), or
+        either without them.
     """
 
     def __init__(self, model: Model, *, method: str = "cvode-bdf", rtol: float = 1e-8,
                  atol: float | ArrayLike | None = None, max_step: float | None = None,
                  jacobian: str = "analytic", max_order: int | None = None,
                  input_functions: Mapping[int, Callable[[float], float]] | None = None,
-                 rigid: bool = True, motion_duration: float | None = None) -> None:
+                 rigid: bool = True, motion_duration: float | None = None,
+                 stepwise_motion: bool = False) -> None:
         if method not in METHODS:
             raise SimulationError(f"unknown method {method!r}; expected one of "
                                   f"{', '.join(METHODS)}")
@@ -115,7 +122,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
             raise SimulationError(f"rtol must be a number between 0 and 1, got {rtol!r}")
         if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
-        check_motion_method(model, method, motion_duration)
+        check_motion_method(model, method, motion_duration, stepwise_motion)
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model, rigid=rigid)
@@ -153,8 +160,10 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         self._within = None  # its compiled check of the last evaluation, made on first use
         # views of the coordinates and deformations of the engine's last evaluation
         self._last_x, self._last_e = self.data.float_array("x"), self.data.float_array("e")
-        if model.kinematic_inputs:  # the scene's move from t = 0 (`simulator_motion`)
+        if motion_duration is not None:  # the scene's move from t = 0 (`simulator_motion`)
             self._write_path(motion_duration, 0.0)
+        elif model.kinematic_inputs:  # held at the start until a host moves them
+            self._set_path(held_path(model.motion_starts, 0.0))
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -194,6 +203,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         self._q_ref = q.copy()
         self._y = np.concatenate([np.zeros(self.ndof), qdot, i])
         self._put_on_path()  # the kinematic inputs' entries (`simulator_motion`)
+        self._restart_samples()
         self._x = self.data.float_array("x").copy()
         self._outputs_cache = None
         self._needs_init = self._restart_kinematics = True

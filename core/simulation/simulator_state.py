@@ -3,7 +3,8 @@
 A snapshot holds the whole state as plain numbers and arrays (version 2): the time t (s),
 the integrator's state y = [q - q_ref, qdot(, coil currents)], the reference DOFs q_ref, the
 held inputs u, the coordinates x and what a one-step integrator has learnt (its step, its
-Jacobian; `esdirk.Esdirk.restart_memory`). Taking one marks a restart point, so a run
+Jacobian; `esdirk.Esdirk.restart_memory`), and with kinematic inputs their path and the
+positions a host set (`simulator_motion`). Taking one marks a restart point, so a run
 restored with `set_state` continues bit for bit like the original.
 """
 
@@ -33,8 +34,10 @@ class SimulatorState:
         -------
         dict
             Plain numbers and arrays (module docstring): "version", "model", "t" (s), "y"
-            (the integrator state), "q_ref" (m, rad), "u" (N, N m, V), "x" (m, rad) and what
-            a one-step integrator has learnt.
+            (the integrator state), "q_ref" (m, rad), "u" (N, N m, V), "x" (m, rad), what
+            a one-step integrator has learnt and, with kinematic inputs, their path
+            ("motion_path") and the positions a host set ("motion_times" s,
+            "motion_positions" m or rad: `simulator_motion`).
         """
         self._needs_init = self._restart_kinematics = True
         memory = self.integrator.restart_memory  # the stepper's restart point
@@ -42,7 +45,8 @@ class SimulatorState:
                 "y": self._y.copy(), "q_ref": self._q_ref.copy(), "u": self._u.copy(),
                 "x": self._x.copy(), "initial_step": memory.get("initial_step", 0.0),
                 "jacobian": memory.get("jacobian", np.zeros(0)),
-                **{key: value for key, value in memory.items() if key in MEMORY_KEYS}}
+                **{key: value for key, value in memory.items() if key in MEMORY_KEYS},
+                **self._motion_snapshot()}
 
     def set_state(self, state: Mapping[str, object]) -> None:
         """Restore a snapshot of `get_state` (of a simulator of the same model).
@@ -59,6 +63,7 @@ class SimulatorState:
         ------
         SimulationError
             Not a snapshot, one of another model or size, or one with non-finite numbers.
+            A snapshot without a motion path keeps the simulator's.
         """
         try:
             version = int(state.get("version", 1))
@@ -81,9 +86,11 @@ class SimulatorState:
         if not (np.isfinite(t) and np.all(np.isfinite(y)) and np.all(np.isfinite(q_ref))
                 and np.all(np.isfinite(u)) and np.all(np.isfinite(x))):
             raise SimulationError("the state holds non-finite numbers")
+        motion = self._checked_motion(state)
         if version < 2:
             y[: self.ndof] = 0.0
         self._t, self._y, self._u, self._x = t, y, u, x
+        self._restore_motion(motion)
         self._q_ref = q_ref
         try:  # what the integrator had learnt (a stepper without a memory forgets)
             self.integrator.restart_memory = {

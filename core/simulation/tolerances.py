@@ -87,8 +87,15 @@ def _initial_matrices(model, data):
     if status == ed.OK:
         status = engine.call(data, engine.OP_JACOBIAN, np.zeros(size), jacobian)
     if status != ed.OK:
-        raise SimulationError("the start configuration could not be evaluated for the default "
-                              f"tolerances: {STATUS_MESSAGES.get(status, status)}")
+        hint = ""
+        if status == ed.SINGULAR_MASS and model.kinematic_inputs:
+            # the prescribed form solves with the mass matrix of every DOF, the moved ones' too
+            names = ", ".join(port.name for port in model.kinematic_inputs)
+            hint = (f"; the kinematic inputs ({names}) are DOFs of the mass matrix too: what "
+                    "each moves needs a mass of its own (nodes.NAME.mass, or an element's)")
+        raise SimulationError(f"{model.source}: the start configuration could not be "
+                              "evaluated for the default tolerances: "
+                              f"{STATUS_MESSAGES.get(status, status)}{hint}")
     nx = data.int_array("dims")[ed.NX]
     M0 = data.float_array("mass")[:n * n].reshape(n, n).copy()
     K0 = -M0 @ jacobian.reshape(size, size)[n:2 * n, :n]
