@@ -332,9 +332,9 @@ def evaluate_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENGINE_ENTRY)
 def tangent_entry(op, user_data, t, a, b, c, s):
-    """OP_TANGENT: qddot (a)."""
+    """OP_TANGENT: qddot (a); s = 1 for the statics' (DF formed, not M_bar)."""
     table = address_of(user_data)
-    return tangent(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
+    return tangent(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8), s != 0.0)
 
 
 @entry(ENGINE_ENTRY)
@@ -433,7 +433,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
-         OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
+         OP_TANGENT: (OP_MASS, OP_DF), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
          OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
          OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
