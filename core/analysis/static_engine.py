@@ -47,6 +47,7 @@ import numpy as np
 from ..errors import ConvergenceError
 
 if TYPE_CHECKING:  # names for the annotations only
+    from ..mechanics.kinematics import Configuration
     from ..model import Model
 
 _BALANCES: dict[int, tuple[weakref.ref, EngineBalance]] = {}
@@ -106,6 +107,8 @@ class EngineBalance:
     """
 
     def __init__(self, model: Model):
+        # the engine (and numba) imported on first use: a command that never solves a loaded
+        # model through it does not pay for that import
         from ..engine import data as ed
         from ..engine.data import EngineData
 
@@ -117,13 +120,12 @@ class EngineBalance:
         data.int_array("dims")[ed.HAS_DAMPING] = 0
         self._constant = data.float_array("constant_force")
         self._lumped_gravity = self._constant - model.loads  # what packing added to the loads
-        groups = data.int_array("groups").reshape(-1, ed.G_WIDTH)
         group_data = data.float_array("group_data")
-        self._gravity = [(group_data[row[ed.G_GRAVITY_OFFSET]:
-                                     row[ed.G_GRAVITY_OFFSET] + row[ed.G_P]],
-                          group_data[row[ed.G_GRAVITY_OFFSET]:
-                                     row[ed.G_GRAVITY_OFFSET] + row[ed.G_P]].copy())
-                         for row in groups if row[ed.G_GRAVITY_OFFSET] >= 0]
+        points = [slice(row[ed.G_GRAVITY_OFFSET], row[ed.G_GRAVITY_OFFSET] + row[ed.G_P])
+                  for row in data.int_array("groups").reshape(-1, ed.G_WIDTH)
+                  if row[ed.G_GRAVITY_OFFSET] >= 0]
+        # (the packed gravity on a group's inertia points (a view), its full value)
+        self._gravity = [(group_data[p], group_data[p].copy()) for p in points]
         self._inputs = data.float_array("inputs")
         self._current: EnginePoint | None = None  # whose kinematics the engine holds
         n = model.ndof
@@ -148,12 +150,13 @@ class EngineBalance:
             packed[:] = load_factor * full
         self._inputs[:] = 0.0 if values is None else load_factor * np.asarray(values, float)
 
-    def moved(self, point: EnginePoint | object, q: np.ndarray) -> EnginePoint:
+    def moved(self, point: EnginePoint | Configuration, q: np.ndarray) -> EnginePoint:
         """The iterate at DOFs q after `point` (its kinematics solved when it is evaluated,
         from the engine's last solution)."""
         return EnginePoint(np.asarray(q, float))
 
-    def residual_and_tangent(self, point: EnginePoint | object) -> tuple[np.ndarray, np.ndarray]:
+    def residual_and_tangent(self, point: EnginePoint | Configuration,
+                             ) -> tuple[np.ndarray, np.ndarray]:
         """Q and K at `point` under the load of the last `set_load` (module docstring).
 
         Parameters
