@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConvergenceError
+from ..mechanics.kinematics import SPARSE_FROM
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.kinematics import Configuration
@@ -63,13 +64,19 @@ class EnginePoint:
     x: np.ndarray | None = None
 
 
-# The engine's tangent adds each element's DF_e^T H DF_e into a dense (NDOF, NDOF) matrix,
-# about (sum of the elements' coordinates) NDOF^2 products; the numpy reference's carries
-# a sparse coordinate-space matrix to the DOFs by one BLAS product, NX NDOF^2. Measured per
-# static solve (engine over numpy, CPU): 0.55 at 96 DOFs, 0.70 at 192, 1.8 at 384 (a BEAM
-# cantilever, 6 DOFs per element), 0.27 on manipulator_control (75 DOFs), 1.2 on
-# manipulator_reduced (507 DOFs). Above this many DOFs the default is the numpy path.
+# Where the engine is the statics' default: a window of model sizes, from measurements of
+# one static solve's CPU, engine over numpy (examples/benchmarks/statics.py).
+# - Above ENGINE_MAX_DOFS DOFs the engine's tangent costs more: it adds each element's
+#   DF_e^T H DF_e into a dense (NDOF, NDOF) matrix, (the elements' coordinates) NDOF^2
+#   products, where the numpy one carries a sparse coordinate-space matrix to the DOFs in
+#   one BLAS product, NX NDOF^2: 1.2 on manipulator_reduced (507 DOFs), 1.8 on a BEAM
+#   cantilever of 384 DOFs, against 0.27 on manipulator_control (75 DOFs).
+# - Below SPARSE_FROM free coordinates (where the numpy kinematics go sparse) a numpy solve
+#   takes milliseconds (20 ms on stage_spatial_19dof), less than what touching the compiled
+#   engine costs a process (0.08 s of CPU: numba, llvmlite, the cached entries; warm
+#   `flexure analyze truss_1dof_x` 0.38 -> 0.46 s).
 ENGINE_MAX_DOFS = 250
+ENGINE_MIN_FREE = SPARSE_FROM
 
 
 def supports(model: Model) -> bool:
@@ -79,9 +86,11 @@ def supports(model: Model) -> bool:
 
 
 def preferred(model: Model) -> bool:
-    """Whether the engine is the default path of the statics of `model`: it takes the model
-    and the model has at most ENGINE_MAX_DOFS DOFs (where the engine is the faster)."""
-    return supports(model) and model.ndof <= ENGINE_MAX_DOFS
+    """Whether the engine is the default path of the statics of `model`: it takes the model,
+    which has at least ENGINE_MIN_FREE free coordinates and at most ENGINE_MAX_DOFS DOFs
+    (where the engine is the faster, its start-up included)."""
+    return (supports(model) and model.ndof <= ENGINE_MAX_DOFS
+            and model.free_coordinates.size >= ENGINE_MIN_FREE)
 
 
 def engine_balance(model: Model) -> EngineBalance:

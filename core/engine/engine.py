@@ -40,8 +40,8 @@ through `call`.
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
 quantity is in `mechanics` (its kinematics, assembly and mechanics modules, which the linear
-analyses use; the statics take Newton's balance and tangent from here up to 250 DOFs,
-`analysis.static_engine`); tests compare the two to round-off.
+analyses use; the statics take Newton's balance and tangent from here where that is the
+faster, `analysis.static_engine`); tests compare the two to round-off.
 
 Status codes (`data`): each function returns OK or the reason it could not finish;
 nothing raises inside compiled code.

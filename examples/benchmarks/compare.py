@@ -79,9 +79,9 @@ spatial   Issue 35, item 4 (`spatial.py`): one rhs of manipulator_control per DO
           implicit step (esdirk, rtol 1e-6) at 384 DOFs <= Exudyn's (the issue's 3.4 ms, not
           measured in the run), growing at most as n^1.2.
 statics   Issue 35, item 1 (`statics.py`): one static solve through the compiled engine over
-          the numpy reference (CPU, alternating): at most 1 on the models up to 250 DOFs,
-          where the engine is the statics' default (manipulator_control, cantilevers of 96
-          and 192 DOFs); manipulator_reduced and a 384-DOF cantilever for information.
+          the numpy reference (CPU, alternating): at most 1 where the engine is the statics'
+          default (manipulator_control); cantilevers of 96, 192, 384 DOFs and
+          manipulator_reduced for information.
 startup   Whole processes as a user starts them, warm cache, in CPU seconds (user + system):
           `python -c "import flexure.core"` (<= 0.5 s), `flexure analyze truss_1dof_x`
           (<= 0.5 s), `flexure loop --no-plot` (<= 1.5 s) beside Exudyn's whole process for

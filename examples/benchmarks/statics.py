@@ -12,9 +12,11 @@ it. The models:
   `spatial.spatial_cantilever`) under 20 N at the tip (large deflection);
 - `manipulator_reduced` (507 DOFs), as `manipulator_control`.
 
-The ratio decides the statics' default path (`static_engine.ENGINE_MAX_DOFS` = 250): a model
-up to that many DOFs, where the engine is the default, meets its row when the ratio is at
-most 1; above it the row is for information (the engine's dense tangent costs more there).
+The ratios decide the statics' default path (`static_engine.preferred`: from 300 free
+coordinates, up to 250 DOFs): a model where the engine is the default (manipulator_control)
+meets its row when the ratio is at most 1; the other rows are for information (above 250
+DOFs the engine's dense tangent costs more; below 300 free coordinates a solve costs less
+than the engine's start-up in a process, which these in-process figures leave out).
 
 Run alone: python -m examples.benchmarks.statics
 """
@@ -54,7 +56,7 @@ def _models(quick):
 def statics(*, repeat=5, quick=False):
     """Rows: per model, the engine's static solve over the numpy one's (CPU s)."""
     from flexure.core import static_equilibrium
-    from flexure.core.analysis.static_engine import ENGINE_MAX_DOFS
+    from flexure.core.analysis.static_engine import preferred
 
     rows = []
     for label, make in _models(quick).items():
@@ -69,7 +71,7 @@ def statics(*, repeat=5, quick=False):
         t = alternate({"engine": lambda: solve(True), "numpy": lambda: solve(False)},
                       repeat, f"statics {label} (CPU s)")
         ratio = t["engine"].median / t["numpy"].median
-        default = model.ndof <= ENGINE_MAX_DOFS
+        default = preferred(model)
         log(f"statics {label}: {model.ndof} DOFs, engine/numpy {ratio:.3g}")
         rows.append(Row(f"static solve, {label} ({model.ndof} DOFs), engine"
                         + (" (the default): <= numpy" if default else " (not the default)"),
