@@ -95,7 +95,8 @@ def preferred(model: Model) -> bool:
 
 def engine_balance(model: Model) -> EngineBalance:
     """The `EngineBalance` of `model`, packed once per live model and reused (its packing
-    takes 0.3 to 1 s on the 507-DOF manipulator)."""
+    takes 0.3 to 1 s on the 507-DOF manipulator; a model is not changed once built: a
+    parameter study builds a model per parameter set)."""
     key = id(model)
     known = _BALANCES.get(key)
     if known is not None and known[0]() is model:

@@ -43,10 +43,10 @@ that realises each input, F = -Q_k (`StaticSolution.input_efforts`).
 Q and K come from the compiled engine (`static_engine`: its kinematics, forces and tangent
 at rest) or from the numpy `Mechanics`, the reference the tests compare it with (equilibria
 within 1e-10 of each DOF's unit, tests/test_static_engine.py); `compiled` chooses, by default
-the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates, up to
-250 DOFs). Either way
-the solution's configuration (De, DF and J's factors, which the linear analyses take) and
-stress resultants are the numpy kinematics' at the equilibrium's coordinates.
+the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates, up
+to 250 DOFs). Either way the solution's configuration (De, DF and J's factors, which the
+linear analyses take) and stress resultants are the numpy kinematics' at the equilibrium's
+coordinates.
 """
 
 from __future__ import annotations
@@ -240,12 +240,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     # with the numpy tangent: a mechanism's (a kinematic scene such as manipulator_stage)
     # is singular, and the step from its zero force is round-off either way.
     engine = preferred(model) if compiled is None else compiled and supports(model)
-    if engine and not unloaded:
-        balance = engine_balance(model)
-        config = EnginePoint(q0, x0.copy())
-    else:
-        balance = _PlainBalance(mech)
-        config = mech.initial_configuration()
+    engine = engine and not unloaded
+    balance = engine_balance(model) if engine else _PlainBalance(mech)
 
     def solution(point, iterations):
         # the configuration and stress resultants reported: the numpy kinematics' first order
@@ -259,12 +255,13 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
 
     if start is not None:
         try:
-            config_start, iterations = _newton(balance, start.config, 1.0, loads, values,
-                                               target, steps, max_iterations)
+            config, iterations = _newton(balance, start.config, 1.0, loads, values, target,
+                                         steps, max_iterations)
         except ConvergenceError:
             pass
         else:
-            return solution(config_start, iterations)
+            return solution(config, iterations)
+    config = EnginePoint(q0, x0.copy()) if engine else mech.initial_configuration()
     total_iterations = 0
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     # the path's points by load factor, the unloaded configuration at 0; the stepping starts
