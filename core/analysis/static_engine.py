@@ -102,8 +102,10 @@ def engine_balance(model: Model) -> EngineBalance:
     if known is not None and known[0]() is model:
         return known[1]
     balance = EngineBalance(model)
-    _BALANCES[key] = (weakref.ref(model, lambda _, key=key: _BALANCES.pop(key, None)),
-                      balance)
+    # the callback holds the dict itself: at the interpreter's exit the module's globals
+    # may be gone before the models
+    _BALANCES[key] = (weakref.ref(model, lambda _, key=key, known=_BALANCES:
+                                  known.pop(key, None)), balance)
     return balance
 
 
