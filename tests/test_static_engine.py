@@ -111,9 +111,14 @@ def test_the_engine_takes_a_massless_model():
     statics through the engine still solves it, as the spring's elongation under its 1 N
     load: x = l0 + F / (EA / l0)."""
     model, _ = massless_truss()
-    data = EngineData(model, augmented=True)  # the statics' form
+    data = EngineData(model, augmented=False)  # the statics' form
     q = Mechanics(model).kinematics.dofs_of(model.initial_coordinates)
     assert engine.call(data, engine.OP_EVALUATE, q, np.zeros(q.size)) == ed.SINGULAR_MASS
+    balance = static_engine.EngineBalance(model)
+    balance.set_load(1.0)
+    Q, K = balance.residual_and_tangent(
+        static_engine.EnginePoint(q, model.initial_coordinates.copy()))
+    assert abs(Q[0] - 1.0) <= 1e-15 and abs(K[0, 0] - 945.0) <= 1e-12  # N, N/m
     solution = static_equilibrium(model, compiled=True)
     assert abs(solution.x[model.coordinate_index("2.x")] - (0.1 + 1.0 / 945.0)) <= 1e-14
 

@@ -6,34 +6,35 @@ At DOFs q (m, rad) and a load factor s, `EngineBalance.residual_and_tangent` ret
     K(q) = -dQ/dq = K0 + G0                            (NDOF, NDOF)   N/m, N m/rad (mixed)
 
 with f the loads (nodal forces, gravity on the lumped and the element masses, the held
-inputs' port values), from the engine's operations at rest: OP_ACCELERATIONS at (q, qdot = 0)
-solves the kinematics and leaves r in slot force; OP_TANGENT at qddot = 0 in its statics form
-(s = 1) forms DF and K0 + G0 with the multipliers of the static balance J^-T r, and no M_bar.
-These are `Mechanics.static_balance` and `Mechanics.tangent_stiffness` of the numpy
-reference to round-off (tests/test_static_engine.py: K within 1e-10 of its largest entry),
-but for one term the engine's tangent leaves out: the load stiffness of gravity on element
-masses that hang on rotations (a BEAM's consistent mass couples its position points, where
-gravity acts, to its tangent points), 5e-9 of K's largest entry on a spatial cantilever
-under gravity. Q is exact, so the equilibrium is the same; only Newton's convergence there
-is short of quadratic by that much. On every built-in scene the equilibria of the two paths
-agree within 1e-10 of each DOF's unit (m through the model's length scale, rad through 1;
-measured 5e-15 and below).
+inputs' port values), from the engine's existing operations at rest: OP_ACCELERATIONS at
+(q, qdot = 0), in the reduced form, solves the kinematics and forms DF, r and DF^T r (slot
+reduced_force); OP_TANGENT at qddot = 0 forms K0 + G0 with the multipliers of the static
+balance J^-T r. These are `Mechanics.static_balance` and `Mechanics.tangent_stiffness` of
+the numpy reference to round-off (tests/test_static_engine.py: K within 1e-10 of its
+largest entry), but for one term the engine's tangent leaves out: the load stiffness of
+gravity on element masses that hang on rotations (a BEAM's consistent mass couples its
+position points, where gravity acts, to its tangent points), 5e-9 of K's largest entry on a
+spatial cantilever under gravity. Q is exact, so the equilibrium is the same; only Newton's
+convergence there is short of quadratic by that much. On every built-in scene the
+equilibria of the two paths agree within 1e-10 of each DOF's unit (m through the model's
+length scale, rad through 1; measured 5e-15 and below).
 
 The balance owns its packed model (one per live model, kept between calls), packed in the
-augmented form, whose evaluation forms neither DF nor M_bar, and writes into it what the
-statics holds fixed: the load per load factor (slot constant_force: the nodal loads and
-gravity on the lumped masses; the element groups' gravity on their inertia points in slot
-group_data; the inputs' port values in slot inputs, each s times its full value), every
-input a plain force input (an actuator's force at rest is given:
-`mechanics.actuators.steady_port_values`; no coil) and no damping (at rest D edot = 0, and
-C0 is not wanted). No integrator shares this packed model, so no simulation sees these
-writes.
+reduced form, and writes into it what the statics holds fixed: the load per load factor
+(slot constant_force: the nodal loads and gravity on the lumped masses; the element groups'
+gravity on their inertia points in slot group_data; the inputs' port values in slot inputs,
+each s times its full value), every input a plain force input (an actuator's force at rest
+is given: `mechanics.actuators.steady_port_values`; no coil) and no damping (at rest
+D edot = 0, and C0 is not wanted). No integrator shares this packed model, so no
+simulation sees these writes. The evaluation also forms M_bar and its LU, which the statics
+does not use (the engine has no operation without them; one costs a third of a Newton
+iteration on manipulator_control).
 
-Models without mass work: the evaluation forms r before it factors the augmented system, so
-its SINGULAR_MASS status is no failure here, and the statics' tangent forms no M_bar. The
-kinematics are solved to the engine's tolerance (1e-15 of each row's unit); a configuration
-counts as singular only at a zero pivot of J, as in the numpy kinematics
-(`singular_ratio=0`), so both paths reach the same configurations.
+Models without mass work: the reduced form forms DF^T r and marks M_bar current before it
+factors M_bar, so its SINGULAR_MASS status is no failure here, and the tangent, which reads
+neither M_bar nor its LU, runs. The kinematics are solved to the engine's tolerance (1e-15
+of each row's unit); a configuration counts as singular only at a zero pivot of J, as in the
+numpy kinematics (`singular_ratio=0`), so both paths reach the same configurations.
 """
 
 from __future__ import annotations
@@ -66,16 +67,17 @@ class EnginePoint:
 
 # Where the engine is the statics' default: a window of model sizes, from measurements of
 # one static solve's CPU, engine over numpy (examples/benchmarks/statics.py).
-# - Above ENGINE_MAX_DOFS DOFs the engine's tangent costs more: it adds each element's
-#   DF_e^T H DF_e into a dense (NDOF, NDOF) matrix, (the elements' coordinates) NDOF^2
-#   products, where the numpy one carries a sparse coordinate-space matrix to the DOFs in
-#   one BLAS product, NX NDOF^2: 1.2 on manipulator_reduced (507 DOFs), 1.8 on a BEAM
-#   cantilever of 384 DOFs, against 0.27 on manipulator_control (75 DOFs).
+# - Above ENGINE_MAX_DOFS DOFs the engine costs more: its tangent adds each element's
+#   DF_e^T H DF_e into a dense (NDOF, NDOF) matrix, and its evaluation M_bar likewise,
+#   (the elements' coordinates) NDOF^2 products each, where the numpy tangent carries a
+#   sparse coordinate-space matrix to the DOFs in one BLAS product, NX NDOF^2: 0.34 on
+#   manipulator_control (75 DOFs), 0.68 and 0.99 on BEAM cantilevers of 96 and 192 DOFs,
+#   2.1 on manipulator_reduced (507 DOFs), 2.7 on a cantilever of 384 DOFs.
 # - Below SPARSE_FROM free coordinates (where the numpy kinematics go sparse) a numpy solve
 #   takes milliseconds (20 ms on stage_spatial_19dof), less than what touching the compiled
 #   engine costs a process (0.08 s of CPU: numba, llvmlite, the cached entries; warm
 #   `flexure analyze truss_1dof_x` 0.38 -> 0.46 s).
-ENGINE_MAX_DOFS = 250
+ENGINE_MAX_DOFS = 150
 ENGINE_MIN_FREE = SPARSE_FROM
 
 
@@ -126,7 +128,7 @@ class EngineBalance:
 
         self.model = model
         self._ed = ed
-        data = EngineData(model, augmented=True, singular_ratio=0.0)
+        data = EngineData(model, augmented=False, singular_ratio=0.0)
         self.data = data
         data.int_array("actuators")[0::2] = ed.FORCE_INPUT  # their force at rest is given
         data.int_array("dims")[ed.HAS_DAMPING] = 0
@@ -200,11 +202,11 @@ class EngineBalance:
         if status not in (ed.OK, ed.SINGULAR_MASS):  # see the module docstring on massless
             self._fail(status, q)
         self._current = point
-        status = engine.call(data, engine.OP_TANGENT, self._rest, s=1.0)  # and DF
+        Q = data.float_array("reduced_force").copy()
+        status = engine.call(data, engine.OP_TANGENT, self._rest)
         if status != ed.OK:
             self._fail(status, q)
         n = q.size
-        Q = data.float_array("DF").reshape(-1, n).T @ data.float_array("force")
         return Q, data.float_array("stiffness").reshape(n, n).copy()
 
     def solved(self, point: EnginePoint) -> EnginePoint:

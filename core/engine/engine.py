@@ -39,9 +39,8 @@ through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
-quantity is in `mechanics` (its kinematics, assembly and mechanics modules, which the linear
-analyses use; the statics take Newton's balance and tangent from here where that is the
-faster, `analysis.static_engine`); tests compare the two to round-off.
+quantity is in `mechanics` (its kinematics, assembly and mechanics modules, which the static
+analyses use); tests compare the two to round-off.
 
 Status codes (`data`): each function returns OK or the reason it could not finish;
 nothing raises inside compiled code.
@@ -333,9 +332,9 @@ def evaluate_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENGINE_ENTRY)
 def tangent_entry(op, user_data, t, a, b, c, s):
-    """OP_TANGENT: qddot (a); s = 1 for the statics' (DF formed, not M_bar)."""
+    """OP_TANGENT: qddot (a)."""
     table = address_of(user_data)
-    return tangent(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8), s != 0.0)
+    return tangent(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
 
 
 @entry(ENGINE_ENTRY)
@@ -434,7 +433,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
-         OP_TANGENT: (OP_MASS, OP_DF), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
+         OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
          OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
          OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
 # the addresses of the operations' entries in this process (missing_entry's until connected)

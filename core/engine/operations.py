@@ -20,7 +20,7 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     KINEMATICS           q; x = F(q) and DF
     DEFORMATIONS         x; s = the order of the derivatives
     EVALUATE             q, qdot; qddot, DF and M_bar
-    TANGENT              qddot; K0 + G0 and C0; s = 1: the statics' (DF, no M_bar)
+    TANGENT              qddot; K0 + G0 and C0
     POSITIONS            q; x by Newton from slot x_start, nothing else
     ACCELERATIONS        q, qdot; qddot (`motion.evaluate`: no DF or M_bar unless its form has
                          them)

@@ -18,7 +18,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
-from .operations import OP_DF, OP_MASS, OP_RIGID_CONDENSE, OP_RIGID_GEOMETRIC, run
+from .operations import OP_MASS, OP_RIGID_CONDENSE, OP_RIGID_GEOMETRIC, run
 from .point_masses import element_points, massless, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .slots import float_array as _f
@@ -31,14 +31,11 @@ from .slots import int_array as _i
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
-def tangent(table, qddot, static):
+def tangent(table, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,
-    M_bar and its LU as `reduced_mass` does, or, `static` (the statics' tangent at rest:
-    `analysis.static_engine`), DF alone: the statics has no use for M_bar, whose forming
-    costs as much as this tangent on the 507-DOF manipulator, and a massless model none.
-    A status."""
-    status = run(table, OP_DF if static else OP_MASS, 0, 0, 0.0)  # or motion.reduced_mass
+    M_bar and its LU as `reduced_mass` does. A status."""
+    status = run(table, OP_MASS, 0, 0, 0.0)  # motion.reduced_mass
     if status != ed.OK:
         return status
     dims = _i(table, slot.DIMS)

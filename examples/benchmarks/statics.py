@@ -13,10 +13,11 @@ it. The models:
 - `manipulator_reduced` (507 DOFs), as `manipulator_control`.
 
 The ratios decide the statics' default path (`static_engine.preferred`: from 300 free
-coordinates, up to 250 DOFs): a model where the engine is the default (manipulator_control)
-meets its row when the ratio is at most 1; the other rows are for information (above 250
-DOFs the engine's dense tangent costs more; below 300 free coordinates a solve costs less
-than the engine's start-up in a process, which these in-process figures leave out).
+coordinates, up to 150 DOFs): a model where the engine is the default (manipulator_control)
+meets its row when the ratio is at most 1; the other rows are for information (above 150
+DOFs the engine's dense tangent and M_bar cost more; below 300 free coordinates a solve
+costs less than the engine's start-up in a process, which these in-process figures leave
+out).
 
 Run alone: python -m examples.benchmarks.statics
 """
