@@ -39,6 +39,14 @@ Kinematic inputs (`flexure.core.mechanics.motions`) hold their prescribed values
 default the scene's), stepped with the load from the scene's configuration; Newton then runs
 on the DOFs proper q_f with K_ff dq_f = Q_f - K_fk dq_k, and the solution carries the force
 that realises each input, F = -Q_k (`StaticSolution.input_efforts`).
+
+Q and K come from the compiled engine (`static_engine`: its kinematics, forces and tangent
+at rest) or from the numpy `Mechanics`, the reference the tests compare it with (equilibria
+within 1e-10 of each DOF's unit, tests/test_static_engine.py); `compiled` chooses, by default
+the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates, up
+to 150 DOFs). Either way the solution's configuration (De, DF and J's factors, which the
+linear analyses take) and stress resultants are the numpy kinematics' at the equilibrium's
+coordinates.
 """
 
 from __future__ import annotations
@@ -57,6 +65,7 @@ from ..mechanics.motions import input_effort, motion_values
 from ..mechanics.ports import input_values
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
+from .static_engine import EnginePoint, engine_balance, preferred, supports
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.kinematics import Configuration
@@ -148,7 +157,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        inputs: dict | np.ndarray | None = None,
                        motions: dict | np.ndarray | None = None,
                        start: StaticSolution | None = None,
-                       path: Sequence[tuple[float, StaticSolution]] = ()) -> StaticSolution:
+                       path: Sequence[tuple[float, StaticSolution]] = (),
+                       compiled: bool | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads, stepped with Newton.
 
     Parameters
@@ -184,6 +194,13 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         s times them), s < 1 and s != 0 (negative: the opposite loads), the same model. The
         stepping starts at the largest s (or the unloaded configuration at s = 0), with the
         curvature of the point before it (module docstring).
+    compiled : bool, optional
+        Evaluate the balance and its tangent through the compiled engine (True:
+        `static_engine`) or through the numpy `Mechanics`, the plain reference (False).
+        Default: the engine where it is the faster (`static_engine.preferred`: from 300
+        free coordinates, up to 150 DOFs). A model the engine does not take
+        (`static_engine.supports`), and an unloaded one (one Newton step, module
+        docstring), take the numpy path either way.
 
     Returns
     -------
@@ -211,28 +228,41 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     loose = dof_tolerances(model, max(tolerance, INTERMEDIATE_TOLERANCE))
     target = motion_values(model, motions)
     prescribed = model.prescribed_dofs
+    x0 = model.initial_coordinates
+    q0 = mech.kinematics.dofs_of(x0)
+    # the prescribed values go from the scene's configuration to `target` with the load
+    first = q0[prescribed]
+    # Without loads and gravity there is nothing to step: the reference configuration (all
+    # deformations zero) balances, and one Newton step at full load confirms it.
+    unloaded = (not np.any(mech.external_force(x0, 1.0, loads, values))
+                and np.array_equal(first, target))
+    # That one step is the numpy path's, as cheap as the engine's there (no packing), and
+    # with the numpy tangent: a mechanism's (a kinematic scene such as manipulator_stage)
+    # is singular, and the step from its zero force is round-off either way.
+    engine = preferred(model) if compiled is None else compiled and supports(model)
+    engine = engine and not unloaded
+    balance = engine_balance(model) if engine else _PlainBalance(mech)
 
-    def solution(config, iterations):
+    def solution(point, iterations):
+        # the configuration and stress resultants reported: the numpy kinematics' first order
+        # (De, DF, J's factors, which the linear analyses take) at the engine's coordinates
+        config = point
+        if isinstance(point, EnginePoint):
+            config = mech.kinematics.configuration(point.q, point.x)
         Q, _, sigma = mech.static_balance(config, 1.0, loads, values)
         return StaticSolution(model, config, sigma, 1.0, iterations, held, values,
                               target, input_effort(model, Q))
 
     if start is not None:
         try:
-            config, iterations = _newton(mech, start.config, 1.0, loads, values, target,
+            config, iterations = _newton(balance, start.config, 1.0, loads, values, target,
                                          steps, max_iterations)
         except ConvergenceError:
             pass
         else:
             return solution(config, iterations)
-    config = mech.initial_configuration()
-    # the prescribed values go from the scene's configuration to `target` with the load
-    first = config.q[prescribed]
+    config = EnginePoint(q0, x0.copy()) if engine else mech.initial_configuration()
     total_iterations = 0
-    # Without loads and gravity there is nothing to step: the reference configuration (all
-    # deformations zero) balances, and one Newton step at full load confirms it.
-    unloaded = (not np.any(mech.external_force(config.x, 1.0, loads, values))
-                and np.array_equal(first, target))
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     # the path's points by load factor, the unloaded configuration at 0; the stepping starts
     # at the last, the one before it (DOFs, load factor) gives the curvature
@@ -247,7 +277,7 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         if behind is not None:  # (q0, h2 / h1): module docstring
             predictor = (behind[0], (target_factor - factor) / (factor - behind[1]))
         try:
-            reached, iterations = _newton(mech, config, target_factor, loads, values,
+            reached, iterations = _newton(balance, config, target_factor, loads, values,
                                           first + target_factor * (target - first),
                                           steps if target_factor > 1.0 - 1e-12 else loose,
                                           max_iterations, curvature=predictor)
@@ -303,20 +333,21 @@ def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
     return step + ratio**2 * (before - q + step / ratio)
 
 
-def _newton(mech, config, load_factor, loads, values, prescribed_values, step_tolerance,
+def _newton(balance, config, load_factor, loads, values, prescribed_values, step_tolerance,
             max_iterations, *, curvature=None):
-    """Newton's method at one load factor; values: the inputs' port values (N, N m);
-    prescribed_values (n_kinematic,) the kinematic inputs' (m, rad), reached in the first
-    step; step_tolerance (NDOF,) the largest converged |dq_j| (m or rad); curvature, if
-    given, (q0 (NDOF,), h2 / h1): the equilibrium before config's and the ratio of the load
-    steps, whose quadratic term is added to the first step on the DOFs proper (module
-    docstring)."""
-    kin = mech.kinematics
-    model = mech.model
+    """Newton's method at one load factor from config (a solved configuration: its q and
+    x); balance: the engine's (`static_engine.EngineBalance`) or the numpy `_PlainBalance`;
+    values: the inputs' port values (N, N m); prescribed_values (n_kinematic,) the kinematic
+    inputs' (m, rad), reached in the first step; step_tolerance (NDOF,) the largest
+    converged |dq_j| (m or rad); curvature, if given, (q0 (NDOF,), h2 / h1): the equilibrium
+    before config's and the ratio of the load steps, whose quadratic term is added to the
+    first step on the DOFs proper (module docstring). Returns (the solved configuration,
+    iterations)."""
+    model = balance.model
     free, prescribed = model.free_dofs, model.prescribed_dofs
+    balance.set_load(load_factor, loads, values)
     for iteration in range(1, max_iterations + 1):
-        Q, _, sigma = mech.static_balance(config, load_factor, loads, values)
-        K = mech.tangent_stiffness(config, sigma, load_factor, inputs=values)
+        Q, K = balance.residual_and_tangent(config)
         # Q - K dq = 0 on the DOFs proper, dq_k the move of the prescribed values
         dq = np.zeros_like(Q)
         dq[prescribed] = prescribed_values - config.q[prescribed]
@@ -330,8 +361,36 @@ def _newton(mech, config, load_factor, loads, values, prescribed_values, step_to
         if iteration == 1 and curvature is not None:
             before, ratio = curvature
             dq[free] = curvature_step(before[free], config.q[free], dq[free], ratio)
-        config = kin.solve(config.q + dq, config.x)
+        config = balance.moved(config, config.q + dq)
         if within(dq, step_tolerance, magnitudes=config.q):
-            return config, iteration
+            return balance.solved(config), iteration
     raise ConvergenceError(f"Newton did not converge in {max_iterations} iterations "
                            f"(last |dq| = {np.max(np.abs(dq)):.3e})")
+
+
+class _PlainBalance:
+    """The static balance and its tangent through the numpy `Mechanics`, the reference of
+    the engine's (`static_engine.EngineBalance`, the same methods): configurations are the
+    numpy kinematics' `Configuration`s, solved as soon as they are moved."""
+
+    def __init__(self, mech):
+        self.mech, self.model = mech, mech.model
+        self._load = (1.0, None, None)
+
+    def set_load(self, load_factor, loads=None, values=None):
+        """The load factor (unitless), nodal loads (NX,) N and port values (n_inputs,) N,
+        N m of the next balances."""
+        self._load = (load_factor, loads, values)
+
+    def residual_and_tangent(self, config):
+        """Q (NDOF,) N or N m and K = -dQ/dq (NDOF, NDOF) at config."""
+        load_factor, loads, values = self._load
+        Q, _, sigma = self.mech.static_balance(config, load_factor, loads, values)
+        return Q, self.mech.tangent_stiffness(config, sigma, load_factor, inputs=values)
+
+    def moved(self, config, q):
+        """The configuration at DOFs q (m, rad), solved from config's coordinates."""
+        return self.mech.kinematics.solve(q, config.x)
+
+    def solved(self, config):
+        return config

@@ -78,6 +78,10 @@ spatial   Issue 35, item 4 (`spatial.py`): one rhs of manipulator_control per DO
           matrix beside it); a spatial cantilever of 16 and 64 BEAMs (96, 384 DOFs): one
           implicit step (esdirk, rtol 1e-6) at 384 DOFs <= Exudyn's (the issue's 3.4 ms, not
           measured in the run), growing at most as n^1.2.
+statics   Issue 35, item 1 (`statics.py`): one static solve through the compiled engine over
+          the numpy reference (CPU, alternating): at most 1 where the engine is the statics'
+          default (manipulator_control); cantilevers of 96, 192, 384 DOFs and
+          manipulator_reduced for information.
 startup   Whole processes as a user starts them, warm cache, in CPU seconds (user + system):
           `python -c "import flexure.core"` (<= 0.5 s), `flexure analyze truss_1dof_x`
           (<= 0.5 s), `flexure loop --no-plot` (<= 1.5 s) beside Exudyn's whole process for
@@ -103,7 +107,8 @@ Usage
                                           [--markdown FILE]
 
 The row groups live in this folder's modules (loops, step_scan, refined, fmu_overhead,
-manipulator, spatial, latency, portable), the shared machinery in measure, table and stage_models.
+manipulator, spatial, statics, latency, portable), the shared machinery in measure, table and
+stage_models.
 
 Requires flexure and, for the peer columns, exudyn (``pip install ".[bench]"``); without
 exudyn the flexure side and the limits are still measured.
@@ -128,14 +133,15 @@ from .measure import log  # noqa: E402
 from .portable import portable  # noqa: E402
 from .refined import refined  # noqa: E402
 from .spatial import spatial  # noqa: E402
+from .statics import statics  # noqa: E402
 from .step_scan import step  # noqa: E402
 from .table import environment, markdown, text_table  # noqa: E402
 
-GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "spatial", "startup",
-          "portable")
+GROUPS = ("loop", "realtime", "step", "refined", "fmu", "manipulator", "spatial", "statics",
+          "startup", "portable")
 FUNCTIONS = {"loop": loop, "realtime": realtime, "step": step, "refined": refined, "fmu": fmu,
-             "manipulator": manipulator, "spatial": spatial, "startup": startup,
-             "portable": portable}
+             "manipulator": manipulator, "spatial": spatial, "statics": statics,
+             "startup": startup, "portable": portable}
 
 
 def run(groups=GROUPS, *, repeat=5, quick=False):

@@ -1,0 +1,87 @@
+"""The statics through the compiled engine against the numpy reference: CPU per static solve.
+
+`static_equilibrium(..., compiled=True)` (Newton's balance and tangent from the engine's
+operations, core/analysis/static_engine.py) over `compiled=False` (the numpy `Mechanics`),
+the same loads, two load steps, in one process, alternating, medians of CPU seconds
+(time.process_time: the shared machine's other load inflates walls far more); each model's
+engine packing made once before the timed runs, as a second solve of the same model finds
+it. The models:
+
+- `manipulator_control` (75 DOFs, 952 coordinates), 3 N on its x actuators;
+- BEAM cantilevers of 16, 32, 64 elements (96, 192, 384 DOFs,
+  `spatial.spatial_cantilever`) under 20 N at the tip (large deflection);
+- `manipulator_reduced` (507 DOFs), as `manipulator_control`.
+
+The ratios decide the statics' default path (`static_engine.preferred`: from 300 free
+coordinates, up to 150 DOFs): a model where the engine is the default (manipulator_control)
+meets its row when the ratio is at most 1; the other rows are for information (above 150
+DOFs the engine's dense tangent and M_bar cost more; below 300 free coordinates a solve
+costs less than the engine's start-up in a process, which these in-process figures leave
+out).
+
+Run alone: python -m examples.benchmarks.statics
+"""
+
+import time
+
+import numpy as np
+
+from .measure import alternate, log
+from .table import Row
+
+
+def _models(quick):
+    from flexure.core import load_scene
+
+    from .spatial import spatial_cantilever
+
+    def manipulator(name):
+        model = load_scene(name)
+        loads = np.zeros(model.nx)
+        loads[[port.coordinate for port in model.inputs]] = [3.0, 0.0] * 3
+        return model, loads
+
+    def cantilever(n):
+        model = spatial_cantilever(n)
+        return model, 20.0 * model.loads
+
+    models = {"manipulator_control": lambda: manipulator("manipulator_control"),
+              "cantilever, 16 BEAMs": lambda: cantilever(16),
+              "cantilever, 32 BEAMs": lambda: cantilever(32)}
+    if not quick:
+        models["cantilever, 64 BEAMs"] = lambda: cantilever(64)
+        models["manipulator_reduced"] = lambda: manipulator("manipulator_reduced")
+    return models
+
+
+def statics(*, repeat=5, quick=False):
+    """Rows: per model, the engine's static solve over the numpy one's (CPU s)."""
+    from flexure.core import static_equilibrium
+    from flexure.core.analysis.static_engine import preferred
+
+    rows = []
+    for label, make in _models(quick).items():
+        model, loads = make()
+        static_equilibrium(model, loads=0.01 * loads, load_steps=1, compiled=True)  # packs
+
+        def solve(compiled, model=model, loads=loads):
+            start = time.process_time()
+            solution = static_equilibrium(model, loads=loads, load_steps=2, compiled=compiled)
+            return time.process_time() - start, solution.iterations
+
+        t = alternate({"engine": lambda: solve(True), "numpy": lambda: solve(False)},
+                      repeat, f"statics {label} (CPU s)")
+        ratio = t["engine"].median / t["numpy"].median
+        default = preferred(model)
+        log(f"statics {label}: {model.ndof} DOFs, engine/numpy {ratio:.3g}")
+        rows.append(Row(f"static solve, {label} ({model.ndof} DOFs), engine"
+                        + (" (the default): <= numpy" if default else " (not the default)"),
+                        t["engine"].text(), f"numpy {t['numpy'].text()}", ratio,
+                        ratio <= 1.0 if default else None))
+    return rows
+
+
+if __name__ == "__main__":
+    from .table import text_table
+
+    print(text_table(statics(repeat=3), "static solves, engine over numpy (CPU s)"))
