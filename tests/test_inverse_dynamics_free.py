@@ -245,3 +245,11 @@ def test_a_renewed_newton_matrix_gives_the_same_motion(monkeypatch):
     renewed = free_inverse_dynamics(two_masses(), t, moved(0.1), outputs=["x1"])
     scale = np.max(np.abs(plain.forces))
     np.testing.assert_allclose(renewed.forces, plain.forces, rtol=0, atol=1e-9 * scale)
+
+
+def test_node_values_of_the_wrong_count_are_refused():
+    """Two steps have seven nodes: six values are refused, naming both counts."""
+    from flexure.core.analysis.inverse_dynamics_free import node_polynomial
+
+    with pytest.raises(ValueError, match="expected 7 node values for 2 steps, got 6"):
+        node_polynomial([0.0, 1.0, 2.0], np.zeros(6))
