@@ -197,7 +197,7 @@ def _check_zeros(model, zeros, spacing):
     """ConstraintError for an unstable zero that some step does not damp (|R(h lambda)| >=
     1)."""
     unstable = zeros[zeros.real > 0]
-    for h in np.unique(spacing):
+    for h in np.unique(np.round(spacing / spacing.max(), 9)) * spacing.max():
         grown = unstable[amplification(h * unstable) >= 1.0]
         if grown.size:
             raise ConstraintError(
@@ -217,15 +217,20 @@ class _Stepper:
         self.i = part.independent
         self.steps = np.tile(part.steps[self.i], 3)
         self.A_q, self.A_v = A_q, A_v
-        self.factors = {}
+        self.factored = (None, None)  # (h, LU): the last step's Newton matrix
 
     def factor(self, h):
-        if h not in self.factors:
+        """The LU of the Newton matrix at step h, kept while h stays within 1e-9 (the
+        spacings of h * arange(n) differ in their last bits; the matrix sets only how fast
+        Newton converges, not where)."""
+        last, lu = self.factored
+        if last is None or abs(h - last) > 1e-9 * h:
             n = self.i.size
             matrix = (np.eye(3 * n) - h * np.kron(RADAU_A, self.A_v)
                       - h * h * np.kron(RADAU_A @ RADAU_A, self.A_q))
-            self.factors[h] = scipy.linalg.lu_factor(matrix)
-        return self.factors[h]
+            lu = scipy.linalg.lu_factor(matrix)
+            self.factored = (h, lu)
+        return lu
 
     def step(self, t, h, q, v, guess):
         """(stage rates (3, n_i), the last iteration's evaluations at the stages)."""
@@ -238,7 +243,7 @@ class _Stepper:
                 end = q + h * RADAU_A[2] @ V
                 self.A_q, self.A_v = numerical_derivatives(self.part, t + h, end, V[2],
                                                            self.part.steps[i], h)
-                self.factors = {}
+                self.factored = (None, None)
                 renewed = True
             Q = q + h * RADAU_A @ V
             evaluations = [self.part.evaluate(t + c * h, Q[j], V[j])
