@@ -12,15 +12,15 @@ from examples import manipulator_feedforward
 @pytest.mark.slow
 def test_the_quick_comparison(capsys):
     """In the six loops on the nonlinear control model, the linear feedforward leaves the
-    end effector at least 3 times further off its path than the inverse dynamics' does
-    (measured 7.5) and turned at least 20 times more (measured 68); the forces replayed in
-    `simulate` give the loop's encoders within 20 nm (measured 6.1 nm: the loop's own
-    esdirk2 at rtol 1e-5)."""
+    end effector at least 100 times further off its path than the inverse dynamics' does
+    (measured 739; 7.5 with BDF2's forces) and turned at least 300 times more (measured
+    1674; 68 with BDF2's); the forces replayed in `simulate` give the loop's encoders within
+    20 nm (measured 6.4 nm: the loop's own esdirk2 at rtol 1e-5)."""
     results, _ = manipulator_feedforward.main(["--quick", "--no-figure"])
     _, rows = results["1 mm x"]
     worst = manipulator_feedforward.summary(rows)
-    assert np.max(worst["linear"][:3]) > 3 * np.max(worst["dynamic"][:3])
-    assert np.max(worst["linear"][3:]) > 20 * np.max(worst["dynamic"][3:])
+    assert np.max(worst["linear"][:3]) > 100 * np.max(worst["dynamic"][:3])
+    assert np.max(worst["linear"][3:]) > 300 * np.max(worst["dynamic"][3:])
     assert all(row["replay"] < 20e-9 for row in rows.values())
     assert "| 1 mm x | 1 | dynamic |" in capsys.readouterr().out
 
