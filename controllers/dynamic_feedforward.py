@@ -38,6 +38,7 @@ if TYPE_CHECKING:  # names for the annotations only
     from flexure.core import Model
     from flexure.core.analysis.inverse_dynamics_free import FreeInverseDynamics
 
+
 @dataclass(frozen=True)
 class DynamicFeedforward:
     """The loops' references (m, rad) at the samples k = 0 .. N (`reference`, (N+1, n_loops))
