@@ -5,6 +5,7 @@
     python examples/manipulator_feedforward.py --moves "2 mm x,6 mm x"   # others
     python examples/manipulator_feedforward.py --quick    # 1 mm x in 0.1 s, coarser (tests)
     python examples/manipulator_feedforward.py --check    # + the forward check below
+    python examples/manipulator_feedforward.py --kinds dynamic   # one feedforward's rows
 
 For each move of the end effector E (its x and y moved along a third-order profile in
 `duration`, its height and tilts held: manipulator_loop.targets), the six PID-like loops of
@@ -17,17 +18,20 @@ manipulator_loop.py (300 rad/s, 4 kHz) on the nonlinear control model (manipulat
 - **static**: the strokes and static forces of the nonlinear inverse statics
   (`move_path(..., kind="nonlinear")`) plus m y'' + c y' of the low-frequency model;
 - **dynamic**: the strokes and forces of the nonlinear inverse dynamics with the 69 other DOFs
-  free (`flexure.controllers.dynamic_feedforward`, BDF2 at `step`).
+  free (`flexure.controllers.dynamic_feedforward`, Radau IIA at `step`, 5 ms).
 
 The forces the loop applied are then replayed on the model in `simulate` (esdirk3, rtol 1e-8:
 tighter than the loop's own esdirk2 at 1e-5) to record E, and E's deviation from its intended
 path (its start plus the move, rotations zero) is taken over the move and the settling after
 it: position (nm) and the three rotations about the global axes (nrad).
 
-`--check` (the forward check): the dynamic feedforward's forces alone, without the loop,
-drive the model in `simulate` (CVODE BDF, rtol 1e-9, the forces a cubic spline through the
-inverse dynamics' steps), at two steps; E's largest deviation from the path shrinks with the
-step as BDF2's O(h^2).
+`--check` (the forward check): the inverse dynamics' forces alone, without the loop, drive
+the model in `simulate` along the 4 mm x move in 1 s and 0.25 s after it (CVODE BDF; the
+forces the piecewise cubic through each step's nodes, `FreeInverseDynamics.force_polynomial`),
+at steps of 5 and 2.5 ms. Per step: E's largest deviation from the path at rtol 1e-8 and at
+1e-11, and the run's own error at 1e-8 (its difference from the run at 1e-11): the forces
+reproduce the path within the integrator's tolerance where the deviation at 1e-8 is no larger
+than that own error. With `--quick` the check takes the move's first 0.2 s at 1.25 ms.
 """
 
 import argparse
@@ -39,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from examples.manipulator_loop import CONTROL, design_loops, targets
-from flexure.controllers.dynamic_feedforward import dynamic_feedforward
+from flexure.controllers.dynamic_feedforward import dynamic_feedforward, move_inverse_dynamics
 from flexure.controllers.move_path import move_path
 from flexure.controllers.profiles import ThirdOrderProfile
 from flexure.controllers.runner import run_loop
@@ -94,12 +98,12 @@ def deviation(model, start, move, t, effector, duration):
     return effector - intended
 
 
-def run_move(model, design, label, move, *, duration, settle, fs, step):
+def run_move(model, design, label, move, *, duration, settle, fs, step, kinds=KINDS):
     """{kind: {"deviation": (n, 6), "t": (n,), "replay": m, "loop": max error / stroke}}."""
     wanted = targets(*move)
     start = effector_start(model)
     rows = {}
-    for kind in KINDS:
+    for kind in kinds:
         begin = time.perf_counter()
         if kind == "dynamic":
             ff = dynamic_feedforward(model, wanted, duration=duration, settle=settle, fs=fs,
@@ -169,45 +173,76 @@ def plot(results, path):
     plt.close(fig)
 
 
-def forward_check(model, move, *, duration, settle, steps):
-    """The dynamic feedforward's forces alone in `simulate` (CVODE BDF, rtol 1e-9): per step
-    (s), E's largest deviation from its path (position m, rotation rad)."""
-    from scipy.interpolate import CubicSpline
-
+def forward_check(model, move, *, duration, window, steps, rtol=1e-8, tight=1e-11):
+    """The forward check: the inverse dynamics' forces alone in `simulate` (CVODE BDF), the
+    piecewise cubic through each step's nodes, over [0, window] (s) of the move in
+    `duration`. Per step (s): E's largest deviation from its path at `rtol` ("path") and at
+    `tight` ("tight"), and the run's own error at `rtol` ("own", its largest difference from
+    the run at `tight`), each as (position m, rotation rad); "seconds" the inverse
+    dynamics' wall time."""
     start = effector_start(model)
+    t = np.linspace(0.0, window, 501)
     rows = {}
     for step in steps:
-        ff = dynamic_feedforward(model, targets(*move), duration=duration, settle=settle,
-                                 step=step)
-        inverse = ff.inverse
-        spline = CubicSpline(inverse.times, inverse.forces, axis=0)
-        t = np.linspace(0.0, duration + settle, 501)
-        inputs = {name: (lambda s, j=j, spline=spline: float(spline(s)[j]))
+        begin = time.perf_counter()
+        inverse = move_inverse_dynamics(model, targets(*move), duration=duration, end=window,
+                                        step=step, tolerance=1e-14)
+        seconds = time.perf_counter() - begin
+        polynomial = inverse.force_polynomial()
+        inputs = {name: (lambda s, j=j, polynomial=polynomial: float(polynomial(s)[j]))
                   for j, name in enumerate(inverse.input_names)}
-        run = simulate(model, float(t[-1]), inputs=inputs, rtol=1e-9, output_times=t)
-        effector = np.column_stack([run.outputs[name] for name in
-                                    ("E_x", "E_y", "E_z", "E_rx", "E_ry", "E_rz")])
-        error = np.abs(deviation(model, start, move, t, effector, duration))
-        rows[step] = (float(np.max(error[:, :3])), float(np.max(error[:, 3:])))
+        effector = {}
+        for tolerance in (rtol, tight):
+            run = simulate(model, float(t[-1]), inputs=inputs, method="cvode-bdf",
+                           rtol=tolerance, output_times=t)
+            effector[tolerance] = np.column_stack([run.outputs[name] for name in (
+                "E_x", "E_y", "E_z", "E_rx", "E_ry", "E_rz")])
+
+        def largest(values):
+            return float(np.max(values[:, :3])), float(np.max(values[:, 3:]))
+
+        rows[step] = {
+            "path": largest(np.abs(deviation(model, start, move, t, effector[rtol], duration))),
+            "tight": largest(np.abs(deviation(model, start, move, t, effector[tight],
+                                              duration))),
+            "own": largest(np.abs(effector[rtol] - effector[tight])), "seconds": seconds}
+        log(f"  forward check, step {step * 1e3:g} ms: {time.perf_counter() - begin:.0f} s")
     return rows
+
+
+def print_check(checks, rtol=1e-8, tight=1e-11):
+    print(f"\n| step (ms) | E position off the path at rtol {rtol:g} (nm) | at {tight:g} | "
+          f"the run's own error at {rtol:g} | rotation off the path at {rtol:g} (nrad) | "
+          f"at {tight:g} | own error |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for step, row in checks.items():
+        values = [row[key][part] * 1e9 for part in (0, 1) for key in ("path", "tight", "own")]
+        print(f"| {step * 1e3:g} | " + " | ".join(f"{v:.3f}" for v in values) + " |")
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="1 mm x in 0.1 s, step 2.5 ms: a coarse run (the tests')")
+                        help="1 mm x in 0.1 s, step 2.5 ms, and the forward check on the "
+                        "first 0.2 s only: a short run (the tests')")
     parser.add_argument("--check", action="store_true",
                         help="the forward check of the dynamic feedforward's forces")
     parser.add_argument("--no-figure", action="store_true", help="write no PNG")
+    parser.add_argument("--kinds", default=",".join(KINDS),
+                        help="the feedforwards, comma-separated (default %(default)s; the "
+                        "figure needs all three)")
     parser.add_argument("--moves", default="1 mm x,4 mm x,6 mm xy",
                         help=f"the moves, comma-separated, of: {', '.join(MOVES)} (default "
                         "%(default)s; empty: none)")
     args = parser.parse_args(argv)
-    duration, settle, step = (0.1, 0.02, 2.5e-3) if args.quick else (1.0, 0.25, 2e-3)
+    duration, settle, step = (0.1, 0.02, 2.5e-3) if args.quick else (1.0, 0.25, 5e-3)
     labels = [label.strip() for label in args.moves.split(",") if label.strip()]
     unknown = [label for label in labels if label not in MOVES]
     if unknown:
         parser.error(f"--moves: unknown {', '.join(unknown)}; expected of {', '.join(MOVES)}")
+    kinds = tuple(kind.strip() for kind in args.kinds.split(",") if kind.strip())
+    if not kinds or set(kinds) - set(KINDS):
+        parser.error(f"--kinds: expected some of {', '.join(KINDS)}, got {args.kinds!r}")
     moves = {"1 mm x": MOVES["1 mm x"]} if args.quick else {label: MOVES[label]
                                                              for label in labels}
     model = control_model()
@@ -216,20 +251,18 @@ def main(argv=None):
     for label, move in moves.items():
         log(f"{label}:")
         results[label] = (move, run_move(model, design, label, move, duration=duration,
-                                         settle=settle, fs=4000.0, step=step))
+                                         settle=settle, fs=4000.0, step=step,
+                                         kinds=kinds))
         print_table({label: results[label]}, file=sys.stderr)  # each move as it ends
     print_table(results)
-    if results and not args.no_figure and not args.quick:
+    if results and not args.no_figure and not args.quick and kinds == KINDS:
         plot(results, FIGURES / "manipulator_feedforward.png")
     checks = None
-    if args.check:
-        steps = (5e-3, 2.5e-3) if args.quick else (4e-3, 2e-3)
-        checks = forward_check(model, MOVES["4 mm x"] if not args.quick else MOVES["1 mm x"],
-                               duration=duration, settle=settle, steps=steps)
-        print("\n| step (ms) | E position, largest deviation (nm) | rotation (nrad) |")
-        print("| ---: | ---: | ---: |")
-        for step, (position, rotation) in checks.items():
-            print(f"| {step * 1e3:g} | {position * 1e9:.2f} | {rotation * 1e9:.2f} |")
+    if args.check:  # the 4 mm x move in 1 s, its first 0.2 s with --quick
+        window, steps = (0.2, (1.25e-3,)) if args.quick else (1.25, (5e-3, 2.5e-3))
+        checks = forward_check(model, MOVES["4 mm x"], duration=1.0, window=window,
+                               steps=steps)
+        print_check(checks)
     return results, checks
 
 

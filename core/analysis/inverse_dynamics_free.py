@@ -8,46 +8,52 @@ of motion with the outputs as constraints form a DAE,
     M(q) qddot = Q(q, qdot) + B(q) w,     y(x(q)) = y*(t)
 
 (M = DF^T M_x DF, Q = DF^T (f - M_x (D2F qdot) qdot - h - De^T sigma_c), B = DF^T b). It is
-solved in minimal coordinates (coordinate partitioning): at the start, QR with column
-pivoting on C = (dy/dx) DF picks n_y dependent DOFs q_d whose block C_d is best conditioned;
-the others, q_i, are the coordinates integrated. At every evaluation, given (t, q_i, qdot_i):
+solved in minimal coordinates (coordinate partitioning, inverse_dynamics_partition.py): the
+free DOFs q_i are integrated; at every evaluation the dependent q_d follow from the outputs,
+and the free DOFs' accelerations a(t, q_i, qdot_i) and the forces w from one square system.
 
-1. positions: Newton on q_d for y(q) = y*(t) (C_d dq_d = y* - y), warm-started;
-2. velocities: C_d qdot_d = y*' - C_i qdot_i;
-3. accelerations and forces together: with qddot_d = C_d^-1 (y*'' - c_y - C_i qddot_i)
-   (c_y the outputs' acceleration at qddot = 0, as in `inverse_dynamics`), the balance
-   becomes one square system of NDOF rows
+Integration: Radau IIA with three stages (order 5 at the steps, stage order 3; A- and
+L-stable, stiffly accurate), one step from each given time to the next (any increasing
+times: a step may end where the path has a kink, e.g. a third-order profile's knots, and the
+order holds between them). On q' = v, v' = a the stage rates V_j are the unknowns,
 
-       [M_i - M_d C_d^-1 C_i,  -B] [qddot_i; w] = Q - M_d C_d^-1 (y*'' - c_y)
+    Q_j = q_n + h sum_k A_jk V_k,   V_j = v_n + h sum_k A_jk a(t_n + c_j h, Q_j, V_j),
 
-   (M_i, M_d the columns of M). It is singular where the forces do not reach the outputs'
-   accelerations (relative degree above two: a force on one mass, the output on another
-   joined by a massless spring): refused.
+solved by Newton with the matrix I - h A (x) A_v - h^2 A^2 (x) A_q of the linearisation at
+the start (A_q, A_v the accelerations' derivatives by q_i and qdot_i), until every |h dV_j|
+is within `tolerance` of its DOF's unit; a step still iterating after 8 iterations renews
+A_q, A_v by forward differences where it is (the rest's go stale along a long stroke: the
+manipulator's 6 mm). The last stage is the step's end (c_3 = 1). The outputs hold the path at
+every time to that tolerance; the free DOFs and the forces at the steps carry the global
+error O(h^5), the forces at the inner stages O(h^4) (measured in
+tests/test_inverse_dynamics_free.py).
 
-The ODE in z = [q_i, qdot_i] is integrated by BDF2 (backward differentiation, order 2, L- and
-A-stable) with a fixed step, the given times' spacing h, its first step backward Euler;
-each step's implicit equation is solved by Newton on qdot_i with the matrix I - b (A_v + b A_q)
-(b = 2h/3, h on the first step) of the linearisation at the start (A_q, A_v the
-accelerations' derivatives by q_i and qdot_i), until every |b dqdot_i| is within `tolerance`
-of its DOF's unit; a step still iterating after 8 iterations renews A_q, A_v by forward
-differences where it is (the rest's go stale along a long stroke: the manipulator's 6 mm).
-The outputs hold the path at every time to that tolerance; the free DOFs and the forces
-carry the global error O(h^2) (the order is measured in tests/test_inverse_dynamics_free.py).
+Forces between the steps. Each step has four nodes, its start, its two inner stages
+t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through
+the four, step by step, is the force history w(t) that a forward simulation takes
+(`FreeInverseDynamics.force_polynomial`: continuous, O(h^4)). A forward run driven by it
+reproduces the path within its own tolerance where h is small enough for the forces'
+O(h^4) to lie below that, and `tolerance` tight enough: what each step's Newton leaves adds
+up over the steps (docs/manipulator.md, the forward check: 1e-10 was the largest error on
+the manipulator at 1.25 ms, 1e-14 is not).
 
 Zero dynamics. The free DOFs' motion with the outputs held is the system's zero dynamics,
 the eigenvalues of [[0, I], [A_q, A_v]] (its transmission zeros). A zero in the right half
 plane (non-minimum phase) makes the exact inverse non-causal. A flexure's consistent beam
 masses couple its nodes, and so give real zeros at about sqrt(k / m_c), the inverse of a
-travel time along the flexure (3.1e5 1/s on manipulator_control). BDF2 with h lambda > 4
-takes such a fast unstable mode on its bounded branch, the quasi-static one that the
-non-causal stable inversion gives to O(1 / (lambda T)) for a path slower than it (T its time
-scale). An unstable zero with 0 < h Re(lambda) <= 4 cannot be integrated this way:
+travel time along the flexure (3.1e5 1/s on manipulator_control). The step's amplification
+of such a mode is Radau IIA's stability function R(h lambda), |R(z)| -> 3 / |z| for large z
+(L-stability): where |R(h lambda)| < 1 (h lambda > 11.84 on the real axis) the step damps
+the mode and takes its bounded branch, the quasi-static one that the non-causal stable
+inversion gives to O(1 / (lambda T)) for a path slower than it (T its time scale). An
+unstable zero with |R(h lambda)| >= 1 at some step cannot be integrated this way:
 ConstraintError names it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -55,164 +61,211 @@ import scipy.linalg
 
 from ..errors import ConstraintError, ConvergenceError, SceneError
 from ..mechanics.mechanics import Mechanics
-from ..mechanics.ports import input_columns, output_rows, output_value, position_port
+from ..mechanics.ports import input_columns, output_value, position_port
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
-from .inverse_dynamics import (
-    InverseDynamics,
-    Path,
-    _output_convective,
-    _ports,
-    input_ports,
-    sample_path,
+from .inverse_dynamics import InverseDynamics, Path, _ports, input_ports, sample_path
+from .inverse_dynamics_partition import (
+    Partitioned,
+    linear_derivatives,
+    numerical_derivatives,
+    zero_dynamics,
 )
 from .stresses import dynamic_stress_resultants
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
+    from scipy.interpolate import PPoly
 
     from ..model import Model
 
-CONDITION = 1e12  # the largest condition number of C_d and of the balance's matrix
 RENEW_AFTER = 8  # Newton iterations of a step before its matrix is renewed
 
-
-class _Partitioned:
-    """The equations of motion in the minimal coordinates q_i (module docstring)."""
-
-    def __init__(self, model, mech, path, out_ports, in_ports, config, tolerance,
-                 max_iterations):
-        self.model, self.mech, self.path = model, mech, path
-        self.out_ports, self.in_ports = out_ports, in_ports
-        self.max_iterations = max_iterations
-        ndof = model.declared_dof_count
-        C = output_rows(model, config.x, config.DF, out_ports)
-        _, _, pivots = scipy.linalg.qr(C, pivoting=True, mode="economic")
-        n_y = len(out_ports)
-        self.dependent = np.sort(pivots[:n_y])
-        self.independent = np.setdiff1d(np.arange(ndof), self.dependent)
-        if np.linalg.cond(C[:, self.dependent]) > CONDITION:
-            raise ConstraintError(
-                f"{model.source}: inverse dynamics of {model.name!r}: the prescribed outputs "
-                f"{', '.join(p.name for p in out_ports)} do not move independently (their "
-                "Jacobian C = (dy/dx) DF has rank below their count)")
-        self.steps = dof_tolerances(model, tolerance)
-        self.config = config
-
-    def solve_positions(self, t, q_i, values):
-        """The configuration with q_i and the outputs at `values` (Newton on q_d)."""
-        model, kin, d = self.model, self.mech.kinematics, self.dependent
-        q = self.config.q.copy()
-        q[self.independent] = q_i
-        config = kin.solve(q, self.config.x)
-        for _ in range(self.max_iterations):
-            C = output_rows(model, config.x, config.DF, self.out_ports)
-            current = np.array([output_value(model, port, config.x) for port in self.out_ports])
-            dq = np.linalg.solve(C[:, d], values - current)
-            q = config.q.copy()
-            q[d] += dq
-            config = kin.solve(q, config.x)
-            if within(dq, self.steps[d], magnitudes=config.q[d]):
-                self.config = config
-                return config
-        raise ConvergenceError(f"{model.source}: inverse dynamics of {model.name!r} at t = "
-                               f"{t:g} s: the positions of the prescribed outputs did not "
-                               f"converge in {self.max_iterations} iterations")
-
-    def evaluate(self, t, q_i, qdot_i):
-        """(config, qdot, qddot, w) at time t: the motion and the forces (module docstring)."""
-        model, mech, d, i = self.model, self.mech, self.dependent, self.independent
-        values, rates, accelerations = sample_path(model, self.path, t, len(self.out_ports))
-        config = self.solve_positions(t, q_i, values)
-        C = output_rows(model, config.x, config.DF, self.out_ports)
-        C_d = scipy.linalg.lu_factor(C[:, d])
-        qdot = np.zeros(model.declared_dof_count)
-        qdot[i] = qdot_i
-        qdot[d] = scipy.linalg.lu_solve(C_d, rates - C[:, i] @ qdot_i)
-        convective = mech.kinematics.convective_acceleration(config, qdot)
-        wanted = accelerations - _output_convective(model, self.out_ports, config, qdot,
-                                                    convective)
-        inertia = mech.inertia
-        xdot = config.DF @ qdot
-        M_x = inertia.mass_matrix(config.x)
-        sigma_c = mech.constitutive_stress(config, config.De @ xdot)
-        r = (mech.external_force(config.x) - M_x @ convective
-             - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
-        M = config.DF.T @ (M_x @ config.DF)
-        B = config.DF.T @ input_columns(model, config.x, self.in_ports)
-        system = np.hstack([M[:, i] - M[:, d] @ scipy.linalg.lu_solve(C_d, C[:, i]), -B])
-        right = config.DF.T @ r - M[:, d] @ scipy.linalg.lu_solve(C_d, wanted)
-        _check_reach(model, system, self.in_ports, t)
-        unknowns = np.linalg.solve(system, right)
-        qddot = np.zeros_like(qdot)
-        qddot[i] = unknowns[:i.size]
-        qddot[d] = scipy.linalg.lu_solve(C_d, wanted - C[:, i] @ qddot[i])
-        return config, qdot, qddot, unknowns[i.size:]
+_S6 = np.sqrt(6.0)
+# Radau IIA, three stages (Hairer & Wanner, Solving ODEs II, Table IV.5.6)
+RADAU_C = np.array([(4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0])
+RADAU_A = np.array([
+    [(88.0 - 7.0 * _S6) / 360.0, (296.0 - 169.0 * _S6) / 1800.0, (-2.0 + 3.0 * _S6) / 225.0],
+    [(296.0 + 169.0 * _S6) / 1800.0, (88.0 + 7.0 * _S6) / 360.0, (-2.0 - 3.0 * _S6) / 225.0],
+    [(16.0 - _S6) / 36.0, (16.0 + _S6) / 36.0, 1.0 / 9.0]])
+NODES = np.concatenate([[0.0], RADAU_C])  # a step's four nodes, in units of its length
 
 
-def _check_reach(model, system, in_ports, t):
-    """ConstraintError where the balance's matrix [M_i - M_d C_d^-1 C_i, -B] is singular."""
-    if np.linalg.cond(system) > CONDITION:
-        raise ConstraintError(
-            f"{model.source}: inverse dynamics of {model.name!r} at t = {t:g} s: the force "
-            f"inputs {', '.join(p.name for p in in_ports)} do not reach the accelerations of "
-            "the prescribed outputs (their balance is singular: the outputs' relative degree "
-            "is above two, e.g. a massless spring between an input and an output)")
-
-
-def _linear_derivatives(part, model, mech, rest, config, t0):
-    """(A_q, A_v): the free DOFs' accelerations' derivatives by q_i and qdot_i at the rest
-    `config`, from the linearisation M0, C0, K of the model there (s^-2, s^-1)."""
-    from .linearization import linearize
-
-    lin = linearize(model, rest, mechanics=mech)
-    d, i = part.dependent, part.independent
-    C = output_rows(model, config.x, config.DF, part.out_ports)
-    S_i = np.zeros((model.declared_dof_count, i.size))
-    S_i[i] = np.eye(i.size)
-    S_i[d] = -np.linalg.solve(C[:, d], C[:, i])
-    B = lin.DF.T @ input_columns(model, config.x, part.in_ports)
-    system = np.hstack([lin.M0 @ S_i, -B])
-    _check_reach(model, system, part.in_ports, t0)
-    A_q = np.linalg.solve(system, -lin.K @ S_i)[:i.size]
-    A_v = np.linalg.solve(system, -lin.C0 @ S_i)[:i.size]
-    return A_q, A_v
-
-
-def _numerical_derivatives(part, t, q_i, qdot_i, steps, h):
-    """(A_q, A_v) at (t, q_i, qdot_i) by forward differences of the accelerations, each DOF
-    moved by 1e3 times its Newton tolerance (and its rate by that over h): the Newton matrix
-    renewed where the linearisation at rest no longer converges (2 n_i + 1 evaluations)."""
-    i = part.independent
-    base = part.evaluate(t, q_i, qdot_i)[2][i]
-    A_q, A_v = np.empty((i.size, i.size)), np.empty((i.size, i.size))
-    for j in range(i.size):
-        delta = 1e3 * steps[j]
-        moved = q_i.copy()
-        moved[j] += delta
-        A_q[:, j] = (part.evaluate(t, moved, qdot_i)[2][i] - base) / delta
-        moved = qdot_i.copy()
-        moved[j] += delta / h
-        A_v[:, j] = (part.evaluate(t, q_i, moved)[2][i] - base) / (delta / h)
-    return A_q, A_v
-
-
-def zero_dynamics(A_q: np.ndarray, A_v: np.ndarray) -> np.ndarray:
-    """The eigenvalues (1/s) of the free DOFs' motion with the outputs held, linearised:
-    of [[0, I], [A_q, A_v]] (the transmission zeros from the inputs to the outputs).
+def amplification(z: ArrayLike) -> np.ndarray:
+    """|R(z)|: Radau IIA's amplification of a mode y' = lambda y over a step, z = h lambda.
 
     Parameters
     ----------
-    A_q, A_v : ndarray (n_i, n_i)
-        s^-2 and s^-1: the accelerations' derivatives by the free DOFs and their rates.
+    z : array_like complex
+        h lambda (dimensionless).
 
     Returns
     -------
-    ndarray (2 n_i,) complex, in decreasing real part.
+    ndarray of float: |1 + z b^T (I - z A)^-1 1|, b the last row of A.
     """
-    n = A_q.shape[0]
-    values = np.linalg.eigvals(np.block([[np.zeros((n, n)), np.eye(n)], [A_q, A_v]]))
-    return values[np.argsort(-values.real)]
+    z = np.atleast_1d(np.asarray(z, dtype=complex))
+    ones = np.ones(3)
+    return np.array([abs(1.0 + value * RADAU_A[2] @ np.linalg.solve(
+        np.eye(3) - value * RADAU_A, ones)) for value in z])
+
+
+def _lagrange(tau: np.ndarray) -> np.ndarray:
+    """(len(tau), 4): the cubic Lagrange basis on a step's nodes at tau (its fraction)."""
+    basis = np.ones((tau.size, NODES.size))
+    for j, node in enumerate(NODES):
+        for k, other in enumerate(NODES):
+            if k != j:
+                basis[:, j] *= (tau - other) / (node - other)
+    return basis
+
+
+def node_polynomial(times: ArrayLike, values: ArrayLike) -> PPoly:
+    """The cubic through each step's four nodes, step by step, as a piecewise polynomial.
+
+    Parameters
+    ----------
+    times : array_like (n_t,)
+        s, increasing: the steps' ends.
+    values : array_like (3 n_t - 2, ...)
+        The values at the nodes in time order: times[0], then per step its two inner stages
+        and its end (`FreeInverseDynamics.node_times`), in any unit.
+
+    Returns
+    -------
+    scipy.interpolate.PPoly
+        Continuous at the steps' ends, exact at the nodes; its derivative, antiderivative and
+        `integrate` are the polynomials'.
+    """
+    from scipy.interpolate import PPoly
+
+    times = np.asarray(times, dtype=float)
+    values = np.asarray(values, dtype=float)
+    n = times.size - 1
+    if values.shape[0] != 3 * n + 1:
+        raise ValueError(f"expected {3 * n + 1} node values for {n} steps, got "
+                         f"{values.shape[0]}")
+    # power coefficients in tau of the Lagrange basis: rows tau^3, tau^2, tau, 1
+    vandermonde = np.vander(NODES, 4)
+    to_power = np.linalg.inv(vandermonde)  # (4 powers, 4 nodes)
+    index = 3 * np.arange(n)[:, None] + np.arange(4)[None, :]  # (n, 4) nodes of each step
+    local = values[index]  # (n, 4, ...)
+    coefficients = np.einsum("pj,nj...->pn...", to_power, local)
+    h = np.diff(times)
+    scale = h[None, :] ** -np.arange(3, -1, -1)[:, None]  # tau = (t - t_n) / h
+    coefficients = coefficients * scale.reshape(scale.shape + (1,) * (values.ndim - 1))
+    return PPoly(coefficients, times)
+
+
+@dataclass
+class FreeInverseDynamics(InverseDynamics):
+    """`InverseDynamics` at the given times, plus every step's inner stages (module
+    docstring): node_times (3 n_t - 2,) s, the times and the stages in order; node_forces
+    (3 n_t - 2, n_inputs) N or N m and node_x (3 n_t - 2, NX) the coordinates there."""
+
+    node_times: np.ndarray | None = None
+    node_forces: np.ndarray | None = None
+    node_x: np.ndarray | None = None
+
+    def force_polynomial(self) -> PPoly:
+        """The forces between the steps: the cubic through each step's four nodes.
+
+        Returns
+        -------
+        scipy.interpolate.PPoly
+            t (s) -> forces (n_inputs,) in N or N m, in `input_names` order.
+        """
+        return node_polynomial(self.times, self.node_forces)
+
+
+def _start(model, mech, path, out_ports, times):
+    """(rest, config): the static equilibrium where the path must start (SceneError if not)."""
+    from .statics import static_equilibrium
+
+    rest = static_equilibrium(model, mechanics=mech)
+    config = mech.kinematics.solve(rest.q, rest.x)
+    values = sample_path(model, path, times[0], len(out_ports))[0]
+    start = np.array([output_value(model, port, config.x) for port in out_ports])
+    scale = dof_tolerances(model, 1.0).max()
+    off = np.abs(values - start) > 1e-9 * scale
+    if np.any(off):
+        name = out_ports[int(np.argmax(off))].name
+        raise SceneError(f"{model.source}: the path must start where {model.name!r} rests: "
+                         f"output {name!r} is {start[np.argmax(off)]:.9g} there, the path "
+                         f"gives {values[np.argmax(off)]:.9g} at t = {times[0]:g} s")
+    return rest, config
+
+
+def _check_zeros(model, zeros, spacing):
+    """ConstraintError for an unstable zero that some step does not damp (|R(h lambda)| >=
+    1)."""
+    unstable = zeros[zeros.real > 0]
+    for h in np.unique(np.round(spacing / spacing.max(), 9)) * spacing.max():
+        grown = unstable[amplification(h * unstable) >= 1.0]
+        if grown.size:
+            raise ConstraintError(
+                f"{model.source}: inverse dynamics of {model.name!r}: the zero dynamics (the "
+                f"free DOFs with the outputs held) have an unstable mode at {grown[0]:.6g} "
+                f"1/s that a step of {h:.6g} s does not damp (|R(h lambda)| >= 1; on the "
+                f"real axis h lambda must exceed 11.84, h > {11.85 / abs(grown[0]):.3g} s): "
+                "the outputs cannot be followed causally (non-minimum phase); larger steps "
+                "take only such fast modes on their bounded branch")
+
+
+class _Stepper:
+    """Radau IIA steps of the free DOFs (module docstring), with the Newton matrices per h."""
+
+    def __init__(self, part, A_q, A_v, max_iterations, model):
+        self.part, self.model, self.max_iterations = part, model, max_iterations
+        self.i = part.independent
+        self.steps = np.tile(part.steps[self.i], 3)
+        self.A_q, self.A_v = A_q, A_v
+        self.factored = (None, None)  # (h, LU): the last step's Newton matrix
+
+    def factor(self, h):
+        """The LU of the Newton matrix at step h, kept while h stays within 1e-9 (the
+        spacings of h * arange(n) differ in their last bits; the matrix sets only how fast
+        Newton converges, not where)."""
+        last, lu = self.factored
+        if last is None or abs(h - last) > 1e-9 * h:
+            n = self.i.size
+            matrix = (np.eye(3 * n) - h * np.kron(RADAU_A, self.A_v)
+                      - h * h * np.kron(RADAU_A @ RADAU_A, self.A_q))
+            lu = scipy.linalg.lu_factor(matrix)
+            self.factored = (h, lu)
+        return lu
+
+    def step(self, t, h, q, v, guess):
+        """(stage rates (3, n_i), the last iteration's evaluations at the stages)."""
+        n, i = self.i.size, self.i
+        V = guess.copy()
+        renewed = False
+        for iteration in range(self.max_iterations):
+            if iteration == RENEW_AFTER and not renewed:
+                # the matrix of the rest has gone stale along a long stroke: renew it here
+                end = q + h * RADAU_A[2] @ V
+                self.A_q, self.A_v = numerical_derivatives(self.part, t + h, end, V[2],
+                                                           self.part.steps[i], h)
+                self.factored = (None, None)
+                renewed = True
+            Q = q + h * RADAU_A @ V
+            evaluations = [self.part.evaluate(t + c * h, Q[j], V[j])
+                           for j, c in enumerate(RADAU_C)]
+            accelerations = np.array([found[2][i] for found in evaluations])
+            residual = v + h * RADAU_A @ accelerations - V
+            dV = scipy.linalg.lu_solve(self.factor(h), residual.reshape(-1)).reshape(3, n)
+            V = V + dV
+            if within(h * dV.reshape(-1), self.steps):
+                return V, evaluations
+        raise ConvergenceError(f"{self.model.source}: inverse dynamics of "
+                               f"{self.model.name!r}: the step to t = {t + h:g} s did not "
+                               f"converge in {self.max_iterations} Newton iterations")
+
+
+def _predicted(v_start, V, h_before, h):
+    """The stage rates of the next step extrapolated from the last step's cubic through
+    (v at its start, its stage rates)."""
+    tau = 1.0 + RADAU_C * h / h_before
+    return _lagrange(tau) @ np.vstack([v_start, V])
 
 
 @blas_threads()
@@ -220,7 +273,7 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
                           outputs: Sequence[str] | None = None,
                           inputs: Sequence[str] | None = None, tolerance: float = 1e-12,
                           max_iterations: int = 30,
-                          mechanics: Mechanics | None = None) -> InverseDynamics:
+                          mechanics: Mechanics | None = None) -> FreeInverseDynamics:
     """The input forces that make `model` follow `path`, the DOFs the outputs leave free
     integrated from rest (module docstring: the method, its order and tolerance).
 
@@ -229,8 +282,9 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
     model : Model
         Without kinematic inputs or actuators.
     times : array_like (n_t,)
-        s, equally spaced (the BDF2 step h is their spacing), n_t >= 2: the motion starts at
-        rest at the static equilibrium under the scene's loads (the inputs zero) at times[0].
+        s, increasing, n_t >= 2: the steps' ends (Radau IIA from each to the next; a kink of
+        the path should be one of them). The motion starts at rest at the static
+        equilibrium under the scene's loads (the inputs zero) at times[0].
     path : callable
         path(t) -> (values, rates, accelerations), each (n_outputs,): the prescribed outputs
         in `outputs` order, m, m/s, m/s^2 (rad, rad/s, rad/s^2 on an angle); its values at
@@ -249,18 +303,19 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
 
     Returns
     -------
-    InverseDynamics
-        The forces (N, N m) and the motion at `times`; no efforts (no kinematic inputs).
+    FreeInverseDynamics
+        The forces (N, N m) and the motion at `times`, the forces and coordinates at the
+        steps' inner stages, the forces between (`force_polynomial`); no efforts.
 
     Raises
     ------
     SceneError
-        An unknown or unsuitable output or input name, unequal counts, times not equally
-        spaced and increasing, a path of the wrong shape, not finite, or not starting at the
-        rest; a model with kinematic inputs (`inverse_dynamics` takes them, nothing free).
+        An unknown or unsuitable output or input name, unequal counts, times not finite and
+        increasing, a path of the wrong shape, not finite, or not starting at the rest; a
+        model with kinematic inputs (`inverse_dynamics` takes them, nothing free).
     ConstraintError
         The outputs are not independent, the inputs do not reach their accelerations, or the
-        zero dynamics have an unstable mode the step cannot damp (0 < h Re(lambda) <= 4).
+        zero dynamics have an unstable mode a step does not damp (|R(h lambda)| >= 1).
     ConvergenceError
         A position solve or a step's Newton does not converge.
     """
@@ -273,78 +328,44 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
     out_ports, in_ports = _resolved_ports(model, outputs, inputs)
     times = np.asarray(times, dtype=float).reshape(-1)
     spacing = np.diff(times)
-    if (times.size < 2 or not np.all(np.isfinite(times)) or np.any(spacing <= 0)
-            or np.ptp(spacing) > 1e-9 * spacing[0]):
+    if times.size < 2 or not np.all(np.isfinite(times)) or np.any(spacing <= 0):
         raise SceneError(f"{model.source}: inverse dynamics with free DOFs needs at least two "
-                         "finite, increasing, equally spaced times (the step), got "
+                         "finite, increasing times (the steps' ends), got "
                          f"{np.array2string(times, threshold=8)}")
-    h = float(spacing[0])
-    from .statics import static_equilibrium
-
-    rest = static_equilibrium(model, mechanics=mech)
-    config = mech.kinematics.solve(rest.q, rest.x)
-    values = sample_path(model, path, times[0], len(out_ports))[0]
-    start = np.array([output_value(model, port, config.x) for port in out_ports])
-    scale = dof_tolerances(model, 1.0).max()
-    off = np.abs(values - start) > 1e-9 * scale
-    if np.any(off):
-        name = out_ports[int(np.argmax(off))].name
-        raise SceneError(f"{model.source}: the path must start where {model.name!r} rests: "
-                         f"output {name!r} is {start[np.argmax(off)]:.9g} there, the path "
-                         f"gives {values[np.argmax(off)]:.9g} at t = {times[0]:g} s")
-    part = _Partitioned(model, mech, path, out_ports, in_ports, config, tolerance,
-                        max_iterations)
-    A_q, A_v = _linear_derivatives(part, model, mech, rest, config, times[0])
-    zeros = zero_dynamics(A_q, A_v)
-    slow = zeros[(zeros.real > 0) & (h * zeros.real <= 4.0)]
-    if slow.size:
-        raise ConstraintError(
-            f"{model.source}: inverse dynamics of {model.name!r}: the zero dynamics (the free "
-            f"DOFs with the outputs held) have an unstable mode at {slow[0]:.6g} 1/s, within "
-            f"4 / h = {4.0 / h:.6g} 1/s: the outputs cannot be followed causally (non-minimum "
-            "phase); a larger step takes only modes faster than 4 / h on their bounded branch")
+    rest, config = _start(model, mech, path, out_ports, times)
+    part = Partitioned(model, mech, path, out_ports, in_ports, config, tolerance,
+                       max_iterations)
+    A_q, A_v = linear_derivatives(part, model, mech, rest, config, times[0])
+    _check_zeros(model, zero_dynamics(A_q, A_v), spacing)
+    stepper = _Stepper(part, A_q, A_v, max_iterations, model)
     i = part.independent
-    steps = part.steps[i]
     q_now, v_now = config.q[i].copy(), np.zeros(i.size)
-    q_before = v_before = None
     rows = [_row(part, mech, times[0], q_now, v_now)]
-    eye = np.eye(i.size)
-    factors, renewed = {}, False
-    for t in times[1:]:
-        if q_before is None:  # backward Euler
-            b, q_base, v_base = h, q_now, v_now
-        else:  # BDF2
-            b = 2.0 * h / 3.0
-            q_base = (4.0 * q_now - q_before) / 3.0
-            v_base = (4.0 * v_now - v_before) / 3.0
-        if b not in factors:
-            factors[b] = scipy.linalg.lu_factor(eye - b * (A_v + b * A_q))
-        # predicted: the rates extrapolated from the last two steps
-        v = v_now.copy() if v_before is None else 2.0 * v_now - v_before
-        for iteration in range(max_iterations):
-            if iteration == RENEW_AFTER and not renewed:
-                # the matrix of the rest has gone stale along a long stroke: renew it here
-                A_q, A_v = _numerical_derivatives(part, t, q_base + b * v, v, steps, h)
-                factors = {b: scipy.linalg.lu_factor(eye - b * (A_v + b * A_q))}
-                renewed = True
-            _, _, qddot, _ = part.evaluate(t, q_base + b * v, v)
-            dv = scipy.linalg.lu_solve(factors[b], v_base + b * qddot[i] - v)
-            v = v + dv
-            if within(b * dv, steps):
-                renewed = False  # converged: a later stall may renew it again
-                break
-        else:
-            raise ConvergenceError(f"{model.source}: inverse dynamics of {model.name!r}: the "
-                                   f"step to t = {t:g} s did not converge in {max_iterations} "
-                                   "Newton iterations")
-        q_before, v_before = q_now, v_now
-        q_now, v_now = q_base + b * v, v
-        rows.append(_row(part, mech, t, q_now, v_now))
+    node_times, node_forces, node_x = [times[0]], [rows[0][5]], [rows[0][3]]
+    guess, before = np.tile(v_now, (3, 1)), None
+    for t, h in zip(times[:-1], spacing, strict=True):
+        if before is not None:
+            guess = _predicted(*before, h)
+        V, evaluations = stepper.step(t, h, q_now, v_now, guess)
+        for c, (found_config, _, _, forces) in zip(RADAU_C[:2], evaluations[:2],
+                                                    strict=True):
+            node_times.append(t + c * h)
+            node_forces.append(forces)
+            node_x.append(found_config.x.copy())
+        before = (v_now, V, h)
+        q_now, v_now = q_now + h * RADAU_A[2] @ V, V[2].copy()  # stiffly accurate
+        rows.append(_row(part, mech, t + h, q_now, v_now))
+        node_times.append(t + h)
+        node_forces.append(rows[-1][5])
+        node_x.append(rows[-1][3])
     q, qdot, qddot, x, e, forces, sigma = (np.array(column)
                                            for column in zip(*rows, strict=True))
-    return InverseDynamics(model, times, [p.name for p in in_ports],
-                           [p.name for p in out_ports], forces.reshape(times.size, -1),
-                           np.zeros((times.size, 0)), q, qdot, qddot, x, e, sigma)
+    return FreeInverseDynamics(
+        model, times, [p.name for p in in_ports], [p.name for p in out_ports],
+        forces.reshape(times.size, -1), np.zeros((times.size, 0)), q, qdot, qddot, x, e,
+        sigma, node_times=np.array(node_times),
+        node_forces=np.array(node_forces).reshape(len(node_times), -1),
+        node_x=np.array(node_x))
 
 
 def _resolved_ports(model, outputs, inputs):
@@ -377,4 +398,5 @@ def _row(part, mech, t, q_i, qdot_i):
     return config.q.copy(), qdot, qddot, config.x.copy(), config.e.copy(), forces, sigma
 
 
-__all__ = ["free_inverse_dynamics", "zero_dynamics"]
+__all__ = ["FreeInverseDynamics", "amplification", "free_inverse_dynamics", "node_polynomial",
+           "zero_dynamics"]
