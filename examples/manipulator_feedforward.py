@@ -42,7 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
-from examples.manipulator_loop import CONTROL, design_loops, targets
+# Run by its path (as docs/manipulator.md gives it), this file's folder is on sys.path but not
+# the repository's root, from which `examples.manipulator_loop` is found.
+if not __package__:
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from examples.manipulator_loop import CONTROL, design_loops, targets  # noqa: E402
 from flexure.controllers.dynamic_feedforward import dynamic_feedforward, move_inverse_dynamics
 from flexure.controllers.move_path import move_path
 from flexure.controllers.profiles import ThirdOrderProfile
