@@ -73,6 +73,21 @@ def pendulum(mass, length, g):
                     "tension": {"element": "link", "deformation": "e1", "quantity": "stress"}}})
 
 
+def turned_pendulum(mass, length, g, *, name="pendulum", **motion):
+    """The data of a point mass `mass` (kg) on a stiff link `length` (m) under gravity g
+    (m/s^2), turned about its pivot by the kinematic input A on the hinge's angle (rad;
+    `motion`: the input's keys, as its value)."""
+    return {"scene": {"name": name, "gravity": [0.0, -g]},
+            "sections": {"link": {"EA": 1e6, "EI": 1e3}},
+            "nodes": {"pivot": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
+                      "hinge": {"angle": 0.0},
+                      "bob": {"position": [0.0, -length], "mass": mass},
+                      "bob_r": {"angle": 0.0}},
+            "elements": {"link": {"type": "PLBEAM", "nodes": ["pivot", "hinge", "bob", "bob_r"],
+                                  "section": "link"}},
+            "inputs": {"A": {"kind": "motion", "node": "hinge", "coordinate": "phi", **motion}}}
+
+
 X0, STROKE, PERIOD = 0.1, 1e-3, 0.04  # node 1's start (m), the motion's stroke (m), period (s)
 
 

@@ -14,7 +14,20 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy_slave import Slave
-from kinematic_scenes import C1, C2, K1, K2, M1, M2, STROKE, X0, chain, follower, motion
+from kinematic_scenes import (
+    C1,
+    C2,
+    K1,
+    K2,
+    M1,
+    M2,
+    STROKE,
+    X0,
+    chain,
+    follower,
+    motion,
+    turned_pendulum,
+)
 from scipy.integrate import solve_ivp
 
 from flexure.core import Simulator, build_model, scene_toml
@@ -313,16 +326,8 @@ def test_an_angle_is_set_in_rad_and_its_effort_is_a_moment(tmp_path):
     first 1 ms step and held, after 5 steps (the last four angles equal: at rest) the effort
     is m g l sin(0.8) to 1e-12."""
     mass, length, g = 0.3, 0.25, 9.81
-    data = {"scene": {"name": "turned", "gravity": [0.0, -g]},
-            "sections": {"link": {"EA": 1e6, "EI": 1e3}},
-            "nodes": {"pivot": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
-                      "hinge": {"angle": 0.0},
-                      "bob": {"position": [0.0, -length], "mass": mass},
-                      "bob_r": {"angle": 0.0}},
-            "elements": {"link": {"type": "PLBEAM", "nodes": ["pivot", "hinge", "bob", "bob_r"],
-                                  "section": "link"}},
-            "inputs": {"A": {"kind": "motion", "node": "hinge", "coordinate": "phi"}},
-            "outputs": {"bob_x": {"node": "bob", "coordinate": "x"}}}
+    data = turned_pendulum(mass, length, g, name="turned")
+    data["outputs"] = {"bob_x": {"node": "bob", "coordinate": "x"}}
     scene = tmp_path / "turned.toml"
     scene.write_text(scene_toml(data, "a pendulum turned at its pivot"))
     slave = Slave(build_scene_fmu(scene, tmp_path / "turned.fmu"))

@@ -52,22 +52,31 @@ def whole_reference(times, force):
     return np.array(reference)
 
 
+def pair_convergence(run_pair, paths, *, t_end=0.1, force=1.0):
+    """The pair `run_pair(paths, h, t_end, force)` (rows of x1, x2 at each step's end) at
+    h = 1, 0.5 and 0.25 ms against the one-scene chain every 10 ms: the largest errors (m),
+    the orders between them and the largest displacement (m)."""
+    common = np.linspace(0.01, t_end, 10)
+    reference = whole_reference(common, force)
+    errors = []
+    for h in (1e-3, 5e-4, 2.5e-4):
+        rows = run_pair(paths, h, t_end, force)
+        at = np.rint(common / h).astype(int) - 1
+        errors.append(np.max(np.abs(rows[at] - reference)))
+    errors = np.array(errors)
+    orders = np.log2(errors[:-1] / errors[1:])
+    moved = np.max(np.abs(reference - [X0, 2 * X0]))
+    print(f"{run_pair.__name__} errors (m):", errors.tolist(), "orders:", orders.tolist(),
+          "moved (m):", moved)
+    return errors, orders, moved
+
+
 def test_a_force_driven_and_a_displacement_driven_fmu_make_the_chain(motion_fmus):
     """1 N on m1 from rest: the pair, coupled at h = 1, 0.5 and 0.25 ms, against the chain in
     one scene in process (CVODE BDF, rtol 1e-10), every 10 ms over 0.1 s: the error shrinks at
     order 1 in h (the leader holds the follower's effort over a step; measured 1.00 and
     1.00), to 5e-3 of the largest displacement at 0.25 ms (measured 4.9e-6 m of 3.1 mm)."""
-    t_end, force, common = 0.1, 1.0, np.linspace(0.01, 0.1, 10)
-    reference = whole_reference(common, force)
-    errors = []
-    for h in (1e-3, 5e-4, 2.5e-4):
-        rows = coupled_pair(motion_fmus, h, t_end, force)
-        at = np.rint(common / h).astype(int) - 1
-        errors.append(np.max(np.abs(rows[at] - reference)))
-    errors = np.array(errors)
-    orders = np.log2(errors[:-1] / errors[1:])
-    moved = np.max(np.abs(reference - [X0, 2 * X0]))  # m, the largest displacement
-    print("pair errors (m):", errors.tolist(), "orders:", orders.tolist(), "moved", moved)
+    errors, orders, moved = pair_convergence(coupled_pair, motion_fmus)
     assert np.all((0.9 <= orders) & (orders <= 1.1)), orders
     assert errors[-1] <= 5e-3 * moved
 
@@ -118,17 +127,7 @@ def test_the_pair_in_libcosim_side_by_side(motion_fmus):
     the leader's (x1 + h v1): against the one-scene chain every 10 ms, order 1 in h as well
     (measured 1.01 and 1.01), to 5e-3 of the largest displacement at 0.25 ms (measured
     5.0e-6 m of 3.1 mm)."""
-    t_end, force, common = 0.1, 1.0, np.linspace(0.01, 0.1, 10)
-    reference = whole_reference(common, force)
-    errors = []
-    for h in (1e-3, 5e-4, 2.5e-4):
-        rows = libcosim_pair(motion_fmus, h, t_end, force)
-        at = np.rint(common / h).astype(int) - 1
-        errors.append(np.max(np.abs(rows[at] - reference)))
-    errors = np.array(errors)
-    orders = np.log2(errors[:-1] / errors[1:])
-    moved = np.max(np.abs(reference - [X0, 2 * X0]))
-    print("libcosim pair errors (m):", errors.tolist(), "orders:", orders.tolist())
+    errors, orders, moved = pair_convergence(libcosim_pair, motion_fmus)
     assert np.all((0.9 <= orders) & (orders <= 1.1)), orders
     assert errors[-1] <= 5e-3 * moved
 

@@ -8,7 +8,7 @@ line, and the refusals of what does not take kinematic inputs yet."""
 import numpy as np
 import pytest
 from cli_runs import run
-from kinematic_scenes import chain, with_motion
+from kinematic_scenes import chain, turned_pendulum, with_motion
 
 from flexure.core import build_model, load_scene
 from flexure.core.analysis.motion_paths import increment_path
@@ -107,16 +107,7 @@ def test_a_pendulum_turned_takes_m_g_l_sin_plus_m_l2_theta_ddot():
     effort (N m) is m g l sin(theta) + m l^2 theta'' to 1e-12 of its largest (nonlinear in
     theta, nothing free)."""
     mass, length, g = 0.3, 0.25, 9.81
-    data = {"scene": {"name": "pendulum", "gravity": [0.0, -g]},
-            "sections": {"link": {"EA": 1e6, "EI": 1e3}},
-            "nodes": {"pivot": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
-                      "hinge": {"angle": 0.0},
-                      "bob": {"position": [0.0, -length], "mass": mass},
-                      "bob_r": {"angle": 0.0}},
-            "elements": {"link": {"type": "PLBEAM", "nodes": ["pivot", "hinge", "bob", "bob_r"],
-                                  "section": "link"}},
-            "inputs": {"A": {"kind": "motion", "node": "hinge", "coordinate": "phi",
-                             "value": 0.8}}}
+    data = turned_pendulum(mass, length, g, value=0.8)
     model = build_model(data)
     result = simulate(model, 0.6, method="esdirk", motion_duration=0.5,
                       output_times=np.linspace(0.0, 0.6, 13))
