@@ -7,6 +7,7 @@ import shutil
 
 import numpy as np
 from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
     fmi2CallbackAllocateMemoryTYPE,
@@ -19,6 +20,15 @@ from flexure.core import builtin_scenes
 
 # the manipulator's scenes (hundreds of DOFs, one refused by design): tests/test_manipulator.py
 SCENES = [name for name in builtin_scenes() if not name.startswith("manipulator")]
+
+
+def do_step(slave, t, h=1e-3):
+    """fmi2DoStep's status: 0 OK, 2 Discard (fmpy raises on any status but OK)."""
+    try:
+        slave.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        return 0
+    except FMICallException as error:
+        return error.status
 
 
 class Slave:

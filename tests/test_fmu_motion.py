@@ -12,8 +12,7 @@ FMUs coupled by a master: tests/test_fmu_motion_pair.py.
 import numpy as np
 import pytest
 from fmpy import read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy_slave import Slave
+from fmpy_slave import Slave, do_step
 from kinematic_scenes import (
     C1,
     C2,
@@ -256,15 +255,6 @@ def test_the_simulator_refuses_a_state_whose_motion_does_not_fit():
 
 
 # -- refusals ------------------------------------------------------------------------------------
-
-def do_step(slave, t, h=1e-3):
-    """fmi2DoStep's status: 0 OK, 2 Discard (fmpy raises on any status but OK)."""
-    try:
-        slave.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        return 0
-    except FMICallException as error:
-        return error.status
-
 
 def test_ida_and_a_position_that_is_not_finite_are_refused(motion_fmus):
     """IDA cannot integrate kinematic inputs: setting it is refused naming the method, the

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
-from fmpy_slave import Slave
+from fmpy_slave import Slave, do_step
 
 from flexure.core import Simulator, load_scene, stresses_along
 from flexure.fmu import build_scene_fmu, state_format
@@ -52,15 +52,6 @@ def test_a_restored_state_steps_from_its_own_time(scene_fmus, binary, reported):
             "0.008 s" in m]
     slave.fmu.freeFMUstate(state)
     slave.close()
-
-
-def do_step(slave, t, h=1e-3):
-    """fmi2DoStep's status: 0 OK, 2 Discard (fmpy raises on any status but OK)."""
-    try:
-        slave.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        return 0
-    except FMICallException as error:
-        return error.status
 
 
 def steps_to_from(slave, k0, k1, h=1e-3):
