@@ -12,8 +12,11 @@ with f the constant loads, gravity and the inputs (a moment input's force depend
 `ports`), sigma_c = S e + D edot on the stressed
 deformations (S and D kept by compressed rows), M = diag(lumped) + sum Dp^T Mp Dp over the
 inertia points p of the element masses, g_conv = sum Dp^T Mp (D2p xdot) xdot, and (D2F qdot)
-qdot = -J^-1 [xdot^T H_i xdot] on the constraint rows. Gravity acts on the position points of
-the inertia, which are linear in x for every element, so it has no tangent stiffness.
+qdot = -J^-1 [xdot^T H_i xdot] on the constraint rows. Gravity acts on the inertia points;
+the tangent (`tangent`) leaves out its load stiffness, which is not zero where the points
+hang on rotations (a BEAM's consistent mass): 5e-9 of K's largest entry on a spatial
+cantilever under gravity (tests/test_static_engine.py checks it against the numpy
+reference's `gravity_stiffness`). Q is exact; only Newton's rate there is affected.
 
 With rigid clusters (`rigid`) xdot, conv and xddot are solved on the reduced coordinates z and
 filled on the slaves' rows (T zdot; T conv_z + c; T zddot + c), the augmented system is the
