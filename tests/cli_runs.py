@@ -1,12 +1,30 @@
 """Running the `flexure` command in the test process, as a user's shell would, and a stub of
 the results it reports."""
 
+import json
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from flexure.core.cli import main
+
+
+def warm_command_modules(arguments, selected, cwd):
+    """(exit code, stdout, the modules `selected` picks) of `flexure ARGUMENTS` run twice in a
+    child process, the second run's: the first may compile, or load the compiled code through
+    numba (which writes the object code), and either imports what the second run must not.
+    `selected` is a Python expression of a module's name `m` (True: report it)."""
+    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
+             f"code = main({[str(a) for a in arguments]!r})\n"
+             f"print(json.dumps([code, sorted(m for m in sys.modules if {selected})]))")
+    for _ in range(2):
+        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
+                                   text=True, check=True, cwd=cwd)
+    code, loaded = json.loads(completed.stdout.splitlines()[-1])
+    return code, completed.stdout, loaded
 
 
 def run(capsys, *argv):

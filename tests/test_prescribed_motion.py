@@ -7,7 +7,7 @@ line, and the refusals of what does not take kinematic inputs yet."""
 
 import numpy as np
 import pytest
-from cli_runs import run
+from cli_runs import run, warm_command_modules
 from kinematic_scenes import chain, turned_pendulum, with_motion
 
 from flexure.core import build_model, load_scene
@@ -239,24 +239,15 @@ def test_flexure_simulate_moves_a_scene_and_writes_its_effort(capsys, tmp_path):
 def test_a_warm_simulation_with_prescribed_motion_imports_no_numba(tmp_path, method):
     """The prescribed form's entries load as object code like the others': a warm `flexure
     simulate` of a moved scene does not import numba (the first run may compile)."""
-    import json
-    import subprocess
-    import sys
 
     from flexure.core import scene_toml
 
     path = tmp_path / "moved.toml"
     path.write_text(scene_toml(with_motion("truss_1dof_x", "2", "x", value=0.101), "a test"))
-    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
-             f"code = main(['simulate', {str(path)!r}, '--t-end', '0.02', '--motion-duration', "
-             f"'0.01', '--method', '{method}'])\n"
-             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] == "
-             "'numba' and m.count('.') < 2 and not m.startswith('numba._'))]))")
-    for _ in range(2):
-        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
-                                   text=True, check=True, cwd=tmp_path)
-    code, loaded = json.loads(completed.stdout.splitlines()[-1])
-    assert code == 0, completed.stdout
+    code, stdout, loaded = warm_command_modules(
+        ["simulate", path, "--t-end", "0.02", "--motion-duration", "0.01", "--method", method],
+        "m.split('.')[0] == 'numba' and m.count('.') < 2 and not m.startswith('numba._')", tmp_path)
+    assert code == 0, stdout
     assert loaded == [], f"flexure simulate --method {method} imported {loaded}"
 
 

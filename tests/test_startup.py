@@ -10,6 +10,7 @@ import subprocess
 import sys
 
 import pytest
+from cli_runs import warm_command_modules
 
 HEAVY = ("control", "matplotlib", "fmpy", "libcosimpy", "numba", "sksundae")
 
@@ -153,17 +154,12 @@ def test_the_loop_command_imports_neither_python_control_nor_scipy_signal(
     object code (the second run: the first may load through numba, which writes them)."""
     png = tmp_path / "loop.png"
     arguments = [str(png) if a == "PLOT" else a for a in arguments]
-    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
-             f"code = main({arguments!r})\n"
-             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] in "
-             "('control', 'fmpy', 'pythonfmu', 'libcosimpy', 'sksundae') or m.split('.')[:2] "
-             "in (['scipy', 'signal'], ['scipy', 'interpolate'], ['scipy', 'optimize']) "
-             "or m.endswith('.simulation.sundials') or m in ('numba', 'numba.core'))]))")
-    for _ in range(2):
-        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
-                                   text=True, check=True, cwd=tmp_path)
-    code, loaded = json.loads(completed.stdout.splitlines()[-1])
-    assert code == 0, completed.stdout
+    code, stdout, loaded = warm_command_modules(arguments, (
+        "m.split('.')[0] in ('control', 'fmpy', 'pythonfmu', 'libcosimpy', 'sksundae') "
+        "or m.split('.')[:2] in (['scipy', 'signal'], ['scipy', 'interpolate'], "
+        "['scipy', 'optimize']) or m.endswith('.simulation.sundials') "
+        "or m in ('numba', 'numba.core')"), tmp_path)
+    assert code == 0, stdout
     assert loaded == [], f"flexure {' '.join(arguments)} imported {loaded}"
     assert png.is_file() == plot
 
@@ -174,16 +170,11 @@ def test_a_short_simulation_imports_neither_scipy_linalg_nor_scipy_sparse(tmp_pa
     number and the default atol's frequency come from numpy and the engine, the cached engine
     loads without numba's registry refresh (numerics/jit.py) and names no numba module that
     imports scipy.linalg. Each would cost 0.1 to 0.3 s of CPU of a 10 ms run."""
-    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
-             "code = main(['simulate', 'stage_planar_3dof', '--t-end', '0.01', '--input', "
-             "'F=1'])\n"
-             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[:2] in "
-             "(['scipy', 'linalg'], ['scipy', 'sparse']) or m.startswith('numba.np.linalg'))]))")
-    for _ in range(2):  # the first run may compile (and a compilation imports what it needs)
-        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
-                                   text=True, check=True, cwd=tmp_path)
-    code, loaded = json.loads(completed.stdout.splitlines()[-1])
-    assert code == 0, completed.stdout
+    code, stdout, loaded = warm_command_modules(
+        ["simulate", "stage_planar_3dof", "--t-end", "0.01", "--input", "F=1"],
+        "m.split('.')[:2] in (['scipy', 'linalg'], ['scipy', 'sparse']) "
+        "or m.startswith('numba.np.linalg')", tmp_path)
+    assert code == 0, stdout
     assert loaded == [], f"flexure simulate imported {loaded}"
 
 
@@ -193,16 +184,12 @@ def test_a_warm_short_simulation_imports_no_numba(tmp_path, method):
     object_code.py) and restarts its integrator through C entries (`restart_plant_now`,
     `cvode_restart_now`, `esdirk_entry.restart_now`): numba, 0.15 s of CPU to import, is not
     imported at all, nor llvmlite's IR builder's users (numba's intrinsics)."""
-    probe = ("import json, sys\nfrom flexure.core.cli import main\n"
-             "code = main(['simulate', 'stage_planar_3dof', '--t-end', '0.005', '--input', "
-             f"'F=1', '--method', '{method}'])\n"
-             "print(json.dumps([code, sorted(m for m in sys.modules if m.split('.')[0] == "
-             "'numba' and m.count('.') < 2 and not m.startswith('numba._'))]))")
-    for _ in range(2):  # the first run may load through numba, which writes the object code
-        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
-                                   text=True, check=True, cwd=tmp_path)
-    code, loaded = json.loads(completed.stdout.splitlines()[-1])
-    assert code == 0, completed.stdout
+    code, stdout, loaded = warm_command_modules(
+        ["simulate", "stage_planar_3dof", "--t-end", "0.005", "--input", "F=1", "--method",
+         method],
+        "m.split('.')[0] == 'numba' and m.count('.') < 2 and not m.startswith('numba._')",
+        tmp_path)
+    assert code == 0, stdout
     assert loaded == [], f"flexure simulate --method {method} imported {loaded}"
 
 
