@@ -161,6 +161,8 @@ def _cache_location(py_func, py_file):
     if not inside or cache_root() is None:
         return None
     relative = os.path.relpath(os.path.dirname(os.path.abspath(py_file)), _PACKAGE_ROOT)
+    if linked_code.is_python_callable(py_func):  # numba's index keys neither by the options
+        relative = os.path.join("python-calls", relative)  # nor by the code's kind
     return os.path.join(package_cache_folder(), relative), py_func.__code__.co_firstlineno
 
 
@@ -172,7 +174,9 @@ def kernel(function=None, **options):
     points are `entry`'s own; without it the first compilation takes about 8 % less CPU). A
     kernel is compiled once per type of its arguments, a constant argument's type being its
     plain type (`_by_plain_types`). The decorated function is a `Kernel`: numba's dispatcher
-    made when first needed."""
+    made when first needed, compiled for linking into the C entries only (no CPython
+    wrapper, no machine code of its own: `linked_code`), and a second one, compiled as numba
+    compiles, for a call from Python."""
     options = {"cache": True, "error_model": "numpy", "no_cfunc_wrapper": True, **options}
     if function is None:
         return lambda function: Kernel(function, options)
@@ -180,23 +184,49 @@ def kernel(function=None, **options):
 
 
 class Kernel:
-    """A numba kernel whose dispatcher (and numba) is made when it is first needed: called
-    from Python, compiled into another kernel (numba types a global by its `_numba_type_`),
-    or asked for a dispatcher's attribute (`signatures`, `targetoptions`, ...)."""
+    """A numba kernel whose dispatchers (and numba) are made when first needed: the
+    linking-only one when compiled code calls it (numba types a global by its
+    `_numba_type_`) or a dispatcher's attribute is asked for (`signatures`, ...), the
+    Python-callable one when Python calls it."""
 
     def __init__(self, function, options):
-        self.py_func, self._options, self._dispatcher = function, options, None
+        self.py_func, self._options = function, options
+        self._dispatcher = self._python_dispatcher = None
         functools.update_wrapper(self, function)
 
     @property
     def dispatcher(self):
-        """numba's dispatcher of this kernel (numba.njit with the kernel's options)."""
+        """numba's dispatcher of this kernel as compiled code calls it (numba.njit with the
+        kernel's options), compiled for linking only (`linked_code`)."""
         if self._dispatcher is None:
             numba = numba_module()
-            dispatcher = _by_plain_types(numba.njit(**self._options)(self.py_func))
-            dispatcher.compile = linked_code.compiled_as_kernel(dispatcher.compile)
-            self._dispatcher = dispatcher
+            if linked_code.install():
+                dispatcher = numba.njit(**self._options, no_cpython_wrapper=True)(self.py_func)
+                linked_code.refusing_python_calls(dispatcher)
+            else:
+                dispatcher = numba.njit(**self._options)(self.py_func)
+            dispatcher.compile = linked_code.compiled_as_kernel(dispatcher.compile,
+                                                                  self.py_func)
+            self._dispatcher = _by_plain_types(dispatcher)
         return self._dispatcher
+
+    @property
+    def python_dispatcher(self):
+        """numba's dispatcher of this kernel as Python calls it: compiled as numba compiles
+        it, cached apart from the linking-only code (`linked_code.python_callable`)."""
+        if self._python_dispatcher is None:
+            numba = numba_module()
+            if linked_code.install():
+                function = linked_code.python_callable(self.py_func)
+                # numba's own locators (a kernel outside flexure's core) would file it with
+                # the linking-only code: uncached there
+                cached = _cache_location(function, inspect.getfile(function)) is not None
+                self._python_dispatcher = numba.njit(
+                    **{**self._options, "cache": self._options.get("cache") and cached})(
+                    function)
+            else:
+                self._python_dispatcher = self.dispatcher
+        return self._python_dispatcher
 
     @property
     def is_made(self):
@@ -210,7 +240,7 @@ class Kernel:
         return types.Dispatcher(self.dispatcher)
 
     def __call__(self, *args, **kwargs):
-        return self.dispatcher(*args, **kwargs)
+        return self.python_dispatcher(*args, **kwargs)
 
     def __getattr__(self, name):
         if name.startswith("__"):  # copy, pickle and inspect probe these: not the dispatcher's
