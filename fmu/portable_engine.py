@@ -11,16 +11,15 @@ with
 - a cache folder of its own (`staging_folder`, kept: the next FMU built from the same flexure
   sources loads what this one compiled instead of compiling again).
 
-The child instantiates the FMU once per integrator method it takes (with kinematic inputs, those
-that integrate them) and takes a few steps, its inputs at their start values, so that every
-kernel the scene's slave needs is compiled (the first time: about a minute of CPU) or loaded.
-A child that loaded everything exports the cache files of what it loaded, with a manifest of
-what that code needs (`flexure.core.numerics.portable_cache.export_compiled`); one that
-compiled leaves that to a second child, which loads what the first compiled: the functions a
-host loads, not the callees numba compiled on the way, whose code their callers hold
-(stage_planar_3dof: 9 functions, 1.4 MB, instead of 121 and 10 MB). They are added to the FMU
-as resources/flexure-engine/, which the FMU installs into its host's cache at instantiation
-(`flexure.fmu.compiled_engine`).
+The child instantiates the FMU once per integrator method it takes and takes a few steps, its
+inputs at their start values, so that every kernel the scene's slave needs is compiled (the
+first time: about a minute of CPU) or loaded. A child that loaded everything exports the cache
+files of what it loaded, with a manifest of what that code needs
+(`flexure.core.numerics.portable_cache.export_compiled`); one that compiled leaves that to a
+second child, which loads what the first compiled: the functions a host loads, not the callees
+numba compiled on the way, whose code their callers hold (stage_planar_3dof: 9 functions,
+1.4 MB, instead of 121 and 10 MB). They are added to the FMU as resources/flexure-engine/, which
+the FMU installs into its host's cache at instantiation (`flexure.fmu.compiled_engine`).
 """
 
 import json
@@ -157,10 +156,8 @@ def _exercise(fmu, out):
     held = [v for v in variables.values() if v.causality == "input" and v.type == "Real"]
     inputs = [v.valueReference for v in held]
     # each input at its start: a force at 0, a kinematic input where it is (0 m would be a
-    # jump of the whole stroke); an FMU with kinematic inputs (an input NAME with an output
-    # NAME.effort) refuses the methods that cannot integrate them (IDA)
+    # jump of the whole stroke)
     starts = [float(v.start) if v.start is not None else 0.0 for v in held]
-    kinematic = any(f"{v.name}.effort" in variables for v in held)
     methods, done = None, 0
     while methods is None or done < len(methods):
         slave = FMU2Slave(guid=description.guid, unzipDirectory=folder,
@@ -182,9 +179,6 @@ def _exercise(fmu, out):
             slave.freeInstance()
         if methods is None:  # its default first; its slave's module is loaded now
             methods = importlib.import_module(f"{package}.fmu.scene_slave").METHODS
-            if kinematic:
-                motion = importlib.import_module(f"{package}.core.simulation.simulator_motion")
-                methods = [m for m in methods if m in motion.MOTION_METHODS]
         done += 1
     if Compilations.count:  # exported by the next child, which loads it all
         return

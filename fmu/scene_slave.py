@@ -47,11 +47,10 @@ scene (or of the same scene built from another scene file) is refused by name.
 
 Values a host sets are checked when set (`check_value`): the method must be one of METHODS,
 0 < rtol < 1, atol >= 0 (finite), a tunable damping (EdA, cx, ...) >= 0 and any other tunable
-value > 0, all finite; with kinematic inputs the method must be one that integrates them
-(not IDA: `MOTION_METHODS`). A refused value puts the instance in the error state (see
-`SafeSlave`). A tunable key's unit, and whether it is a damping, are its schema's
-(`flexure.core.scene.building.scene_key`: the element section schemas, the node keys and the
-actuators').
+value > 0, all finite (every method integrates kinematic inputs). A refused value puts the
+instance in the error state (see `SafeSlave`). A tunable key's unit, and whether it is a
+damping, are its schema's (`flexure.core.scene.building.scene_key`: the element section
+schemas, the node keys and the actuators').
 """
 
 
@@ -78,7 +77,6 @@ from flexure.core.scene.building import scene_key
 from flexure.core.simulation.methods import METHODS as CORE_METHODS
 from flexure.core.simulation.methods import ONE_STEP_METHODS
 from flexure.core.simulation.simulation import effort_unit
-from flexure.core.simulation.simulator_motion import MOTION_METHODS
 
 from .slave import SafeSlave
 from .slave_states import STEP_COMPLETE, TERMINATED
@@ -241,12 +239,6 @@ class SceneSlave(SafeSlave):
         if name == "integrator.method":
             if value not in METHODS:
                 return f"integrator.method = {value!r}: expected one of {', '.join(METHODS)}"
-            kinematic = self._model.kinematic_inputs
-            if kinematic and value not in MOTION_METHODS:
-                names = ", ".join(port.name for port in kinematic)
-                return (f"integrator.method = {value!r} cannot integrate the kinematic inputs "
-                        f"({names}) of {self.scene_name!r}; expected one of "
-                        f"{', '.join(m for m in METHODS if m in MOTION_METHODS)}")
             return None
         if name == "integrator.rtol":
             if not (math.isfinite(value) and 0.0 < value < 1.0):

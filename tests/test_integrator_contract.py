@@ -11,6 +11,9 @@ The contract (each method at RTOL, on a planar and a spatial scene with an input
   set_state, advance again gives the same state and outputs bit for bit, also in a simulator
   of its own;
 - statistics present (steps, evaluations, wall time; the stepper's own counts);
+- kinematic inputs: the chain's node 1 moved by the scene's quintic, its free mass's position
+  and velocity and the input's effort within MOTION_BOUND x RTOL of the motion of the same
+  reference; a host's steps (`move_to`) restart from a snapshot bit for bit;
 - the compiled sampled loop: the methods with `compiled_loop` give a Python loop's numbers bit
   for bit, the others are refused by name.
 """
@@ -21,9 +24,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from kinematic_scenes import X0, chain, motion
 from test_engine import check_compiled_loop_against_python_loop
 
-from flexure.core import Simulator, load_scene, run_sampled_loop
+from flexure.core import Simulator, build_model, load_scene, run_sampled_loop
 from flexure.core.engine import engine
 from flexure.core.errors import SimulationError
 from flexure.core.simulation import methods
@@ -49,6 +53,14 @@ DEFAULT_BOUND = 10.0
 # scene: (input held first, input after the change)
 SCENES = {"stage_planar_3dof": (1.0, -0.5), "stage_spatial_1dof": (1.0, -0.5)}
 T_CHANGE, T_AFTER, T_END = 4e-3, 4.25e-3, 8e-3  # s: the input change, just after, the end
+# The kinematic inputs' part: the chain (tests/kinematic_scenes.py) with node 1 moved 1 mm in
+# MOVE s, read at MOTION_TIMES (during, at the end of and after the move). The errors in units
+# of RTOL times the motion of x2, v2 and the effort (1.2 mm, 0.040 m/s, 1.08 N) measured at
+# RTOL = 1e-6, the largest of the three: cvode-bdf 8.0, cvode-adams 0.31, ida 1.8, esdirk 2.8,
+# esdirk3 5.1, esdirk2 36; the bounds leave a factor 2.5.
+MOVE, MOTION_TIMES = 0.04, (0.02, 0.04, 0.06)
+MOTION_BOUND = {"esdirk2": 90.0}
+MOTION_DEFAULT_BOUND = 20.0
 
 
 def run(scene, method, rtol):
@@ -192,6 +204,60 @@ def test_statistics_are_present(method):
     assert all(isinstance(v, int) and v >= 0 for v in own.values())
     assert sim.integrator.step_count() == own["steps"] >= stats["steps"]
     assert isinstance(sim.integrator.restart_memory, dict)
+
+
+def moved_chain():
+    data = chain()
+    data["inputs"]["u"]["value"] = X0 + 1e-3
+    return build_model(data)
+
+
+def run_motion(method, rtol):
+    """The chain moved by the scene's quintic: [x2, v2, effort] (m, m/s, N) at the start and
+    at MOTION_TIMES."""
+    sim = Simulator(moved_chain(), method=method, rtol=rtol, motion_duration=MOVE)
+    start = np.array([*sim.outputs(), *sim.efforts()])
+    rows = []
+    for t in MOTION_TIMES:
+        sim.advance_to(t)
+        rows.append([*sim.outputs(), *sim.efforts()])
+    return start, np.array(rows)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_kinematic_inputs_within_the_methods_tolerance(method):
+    if "motion" not in _references:
+        start, rows = run_motion("cvode-bdf", REFERENCE_RTOL)
+        _references["motion"] = rows, np.max(np.abs(rows - start), axis=0)
+    expected, motion_size = _references["motion"]
+    _, rows = run_motion(method, RTOL)
+    error = np.max(np.abs(rows - expected), axis=0) / (RTOL * motion_size)
+    assert np.all(error <= MOTION_BOUND.get(method, MOTION_DEFAULT_BOUND)), (method, error)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_hosts_steps_restart_from_a_snapshot_bit_for_bit(method):
+    """The chain moved by a host (`stepwise_motion`): get_state after three steps, two more
+    steps, set_state, the same two steps: the same state, outputs and effort bit for bit, in
+    the same simulator and in a new one."""
+    times = np.array([0.0, 1e-3, 2.5e-3, 4e-3, 5.2e-3, 7e-3])
+
+    def simulator():
+        return Simulator(build_model(chain()), method=method, rtol=RTOL, stepwise_motion=True)
+
+    sim = simulator()
+    for t1 in times[1:4]:
+        sim.move_to([motion(t1)[0]], t1)
+    snapshot = sim.get_state()
+    runs = []
+    for target in (sim, sim, simulator()):
+        target.set_state(snapshot)
+        for t1 in times[4:]:
+            target.move_to([motion(t1)[0]], t1)
+        runs.append((target.time, target.state, [*target.outputs(), *target.efforts()]))
+    for other in runs[1:]:
+        assert other[0] == runs[0][0]
+        assert np.array_equal(other[1], runs[0][1]) and other[2] == runs[0][2]
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -19,6 +19,7 @@ has its module; this one holds the forms the integrators call and the operations
                      explicit in their masters, x_s = S(z), and the chain rule through T)
     prescribed       the first-order form with kinematic inputs: u, u', u'' at the time
                      given, the constrained accelerations, the efforts and the Jacobian
+    prescribed_residual  the implicit form (IDA's) with kinematic inputs
     operations       the operations' codes, and `run`: one through its address
     engine (here)    the first-order and implicit forms, one C entry point per operation
                      (`ENTRIES`), `connect`, `call`
@@ -77,6 +78,8 @@ from .operations import (
     OP_MASS_OF,
     OP_POSITIONS,
     OP_PRESCRIBED_JACOBIAN,
+    OP_PRESCRIBED_RESIDUAL,
+    OP_PRESCRIBED_RESIDUAL_JACOBIAN,
     OP_PRESCRIBED_RHS,
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
@@ -98,6 +101,7 @@ from .operations import (
 )
 from .part_entries import df_entry, mass_of_entry
 from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
+from .prescribed_residual import prescribed_residual_entry, prescribed_residual_jacobian_entry
 from .slots import float_array, int_array
 from .tangent import tangent
 
@@ -288,8 +292,12 @@ def jacobian_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENGINE_ENTRY)
 def residual_entry(op, user_data, t, a, b, c, s):
-    """OP_RESIDUAL: y (a), yp (b), res (c)."""
+    """OP_RESIDUAL: y (a), yp (b), res (c); a model with kinematic inputs runs
+    OP_PRESCRIBED_RESIDUAL at time t."""
     table = address_of(user_data)
+    if _i(table, slot.DIMS)[ed.NKI]:
+        return call_engine(_i(table, slot.DIMS)[ed.ENGINE], OP_PRESCRIBED_RESIDUAL,
+                           user_data, t, a, b, c, s)
     n = _state_size(table)
     return implicit_residual(table, carray(a, (n,), _F8), carray(b, (n,), _F8),
                              carray(c, (n,), _F8))
@@ -297,8 +305,12 @@ def residual_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENGINE_ENTRY)
 def residual_jacobian_entry(op, user_data, t, a, b, c, s):
-    """OP_RESIDUAL_JACOBIAN: y (a), yp (b), J (c); s = cj."""
+    """OP_RESIDUAL_JACOBIAN: y (a), yp (b), J (c); s = cj; a model with kinematic inputs
+    runs OP_PRESCRIBED_RESIDUAL_JACOBIAN at time t."""
     table = address_of(user_data)
+    if _i(table, slot.DIMS)[ed.NKI]:
+        return call_engine(_i(table, slot.DIMS)[ed.ENGINE], OP_PRESCRIBED_RESIDUAL_JACOBIAN,
+                           user_data, t, a, b, c, s)
     n = _state_size(table)
     return implicit_jacobian(table, carray(a, (n,), _F8), carray(b, (n,), _F8), s,
                              carray(c, (n * n,), _F8))
@@ -429,13 +441,16 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            deformations_entry, evaluate_entry, tangent_entry, positions_entry,
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
            sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS) + (
-           df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry)
+           df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
+           prescribed_residual_entry, prescribed_residual_jacobian_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
          OP_TANGENT: (OP_MASS,), OP_ACCELERATIONS: (OP_CONFIGURATION, OP_DF, OP_MASS_OF),
          OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
-         OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
+         OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT),
+         OP_PRESCRIBED_RESIDUAL: (OP_PRESCRIBED_RHS,),
+         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
 _TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 
@@ -459,6 +474,8 @@ def connect(data, *ops):
         wanted += RIGID_OPERATIONS
     if ops and dims[ed.NKI] > 0:  # the kinematic inputs' forms (`prescribed`)
         wanted += [OP_PRESCRIBED_RHS, OP_PRESCRIBED_JACOBIAN]
+        if OP_RESIDUAL in ops or OP_RESIDUAL_JACOBIAN in ops:  # and IDA's
+            wanted += [OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN]
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

@@ -14,6 +14,11 @@ the same contract over every method registered here. Adding a method: docs/exten
 SUNDIALS_METHODS run SUNDIALS' multistep integrators (`flexure.core.simulation.sundials`) and
 take a largest order; ONE_STEP_METHODS are the compiled one-step ESDIRKs
 (`flexure.core.simulation.esdirk`), which take a held input's change without a restart.
+
+Every method integrates kinematic inputs (prescribed motion): the engine's operations run
+their prescribed forms on a model that has them (`flexure.core.engine.prescribed` for the
+first-order form, `prescribed_residual` for IDA's implicit one), so a method's operations
+decide nothing there; the contract's kinematic-input tests run over every method.
 """
 
 from __future__ import annotations

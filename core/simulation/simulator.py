@@ -43,7 +43,7 @@ from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
 from .held_inputs import checked_inputs
 from .methods import METHODS, REGISTRY
-from .simulator_motion import SimulatorMotion, check_motion_method
+from .simulator_motion import SimulatorMotion, check_motion
 from .simulator_outputs import SimulatorOutputs
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
@@ -105,8 +105,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         An unknown method, an rtol outside (0, 1), a max_step or atol that is not positive,
         an option the one-step methods do not take, a scene configuration the DOFs
         cannot be assembled in, or kinematic inputs without a motion_duration or
-        stepwise_motion (or with both) or with a method that does not take them (IDA), or
-        either without them.
+        stepwise_motion (or with both), or either without them.
     """
 
     def __init__(self, model: Model, *, method: str = "cvode-bdf", rtol: float = 1e-8,
@@ -122,7 +121,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
             raise SimulationError(f"rtol must be a number between 0 and 1, got {rtol!r}")
         if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
-        check_motion_method(model, method, motion_duration, stepwise_motion)
+        check_motion(model, motion_duration, stepwise_motion)
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model, rigid=rigid)

@@ -2,17 +2,17 @@
 efforts.
 
 A model with kinematic inputs (`Model.kinematic_inputs`) is integrated by the engine's
-prescribed form (`flexure.core.engine.prescribed`): every right-hand side puts the inputs'
-u(t), u'(t) into q and qdot at its own time and solves the accelerations of the DOFs proper
-with u'' given. The path is held at each input's `start` until `set_motion` gives the scene's
-move (a rest-to-rest quintic from `start` to `value`, `analysis.motion_paths`), or a host moves
-the inputs step by step (`move_to`: the positions at the end of each step, made a path by
-`stepwise_motion`'s rule; a Simulator made with `stepwise_motion=True`). The state keeps
-the prescribed entries (integrated from qdot and u'', within the integrator's tolerance of
-the path); what this module reports of them (`prescribed_values`, the `q` and `qdot` of a
-recorded trajectory in `simulate`) is the path itself. The efforts (N, N m) come from one
-evaluation of the state on the simulator's second packed model, so that reading them leaves
-the integrator's own evaluations as they were.
+prescribed forms (`flexure.core.engine.prescribed`, and `prescribed_residual` for IDA's
+implicit form), by every method: every evaluation puts the inputs' u(t), u'(t) into q and qdot
+at its own time and solves the accelerations of the DOFs proper with u'' given. The path is
+held at each input's `start` until `set_motion` gives the scene's move (a rest-to-rest quintic
+from `start` to `value`, `analysis.motion_paths`), or a host moves the inputs step by step
+(`move_to`: the positions at the end of each step, made a path by `stepwise_motion`'s rule; a
+Simulator made with `stepwise_motion=True`). The state keeps the prescribed entries (integrated
+from qdot and u'', within the integrator's tolerance of the path); what this module reports of
+them (`prescribed_values`, the `q` and `qdot` of a recorded trajectory in `simulate`) is the
+path itself. The efforts (N, N m) come from one evaluation of the state on the simulator's
+second packed model, so that reading them leaves the integrator's own evaluations as they were.
 """
 
 from __future__ import annotations
@@ -25,17 +25,11 @@ from ..engine import data as ed
 from ..engine import engine
 from ..engine.prescribed import PATH_WIDTH, quintic_path
 from ..errors import SimulationError
-from .methods import METHOD_TABLE
 from .status import STATUS_MESSAGES
 from .stepwise_motion import SAMPLES, held_path, next_piece
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
-
-# the methods that take kinematic inputs: those of the first-order form (OP_RHS; IDA's
-# implicit form has no prescribed twin yet)
-MOTION_METHODS = tuple(m.name for m in METHOD_TABLE if "OP_RHS" in m.operations)
-
 
 def path_values(path, t):
     """(u, u', u'') (nki,) each at time t (s) from the records of slot motion_path (plain
@@ -75,10 +69,12 @@ def path_point_now(path, t):
     return np.array(values), np.array(rates), np.array(accelerations)
 
 
-def check_motion_method(model, method, duration, stepwise=False):
+def check_motion(model, duration, stepwise=False):
     """SimulationError unless a model with kinematic inputs comes with the duration of its
-    move (s) or is moved step by step (`stepwise`), not both, and with a method that
-    integrates it; a model without them with neither."""
+    move (s) or is moved step by step (`stepwise`), not both; a model without them with
+    neither. Every registered method integrates them (the engine's prescribed forms: the
+    first-order one of CVODE and the ESDIRKs, `engine.prescribed`, and IDA's implicit one,
+    `engine.prescribed_residual`)."""
     if not model.kinematic_inputs:
         if duration is not None or stepwise:
             given = (f"motion_duration {duration!r}" if duration is not None
@@ -98,10 +94,6 @@ def check_motion_method(model, method, duration, stepwise=False):
         raise SimulationError(f"{model.name!r}: motion_duration {duration!r} and "
                               "stepwise_motion: the kinematic inputs ({names}) follow either "
                               "the scene's move or a host's steps, not both")
-    if method not in MOTION_METHODS:
-        raise SimulationError(f"method {method!r} cannot integrate the kinematic inputs "
-                              f"({names}) of {model.name!r} yet; use one of "
-                              f"{', '.join(MOTION_METHODS)}")
 
 
 class SimulatorMotion:
@@ -375,5 +367,4 @@ class SimulatorMotion:
         return self.efforts_along([self._t], state, start=self._x)[0]
 
 
-__all__ = ["MOTION_METHODS", "SimulatorMotion", "check_motion_method", "path_point_now",
-           "path_values"]
+__all__ = ["SimulatorMotion", "check_motion", "path_point_now", "path_values"]

@@ -400,8 +400,9 @@ class Ida(_Solver):
         whether or not only the inputs changed (`inputs_changed`, as `Cvode.reset`)."""
         if self.input_function is not None:
             self.data.float_array("inputs")[:] = self.input_function(t)
+        # at t: a model with kinematic inputs evaluates them on their path then
         status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, float),
-                             self._ydot)
+                             self._ydot, t=float(t))
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: IDA could not start: "
                                   f"{STATUS_MESSAGES.get(status, status)}")
