@@ -27,11 +27,11 @@ import sys
 import tempfile
 import time
 
-# A cold `flexure loop` on the project's 2-core development machine, empty cache, quiet (load
-# below 1.1; 2026-11-29, docs/benchmarks.md, "a kernel's module optimised once"): 34.1 s of CPU
-# (the median of three whole processes; the commit before, alternating with them: 41.2 s).
-# The machine's speed moves by the hour: the same code took 27.8 s at another hour.
-DEFAULT_CPU_S = 34.1
+# A cold `flexure loop` on the project's 2-core development machine, empty cache (load about 2;
+# 2026-11-29, docs/benchmarks.md, "a kernel compiled for linking only"): 27.1 s of CPU (the
+# median of three whole processes; the commit before, alternating with them: 32.3 s). The
+# machine's speed moves by the hour, by up to a third.
+DEFAULT_CPU_S = 27.1
 DEFAULT_FUNCTIONS = 129
 RECORD_NAME = "compile-time.json"
 
