@@ -1,0 +1,155 @@
+"""The outputs on elements (SPACAR's OUTE and OUTF) in a simulation: each at a state, read
+from the compiled engine on the simulator's second packed model (`_output_data`), so that
+reading them never disturbs the integrator's own evaluations.
+
+- A deformation output is e_d (m) of the kinematics solved at the state's DOFs: the solve the
+  coordinate outputs already made.
+- A stress output of a stressed deformation (released, or a DOF) is the engine's stress
+  resultant sigma_d = S e + D edot (N; a bending or torsion resultant is the moment over l0),
+  elastic plus the element's viscous term, from one evaluation of the equations of motion at
+  the state. Why the viscous term: sigma is what the element puts on its nodes (the force
+  De^T sigma of the equations of motion), the quantity SPACAR's stress resultants and
+  flexure's inverse dynamics report along a motion; at rest (edot = 0) it is the static
+  solution's S e. The elastic part alone is the deformation output times the stiffness.
+- A stress output of a prescribed deformation (a kinematic input's) is a reaction: minus the
+  input's effort, sigma_d = -F = Q_k - M_k. qddot (`flexure.core.engine.prescribed`), which the
+  same evaluation gives at the state's time with the held inputs.
+- A rigid deformation's stress resultant (held zero: a constraint's multiplier) needs the
+  multipliers of the full dynamic balance, which the engine's evaluation does not form: a
+  simulator of a model with such an output is refused when it is made, naming the output.
+
+Measured (tests/test_simulation_element_outputs.py): one evaluation after the kinematics,
+about as much again as the kinematics the coordinate outputs cost.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..engine import data as ed
+from ..engine import engine
+from ..errors import SimulationError
+from .status import STATUS_MESSAGES
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..engine.data import EngineData
+    from ..model import Model
+
+# what an output on an element reads (`ElementReadings.kinds`)
+DEFORMATION, STRESS, REACTION = 0, 1, 2
+
+
+def refused_element_outputs(model: Model) -> str | None:
+    """Why a simulation cannot give the model's outputs on elements, or None.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    str or None
+        The message naming the first stress output of a rigid deformation (its reaction
+        needs the constraint multipliers, which the engine's evaluation does not form).
+    """
+    rigid = set(np.asarray(model.rigid_deformations).tolist())
+    for port in model.element_outputs:
+        if port.quantity == "stress" and port.deformation in rigid:
+            return (f"{model.source}: outputs.{port.name}: the stress resultant of "
+                    f"{model.deformation_names[port.deformation]} is the reaction of a rigid "
+                    "deformation (held zero): a simulation does not give it (it needs the "
+                    "constraint multipliers); release the deformation, or read it from a "
+                    "static solution or inverse dynamics")
+    return None
+
+
+class ElementReadings:
+    """How a simulator reads its model's outputs on elements from a packed model.
+
+    Parameters
+    ----------
+    model : Model
+
+    Raises
+    ------
+    SimulationError
+        An output the simulation cannot give (`refused_element_outputs`).
+    """
+
+    def __init__(self, model: Model) -> None:
+        problem = refused_element_outputs(model)
+        if problem:
+            raise SimulationError(problem)
+        self.model = model
+        self.ndof = model.declared_dof_count
+        prescribed = {port.deformation: k for k, port in enumerate(model.kinematic_inputs)
+                      if port.deformation is not None}
+        ports = model.element_outputs
+        self.deformations = [int(port.deformation) for port in ports]
+        self.kinds = [DEFORMATION if port.quantity == "deformation"
+                      else REACTION if port.deformation in prescribed else STRESS
+                      for port in ports]
+        # a reaction's place in the efforts (unused for the other kinds)
+        self.efforts = [prescribed.get(port.deformation, -1) for port in ports]
+        self.evaluates = any(kind != DEFORMATION for kind in self.kinds)
+        # with kinematic inputs an evaluation puts their path at its time into q: it needs t
+        self.needs_time = self.evaluates and bool(model.kinematic_inputs)
+
+    def __len__(self) -> int:
+        return len(self.kinds)
+
+    def values(self, data: EngineData, state: np.ndarray, inputs: np.ndarray,
+               t: float | None) -> np.ndarray:
+        """The outputs on elements at a state whose kinematics `data` has just solved.
+
+        Parameters
+        ----------
+        data : EngineData
+            The packed model, its slot e the deformations at the state's DOFs.
+        state : ndarray (2 NDOF + n_coils,)
+            The absolute state [q, qdot(, i)]: m, rad; m/s, rad/s; A.
+        inputs : ndarray (n_inputs,)
+            The inputs held at the state: N, N m, V (what an effort carries).
+        t : float or None
+            The state's time (s): the kinematic inputs' path at it (needed with kinematic
+            inputs and a stress output, `needs_time`).
+
+        Returns
+        -------
+        ndarray (n_element_outputs,)
+            m for a deformation, N for a stress resultant.
+
+        Raises
+        ------
+        SimulationError
+            The evaluation failed at the state (the caller names the state), or no time
+            where one is needed.
+        """
+        e = data.float_array("e")
+        values = np.array([e[d] for d in self.deformations], dtype=float)
+        if not self.evaluates:
+            return values
+        if self.needs_time and t is None:
+            raise SimulationError("the stress outputs of a model with kinematic inputs need "
+                                  "the time of each state (the inputs' path at it)")
+        n = self.ndof
+        # y = [0, qdot(, i)] on q_ref = q: the evaluation of this state, as the integrator's
+        data.float_array("q_ref")[:] = state[:n]
+        data.float_array("inputs")[:] = inputs
+        y = np.concatenate([np.zeros(n), state[n:]])
+        status = engine.call(data, engine.OP_RHS, y, t=0.0 if t is None else float(t))
+        if status != ed.OK:
+            raise SimulationError(f"the stress outputs: {STATUS_MESSAGES[status]}")
+        sigma, efforts = data.float_array("sigma"), data.float_array("efforts")
+        for j, (kind, d, k) in enumerate(zip(self.kinds, self.deformations, self.efforts,
+                                             strict=True)):
+            if kind == STRESS:
+                values[j] = sigma[d]
+            elif kind == REACTION:  # the effort does work on the deformation's increase
+                values[j] = -efforts[k]
+        return values
+
+
+__all__ = ["DEFORMATION", "REACTION", "STRESS", "ElementReadings", "refused_element_outputs"]
