@@ -127,6 +127,8 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
         check_motion_method(model, method, motion_duration, stepwise_motion)
+        # the outputs on elements (`element_readings`), refused before anything compiles
+        self._elements = ElementReadings(model)
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model, rigid=rigid)
@@ -137,9 +139,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         self.atol = atol_vector(model, rtol, atol, self.nstate, self.data)
         self.input_names = [p.name for p in model.inputs]
         self.input_units = [p.unit for p in model.inputs]
-        # the coordinate outputs, then the outputs on elements (`element_readings`)
-        self._elements = ElementReadings(model)
-        ports = [*model.outputs, *model.element_outputs]
+        ports = [*model.outputs, *model.element_outputs]  # the coordinate outputs first
         self.output_names = [p.name for p in ports]
         self.output_units = [p.unit for p in ports]
         self.dof_names = model.dof_names
