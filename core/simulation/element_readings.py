@@ -18,8 +18,13 @@ reading them never disturbs the integrator's own evaluations.
   multipliers of the full dynamic balance, which the engine's evaluation does not form: a
   simulator of a model with such an output is refused when it is made, naming the output.
 
-Measured (tests/test_simulation_element_outputs.py): one evaluation after the kinematics,
-about as much again as the kinematics the coordinate outputs cost.
+The engine's evaluation is the one the integrator makes, so no second physics path is
+involved; the numpy mechanics (the tests' reference: its kinematics, De and S e + D edot)
+cost 1.5 to 7 ms per state on the stages against about 0.05 ms here. Measured on
+stage_planar_3dof (esdirk, 1 ms steps of about 0.1 to 0.17 ms on a shared 2-core machine):
+`output_values` 0.6 us with its coordinate outputs alone (read from q), 45 us with
+deformation outputs (a kinematic solve through Python), 93 us with stress outputs too (one
+evaluation more); stage_spatial_1dof 17, 48 and 95 us.
 """
 
 from __future__ import annotations
