@@ -89,6 +89,7 @@ class ElementReadings:
             raise SimulationError(problem)
         self.model = model
         self.ndof = model.declared_dof_count
+        self.nstate = 2 * self.ndof + len(model.coil_actuators)
         prescribed = {port.deformation: k for k, port in enumerate(model.kinematic_inputs)
                       if port.deformation is not None}
         ports = model.element_outputs
@@ -143,7 +144,10 @@ class ElementReadings:
         # y = [0, qdot(, i)] on q_ref = q: the evaluation of this state, as the integrator's
         data.float_array("q_ref")[:] = state[:n]
         data.float_array("inputs")[:] = inputs
-        y = np.concatenate([np.zeros(n), state[n:]])
+        # the engine reads a whole state: coil currents left out of `state` are zero
+        y = np.zeros(self.nstate)
+        rates = state[n: self.nstate]
+        y[n: n + rates.size] = rates
         status = engine.call(data, engine.OP_RHS, y, t=0.0 if t is None else float(t))
         if status != ed.OK:
             raise SimulationError(f"the stress outputs: {STATUS_MESSAGES[status]}")
