@@ -383,7 +383,6 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
     from flexure.core import FlexureError, apply_overrides, build_model, scene_path, scene_toml
     from flexure.core.scene.building import parse_toml
     from flexure.core.scene.overrides import describe_overrides
-    from flexure.core.simulation.element_readings import refused_element_outputs
 
     from .scene_slave import scene_value
 
@@ -399,9 +398,6 @@ def build_scene_fmu(scene: str | Path, dest: str | Path | None = None, *,
                             f"actuators {', '.join(a.name for a in model.actuators)}: a time "
                             "simulation takes kinematic inputs only without actuators; no FMU "
                             "of this scene")
-    refused = refused_element_outputs(model)  # before anything compiles
-    if refused:
-        raise FMUBuildError(f"{refused}; no FMU of this scene")
     # the FMU carries the scene it was built from: the file's own text where it is TOML as
     # given, otherwise the scene written back (an imported SPACAR file, overrides)
     if path.suffix.lower() == ".toml" and not overrides:

@@ -20,8 +20,9 @@ Variables (only what the scene has):
 - one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
   global axis of a 3-D rotational node, rad, or its angular velocity, rad/s), then one per
   output on an element (SPACAR's OUTE, OUTF): its deformation (m) or its stress resultant
-  (N, S e + D edot with the viscous term; a prescribed deformation's is minus its effort:
-  `flexure.core.simulation.element_readings`), all updated after every step;
+  (N, S e + D edot with the viscous term; a prescribed deformation's is minus its effort, a
+  rigid one's its reaction: `flexure.core.simulation.element_readings`), all updated after
+  every step;
 - one output "NAME.current" (A) per voltage-driven actuator [actuators.NAME]: its coil
   current, a state of the FMU;
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises

@@ -59,13 +59,7 @@ def sine(x0, amplitude, omega):
 
 
 def pendulum(mass, length, g):
-    return build_model(pendulum_data(mass, length, g))
-
-
-def pendulum_data(mass, length, g):
-    """A point mass on a stiff link under gravity, its hinge's angle a DOF driven by the
-    moment T; outputs the angle and the link's (rigid) tension."""
-    return {
+    return build_model({
         "scene": {"name": "pendulum", "gravity": [0.0, -g]},
         "sections": {"link": {"EA": 1e6, "EI": 1e3}},
         "nodes": {"pivot": {"position": [0.0, 0.0], "fixed": ["x", "y"]},
@@ -76,7 +70,7 @@ def pendulum_data(mass, length, g):
                               "section": "link"}},
         "inputs": {"T": {"node": "hinge", "coordinate": "phi"}},
         "outputs": {"theta": {"node": "hinge", "coordinate": "phi"},
-                    "tension": {"element": "link", "deformation": "e1", "quantity": "stress"}}}
+                    "tension": {"element": "link", "deformation": "e1", "quantity": "stress"}}})
 
 
 def turned_pendulum(mass, length, g, *, name="pendulum", **motion):

@@ -14,13 +14,15 @@ reading them never disturbs the integrator's own evaluations.
 - A stress output of a prescribed deformation (a kinematic input's) is a reaction: minus the
   input's effort, sigma_d = -F = Q_k - M_k. qddot (`flexure.core.engine.prescribed`), which the
   same evaluation gives at the state's time with the held inputs.
-- A rigid deformation's stress resultant (held zero: a constraint's multiplier) needs the
-  multipliers of the full dynamic balance, which the engine's evaluation does not form: a
-  simulator of a model with such an output is refused when it is made, naming the output.
+- A stress output of a rigid deformation (held zero) is a reaction too: the multiplier of
+  its constraint row in the full dynamic balance, which the engine's evaluation does not
+  form; it comes from the numpy mechanics at the engine's coordinates and accelerations of
+  the same evaluation (`element_reactions`).
 
 The engine's evaluation is the one the integrator makes, so no second physics path is
-involved; the numpy mechanics (the tests' reference: its kinematics, De and S e + D edot)
-cost 1.5 to 7 ms per state on the stages against about 0.05 ms here. Measured on
+involved but for a rigid deformation's reaction; the numpy mechanics (the tests' reference:
+its kinematics, De and S e + D edot) cost 1.5 to 7 ms per state on the stages against about
+0.05 ms here. Measured on
 stage_planar_3dof (esdirk, 1 ms steps of about 0.1 to 0.17 ms on a shared 2-core machine):
 `output_values` 0.6 us with its coordinate outputs alone (read from q), 45 us with
 deformation outputs (a kinematic solve through Python), 93 us with stress outputs too (one
@@ -36,38 +38,17 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
+from .element_reactions import RigidReactions
+from .simulator_motion import path_point_now
 from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..engine.data import EngineData
     from ..model import Model
 
-# what an output on an element reads (`ElementReadings.kinds`)
-DEFORMATION, STRESS, REACTION = 0, 1, 2
-
-
-def refused_element_outputs(model: Model) -> str | None:
-    """Why a simulation cannot give the model's outputs on elements, or None.
-
-    Parameters
-    ----------
-    model : Model
-
-    Returns
-    -------
-    str or None
-        The message naming the first stress output of a rigid deformation (its reaction
-        needs the constraint multipliers, which the engine's evaluation does not form).
-    """
-    rigid = set(np.asarray(model.rigid_deformations).tolist())
-    for port in model.element_outputs:
-        if port.quantity == "stress" and port.deformation in rigid:
-            return (f"{model.source}: outputs.{port.name}: the stress resultant of "
-                    f"{model.deformation_names[port.deformation]} is the reaction of a rigid "
-                    "deformation (held zero): a simulation does not give it (it needs the "
-                    "constraint multipliers); release the deformation, or read it from a "
-                    "static solution or inverse dynamics")
-    return None
+# what an output on an element reads (`ElementReadings.kinds`): a deformation, a
+# constitutive stress resultant, minus a kinematic input's effort, a rigid one's reaction
+DEFORMATION, STRESS, REACTION, RIGID = 0, 1, 2, 3
 
 
 class ElementReadings:
@@ -76,17 +57,9 @@ class ElementReadings:
     Parameters
     ----------
     model : Model
-
-    Raises
-    ------
-    SimulationError
-        An output the simulation cannot give (`refused_element_outputs`).
     """
 
     def __init__(self, model: Model) -> None:
-        problem = refused_element_outputs(model)
-        if problem:
-            raise SimulationError(problem)
         self.model = model
         self.ndof = model.declared_dof_count
         self.nstate = 2 * self.ndof + len(model.coil_actuators)
@@ -94,9 +67,12 @@ class ElementReadings:
                       if port.deformation is not None}
         ports = model.element_outputs
         self.deformations = [int(port.deformation) for port in ports]
+        rigid = set(np.asarray(model.rigid_deformations).tolist())
         self.kinds = [DEFORMATION if port.quantity == "deformation"
-                      else REACTION if port.deformation in prescribed else STRESS
+                      else REACTION if port.deformation in prescribed
+                      else RIGID if port.deformation in rigid else STRESS
                       for port in ports]
+        self.reactions = RigidReactions(model) if RIGID in self.kinds else None
         # a reaction's place in the efforts (unused for the other kinds)
         self.efforts = [prescribed.get(port.deformation, -1) for port in ports]
         self.evaluates = any(kind != DEFORMATION for kind in self.kinds)
@@ -152,13 +128,33 @@ class ElementReadings:
         if status != ed.OK:
             raise SimulationError(f"the stress outputs: {STATUS_MESSAGES[status]}")
         sigma, efforts = data.float_array("sigma"), data.float_array("efforts")
+        reactions = (None if self.reactions is None else self.reactions.stress_resultants(
+            data, *self._evaluated(data, state, t), self._port_values(data, inputs)))
         for j, (kind, d, k) in enumerate(zip(self.kinds, self.deformations, self.efforts,
                                              strict=True)):
             if kind == STRESS:
                 values[j] = sigma[d]
+            elif kind == RIGID:
+                values[j] = reactions[d]
             elif kind == REACTION:  # the effort does work on the deformation's increase
                 values[j] = -efforts[k]
         return values
 
+    def _evaluated(self, data, state, t):
+        """(q, qdot) the engine evaluated: the state's, a kinematic input's entries on its
+        path at t (the prescribed form puts them there)."""
+        n = self.ndof
+        q, qdot = state[:n].copy(), state[n: 2 * n].copy()
+        if self.model.kinematic_inputs:
+            k = self.model.prescribed_dofs
+            q[k], qdot[k], _ = path_point_now(data.float_array("motion_path"), t)
+        return q, qdot
 
-__all__ = ["DEFORMATION", "REACTION", "STRESS", "ElementReadings", "refused_element_outputs"]
+    def _port_values(self, data, inputs):
+        """The force or moment (N, N m) each input put on its port in the evaluation: the
+        engine's own with actuators (from a drive signal or a coil current), else the
+        inputs."""
+        return data.float_array("port_values").copy() if self.model.actuators else inputs
+
+
+__all__ = ["DEFORMATION", "REACTION", "RIGID", "STRESS", "ElementReadings"]

@@ -70,7 +70,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         rad/s; an angle about a global axis is a rotation-vector component,
         `flexure.core.mechanics.ports`), then its outputs on elements, deformations (m) and
         stress resultants (N) (`element_readings`: a stress resultant is S e + D edot, its
-        viscous term included).
+        viscous term included; a rigid or prescribed deformation's the reaction).
     method : str
         "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a one-step
         L-stable method of order 4, `flexure.core.simulation.esdirk`: no restart cost when an
@@ -109,8 +109,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         an option the one-step methods do not take, a scene configuration the DOFs
         cannot be assembled in, or kinematic inputs without a motion_duration or
         stepwise_motion (or with both) or with a method that does not take them (IDA), or
-        either without them; a stress output of a rigid deformation (a reaction the
-        simulation does not give, `element_readings`).
+        either without them.
     """
 
     def __init__(self, model: Model, *, method: str = "cvode-bdf", rtol: float = 1e-8,
@@ -127,8 +126,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
         check_motion_method(model, method, motion_duration, stepwise_motion)
-        # the outputs on elements (`element_readings`), refused before anything compiles
-        self._elements = ElementReadings(model)
+        self._elements = ElementReadings(model)  # the outputs on elements
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model, rigid=rigid)
