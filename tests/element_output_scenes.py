@@ -7,20 +7,24 @@ from kinematic_scenes import C2, K2, M1, M2, scene
 
 def stage_planar():
     """stage_planar_3dof (force F on 3.x): the left leaf's elongation and bending as
-    deformations and stress resultants, the right leaf's bending stress."""
+    deformations and stress resultants, the right leaf's bending stress, and the rigid
+    bar's axial force and bending moment (reactions)."""
     data = scene("stage_planar_3dof")
     data["outputs"] |= {
         "e1_left": {"element": "leaf_left", "deformation": "e1"},
         "e2_left": {"element": "leaf_left", "deformation": "e2"},
         "N_left": {"element": "leaf_left", "deformation": "e1", "quantity": "stress"},
         "M2_left": {"element": "leaf_left", "deformation": "e2", "quantity": "stress"},
-        "M3_right": {"element": "leaf_right", "deformation": "e3", "quantity": "stress"}}
+        "M3_right": {"element": "leaf_right", "deformation": "e3", "quantity": "stress"},
+        "N_bar": {"element": "bar", "deformation": "e1", "quantity": "stress"},
+        "M2_bar": {"element": "bar", "deformation": "e2", "quantity": "stress"}}
     return data
 
 
 def stage_spatial():
     """stage_spatial_1dof (force F on 3.x): the leaves' sideways bending e5, e6 and the right
-    leaf's torsion e2, deformations and stress resultants."""
+    leaf's torsion e2, deformations and stress resultants; the left leaf's rigid elongation
+    and torsion (reactions)."""
     data = scene("stage_spatial_1dof")
     data.setdefault("outputs", {})
     data["outputs"] |= {
@@ -28,7 +32,9 @@ def stage_spatial():
         "M5_left": {"element": "leaf_left", "deformation": "e5", "quantity": "stress"},
         "M6_left": {"element": "leaf_left", "deformation": "e6", "quantity": "stress"},
         "T_right": {"element": "leaf_right", "deformation": "e2", "quantity": "stress"},
-        "e6_right": {"element": "leaf_right", "deformation": "e6"}}
+        "e6_right": {"element": "leaf_right", "deformation": "e6"},
+        "N_left": {"element": "leaf_left", "deformation": "e1", "quantity": "stress"},
+        "T_left": {"element": "leaf_left", "deformation": "e2", "quantity": "stress"}}
     return data
 
 
