@@ -24,7 +24,8 @@ if TYPE_CHECKING:  # names for the annotations only
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
-    `_output_dofs` and `_output_dof_list`, `_restart_kinematics` (whether the plant's last
+    `_output_dofs` and `_output_dof_list`, `_elements` (the outputs on elements:
+    `element_readings`), `_restart_kinematics` (whether the plant's last
     solution may be of another state), the last evaluation's `_last_x`, `_last_e`, and
     `_range`, `_within` made here on first use)."""
 
