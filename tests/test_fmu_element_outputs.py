@@ -1,6 +1,6 @@
 """Outputs on elements (SPACAR's OUTE, OUTF) in an FMU: each an output variable in m or N,
-updated after every step, in a force-driven FMU (stage_planar_3dof) and a
-displacement-driven one (the pushed chain: a truss's elongation moved). Checked in fmpy: the
+updated after every step, in force-driven FMUs (stage_planar_3dof, stage_spatial_1dof) and
+a displacement-driven one (the pushed chain: a truss's elongation moved). Checked in fmpy: the
 model description validates and declares them; over a run on a variable grid the FMU's
 values (constitutive stress resultants, a prescribed deformation's and rigid ones'
 reactions) equal the in-process Simulator's given the same inputs. The simulation's own
@@ -8,7 +8,7 @@ checks: test_simulation_element_outputs.py."""
 
 import numpy as np
 import pytest
-from element_output_scenes import pushed_chain, stage_planar
+from element_output_scenes import pushed_chain, stage_planar, stage_spatial
 from fmpy import read_model_description
 from fmpy_slave import Slave
 
@@ -17,7 +17,7 @@ from flexure.fmu import build_scene_fmu, validate_fmu_file
 
 STEPS = np.array([1e-3, 2.5e-3, 0.4e-3, 1.7e-3, 3e-3, 0.9e-3, 1e-3, 2e-3] * 3)  # s
 TIMES = np.concatenate([[0.0], np.cumsum(STEPS)])
-SCENES = {"stage": stage_planar, "pushed": pushed_chain}
+SCENES = {"stage": stage_planar, "spatial": stage_spatial, "pushed": pushed_chain}
 
 
 @pytest.fixture(scope="module")
@@ -35,6 +35,8 @@ def element_fmus(tmp_path_factory):
 @pytest.mark.parametrize("name, outputs", [
     ("stage", ["x", "y", "e1_left", "e2_left", "N_left", "M2_left", "M3_right", "N_bar",
                "M2_bar"]),
+    ("spatial", ["x", "y", "e5_left", "M5_left", "M6_left", "T_right", "e6_right", "N_left",
+                 "T_left"]),
     ("pushed", ["x2", "push", "stretch", "eb", "fb", "L.effort"]),
 ])
 def test_the_model_description_declares_them(element_fmus, name, outputs):
@@ -54,9 +56,9 @@ def test_the_model_description_declares_them(element_fmus, name, outputs):
 
 
 def inputs_at(name, k):
-    """The input set before step k: the stage's force (N), varied; the pushed chain's
+    """The input set before step k: a stage's force (N), varied; the pushed chain's
     elongation at the step's end (m), a smooth 1 mm move."""
-    if name == "stage":
+    if name != "pushed":
         return [1.0 + 0.5 * np.sin(7.0 * k)]
     t = TIMES[k + 1]
     return [1e-3 * (1 - np.cos(np.pi * min(t / TIMES[-1], 1.0))) / 2]
