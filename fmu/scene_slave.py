@@ -18,7 +18,11 @@ Variables (only what the scene has):
   (`flexure.core.simulation.stepwise_motion`); and one output "NAME.effort" (N, N.m on an
   angle): the generalised force that realises it in the current state;
 - one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
-  global axis of a 3-D rotational node, rad, or its angular velocity, rad/s);
+  global axis of a 3-D rotational node, rad, or its angular velocity, rad/s), then one per
+  output on an element (SPACAR's OUTE, OUTF): its deformation (m) or its stress resultant
+  (N, S e + D edot with the viscous term; a prescribed deformation's is minus its effort, a
+  rigid one's its reaction: `flexure.core.simulation.element_readings`), all updated after
+  every step;
 - one output "NAME.current" (A) per voltage-driven actuator [actuators.NAME]: its coil
   current, a state of the FMU;
 - on request (`von_mises = True`), the output "von_mises_max" (Pa): the largest von Mises
@@ -152,7 +156,7 @@ class SceneSlave(SafeSlave):
         # cheapest call there is): the inputs the host set (N, N m or V), held from the next
         # doStep on; the outputs and coil currents of the current state (`_refresh`).
         self.inputs = [0.0] * len(model.inputs)
-        self.outputs = [math.nan] * len(model.outputs)
+        self.outputs = [math.nan] * len(self.simulator.output_names)
         self.currents = [math.nan] * len(model.coil_actuators)
         # the kinematic inputs' positions (m, rad) the host set: where each is at the end of
         # the next step (where it starts, before the first); their efforts (N, N.m) now
@@ -184,7 +188,7 @@ class SceneSlave(SafeSlave):
                                       "where it starts)",
                           getter=partial(self.motions.__getitem__, i),
                           setter=partial(self.motions.__setitem__, i))
-        for j, port in enumerate(model.outputs):
+        for j, port in enumerate([*model.outputs, *model.element_outputs]):
             self.add_real(port.name, causality="output", unit=port.unit,
                           description=port_description(model, port, is_input=False),
                           getter=partial(self.outputs.__getitem__, j))
@@ -416,7 +420,7 @@ def restored_state_problem(slave, simulator_state):
         if abs(t - slave.time) > 1e-9 * max(1.0, abs(slave.time)):
             return (f"simulator.t = {t!r} s: expected the state's communication point "
                     f"time = {slave.time!r} s")
-    names = [port.name for port in slave._model.outputs]
+    names = slave.simulator.output_names  # the coordinate outputs, those on elements
     for name, value in zip(names, slave.outputs, strict=True):
         if not math.isfinite(value):
             return f"output {name} = {value!r}: expected a finite number"

@@ -82,6 +82,19 @@ def test_a_truss_moved_along_its_axis_takes_m_a_plus_c_v_plus_k_u(method):
     assert result.outputs["x"][-1] == 0.101  # the scene's output on the moved node
 
 
+def test_an_effort_carries_the_held_force_on_its_row():
+    """truss_1dof_x held at 0.1 m with the force input F = 2 N on its node: the effort at
+    rest is the static one, k (u - 0.1) - 1 N (the load) - F, to 1e-12 N, in the simulator
+    and in simulate() (with F = 0 it would be -1 N)."""
+    model = moved_truss(0.1)
+    sim = Simulator(model, method="esdirk", stepwise_motion=True)
+    sim.set_inputs([2.0])
+    sim.move_to([0.1], 1e-3)
+    assert sim.efforts()[0] == pytest.approx(-3.0, rel=0, abs=1e-12)
+    result = simulate(model, 1e-3, inputs={"F": 2.0})
+    assert result.outputs["X.effort"][-1] == pytest.approx(-3.0, rel=0, abs=1e-12)
+
+
 def test_set_motion_moves_the_inputs_again_from_a_later_time():
     """set_motion(T, t0): the truss's move of 20 ms starting at 10 ms (held at the start
     before): the effort m u'' + c u' + k (u - 0.1) - 1 N of the shifted quintic to 1e-12 of its

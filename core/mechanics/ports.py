@@ -290,15 +290,19 @@ def port_description(model: Model, port: Port, *, is_input: bool) -> str:
     ----------
     model : Model
     port : Port
-        One of the model's inputs or outputs.
+        One of the model's inputs or outputs (its outputs on elements too).
     is_input : bool
         Whether `port` is an input (a force or moment) or an output (a position or velocity).
 
     Returns
     -------
     str
-        E.g. "force on coordinate 3.x", "moment about the global z axis on node 4".
+        E.g. "force on coordinate 3.x", "moment about the global z axis on node 4",
+        "stress resultant of leaf_left.e2".
     """
+    if port.deformation is not None:  # an output on an element (SPACAR's OUTE, OUTF)
+        what = "deformation" if port.quantity == "deformation" else "stress resultant"
+        return f"{what} of {model.deformation_names[port.deformation]}"
     if port.about_axis:
         node = model.coordinate_node[port.euler[0]]
         axis = port.axis[1]

@@ -215,10 +215,11 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
             keep[0] = False
         times, states, held = times[keep], states[keep], np.array(held)[keep]
     states = sim.on_path(times, states)  # the kinematic inputs' entries exactly the path's
-    outputs, warnings = sim.outputs_and_warnings(states, times=times)
+    held = np.array(held, dtype=float).reshape(len(times), len(sim.input_names))
+    outputs, warnings = sim.outputs_and_warnings(states, times=times, inputs=held)
     names, units = sim.output_names, sim.output_units
     if model.kinematic_inputs:  # their efforts as outputs after the scene's
-        outputs = np.column_stack([outputs, sim.efforts_along(times, states)])
+        outputs = np.column_stack([outputs, sim.efforts_along(times, states, inputs=held)])
         names = names + [f"{port.name}.effort" for port in model.kinematic_inputs]
         units = units + [effort_unit(port) for port in model.kinematic_inputs]
     n = sim.ndof
@@ -227,7 +228,7 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
                             currents=states[:, 2 * n:], dof_names=sim.dof_names,
                             output_names=names, output_units=units,
                             output_array=outputs, statistics=sim.statistics,
-                            inputs=np.array(held), input_names=sim.input_names,
+                            inputs=held, input_names=sim.input_names,
                             warnings=warnings)
 
 

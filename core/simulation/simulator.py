@@ -41,6 +41,7 @@ from ..engine import data as ed
 from ..engine.data import EngineData
 from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
+from .element_readings import ElementReadings
 from .held_inputs import checked_inputs
 from .methods import METHODS, REGISTRY
 from .simulator_motion import SimulatorMotion, check_motion
@@ -67,7 +68,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         The model; its inputs are forces (N, N m) or moments about a global axis (N m), or
         actuators' drive signals (V); its outputs positions or velocities (m, rad, m/s,
         rad/s; an angle about a global axis is a rotation-vector component,
-        `flexure.core.mechanics.ports`).
+        `flexure.core.mechanics.ports`), then its outputs on elements, deformations (m) and
+        stress resultants (N) (`element_readings`: a stress resultant is S e + D edot, its
+        viscous term included; a rigid or prescribed deformation's the reaction).
     method : str
         "cvode-bdf" (stiff, default), "cvode-adams" (non-stiff), "ida", or "esdirk" (a one-step
         L-stable method of order 4, `flexure.core.simulation.esdirk`: no restart cost when an
@@ -122,6 +125,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         if max_step is not None and not (np.isfinite(max_step) and max_step > 0):
             raise SimulationError(f"max_step must be a positive number (s), got {max_step!r}")
         check_motion(model, motion_duration, stepwise_motion)
+        self._elements = ElementReadings(model)  # the outputs on elements
         self.model = model
         self.method, self.rtol, self.max_step, self.jacobian = method, rtol, max_step, jacobian
         self.data = EngineData(model, rigid=rigid)
@@ -132,8 +136,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         self.atol = atol_vector(model, rtol, atol, self.nstate, self.data)
         self.input_names = [p.name for p in model.inputs]
         self.input_units = [p.unit for p in model.inputs]
-        self.output_names = [p.name for p in model.outputs]
-        self.output_units = [p.unit for p in model.outputs]
+        ports = [*model.outputs, *model.element_outputs]  # the coordinate outputs first
+        self.output_names = [p.name for p in ports]
+        self.output_units = [p.unit for p in ports]
         self.dof_names = model.dof_names
         self.deadline = None  # a time.perf_counter() value past which `advance` stops
         self._u = np.zeros(len(model.inputs))
@@ -150,10 +155,12 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         self._output_coordinates = np.array([-1 if port.about_axis else port.coordinate
                                              for port in model.outputs], dtype=np.int64)
         self._about_axis = any(port.about_axis for port in model.outputs)
-        self._positions_only = all(port.quantity == "position" for port in model.outputs)
+        self._positions_only = (all(port.quantity == "position" for port in model.outputs)
+                                and not model.element_outputs)
         # every output a coordinate DOF (a stage's carriage): read from q, no kinematics
         dofs = output_dofs(model)
-        self._output_dofs = dofs if dofs.size and np.all(dofs >= 0) else None
+        self._output_dofs = (dofs if dofs.size and np.all(dofs >= 0)
+                             and not model.element_outputs else None)
         self._output_dof_list = [] if self._output_dofs is None else self._output_dofs.tolist()
         self._range = None  # plausibility.RangeCheck, made on first use
         self._within = None  # its compiled check of the last evaluation, made on first use

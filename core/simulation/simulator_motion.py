@@ -312,7 +312,8 @@ class SimulatorMotion:
         return states
 
     def efforts_along(self, times: ArrayLike, states: ArrayLike, *,
-                      start: np.ndarray | None = None) -> np.ndarray:
+                      start: np.ndarray | None = None,
+                      inputs: ArrayLike | None = None) -> np.ndarray:
         """The efforts that realise the kinematic inputs along states: F = M_k. qddot - Q_k.
 
         Parameters
@@ -324,6 +325,9 @@ class SimulatorMotion:
         start : ndarray (NX,), optional
             The coordinates the first kinematics starts from (default the scene's); each
             next starts from the last solution.
+        inputs : array_like (n, n_inputs), optional
+            The inputs held at each state (N, N m, V; default the ones held now): a force on
+            an input's row is part of what its effort balances.
 
         Returns
         -------
@@ -342,11 +346,14 @@ class SimulatorMotion:
         if not nki:
             return efforts
         data = self._output_data
-        q_ref = data.float_array("q_ref")
+        q_ref, held = data.float_array("q_ref"), data.float_array("inputs")
+        given = (np.broadcast_to(self._u, (times.size, self._u.size)) if inputs is None
+                 else np.asarray(inputs, dtype=float).reshape(times.size, self._u.size))
         self._start_kinematics(self.model.initial_coordinates if start is None else start,
                                data)
         for row, (t, state) in enumerate(zip(times, states, strict=True)):
             q_ref[:] = state[:n]
+            held[:] = given[row]
             y = np.concatenate([np.zeros(n), state[n: 2 * n]])
             status = engine.call(data, engine.OP_RHS, y, t=float(t))
             if status != ed.OK:

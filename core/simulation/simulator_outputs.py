@@ -24,7 +24,8 @@ if TYPE_CHECKING:  # names for the annotations only
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
-    `_output_dofs` and `_output_dof_list`, `_restart_kinematics` (whether the plant's last
+    `_output_dofs` and `_output_dof_list`, `_elements` (the outputs on elements:
+    `element_readings`), `_restart_kinematics` (whether the plant's last
     solution may be of another state), the last evaluation's `_last_x`, `_last_e`, and
     `_range`, `_within` made here on first use)."""
 
@@ -36,7 +37,8 @@ class SimulatorOutputs:
         Returns
         -------
         ndarray (n_outputs,)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s).
+            Positions m, velocities m/s (angles rad, angular velocities rad/s), then the
+            outputs on elements: deformations m, stress resultants N (`element_readings`).
 
         Raises
         ------
@@ -51,7 +53,8 @@ class SimulatorOutputs:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
-                                                         start=self._x, times=[self._t])[0]
+                                                         start=self._x, times=[self._t],
+                                                         inputs=[self._u])[0]
         return self._outputs_cache.copy()
 
     def output_values(self) -> list[float]:
@@ -62,7 +65,7 @@ class SimulatorOutputs:
         Returns
         -------
         list of float (n_outputs,)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s).
+            As `outputs`: the coordinate outputs, then the outputs on elements (m, N).
 
         Raises
         ------
@@ -90,7 +93,8 @@ class SimulatorOutputs:
         return x[self._output_coordinates]
 
     def outputs_along(self, states: ArrayLike, *, start: np.ndarray | None = None,
-                      times: ArrayLike | None = None) -> np.ndarray:
+                      times: ArrayLike | None = None,
+                      inputs: ArrayLike | None = None) -> np.ndarray:
         """The declared outputs along a path of states, solving the kinematics point by point
         (warm-started from one to the next).
 
@@ -102,23 +106,30 @@ class SimulatorOutputs:
             The coordinates (m, rad) the first kinematic solve starts from (default: the
             scene's initial ones).
         times : array_like (n,), optional
-            The time of each state (s), for the error that names the state that failed.
+            The time of each state (s), for the error that names the state that failed, and
+            the kinematic inputs' path a stress output is evaluated on (needed then).
+        inputs : array_like (n, n_inputs), optional
+            The inputs held at each state (N, N m, V; default the ones held now): what a
+            kinematic input's effort, and so a prescribed deformation's stress, carries.
 
         Returns
         -------
         ndarray (n, n_outputs)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s).
+            Positions m, velocities m/s (angles rad, angular velocities rad/s), then the
+            outputs on elements: deformations m, stress resultants N (`element_readings`).
 
         Raises
         ------
         SimulationError
-            The kinematics cannot be solved at a state (it names the state's time, or its
-            place along the path without `times`).
+            The kinematics or the evaluation of a stress output fails at a state (it names
+            the state's time, or its place along the path without `times`), or a stress
+            output of a model with kinematic inputs comes without `times`.
         """
-        return self._along(states, start, None, times)
+        return self._along(states, start, None, times, inputs)
 
-    def outputs_and_warnings(self, states: ArrayLike, *,
-                             times: ArrayLike | None = None) -> tuple[np.ndarray, list[str]]:
+    def outputs_and_warnings(self, states: ArrayLike, *, times: ArrayLike | None = None,
+                             inputs: ArrayLike | None = None
+                             ) -> tuple[np.ndarray, list[str]]:
         """The declared outputs along a path of states, and the range-of-validity warnings
         of those states (`flexure.core.simulation.plausibility`).
 
@@ -128,6 +139,8 @@ class SimulatorOutputs:
             Absolute states [q, qdot(, i)]: m, rad; m/s, rad/s; A.
         times : array_like (n,), optional
             The time of each state (s), as `outputs_along` takes them.
+        inputs : array_like (n, n_inputs), optional
+            The inputs held at each state, as `outputs_along` takes them.
 
         Returns
         -------
@@ -145,7 +158,7 @@ class SimulatorOutputs:
         n_points = len(states)
         path = (np.zeros((n_points, self.model.nx)),
                 np.zeros((n_points, len(self.model.deformation_names))))
-        outputs = self._along(states, None, path, times)
+        outputs = self._along(states, None, path, times, inputs)
         return outputs, list(self._range_check().warnings(*path).values())
 
     def range_warnings(self) -> dict[str, str]:
@@ -169,18 +182,21 @@ class SimulatorOutputs:
             self._range = RangeCheck(self.model)
         return self._range
 
-    def _along(self, states, start, path, times=None):
+    def _along(self, states, start, path, times=None, inputs=None):
         data = self._output_data
         self._start_kinematics(self.model.initial_coordinates if start is None else start,
                                data)
-        ports = self.model.outputs
-        result = np.zeros((len(states), len(ports)))
+        ports, elements = self.model.outputs, self._elements
+        states = np.asarray(states, float)
+        result = np.zeros((len(states), len(ports) + len(elements)))
+        held = (np.broadcast_to(self._u, (len(states), self._u.size)) if inputs is None
+                else np.asarray(inputs, float).reshape(len(states), self._u.size))
         n = self.ndof
         x, DF = data.float_array("x"), data.float_array("DF").reshape(self.model.nx, n)
-        for k, y in enumerate(np.asarray(states, float)):
+        for k, y in enumerate(states):
+            where = (f"t = {times[k]:.9g} s" if times is not None else "a state")
             status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
             if status != ed.OK:  # name the state that failed, not the simulator's time
-                where = (f"t = {times[k]:.9g} s" if times is not None else "a state")
                 raise SimulationError(f"{where} (state {k + 1} of {len(states)} along the "
                                       f"path): outputs: {STATUS_MESSAGES[status]}")
             for j, p in enumerate(ports):
@@ -196,4 +212,11 @@ class SimulatorOutputs:
             if path is not None:  # the kinematics left x and e of this point in the data
                 path[0][k] = x
                 path[1][k] = data.float_array("e")
+            if len(elements):  # after the kinematics: e is this state's
+                try:
+                    result[k, len(ports):] = elements.values(
+                        data, y, held[k], None if times is None else float(times[k]))
+                except SimulationError as error:
+                    raise SimulationError(f"{where} (state {k + 1} of {len(states)} along "
+                                          f"the path): {error}") from None
         return result
