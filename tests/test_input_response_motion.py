@@ -17,6 +17,9 @@ from kinematic_scenes import X0, chain, motion
 
 from flexure.core import build_model
 from flexure.core.engine import data as ed
+from flexure.core.engine import engine
+from flexure.core.engine.data import EngineData
+from flexure.core.engine.prescribed import quintic_path
 from flexure.core.simulation.simulator import Simulator
 
 D, T = 1e-3, 0.04  # node 1's move: 1 mm in 40 ms
@@ -40,6 +43,30 @@ def form(request, monkeypatch):
     monkeypatch.setattr(ed, "evaluation_cost",
                         lambda *args, **kwargs: {**cost(*args, **kwargs), other: np.inf})
     return request.param
+
+
+def test_the_engine_has_no_input_response_with_kinematic_inputs():
+    """After an evaluation of the prescribed form at a state of the move, the response to a
+    changed F is NOT_AVAILABLE (it would be that of the unconstrained accelerations), while
+    two evaluations at that state differ by the truss's coupling on node 2 alone."""
+    data = EngineData(moved_chain(value=X0 + D), augmented=True)
+    dims = data.int_array("dims")
+    assert dims[ed.AUGMENTED] == 1 and dims[ed.NKI] == 1
+    data.float_array("motion_path")[:] = quintic_path([X0], [X0 + D], T)
+    n = dims[ed.NDOF]
+    y = np.array([0.0, 2e-5, 0.0, 1e-3])  # q - q_ref (m), qdot (m/s)
+
+    def accelerations(force):
+        data.float_array("inputs")[:] = [force]
+        ydot = np.zeros(2 * n)
+        assert engine.call(data, engine.OP_RHS, y, ydot, t=0.013) == ed.OK
+        return ydot[n:].copy()
+
+    change = accelerations(1.0) - accelerations(0.0)
+    assert change[0] == 0.0 and abs(change[1]) > 1.0  # node 1 on its path; node 2 pushed
+    data.float_array("inputs")[:] = [1.0]
+    out = np.full(n, np.nan)
+    assert engine.call(data, engine.OP_INPUT_RESPONSE, out) == ed.NOT_AVAILABLE
 
 
 @pytest.mark.parametrize("method", ONE_STEP)

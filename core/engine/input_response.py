@@ -12,7 +12,10 @@ element masses and the factorisation). d qddot is then d xddot on the DOF coordi
 De_m d xddot on the DOF deformations. A one-step integrator uses it for the first stage after
 a change of the held inputs (`simulation.esdirk`). Exact but for round-off at the evaluation's
 state; only the augmented form keeps those factors, and only without actuators (whose forces
-depend on the coil currents, a state): otherwise NOT_AVAILABLE.
+depend on the coil currents, a state) and without kinematic inputs: otherwise NOT_AVAILABLE.
+With kinematic inputs (`prescribed`) the evaluation's qddot is the constrained one, qddot_0 +
+W F, whose change is d qddot_0 projected by I - W S^-1 E^T and zero on the inputs' rows, with
+the efforts changed too: the solve above is not it.
 """
 
 from ..numerics.jit import kernel
@@ -30,11 +33,11 @@ from .slots import int_array as _i
 def input_response(table, out):
     """out (NDOF,) = d qddot (m/s^2, rad/s^2) for the change of the inputs in slot inputs since
     the last evaluation, at that evaluation's state and with its factors; a status (OK, or
-    NOT_AVAILABLE when no evaluation's factors are current, in the reduced form, or with
-    actuators)."""
+    NOT_AVAILABLE when no evaluation's factors are current, in the reduced form, with
+    actuators or with kinematic inputs)."""
     dims = _i(table, slot.DIMS)
     if (dims[ed.A_FACTORS] == ed.NO_FACTORS or dims[ed.AUGMENTED] == 0
-            or _f(table, slot.PORT_VALUES).size != 0):
+            or _f(table, slot.PORT_VALUES).size != 0 or dims[ed.NKI] != 0):
         return ed.NOT_AVAILABLE
     inputs = _f(table, slot.INPUTS)
     nin = inputs.size

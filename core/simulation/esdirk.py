@@ -49,7 +49,8 @@ loop at 4 kHz this cuts the evaluations per step by about a fifth (docs/decision
 After an input change du, F_1 = F_s + [0; M^-1 B du]: the inputs enter qddot linearly, and
 the engine solves for their change with the factors of its last evaluation (`engine.
 input_response`): one solve, not an evaluation, and F_s is what FSAL takes while inputs are
-held (within the Newton tolerance of f(y)). Where it cannot (reduced form, actuators): f(y).
+held (within the Newton tolerance of f(y)). Where it cannot (reduced form, actuators,
+kinematic inputs): f(y).
 
 Status (the kernel's return): OK = 0 or one of the negative codes below; the state is always
 the last accepted one.

@@ -305,7 +305,9 @@ def restart(table, memory, flags, t, inputs_only):
     inputs_only (nothing but the inputs changed since the step that ended at t) it is the last
     stage's plus the engine's input response; the step size, Jacobian and Newton matrix are
     kept. `Esdirk.reset` and the compiled sampled loop both restart through it."""
-    # (the input response is that of the free equations: not with kinematic inputs)
+    # not with kinematic inputs: the input response is that of the unconstrained
+    # accelerations (the engine declines it too), and a host's move_to changes the path,
+    # which changes f where no input response can tell
     keep = inputs_only and memory[M_T] == t and flags[I_FSAL] != FSAL_NONE and \
         access.dims(table)[ed.NKI] == 0
     memory[M_T] = t
