@@ -141,10 +141,11 @@ def test_the_one_step_methods_agree_with_cvode_and_ida(form, run):
 def test_a_stage_on_the_augmented_form_agrees_with_cvode_and_ida():
     """stage_spatial_19dof (the augmented form by its costs) with 3.x moved 1 mm in 10 ms and
     a force G on node 11's x stepped through -0.5, 0 and 0.5 N every ms to 15 ms, at rtol
-    1e-9: every method's DOFs within 1e-9 m or rad and the effort within 2e-5 N (of up to
-    11.7 N; the stiff modes' M_kf qddot_f, as in tests/test_ida_motion.py) of CVODE BDF's at
-    each change (measured: IDA 2.5e-12, 7.2e-8 N; esdirk 2.5e-12, 8.7e-8 N; esdirk3 1.4e-12,
-    2.6e-8 N; esdirk2 1.5e-10, 1.6e-6 N)."""
+    1e-9: the DOFs within 1e-10 m or rad and the effort within 1e-6 N (of up to 11.7 N) of
+    CVODE BDF's at each change, esdirk2's within 1e-9 and 2e-5 N (the stiff modes' M_kf
+    qddot_f, as in tests/test_ida_motion.py). Measured: IDA 2.5e-12, 7.2e-8 N; esdirk
+    2.5e-12, 8.7e-8 N; esdirk3 1.4e-12, 2.6e-8 N; esdirk2 1.5e-10, 1.6e-6 N; with the first
+    stage from the input response esdirk's DOFs 7.9e-10, esdirk3's 1.2e-10."""
     data = with_motion("stage_spatial_19dof", "3", "x", value=1e-3)
     del data["inputs"]["F"]  # on 3.x, now moved
     data["inputs"]["G"] = {"node": "11", "coordinate": "x"}
@@ -161,4 +162,5 @@ def test_a_stage_on_the_augmented_form_agrees_with_cvode_and_ida():
         runs[method] = np.array(rows)
     for method in ("ida", *ONE_STEP):
         difference = np.max(np.abs(runs[method] - runs["cvode-bdf"]), axis=0)
-        assert np.all(difference[:-1] <= 1e-9) and difference[-1] <= 2e-5, (method, difference)
+        dofs, effort = (1e-9, 2e-5) if method == "esdirk2" else (1e-10, 1e-6)
+        assert np.all(difference[:-1] <= dofs) and difference[-1] <= effort, (method, difference)
