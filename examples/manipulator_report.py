@@ -38,12 +38,12 @@ from flexure.core import (
     static_equilibrium,
 )
 from flexure.core.analysis.modal import describe_mode
-from flexure.core.mechanics.mechanics import Mechanics
 from flexure.core.analysis.statespace import (
     frequency_grid,
     plot_principal_gains,
     state_space_matrices,
 )
+from flexure.core.mechanics.mechanics import Mechanics
 from flexure.core.numerics.blas import blas_threads
 from flexure.core.numerics.rotations import to_rotation_vector
 

@@ -85,7 +85,7 @@ class Configuration:
     q: np.ndarray  # (NDOF,) DOF values
     x: np.ndarray  # (NX,) coordinates
     e: np.ndarray  # (NE,) deformations
-    De: np.ndarray  # (NE, NX) deformation Jacobian
+    De: np.ndarray  # (NE, NX) deformation Jacobian (CSR where DF is None on the sparse path)
     lu: JacobianFactor  # LU factors of the constraint Jacobian J (free x free)
     DF: np.ndarray | None  # (NX, NDOF) first-order transfer function; None: not formed
 
@@ -184,19 +184,18 @@ class Kinematics:
         """
         if self.free.size < SPARSE_FROM:
             return JacobianFactor(self.constraint_jacobian(De))
-        source_rows, source_columns, _, _, _ = self._sparse_entries()
+        source_rows, source_columns = self._sparse_entries()[:2]
         return self._sparse_factor(De[source_rows, source_columns])
 
     def _sparse_entries(self):
-        """(De rows, De columns, J rows, J columns, the kept entries of the elements' blocks
-        in `_element_jacobian`'s order) of every entry J takes from De, found once."""
+        """`_sparse_pattern`, found once."""
         if self._pattern is None:
             self._pattern = self._sparse_pattern()
         return self._pattern
 
     def _sparse_factor(self, values):
         """The sparse J's factors from its entries taken from De, `_sparse_entries`' order."""
-        _, _, rows, columns, _ = self._pattern
+        rows, columns = self._pattern[2:4]
         n_def = self.constraint_rows.size
         data = np.concatenate([values, np.ones(self.dof_positions.size)])
         rows = np.concatenate([rows, n_def + np.arange(self.dof_positions.size)])
@@ -206,11 +205,12 @@ class Kinematics:
         return JacobianFactor(csc_matrix((data, (rows, columns)),
                                          shape=(self.free.size, self.free.size)))
 
-    def _element_jacobian(self, x):
-        """e (NE,) and the factors of J at x, without the dense De: J's entries taken from
-        the elements' own blocks (the same numbers as from De, in the same places). The
-        Newton iterations of a large model's kinematics need no more, and forming and
-        filling the (NE, NX) De took 4 of its 6.5 ms on the 507-DOF manipulator."""
+    def _element_jacobian(self, x, *, sparse_De=False):
+        """(e (NE,), the factors of J, De as a CSR matrix or None) at x, without the dense
+        De: J's entries taken from the elements' own blocks (the same numbers as from De, in
+        the same places). The Newton iterations of a large model's kinematics need no more,
+        and forming and filling the (NE, NX) De took 4 of its 6.5 ms on the 507-DOF
+        manipulator."""
         e = np.zeros(len(self.model.deformation_names))
         blocks = []
         for group in self.model.groups:
@@ -218,12 +218,20 @@ class Kinematics:
                                                         order=1)
             e[group.deformation_index] = local_e
             blocks.append(np.ravel(local_De))
-        keep = self._sparse_entries()[4]
-        values = np.concatenate(blocks)[keep] if blocks else np.zeros(0)
-        return e, self._sparse_factor(values)
+        _, _, _, _, keep, all_rows, all_columns = self._sparse_entries()
+        values = np.concatenate(blocks) if blocks else np.zeros(0)
+        De = None
+        if sparse_De:
+            from scipy.sparse import csr_matrix
+
+            De = csr_matrix((values, (all_rows, all_columns)), shape=(e.size, self.model.nx))
+        return e, self._sparse_factor(values[keep]), De
 
     def _sparse_pattern(self):
-        """(De rows, De columns, J rows, J columns) of every entry J takes from De."""
+        """(De rows, De columns, J rows, J columns) of every entry J takes from De; then
+        which of the elements' (deformation, coordinate) pairs, in the order of their
+        blocks (`_element_jacobian`), these are (a mask), and those pairs' rows and
+        columns of De."""
         row_of = np.full(len(self.model.deformation_names), -1)
         row_of[self.constraint_rows] = np.arange(self.constraint_rows.size)
         column_of = np.full(self.model.nx, -1)
@@ -234,9 +242,10 @@ class Kinematics:
         source_rows = np.concatenate([d.ravel() for d, _ in pairs])
         source_columns = np.concatenate([c.ravel() for _, c in pairs])
         keep = (row_of[source_rows] >= 0) & (column_of[source_columns] >= 0)
+        all_rows, all_columns = source_rows, source_columns
         source_rows, source_columns = source_rows[keep], source_columns[keep]
         return (source_rows, source_columns, row_of[source_rows], column_of[source_columns],
-                keep)
+                keep, all_rows, all_columns)
 
     def residual(self, x: np.ndarray, e: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The constraint residual g: the rigid deformations, the DOF deformations minus
@@ -293,7 +302,7 @@ class Kinematics:
                     e, De = assembly.deformation_jacobian(self.model, x)
                     lu = self.factor(De)
                 else:
-                    e, lu = self._element_jacobian(x)
+                    e, lu, _ = self._element_jacobian(x)
                 g = self.residual(x, e, q)
                 dx = lu.solve(g)
             if not np.all(np.isfinite(dx)):
@@ -327,13 +336,18 @@ class Kinematics:
             Coordinates that satisfy the constraints for q (m, rad); not checked.
         first_order : bool
             Form DF (False: DF is None; its solve for NDOF right-hand sides is most of a
-            large model's configuration, 20 of 30 ms on the 507-DOF manipulator).
+            large model's configuration, 20 of 30 ms on the 507-DOF manipulator; and on the
+            sparse path (SPARSE_FROM free coordinates) De is a scipy.sparse CSR matrix,
+            with the elements' entries, explicit zeros kept).
 
         Returns
         -------
         Configuration
             With e, De, the factors of J and DF = dx/dq (NX, NDOF).
         """
+        if not first_order and self.free.size >= SPARSE_FROM:
+            e, lu, De = self._element_jacobian(x, sparse_De=True)
+            return Configuration(q=np.asarray(q, float), x=x, e=e, De=De, lu=lu, DF=None)
         e, De = assembly.deformation_jacobian(self.model, x)
         lu = self.factor(De)
         DF = None

@@ -210,11 +210,13 @@ class Mechanics:
         return DeF.T @ matrix @ DeF
 
     def _stressed_jacobian(self, De):
-        """De on the stressed deformations as a CSR matrix, gathered at the elements'
-        (deformation, coordinate) pairs: scanning the dense (NE, NX) De for its non-zeros
-        took 6 ms a call, 4 s of the manipulator report's 50."""
+        """De (NE, NX), dense or CSR, on the stressed deformations as a CSR matrix: a dense
+        De gathered at the elements' (deformation, coordinate) pairs (scanning the dense De
+        for its non-zeros took 6 ms a call, 4 s of the manipulator report's 50)."""
         from scipy.sparse import csr_matrix
 
+        if not isinstance(De, np.ndarray):  # sparse already (`Kinematics.configuration`)
+            return De.tocsr()[self.stressed]
         if getattr(self, "_pattern", None) is None:
             row_of = np.full(len(self.model.deformation_names), -1)
             row_of[self.stressed] = np.arange(self.stressed.size)
