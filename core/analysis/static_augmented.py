@@ -44,8 +44,9 @@ if TYPE_CHECKING:  # names for the annotations only
 
 class AugmentedBalance:
     """The statics' Newton step through the sparse augmented system (module docstring), for
-    a model on the numpy `Mechanics`' sparse path (`Mechanics.sparse`: at least
-    `kinematics.SPARSE_FROM` free coordinates).
+    a model on the numpy `Mechanics`' sparse path (`Mechanics.sparse`: by default from
+    `kinematics.SPARSE_FROM` free coordinates; a smaller model's when forced, as the tests
+    do).
 
     Parameters
     ----------
@@ -108,7 +109,8 @@ class AugmentedBalance:
             stiffness = stiffness - csr_matrix(load)
         stiffness = stiffness.tocsr()[free][:, free]
         scale = np.max(np.abs(stiffness.data), initial=0.0) or 1.0
-        J = config.lu.matrix.tocsr()
+        J = config.lu.matrix  # dense below the kinematics' SPARSE_FROM (a forced sparse
+        J = csr_matrix(J) if isinstance(J, np.ndarray) else J.tocsr()  # Mechanics)
         held = scale * J[self._held_rows]
         system = bmat([[stiffness, -held.T], [held, None]], format="csc")
         rhs = np.concatenate([r_x[free], np.zeros(kin.n_rigid),
