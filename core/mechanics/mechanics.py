@@ -27,6 +27,8 @@ from .kinematics import SPARSE_FROM, Kinematics
 from .ports import input_forces, input_stiffness
 
 if TYPE_CHECKING:  # names for the annotations only
+    from scipy.sparse import csr_matrix
+
     from ..model import Model
     from .kinematics import Configuration, Hessians
 
@@ -300,7 +302,7 @@ class Mechanics:
         K = DF.T @ np.asarray(self.coordinate_stiffness(config, sigma) @ DF)
         return K - self._load_stiffness(config, load_factor, inputs)
 
-    def coordinate_stiffness(self, config: Configuration, sigma: np.ndarray):
+    def coordinate_stiffness(self, config: Configuration, sigma: np.ndarray) -> csr_matrix:
         """De_s^T S De_s + sum_i sigma_i d2e_i/dx2 on the coordinates, sparse (a model on
         the sparse path only): `tangent_stiffness`' K is DF^T (this) DF less the load
         stiffness.
