@@ -21,8 +21,8 @@ entry in a free DOF's column); the second says dx = DF dq for some dq. So DF^T (
 r_x) = 0 on the free DOFs: the reduced step, without DF (`Kinematics.configuration` with
 first_order=False) and with one sparse LU of NX + NC unknowns (5 ms on the 507-DOF
 manipulator, 2657 unknowns). The two steps agree to round-off (tests/test_static_augmented.py:
-within 1e-9 of the step's largest entry); the equilibria, converged to the same tolerance on
-dq, within 1e-10 of each DOF's unit.
+within 1e-8 of the step's largest entry, measured 5e-11); the equilibria, converged to the
+same tolerance on dq, within 1e-10 of each DOF's unit.
 
 The constraint rows are scaled by K_x's largest entry, so that the LU's pivots compare
 numbers of one size (N/m against unitless Jacobian entries otherwise); the scaling changes
@@ -68,6 +68,7 @@ class AugmentedBalance:
         self._held_rows = np.concatenate([np.arange(kin.n_rigid),
                                           dof_rows[self.model.prescribed_dofs]])
         self._load = (1.0, None, None)
+        self._step = (None, None)  # (the configuration of the last step, its dx)
 
     def set_load(self, load_factor: float, loads: np.ndarray | None = None,
                  values: np.ndarray | None = None) -> None:
@@ -135,7 +136,7 @@ class AugmentedBalance:
         at config's coordinates, as they would without it."""
         kin = self.mech.kinematics
         start = config.x.copy()
-        made_at, dx = getattr(self, "_step", (None, None))
+        made_at, dx = self._step
         if (made_at is config and np.all(np.isfinite(dx))
                 and not within(dx, kin.step_tolerance, magnitudes=start[kin.free])):
             start[kin.free] += dx

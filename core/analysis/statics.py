@@ -354,7 +354,8 @@ def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
 def _newton(balance, config, load_factor, loads, values, prescribed_values, step_tolerance,
             max_iterations, *, curvature=None):
     """Newton's method at one load factor from config (a solved configuration: its q and
-    x); balance: the engine's (`static_engine.EngineBalance`) or the numpy `_PlainBalance`;
+    x); balance: the engine's (`static_engine.EngineBalance`), the numpy `_PlainBalance` or
+    the augmented `static_augmented.AugmentedBalance` (its own step on the free DOFs);
     values: the inputs' port values (N, N m); prescribed_values (n_kinematic,) the kinematic
     inputs' (m, rad), reached in the first step; step_tolerance (NDOF,) the largest
     converged |dq_j| (m or rad); curvature, if given, (q0 (NDOF,), h2 / h1): the equilibrium
