@@ -46,7 +46,10 @@ within 1e-10 of each DOF's unit, tests/test_static_engine.py); `compiled` choose
 the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates, up
 to 150 DOFs). Either way the solution's configuration (De, DF and J's factors, which the
 linear analyses take) and stress resultants are the numpy kinematics' at the equilibrium's
-coordinates.
+coordinates. On the numpy path of a large model (`Mechanics.sparse`) Newton's step comes, by
+default, from the sparse augmented system on the coordinates instead of K and Q on the DOFs
+(`static_augmented`: the same step to round-off, without DF and the dense tangent in the
+iterations; `augmented` chooses).
 """
 
 from __future__ import annotations
@@ -65,6 +68,7 @@ from ..mechanics.motions import input_effort, motion_values
 from ..mechanics.ports import input_values
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
+from .static_augmented import AugmentedBalance
 from .static_engine import EnginePoint, engine_balance, preferred, supports
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -158,7 +162,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                        motions: dict | np.ndarray | None = None,
                        start: StaticSolution | None = None,
                        path: Sequence[tuple[float, StaticSolution]] = (),
-                       compiled: bool | None = None) -> StaticSolution:
+                       compiled: bool | None = None,
+                       augmented: bool | None = None) -> StaticSolution:
     """Solve the static equilibrium of `model` under its loads, stepped with Newton.
 
     Parameters
@@ -201,6 +206,11 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         free coordinates, up to 150 DOFs). A model the engine does not take
         (`static_engine.supports`), and an unloaded one (one Newton step, module
         docstring), take the numpy path either way.
+    augmented : bool, optional
+        On the numpy path, Newton's step from the sparse augmented system on the
+        coordinates (True: `static_augmented`, a model on the sparse mechanics only) or
+        from the reduced tangent on the DOFs (False). Default: augmented where the
+        mechanics are sparse (from 300 free coordinates).
 
     Returns
     -------
@@ -241,13 +251,21 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
     # is singular, and the step from its zero force is round-off either way.
     engine = preferred(model) if compiled is None else compiled and supports(model)
     engine = engine and not unloaded
-    balance = engine_balance(model) if engine else _PlainBalance(mech)
+    if augmented is None:
+        augmented = mech.sparse
+    if engine:
+        balance = engine_balance(model)
+    elif augmented:
+        balance = AugmentedBalance(mech)
+    else:
+        balance = _PlainBalance(mech)
 
     def solution(point, iterations):
         # the configuration and stress resultants reported: the numpy kinematics' first order
-        # (De, DF, J's factors, which the linear analyses take) at the engine's coordinates
+        # (De, DF, J's factors, which the linear analyses take) at the engine's coordinates,
+        # or where the augmented steps left DF out
         config = point
-        if isinstance(point, EnginePoint):
+        if isinstance(point, EnginePoint) or point.DF is None:
             config = mech.kinematics.configuration(point.q, point.x)
         Q, _, sigma = mech.static_balance(config, 1.0, loads, values)
         return StaticSolution(model, config, sigma, 1.0, iterations, held, values,
@@ -336,7 +354,8 @@ def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
 def _newton(balance, config, load_factor, loads, values, prescribed_values, step_tolerance,
             max_iterations, *, curvature=None):
     """Newton's method at one load factor from config (a solved configuration: its q and
-    x); balance: the engine's (`static_engine.EngineBalance`) or the numpy `_PlainBalance`;
+    x); balance: the engine's (`static_engine.EngineBalance`), the numpy `_PlainBalance` or
+    the augmented `static_augmented.AugmentedBalance` (its own step on the free DOFs);
     values: the inputs' port values (N, N m); prescribed_values (n_kinematic,) the kinematic
     inputs' (m, rad), reached in the first step; step_tolerance (NDOF,) the largest
     converged |dq_j| (m or rad); curvature, if given, (q0 (NDOF,), h2 / h1): the equilibrium
@@ -347,15 +366,18 @@ def _newton(balance, config, load_factor, loads, values, prescribed_values, step
     free, prescribed = model.free_dofs, model.prescribed_dofs
     balance.set_load(load_factor, loads, values)
     for iteration in range(1, max_iterations + 1):
-        Q, K = balance.residual_and_tangent(config)
         # Q - K dq = 0 on the DOFs proper, dq_k the move of the prescribed values
-        dq = np.zeros_like(Q)
+        dq = np.zeros(model.ndof)
         dq[prescribed] = prescribed_values - config.q[prescribed]
-        try:
-            dq[free] = np.linalg.solve(K[np.ix_(free, free)],
-                                       Q[free] - K[np.ix_(free, prescribed)] @ dq[prescribed])
-        except np.linalg.LinAlgError:
-            raise ConvergenceError("the tangent stiffness is singular") from None
+        if isinstance(balance, AugmentedBalance):
+            dq[free] = balance.free_step(config, dq)
+        else:
+            Q, K = balance.residual_and_tangent(config)
+            try:
+                dq[free] = np.linalg.solve(K[np.ix_(free, free)], Q[free]
+                                           - K[np.ix_(free, prescribed)] @ dq[prescribed])
+            except np.linalg.LinAlgError:
+                raise ConvergenceError("the tangent stiffness is singular") from None
         if not np.all(np.isfinite(dq)):
             raise ConvergenceError("the tangent stiffness is singular")
         if iteration == 1 and curvature is not None:

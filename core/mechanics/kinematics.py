@@ -48,6 +48,7 @@ class JacobianFactor:
     def __init__(self, J):
         self.size = J.shape[0]
         self.sparse = not isinstance(J, np.ndarray)  # scipy.sparse's, imported by who made it
+        self.matrix = J  # J itself (CSC where sparse): the augmented statics build on it
         if self.sparse:
             from scipy.sparse.linalg import splu
 
@@ -84,9 +85,9 @@ class Configuration:
     q: np.ndarray  # (NDOF,) DOF values
     x: np.ndarray  # (NX,) coordinates
     e: np.ndarray  # (NE,) deformations
-    De: np.ndarray  # (NE, NX) deformation Jacobian
+    De: np.ndarray  # (NE, NX) deformation Jacobian (CSR where DF is None on the sparse path)
     lu: JacobianFactor  # LU factors of the constraint Jacobian J (free x free)
-    DF: np.ndarray  # (NX, NDOF) first-order transfer function
+    DF: np.ndarray | None  # (NX, NDOF) first-order transfer function; None: not formed
 
 
 class Kinematics:
@@ -183,12 +184,20 @@ class Kinematics:
         """
         if self.free.size < SPARSE_FROM:
             return JacobianFactor(self.constraint_jacobian(De))
+        source_rows, source_columns = self._sparse_entries()[:2]
+        return self._sparse_factor(De[source_rows, source_columns])
+
+    def _sparse_entries(self):
+        """`_sparse_pattern`, found once."""
         if self._pattern is None:
             self._pattern = self._sparse_pattern()
-        source_rows, source_columns, rows, columns = self._pattern
+        return self._pattern
+
+    def _sparse_factor(self, values):
+        """The sparse J's factors from its entries taken from De, `_sparse_entries`' order."""
+        rows, columns = self._pattern[2:4]
         n_def = self.constraint_rows.size
-        data = np.concatenate([De[source_rows, source_columns],
-                               np.ones(self.dof_positions.size)])
+        data = np.concatenate([values, np.ones(self.dof_positions.size)])
         rows = np.concatenate([rows, n_def + np.arange(self.dof_positions.size)])
         columns = np.concatenate([columns, self.dof_positions])
         from scipy.sparse import csc_matrix  # only for large models: 0.05 s to import
@@ -196,8 +205,33 @@ class Kinematics:
         return JacobianFactor(csc_matrix((data, (rows, columns)),
                                          shape=(self.free.size, self.free.size)))
 
+    def _element_jacobian(self, x, *, sparse_De=False):
+        """(e (NE,), the factors of J, De as a CSR matrix or None) at x, without the dense
+        De: J's entries taken from the elements' own blocks (the same numbers as from De, in
+        the same places). The Newton iterations of a large model's kinematics need no more,
+        and forming and filling the (NE, NX) De took 4 of its 6.5 ms on the 507-DOF
+        manipulator."""
+        e = np.zeros(len(self.model.deformation_names))
+        blocks = []
+        for group in self.model.groups:
+            local_e, local_De = group.kind.deformations(group.local(x), group.reference,
+                                                        order=1)
+            e[group.deformation_index] = local_e
+            blocks.append(np.ravel(local_De))
+        _, _, _, _, keep, all_rows, all_columns = self._sparse_entries()
+        values = np.concatenate(blocks) if blocks else np.zeros(0)
+        De = None
+        if sparse_De:
+            from scipy.sparse import csr_matrix
+
+            De = csr_matrix((values, (all_rows, all_columns)), shape=(e.size, self.model.nx))
+        return e, self._sparse_factor(values[keep]), De
+
     def _sparse_pattern(self):
-        """(De rows, De columns, J rows, J columns) of every entry J takes from De."""
+        """(De rows, De columns, J rows, J columns) of every entry J takes from De; then
+        which of the elements' (deformation, coordinate) pairs, in the order of their
+        blocks (`_element_jacobian`), these are (a mask), and those pairs' rows and
+        columns of De."""
         row_of = np.full(len(self.model.deformation_names), -1)
         row_of[self.constraint_rows] = np.arange(self.constraint_rows.size)
         column_of = np.full(self.model.nx, -1)
@@ -208,8 +242,10 @@ class Kinematics:
         source_rows = np.concatenate([d.ravel() for d, _ in pairs])
         source_columns = np.concatenate([c.ravel() for _, c in pairs])
         keep = (row_of[source_rows] >= 0) & (column_of[source_columns] >= 0)
+        all_rows, all_columns = source_rows, source_columns
         source_rows, source_columns = source_rows[keep], source_columns[keep]
-        return source_rows, source_columns, row_of[source_rows], column_of[source_columns]
+        return (source_rows, source_columns, row_of[source_rows], column_of[source_columns],
+                keep, all_rows, all_columns)
 
     def residual(self, x: np.ndarray, e: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The constraint residual g: the rigid deformations, the DOF deformations minus
@@ -234,7 +270,8 @@ class Kinematics:
             x[model.dof_coordinates] - q[:n_xdof],
         ])
 
-    def solve(self, q: np.ndarray, x_start: np.ndarray) -> Configuration:
+    def solve(self, q: np.ndarray, x_start: np.ndarray, *,
+              first_order: bool = True) -> Configuration:
         """The configuration for DOFs q, by Newton's method on the constraints.
 
         Parameters
@@ -242,6 +279,8 @@ class Kinematics:
         q : ndarray (NDOF,)
         x_start : ndarray (NX,)
             The coordinates to start from (m, rad), e.g. the previous solution.
+        first_order : bool
+            Form DF (False: its DF is None; `configuration`).
 
         Returns
         -------
@@ -259,9 +298,13 @@ class Kinematics:
             # A singular J, or Newton running away from a configuration it cannot reach (x
             # overflowing on the way), is answered below with a ConvergenceError of our own.
             with np.errstate(over="ignore", invalid="ignore"):
-                e, De = assembly.deformation_jacobian(self.model, x)
+                if self.free.size < SPARSE_FROM:
+                    e, De = assembly.deformation_jacobian(self.model, x)
+                    lu = self.factor(De)
+                else:
+                    e, lu, _ = self._element_jacobian(x)
                 g = self.residual(x, e, q)
-                dx = self.factor(De).solve(g)
+                dx = lu.solve(g)
             if not np.all(np.isfinite(dx)):
                 raise ConvergenceError(
                     f"kinematics of {self.model.name!r}: the constraint Jacobian is singular "
@@ -280,9 +323,10 @@ class Kinematics:
                 f"(last correction {worst:.3e} times its tolerance): these DOF values lie "
                 "beyond the reach of the mechanism or at a singular configuration"
             )
-        return self.configuration(q, x)
+        return self.configuration(q, x, first_order=first_order)
 
-    def configuration(self, q: np.ndarray, x: np.ndarray) -> Configuration:
+    def configuration(self, q: np.ndarray, x: np.ndarray, *,
+                      first_order: bool = True) -> Configuration:
         """First-order kinematics at coordinates x that satisfy the constraints for q.
 
         Parameters
@@ -290,16 +334,26 @@ class Kinematics:
         q : ndarray (NDOF,)
         x : ndarray (NX,)
             Coordinates that satisfy the constraints for q (m, rad); not checked.
+        first_order : bool
+            Form DF (False: DF is None; its solve for NDOF right-hand sides is most of a
+            large model's configuration, 20 of 30 ms on the 507-DOF manipulator; and on the
+            sparse path (SPARSE_FROM free coordinates) De is a scipy.sparse CSR matrix,
+            with the elements' entries, explicit zeros kept).
 
         Returns
         -------
         Configuration
             With e, De, the factors of J and DF = dx/dq (NX, NDOF).
         """
+        if not first_order and self.free.size >= SPARSE_FROM:
+            e, lu, De = self._element_jacobian(x, sparse_De=True)
+            return Configuration(q=np.asarray(q, float), x=x, e=e, De=De, lu=lu, DF=None)
         e, De = assembly.deformation_jacobian(self.model, x)
         lu = self.factor(De)
-        DF = np.zeros((self.model.nx, self.selector.shape[1]))
-        DF[self.free] = lu.solve(self.selector)
+        DF = None
+        if first_order:
+            DF = np.zeros((self.model.nx, self.selector.shape[1]))
+            DF[self.free] = lu.solve(self.selector)
         return Configuration(q=np.asarray(q, float), x=x, e=e, De=De, lu=lu, DF=DF)
 
     def convective_acceleration(self, config: Configuration, qdot: np.ndarray,

@@ -27,6 +27,8 @@ from .kinematics import SPARSE_FROM, Kinematics
 from .ports import input_forces, input_stiffness
 
 if TYPE_CHECKING:  # names for the annotations only
+    from scipy.sparse import csr_matrix
+
     from ..model import Model
     from .kinematics import Configuration, Hessians
 
@@ -210,11 +212,13 @@ class Mechanics:
         return DeF.T @ matrix @ DeF
 
     def _stressed_jacobian(self, De):
-        """De on the stressed deformations as a CSR matrix, gathered at the elements'
-        (deformation, coordinate) pairs: scanning the dense (NE, NX) De for its non-zeros
-        took 6 ms a call, 4 s of the manipulator report's 50."""
+        """De (NE, NX), dense or CSR, on the stressed deformations as a CSR matrix: a dense
+        De gathered at the elements' (deformation, coordinate) pairs (scanning the dense De
+        for its non-zeros took 6 ms a call, 4 s of the manipulator report's 50)."""
         from scipy.sparse import csr_matrix
 
+        if not isinstance(De, np.ndarray):  # sparse already (`Kinematics.configuration`)
+            return De.tocsr()[self.stressed]
         if getattr(self, "_pattern", None) is None:
             row_of = np.full(len(self.model.deformation_names), -1)
             row_of[self.stressed] = np.arange(self.stressed.size)
@@ -295,13 +299,56 @@ class Mechanics:
             return self.structural_stiffness(config) + self.geometric_stiffness(
                 config, sigma, load_factor, inputs=inputs)
         DF = config.DF
+        K = DF.T @ np.asarray(self.coordinate_stiffness(config, sigma) @ DF)
+        return K - self._load_stiffness(config, load_factor, inputs)
+
+    def coordinate_stiffness(self, config: Configuration, sigma: np.ndarray) -> csr_matrix:
+        """De_s^T S De_s + sum_i sigma_i d2e_i/dx2 on the coordinates, sparse (a model on
+        the sparse path only): `tangent_stiffness`' K is DF^T (this) DF less the load
+        stiffness.
+
+        Parameters
+        ----------
+        config : Configuration
+            Its DF is not read.
+        sigma : ndarray (NE,)
+            The stress resultants of every deformation, N.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix (NX, NX)
+            N/m (N/rad, N m/rad where rotations are involved).
+        """
         stressed = self._stressed_jacobian(config.De)
         hessians = assembly.deformation_hessians(self.model, config.x)
-        coordinate_stiffness = (stressed.T @ (self._sparse_S @ stressed)
-                                + assembly.weighted_hessian(self.model, hessians, sigma,
-                                                            sparse=True))
-        K = DF.T @ np.asarray(coordinate_stiffness @ DF)
-        return K - self._load_stiffness(config, load_factor, inputs)
+        return (stressed.T @ (self._sparse_S @ stressed)
+                + assembly.weighted_hessian(self.model, hessians, sigma, sparse=True))
+
+    def load_stiffness(self, x: np.ndarray, load_factor: float = 1.0,
+                       inputs: np.ndarray | None = None) -> np.ndarray | None:
+        """df/dx of gravity and the inputs on the coordinates, scaled by load_factor, or None
+        where there is none (no gravity, no input values).
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates, m and rad.
+        load_factor : float
+            The factor on gravity and the inputs (unitless).
+        inputs : ndarray (n_inputs,), optional
+            Values on the input ports, N or N m.
+
+        Returns
+        -------
+        ndarray (NX, NX) or None
+            N/m (N m/rad on rotations).
+        """
+        parts = []
+        if np.any(self.model.gravity):
+            parts.append(self.inertia.gravity_stiffness(x))
+        if inputs is not None and np.any(inputs):
+            parts.append(input_stiffness(self.model, x, inputs))
+        return load_factor * sum(parts) if parts else None
 
     def _load_stiffness(self, config, load_factor, inputs):
         """DF^T (df/dx) DF of gravity and the inputs (NDOF, NDOF), scaled by load_factor;

@@ -1,0 +1,106 @@
+"""The statics' Newton step from the sparse augmented system (core/analysis/static_augmented.py)
+against the reduced step on the DOFs, K dq = Q, of the numpy reference (`Mechanics`'
+static_balance and tangent_stiffness), which `static_equilibrium(..., augmented=False)` runs.
+
+Every built-in scene, scenes with gravity on element masses, moments about global axes, an
+actuator, and a kinematic input; the small ones through a forced sparse `Mechanics` (the
+augmented step needs it; by default only models of 300 free coordinates and more take it).
+
+Tolerances:
+- one step, at a configuration away from equilibrium: every DOF's step within 1e-8 of the
+  largest, both in the DOFs' units (the two solve one linear system in two arrangements;
+  their round-off is K's condition number times eps of the step, measured 5e-11 on
+  manipulator_reduced);
+- the equilibria: every DOF and coordinate within 1e-10 of its unit, the stress resultants
+  within the bounds of tests/test_static_engine.py (both Newtons stop at 1e-11 of a unit and
+  converge quadratically: measured 1e-15 of a unit).
+"""
+
+import numpy as np
+import pytest
+from kinematic_scenes import chain
+from test_static_engine import LARGE, SCENES, stress_bound
+from test_static_tangent import away_from_equilibrium
+
+from flexure.core import build_model, load_scene
+from flexure.core.analysis.static_augmented import AugmentedBalance
+from flexure.core.analysis.statics import static_equilibrium
+from flexure.core.mechanics.actuators import steady_port_values
+from flexure.core.mechanics.mechanics import Mechanics
+from flexure.core.mechanics.scales import coordinate_units, dof_tolerances
+
+# the massless truss has no mass to test beyond the truss; manipulator_stage is a mechanism
+# (its tangent singular: any step solves it, tests/test_static_engine.py solves its statics)
+CASES = {name: make for name, make in SCENES.items()
+         if name not in ("massless truss", "manipulator_stage")}
+CASES["spring chain, kinematic input"] = lambda: (build_model(chain()), None)
+
+
+def marked(names):
+    return [pytest.param(name, marks=pytest.mark.slow) if name in LARGE else name
+            for name in names]
+
+
+def reduced_step(mech, config, load, dq):
+    """The free DOFs' step of `statics._newton` from K and Q: K_ff dq_f = Q_f - K_fk dq_k."""
+    model = mech.model
+    Q, _, sigma = mech.static_balance(config, *load)
+    K = mech.tangent_stiffness(config, sigma, load[0], inputs=load[2])
+    free, held = model.free_dofs, model.prescribed_dofs
+    return np.linalg.solve(K[np.ix_(free, free)], Q[free] - K[np.ix_(free, held)] @ dq[held])
+
+
+@pytest.mark.parametrize("name", marked(CASES))
+def test_the_augmented_step_is_the_reduced_step(name):
+    """At 0.6 of the scene's loads (plus 0.5 N on every coordinate) and inputs, 1e-2 units
+    (1e-3 on the manipulators) from the scene's configuration; a kinematic input moved by
+    1e-3 of its unit."""
+    model, values = CASES[name]()
+    if values is not None and model.actuators:  # the port values at rest
+        values = steady_port_values(model, values)
+    mech = Mechanics(model, sparse=True)
+    size = 1e-3 if name.startswith("manipulator") else 1e-2
+    config, units = away_from_equilibrium(model, mech, 5, size)
+    load = (0.6, model.loads + 0.5, values)
+    dq = np.zeros(model.ndof)
+    dq[model.prescribed_dofs] = 1e-3 * units[model.prescribed_dofs]
+    expected = reduced_step(mech, config, load, dq)
+    balance = AugmentedBalance(mech)
+    balance.set_load(*load)
+    lean = mech.kinematics.configuration(config.q, config.x, first_order=False)
+    step = balance.free_step(lean, dq)
+    scale = units[model.free_dofs]
+    error = np.max(np.abs(step - expected) / scale)
+    assert error <= 1e-8 * np.max(np.abs(expected) / scale), f"{name}: {error:.2e}"
+
+
+@pytest.mark.parametrize("name", marked(CASES))
+def test_augmented_equilibria_match_the_reduced_ones(name):
+    model, inputs = CASES[name]()
+    motions = {"u": 0.102} if model.kinematic_inputs else None  # 2 mm from node 1's 0.1 m
+    solutions = [static_equilibrium(model, inputs=inputs, motions=motions, compiled=False,
+                                    augmented=augmented,
+                                    mechanics=Mechanics(model, sparse=True))
+                 for augmented in (True, False)]
+    units = dof_tolerances(model, 1.0)
+    error = np.max(np.abs(solutions[0].q - solutions[1].q) / units, initial=0.0)
+    assert error <= 1e-10, f"{name}: DOFs differ by {error:.2e} of their units"
+    error = np.max(np.abs(solutions[0].x - solutions[1].x) / coordinate_units(model)[0])
+    assert error <= 1e-10, f"{name}: coordinates differ by {error:.2e} of their units"
+    mech = Mechanics(model)
+    sigma = solutions[1].stress_resultants
+    bound = stress_bound(model, mech, np.max(np.abs(sigma)))
+    assert np.all(np.abs(solutions[0].stress_resultants - sigma) <= bound), name
+    assert solutions[0].config.DF is not None  # formed for the linear analyses
+    if motions:
+        assert abs(solutions[0].efforts()["u"] - solutions[1].efforts()["u"]) <= 1e-12
+
+
+def test_a_large_model_takes_the_augmented_step_by_default():
+    """manipulator_control's numpy path (784 free coordinates) steps through the augmented
+    system unless told otherwise; a model on the dense mechanics cannot."""
+    model = load_scene("manipulator_control")
+    assert Mechanics(model).sparse
+    small = load_scene("truss_1dof_x")
+    with pytest.raises(ValueError, match="sparse mechanics"):
+        static_equilibrium(small, compiled=False, augmented=True)
