@@ -412,7 +412,7 @@ PROBE = textwrap.dedent("""
     out = np.zeros(1)
     controller_step(np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)),
                     np.zeros(1), np.ones(1), out)
-    stats = controller_step.stats
+    stats = controller_step.python_dispatcher.stats  # Python called it: that code's cache
     print(json.dumps({{"hits": sum(stats.cache_hits.values()),
                       "misses": sum(stats.cache_misses.values())}}))
 """)
