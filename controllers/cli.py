@@ -119,6 +119,10 @@ def register(subparsers):
     parser.add_argument("--disturbance", type=disturbance, default=None, metavar="A[@HZ]",
                         help="a sinusoidal force of amplitude A in N (N m on an angle) at "
                              f"every actuator, at HZ Hz (default {MAINS_HZ:g}: the mains)")
+    parser.add_argument("--motion-duration", type=positive, default=None, metavar="T",
+                        help="on a scene with kinematic inputs: the time in s each takes "
+                             "along the scene's move from its start to its value, from t = 0 "
+                             "(default --duration); the loop rides on it (--plant inprocess)")
     parser.add_argument("--plant", choices=PLANTS, default="inprocess",
                         help="in-process simulation, the linearised model stepped exactly, the "
                              "scene FMU under fmpy, or the controller and scene FMUs in "
@@ -168,6 +172,7 @@ def run(args):
                       workdir=args.workdir, overrides=overrides, path=path,
                       quantum=args.quantum, disturbance=amplitude, disturbance_hz=hz,
                       progress=Progress(f"flexure loop ({args.plant})", after=1.0), warn=warn,
+                      motion_duration=args.motion_duration,
                       **({"loops": args.loops} if args.loops else {}))
     summary = result.summary()
     code = write_outputs("flexure loop", [("--plot", plot, result.plot)],
@@ -246,6 +251,17 @@ def _plugged_rows(s):
     return rows
 
 
+def _motion_rows(s):
+    """The table's rows for a scene's kinematic inputs: each one's move and its effort at the
+    end."""
+    rows = []
+    for name, motion in s.get("kinematic_inputs", {}).items():
+        rows.append((f"kinematic input {name}", f"{motion['start']:.6g} to {motion['value']:.6g}"
+                     f" in {motion['motion_duration']:g} s"))
+        rows.append((f"{name}.effort at the end", motion["effort_end"]))
+    return rows
+
+
 def _one_or_all(values):
     """One number when every loop has the same, else all of them."""
     return values[0] if len(set(values)) == 1 else ", ".join(f"{v:g}" for v in values)
@@ -271,7 +287,7 @@ def render(s):
         ("scene", s["scene"]), ("plant", s["plant"]),
         ("controller", f"{feedback} + {s['feedforward_kind']} feedforward" if s["feedforward"]
          else f"{feedback} alone"),
-        *_plugged_rows(s),
+        *_plugged_rows(s), *_motion_rows(s),
         (f"stroke ({s['units']['position']})", s["stroke"]), ("duration (s)", s["duration"]),
         ("sample rate (Hz)", s["sample_rate_hz"]),
         ("cross-over (rad/s)", s["crossover_rad_s"]),

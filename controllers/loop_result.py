@@ -154,7 +154,9 @@ class LoopResult:
         dict
             SI units: errors, strokes and positions m (rad), forces N (N m), margins as
             `FeedbackDesign.summary`, "wall_time_s" s; "units" names the moving loop's;
-            "path" the move path's kind and targets (m, rad), or None.
+            "path" the move path's kind and targets (m, rad), or None; "kinematic_inputs"
+            (a scene with them) each one's start and value (m, rad), motion_duration (s)
+            and effort_end (N, N m) at the last sample.
         """
         loops = self.per_loop()
         ratio = max(row["error_ratio"] for row in loops)  # the worst loop's
@@ -190,7 +192,8 @@ class LoopResult:
             "reference_kind": self.settings.get("reference", "profile"),
             "path": self.settings.get("path"),
             "warnings": list(self.settings.get("warnings", [])),
-            **{key: self.settings[key] for key in ("quantum", "disturbance")
+            **{key: self.settings[key] for key in ("quantum", "disturbance",
+                                                   "kinematic_inputs")
                if key in self.settings},
         }
 

@@ -53,14 +53,17 @@ class SimulatorPlant:
 
 
 class InProcessPlant(SimulatorPlant):
-    """The scene's nonlinear model integrated by flexure.core.Simulator in this process."""
+    """The scene's nonlinear model integrated by flexure.core.Simulator in this process; its
+    kinematic inputs, if any, move along the scene's quintic in `motion_duration` s from
+    t = 0 (`Simulator(..., motion_duration=)`)."""
 
     kind = "inprocess"
 
-    def __init__(self, model, *, method=LOOP_METHOD, rtol=LOOP_RTOL):
+    def __init__(self, model, *, method=LOOP_METHOD, rtol=LOOP_RTOL, motion_duration=None):
         from flexure.core import Simulator  # the models (numba, scipy) on first use
 
-        super().__init__(model, Simulator(model, method=method, rtol=rtol))
+        super().__init__(model, Simulator(model, method=method, rtol=rtol,
+                                          motion_duration=motion_duration))
 
     @property
     def statistics(self):

@@ -30,6 +30,7 @@ from flexure.core.simulation.methods import LOOP_METHOD, LOOP_RTOL
 
 from .loop_controller import LoopController
 from .loop_design import LoopError, build_loop, feedforward_kind
+from .loop_motion import motion_duration_of, motion_report
 from .loop_result import TARGET, LoopResult
 from .plants import FmuPlant, InProcessPlant, LinearPlant
 from .sample_loop import compiled_loop, simulate_loop
@@ -67,6 +68,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
              disturbance: float | Sequence[float] | None = None,
              disturbance_hz: float = 50.0, warn: Callable[[str], None] | None = None,
              feedforward_forces: ArrayLike | None = None,
+             motion_duration: float | None = None,
              **design_options: Any) -> LoopResult:
     """Run the closed loop on a scene (a model, a file or a built-in name).
 
@@ -134,6 +136,11 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     feedforward_forces : array_like (N+2, n_loops), optional
         Given feedforward forces (N, N m), held from each sample (`build_loop`), e.g. from
         the nonlinear inverse dynamics (`dynamic_feedforward`).
+    motion_duration : float, optional
+        s: on a scene with kinematic inputs, each moves along the scene's quintic from its
+        `start` to its `value` in this time from t = 0 (default `duration`), a known motion
+        the loop rides on (loop_motion.py); only on "inprocess". The summary gives each
+        input's effort at the end ("kinematic_inputs").
     **design_options
         Passed on to `design_feedback`.
 
@@ -146,7 +153,8 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     ------
     LoopError
         An unknown plant or method, a bad rtol, overrides on a built Model, a controller
-        the chosen plant cannot run, or a bad loop setting (`build_loop`).
+        the chosen plant cannot run, kinematic inputs on a plant that does not move them
+        or a bad motion_duration, or a bad loop setting (`build_loop`).
     ControlDesignError
         The feedback or feedforward cannot be designed.
     SceneError
@@ -168,6 +176,8 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         raise LoopError("overrides apply to a scene file or name, not to a built Model: "
                         "build the model with them (build_model(data, overrides=...))")
     model = load_scene(scene, overrides=overrides) if named else scene
+    # before anything compiles: the kinematic inputs' move, or the plant's refusal
+    moving_for = motion_duration_of(model, plant, motion_duration, duration)
     if plant == "linear" and design is None and "linear_model" not in design_options:
         from flexure.core import linearize  # one linearisation: the plant's and the design's
 
@@ -221,6 +231,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     linear = None
     if plant == "linear":  # nor are the linear plant's eigenvectors
         linear = LinearPlant(model, linear_model=design_options.get("linear_model"))
+    ended = {}  # the Simulator at t_N, for the kinematic inputs' efforts
     start = time.perf_counter()
     with contextlib.ExitStack() as stack:
         # every plant's loop with one BLAS thread, the host's limits back after it
@@ -235,11 +246,14 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
             t, r, position, force = _run_plant(plant, model, scene, loop, design,
                                                method=method, rtol=rtol, workdir=workdir,
                                                progress=progress, overrides=overrides,
-                                               warn=warn_during)
+                                               warn=warn_during, motion_duration=moving_for,
+                                               ended=ended)
     wall = time.perf_counter() - start
     recorded = dict(zip(coordinates, np.max(np.abs(position - position[0]), axis=0),
                         strict=True))
     settings["warnings"] = _warned(motion_warnings(model, recorded), found, warn)
+    if moving_for is not None:
+        settings["kinematic_inputs"] = motion_report(model, moving_for, ended["simulator"])
     return LoopResult(t=t, reference=r, position=position, force=force,
                       feedforward=loop.feedforward[: len(t)].copy(), stroke=stroke,
                       design=design.summary(), settings=settings, wall_time_s=wall,
@@ -274,8 +288,10 @@ def _disturbance_settings(loop, quantum, amplitude):
 
 
 def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir, progress,
-               overrides, warn=None):
-    """t, reference, position, force of the loop on the plant named `plant`."""
+               overrides, warn=None, motion_duration=None, ended=None):
+    """t, reference, position, force of the loop on the plant named `plant`; an in-process
+    plant's Simulator at t_N into ended["simulator"]."""
+    ended = {} if ended is None else ended
     if plant in ("fmu", "libcosim"):  # the FMU plants' packages (pythonfmu, ...) only here
         from .cosim import run_cosimulation, scene_fmu
     if plant == "libcosim":
@@ -284,8 +300,11 @@ def _run_plant(plant, model, scene, controller, design, *, method, rtol, workdir
     if plant == "inprocess":
         if controller.compiled:
             return compiled_loop(model, controller, design, method=method, rtol=rtol,
-                                 progress=progress, warn=warn)
-        adapter = InProcessPlant(model, method=method, rtol=rtol)
+                                 progress=progress, warn=warn, motion_duration=motion_duration,
+                                 ended=lambda sim: ended.update(simulator=sim))
+        adapter = InProcessPlant(model, method=method, rtol=rtol,
+                                 motion_duration=motion_duration)
+        ended["simulator"] = adapter.simulator
         return simulate_loop(adapter, controller, design, progress=progress)
     adapter = FmuPlant(scene_fmu(scene, model, workdir, overrides=overrides), method=method,
                        rtol=rtol, inputs=[port.name for port in model.inputs],

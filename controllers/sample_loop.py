@@ -74,7 +74,7 @@ def simulate_loop(plant, controller: LoopController, design, *, progress=None):
 
 @blas_threads()
 def compiled_loop(model, controller: LoopController, design, *, method: str, rtol: float,
-                  progress=None, warn=None):
+                  progress=None, warn=None, motion_duration=None, ended=None):
     """The in-process loop of `model` as one compiled run; returns t, r, y, u like
     `simulate_loop`, to the bit. The controller's feedback is a state space
     (`controller.compiled`); its encoders' quantum goes to run_sampled_loop and its
@@ -93,13 +93,19 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
         Called with the simulator's range-of-validity warning of each kind (strain,
         distance) the first time the run's state leaves the range, while it runs (checked
         with each progress report, about 100 times).
+    motion_duration : float, optional
+        s: a model with kinematic inputs moves each along the scene's quintic from its
+        `start` to its `value` in this time from t = 0 (`Simulator(..., motion_duration=)`),
+        a known motion the loop rides on.
+    ended : callable, optional
+        Called with the Simulator at t_N after the run (e.g. for the inputs' efforts).
     """
     from flexure.core import Simulator, run_sampled_loop  # the models (numba) on first use
 
     if not controller.compiled:
         raise LoopError("the compiled loop runs a state-space feedback; a callable "
                         "controller takes simulate_loop")
-    sim = Simulator(model, method=method, rtol=rtol)
+    sim = Simulator(model, method=method, rtol=rtol, motion_duration=motion_duration)
     feedback = controller.controller
     said = set()
 
@@ -119,4 +125,6 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
         loop_outputs=[pair.output_index for pair in design.pairs],
         quantum=controller.quantum,
         progress=report if progress is not None or warn is not None else None)
+    if ended is not None:
+        ended(sim)
     return t, controller.reference[: len(t)].copy(), position, force

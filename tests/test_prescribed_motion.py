@@ -277,11 +277,9 @@ def test_flexure_simulate_refuses_a_motion_duration_without_kinematic_inputs(cap
 # -- what is refused -------------------------------------------------------------------------
 
 def test_what_does_not_take_kinematic_inputs_yet_is_refused():
-    """A Simulator without the move's duration (what the loop's plant makes), the compiled
-    sampled loop, actuators with kinematic inputs; a duration for a model without them, or
-    one that is not a positive number."""
-    from flexure.core.simulation.sampled_loop import run_sampled_loop
-
+    """A Simulator without the move's duration, actuators with kinematic inputs; a duration
+    for a model without them, or one that is not a positive number (the sampled loop takes
+    them: tests/test_loop_motion.py)."""
     model = moved_truss()
     with pytest.raises(SimulationError, match=r"kinematic inputs \(X\): a time simulation "
                                               r"needs the duration of their move"):
@@ -292,12 +290,6 @@ def test_what_does_not_take_kinematic_inputs_yet_is_refused():
     with pytest.raises(SimulationError, match="motion_duration 0.1: 'truss_1dof_x' has no "
                                               "kinematic input"):
         Simulator(load_scene("truss_1dof_x"), motion_duration=0.1)
-    sim = Simulator(model, method="esdirk2", motion_duration=0.1)
-    with pytest.raises(SimulationError, match=r"sampled loop does not take the kinematic "
-                                              r"inputs \(X\)"):
-        run_sampled_loop(sim, fs=1e3, samples=1, reference=np.zeros((1, 1)),
-                         feedforward=np.zeros((1, 1)),
-                         controller=(np.zeros((1, 1)),) * 4, loop_inputs=[0], loop_outputs=[0])
     actuated = with_motion("truss_1dof_x", "2", "x", value=0.101)
     actuated["actuators"] = {"VCM1": {"input": "F", "force_constant": 2.0, "resistance": 2.0,
                                       "inductance": 0.01}}

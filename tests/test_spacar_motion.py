@@ -293,8 +293,8 @@ def test_import_says_what_each_input_became_and_warns_of_the_simulation(tmp_path
     assert "INPUTX 3 1 -> the kinematic input u1: from 0.2 m by 0.001 m (DELINPX)" in \
         captured.out
     assert captured.err.startswith(f"flexure import: warning: {path}: 1 kinematic input(s)")
-    assert "`flexure simulate` (its --motion-duration) and `flexure fmu build`" in captured.err
-    assert "`flexure loop` refuses them" in captured.err
+    assert "`flexure simulate` (its --motion-duration), `flexure loop`" in captured.err
+    assert "`flexure loop` (its --motion-duration, on the in-process plant)" in captured.err
     assert tomllib.loads(out.read_text()) == read_spacar(path)
     solution = static_equilibrium(load_scene(out))
     assert solution.efforts()["u1"] == pytest.approx(SERIES * DELTA, rel=1e-12)

@@ -64,7 +64,7 @@ def run(args):
         print(f"flexure import: warning: {path}: {len(model.kinematic_inputs)} kinematic "
               "input(s): static_equilibrium (`flexure analyze --static`, at each input's value), "
               "motion_state_space, inverse_dynamics, `flexure simulate` (its "
-              "--motion-duration) and `flexure fmu build` (positions in, efforts out) take "
-              "them; `flexure loop` refuses them",
+              "--motion-duration), `flexure loop` (its --motion-duration, on the in-process "
+              "plant) and `flexure fmu build` (positions in, efforts out) take them",
               file=sys.stderr)
     return code

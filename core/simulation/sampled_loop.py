@@ -15,7 +15,12 @@ arithmetic whoever computes them); the positions returned stay the true y_k. Any
 additive input, e.g. a disturbance force, rides on u_ff: it is known per sample. An
 input that a voice-coil actuator drives (`flexure.core.mechanics.actuators`) takes u_k as its
 drive signal (V), held likewise; its coil current is part of the integrator's state. Past
-the last sample of the reference and feedforward arrays their last entries hold.
+the last sample of the reference and feedforward arrays their last entries hold. A kinematic
+input follows the simulator's path (slot motion_path: `Simulator(..., motion_duration=T)` or
+`set_motion`, the scene's quintic; held where `stepwise_motion` put it): every evaluation of
+the integrator reads it at its own time (`esdirk_kernels._f`, CVODE's right-hand side), as in
+`Simulator.advance_to`; the motion is a known disturbance of the loop, its effort not a loop
+input. After a run `Simulator.efforts` gives the efforts at t_N.
 
 The plant is the Simulator's own integrator, driven exactly as `Simulator.set_inputs` plus
 `advance` drive it, so this loop and a loop of Python calls give the same numbers, bit for bit;
@@ -110,16 +115,11 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     Raises
     ------
     SimulationError
-        The model has kinematic inputs, the simulator's method is not one the loop drives,
-        a loop output is not a position,
+        The simulator's method is not one the loop drives, a loop output is not a position,
         the reference or feedforward has the wrong number of columns, a quantum is not one
         positive finite number per loop, or the integration or a measurement fails (naming
         the time).
     """
-    if sim.model.kinematic_inputs:
-        raise SimulationError(f"the compiled sampled loop does not take the kinematic inputs "
-                              f"({', '.join(p.name for p in sim.model.kinematic_inputs)}) of "
-                              f"{sim.model.name!r} yet (docs/analyses.md)")
     if not sim.integrator.method.compiled_loop:
         raise SimulationError(f"the compiled sampled loop does not drive method "
                               f"{sim.method!r}; use one of {', '.join(COMPILED_LOOP_METHODS)}")

@@ -88,8 +88,7 @@ def check_motion(model, duration, stepwise=False):
                               f"({names}): a time simulation needs the duration of their "
                               "move (Simulator(..., motion_duration=T), `flexure simulate "
                               "--motion-duration`) or a host that moves them step by step "
-                              "(Simulator(..., stepwise_motion=True), the FMU); the sampled "
-                              "loop does not take them yet (docs/analyses.md)")
+                              "(Simulator(..., stepwise_motion=True), the FMU)")
     if duration is not None and stepwise:
         raise SimulationError(f"{model.name!r}: motion_duration {duration!r} and "
                               "stepwise_motion: the kinematic inputs ({names}) follow either "
