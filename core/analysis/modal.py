@@ -1,6 +1,6 @@
 """Natural frequencies, mode shapes and linear buckling load factors.
 
-Frequencies solve (K0 + G0) phi = omega^2 M0 phi (scipy.linalg.eigh, symmetric-definite);
+Frequencies solve (K0 + G0) phi = omega^2 M0 phi (symmetric-definite, `symmetric_definite_eigh`);
 mode shapes are normalised to unit modal mass and given on the DOFs and on all coordinates
 (DF phi). A negative frequency marks an unstable (divergent) mode, omega^2 < 0. They are the
 mechanical frequencies: voice-coil actuators count as open coils (no current, no back-EMF
@@ -18,12 +18,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import ConvergenceError
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.motions import held
 from ..numerics.blas import blas_threads
+from ..numerics.symmetric_definite import symmetric_definite_eigh
 from .linearization import LinearModel, linearize
 from .statics import static_equilibrium
 
@@ -71,7 +71,7 @@ def natural_frequencies(model: Model, count: int | None = None, *,
     if lin.M0.size == 0:
         raise ConvergenceError(f"{model.name!r} has no DOFs: no natural frequencies")
     try:
-        eigenvalues, shapes = scipy.linalg.eigh(lin.K, lin.M0)
+        eigenvalues, shapes = symmetric_definite_eigh(lin.K, lin.M0)
     except np.linalg.LinAlgError:
         raise ConvergenceError(
             f"{model.source}: the reduced mass matrix of {model.name!r} is not positive "
@@ -120,6 +120,8 @@ def buckling_load_factors(model: Model, count: int | None = None, *,
     # with the kinematic inputs held
     K0 = held(model, mech.structural_stiffness(config))
     G0 = held(model, mech.geometric_stiffness(config, solution.stress_resultants))
+    import scipy.linalg  # here: a buckling analysis is rare, and the import 0.12 s of CPU
+
     try:
         inverse = scipy.linalg.eigh(-G0, K0, eigvals_only=True)
     except np.linalg.LinAlgError:

@@ -18,7 +18,6 @@ H_i = d2 g_i / dx2, (D2F qdot) qdot = -J^-1 [ (DF qdot)^T H_i (DF qdot) ]_i.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -58,12 +57,8 @@ class JacobianFactor:
                 self.lu = splu(J) if np.all(np.isfinite(J.data)) else None
             except RuntimeError:  # "Factor is exactly singular"
                 self.lu = None
-        else:
-            import scipy.linalg  # here: a command that never factors J skips its import
-
-            with np.errstate(all="ignore"), warnings.catch_warnings():
-                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                self.lu = scipy.linalg.lu_factor(J, check_finite=False)
+        else:  # below SPARSE_FROM: numpy's solve, LAPACK's LU with partial pivoting (gesv)
+            self.lu = np.asarray(J, dtype=float)  # factored by each solve (see `solve`)
 
     def solve(self, b, *, transposed=False):
         """J^-1 b (or J^-T b); b (n,) or (n, k)."""
@@ -71,11 +66,14 @@ class JacobianFactor:
             return np.full(np.shape(b), np.nan)
         if self.sparse:
             return self.lu.solve(np.asarray(b, dtype=float), trans="T" if transposed else "N")
-        import scipy.linalg
-
+        # numpy factors J again at each solve (a few per configuration, O(n^3) at n < 300),
+        # where scipy.linalg's kept factors would cost a short command its import (0.12 to
+        # 0.15 s of CPU, a quarter of `flexure analyze` on a small scene)
         with np.errstate(all="ignore"):
-            return scipy.linalg.lu_solve(self.lu, b, trans=1 if transposed else 0,
-                                         check_finite=False)
+            try:
+                return np.linalg.solve(self.lu.T if transposed else self.lu, b)
+            except np.linalg.LinAlgError:  # exactly singular: as LAPACK's LU, no finite answer
+                return np.full(np.shape(b), np.nan)
 
 
 @dataclass
