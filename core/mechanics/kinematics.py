@@ -40,9 +40,9 @@ SPARSE_FROM = 300
 
 
 class JacobianFactor:
-    """The LU factorisation of the constraint Jacobian J, dense or sparse by its size; `solve`
-    solves J z = b (or J^T z = b) for one or more right-hand sides. Singular: solve gives
-    non-finite values, as LAPACK's dense LU does."""
+    """The constraint Jacobian J for solves, dense or sparse by its size (sparse: its LU
+    factors, kept); `solve` solves J z = b (or J^T z = b) for one or more right-hand sides.
+    Singular: solve gives non-finite values, as LAPACK's dense LU does."""
 
     def __init__(self, J):
         self.size = J.shape[0]
@@ -57,21 +57,21 @@ class JacobianFactor:
                 self.lu = splu(J) if np.all(np.isfinite(J.data)) else None
             except RuntimeError:  # "Factor is exactly singular"
                 self.lu = None
-        else:  # below SPARSE_FROM: numpy's solve, LAPACK's LU with partial pivoting (gesv)
-            self.lu = np.asarray(J, dtype=float)  # factored by each solve (see `solve`)
+        # below SPARSE_FROM no factors are kept: numpy's solve (LAPACK's LU with partial
+        # pivoting, gesv) factors `matrix` at each solve (see `solve`)
 
     def solve(self, b, *, transposed=False):
         """J^-1 b (or J^-T b); b (n,) or (n, k)."""
-        if self.lu is None:
-            return np.full(np.shape(b), np.nan)
         if self.sparse:
+            if self.lu is None:
+                return np.full(np.shape(b), np.nan)
             return self.lu.solve(np.asarray(b, dtype=float), trans="T" if transposed else "N")
         # numpy factors J again at each solve (a few per configuration, O(n^3) at n < 300),
         # where scipy.linalg's kept factors would cost a short command its import (0.12 to
         # 0.15 s of CPU, a quarter of `flexure analyze` on a small scene)
         with np.errstate(all="ignore"):
             try:
-                return np.linalg.solve(self.lu.T if transposed else self.lu, b)
+                return np.linalg.solve(self.matrix.T if transposed else self.matrix, b)
             except np.linalg.LinAlgError:  # exactly singular: as LAPACK's LU, no finite answer
                 return np.full(np.shape(b), np.nan)
 
