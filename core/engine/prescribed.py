@@ -150,6 +150,15 @@ def prescribed_rhs(table, t, y, ydot):
 
 
 @kernel(inline="always")
+def is_prescribed(prescribed, j):
+    """Whether DOF j is a kinematic input's (`prescribed` the slot of their DOFs)."""
+    for k in prescribed:
+        if k == j:
+            return True
+    return False
+
+
+@kernel(inline="always")
 def prescribed_jacobian(table, t, y, J, column_major):
     """d ydot / d y (2n, 2n) into J (flat; column-major for SUNDIALS' dense matrix) at time t
     (s): [[0, I], [A, B]] with [A B] = -(I - W S^-1 E^T) M_bar^-1 [K C] on the free columns,
@@ -174,10 +183,7 @@ def prescribed_jacobian(table, t, y, J, column_major):
         put(J, N, j, n + j, 1.0, column_major)
     for c in range(N):  # column c of -(I - W S^-1 E^T) M_bar^-1 [K C]
         j = c % n
-        held = False
-        for i in range(nk):
-            held = held or prescribed[i] == j
-        if held:  # the state's prescribed entries do not enter the right-hand side
+        if is_prescribed(prescribed, j):  # not in the right-hand side: the path gives them
             continue
         source = K if c < n else C
         for i in range(n):

@@ -35,20 +35,12 @@ from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
 from .operations import OP_PRESCRIBED_RHS, OP_TANGENT, run
+from .prescribed import is_prescribed
 from .slots import float_array as _f
 from .slots import int_array as _i
 
 ENGINE_ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 _F8 = np.float64
-
-
-@kernel(inline="always")
-def _held(prescribed, j):
-    """Whether DOF j is a kinematic input's."""
-    for k in prescribed:
-        if k == j:
-            return True
-    return False
 
 
 @kernel(inline="always")
@@ -64,12 +56,12 @@ def prescribed_residual(table, t, y, yp, res):
     for i in range(n):
         res[i] = yp[i] - y[n + i]
     for i in range(n):
-        if _held(prescribed, i):
+        if is_prescribed(prescribed, i):
             res[n + i] = yp[n + i] - qddot[i]  # qddot_k is the path's u'' exactly
             continue
         s = 0.0
         for j in range(n):
-            if not _held(prescribed, j):  # a*_k - qddot_k = 0 on an input's column
+            if not is_prescribed(prescribed, j):  # a*_k - qddot_k = 0 on an input's column
                 s += mass[i * n + j] * (yp[n + j] - qddot[j])
         res[n + i] = s
     return ed.OK
@@ -89,7 +81,7 @@ def prescribed_residual_jacobian(table, t, y, yp, cj, J):
     # tangent's dynamic balance is taken at (the residual's, not the evaluation's qddot)
     qddot = _f(table, slot.QDDOT)
     for j in range(n):
-        if not _held(prescribed, j):
+        if not is_prescribed(prescribed, j):
             qddot[j] = yp[n + j]
     status = run(table, OP_TANGENT, qddot.ctypes.data, 0, 0.0)
     if status != ed.OK:
@@ -100,11 +92,11 @@ def prescribed_residual_jacobian(table, t, y, yp, cj, J):
         J[i * N + i] = cj
         J[(n + i) * N + i] = -1.0
     for i in range(n):
-        if _held(prescribed, i):
+        if is_prescribed(prescribed, i):
             J[(n + i) * N + n + i] = cj
             continue
         for j in range(n):
-            if not _held(prescribed, j):
+            if not is_prescribed(prescribed, j):
                 J[j * N + n + i] = K[i * n + j]
                 J[(n + j) * N + n + i] = C[i * n + j] + cj * mass[i * n + j]
     return ed.OK
