@@ -32,7 +32,7 @@ import os
 import sys
 import tempfile
 
-from . import linked_code
+from . import inline_copy, linked_code
 from .compile_notice import CompileNotice
 
 _CORE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # core/, above numerics/
@@ -96,6 +96,7 @@ def numba_module():
         implementation._locator_classes.insert(0, locator)
         _load_without_refresh(caching.Cache, locator)
     linked_code.install()
+    inline_copy.install()
     return numba
 
 
