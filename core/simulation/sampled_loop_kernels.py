@@ -85,6 +85,16 @@ MEASURE_FAILED = -1000
 END_MEASURE = -2000
 
 
+@kernel(inline="always")  # into measure, its one caller
+def _all_dofs(dofs):
+    """Whether every output is a coordinate DOF (no index -1); a loop, where np.all(dofs >=
+    0) would allocate a temporary array every sample."""
+    for j in range(dofs.size):
+        if dofs[j] < 0:
+            return False
+    return True
+
+
 @kernel
 def measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
@@ -94,7 +104,7 @@ def measure(addresses, y, scratch, coordinates, out):
     each output or -1 (`mechanics.ports.output_dofs`)."""
     q_ref = access.reference_dofs(addresses[PLANT])
     dofs = coordinates[coordinates.size - out.size:]
-    if np.all(dofs >= 0):
+    if _all_dofs(dofs):
         for j in range(out.size):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
