@@ -1,7 +1,7 @@
-"""numba's inliner copies a callee's scope once per copy, not once per block
-(core/numerics/inline_copy.py): the copied blocks share one scope, equal to the original and
-apart from it; other callers of deepcopy keep a fresh memo per call; inlined kernels compute
-what their plain formulas do."""
+"""numba's inliner (core/numerics/inline_copy.py): a callee's scope copied once per copy, not
+once per block (the copied blocks share one scope, equal to the original and apart from it;
+other callers of deepcopy keep a fresh memo per call); a flexure kernel's untyped IR made once
+for all its call sites, anyone else's at each; inlined kernels compute their plain formulas."""
 
 import inspect
 
@@ -10,7 +10,7 @@ import numpy as np
 from numba.core import inline_closurecall, ir
 from numba.core.compiler import run_frontend
 
-from flexure.core.numerics import inline_copy, jit
+from flexure.core.numerics import array_tables, inline_copy, jit
 
 
 def _branchy(x, n):
@@ -95,3 +95,25 @@ def test_an_inlined_kernel_computes_its_formula():
     a = np.linspace(-3.0, 3.0, 61)
     expected = np.clip(a, -1.0, 1.5).sum() + np.clip(2.0 * a, -1.0, 1.5).sum()
     assert abs(_clipped_sum(a, -1.0, 1.5) - expected) <= 1e-12 * abs(expected)
+
+
+@jit.kernel(cache=False)
+def _sum_of_two_table_reads(table):
+    # array_tables.floats (a flexure kernel, inline="always") at two call sites
+    s = 0.0
+    for i in range(array_tables.floats(table, 0).size):
+        s += array_tables.floats(table, 0)[i] * array_tables.floats(table, 1)[i]
+    return s
+
+
+def test_a_kernels_untyped_ir_is_made_once_for_its_call_sites():
+    a, b = np.linspace(0.0, 1.0, 11), np.linspace(2.0, 3.0, 11)
+    table = array_tables.array_table([a, b], "ff")
+    floats = array_tables.floats.py_func
+    for key in [key for key in inline_copy._IR_OF if key[0] is floats]:
+        del inline_copy._IR_OF[key]  # made by other tests' compilations in this process
+    assert abs(_sum_of_two_table_reads(table) - a @ b) <= 1e-12 * abs(a @ b)
+    made = [key for key in inline_copy._IR_OF if key[0] is floats]
+    assert len(made) == 1  # three call sites, one untyped pipeline
+    # a function of anyone else's (here the tests') is made at each call site, as numba does
+    assert not [key for key in inline_copy._IR_OF if key[0] is _clipped.py_func]
