@@ -40,6 +40,7 @@ import numpy as np
 from ..errors import SceneError
 from ..mechanics.element_outputs import element_output_rows
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import output_rows
 from ..numerics.blas import blas_threads
 from .statics import StaticSolution, static_equilibrium
@@ -190,9 +191,9 @@ def motion_state_space(model: Model, *, solution: StaticSolution | None = None,
     # stress resultant may be both): y = z1 + E2 u, y' = z2 + E1 u + E2 u'
     on_q, on_qdot = element_output_rows(model, mech, config)
     rows = output_rows(model, config.x, config.DF)
-    velocity = np.array([port.quantity == "velocity" for port in model.outputs], dtype=bool)
-    on_q = np.vstack([np.where(velocity[:, None], 0.0, rows), on_q])
-    on_qdot = np.vstack([np.where(velocity[:, None], rows, 0.0), on_qdot])
+    order = np.array([output_order(port) for port in model.outputs], dtype=int)[:, None]
+    on_q = np.vstack([np.where(order == 0, rows, 0.0), on_q])
+    on_qdot = np.vstack([np.where(order == 1, rows, 0.0), on_qdot])
     n_out = on_q.shape[0]
     Cz = np.hstack([on_q[:, f], on_qdot[:, f]])
     D = on_q[:, f] @ E2 + on_q[:, k] + on_qdot[:, f] @ E1

@@ -11,7 +11,8 @@ of DF of each output coordinate (OUTX). A port about a global axis of a 3-D rota
 is nonlinear in the coordinates; linearised at the configuration x of the linear model, its b
 column is the moment's generalised force 2 E_k(lambda)^T and its C row (d y / d lambda) DF_l:
 the rotation-vector component's gradient for an angle, 2 E_k for an angular velocity
-(`flexure.core.mechanics.ports`). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
+(`flexure.core.mechanics.ports`). Units: inputs N (N m), outputs m, m/s (rad, rad/s); each
+output's quantity and order are `flexure.core.mechanics.output_quantities`'.
 An input a voice-coil actuator drives is its drive signal (V), and a voltage-driven coil adds
 its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`, with the same b
 columns of the ports): the transfer from the drive signal to a position then shows the
@@ -25,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SceneError
+from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import input_columns, output_rows
 from ..numerics.blas import blas_threads
 from .linearization import linearize
@@ -124,11 +126,11 @@ def _matrices(model, linear_model):
         dofs = model.free_dof_names  # the DOFs proper: kinematic inputs are held
         states = [f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
     C = np.zeros((len(model.outputs), A.shape[0]))
+    D = np.zeros((len(model.outputs), len(model.inputs)))
     rows = output_rows(model, x, DF)
     for row, port in enumerate(model.outputs):
-        offset = 0 if port.quantity == "position" else n
-        C[row, offset:offset + n] = rows[row]
-    D = np.zeros((len(model.outputs), len(model.inputs)))
+        order = output_order(port)  # dq or dq', a block of the state
+        C[row, order * n:(order + 1) * n] = rows[row]
     return A, B, C, D, states
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
+from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import output_value
 from .measuring import start_from_plant
 from .plausibility import RangeCheck
@@ -20,10 +21,28 @@ from .status import STATUS_MESSAGES
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
 
+    from ..model import Model
+
+
+def measured_orders(model: Model) -> list[int]:
+    """The time derivative (0, 1, ...: `output_quantities`) of the coordinates each of the
+    model's outputs on nodes reads, as a simulation measures them.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    list of int (n_outputs,)
+    """
+    return [output_order(port) for port in model.outputs]
+
 
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
+    `_orders` (the time derivative each output on a node reads: `measured_orders`),
     `_output_dofs` and `_output_dof_list`, `_elements` (the outputs on elements:
     `element_readings`), `_restart_kinematics` (whether the plant's last
     solution may be of another state), the last evaluation's `_last_x`, `_last_e`, and
@@ -192,23 +211,17 @@ class SimulatorOutputs:
         held = (np.broadcast_to(self._u, (len(states), self._u.size)) if inputs is None
                 else np.asarray(inputs, float).reshape(len(states), self._u.size))
         n = self.ndof
-        x, DF = data.float_array("x"), data.float_array("DF").reshape(self.model.nx, n)
+        x = data.float_array("x")
         for k, y in enumerate(states):
             where = (f"t = {times[k]:.9g} s" if times is not None else "a state")
             status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
             if status != ed.OK:  # name the state that failed, not the simulator's time
                 raise SimulationError(f"{where} (state {k + 1} of {len(states)} along the "
                                       f"path): outputs: {STATUS_MESSAGES[status]}")
+            rates = self._rates(data, y)  # x, then its rates as needed
             for j, p in enumerate(ports):
-                if p.about_axis:  # an angle, or an angular velocity from lambda_dot = DF qdot
-                    euler = list(p.euler)
-                    xdot = np.zeros(self.model.nx)
-                    if p.quantity == "velocity":
-                        xdot[euler] = DF[euler] @ y[n: 2 * n]
-                    result[k, j] = output_value(self.model, p, x, xdot)
-                else:
-                    result[k, j] = (DF[p.coordinate] @ y[n: 2 * n] if p.quantity == "velocity"
-                                    else x[p.coordinate])
+                result[k, j] = (output_value(self.model, p, *rates) if p.about_axis
+                                else rates[self._orders[j]][p.coordinate])
             if path is not None:  # the kinematics left x and e of this point in the data
                 path[0][k] = x
                 path[1][k] = data.float_array("e")
@@ -220,3 +233,14 @@ class SimulatorOutputs:
                     raise SimulationError(f"{where} (state {k + 1} of {len(states)} along "
                                           f"the path): {error}") from None
         return result
+
+    def _rates(self, data, state):
+        """(x, xdot, ...) of the coordinates up to the highest order the outputs read
+        (`output_quantities`), at a state whose kinematics `data` has just solved: xdot =
+        DF qdot."""
+        n, nx = self.ndof, self.model.nx
+        top = max(self._orders, default=0)
+        rates = [data.float_array("x")]
+        if top >= 1:
+            rates.append(data.float_array("DF").reshape(nx, n) @ state[n: 2 * n])
+        return rates
