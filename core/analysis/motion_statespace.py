@@ -22,7 +22,9 @@ output is
 
     C z + D u + D1 u' + D2 u''
 
-where D1, D2 are zero for positions, D1 = C_f E2 + C_k for a velocity, and for an effort
+where D1, D2 are zero for positions, D1 = C_f E2 + C_k for a velocity, for an acceleration
+y'' = A_lower z + B_lower u + E1 u' + E2 u'' read by its rows (C_f A_lower, C_f B_lower,
+D1 = C_f E1, D2 = C_f E2 + C_k), and for an effort
 D2 = M_kf E2 + M_kk (the inertia the input moves along) and D1 = M_kf E1 + C_kf E2 + C_kk:
 a position-driven mass needs the acceleration of its input, which no proper state space has.
 `MotionStateSpace.system()` gives the python-control object of the outputs that need no rate
@@ -200,6 +202,12 @@ def motion_state_space(model: Model, *, solution: StaticSolution | None = None,
     D1 = on_qdot[:, f] @ E2 + on_qdot[:, k]
     Cz, D, D1 = (np.vstack([a, np.zeros((m, a.shape[1]))]) for a in (Cz, D, D1))
     D2 = np.zeros((n_out + m, m))
+    # an acceleration: y'' of the DOFs proper (below) on the free rows, u'' on the prescribed
+    accelerations = np.flatnonzero(order[:, 0] == 2)
+    Cz[accelerations] = rows[np.ix_(accelerations, f)] @ A[n:]
+    D[accelerations] = rows[np.ix_(accelerations, f)] @ lower
+    D1[accelerations] = rows[np.ix_(accelerations, f)] @ E1
+    D2[accelerations] = rows[np.ix_(accelerations, f)] @ E2 + rows[np.ix_(accelerations, k)]
     # the efforts: y'' = A_lower z + B_lower u + E1 u' + E2 u''
     effort = slice(n_out, n_out + m)
     Mkf, Ckf, Kkf = part(M, k, f), part(C, k, f), part(K, k, f)

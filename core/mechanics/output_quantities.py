@@ -2,18 +2,18 @@
 
 An output on a coordinate c reads the coordinate's time derivative of some order,
 
-    order 0: x_c (m, rad),  order 1: xdot_c (m/s, rad/s),
+    order 0: x_c (m, rad),  order 1: xdot_c (m/s, rad/s),  order 2: xddot_c (m/s2, rad/s2),
 
 and an output about a global axis k of a 3-D rotational node (Euler parameters lambda) reads
-the angle phi_k (order 0, the rotation-vector component) or the angular velocity in the
-global frame,
+the angle phi_k (order 0, the rotation-vector component) or the angular velocity and
+acceleration in the global frame,
 
-    omega_k = 2 E_k(lambda) lambda_dot.
+    omega_k = 2 E_k(lambda) lambda_dot,   alpha_k = d omega_k / dt = 2 E_k(lambda) lambda_ddot,
 
-An order-r output is linear in the r-th derivative of the coordinates, with the same
-gradient for every r >= 1 (`flexure.core.mechanics.ports.output_gradient`), as long as the
-r-th rate of omega_k is 2 E_k times the r-th rate of lambda (a row of a higher order says
-why).
+the last because E is linear in lambda and E(lambda_dot) lambda_dot = 0 (each row of E is
+orthogonal to its argument), so the term 2 E_k(lambda_dot) lambda_dot of the product rule
+vanishes. An order-r output is therefore linear in the r-th derivative of the coordinates,
+with the same gradient for every r >= 1 (`flexure.core.mechanics.ports.output_gradient`).
 
 Everything that interprets a node output's quantity reads this table: the scene reader (its
 names and units), the port maths (`ports`: value, gradient, description), the simulation's
@@ -35,12 +35,12 @@ class OutputQuantity:
     Attributes
     ----------
     name : str
-        The scene's `quantity` ("position", "velocity").
+        The scene's `quantity` ("position", "velocity", "acceleration").
     order : int
-        The time derivative of the coordinate it reads: 0, 1, ...
+        The time derivative of the coordinate it reads: 0, 1 or 2.
     unit, rotation_unit : str
         Its unit on a translation and on a rotation (a planar angle or a rotation about a
-        global axis), as FMI writes units ("m/s").
+        global axis), as FMI writes units ("m/s2").
     rotation_words : str
         What it is about a global axis, for the FMU's descriptions ("angular velocity").
     needs : str
@@ -59,19 +59,21 @@ class OutputQuantity:
 QUANTITIES = {quantity.name: quantity for quantity in (
     OutputQuantity("position", 0, "m", "rad", "rotation", ""),
     OutputQuantity("velocity", 1, "m/s", "rad/s", "angular velocity", "the velocities xdot"),
+    OutputQuantity("acceleration", 2, "m/s2", "rad/s2", "angular acceleration",
+                   "the velocities xdot and the accelerations xddot"),
 )}
 
 
 def output_order(port) -> int:
-    """The time derivative (0, 1, ...) of the coordinates an output on a node reads; -1 for an
+    """The time derivative (0, 1, 2) of the coordinates an output on a node reads; -1 for an
     output on an element (a deformation or a stress) or an input."""
     quantity = QUANTITIES.get(port.quantity)
     return -1 if quantity is None or port.deformation is not None else quantity.order
 
 
 def quantity_unit(quantity: str, *, rotation: bool) -> str:
-    """The unit of a node output's quantity: on a translation (m, m/s, ...) or on a rotation
-    (rad, rad/s, ...)."""
+    """The unit of a node output's quantity: on a translation (m, m/s, m/s2) or on a rotation
+    (rad, rad/s, rad/s2)."""
     entry = QUANTITIES[quantity]
     return entry.rotation_unit if rotation else entry.unit
 

@@ -25,7 +25,7 @@ if TYPE_CHECKING:  # names for the annotations only
 
 
 def measured_orders(model: Model) -> list[int]:
-    """The time derivative (0, 1, ...: `output_quantities`) of the coordinates each of the
+    """The time derivative (0, 1, 2: `output_quantities`) of the coordinates each of the
     model's outputs on nodes reads, as a simulation measures them.
 
     Parameters
@@ -35,8 +35,23 @@ def measured_orders(model: Model) -> list[int]:
     Returns
     -------
     list of int (n_outputs,)
+
+    Raises
+    ------
+    SimulationError
+        An acceleration output of a model with kinematic inputs (not measured: a kinematic
+        input's acceleration is its path's at the state's time, which this measurement does
+        not take); it names the output.
     """
-    return [output_order(port) for port in model.outputs]
+    orders = [output_order(port) for port in model.outputs]
+    for port, order in zip(model.outputs, orders, strict=True):
+        if order == 2 and model.kinematic_inputs:
+            raise SimulationError(
+                f"output {port.name!r} is an acceleration: a simulation of a model with "
+                f"kinematic inputs ({', '.join(p.name for p in model.kinematic_inputs)}) does "
+                "not measure accelerations (a kinematic input's is its path's at the time, "
+                "which the measurement does not take); differentiate a velocity output")
+    return orders
 
 
 class SimulatorOutputs:
@@ -56,8 +71,9 @@ class SimulatorOutputs:
         Returns
         -------
         ndarray (n_outputs,)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s), then the
-            outputs on elements: deformations m, stress resultants N (`element_readings`).
+            Positions m, velocities m/s, accelerations m/s2 (angles rad, their rates rad/s,
+            rad/s2), then the outputs on elements: deformations m, stress resultants N
+            (`element_readings`).
 
         Raises
         ------
@@ -134,7 +150,8 @@ class SimulatorOutputs:
         Returns
         -------
         ndarray (n, n_outputs)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s), then the
+            Positions m, velocities m/s, accelerations m/s2 (angles rad, their rates rad/s,
+            rad/s2), then the
             outputs on elements: deformations m, stress resultants N (`element_readings`).
 
         Raises
@@ -218,7 +235,7 @@ class SimulatorOutputs:
             if status != ed.OK:  # name the state that failed, not the simulator's time
                 raise SimulationError(f"{where} (state {k + 1} of {len(states)} along the "
                                       f"path): outputs: {STATUS_MESSAGES[status]}")
-            rates = self._rates(data, y)  # x, then its rates as needed
+            rates = self._rates(data, y, held[k], where)  # x, then xdot, xddot as needed
             for j, p in enumerate(ports):
                 result[k, j] = (output_value(self.model, p, *rates) if p.about_axis
                                 else rates[self._orders[j]][p.coordinate])
@@ -234,13 +251,27 @@ class SimulatorOutputs:
                                           f"the path): {error}") from None
         return result
 
-    def _rates(self, data, state):
-        """(x, xdot, ...) of the coordinates up to the highest order the outputs read
+    def _rates(self, data, state, inputs, where):
+        """(x, xdot, xddot) of the coordinates up to the highest order the outputs read
         (`output_quantities`), at a state whose kinematics `data` has just solved: xdot =
-        DF qdot."""
+        DF qdot; xddot = DF qddot + (D2F qdot) qdot from one evaluation of the equations of
+        motion with the held inputs (the engine's qddot and convective term, slot conv)."""
         n, nx = self.ndof, self.model.nx
         top = max(self._orders, default=0)
-        rates = [data.float_array("x")]
+        x = data.float_array("x")
+        rates = [x.copy() if top >= 2 else x]  # the evaluation below solves x once more
         if top >= 1:
             rates.append(data.float_array("DF").reshape(nx, n) @ state[n: 2 * n])
+        if top >= 2:
+            DF = data.float_array("DF").reshape(nx, n).copy()
+            # y = [0, qdot(, i)] on q_ref = q: this state's evaluation, as the integrator's
+            data.float_array("q_ref")[:] = state[:n]
+            data.float_array("inputs")[:] = inputs
+            y = np.zeros(self.nstate)
+            y[n: min(state.size, self.nstate)] = state[n: self.nstate]
+            status = engine.call(data, engine.OP_RHS, y)
+            if status != ed.OK:
+                raise SimulationError(f"{where}: the acceleration outputs: "
+                                      f"{STATUS_MESSAGES[status]}")
+            rates.append(DF @ data.float_array("qddot") + data.float_array("conv"))
         return rates
