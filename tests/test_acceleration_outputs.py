@@ -79,6 +79,19 @@ def test_mass_spring_acceleration_is_the_closed_form_at_every_state(method):
     np.testing.assert_allclose(a, expected, rtol=0, atol=1e-10 * np.abs(expected).max())
 
 
+def test_an_input_change_is_seen_by_the_acceleration_at_the_same_state():
+    """set_inputs between two readings at one state: the acceleration jumps by dF / m (to
+    1e-12), the position and velocity stay bit for bit."""
+    sim = Simulator(build_model(mass_spring()), method="esdirk")
+    sim.set_inputs([0.3])
+    sim.advance_to(2e-3)
+    before = sim.outputs()
+    sim.set_inputs([0.8])
+    after = sim.outputs()
+    np.testing.assert_array_equal(after[:2], before[:2])
+    assert after[2] - before[2] == pytest.approx(0.5 / MASS, rel=1e-12)
+
+
 def test_linear_simulator_acceleration_is_the_closed_form():
     """The linear simulator of the mass-spring (exact: the system is linear) reads the same
     closed form, its feedthrough D = 1/m included, to 1e-9 of the largest acceleration."""

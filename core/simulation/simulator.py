@@ -295,6 +295,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         if values != self._u.tolist():
             self._u = u
             self._needs_init = True
+            # outputs that read the held inputs at this state (an acceleration, a kinematic
+            # input's reaction) are measured again
+            self._outputs_cache = None
 
     @property
     def statistics(self) -> dict[str, float]:
