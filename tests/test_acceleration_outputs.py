@@ -92,6 +92,22 @@ def test_an_input_change_is_seen_by_the_acceleration_at_the_same_state():
     assert after[2] - before[2] == pytest.approx(0.5 / MASS, rel=1e-12)
 
 
+def test_an_input_function_is_read_at_the_state_s_time():
+    """With the force an input function of time, the acceleration at each state is the
+    closed form with the function's value there (to 1e-10 of the largest acceleration)."""
+    def force(t):
+        return 0.4 * np.sin(300.0 * t)
+
+    sim = Simulator(build_model(mass_spring()), method="cvode-bdf", input_functions={0: force})
+    rows, times = [], np.arange(1, 21) * 5e-4
+    for t in times:
+        sim.advance_to(t)
+        rows.append(sim.outputs())
+    x, v, a = np.array(rows).T
+    expected = (force(times) + LOAD - K * (x - L0) - D * v) / MASS
+    np.testing.assert_allclose(a, expected, rtol=0, atol=1e-10 * np.abs(expected).max())
+
+
 def test_linear_simulator_acceleration_is_the_closed_form():
     """The linear simulator of the mass-spring (exact: the system is linear) reads the same
     closed form, its feedthrough D = 1/m included, to 1e-9 of the largest acceleration."""

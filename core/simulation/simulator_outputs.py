@@ -58,6 +58,7 @@ class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
     `_orders` (the time derivative each output on a node reads: `measured_orders`),
+    `_input_functions` and `_inputs_at` (the inputs at a time),
     `_output_dofs` and `_output_dof_list`, `_elements` (the outputs on elements:
     `element_readings`), `_restart_kinematics` (whether the plant's last
     solution may be of another state), the last evaluation's `_last_x`, `_last_e`, and
@@ -87,9 +88,11 @@ class SimulatorOutputs:
             if self._positions_only:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
+                # the inputs at this time: the held ones, or an input function's value
+                inputs = self._inputs_at(self._t) if self._input_functions else self._u
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
                                                          start=self._x, times=[self._t],
-                                                         inputs=[self._u])[0]
+                                                         inputs=[inputs])[0]
         return self._outputs_cache.copy()
 
     def output_values(self) -> list[float]:
