@@ -97,8 +97,8 @@ class Port:
 
     name: str
     coordinate: int | None
-    quantity: str = "force"  # "force", "moment", "drive" or "motion" for inputs; "position",
-    unit: str = "N"          # "velocity" for outputs
+    quantity: str = "force"  # "force", "moment", "drive" or "motion" for inputs; for outputs
+    unit: str = "N"          # one of `mechanics.output_quantities`, "deformation", "stress"
     euler: tuple = ()
     axis: str = ""
     # a kinematic input (quantity "motion") on a deformation: its index (coordinate None)

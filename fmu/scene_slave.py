@@ -17,8 +17,9 @@ Variables (only what the scene has):
   initialization mode, where it starts), which the simulator makes a smooth path
   (`flexure.core.simulation.stepwise_motion`); and one output "NAME.effort" (N, N.m on an
   angle): the generalised force that realises it in the current state;
-- one output per scene output (position m / rad, velocity m/s / rad/s; the angle about a
-  global axis of a 3-D rotational node, rad, or its angular velocity, rad/s), then one per
+- one output per scene output (its quantity's unit: position m / rad, velocity m/s / rad/s,
+  ...: `flexure.core.mechanics.output_quantities`; about a global axis of a 3-D rotational
+  node the angle, rad, or its rates), then one per
   output on an element (SPACAR's OUTE, OUTF): its deformation (m) or its stress resultant
   (N, S e + D edot with the viscous term; a prescribed deformation's is minus its effort, a
   rigid one's its reaction: `flexure.core.simulation.element_readings`), all updated after

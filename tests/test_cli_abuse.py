@@ -74,7 +74,7 @@ def test_an_invalid_utf8_byte_names_the_file_line_and_byte(tmp_path, capsys):
 def test_a_list_where_a_string_belongs():
     data = scene("stage_planar_1dof", lambda d: d["outputs"]["y"].update(quantity=[1.0, 2.0]))
     with pytest.raises(SceneError, match=r"outputs.y.quantity: expected one of position, "
-                                         r"velocity, got \[1.0, 2.0\]"):
+                                         r"velocity, acceleration, got \[1.0, 2.0\]"):
         build_model(data)
     for key, value in (("section", ["leaf"]), ("type", {"a": 1})):
         data = scene("stage_planar_1dof", lambda d, k=key, v=value: d["elements"]["bar"]

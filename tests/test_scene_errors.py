@@ -96,8 +96,9 @@ CASES = {
                                        ["nodes.3", "exactly one of 'position'"]),
     "input on unknown coordinate": (lambda d: d["inputs"]["F"].update(coordinate="z"),
                                     ["inputs.F.coordinate", "no coordinate 'z'"]),
-    "output quantity": (lambda d: d["outputs"]["x"].update(quantity="acceleration"),
-                        ["outputs.x.quantity", "acceleration"]),
+    "output quantity": (lambda d: d["outputs"]["x"].update(quantity="jerk"),
+                        ["outputs.x.quantity", "expected one of position, velocity, "
+                         "acceleration", "jerk"]),
     "description that is no text": (lambda d: d["scene"].update(description=3),
                                     ["scene.description", "expected a string, got 3"]),
 }

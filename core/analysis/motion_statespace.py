@@ -22,7 +22,9 @@ output is
 
     C z + D u + D1 u' + D2 u''
 
-where D1, D2 are zero for positions, D1 = C_f E2 + C_k for a velocity, and for an effort
+where D1, D2 are zero for positions, D1 = C_f E2 + C_k for a velocity, for an acceleration
+y'' = A_lower z + B_lower u + E1 u' + E2 u'' read by its rows (C_f A_lower, C_f B_lower,
+D1 = C_f E1, D2 = C_f E2 + C_k), and for an effort
 D2 = M_kf E2 + M_kk (the inertia the input moves along) and D1 = M_kf E1 + C_kf E2 + C_kk:
 a position-driven mass needs the acceleration of its input, which no proper state space has.
 `MotionStateSpace.system()` gives the python-control object of the outputs that need no rate
@@ -40,6 +42,7 @@ import numpy as np
 from ..errors import SceneError
 from ..mechanics.element_outputs import element_output_rows
 from ..mechanics.mechanics import Mechanics
+from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import output_rows
 from ..numerics.blas import blas_threads
 from .statics import StaticSolution, static_equilibrium
@@ -190,15 +193,21 @@ def motion_state_space(model: Model, *, solution: StaticSolution | None = None,
     # stress resultant may be both): y = z1 + E2 u, y' = z2 + E1 u + E2 u'
     on_q, on_qdot = element_output_rows(model, mech, config)
     rows = output_rows(model, config.x, config.DF)
-    velocity = np.array([port.quantity == "velocity" for port in model.outputs], dtype=bool)
-    on_q = np.vstack([np.where(velocity[:, None], 0.0, rows), on_q])
-    on_qdot = np.vstack([np.where(velocity[:, None], rows, 0.0), on_qdot])
+    order = np.array([output_order(port) for port in model.outputs], dtype=int)[:, None]
+    on_q = np.vstack([np.where(order == 0, rows, 0.0), on_q])
+    on_qdot = np.vstack([np.where(order == 1, rows, 0.0), on_qdot])
     n_out = on_q.shape[0]
     Cz = np.hstack([on_q[:, f], on_qdot[:, f]])
     D = on_q[:, f] @ E2 + on_q[:, k] + on_qdot[:, f] @ E1
     D1 = on_qdot[:, f] @ E2 + on_qdot[:, k]
     Cz, D, D1 = (np.vstack([a, np.zeros((m, a.shape[1]))]) for a in (Cz, D, D1))
     D2 = np.zeros((n_out + m, m))
+    # an acceleration: y'' of the DOFs proper (below) on the free rows, u'' on the prescribed
+    accelerations = np.flatnonzero(order[:, 0] == 2)
+    Cz[accelerations] = rows[np.ix_(accelerations, f)] @ A[n:]
+    D[accelerations] = rows[np.ix_(accelerations, f)] @ lower
+    D1[accelerations] = rows[np.ix_(accelerations, f)] @ E1
+    D2[accelerations] = rows[np.ix_(accelerations, f)] @ E2 + rows[np.ix_(accelerations, k)]
     # the efforts: y'' = A_lower z + B_lower u + E1 u' + E2 u''
     effort = slice(n_out, n_out + m)
     Mkf, Ckf, Kkf = part(M, k, f), part(C, k, f), part(K, k, f)

@@ -4,14 +4,19 @@
 With the state [dq, dq'] (deviations from the configuration of the linear model):
 
     A = [[0, I], [-M0^-1 K, -M0^-1 C0]]     B = [[0], [M0^-1 DF^T b]]
-    C = [[DF_y, 0]] for positions, [[0, DF_y]] for velocities,  D = 0
+    C = [[DF_y, 0]] for positions, [[0, DF_y]] for velocities,  D = 0;
+    C = DF_y [-M0^-1 K, -M0^-1 C0],  D = DF_y M0^-1 DF^T b for accelerations
 
 where b holds a unit force on the coordinate of each input (SPACAR's INPUTF) and DF_y the rows
 of DF of each output coordinate (OUTX). A port about a global axis of a 3-D rotational node
 is nonlinear in the coordinates; linearised at the configuration x of the linear model, its b
 column is the moment's generalised force 2 E_k(lambda)^T and its C row (d y / d lambda) DF_l:
 the rotation-vector component's gradient for an angle, 2 E_k for an angular velocity
-(`flexure.core.mechanics.ports`). Units: inputs N (N m), outputs m, m/s (rad, rad/s).
+(`flexure.core.mechanics.ports`), and 2 E_k for an angular acceleration, whose convective
+term (quadratic in dq') has no linear part. An acceleration output's row is DF_y times the
+lower rows of A and B: an accelerometer has a feedthrough D. Units: inputs N (N m), outputs
+m, m/s, m/s2 (rad, rad/s, rad/s2); each output's quantity and order are
+`flexure.core.mechanics.output_quantities`'.
 An input a voice-coil actuator drives is its drive signal (V), and a voltage-driven coil adds
 its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`, with the same b
 columns of the ports): the transfer from the drive signal to a position then shows the
@@ -25,6 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SceneError
+from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import input_columns, output_rows
 from ..numerics.blas import blas_threads
 from .linearization import linearize
@@ -54,7 +60,7 @@ def state_space(model: Model, *, linear_model: LinearModel | None = None) -> con
     control.StateSpace
         States [dq, dq'] (m, rad; m/s, rad/s), plus the coil currents (A) of voltage-driven
         actuators; inputs N, N m (V for an actuator's drive signal); outputs m, rad, m/s,
-        rad/s; D = 0.
+        rad/s, m/s2, rad/s2; D = 0 but for acceleration outputs.
 
     Raises
     ------
@@ -124,11 +130,15 @@ def _matrices(model, linear_model):
         dofs = model.free_dof_names  # the DOFs proper: kinematic inputs are held
         states = [f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
     C = np.zeros((len(model.outputs), A.shape[0]))
+    D = np.zeros((len(model.outputs), len(model.inputs)))
     rows = output_rows(model, x, DF)
     for row, port in enumerate(model.outputs):
-        offset = 0 if port.quantity == "position" else n
-        C[row, offset:offset + n] = rows[row]
-    D = np.zeros((len(model.outputs), len(model.inputs)))
+        order = output_order(port)
+        if order < 2:  # dq or dq', a block of the state
+            C[row, order * n:(order + 1) * n] = rows[row]
+        else:  # dq'' = A[n:2n] z + B[n:2n] du: an accelerometer feeds the inputs through
+            C[row] = rows[row] @ A[n: 2 * n]
+            D[row] = rows[row] @ B[n: 2 * n]
     return A, B, C, D, states
 
 

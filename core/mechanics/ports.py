@@ -1,7 +1,8 @@
 """The maths of a model's inputs and outputs (`Port`), in plain numpy.
 
 A port on one coordinate c (SPACAR's INPUTF / OUTX) is linear: an input u puts the force u on
-x_c (N, or N m on a planar angle), an output reads x_c or xdot_c (m, rad, m/s, rad/s).
+x_c (N, or N m on a planar angle), an output reads x_c or a rate of it (m, rad; m/s, rad/s;
+...: each quantity, its order and its units are `flexure.core.mechanics.output_quantities`).
 
 A port about a global axis k of a 3-D rotational node (Euler parameters lambda, see
 `flexure.core.numerics.rotations`) is not:
@@ -18,9 +19,10 @@ A port about a global axis k of a 3-D rotational node (Euler parameters lambda, 
 - an angle output is phi_k(lambda), the rotation-vector component about axis k (rad), with the
   gradient d phi_k / d lambda (`rotations.rotation_vector_derivatives`); its velocity output is
   the angular velocity omega_k = 2 E_k lambda_dot (rad/s), the rate a gyroscope measures and
-  the power conjugate of the moment input about the same axis. It equals d phi_k / dt about
-  the unrotated orientation (d phi / d lambda = 2 E there) and for any rotation about axis k
-  alone; otherwise they differ by d phi / d theta = I + [phi x] / 2 + O(phi^2).
+  the power conjugate of the moment input about the same axis. omega_k equals d phi_k / dt
+  about the unrotated orientation (d phi / d lambda = 2 E there) and for any rotation about
+  axis k alone; otherwise they differ by d phi / d theta = I + [phi x] / 2 + O(phi^2). A rate
+  of higher order r is 2 E_k times the r-th rate of lambda (`output_quantities`).
 
 Linearised at a configuration x the state space takes B = DF^T f / u and C = (d y / d x) DF
 from `input_direction` and `output_gradient`. The compiled twins are in
@@ -36,6 +38,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..numerics.rotations import RATES_TENSOR, global_rates_matrix, rotation_vector_derivatives
+from .output_quantities import QUANTITIES, output_order
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -161,54 +164,57 @@ def position_port(model: Model, name: str) -> Port:
     return Port(name, index, "position", unit)
 
 
-def output_value(model: Model, port: Port, x: np.ndarray,
-                 xdot: np.ndarray | None = None) -> float:
-    """The value of an output: x_c or xdot_c; phi_k or omega_k = 2 E_k lambda_dot about a
-    global axis k.
+def output_value(model: Model, port: Port, x: np.ndarray, *rates: np.ndarray) -> float:
+    """The value of an output on a node: x_c or its r-th rate; phi_k, or 2 E_k times the r-th
+    rate of lambda about a global axis k (omega_k for r = 1), r the order of the output's
+    quantity (`output_quantities`).
 
     Parameters
     ----------
     model : Model
     port : Port
-        One of the model's outputs.
+        One of the model's outputs on nodes.
     x : ndarray (NX,)
         The coordinates, m and rad (Euler parameters unitless).
-    xdot : ndarray (NX,), optional
-        Their rates (m/s, rad/s, 1/s); needed by a velocity output.
+    *rates : ndarray (NX,)
+        Their rates, first xdot (m/s, rad/s, 1/s), then the higher ones, up to the order
+        the output's quantity reads (a velocity needs xdot).
 
     Returns
     -------
     float
-        m or rad for a position output, m/s or rad/s for a velocity output.
+        In the port's unit (m or rad, m/s or rad/s, ...).
 
     Raises
     ------
     ValueError
-        A velocity output without `xdot`.
+        An output without the rate its quantity reads.
     """
-    velocity = port.quantity == "velocity"
-    if velocity and xdot is None:
-        raise ValueError(f"output {port.name!r} is a velocity: it needs the velocities xdot")
+    quantity = QUANTITIES[port.quantity]
+    if quantity.order and (len(rates) < quantity.order or rates[quantity.order - 1] is None):
+        raise ValueError(f"output {port.name!r} is a {port.quantity}: it needs "
+                         f"{quantity.needs}")
+    rates = (x, *rates)[quantity.order]
     if not port.about_axis:
-        return float((xdot if velocity else x)[port.coordinate])
+        return float(rates[port.coordinate])
     lam = x[list(port.euler)]
     k = AXIS_INDEX[port.axis]
-    if velocity:
-        return float(2.0 * global_rates_matrix(lam)[k] @ xdot[list(port.euler)])
+    if quantity.order:  # omega_k, alpha_k: 2 E_k times the rate of lambda (module docstring)
+        return float(2.0 * global_rates_matrix(lam)[k] @ rates[list(port.euler)])
     return float(rotation_vector_derivatives(lam, order=0)[0][0, k])
 
 
 def output_gradient(model, port, x):
-    """d y / d x (NX,) of a position output at x, or d y / d xdot of a velocity output (which
-    is linear in xdot): a unit row on the coordinate; d phi_k / d lambda or 2 E_k on the Euler
-    parameters of a rotation about axis k."""
+    """d y / d x (NX,) of a position output at x, or of a rate output d y / d (its rate of x)
+    (a rate output is linear in it: `output_quantities`): a unit row on the coordinate;
+    d phi_k / d lambda or 2 E_k on the Euler parameters of a rotation about axis k."""
     row = np.zeros(model.nx)
     if not port.about_axis:
         row[port.coordinate] = 1.0
         return row
     lam = x[list(port.euler)]
     k = AXIS_INDEX[port.axis]
-    if port.quantity == "velocity":
+    if output_order(port):
         row[list(port.euler)] = 2.0 * global_rates_matrix(lam)[k]
     else:
         row[list(port.euler)] = rotation_vector_derivatives(lam, order=1)[1][0, k]
@@ -217,8 +223,9 @@ def output_gradient(model, port, x):
 
 def output_rows(model: Model, x: np.ndarray, DF: np.ndarray,
                 ports: Sequence[Port] | None = None) -> np.ndarray:
-    """C = d y / d q of the outputs at a configuration; position and velocity outputs alike
-    (a velocity output's row multiplies qdot).
+    """C = d y / d q of the outputs at a configuration; position and rate outputs alike (a
+    velocity output's row multiplies qdot, a higher rate's that rate of q: the state space
+    maps it, `flexure.core.analysis.statespace`).
 
     Parameters
     ----------
@@ -252,7 +259,7 @@ def output_dofs(model, ports=None):
     ports = model.outputs if ports is None else ports
     where = {int(c): j for j, c in enumerate(model.dof_coordinates)}
     return np.array([where.get(port.coordinate, -1) if not port.about_axis
-                     and port.quantity == "position" else -1 for port in ports],
+                     and output_order(port) == 0 else -1 for port in ports],
                     dtype=np.int64)
 
 
@@ -292,7 +299,8 @@ def port_description(model: Model, port: Port, *, is_input: bool) -> str:
     port : Port
         One of the model's inputs or outputs (its outputs on elements too).
     is_input : bool
-        Whether `port` is an input (a force or moment) or an output (a position or velocity).
+        Whether `port` is an input (a force or moment) or an output (a quantity of
+        `output_quantities`).
 
     Returns
     -------
@@ -308,9 +316,10 @@ def port_description(model: Model, port: Port, *, is_input: bool) -> str:
         axis = port.axis[1]
         if is_input:
             return f"moment about the global {axis} axis on node {node}"
-        if port.quantity == "velocity":
-            return f"angular velocity about the global {axis} axis of node {node}"
-        return f"rotation about the global {axis} axis of node {node} (rotation vector component)"
+        words = QUANTITIES[port.quantity].rotation_words
+        if output_order(port):
+            return f"{words} about the global {axis} axis of node {node}"
+        return f"{words} about the global {axis} axis of node {node} (rotation vector component)"
     preposition = "on" if is_input else "of"
     return f"{port.quantity} {preposition} coordinate {model.coordinate_names[port.coordinate]}"
 

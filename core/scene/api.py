@@ -213,8 +213,8 @@ class Scene:
 
     def output(self, name: str, *, node: str, coordinate: str,
                quantity: str = "position") -> Scene:
-        """Add an [outputs.NAME]: the position or velocity of one coordinate, or on a 3-D
-        rotational node the angle or angular velocity about a global axis.
+        """Add an [outputs.NAME]: the position or a rate of one coordinate, or on a 3-D
+        rotational node the angle or a rate of it about a global axis.
 
         Parameters
         ----------
@@ -224,7 +224,8 @@ class Scene:
         coordinate : str
             "x", "y", "z", "phi"; "rx", "ry", "rz" about a global axis.
         quantity : str
-            "position" (m, rad) or "velocity" (m/s, rad/s).
+            A quantity of `flexure.core.mechanics.output_quantities` (its table lists them
+            with their units): "position" (m, rad), "velocity" (m/s, rad/s), ...
 
         Returns
         -------

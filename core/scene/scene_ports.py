@@ -1,6 +1,7 @@
 """The [inputs] and [outputs] of a scene: each port on one coordinate (a force; a position or
-velocity), or about a global axis of a 3-D rotational node (a moment; an angle or angular
-velocity: `flexure.core.mechanics.ports`).
+a rate of it), or about a global axis of a 3-D rotational node (a moment; an angle or a rate
+of it: `flexure.core.mechanics.ports`). The quantities an output on a node reads, with their
+units, are `flexure.core.mechanics.output_quantities`'.
 
 An input of `kind = "motion"` is a kinematic input (SPACAR's INPUTX, INPUTE): it prescribes
 a node's coordinate (m, or rad on a planar angle) or an element's deformation (m), which then
@@ -15,11 +16,12 @@ An output on an element (`element`, `deformation`, `quantity = "deformation"` or
 the moment over l0): SPACAR's OUTE and OUTF (`flexure.core.mechanics.element_outputs`).
 """
 
+from ..mechanics.output_quantities import QUANTITIES, quantity_unit
 from ..model import DEPENDENT, DOF, FIXED, GLOBAL_ROTATIONS, ZERO, Port
 from ..numerics.rotations import rotation_vector_derivatives
 from .scene_reader import show
 
-OUTPUT_QUANTITIES = {"position": "m", "velocity": "m/s"}
+OUTPUT_QUANTITIES = tuple(QUANTITIES)  # an output on a node (`output_quantities`)
 INPUT_KINDS = ("force", "motion")
 # an element's output (SPACAR's OUTE, OUTF): its deformation, or its stress resultant
 ELEMENT_QUANTITIES = {"deformation": "m", "stress": "N"}
@@ -39,7 +41,7 @@ class PortBuilding:
 
     def build_port(self, section, name, port, *, is_input):
         """One [inputs.NAME] (a force, N or N m; a moment about a global axis, N m) or
-        [outputs.NAME] (a position or velocity; an angle or angular velocity)."""
+        [outputs.NAME] (a quantity of `output_quantities`: a position, velocity, ...)."""
         key = f"{section}.{name}"
         port = self.table(key, port)
         if not name.isidentifier():
@@ -66,14 +68,12 @@ class PortBuilding:
         if is_input:
             return Port(name, self.coordinate(key, port), "force",
                         "N" if self._is_translation(port) else "N.m")
-        unit = OUTPUT_QUANTITIES[quantity]
-        if not self._is_translation(port):
-            unit = unit.replace("m", "rad")
+        unit = quantity_unit(quantity, rotation=not self._is_translation(port))
         return Port(name, self.coordinate(key, port), quantity, unit)
 
     def rotation_port(self, key, name, port, quantity, *, is_input):
         """A port about a global axis ("rx", "ry", "rz") of a 3-D rotational node: a moment
-        input (N m), or an angle (rad) or angular velocity (rad/s) output."""
+        input (N m), or an output of its angle (rad) or a rate of it (rad/s, ...)."""
         node = str(port["node"])
         axis = port.get("coordinate")
         if not isinstance(axis, str) or axis not in GLOBAL_ROTATIONS:
@@ -90,8 +90,8 @@ class PortBuilding:
                                      "would do nothing; name a free rotational node")
         if is_input:
             return Port(name, None, "moment", "N.m", euler=euler, axis=axis)
-        unit = {"position": "rad", "velocity": "rad/s"}[quantity]
-        return Port(name, None, quantity, unit, euler=euler, axis=axis)
+        return Port(name, None, quantity, quantity_unit(quantity, rotation=True), euler=euler,
+                    axis=axis)
 
     def motion_port(self, key, name, port):
         """A kinematic input: on a coordinate (node, coordinate) or a deformation (element,

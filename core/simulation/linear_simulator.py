@@ -80,7 +80,8 @@ class LinearSimulator:
     u0 : ndarray (n_inputs,)
         The inputs of the linearisation (N, N m, V); the model is driven by u - u0.
     y_start : ndarray (n_outputs,)
-        The outputs at the start (m, rad, m/s, rad/s).
+        The outputs at the start: the positions' (m, rad), the rates' of the linear model,
+        C z0 (m/s, rad/s, ...: a velocity's zero at rest), before the inputs' D (u - u0).
     initial_state : ndarray (n_states,)
         z0, the start's deviation from the linearisation.
     modal : bool
@@ -108,6 +109,7 @@ class LinearSimulator:
         from ..analysis.linearization import linearize
         from ..analysis.statespace import state_space
         from ..mechanics.kinematics import Kinematics
+        from ..mechanics.output_quantities import output_order
         from ..mechanics.ports import output_value
 
         lin = linear_model if linear_model is not None else linearize(model)
@@ -122,8 +124,11 @@ class LinearSimulator:
         q0 = Kinematics(model).dofs_of(x0)
         self.initial_state = np.zeros(self.A.shape[0])
         self.initial_state[: q0.size] = q0 - lin.solution.q
-        self.y_start = np.array([output_value(model, port, x0, np.zeros_like(x0))
-                                 for port in model.outputs])
+        # a position's exact value at the start; a rate's (`output_quantities`) that of the
+        # linear model, C z0 (a velocity's zero at rest): its value at the equilibrium is zero
+        rates = self.C @ self.initial_state
+        self.y_start = np.array([rates[j] if output_order(port) else output_value(model, port, x0)
+                                 for j, port in enumerate(model.outputs)])
         self._output_constant = self.y_start - self.C @ self.initial_state
         eigenvalues, V = eig(self.A)
         # > 0: an unstable linearisation (a buckled or negatively stiff equilibrium), whose

@@ -45,7 +45,7 @@ from .element_readings import ElementReadings
 from .held_inputs import checked_inputs
 from .methods import METHODS, REGISTRY
 from .simulator_motion import SimulatorMotion, check_motion
-from .simulator_outputs import SimulatorOutputs
+from .simulator_outputs import SimulatorOutputs, measured_orders
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
 from .start import scene_dofs, solve_start, start_kinematics
@@ -155,8 +155,8 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         self._output_coordinates = np.array([-1 if port.about_axis else port.coordinate
                                              for port in model.outputs], dtype=np.int64)
         self._about_axis = any(port.about_axis for port in model.outputs)
-        self._positions_only = (all(port.quantity == "position" for port in model.outputs)
-                                and not model.element_outputs)
+        self._orders = measured_orders(model)  # what of the state each output reads
+        self._positions_only = not any(self._orders) and not model.element_outputs
         # every output a coordinate DOF (a stage's carriage): read from q, no kinematics
         dofs = output_dofs(model)
         self._output_dofs = (dofs if dofs.size and np.all(dofs >= 0)
@@ -295,6 +295,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         if values != self._u.tolist():
             self._u = u
             self._needs_init = True
+            # outputs that read the held inputs at this state (an acceleration, a kinematic
+            # input's reaction) are measured again
+            self._outputs_cache = None
 
     @property
     def statistics(self) -> dict[str, float]:

@@ -12,6 +12,7 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
+from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import output_value
 from .measuring import start_from_plant
 from .plausibility import RangeCheck
@@ -20,10 +21,44 @@ from .status import STATUS_MESSAGES
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
 
+    from ..model import Model
+
+
+def measured_orders(model: Model) -> list[int]:
+    """The time derivative (0, 1, 2: `output_quantities`) of the coordinates each of the
+    model's outputs on nodes reads, as a simulation measures them.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    list of int (n_outputs,)
+
+    Raises
+    ------
+    SimulationError
+        An acceleration output of a model with kinematic inputs (not measured: a kinematic
+        input's acceleration is its path's at the state's time, which this measurement does
+        not take); it names the output.
+    """
+    orders = [output_order(port) for port in model.outputs]
+    for port, order in zip(model.outputs, orders, strict=True):
+        if order == 2 and model.kinematic_inputs:
+            raise SimulationError(
+                f"output {port.name!r} is an acceleration: a simulation of a model with "
+                f"kinematic inputs ({', '.join(p.name for p in model.kinematic_inputs)}) does "
+                "not measure accelerations (a kinematic input's is its path's at the time, "
+                "which the measurement does not take); differentiate a velocity output")
+    return orders
+
 
 class SimulatorOutputs:
     """The measuring methods of `Simulator` (which sets up the attributes they read: the
     model, the state, `_output_data`, `_output_coordinates`, `_about_axis`, `_positions_only`,
+    `_orders` (the time derivative each output on a node reads: `measured_orders`),
+    `_input_functions` and `_inputs_at` (the inputs at a time),
     `_output_dofs` and `_output_dof_list`, `_elements` (the outputs on elements:
     `element_readings`), `_restart_kinematics` (whether the plant's last
     solution may be of another state), the last evaluation's `_last_x`, `_last_e`, and
@@ -37,8 +72,9 @@ class SimulatorOutputs:
         Returns
         -------
         ndarray (n_outputs,)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s), then the
-            outputs on elements: deformations m, stress resultants N (`element_readings`).
+            Positions m, velocities m/s, accelerations m/s2 (angles rad, their rates rad/s,
+            rad/s2), then the outputs on elements: deformations m, stress resultants N
+            (`element_readings`).
 
         Raises
         ------
@@ -52,9 +88,11 @@ class SimulatorOutputs:
             if self._positions_only:
                 self._outputs_cache = self._positions_at(self._q_ref + self._y[: self.ndof])
             else:
+                # the inputs at this time: the held ones, or an input function's value
+                inputs = self._inputs_at(self._t) if self._input_functions else self._u
                 self._outputs_cache = self.outputs_along(self.absolute(self._y)[None],
                                                          start=self._x, times=[self._t],
-                                                         inputs=[self._u])[0]
+                                                         inputs=[inputs])[0]
         return self._outputs_cache.copy()
 
     def output_values(self) -> list[float]:
@@ -115,7 +153,8 @@ class SimulatorOutputs:
         Returns
         -------
         ndarray (n, n_outputs)
-            Positions m, velocities m/s (angles rad, angular velocities rad/s), then the
+            Positions m, velocities m/s, accelerations m/s2 (angles rad, their rates rad/s,
+            rad/s2), then the
             outputs on elements: deformations m, stress resultants N (`element_readings`).
 
         Raises
@@ -192,23 +231,17 @@ class SimulatorOutputs:
         held = (np.broadcast_to(self._u, (len(states), self._u.size)) if inputs is None
                 else np.asarray(inputs, float).reshape(len(states), self._u.size))
         n = self.ndof
-        x, DF = data.float_array("x"), data.float_array("DF").reshape(self.model.nx, n)
+        x = data.float_array("x")
         for k, y in enumerate(states):
             where = (f"t = {times[k]:.9g} s" if times is not None else "a state")
             status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
             if status != ed.OK:  # name the state that failed, not the simulator's time
                 raise SimulationError(f"{where} (state {k + 1} of {len(states)} along the "
                                       f"path): outputs: {STATUS_MESSAGES[status]}")
+            rates = self._rates(data, y, held[k], where)  # x, then xdot, xddot as needed
             for j, p in enumerate(ports):
-                if p.about_axis:  # an angle, or an angular velocity from lambda_dot = DF qdot
-                    euler = list(p.euler)
-                    xdot = np.zeros(self.model.nx)
-                    if p.quantity == "velocity":
-                        xdot[euler] = DF[euler] @ y[n: 2 * n]
-                    result[k, j] = output_value(self.model, p, x, xdot)
-                else:
-                    result[k, j] = (DF[p.coordinate] @ y[n: 2 * n] if p.quantity == "velocity"
-                                    else x[p.coordinate])
+                result[k, j] = (output_value(self.model, p, *rates) if p.about_axis
+                                else rates[self._orders[j]][p.coordinate])
             if path is not None:  # the kinematics left x and e of this point in the data
                 path[0][k] = x
                 path[1][k] = data.float_array("e")
@@ -220,3 +253,28 @@ class SimulatorOutputs:
                     raise SimulationError(f"{where} (state {k + 1} of {len(states)} along "
                                           f"the path): {error}") from None
         return result
+
+    def _rates(self, data, state, inputs, where):
+        """(x, xdot, xddot) of the coordinates up to the highest order the outputs read
+        (`output_quantities`), at a state whose kinematics `data` has just solved: xdot =
+        DF qdot; xddot = DF qddot + (D2F qdot) qdot from one evaluation of the equations of
+        motion with the held inputs (the engine's qddot and convective term, slot conv)."""
+        n, nx = self.ndof, self.model.nx
+        top = max(self._orders, default=0)
+        x = data.float_array("x")
+        rates = [x.copy() if top >= 2 else x]  # the evaluation below solves x once more
+        if top >= 1:
+            rates.append(data.float_array("DF").reshape(nx, n) @ state[n: 2 * n])
+        if top >= 2:
+            DF = data.float_array("DF").reshape(nx, n).copy()
+            # y = [0, qdot(, i)] on q_ref = q: this state's evaluation, as the integrator's
+            data.float_array("q_ref")[:] = state[:n]
+            data.float_array("inputs")[:] = inputs
+            y = np.zeros(self.nstate)
+            y[n: min(state.size, self.nstate)] = state[n: self.nstate]
+            status = engine.call(data, engine.OP_RHS, y)
+            if status != ed.OK:
+                raise SimulationError(f"{where}: the acceleration outputs: "
+                                      f"{STATUS_MESSAGES[status]}")
+            rates.append(DF @ data.float_array("qddot") + data.float_array("conv"))
+        return rates
