@@ -107,6 +107,18 @@ def test_the_solve_path_gives_the_same_gains(monkeypatch):
     np.testing.assert_allclose(principal_gains(model, frequencies), modal, rtol=1e-9)
 
 
+def test_a_repeated_natural_frequency_is_one_point_of_the_grid():
+    """Copies of a natural frequency within round-off (a symmetric mechanism's repeated
+    mode) add one point, whichever copies round-off made distinct; distinct ones add one
+    each."""
+    plain = frequency_grid([10.0, 444.86], points=50)
+    assert plain.size == 52 and 10.0 in plain and 444.86 in plain
+    for copies in ([444.86, 444.86, 444.86], [444.86, 444.86 * (1 + 3e-12), 444.86 * (1 - 2e-12)]):
+        grid = frequency_grid([10.0, *copies], points=50)
+        assert grid.size == 52 and np.all(np.diff(grid) > 0.0)
+    assert frequency_grid([10.0, 444.86, 444.86 * 1.001], points=50).size == 53
+
+
 def test_a_bad_frequency_is_refused():
     with pytest.raises(ValueError, match="expected finite frequencies >= 0"):
         principal_gains(load_scene("stage_planar_3dof"), [-1.0])

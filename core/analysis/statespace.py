@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import SceneError
 from ..mechanics.ports import input_columns, output_rows
 from ..numerics.blas import blas_threads
+from ..numerics.ties import TIE_RTOL
 from .linearization import linearize
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -267,8 +268,14 @@ def _names(ports):
 def frequency_grid(natural_hz, points=400, *, band=None):
     """Log-spaced frequencies (Hz) from a tenth of the lowest natural frequency to ten times
     the highest, or across `band` (f_min, f_max) Hz when given, with the natural frequencies
-    in that range themselves added (so the peaks are hit)."""
-    natural = np.asarray([f for f in natural_hz if f > 0.0], dtype=float)
+    in that range themselves added (so the peaks are hit). A repeated natural frequency (the
+    manipulator's three legs' modes at 444.86 Hz) is added once: its copies differ by
+    round-off, which would decide per CPU how many points the grid has, so a frequency
+    within `ties.TIE_RTOL` of the one below it is the same peak."""
+    natural = np.sort([f for f in natural_hz if f > 0.0]).astype(float)
+    if natural.size:
+        apart = natural[1:] > natural[:-1] * (1.0 + TIE_RTOL)
+        natural = natural[np.concatenate([[True], apart])]
     if band is not None:
         low, high = band
         natural = natural[(natural >= low) & (natural <= high)]
