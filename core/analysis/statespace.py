@@ -112,9 +112,10 @@ def static_gain(model: Model, *, linear_model: LinearModel | None = None) -> np.
     Without actuators, A [u; v] = B gives v = 0 and K u = -DF^T b, so the gain is
     C_pos K^-1 DF^T b (C_pos the outputs' rows on dq; a velocity output's gain is 0): one
     solve of the NDOF tangent K instead of A's three solves of M0 and one of the 2 NDOF A
-    (14 ms against 260 ms of CPU on the 507-DOF manipulator_reduced; the two agree to 1e-10
-    of the largest gain there, A's solve carrying cond(A)). A voltage-driven actuator adds
-    its coil's current to the state: then the gain is D - C A^-1 B itself.
+    (7 ms against 70 ms of CPU with one BLAS thread on the 507-DOF manipulator_reduced; the
+    two agree to 1e-10 of the largest gain there, A's solve carrying cond(A)). A
+    voltage-driven actuator adds its coil's current to the state: then the gain is
+    D - C A^-1 B itself.
 
     Parameters
     ----------
