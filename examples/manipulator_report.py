@@ -1,6 +1,6 @@
 """The six-DOF manipulator's analyses: the chapter's Table 3.1 and Fig. 3.5, and its workspace.
 
-    python examples/manipulator_report.py                  # everything, about 20 s of CPU
+    python examples/manipulator_report.py                  # everything, about 17 s of CPU
     python examples/manipulator_report.py --skip-workspace
 
 1. **Frequencies** (the chapter's Table 3.1 analogue): the lowest ten natural frequencies of the
@@ -36,15 +36,14 @@ from flexure.core import (
     natural_frequencies,
     principal_gains,
     static_equilibrium,
+    static_gain,
 )
 from flexure.core.analysis.modal import describe_mode
 from flexure.core.analysis.statespace import (
     frequency_grid,
     plot_principal_gains,
-    state_space_matrices,
 )
 from flexure.core.mechanics.mechanics import Mechanics
-from flexure.core.numerics.blas import blas_threads
 from flexure.core.numerics.rotations import to_rotation_vector
 
 MODELS = ("manipulator", "manipulator_e1", "manipulator_reduced")
@@ -67,14 +66,6 @@ def at_rest(name):
     mech = Mechanics(model)
     solution = static_equilibrium(model, mechanics=mech)
     return model, mech, solution, linearize(model, solution, mechanics=mech)
-
-
-@blas_threads()  # one BLAS thread, as flexure's own analyses (`flexure.core.numerics.blas`)
-def static_gain(model, lin):
-    """The static gain -C A^-1 B (outputs per input) of the state space at `lin`, without
-    python-control (its import is 2 s of CPU)."""
-    A, B, C, D = state_space_matrices(model, linear_model=lin)
-    return D - C @ np.linalg.solve(A, B)
 
 
 def frequency_table(count=10):
@@ -142,7 +133,7 @@ def workspace(amplitudes):
     frequencies Hz, largest and smallest static gain mm/N) of the reduced model."""
     model, mech, _, lin0 = at_rest(MODELS[-1])
     x0 = model.initial_coordinates
-    stiffness = np.linalg.inv(static_gain(model, lin0))  # N/m, 6 x 6
+    stiffness = np.linalg.inv(static_gain(model, linear_model=lin0))  # N/m, 6 x 6
     inputs = [port.coordinate for port in model.inputs]
     rows = []
     solved = {}  # {direction: {amplitude: its equilibrium}}: the forces are linear in it
@@ -168,7 +159,7 @@ def workspace(amplitudes):
                 done[amplitude] = solution
             lin = linearize(model, solution, mechanics=mech)
             frequencies = natural_frequencies(model, 7, linear_model=lin).frequencies_hz
-            gain = np.linalg.svd(static_gain(model, lin), compute_uv=False)
+            gain = np.linalg.svd(static_gain(model, linear_model=lin), compute_uv=False)
             moved, turned = effector_pose(model, solution.x, x0)
             label = "reference" if amplitude == 0.0 else direction
             rows.append((label, amplitude * 1e3, *(moved * 1e3), *(turned * 1e3), *frequencies,

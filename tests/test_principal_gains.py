@@ -8,7 +8,15 @@ import json
 import numpy as np
 import pytest
 
-from flexure.core import build_model, load_scene, state_space, static_equilibrium
+from flexure.core import (
+    build_model,
+    linearize,
+    load_scene,
+    state_space,
+    state_space_matrices,
+    static_equilibrium,
+    static_gain,
+)
 from flexure.core.analysis.statespace import frequency_grid, principal_gains
 from flexure.core.cli import main
 from flexure.core.scene.building import parse_toml, scene_path
@@ -49,6 +57,46 @@ def test_low_frequency_gains_are_the_static_compliance():
     np.testing.assert_allclose(principal_gains(model, [0.0])[0], expected, rtol=1e-4)
 
 
+def with_velocity_outputs():
+    """two_by_two with the velocities of the bar's x and y as outputs too: 4 x 2."""
+    data = copy.deepcopy(parse_toml(scene_path("stage_planar_3dof")))
+    data["inputs"]["Fy"] = {"node": "3", "coordinate": "y"}
+    for axis in "xy":
+        data["outputs"][f"v{axis}"] = {"node": "3", "coordinate": axis, "quantity": "velocity"}
+    return build_model(data)
+
+
+@pytest.mark.parametrize("make", [lambda: load_scene("stage_planar_3dof"), two_by_two,
+                                  with_velocity_outputs], ids=["1x2", "2x2", "4x2"])
+def test_the_static_gain_is_d_minus_c_a_inverse_b(make):
+    """The static gain through the tangent K is the state space's D - C A^-1 B (A's solve
+    carries cond(A), 5e8 here; measured 2e-18 of the largest gain), and a velocity output's
+    gain is exactly zero."""
+    model = make()
+    A, B, C, D = state_space_matrices(model)
+    expected = D - C @ np.linalg.solve(A, B)
+    gain = static_gain(model)
+    assert gain.shape == (len(model.outputs), len(model.inputs))
+    np.testing.assert_allclose(gain, expected, rtol=0.0, atol=1e-9 * np.abs(expected).max())
+    velocity = [p.quantity == "velocity" for p in model.outputs]
+    assert np.all(gain[velocity] == 0.0)
+    np.testing.assert_allclose(np.linalg.svd(gain, compute_uv=False),
+                               principal_gains(model, [0.0])[0], rtol=1e-7)
+
+
+def test_the_static_gain_of_a_voltage_driven_coil_is_km_over_r_k():
+    """With a coil's current in the state the gain is D - C A^-1 B: Km / (R k) m/V for the
+    truss driven through a voltage-driven actuator (its spring k = EA / l)."""
+    data = parse_toml(scene_path("truss_1dof_x"))
+    data["nodes"]["2"].pop("force")
+    data["actuators"] = {"VCM1": {"input": "F", "force_constant": 2.0, "resistance": 2.0,
+                                  "inductance": 0.01}}
+    model = build_model(data)
+    k = linearize(model).K[0, 0]
+    expected = 2.0 / (2.0 * k)
+    assert abs(static_gain(model).item() - expected) <= 1e-12 * expected
+
+
 def test_the_solve_path_gives_the_same_gains(monkeypatch):
     """Where the eigenvectors of A are ill-conditioned the gains come from a solve per
     frequency: the same numbers."""
@@ -57,6 +105,18 @@ def test_the_solve_path_gives_the_same_gains(monkeypatch):
     modal = principal_gains(model, frequencies)
     monkeypatch.setattr(np.linalg, "cond", lambda matrix: np.inf)
     np.testing.assert_allclose(principal_gains(model, frequencies), modal, rtol=1e-9)
+
+
+def test_a_repeated_natural_frequency_is_one_point_of_the_grid():
+    """Copies of a natural frequency within round-off (a symmetric mechanism's repeated
+    mode) add one point, whichever copies round-off made distinct; distinct ones add one
+    each."""
+    plain = frequency_grid([10.0, 444.86], points=50)
+    assert plain.size == 52 and 10.0 in plain and 444.86 in plain
+    for copies in ([444.86, 444.86, 444.86], [444.86, 444.86 * (1 + 3e-12), 444.86 * (1 - 2e-12)]):
+        grid = frequency_grid([10.0, *copies], points=50)
+        assert grid.size == 52 and np.all(np.diff(grid) > 0.0)
+    assert frequency_grid([10.0, 444.86, 444.86 * 1.001], points=50).size == 53
 
 
 def test_a_bad_frequency_is_refused():

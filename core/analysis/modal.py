@@ -71,7 +71,7 @@ def natural_frequencies(model: Model, count: int | None = None, *,
     if lin.M0.size == 0:
         raise ConvergenceError(f"{model.name!r} has no DOFs: no natural frequencies")
     try:
-        eigenvalues, shapes = symmetric_definite_eigh(lin.K, lin.M0)
+        eigenvalues, shapes = symmetric_definite_eigh(lin.K, lin.M0, count)
     except np.linalg.LinAlgError:
         raise ConvergenceError(
             f"{model.source}: the reduced mass matrix of {model.name!r} is not positive "

@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..numerics.blas import blas_threads
+
 if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.mechanics import Mechanics
     from ..model import Model
@@ -27,6 +29,7 @@ if TYPE_CHECKING:  # names for the annotations only
 NEGATIVE_RTOL = 1e-9
 
 
+@blas_threads()
 def negative_stiffness(K: np.ndarray) -> tuple[int, float, float]:
     """(count, lowest, largest magnitude) of the eigenvalues of the symmetric part of the
     tangent stiffness `K` (NDOF x NDOF; N/m, N m/rad and mixed, as the DOFs' units) that
@@ -40,6 +43,7 @@ def negative_stiffness(K: np.ndarray) -> tuple[int, float, float]:
     return count, float(eigenvalues[0]), largest
 
 
+@blas_threads()
 def clearly_stable(K: np.ndarray) -> bool:
     """Whether the tangent stiffness `K` (NDOF x NDOF) has no eigenvalue below
     -NEGATIVE_RTOL times its largest magnitude, shown by one Cholesky factorisation.
@@ -48,7 +52,10 @@ def clearly_stable(K: np.ndarray) -> bool:
     magnitude of the symmetric part: |K_ii| <= max|lambda|), K_s + tau I factors exactly when
     every eigenvalue of K_s lies above -tau: then none lies below the threshold of
     `negative_stiffness`. False means "not shown" (a K close to the threshold, or unstable):
-    the eigenvalues decide. At 816 DOFs 0.02 s against 1.6 s for the eigenvalues.
+    the eigenvalues decide. At 816 DOFs 0.02 s against 1.6 s for the eigenvalues, with one
+    BLAS thread (`blas_threads`, as every function here): outside it OpenBLAS's two threads
+    made this one factorisation 0.8 to 1.1 s of CPU of `flexure analyze manipulator` on the
+    loaded 2-core machine.
     """
     K = np.asarray(K, dtype=float)
     if K.size == 0:
@@ -64,6 +71,7 @@ def clearly_stable(K: np.ndarray) -> bool:
     return True
 
 
+@blas_threads()
 def tangent_stiffness(model: Model, solution: StaticSolution,
                       mechanics: Mechanics | None = None) -> np.ndarray:
     """K0 + G0 (NDOF x NDOF) at a static equilibrium, with the loads that hold it (the
@@ -77,6 +85,7 @@ def tangent_stiffness(model: Model, solution: StaticSolution,
         config, solution.stress_resultants, solution.load_factor, inputs=solution.port_values))
 
 
+@blas_threads()
 def instability_warnings(K: np.ndarray, *, frequencies_hz=None, descriptions=None) -> list[str]:
     """The warning that an equilibrium with tangent stiffness `K` is unstable (empty when it
     is not), naming the modes whose frequency is imaginary (negative in `frequencies_hz`,

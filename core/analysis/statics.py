@@ -279,7 +279,8 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
             pass
         else:
             return solution(config, iterations)
-    config = EnginePoint(q0, x0.copy()) if engine else mech.initial_configuration()
+    # (the shared one: Newton's steps make new configurations, none is changed in place)
+    config = EnginePoint(q0, x0.copy()) if engine else mech.initial_configuration(shared=True)
     total_iterations = 0
     factor, step = 0.0, 1.0 if unloaded else 1.0 / load_steps
     # the path's points by load factor, the unloaded configuration at 0; the stepping starts
