@@ -1,0 +1,218 @@
+"""A sampled feedback loop around a `LinearSimulator`, compiled: no Python call per sample.
+
+The loop of `sampled_loop` (the same samples, controller, quantum and timing: the controller's
+side is the same compiled `sampled_control.control_sample`) on the linearised plant, stepped
+exactly with the inputs held over each sample as `LinearSimulator.advance_to` steps it, in its
+modal form. The compiled step works in real arithmetic on half the modes: a real matrix's
+eigenvalues come in conjugate pairs with conjugate modal coordinates (the state z is real), so
+one coordinate of each pair, its real and imaginary parts, carries both (`RealModes`; the
+step in `linear_loop_kernels`), and only the output rows the loop reads are kept. Per sample:
+the controller's step, one pass over the modes (the rotation by e^(lambda h), the inputs'
+part, the outputs' sums), no allocation, no Python.
+
+The answers are the Python loop's around the same LinearSimulator
+(`controllers/sample_loop.simulate_loop` around `LinearPlant`) to round-off: the pairs'
+coordinates are the means of the two the LinearSimulator steps (equal but for the rounding of
+V^-1), and the sums run in another order (tests/test_linear_loop.py: the manipulator's loop
+within 1e-12 of the stroke). The simulator is left at t_N with the modal state reached and the
+last force held, as after the Python loop.
+
+    t, position, force = run_linear_loop(sim, fs=4000.0, samples=N, reference=r,
+                                         feedforward=u_ff, controller=(A, B, C, D),
+                                         loop_inputs=[0], loop_outputs=[0])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from ..errors import SimulationError
+from .linear_loop_kernels import OVERFLOW, linear_loop_runner
+from .sampled_control import FORCE, POSITION, controller_arrays
+
+if TYPE_CHECKING:  # names for the annotations only
+    from numpy.typing import ArrayLike
+
+    from .linear_simulator import LinearSimulator
+
+
+class RealModes(NamedTuple):
+    """The real modal form of a LinearSimulator's step (see `linear_loop_kernels`): per mode,
+    one of each conjugate pair of eigenvalues or a real one, in the order of the eigenvalues.
+
+    Attributes
+    ----------
+    rotation : ndarray (n_modes, 2)
+        p, q: e^(lambda h) = p + j q.
+    drive : ndarray (n_modes, 2 n_inputs)
+        The real, then the imaginary parts of h phi1(lambda h) (V^-1 B) (per N, N m, V).
+    readout : ndarray (n_modes, 2 n_outputs)
+        c' = 2 Re(C V), then c'' = -2 Im(C V) for a pair (1 Re, -1 Im for a real eigenvalue),
+        of the outputs asked for (m, rad, m/s, rad/s per unit of w).
+    state : ndarray (n_modes, 2)
+        a, b: w = a + j b, the modal state now.
+    partner : ndarray (n_modes,) of int
+        The eigenvalue's index of each mode's conjugate (its own for a real eigenvalue); its
+        own index is `first`.
+    first : ndarray (n_modes,) of int
+    """
+
+    rotation: np.ndarray
+    drive: np.ndarray
+    readout: np.ndarray
+    state: np.ndarray
+    first: np.ndarray
+    partner: np.ndarray
+
+    @classmethod
+    def of(cls, sim: LinearSimulator, h: float, outputs: Sequence[int]) -> RealModes:
+        """The real modal form of `sim`'s step of h seconds (its factors as `advance_to` takes
+        them), reading the outputs of index `outputs`, at its modal state now.
+
+        Raises
+        ------
+        SimulationError
+            `sim` does not step in its modal form, or a complex eigenvalue's conjugate is not
+            next to it (LAPACK's order, which scipy's `eig` keeps).
+        """
+        if not sim.modal:
+            raise SimulationError("the compiled linear loop steps the modal form; this "
+                                  f"linearisation's eigenvectors are ill-conditioned "
+                                  f"(cond_1(V) = {sim.condition:.3g}): use the Python loop")
+        first, partner = _conjugate_pairs(sim.eigenvalues)
+        decay, drive = sim.step_factors(h)
+        readout = sim.output_modes[list(outputs)]
+        w = sim.modal_state
+
+        def mean(values, axis=0):  # of each mode and its conjugate's conjugate
+            taken = np.take(values, first, axis=axis)
+            return (taken + np.take(values, partner, axis=axis).conj()) / 2
+
+        weight = np.where(partner != first, 2.0, 1.0)  # a pair's conjugate counts again
+        c = mean(readout, axis=1) * weight
+        d, g, state = mean(decay), mean(drive), mean(w)
+        return cls(rotation=_real_pairs(d), drive=np.hstack([g.real, g.imag]),
+                   readout=np.ascontiguousarray(np.hstack([c.real.T, -c.imag.T])),
+                   state=_real_pairs(state), first=first, partner=partner)
+
+    def modal_state(self, n_states: int) -> np.ndarray:
+        """The LinearSimulator's modal state (n_states,), complex: w for each mode, its
+        conjugate for its partner."""
+        w = self.state[:, 0] + 1j * self.state[:, 1]
+        full = np.zeros(n_states, dtype=complex)
+        full[self.partner] = w.conj()
+        full[self.first] = w  # a real eigenvalue's own: w, not its conjugate
+        return full
+
+
+def _real_pairs(values):
+    """(n, 2) C-contiguous: the real and imaginary parts of the complex (n,)."""
+    return np.ascontiguousarray(np.column_stack([values.real, values.imag]))
+
+
+def _conjugate_pairs(eigenvalues):
+    """(first, partner): the index of each real eigenvalue and of the first of each conjugate
+    pair (positive imaginary part), and of its conjugate (itself for a real one)."""
+    first, partner = [], []
+    i = 0
+    while i < eigenvalues.size:
+        value = eigenvalues[i]
+        if value.imag == 0.0:
+            first.append(i), partner.append(i)
+            i += 1
+        elif value.imag > 0 and i + 1 < eigenvalues.size and eigenvalues[i + 1] == value.conj():
+            first.append(i), partner.append(i + 1)
+            i += 2
+        else:
+            raise SimulationError(f"the eigenvalue {value:.6g} (index {i}) is not followed by "
+                                  "its conjugate: the compiled linear loop pairs them so")
+    return np.array(first, dtype=np.int64), np.array(partner, dtype=np.int64)
+
+
+def run_linear_loop(sim: LinearSimulator, *, fs: float, samples: int, reference: ArrayLike,
+                    feedforward: ArrayLike,
+                    controller: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike],
+                    loop_inputs: Sequence[int], loop_outputs: Sequence[int],
+                    quantum: ArrayLike | None = None,
+                    progress: Callable[[float], None] | None = None,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Run the loop from the simulator's state at t = 0 (after `reset`).
+
+    Parameters
+    ----------
+    sim : LinearSimulator
+        The plant, stepping its modal form (`sim.modal`), at t = 0.
+    fs : float
+        Sample rate (Hz).
+    samples : int
+        The number of intervals N; the run ends at t_N = N / fs.
+    reference, feedforward : array_like (>= 1, n_loops)
+        r_k (m, rad) and u_ff,k (N, N m, or V for an actuator's drive signal) per sample
+        (the last row holds past the end).
+    controller : tuple of array_like (A, B, C, D)
+        The discrete controller from errors to forces, as `run_sampled_loop` takes it.
+    loop_inputs, loop_outputs : sequences of int
+        The model input driven by each loop, and the model output it measures.
+    quantum : array_like (n_loops,), optional
+        Each loop's encoder quantum (m, rad; > 0), as `run_sampled_loop` takes it.
+    progress : callable, optional
+        Called with the fraction of samples done, about 100 times.
+
+    Returns
+    -------
+    t : ndarray (N+1,)
+        The sample times, s.
+    position : ndarray (N+1, n_loops)
+        y_k (m, rad, or the outputs' units).
+    force : ndarray (N+1, n_loops)
+        u_k held from t_k (N, N m, V); the last row repeats the one before.
+
+    Raises
+    ------
+    SimulationError
+        The simulator is not at t = 0 or not modal, the loop inputs and outputs or the
+        reference, feedforward or quantum do not fit the loops, or the state overflows
+        (naming the time; the simulator is then left at the last sample before it).
+    """
+    if sim.time != 0.0:
+        raise SimulationError(f"the linear loop starts at t = 0; the simulator is at "
+                              f"t = {sim.time:.9g} s: reset it first")
+    if len(loop_inputs) != len(loop_outputs):
+        raise SimulationError(f"expected as many loop inputs as loop outputs, one pair per "
+                              f"loop: got {len(loop_inputs)} loop inputs and "
+                              f"{len(loop_outputs)} loop outputs")
+    N = int(samples)
+    h = 1.0 / fs  # the first step's, as advance_to(1 / fs) takes it from t = 0
+    modes = RealModes.of(sim, h, loop_outputs)
+    arrays = controller_arrays(reference, feedforward, controller, loop_inputs,
+                               quantum=quantum, samples=N,
+                               coordinates=np.zeros(0, dtype=np.int64))
+    position, force = arrays[POSITION], arrays[FORCE]
+    position[0] = sim.outputs()[list(loop_outputs)]
+    held = np.array(sim.inputs, dtype=float)
+    n_outputs = len(loop_outputs)
+    plant = (np.ascontiguousarray(sim.u0, dtype=float), modes.rotation, modes.drive,
+             modes.readout, modes.state, np.zeros_like(modes.state), np.zeros(held.size),
+             np.zeros(n_outputs), np.ascontiguousarray(sim.output_constant[list(loop_outputs)]),
+             np.ascontiguousarray(sim.D[list(loop_outputs)]))
+    loop_state = np.zeros(1)
+    run = linear_loop_runner(arrays, plant, loop_state, held)
+    chunk = max(1, N // 100 if progress is not None else N)
+    for done in range(0, N, chunk):  # in chunks of samples, for the progress report
+        stop = min(N, done + chunk)
+        if run(done, stop) == OVERFLOW:
+            k = int(loop_state[0])
+            sim.continue_from(k / fs, modes.modal_state(sim.eigenvalues.size), held)
+            raise SimulationError(
+                f"t = {k / fs:.9g} s: the linearised state overflows over the step to "
+                f"{(k + 1) / fs:.9g} s (the linearisation's fastest growth rate: "
+                f"{sim.growth_rate:.6g} 1/s; the inputs' largest distance from the "
+                f"linearisation's: {np.max(np.abs(held - sim.u0), initial=0.0):.6g})")
+        if progress is not None:
+            progress(stop / N)
+    force[N] = force[N - 1]
+    sim.continue_from(N / fs, modes.modal_state(sim.eigenvalues.size), held)
+    return np.arange(N + 1) / fs, position, force
