@@ -55,26 +55,56 @@ def matrix_exponential_outputs(sim, inputs, outputs, forces, fs):
     return np.array(y)
 
 
+def python_steps(sim, outputs, forces, fs):
+    """The LinearSimulator's own steps (complex modal, `advance_to`) under the same held
+    forces: its outputs (N+1, n_loops)."""
+    sim.reset()
+    y = [sim.outputs()[outputs]]
+    for k, u in enumerate(forces[:-2]):
+        sim.set_inputs(u)
+        sim.advance_to((k + 1) / fs)
+        y.append(sim.outputs()[outputs])
+    return np.array(y)
+
+
+# fs (Hz) -> the bound against the matrix exponential, of the motion: at 1 Hz the stiffest
+# modes' lambda h reaches -1.8e7, where expm's scaling and squaring and the modal step part
+# by 1.35e-8 (the LinearSimulator's complex modal step as much as the real one)
+EXPM_BOUND = {FS: 1e-9, 1000.0: 1e-9, 1.0: 1e-7}
+
+
 @pytest.mark.parametrize(("scene", "outputs"), [
     ("stage_spatial_19dof", [0]), ("stage_spatial_19dof", [1]), ("coil", [0])])
 def test_the_real_modal_step_is_the_matrix_exponentials(scene, outputs):
-    """Random held forces (N, scaled to move the stage about 1 mm) for 300 samples at two
+    """Random held forces (N, scaled to move the stage about 1 mm) for 300 samples at three
     step lengths: the compiled loop's outputs are the block matrix exponential's to 1e-9 of
-    the motion (the 19-DOF stage starts 1.06 mm from its loaded equilibrium; the coil adds a
-    real eigenvalue). Measured: 2.8e-10 on the 19-DOF stage at 1 kHz, what the
-    LinearSimulator's complex modal step gives too (its eigenvectors' cond_1(V) = 8.1e5;
-    the two within 6e-16 of the motion); 7e-14 on the coil stage (cond_1(V) = 278)."""
+    the motion (EXPM_BOUND), and the LinearSimulator's own complex modal steps' to 1e-14 of
+    the outputs' size.
+    The 19-DOF stage starts 1.06 mm from its loaded equilibrium and has every kind of mode:
+    at 4 kHz 13 conjugate pairs, 8 real eigenvalues and 4 modes a step forgets
+    (e^(lambda h) = 0), at 1 Hz pairs forgotten too; the coil's real eigenvalue is forgotten
+    at 1 Hz. Measured against expm: 2.8e-10 on the 19-DOF stage at 1 kHz, what the complex
+    modal step gives too (its eigenvectors' cond_1(V) = 8.1e5), 1.35e-8 at 1 Hz; 7e-14 on
+    the coil stage (cond_1(V) = 278). Against the complex modal steps: a rounding unit of
+    y = 0.1 m, 6e-16 of x's motion."""
+    from flexure.core.simulation.linear_loop import RealModes
+
     model = coil_stage() if scene == "coil" else load_scene(scene)
     sim = LinearSimulator(model)
     assert sim.modal
+    if scene != "coil":
+        groups = RealModes.of(sim, 1 / FS, outputs)
+        assert (groups.pairs.size, groups.reals.size, groups.gone.size) == (13, 8, 4)
     forces = np.random.default_rng(3).normal(size=(302, 1))
-    for fs in (FS, 1000.0):  # a new step length: new factors
+    for fs, bound in EXPM_BOUND.items():  # a new step length: new factors
         got = open_loop(sim, [0], outputs, forces, fs)
+        assert sim.time == 300 / fs
         expected = matrix_exponential_outputs(sim, [0], outputs, forces, fs)
         motion = np.max(np.abs(expected - expected[0]))
         assert motion > 1e-6
-        assert np.max(np.abs(got - expected)) < 1e-9 * motion
-        assert sim.time == 300 / fs
+        assert np.max(np.abs(got - expected)) < bound * motion
+        complex_steps = python_steps(sim, outputs, forces, fs)
+        assert np.max(np.abs(got - complex_steps)) < 1e-14 * np.max(np.abs(complex_steps))
 
 
 def python_and_compiled(model, **options):

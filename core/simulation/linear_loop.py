@@ -40,32 +40,53 @@ if TYPE_CHECKING:  # names for the annotations only
 
 
 class RealModes(NamedTuple):
-    """The real modal form of a LinearSimulator's step (see `linear_loop_kernels`): per mode,
-    one of each conjugate pair of eigenvalues or a real one, in the order of the eigenvalues.
+    """The real modal form of a LinearSimulator's step (see `linear_loop_kernels`), in three
+    groups: one mode of each conjugate pair of eigenvalues (a complex coordinate as two real
+    ones), the real eigenvalues (one real coordinate each), and the modes a step forgets
+    (e^(lambda h) = 0: lambda h below -745, the stiffest overdamped modes; after any step
+    their w is g du, their part of the outputs one matrix times du).
 
     Attributes
     ----------
-    rotation : ndarray (n_modes, 2)
+    rotation : ndarray (n_pairs, 2)
         p, q: e^(lambda h) = p + j q.
-    drive : ndarray (n_modes, 2 n_inputs)
-        The real, then the imaginary parts of h phi1(lambda h) (V^-1 B) (per N, N m, V).
-    readout : ndarray (n_modes, 2 n_outputs)
-        c' = 2 Re(C V), then c'' = -2 Im(C V) for a pair (1 Re, -1 Im for a real eigenvalue),
-        of the outputs asked for (m, rad, m/s, rad/s per unit of w).
-    state : ndarray (n_modes, 2)
-        a, b: w = a + j b, the modal state now.
-    partner : ndarray (n_modes,) of int
-        The eigenvalue's index of each mode's conjugate (its own for a real eigenvalue); its
-        own index is `first`.
-    first : ndarray (n_modes,) of int
+    pair_drive : ndarray (n_pairs, 2 n_inputs)
+        The real, then the imaginary parts of g = h phi1(lambda h) (V^-1 B) (per N, N m, V).
+    pair_readout : ndarray (n_pairs, 2 n_outputs)
+        c' = 2 Re(C V), then c'' = -2 Im(C V), of the outputs asked for (a pair's conjugate
+        adds the same part again).
+    pair_state : ndarray (n_pairs, 2)
+        a, b: w = a + j b, now.
+    decay : ndarray (n_real,)
+        e^(lambda h) of the real eigenvalues a step does not forget.
+    real_drive, real_readout : ndarray (n_real, n_inputs), (n_real, n_outputs)
+        g and C V: real (V's columns of a real eigenvalue are real, so is C V; g's imaginary
+        part is V^-1's rounding, which C V's zero imaginary part never reads).
+    real_state : ndarray (n_real,)
+        w, now.
+    forgotten : ndarray (n_outputs, n_inputs)
+        Re(C V g) summed over the modes a step forgets.
+    pairs, partners, reals, gone : ndarray of int
+        The eigenvalues' indices of each pair's mode and of its conjugate, of the real
+        modes, and of the forgotten ones.
+    gone_drive : ndarray (n_gone, n_inputs), complex
+        The forgotten modes' g.
     """
 
     rotation: np.ndarray
-    drive: np.ndarray
-    readout: np.ndarray
-    state: np.ndarray
-    first: np.ndarray
-    partner: np.ndarray
+    pair_drive: np.ndarray
+    pair_readout: np.ndarray
+    pair_state: np.ndarray
+    decay: np.ndarray
+    real_drive: np.ndarray
+    real_readout: np.ndarray
+    real_state: np.ndarray
+    forgotten: np.ndarray
+    pairs: np.ndarray
+    partners: np.ndarray
+    reals: np.ndarray
+    gone: np.ndarray
+    gone_drive: np.ndarray
 
     @classmethod
     def of(cls, sim: LinearSimulator, h: float, outputs: Sequence[int]) -> RealModes:
@@ -86,29 +107,42 @@ class RealModes(NamedTuple):
         decay, drive = sim.step_factors(h)
         readout = sim.output_modes[list(outputs)]
         w = sim.modal_state
+        forgets = (decay[first] == 0) | (decay[partner] == 0)
+        gone = np.union1d(first[forgets], partner[forgets])
+        first, partner = first[~forgets], partner[~forgets]
+        paired = partner != first
+        pairs, partners, reals = first[paired], partner[paired], first[~paired]
 
-        def mean(values, axis=0):  # of each mode and its conjugate's conjugate
-            taken = np.take(values, first, axis=axis)
-            return (taken + np.take(values, partner, axis=axis).conj()) / 2
+        def mean(values, axis=0):  # of each pair's mode and its conjugate's conjugate
+            return (np.take(values, pairs, axis=axis)
+                    + np.take(values, partners, axis=axis).conj()) / 2
 
-        weight = np.where(partner != first, 2.0, 1.0)  # a pair's conjugate counts again
-        c = mean(readout, axis=1) * weight
-        d, g, state = mean(decay), mean(drive), mean(w)
-        return cls(rotation=_real_pairs(d), drive=np.hstack([g.real, g.imag]),
-                   readout=np.ascontiguousarray(np.hstack([c.real.T, -c.imag.T])),
-                   state=_real_pairs(state), first=first, partner=partner)
+        c, g = 2 * mean(readout, axis=1), mean(drive)
+        return cls(rotation=_real_parts(mean(decay)),
+                   pair_drive=np.ascontiguousarray(np.hstack([g.real, g.imag])),
+                   pair_readout=np.ascontiguousarray(np.hstack([c.real.T, -c.imag.T])),
+                   pair_state=_real_parts(mean(w)),
+                   decay=np.ascontiguousarray(decay[reals].real),
+                   real_drive=np.ascontiguousarray(drive[reals].real),
+                   real_readout=np.ascontiguousarray(readout[:, reals].real.T),
+                   real_state=np.ascontiguousarray(w[reals].real),
+                   forgotten=np.ascontiguousarray((readout[:, gone] @ drive[gone]).real),
+                   pairs=pairs, partners=partners, reals=reals, gone=gone,
+                   gone_drive=drive[gone])
 
-    def modal_state(self, n_states: int) -> np.ndarray:
-        """The LinearSimulator's modal state (n_states,), complex: w for each mode, its
-        conjugate for its partner."""
-        w = self.state[:, 0] + 1j * self.state[:, 1]
+    def modal_state(self, n_states: int, du: np.ndarray) -> np.ndarray:
+        """The LinearSimulator's modal state (n_states,), complex, after a step with du
+        (N, N m, V) held: w for each pair's mode and its conjugate for its partner, the real
+        modes' w, and g du for the forgotten ones (as its own step leaves them)."""
+        w = self.pair_state[:, 0] + 1j * self.pair_state[:, 1]
         full = np.zeros(n_states, dtype=complex)
-        full[self.partner] = w.conj()
-        full[self.first] = w  # a real eigenvalue's own: w, not its conjugate
+        full[self.pairs], full[self.partners] = w, w.conj()
+        full[self.reals] = self.real_state
+        full[self.gone] = self.gone_drive @ du
         return full
 
 
-def _real_pairs(values):
+def _real_parts(values):
     """(n, 2) C-contiguous: the real and imaginary parts of the complex (n,)."""
     return np.ascontiguousarray(np.column_stack([values.real, values.imag]))
 
@@ -193,19 +227,26 @@ def run_linear_loop(sim: LinearSimulator, *, fs: float, samples: int, reference:
     position, force = arrays[POSITION], arrays[FORCE]
     position[0] = sim.outputs()[list(loop_outputs)]
     held = np.array(sim.inputs, dtype=float)
+    start = sim.modal_state
     n_outputs = len(loop_outputs)
-    plant = (np.ascontiguousarray(sim.u0, dtype=float), modes.rotation, modes.drive,
-             modes.readout, modes.state, np.zeros_like(modes.state), np.zeros(held.size),
-             np.zeros(n_outputs), np.ascontiguousarray(sim.output_constant[list(loop_outputs)]),
-             np.ascontiguousarray(sim.D[list(loop_outputs)]))
+    plant = (np.ascontiguousarray(sim.u0, dtype=float),
+             modes.rotation, modes.pair_drive, modes.pair_readout, modes.pair_state,
+             np.zeros_like(modes.pair_state),
+             modes.decay, modes.real_drive, modes.real_readout, modes.real_state,
+             np.zeros_like(modes.real_state),
+             np.zeros(held.size), np.zeros(n_outputs),
+             np.ascontiguousarray(sim.output_constant[list(loop_outputs)]),
+             # D du and the forgotten modes' part in one product
+             np.ascontiguousarray(sim.D[list(loop_outputs)] + modes.forgotten))
     loop_state = np.zeros(1)
     run = linear_loop_runner(arrays, plant, loop_state, held)
     chunk = max(1, N // 100 if progress is not None else N)
     for done in range(0, N, chunk):  # in chunks of samples, for the progress report
         stop = min(N, done + chunk)
         if run(done, stop) == OVERFLOW:
-            k = int(loop_state[0])
-            sim.continue_from(k / fs, modes.modal_state(sim.eigenvalues.size), held)
+            k = int(loop_state[0])  # the state stayed at t_k, after the step with u_k-1
+            sim.continue_from(k / fs, start if k == 0 else modes.modal_state(
+                start.size, _held(force[k - 1], loop_inputs, held.size) - sim.u0), held)
             raise SimulationError(
                 f"t = {k / fs:.9g} s: the linearised state overflows over the step to "
                 f"{(k + 1) / fs:.9g} s (the linearisation's fastest growth rate: "
@@ -214,5 +255,13 @@ def run_linear_loop(sim: LinearSimulator, *, fs: float, samples: int, reference:
         if progress is not None:
             progress(stop / N)
     force[N] = force[N - 1]
-    sim.continue_from(N / fs, modes.modal_state(sim.eigenvalues.size), held)
+    sim.continue_from(N / fs, modes.modal_state(start.size, held - sim.u0), held)
     return np.arange(N + 1) / fs, position, force
+
+
+def _held(force, loop_inputs, n_inputs):
+    """The plant's inputs (n_inputs,) with the loops' forces held (the others zero), as
+    `control_sample` sets them."""
+    held = np.zeros(n_inputs)
+    held[list(loop_inputs)] = force
+    return held
