@@ -3,12 +3,14 @@
 The loop of `sampled_loop` (the same samples, controller, quantum and timing: the controller's
 side is the same compiled `sampled_control.control_sample`) on the linearised plant, stepped
 exactly with the inputs held over each sample as `LinearSimulator.advance_to` steps it, in its
-modal form. The compiled step works in real arithmetic on half the modes: a real matrix's
-eigenvalues come in conjugate pairs with conjugate modal coordinates (the state z is real), so
-one coordinate of each pair, its real and imaginary parts, carries both (`RealModes`; the
-step in `linear_loop_kernels`), and only the output rows the loop reads are kept. Per sample:
-the controller's step, one pass over the modes (the rotation by e^(lambda h), the inputs'
-part, the outputs' sums), no allocation, no Python.
+modal form. The compiled step works in real arithmetic: a real matrix's complex eigenvalues
+come in conjugate pairs with conjugate modal coordinates (the state z is real), so one
+coordinate of each pair, its real and imaginary parts, carries both; a real eigenvalue's
+coordinate is one real number; the modes a step forgets (e^(lambda h) = 0) are one matrix on
+the inputs (`RealModes`; the step in `linear_loop_kernels`); and only the output rows the
+loop reads are kept. Per sample: the controller's step (shared with the other compiled
+loops; it allocates its new state), one pass over the modes (the rotation by e^(lambda h),
+the inputs' part, the outputs' sums) into arrays made once, no Python.
 
 The answers are the Python loop's around the same LinearSimulator
 (`controllers/sample_loop.simulate_loop` around `LinearPlant`) to round-off: the pairs'
