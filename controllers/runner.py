@@ -2,7 +2,8 @@
 
     scene -> build_loop (loop_design.py) -> a LoopController and its design
           -> the plant:  "inprocess"  the compiled in-process loop (sample_loop.py)
-                         "linear"     the linearised model, stepped exactly (plants.py)
+                         "linear"     the linearised model, stepped exactly (plants.py),
+                                      the loop compiled (sample_loop.py)
                          "fmu"        the scene FMU under fmpy (plants.py, sample_loop.py)
                          "libcosim"   the controller and scene FMUs in libcosim (cosim.py)
           -> LoopResult (loop_result.py)
@@ -33,7 +34,7 @@ from .loop_design import LoopError, build_loop, feedforward_kind
 from .loop_motion import motion_duration_of, motion_report
 from .loop_result import TARGET, LoopResult
 from .plants import FmuPlant, InProcessPlant, LinearPlant
-from .sample_loop import compiled_loop, simulate_loop
+from .sample_loop import compiled_loop, linear_loop, prepare_linear_loop, simulate_loop
 from .user_reference import reference_stroke
 from .validity import loop_coordinates, motion_warnings
 
@@ -229,8 +230,9 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     if plant == "inprocess":  # the engine's compilation (first use only) is not the loop's
         prepare(model, loop_method=method)
     linear = None
-    if plant == "linear":  # nor are the linear plant's eigenvectors
+    if plant == "linear":  # nor are the linear plant's eigenvectors, nor its loop's code
         linear = LinearPlant(model, linear_model=design_options.get("linear_model"))
+        prepare_linear_loop(linear, loop)
     ended = {}  # the Simulator at t_N, for the kinematic inputs' efforts
     start = time.perf_counter()
     with contextlib.ExitStack() as stack:
@@ -241,7 +243,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
             workdir = stack.enter_context(tempfile.TemporaryDirectory(
                 prefix="flexure_loop_", ignore_cleanup_errors=True))
         if linear is not None:
-            t, r, position, force = simulate_loop(linear, loop, design, progress=progress)
+            t, r, position, force = linear_loop(linear, loop, design, progress=progress)
         else:
             t, r, position, force = _run_plant(plant, model, scene, loop, design,
                                                method=method, rtol=rtol, workdir=workdir,

@@ -220,10 +220,7 @@ class LinearSimulator:
         if not (math.isfinite(t_end) and h > 0):
             raise SimulationError(f"t = {self._t:.9g} s: advance to t_end = {t_end!r}: expected "
                                   "a finite time after the current one")
-        # k/fs - (k-1)/fs wobbles by a rounding unit of t: a relative 1e-9 (below the modal
-        # step's own rounding, cond * 1e-16) keeps one set of factors for a whole loop
-        if self._h is None or abs(h - self._h) > 1e-9 * h:
-            self._factors(h)
+        self.step_factors(h)
         # an overflow is refused below, by name, rather than warned of by numpy (1 us a step)
         with np.errstate(over="ignore", invalid="ignore"):
             z = self._step()
@@ -236,6 +233,62 @@ class LinearSimulator:
                                   f"{np.max(np.abs(self._du), initial=0.0):.6g})")
         self._z = z
         self._t = t_end
+
+    def step_factors(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """The factors of a step of h seconds with the inputs held, as `advance_to` steps:
+        computed for h, or those kept from a step within a relative 1e-9 of it.
+
+        Parameters
+        ----------
+        h : float
+            The step, s (> 0).
+
+        Returns
+        -------
+        decay : ndarray
+            Modal: e^(lambda h) (n_states,), complex; else e^(A h) (n_states, n_states).
+        drive : ndarray (n_states, n_inputs)
+            Modal: h phi1(lambda h) V^-1 B, complex; else (integral_0^h e^(A s) ds) B. The
+            step is w <- decay * w + drive (u - u0) (decay @ z + ... without the modes).
+        """
+        # k/fs - (k-1)/fs wobbles by a rounding unit of t: a relative 1e-9 (below the modal
+        # step's own rounding, cond * 1e-16) keeps one set of factors for a whole loop
+        if self._h is None or abs(h - self._h) > 1e-9 * h:
+            self._factors(h)
+        return self._decay, self._drive
+
+    @property
+    def modal_state(self) -> np.ndarray:
+        """The modal state w = V^-1 z now (n_states,), complex (a copy); modal only."""
+        return self._z.copy()
+
+    @property
+    def output_modes(self) -> np.ndarray:
+        """C V (n_outputs, n_states), complex: y = y_c + (C V w).real + D (u - u0); modal
+        only."""
+        return self._output_modes
+
+    @property
+    def output_constant(self) -> np.ndarray:
+        """y_c = y_start - C z0 (n_outputs,): m, rad, m/s, rad/s."""
+        return self._output_constant
+
+    def continue_from(self, t: float, modal_state: ArrayLike, inputs: ArrayLike) -> None:
+        """Take over where another stepper of this simulator's modal form left it (a compiled
+        loop, `linear_loop`): at t, with the modal state w and the inputs held.
+
+        Parameters
+        ----------
+        t : float
+            s.
+        modal_state : array_like (n_states,), complex
+            w = V^-1 z.
+        inputs : array_like (n_inputs,)
+            The absolute inputs held (N, N m, V).
+        """
+        self._z = np.array(modal_state, dtype=complex)
+        self._t = float(t)
+        self._du = np.asarray(inputs, float) - self.u0
 
     def outputs(self) -> np.ndarray:
         """The declared outputs now.

@@ -50,6 +50,7 @@ from ..engine.ports import port_specs
 from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
 from .methods import COMPILED_LOOP_METHODS
+from .sampled_control import FORCE, POSITION, controller_arrays, controller_step
 from .sampled_loop_kernels import (
     ADDRESSES,
     ADVANCE,
@@ -58,7 +59,6 @@ from .sampled_loop_kernels import (
     MEASURE_FAILED,
     OUTPUT,
     PLANT,
-    controller_step,
     loop_runner,
 )
 from .status import STATUS_MESSAGES
@@ -126,26 +126,15 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
     ports = [sim.model.outputs[j] for j in loop_outputs]
     if any(port.quantity != "position" for port in ports):
         raise SimulationError("the compiled sampled loop measures positions only")
-    A, B, C, D = (np.ascontiguousarray(np.atleast_2d(np.asarray(m, float))) for m in controller)
-    reference = np.ascontiguousarray(reference, dtype=float)
-    feedforward = np.ascontiguousarray(feedforward, dtype=float)
-    n_loops = len(loop_inputs)
-    if reference.shape[1] != n_loops or feedforward.shape[1] != n_loops:
-        raise SimulationError(f"reference and feedforward: expected {n_loops} columns, got "
-                              f"{reference.shape[1]} and {feedforward.shape[1]}")
-    quanta = _quanta(quantum, n_loops)
     N = int(samples)
-    position = np.zeros((N + 1, n_loops))
-    force = np.zeros((N + 1, n_loops))
     # the measured outputs, packed (engine.ports): a coordinate, or an angle about a global
     # axis; then the DOF each one is, or -1 (`sampled_loop_kernels.measure`)
     coordinates = np.concatenate([port_specs(ports).ravel(),
                                   output_dofs(sim.model, ports)])
-    # what `_sample` reads and writes, one tuple that the integrators' loops hand on; the
-    # last two are its scratch (n_loops,): the errors and the controller's outputs
-    controller = (reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
-                  np.array(loop_inputs, dtype=np.int64), coordinates, quanta, position, force,
-                  np.empty(n_loops), np.empty(n_loops))
+    controller = controller_arrays(reference, feedforward, controller, loop_inputs,
+                                   quantum=quantum, samples=N, coordinates=coordinates)
+    position, force = controller[POSITION], controller[FORCE]
+    n_loops = len(loop_inputs)
     loop = (float(fs), controller)
     with sim.held_input_drive() as drive:  # the simulator continues from where it ends
         solver, loop_state = drive.stepper, drive.loop_state
@@ -172,20 +161,6 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
         force[N] = force[N - 1]
         drive.wall = time.perf_counter() - start_time
     return np.arange(N + 1) / fs, position, force
-
-
-def _quanta(quantum, n_loops):
-    """The quanta (n_loops,) the kernels take: q > 0 per loop, or zeros for exact ones."""
-    if quantum is None:
-        return np.zeros(n_loops)
-    try:
-        quanta = np.asarray(quantum, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        quanta = np.full(0, np.nan)
-    if quanta.shape != (n_loops,) or not np.all(np.isfinite(quanta) & (quanta > 0)):
-        raise SimulationError(f"quantum: expected {n_loops} positive finite values (m, rad), "
-                              f"one per loop, got {quantum!r}")
-    return np.ascontiguousarray(quanta)
 
 
 def _esdirk_samples(sim, solver, addresses, loop_state, held, loop):

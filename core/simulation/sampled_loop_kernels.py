@@ -1,7 +1,8 @@
-"""The compiled side of the sampled loop (`sampled_loop`): the controller's step, the
-measurement of the loop outputs, one sample, and the loops over samples on CVODE and on the
-one-step ESDIRK, each with a C entry through which Python runs it (`loop_runner`:
-a process that loads the compiled code from the cache runs the loop without numba).
+"""The compiled side of the sampled loop (`sampled_loop`): the measurement of the loop
+outputs, one sample (its controller's side in `sampled_control`), and the loops over samples
+on CVODE and on the one-step ESDIRK, each with a C entry through which Python runs it
+(`loop_runner`: a process that loads the compiled code from the cache runs the loop without
+numba).
 """
 
 import numpy as np
@@ -10,7 +11,6 @@ from ..engine import access, engine
 from ..engine import data as ed
 from ..engine.ports import position_value
 from ..numerics.array_tables import array_table, floats, floats2d, ints
-from ..numerics.dense import copy
 from ..numerics.jit import entry, kernel
 from ..numerics.native import (
     as_float_pointer,
@@ -24,6 +24,7 @@ from ..numerics.native import (
 )
 from . import esdirk_kernels
 from .measuring import start_from_plant
+from .sampled_control import CONTROLLER_KINDS, control_sample, controller_table
 from .stepper import restart_plant
 from .sundials_restart import (
     A_ACTUAL_INIT_STEP,
@@ -37,45 +38,6 @@ from .sundials_restart import (
     L_JACOBIAN,
     cvode_restart,
 )
-
-
-@kernel(inline="always")
-def _state_space_row(P, Q, state, error, i):
-    """Row i of P x + Q e: the two dot products each summed in index order, then added."""
-    s = 0.0
-    for j in range(P.shape[1]):
-        s += P[i, j] * state[j]
-    d = 0.0
-    for j in range(Q.shape[1]):
-        d += Q[i, j] * error[j]
-    return s + d
-
-
-@kernel
-def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-                    state: np.ndarray, error: np.ndarray, output: np.ndarray) -> None:
-    """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e.
-
-    Compiled (numba); the sums run in index order, so every caller gets the same numbers.
-
-    Parameters
-    ----------
-    A, B, C, D : ndarray, 2-D, float64
-        The controller's matrices: (s, s), (s, n), (m, s), (m, n).
-    state : ndarray (s,), float64
-        x, updated in place.
-    error : ndarray (n,), float64
-        e, in the loops' output units (m, rad).
-    output : ndarray (m,), float64
-        Receives u, in the loops' input units (N, N m, V).
-    """
-    for i in range(C.shape[0]):
-        output[i] = _state_space_row(C, D, state, error, i)
-    new_state = np.empty(A.shape[0])
-    for i in range(A.shape[0]):
-        new_state[i] = _state_space_row(A, B, state, error, i)
-    copy(state, new_state)
-
 
 # the addresses handed to the compiled loop, in this order (CVODE's own are in its
 # `address_table`, sundials_restart.A_...)
@@ -125,41 +87,15 @@ def measure(addresses, y, scratch, coordinates, out):
 
 @kernel(inline="always")  # into the loop of the integrator in use, its one caller
 def _sample(addresses, y, scratch, k, controller, held):
-    """Sample k: measure y_k, compute u_k+1 = C x_c + D e_k + u_ff,k+1 (the controller state
-    stepped; e_k of y_k rounded to its quantum where quanta > 0), and put u_k into the held
-    plant inputs (the others zero) for [t_k, t_k+1).
+    """Sample k: measure y_k, then the controller's sample (`sampled_control.control_sample`:
+    u_k+1 computed, u_k into the held plant inputs for [t_k, t_k+1)).
     Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
     controller: (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta,
-    position, force, error, output) as `run_sampled_loop` packs it, error and output scratch
-    (n_loops,)."""
-    (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta, position, force,
-     error, output) = controller
+    position, force, error, output) as `run_sampled_loop` packs it."""
+    coordinates, position = controller[8], controller[10]
     if measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
         return -1
-    n_loops = inputs.size
-    if k == 0:  # element by element: a slice assignment compiles numba's shape-error message
-        for i in range(n_loops):
-            force[0, i] = feedforward[0, i]
-    r = reference[min(k, reference.shape[0] - 1)]
-    ff = feedforward[min(k + 1, feedforward.shape[0] - 1)]
-    for i in range(n_loops):
-        measured = position[k, i]
-        if quanta[i] > 0.0:  # as numpy's q * round(y / q): rint rounds halves to even
-            measured = quanta[i] * np.rint(measured / quanta[i])
-        error[i] = r[i] - measured
-    controller_step(A, B, C, D, state, error, output)
-    for i in range(n_loops):
-        force[k + 1, i] = output[i] + ff[i]
-    changed = 0
-    for j in range(held.size):
-        value = 0.0
-        for i in range(n_loops):
-            if inputs[i] == j:
-                value = force[k, i]
-        if value != held[j]:
-            changed = 1
-            held[j] = value
-    return changed
+    return control_sample(k, controller, held)
 
 
 @kernel(inline="always")  # into its C entry, its one caller: one compilation unit
@@ -244,19 +180,10 @@ def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, 
 
 # -- the C entries: the arrays of a run in one table (numerics.array_tables), the
 # controller's first, in `sample`'s order, then the driver's
-CONTROLLER_KINDS = "FFFFFFfiifFFff"  # reference .. output, as run_sampled_loop packs them
 ESDIRK_KINDS = "ifffiFif"  # addresses, loop_state, held, memory, flags, vectors, arguments,
 #                            scratch
 CVODE_KINDS = "iiffifff"  # addresses, cvode, loop_state, learnt, totals, held, y, scratch
 _N = len(CONTROLLER_KINDS)
-
-
-@kernel(inline="always")
-def _controller(table):
-    return (floats2d(table, 0), floats2d(table, 1), floats2d(table, 2), floats2d(table, 3),
-            floats2d(table, 4), floats2d(table, 5), floats(table, 6), ints(table, 7),
-            ints(table, 8), floats(table, 9), floats2d(table, 10), floats2d(table, 11),
-            floats(table, 12), floats(table, 13))
 
 
 @kernel(inline="always")
@@ -275,7 +202,7 @@ def _esdirk_entry(address, start, stop, fs):
     """`loop_esdirk` on the arrays of the table at `address` (CONTROLLER_KINDS, then
     ESDIRK_KINDS), and y_N measured after the last sample (`_measure_end`)."""
     table = carray(as_int_pointer(address), (3 * (_N + len(ESDIRK_KINDS)),))
-    controller = _controller(table)
+    controller = controller_table(table)
     addresses, vectors, scratch = ints(table, _N), floats2d(table, _N + 5), floats(table, _N + 7)
     flag = loop_esdirk(addresses, floats(table, _N + 1), floats(table, _N + 2),
                        floats(table, _N + 3), ints(table, _N + 4), vectors,
@@ -290,7 +217,7 @@ def _cvode_entry(address, start, stop, fs):
     """`loop_cvode` on the arrays of the table at `address` (CONTROLLER_KINDS, then
     CVODE_KINDS), and y_N measured after the last sample (`_measure_end`)."""
     table = carray(as_int_pointer(address), (3 * (_N + len(CVODE_KINDS)),))
-    controller = _controller(table)
+    controller = controller_table(table)
     addresses, y, scratch = ints(table, _N), floats(table, _N + 6), floats(table, _N + 7)
     flag = loop_cvode(addresses, ints(table, _N + 1), floats(table, _N + 2),
                       floats(table, _N + 3), ints(table, _N + 4), floats(table, _N + 5), y,
