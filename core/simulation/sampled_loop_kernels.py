@@ -5,8 +5,6 @@ on CVODE and on the one-step ESDIRK, each with a C entry through which Python ru
 numba).
 """
 
-import numpy as np
-
 from ..engine import access, engine
 from ..engine import data as ed
 from ..engine.ports import position_value
