@@ -21,7 +21,8 @@ from flexure.core import (
     state_space,
     static_equilibrium,
 )
-from flexure.core.mechanics.constraints import check_exact_constraint, freezable
+from flexure.core.mechanics.constraints import check_exact_constraint
+from flexure.core.mechanics.freezing import freezable
 from flexure.core.scene.building import parse_toml, scene_path
 
 

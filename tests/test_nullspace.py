@@ -59,10 +59,10 @@ def test_no_rows_leave_every_motion_free():
 @pytest.mark.slow
 def test_on_the_manipulator_the_blocks_give_the_svd_null_space():
     from flexure.core import load_scene
-    from flexure.core.mechanics.constraints import RANK_TOLERANCE, _scaled_jacobian
+    from flexure.core.mechanics.constraints import RANK_TOLERANCE, scaled_jacobian
 
     model = load_scene("manipulator")
-    _, scaled = _scaled_jacobian(model, None)
+    _, scaled = scaled_jacobian(model, None)
     rigid = scaled[np.ix_(model.rigid_deformations, model.free_coordinates)]
     rank, _, basis = rank_and_null_space(rigid, RANK_TOLERANCE)
     expected_rank, expected = reference(rigid)

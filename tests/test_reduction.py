@@ -133,7 +133,7 @@ def test_the_projected_trials_give_the_built_models_frequencies():
         frozen_scene,
         lowest_frequencies,
     )
-    from flexure.core.mechanics.constraints import freezable
+    from flexure.core.mechanics.freezing import freezable
 
     loaded = parse_toml(scene_path("stage_spatial_19dof"))
     data = copy.deepcopy(loaded)

@@ -21,7 +21,7 @@ cost. SPACAR users freeze them by hand; `propose_reduction` does it by measureme
    chosen reduced scene is built once: `_projected_frequencies`). A deformation whose freezing would
    over-constrain the model together with those before it (a release that removes an
    over-constraint, such as a leaf's local cut, or the second leaf of a parallel pair) is
-   skipped: `constraints.freezable` tests the rank of the constraint rows incrementally, so
+   skipped: `freezing.freezable` tests the rank of the constraint rows incrementally, so
    that every trial builds.
 
 `freeze` (`flexure reduce --freeze e1`) prescribes the named deformations zero on every
@@ -44,7 +44,7 @@ import numpy as np
 
 from ..errors import FlexureError
 from ..mechanics import assembly
-from ..mechanics.constraints import freezable
+from ..mechanics.freezing import freezable
 from ..numerics.blas import blas_threads
 from ..numerics.ties import ordered
 from ..scene.building import build_model

@@ -65,7 +65,7 @@ def check_exact_constraint(model: Model, x: np.ndarray | None = None) -> dict[st
         names the DOF counts, the redundant constraints (element deformations) and the free
         coordinates, as far as they apply.
     """
-    kin, scaled_De = _scaled_jacobian(model, x)
+    kin, scaled_De = scaled_jacobian(model, x)
     problems = []
     if model.declared_dof_count != model.ndof:
         count = model.dof_count()  # the course notes' count (3 per 3-D rotational node)
@@ -161,7 +161,7 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
         (over-constrained) or no DOFs can take the allowed motions:
         `check_exact_constraint` then names the problem.
     """
-    kin, scaled_De = _scaled_jacobian(model, x)
+    kin, scaled_De = scaled_jacobian(model, x)
     if not np.all(np.isfinite(scaled_De)):
         return None  # a degenerate configuration: the check reports it
     scale = column_scale(model, kin.length_scale)
@@ -303,52 +303,13 @@ def proposed_releases(model: Model, x: np.ndarray | None = None) -> list[str]:
         The deformation names ("leaf.e2") to release; empty when the prescribed
         deformations are independent.
     """
-    kin, scaled_De = _scaled_jacobian(model, x)
+    kin, scaled_De = scaled_jacobian(model, x)
     rows = scaled_De[np.ix_(model.rigid_deformations, kin.free)]
     redundant = _independent_rows(rows, _release_preference(model))[1]
     return [model.deformation_names[model.rigid_deformations[i]] for i in redundant]
 
 
-@blas_threads()
-def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[int]:
-    """Which `groups` of released (or DOF) deformations, taken in their order, can be
-    prescribed zero together, on top of the model's prescribed deformations, without
-    over-constraining it: a group is taken when its rows of the deformation Jacobian (at
-    coordinates x, default the initial ones; rotations scaled to lengths) add fully to the
-    span of the prescribed rows and of the groups taken before it. `groups` are arrays of
-    deformation indices; returns the positions in `groups` of those taken.
-
-    This is the over-constraint test of `check_exact_constraint` done incrementally: a model
-    reduction can then freeze many deformations at once and know that the result builds.
-    """
-    kin, scaled_De = _scaled_jacobian(model, x)
-    columns = kin.free
-    prescribed = scaled_De[np.ix_(model.rigid_deformations, columns)]
-    top = max(np.abs(scaled_De[:, columns]).max(initial=0.0), 1e-300)
-    # an orthonormal basis of the prescribed rows' span (they are independent in a model
-    # that passed the check), grown by each group taken
-    q, r = np.linalg.qr(prescribed.T)
-    keep = np.abs(np.diag(r)) > RANK_TOLERANCE * top
-    basis = np.zeros((columns.size, columns.size))
-    count = int(keep.sum())
-    basis[:, :count] = q[:, keep]
-    taken = []
-    for position, group in enumerate(groups):
-        rows = scaled_De[np.ix_(np.asarray(group, dtype=np.int64), columns)]
-        norms = np.linalg.norm(rows, axis=1)
-        if rows.shape[0] == 0 or count + rows.shape[0] > columns.size or not np.all(norms > 0):
-            continue
-        for _ in range(2):  # Gram-Schmidt twice: orthogonal to round-off
-            rows = rows - (rows @ basis[:, :count]) @ basis[:, :count].T
-        q, r = np.linalg.qr(rows.T)
-        if np.all(np.abs(np.diag(r)) > np.maximum(1e-6 * norms, RANK_TOLERANCE * top)):
-            basis[:, count:count + rows.shape[0]] = q
-            count += rows.shape[0]
-            taken.append(position)
-    return taken
-
-
-def _scaled_jacobian(model, x):
+def scaled_jacobian(model, x):
     """(kin, scaled_De): the model's Kinematics and its deformation Jacobian de/dx at
     coordinates x (m, rad; default the initial ones), (NE, NX), with each rotation column
     divided by the length scale (`column_scale`) so that every column is in m/m: the matrix whose
