@@ -55,29 +55,6 @@ def test_both_paths_give_the_same_linear_model_near_the_threshold(segments):
     assert np.allclose(f_sparse, f_dense, rtol=1e-7, atol=0.0)
 
 
-def pushed_manipulator():
-    """manipulator_reduced with 20 N on its first actuator's coordinate, and its equilibrium."""
-    model = load_scene("manipulator_reduced")
-    loads = np.zeros(model.nx)
-    loads[model.inputs[0].coordinate] = 20.0
-    return model, static_equilibrium(model, loads=loads, load_steps=2).x
-
-
-@pytest.mark.parametrize("make", [lambda: (stage(22), static_equilibrium(stage(22)).x),
-                                  pushed_manipulator], ids=["stage", "manipulator"])
-def test_the_sparse_mass_matrix_is_the_dense_ones_einsum(make):
-    """sparse_mass_matrix's batched products against mass_matrix's einsum of the element
-    formula, on every coordinate, at a loaded equilibrium (rotated nodes): the same sums in
-    another order (measured 9e-23 and 2e-19 of the largest entry)."""
-    model, x = make()
-    assert np.abs(x - model.initial_coordinates).max() > 1e-4
-    inertia = Mechanics(model).inertia
-    dense = inertia.mass_matrix(x)
-    sparse = inertia.sparse_mass_matrix(x).toarray()
-    assert np.count_nonzero(dense) > model.nx
-    assert np.abs(sparse - dense).max() <= 1e-14 * np.abs(dense).max()
-
-
 def test_the_statics_share_one_initial_configuration_and_leave_it_unchanged():
     """Every solve through one Mechanics starts at the configuration it keeps for the
     initial coordinates: after solves under two loads it is the same object with the same
