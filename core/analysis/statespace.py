@@ -151,7 +151,7 @@ def static_gain(model: Model, *, linear_model: LinearModel | None = None) -> np.
     x = lin.solution.config.x
     DF = lin.DF
     rows = output_rows(model, x, DF)
-    positions = np.array([port.quantity == "position" for port in model.outputs])
+    positions = np.array([output_order(port) == 0 for port in model.outputs])
     gain = np.zeros((len(model.outputs), len(model.inputs)))
     gain[positions] = rows[positions] @ np.linalg.solve(lin.K, DF.T @ input_columns(model, x))
     return gain
