@@ -6,7 +6,8 @@ prescribed rows of the 816-DOF manipulator."""
 import numpy as np
 import pytest
 
-from flexure.core.mechanics.nullspace import blocks, rank_and_null_space
+from flexure.core.mechanics.nullspace import rank_and_null_space
+from flexure.core.numerics.sparse_blocks import blocks
 
 RTOL = 1e-9
 

@@ -95,3 +95,26 @@ def test_independent_rows_drops_nothing_it_could_choose(seed):
     rows = rows[rng.permutation(rows.shape[0])]
     for count in (5, 30, 60):
         assert independent_rows(rows, count) == _plain_independent_rows(rows, count)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_independent_rows_block_by_block_is_the_choice_over_all_rows(seed):
+    """Rows that fall apart into independent blocks (permuted; rank-deficient blocks, the
+    same block twice on other columns so that rows of different blocks tie exactly, an
+    empty row, columns no row touches): the same choice, in the same order of ties, as the
+    plain loop's updates over all rows."""
+    rng = np.random.default_rng(seed)
+    pieces = []
+    for _ in range(4):
+        base = rng.normal(size=(rng.integers(2, 6), rng.integers(3, 7)))
+        piece = np.vstack([base, base[:1] * 2.0, base[:2].sum(axis=0, keepdims=True)])
+        pieces += [piece, piece.copy()]  # the copy: exact ties across blocks
+    width = sum(piece.shape[1] for piece in pieces) + 3
+    rows = np.zeros((sum(piece.shape[0] for piece in pieces) + 1, width))
+    r = c = 0
+    for piece in pieces:
+        rows[r:r + piece.shape[0], c:c + piece.shape[1]] = piece
+        r, c = r + piece.shape[0], c + piece.shape[1]
+    rows = rows[rng.permutation(rows.shape[0])][:, rng.permutation(width)]
+    for count in (3, 12, rows.shape[0]):
+        assert independent_rows(rows, count) == _plain_independent_rows(rows, count)
