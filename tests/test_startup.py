@@ -209,3 +209,11 @@ def test_the_subcommands_are_read_from_flexures_own_entry_points():
     assert _section(text, "flexure.commands") == [
         ("analyze", "flexure.core.cli.analyze:register"),
         ("loop", "flexure.controllers.cli:register")]
+
+
+def test_a_linear_simulator_imports_no_python_control():
+    """The linear plant needs A, B, C, D alone (`state_space_matrices`): building a
+    LinearSimulator loads neither python-control nor matplotlib."""
+    loaded = loaded_after("from flexure.core import LinearSimulator, load_scene\n"
+                          "LinearSimulator(load_scene('stage_planar_3dof'))")
+    assert "numpy" in loaded and not loaded & {"control", "matplotlib"}, sorted(loaded)
