@@ -160,9 +160,10 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
                 flags[I_EXTRA] += 1
             if theta >= 0.99:
                 return False
+            # a slow contraction that converges asks for no new J of its own: its iterations
+            # count in flags[I_EXTRA] against the cost of one (JACOBIAN_COST); on
+            # manipulator_reduced a J costs about 110 evaluations (docs/benchmarks.md)
             eta = theta / (1.0 - theta)
-            if iteration >= 3 or theta > 0.5:
-                flags[I_REFRESH] = 1  # converging slowly: a new J for the next step
         if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:
             memory[M_ETA] = eta
             for k in range(n):
