@@ -141,7 +141,11 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     for j in range(i + 1):
         c_i += A[i, j]
     t_stage = memory[M_T] + c_i * h
-    eta = max(memory[M_ETA], 1e-16) ** 0.8
+    # the last contraction estimate, let grow once per step (its first implicit stage), as
+    # RADAU5 does once per step for its one Newton over all stages
+    eta = max(memory[M_ETA], 1e-16)
+    if i == 1:
+        eta = eta ** 0.8
     previous = 0.0
     for iteration in range(MAX_NEWTON):
         if _f(table, z, F[i], flags, engine.OP_RHS, t_stage) != ed.OK:
