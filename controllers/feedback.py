@@ -338,6 +338,7 @@ class DiscreteController:
         self.A, self.B, self.C, self.D = (np.ascontiguousarray(np.atleast_2d(
             np.asarray(m, float))) for m in (sys.A, sys.B, sys.C, sys.D))
         self.x = np.zeros(self.A.shape[0])
+        self._next = np.empty(self.A.shape[0])  # controller_step's scratch for A x + B e
 
     def reset(self) -> None:
         """Set the state back to zero."""
@@ -363,7 +364,7 @@ class DiscreteController:
 
         e = np.ascontiguousarray(np.atleast_1d(np.asarray(e, float)))
         u = np.empty(self.C.shape[0])
-        controller_step(self.A, self.B, self.C, self.D, self.x, e, u)
+        controller_step(self.A, self.B, self.C, self.D, self.x, e, u, self._next)
         return u
 
     def to_dict(self) -> dict[str, dict[str, list]]:
@@ -395,4 +396,5 @@ class DiscreteController:
         for k in "ABCD":
             setattr(obj, k, np.asarray(data[k]["values"], float).reshape(data[k]["shape"]))
         obj.x = np.zeros(obj.A.shape[0])
+        obj._next = np.empty(obj.A.shape[0])
         return obj

@@ -25,6 +25,8 @@ class LoopResult:
     (N+1, n_loops) N, the force held from t_k (the last row repeats the one before). A loop on
     a planar angle has rad and N m instead (`units`). `disturbance` (N+1, n_loops) N: the
     sinusoidal force added at the actuators (disturbances.py), None without one.
+    `wall_time_s` and `cpu_time_s` (s): the loop's samples alone, the process's CPU (user +
+    system, every thread) for the latter.
     """
 
     t: np.ndarray
@@ -37,6 +39,7 @@ class LoopResult:
     settings: dict = field(default_factory=dict)
     wall_time_s: float = 0.0
     disturbance: np.ndarray | None = None
+    cpu_time_s: float = 0.0
 
     @property
     def units(self) -> dict:
@@ -153,10 +156,10 @@ class LoopResult:
         -------
         dict
             SI units: errors, strokes and positions m (rad), forces N (N m), margins as
-            `FeedbackDesign.summary`, "wall_time_s" s; "units" names the moving loop's;
-            "path" the move path's kind and targets (m, rad), or None; "kinematic_inputs"
-            (a scene with them) each one's start and value (m, rad), motion_duration (s)
-            and effort_end (N, N m) at the last sample.
+            `FeedbackDesign.summary`, "wall_time_s" and "cpu_time_s" s; "units" names the
+            moving loop's; "path" the move path's kind and targets (m, rad), or None;
+            "kinematic_inputs" (a scene with them) each one's start and value (m, rad),
+            motion_duration (s) and effort_end (N, N m) at the last sample.
         """
         loops = self.per_loop()
         ratio = max(row["error_ratio"] for row in loops)  # the worst loop's
@@ -185,6 +188,7 @@ class LoopResult:
                 "modulus_margin_others_closed", "sensitivity_peak") if key in self.design},
             "duration": self.settings.get("duration"), "settle": self.settings.get("settle"),
             "rtol": self.settings.get("rtol"), "wall_time_s": self.wall_time_s,
+            "cpu_time_s": self.cpu_time_s,
             "units": self.units,
             "per_loop": loops,
             "controller_kind": self.design.get("controller_kind", "designed"),

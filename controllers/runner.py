@@ -234,7 +234,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
         linear = LinearPlant(model, linear_model=design_options.get("linear_model"))
         prepare_linear_loop(linear, loop)
     ended = {}  # the Simulator at t_N, for the kinematic inputs' efforts
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     with contextlib.ExitStack() as stack:
         # every plant's loop with one BLAS thread, the host's limits back after it
         # (sample_loop.py: small per-sample calls; several threads spin under load)
@@ -250,7 +250,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
                                                progress=progress, overrides=overrides,
                                                warn=warn_during, motion_duration=moving_for,
                                                ended=ended)
-    wall = time.perf_counter() - start
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu_start
     recorded = dict(zip(coordinates, np.max(np.abs(position - position[0]), axis=0),
                         strict=True))
     settings["warnings"] = _warned(motion_warnings(model, recorded), found, warn)
@@ -259,6 +259,7 @@ def run_loop(scene: Model | str | PathLike, *, stroke: float = 1e-3, duration: f
     return LoopResult(t=t, reference=r, position=position, force=force,
                       feedforward=loop.feedforward[: len(t)].copy(), stroke=stroke,
                       design=design.summary(), settings=settings, wall_time_s=wall,
+                      cpu_time_s=cpu,
                       disturbance=None if loop.disturbance is None
                       else loop.disturbance[: len(t)].copy())
 

@@ -411,7 +411,7 @@ PROBE = textwrap.dedent("""
     from {package}.core.simulation.sampled_loop import controller_step
     out = np.zeros(1)
     controller_step(np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)),
-                    np.zeros(1), np.ones(1), out)
+                    np.zeros(1), np.ones(1), out, np.empty(1))
     stats = controller_step.python_dispatcher.stats  # Python called it: that code's cache
     print(json.dumps({{"hits": sum(stats.cache_hits.values()),
                       "misses": sum(stats.cache_misses.values())}}))

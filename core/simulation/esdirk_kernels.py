@@ -141,7 +141,11 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     for j in range(i + 1):
         c_i += A[i, j]
     t_stage = memory[M_T] + c_i * h
-    eta = max(memory[M_ETA], 1e-16) ** 0.8
+    # the last contraction estimate, let grow once per step (its first implicit stage), as
+    # RADAU5 does once per step for its one Newton over all stages
+    eta = max(memory[M_ETA], 1e-16)
+    if i == 1:
+        eta = eta ** 0.8
     previous = 0.0
     for iteration in range(MAX_NEWTON):
         if _f(table, z, F[i], flags, engine.OP_RHS, t_stage) != ed.OK:
@@ -160,9 +164,10 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
                 flags[I_EXTRA] += 1
             if theta >= 0.99:
                 return False
+            # a slow contraction that converges asks for no new J of its own: its iterations
+            # count in flags[I_EXTRA] against the cost of one (JACOBIAN_COST); on
+            # manipulator_reduced a J costs about 110 evaluations (docs/benchmarks.md)
             eta = theta / (1.0 - theta)
-            if iteration >= 3 or theta > 0.5:
-                flags[I_REFRESH] = 1  # converging slowly: a new J for the next step
         if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:
             memory[M_ETA] = eta
             for k in range(n):

@@ -19,7 +19,7 @@ from ..numerics.jit import kernel
 
 # the controller's arrays, in the order `control_sample` unpacks them, and their kinds in a C
 # entry's table (numerics.array_tables): reference .. output
-CONTROLLER_KINDS = "FFFFFFfiifFFff"
+CONTROLLER_KINDS = "FFFFFFfiifFFfff"
 POSITION, FORCE = 10, 11  # where the run's samples are, (N+1, n_loops) each
 
 
@@ -37,10 +37,12 @@ def _state_space_row(P, Q, state, error, i):
 
 @kernel
 def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-                    state: np.ndarray, error: np.ndarray, output: np.ndarray) -> None:
+                    state: np.ndarray, error: np.ndarray, output: np.ndarray,
+                    new_state: np.ndarray) -> None:
     """One sample of a discrete linear controller: output = C x + D e, then x <- A x + B e.
 
     Compiled (numba); the sums run in index order, so every caller gets the same numbers.
+    Allocates nothing: A x + B e goes through the caller's `new_state` before it replaces x.
 
     Parameters
     ----------
@@ -52,10 +54,11 @@ def controller_step(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
         e, in the loops' output units (m, rad).
     output : ndarray (m,), float64
         Receives u, in the loops' input units (N, N m, V).
+    new_state : ndarray (s,), float64
+        Scratch: receives A x + B e, then copied into `state`.
     """
     for i in range(C.shape[0]):
         output[i] = _state_space_row(C, D, state, error, i)
-    new_state = np.empty(A.shape[0])
     for i in range(A.shape[0]):
         new_state[i] = _state_space_row(A, B, state, error, i)
     copy(state, new_state)
@@ -68,10 +71,11 @@ def control_sample(k, controller, held):
     u_k into the held plant inputs (the others zero) for [t_k, t_k+1).
     Returns 1 when the held inputs changed, 0 when not.
     controller: (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta,
-    position, force, error, output) as `run_sampled_loop` packs it, error and output scratch
-    (n_loops,); coordinates are the nonlinear plant's (unread here)."""
+    position, force, error, output, new_state) as `run_sampled_loop` packs it, error and
+    output scratch (n_loops,), new_state scratch (s,); coordinates are the nonlinear plant's
+    (unread here)."""
     (reference, feedforward, A, B, C, D, state, inputs, _, quanta, position, force,
-     error, output) = controller
+     error, output, new_state) = controller
     n_loops = inputs.size
     if k == 0:  # element by element: a slice assignment compiles numba's shape-error message
         for i in range(n_loops):
@@ -83,7 +87,7 @@ def control_sample(k, controller, held):
         if quanta[i] > 0.0:  # as numpy's q * round(y / q): rint rounds halves to even
             measured = quanta[i] * np.rint(measured / quanta[i])
         error[i] = r[i] - measured
-    controller_step(A, B, C, D, state, error, output)
+    controller_step(A, B, C, D, state, error, output, new_state)
     for i in range(n_loops):
         force[k + 1, i] = output[i] + ff[i]
     changed = 0
@@ -101,9 +105,9 @@ def control_sample(k, controller, held):
 def controller_arrays(reference, feedforward, controller, loop_inputs, *, quantum, samples,
                       coordinates):
     """What `control_sample` reads and writes, checked and packed: (reference, feedforward,
-    A, B, C, D, state, inputs, coordinates, quanta, position, force, error, output), the
-    positions (m, rad) and forces (N, N m, V) zeros of (samples + 1, n_loops), the
-    controller's state zero.
+    A, B, C, D, state, inputs, coordinates, quanta, position, force, error, output,
+    new_state), the positions (m, rad) and forces (N, N m, V) zeros of (samples + 1,
+    n_loops), the controller's state zero; the last three scratch, allocated once per run.
 
     Parameters
     ----------
@@ -135,10 +139,12 @@ def controller_arrays(reference, feedforward, controller, loop_inputs, *, quantu
                               f"{reference.shape[1]} and {feedforward.shape[1]}")
     position = np.zeros((samples + 1, n_loops))
     force = np.zeros((samples + 1, n_loops))
-    # the last two are scratch (n_loops,): the errors and the controller's outputs
+    # the last three are scratch: the errors and the controller's outputs (n_loops,), its
+    # next state (s,)
     return (reference, feedforward, A, B, C, D, np.zeros(A.shape[0]),
             np.array(loop_inputs, dtype=np.int64), np.ascontiguousarray(coordinates),
-            _quanta(quantum, n_loops), position, force, np.empty(n_loops), np.empty(n_loops))
+            _quanta(quantum, n_loops), position, force, np.empty(n_loops), np.empty(n_loops),
+            np.empty(A.shape[0]))
 
 
 def _quanta(quantum, n_loops):
@@ -162,4 +168,4 @@ def controller_table(table):
     return (floats2d(table, 0), floats2d(table, 1), floats2d(table, 2), floats2d(table, 3),
             floats2d(table, 4), floats2d(table, 5), floats(table, 6), ints(table, 7),
             ints(table, 8), floats(table, 9), floats2d(table, 10), floats2d(table, 11),
-            floats(table, 12), floats(table, 13))
+            floats(table, 12), floats(table, 13), floats(table, 14))

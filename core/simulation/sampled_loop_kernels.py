@@ -89,7 +89,7 @@ def _sample(addresses, y, scratch, k, controller, held):
     u_k+1 computed, u_k into the held plant inputs for [t_k, t_k+1)).
     Returns 1 when the held inputs changed, 0 when not, -1 when y_k could not be measured.
     controller: (reference, feedforward, A, B, C, D, state, inputs, coordinates, quanta,
-    position, force, error, output) as `run_sampled_loop` packs it."""
+    position, force, error, output, new_state) as `run_sampled_loop` packs it."""
     coordinates, position = controller[8], controller[10]
     if measure(addresses, y, scratch, coordinates, position[k]) != ed.OK:
         return -1
