@@ -11,7 +11,13 @@ Tolerances:
 - the state space A, B, C, D (`state_space_matrices`, or `LinearModel.state_matrices`
   where the model declares no outputs) within 1e-10 of each matrix's largest entry, and
   the natural frequencies within 1e-9 relative: M0^-1 K carries the matrices' round-off times
-  the conditioning of M0 (measured 2e-13 and below).
+  the conditioning of M0 (measured 2e-13 and below);
+- on the 500- to 800-DOF manipulators (outside the engine's window: asked for with
+  compiled=True), whose frequencies span 11.7 Hz to 5e5 Hz, the lowest carry the matrices'
+  round-off delta (relative to the largest entry) amplified by (f_max / f)^2 ~ 2e9: within
+  1e-9 + delta (f_max / f)^2 relative (a perturbation of K by delta |K| moves an eigenvalue
+  lambda_i by at most about delta lambda_max, so f_i by delta (f_max / f_i)^2 / 2; measured
+  3.2e-8 on manipulator_e1's third mode, 1.9e-8 on manipulator's).
 """
 
 import numpy as np
@@ -86,8 +92,14 @@ def test_engine_linearisation_matches_the_numpy_reference(name):
     for ours, theirs in matrices:
         assert largest(ours - theirs) <= 1e-10 * largest(theirs), name
     ours = natural_frequencies(model, linear_model=engine_path).frequencies_hz
-    theirs = natural_frequencies(model, linear_model=reference).frequencies_hz
-    assert np.all(np.abs(ours - theirs) <= 1e-9 * np.abs(theirs)), name
+    theirs = np.abs(natural_frequencies(model, linear_model=reference).frequencies_hz)
+    rtol = 1e-9
+    if name in LARGE:  # module docstring: the round-off delta of K and M0 moves f_i by about
+        # delta (f_max / f_i)^2 / 2 relative, and f_max / f_1 is 4e4 on the manipulators
+        delta = max(largest(engine_path.K - reference.K) / K_scale,
+                    largest(engine_path.M0 - reference.M0) / largest(reference.M0))
+        rtol = 1e-9 + delta * (theirs.max() / theirs) ** 2
+    assert np.all(np.abs(ours - theirs) <= rtol * theirs), name
 
 
 @pytest.mark.parametrize("name", ["manipulator_control", "spatial beam, actuator and moment "
