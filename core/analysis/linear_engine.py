@@ -67,9 +67,9 @@ def preferred(model: Model, mechanics: Mechanics) -> bool:
     """Whether the engine is the default path of the linearisation of `model`: where the
     statics prefer it (`static_engine.preferred`) and have packed it (`packed`: a loaded
     equilibrium, which they solved through the engine). The linearisation then costs two
-    operations on that packed model (0.006 s against the numpy path's 0.025 s on
+    operations on that packed model (0.006 s against the numpy path's 0.029 s on
     manipulator_control); packing the engine for one linearisation would cost more than it
-    saves (0.06 s with the engine loaded, 0.7 s with its import and first calls:
+    saves (0.3 s with the engine loaded, 0.7 s with its import and first calls:
     docs/benchmarks.md, 2026-11-29), so an unloaded model, whose statics took the numpy
     path, is linearised there too."""
     return static_engine.preferred(model) and packed(model) and supports(model, mechanics)
