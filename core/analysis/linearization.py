@@ -44,6 +44,7 @@ from ..mechanics.actuators import amplifier_slope
 from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_columns
 from ..numerics.blas import blas_threads
+from . import linear_engine
 from .statics import StaticSolution, static_equilibrium
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -121,7 +122,8 @@ class LinearModel:
 
 @blas_threads()
 def linearize(model: Model, solution: StaticSolution | None = None, *,
-              mechanics: Mechanics | None = None) -> LinearModel:
+              mechanics: Mechanics | None = None,
+              compiled: bool | None = None) -> LinearModel:
     """Linearise `model` at `solution`: M0, C0, K0 and G0 on the DOFs.
 
     Parameters
@@ -131,6 +133,12 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
         The configuration (default: the static equilibrium under the model's loads).
     mechanics : Mechanics, optional
         The model's mechanics to reuse (default: a new one).
+    compiled : bool, optional
+        Form M0, C0 and K0 + G0 through the compiled engine (True: `linear_engine`, where
+        it takes the model) or through the numpy `Mechanics`, the plain reference (False).
+        Default: the engine where the statics have packed it for this model
+        (`linear_engine.preferred`: a model in the statics' window that they solved
+        loaded).
 
     Returns
     -------
@@ -146,10 +154,16 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
     if solution is None:
         solution = static_equilibrium(model, mechanics=mech)
     config = solution.config
-    matrices = (mech.mass_matrix(config), mech.damping_matrix(config),
-                mech.structural_stiffness(config),
-                mech.geometric_stiffness(config, solution.stress_resultants,
-                                         solution.load_factor, inputs=solution.port_values))
+    engine = (linear_engine.preferred(model, mech) if compiled is None
+              else compiled and linear_engine.supports(model, mech))
+    if engine and solution.load_factor == 1.0:
+        matrices = linear_engine.engine_matrices(model, solution, mech)
+    else:
+        matrices = (mech.mass_matrix(config), mech.damping_matrix(config),
+                    mech.structural_stiffness(config),
+                    mech.geometric_stiffness(config, solution.stress_resultants,
+                                             solution.load_factor,
+                                             inputs=solution.port_values))
     if model.kinematic_inputs:  # held: the DOFs proper alone (module docstring)
         free = np.ix_(model.free_dofs, model.free_dofs)
         matrices = tuple(matrix[free] for matrix in matrices)

@@ -1,0 +1,161 @@
+"""The linearisation through the compiled engine: M0, C0 and K0 + G0 at a static equilibrium.
+
+At a static equilibrium (q, qdot = 0, qddot = 0) the engine's own operations give the
+matrices of `linearization` (its docstring has the equations):
+
+- OP_ACCELERATIONS at (q, qdot = 0), in the reduced form, solves the kinematics and forms r =
+  f - De^T sigma_c (no damping force: edot = 0, and no convective term at rest);
+- OP_TANGENT at qddot = 0 forms K0 + G0 (slot stiffness) with the stress resultants sigma_c
+  plus the multipliers of the dynamic balance J^-T (r - M DF qddot) = J^-T r, which at
+  qddot = 0 are those of the static balance; C0 = DeF_s^T D DeF_s (slot damping); and,
+  through OP_MASS, M0 = DF^T M DF (slot mass) and DeF = De DF (slot DeF).
+
+K0 alone, which `LinearModel` keeps apart from G0 (`reduction` asks whether G0 vanishes), is
+DeF_s^T S DeF_s from that DeF and the packed S (one sparse product, NDOF^2 per stressed
+deformation's entries), and G0 = (K0 + G0) - K0 (round-off of |K| in G0, 1e-16 of it).
+
+The load. A StaticSolution does not say which loads hold it (`static_equilibrium`'s `loads`
+may differ from the model's), but its stress resultants do: at an equilibrium the generalised
+force on the free coordinates is De^T sigma (sigma with the multipliers of the constraint
+rows; the DOF rows' multipliers are Q, zero there). The engine is given those free
+coordinates' nodal loads, De^T sigma minus the gravity and the held inputs' forces it adds
+itself at x (`Mechanics.external_force` of no loads), so its r is De_c^T lambda_c and its
+multipliers J^-T r are the solution's own, the same stress resultants that the numpy
+reference (`Mechanics.geometric_stiffness`) weighs the Hessians with. Under the model's
+own loads the two agree, as J^-T r of the static balance is the solution's multipliers
+(tests/test_linear_engine.py checks K against the statics' balance, `EngineBalance`, under the
+loads themselves).
+
+The packed model is the statics' (`static_engine.engine_balance`: one per live model, in
+the reduced form, inputs as plain force inputs, which is what the linearisation wants: an
+actuator's force at rest is its port value; the coil enters `LinearModel.state_matrices`
+from the model). Its damping is switched off for the statics (at rest D edot = 0); it is
+switched on for the tangent here and off again, so that the statics' later calls see their
+packed model as they left it; the load is the statics' to set anew (`set_load`) at its
+next solve.
+
+Where the engine does not take a model: what `static_engine.supports` refuses, and gravity on
+element masses that hang on rotations (a BEAM's consistent mass), whose load stiffness the
+engine's tangent leaves out (8e-9 of K's largest entry on a spatial cantilever, which moves
+its frequencies by 3.5e-6 relative; 3e-11 and 6e-9 on the planar stage under gravity):
+those take the numpy path.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..mechanics.assembly import point_gravity
+from . import static_engine
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..mechanics.mechanics import Mechanics
+    from ..model import Model
+    from .statics import StaticSolution
+
+
+def supports(model: Model, mechanics: Mechanics) -> bool:
+    """Whether the engine linearises `model`: its statics' engine takes it
+    (`static_engine.supports`) and no gravity acts on element masses that hang on
+    rotations (the load stiffness the engine's tangent leaves out: module docstring)."""
+    return static_engine.supports(model) and not gravity_on_rotations(model, mechanics)
+
+
+def preferred(model: Model, mechanics: Mechanics) -> bool:
+    """Whether the engine is the default path of the linearisation of `model`: where the
+    statics prefer it (`static_engine.preferred`) and have packed it (`packed`: a loaded
+    equilibrium, which they solved through the engine). The linearisation then costs two
+    operations on that packed model (0.006 s against the numpy path's 0.029 s on
+    manipulator_control); packing the engine for one linearisation would cost more than it
+    saves (0.3 s with the engine loaded, 0.7 s with its import and first calls:
+    docs/benchmarks.md, 2026-11-29), so an unloaded model, whose statics took the numpy
+    path, is linearised there too."""
+    return static_engine.preferred(model) and packed(model) and supports(model, mechanics)
+
+
+def packed(model: Model) -> bool:
+    """Whether the statics' packed engine model of `model` is live
+    (`static_engine.engine_balance` has made it and the model lives)."""
+    known = static_engine._BALANCES.get(id(model))  # no public look-up without packing yet
+    return known is not None and known[0]() is model
+
+
+def gravity_on_rotations(model: Model, mechanics: Mechanics) -> bool:
+    """Whether gravity acts on element masses through points that hang on rotations (the
+    tangent points of a consistent mass, coupled to its position points): then its force
+    depends on the orientation, and its load stiffness is not zero."""
+    if not np.any(model.gravity):
+        return False
+    for group, Mp in mechanics.inertia.groups:
+        kinds = group.kind.inertia_point_kinds
+        g = point_gravity(group, model.gravity)
+        if not kinds or not np.any(g):
+            continue
+        tangent = np.repeat([kind == "tangent" for kind in kinds], g.size // len(kinds))
+        if np.any((Mp @ g)[..., tangent]):
+            return True
+    return False
+
+
+def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """M0, C0, K0 and G0 (NDOF, NDOF) of `model` at `solution`, through the engine (module
+    docstring); with kinematic inputs on every DOF (the caller drops the prescribed ones).
+
+    Parameters
+    ----------
+    model : Model
+        A model the engine takes (`supports`).
+    solution : StaticSolution
+        The configuration and its stress resultants (N), at a load factor of 1.
+    mechanics : Mechanics
+        The model's mechanics (its gravity and input forces at x).
+
+    Returns
+    -------
+    (M0, C0, K0, G0)
+        kg, N s/m, N/m, N/m in the DOF units (m, rad).
+
+    Raises
+    ------
+    ConvergenceError
+        The engine could not solve the kinematics at the solution's DOFs.
+    """
+    from ..engine import data as ed
+
+    balance = static_engine.engine_balance(model)
+    data = balance.data
+    config, values = solution.config, solution.port_values
+    # the free coordinates' nodal loads that hold the solution (module docstring)
+    held = np.asarray(config.De.T @ solution.stress_resultants).ravel()
+    held -= mechanics.external_force(config.x, 1.0, np.zeros(model.nx), values)
+    loads = np.zeros(model.nx)
+    free = model.free_coordinates
+    loads[free] = held[free]
+    balance.set_load(1.0, loads, values)
+    dims = data.int_array("dims")
+    D = data.float_array("D")
+    dims[ed.HAS_DAMPING] = int(np.any(D))
+    try:
+        _, K = balance.residual_and_tangent(config)
+        n = model.ndof
+        M0 = data.float_array("mass").reshape(n, n).copy()
+        C0 = data.float_array("damping").reshape(n, n).copy()
+    finally:
+        dims[ed.HAS_DAMPING] = 0
+    K0 = _structural(data, n)
+    return M0, C0, K0, K - K0
+
+
+def _structural(data, n):
+    """K0 = DeF_s^T S DeF_s (NDOF, NDOF) from the engine's DeF of its last tangent and its
+    packed S (compressed rows on the stressed deformations)."""
+    from scipy.sparse import csr_matrix
+
+    stressed = data.int_array("stressed")
+    S = csr_matrix((data.float_array("S"), data.int_array("stress_columns"),
+                    data.int_array("stress_pointers")), shape=(stressed.size, stressed.size))
+    DeF = data.float_array("DeF").reshape(-1, n)[stressed]
+    return DeF.T @ np.asarray(S @ DeF)
