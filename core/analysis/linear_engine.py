@@ -78,8 +78,7 @@ def preferred(model: Model, mechanics: Mechanics) -> bool:
 def packed(model: Model) -> bool:
     """Whether the statics' packed engine model of `model` is live
     (`static_engine.engine_balance` has made it and the model lives)."""
-    known = static_engine._BALANCES.get(id(model))  # no public look-up without packing yet
-    return known is not None and known[0]() is model
+    return static_engine.live_balance(model) is not None
 
 
 def gravity_on_rotations(model: Model, mechanics: Mechanics) -> bool:

@@ -31,6 +31,11 @@ are those of the DOFs proper q_f (the rows and columns of q_k dropped) and `DF` 
 columns only, so the modes, the force-driven state space and the compliance are those of the
 mechanism with its prescribed coordinates held. The state space whose inputs are the
 prescribed positions: `flexure.core.analysis.motion_statespace`.
+
+M0, C0, K0 and G0 come from the compiled engine where the statics have packed it for the
+model (`linear_engine`: its tangent at the equilibrium, within 1e-10 of the largest entry of
+the numpy path's, tests/test_linear_engine.py), else from the numpy `Mechanics`; the input
+and output columns from the numpy ports either way.
 """
 
 from __future__ import annotations

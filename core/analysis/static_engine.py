@@ -95,14 +95,21 @@ def preferred(model: Model) -> bool:
             and model.free_coordinates.size >= ENGINE_MIN_FREE)
 
 
+def live_balance(model: Model) -> EngineBalance | None:
+    """The `EngineBalance` of `model` if the statics have packed it already, else None
+    (nothing is packed: what the linearisation asks before it takes the engine)."""
+    known = _BALANCES.get(id(model))
+    return known[1] if known is not None and known[0]() is model else None
+
+
 def engine_balance(model: Model) -> EngineBalance:
     """The `EngineBalance` of `model`, packed once per live model and reused (its packing
     takes 0.3 to 1 s on the 507-DOF manipulator; a model is not changed once built: a
     parameter study builds a model per parameter set)."""
+    known = live_balance(model)
+    if known is not None:
+        return known
     key = id(model)
-    known = _BALANCES.get(key)
-    if known is not None and known[0]() is model:
-        return known[1]
     balance = EngineBalance(model)
     # the callback holds the dict itself: at the interpreter's exit the module's globals
     # may be gone before the models
