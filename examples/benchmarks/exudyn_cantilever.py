@@ -55,7 +55,7 @@ def build(n):
     section.inertia = RHO * np.diag([iy + iz, iy, iz])
     container = exu.SystemContainer()
     mbs = container.AddSystem()
-    rest = list(ei.eulerParameters0) if hasattr(ei, "eulerParameters0") else [1.0, 0, 0, 0]
+    rest = [1.0, 0.0, 0.0, 0.0]  # the Euler parameters of no rotation
     previous = first = mbs.AddNode(ei.NodeRigidBodyEP(referenceCoordinates=[0, 0, 0] + rest))
     for k in range(1, n + 1):
         node = mbs.AddNode(ei.NodeRigidBodyEP(
