@@ -60,10 +60,11 @@ def _sparse_factor(table, which):
 @kernel
 def _constraint_jacobian(table, J):
     """J (n_free, n_free) row-major into J from the elements' De in slot de, its rows and
-    columns in their banded order (slots j_row_position, j_column_position)."""
+    columns in their banded order (slots j_row_position, j_column_position); zero only in its
+    band (`clear_band`)."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
-    J[:] = 0.0
+    clear_band(J, nf, dims[ed.J_KL], dims[ed.J_KU])
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
     row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
     rigid = dims[ed.NSLAVES] > 0
@@ -174,7 +175,8 @@ def j_solve(table, b, transposed):
 @kernel
 def augmented_matrix(table):
     """The array the augmented system is assembled into, cleared: its sparse values when it
-    is factored sparse, else the dense (na, na) slot augmented (row length na)."""
+    is factored sparse, else the dense (na, na) slot augmented (row length na), in its band
+    (`clear_band`)."""
     dims = _i(table, slot.DIMS)
     dims[ed.A_FACTORS] = ed.NO_FACTORS
     if dims[ed.A_SPARSE] == 1:
@@ -183,8 +185,18 @@ def augmented_matrix(table):
         return A
     na = dims[ed.NFREE] + dims[ed.NRIGID]
     A = _f(table, slot.AUG)[: na * na]
-    A[:] = 0.0
+    clear_band(A, na, dims[ed.A_KL], dims[ed.A_KU])
     return A
+
+
+@kernel
+def clear_band(a, n, kl, ku):
+    """a (n * n, row-major) = 0 on every entry the banded LU reads or fills: row i, columns
+    i - kl to i + kl + ku (`banded.factor`). The rest of the dense storage is never read, and
+    clearing all of it cost O(n^2) per evaluation: 3.7 MB on a 384-DOF cantilever."""
+    for i in range(n):
+        for j in range(max(0, i - kl), min(n - 1, i + kl + ku) + 1):
+            a[i * n + j] = 0.0
 
 
 @kernel
