@@ -53,7 +53,7 @@ from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, call_engine, carray, float_address
 from . import data as ed
-from . import rigid_kernels, sparse_factors
+from . import newton, rigid_kernels, sparse_factors
 from . import slots as slot
 from .actuators import (
     current_rates,
@@ -108,10 +108,9 @@ from .tangent import tangent
 # what other modules take from here (the accessors and the dense LU are the engine's too)
 __all__ = ["ENGINE_ENTRY", "ENTRIES", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
            "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
-           "OP_POSITIONS",
-           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call", "connect",
-           "first_order_jacobian", "first_order_rhs", "float_array", "implicit_jacobian",
-           "implicit_residual", "int_array", "lu_factor", "lu_solve"]
+           "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call",
+           "connect", "first_order_jacobian", "first_order_rhs", "float_array",
+           "implicit_jacobian", "implicit_residual", "int_array", "lu_factor", "lu_solve"]
 
 _i, _f = int_array, float_array  # the short names of the many uses below
 
@@ -442,7 +441,8 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
            sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS) + (
            df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
-           prescribed_residual_entry, prescribed_residual_jacobian_entry)
+           prescribed_residual_entry, prescribed_residual_jacobian_entry,
+           newton.jacobian_entry, newton.factor_entry, newton.solve_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -450,7 +450,7 @@ CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
          OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT),
          OP_PRESCRIBED_RESIDUAL: (OP_PRESCRIBED_RHS,),
-         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
+         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT), **newton.CALLS}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
 _TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 
@@ -470,6 +470,8 @@ def connect(data, *ops):
     wanted = list(ops) if ops else list(range(len(ENTRIES)))
     if ops and (dims[ed.J_SPARSE] or dims[ed.A_SPARSE]):  # the factors' own operations
         wanted += [OP_SPARSE_FACTOR, OP_SPARSE_SOLVE]
+    if OP_JACOBIAN in ops and dims[ed.NEWTON_SPARSE]:  # the ESDIRK's sparse Newton matrix
+        wanted += newton.OPERATIONS
     if ops and dims[ed.NSLAVES] > 0:  # the rigid clusters'
         wanted += RIGID_OPERATIONS
     if ops and dims[ed.NKI] > 0:  # the kinematic inputs' forms (`prescribed`)

@@ -283,6 +283,28 @@ SLOTS = (
         ("rigid_local", "RIGID_LOCAL", "-", SCRATCH, "-", "a touching element's Dp_z, "
          "Mp Dp_z, Me_z and T_e"),
     )),
+    *_slots(INT, "newton", (
+        ("newton_j", "NEWTON_J", "-", STATE, "-", "the sparse Newton matrix's own sparse LU "
+         "of J (`newton`; empty on the dense path)"),
+        ("newton_j_map", "NEWTON_J_MAP", "-", CONFIG, "-", "where each De entry and unit row "
+         "lands in it"),
+        ("newton_h", "NEWTON_H", "-", STATE, "-", "the sparse LU of [H J_o^T; J_o 0]"),
+        ("newton_h_map", "NEWTON_H_MAP", "-", CONFIG, "-", "where each free coordinate's "
+         "diagonal, rigid-row De entry (below, beside) and element pair lands in it"),
+        ("newton_stress_row", "NEWTON_STRESS_ROW", "-", CONFIG, "-", "per deformation its row "
+         "among the stressed ones, or -1"),
+        ("newton_port_map", "NEWTON_PORT_MAP", "-", CONFIG, "-", "per input the slots of its "
+         "Euler parameters' 4 x 4 pairs, or -1"),
+    )),
+    *_slots(FLOAT, "newton", (
+        ("newton_j_values", "NEWTON_J_VALUES", "-", STATE, "1, m", "its J's values and LU at "
+         "the Newton matrix's state"),
+        ("newton_h_values", "NEWTON_H_VALUES", "-", STATE, "kg, 1", "H's values and LU"),
+        ("newton_parts", "NEWTON_PARTS", "-", STATE, "kg, N s/m, N/m", "M (with J_o), C_x, "
+         "K_x on H's pattern, one after the other"),
+        ("newton_scratch", "NEWTON_SCRATCH", "-", SCRATCH, "-", "three vectors on the "
+         "augmented system's unknowns"),
+    )),
 )
 
 # -- the fields of slot dims ---------------------------------------------------------------
@@ -327,6 +349,8 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
      "augmented map, or -1"),
     ("a_factors", "A_FACTORS", STATE, "which of the augmented system's factors are current"),
     ("nki", "NKI", CONFIG, "kinematic inputs (prescribed DOFs: `prescribed`)"),
+    ("newton_sparse", "NEWTON_SPARSE", CONFIG, "1: the ESDIRK's Newton matrix in coordinate "
+     "space, sparse (`newton`)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------

@@ -14,7 +14,7 @@ import numpy as np
 from ..mechanics import assembly
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..mechanics.scales import kinematic_tolerances
-from . import layout
+from . import layout, newton_packing
 from .orders import FactorPlan
 from .ports import PORT_WIDTH, port_specs
 from .rigid import SLAVE_WIDTH, RigidPacking, positions_among
@@ -142,6 +142,7 @@ class Context:
         self.S = S[np.ix_(self.stressed, self.stressed)]
         self.D = D[np.ix_(self.stressed, self.stressed)]
         self.counts = counts(self)
+        self.newton = newton_packing.NewtonPacking.analyse(self)  # or None: the dense one
 
 
 def counts(c):
@@ -186,6 +187,7 @@ def dimensions(c):
         augmented=int(plan.augmented), j_kl=plan.bands[0], j_ku=plan.bands[1],
         a_kl=plan.bands[2], a_ku=plan.bands[3], j_sparse=int(plan.j_sparse),
         a_sparse=int(plan.a_sparse), a_factors=NO_FACTORS,
+        newton_sparse=int(c.newton is not None),
         # where the touching elements' entries begin in the augmented map (`sparse_packing`)
         a_rigid=-1 if plan.factors is None else plan.factors.rigid_start)
     # dims.engine, the address of the engine's table of entries for callers, is set by the
@@ -345,7 +347,7 @@ def rigid(c):
 PACKERS = {"dimensions": dimensions, "kinematics": kinematics, "groups": groups,
            "stiffness": stiffness, "inertia": inertia, "ports": ports,
            "actuators": actuators, "motion": motion, "prescribed": prescribed,
-           "factors": factors, "rigid": rigid}
+           "factors": factors, "rigid": rigid, "newton": newton_packing.pack}
 
 
 def pack(c):

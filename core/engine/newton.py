@@ -1,0 +1,304 @@
+"""The ESDIRK's Newton matrix on the free coordinates, sparse: no dense DOF-space algebra.
+
+For the first-order Jacobian J = [[0, I], [-M_bar^-1 K_bar, -M_bar^-1 C_bar]] the Newton
+system (I - hg J) [dq; dv] = [r1; r2] (hg in s) is dq = r1 + hg dv with
+
+    (M_bar + hg C_bar + hg^2 K_bar) dv = M_bar r2 - hg K_bar r1.
+
+With M_bar = DF^T M DF, C_bar = DF^T C_x DF, K_bar = DF^T K_x DF (the coordinate-space
+damping C_x = De_s^T D De_s and tangent K_x = De_s^T S De_s + sum_e sum_i sigma_i D2e_i - the
+moment inputs' load stiffness, sigma the stress resultants of the full dynamic balance as
+`tangent` has them: sigma_c plus the multipliers J^-T (r - M xddot) on every row of J) and
+DF = J^-1 [0; I], that is the saddle-point system on the free coordinates
+
+    [H    J_o^T] [dx    ]   [p]     H = M + hg C_x + hg^2 K_x,   p = M a - hg K_x b,
+    [J_o  0    ] [lambda] = [0],    a = J^-1 [0; r2],  b = J^-1 [0; r1],
+
+and dv = (J's DOF rows) dx: DF^T J_o^T = 0, and J_o dx = 0 makes dx = DF dv. H has the
+pattern of the augmented system's mass block (each element couples its own coordinates in M,
+C_x and K_x alike; `newton_packing` checks it), so its sparse LU (`numerics.sparse_lu`) costs
+in proportion to the elements, as do J's solves and the products with M and K_x.
+
+Three operations (each the body of its C entry, compiled only for the models that take this
+path, dims[NEWTON_SPARSE] = 1):
+
+    NEWTON_JACOBIAN  y: one evaluation at y, then M (with J_o beside and below it), C_x and
+                     K_x on H's pattern (slot newton_parts) and J's LU at y (slot newton_j);
+                     the ESDIRK's "new Jacobian"
+    NEWTON_FACTOR    s = hg: H from them, factored (kept pivots, else pivoting afresh)
+    NEWTON_SOLVE     v (2 NDOF,) <- (I - hg J)^-1 v; s = hg of the last NEWTON_FACTOR
+
+Everything is at the Jacobian's state (its own copies of J's LU and values), so the solve is
+(I - hg J)^-1 of the dense path's J to round-off (tests/test_sparse_newton.py). Units: M kg,
+C_x N s/m, K_x N/m (and their rotational counterparts), hg s.
+"""
+
+import numpy as np
+
+from ..numerics import sparse_lu
+from ..numerics.jit import entry, kernel
+from ..numerics.native import address_of, carray
+from ..numerics.rotation_kernels import rates_coefficient
+from . import data as ed
+from . import slots as slot
+from .actuators import evaluated_port_values
+from .factors import _scatter_de, j_solve
+from .kinematics import dof_rows
+from .operations import NEWTON_OPERATIONS, OP_NEWTON_JACOBIAN, OP_RHS, run
+from .point_masses import element_mass, element_points, massless
+from .ports import PORT_WIDTH, ROTATION
+from .slots import float_array as _f
+from .slots import group_deformations, group_inertia, inertia_scratch
+from .slots import int_array as _i
+from .tangent import _mass_times
+
+ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"  # engine's
+OPERATIONS = NEWTON_OPERATIONS  # this module's entries' operations, in `engine.ENTRIES`
+CALLS = {OP_NEWTON_JACOBIAN: (OP_RHS,)}  # the operations they call (`engine.CALLS`)
+EULER_PAIRS = 16  # `newton_packing.EULER_PAIRS`
+
+
+@kernel
+def _parts(table):
+    """(M, C_x, K_x) on H's pattern: views of slot newton_parts."""
+    parts = _f(table, slot.NEWTON_PARTS)
+    nnz = parts.size // 3
+    return parts[:nnz], parts[nnz: 2 * nnz], parts[2 * nnz:]
+
+
+@kernel
+def _factor(table, ints, floats):
+    """The sparse LU of the values in `floats` with the kept pivots, else pivoting afresh
+    (counted in counters[SPARSE_PIVOTING]); whether it could be factored."""
+    if sparse_lu.refactor(ints, floats, sparse_lu.THRESHOLD) >= 0.0:
+        return True
+    _i(table, slot.COUNTERS)[ed.SPARSE_PIVOTING] += 1
+    return sparse_lu.factor(ints, floats, sparse_lu.THRESHOLD) >= 0.0
+
+
+@kernel
+def _product(ints, floats, values, v, out, limit, scale):
+    """out[r] += scale A[r, c] v[c] over the entries of the pattern packed in ints (floats:
+    its packed floats, for the views) with values `values`, rows and columns below limit."""
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
+    for j in range(n):
+        c = pcol[j]
+        if c >= limit or v[c] == 0.0:
+            continue
+        vc = scale * v[c]
+        for p in range(Ap[j], Ap[j + 1]):
+            if Ai[p] < limit:
+                out[Ai[p]] += values[p] * vc
+
+
+@kernel
+def _full_stresses(table):
+    """The stress resultants of the full dynamic balance into slot edot (as `tangent`):
+    sigma_c plus the multipliers J^-T (r - M xddot) on J's rows, at the last evaluation."""
+    dims = _i(table, slot.DIMS)
+    r_full = _f(table, slot.X_TRIAL)
+    r_full[:] = _f(table, slot.FORCE)
+    _mass_times(table, _f(table, slot.X), _f(table, slot.XDDOT), r_full)
+    free, lam = _i(table, slot.FREE), _f(table, slot.DX)
+    for a in range(dims[ed.NFREE]):
+        lam[a] = r_full[free[a]]
+    j_solve(table, lam, True)
+    sigma = _f(table, slot.EDOT)
+    sigma[:] = _f(table, slot.SIGMA)
+    rows = _i(table, slot.ROWS)
+    for j in range(rows.size):
+        sigma[rows[j]] += lam[j]
+    return sigma
+
+
+@kernel
+def _element_tangent(table, g, i, sigma, Ke, Ce, row, crow):
+    """K_e = De^T S_e De + sum_b sigma_b D2e_b and C_e = De^T D_e De (m * m each, row by row)
+    of element i of group g, S_e and D_e its block of S and D (compressed rows)."""
+    n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+    stress_row, stressed = _i(table, slot.NEWTON_STRESS_ROW), _i(table, slot.STRESSED)
+    S, D = _f(table, slot.S), _f(table, slot.D)
+    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
+    damped = _i(table, slot.DIMS)[ed.HAS_DAMPING] == 1
+    Ke[: m * m] = 0.0
+    Ce[: m * m] = 0.0
+    for b in range(k):
+        s = sigma[defs[i * k + b]]
+        if s != 0.0:
+            base2 = (i * k + b) * m * m
+            for a in range(m * m):
+                Ke[a] += s * D2e[base2 + a]
+    for b1 in range(k):
+        a1 = stress_row[defs[i * k + b1]]
+        if a1 < 0:
+            continue
+        row[:m] = 0.0
+        crow[:m] = 0.0
+        for p in range(pointers[a1], pointers[a1 + 1]):
+            d2 = stressed[columns[p]]
+            for b2 in range(k):  # the element's own deformation (`newton_packing`)
+                if defs[i * k + b2] == d2:
+                    base = (i * k + b2) * m
+                    for c in range(m):
+                        row[c] += S[p] * De[base + c]
+                        if damped:
+                            crow[c] += D[p] * De[base + c]
+        base1 = (i * k + b1) * m
+        for a in range(m):
+            da = De[base1 + a]
+            if da == 0.0:
+                continue
+            for c in range(m):
+                Ke[a * m + c] += da * row[c]
+                if damped:
+                    Ce[a * m + c] += da * crow[c]
+
+
+@kernel(inline="always")  # into its operation's entry, its one caller
+def jacobian(table, y):
+    """NEWTON_JACOBIAN at the state y (2 NDOF,): M, C_x, K_x on H's pattern and J's LU; a
+    status."""
+    status = run(table, OP_RHS, y.ctypes.data, 0, 0.0)  # the evaluation only
+    if status != ed.OK:
+        return status
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    sigma = _full_stresses(table)
+    Mv, Cv, Kv = _parts(table)
+    Mv[:] = 0.0
+    Cv[:] = 0.0
+    Kv[:] = 0.0
+    hmap, De, x = _i(table, slot.NEWTON_H_MAP), _f(table, slot.DE), _f(table, slot.X)
+    lumped, col_of_coord = _f(table, slot.LUMPED), _i(table, slot.COL_OF_COORD)
+    for a in range(dims[ed.NX]):
+        c = col_of_coord[a]
+        if c >= 0:
+            Mv[hmap[c]] += lumped[a]
+    _scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
+    local, columns = _f(table, slot.LOCAL), _i(table, slot.POINT_COLUMNS)
+    base = nf + 2 * De.size  # the element pairs' part of the map
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, _, _, _, _ = group_deformations(table, g)
+        inertia = group_inertia(table, g)
+        n_inertia, _, P, _, _, _, _, masses, _, pattern = inertia
+        scratch = inertia_scratch(table, 0, P, m)
+        _, _, point, _, w, Dp, o = scratch
+        Me, Ke, Ce = local[o: o + m * m], local[o + m * m: o + 2 * m * m], \
+            local[o + 2 * m * m: o + 3 * m * m]
+        row, crow = local[o + 3 * m * m: o + 3 * m * m + m], \
+            local[o + 3 * m * m + m: o + 3 * m * m + 2 * m]
+        for i in range(n):
+            _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+            Mp = masses[i * P * P: (i + 1) * P * P]
+            heavy = i < n_inertia and not massless(Mp, pattern)
+            if heavy:  # Me = Dp^T Mp Dp (the point values unused)
+                element_points(inertia, scratch, i, x, x, 1)
+                point[:P] = 0.0
+                element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns)
+            for e in range(m * m):
+                s = hmap[base + i * m * m + e]
+                if s >= 0:
+                    Kv[s] += Ke[e]
+                    Cv[s] += Ce[e]
+                    if heavy:
+                        Mv[s] += Me[e]
+        base += n * m * m
+    _input_stiffness(table, Kv)
+    return _constraint_factors(table)
+
+
+@kernel
+def _input_stiffness(table, Kv):
+    """K_x -= 2 u P_k on the Euler parameters of every moment input u about axis k (the load
+    stiffness of `ports.subtract_input_stiffness`, in coordinate space)."""
+    specs, inputs = _i(table, slot.INPUT_PORTS), evaluated_port_values(table)
+    port_map = _i(table, slot.NEWTON_PORT_MAP)
+    for j in range(inputs.size):
+        if specs[j * PORT_WIDTH] != ROTATION or inputs[j] == 0.0:
+            continue
+        k = specs[j * PORT_WIDTH + 5]
+        for a in range(4):
+            for b in range(4):
+                s = port_map[j * EULER_PAIRS + 4 * a + b]
+                if s >= 0:
+                    Kv[s] -= 2.0 * inputs[j] * rates_coefficient(k, a, b)
+
+
+@kernel
+def _constraint_factors(table):
+    """J's values from slot de and the DOF coordinates' unit rows, factored into slot
+    newton_j_values; a status."""
+    ints, floats = _i(table, slot.NEWTON_J), _f(table, slot.NEWTON_J_VALUES)
+    jmap, De = _i(table, slot.NEWTON_J_MAP), _f(table, slot.DE)
+    values = sparse_lu.matrix_values(ints, floats)
+    values[:] = 0.0
+    _scatter_de(table, De, jmap, 0, -1, values)
+    for j in range(_i(table, slot.DIMS)[ed.NXDOF]):
+        values[jmap[De.size + j]] = 1.0
+    return ed.OK if _factor(table, ints, floats) else ed.SINGULAR_CONSTRAINTS
+
+
+@kernel(inline="always")  # into its operation's entry, its one caller
+def factor(table, hg):
+    """NEWTON_FACTOR: H = M + hg C_x + hg^2 K_x (with J_o) factored; a status."""
+    ints, floats = _i(table, slot.NEWTON_H), _f(table, slot.NEWTON_H_VALUES)
+    H = sparse_lu.matrix_values(ints, floats)
+    Mv, Cv, Kv = _parts(table)
+    h2 = hg * hg
+    for p in range(H.size):
+        H[p] = Mv[p] + hg * Cv[p] + h2 * Kv[p]
+    return ed.OK if _factor(table, ints, floats) else ed.SINGULAR_MASS
+
+
+@kernel(inline="always")  # into its operation's entry, its one caller
+def solve(table, v, hg):
+    """NEWTON_SOLVE: v (2 NDOF,) <- (I - hg J)^-1 v with the factors of the last `factor`
+    (made with this hg, s) and the Jacobian's J."""
+    dims = _i(table, slot.DIMS)
+    ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    j_ints, j_floats = _i(table, slot.NEWTON_J), _f(table, slot.NEWTON_J_VALUES)
+    h_ints, h_floats = _i(table, slot.NEWTON_H), _f(table, slot.NEWTON_H_VALUES)
+    scratch = _f(table, slot.NEWTON_SCRATCH)
+    na = scratch.size // 3
+    a, b, rhs = scratch[:nf], scratch[na: na + nf], scratch[2 * na: 3 * na]
+    dof_rows(table, v[ndof: 2 * ndof], a)  # a = J^-1 [0; r2], b = J^-1 [0; r1]
+    sparse_lu.solve(j_ints, j_floats, a, False)
+    dof_rows(table, v[:ndof], b)
+    sparse_lu.solve(j_ints, j_floats, b, False)
+    Mv, _, Kv = _parts(table)
+    rhs[:] = 0.0  # [M a - hg K_x b; 0]
+    _product(h_ints, h_floats, Mv, a, rhs, nf, 1.0)
+    _product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
+    sparse_lu.solve(h_ints, h_floats, rhs, False)
+    a[:] = 0.0  # J dx on J's rows: the DOF rows are dv
+    _product(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats), rhs, a, nf, 1.0)
+    for j in range(n_xdof):
+        dv = a[n_rigid + n_edof + j]
+        v[ndof + j] = dv
+        v[j] += hg * dv
+    for e in range(n_edof):
+        dv = a[n_rigid + e]
+        v[ndof + n_xdof + e] = dv
+        v[n_xdof + e] += hg * dv
+
+
+@entry(ENTRY)
+def jacobian_entry(op, user_data, t, a, b, c, s):
+    """OP_NEWTON_JACOBIAN: y (a)."""
+    table = address_of(user_data)
+    return jacobian(table, carray(a, (2 * _i(table, slot.DIMS)[ed.NDOF],), np.float64))
+
+
+@entry(ENTRY)
+def factor_entry(op, user_data, t, a, b, c, s):
+    """OP_NEWTON_FACTOR: s = hg (s)."""
+    return factor(address_of(user_data), s)
+
+
+@entry(ENTRY)
+def solve_entry(op, user_data, t, a, b, c, s):
+    """OP_NEWTON_SOLVE: v (a); s = hg (s)."""
+    table = address_of(user_data)
+    solve(table, carray(a, (2 * _i(table, slot.DIMS)[ed.NDOF],), np.float64), s)
+    return ed.OK
