@@ -122,6 +122,7 @@ class Esdirk(Stepper):
         self.tables = self.tableau.arrays()
         dims = data.int_array("dims")
         self.n = n = 2 * int(dims[ed.NDOF]) + int(dims[ed.NEL])  # with the coil currents
+        self.sparse_newton = bool(dims[ed.NEWTON_SPARSE])  # `newton_matrix`: J not in self.J
         self.memory = np.zeros(M_SIZE)
         self.memory[M_RTOL] = float(rtol)
         self.memory[M_H_MAX] = float(max_step or 0.0)
@@ -214,7 +215,9 @@ class Esdirk(Stepper):
         step), "jacobian" (n * n,) or empty, "lu_step" (s, h g of the Newton matrix),
         "newton_rate", "refresh" (1: a new Jacobian at the next step), "extra_iterations"
         (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`)}."""
-        valid = self.flags[I_JACOBIAN] == 1
+        # a sparse Newton matrix's Jacobian lives in the packed model (`newton_matrix`): a
+        # restart from this memory evaluates a new one
+        valid = self.flags[I_JACOBIAN] == 1 and not self.sparse_newton
         return {"initial_step": float(self.memory[M_H]),
                 "jacobian": self.J.copy() if valid else np.zeros(0),
                 "lu_step": float(self.memory[M_H_LU]) if self.flags[I_LU] else 0.0,
@@ -243,7 +246,7 @@ class Esdirk(Stepper):
                                   "number")
         self.memory[M_H], self.memory[M_ETA] = numbers["initial_step"], numbers["newton_rate"]
         lu_step = numbers["lu_step"]
-        if jacobian.size == self.n * self.n:
+        if jacobian.size == self.n * self.n and not self.sparse_newton:
             self.J[:] = jacobian
             self.flags[I_JACOBIAN] = 1
             self.flags[I_REFRESH] = int(refresh)

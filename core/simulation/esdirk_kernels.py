@@ -9,6 +9,7 @@ import numpy as np
 
 from ..engine import access, engine
 from ..engine import data as ed
+from ..engine.operations import OP_NEWTON_JACOBIAN
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
 from . import newton_matrix
@@ -23,6 +24,9 @@ FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
  I_HISTORY, I_EXTRA, I_SIZE) = range(18)
+# flags[I_REDUCED]: the Newton matrix's factors are the full matrix's (0), its Schur
+# complement's (1) or the engine's sparse ones (SPARSE_FACTORS, `newton_matrix`)
+SPARSE_FACTORS = 2
 # rows of the vector workspace: the stage derivatives from V_F, then the last step's history
 (V_Y, V_Z, V_BASE, V_DELTA, V_ERR, V_WEIGHT, V_F) = range(7)
 V_SLOPE, V_CURVATURE = V_F + MAX_STAGES, V_F + MAX_STAGES + 1
@@ -59,8 +63,10 @@ def _f(table, y, out, flags, op, t):
     flags[I_JACOBIANS if jacobian else I_RHS] += 1
     counters = access.counters(table)
     counters[ed.JACOBIAN_COUNT if jacobian else ed.RHS_COUNT] += 1
-    status = call_engine(access.dims(table)[ed.ENGINE], op, table, t,
-                         y.ctypes.data, out.ctypes.data, 0, 0.0)
+    dims = access.dims(table)
+    if jacobian and dims[ed.NEWTON_SPARSE] == 1:  # M, C_x, K_x in the engine (`newton_matrix`)
+        op = OP_NEWTON_JACOBIAN
+    status = call_engine(dims[ed.ENGINE], op, table, t, y.ctypes.data, out.ctypes.data, 0, 0.0)
     if status != ed.OK:
         counters[ed.FAILED_STATUS] = status
     return status
@@ -74,6 +80,29 @@ def factor(J, LU, piv, hg, flags):
     flags[I_FACTORIZATIONS] += 1
     flags[I_REDUCED] = 1 if form == newton_matrix.SCHUR else 0
     return form != newton_matrix.SINGULAR
+
+
+@kernel(inline="always")
+def factor_model(table, J, LU, piv, hg, flags):
+    """`factor`, or on a model with the sparse Newton matrix (dims[NEWTON_SPARSE]) the
+    engine's factors from its last sparse Jacobian (`newton_matrix.sparse_factor`), counted,
+    with flags[I_REDUCED] = SPARSE_FACTORS; False when singular."""
+    if access.dims(table)[ed.NEWTON_SPARSE] != 1:
+        return factor(J, LU, piv, hg, flags)
+    form = newton_matrix.sparse_factor(table, hg)
+    flags[I_FACTORIZATIONS] += 1
+    flags[I_REDUCED] = SPARSE_FACTORS
+    return form != newton_matrix.SINGULAR
+
+
+@kernel(inline="always")
+def solve(table, J, LU, piv, memory, flags, v):
+    """v <- (I - hg J)^-1 v with the factors of the last `factor_model` (hg =
+    memory[M_H_LU])."""
+    if flags[I_REDUCED] == SPARSE_FACTORS:
+        newton_matrix.sparse_solve(table, memory[M_H_LU], v)
+    else:
+        newton_solve(J, LU, piv, memory[M_H_LU], flags[I_REDUCED] == 1, v)
 
 
 @kernel
@@ -152,7 +181,7 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
             return False
         for k in range(n):
             delta[k] = base[k] + hg * F[i, k] - z[k]
-        newton_solve(J, LU, piv, memory[M_H_LU], flags[I_REDUCED] == 1, delta)
+        solve(table, J, LU, piv, memory, flags, delta)
         for k in range(n):
             z[k] += delta[k]
         norm = _norm(delta, weight)
@@ -244,7 +273,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             flags[I_EXTRA] = 0
         hg = h * A[1, 1]
         if flags[I_LU] == 0 or abs(hg / memory[M_H_LU] - 1.0) > LU_SLACK:
-            if not factor(J, LU, piv, hg, flags):
+            if not factor_model(table, J, LU, piv, hg, flags):
                 return SINGULAR_MATRIX
             flags[I_LU] = 1
             memory[M_H_LU] = hg
@@ -274,7 +303,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
                 s += EW[j] * F[j, k]
             err[k] = h * s
             weight[k] = 1.0 / (rtol * max(abs(y[k]), abs(z[k])) + atol[k])
-        newton_solve(J, LU, piv, memory[M_H_LU], flags[I_REDUCED] == 1, err)
+        solve(table, J, LU, piv, memory, flags, err)
         error = _norm(err, weight)
         if not np.isfinite(error):
             error = 1e10

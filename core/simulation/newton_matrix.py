@@ -12,13 +12,35 @@ the small models' numbers as they were (its LU costs under a millisecond there).
 coil currents ([q - q_ref, qdot, i], `engine.actuators`) is not of that form (with one coil n
 is odd, with more the identity block is not at n / 2): it takes the full matrix, as does a
 restored J of any other form (the form is checked, not assumed).
+
+Sparse (SPARSE). M_bar, K_bar, C_bar and hence J are dense in DOF space when every nodal
+coordinate depends on the DOFs (a spatial cantilever whose DOFs are all its deformations):
+forming J costs O(NDOF^3) (M_bar^-1 [K C]) and the Schur complement's LU NDOF^3 / 3. A model
+that the engine packs with dims[NEWTON_SPARSE] = 1 (`engine.newton_packing`: the augmented
+form, at least SPARSE_NEWTON_FROM = 50 DOFs, no rigid clusters, coil currents or kinematic
+inputs, element-local S and D, every element with mass) takes instead the same Schur
+equation in coordinate space,
+
+    (M_bar + hg C_bar + hg^2 K_bar) dv = M_bar r2 - hg K_bar r1,   dq = r1 + hg dv,
+
+solved as the sparse saddle-point system [H J_o^T; J_o 0] [dx; lambda] = [M a - hg K_x b; 0]
+with H = M + hg C_x + hg^2 K_x on the free coordinates, a = J^-1 [0; r2], b = J^-1 [0; r1]
+and dv = (J's DOF rows) dx (`engine.newton`, docs/analyses.md). Its "Jacobian" is M, C_x,
+K_x and J's LU at the Jacobian's state, kept in the packed model (the J array of the
+integrator is not used); `sparse_factor` and `sparse_solve` reach them through the engine's
+operations. The rules of when to renew J and refactor at a new hg are the ESDIRK's, unchanged;
+the solve is the dense path's (I - hg J)^-1 to round-off, so the step's error control and
+Newton's convergence are those of the dense path. Costs grow with the element count.
 """
 
-from ..engine import engine
+from ..engine import access, engine
+from ..engine import data as ed
+from ..engine.operations import OP_NEWTON_FACTOR, OP_NEWTON_SOLVE
 from ..numerics.jit import kernel
+from ..numerics.native import call_engine
 
 SCHUR_FROM = 50  # DOFs from which the Newton matrix is solved by its Schur complement
-SINGULAR, FULL, SCHUR = 0, 1, 2  # what `factor` made
+SINGULAR, FULL, SCHUR, SPARSE = 0, 1, 2, 3  # what `factor` (or `sparse_factor`) made
 
 
 @kernel
@@ -74,3 +96,20 @@ def newton_solve(J, LU, piv, hg, schur, v):
     for i in range(m):
         v[m + i] = t[i]
         v[i] += hg * t[i]
+
+
+@kernel
+def sparse_factor(table, hg):
+    """The sparse Newton matrix at hg (s) factored in the packed model at address `table`,
+    from its last sparse Jacobian (engine operation NEWTON_FACTOR): SPARSE, or SINGULAR."""
+    ok = call_engine(access.dims(table)[ed.ENGINE], OP_NEWTON_FACTOR, table, 0.0, 0, 0, 0,
+                     hg) == ed.OK
+    return SPARSE if ok else SINGULAR
+
+
+@kernel
+def sparse_solve(table, hg, v):
+    """v (2 NDOF,) <- (I - hg J)^-1 v with the factors of the last `sparse_factor` (made with
+    this hg, s)."""
+    call_engine(access.dims(table)[ed.ENGINE], OP_NEWTON_SOLVE, table, 0.0, v.ctypes.data, 0,
+                0, hg)
