@@ -10,7 +10,8 @@
 - A spatial cantilever (`spatial_cantilever`: n BEAMs along x, every deformation a DOF, 6 n
   DOFs, clamped, a 1 N tip load from rest; steel strip 10 x 1 mm, 0.2 m): one implicit step
   (esdirk at rtol 1e-6 for 5 ms: the wall of `Simulator.advance_to`, Jacobians and Newton
-  factorisations included, over its steps; CPU time) at 96 and 384 DOFs. Targets: the
+  factorisations included, over its steps; CPU time) at 96 and 384 DOFs, both on the sparse
+  Newton matrix (`core/engine/newton.py`; docs/simulation.md). Targets: the
   growth from 96 to 384 DOFs at most n^1.2; at 384 DOFs at most Exudyn's step, measured in
   the same run where exudyn is installed (`exudyn_cantilever`: the same strip of
   geometrically exact beams, generalized-alpha at h = 1e-4 s, sparse LU; undamped, as that
@@ -85,7 +86,7 @@ def jacobian_cost(model, *, repeat=5):
 
 
 def cantilever_step(model):
-    """One run of the cantilever: (CPU s, (steps, rhs, Jacobians))."""
+    """One run of the cantilever: (CPU s, (steps, rhs, Jacobians, Newton factorisations))."""
     from flexure.core import Simulator
 
     sim = Simulator(model, method="esdirk", rtol=1e-6)
@@ -93,7 +94,8 @@ def cantilever_step(model):
     sim.advance_to(CANTILEVER_END)
     wall = time.process_time() - start
     stats = sim.statistics
-    return wall, (stats["steps"], stats["rhs_evaluations"], stats["jacobian_evaluations"])
+    return wall, (stats["steps"], stats["rhs_evaluations"], stats["jacobian_evaluations"],
+                  sim.integrator.statistics()["factorizations"])
 
 
 def spatial(*, repeat=5, quick=False):
@@ -151,7 +153,7 @@ def cantilever_rows(repeat):
     limit = peer.get(64, EXUDYN_STEP_384)
     rows = []
     for n in SIZES:
-        steps, evaluations, jacobians = t[n].info
+        steps, evaluations, jacobians, factorisations = t[n].info
         if n in peer:
             beside = f"Exudyn {1e3 * peer[n]:.2f} ms/step (measured)"
         else:
@@ -160,7 +162,7 @@ def cantilever_rows(repeat):
             f"spatial cantilever, {n} BEAMs ({6 * n} DOFs): one implicit step (esdirk, rtol "
             f"1e-6, {1e3 * CANTILEVER_END:g} ms after a 1 N tip load; CPU)",
             f"{1e3 * per_step[n]:.2f} ms/step ({t[n].text()} for {steps} steps, "
-            f"{evaluations} rhs, {jacobians} Jacobians)",
+            f"{evaluations} rhs, {jacobians} Jacobians, {factorisations} factorisations)",
             beside or "(information)",
             per_step[n] / limit if n == 64 else None,
             per_step[n] <= limit if n == 64 else None))
