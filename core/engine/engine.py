@@ -94,6 +94,7 @@ from .operations import (
     OP_RIGID_RATES,
     OP_SPARSE_FACTOR,
     OP_SPARSE_SOLVE,
+    OP_STRESS_RESULTANTS,
     OP_TANGENT,
     RIGID_OPERATIONS,
     SPARSE_AUGMENTED,
@@ -102,6 +103,7 @@ from .operations import (
 from .part_entries import df_entry, mass_of_entry
 from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
 from .prescribed_residual import prescribed_residual_entry, prescribed_residual_jacobian_entry
+from .reactions import stress_resultants_entry
 from .slots import float_array, int_array
 from .tangent import tangent
 
@@ -109,7 +111,8 @@ from .tangent import tangent
 __all__ = ["ENGINE_ENTRY", "ENTRIES", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
            "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
            "OP_POSITIONS",
-           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call", "connect",
+           "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_STRESS_RESULTANTS",
+           "OP_TANGENT", "call", "connect",
            "first_order_jacobian", "first_order_rhs", "float_array", "implicit_jacobian",
            "implicit_residual", "int_array", "lu_factor", "lu_solve"]
 
@@ -442,7 +445,8 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
            sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS) + (
            df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
-           prescribed_residual_entry, prescribed_residual_jacobian_entry)
+           prescribed_residual_entry, prescribed_residual_jacobian_entry,
+           stress_resultants_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -450,7 +454,8 @@ CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
          OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT),
          OP_PRESCRIBED_RESIDUAL: (OP_PRESCRIBED_RHS,),
-         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT)}
+         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT),
+         OP_STRESS_RESULTANTS: (OP_DF,)}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
 _TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 

@@ -53,6 +53,10 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          (`prescribed_residual`; RESIDUAL runs it on a model that has them)
     PRESCRIBED_RESIDUAL_JACOBIAN  y, yp, J; its t; s = cj: RESIDUAL_JACOBIAN's
 
+    STRESS_RESULTANTS    qddot (NDOF,), out (NE,): the stress resultants of the full dynamic
+                         balance at the last evaluation, the rigid deformations' reactions
+                         (`reactions`)
+
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller.
 """
@@ -67,7 +71,8 @@ from .slots import DIMS, int_array
  OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE, OP_RIGID_FILL, OP_RIGID_EXPAND,
  OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
  OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
- OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN) = range(29)
+ OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
+ OP_STRESS_RESULTANTS) = range(30)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
