@@ -17,6 +17,10 @@ A model packed with rigid clusters gets no reactions from that operation (a clus
 eliminates its rigid beams' rows, and the multipliers of the rows it keeps are not yet
 numpy's: `engine.reactions`): such a model gets a second packed model without clusters
 (`EngineData(model, rigid=False)`, made on first use), evaluated at the same state.
+
+Measured (CPU, loaded 2-core machine, docs/benchmarks.md 2026-11-29): the element outputs of
+one state with reactions 46 us on stage_planar_3dof and 61 us on stage_spatial_1dof, against
+352 and 967 us through the numpy mechanics.
 """
 
 from __future__ import annotations
