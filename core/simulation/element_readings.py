@@ -16,7 +16,8 @@ reading them never disturbs the integrator's own evaluations.
   same evaluation gives at the state's time with the held inputs.
 - A stress output of a rigid deformation (held zero) is a reaction too: the multiplier of
   its constraint row in the full dynamic balance, which the engine forms from the same
-  evaluation (OP_STRESS_RESULTANTS: one J^-T solve; `element_reactions`).
+  evaluation (OP_STRESS_RESULTANTS: one J^-T solve), or on a model with rigid clusters from
+  one evaluation more on a packing without them (`element_reactions`).
 
 The engine's evaluation is the one the integrator makes, so no second physics path is
 involved; the numpy mechanics (the tests' reference: its kinematics, De and S e + D edot)
