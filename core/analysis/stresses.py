@@ -20,7 +20,9 @@ stiffness only (no A) get NaN.
 The stress resultants sigma (NE,) are those of every deformation: the constitutive ones of
 released and DOF deformations plus the multipliers of the rigid ones (reaction forces), as
 `StaticSolution.stress_resultants` holds them; `dynamic_stress_resultants` gives them along a
-motion.
+motion from the numpy `Mechanics` (the plain reference), `stress_engine` from the compiled
+engine's evaluation of each state, which `stresses_along` takes by default (not with
+kinematic inputs, whose path a state alone does not give).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from ..mechanics.actuators import port_values
 from ..mechanics.ports import input_forces
 from ..numerics.blas import blas_threads
 from ..numerics.ties import best_first
+from . import stress_engine
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -197,7 +200,8 @@ def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=N
 
 @blas_threads()
 def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None = None,
-                   mechanics: Mechanics | None = None) -> tuple[list[str], np.ndarray]:
+                   mechanics: Mechanics | None = None,
+                   compiled: bool | None = None) -> tuple[list[str], np.ndarray]:
     """Von Mises stresses along a trajectory; the accelerations follow from the equations of
     motion in each state.
 
@@ -211,7 +215,11 @@ def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None 
         The held inputs: N, N m for the scene's forces and moments, V for an actuator's
         drive signal (default zero).
     mechanics : Mechanics, optional
-        The model's mechanics to reuse (default: a new one).
+        The model's mechanics to reuse on the numpy path (default: a new one).
+    compiled : bool, optional
+        Evaluate each state through the compiled engine (True, where it takes the model:
+        `stress_engine.supports`) or through the numpy `Mechanics` (False). Default: the
+        engine where it takes the model (its packed model kept for the model's next calls).
 
     Returns
     -------
@@ -225,13 +233,30 @@ def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None 
     ConvergenceError
         The kinematics of a state do not converge.
     """
+    states = np.asarray(states, float)
+    names, result = [], []
+    for x, sigma in _states_resultants(model, states, inputs, mechanics, compiled):
+        stresses = beam_stresses(model, x, sigma)
+        names = stresses.names
+        result.append(stresses.von_mises)
+    return names, np.array(result)
+
+
+def _states_resultants(model, states, inputs, mechanics, compiled):
+    """(x (NX,), sigma (NE,)) of each state, through the engine or numpy (`stresses_along`)."""
+    if compiled is not False and stress_engine.supports(model):
+        evaluator = stress_engine.engine_stresses(model)
+        evaluator.restart()
+        for k, state in enumerate(states):
+            yield evaluator.stress_resultants(state, None if inputs is None
+                                              else np.asarray(inputs[k], float))
+        return
     from ..mechanics.mechanics import Mechanics
 
     mech = mechanics or Mechanics(model)
     ndof = model.declared_dof_count
     x = model.initial_coordinates.copy()
-    names, result = [], []
-    for k, state in enumerate(np.asarray(states, float)):
+    for k, state in enumerate(states):
         config = mech.kinematics.solve(state[:ndof], x)
         x = config.x
         force = np.zeros(model.nx)
@@ -241,12 +266,8 @@ def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None 
             values = port_values(model, held, currents) if model.actuators else held
             # forces on their coordinates, moments by their orientation
             force = input_forces(model, x, values)
-        sigma = dynamic_stress_resultants(mech, config, state[ndof: 2 * ndof],
-                                          input_force=force)
-        stresses = beam_stresses(model, x, sigma)
-        names = stresses.names
-        result.append(stresses.von_mises)
-    return names, np.array(result)
+        yield x, dynamic_stress_resultants(mech, config, state[ndof: 2 * ndof],
+                                           input_force=force)
 
 
 def _chains(stresses, fixed_nodes):

@@ -20,6 +20,8 @@ has its module; this one holds the forms the integrators call and the operations
     prescribed       the first-order form with kinematic inputs: u, u', u'' at the time
                      given, the constrained accelerations, the efforts and the Jacobian
     prescribed_residual  the implicit form (IDA's) with kinematic inputs
+    newton           the ESDIRK's Newton matrix sparse on the coordinates (large models)
+    reactions        the stress resultants of the full dynamic balance, reactions included
     operations       the operations' codes, and `run`: one through its address
     engine (here)    the first-order and implicit forms, one C entry point per operation
                      (`ENTRIES`), `connect`, `call`
@@ -84,16 +86,9 @@ from .operations import (
     OP_RESIDUAL,
     OP_RESIDUAL_JACOBIAN,
     OP_RHS,
-    OP_RIGID_CONDENSE,
-    OP_RIGID_CONVECTIVE,
-    OP_RIGID_DE,
-    OP_RIGID_EXPAND,
-    OP_RIGID_EXPAND_COLUMNS,
-    OP_RIGID_FILL,
-    OP_RIGID_GEOMETRIC,
-    OP_RIGID_RATES,
     OP_SPARSE_FACTOR,
     OP_SPARSE_SOLVE,
+    OP_STRESS_RESULTANTS,
     OP_TANGENT,
     RIGID_OPERATIONS,
     SPARSE_AUGMENTED,
@@ -102,15 +97,17 @@ from .operations import (
 from .part_entries import df_entry, mass_of_entry
 from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
 from .prescribed_residual import prescribed_residual_entry, prescribed_residual_jacobian_entry
+from .reactions import stress_resultants_entry
 from .slots import float_array, int_array
 from .tangent import tangent
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
 __all__ = ["ENGINE_ENTRY", "ENTRIES", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
            "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
-           "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_TANGENT", "call",
-           "connect", "first_order_jacobian", "first_order_rhs", "float_array",
-           "implicit_jacobian", "implicit_residual", "int_array", "lu_factor", "lu_solve"]
+           "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_STRESS_RESULTANTS",
+           "OP_TANGENT", "call", "connect", "first_order_jacobian", "first_order_rhs",
+           "float_array", "implicit_jacobian", "implicit_residual", "int_array", "lu_factor",
+           "lu_solve"]
 
 _i, _f = int_array, float_array  # the short names of the many uses below
 
@@ -401,35 +398,6 @@ def sparse_solve_entry(op, user_data, t, a, b, c, s):
 
 
 @entry(ENGINE_ENTRY)
-def rigid_entry(op, user_data, t, a, b, c, s):
-    """The rigid clusters' operations (OP_RIGID_...: `operations`, `rigid_kernels`), one entry
-    for all of them: a model has clusters or not."""
-    table = address_of(user_data)
-    dims = _i(table, slot.DIMS)
-    nx, nf = dims[ed.NX], dims[ed.NFREE]
-    if op == OP_RIGID_FILL:
-        rigid_kernels.fill_slaves(table, carray(a, (nx,), _F8))
-    elif op == OP_RIGID_EXPAND:
-        rigid_kernels.expand(table, carray(a, (nx,), _F8), s != 0.0)
-    elif op == OP_RIGID_EXPAND_COLUMNS:
-        rigid_kernels.expand_columns(table, _f(table, slot.DF), dims[ed.NDOF])
-    elif op == OP_RIGID_CONVECTIVE:
-        rigid_kernels.convective(table, carray(a, (nx,), _F8), carray(b, (nx,), _F8))
-    elif op == OP_RIGID_RATES:
-        rigid_kernels.rigid_rates(table)
-    elif op == OP_RIGID_CONDENSE:
-        rigid_kernels.condense(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8))
-    elif op == OP_RIGID_GEOMETRIC:
-        rigid_kernels.rigid_geometric(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8),
-                                      _f(table, slot.STIFFNESS))
-    elif op == OP_RIGID_DE:
-        rigid_kernels.rigid_de(table)
-    else:
-        return ed.NOT_CONNECTED
-    return ed.OK
-
-
-@entry(ENGINE_ENTRY)
 def missing_entry(op, user_data, t, a, b, c, s):
     """An operation that no `connect` has asked for: NOT_CONNECTED."""
     return ed.NOT_CONNECTED
@@ -439,10 +407,12 @@ def missing_entry(op, user_data, t, a, b, c, s):
 ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, kinematics_entry,
            deformations_entry, evaluate_entry, tangent_entry, positions_entry,
            accelerations_entry, configuration_entry, mass_entry, input_response_entry,
-           sparse_factor_entry, sparse_solve_entry) + (rigid_entry,) * len(RIGID_OPERATIONS) + (
+           sparse_factor_entry, sparse_solve_entry) + (
+           rigid_kernels.rigid_entry,) * len(RIGID_OPERATIONS) + (
            df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
            prescribed_residual_entry, prescribed_residual_jacobian_entry,
-           newton.jacobian_entry, newton.factor_entry, newton.solve_entry)
+           newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
+           stress_resultants_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -450,7 +420,8 @@ CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_MASS: (OP_DF, OP_MASS_OF), OP_PRESCRIBED_RHS: (OP_ACCELERATIONS, OP_MASS),
          OP_PRESCRIBED_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT),
          OP_PRESCRIBED_RESIDUAL: (OP_PRESCRIBED_RHS,),
-         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT), **newton.CALLS}
+         OP_PRESCRIBED_RESIDUAL_JACOBIAN: (OP_PRESCRIBED_RHS, OP_TANGENT),
+         OP_STRESS_RESULTANTS: (OP_DF,), **newton.CALLS}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
 _TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 

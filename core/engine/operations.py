@@ -54,6 +54,9 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     PRESCRIBED_RESIDUAL_JACOBIAN  y, yp, J; its t; s = cj: RESIDUAL_JACOBIAN's
     NEWTON_JACOBIAN, NEWTON_FACTOR, NEWTON_SOLVE  the ESDIRK's sparse Newton matrix: y; s = hg;
                          v and s = hg (`newton`; models with dims[NEWTON_SPARSE] = 1)
+    STRESS_RESULTANTS    qddot (NDOF,), out (NE,): the stress resultants of the full dynamic
+                         balance at the last evaluation, the rigid deformations' reactions
+                         (`reactions`)
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller.
@@ -70,7 +73,7 @@ from .slots import DIMS, int_array
  OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
  OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
- OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE) = range(32)
+ OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS) = range(33)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)

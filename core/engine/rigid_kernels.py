@@ -30,16 +30,30 @@ from ..mechanics.rigid_bodies import (
     SPATIAL_TRANSLATION,
 )
 from ..numerics.dense import copy
-from ..numerics.jit import kernel
+from ..numerics.jit import entry, kernel
+from ..numerics.native import address_of, carray
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
+from .operations import (
+    OP_RIGID_CONDENSE,
+    OP_RIGID_CONVECTIVE,
+    OP_RIGID_DE,
+    OP_RIGID_EXPAND,
+    OP_RIGID_EXPAND_COLUMNS,
+    OP_RIGID_FILL,
+    OP_RIGID_GEOMETRIC,
+    OP_RIGID_RATES,
+)
 from .point_masses import dense_element_mass, padded_width, sparse_rows_product
 from .slots import float_array as _f
 from .slots import group_deformations
 from .slots import int_array as _i
 
 SW, DW, EW = rg.SLAVE_WIDTH, 48, rg.ELEMENT_WIDTH
+# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
+ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
+_F8 = np.float64
 
 
 @kernel
@@ -333,3 +347,32 @@ def rigid_geometric(table, r_full, lam, K):
                     for j2 in range(ndof):
                         K[j1 * ndof + j2] -= fa * DF[rb + j2]
         H[:] = 0.0
+
+
+@entry(ENTRY)
+def rigid_entry(op, user_data, t, a, b, c, s):
+    """The rigid clusters' operations (OP_RIGID_...: `operations`), one entry of the engine
+    (`engine.ENTRIES`) for all of them: a model has clusters or not."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    nx, nf = dims[ed.NX], dims[ed.NFREE]
+    if op == OP_RIGID_FILL:
+        fill_slaves(table, carray(a, (nx,), _F8))
+    elif op == OP_RIGID_EXPAND:
+        expand(table, carray(a, (nx,), _F8), s != 0.0)
+    elif op == OP_RIGID_EXPAND_COLUMNS:
+        expand_columns(table, _f(table, slot.DF), dims[ed.NDOF])
+    elif op == OP_RIGID_CONVECTIVE:
+        convective(table, carray(a, (nx,), _F8), carray(b, (nx,), _F8))
+    elif op == OP_RIGID_RATES:
+        rigid_rates(table)
+    elif op == OP_RIGID_CONDENSE:
+        condense(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8))
+    elif op == OP_RIGID_GEOMETRIC:
+        rigid_geometric(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8),
+                                      _f(table, slot.STIFFNESS))
+    elif op == OP_RIGID_DE:
+        rigid_de(table)
+    else:
+        return ed.NOT_CONNECTED
+    return ed.OK

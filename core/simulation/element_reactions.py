@@ -6,20 +6,21 @@ multiplier lambda of its constraint row in
 
     J^T lambda = r = f + f_in - M xddot - h(x, xdot) - De^T sigma_c
 
-(`flexure.core.mechanics.mechanics`). The engine's evaluation solves the accelerations
-without forming the multipliers (the reduced form never has them), so they come from the
-numpy mechanics (`flexure.core.analysis.stresses.dynamic_stress_resultants`, the function
-inverse dynamics uses) at the engine's own coordinates x and accelerations qddot: the same
-state, one factorisation of J and one mass matrix, no second solve of the motion. The force
-inputs are the values the engine put on their ports (an actuator's force from its drive or
-current); a kinematic input's effort acts on its own DOF row only, whose multiplier is not a
-rigid deformation's, so it is left out (as in inverse dynamics).
+(`flexure.core.mechanics.mechanics`; numpy's `analysis.stresses.dynamic_stress_resultants`
+is the reference the tests compare with). The engine's operation OP_STRESS_RESULTANTS
+(`flexure.core.engine.reactions`) forms them from the evaluation just made: one J^-T solve
+with its factors, at its own coordinates, forces and accelerations, so that reading the
+reactions at a state is that one evaluation. The force inputs are those the evaluation put
+on their ports (an actuator's force from its drive or current).
 
-Measured on a loaded 2-core machine, one BLAS thread: `output_values` 0.83 ms on
-stage_planar_3dof with the bar's two reactions (0.12 ms without), 2.8 ms on
-stage_spatial_1dof with the left leaf's two (numpy's J and mass matrix over 24
-coordinates), against 0.2 ms for a 1 ms esdirk step: the price of a reaction, paid only by
-a model that asks for one (an FMU's doStep then costs 5 to 15 times as much).
+A model packed with rigid clusters gets no reactions from that operation (a cluster
+eliminates its rigid beams' rows, and the multipliers of the rows it keeps are not yet
+numpy's: `engine.reactions`): such a model gets a second packed model without clusters
+(`EngineData(model, rigid=False)`, made on first use), evaluated at the same state.
+
+Measured (CPU, loaded 2-core machine, docs/benchmarks.md 2026-11-29): the element outputs of
+one state with reactions 46 us on stage_planar_3dof and 61 us on stage_spatial_1dof, against
+352 and 967 us through the numpy mechanics.
 """
 
 from __future__ import annotations
@@ -28,8 +29,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import FlexureError, SimulationError
-from ..numerics.blas import blas_threads
+from ..engine import data as ed
+from ..engine import engine
+from ..errors import SimulationError
+from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..engine.data import EngineData
@@ -38,7 +41,7 @@ if TYPE_CHECKING:  # names for the annotations only
 
 class RigidReactions:
     """The stress resultants of every deformation at an evaluated state, the rigid ones'
-    the reactions (module docstring); the numpy mechanics made on first use.
+    the reactions (module docstring).
 
     Parameters
     ----------
@@ -47,22 +50,23 @@ class RigidReactions:
 
     def __init__(self, model: Model) -> None:
         self.model = model
-        self._mechanics = None
+        self._unclustered: EngineData | None = None
 
-    def stress_resultants(self, data: EngineData, q: np.ndarray, qdot: np.ndarray,
-                          port_values: np.ndarray) -> np.ndarray:
+    def stress_resultants(self, data: EngineData, y: np.ndarray, inputs: np.ndarray,
+                          t: float) -> np.ndarray:
         """sigma of every deformation at the state the engine evaluated last.
 
         Parameters
         ----------
         data : EngineData
-            The packed model just evaluated at q, qdot: its slots x (the coordinates, m,
-            rad) and qddot (the accelerations, m/s^2, rad/s^2) are read.
-        q, qdot : ndarray (NDOF,)
-            The DOFs (m, rad) and their rates (m/s, rad/s) it evaluated (a kinematic input's
-            entries on its path).
-        port_values : ndarray (n_inputs,)
-            The force or moment each input put on its port, N or N m.
+            The packed model just evaluated (OP_RHS) at the state y on its q_ref, with the
+            held inputs `inputs`, at time t.
+        y : ndarray (2 NDOF + n_coils,)
+            The state it evaluated: [q - q_ref, qdot(, i)] (m, rad; m/s, rad/s; A).
+        inputs : ndarray (n_inputs,)
+            The inputs held: N, N m, V.
+        t : float
+            The time, s (the kinematic inputs' path).
 
         Returns
         -------
@@ -72,27 +76,35 @@ class RigidReactions:
         Raises
         ------
         SimulationError
-            The numpy mechanics cannot factor the constraints at the engine's coordinates.
+            The engine could not evaluate the state or solve for the multipliers.
         """
-        from ..analysis.stresses import dynamic_stress_resultants
-        from ..mechanics.mechanics import Mechanics
-        from ..mechanics.ports import input_forces
+        if data.int_array("dims")[ed.NSLAVES] > 0:
+            data = self._evaluated_without_clusters(data, y, inputs, t)
+        out = np.empty(data.int_array("dims")[ed.NE])
+        status = engine.call(data, engine.OP_STRESS_RESULTANTS,
+                             data.float_array("qddot").copy(), out)
+        if status == ed.NONFINITE_RESULT:
+            raise SimulationError("the reactions of the rigid deformations: non-finite "
+                                  "multipliers (a singular configuration)")
+        if status != ed.OK:
+            raise SimulationError(f"the reactions of the rigid deformations: "
+                                  f"{STATUS_MESSAGES[status]}")
+        return out
 
-        if self._mechanics is None:
-            self._mechanics = Mechanics(self.model)
-        mechanics = self._mechanics
-        x = data.float_array("x").copy()
-        qddot = data.float_array("qddot").copy()
-        # one BLAS thread on these small matrices (`blas`: many times faster on a busy machine)
-        with blas_threads():
-            try:
-                config = mechanics.kinematics.configuration(np.array(q, float), x)
-                force = input_forces(self.model, x, np.asarray(port_values, float))
-                return dynamic_stress_resultants(mechanics, config, np.array(qdot, float),
-                                                 qddot, force)
-            except (FlexureError, np.linalg.LinAlgError) as error:
-                raise SimulationError("the reactions of the rigid deformations: "
-                                      f"{error}") from None
+    def _evaluated_without_clusters(self, data, y, inputs, t):
+        """The packed model without rigid clusters, evaluated at the state `data` was."""
+        from ..engine.data import EngineData
+
+        if self._unclustered is None:
+            self._unclustered = EngineData(self.model, rigid=False)
+        own = self._unclustered
+        own.float_array("q_ref")[:] = data.float_array("q_ref")
+        own.float_array("inputs")[:] = inputs
+        status = engine.call(own, engine.OP_RHS, np.array(y, dtype=float), t=t)
+        if status != ed.OK:
+            raise SimulationError(f"the reactions of the rigid deformations: "
+                                  f"{STATUS_MESSAGES[status]}")
+        return own
 
 
 __all__ = ["RigidReactions"]

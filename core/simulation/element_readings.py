@@ -15,14 +15,13 @@ reading them never disturbs the integrator's own evaluations.
   input's effort, sigma_d = -F = Q_k - M_k. qddot (`flexure.core.engine.prescribed`), which the
   same evaluation gives at the state's time with the held inputs.
 - A stress output of a rigid deformation (held zero) is a reaction too: the multiplier of
-  its constraint row in the full dynamic balance, which the engine's evaluation does not
-  form; it comes from the numpy mechanics at the engine's coordinates and accelerations of
-  the same evaluation (`element_reactions`).
+  its constraint row in the full dynamic balance, which the engine forms from the same
+  evaluation (OP_STRESS_RESULTANTS: one J^-T solve), or on a model with rigid clusters from
+  one evaluation more on a packing without them (`element_reactions`).
 
 The engine's evaluation is the one the integrator makes, so no second physics path is
-involved but for a rigid deformation's reaction; the numpy mechanics (the tests' reference:
-its kinematics, De and S e + D edot) cost 1.5 to 7 ms per state on the stages against about
-0.05 ms here. Measured on
+involved; the numpy mechanics (the tests' reference: its kinematics, De and S e + D edot)
+cost 1.5 to 7 ms per state on the stages against about 0.05 ms here. Measured on
 stage_planar_3dof (esdirk, 1 ms steps of about 0.1 to 0.17 ms on a shared 2-core machine):
 `output_values` 0.6 us with its coordinate outputs alone (read from q), 45 us with
 deformation outputs (a kinematic solve through Python), 93 us with stress outputs too (one
@@ -39,7 +38,6 @@ from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError
 from .element_reactions import RigidReactions
-from .simulator_motion import path_point_now
 from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -124,12 +122,13 @@ class ElementReadings:
         y = np.zeros(self.nstate)
         rates = state[n: self.nstate]
         y[n: n + rates.size] = rates
-        status = engine.call(data, engine.OP_RHS, y, t=0.0 if t is None else float(t))
+        t = 0.0 if t is None else float(t)
+        status = engine.call(data, engine.OP_RHS, y, t=t)
         if status != ed.OK:
             raise SimulationError(f"the stress outputs: {STATUS_MESSAGES[status]}")
         sigma, efforts = data.float_array("sigma"), data.float_array("efforts")
-        reactions = (None if self.reactions is None else self.reactions.stress_resultants(
-            data, *self._evaluated(data, state, t), self._port_values(data, inputs)))
+        reactions = (None if self.reactions is None
+                     else self.reactions.stress_resultants(data, y, inputs, t))
         for j, (kind, d, k) in enumerate(zip(self.kinds, self.deformations, self.efforts,
                                              strict=True)):
             if kind == STRESS:
@@ -139,22 +138,6 @@ class ElementReadings:
             elif kind == REACTION:  # the effort does work on the deformation's increase
                 values[j] = -efforts[k]
         return values
-
-    def _evaluated(self, data, state, t):
-        """(q, qdot) the engine evaluated: the state's, a kinematic input's entries on its
-        path at t (the prescribed form puts them there)."""
-        n = self.ndof
-        q, qdot = state[:n].copy(), state[n: 2 * n].copy()
-        if self.model.kinematic_inputs:
-            k = self.model.prescribed_dofs
-            q[k], qdot[k], _ = path_point_now(data.float_array("motion_path"), t)
-        return q, qdot
-
-    def _port_values(self, data, inputs):
-        """The force or moment (N, N m) each input put on its port in the evaluation: the
-        engine's own with actuators (from a drive signal or a coil current), else the
-        inputs."""
-        return data.float_array("port_values").copy() if self.model.actuators else inputs
 
 
 __all__ = ["DEFORMATION", "REACTION", "RIGID", "STRESS", "ElementReadings"]

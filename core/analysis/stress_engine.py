@@ -1,0 +1,140 @@
+"""The stress resultants of a motion through the compiled engine, for `stresses.stresses_along`.
+
+At a state [q, qdot(, i)] (m, rad; m/s, rad/s; A) with the inputs held (N, N m, V), one
+evaluation of the equations of motion (OP_RHS: the kinematics, the forces, the accelerations
+qddot of that state) and OP_STRESS_RESULTANTS (`engine.reactions`) give the stress resultants
+of every deformation,
+
+    sigma = S e + D edot  (+ J^-T (r - M xddot) on the constraint rows),
+
+which the numpy reference `stresses.dynamic_stress_resultants` forms with its own
+`Mechanics` (tests/test_engine_reactions.py compares the two). The force inputs are those the
+evaluation puts on their ports: a force or moment input's value, an actuator's force from its
+drive signal and the state's coil current.
+
+The packed model is one per live model, kept between calls (packing takes 0.1 to 1 s; an
+FMU reads the stresses once per step). It keeps its rigid clusters unless a beam with a
+section has a rigid deformation, whose reaction the engine gives only without clusters
+(`engine.reactions`): then it is packed without them. Each call starts the kinematics from
+the model's initial coordinates and each state from the last one's, as the numpy path does.
+A model with kinematic inputs is not taken: the engine puts their path at a time into q,
+which a state alone does not give.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import ConvergenceError
+
+if TYPE_CHECKING:  # names for the annotations only
+    from ..model import Model
+
+_PACKED: dict[int, tuple[weakref.ref, EngineStresses]] = {}
+
+
+def supports(model: Model) -> bool:
+    """Whether the engine gives the stress resultants of `model`'s states: not with kinematic
+    inputs (module docstring)."""
+    return not model.kinematic_inputs
+
+
+def engine_stresses(model: Model) -> EngineStresses:
+    """The `EngineStresses` of `model`, packed once per live model and reused."""
+    known = _PACKED.get(id(model))
+    if known is not None and known[0]() is model:
+        return known[1]
+    key = id(model)
+    packed = EngineStresses(model)
+    # the callback holds the dict itself: at the interpreter's exit the module's globals
+    # may be gone before the models
+    _PACKED[key] = (weakref.ref(model, lambda _, key=key, known=_PACKED:
+                                known.pop(key, None)), packed)
+    return packed
+
+
+def section_deformations(model: Model) -> np.ndarray:
+    """The deformations of the elements whose von Mises stress `stresses.beam_stresses`
+    gives (a module with `section_forces`, a section with A > 0), model indices."""
+    found = [group.deformation_index[group.properties["A"] > 0].ravel()
+             for group in model.groups
+             if getattr(group.kind, "section_forces", None) is not None
+             and np.any(group.properties.get("A", 0.0) > 0)]
+    return np.concatenate(found) if found else np.zeros(0, dtype=np.int64)
+
+
+class EngineStresses:
+    """The stress resultants of one model's states through the engine (module docstring).
+
+    Parameters
+    ----------
+    model : Model
+        A model the engine takes (`supports`).
+    """
+
+    def __init__(self, model: Model):
+        from ..engine import data as ed
+        from ..engine.data import EngineData
+
+        self._ed = ed
+        self.model = model
+        data = EngineData(model)
+        reactions = np.isin(section_deformations(model), model.rigid_deformations)
+        if data.int_array("dims")[ed.NSLAVES] > 0 and np.any(reactions):
+            data = EngineData(model, rigid=False)
+        self.data = data
+        self.ndof = model.declared_dof_count
+        self.nstate = 2 * self.ndof + len(model.coil_actuators)
+        self._sigma = np.empty(data.int_array("dims")[ed.NE])
+
+    def restart(self) -> None:
+        """Start the next state's kinematics from the model's initial coordinates."""
+        self.data.float_array("x_start")[:] = self.model.initial_coordinates
+        self.data.int_array("dims")[self._ed.WARM] = 0
+
+    def stress_resultants(self, state: np.ndarray, held: np.ndarray | None,
+                          ) -> tuple[np.ndarray, np.ndarray]:
+        """The coordinates and the stress resultants at `state`.
+
+        Parameters
+        ----------
+        state : ndarray (2 NDOF [+ n_coils],)
+            [q, qdot(, i)]: m, rad; m/s, rad/s; A (coil currents left out are zero).
+        held : ndarray (n_inputs,) or None
+            The inputs held: N, N m, V (None: zero).
+
+        Returns
+        -------
+        x : ndarray (NX,)
+            The coordinates, m and rad (Euler parameters unitless).
+        sigma : ndarray (NE,)
+            The stress resultants, N (a bending or torsion resultant is its moment over l0).
+
+        Raises
+        ------
+        ConvergenceError
+            The engine could not evaluate the state (its kinematics, a singular
+            configuration).
+        """
+        from ..engine import engine
+
+        ed, data, n = self._ed, self.data, self.ndof
+        data.float_array("q_ref")[:] = state[:n]
+        data.float_array("inputs")[:] = 0.0 if held is None else held
+        y = np.zeros(self.nstate)
+        rates = state[n: self.nstate]
+        y[n: n + rates.size] = rates
+        status = engine.call(data, engine.OP_RHS, y)
+        if status == ed.OK:
+            status = engine.call(data, engine.OP_STRESS_RESULTANTS,
+                                 data.float_array("qddot").copy(), self._sigma)
+        if status != ed.OK:
+            from ..simulation.status import STATUS_MESSAGES
+
+            raise ConvergenceError(f"the stress resultants of {self.model.name!r} at q = "
+                                   f"{np.array2string(state[:n], precision=6)}: "
+                                   f"{STATUS_MESSAGES.get(int(status), status)}")
+        return data.float_array("x").copy(), self._sigma.copy()
