@@ -132,6 +132,7 @@ class EngineBalance:
         self.data = data
         data.int_array("actuators")[0::2] = ed.FORCE_INPUT  # their force at rest is given
         data.int_array("dims")[ed.HAS_DAMPING] = 0
+        data.int_array("dims")[ed.STATIC] = 1  # DF^T r without M_bar and its LU
         self._constant = data.float_array("constant_force")
         self._lumped_gravity = self._constant - model.loads  # what packing added to the loads
         group_data = data.float_array("group_data")

@@ -30,9 +30,10 @@ def df_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENTRY)
 def mass_of_entry(op, user_data, t, a, b, c, s):
-    """OP_MASS_OF: s = 0 M_bar only, 1 with the element masses' forces, 2 also moving; on
-    slots x, xdot, conv and force (`motion.reduced_mass_of`)."""
+    """OP_MASS_OF: s = 0 M_bar only, 1 with the element masses' forces, 2 also moving, -1
+    the forces at rest without M_bar (the statics); on slots x, xdot, conv and force
+    (`motion.reduced_mass_of`)."""
     table = address_of(user_data)
     reduced_mass_of(table, _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.CONV),
-                    s > 1.0, _f(table, slot.FORCE), s > 0.0)
+                    s > 1.0, _f(table, slot.FORCE), s != 0.0, s >= 0.0)
     return ed.OK
