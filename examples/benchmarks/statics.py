@@ -51,6 +51,7 @@ def _models(quick):
     if not quick:
         models["cantilever, 64 BEAMs"] = lambda: cantilever(64)
         models["manipulator_reduced"] = lambda: manipulator("manipulator_reduced")
+        models["manipulator"] = lambda: manipulator("manipulator")
     return models
 
 
