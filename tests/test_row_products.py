@@ -1,5 +1,6 @@
-"""The tangent's product C += A^T B over chosen rows (`dense.add_row_products`) against the
-plain triple loop over its formula and against numpy.
+"""The tangent's product C += A^T B over chosen rows (`dense.add_row_products`, and
+`dense.add_row_groups`, which takes rows four at a time) against the plain triple loop over
+its formula and against numpy.
 
 A and B are tall (nrows, n) with each row's entries in a column range, as DF and K_x DF are
 in the tangent: some rows in groups of four with equal ranges (the kernel's four-row path),
@@ -13,7 +14,9 @@ against the full plain product to round-off, and exactly symmetric.
 import numpy as np
 import pytest
 
-from flexure.core.numerics.dense import add_row_products
+from flexure.core.numerics.dense import add_row_groups, add_row_products
+
+KERNELS = pytest.mark.parametrize("kernel", [add_row_products, add_row_groups])
 
 
 def _rows(nrows, n, seed):
@@ -56,8 +59,9 @@ def _ranges(nrows, taken, first, end, b_first, b_end):
     return ranges
 
 
+@KERNELS
 @pytest.mark.parametrize("nrows, n, seed", [(1, 1, 0), (9, 7, 1), (40, 23, 2), (61, 50, 3)])
-def test_row_products_against_the_plain_loop_and_numpy(nrows, n, seed):
+def test_row_products_against_the_plain_loop_and_numpy(kernel, nrows, n, seed):
     A, first, end, taken = _rows(nrows, n, seed)
     rng = np.random.default_rng(seed + 100)
     B = np.zeros((nrows, n))
@@ -71,8 +75,14 @@ def test_row_products_against_the_plain_loop_and_numpy(nrows, n, seed):
         b_first[r], b_end[r] = lo, hi
     C0 = rng.standard_normal((n, n))  # added to
     C = C0.ravel().copy()
+    if kernel is add_row_groups:  # some four rows of equal ranges: its grouped path
+        assert any(np.all(first[taken[t: t + 4]] == first[taken[t]])
+                   and np.all(end[taken[t: t + 4]] == end[taken[t]])
+                   and np.all(b_first[taken[t: t + 4]] == b_first[taken[t]])
+                   and np.all(b_end[taken[t: t + 4]] == b_end[taken[t]])
+                   for t in range(taken.size - 3)) or taken.size < 4
 
-    add_row_products(A.ravel(), B.ravel(), n, taken, taken.size,
+    kernel(A.ravel(), B.ravel(), n, taken, taken.size,
                      _ranges(nrows, taken, first, end, b_first, b_end), False, C)
 
     expected = C0 + _plain(A, B, taken, n)
@@ -83,8 +93,9 @@ def test_row_products_against_the_plain_loop_and_numpy(nrows, n, seed):
     assert np.all(np.abs(C.reshape(n, n) - numpy) <= (nrows + 2) * eps * scale)
 
 
+@KERNELS
 @pytest.mark.parametrize("nrows, n, seed", [(8, 6, 4), (40, 23, 5), (61, 50, 6)])
-def test_symmetric_row_products_mirror_the_upper_triangle(nrows, n, seed):
+def test_symmetric_row_products_mirror_the_upper_triangle(kernel, nrows, n, seed):
     A, first, end, taken = _rows(nrows, n, seed)
     rng = np.random.default_rng(seed + 200)
     X = rng.standard_normal((nrows, nrows))
@@ -101,7 +112,7 @@ def test_symmetric_row_products_mirror_the_upper_triangle(nrows, n, seed):
             B[r] = 0.0
     C = np.zeros(n * n)
 
-    add_row_products(A.ravel(), B.ravel(), n, taken, taken.size,
+    kernel(A.ravel(), B.ravel(), n, taken, taken.size,
                      _ranges(nrows, taken, first, end, b_first, b_end), True, C)
 
     C = C.reshape(n, n)

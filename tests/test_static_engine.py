@@ -60,6 +60,15 @@ def massless_truss():
     return build_model(data), None
 
 
+def long_cantilever(n):
+    """The benchmarks' spatial BEAM cantilever of n elements (6 n DOFs), 1 N at its tip: at
+    156 DOFs (n = 26) the engine's tangent takes its product through OP_ROW_PRODUCTS (from
+    ROW_GROUPS_FROM DOFs)."""
+    from examples.benchmarks.spatial import spatial_cantilever
+
+    return spatial_cantilever(n), None
+
+
 def stage_under_gravity():
     """The planar stage with gravity on its element masses, 1 N on its input."""
     model = scene_with_gravity("stage_planar_3dof", [0.0, -9.81])
@@ -73,6 +82,7 @@ SCENES |= {
     "spatial beam, moments about global axes, gravity": lambda: cantilever_with_gravity()[:2],
     "spatial beam, actuator and moment about z": lambda: coil_and_moment()[:2],
     "massless truss": massless_truss,
+    "spatial cantilever, 26 BEAMs": lambda: long_cantilever(26),
 }
 
 
@@ -155,7 +165,8 @@ def test_a_path_of_loads_matches():
 
 BALANCE_SCENES = ["planar stage, gravity", "spatial beam, moments about global axes, gravity",
                   "spatial beam, actuator and moment about z", "stage_spatial_19dof",
-                  "wire_tripod", "manipulator_control", "truss_1dof_x"]
+                  "wire_tripod", "manipulator_control", "truss_1dof_x",
+                  "spatial cantilever, 26 BEAMs"]
 
 
 @pytest.mark.parametrize("name", BALANCE_SCENES)

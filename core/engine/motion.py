@@ -104,13 +104,14 @@ def evaluate(table, q, qdot):
     moving = any_nonzero(qdot)
     reduced = dims[ed.AUGMENTED] == 0
     rigid = dims[ed.NSLAVES] > 0
-    if reduced:  # xdot = DF qdot
+    if reduced:  # xdot = DF qdot (zero at rest: the statics)
         run(table, OP_DF, 0, 0, 0.0)  # kinematics.compute_DF
         DF = _f(table, slot.DF)
         for a in range(nx):
             s = 0.0
-            for j in range(ndof):
-                s += DF[a * ndof + j] * qdot[j]
+            if moving:
+                for j in range(ndof):
+                    s += DF[a * ndof + j] * qdot[j]
             xdot[a] = s
     else:  # xdot = J^-1 [0; qdot]
         dof_rows(table, qdot, dx)

@@ -19,7 +19,14 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
 from .motion import any_nonzero
-from .operations import OP_MASS, OP_RIGID_CONDENSE, OP_RIGID_GEOMETRIC, run
+from .operations import (
+    OP_MASS,
+    OP_RIGID_CONDENSE,
+    OP_RIGID_GEOMETRIC,
+    OP_ROW_PRODUCTS,
+    ROW_GROUPS_FROM,
+    run,
+)
 from .point_masses import element_points, massless, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .slots import float_array as _f
@@ -79,15 +86,20 @@ def tangent(table, qddot):
     for j in range(rows.size):
         sigma[rows[j]] += lam[j]
     K, C = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
-    K[:] = 0.0  # (C stays as packed, zero, on a model without damping)
     W, ranges = _f(table, slot.TANGENT_ROWS), _i(table, slot.TANGENT_RANGES)
     row_ranges(DF, nx, ndof, ranges)
-    count = coordinate_rows(table, sigma, _f(table, slot.S), True, W, ranges)
-    add_row_products(DF, W, ndof, ranges[:nx], count, ranges, True, K)  # K0 + G0 = DF^T W
-    if dims[ed.HAS_DAMPING] == 1:  # C0 = DF^T (C_x DF)
-        C[:] = 0.0
-        count = coordinate_rows(table, sigma, _f(table, slot.D), False, W, ranges)
-        add_row_products(DF, W, ndof, ranges[:nx], count, ranges, True, C)
+    # K0 + G0 = DF^T (K_x DF), then (with damping) C0 = DF^T (C_x DF)
+    for damping in range(1 + dims[ed.HAS_DAMPING]):
+        target = C if damping else K
+        target[:] = 0.0  # (C stays as packed, zero, on a model without damping)
+        count = coordinate_rows(table, sigma, _f(table, slot.D if damping else slot.S),
+                                damping == 0, W, ranges)
+        if ndof >= ROW_GROUPS_FROM:  # the product that is faster there (`dense`)
+            status = run(table, OP_ROW_PRODUCTS, target.ctypes.data, 0, float(count))
+            if status != ed.OK:
+                return status
+        else:
+            add_row_products(DF, W, ndof, ranges[:nx], count, ranges, True, target)
     if rigid:  # what the eliminated rigid rows' multipliers added
         run(table, OP_RIGID_GEOMETRIC, r_full.ctypes.data, lam.ctypes.data, 0.0)
     # the moments of the last evaluation: an input's, or an actuator's (Km sat(G u), Km i)
