@@ -44,7 +44,7 @@ Q and K come from the compiled engine (`static_engine`: its kinematics, forces a
 at rest) or from the numpy `Mechanics`, the reference the tests compare it with (equilibria
 within 1e-10 of each DOF's unit, tests/test_static_engine.py); `compiled` chooses, by default
 the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates, up
-to 150 DOFs). Either way the solution's configuration (De, DF and J's factors, which the
+to 300 DOFs). Either way the solution's configuration (De, DF and J's factors, which the
 linear analyses take) and stress resultants are the numpy kinematics' at the equilibrium's
 coordinates. On the numpy path of a large model (`Mechanics.sparse`) Newton's step comes, by
 default, from the sparse augmented system on the coordinates instead of K and Q on the DOFs
@@ -205,7 +205,7 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         Evaluate the balance and its tangent through the compiled engine (True:
         `static_engine`) or through the numpy `Mechanics`, the plain reference (False).
         Default: the engine where it is the faster (`static_engine.preferred`: from 300
-        free coordinates, up to 150 DOFs). A model the engine does not take
+        free coordinates, up to 300 DOFs). A model the engine does not take
         (`static_engine.supports`), and an unloaded one (one Newton step, module
         docstring), take the numpy path either way.
     augmented : bool, optional
