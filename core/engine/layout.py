@@ -185,9 +185,8 @@ SLOTS = (
         ("point_columns", "POINT_COLUMNS", "max_p * (max_m + 1) + max_m", SCRATCH, "-",
          "an element's Dp columns that are not zero per row, their counts, its coordinates' "
          "positions in the augmented system"),
-        ("tangent_ranges", "TANGENT_RANGES", "5 * nx", SCRATCH, "-", "the tangent's "
-         "coordinate rows: those tangent_rows has, then per row the columns [first, end) "
-         "of DF's entries and of tangent_rows' (`tangent`)"),
+        ("tangent_ranges", "TANGENT_RANGES", "5 * nx", SCRATCH, "-", "the rows tangent_rows "
+         "has, then per row the columns [first, end) of DF's and of its entries"),
     )),
     *_slots(FLOAT, "motion", (
         ("xdot", "XDOT", "nx", STATE, "m/s, 1/s", "the coordinates' velocities"),
@@ -203,8 +202,8 @@ SLOTS = (
         ("reduced_force", "REDUCED_FORCE", "ndof", STATE, "N, N m", "DF^T r; a DOF column's "
          "scratch"),
         ("qddot", "QDDOT", "ndof", STATE, "m/s^2, rad/s^2", "the accelerations"),
-        ("tangent_rows", "TANGENT_ROWS", "nx * ndof", SCRATCH, "N/m, N m/rad", "the "
-         "tangent's coordinate-space stiffness or damping times DF (nx, ndof), row-major"),
+        ("tangent_rows", "TANGENT_ROWS", "nx * ndof", SCRATCH, "N/m, N m/rad", "K_x DF or "
+         "C_x DF (nx, ndof) on the coordinates, for the tangent (`tangent`)"),
         ("stiffness", "STIFFNESS", "ndof * ndof", STATE, "N/m, N m/rad", "K = K0 + G0"),
         ("damping", "DAMPING", "ndof * ndof", STATE, "N s/m, N m s/rad", "C0"),
         ("jacobian_cache", "JAC_CACHE", "nstate * nstate", STATE, "1/s, 1/s^2", "the "
