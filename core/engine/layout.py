@@ -144,6 +144,8 @@ SLOTS = (
          "rows on the stressed deformations: each row's first entry"),
         ("stress_columns", "STRESS_COLUMNS", "-", CONFIG, "-", "the column of each entry of "
          "S and D (the entries either has)"),
+        ("stressed_position", "STRESSED_POSITION", "ne", CONFIG, "-", "each deformation's "
+         "row of S and D (its index in stressed), or -1"),
     )),
     *_slots(FLOAT, "stiffness", (
         ("S", "S", "-", CONFIG, "N/m, N m/rad", "the stiffness on those entries"),
@@ -183,6 +185,8 @@ SLOTS = (
         ("point_columns", "POINT_COLUMNS", "max_p * (max_m + 1) + max_m", SCRATCH, "-",
          "an element's Dp columns that are not zero per row, their counts, its coordinates' "
          "positions in the augmented system"),
+        ("tangent_ranges", "TANGENT_RANGES", "5 * nx", SCRATCH, "-", "the rows tangent_rows "
+         "has, then per row the columns [first, end) of DF's and of its entries"),
     )),
     *_slots(FLOAT, "motion", (
         ("xdot", "XDOT", "nx", STATE, "m/s, 1/s", "the coordinates' velocities"),
@@ -198,7 +202,8 @@ SLOTS = (
         ("reduced_force", "REDUCED_FORCE", "ndof", STATE, "N, N m", "DF^T r; a DOF column's "
          "scratch"),
         ("qddot", "QDDOT", "ndof", STATE, "m/s^2, rad/s^2", "the accelerations"),
-        ("DeF", "DEF", "ne * ndof", STATE, "1, m", "De DF (ne, ndof) for the tangent"),
+        ("tangent_rows", "TANGENT_ROWS", "nx * ndof", SCRATCH, "N/m, N m/rad", "K_x DF or "
+         "C_x DF (nx, ndof) on the coordinates, for the tangent (`tangent`)"),
         ("stiffness", "STIFFNESS", "ndof * ndof", STATE, "N/m, N m/rad", "K = K0 + G0"),
         ("damping", "DAMPING", "ndof * ndof", STATE, "N s/m, N m s/rad", "C0"),
         ("jacobian_cache", "JAC_CACHE", "nstate * nstate", STATE, "1/s, 1/s^2", "the "
@@ -327,6 +332,8 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
      "augmented map, or -1"),
     ("a_factors", "A_FACTORS", STATE, "which of the augmented system's factors are current"),
     ("nki", "NKI", CONFIG, "kinematic inputs (prescribed DOFs: `prescribed`)"),
+    ("static", "STATIC", CONFIG, "1: the reduced evaluation forms DF^T r and no M_bar or "
+     "qddot (the statics' own packed model, `static_engine`)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
