@@ -20,8 +20,10 @@ Tolerances:
   engine's window: asked for with compiled=True; 11.7 Hz to 5e5 Hz, (f_max / f)^2 ~ 2e9;
   measured 3.2e-8 on manipulator_e1's third mode, 1.9e-8 on manipulator's) and the
   26-BEAM cantilever (20.9 Hz to 4.7e5 Hz, 5e8; measured 3.4e-8, as the numpy path's own
-  eigensolver round-off, eps (f_max / f)^2 = 1e-7, lets it be; delta 2.1e-13, the tangent's
-  K = DF^T (K_x DF) losing the digits of the axial stiffness EA/l0 that cancel in K).
+  eigensolver round-off, eps (f_max / f)^2 = 1e-7, lets it be; delta 2.1e-13: its DOFs are
+  deformations, whose DeF = De DF are nearly unit rows, and the tangent's K = DF^T (K_x DF)
+  cancels the stiffness carried through the chain's lever arms in DF, where forming De DF
+  first cancels before S: round-off larger by about |De| |DF|).
 """
 
 import numpy as np
