@@ -129,8 +129,8 @@ def test_the_multipliers_are_those_of_the_loads(name):
 def test_the_default_path_and_the_statics_left_as_they_were():
     """The default: the engine where the statics have packed it (a loaded equilibrium of a
     model in their window: the same matrices as compiled=True), numpy before (an unloaded
-    one); the statics' packed model afterwards as the statics left it (no damping), and its
-    next solve the same."""
+    one); the statics' packed model afterwards as the statics left it (no damping, its
+    evaluation without M_bar), and its next solve the same."""
     model = load_scene("manipulator_control")
     mech = Mechanics(model)
     unloaded = static_equilibrium(model, mechanics=mech)  # one numpy Newton step
@@ -148,6 +148,7 @@ def test_the_default_path_and_the_statics_left_as_they_were():
     assert largest(engine_path.C0) > 0.0
     dims = static_engine.engine_balance(model).data.int_array("dims")
     assert dims[ed.HAS_DAMPING] == 0
+    assert dims[ed.STATIC] == 1  # its evaluation without M_bar again
     again = static_equilibrium(model, inputs=inputs, compiled=True)
     assert np.max(np.abs(again.q - solution.q) / dof_tolerances(model, 1.0)) <= 1e-10
     small, _ = held_chain()  # outside the window: 1 DOF, 2 free coordinates
