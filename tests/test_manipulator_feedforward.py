@@ -49,9 +49,10 @@ def test_the_forces_drive_the_model_along_the_path_within_the_integrators_tolera
       stroke (40 pm) and to a radian (10 nrad): measured 4.4 pm and 0.10 nrad.
 
     The run at rtol 1e-8 (whose difference from the run at 1e-11 the example prints as its
-    own error) is not asserted on: that error depends on how CVODE's steps fall at 1e-8
-    (0.099 nm and 0.55 nrad at 1.25 ms, 0.011 nm and 0.12 nrad at 0.625 ms with the same
-    integrator), not on the forces."""
+    own error) is not asserted on: that error depends on how CVODE's steps fall at 1e-8, not
+    on the forces (measured 0.016 nm and 0.13 nrad at 1.25 ms, 0.016 nm and 0.19 nrad at
+    0.625 ms; a Newton matrix equal to this one to round-off made it 0.099 nm and 0.55 nrad
+    at 1.25 ms, 0.011 nm and 0.12 nrad at 0.625 ms: docs/benchmarks.md, session 25)."""
     model = manipulator_feedforward.control_model()
     row = manipulator_feedforward.forward_check(
         model, manipulator_feedforward.MOVES["4 mm x"], duration=1.0, window=0.2,
