@@ -1,7 +1,7 @@
 """The engine's layout table against its index constants, its packing and its roles.
 
 The slots' index constants (`slots.X`) and the records' field constants (`data.NDOF`) are
-generated from `layout`; the packing (`packing`) fills slots by name and `layout.check` holds
+generated from `layout`; the packing (`packing`) fills slots by name and `packing_check.check` holds
 it against the table. These tests check the three ways that can go wrong: two slots sharing
 an index, a slot packed under another's name (or by another concern, or of another size), a
 slot declared and never packed; and that what the table calls configuration is left alone
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from flexure.core import Simulator, load_scene
-from flexure.core.engine import access, engine, layout, packing, slots
+from flexure.core.engine import access, engine, layout, packing, packing_check, slots
 from flexure.core.engine import data as ed
 from flexure.core.engine.data import EngineData
 
@@ -62,32 +62,32 @@ def _moved(packed, moves):
 
 def test_the_packing_matches_the_table(packed):
     context, arrays = packed
-    assert layout.check(arrays, context.counts) == []
+    assert packing_check.check(arrays, context.counts) == []
 
 
 def test_a_slot_packed_under_another_slots_name_is_refused(packed):
     context, arrays = packed
     swapped = _moved(arrays, {("kinematics", "x"): ("kinematics", "e"),
                               ("kinematics", "e"): ("kinematics", "x")})
-    problems = layout.check(swapped, context.counts)
+    problems = packing_check.check(swapped, context.counts)
     assert any(p.startswith("slot 'x': expected nx") for p in problems), problems
     assert any(p.startswith("slot 'e': expected ne") for p in problems), problems
     by_another = _moved(arrays, {("motion", "qddot"): ("kinematics", "qddot")})
-    assert "slot 'qddot': expected from motion, packed by kinematics" in layout.check(
+    assert "slot 'qddot': expected from motion, packed by kinematics" in packing_check.check(
         by_another, context.counts)
     as_int = {**arrays, "kinematics": {**arrays["kinematics"],
                                        "x": arrays["kinematics"]["x"].astype(np.int64)}}
     assert any("slot 'x': expected a flat float64 array" in p
-               for p in layout.check(as_int, context.counts))
+               for p in packing_check.check(as_int, context.counts))
 
 
 def test_a_slot_never_packed_or_unknown_is_refused(packed):
     context, arrays = packed
     missing = {**arrays, "motion": {k: v for k, v in arrays["motion"].items() if k != "mass"}}
-    assert layout.check(missing, context.counts) == [
+    assert packing_check.check(missing, context.counts) == [
         "slot 'mass' declared (packed by motion) and never packed"]
     unknown = {**arrays, "motion": {**arrays["motion"], "masses": arrays["motion"]["mass"]}}
-    assert layout.check(unknown, context.counts) == [
+    assert packing_check.check(unknown, context.counts) == [
         "motion packed 'masses', which is no slot of the layout"]
 
 

@@ -60,6 +60,15 @@ def massless_truss():
     return build_model(data), None
 
 
+def long_cantilever(n):
+    """The benchmarks' spatial BEAM cantilever of n elements (6 n DOFs), 1 N at its tip: at
+    156 DOFs (n = 26) the engine's tangent takes its product through OP_ROW_PRODUCTS (from
+    ROW_GROUPS_FROM DOFs)."""
+    from examples.benchmarks.spatial import spatial_cantilever
+
+    return spatial_cantilever(n), None
+
+
 def stage_under_gravity():
     """The planar stage with gravity on its element masses, 1 N on its input."""
     model = scene_with_gravity("stage_planar_3dof", [0.0, -9.81])
@@ -73,6 +82,7 @@ SCENES |= {
     "spatial beam, moments about global axes, gravity": lambda: cantilever_with_gravity()[:2],
     "spatial beam, actuator and moment about z": lambda: coil_and_moment()[:2],
     "massless truss": massless_truss,
+    "spatial cantilever, 26 BEAMs": lambda: long_cantilever(26),
 }
 
 
@@ -155,7 +165,8 @@ def test_a_path_of_loads_matches():
 
 BALANCE_SCENES = ["planar stage, gravity", "spatial beam, moments about global axes, gravity",
                   "spatial beam, actuator and moment about z", "stage_spatial_19dof",
-                  "wire_tripod", "manipulator_control", "truss_1dof_x"]
+                  "wire_tripod", "manipulator_control", "truss_1dof_x",
+                  "spatial cantilever, 26 BEAMs"]
 
 
 @pytest.mark.parametrize("name", BALANCE_SCENES)
@@ -220,3 +231,24 @@ def test_an_unreachable_configuration_is_a_convergence_error():
                                                r"(the constraints could not be solved|a "
                                                r"singular configuration)"):
         balance.residual_and_tangent(static_engine.EnginePoint(start.q + 10.0, start.x))
+
+
+@pytest.mark.parametrize("density", [0.02, 0.5])
+def test_tangent_step_sparse_and_dense(density):
+    """Newton's step K dq = rhs (`statics.tangent_step`): by the sparse LU at 2 % of entries
+    (at most SPARSE_TANGENT), by the dense one at 50 %, both to the backward error of an LU
+    against numpy.linalg.solve; a singular K is a ConvergenceError either way."""
+    from flexure.core.analysis.statics import SPARSE_TANGENT, tangent_step
+
+    rng = np.random.default_rng(7)
+    n = 200
+    K = np.where(rng.random((n, n)) < density / 2, rng.standard_normal((n, n)), 0.0)
+    K = K + K.T + np.diag(rng.uniform(5.0, 10.0, n))  # symmetric, diagonally dominant
+    assert (np.count_nonzero(K) <= SPARSE_TANGENT * K.size) == (density < SPARSE_TANGENT)
+    rhs = rng.standard_normal(n)
+    expected = np.linalg.solve(K, rhs)
+    bound = 1e3 * n * np.finfo(float).eps * np.linalg.cond(K) * np.max(np.abs(expected))
+    assert np.max(np.abs(tangent_step(K, rhs) - expected)) <= bound
+    K[:, 3] = 0.0  # a zero column: singular
+    with pytest.raises(ConvergenceError):
+        tangent_step(K, rhs)

@@ -8,10 +8,11 @@ matrices of `linearization` (its docstring has the equations):
 - OP_TANGENT at qddot = 0 forms K0 + G0 (slot stiffness) with the stress resultants sigma_c
   plus the multipliers of the dynamic balance J^-T (r - M DF qddot) = J^-T r, which at
   qddot = 0 are those of the static balance; C0 = DeF_s^T D DeF_s (slot damping); and,
-  through OP_MASS, M0 = DF^T M DF (slot mass) and DeF = De DF (slot DeF).
+  through OP_MASS, M0 = DF^T M DF (slot mass) and DF (slot DF).
 
 K0 alone, which `LinearModel` keeps apart from G0 (`reduction` asks whether G0 vanishes), is
-DeF_s^T S DeF_s from that DeF and the packed S (one sparse product, NDOF^2 per stressed
+DeF_s^T S DeF_s with DeF = De DF from the solution's De (the numpy kinematics' at the same
+coordinates) and the engine's DF, and the packed S (sparse products, NDOF^2 per stressed
 deformation's entries), and G0 = (K0 + G0) - K0 (round-off of |K| in G0, 1e-16 of it).
 
 The load. A StaticSolution does not say which loads hold it (`static_equilibrium`'s `loads`
@@ -30,9 +31,10 @@ The packed model is the statics' (`static_engine.engine_balance`: one per live m
 the reduced form, inputs as plain force inputs, which is what the linearisation wants: an
 actuator's force at rest is its port value; the coil enters `LinearModel.state_matrices`
 from the model). Its damping is switched off for the statics (at rest D edot = 0); it is
-switched on for the tangent here and off again, so that the statics' later calls see their
-packed model as they left it; the load is the statics' to set anew (`set_load`) at its
-next solve.
+switched on for the tangent here and off again, and so is M_bar, which the statics' own
+evaluation leaves out (`dims.static`, `static_engine`), so that the statics' later calls see
+their packed model as they left it; the load is the statics' to set anew (`set_load`) at
+its next solve.
 
 Where the engine does not take a model: what `static_engine.supports` refuses, and gravity on
 element masses that hang on rotations (a BEAM's consistent mass), whose load stiffness the
@@ -137,24 +139,28 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
     dims = data.int_array("dims")
     D = data.float_array("D")
     dims[ed.HAS_DAMPING] = int(np.any(D))
+    dims[ed.STATIC] = 0  # the evaluation forms M_bar, which M0 is
     try:
         _, K = balance.residual_and_tangent(config)
         n = model.ndof
         M0 = data.float_array("mass").reshape(n, n).copy()
         C0 = data.float_array("damping").reshape(n, n).copy()
+        DF = data.float_array("DF").reshape(-1, n).copy()
     finally:
         dims[ed.HAS_DAMPING] = 0
-    K0 = _structural(data, n)
+        dims[ed.STATIC] = 1
+    K0 = _structural(data, config.De, DF)
     return M0, C0, K0, K - K0
 
 
-def _structural(data, n):
-    """K0 = DeF_s^T S DeF_s (NDOF, NDOF) from the engine's DeF of its last tangent and its
-    packed S (compressed rows on the stressed deformations)."""
+def _structural(data, De, DF):
+    """K0 = DeF_s^T S DeF_s (NDOF, NDOF), DeF = De DF, from the solution's De (sparse, (NE,
+    NX)), the engine's DF (NX, NDOF) of its last tangent and its packed S (compressed rows
+    on the stressed deformations)."""
     from scipy.sparse import csr_matrix
 
     stressed = data.int_array("stressed")
     S = csr_matrix((data.float_array("S"), data.int_array("stress_columns"),
                     data.int_array("stress_pointers")), shape=(stressed.size, stressed.size))
-    DeF = data.float_array("DeF").reshape(-1, n)[stressed]
+    DeF = np.asarray(De[stressed] @ DF)
     return DeF.T @ np.asarray(S @ DeF)

@@ -24,17 +24,18 @@ reduced form, and writes into it what the statics holds fixed: the load per load
 (slot constant_force: the nodal loads and gravity on the lumped masses; the element groups'
 gravity on their inertia points in slot group_data; the inputs' port values in slot inputs,
 each s times its full value), every input a plain force input (an actuator's force at rest
-is given: `mechanics.actuators.steady_port_values`; no coil) and no damping (at rest
-D edot = 0, and C0 is not wanted). No integrator shares this packed model, so no
-simulation sees these writes. The evaluation also forms M_bar and its LU, which the statics
-does not use (the engine has no operation without them; one costs a third of a Newton
-iteration on manipulator_control).
+is given: `mechanics.actuators.steady_port_values`; no coil), no damping (at rest
+D edot = 0, and C0 is not wanted) and dims.static: its evaluation forms DF^T r and neither
+M_bar, its LU nor qddot, which the statics does not use (they were a third to nine tenths
+of an evaluation, 0.8 of 1.4 ms on manipulator_control, 68 of 91 ms on
+manipulator_reduced), and marks M_bar current, so that the tangent, which reads neither,
+does not form it. No integrator shares this packed model, so no simulation sees these
+writes. Models without mass work alike (no M_bar is factored; SINGULAR_MASS, which the
+engine's other forms return for them, is no failure here either).
 
-Models without mass work: the reduced form forms DF^T r and marks M_bar current before it
-factors M_bar, so its SINGULAR_MASS status is no failure here, and the tangent, which reads
-neither M_bar nor its LU, runs. The kinematics are solved to the engine's tolerance (1e-15
-of each row's unit); a configuration counts as singular only at a zero pivot of J, as in the
-numpy kinematics (`singular_ratio=0`), so both paths reach the same configurations.
+The kinematics are solved to the engine's tolerance (1e-15 of each row's unit); a
+configuration counts as singular only at a zero pivot of J, as in the numpy kinematics
+(`singular_ratio=0`), so both paths reach the same configurations.
 """
 
 from __future__ import annotations
@@ -66,18 +67,19 @@ class EnginePoint:
 
 
 # Where the engine is the statics' default: a window of model sizes, from measurements of
-# one static solve's CPU, engine over numpy (examples/benchmarks/statics.py).
-# - Above ENGINE_MAX_DOFS DOFs the engine costs more: its tangent adds each element's
-#   DF_e^T H DF_e into a dense (NDOF, NDOF) matrix, and its evaluation M_bar likewise,
-#   (the elements' coordinates) NDOF^2 products each, where the numpy tangent carries a
-#   sparse coordinate-space matrix to the DOFs in one BLAS product, NX NDOF^2: 0.34 on
-#   manipulator_control (75 DOFs), 0.68 and 0.99 on BEAM cantilevers of 96 and 192 DOFs,
-#   2.1 on manipulator_reduced (507 DOFs), 2.7 on a cantilever of 384 DOFs.
+# one static solve's CPU, engine over numpy (examples/benchmarks/statics.py, 2026-11-29).
+# - Above ENGINE_MAX_DOFS DOFs the engine may cost more: each iteration forms DF (NDOF
+#   solves of J) and the dense tangent DF^T (K_x DF) (`engine.tangent`), about (DF's
+#   entries) NDOF products, where the numpy path's step on a model from 300 free
+#   coordinates is the sparse augmented system's (`static_augmented`), in proportion to
+#   the elements. BEAM cantilevers: 0.37 at 192 and 240 DOFs, 0.86 at 288, 1.05 at 336,
+#   1.3 to 1.4 at 384; manipulator_reduced (507 DOFs) 1.1; the 816-DOF manipulator (its DF
+#   is 1 % full) 0.89 to 1.0, left to numpy by this rule.
 # - Below SPARSE_FROM free coordinates (where the numpy kinematics go sparse) a numpy solve
 #   takes milliseconds (20 ms on stage_spatial_19dof), less than what touching the compiled
 #   engine costs a process (0.08 s of CPU: numba, llvmlite, the cached entries; warm
 #   `flexure analyze truss_1dof_x` 0.38 -> 0.46 s).
-ENGINE_MAX_DOFS = 150
+ENGINE_MAX_DOFS = 300
 ENGINE_MIN_FREE = SPARSE_FROM
 
 
@@ -139,6 +141,7 @@ class EngineBalance:
         self.data = data
         data.int_array("actuators")[0::2] = ed.FORCE_INPUT  # their force at rest is given
         data.int_array("dims")[ed.HAS_DAMPING] = 0
+        data.int_array("dims")[ed.STATIC] = 1  # DF^T r without M_bar and its LU
         self._constant = data.float_array("constant_force")
         self._lumped_gravity = self._constant - model.loads  # what packing added to the loads
         group_data = data.float_array("group_data")

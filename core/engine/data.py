@@ -11,7 +11,7 @@ its index constant (`slots.X`), both from the same table.
 
 `packing` fills the slots, one function per concern (kinematics, element groups, stiffness,
 inertia, ports, actuators, motion, factors, rigid clusters), each returning its slots by
-name; `layout.check` holds them against the table before they are put in its order. The
+name; `packing_check.check` holds them against the table before they are put in its order. The
 fields of the records `dims`, a row of `groups`, `counters` and `settings` are named here
 (NX, G_COUNT, RHS_COUNT, ...: generated from `layout`, compile-time ints for numba).
 
@@ -20,7 +20,7 @@ Units: SI throughout (m, rad, kg, N, s), as the model's.
 
 import numpy as np
 
-from . import layout, packing, sparse_packing
+from . import layout, packing, packing_check, sparse_packing
 from .packing import (
     A_GAIN,
     A_KM,
@@ -106,7 +106,7 @@ class EngineData:
                                   augmented=augmented, sparse=sparse, rigid=rigid)
         self.rigid, self.costs = context.rigid, context.plan.costs
         packed = packing.pack(context)
-        problems = layout.check(packed, context.counts)
+        problems = packing_check.check(packed, context.counts)
         if problems:
             raise layout.LayoutError(f"model {model.name!r}: the packing does not match the "
                                      "layout: " + "; ".join(problems))

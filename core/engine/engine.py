@@ -26,8 +26,7 @@ has its module; this one holds the forms the integrators call and the operations
     engine (here)    the first-order and implicit forms, one C entry point per operation
                      (`ENTRIES`), `connect`, `call`
 
-with the dense LU of small matrices (M_bar, the integrators' Newton matrices) from
-`numerics.dense`.
+with the dense kernels (M_bar's LU, the integrators' Newton matrices) from `numerics.dense`.
 
 First-order form (CVODE, ESDIRK): the state y = [q - q_ref, qdot] and ydot = [qdot, qddot],
 its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the residual
@@ -55,7 +54,7 @@ from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, call_engine, carray, float_address
 from . import data as ed
-from . import newton, rigid_kernels, sparse_factors
+from . import newton, operations, rigid_kernels, sparse_factors
 from . import slots as slot
 from .actuators import (
     current_rates,
@@ -94,7 +93,7 @@ from .operations import (
     SPARSE_AUGMENTED,
     run,
 )
-from .part_entries import df_entry, mass_of_entry
+from .part_entries import df_entry, mass_of_entry, row_products_entry
 from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
 from .prescribed_residual import prescribed_residual_entry, prescribed_residual_jacobian_entry
 from .reactions import stress_resultants_entry
@@ -412,7 +411,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
            prescribed_residual_entry, prescribed_residual_jacobian_entry,
            newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
-           stress_resultants_entry)
+           stress_resultants_entry, row_products_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -449,6 +448,8 @@ def connect(data, *ops):
         wanted += [OP_PRESCRIBED_RHS, OP_PRESCRIBED_JACOBIAN]
         if OP_RESIDUAL in ops or OP_RESIDUAL_JACOBIAN in ops:  # and IDA's
             wanted += [OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN]
+    if ops and dims[ed.NDOF] >= operations.ROW_GROUPS_FROM:  # the tangent's, large models
+        wanted.append(operations.OP_ROW_PRODUCTS)
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

@@ -8,9 +8,9 @@ it by, its size, its role, the packing function that fills it (`packing`), its u
 meaning. From the table come the slot order (`INT_SLOTS`, `FLOAT_SLOTS`), the index
 constants (`slots.X` is the index of slot "x"; generated, module-level ints, which numba
 freezes into the compiled code as literals) and the check that the packing filled every
-slot by its name with the declared dtype and size (`check`). The fields of slot `dims` and of
-a row of slot `groups` are tables of their own (`DIMS_FIELDS`, `GROUP_FIELDS`), as are the
-small records `counters` and `settings`.
+slot by its name with the declared dtype and size (`packing_check.check`). The fields of
+slot `dims` and of a row of slot `groups` are tables of their own (`DIMS_FIELDS`,
+`GROUP_FIELDS`), as are the small records `counters` and `settings`.
 
 Roles. CONFIG: the model, written once by the packing and only read by an evaluation.
 STATE: written by evaluations (or by the integrators between them) and meaningful after one:
@@ -144,6 +144,8 @@ SLOTS = (
          "rows on the stressed deformations: each row's first entry"),
         ("stress_columns", "STRESS_COLUMNS", "-", CONFIG, "-", "the column of each entry of "
          "S and D (the entries either has)"),
+        ("stressed_position", "STRESSED_POSITION", "ne", CONFIG, "-", "each deformation's "
+         "row of S and D (its index in stressed), or -1"),
     )),
     *_slots(FLOAT, "stiffness", (
         ("S", "S", "-", CONFIG, "N/m, N m/rad", "the stiffness on those entries"),
@@ -183,6 +185,8 @@ SLOTS = (
         ("point_columns", "POINT_COLUMNS", "max_p * (max_m + 1) + max_m", SCRATCH, "-",
          "an element's Dp columns that are not zero per row, their counts, its coordinates' "
          "positions in the augmented system"),
+        ("tangent_ranges", "TANGENT_RANGES", "5 * nx", SCRATCH, "-", "the rows tangent_rows "
+         "has, then per row the columns [first, end) of DF's and of its entries"),
     )),
     *_slots(FLOAT, "motion", (
         ("xdot", "XDOT", "nx", STATE, "m/s, 1/s", "the coordinates' velocities"),
@@ -198,7 +202,8 @@ SLOTS = (
         ("reduced_force", "REDUCED_FORCE", "ndof", STATE, "N, N m", "DF^T r; a DOF column's "
          "scratch"),
         ("qddot", "QDDOT", "ndof", STATE, "m/s^2, rad/s^2", "the accelerations"),
-        ("DeF", "DEF", "ne * ndof", STATE, "1, m", "De DF (ne, ndof) for the tangent"),
+        ("tangent_rows", "TANGENT_ROWS", "nx * ndof", SCRATCH, "N/m, N m/rad", "K_x DF or "
+         "C_x DF (nx, ndof) on the coordinates, for the tangent (`tangent`)"),
         ("stiffness", "STIFFNESS", "ndof * ndof", STATE, "N/m, N m/rad", "K = K0 + G0"),
         ("damping", "DAMPING", "ndof * ndof", STATE, "N s/m, N m s/rad", "C0"),
         ("jacobian_cache", "JAC_CACHE", "nstate * nstate", STATE, "1/s, 1/s^2", "the "
@@ -351,6 +356,8 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
     ("nki", "NKI", CONFIG, "kinematic inputs (prescribed DOFs: `prescribed`)"),
     ("newton_sparse", "NEWTON_SPARSE", CONFIG, "1: the ESDIRK's Newton matrix in coordinate "
      "space, sparse (`newton`)"),
+    ("static", "STATIC", CONFIG, "1: the reduced evaluation forms DF^T r and no M_bar or "
+     "qddot (the statics' own packed model, `static_engine`)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
@@ -462,38 +469,6 @@ def record(record_name, **values):
     for name, value in values.items():
         out[position[name]] = value
     return out
-
-
-def check(packed, counts):
-    """The problems of a packing against the table, as a list of messages (empty: none).
-
-    packed : {packing function name: {slot name: array}}, what each `packing` function
-    returned; counts : {name: int}, the model's counts the sizes are written in."""
-    problems = []
-    seen = {}
-    for packer, arrays in packed.items():
-        for name, array in arrays.items():
-            slot = BY_NAME.get(name)
-            if slot is None:
-                problems.append(f"{packer} packed {name!r}, which is no slot of the layout")
-                continue
-            if name in seen:
-                problems.append(f"slot {name!r} packed by {seen[name]} and by {packer}")
-            seen[name] = packer
-            if slot.packer != packer:
-                problems.append(f"slot {name!r}: expected from {slot.packer}, packed by "
-                                f"{packer}")
-            if array.dtype.name != slot.dtype or array.ndim != 1:
-                problems.append(f"slot {name!r}: expected a flat {slot.dtype} array, got "
-                                f"{array.dtype.name} of shape {array.shape}")
-            if slot.size != "-":
-                size = eval(slot.size, {"__builtins__": {}}, counts)  # noqa: S307 (our table)
-                if array.size != size:
-                    problems.append(f"slot {name!r}: expected {slot.size} = {size} entries, "
-                                    f"got {array.size}")
-    problems += [f"slot {name!r} declared (packed by {BY_NAME[name].packer}) and never packed"
-                 for name in BY_NAME if name not in seen]
-    return problems
 
 
 def markdown():

@@ -101,16 +101,17 @@ def evaluate(table, q, qdot):
     n_rigid = dims[ed.NRIGID]
     x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
     dx = _f(table, slot.DX)
-    moving = _any_nonzero(qdot)
+    moving = any_nonzero(qdot)
     reduced = dims[ed.AUGMENTED] == 0
     rigid = dims[ed.NSLAVES] > 0
-    if reduced:  # xdot = DF qdot
+    if reduced:  # xdot = DF qdot (zero at rest: the statics)
         run(table, OP_DF, 0, 0, 0.0)  # kinematics.compute_DF
         DF = _f(table, slot.DF)
         for a in range(nx):
             s = 0.0
-            for j in range(ndof):
-                s += DF[a * ndof + j] * qdot[j]
+            if moving:
+                for j in range(ndof):
+                    s += DF[a * ndof + j] * qdot[j]
             xdot[a] = s
     else:  # xdot = J^-1 [0; qdot]
         dof_rows(table, qdot, dx)
@@ -162,14 +163,22 @@ def evaluate(table, q, qdot):
             run(table, OP_RIGID_EXPAND, conv.ctypes.data, 0, 1.0)
     qddot = _f(table, slot.QDDOT)
     if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
-        # M_bar, and r -= M conv + g_conv (`reduced_mass_of`, on slots x, xdot, conv, force)
-        run(table, OP_MASS_OF, 0, 0, 2.0 if moving else 1.0)
+        # M_bar, and r -= M conv + g_conv (`reduced_mass_of`, on slots x, xdot, conv, force);
+        # the statics' packed model (dims.static): the element masses' gravity, no M_bar
+        static = dims[ed.STATIC] == 1
+        run(table, OP_MASS_OF, 0, 0, -1.0 if static else 2.0 if moving else 1.0)
         DF, rq = _f(table, slot.DF), _f(table, slot.REDUCED_FORCE)
         for j in range(ndof):
-            s = 0.0
-            for a in range(nx):
-                s += DF[a * ndof + j] * r[a]
-            rq[j] = s
+            rq[j] = 0.0
+        for a in range(nx):  # DF^T r row by row: DF read along its rows
+            ra = r[a]
+            if ra != 0.0:
+                row = DF[a * ndof: (a + 1) * ndof]
+                for j in range(ndof):
+                    rq[j] += row[j] * ra
+        if static:  # DF^T r is what the statics reads; the tangent finds M_bar "current"
+            dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 1
+            return ed.OK
         mass_lu = _f(table, slot.MASS_LU)
         copy(mass_lu, _f(table, slot.MASS))
         dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 1
@@ -225,7 +234,7 @@ def qddot_of_solution(table, rhs, xddot, with_c, quad, moving, qddot):
 
 
 @kernel(inline="always")
-def _any_nonzero(v):
+def any_nonzero(v):
     """Whether any entry of v is nonzero; a bool that numba types as bool throughout (a flag
     set to False and then maybe True in a loop is typed Literal[False] first, and each
     callee it is passed to was compiled once more for that type)."""
@@ -408,21 +417,24 @@ def reduced_mass(table):
 
 
 @kernel
-def reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
-    """M_bar = DF^T M DF into slot mass, element by element through the inertia points
-    (M_bar += (Dp DF_e)^T Mp (Dp DF_e)) and the lumped masses; with_forces: also gravity on
-    the element masses into r and, if moving, r -= M conv + g_conv (xdot, conv, r are not
-    read otherwise)."""
+def reduced_mass_of(table, x, xdot, conv, moving, r, with_forces, with_mass):
+    """M_bar = DF^T M DF into slot mass (with_mass), element by element through the inertia
+    points (M_bar += (Dp DF_e)^T Mp (Dp DF_e)) and the lumped masses; with_forces: also
+    gravity on the element masses into r and, if moving, r -= M conv + g_conv (xdot, conv, r
+    are not read otherwise)."""
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF, mass, lumped = _f(table, slot.DF), _f(table, slot.MASS), _f(table, slot.LUMPED)
-    mass[:] = 0.0
+    if with_mass:
+        mass[:] = 0.0
     for a in range(nx):  # the lumped masses
         la = lumped[a]
-        if la == 0.0:
+        if la == 0.0 or not (with_mass or (with_forces and moving)):
             continue
         if with_forces and moving:
             r[a] -= la * conv[a]
+        if not with_mass:
+            continue
         for i in range(ndof):
             di = la * DF[a * ndof + i]
             if di == 0.0:
@@ -448,26 +460,30 @@ def reduced_mass_of(table, x, xdot, conv, moving, r, with_forces):
             if massless(Mp, pattern):  # no mass, no forces (a rigid body's inner elements)
                 continue
             element_points(inertia, scratch, i, x, xdot, order)
-            B[: P * ndof] = 0.0
+            if with_mass:
+                B[: P * ndof] = 0.0
             for pp in range(P):  # B = Dp DF_e, and the point forces gravity - Dp conv - acc
                 f = gravity[pp]
                 for a in range(m):
                     d = Dp[pp, a]
                     if d != 0.0:
-                        row_df = coords[i * m + a] * ndof
-                        for j in range(ndof):
-                            B[pp * ndof + j] += d * DF[row_df + j]
+                        if with_mass:
+                            row_df = coords[i * m + a] * ndof
+                            for j in range(ndof):
+                                B[pp * ndof + j] += d * DF[row_df + j]
                         if order == 2:
                             f -= d * conv[coords[i * m + a]]
                 point[pp] = f - acc[pp] if order == 2 else f
             point_forces(Mp, pattern, P, point, w)  # w = Mp (point forces), MpB = Mp B
-            mass_rows_product(Mp, pattern, P, B, ndof, MpB)
             if with_forces:
                 for a in range(m):  # r += Dp^T w
                     s = 0.0
                     for pp in range(P):
                         s += Dp[pp, a] * w[pp]
                     r[coords[i * m + a]] += s
+            if not with_mass:
+                continue
+            mass_rows_product(Mp, pattern, P, B, ndof, MpB)
             for pp in range(P):  # M_bar += B^T (Mp B)
                 for a in range(ndof):
                     ba = B[pp * ndof + a]

@@ -43,7 +43,11 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
       DE                 `rigid_de`
     DF                   DF into slot DF from J's factors (`kinematics.compute_DF`)
     MASS_OF              M_bar into slot mass; s = 1 with the element masses' forces into slot
-                         force, 2 also moving (`motion.reduced_mass_of`)
+                         force, 2 also moving, -1 the forces alone
+                         (`motion.reduced_mass_of`)
+    ROW_PRODUCTS         C (a, (NDOF, NDOF)); s = the count of rows: the tangent's C += DF^T W
+                         on a model from ROW_GROUPS_FROM DOFs (`tangent`: `dense.add_row_groups`,
+                         compiled only for such a model)
 
     PRESCRIBED_RHS       y, ydot (0: evaluate only); s = the time t (s): RHS with the
                          kinematic inputs on their path (`prescribed`; RHS runs it on a
@@ -59,7 +63,9 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          (`reactions`)
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
-own (`part_entries`) they are compiled once, not again inside each caller.
+own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
+tangent's product in a form that is faster on large models and longer to compile, so that a
+process with small models only never compiles it.
 """
 
 from ..numerics.jit import kernel
@@ -73,9 +79,12 @@ from .slots import DIMS, int_array
  OP_RIGID_EXPAND_COLUMNS, OP_RIGID_CONVECTIVE, OP_RIGID_RATES, OP_RIGID_CONDENSE,
  OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
- OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS) = range(33)
+ OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
+ OP_ROW_PRODUCTS) = range(34)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
+# from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)
+ROW_GROUPS_FROM = 150
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 

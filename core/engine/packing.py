@@ -3,7 +3,7 @@
 `EngineData` builds a `Context` (the element groups packed, the rigid clusters, the free
 coordinates and rows, the factors' plan, the model's counts), then calls each function of
 `PACKERS`; every one returns {slot name: array} for the slots that `layout.SLOTS` says it
-packs, and `layout.check` holds the result against the table (every slot packed once, by its
+packs, and `packing_check.check` holds the result against the table (every slot packed once, by its
 own function, with its dtype and size) before the arrays are put in the table's order.
 Records (`dims`, a row of `groups`, `counters`, `settings`) are filled by field name
 (`layout.record`). Units: SI, as the model's.
@@ -235,7 +235,9 @@ def stiffness(c):
     (compressed rows: an element's stiffness couples its own deformations only)."""
     rows, columns = np.nonzero((c.S != 0.0) | (c.D != 0.0))  # row by row
     pointers = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=c.stressed.size))])
-    return {"stressed": c.stressed.astype(np.int64),
+    position = np.full(c.counts["ne"], -1, dtype=np.int64)
+    position[c.stressed] = np.arange(c.stressed.size)
+    return {"stressed": c.stressed.astype(np.int64), "stressed_position": position,
             "stress_pointers": pointers.astype(np.int64),
             "stress_columns": columns.astype(np.int64),
             "S": c.S[rows, columns], "D": c.D[rows, columns]}
@@ -289,11 +291,12 @@ def motion(c):
         "mass_pivots": np.zeros(ndof, np.int64),
         "counters": layout.record("counters"),
         "point_columns": np.zeros(n["max_p"] * (n["max_m"] + 1) + n["max_m"], np.int64),
+        "tangent_ranges": np.zeros(5 * nx, np.int64),
         "xdot": np.zeros(nx), "edot": np.zeros(ne), "sigma": np.zeros(ne),
         "force": np.zeros(nx), "conv": np.zeros(nx), "xddot": np.zeros(nx),
         "mass": np.zeros(ndof * ndof), "mass_lu": np.zeros(ndof * ndof),
         "reduced_force": np.zeros(ndof), "qddot": np.zeros(ndof),
-        "DeF": np.zeros(ne * ndof), "stiffness": np.zeros(ndof * ndof),
+        "tangent_rows": np.zeros(nx * ndof), "stiffness": np.zeros(ndof * ndof),
         "damping": np.zeros(ndof * ndof),
         "jacobian_cache": np.zeros(n["nstate"] * n["nstate"]),
         "local": np.zeros(n["scratch"]),

@@ -1,4 +1,5 @@
-"""The entries of the operations that are parts of others: DF and M_bar.
+"""The entries of the operations that are parts of others: DF, M_bar and the tangent's
+product on large models.
 
 Each is a C function of the engine's signature (`engine.ENGINE_ENTRY`), in the process's table
 of operations (`engine.ENTRIES`), which the evaluation's own operations call through `run`.
@@ -9,13 +10,17 @@ and the mass operation) four; as operations they are compiled twice (the kernel,
 A call by address costs a few nanoseconds beside either.
 """
 
+import numpy as np
+
+from ..numerics.dense import add_row_groups
 from ..numerics.jit import entry
-from ..numerics.native import address_of
+from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
 from .kinematics import compute_DF
 from .motion import reduced_mass_of
 from .slots import float_array as _f
+from .slots import int_array as _i
 
 # the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
 ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
@@ -30,9 +35,23 @@ def df_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENTRY)
 def mass_of_entry(op, user_data, t, a, b, c, s):
-    """OP_MASS_OF: s = 0 M_bar only, 1 with the element masses' forces, 2 also moving; on
-    slots x, xdot, conv and force (`motion.reduced_mass_of`)."""
+    """OP_MASS_OF: s = 0 M_bar only, 1 with the element masses' forces, 2 also moving, -1
+    the forces at rest without M_bar (the statics); on slots x, xdot, conv and force
+    (`motion.reduced_mass_of`)."""
     table = address_of(user_data)
     reduced_mass_of(table, _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.CONV),
-                    s > 1.0, _f(table, slot.FORCE), s > 0.0)
+                    s > 1.0, _f(table, slot.FORCE), s != 0.0, s >= 0.0)
+    return ed.OK
+
+
+@entry(ENTRY)
+def row_products_entry(op, user_data, t, a, b, c, s):
+    """OP_ROW_PRODUCTS: C (a, (NDOF, NDOF)) += DF^T W over the first s rows of slot
+    tangent_ranges (`dense.add_row_groups`, symmetric; `tangent.coordinate_rows` made W)."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    ndof, nx = dims[ed.NDOF], dims[ed.NX]
+    ranges = _i(table, slot.TANGENT_RANGES)
+    add_row_groups(_f(table, slot.DF), _f(table, slot.TANGENT_ROWS), ndof, ranges[:nx], int(s),
+                   ranges, True, carray(a, (ndof * ndof,), np.float64))
     return ed.OK

@@ -4,7 +4,7 @@
 table (`layout.SLOTS`), and lists (address, length) of each in one address table. The
 engine's modules take every array they read or write from that table's address, through
 `int_array` and `float_array` with the slot indices defined here: one module-level int per
-slot, named by the table's `constant` column (`X` is slot "x", `DF` "DF", `DEF` "DeF", `AUG`
+slot, named by the table's `constant` column (`X` is slot "x", `DF` "DF", `AUG`
 "augmented", `RIGID_DEPS` "rigid_dependencies"), generated from the table. numba reads a
 module's global ints when it compiles a kernel and freezes them into the code as literals,
 so an index costs nothing at run time (and a change to the table changes the sources' hash,

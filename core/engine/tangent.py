@@ -12,13 +12,21 @@ with sigma the stress resultants of the full dynamic balance: sigma_c plus the m
 J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed deformations).
 """
 
-from ..numerics.dense import copy
+from ..numerics.dense import add_row_products, copy
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
-from .operations import OP_MASS, OP_RIGID_CONDENSE, OP_RIGID_GEOMETRIC, run
+from .motion import any_nonzero
+from .operations import (
+    OP_MASS,
+    OP_RIGID_CONDENSE,
+    OP_RIGID_GEOMETRIC,
+    OP_ROW_PRODUCTS,
+    ROW_GROUPS_FROM,
+    run,
+)
 from .point_masses import element_points, massless, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
 from .slots import float_array as _f
@@ -34,7 +42,16 @@ from .slots import int_array as _i
 def tangent(table, qddot):
     """Stiffness K0 + G0 and damping C0 (NDOF, NDOF) into slot stiffness, slot damping at the
     state of the last `evaluate`, with the dynamic balance taken at accelerations qddot; DF,
-    M_bar and its LU as `reduced_mass` does. A status."""
+    M_bar and its LU as `reduced_mass` does (on the statics' packed model, dims.static, the
+    evaluation left M_bar out and marked it current). A status.
+
+    Both on the coordinates first, element by element, then carried to the DOFs once:
+    K = DF^T W with W = K_x DF (slot tangent_rows, on the rows of the stressed elements'
+    coordinates), K_x = sum_e (De_e^T S_e De_e + sum_i sigma_i D2e_i) (`coordinate_rows`);
+    C likewise with C_x = sum_e De_e^T D_e De_e. A row of K_x is the few elements at one
+    coordinate, so the product DF^T W costs (the touched coordinates) NDOF^2, where adding
+    each element's DF_e^T H DF_e and each stressed deformation's DeF^T S DeF cost (the
+    elements' coordinates plus the stressed deformations) NDOF^2."""
     status = run(table, OP_MASS, 0, 0, 0.0)  # motion.reduced_mass
     if status != ed.OK:
         return status
@@ -42,17 +59,19 @@ def tangent(table, qddot):
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
     DF, x, conv = _f(table, slot.DF), _f(table, slot.X), _f(table, slot.CONV)
     # r_full = r - M xddot with xddot = DF qddot + conv (the reduced form's r holds - M conv
-    # already), then the multipliers J^-T r_full on the free coordinates
-    acc = _f(table, slot.XDDOT)
+    # already), then the multipliers J^-T r_full on the free coordinates; at rest (the
+    # statics) xddot = 0 and r_full = r
     with_conv = dims[ed.REDUCED] == 0
-    for a in range(nx):
-        s = conv[a] if with_conv else 0.0
-        for j in range(ndof):
-            s += DF[a * ndof + j] * qddot[j]
-        acc[a] = s
     r_full = _f(table, slot.X_TRIAL)
     copy(r_full, _f(table, slot.FORCE))
-    _mass_times(table, x, acc, r_full)
+    if any_nonzero(qddot) or (with_conv and any_nonzero(conv)):
+        acc = _f(table, slot.XDDOT)
+        for a in range(nx):
+            s = conv[a] if with_conv else 0.0
+            for j in range(ndof):
+                s += DF[a * ndof + j] * qddot[j]
+            acc[a] = s
+        _mass_times(table, x, acc, r_full)
     free, lam = _i(table, slot.FREE), _f(table, slot.DX)
     rigid = dims[ed.NSLAVES] > 0
     if rigid:  # on the reduced coordinates: T^T r_full
@@ -66,75 +85,21 @@ def tangent(table, qddot):
     rows = _i(table, slot.ROWS)
     for j in range(rows.size):
         sigma[rows[j]] += lam[j]
-    # DeF = De DF (NE, NDOF) and G0 = sum DF_e^T (sum_i sigma_i D2e_i) DF_e
-    DeF, K, C = _f(table, slot.DEF), _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
-    K[:] = 0.0
-    C[:] = 0.0
-    DeF[:] = 0.0
-    local = _f(table, slot.LOCAL)
-    for g in range(dims[ed.NGROUPS]):
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        H = local[: m * m]
-        HD = local[m * m: m * m + m * ndof]
-        for i in range(n):
-            for b in range(k):
-                base = (i * k + b) * m
-                d = defs[i * k + b]
-                for j in range(ndof):
-                    s = 0.0
-                    for a in range(m):
-                        s += De[base + a] * DF[coords[i * m + a] * ndof + j]
-                    DeF[d * ndof + j] = s
-            H[:] = 0.0
-            unstressed = True
-            for b in range(k):
-                s = sigma[defs[i * k + b]]
-                if s == 0.0:
-                    continue
-                unstressed = False
-                base2 = (i * k + b) * m * m
-                for a in range(m * m):
-                    H[a] += s * D2e[base2 + a]
-            if unstressed:  # H = 0 adds nothing to K (an element inside a rigid cluster)
-                continue
-            for a in range(m):  # HD = H DF_e
-                for j in range(ndof):
-                    s = 0.0
-                    for c in range(m):
-                        s += H[a * m + c] * DF[coords[i * m + c] * ndof + j]
-                    HD[a * ndof + j] = s
-            for a in range(m):
-                for j1 in range(ndof):
-                    dfa = DF[coords[i * m + a] * ndof + j1]
-                    if dfa == 0.0:
-                        continue
-                    for j2 in range(ndof):
-                        K[j1 * ndof + j2] += dfa * HD[a * ndof + j2]
-    # K0 = DeF_s^T S DeF_s, C0 = DeF_s^T D DeF_s
-    stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
-    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
-    damped = dims[ed.HAS_DAMPING] == 1
-    SD = local[: ndof]
-    DD = local[ndof: 2 * ndof]
-    for a in range(stressed.size):  # S and D by compressed rows
-        for j in range(ndof):
-            s = 0.0
-            t = 0.0
-            for p in range(pointers[a], pointers[a + 1]):
-                v = DeF[stressed[columns[p]] * ndof + j]
-                s += S[p] * v
-                if damped:
-                    t += D[p] * v
-            SD[j] = s
-            DD[j] = t
-        for i in range(ndof):
-            v = DeF[stressed[a] * ndof + i]
-            if v == 0.0:
-                continue
-            for j in range(ndof):
-                K[i * ndof + j] += v * SD[j]
-                if damped:
-                    C[i * ndof + j] += v * DD[j]
+    K, C = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
+    W, ranges = _f(table, slot.TANGENT_ROWS), _i(table, slot.TANGENT_RANGES)
+    row_ranges(DF, nx, ndof, ranges)
+    # K0 + G0 = DF^T (K_x DF), then (with damping) C0 = DF^T (C_x DF)
+    for damping in range(1 + dims[ed.HAS_DAMPING]):
+        target = C if damping else K
+        target[:] = 0.0  # (C stays as packed, zero, on a model without damping)
+        count = coordinate_rows(table, sigma, _f(table, slot.D if damping else slot.S),
+                                damping == 0, W, ranges)
+        if ndof >= ROW_GROUPS_FROM:  # the product that is faster there (`dense`)
+            status = run(table, OP_ROW_PRODUCTS, target.ctypes.data, 0, float(count))
+            if status != ed.OK:
+                return status
+        else:
+            add_row_products(DF, W, ndof, ranges[:nx], count, ranges, True, target)
     if rigid:  # what the eliminated rigid rows' multipliers added
         run(table, OP_RIGID_GEOMETRIC, r_full.ctypes.data, lam.ctypes.data, 0.0)
     # the moments of the last evaluation: an input's, or an actuator's (Km sat(G u), Km i)
@@ -142,6 +107,117 @@ def tangent(table, qddot):
     if has_moment_inputs(specs, inputs):  # - DF^T df/dx DF: a moment's force depends on x
         subtract_input_stiffness(specs, inputs, DF, ndof, K)
     return ed.OK
+
+
+@kernel
+def row_ranges(DF, nx, ndof, ranges):
+    """Per row a of DF (nx, ndof) the columns [first, end) of its entries into
+    ranges[nx + a], ranges[2 nx + a] (an empty row: [0, 0))."""
+    for a in range(nx):
+        first, end = 0, 0
+        row = DF[a * ndof: (a + 1) * ndof]
+        for j in range(ndof):
+            if row[j] != 0.0:
+                first = j
+                break
+        for j in range(ndof - 1, first - 1, -1):
+            if row[j] != 0.0:
+                end = j + 1
+                break
+        ranges[nx + a], ranges[2 * nx + a] = first, end
+
+
+@kernel
+def coordinate_rows(table, sigma, values, hessians, W, ranges):
+    """W = X DF (slot tangent_rows' layout, (nx, ndof)) on the rows it has, for the
+    coordinate-space X = sum_e De_e^T V_e De_e (+ sum_i sigma_i D2e_i with `hessians`), V
+    the packed S or D (`values`, by compressed rows on the stressed deformations; an
+    element's V couples its own deformations only); element by element: H (m, m) of the
+    element, then W's rows of its coordinates += H DF_e over DF's column ranges
+    (`row_ranges`, in `ranges`). A row's range in W (ranges[3 nx + a], ranges[4 nx + a])
+    grows to cover what is added to it, zeroed as it grows. The rows W has, ascending, into
+    ranges[:count]; returns count."""
+    dims = _i(table, slot.DIMS)
+    nx, ndof, DF = dims[ed.NX], dims[ed.NDOF], _f(table, slot.DF)
+    first, end = ranges[nx: 2 * nx], ranges[2 * nx: 3 * nx]
+    w_first, w_end = ranges[3 * nx: 4 * nx], ranges[4 * nx: 5 * nx]
+    for a in range(nx):
+        w_first[a], w_end[a] = ndof, 0
+    stressed, position = _i(table, slot.STRESSED), _i(table, slot.STRESSED_POSITION)
+    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
+    local = _f(table, slot.LOCAL)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        H = local[: m * m]
+        for i in range(n):
+            H[:] = 0.0
+            empty = True
+            if hessians:  # sum_i sigma_i D2e_i
+                for b in range(k):
+                    s = sigma[defs[i * k + b]]
+                    if s == 0.0:
+                        continue
+                    empty = False
+                    base2 = (i * k + b) * m * m
+                    for a in range(m * m):
+                        H[a] += s * D2e[base2 + a]
+            for b in range(k):  # De_e^T V_e De_e, V's entries row by row
+                row = position[defs[i * k + b]]
+                if row < 0:
+                    continue
+                base = (i * k + b) * m
+                for p in range(pointers[row], pointers[row + 1]):
+                    v, other = values[p], stressed[columns[p]]
+                    if v == 0.0:
+                        continue
+                    empty = False
+                    for c in range(k):
+                        if defs[i * k + c] == other:
+                            base_c = (i * k + c) * m
+                            for a in range(m):
+                                va = v * De[base + a]
+                                if va != 0.0:
+                                    for d in range(m):
+                                        H[a * m + d] += va * De[base_c + d]
+            if empty:  # H = 0 adds nothing (an element inside a rigid cluster)
+                continue
+            lo, hi = ndof, 0  # the columns of the element's rows of DF
+            for a in range(m):
+                row = coords[i * m + a]
+                if end[row] > first[row]:
+                    lo, hi = min(lo, first[row]), max(hi, end[row])
+            if hi <= lo:
+                continue
+            for a in range(m):  # W's rows cover [lo, hi), zeroed where they grow
+                row = W[coords[i * m + a] * ndof: (coords[i * m + a] + 1) * ndof]
+                w0, w1 = w_first[coords[i * m + a]], w_end[coords[i * m + a]]
+                if w1 <= w0:
+                    w0 = w1 = lo
+                for j in range(lo, w0):
+                    row[j] = 0.0
+                for j in range(w1, hi):
+                    row[j] = 0.0
+                w_first[coords[i * m + a]], w_end[coords[i * m + a]] = min(w0, lo), max(w1, hi)
+            for c in range(m):  # W's rows += H DF_e, a column of H at a time
+                source_row = coords[i * m + c]
+                c0, c1 = first[source_row], end[source_row]
+                if c1 <= c0:
+                    continue
+                source = DF[source_row * ndof + c0: source_row * ndof + c1]
+                for a in range(m):
+                    h = H[a * m + c]
+                    if h == 0.0:
+                        continue
+                    target_row = coords[i * m + a] * ndof
+                    target = W[target_row + c0: target_row + c1]
+                    for j in range(c1 - c0):
+                        target[j] += h * source[j]
+    count = 0
+    for a in range(nx):
+        if w_end[a] > w_first[a]:
+            ranges[count] = a
+            count += 1
+    return count
 
 
 @kernel

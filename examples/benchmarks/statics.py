@@ -8,16 +8,17 @@ engine packing made once before the timed runs, as a second solve of the same mo
 it. The models:
 
 - `manipulator_control` (75 DOFs, 952 coordinates), 3 N on its x actuators;
-- BEAM cantilevers of 16, 32, 64 elements (96, 192, 384 DOFs,
+- BEAM cantilevers of 16, 32, 48, 64 elements (96, 192, 288, 384 DOFs,
   `spatial.spatial_cantilever`) under 20 N at the tip (large deflection);
-- `manipulator_reduced` (507 DOFs), as `manipulator_control`.
+- `manipulator_reduced` (507 DOFs) and `manipulator` (816 DOFs, its DF 1 % full), as
+  `manipulator_control`.
 
 The ratios decide the statics' default path (`static_engine.preferred`: from 300 free
-coordinates, up to 150 DOFs): a model where the engine is the default (manipulator_control)
-meets its row when the ratio is at most 1; the other rows are for information (above 150
-DOFs the engine's dense tangent and M_bar cost more; below 300 free coordinates a solve
-costs less than the engine's start-up in a process, which these in-process figures leave
-out).
+coordinates, up to 300 DOFs): a model where the engine is the default (manipulator_control,
+the 48-BEAM cantilever) meets its row when the ratio is at most 1; the other rows are for
+information (above 300 DOFs the engine's DF and dense tangent may cost more than the numpy
+path's sparse augmented step; below 300 free coordinates a solve costs less than the
+engine's start-up in a process, which these in-process figures leave out).
 
 Run alone: python -m examples.benchmarks.statics
 """
@@ -49,8 +50,10 @@ def _models(quick):
               "cantilever, 16 BEAMs": lambda: cantilever(16),
               "cantilever, 32 BEAMs": lambda: cantilever(32)}
     if not quick:
+        models["cantilever, 48 BEAMs"] = lambda: cantilever(48)
         models["cantilever, 64 BEAMs"] = lambda: cantilever(64)
         models["manipulator_reduced"] = lambda: manipulator("manipulator_reduced")
+        models["manipulator"] = lambda: manipulator("manipulator")
     return models
 
 
