@@ -14,13 +14,26 @@ of the balance (zero at the accelerations of the equations of motion), on a kine
 input's the effort.
 
 A model packed with rigid clusters (`rigid`) gets the constitutive ones only, NaN on the
-rigid and prescribed deformations: a cluster eliminates its rigid beams' rows, and the
-multipliers of the rows it keeps, J_z^-T T^T r on the reduced coordinates (what `tangent`
-weighs the Hessians with), differ from the numpy reference's on the rows of the elements
-that touch the slaves (by up to 0.08 N, against reactions of 1e-6 N there, on
-manipulator_control at rest with qddot = 0; the packing without clusters agrees with numpy
-within 1e-8 of the largest resultant). A caller that needs reactions packs its model
-without clusters (`EngineData(model, rigid=False)`).
+rigid and prescribed deformations: a cluster eliminates its rigid beams' rows (and its
+slaves' Euler normalisations), whose reactions are then nowhere. The multipliers of the rows
+it keeps, J_z^-T T^T r_full on the reduced coordinates z (what `tangent` weighs the Hessians
+with), are the numpy reference's on every row but the masters' Euler normalisations. The
+slaves' coordinates x_s = S(z) are homogeneous quadratic in the master's Euler parameters
+lambda_m (`mechanics.rigid_bodies`): off |lambda_m| = 1 the cluster is scaled by
+|lambda_m|^2 and its eliminated rows do not vanish, so J_int T = alpha J_norm T (J_norm the
+master's normalisation row, a kept one; alpha one number per eliminated row), not 0. With
+the full balance T^T r_full = (J_kept T)^T lam_kept + (J_int T)^T lam_int, the clustered
+packing's J_z = J_kept T (square, regular) gives
+
+    lam_kept' = lam_kept + J_z^-T (J_int T)^T lam_int,
+
+which differs from lam_kept on the masters' normalisation rows alone: they absorb the
+eliminated rows' reactions (measured 0.08 N on manipulator_control at qdot = 0, qddot = 0
+in its initial configuration under 1 N on each input, where numpy has 1e-17; the other kept
+rows agree to round-off, 4e-14 N there). A normalisation's multiplier has no physical
+meaning, and T^T J^T lam and the tangent (its G0 with OP_RIGID_GEOMETRIC's term) are the
+same on both packings (tests/test_cluster_multipliers.py). A caller that needs the rigid rows'
+reactions packs its model without clusters (`EngineData(model, rigid=False)`).
 
 DF comes from J's factors (OP_DF) unless the evaluation formed it (the reduced form, or an
 OP_MASS since); no M_bar is formed, so a model without mass works. The scratch is the
