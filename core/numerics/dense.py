@@ -180,17 +180,23 @@ def add_row_products(A, B, n, rows, count, ranges, symmetric, C):
     lo, hi = ranges[nrows: 2 * nrows], ranges[2 * nrows: 3 * nrows]
     blo, bhi = ranges[3 * nrows: 4 * nrows], ranges[4 * nrows: 5 * nrows]
     for t in range(count):
-        r0 = rows[t]
-        for i in range(lo[r0], hi[r0]):
-            f = A[r0 * n + i]
-            if f != 0.0:
-                b0 = max(blo[r0], i) if symmetric else blo[r0]
-                source = B[r0 * n + b0: r0 * n + bhi[r0]]
-                target = C[i * n + b0: i * n + bhi[r0]]
-                for j in range(source.size):
-                    target[j] += f * source[j]
+        _add_one_row(A, B, n, rows[t], lo, hi, blo, bhi, symmetric, C)
     if symmetric:
         _mirror(C, n)
+
+
+@kernel(inline="always")
+def _add_one_row(A, B, n, r0, lo, hi, blo, bhi, symmetric, C):
+    """C_ij += a_ri b_rj for the one row r = r0 of A and B (row-major (n, n)), over its
+    ranges, a zero a_ri skipped (only the upper triangle where `symmetric`)."""
+    for i in range(lo[r0], hi[r0]):
+        f = A[r0 * n + i]
+        if f != 0.0:
+            b0 = max(blo[r0], i) if symmetric else blo[r0]
+            source = B[r0 * n + b0: r0 * n + bhi[r0]]
+            target = C[i * n + b0: i * n + bhi[r0]]
+            for j in range(source.size):
+                target[j] += f * source[j]
 
 
 @kernel(inline="always")
@@ -225,14 +231,7 @@ def add_row_groups(A, B, n, rows, count, ranges, symmetric, C):
                            hi[r0], blo[r0], bhi[r0], symmetric, C)
             t += 4
             continue
-        for i in range(lo[r0], hi[r0]):
-            f = A[r0 * n + i]
-            if f != 0.0:
-                b0 = max(blo[r0], i) if symmetric else blo[r0]
-                source = B[r0 * n + b0: r0 * n + bhi[r0]]
-                target = C[i * n + b0: i * n + bhi[r0]]
-                for j in range(source.size):
-                    target[j] += f * source[j]
+        _add_one_row(A, B, n, r0, lo, hi, blo, bhi, symmetric, C)
         t += 1
     if symmetric:
         _mirror(C, n)
