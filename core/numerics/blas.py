@@ -28,8 +28,9 @@ context does so (a depth counter): a nested one costs a lock and a counter, abou
 Finding the libraries costs about 0.2 ms, so they are looked up again only when a module was
 imported since the last look (a BLAS library is loaded by an extension module); an outermost
 entry and exit then costs about 10 us, against 30 us for the cheapest wrapped call (the modes
-of a given linear model) and 0.4 to 2.5 ms for `stresses_along` of one state (up to 12 ms
-with the host's two threads on the loaded 2-core machine). BLAS thread counts belong to
+of a given linear model) and 0.2 to 0.3 ms for `stresses_along` of one state through the
+engine (0.7 to 2 ms through the numpy reference, up to 12 ms there with the host's two
+threads on the loaded 2-core machine). BLAS thread counts belong to
 the process: while a flexure call runs, another thread's BLAS calls get its limit too. A
 library loaded during a call (its first import) is limited from the next call on.
 """
