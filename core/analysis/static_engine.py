@@ -40,20 +40,20 @@ configuration counts as singular only at a zero pivot of J, as in the numpy kine
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import ConvergenceError
+from ..live_models import PerLiveModel
 from ..mechanics.kinematics import SPARSE_FROM
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.kinematics import Configuration
     from ..model import Model
 
-_BALANCES: dict[int, tuple[weakref.ref, EngineBalance]] = {}
+_BALANCES = PerLiveModel()  # model -> EngineBalance
 
 
 @dataclass
@@ -100,24 +100,14 @@ def preferred(model: Model) -> bool:
 def live_balance(model: Model) -> EngineBalance | None:
     """The `EngineBalance` of `model` if the statics have packed it already, else None
     (nothing is packed: what the linearisation asks before it takes the engine)."""
-    known = _BALANCES.get(id(model))
-    return known[1] if known is not None and known[0]() is model else None
+    return _BALANCES.get(model)
 
 
 def engine_balance(model: Model) -> EngineBalance:
     """The `EngineBalance` of `model`, packed once per live model and reused (its packing
     takes 0.3 to 1 s on the 507-DOF manipulator; a model is not changed once built: a
     parameter study builds a model per parameter set)."""
-    known = live_balance(model)
-    if known is not None:
-        return known
-    key = id(model)
-    balance = EngineBalance(model)
-    # the callback holds the dict itself: at the interpreter's exit the module's globals
-    # may be gone before the models
-    _BALANCES[key] = (weakref.ref(model, lambda _, key=key, known=_BALANCES:
-                                  known.pop(key, None)), balance)
-    return balance
+    return _BALANCES.get(model) or _BALANCES.put(model, EngineBalance(model))
 
 
 class EngineBalance:

@@ -23,17 +23,17 @@ which a state alone does not give.
 
 from __future__ import annotations
 
-import weakref
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import ConvergenceError
+from ..live_models import PerLiveModel
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
 
-_PACKED: dict[int, tuple[weakref.ref, EngineStresses]] = {}
+_PACKED = PerLiveModel()  # model -> EngineStresses
 
 
 def supports(model: Model) -> bool:
@@ -44,16 +44,7 @@ def supports(model: Model) -> bool:
 
 def engine_stresses(model: Model) -> EngineStresses:
     """The `EngineStresses` of `model`, packed once per live model and reused."""
-    known = _PACKED.get(id(model))
-    if known is not None and known[0]() is model:
-        return known[1]
-    key = id(model)
-    packed = EngineStresses(model)
-    # the callback holds the dict itself: at the interpreter's exit the module's globals
-    # may be gone before the models
-    _PACKED[key] = (weakref.ref(model, lambda _, key=key, known=_PACKED:
-                                known.pop(key, None)), packed)
-    return packed
+    return _PACKED.get(model) or _PACKED.put(model, EngineStresses(model))
 
 
 def section_deformations(model: Model) -> np.ndarray:

@@ -8,15 +8,15 @@ and keeps the orders and the sparse analysis per live model (a Simulator packs i
 Nothing here is compiled; `packing` puts the choice into the slots.
 """
 
-import weakref
 
 import numpy as np
 
+from ..live_models import PerLiveModel
 from . import data, sparse_packing  # data: its cost model, which tests may replace
 
 # the banded orders of a model's J and augmented system, computed once per live model (read
 # only): {(id(model), rigid): (weak reference to the model, orders)}
-_ORDERS = {}
+_ORDERS = PerLiveModel()  # (model, clusters packed) -> orders and sparse analysis
 
 
 def constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
@@ -145,14 +145,12 @@ def _found(model, groups, topology, rigid):
     """{"orders": ((J's row and column positions, kl, ku), (the augmented system's
     positions, kl, ku))} of the model, and later its "sparse" analysis: computed once per
     live model and packing of its rigid clusters."""
-    key = (id(model), rigid.enabled)  # a Simulator packs its model twice
-    known = _ORDERS.get(key)
-    if known is not None and known[0]() is model:
-        return known[1]
+    known = _ORDERS.get(model, rigid.enabled)  # a Simulator packs its model twice
+    if known is not None:
+        return known
     found = {"orders": (
         constraint_order(model, topology.free, topology.rows, topology.row_of_def,
                          topology.col_of_coord, rigid),
         augmented_order(model, topology.free.size, topology.n_rigid, topology.row_of_def,
                         topology.col_of_coord, groups.all, groups.inertia, rigid))}
-    _ORDERS[key] = (weakref.ref(model, lambda _, key=key: _ORDERS.pop(key, None)), found)
-    return found
+    return _ORDERS.put(model, found, rigid.enabled)
