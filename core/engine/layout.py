@@ -190,8 +190,8 @@ SLOTS = (
     )),
     *_slots(FLOAT, "motion", (
         ("xdot", "XDOT", "nx", STATE, "m/s, 1/s", "the coordinates' velocities"),
-        ("edot", "EDOT", "ne", STATE, "m/s, rad/s", "the deformation rates (the tangent's "
-         "stress resultants after it)"),
+        ("edot", "EDOT", "ne", STATE, "m/s, rad/s", "the deformation rates (the full "
+         "stress resultants after `tangent.balance_multipliers`)"),
         ("sigma", "SIGMA", "ne", STATE, "N, N m", "the stress resultants S e + D edot"),
         ("force", "FORCE", "nx", STATE, "N, N m", "the forces on the coordinates"),
         ("conv", "CONV", "nx", STATE, "m/s^2, 1/s^2", "the convective accelerations "

@@ -42,7 +42,7 @@ from ..numerics.rotation_kernels import rates_coefficient
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
-from .factors import _scatter_de, j_solve
+from .factors import _scatter_de
 from .kinematics import dof_rows
 from .operations import NEWTON_OPERATIONS, OP_NEWTON_JACOBIAN, OP_RHS, run
 from .point_masses import element_mass, element_points, massless
@@ -50,7 +50,7 @@ from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
 from .slots import group_deformations, group_inertia, inertia_scratch
 from .slots import int_array as _i
-from .tangent import _mass_times
+from .tangent import _mass_times, balance_multipliers
 
 ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"  # engine's
 OPERATIONS = NEWTON_OPERATIONS  # this module's entries' operations, in `engine.ENTRIES`
@@ -95,19 +95,11 @@ def _product(ints, floats, values, v, out, limit, scale):
 def _full_stresses(table):
     """The stress resultants of the full dynamic balance into slot edot (as `tangent`):
     sigma_c plus the multipliers J^-T (r - M xddot) on J's rows, at the last evaluation."""
-    dims = _i(table, slot.DIMS)
     r_full = _f(table, slot.X_TRIAL)
     r_full[:] = _f(table, slot.FORCE)
     _mass_times(table, _f(table, slot.X), _f(table, slot.XDDOT), r_full)
-    free, lam = _i(table, slot.FREE), _f(table, slot.DX)
-    for a in range(dims[ed.NFREE]):
-        lam[a] = r_full[free[a]]
-    j_solve(table, lam, True)
     sigma = _f(table, slot.EDOT)
-    sigma[:] = _f(table, slot.SIGMA)
-    rows = _i(table, slot.ROWS)
-    for j in range(rows.size):
-        sigma[rows[j]] += lam[j]
+    balance_multipliers(table, r_full, _f(table, slot.DX), sigma)
     return sigma
 
 

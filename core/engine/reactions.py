@@ -42,16 +42,14 @@ tangent's (slots x_trial, dx, xddot): nothing an evaluation reads.
 
 import numpy as np
 
-from ..numerics.dense import copy
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
-from .factors import j_solve
 from .operations import OP_DF, run
 from .slots import float_array as _f
 from .slots import int_array as _i
-from .tangent import _mass_times
+from .tangent import balance_force, balance_multipliers
 
 # the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
 ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
@@ -72,26 +70,12 @@ def stress_resultants(table, qddot, out):
         return ed.OK
     if dims[ed.MASS_CURRENT] != 1:  # DF is there when M_bar is
         run(table, OP_DF, 0, 0, 0.0)
-    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x, conv = _f(table, slot.DF), _f(table, slot.X), _f(table, slot.CONV)
-    acc = _f(table, slot.XDDOT)
-    with_conv = dims[ed.REDUCED] == 0
-    for a in range(nx):
-        s = conv[a] if with_conv else 0.0
-        for j in range(ndof):
-            s += DF[a * ndof + j] * qddot[j]
-        acc[a] = s
-    r_full = _f(table, slot.X_TRIAL)
-    copy(r_full, _f(table, slot.FORCE))
-    _mass_times(table, x, acc, r_full)
-    free, lam = _i(table, slot.FREE), _f(table, slot.DX)
-    for a in range(nf):
-        lam[a] = r_full[free[a]]
-    j_solve(table, lam, True)  # J^-T
+    full = _f(table, slot.EDOT)  # reused: the full stress resultants
+    balance_multipliers(table, balance_force(table, qddot), _f(table, slot.DX), full)
     rows = _i(table, slot.ROWS)
     for j in range(rows.size):  # the rigid rows, then the DOF deformations'
         d = rows[j]
-        out[d] = (0.0 if np.isnan(out[d]) else out[d]) + lam[j]
+        out[d] = full[d]
         if not np.isfinite(out[d]):  # J singular at the state
             return ed.NONFINITE_RESULT
     return ed.OK

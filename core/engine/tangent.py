@@ -56,35 +56,12 @@ def tangent(table, qddot):
     if status != ed.OK:
         return status
     dims = _i(table, slot.DIMS)
-    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
-    DF, x, conv = _f(table, slot.DF), _f(table, slot.X), _f(table, slot.CONV)
-    # r_full = r - M xddot with xddot = DF qddot + conv (the reduced form's r holds - M conv
-    # already), then the multipliers J^-T r_full on the free coordinates; at rest (the
-    # statics) xddot = 0 and r_full = r
-    with_conv = dims[ed.REDUCED] == 0
-    r_full = _f(table, slot.X_TRIAL)
-    copy(r_full, _f(table, slot.FORCE))
-    if any_nonzero(qddot) or (with_conv and any_nonzero(conv)):
-        acc = _f(table, slot.XDDOT)
-        for a in range(nx):
-            s = conv[a] if with_conv else 0.0
-            for j in range(ndof):
-                s += DF[a * ndof + j] * qddot[j]
-            acc[a] = s
-        _mass_times(table, x, acc, r_full)
-    free, lam = _i(table, slot.FREE), _f(table, slot.DX)
-    rigid = dims[ed.NSLAVES] > 0
-    if rigid:  # on the reduced coordinates: T^T r_full
-        run(table, OP_RIGID_CONDENSE, r_full.ctypes.data, lam.ctypes.data, 0.0)
-    else:
-        for a in range(nf):
-            lam[a] = r_full[free[a]]
-    j_solve(table, lam, True)  # J^-T
+    nx, ndof = dims[ed.NX], dims[ed.NDOF]
+    DF = _f(table, slot.DF)
+    r_full, lam = balance_force(table, qddot), _f(table, slot.DX)
     sigma = _f(table, slot.EDOT)  # reused: the full stress resultants
-    copy(sigma, _f(table, slot.SIGMA))
-    rows = _i(table, slot.ROWS)
-    for j in range(rows.size):
-        sigma[rows[j]] += lam[j]
+    balance_multipliers(table, r_full, lam, sigma)
+    rigid = dims[ed.NSLAVES] > 0
     K, C = _f(table, slot.STIFFNESS), _f(table, slot.DAMPING)
     W, ranges = _f(table, slot.TANGENT_ROWS), _i(table, slot.TANGENT_RANGES)
     row_ranges(DF, nx, ndof, ranges)
@@ -218,6 +195,47 @@ def coordinate_rows(table, sigma, values, hessians, W, ranges):
             ranges[count] = a
             count += 1
     return count
+
+
+@kernel
+def balance_force(table, qddot):
+    """r_full = r - M xddot (slot x_trial, NX) at the last evaluation and accelerations qddot,
+    xddot = DF qddot + conv into slot xddot (the reduced form's r holds - M conv already); at
+    rest (the statics) xddot = 0 and r_full = r. Needs DF (slot DF) when qddot is not zero."""
+    dims = _i(table, slot.DIMS)
+    nx, ndof = dims[ed.NX], dims[ed.NDOF]
+    DF, conv = _f(table, slot.DF), _f(table, slot.CONV)
+    with_conv = dims[ed.REDUCED] == 0
+    r_full = _f(table, slot.X_TRIAL)
+    copy(r_full, _f(table, slot.FORCE))
+    if any_nonzero(qddot) or (with_conv and any_nonzero(conv)):
+        acc = _f(table, slot.XDDOT)
+        for a in range(nx):
+            s = conv[a] if with_conv else 0.0
+            for j in range(ndof):
+                s += DF[a * ndof + j] * qddot[j]
+            acc[a] = s
+        _mass_times(table, _f(table, slot.X), acc, r_full)
+    return r_full
+
+
+@kernel
+def balance_multipliers(table, r_full, lam, sigma):
+    """The multipliers lam = J^-T r_full on J's rows (n_free,; with rigid clusters J_z^-T
+    T^T r_full) and the stress resultants of the full balance sigma (NE,) = sigma_c plus lam
+    on J's rows (N, or N m over l0)."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.NSLAVES] > 0:  # on the reduced coordinates: T^T r_full
+        run(table, OP_RIGID_CONDENSE, r_full.ctypes.data, lam.ctypes.data, 0.0)
+    else:
+        free = _i(table, slot.FREE)
+        for a in range(dims[ed.NFREE]):
+            lam[a] = r_full[free[a]]
+    j_solve(table, lam, True)  # J^-T
+    copy(sigma, _f(table, slot.SIGMA))
+    rows = _i(table, slot.ROWS)
+    for j in range(rows.size):
+        sigma[rows[j]] += lam[j]
 
 
 @kernel
