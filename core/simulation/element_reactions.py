@@ -14,8 +14,8 @@ reactions at a state is that one evaluation. The force inputs are those the eval
 on their ports (an actuator's force from its drive or current).
 
 A model packed with rigid clusters gets no reactions from that operation (a cluster
-eliminates its rigid beams' rows, and the multipliers of the rows it keeps are not yet
-numpy's: `engine.reactions`): such a model gets a second packed model without clusters
+eliminates its rigid beams' rows, whose reactions its masters' normalisation rows then carry:
+`engine.reactions`): such a model gets a second packed model without clusters
 (`EngineData(model, rigid=False)`, made on first use), evaluated at the same state.
 
 Measured (CPU, loaded 2-core machine, docs/benchmarks.md 2026-11-29): the element outputs of
