@@ -60,8 +60,15 @@ def package_name():
 
 @functools.cache
 def cache_root():
-    """The folder of flexure's compiled-code cache (created if missing)."""
-    candidates = [os.environ.get("FLEXURE_CACHE_DIR"), os.environ.get("NUMBA_CACHE_DIR")]
+    """The folder of flexure's compiled-code cache (created if missing), an absolute path.
+
+    A relative $FLEXURE_CACHE_DIR is taken against this process's working folder and written
+    back to the environment absolute: a child process (an FMU host started from here, in its
+    own working folder) then finds the same cache instead of compiling into a new one."""
+    given = os.environ.get("FLEXURE_CACHE_DIR")
+    if given and not os.path.isabs(given):
+        given = os.environ["FLEXURE_CACHE_DIR"] = os.path.abspath(given)
+    candidates = [given, os.environ.get("NUMBA_CACHE_DIR")]
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     candidates.append(os.path.join(base, "flexure"))
     candidates.append(os.path.join(tempfile.gettempdir(), f"flexure-cache-{os.getuid()}"
@@ -70,7 +77,7 @@ def cache_root():
         try:
             os.makedirs(folder, exist_ok=True)
             tempfile.TemporaryFile(dir=folder).close()
-            return folder
+            return os.path.abspath(folder)
         except OSError:
             continue
     return None
