@@ -5,6 +5,7 @@
     python examples/manipulator_feedforward.py --moves "2 mm x,6 mm x"   # others
     python examples/manipulator_feedforward.py --quick    # 1 mm x in 0.1 s, coarser (tests)
     python examples/manipulator_feedforward.py --check    # + the forward check below
+    python examples/manipulator_feedforward.py --check --halved  # + its half-step columns
     python examples/manipulator_feedforward.py --kinds dynamic   # one feedforward's rows
 
 For each move of the end effector E (its x and y moved along a third-order profile in
@@ -234,12 +235,18 @@ def forward_check(model, move, *, duration, window, steps, rtol=1e-8, tight=1e-1
 
 
 def print_check(checks, rtol=1e-8, tight=1e-11):
+    """The forward check's table (nm, nrad); with `forward_check(..., halved=True)`'s rows,
+    also the deviation at half the step and the two steps' difference (both at `tight`),
+    what tests/test_manipulator_feedforward.py asserts on."""
+    halved = all("half" in row for row in checks.values())
+    keys = ("path", "tight", "own") + (("half", "inverse") if halved else ())
+    extra = " | at half the step | the two steps' difference" if halved else ""
     print(f"\n| step (ms) | E position off the path at rtol {rtol:g} (nm) | at {tight:g} | "
-          f"the run's own error at {rtol:g} | rotation off the path at {rtol:g} (nrad) | "
-          f"at {tight:g} | own error |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+          f"the run's own error at {rtol:g}{extra} | rotation off the path at {rtol:g} (nrad) "
+          f"| at {tight:g} | own error{extra} |")
+    print("| ---: " * (1 + 2 * len(keys)) + "|")
     for step, row in checks.items():
-        values = [row[key][part] * 1e9 for part in (0, 1) for key in ("path", "tight", "own")]
+        values = [row[key][part] * 1e9 for part in (0, 1) for key in keys]
         print(f"| {step * 1e3:g} | " + " | ".join(f"{v:.3f}" for v in values) + " |")
 
 
@@ -250,6 +257,9 @@ def main(argv=None):
                         "first 0.2 s only: a short run (the tests')")
     parser.add_argument("--check", action="store_true",
                         help="the forward check of the dynamic feedforward's forces")
+    parser.add_argument("--halved", action="store_true",
+                        help="with --check: also the inverse dynamics at half each step (at "
+                        "rtol 1e-11), the estimate of their own error that the test uses")
     parser.add_argument("--no-figure", action="store_true", help="write no PNG")
     parser.add_argument("--kinds", default=",".join(KINDS),
                         help="the feedforwards, comma-separated (default %(default)s; the "
@@ -284,7 +294,7 @@ def main(argv=None):
     if args.check:  # the 4 mm x move in 1 s, its first 0.2 s with --quick
         window, steps = (0.2, (1.25e-3,)) if args.quick else (1.25, (5e-3, 2.5e-3))
         checks = forward_check(model, MOVES["4 mm x"], duration=1.0, window=window,
-                               steps=steps)
+                               steps=steps, halved=args.halved)
         print_check(checks)
     return results, checks
 

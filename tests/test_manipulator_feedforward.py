@@ -26,7 +26,7 @@ def test_the_quick_comparison(capsys):
 
 
 @pytest.mark.slow
-def test_the_forces_drive_the_model_along_the_path_within_the_integrators_tolerance():
+def test_the_forces_drive_the_model_along_the_path_within_the_integrators_tolerance(capsys):
     """The forward check: the inverse dynamics' forces (Radau IIA at 1.25 ms, its Newton to
     1e-14 of the DOFs' unit, the piecewise cubic between the steps) alone drive the 75-DOF
     model in `simulate` (CVODE BDF) over the first 0.2 s of the 4 mm x move in 1 s (a jerk
@@ -61,3 +61,7 @@ def test_the_forces_drive_the_model_along_the_path_within_the_integrators_tolera
         assert row["half"][part] < 0.75 * row["tight"][part], row
         assert row["tight"][part] < 2.0 * row["inverse"][part], row
         assert row["tight"][part] < 1e-8 * scale, row
+    manipulator_feedforward.print_check({1.25e-3: row})  # the example's --check --halved table
+    header, _, values = capsys.readouterr().out.strip().splitlines()
+    assert header.count("at half the step") == 2
+    assert values.count("|") == 12  # the step and 2 x 5 figures
