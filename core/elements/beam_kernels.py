@@ -8,25 +8,17 @@ reads `pack_reference`, `REFERENCE_WIDTH`, `deformations_entry` and `inertia_ent
 `beam`, which takes them from here.
 
 Where numpy contracts the constant tensors C of `rotations.vector_tensor` (48 floats per
-node vector, R(lambda) a = C lambda lambda), these kernels use the closed forms of the
-quadratic rotation R(lambda) = (lambda0^2 - v . v) I + 2 v v^T + 2 lambda0 [v x] (v = the
-vector part) on the body vector a itself (3 floats):
-
-    u = R a = (lambda0^2 - v . v) a + 2 (v . a) v + 2 lambda0 (v x a),
-    h = C lambda (3 x 4, Du = 2 h): h_0 = lambda0 a + v x a and, for i = 1, 2, 3,
-        h_i = (v . a) e_i + a_i v - v_i a + lambda0 (e_i x a),
-    K(w, a) = w . C (4 x 4, symmetric; D2(w . u) = 2 K): K_00 = w . a, K_0i = (a x w)_i,
-        K_ij = a_i w_j + a_j w_i - delta_ij (w . a),
-
-the same numbers to round-off for a few flops each (C is linear in a: C_00 = a,
-C_0i = e_i x a, C_ij = a_i e_j + a_j e_i - delta_ij a). So the packed reference row holds
-the element frame's vectors (21 floats per element where the tensors took 483), and the
-Hessian, symmetric, is formed once per pair of columns and mirrored.
+node vector, R(lambda) a = C lambda lambda), these kernels use the closed forms of
+`rotation_kernels` (`rotated_vector`, `rotated_half_jacobian`, `rotated_contraction`) on the
+body vector a itself: the same numbers to round-off for a few flops each. So the packed
+reference row holds the element frame's vectors (21 floats per element where the tensors
+took 483), and e1's Hessian, symmetric, is formed once per pair of columns and mirrored.
 """
 
 import numpy as np
 
 from ..numerics.jit import kernel
+from ..numerics.rotation_kernels import rotated_contraction, rotated_half_jacobian, rotated_vector
 from . import entries
 
 # The packed reference row is [l0, c, c_t, az_p, az_q, ay_p, ay_q, ax_p, ax_q] (each vector
@@ -58,40 +50,19 @@ def pack_reference(ref):
 @kernel(inline="always")
 def _rotated(ref, start, m0, m1, m2, m3):
     """u = R(lambda) a (three components), a = ref[start:start + 3], lambda = [m0 ... m3]."""
-    a0, a1, a2 = ref[start], ref[start + 1], ref[start + 2]
-    s = 2.0 * (m1 * a0 + m2 * a1 + m3 * a2)
-    q = m0 * m0 - (m1 * m1 + m2 * m2 + m3 * m3)
-    t = 2.0 * m0
-    return (q * a0 + s * m1 + t * (m2 * a2 - m3 * a1),
-            q * a1 + s * m2 + t * (m3 * a0 - m1 * a2),
-            q * a2 + s * m3 + t * (m1 * a1 - m2 * a0))
+    return rotated_vector(ref[start], ref[start + 1], ref[start + 2], m0, m1, m2, m3)
 
 
 @kernel(inline="always")
 def _half_jacobian(ref, start, m0, m1, m2, m3):
-    """h = C lambda (3 x 4; Du = 2 h) as its four columns h_0 ... h_3, each three components,
-    of the body vector a = ref[start:start + 3] (the module docstring's closed form)."""
-    a0, a1, a2 = ref[start], ref[start + 1], ref[start + 2]
-    s = m1 * a0 + m2 * a1 + m3 * a2
-    pxy = a0 * m2 - m1 * a1  # the antisymmetric products a_i v_j - v_i a_j
-    pxz = a0 * m3 - m1 * a2
-    pyz = a1 * m3 - m2 * a2
-    al = pxy - m0 * a2
-    be = pxz + m0 * a1
-    ga = pyz - m0 * a0
-    return ((m0 * a0 - pyz, m0 * a1 + pxz, m0 * a2 - pxy), (s, al, be), (-al, s, ga),
-            (-be, -ga, s))
+    """h = C lambda (Du = 2 h) as its four columns, of the body vector a = ref[start:start + 3]."""
+    return rotated_half_jacobian(ref[start], ref[start + 1], ref[start + 2], m0, m1, m2, m3)
 
 
 @kernel(inline="always")
 def _contraction(ref, start, w0, w1, w2):
-    """The ten entries K_00, K_01, K_02, K_03, K_11, K_12, K_13, K_22, K_23, K_33 of the
-    symmetric K = w . C (4 x 4) of the body vector a = ref[start:start + 3]."""
-    a0, a1, a2 = ref[start], ref[start + 1], ref[start + 2]
-    d = w0 * a0 + w1 * a1 + w2 * a2
-    return (d, a1 * w2 - a2 * w1, a2 * w0 - a0 * w2, a0 * w1 - a1 * w0,
-            2.0 * a0 * w0 - d, a0 * w1 + a1 * w0, a0 * w2 + a2 * w0,
-            2.0 * a1 * w1 - d, a1 * w2 + a2 * w1, 2.0 * a2 * w2 - d)
+    """The ten entries of the symmetric w . C of the body vector a = ref[start:start + 3]."""
+    return rotated_contraction(ref[start], ref[start + 1], ref[start + 2], w0, w1, w2)
 
 
 @kernel(inline="always")
