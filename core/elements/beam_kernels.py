@@ -27,9 +27,6 @@ _AZ_P, _AZ_Q, _AY_P, _AY_Q, _AX_P, _AX_Q = 3, 6, 9, 12, 15, 18
 REFERENCE_WIDTH = 21  # floats, 168 B per element
 # x columns of the translations and Euler parameters of p and q
 _XP, _XLP, _XQ, _XLQ = 0, 3, 7, 10
-# the x column of each z = [l (3), lambda^p (4), lambda^q (4)] column (l's as r^q's; r^p's
-# column of anything is minus r^q's: l = r^q - r^p)
-_Z_COLUMNS = (7, 8, 9, 3, 4, 5, 6, 10, 11, 12, 13)
 
 
 def pack_reference(ref):
@@ -240,7 +237,7 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     kl_b = _contraction(ref, _AZ_Q, lx, ly, lz)
     kl_c = _contraction(ref, _AY_P, lx, ly, lz)
     kl_d = _contraction(ref, _AY_Q, lx, ly, lz)
-    _store_symmetric(D2e, 2, _XLP, -2.0, kl_a, 0.0, kl_a)
+    _store_symmetric(D2e, 2, _XLP, -2.0, kl_a, 0.0, kl_a)  # one tensor: its second term 0
     _store_symmetric(D2e, 3, _XLQ, 2.0, kl_b, 0.0, kl_b)
     _store_symmetric(D2e, 4, _XLP, 2.0, kl_c, 0.0, kl_c)
     _store_symmetric(D2e, 5, _XLQ, -2.0, kl_d, 0.0, kl_d)
