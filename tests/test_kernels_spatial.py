@@ -11,7 +11,12 @@ from numba import njit
 from numpy.testing import assert_allclose
 
 from flexure.core.elements import beam, rotary_inertia
-from flexure.core.numerics.rotations import from_rotation_vector
+from flexure.core.numerics.rotation_kernels import (
+    rotated_contraction,
+    rotated_half_jacobian,
+    rotated_vector,
+)
+from flexure.core.numerics.rotations import from_rotation_vector, rotation_matrix, vector_tensor
 
 COUNT = 12
 
@@ -143,3 +148,32 @@ def test_kernels_called_from_compiled_code(beams):
     close(p, expected[0])
     close(Dp, expected[1])
     close(acc, np.einsum("npij,ni,nj->np", expected[2], v, v))
+
+
+def test_closed_forms_of_the_rotation_against_its_tensors():
+    """rotation_kernels' u = R(lambda) a, h = C lambda and K = w . C on a body vector a against
+    the contractions of `rotations.vector_tensor` (C lambda lambda = R(lambda) a), for lambda
+    off the unit sphere too (the forms are the quadratic form, not only the rotation)."""
+    rng = np.random.default_rng(31)
+    for _ in range(50):
+        a, w = rng.normal(size=3), rng.normal(size=3)
+        lam = rng.normal(size=4) * rng.uniform(0.5, 2.0)
+        C = vector_tensor(a)
+        u = np.array(rotated_vector(*a, *lam))
+        assert_allclose(u, C @ lam @ lam, rtol=0, atol=1e-14 * np.abs(C).max() * (lam @ lam))
+        assert_allclose(u, rotation_matrix(lam) @ a, rtol=0, atol=1e-14 * (lam @ lam) * 4)
+        h = np.array(rotated_half_jacobian(*a, *lam)).T  # (3, 4): columns h_i
+        assert_allclose(h, C @ lam, rtol=0, atol=1e-14 * np.abs(C @ lam).max())
+        K = np.empty((4, 4))
+        K[np.triu_indices(4)] = rotated_contraction(*a, *w)
+        K[np.tril_indices(4)] = K.T[np.tril_indices(4)]
+        assert_allclose(K, np.einsum("k,kij->ij", w, C), rtol=0, atol=1e-14 * np.abs(w).max())
+
+
+def test_beam_hessian_exactly_symmetric(beams):
+    """D2e_k is formed on one triangle and mirrored: symmetric to the bit."""
+    x, _, _, packed = beams
+    for n in range(COUNT):
+        e, De, D2e = nan(6), nan(6, 14), nan(6, 14, 14)
+        beam.deformations_kernel(x[n], packed[n], 2, e, De, D2e)
+        assert np.array_equal(D2e, np.swapaxes(D2e, 1, 2))

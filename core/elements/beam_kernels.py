@@ -2,28 +2,31 @@
 
 The formulas of `flexure.core.elements.beam` (its module docstring) for one element, for the
 compiled evaluation engine (`flexure.core.engine`), with scalar loops and no allocation; they
-compute what `beam.deformations` and `beam.inertia_points` compute, in the same order of
-operations where it costs nothing, and tests/test_kernels_spatial.py checks them against those
-to round-off. The element registry reads `pack_reference`, `REFERENCE_WIDTH`,
-`deformations_entry` and `inertia_entry` from `beam`, which takes them from here.
+compute what `beam.deformations` and `beam.inertia_points` compute, and
+tests/test_kernels_spatial.py checks them against those to round-off. The element registry
+reads `pack_reference`, `REFERENCE_WIDTH`, `deformations_entry` and `inertia_entry` from
+`beam`, which takes them from here.
+
+Where numpy contracts the constant tensors C of `rotations.vector_tensor` (48 floats per
+node vector, R(lambda) a = C lambda lambda), these kernels use the closed forms of
+`rotation_kernels` (`rotated_vector`, `rotated_half_jacobian`, `rotated_contraction`) on the
+body vector a itself: the same numbers to round-off for a few flops each. So the packed
+reference row holds the element frame's vectors (21 floats per element where the tensors
+took 483), and e1's Hessian, symmetric, is formed once per pair of columns and mirrored.
 """
 
 import numpy as np
 
 from ..numerics.jit import kernel
+from ..numerics.rotation_kernels import rotated_contraction, rotated_half_jacobian, rotated_vector
 from . import entries
 
-# The packed reference row is
-# [l0, c, c_t, bend_tensors (4 x 3 x 4 x 4), inertia_tensors (6 x 3 x 4 x 4)]; inertia_scale is
-# l0 on the vectors ax_p, ax_q and 1 on the others. A tensor C (3 x 4 x 4) sits at
-# ref[base + 16 k + 4 i + j] = C_kij.
-
-_REF_BEND = 3
-_REF_INERTIA = _REF_BEND + 4 * 48
-REFERENCE_WIDTH = _REF_INERTIA + 6 * 48  # 483 floats, 3.9 kB per element
+# The packed reference row is [l0, c, c_t, az_p, az_q, ay_p, ay_q, ax_p, ax_q] (each vector
+# three floats, in its node's body frame): the bending vectors in `beam._BEND_AXES`' order.
+_AZ_P, _AZ_Q, _AY_P, _AY_Q, _AX_P, _AX_Q = 3, 6, 9, 12, 15, 18
+REFERENCE_WIDTH = 21  # floats, 168 B per element
 # x columns of the translations and Euler parameters of p and q
 _XP, _XLP, _XQ, _XLQ = 0, 3, 7, 10
-_TRANSLATIONS = (0, 1, 2, 7, 8, 9)  # the x columns of r^p and r^q
 
 
 def pack_reference(ref):
@@ -33,50 +36,43 @@ def pack_reference(ref):
     packed[:, 0] = ref["l0"]
     packed[:, 1] = ref["c"]
     packed[:, 2] = ref["c_t"]
-    packed[:, _REF_BEND:_REF_INERTIA] = ref["bend_tensors"].reshape(n, 4 * 48)
-    packed[:, _REF_INERTIA:] = ref["inertia_tensors"].reshape(n, 6 * 48)
+    for start, key in ((_AZ_P, "az_p"), (_AZ_Q, "az_q"), (_AY_P, "ay_p"), (_AY_Q, "ay_q"),
+                       (_AX_P, "ax_p"), (_AX_Q, "ax_q")):
+        packed[:, start:start + 3] = ref[key]
     return packed
 
 
 # The Euler parameters are read once into scalars m0 ... m3 and passed as such: indexing x
-# inside the helpers made the kernels two to three times slower. The helpers are inlined by
-# numba, except `_row`, the innermost and most used: LLVM inlines that one as well, and
-# numba's inlining of its many uses doubled the kernels' first compilation (6.3 s against
-# 3.8 s) for the same speed (974-1055 ns against 979-1019 ns per pair of calls).
-@kernel
-def _row(ref, start, m0, m1, m2, m3):
-    """(C lambda)_i of the row C_i. = ref[start:start + 4], lambda = [m0, m1, m2, m3]."""
-    return ref[start] * m0 + ref[start + 1] * m1 + ref[start + 2] * m2 + ref[start + 3] * m3
+# inside the helpers made the kernels two to three times slower. The helpers are inlined.
+@kernel(inline="always")
+def _rotated(ref, start, m0, m1, m2, m3):
+    """u = R(lambda) a (three components), a = ref[start:start + 3], lambda = [m0 ... m3]."""
+    return rotated_vector(ref[start], ref[start + 1], ref[start + 2], m0, m1, m2, m3)
 
 
 @kernel(inline="always")
-def _quadratic(ref, start, m0, m1, m2, m3):
-    """(C lambda) . lambda of the 4 x 4 block C = ref[start:start + 16]."""
-    return (_row(ref, start, m0, m1, m2, m3) * m0 + _row(ref, start + 4, m0, m1, m2, m3) * m1
-            + _row(ref, start + 8, m0, m1, m2, m3) * m2
-            + _row(ref, start + 12, m0, m1, m2, m3) * m3)
+def _half_jacobian(ref, start, m0, m1, m2, m3):
+    """h = C lambda (Du = 2 h) as its four columns, of the body vector a = ref[start:start + 3]."""
+    return rotated_half_jacobian(ref[start], ref[start + 1], ref[start + 2], m0, m1, m2, m3)
 
 
 @kernel(inline="always")
-def _rotated_vector(ref, base, m0, m1, m2, m3):
-    """u = C lambda lambda (three components) of the tensor C at ref[base:base + 48]."""
-    return (_quadratic(ref, base, m0, m1, m2, m3), _quadratic(ref, base + 16, m0, m1, m2, m3),
-            _quadratic(ref, base + 32, m0, m1, m2, m3))
+def _contraction(ref, start, w0, w1, w2):
+    """The ten entries of the symmetric w . C of the body vector a = ref[start:start + 3]."""
+    return rotated_contraction(ref[start], ref[start + 1], ref[start + 2], w0, w1, w2)
 
 
 @kernel(inline="always")
-def _derivative_column(ref, base, i, m0, m1, m2, m3):
-    """Column i of Du = 2 C lambda (three components) of the tensor C at ref[base:base + 48]."""
-    start = base + 4 * i
-    return (2.0 * _row(ref, start, m0, m1, m2, m3), 2.0 * _row(ref, start + 16, m0, m1, m2, m3),
-            2.0 * _row(ref, start + 32, m0, m1, m2, m3))
-
-
-@kernel(inline="always")
-def _contracted(ref, base, w0, w1, w2, i, j):
-    """(w . C)_ij = sum_k w_k C_kij of the tensor C at ref[base:base + 48]."""
-    offset = base + 4 * i + j
-    return w0 * ref[offset] + w1 * ref[offset + 16] + w2 * ref[offset + 32]
+def _store_symmetric(D2e, row, col, f, K, g, L):
+    """D2e[row] on the 4 x 4 block at (col, col) = f K + g L, both symmetric, as their ten
+    entries (`_contraction`'s order)."""
+    n = 0
+    for i in range(4):
+        for j in range(i, 4):
+            value = f * K[n] + g * L[n]
+            D2e[row, col + i, col + j] = value
+            D2e[row, col + j, col + i] = value
+            n += 1
 
 
 @kernel(inline="always")
@@ -88,6 +84,39 @@ def _store_mixed(D2e, row, col, v0, v1, v2):
     D2e[row, _XP, col] = D2e[row, col, _XP] = -v0
     D2e[row, _XP + 1, col] = D2e[row, col, _XP + 1] = -v1
     D2e[row, _XP + 2, col] = D2e[row, col, _XP + 2] = -v2
+
+
+@kernel(inline="always")
+def _zero(D2e, row, i0, i1, j0, j1):
+    """D2e[row, i0:i1, j0:j1] = 0."""
+    for i in range(i0, i1):
+        for j in range(j0, j1):
+            D2e[row, i, j] = 0.0
+
+
+@kernel(inline="always")
+def _zero_structural(D2e):
+    """The entries of D2e's rows 1 ... 5 that are zero by structure, which the kernel does not
+    write otherwise: e2 is free of the translations (r^p 0:3, r^q 7:10); e3, e5 (rows 2, 4)
+    involve lambda^p (3:7) alone and its products with the translations, e4, e6 (rows 3, 5)
+    likewise lambda^q (10:14)."""
+    _zero(D2e, 1, 0, 3, 0, 14)
+    _zero(D2e, 1, 7, 10, 0, 14)
+    for first in (3, 10):
+        _zero(D2e, 1, first, first + 4, 0, 3)
+        _zero(D2e, 1, first, first + 4, 7, 10)
+    for row in (2, 4):
+        _zero(D2e, row, 0, 3, 0, 3)
+        _zero(D2e, row, 0, 3, 7, 14)
+        _zero(D2e, row, 7, 10, 0, 3)
+        _zero(D2e, row, 7, 10, 7, 14)
+        _zero(D2e, row, 10, 14, 0, 14)
+        _zero(D2e, row, 3, 7, 10, 14)
+    for row in (3, 5):
+        _zero(D2e, row, 0, 3, 0, 10)
+        _zero(D2e, row, 7, 10, 0, 10)
+        _zero(D2e, row, 3, 7, 0, 14)
+        _zero(D2e, row, 10, 14, 3, 7)
 
 
 @kernel
@@ -102,17 +131,13 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     lx = x[_XQ] - x[_XP]
     ly = x[_XQ + 1] - x[_XP + 1]
     lz = x[_XQ + 2] - x[_XP + 2]
-    # the node vectors [n_z'^p, n_z'^q, n_y'^p, n_y'^q] (see _BEND_AXES) and their tensors
-    t0 = _REF_BEND
-    t1 = _REF_BEND + 48
-    t2 = _REF_BEND + 96
-    t3 = _REF_BEND + 144
     m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]  # lambda^p
     k0, k1, k2, k3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]  # lambda^q
-    a0, a1, a2 = _rotated_vector(ref, t0, m0, m1, m2, m3)
-    b0, b1, b2 = _rotated_vector(ref, t1, k0, k1, k2, k3)
-    c0, c1, c2 = _rotated_vector(ref, t2, m0, m1, m2, m3)
-    d0, d1, d2 = _rotated_vector(ref, t3, k0, k1, k2, k3)
+    # the node vectors [n_z'^p, n_z'^q, n_y'^p, n_y'^q] (see beam._BEND_AXES)
+    a0, a1, a2 = _rotated(ref, _AZ_P, m0, m1, m2, m3)
+    b0, b1, b2 = _rotated(ref, _AZ_Q, k0, k1, k2, k3)
+    c0, c1, c2 = _rotated(ref, _AY_P, m0, m1, m2, m3)
+    d0, d1, d2 = _rotated(ref, _AY_Q, k0, k1, k2, k3)
     e3 = -(a0 * lx + a1 * ly + a2 * lz)
     e4 = b0 * lx + b1 * ly + b2 * lz
     e5 = c0 * lx + c1 * ly + c2 * lz
@@ -134,11 +159,6 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     s4 = c * (4.0 * e4 + e3)
     s5 = c * (4.0 * e5 + e6)
     s6 = c * (4.0 * e6 + e5)
-    if order >= 2:  # zero what is not written below (row 0 is written whole)
-        for r in range(1, 6):
-            for i in range(14):
-                for j in range(14):
-                    D2e[r, i, j] = 0.0
     # translations: d e / d r^q = Dz (l), d e / d r^p its negative
     ux = lx / length
     uy = ly / length
@@ -165,12 +185,19 @@ def deformations_kernel(x, ref, order, e, De, D2e):
         De[3, _XP + k] = -g4
         De[4, _XP + k] = -g5
         De[5, _XP + k] = -g6
-    # Euler parameters: column i of Dn for each vector; bending l^T Dn, torsion n_(3-i)^T Dn
+    if order >= 2:  # zero what is not written below (row 0 is written whole)
+        _zero_structural(D2e)
+    # Euler parameters: column i of Dn = 2 h_i for each vector; bending l^T Dn, torsion
+    # n_(3-i)^T Dn
+    ha = _half_jacobian(ref, _AZ_P, m0, m1, m2, m3)  # D n_z'^p / 2
+    hb = _half_jacobian(ref, _AZ_Q, k0, k1, k2, k3)  # D n_z'^q / 2
+    hc = _half_jacobian(ref, _AY_P, m0, m1, m2, m3)  # D n_y'^p / 2
+    hd = _half_jacobian(ref, _AY_Q, k0, k1, k2, k3)  # D n_y'^q / 2
     for i in range(4):
-        p0, p1, p2 = _derivative_column(ref, t0, i, m0, m1, m2, m3)  # D n_z'^p
-        q0, q1, q2 = _derivative_column(ref, t1, i, k0, k1, k2, k3)  # D n_z'^q
-        r0, r1, r2 = _derivative_column(ref, t2, i, m0, m1, m2, m3)  # D n_y'^p
-        w0, w1, w2 = _derivative_column(ref, t3, i, k0, k1, k2, k3)  # D n_y'^q
+        p0, p1, p2 = 2.0 * ha[i][0], 2.0 * ha[i][1], 2.0 * ha[i][2]  # D n_z'^p
+        q0, q1, q2 = 2.0 * hb[i][0], 2.0 * hb[i][1], 2.0 * hb[i][2]  # D n_z'^q
+        r0, r1, r2 = 2.0 * hc[i][0], 2.0 * hc[i][1], 2.0 * hc[i][2]  # D n_y'^p
+        w0, w1, w2 = 2.0 * hd[i][0], 2.0 * hd[i][1], 2.0 * hd[i][2]  # D n_y'^q
         g3 = -(lx * p0 + ly * p1 + lz * p2)
         g5 = lx * r0 + ly * r1 + lz * r2
         g4 = lx * q0 + ly * q1 + lz * q2
@@ -190,73 +217,83 @@ def deformations_kernel(x, ref, order, e, De, D2e):
         De[5, _XLP + i] = 0.0
         De[5, _XLQ + i] = g6
         if order >= 2:
-            # bending: d2 e / dl dlambda = sign Dn (kept there for the torsion below)
+            # bending: d2 e / dl dlambda = sign Dn
             _store_mixed(D2e, 2, _XLP + i, -p0, -p1, -p2)
             _store_mixed(D2e, 3, _XLQ + i, q0, q1, q2)
             _store_mixed(D2e, 4, _XLP + i, r0, r1, r2)
             _store_mixed(D2e, 5, _XLQ + i, -w0, -w1, -w2)
+            # torsion between the nodes: l0 / 2 (Dn_0^T Dn_3 - Dn_2^T Dn_1)
+            for j in range(4):
+                mixed = half * ((p0 * (2.0 * hd[j][0]) + p1 * (2.0 * hd[j][1])
+                                 + p2 * (2.0 * hd[j][2]))
+                                - (r0 * (2.0 * hb[j][0]) + r1 * (2.0 * hb[j][1])
+                                   + r2 * (2.0 * hb[j][2])))
+                D2e[1, _XLP + i, _XLQ + j] = mixed
+                D2e[1, _XLQ + j, _XLP + i] = mixed
     if order < 2:
         return
-    for i in range(4):
-        for j in range(4):
-            # bending: d2 e / dlambda2 = 2 sign l . C
-            D2e[2, _XLP + i, _XLP + j] = -2.0 * _contracted(ref, t0, lx, ly, lz, i, j)
-            D2e[3, _XLQ + i, _XLQ + j] = 2.0 * _contracted(ref, t1, lx, ly, lz, i, j)
-            D2e[4, _XLP + i, _XLP + j] = 2.0 * _contracted(ref, t2, lx, ly, lz, i, j)
-            D2e[5, _XLQ + i, _XLQ + j] = -2.0 * _contracted(ref, t3, lx, ly, lz, i, j)
-            # torsion: l0 sign n_(3-i) . C_i, and l0 / 2 (Dn_0^T Dn_3 - Dn_2^T Dn_1) between
-            # the nodes (the Dn read back from the bending rows, where they are stored exactly)
-            D2e[1, _XLP + i, _XLP + j] = (l0 * _contracted(ref, t0, d0, d1, d2, i, j)
-                                          + -l0 * _contracted(ref, t2, b0, b1, b2, i, j))
-            D2e[1, _XLQ + i, _XLQ + j] = (-l0 * _contracted(ref, t1, c0, c1, c2, i, j)
-                                          + l0 * _contracted(ref, t3, a0, a1, a2, i, j))
-            cross_03 = 0.0  # (-Dn_0) (-Dn_3) in the rows of e3 and e6
-            cross_21 = 0.0
-            for k in range(3):
-                cross_03 += D2e[2, _XQ + k, _XLP + i] * D2e[5, _XQ + k, _XLQ + j]
-                cross_21 += D2e[4, _XQ + k, _XLP + i] * D2e[3, _XQ + k, _XLQ + j]
-            mixed = half * (cross_03 - cross_21)
-            D2e[1, _XLP + i, _XLQ + j] = mixed
-            D2e[1, _XLQ + j, _XLP + i] = mixed
-    # elongation: c Db^T W Db + sum_k slope_k D2e_k + (I - u u^T) / |l| on the translations
-    # and 2 c_t De2^T De2 + s2 D2e2 on the Euler parameters, column by column, leaving out
-    # the terms that are zero by structure (the rows of e3, e5 in De and D2e do not involve
-    # lambda^q, those of e4, e6 not lambda^p, e2 does not involve the translations, and the
-    # D2e of e2 ... e6 are zero between translations): each entry the sum of the same
-    # non-zero terms in the same order as over all of them
-    for j in range(14):
-        w2 = 2.0 * c_t * De[1, j]
-        w3 = c * (4.0 * De[2, j] + De[3, j])
-        w4 = c * (De[2, j] + 4.0 * De[3, j])
-        w5 = c * (4.0 * De[4, j] + De[5, j])
-        w6 = c * (De[4, j] + 4.0 * De[5, j])
-        on_p = _XLP <= j < _XQ  # j a lambda^p column
-        on_q = j >= _XLQ
-        for i in _TRANSLATIONS:
-            value = ((De[2, i] * w3 + De[3, i] * w4) + De[4, i] * w5) + De[5, i] * w6
-            if on_p:
-                value += s3 * D2e[2, i, j] + s5 * D2e[4, i, j]
-            elif on_q:
-                value += s4 * D2e[3, i, j] + s6 * D2e[5, i, j]
-            D2e[0, i, j] = value
-        for i in range(_XLP, _XLP + 4):
-            value = De[2, i] * w3 + De[4, i] * w5
-            if not on_q:
-                value += s3 * D2e[2, i, j] + s5 * D2e[4, i, j]
-            D2e[0, i, j] = value + (De[1, i] * w2 + s2 * D2e[1, i, j])
-        for i in range(_XLQ, _XLQ + 4):
-            value = De[3, i] * w4 + De[5, i] * w6
-            if not on_p:
-                value += s4 * D2e[3, i, j] + s6 * D2e[5, i, j]
-            D2e[0, i, j] = value + (De[1, i] * w2 + s2 * D2e[1, i, j])
+    # bending: d2 e / dlambda2 = 2 sign l . C; torsion within a node: l0 sign n_(3-i) . C_i
+    kl_a = _contraction(ref, _AZ_P, lx, ly, lz)
+    kl_b = _contraction(ref, _AZ_Q, lx, ly, lz)
+    kl_c = _contraction(ref, _AY_P, lx, ly, lz)
+    kl_d = _contraction(ref, _AY_Q, lx, ly, lz)
+    _store_symmetric(D2e, 2, _XLP, -2.0, kl_a, 0.0, kl_a)  # one tensor: its second term 0
+    _store_symmetric(D2e, 3, _XLQ, 2.0, kl_b, 0.0, kl_b)
+    _store_symmetric(D2e, 4, _XLP, 2.0, kl_c, 0.0, kl_c)
+    _store_symmetric(D2e, 5, _XLQ, -2.0, kl_d, 0.0, kl_d)
+    _store_symmetric(D2e, 1, _XLP, l0, _contraction(ref, _AZ_P, d0, d1, d2),
+                     -l0, _contraction(ref, _AY_P, b0, b1, b2))
+    _store_symmetric(D2e, 1, _XLQ, -l0, _contraction(ref, _AZ_Q, c0, c1, c2),
+                     l0, _contraction(ref, _AY_Q, a0, a1, a2))
+    # elongation: c Db^T W Db + 2 c_t De2^T De2 + sum_k slope_k D2e_k (k = 2 ... 6), and
+    # (I - u u^T) / |l| on the translations: block by block of z = [l, lambda^p, lambda^q],
+    # leaving out the terms that are zero by structure (e2 does not involve l, e3 and e5 not
+    # lambda^q, e4 and e6 not lambda^p), the upper triangle mirrored; an r^p column is minus
+    # its r^q column
+    ct2 = 2.0 * c_t
     for k in range(3):
+        i = _XQ + k
+        g3i, g4i, g5i, g6i = De[2, i], De[3, i], De[4, i], De[5, i]
         uk = (ux, uy, uz)[k]
-        for m in range(3):
-            value = ((1.0 if k == m else 0.0) - uk * (ux, uy, uz)[m]) / length
-            D2e[0, _XQ + k, _XQ + m] += value
-            D2e[0, _XP + k, _XP + m] += value
-            D2e[0, _XQ + k, _XP + m] -= value
-            D2e[0, _XP + k, _XQ + m] -= value
+        for m in range(k, 3):
+            j = _XQ + m
+            g3j, g4j, g5j, g6j = De[2, j], De[3, j], De[4, j], De[5, j]
+            value = (c * (4.0 * ((g3i * g3j + g4i * g4j) + (g5i * g5j + g6i * g6j))
+                          + ((g3i * g4j + g4i * g3j) + (g5i * g6j + g6i * g5j)))
+                     + ((1.0 if k == m else 0.0) - uk * (ux, uy, uz)[m]) / length)
+            D2e[0, i, j] = D2e[0, j, i] = value
+            D2e[0, i - 7, j - 7] = D2e[0, j - 7, i - 7] = value
+            D2e[0, i - 7, j] = D2e[0, j, i - 7] = -value
+            D2e[0, i, j - 7] = D2e[0, j - 7, i] = -value
+        for j in range(_XLP, _XLP + 4):
+            g3j, g5j = De[2, j], De[4, j]
+            value = (c * (4.0 * (g3i * g3j + g5i * g5j) + (g4i * g3j + g6i * g5j))
+                     + (s3 * D2e[2, i, j] + s5 * D2e[4, i, j]))
+            D2e[0, i, j] = D2e[0, j, i] = value
+            D2e[0, i - 7, j] = D2e[0, j, i - 7] = -value
+        for j in range(_XLQ, _XLQ + 4):
+            g4j, g6j = De[3, j], De[5, j]
+            value = (c * (4.0 * (g4i * g4j + g6i * g6j) + (g3i * g4j + g5i * g6j))
+                     + (s4 * D2e[3, i, j] + s6 * D2e[5, i, j]))
+            D2e[0, i, j] = D2e[0, j, i] = value
+            D2e[0, i - 7, j] = D2e[0, j, i - 7] = -value
+    for i in range(4):
+        ip, iq = _XLP + i, _XLQ + i
+        g2p, g3i, g5i = De[1, ip], De[2, ip], De[4, ip]
+        g2q, g4i, g6i = De[1, iq], De[3, iq], De[5, iq]
+        for j in range(i, 4):
+            jp, jq = _XLP + j, _XLQ + j
+            value = (c * (4.0 * (g3i * De[2, jp] + g5i * De[4, jp])) + ct2 * (g2p * De[1, jp])
+                     + (s2 * D2e[1, ip, jp] + s3 * D2e[2, ip, jp] + s5 * D2e[4, ip, jp]))
+            D2e[0, ip, jp] = D2e[0, jp, ip] = value
+            value = (c * (4.0 * (g4i * De[3, jq] + g6i * De[5, jq])) + ct2 * (g2q * De[1, jq])
+                     + (s2 * D2e[1, iq, jq] + s4 * D2e[3, iq, jq] + s6 * D2e[5, iq, jq]))
+            D2e[0, iq, jq] = D2e[0, jq, iq] = value
+        for j in range(4):
+            jq = _XLQ + j
+            value = (c * (g3i * De[3, jq] + g5i * De[5, jq]) + ct2 * (g2p * De[1, jq])
+                     + s2 * D2e[1, ip, jq])
+            D2e[0, ip, jq] = D2e[0, jq, ip] = value
 
 
 @kernel
@@ -278,38 +315,34 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
         for k in range(3):
             acc[k] = 0.0
             acc[6 + k] = 0.0
-    # the vectors [ax_p, ay_p, az_p, ax_q, ay_q, az_q] (see _INERTIA_AXES)
-    base = _REF_INERTIA
+    # the vectors [ax_p, ay_p, az_p, ax_q, ay_q, az_q] (see beam._INERTIA_AXES) at their rows
     m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]
-    _inertia_vector(v, ref, order, p, Dp, acc, 3, _XLP, l0, base, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 12, _XLP, 1.0, base + 48, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 15, _XLP, 1.0, base + 96, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 3, _XLP, l0, _AX_P, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 12, _XLP, 1.0, _AY_P, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 15, _XLP, 1.0, _AZ_P, m0, m1, m2, m3)
     m0, m1, m2, m3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]
-    _inertia_vector(v, ref, order, p, Dp, acc, 9, _XLQ, l0, base + 144, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 18, _XLQ, 1.0, base + 192, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 21, _XLQ, 1.0, base + 240, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 9, _XLQ, l0, _AX_Q, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 18, _XLQ, 1.0, _AY_Q, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 21, _XLQ, 1.0, _AZ_Q, m0, m1, m2, m3)
 
 
 @kernel(inline="always")
-def _inertia_vector(v, ref, order, p, Dp, acc, row, col, scale, base, m0, m1, m2, m3):
-    """The rows row ... row + 2 of p, Dp, acc of the inertia point scale C lambda lambda, C the
-    tensor at ref[base:base + 48], lambda = [m0, m1, m2, m3] = x[col:col + 4]: scale 2 C lambda,
-    scale (2 C v) v."""
+def _inertia_vector(v, ref, order, p, Dp, acc, row, col, scale, start, m0, m1, m2, m3):
+    """The rows row ... row + 2 of p, Dp, acc of the inertia point scale R(lambda) a, a the
+    body vector ref[start:start + 3], lambda = [m0, m1, m2, m3] = x[col:col + 4]: scale 2 h
+    (h = C lambda) and scale (2 C v) v = 2 scale R(v) a (C v v is R's quadratic form at v)."""
+    u = _rotated(ref, start, m0, m1, m2, m3)
     for k in range(3):
-        start = base + 16 * k
-        h0 = _row(ref, start, m0, m1, m2, m3)
-        h1 = _row(ref, start + 4, m0, m1, m2, m3)
-        h2 = _row(ref, start + 8, m0, m1, m2, m3)
-        h3 = _row(ref, start + 12, m0, m1, m2, m3)
-        p[row + k] = scale * (h0 * m0 + h1 * m1 + h2 * m2 + h3 * m3)
-        if order >= 1:
-            Dp[row + k, col] = scale * (2.0 * h0)
-            Dp[row + k, col + 1] = scale * (2.0 * h1)
-            Dp[row + k, col + 2] = scale * (2.0 * h2)
-            Dp[row + k, col + 3] = scale * (2.0 * h3)
-        if order >= 2:
-            acc[row + k] = scale * (2.0 * _quadratic(ref, start, v[col], v[col + 1], v[col + 2],
-                                                     v[col + 3]))
+        p[row + k] = scale * u[k]
+    if order >= 1:
+        h = _half_jacobian(ref, start, m0, m1, m2, m3)
+        for i in range(4):
+            for k in range(3):
+                Dp[row + k, col + i] = scale * (2.0 * h[i][k])
+    if order >= 2:
+        w = _rotated(ref, start, v[col], v[col + 1], v[col + 2], v[col + 3])
+        for k in range(3):
+            acc[row + k] = scale * (2.0 * w[k])
 
 
 deformations_entry = entries.deformations_entry(deformations_kernel)

@@ -32,7 +32,8 @@ import numpy as np
 
 from ..model import ElementGroup
 from ..numerics.jit import kernel
-from ..numerics.rotations import rotate, vector_tensor
+from ..numerics.rotation_kernels import rotated_half_jacobian, rotated_vector
+from ..numerics.rotations import rotate
 from . import entries
 
 type_name = "NODE_INERTIA"
@@ -88,49 +89,41 @@ def _self():
 
 # -- compiled kernel (one node per call) -------------------------------------------------------
 # `inertia_points` for one node, for the compiled evaluation engine, with scalar loops and no
-# allocation. The packed reference row holds the tensors C_k (3 x 4 x 4) of the three body
-# vectors b_k (`rotations.vector_tensor`, R(lambda) b_k = C_k lambda lambda), C_k at
-# ref[48 k + 16 m + 4 i + j] = (C_k)_mij.
+# allocation. The packed reference row holds the three body vectors b_k (b_k at ref[3 k:3 k +
+# 3]); the kernel rotates them by the closed forms of `rotation_kernels`, which give what
+# `rotations.rotate` gives through the tensors of `rotations.vector_tensor` to round-off.
 
-REFERENCE_WIDTH = 3 * 48  # 144 floats
+REFERENCE_WIDTH = 9  # floats
 
 
 def pack_reference(ref):
     """(n, REFERENCE_WIDTH) float64, C-contiguous, of the reference {"axes": (n, 3, 3)} (the
-    body vectors b_k as columns)."""
+    body vectors b_k as columns): b_k at columns 3 k ... 3 k + 2."""
     axes = np.asarray(ref["axes"], float)
-    tensors = vector_tensor(np.swapaxes(axes, 1, 2))  # (n, 3 vectors, 3, 4, 4)
-    return np.ascontiguousarray(tensors.reshape(axes.shape[0], REFERENCE_WIDTH))
+    return np.ascontiguousarray(np.swapaxes(axes, 1, 2).reshape(axes.shape[0], REFERENCE_WIDTH))
 
 
 @kernel
 def inertia_kernel(x, v, ref, order, p, Dp, acc):
     """p (9,), Dp (9, 4) if order >= 1, acc = (D2p v) v (9,) if order >= 2 of one node: its
     Euler parameters x (4,) and their rates v (4,), ref its packed reference row. Overwrites
-    every entry it fills; no allocation. With C the tensor of a point's component: p = (C
-    lambda) . lambda, Dp = 2 C lambda, D2p = 2 C."""
+    every entry it fills; no allocation. Point k: p_k = R(lambda) b_k, Dp_k = 2 C_k lambda,
+    (D2p_k v) v = 2 C_k v v = 2 R(v) b_k (R's quadratic form at v)."""
     m0, m1, m2, m3 = x[0], x[1], x[2], x[3]  # as scalars: indexing x in the loop is slower
-    for row in range(9):
-        base = 16 * row  # 48 k + 16 m for component m of point k, row 3 k + m
-        h0 = ref[base] * m0 + ref[base + 1] * m1 + ref[base + 2] * m2 + ref[base + 3] * m3
-        h1 = ref[base + 4] * m0 + ref[base + 5] * m1 + ref[base + 6] * m2 + ref[base + 7] * m3
-        h2 = ref[base + 8] * m0 + ref[base + 9] * m1 + ref[base + 10] * m2 + ref[base + 11] * m3
-        h3 = (ref[base + 12] * m0 + ref[base + 13] * m1 + ref[base + 14] * m2
-              + ref[base + 15] * m3)
-        p[row] = h0 * m0 + h1 * m1 + h2 * m2 + h3 * m3
+    for k in range(3):
+        b0, b1, b2 = ref[3 * k], ref[3 * k + 1], ref[3 * k + 2]
+        u = rotated_vector(b0, b1, b2, m0, m1, m2, m3)
+        for c in range(3):
+            p[3 * k + c] = u[c]
         if order >= 1:
-            Dp[row, 0] = 2.0 * h0
-            Dp[row, 1] = 2.0 * h1
-            Dp[row, 2] = 2.0 * h2
-            Dp[row, 3] = 2.0 * h3
-        if order >= 2:
-            rate = 0.0
+            h = rotated_half_jacobian(b0, b1, b2, m0, m1, m2, m3)
             for i in range(4):
-                half = 0.0
-                for j in range(4):
-                    half += ref[base + 4 * i + j] * v[j]
-                rate += half * v[i]
-            acc[row] = 2.0 * rate
+                for c in range(3):
+                    Dp[3 * k + c, i] = 2.0 * h[i][c]
+        if order >= 2:
+            w = rotated_vector(b0, b1, b2, v[0], v[1], v[2], v[3])
+            for c in range(3):
+                acc[3 * k + c] = 2.0 * w[c]
 
 
 inertia_entry = entries.inertia_entry(inertia_kernel)
