@@ -1,6 +1,6 @@
 """The six-DOF manipulator's analyses: the chapter's Table 3.1 and Fig. 3.5, and its workspace.
 
-    python examples/manipulator_report.py                  # everything, about 17 s of CPU
+    python examples/manipulator_report.py                  # everything, about 15 s of CPU
     python examples/manipulator_report.py --skip-workspace
 
 1. **Frequencies** (the chapter's Table 3.1 analogue): the lowest ten natural frequencies of the
