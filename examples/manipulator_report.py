@@ -1,6 +1,6 @@
 """The six-DOF manipulator's analyses: the chapter's Table 3.1 and Fig. 3.5, and its workspace.
 
-    python examples/manipulator_report.py                  # everything, about 17 s of CPU
+    python examples/manipulator_report.py                  # everything, about 15 s of CPU
     python examples/manipulator_report.py --skip-workspace
 
 1. **Frequencies** (the chapter's Table 3.1 analogue): the lowest ten natural frequencies of the
@@ -148,13 +148,16 @@ def workspace(amplitudes):
             # loads (at the ratio of their amplitudes): the 6 mm pose's stepping starts at
             # its 3 mm pose, the first half of its load, which it stepped through again
             # before (`static_equilibrium`'s path; the opposite pose's curvature did not
-            # help the 3 mm ones). Two load steps: the poses are far from any buckling or
-            # snap-through.
+            # help the 3 mm ones). The poses are far from any buckling or snap-through: a
+            # 3 mm pose is one load step from rest (5 or 6 Newton iterations, where two
+            # steps took 4 and 5 or 6), a 6 mm pose one step of half its load from its 3 mm
+            # pose (`load_steps=2`: a step that fails is halved to 0.75 of the load; from
+            # one load step the first halving would try the same full load again).
             done = solved.setdefault(direction, {})
             path = [(other / amplitude, found) for other, found in done.items()
                     if amplitude != 0.0 and 0.0 < other / amplitude < 1.0]
-            solution = static_equilibrium(model, loads=loads, load_steps=2, path=path,
-                                          mechanics=mech)
+            solution = static_equilibrium(model, loads=loads, load_steps=2 if path else 1,
+                                          path=path, mechanics=mech)
             if amplitude != 0.0:
                 done[amplitude] = solution
             lin = linearize(model, solution, mechanics=mech)

@@ -104,3 +104,102 @@ def test_a_large_model_takes_the_augmented_step_by_default():
     small = load_scene("truss_1dof_x")
     with pytest.raises(ValueError, match="sparse mechanics"):
         static_equilibrium(small, compiled=False, augmented=True)
+
+
+def unprojected_steps(name, size, count):
+    """The free DOFs' steps (in their units) of `count` Newton iterations of the augmented
+    balance from the scene's equilibrium with every DOF moved by `size` units at random
+    (projected there), and the unprojected iterates with their projections (`solved`)."""
+    model, inputs = CASES[name]()
+    values = inputs
+    if values is not None and model.actuators:
+        values = steady_port_values(model, values)
+    mech = Mechanics(model, sparse=True)
+    solution = static_equilibrium(model, inputs=inputs, compiled=False, mechanics=mech)
+    units = dof_tolerances(model, 1.0)
+    moved = solution.q + size * units * np.random.default_rng(3).standard_normal(units.size)
+    config = mech.kinematics.solve(moved, solution.x)
+    balance = AugmentedBalance(mech)
+    balance.set_load(1.0, None, values)
+    steps, unprojected = [], []
+    for _ in range(count):
+        dq = np.zeros(model.ndof)
+        dq[model.free_dofs] = balance.free_step(config, dq)
+        steps.append(np.max(np.abs(dq) / units))
+        config = balance.moved(config, config.q + dq)
+        if config is balance._unprojected:  # (a round-off step is projected)
+            unprojected.append((config, balance.solved(config)))
+    return mech, unprojected, np.array(steps)
+
+
+@pytest.mark.parametrize("name", ["spatial cantilever, 26 BEAMs",
+                                  "spatial beam, moments about global axes, gravity",
+                                  "planar stage, gravity"])
+def test_unprojected_iterates_converge_to_the_projected_equilibrium(name):
+    """Newton on the coordinates and multipliers without projecting the iterates onto the
+    constraints (static_augmented's module docstring), 1e-3 units from the equilibrium: the
+    steps (in the DOFs' units) reach round-off, 1e-13, in five iterations, as the projected
+    iterates do (measured: the same steps to two digits on the two scenes with gravity);
+    on the cantilever each step above 1e-7 is followed by one at most 100 times its square
+    (Newton's quadratic convergence: measured 3e-3, 3e-5, 7e-10). The projected solution
+    satisfies the constraints to 10 times the kinematics' step tolerance and its DOFs are
+    the last unprojected iterate's within 1e-12 of their units (the projection corrects by
+    the order of the last step squared)."""
+    mech, unprojected, steps = unprojected_steps(name, 1e-3, 5)
+    assert len(unprojected) >= 2, f"{name}: {len(unprojected)} iterates not projected"
+    assert steps[-1] <= 1e-13, f"{name}: steps {steps}"
+    if name.startswith("spatial cantilever"):
+        for before, after in zip(steps[:-1], steps[1:], strict=True):
+            if before > 1e-7:
+                assert after <= 100.0 * before**2, f"{name}: steps {steps}"
+    last, solved = unprojected[-1]
+    kin = mech.kinematics
+    residual = kin.residual(solved.x, solved.e, solved.q)
+    assert np.all(np.abs(residual) <= 10.0 * kin.step_tolerance), name
+    units = dof_tolerances(mech.model, 1.0)
+    assert np.max(np.abs(solved.q - last.q) / units) <= 1e-12, name
+
+
+def test_an_unprojected_step_far_beyond_reach_is_a_convergence_error():
+    """A step that takes x + dx where the deformations are not finite raises (the load step
+    is then halved by `static_equilibrium`), it is not integrated as NaN."""
+    from flexure.core.errors import ConvergenceError
+
+    model, _ = CASES["spatial cantilever, 26 BEAMs"]()
+    mech = Mechanics(model, sparse=True)
+    balance = AugmentedBalance(mech)
+    config = mech.initial_configuration()
+    balance.set_load(1.0, model.loads + 0.5, None)
+    dq = np.zeros(model.ndof)
+    dq[model.free_dofs] = balance.free_step(config, dq)
+    made_at, dx, step = balance._step
+    balance._step = (made_at, np.full_like(dx, 1e300), step)
+    with pytest.raises(ConvergenceError, match="reach"):
+        balance.moved(config, config.q + dq)
+
+
+@pytest.mark.slow
+def test_a_workspace_pose_of_the_manipulator_matches_the_reduced_newton():
+    """manipulator_reduced (507 DOFs) at the report's -3 mm z pose (examples/
+    manipulator_report.py's loads: the actuator forces K_dc (-3 mm radial strokes)),
+    stepped through the unprojected augmented iterates and through the reduced K dq = Q on
+    the DOFs (the numpy reference): every DOF and coordinate within 1e-10 of its unit."""
+    from flexure.core import linearize, static_gain
+
+    model = load_scene("manipulator_reduced")
+    mech = Mechanics(model)
+    rest = static_equilibrium(model, mechanics=mech)
+    stiffness = np.linalg.inv(static_gain(model, linear_model=linearize(model, rest,
+                                                                        mechanics=mech)))
+    angles = np.radians([90.0, 210.0, 330.0])
+    strokes = np.ravel([(3e-3 * np.cos(a), 3e-3 * np.sin(a)) for a in angles])
+    loads = np.zeros(model.nx)
+    loads[[port.coordinate for port in model.inputs]] = stiffness @ strokes
+    solutions = [static_equilibrium(model, loads=loads, load_steps=2, compiled=False,
+                                    augmented=augmented, mechanics=mech)
+                 for augmented in (True, False)]
+    units = dof_tolerances(model, 1.0)
+    error = np.max(np.abs(solutions[0].q - solutions[1].q) / units)
+    assert error <= 1e-10, f"DOFs differ by {error:.2e} of their units"
+    error = np.max(np.abs(solutions[0].x - solutions[1].x) / coordinate_units(model)[0])
+    assert error <= 1e-10, f"coordinates differ by {error:.2e} of their units"

@@ -49,7 +49,7 @@ linear analyses take) and stress resultants are the numpy kinematics' at the equ
 coordinates. On the numpy path of a large model (`Mechanics.sparse`) Newton's step comes, by
 default, from the sparse augmented system on the coordinates instead of K and Q on the DOFs
 (`static_augmented`: the same step to round-off, without DF and the dense tangent in the
-iterations; `augmented` chooses).
+iterations, and without projecting the iterates onto the constraints; `augmented` chooses).
 """
 
 from __future__ import annotations
