@@ -17,6 +17,7 @@ from test_rotation_ports import cantilever
 
 from flexure.core import build_model, static_equilibrium
 from flexure.core.analysis.statics import curvature_step
+from flexure.core.errors import ConvergenceError
 from flexure.core.mechanics.mechanics import Mechanics
 
 TIP_FORCE = 40.0  # N on 3.y: the tip of the 0.2 m cantilever moves about 0.05 m
@@ -86,3 +87,16 @@ def test_a_path_point_off_the_path_is_refused(s):
     other = bent_cantilever()[0]
     with pytest.raises(ValueError, match="the same model"):
         static_equilibrium(other, loads=loads, path=[(0.5, half)])
+
+
+def test_a_step_that_fails_from_a_path_point_is_halved_toward_it():
+    """From the path point at half the load, one load step reaches for the full load; with
+    one Newton iteration allowed, every step fails (the cantilever is nonlinear), and each
+    halving tries half the increment tried before: 1 -> 0.75 -> 0.625 -> 0.5625 -> 0.53125.
+    The error names the last one."""
+    model, loads = bent_cantilever()
+    half = static_equilibrium(model, loads=0.5 * loads, load_steps=2)
+    with pytest.raises(ConvergenceError, match=r"load factor 0\.5 -> 0\.5312, after 4 step "
+                       r"halvings"):
+        static_equilibrium(model, loads=loads, load_steps=1, path=[(0.5, half)],
+                           max_iterations=1)

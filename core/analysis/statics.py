@@ -310,7 +310,9 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
                     f"{target_factor:.4g}, "
                     f"after {halvings} step halvings): {error}"
                 ) from None
-            step *= 0.5
+            # half the increment tried: from a path point the nominal step may reach past
+            # the full load, and halving it alone would try the same target again
+            step = 0.5 * (target_factor - factor)
             halvings += 1
             continue
         total_iterations += iterations
