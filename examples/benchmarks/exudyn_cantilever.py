@@ -121,7 +121,9 @@ def tip_history(n, *, h, samples, newton_tolerance=1e-6):
                                          outputVariableType=exu.OutputVariableType.Position))
     mbs.Assemble()
     settings = _settings(h, float(samples[-1]), newton_tolerance)
-    settings.solutionSettings.sensorsWritePeriod = float(samples[1] - samples[0])
+    with warnings.catch_warnings():  # the older name, which 1.13 still reads
+        warnings.simplefilter("ignore", DeprecationWarning)
+        settings.solutionSettings.sensorsWritePeriod = float(samples[1] - samples[0])
     start = time.process_time()
     exu.SolveDynamic(mbs, settings, showHints=False)
     cpu = time.process_time() - start
