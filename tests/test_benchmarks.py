@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -93,7 +94,7 @@ def test_the_spatial_rows_measure_the_issues_targets():
 
     rows = spatial(repeat=1, quick=True)
     targets = [r for r in rows if r.met is not None]
-    assert len(rows) == 5 and len(targets) == 4
+    assert len(rows) == 7 and len(targets) == 4
     for row in targets:
         assert row.ratio > 0.0 and row.met == (row.ratio <= 1.0), row
     assert "x the planar stage's" in rows[0].flexure
@@ -101,3 +102,26 @@ def test_the_spatial_rows_measure_the_issues_targets():
     for row in rows[2:4]:
         steps = int(row.flexure.split(" for ")[1].split()[0])
         assert steps > 0, row.flexure
+    for row in rows[5:]:  # at equal error: flexure's CPU, and Exudyn's where installed
+        assert "ms CPU per simulated ms" in row.flexure, row
+        assert row.ratio is None or row.ratio > 0.0, row
+
+
+def test_the_cantilevers_cpu_at_equal_error_interpolates_in_log_log():
+    """`cantilever_precision.cpu_at`: between the two points that bracket the error, the
+    straight line in log-log (at the geometric middle, the geometric mean of the CPUs);
+    None outside the points; `relative_error` the largest deviation over the largest
+    reference value."""
+    import math
+
+    from examples.benchmarks.cantilever_precision import cpu_at, relative_error
+
+    rows = [(1e-3, 1e-2, 1.0, 0.1, 10), (1e-5, 1e-4, 10.0, 0.2, 50),
+            (1e-7, 1e-6, 100.0, 0.4, 250)]  # (rtol, error, CPU/ms, CPU/step, steps)
+    assert math.isclose(cpu_at(rows, 1e-3), math.sqrt(10.0), rel_tol=1e-12)
+    assert math.isclose(cpu_at(rows, 1e-5), math.sqrt(1000.0), rel_tol=1e-12)
+    assert math.isclose(cpu_at(rows, 1e-4), 10.0, rel_tol=1e-12)
+    assert cpu_at(rows, 1e-1) is None and cpu_at(rows, 1e-8) is None
+    reference = np.array([1.0, -4.0, 2.0])
+    assert math.isclose(relative_error(reference + np.array([0.0, 0.2, -0.1]), reference),
+                        0.2 / 4.0, rel_tol=1e-12)

@@ -24,7 +24,10 @@ the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, 
 
 Error control: the step is accepted when the weighted RMS norm of err, weights
 1 / (rtol max(|y_i|, |y_new,i|) + atol_i) as CVODE's, is at most 1; the next step is
-h min(5, max(0.2, 0.9 |err|^(-1/(p + 1)))), p the lower of the two orders. The last step
+h min(5, max(0.2, 0.9 |err|^(-1/(p + 1)))), p the lower of the two orders; after a second
+error-test failure at the same t, where the error fell from the first failure's more slowly
+than h^(p + 1), the observed order q (at least 0.5) replaces p + 1: h max(0.01, 0.9
+|err|^(-1/q)) (`esdirk_kernels.observed_shrink`: a sudden load's first step). The last step
 before t_stop is stretched or split so the integration lands on t_stop exactly, never past it
 (the held input changes there). With a step budget (max_steps) the kernel stops at the last
 accepted step once it is spent (TOO_MUCH_WORK).

@@ -78,8 +78,10 @@ manipulator
 spatial   Issue 35, item 4 (`spatial.py`): one rhs of manipulator_control per DOF against the
           refined planar stage's (n = 16, 93 DOFs): <= 3; its Jacobian <= 20 rhs (one mass
           matrix beside it); a spatial cantilever of 16 and 64 BEAMs (96, 384 DOFs): one
-          implicit step (esdirk, rtol 1e-6) at 384 DOFs <= Exudyn's (the issue's 3.4 ms, not
-          measured in the run), growing at most as n^1.2.
+          implicit step (esdirk, rtol 1e-6) at 384 DOFs <= Exudyn's (measured alternating
+          where exudyn is installed, else the issue's 3.4 ms), growing at most as n^1.2;
+          and both codes' CPU per simulated ms at an equal tip error, 1e-3 of the
+          deflection (`cantilever_precision.py`; --plot FILE writes error against CPU).
 statics   Issue 35, item 1 (`statics.py`): one static solve through the compiled engine over
           the numpy reference (CPU, alternating): at most 1 where the engine is the statics'
           default (manipulator_control); cantilevers of 96, 192, 384 DOFs and
@@ -106,7 +108,7 @@ cache is empty); its latency is the table's first row, not part of any other fig
 Usage
 -----
     python examples/benchmarks/compare.py [--quick] [--repeat N] [--only loop,step]
-                                          [--markdown FILE]
+                                          [--markdown FILE] [--plot FILE]
 
 The row groups live in this folder's modules (loops, step_scan, refined, fmu_overhead,
 manipulator, spatial, statics, latency, portable), the shared machinery in measure, table and
@@ -146,12 +148,14 @@ FUNCTIONS = {"loop": loop, "realtime": realtime, "step": step, "refined": refine
              "startup": startup, "portable": portable}
 
 
-def run(groups=GROUPS, *, repeat=5, quick=False):
-    """Measure `groups`; returns the rows (the warm-up's first)."""
+def run(groups=GROUPS, *, repeat=5, quick=False, plot=None):
+    """Measure `groups`; returns the rows (the warm-up's first). `plot`: where the spatial
+    group writes the cantilever's work-precision plot (PNG), or None."""
     rows = warmup(repeat=repeat, quick=quick) if set(groups) - {"startup"} else []
     for name in groups:
         log(f"== {name}")
-        rows.extend(FUNCTIONS[name](repeat=repeat, quick=quick))
+        extra = {"plot": plot} if name == "spatial" else {}
+        rows.extend(FUNCTIONS[name](repeat=repeat, quick=quick, **extra))
     return rows
 
 
@@ -164,6 +168,9 @@ def main(argv=None):
     parser.add_argument("--only", default=None,
                         help=f"comma-separated row groups among {', '.join(GROUPS)}")
     parser.add_argument("--markdown", metavar="FILE", help="also write the table as markdown")
+    parser.add_argument("--plot", metavar="FILE",
+                        help="the spatial group: write the cantilever's work-precision plot "
+                             "(PNG: tip error against CPU per simulated ms, both codes)")
     args = parser.parse_args(argv)
     if args.repeat < 1:
         parser.error("--repeat must be at least 1")
@@ -174,7 +181,7 @@ def main(argv=None):
         if unknown:
             parser.error(f"unknown group(s) {', '.join(unknown)}; expected {', '.join(GROUPS)}")
     before = environment()
-    rows = run(groups, repeat=args.repeat, quick=args.quick)
+    rows = run(groups, repeat=args.repeat, quick=args.quick, plot=args.plot)
     load = f", load average at the end {os.getloadavg()[0]:.2f}" if hasattr(
         os, "getloadavg") else ""
     title = (f"flexure vs Exudyn, median of {args.repeat} (min in brackets)"

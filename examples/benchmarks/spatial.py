@@ -17,6 +17,11 @@
   geometrically exact beams, generalized-alpha at h = 1e-4 s, sparse LU; undamped, as that
   element leaves section damping out, and 2 % off in time where flexure's run is within
   5e-7), alternating with flexure's runs; without exudyn the issue's figure (3.4 ms).
+- The same cantilever at equal error (`cantilever_precision`): the CPU per simulated ms of
+  flexure's esdirk and of Exudyn at a tip error of 1e-3 of the deflection over the 5 ms,
+  each against its own converged run, interpolated in log-log between the tolerances and
+  step sizes around it; the ratio flexure/Exudyn for information (the step row above stays
+  the issue's target). `compare.py --plot FILE` also writes error against CPU, both codes.
 - The nonlinear 6 mm move on `manipulator_control` against real time is a row of the
   manipulator group.
 
@@ -39,9 +44,10 @@ SIZES = (16, 64)  # BEAMs of the cantilevers: 96 and 384 DOFs
 CANTILEVER_END = 5e-3  # s simulated per cantilever run
 
 
-def spatial_cantilever(n, *, length=0.2):
+def spatial_cantilever(n, *, length=0.2, output=False):
     """A clamped steel strip along x of n BEAMs (10 mm wide along y, 1 mm thick along z),
-    every deformation e1 ... e6 a DOF (6 n DOFs), 1 N down (-z) at the tip."""
+    every deformation e1 ... e6 a DOF (6 n DOFs), 1 N down (-z) at the tip; with `output`
+    the tip's z (m) its one output, "tip"."""
     from flexure.core import build_model
 
     nodes = {"0": {"position": [0.0, 0.0, 0.0], "fixed": ["x", "y", "z"]},
@@ -54,11 +60,12 @@ def spatial_cantilever(n, *, length=0.2):
                              "dof": ["e1", "e2", "e3", "e4", "e5", "e6"],
                              "nodes": [str(j - 1), f"{j - 1}r", str(j), f"{j}r"]}
     nodes[str(n)]["force"] = [0.0, 0.0, -1.0]
+    outputs = {"tip": {"node": str(n), "coordinate": "z"}} if output else {}
     return build_model({
         "scene": {"name": f"spatial_cantilever_{n}", "dimension": 3},
         "sections": {"strip": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 5e-5,
                                "width": 0.01, "height": 0.001}},
-        "nodes": nodes, "elements": elements})
+        "nodes": nodes, "elements": elements, "outputs": outputs})
 
 
 def jacobian_cost(model, *, repeat=5):
@@ -98,8 +105,9 @@ def cantilever_step(model):
                   sim.integrator.statistics()["factorizations"])
 
 
-def spatial(*, repeat=5, quick=False):
-    """The rows of the spatial group (the module's docstring)."""
+def spatial(*, repeat=5, quick=False, plot=None):
+    """The rows of the spatial group (the module's docstring); with `plot` (a path) the
+    cantilever's work-precision plot written there (`cantilever_precision.plot`)."""
     from flexure.core import load_scene
 
     rows = []
@@ -129,6 +137,9 @@ def spatial(*, repeat=5, quick=False):
         f"{1e3 * jacobian:.2f} ms = {in_rhs:.1f} rhs (one mass matrix {1e3 * mass:.2f} ms)",
         "<= 20 rhs", in_rhs / 20.0, in_rhs <= 20.0))
     rows += cantilever_rows(1 if quick else min(repeat, 3))
+    from .cantilever_precision import precision_rows
+
+    rows += precision_rows(1 if quick else min(repeat, 3), plot_path=plot, quick=quick)[0]
     return rows
 
 
