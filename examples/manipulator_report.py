@@ -151,13 +151,12 @@ def workspace(amplitudes):
             # help the 3 mm ones). The poses are far from any buckling or snap-through: a
             # 3 mm pose is one load step from rest (5 or 6 Newton iterations, where two
             # steps took 4 and 5 or 6), a 6 mm pose one step of half its load from its 3 mm
-            # pose (`load_steps=2`: a step that fails is halved to 0.75 of the load; from
-            # one load step the first halving would try the same full load again).
+            # pose (a step that fails is halved, to 0.75 of the load).
             done = solved.setdefault(direction, {})
             path = [(other / amplitude, found) for other, found in done.items()
                     if amplitude != 0.0 and 0.0 < other / amplitude < 1.0]
-            solution = static_equilibrium(model, loads=loads, load_steps=2 if path else 1,
-                                          path=path, mechanics=mech)
+            solution = static_equilibrium(model, loads=loads, load_steps=1, path=path,
+                                          mechanics=mech)
             if amplitude != 0.0:
                 done[amplitude] = solution
             lin = linearize(model, solution, mechanics=mech)
