@@ -13,6 +13,16 @@ The linear systems see each element that touches a slave ("touching" element) th
 own z-coordinates: De_z = De T_e and Dp_z = Dp T_e, T_e (m, mz) the element's block of T,
 each row a sum of at most `rigid_bodies.DEPENDENCIES` weights.
 
+Inertia. A massive element whose nodes all belong to one spatial cluster (a rigid beam with
+a section mass, a node inertia on a slave) moves with the master as one rigid body: its
+mass is folded at packing into the cluster's constant tensors (`rigid_inertia`), and the
+augmented form's evaluation adds per cluster a 7 x 7 mass block on the master's coordinates
+and its gravity and convective forces from closed formulas, visiting none of those elements
+(`rigid_inertia_kernels`); the tangent adds their forces element by element, where they
+sit. Massless cluster elements (the manipulator's rigid beams: its bodies' mass is on the
+masters as lumped masses and node inertias) are skipped as before; the elements that join a
+cluster to the rest (flexible beams on slaves) keep their own mass on their z-coordinates.
+
 The packed tables (slots of `data`, read by `rigid_kernels`):
 
     rigid_slaves        per slave node: kind, own coordinates (4), the master's translation
