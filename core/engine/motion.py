@@ -63,7 +63,7 @@ from .point_masses import (
     point_forces,
 )
 from .ports import add_input_forces
-from .rigid_inertia_kernels import add_rigid_bodies, folded
+from .rigid_inertia_kernels import add_rigid_bodies, own_mass
 from .rigid_kernels import touching, touching_mass
 from .slots import float_array as _f
 from .slots import (
@@ -343,7 +343,7 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         for i in range(n):
             t = rigid_element(table, row, i) if rigid else -1
             # a massless touching element, or one whose mass is its cluster's rigid body's
-            if t >= 0 and (touching(table, t)[5] < 0 or folded(table, t)):
+            if t >= 0 and not own_mass(table, t):
                 mass_entry += m * m
                 continue
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)

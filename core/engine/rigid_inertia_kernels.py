@@ -27,9 +27,11 @@ EW, BW, TW = rg.ELEMENT_WIDTH, ri.BODY_WIDTH, ri.TENSOR_WIDTH
 
 
 @kernel
-def folded(table, t):
-    """Whether touching element t's mass is in its cluster's rigid body (`rigid_inertia`)."""
-    return _i(table, slot.RIGID_ELEMENTS)[t * EW + rg.E_FOLDED] == 1
+def own_mass(table, t):
+    """Whether touching element t's mass is evaluated on its own: it has mass, and that mass
+    is not folded into its cluster's rigid body (`rigid_inertia`)."""
+    element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
+    return element[rg.E_MASS_OFFSET] >= 0 and element[rg.E_FOLDED] == 0
 
 
 @kernel
