@@ -274,10 +274,15 @@ SLOTS = (
         ("rigid_coordinates", "RIGID_COORDS", "nsc", CONFIG, "-", "the slave coordinates"),
         ("touching_rows", "TOUCHING_ROWS", "-", CONFIG, "-", "the touching elements' rows "
          "of J: (row, touching index, deformation), flat"),
+        ("rigid_bodies", "RIGID_BODIES", "-", CONFIG, "-", "per folded spatial cluster: its "
+         "master's coordinates, its carrier element and the places in its z "
+         "(`rigid_inertia`)"),
     )),
     *_slots(FLOAT, "rigid", (
         ("rigid_data", "RIGID_DATA", "rigid_data_width * nslaves", CONFIG, "m, 1", "per "
          "slave node its constants (`RigidLayout.data`)"),
+        ("rigid_body_tensors", "RIGID_BODY_TENSORS", "-", CONFIG, "kg, kg m, kg m^2, N",
+         "per folded spatial cluster its mass tensors and gravity (`rigid_inertia`)"),
         ("rigid_weights", "RIGID_WEIGHTS", "dependencies * nsc", STATE, "1, m", "T's "
          "weights at the last configuration"),
         ("rigid_de", "RIGID_DE", "-", STATE, "1, m", "the touching elements' De T_e"),

@@ -63,6 +63,7 @@ from .point_masses import (
     point_forces,
 )
 from .ports import add_input_forces
+from .rigid_inertia_kernels import add_rigid_bodies, own_mass
 from .rigid_kernels import touching, touching_mass
 from .slots import float_array as _f
 from .slots import (
@@ -320,7 +321,9 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
     """The mass of the free coordinates M_ff = diag(lumped) + sum Dp^T Mp Dp into A's first
     n_free rows and columns (row length na); gravity on the element masses into r and, if
     moving, r -= g_conv = Dp^T Mp (D2p xdot) xdot. Element by element through the inertia
-    points."""
+    points, but for the elements folded into their spatial cluster's rigid body
+    (`rigid_inertia`): each cluster's mass block onto A and its forces onto slot
+    rigid_force at its master's coordinates, from closed formulas."""
     dims = _i(table, slot.DIMS)
     add_lumped(table, A, na)
     local = _f(table, slot.LOCAL)
@@ -339,7 +342,8 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         Me = local[o: o + m * m]
         for i in range(n):
             t = rigid_element(table, row, i) if rigid else -1
-            if t >= 0 and touching(table, t)[5] < 0:  # a massless touching element
+            # a massless touching element, or one whose mass is its cluster's rigid body's
+            if t >= 0 and not own_mass(table, t):
                 mass_entry += m * m
                 continue
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
@@ -363,6 +367,8 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                 _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
                                (i + 1) * P * P], pattern, P, m, Dp, point, w, moving, A, na)
             mass_entry += m * m
+    if rigid:  # the spatial clusters' folded element masses, one rigid body each
+        add_rigid_bodies(table, x, xdot, moving, A, na)
 
 
 @kernel

@@ -13,6 +13,16 @@ The linear systems see each element that touches a slave ("touching" element) th
 own z-coordinates: De_z = De T_e and Dp_z = Dp T_e, T_e (m, mz) the element's block of T,
 each row a sum of at most `rigid_bodies.DEPENDENCIES` weights.
 
+Inertia. A massive element whose nodes all belong to one spatial cluster (a rigid beam with
+a section mass, a node inertia on a slave) moves with the master as one rigid body: its
+mass is folded at packing into the cluster's constant tensors (`rigid_inertia`), and the
+augmented form's evaluation adds per cluster a 7 x 7 mass block on the master's coordinates
+and its gravity and convective forces from closed formulas, visiting none of those elements
+(`rigid_inertia_kernels`); the tangent adds their forces element by element, where they
+sit. Massless cluster elements (the manipulator's rigid beams: its bodies' mass is on the
+masters as lumped masses and node inertias) are skipped as before; the elements that join a
+cluster to the rest (flexible beams on slaves) keep their own mass on their z-coordinates.
+
 The packed tables (slots of `data`, read by `rigid_kernels`):
 
     rigid_slaves        per slave node: kind, own coordinates (4), the master's translation
@@ -24,13 +34,16 @@ The packed tables (slots of `data`, read by `rigid_kernels`):
     rigid_elements      per touching element: E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET,
                         E_DE_OFFSET (into rigid_de, -1: no rows), E_MASS_OFFSET (into the
                         rigid part of the augmented map, -1: no mass, not evaluated),
-                        E_GROUP, E_ELEMENT
-                        (its packed group and index there)
+                        E_GROUP, E_ELEMENT (its packed group and index there),
+                        E_FOLDED (1: its mass is in its cluster's rigid-body inertia,
+                        `rigid_inertia`; the evaluations' rhs skip it)
     rigid_z             the touching elements' z-coordinates (model indices), flat
     rigid_terms         per touching element and local coordinate a: DEPENDENCIES pairs
                         (z-local column, weight index: -1 a unit weight, -2 none)
     rigid_units         per DOF coordinate: its slave coordinate row, or -1
     rigid_coordinates   the slave coordinates (model indices)
+    rigid_bodies        per spatial cluster with folded masses: its master's coordinates
+                        and where its mass block lands (`rigid_inertia`)
     touching_rows       per deformation of a touching element on a row of J: (that row, the
                         touching index t, the deformation's index in its element), flat
 """
@@ -39,10 +52,11 @@ import numpy as np
 
 from ..mechanics.rigid_bodies import DEPENDENCIES, RigidLayout, find_clusters
 from .point_masses import padded_width
+from .rigid_inertia import ClusterInertia
 
 SLAVE_WIDTH = 12
 (E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET, E_DE_OFFSET, E_MASS_OFFSET, E_GROUP,
- E_ELEMENT, ELEMENT_WIDTH) = range(9)
+ E_ELEMENT, E_FOLDED, ELEMENT_WIDTH) = range(10)
 
 
 class RigidPacking:
@@ -109,6 +123,7 @@ class RigidPacking:
                 mz = len(z)
                 is_internal = gp < len(model.groups) and (gp, i) in internal
                 row = np.full(ELEMENT_WIDTH, -1, dtype=np.int64)
+                row[E_FOLDED] = 0
                 row[[E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET, E_GROUP, E_ELEMENT]] = (
                     int(is_internal), mz, z_size, term_size, gp, i)
                 if k and not is_internal:
@@ -141,6 +156,11 @@ class RigidPacking:
         # the internal elements' deformations: never evaluated (identically zero)
         self.internal_elements = {(gp, i) for gp, i, _ in self.touching
                                   if self.element_row(gp, i)[E_INTERNAL]}
+        # each spatial cluster's element masses as one rigid body on its master (marks the
+        # folded elements' rows E_FOLDED)
+        self.bodies = ClusterInertia(model, groups, inertia, self)
+        for t in self.bodies.folded:
+            self.elements[t * ELEMENT_WIDTH + E_FOLDED] = 1
 
     @property
     def active(self):
@@ -152,11 +172,12 @@ class RigidPacking:
         t = self.element_of[self.element_offsets[gp] + i]
         return None if t < 0 else self.elements[t * ELEMENT_WIDTH: (t + 1) * ELEMENT_WIDTH]
 
-    def element_transform(self, gp, i, coords, x):
-        """T_e (m, mz) of a touching element at x (the plain twin of the kernels' sums)."""
+    def element_transform(self, gp, i, coords, x, weights=None):
+        """T_e (m, mz) of a touching element at x (the plain twin of the kernels' sums);
+        `weights`: T's weights at x (`RigidLayout.weights`) when the caller has them."""
         row = self.element_row(gp, i)
         m, mz = len(coords), row[E_MZ]
-        W = self.layout.weights(x).ravel()
+        W = (self.layout.weights(x) if weights is None else weights).ravel()
         pairs = self.terms[row[E_TERM_OFFSET]: row[E_TERM_OFFSET] + m * DEPENDENCIES * 2]
         T = np.zeros((m, mz))
         for a in range(m):
@@ -175,7 +196,7 @@ class RigidPacking:
                 "rigid_element_of": self.element_of, "rigid_elements": self.elements,
                 "rigid_z": self.z, "rigid_terms": self.terms, "rigid_units": self.units,
                 "rigid_coordinates": self.layout.slave_coordinates,
-                "touching_rows": self.touching_rows}
+                "touching_rows": self.touching_rows, "rigid_bodies": self.bodies.ints}
 
     @property
     def max_m(self):
@@ -192,13 +213,16 @@ class RigidPacking:
         n_sc = self.layout.slave_coordinates.size
         padded = padded_width.py_func(self.max_mz)  # the kernel's plain function: no compile
         return {"rigid_data": self.layout.data.ravel(),
+                "rigid_body_tensors": self.bodies.tensors,
                 "rigid_weights": np.zeros(n_sc * DEPENDENCIES),
                 "rigid_de": np.zeros(self.de_size), "rigid_c": np.zeros(nx if n_sc else 0),
                 "rigid_h": np.zeros(n_free if n_sc else 0),
                 "rigid_force": np.zeros(nx if n_sc else 0),
                 # a touching element's Dp_z and Mp Dp_z (max_p rows each), Me_z (max_mz)
                 # and T_e (its m), in rows of the padded width (`point_masses.padded_width`)
-                "rigid_local": np.zeros((2 * max_p + self.max_mz + self.max_m) * padded)}
+                # (and a folded cluster's scratch: `rigid_inertia_kernels.add_rigid_bodies`)
+                "rigid_local": np.zeros(max((2 * max_p + self.max_mz + self.max_m) * padded,
+                                            170 if self.bodies.folded else 0))}
 
     def pattern_coordinates(self, gp, group):
         """Per element of packed group gp, the coordinates its entries land on in the

@@ -29,6 +29,7 @@ from .operations import (
 )
 from .point_masses import element_points, massless, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
+from .rigid_inertia_kernels import add_folded_forces
 from .slots import float_array as _f
 from .slots import (
     group_deformations,
@@ -201,13 +202,19 @@ def coordinate_rows(table, sigma, values, hessians, W, ranges):
 def balance_force(table, qddot):
     """r_full = r - M xddot (slot x_trial, NX) at the last evaluation and accelerations qddot,
     xddot = DF qddot + conv into slot xddot (the reduced form's r holds - M conv already); at
-    rest (the statics) xddot = 0 and r_full = r. Needs DF (slot DF) when qddot is not zero."""
+    rest (the statics) xddot = 0 and r_full = r. Needs DF (slot DF) when qddot is not zero.
+    Each element's share of r sits on its own coordinates, as the multipliers and the
+    slaves' geometric stiffness (`rigid_kernels.rigid_geometric`) read it."""
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF, conv = _f(table, slot.DF), _f(table, slot.CONV)
     with_conv = dims[ed.REDUCED] == 0
     r_full = _f(table, slot.X_TRIAL)
     copy(r_full, _f(table, slot.FORCE))
+    if with_conv and dims[ed.NSLAVES] > 0:  # the folded elements' forces, which the
+        # augmented form's r leaves to their clusters' rigid bodies (`rigid_inertia_kernels`)
+        xdot = _f(table, slot.XDOT)
+        add_folded_forces(table, _f(table, slot.X), xdot, any_nonzero(xdot), r_full)
     if any_nonzero(qddot) or (with_conv and any_nonzero(conv)):
         acc = _f(table, slot.XDDOT)
         for a in range(nx):

@@ -1,0 +1,134 @@
+"""The spatial clusters' folded element masses in the compiled engine, per cluster.
+
+`rigid_inertia` sums, at packing, each spatial cluster's element masses into constant tensors
+on its master z = (x_m, lambda_m); an evaluation in the augmented form then adds per cluster
+its mass block M_z(lambda) (7, 7; kg, kg m, kg m^2), quadratic in lambda, and its gravity
+minus its convective force (N, N m), from closed formulas (`add_rigid_bodies`: about 600
+multiplications a cluster, however many elements it holds), and visits none of the folded
+elements. The tangent's dynamic balance (`tangent.balance_force`) reads the coordinate force
+on x with each element's share where the element sits, as the stress resultants and the
+slaves' geometric stiffness need it: `add_folded_forces` puts the folded elements' forces
+there, element by element, once per tangent.
+"""
+
+from ..numerics.jit import kernel
+from . import data as ed
+from . import rigid as rg
+from . import rigid_inertia as ri
+from . import slots as slot
+from .factors import add_element_mass
+from .point_masses import element_points, point_forces
+from .rigid_kernels import touching
+from .slots import float_array as _f
+from .slots import group_inertia, inertia_scratch
+from .slots import int_array as _i
+
+EW, BW, TW = rg.ELEMENT_WIDTH, ri.BODY_WIDTH, ri.TENSOR_WIDTH
+
+
+@kernel
+def own_mass(table, t):
+    """Whether touching element t's mass is evaluated on its own: it has mass, and that mass
+    is not folded into its cluster's rigid body (`rigid_inertia`)."""
+    element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
+    return element[rg.E_MASS_OFFSET] >= 0 and element[rg.E_FOLDED] == 0
+
+
+@kernel
+def add_rigid_bodies(table, x, xdot, moving, A, na):
+    """Every folded cluster's mass block M_z(lambda_m) onto A (the carrier's entries: `
+    factors.add_element_mass`, row length na), and its gravity force minus, if moving, its
+    convective force onto slot rigid_force at the master's coordinates, for the masters'
+    coordinates x (NX,; m, Euler parameters) and velocities xdot (NX,; read if moving)."""
+    bodies, tensors = _i(table, slot.RIGID_BODIES), _f(table, slot.RIGID_BODY_TENSORS)
+    force, local = _f(table, slot.RIGID_FORCE), _f(table, slot.RIGID_LOCAL)
+    # scratch: L (4, 4, 4), M_z (7, 7), the carrier's Me (mz <= 7 squared), lambda, its rate
+    L, Mz, Me = local[:64], local[64:113], local[113:162]
+    lam, rate = local[162:166], local[166:170]
+    position = _i(table, slot.POINT_COLUMNS)[:7]
+    dims = _i(table, slot.DIMS)
+    mass_base = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size
+    for c in range(bodies.size // BW):
+        row, d = bodies[c * BW: (c + 1) * BW], tensors[c * TW: (c + 1) * TW]
+        for b in range(4):
+            lam[b] = x[row[ri.B_ROTATION + b]]
+            rate[b] = xdot[row[ri.B_ROTATION + b]] if moving else 0.0
+        for q in range(64):  # L_c = sum_b lambda_b K_bc
+            s = 0.0
+            for b in range(4):
+                s += lam[b] * d[ri.T_SECOND + b * 64 + q]
+            L[q] = s
+        for k in range(3):
+            for j in range(3):
+                Mz[k * 7 + j] = d[ri.T_MASS + k * 3 + j]
+            for a in range(4):  # sum_b lambda_b F_b
+                s = 0.0
+                for b in range(4):
+                    s += lam[b] * d[ri.T_FIRST + b * 12 + k * 4 + a]
+                Mz[k * 7 + 3 + a] = s
+                Mz[(3 + a) * 7 + k] = s
+        for a in range(4):  # sum_c lambda_c L_c, symmetric
+            for e in range(a, 4):
+                s = 0.0
+                for cc in range(4):
+                    s += lam[cc] * L[cc * 16 + a * 4 + e]
+                Mz[(3 + a) * 7 + 3 + e] = s
+                Mz[(3 + e) * 7 + 3 + a] = s
+        for k in range(3):  # gravity less sum_c lambdadot_c F_c lambdadot
+            f = d[ri.T_GRAVITY + k]
+            if moving:
+                for cc in range(4):
+                    for a in range(4):
+                        f -= rate[cc] * d[ri.T_FIRST + cc * 12 + k * 4 + a] * rate[a]
+            force[row[ri.B_TRANSLATION + k]] += f
+        for a in range(4):  # sum_b lambda_b g_b less sum_c lambdadot_c L_c lambdadot
+            f = 0.0
+            for b in range(4):
+                f += lam[b] * d[ri.T_GRAVITY_TURN + b * 4 + a]
+            if moving:
+                for cc in range(4):
+                    for e in range(4):
+                        f -= rate[cc] * L[cc * 16 + a * 4 + e] * rate[e]
+            force[row[ri.B_ROTATION + a]] += f
+        _, _, mz, z, _, mass_offset = touching(table, row[ri.B_CARRIER])
+        for e in range(mz * mz):
+            Me[e] = 0.0
+        for j in range(7):  # M_z in the carrier's order of z
+            pj = row[ri.B_PLACES + j]
+            if pj < 0:
+                continue
+            for k in range(7):
+                pk = row[ri.B_PLACES + k]
+                if pk >= 0:
+                    Me[pj * mz + pk] = Mz[j * 7 + k]
+        add_element_mass(table, A, na, mass_base + mass_offset, z, mz, Me[: mz * mz],
+                         position)
+
+
+@kernel
+def add_folded_forces(table, x, xdot, moving, out):
+    """out (NX,; N) += Dp^T Mp (g_p - (D2p v) v) of every folded element, on its own
+    coordinates x (NX,) and, if moving, velocities xdot (NX,; the slaves' filled): the share
+    that `motion._inertia_forces` leaves to `add_rigid_bodies`."""
+    dims = _i(table, slot.DIMS)
+    elements = _i(table, slot.RIGID_ELEMENTS)
+    # scratch past what `tangent` keeps in slot local (as `tangent._mass_times`)
+    max_m, ndof = dims[ed.MAX_M], dims[ed.NDOF]
+    base = 2 * ndof + max_m * max_m + max_m * ndof
+    for t in range(elements.size // EW):
+        if elements[t * EW + rg.E_FOLDED] != 1:
+            continue
+        g, i = elements[t * EW + rg.E_GROUP], elements[t * EW + rg.E_ELEMENT]
+        inertia = group_inertia(table, g)
+        _, m, P, _, _, coords, _, masses, gravity, pattern = inertia
+        scratch = inertia_scratch(table, base, P, m)
+        _, _, point, acc, w, Dp, _ = scratch
+        element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
+        for pp in range(P):
+            point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
+        point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, point, w)
+        for a in range(m):
+            s = 0.0
+            for pp in range(P):
+                s += Dp[pp, a] * w[pp]
+            out[coords[i * m + a]] += s
