@@ -12,10 +12,10 @@ section given a mass per length they carry it, and 90 of them fold into 22 clust
 
 import numpy as np
 import pytest
+from test_rigid import engine_results
 
-from flexure.core import Mechanics, load_scene
+from flexure.core import load_scene
 from flexure.core.engine import data as ed
-from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
 from flexure.core.engine.packing import ElementGroups
 from flexure.core.engine.rigid_inertia import B_ROTATION, B_TRANSLATION, BODY_WIDTH
@@ -173,37 +173,15 @@ def test_convective_force_from_the_kinetic_energy():
         assert np.max(np.abs(f - expected)) <= 1e-9 * np.max(np.abs(expected))
 
 
-def engine_results(model, rigid, seed):
-    """qddot, the tangent (K at another qddot) and the first-order Jacobian at two random
-    states, inputs and velocities, in the augmented form."""
-    data = EngineData(model, rigid=rigid, augmented=True)
-    q0 = Mechanics(model).kinematics.dofs_of(model.initial_coordinates)
-    rng = np.random.default_rng(seed)
-    out = []
-    for _ in range(2):
-        q = q0 + 1e-4 * rng.standard_normal(q0.size)
-        qdot = 0.05 * rng.standard_normal(q0.size)
-        data.float_array("inputs")[:] = rng.standard_normal(len(model.inputs))
-        assert engine.call(data, engine.OP_EVALUATE, q, qdot) == ed.OK
-        qddot = data.float_array("qddot").copy()
-        assert engine.call(data, engine.OP_TANGENT, 0.5 * qddot + 1.0) == ed.OK
-        jacobian = np.zeros((2 * q0.size) ** 2)
-        assert engine.call(data, engine.OP_JACOBIAN, np.concatenate([q, qdot]), jacobian,
-                           s=1.0) == ed.OK
-        out.append({"qddot": qddot, "stiffness": data.float_array("stiffness").copy(),
-                    "jacobian": jacobian})
-    return out
-
-
 def test_engine_with_folded_clusters_matches_the_full_system():
     """The manipulator with massive rigid beams: qddot, the tangent's stiffness (with the
     slaves' geometric stiffness, which reads each element's forces where it sits) and the
     first-order Jacobian with the folded clusters against the engine without clusters, to
     1e-12 of each quantity's largest entry (as tests/test_rigid.py's elimination)."""
     model = massive_manipulator()
-    folded = engine_results(model, True, seed=4)
-    full = engine_results(model, False, seed=4)
+    folded, _ = engine_results(model, True, "augmented", seed=4)
+    full, _ = engine_results(model, False, "augmented", seed=4)
     for a, b in zip(full, folded, strict=True):
-        for quantity in a:
+        for quantity in ("qddot", "stiffness", "jacobian"):
             scale = np.max(np.abs(a[quantity]))
             assert np.max(np.abs(a[quantity] - b[quantity])) <= 1e-12 * scale, quantity
