@@ -52,7 +52,7 @@ import numpy as np
 
 from ..mechanics.rigid_bodies import DEPENDENCIES, RigidLayout, find_clusters
 from .point_masses import padded_width
-from .rigid_inertia import ClusterInertia
+from .rigid_inertia import BODY_SCRATCH, ClusterInertia
 
 SLAVE_WIDTH = 12
 (E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET, E_DE_OFFSET, E_MASS_OFFSET, E_GROUP,
@@ -222,7 +222,7 @@ class RigidPacking:
                 # and T_e (its m), in rows of the padded width (`point_masses.padded_width`)
                 # (and a folded cluster's scratch: `rigid_inertia_kernels.add_rigid_bodies`)
                 "rigid_local": np.zeros(max((2 * max_p + self.max_mz + self.max_m) * padded,
-                                            170 if self.bodies.folded else 0))}
+                                            BODY_SCRATCH if self.bodies.folded else 0))}
 
     def pattern_coordinates(self, gp, group):
         """Per element of packed group gp, the coordinates its entries land on in the

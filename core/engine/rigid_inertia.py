@@ -48,6 +48,9 @@ from ..mechanics.assembly import point_gravity
 BODY_WIDTH = 15
 B_TRANSLATION, B_ROTATION, B_CARRIER, B_PLACES = 0, 3, 7, 8
 T_MASS, T_FIRST, T_SECOND, T_GRAVITY, T_GRAVITY_TURN, TENSOR_WIDTH = 0, 9, 57, 313, 316, 332
+# floats of slot rigid_local that `rigid_inertia_kernels.add_rigid_bodies` works in: L (4, 4,
+# 4), M_z (7, 7), the carrier's Me (at most 7 x 7), lambda and its rate (4 each)
+BODY_SCRATCH = 64 + 49 + 49 + 4 + 4
 # relative to the largest entry of G: the affine form holds to round-off (1e-15) where it
 # holds at all; an element outside it misses by the size of G
 AFFINE_TOLERANCE = 1e-10

@@ -42,9 +42,10 @@ def add_rigid_bodies(table, x, xdot, moving, A, na):
     coordinates x (NX,; m, Euler parameters) and velocities xdot (NX,; read if moving)."""
     bodies, tensors = _i(table, slot.RIGID_BODIES), _f(table, slot.RIGID_BODY_TENSORS)
     force, local = _f(table, slot.RIGID_FORCE), _f(table, slot.RIGID_LOCAL)
-    # scratch: L (4, 4, 4), M_z (7, 7), the carrier's Me (mz <= 7 squared), lambda, its rate
+    # scratch (ri.BODY_SCRATCH): L (4, 4, 4), M_z (7, 7), the carrier's Me (mz <= 7 squared),
+    # lambda, its rate
     L, Mz, Me = local[:64], local[64:113], local[113:162]
-    lam, rate = local[162:166], local[166:170]
+    lam, rate = local[162:166], local[166:ri.BODY_SCRATCH]
     position = _i(table, slot.POINT_COLUMNS)[:7]
     dims = _i(table, slot.DIMS)
     mass_base = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size
