@@ -126,8 +126,8 @@ def unprojected_steps(name, size, count):
         dq = np.zeros(model.ndof)
         dq[model.free_dofs] = balance.free_step(config, dq)
         steps.append(np.max(np.abs(dq) / units))
-        config = balance.moved(config, config.q + dq)
-        if config is balance._unprojected:  # (a round-off step is projected)
+        config = balance.moved(config, config.q + dq, as_stepped=True)
+        if balance.is_unprojected(config):  # (a round-off step is projected)
             unprojected.append((config, balance.solved(config)))
     return mech, unprojected, np.array(steps)
 
@@ -172,10 +172,38 @@ def test_an_unprojected_step_far_beyond_reach_is_a_convergence_error():
     balance.set_load(1.0, model.loads + 0.5, None)
     dq = np.zeros(model.ndof)
     dq[model.free_dofs] = balance.free_step(config, dq)
-    made_at, dx, step = balance._step
-    balance._step = (made_at, np.full_like(dx, 1e300), step)
+    made_at, dx = balance._step
+    balance._step = (made_at, np.full_like(dx, 1e300))
     with pytest.raises(ConvergenceError, match="reach"):
-        balance.moved(config, config.q + dq)
+        balance.moved(config, config.q + dq, as_stepped=True)
+
+
+def test_an_iterate_not_the_balances_own_step_is_projected():
+    """`moved` leaves an iterate unprojected only when the caller says it is the balance's
+    own step unchanged (as_stepped); the same q otherwise, as after the curvature
+    predictor, is projected: the kinematics solved for q, so its constraints hold to 10
+    times the kinematics' step tolerance and its DOFs are q's to round-off (1e-12 of their
+    units), while the unprojected iterate's rigid deformations are off by about the step
+    squared."""
+    model, _ = CASES["spatial cantilever, 26 BEAMs"]()
+    mech = Mechanics(model, sparse=True)
+    balance = AugmentedBalance(mech)
+    config = mech.initial_configuration()
+    balance.set_load(1.0, model.loads * 50.0, None)
+    dq = np.zeros(model.ndof)
+    dq[model.free_dofs] = balance.free_step(config, dq)
+    q = config.q + dq
+    projected = balance.moved(config, q, as_stepped=False)
+    assert not balance.is_unprojected(projected)
+    kin = mech.kinematics
+    residual = kin.residual(projected.x, projected.e, projected.q)
+    assert np.all(np.abs(residual) <= 10.0 * kin.step_tolerance)
+    units = dof_tolerances(model, 1.0)
+    assert np.max(np.abs(projected.q - q) / units) <= 1e-12
+    unprojected = balance.moved(config, q, as_stepped=True)
+    assert balance.is_unprojected(unprojected)
+    off = kin.residual(unprojected.x, unprojected.e, unprojected.q)
+    assert np.max(np.abs(off)) > 10.0 * np.max(kin.step_tolerance)
 
 
 @pytest.mark.slow

@@ -85,8 +85,8 @@ class AugmentedBalance:
                                           dof_rows[self.model.prescribed_dofs]])
         self._rigid = self.model.rigid_deformations
         self._load = (1.0, None, None)
-        # (the configuration of the last step, its dx, its free DOFs' step)
-        self._step = (None, None, None)
+        # (the configuration of the last step, its dx)
+        self._step = (None, None)
         self._unprojected = None  # the last iterate `moved` did not project
 
     def set_load(self, load_factor: float, loads: np.ndarray | None = None,
@@ -136,7 +136,7 @@ class AugmentedBalance:
         system = bmat([[stiffness, -held.T], [held, None]], format="csc")
         # -g_c: the rigid deformations' residual at an unprojected iterate; at a projected
         # configuration it is the kinematics' round-off, and zero is the step it aims at
-        residual = (-scale * config.e[self._rigid] if config is self._unprojected
+        residual = (-scale * config.e[self._rigid] if self.is_unprojected(config)
                     else np.zeros(kin.n_rigid))
         rhs = np.concatenate([r_x[free], residual, scale * dq[self.model.prescribed_dofs]])
         try:
@@ -144,18 +144,22 @@ class AugmentedBalance:
         except RuntimeError:  # "Factor is exactly singular"
             raise ConvergenceError("the tangent stiffness is singular") from None
         step = J[self._free_rows] @ dx
-        self._step = (config, dx, step)
+        self._step = (config, dx)
         return step
 
-    def moved(self, config: Configuration, q: np.ndarray) -> Configuration:
+    def moved(self, config: Configuration, q: np.ndarray, *,
+              as_stepped: bool = False) -> Configuration:
         """The next iterate at DOFs q (m, rad), without DF.
 
-        Where the last step was made at config and q is config's DOFs plus that step:
-        unprojected (module docstring), x + dx with the deformations and J there, its q
-        the DOF coordinates and deformations at x + dx. Otherwise (the curvature
-        predictor's step, a step of round-off size): projected, the kinematics solved for q
-        from config's coordinates moved by dx (if the step was made at config), as
-        `project` does.
+        Where the last step was made at config and the caller says q is config's DOFs plus
+        that step unchanged (as_stepped): unprojected (module docstring), x + dx with the
+        deformations and J there, its q the DOF coordinates and deformations at x + dx.
+        Otherwise (the curvature predictor's step, a step of round-off size): projected,
+        the kinematics solved for q from config's coordinates moved by dx (if the step was
+        made at config), as `project` does. The caller says so rather than this method
+        comparing q with config.q + step: dx is the step's coordinates only when the two
+        are the same step, which a float comparison would decide only through how the
+        caller happened to round its sum.
 
         Raises
         ------
@@ -164,11 +168,10 @@ class AugmentedBalance:
             model's reach), or the kinematics of a projected iterate fail.
         """
         kin, model = self.mech.kinematics, self.model
-        made_at, dx, step = self._step
+        made_at, dx = self._step
         free = model.free_dofs
-        if (made_at is not config or not np.all(np.isfinite(dx))
-                or within(dx, kin.step_tolerance, magnitudes=config.x[kin.free])
-                or not np.array_equal(q[free], config.q[free] + step)):
+        if (not as_stepped or made_at is not config or not np.all(np.isfinite(dx))
+                or within(dx, kin.step_tolerance, magnitudes=config.x[kin.free])):
             return self.project(config, q)
         x = config.x.copy()
         x[kin.free] += dx
@@ -197,17 +200,21 @@ class AugmentedBalance:
         at config's coordinates, as they would without it."""
         kin = self.mech.kinematics
         start = config.x.copy()
-        made_at, dx, _ = self._step
+        made_at, dx = self._step
         if (made_at is config and np.all(np.isfinite(dx))
                 and not within(dx, kin.step_tolerance, magnitudes=start[kin.free])):
             start[kin.free] += dx
         return kin.solve(q, start, first_order=False)
+
+    def is_unprojected(self, config: Configuration) -> bool:
+        """Whether config is the last iterate `moved` left unprojected."""
+        return config is self._unprojected
 
     def solved(self, config: Configuration) -> Configuration:
         """config, as the statics report it: an unprojected iterate projected (the
         kinematics solved for its q from its coordinates: the constraints' residual is of
         the order of the last step squared); its DF formed by `static_equilibrium` at the
         end."""
-        if config is self._unprojected:
+        if self.is_unprojected(config):
             return self.mech.kinematics.solve(config.q, config.x, first_order=False)
         return config

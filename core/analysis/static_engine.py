@@ -164,9 +164,11 @@ class EngineBalance:
             packed[:] = load_factor * full
         self._inputs[:] = 0.0 if values is None else load_factor * np.asarray(values, float)
 
-    def moved(self, point: EnginePoint | Configuration, q: np.ndarray) -> EnginePoint:
+    def moved(self, point: EnginePoint | Configuration, q: np.ndarray, *,
+              as_stepped: bool = False) -> EnginePoint:
         """The iterate at DOFs q after `point` (its kinematics solved when it is evaluated,
-        from the engine's last solution)."""
+        from the engine's last solution, whatever step made it: as_stepped is not needed
+        here)."""
         return EnginePoint(np.asarray(q, float))
 
     def residual_and_tangent(self, point: EnginePoint | Configuration,

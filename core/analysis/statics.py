@@ -385,10 +385,12 @@ def _newton(balance, config, load_factor, loads, values, prescribed_values, step
                 dq = tangent_step(K, Q)
         if not np.all(np.isfinite(dq)):
             raise ConvergenceError("the tangent stiffness is singular")
+        as_stepped = True  # dq is the balance's own step, unchanged
         if iteration == 1 and curvature is not None:
             before, ratio = curvature
             dq[free] = curvature_step(before[free], config.q[free], dq[free], ratio)
-        config = balance.moved(config, config.q + dq)
+            as_stepped = False
+        config = balance.moved(config, config.q + dq, as_stepped=as_stepped)
         if within(dq, step_tolerance, magnitudes=config.q):
             return balance.solved(config), iteration
     raise ConvergenceError(f"Newton did not converge in {max_iterations} iterations "
@@ -449,8 +451,9 @@ class _PlainBalance:
         Q, _, sigma = self.mech.static_balance(config, load_factor, loads, values)
         return Q, self.mech.tangent_stiffness(config, sigma, load_factor, inputs=values)
 
-    def moved(self, config, q):
-        """The configuration at DOFs q (m, rad), solved from config's coordinates."""
+    def moved(self, config, q, *, as_stepped=False):
+        """The configuration at DOFs q (m, rad), solved from config's coordinates (every
+        iterate is projected, whatever step made it: as_stepped is not needed here)."""
         return self.mech.kinematics.solve(q, config.x)
 
     def solved(self, config):
