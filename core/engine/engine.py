@@ -33,11 +33,11 @@ its Jacobian [[0, I], [-M_bar^-1 K, -M_bar^-1 C]]. Implicit form (IDA): the resi
 [qp - qdot; M_bar (qddot_p - qddot(q, qdot))] and its Jacobian d res / d y + cj d res / d yp
 = [[cj I, -I], [K, C + cj M_bar]]. A scene with voltage-driven actuators appends their coil
 currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tangent blocks
-from `actuators`. Every operation is a C function of its own (`ENTRIES`), compiled the first
-time a model needs it (`connect`: the sparse factorisations and the rigid clusters' kernels
-only for models that use them); compiled code (a SUNDIALS callback, the sampled loop, the
-engine's own functions) reaches it through the process's table of their addresses, Python
-through `call`.
+from `actuators` through an operation of their own (`coil_entries`). Every operation is a
+C function of its own (`ENTRIES`), compiled the first time a model needs it (`connect`: the
+sparse factorisations, the rigid clusters' kernels and the coils' only for models that use
+them); compiled code (a SUNDIALS callback, the sampled loop, the engine's own functions)
+reaches it through the process's table of their addresses, Python through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
@@ -56,18 +56,21 @@ from ..numerics.native import address_of, call_engine, carray, float_address
 from . import data as ed
 from . import newton, operations, rigid_kernels, sparse_factors
 from . import slots as slot
-from .actuators import (
-    current_rates,
-    current_residual,
-    first_order_blocks,
-    implicit_blocks,
-    set_currents,
+from .coil_entries import (
+    COILS_COLUMNS_BLOCKS,
+    COILS_IMPLICIT_BLOCKS,
+    COILS_RATES,
+    COILS_RESIDUAL,
+    COILS_ROWS_BLOCKS,
+    COILS_SET,
+    coils_entry,
 )
 from .input_response import input_response
 from .kinematics import deformations, solve_kinematics, solve_positions
 from .motion import evaluate, reduced_mass
 from .operations import (
     OP_ACCELERATIONS,
+    OP_COILS,
     OP_CONFIGURATION,
     OP_DEFORMATIONS,
     OP_DF,
@@ -127,8 +130,10 @@ def first_order_rhs(table, y, ydot):
     q_ref = _f(table, slot.Q_REF)
     for j in range(n):
         q_abs[j] = q_ref[j] + y[j]
-    if n_el:
-        set_currents(table, y, n)
+    if n_el:  # the coils' kernels through their operation (`coil_entries`)
+        status = run(table, OP_COILS, y.ctypes.data, 0, COILS_SET)
+        if status != ed.OK:
+            return status
     status = run(table, OP_ACCELERATIONS, q_abs.ctypes.data, y.ctypes.data + 8 * n, 0.0)
     if status != ed.OK:
         return status
@@ -141,7 +146,7 @@ def first_order_rhs(table, y, ydot):
             ydot[j] = y[n + j]
             ydot[n + j] = qddot[j]
         if n_el:
-            current_rates(table, ydot, n)
+            return run(table, OP_COILS, ydot.ctypes.data, 0, COILS_RATES)
     return ed.OK
 
 
@@ -177,7 +182,7 @@ def first_order_jacobian(table, y, J, column_major):
             for j in range(2 * n):
                 J[row + j] = -J[row + j]
         if n_el:
-            first_order_blocks(table, J, N, n, column_major)
+            return run(table, OP_COILS, J.ctypes.data, 0, COILS_ROWS_BLOCKS)
         return ed.OK
     for j in range(n):  # column j of -M^-1 K and of -M^-1 C
         for i in range(n):
@@ -191,7 +196,7 @@ def first_order_jacobian(table, y, J, column_major):
         for i in range(n):
             put(J, N, n + i, n + j, -column[i], column_major)
     if n_el:
-        first_order_blocks(table, J, N, n, column_major)
+        return run(table, OP_COILS, J.ctypes.data, 0, COILS_COLUMNS_BLOCKS)
     return ed.OK
 
 
@@ -214,7 +219,7 @@ def implicit_residual(table, y, yp, res):
             s += mass[i * n + j] * (yp[n + j] - qddot[j])
         res[n + i] = s
     if _i(table, slot.DIMS)[ed.NEL]:
-        current_residual(table, yp, res, n)
+        return run(table, OP_COILS, yp.ctypes.data, res.ctypes.data, COILS_RESIDUAL)
     return ed.OK
 
 
@@ -240,8 +245,9 @@ def implicit_jacobian(table, y, yp, cj, J):
         for j in range(n):
             J[j * N + n + i] = K[i * n + j]
             J[(n + j) * N + n + i] = C[i * n + j] + cj * mass[i * n + j]
-    if n_el:
-        implicit_blocks(table, J, N, n, cj)
+    if n_el:  # cj as the operation's time argument
+        return call_engine(_i(table, slot.DIMS)[ed.ENGINE], OP_COILS, table, cj,
+                           J.ctypes.data, 0, 0, COILS_IMPLICIT_BLOCKS)
     return ed.OK
 
 
@@ -411,7 +417,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
            prescribed_residual_entry, prescribed_residual_jacobian_entry,
            newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
-           stress_resultants_entry, row_products_entry)
+           stress_resultants_entry, row_products_entry, coils_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -450,6 +456,8 @@ def connect(data, *ops):
             wanted += [OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN]
     if ops and dims[ed.NDOF] >= operations.ROW_GROUPS_FROM:  # the tangent's, large models
         wanted.append(operations.OP_ROW_PRODUCTS)
+    if ops and dims[ed.NEL] > 0:  # the coil currents' part of the forms
+        wanted.append(OP_COILS)
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

@@ -32,7 +32,7 @@ import os
 import sys
 import tempfile
 
-from . import inline_copy, linked_code
+from . import compile_flags, inline_copy, linked_code
 from .compile_notice import CompileNotice
 
 _CORE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # core/, above numerics/
@@ -104,6 +104,7 @@ def numba_module():
         _load_without_refresh(caching.Cache, locator)
     linked_code.install()
     inline_copy.install()
+    compile_flags.install()
     return numba
 
 

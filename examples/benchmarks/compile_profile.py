@@ -20,6 +20,7 @@ time, which is why an entry point that calls much directly is expensive.
     python -m examples.benchmarks.compile_profile --top 20 -- loop stage_planar_3dof --no-plot
     python -m examples.benchmarks.compile_profile --fmu             # fmu build + instantiate
     python -m examples.benchmarks.compile_profile --signatures      # each kernel's signatures
+    python -m examples.benchmarks.compile_profile --passes          # numba's passes, self CPU
 """
 
 import argparse
@@ -30,6 +31,42 @@ import sys
 import tempfile
 import time
 from collections import defaultdict
+
+
+class PassRecorder:
+    """numba's compiler passes ("numba:run_pass" events) by name, their self CPU time (s):
+    the passes of the compilations nested in one (a callee typed on the way) subtracted."""
+
+    def __init__(self):
+        self.stack = []  # [name, start, children's time]
+        self.passes = defaultdict(lambda: [0, 0.0])  # name: [runs, self time]
+
+    def install(self):
+        from numba.core import event
+
+        recorder = self
+
+        class Passes(event.Listener):
+            def on_start(self, ev):
+                recorder.stack.append([ev.data["name"].split(" [")[0], time.process_time(),
+                                       0.0])
+
+            def on_end(self, ev):
+                name, start, children = recorder.stack.pop()
+                total = time.process_time() - start
+                recorder.passes[name][0] += 1
+                recorder.passes[name][1] += total - children
+                if recorder.stack:
+                    recorder.stack[-1][2] += total
+
+        event.register("numba:run_pass", Passes())
+
+    def lines(self, top):
+        rows = sorted(self.passes.items(), key=lambda item: -item[1][1])
+        lines = [f"{'numba pass':45s} {'runs':>5s} {'self (s)':>9s}", "-" * 61]
+        lines += [f"{name:45s} {n:5d} {t:9.2f}" for name, (n, t) in rows[:top]]
+        lines.append(f"{'all passes':45s} {'':5s} {sum(t for _, t in self.passes.values()):9.2f}")
+        return lines
 
 
 class CompileRecorder:
@@ -159,6 +196,8 @@ def main(argv=None):
     parser.add_argument("--signatures", action="store_true",
                         help="list each kernel's signatures and who compiled it (the most "
                         "specialised first)")
+    parser.add_argument("--passes", action="store_true",
+                        help="also print numba's compiler passes by self CPU time")
     parser.add_argument("--keep-cache", action="store_true",
                         help="use FLEXURE_CACHE_DIR as set (a warm run), not a new empty one")
     parser.add_argument("--json", help="also write every kernel's row to this JSON file")
@@ -170,6 +209,9 @@ def main(argv=None):
     os.environ.setdefault("MPLBACKEND", "Agg")
     recorder = CompileRecorder()
     install(recorder)
+    passes = PassRecorder() if args.passes else None
+    if passes:
+        passes.install()
     start = time.perf_counter()
     if args.fmu:
         run_fmu()
@@ -185,6 +227,9 @@ def main(argv=None):
     print(f"process CPU {usage.ru_utime + usage.ru_stime:.1f} s (user {usage.ru_utime:.1f}, "
           f"sys {usage.ru_stime:.1f}), wall {time.perf_counter() - start:.1f} s, cache "
           f"{os.environ['FLEXURE_CACHE_DIR']}")
+    if passes:
+        print()
+        print("\n".join(passes.lines(args.top)))
     if args.json:
         with open(args.json, "w") as out:
             json.dump({short(name): row for name, row in recorder.kernels.items()}, out,
