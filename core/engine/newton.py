@@ -50,7 +50,7 @@ from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
 from .slots import group_deformations, group_inertia, inertia_scratch
 from .slots import int_array as _i
-from .tangent import _mass_times, balance_multipliers
+from .tangent import balance_force, balance_multipliers
 
 ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"  # engine's
 OPERATIONS = NEWTON_OPERATIONS  # this module's entries' operations, in `engine.ENTRIES`
@@ -94,10 +94,9 @@ def _product(ints, floats, values, v, out, limit, scale):
 @kernel
 def _full_stresses(table):
     """The stress resultants of the full dynamic balance into slot edot (as `tangent`):
-    sigma_c plus the multipliers J^-T (r - M xddot) on J's rows, at the last evaluation."""
-    r_full = _f(table, slot.X_TRIAL)
-    r_full[:] = _f(table, slot.FORCE)
-    _mass_times(table, _f(table, slot.X), _f(table, slot.XDDOT), r_full)
+    sigma_c plus the multipliers J^-T (r - M xddot) on J's rows, at the last evaluation and
+    its accelerations (slot xddot)."""
+    r_full = balance_force(table, _f(table, slot.XDDOT), True)
     sigma = _f(table, slot.EDOT)
     balance_multipliers(table, r_full, _f(table, slot.DX), sigma)
     return sigma
