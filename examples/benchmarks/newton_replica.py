@@ -6,7 +6,8 @@ stage's Newton can converge.
   the spatial cantilever's case) retraced in Python with the engine's RHS, NEWTON_JACOBIAN,
   NEWTON_FACTOR and NEWTON_SOLVE, recording per attempt t, h, hg, the error estimate and per
   stage the Newton iterations, the contractions theta and the last |dz| (the weighted RMS
-  norm of the step's error test: 1 = the error a step may make). Its counts (steps,
+  norm of the step's error test: 1 = the error a step may make), and the hg (s) of the
+  Newton matrix it used. Its counts (steps,
   rejections, evaluations, factorisations) are the compiled kernel's to the unit
   (tests/test_newton_replica.py), so its records say where that run's evaluations went.
 - `newton_floor`: one stage's Newton iterated far past its tolerance, with the kinematics
@@ -37,8 +38,8 @@ def weighted_norm(v, weight):
 class Replay:
     """The replica's run of a `Simulator` (method "esdirk", sparse Newton matrix) from its
     state at t = 0: `run(t_end)`; counts in rhs, jacobians, factorizations, steps, rejected;
-    per attempt (t, h, hg, error, [(stage, iterations, thetas, last |dz|), ...]) in
-    attempts (error None when a stage's Newton failed)."""
+    per attempt (t, h, hg, error, [(stage, iterations, thetas, last |dz|), ...], hg of the
+    Newton matrix) in attempts (error None when a stage's Newton failed)."""
 
     def __init__(self, sim):
         if not sim.integrator.sparse_newton or sim.integrator.label != "ESDIRK4(3)6L[2]SA":
@@ -117,7 +118,7 @@ class Replay:
                 self.jacobians += 1
                 have_jacobian, fresh, refresh, factored, extra = True, True, False, False, 0
             hg = step * A[1, 1]
-            if not factored or abs(hg / self.hg_lu - 1.0) > K.LU_SLACK:
+            if not factored or abs(hg / self.hg_lu - 1.0) > K.SPARSE_LU_SLACK:
                 engine.call(self.data, OP_NEWTON_FACTOR, s=hg)
                 self.factorizations, factored, self.hg_lu = self.factorizations + 1, True, hg
             record, converged = [], True
@@ -129,7 +130,7 @@ class Replay:
                     break
             failures += 1
             if not converged:
-                self.attempts.append((t, step, hg, None, record))
+                self.attempts.append((t, step, hg, None, record, self.hg_lu))
                 if not fresh:
                     refresh = True
                 else:
@@ -140,7 +141,7 @@ class Replay:
             weight = 1.0 / (self.rtol * np.maximum(np.abs(y), np.abs(z)) + self.atol)
             self.solve(err)
             error = weighted_norm(err, weight)
-            self.attempts.append((t, step, hg, error, record))
+            self.attempts.append((t, step, hg, error, record, self.hg_lu))
             if error > 1.0:
                 self.rejected += 1
                 shrink = max(K.SHRINK, K.SAFETY * error ** -exponent)
@@ -204,7 +205,7 @@ def main(beams=(16, 64), rtol=1e-6, t_end=5e-3):
         replay = Replay(Simulator(spatial_cantilever(n), method="esdirk", rtol=rtol))
         replay.run(t_end)
         per_stage = {}
-        for *_, record in replay.attempts:
+        for *_, record, _ in replay.attempts:
             for stage, iterations, _, _ in record:
                 per_stage.setdefault(stage, []).append(iterations)
         print(f"{6 * n} DOFs: {replay.steps} steps, {replay.rejected} rejected, "
