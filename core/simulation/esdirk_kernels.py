@@ -49,8 +49,9 @@ LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factor
 # only by |1 - hg / hg_LU|, up to the slack; on the 384-DOF spatial cantilever the stages'
 # contractions of 0.01 to 0.1 were that, an iteration more, where a sparse factorisation
 # costs a fifth of an evaluation (0.086 ms against 0.47): 0.83 of the evaluations on 15
-# runs at rtol 1e-5 to 1e-7, 0.81 at 96 DOFs, at the same error (docs/benchmarks.md)
-SPARSE_LU_SLACK = 0.0
+# runs at rtol 1e-5 to 1e-7, 0.81 at 96 DOFs, at the same error (docs/benchmarks.md). Not 0:
+# an h equal to the factors' but for round-off (a CPU's fused multiply-adds) keeps them
+SPARSE_LU_SLACK = 1e-9
 # A new Jacobian J = df/dy at the next step once the Newton iterations its age cost since the
 # last one (beyond each stage's first, contracting by theta >= THETA_STALE: with a current J
 # Newton contracts quadratically, theta < 1e-3 on the stages measured) have cost as much as a
