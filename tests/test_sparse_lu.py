@@ -1,7 +1,7 @@
 """The sparse LU with kept pivots (core/numerics/sparse_lu.py) against numpy and scipy: random
-sparse matrices, refactoring at new values, the transposed solve, a kept pivot that vanishes
-(re-pivoting), a singular matrix, fill beyond the packed room; the manipulator's J and
-augmented system in the slow tier."""
+sparse matrices, refactoring at new values, the transposed solve, two right-hand sides in one
+pass, a kept pivot that vanishes (re-pivoting), a singular matrix, fill beyond the packed
+room; the manipulator's J and augmented system in the slow tier."""
 
 import numpy as np
 import pytest
@@ -88,6 +88,28 @@ def test_refactor_at_new_values_keeps_the_pivots_and_solves(n, density):
     dense[:] = 0.0
     sparse_lu.scatter_dense(lu.ints, lu.floats, dense, order, order)
     assert np.array_equal(dense.reshape(n, n)[np.ix_(order, order)], moved)
+
+
+@pytest.mark.parametrize("n, density", [(1, 0.0), (12, 0.2), (60, 0.05)])
+def test_a_pair_of_right_hand_sides_solves_as_each_alone(n, density):
+    """`solve_pair` against `solve` of each vector: equal values (its pass subtracts products
+    with zero where one vector's entry is zero and the other's not), among them vectors with
+    zeros where the other has none (one all zero), and against numpy within `assert_solves`'
+    bound."""
+    rng, a, lu = random_case(n + 7, n, density)
+    assert factor(lu) > 0.0
+    b, c = rng.standard_normal(n), rng.standard_normal(n)
+    c[: n // 2] = 0.0
+    for first, second in ((b, c), (c, b), (b, np.zeros(n))):
+        x, y, work = first.copy(), second.copy(), np.full(n, np.nan)
+        sparse_lu.solve_pair(lu.ints, lu.floats, x, y, work)
+        for solved, vector in ((x, first), (y, second)):
+            alone = vector.copy()
+            sparse_lu.solve(lu.ints, lu.floats, alone, False)
+            assert np.array_equal(solved, alone)
+            expected = np.linalg.solve(a, vector)
+            bound = 100 * np.linalg.cond(a) * EPS * max(np.max(np.abs(expected)), 1e-300)
+            assert np.max(np.abs(solved - expected)) <= bound
 
 
 def test_a_kept_pivot_that_vanishes_is_rejected_and_the_matrix_pivots_afresh():

@@ -50,7 +50,7 @@ from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
 from .slots import group_deformations, group_inertia, inertia_scratch
 from .slots import int_array as _i
-from .tangent import _mass_times, balance_multipliers
+from .tangent import balance_force, balance_multipliers
 
 ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"  # engine's
 OPERATIONS = NEWTON_OPERATIONS  # this module's entries' operations, in `engine.ENTRIES`
@@ -92,12 +92,28 @@ def _product(ints, floats, values, v, out, limit, scale):
 
 
 @kernel
+def _product_pair(ints, floats, first, v, second, w, out, limit, scale):
+    """out[r] += A1[r, c] v[c] + scale A2[r, c] w[c] over the entries of the pattern packed in
+    ints (floats: its packed floats, for the views), A1 and A2 with values `first` and
+    `second` on it, rows and columns below limit: `_product` of both in one pass over the
+    pattern."""
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
+    for j in range(n):
+        c = pcol[j]
+        if c >= limit or (v[c] == 0.0 and w[c] == 0.0):
+            continue
+        vc, wc = v[c], scale * w[c]
+        for p in range(Ap[j], Ap[j + 1]):
+            if Ai[p] < limit:
+                out[Ai[p]] += first[p] * vc + second[p] * wc
+
+
+@kernel
 def _full_stresses(table):
     """The stress resultants of the full dynamic balance into slot edot (as `tangent`):
-    sigma_c plus the multipliers J^-T (r - M xddot) on J's rows, at the last evaluation."""
-    r_full = _f(table, slot.X_TRIAL)
-    r_full[:] = _f(table, slot.FORCE)
-    _mass_times(table, _f(table, slot.X), _f(table, slot.XDDOT), r_full)
+    sigma_c plus the multipliers J^-T (r - M xddot) on J's rows, at the last evaluation and
+    its accelerations (slot xddot)."""
+    r_full = balance_force(table, _f(table, slot.XDDOT), True)
     sigma = _f(table, slot.EDOT)
     balance_multipliers(table, r_full, _f(table, slot.DX), sigma)
     return sigma
@@ -255,13 +271,11 @@ def solve(table, v, hg):
     na = scratch.size // 3
     a, b, rhs = scratch[:nf], scratch[na: na + nf], scratch[2 * na: 3 * na]
     dof_rows(table, v[ndof: 2 * ndof], a)  # a = J^-1 [0; r2], b = J^-1 [0; r1]
-    sparse_lu.solve(j_ints, j_floats, a, False)
     dof_rows(table, v[:ndof], b)
-    sparse_lu.solve(j_ints, j_floats, b, False)
+    sparse_lu.solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled below
     Mv, _, Kv = _parts(table)
     rhs[:] = 0.0  # [M a - hg K_x b; 0]
-    _product(h_ints, h_floats, Mv, a, rhs, nf, 1.0)
-    _product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
+    _product_pair(h_ints, h_floats, Mv, a, Kv, b, rhs, nf, -hg)
     sparse_lu.solve(h_ints, h_floats, rhs, False)
     a[:] = 0.0  # J dx on J's rows: the DOF rows are dv
     _product(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats), rhs, a, nf, 1.0)

@@ -49,7 +49,7 @@ from . import slots as slot
 from .operations import OP_DF, run
 from .slots import float_array as _f
 from .slots import int_array as _i
-from .tangent import balance_force, balance_multipliers
+from .tangent import balance_force_at, balance_multipliers
 
 # the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
 ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
@@ -71,7 +71,7 @@ def stress_resultants(table, qddot, out):
     if dims[ed.MASS_CURRENT] != 1:  # DF is there when M_bar is
         run(table, OP_DF, 0, 0, 0.0)
     full = _f(table, slot.EDOT)  # reused: the full stress resultants
-    balance_multipliers(table, balance_force(table, qddot), _f(table, slot.DX), full)
+    balance_multipliers(table, balance_force_at(table, qddot), _f(table, slot.DX), full)
     rows = _i(table, slot.ROWS)
     for j in range(rows.size):  # the rigid rows, then the DOF deformations'
         d = rows[j]

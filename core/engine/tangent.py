@@ -59,7 +59,7 @@ def tangent(table, qddot):
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF = _f(table, slot.DF)
-    r_full, lam = balance_force(table, qddot), _f(table, slot.DX)
+    r_full, lam = balance_force_at(table, qddot), _f(table, slot.DX)
     sigma = _f(table, slot.EDOT)  # reused: the full stress resultants
     balance_multipliers(table, r_full, lam, sigma)
     rigid = dims[ed.NSLAVES] > 0
@@ -199,30 +199,52 @@ def coordinate_rows(table, sigma, values, hessians, W, ranges):
 
 
 @kernel
-def balance_force(table, qddot):
-    """r_full = r - M xddot (slot x_trial, NX) at the last evaluation and accelerations qddot,
-    xddot = DF qddot + conv into slot xddot (the reduced form's r holds - M conv already); at
-    rest (the statics) xddot = 0 and r_full = r. Needs DF (slot DF) when qddot is not zero.
-    Each element's share of r sits on its own coordinates, as the multipliers and the
-    slaves' geometric stiffness (`rigid_kernels.rigid_geometric`) read it."""
+def balance_force_at(table, qddot):
+    """r_full = r - M xddot (slot x_trial, NX) at the last evaluation and accelerations qddot
+    (NDOF,): `balance_force` with xddot = DF qddot + conv (`coordinate_accelerations`)."""
+    moving = coordinate_accelerations(table, qddot)
+    return balance_force(table, _f(table, slot.XDDOT), moving)
+
+
+@kernel
+def coordinate_accelerations(table, qddot):
+    """xddot = DF qddot + conv (m/s^2, and the rotation parameters' second derivatives) into
+    slot xddot for accelerations qddot (NDOF,; the reduced form's r holds - M conv already,
+    so there xddot = DF qddot); whether they may be nonzero: False when qddot and conv are
+    all zero (the statics), slot xddot then left as it was. Needs DF (slot DF) when qddot is
+    not zero."""
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF, conv = _f(table, slot.DF), _f(table, slot.CONV)
     with_conv = dims[ed.REDUCED] == 0
+    if not (any_nonzero(qddot) or (with_conv and any_nonzero(conv))):
+        return False
+    acc = _f(table, slot.XDDOT)
+    for a in range(nx):
+        s = conv[a] if with_conv else 0.0
+        for j in range(ndof):
+            s += DF[a * ndof + j] * qddot[j]
+        acc[a] = s
+    return True
+
+
+@kernel
+def balance_force(table, xddot, moving):
+    """r_full = r - M xddot (slot x_trial, NX) at the last evaluation for the coordinate
+    accelerations xddot (NX,) given; without `moving` xddot is taken as zero and r_full = r
+    (the statics). The augmented form's r leaves the folded elements' forces to their
+    clusters' rigid bodies (`rigid_inertia_kernels`): they are added here. Each element's
+    share of r sits on its own coordinates, as the multipliers and the slaves' geometric
+    stiffness (`rigid_kernels.rigid_geometric`) read it. Units: N (N m, N for the rotation
+    parameters' generalised forces)."""
+    dims = _i(table, slot.DIMS)
     r_full = _f(table, slot.X_TRIAL)
     copy(r_full, _f(table, slot.FORCE))
-    if with_conv and dims[ed.NSLAVES] > 0:  # the folded elements' forces, which the
-        # augmented form's r leaves to their clusters' rigid bodies (`rigid_inertia_kernels`)
+    if dims[ed.REDUCED] == 0 and dims[ed.NSLAVES] > 0:  # the folded elements' forces
         xdot = _f(table, slot.XDOT)
         add_folded_forces(table, _f(table, slot.X), xdot, any_nonzero(xdot), r_full)
-    if any_nonzero(qddot) or (with_conv and any_nonzero(conv)):
-        acc = _f(table, slot.XDDOT)
-        for a in range(nx):
-            s = conv[a] if with_conv else 0.0
-            for j in range(ndof):
-                s += DF[a * ndof + j] * qddot[j]
-            acc[a] = s
-        _mass_times(table, _f(table, slot.X), acc, r_full)
+    if moving:
+        _mass_times(table, _f(table, slot.X), xddot, r_full)
     return r_full
 
 

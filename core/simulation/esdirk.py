@@ -35,8 +35,9 @@ accepted step once it is spent (TOO_MUCH_WORK).
 Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
 Jacobian), kept across steps and samples; it is recomputed when a stage's Newton fails (a
 stage that converges slowly but converges only counts its iterations, below), and I - h g J
-is refactored only when J is new or h has moved more than 20 % from the h of the factors; for
-large models through its Schur complement (`newton_matrix`).
+is refactored only when J is new or h has moved more than 20 % from the h of the factors (on
+the sparse Newton matrix at every new h: `esdirk_kernels.SPARSE_LU_SLACK`); for large models
+through its Schur complement (`newton_matrix`).
 Iterations stop when the estimated remaining error eta |dz| (eta =
 theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm above, as in
 Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage

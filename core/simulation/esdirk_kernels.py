@@ -44,6 +44,14 @@ NEWTON_TOLERANCE = 0.05   # eta |dz| in the weighted norm (1 = the error the ste
 MAX_NEWTON = 7
 MAX_FAILURES = 12         # consecutive failed attempts of one step
 LU_SLACK = 0.2            # |h / h_LU - 1| that keeps the Newton matrix's factors
+# On the sparse Newton matrix (`newton_matrix`) none: factored again at every new h. Why: a
+# Newton matrix made at hg_LU contracts the stiff modes (|hg lambda| >> 1) of a stage at hg
+# only by |1 - hg / hg_LU|, up to the slack; on the 384-DOF spatial cantilever the stages'
+# contractions of 0.01 to 0.1 were that, an iteration more, where a sparse factorisation
+# costs a fifth of an evaluation (0.086 ms against 0.47): 0.83 of the evaluations on 15
+# runs at rtol 1e-5 to 1e-7, 0.81 at 96 DOFs, at the same error (docs/benchmarks.md). Not 0:
+# an h equal to the factors' but for round-off (a CPU's fused multiply-adds) keeps them
+SPARSE_LU_SLACK = 1e-9
 # A new Jacobian J = df/dy at the next step once the Newton iterations its age cost since the
 # last one (beyond each stage's first, contracting by theta >= THETA_STALE: with a current J
 # Newton contracts quadratically, theta < 1e-3 on the stages measured) have cost as much as a
@@ -294,7 +302,8 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             flags[I_JACOBIAN], flags[I_FRESH], flags[I_REFRESH], flags[I_LU] = 1, 1, 0, 0
             flags[I_EXTRA] = 0
         hg = h * A[1, 1]
-        if flags[I_LU] == 0 or abs(hg / memory[M_H_LU] - 1.0) > LU_SLACK:
+        slack = SPARSE_LU_SLACK if dims[ed.NEWTON_SPARSE] == 1 else LU_SLACK
+        if flags[I_LU] == 0 or abs(hg / memory[M_H_LU] - 1.0) > slack:
             if not factor_model(table, J, LU, piv, hg, flags):
                 return SINGULAR_MATRIX
             flags[I_LU] = 1

@@ -28,9 +28,11 @@ with H = M + hg C_x + hg^2 K_x on the free coordinates, a = J^-1 [0; r2], b = J^
 and dv = (J's DOF rows) dx (`engine.newton`, docs/analyses.md). Its "Jacobian" is M, C_x,
 K_x and J's LU at the Jacobian's state, kept in the packed model (the J array of the
 integrator is not used); `sparse_factor` and `sparse_solve` reach them through the engine's
-operations. The rules of when to renew J and refactor at a new hg are the ESDIRK's, unchanged;
-the solve is the dense path's (I - hg J)^-1 to round-off, so the step's error control and
-Newton's convergence are those of the dense path. Costs grow with the element count.
+operations. The rule of when to renew J is the ESDIRK's, unchanged; the factors are made
+again at every new hg (a sparse factorisation costs a fifth of an evaluation, so the slack the
+dense path keeps, an iteration more per stage, does not pay: `esdirk_kernels.SPARSE_LU_SLACK`);
+the solve is the dense path's (I - hg J)^-1 to round-off, so the step's error control is the
+dense path's. Costs grow with the element count.
 """
 
 from ..engine import access, engine
