@@ -71,7 +71,7 @@ from .inverse_dynamics_partition import (
     numerical_derivatives,
     zero_dynamics,
 )
-from .stresses import dynamic_stress_resultants
+from .inverse_evaluation import motion_evaluator
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -80,6 +80,9 @@ if TYPE_CHECKING:  # names for the annotations only
     from ..model import Model
 
 RENEW_AFTER = 8  # Newton iterations of a step before its matrix is renewed
+# the evaluations a step makes, about (three stages, two to four Newton iterations, and the
+# step's end): what the choice of the evaluations' path counts (`inverse_evaluation`)
+EVALUATIONS_PER_STEP = 10
 
 _S6 = np.sqrt(6.0)
 # Radau IIA, three stages (Hairer & Wanner, Solving ODEs II, Table IV.5.6)
@@ -177,12 +180,13 @@ class FreeInverseDynamics(InverseDynamics):
         return node_polynomial(self.times, self.node_forces)
 
 
-def _start(model, mech, path, out_ports, times):
-    """(rest, config): the static equilibrium where the path must start (SceneError if not)."""
+def _start(model, mech, evaluator, path, out_ports, times):
+    """(rest, config): the static equilibrium where the path must start (SceneError if not),
+    and its configuration from `evaluator`."""
     from .statics import static_equilibrium
 
     rest = static_equilibrium(model, mechanics=mech)
-    config = mech.kinematics.solve(rest.q, rest.x)
+    config = evaluator.solve(rest.q, rest)
     values = sample_path(model, path, times[0], len(out_ports))[0]
     start = np.array([output_value(model, port, config.x) for port in out_ports])
     scale = dof_tolerances(model, 1.0).max()
@@ -272,8 +276,8 @@ def _predicted(v_start, V, h_before, h):
 def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
                           outputs: Sequence[str] | None = None,
                           inputs: Sequence[str] | None = None, tolerance: float = 1e-12,
-                          max_iterations: int = 30,
-                          mechanics: Mechanics | None = None) -> FreeInverseDynamics:
+                          max_iterations: int = 30, mechanics: Mechanics | None = None,
+                          compiled: bool | None = None) -> FreeInverseDynamics:
     """The input forces that make `model` follow `path`, the DOFs the outputs leave free
     integrated from rest (module docstring: the method, its order and tolerance).
 
@@ -300,6 +304,10 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         Newton iterations per position solve and per step before ConvergenceError.
     mechanics : Mechanics, optional
         The model's mechanics to reuse.
+    compiled : bool, optional
+        Evaluate the model through the compiled engine (True) or the numpy `Mechanics`
+        (False); default: the engine where it takes the model and the work is large enough
+        (`inverse_evaluation.preferred`, about EVALUATIONS_PER_STEP evaluations a step).
 
     Returns
     -------
@@ -332,15 +340,16 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         raise SceneError(f"{model.source}: inverse dynamics with free DOFs needs at least two "
                          "finite, increasing times (the steps' ends), got "
                          f"{np.array2string(times, threshold=8)}")
-    rest, config = _start(model, mech, path, out_ports, times)
-    part = Partitioned(model, mech, path, out_ports, in_ports, config, tolerance,
+    evaluator = motion_evaluator(model, mech, compiled, EVALUATIONS_PER_STEP * spacing.size)
+    rest, config = _start(model, mech, evaluator, path, out_ports, times)
+    part = Partitioned(model, evaluator, path, out_ports, in_ports, config, tolerance,
                        max_iterations)
     A_q, A_v = linear_derivatives(part, model, mech, rest, config, times[0])
     _check_zeros(model, zero_dynamics(A_q, A_v), spacing)
     stepper = _Stepper(part, A_q, A_v, max_iterations, model)
     i = part.independent
     q_now, v_now = config.q[i].copy(), np.zeros(i.size)
-    rows = [_row(part, mech, times[0], q_now, v_now)]
+    rows = [_row(part, times[0], q_now, v_now)]
     node_times, node_forces, node_x = [times[0]], [rows[0][5]], [rows[0][3]]
     guess, before = np.tile(v_now, (3, 1)), None
     for t, h in zip(times[:-1], spacing, strict=True):
@@ -354,7 +363,7 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
             node_x.append(found_config.x.copy())
         before = (v_now, V, h)
         q_now, v_now = q_now + h * RADAU_A[2] @ V, V[2].copy()  # stiffly accurate
-        rows.append(_row(part, mech, t + h, q_now, v_now))
+        rows.append(_row(part, t + h, q_now, v_now))
         node_times.append(t + h)
         node_forces.append(rows[-1][5])
         node_x.append(rows[-1][3])
@@ -390,11 +399,11 @@ def _resolved_ports(model, outputs, inputs):
     return ports, input_ports(model, inputs, ports)
 
 
-def _row(part, mech, t, q_i, qdot_i):
+def _row(part, t, q_i, qdot_i):
     """(q, qdot, qddot, x, e, forces, stress resultants) at t."""
     config, qdot, qddot, forces = part.evaluate(t, q_i, qdot_i)
     b = input_columns(part.model, config.x, part.in_ports)
-    sigma = dynamic_stress_resultants(mech, config, qdot, qddot, b @ forces)
+    sigma = part.evaluator.stress_resultants(config, qdot, qddot, b @ forces)
     return config.q.copy(), qdot, qddot, config.x.copy(), config.e.copy(), forces, sigma
 
 
