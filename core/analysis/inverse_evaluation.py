@@ -14,19 +14,26 @@ so the algorithms above them (Newton on the outputs, the balance solved for the 
 Radau steps) are one code, and the two paths differ by the evaluations' round-off.
 
 Which path (`compiled=None`): the engine where it takes the model (`inverse_engine.supports`)
-and the work is large enough that it is the faster, its start-up in a process included:
+and the work is large enough that it is the faster in a process, its start-up included:
 
-    free coordinates x evaluations >= ENGINE_MIN_WORK
+    evaluations x (free coordinates + OVERHEAD_COORDINATES) >= ENGINE_MIN_WORK
 
 an integer rule (no timing is compared at run time, so the choice cannot flip with the CPU;
-a tie, work equal to the threshold, takes the engine). The evaluations are counted as
-`inverse_dynamics` makes them: one per time (with the Newton on the positions: about three
-kinematics per time); `free_inverse_dynamics` makes about ten per step (three stages, two to
-four Newton iterations), and counts them so. Measured (docs/benchmarks.md, 2026-11-30:
-whole-process CPU, the engine's cache warm; one evaluation of the engine about 0.1 ms on a
-small model, 2 ms on manipulator_control, against 2 ms and 70 ms of numpy): the engine's
-start-up in a process (numba, llvmlite, the cached entries, the packing) is 0.2 to 0.3 s of
-CPU, which the numpy path's saving pays for from about 1e5 free-coordinate evaluations.
+a tie, work equal to the threshold, takes the engine). The evaluations are counted as the
+caller makes them: `inverse_dynamics` one per time (with about three kinematics for the
+positions), `free_inverse_dynamics` EVALUATIONS_PER_STEP per step. Measured (docs/benchmarks.md,
+2026-11-30; 2-core VM under a load of 7): once started, the engine is the faster on every
+model, per time 0.47 against 0.99 ms on truss_1dof_x (1 free coordinate), 0.51 against
+1.6 ms on stage_planar_3dof (6), 1.5 against 6.9 ms on wire_tripod (28), per step of the
+free variant 4.8 against 32 ms on stage_spatial_19dof (35) and 2 against 70 ms an evaluation
+on manipulator_control (784): the numpy path's saving is about 0.1 ms per free coordinate
+and evaluation plus 0.4 ms (OVERHEAD_COORDINATES = 4 free coordinates' worth) of its own
+Python per evaluation. Starting the engine in a process (numba, llvmlite, the cached entries,
+the packing) costs about 0.12 s of CPU. Whole-process CPU, engine over numpy, alternating,
+medians: truss_1dof_x 1.10 at 101 times and 0.95 at 301, stage_planar_3dof 1.22 at 11, 0.98
+at 101, 0.78 at 301, wire_tripod 1.10 at 11 and 0.85 at 41: the break-even lies at a work of
+1060, 1100 and 640, and ENGINE_MIN_WORK = 1000 takes the engine where it is the faster or
+within a few per cent of it.
 """
 
 from __future__ import annotations
@@ -42,14 +49,17 @@ if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.mechanics import Mechanics
     from ..model import Model
 
-ENGINE_MIN_WORK = 100_000  # free coordinates x evaluations from which the engine is preferred
+# the work (module docstring) from which the engine is the default, and the numpy path's own
+# overhead per evaluation in free coordinates' worth
+ENGINE_MIN_WORK = 1000
+OVERHEAD_COORDINATES = 4
 
 
 def preferred(model: Model, evaluations: int) -> bool:
     """Whether the engine is the default path of an inverse dynamics of `model` that makes
     about `evaluations` evaluations (module docstring: the rule and its threshold)."""
-    return (inverse_engine.supports(model)
-            and int(model.free_coordinates.size) * int(evaluations) >= ENGINE_MIN_WORK)
+    work = int(evaluations) * (int(model.free_coordinates.size) + OVERHEAD_COORDINATES)
+    return inverse_engine.supports(model) and work >= ENGINE_MIN_WORK
 
 
 def motion_evaluator(model: Model, mech: Mechanics, compiled: bool | None, evaluations: int):
@@ -124,4 +134,5 @@ class NumpyMotion:
         return dynamic_stress_resultants(self.mech, config, qdot, qddot, input_force)
 
 
-__all__ = ["ENGINE_MIN_WORK", "NumpyMotion", "motion_evaluator", "preferred"]
+__all__ = ["ENGINE_MIN_WORK", "OVERHEAD_COORDINATES", "NumpyMotion", "motion_evaluator",
+           "preferred"]
