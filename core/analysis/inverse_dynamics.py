@@ -31,6 +31,11 @@ inverse_dynamics_free.py, integrates it). At each time t:
    resultants of every deformation then follow from the multipliers of the full balance
    (`stresses.dynamic_stress_resultants`): SPACAR's OUTF along the path.
 
+In step 3, DF^T r = Q - M_bar qddot with M_bar = DF^T M DF and Q the generalised force at
+qddot = 0. The evaluations (the configurations of step 1, (D2F qdot) qdot, M_bar and Q, the
+stress resultants) come from the numpy `Mechanics` or from the compiled engine, by a measured
+rule (`inverse_evaluation`, `compiled`): the steps above are the same code on both.
+
 The path's derivatives are the caller's (a profile's own), or a cubic spline's through
 samples (`sampled_path`): stated, not guessed.
 """

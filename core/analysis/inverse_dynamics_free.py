@@ -28,6 +28,11 @@ every time to that tolerance; the free DOFs and the forces at the steps carry th
 error O(h^5), the forces at the inner stages O(h^4) (measured in
 tests/test_inverse_dynamics_free.py).
 
+The evaluations (positions, the motion's terms, the stress resultants) come from the numpy
+`Mechanics` or from the compiled engine (`inverse_evaluation`: the engine by default where
+EVALUATIONS_PER_STEP per step make enough work; the linearisation at rest and the statics
+take their own paths).
+
 Forces between the steps. Each step has four nodes, its start, its two inner stages
 t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through
 the four, step by step, is the force history w(t) that a forward simulation takes

@@ -21,19 +21,20 @@ and the work is large enough that it is the faster in a process, its start-up in
 an integer rule (no timing is compared at run time, so the choice cannot flip with the CPU;
 a tie, work equal to the threshold, takes the engine). The evaluations are counted as the
 caller makes them: `inverse_dynamics` one per time (with about three kinematics for the
-positions), `free_inverse_dynamics` EVALUATIONS_PER_STEP per step. Measured (docs/benchmarks.md,
-2026-11-30; 2-core VM under a load of 7): once started, the engine is the faster on every
-model, per time 0.47 against 0.99 ms on truss_1dof_x (1 free coordinate), 0.51 against
-1.6 ms on stage_planar_3dof (6), 1.5 against 6.9 ms on wire_tripod (28), per step of the
-free variant 4.8 against 32 ms on stage_spatial_19dof (35) and 2 against 70 ms an evaluation
-on manipulator_control (784): the numpy path's saving is about 0.1 ms per free coordinate
-and evaluation plus 0.4 ms (OVERHEAD_COORDINATES = 4 free coordinates' worth) of its own
-Python per evaluation. Starting the engine in a process (numba, llvmlite, the cached entries,
-the packing) costs about 0.12 s of CPU. Whole-process CPU, engine over numpy, alternating,
-medians: truss_1dof_x 1.10 at 101 times and 0.95 at 301, stage_planar_3dof 1.22 at 11, 0.98
-at 101, 0.78 at 301, wire_tripod 1.10 at 11 and 0.85 at 41: the break-even lies at a work of
-1060, 1100 and 640, and ENGINE_MIN_WORK = 1000 takes the engine where it is the faster or
-within a few per cent of it.
+positions), `free_inverse_dynamics` EVALUATIONS_PER_STEP per step. Measured
+(docs/benchmarks.md, 2026-11-30; 2-core VM under a load of 5 to 7): once started, the engine
+is the faster on every model, per time 0.47 against 0.99 ms on truss_1dof_x (1 free
+coordinate), 0.51 against 1.6 ms on stage_planar_3dof (6), 1.5 against 6.9 ms on wire_tripod
+(28), per step of the free variant 4.8 against 32 ms on stage_spatial_19dof (35) and 62
+against 511 ms on manipulator_control (784; about eight evaluations a step): the numpy
+path's saving is about 0.1 ms per free coordinate and evaluation plus 0.4 ms
+(OVERHEAD_COORDINATES = 4 free coordinates' worth) of its own Python per evaluation.
+Starting the engine in a process (numba, llvmlite, the cached entries, the packing) costs
+about 0.12 s of CPU. Whole-process CPU, engine over numpy, alternating, medians:
+truss_1dof_x 1.10 at 101 times and 0.95 at 301, stage_planar_3dof 1.22 at 11, 0.98 at 101,
+0.78 at 301, wire_tripod 1.10 at 11 and 0.85 at 41: the break-even lies at a work of 1060,
+1100 and 640, and ENGINE_MIN_WORK = 1000 takes the engine where it is the faster or within a
+few per cent of it.
 """
 
 from __future__ import annotations
