@@ -29,9 +29,13 @@ error O(h^5), the forces at the inner stages O(h^4) (measured in
 tests/test_inverse_dynamics_free.py).
 
 The evaluations (positions, the motion's terms, the stress resultants) come from the numpy
-`Mechanics` or from the compiled engine (`inverse_evaluation`: the engine by default where
-EVALUATIONS_PER_STEP per step make enough work; the linearisation at rest and the statics
-take their own paths).
+`Mechanics` (the default) or, with compiled=True, from the compiled engine
+(`inverse_evaluation`; the linearisation at rest and the statics take their own paths). The
+engine's forces agree with the numpy path's within that path's own round-off spread (its
+dense against its sparse `Mechanics`), but along the manipulator's forward check
+(tests/test_manipulator_feedforward.py) they leave E 5.5 pm off the path at 0.625 ms where
+the numpy path's leave 2.5 pm, above the 0.75 of the 1.25 ms run's deviation that the check
+asks of the half step: the engine is not the default here until that floor is understood.
 
 Forces between the steps. Each step has four nodes, its start, its two inner stages
 t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through
@@ -86,7 +90,7 @@ if TYPE_CHECKING:  # names for the annotations only
 
 RENEW_AFTER = 8  # Newton iterations of a step before its matrix is renewed
 # the evaluations a step makes, about (three stages, two to four Newton iterations, and the
-# step's end): what the choice of the evaluations' path counts (`inverse_evaluation`)
+# step's end): the work the evaluations' path is given (`inverse_evaluation`)
 EVALUATIONS_PER_STEP = 10
 
 _S6 = np.sqrt(6.0)
@@ -310,9 +314,9 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
     mechanics : Mechanics, optional
         The model's mechanics to reuse.
     compiled : bool, optional
-        Evaluate the model through the compiled engine (True) or the numpy `Mechanics`
-        (False); default: the engine where it takes the model and the work is large enough
-        (`inverse_evaluation.preferred`, about EVALUATIONS_PER_STEP evaluations a step).
+        Evaluate the model through the compiled engine (True: 0.12 of the numpy path's CPU
+        per step on manipulator_control) or the numpy `Mechanics` (False, the default:
+        module docstring).
 
     Returns
     -------
@@ -345,7 +349,9 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         raise SceneError(f"{model.source}: inverse dynamics with free DOFs needs at least two "
                          "finite, increasing times (the steps' ends), got "
                          f"{np.array2string(times, threshold=8)}")
-    evaluator = motion_evaluator(model, mech, compiled, EVALUATIONS_PER_STEP * spacing.size)
+    # the engine only when asked (module docstring: its round-off in the forward check)
+    evaluator = motion_evaluator(model, mech, bool(compiled),
+                                 EVALUATIONS_PER_STEP * spacing.size)
     rest, config = _start(model, mech, evaluator, path, out_ports, times)
     part = Partitioned(model, evaluator, path, out_ports, in_ports, config, tolerance,
                        max_iterations)
