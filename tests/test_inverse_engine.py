@@ -213,6 +213,24 @@ def test_the_engine_is_preferred_from_the_stated_work_on():
     assert inverse_evaluation.preferred(load_scene("truss_1dof_x"), 200)
 
 
+def test_the_free_variant_takes_numpy_unless_asked(monkeypatch):
+    """`free_inverse_dynamics` keeps the numpy path by default (its module docstring: the
+    engine's round-off in the manipulator's forward check), here with a work of 2560 that the
+    rule would give the engine."""
+    from flexure.core.analysis import inverse_engine
+
+    def refused(model):
+        raise AssertionError("the engine was taken")
+
+    monkeypatch.setattr(inverse_engine, "engine_motion", refused)
+    result = free_inverse_dynamics(load_scene("wire_tripod"), np.linspace(0.0, 0.02, 9),
+                                   wave([0.0], [1e-4], 50.0), outputs=["x"], inputs=["F"])
+    assert result.forces.shape == (9, 1)
+    with pytest.raises(AssertionError, match="the engine was taken"):
+        free_inverse_dynamics(load_scene("wire_tripod"), [0.0, 0.01], wave([0.0], [1e-4], 50.0),
+                              outputs=["x"], inputs=["F"], compiled=True)
+
+
 def test_compiled_is_refused_where_the_engine_does_not_take_the_model():
     """A model with actuators: SceneError naming the numpy path; the default takes it."""
     model = load_scene("manipulator_control_vcm")
