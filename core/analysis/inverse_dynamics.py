@@ -31,6 +31,11 @@ inverse_dynamics_free.py, integrates it). At each time t:
    resultants of every deformation then follow from the multipliers of the full balance
    (`stresses.dynamic_stress_resultants`): SPACAR's OUTF along the path.
 
+In step 3, DF^T r = Q - M_bar qddot with M_bar = DF^T M DF and Q the generalised force at
+qddot = 0. The evaluations (the configurations of step 1, (D2F qdot) qdot, M_bar and Q, the
+stress resultants) come from the numpy `Mechanics` or from the compiled engine, by a measured
+rule (`inverse_evaluation`, `compiled`): the steps above are the same code on both.
+
 The path's derivatives are the caller's (a profile's own), or a cubic spline's through
 samples (`sampled_path`): stated, not guessed.
 """
@@ -51,7 +56,7 @@ from ..mechanics.ports import AXIS_INDEX, input_columns, output_rows, output_val
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
 from ..numerics.rotations import rotation_vector_derivatives
-from .stresses import dynamic_stress_resultants
+from .inverse_evaluation import motion_evaluator
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -142,7 +147,8 @@ class InverseDynamics:
 def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
                      outputs: Sequence[str] | None = None, inputs: Sequence[str] | None = None,
                      tolerance: float = 1e-12, max_iterations: int = 30,
-                     mechanics: Mechanics | None = None) -> InverseDynamics:
+                     mechanics: Mechanics | None = None,
+                     compiled: bool | None = None) -> InverseDynamics:
     """The input forces that make `model` follow `path` (module docstring).
 
     Parameters
@@ -165,6 +171,10 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         Newton iterations per time before ConvergenceError.
     mechanics : Mechanics, optional
         The model's mechanics to reuse.
+    compiled : bool, optional
+        Evaluate the model through the compiled engine (True) or the numpy `Mechanics`
+        (False); default: the engine where it takes the model and the work is large enough
+        (`inverse_evaluation.preferred`).
 
     Returns
     -------
@@ -182,7 +192,6 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         The positions of a time cannot be solved (beyond the mechanism's reach).
     """
     mech = mechanics or Mechanics(model)
-    kin = mech.kinematics
     out_ports, in_ports = _ports(model, outputs, inputs)
     times = np.asarray(times, dtype=float).reshape(-1)
     if times.size == 0 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
@@ -197,20 +206,21 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
             "free_inverse_dynamics integrates their dynamics)")
     prescribed = model.prescribed_dofs
     steps = dof_tolerances(model, tolerance)
-    config = mech.initial_configuration()
+    evaluator = motion_evaluator(model, mech, compiled, times.size)
+    config = evaluator.start(mech.initial_configuration())
     rows = []
     for t in times:
         values, rates, accelerations = sample_path(model, path, t, n_out + n_kin)
-        config, jacobian = _positions(model, kin, config, out_ports, values, steps,
+        config, jacobian = _positions(model, evaluator, config, out_ports, values, steps,
                                       max_iterations, t)
         lu = _factor(model, jacobian, t)
         qdot = scipy.linalg.lu_solve(lu, rates) if ndof else np.zeros(0)
+        conv, M_bar, Q = evaluator.motion(config, qdot)
         right = accelerations.copy()
-        right[:n_out] -= _output_convective(model, out_ports, config, qdot,
-                                            kin.convective_acceleration(config, qdot))
+        right[:n_out] -= _output_convective(model, out_ports, config, qdot, conv)
         qddot = scipy.linalg.lu_solve(lu, right) if ndof else np.zeros(0)
-        forces, efforts, sigma = _balance(model, mech, config, qdot, qddot, in_ports,
-                                          prescribed, t)
+        forces, efforts, sigma = _balance(model, evaluator, config, qdot, qddot, M_bar, Q,
+                                          in_ports, prescribed, t)
         rows.append((config.q.copy(), qdot, qddot, config.x.copy(), config.e.copy(), forces,
                      efforts, sigma))
     q, qdot, qddot, x, e, forces, efforts, sigma = (np.array(column)
@@ -317,7 +327,7 @@ def _jacobian(model, config, out_ports):
     return jacobian
 
 
-def _positions(model, kin, config, out_ports, values, steps, max_iterations, t):
+def _positions(model, evaluator, config, out_ports, values, steps, max_iterations, t):
     """The configuration whose outputs and kinematic inputs take `values` (Newton on q)."""
     n_out = len(out_ports)
     for _ in range(max_iterations):
@@ -326,7 +336,7 @@ def _positions(model, kin, config, out_ports, values, steps, max_iterations, t):
                                   config.q[model.prescribed_dofs]])
         dq = scipy.linalg.lu_solve(_factor(model, jacobian, t), values - current) \
             if current.size else np.zeros(0)
-        config = kin.solve(config.q + dq, config.x)
+        config = evaluator.solve(config.q + dq, config)
         if within(dq, steps, magnitudes=config.q):
             return config, _jacobian(model, config, out_ports)
     raise ConvergenceError(f"{model.source}: inverse dynamics of {model.name!r} at t = {t:g} s: "
@@ -343,15 +353,10 @@ def _factor(model, jacobian, t):
     return scipy.linalg.lu_factor(jacobian)
 
 
-def _balance(model, mech, config, qdot, qddot, in_ports, prescribed, t):
+def _balance(model, evaluator, config, qdot, qddot, M_bar, Q, in_ports, prescribed, t):
     """(forces, efforts, sigma): the force inputs, the kinematic inputs' efforts and every
-    stress resultant that balance the motion (module docstring, step 3)."""
-    inertia = mech.inertia
-    xdot = config.DF @ qdot
-    xddot = config.DF @ qddot + mech.kinematics.convective_acceleration(config, qdot)
-    sigma_c = mech.constitutive_stress(config, config.De @ xdot)
-    r = (mech.external_force(config.x) - inertia.mass_matrix(config.x) @ xddot
-         - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
+    stress resultant that balance the motion (module docstring, step 3), from M_bar and Q
+    at (config, qdot) (`inverse_evaluation`): DF^T r = Q - M_bar qddot."""
     b = input_columns(model, config.x, in_ports)
     ndof = model.declared_dof_count
     system = np.zeros((ndof, ndof))
@@ -361,11 +366,11 @@ def _balance(model, mech, config, qdot, qddot, in_ports, prescribed, t):
         raise ConstraintError(f"{model.source}: inverse dynamics of {model.name!r} at "
                               f"t = {t:g} s: the force inputs cannot balance the motion "
                               "(DF^T b is singular: an input does not act on the DOFs)")
-    unknowns = np.linalg.solve(system, -(config.DF.T @ r)) if ndof else np.zeros(0)
+    unknowns = np.linalg.solve(system, M_bar @ qddot - Q) if ndof else np.zeros(0)
     forces, efforts = unknowns[:b.shape[1]], unknowns[b.shape[1]:]
     # the efforts act on DOF rows only, whose multipliers take them: the rigid deformations'
     # resultants need the force inputs alone
-    sigma = dynamic_stress_resultants(mech, config, qdot, qddot, b @ forces)
+    sigma = evaluator.stress_resultants(config, qdot, qddot, b @ forces)
     return forces, efforts, sigma
 
 

@@ -35,9 +35,9 @@ CONDITION = 1e12  # the largest condition number of C_d and of the balance's mat
 class Partitioned:
     """The equations of motion in the minimal coordinates q_i (module docstring)."""
 
-    def __init__(self, model, mech, path, out_ports, in_ports, config, tolerance,
+    def __init__(self, model, evaluator, path, out_ports, in_ports, config, tolerance,
                  max_iterations):
-        self.model, self.mech, self.path = model, mech, path
+        self.model, self.evaluator, self.path = model, evaluator, path
         self.out_ports, self.in_ports = out_ports, in_ports
         self.max_iterations = max_iterations
         ndof = model.declared_dof_count
@@ -56,17 +56,17 @@ class Partitioned:
 
     def solve_positions(self, t, q_i, values):
         """The configuration with q_i and the outputs at `values` (Newton on q_d)."""
-        model, kin, d = self.model, self.mech.kinematics, self.dependent
+        model, evaluator, d = self.model, self.evaluator, self.dependent
         q = self.config.q.copy()
         q[self.independent] = q_i
-        config = kin.solve(q, self.config.x)
+        config = evaluator.solve(q, self.config)
         for _ in range(self.max_iterations):
             C = output_rows(model, config.x, config.DF, self.out_ports)
             current = np.array([output_value(model, port, config.x) for port in self.out_ports])
             dq = np.linalg.solve(C[:, d], values - current)
             q = config.q.copy()
             q[d] += dq
-            config = kin.solve(q, config.x)
+            config = evaluator.solve(q, config)
             if within(dq, self.steps[d], magnitudes=config.q[d]):
                 self.config = config
                 return config
@@ -76,7 +76,7 @@ class Partitioned:
 
     def evaluate(self, t, q_i, qdot_i):
         """(config, qdot, qddot, w) at time t: the motion and the forces (module docstring)."""
-        model, mech, d, i = self.model, self.mech, self.dependent, self.independent
+        model, d, i = self.model, self.dependent, self.independent
         values, rates, accelerations = sample_path(model, self.path, t, len(self.out_ports))
         config = self.solve_positions(t, q_i, values)
         C = output_rows(model, config.x, config.DF, self.out_ports)
@@ -84,19 +84,12 @@ class Partitioned:
         qdot = np.zeros(model.declared_dof_count)
         qdot[i] = qdot_i
         qdot[d] = scipy.linalg.lu_solve(C_d, rates - C[:, i] @ qdot_i)
-        convective = mech.kinematics.convective_acceleration(config, qdot)
+        convective, M, Q = self.evaluator.motion(config, qdot)
         wanted = accelerations - _output_convective(model, self.out_ports, config, qdot,
                                                     convective)
-        inertia = mech.inertia
-        xdot = config.DF @ qdot
-        M_x = inertia.mass_matrix(config.x)
-        sigma_c = mech.constitutive_stress(config, config.De @ xdot)
-        r = (mech.external_force(config.x) - M_x @ convective
-             - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
-        M = config.DF.T @ (M_x @ config.DF)
         B = config.DF.T @ input_columns(model, config.x, self.in_ports)
         system = np.hstack([M[:, i] - M[:, d] @ scipy.linalg.lu_solve(C_d, C[:, i]), -B])
-        right = config.DF.T @ r - M[:, d] @ scipy.linalg.lu_solve(C_d, wanted)
+        right = Q - M[:, d] @ scipy.linalg.lu_solve(C_d, wanted)
         check_reach(model, system, self.in_ports, t)
         unknowns = np.linalg.solve(system, right)
         qddot = np.zeros_like(qdot)
