@@ -56,16 +56,28 @@ def test_element_mass(P, m):
 
 @pytest.mark.parametrize("P, m", [(24, 14), (24, 16), (5, 17), (9, 4)])
 def test_dense_element_mass(P, m):
-    """Me = D^T Mp D from D in rows of the padded width, packed to m * m, to round-off."""
+    """Me = D^T Mp D from D in rows of the padded width, packed to m * m, to round-off; with
+    a vector d in D's column m (a padding lane), column m of the product D^T Mp d, to
+    round-off, and nothing else changed by it (Me to the bit)."""
     Mp, pattern, D = element(P, m, seed=2 * P + m)
     stride = padded_width(m)
     assert stride >= m and stride % 16 == 0
     padded = np.zeros((P, stride))
     padded[:, :m] = D
     MD, Me = np.full(P * stride, np.nan), np.full(m * stride, np.nan)
-    dense_element_mass(Mp, pattern, P, m, padded.ravel(), MD, Me, stride)
+    dense_element_mass(Mp, pattern, P, m, padded.ravel(), MD, Me, stride, np.zeros(0))
     expected = D.T @ Mp.reshape(P, P) @ D
     assert np.max(np.abs(Me[: m * m] - expected.ravel())) <= 1e-13 * np.max(np.abs(expected))
+    stride = padded_width(m + 1)
+    d = np.random.default_rng(3).standard_normal(P)
+    padded = np.zeros((P, stride))
+    padded[:, :m], padded[:, m] = D, d
+    MD2, Me2, column = np.full(P * stride, np.nan), np.full(m * stride, np.nan), \
+        np.full(m, np.nan)
+    dense_element_mass(Mp, pattern, P, m, padded.ravel(), MD2, Me2, stride, column)
+    assert np.array_equal(Me2[: m * m], Me[: m * m])
+    expected = D.T @ Mp.reshape(P, P) @ d
+    assert np.max(np.abs(column - expected)) <= 1e-13 * np.max(np.abs(expected))
 
 
 @pytest.mark.parametrize("P, stride", [(24, 16), (9, 75), (5, 1)])

@@ -14,6 +14,7 @@ from flexure.core import Mechanics, Simulator, load_scene
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine, rigid_kernels
 from flexure.core.engine.data import EngineData
+from flexure.core.engine.point_masses import point_columns
 from flexure.core.mechanics.rigid_bodies import RigidLayout, find_clusters
 from flexure.core.model import FIXED, ZERO
 from flexure.core.numerics.rotations import rotation_matrix
@@ -125,7 +126,9 @@ def test_plain_derivatives_match_finite_differences(scene):
 
 def test_compiled_maps_match_the_plain_ones(scene):
     """fill_slaves (x_s and T's weights), expand, convective, condense and a touching
-    element's transform against RigidLayout and RigidPacking to 1e-14."""
+    element's transform against RigidLayout and RigidPacking to 1e-14; its points' mass on
+    its z-coordinates and the forces of the slaves' c there (`touching_mass`) against the
+    dense products to 1e-13."""
     name, model, layout = scene
     data = EngineData(model)
     table, nx = data.address, model.nx
@@ -171,6 +174,32 @@ def test_compiled_maps_match_the_plain_ones(scene):
         assert np.array_equal(Te[:, z.size:], np.zeros((coords.size, 5)))
         assert np.allclose(Te[:, :z.size], packing.element_transform(gp, i, coords, x),
                            rtol=0, atol=1e-15)
+        # its points' mass and the forces of the slaves' c on its z-coordinates:
+        # T_e^T Dp^T Mp Dp T_e and T_e^T Dp^T Mp Dp c_e, for a random Dp (P, m; zeros as a
+        # BEAM's) and a symmetric Mp on a pattern; P within the room the model packed
+        P = min(3, int(data.int_array("dims")[ed.MAX_P]))
+        Dp = rng.standard_normal((P, coords.size))
+        Dp[rng.random(Dp.shape) < 0.5] = 0.0
+        Mp = rng.standard_normal((P, P))
+        Mp = Mp + Mp.T
+        pattern = np.arange(P * P, dtype=np.int64)
+        columns = np.zeros(P * (coords.size + 1) + coords.size, dtype=np.int64)
+        point_columns(P, coords.size, Dp, columns)
+        c = data.float_array("rigid_c")
+        c[:] = 0.0
+        c[layout.slave_coordinates] = rng.standard_normal(layout.slave_coordinates.size)
+        Me, force = rigid_kernels.touching_mass(table, t, Mp.ravel(), pattern, P, coords.size,
+                                                Dp, columns, coords, True)
+        Te = packing.element_transform(gp, i, coords, x)
+        expected = Te.T @ Dp.T @ Mp @ Dp @ Te
+        assert np.max(np.abs(Me - expected.ravel())) <= 1e-13 * max(np.max(np.abs(expected)),
+                                                                     1e-300)
+        expected = Te.T @ Dp.T @ Mp @ Dp @ c[coords]
+        assert np.max(np.abs(force - expected)) <= 1e-13 * max(np.max(np.abs(expected)),
+                                                                 1e-300)
+        Me2, force = rigid_kernels.touching_mass(table, t, Mp.ravel(), pattern, P,
+                                                 coords.size, Dp, columns, coords, False)
+        assert np.array_equal(Me2, Me) and not np.any(force)
         # and T_e is T's block: the element's rows, its z-columns
         assert np.allclose(packing.element_transform(gp, i, coords, x), T[np.ix_(coords, z)],
                            rtol=0, atol=1e-15)

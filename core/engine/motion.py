@@ -34,6 +34,7 @@ from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
 from .actuators import port_values
+from .deformation_rates import dof_deformation_accelerations, element_rates, scatter_stress
 from .factors import (
     add_element_mass,
     add_lumped,
@@ -68,7 +69,6 @@ from .rigid_kernels import touching, touching_mass
 from .slots import float_array as _f
 from .slots import (
     group,
-    group_deformations,
     group_inertia,
     inertia_scratch,
     rigid_element,
@@ -125,7 +125,7 @@ def evaluate(table, q, qdot):
     if rigid:  # the slaves' second-order accelerations c (zero at rest)
         run(table, OP_RIGID_CONVECTIVE, x.ctypes.data, xdot.ctypes.data, 0.0)
     # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
-    _element_rates(table, xdot, moving)
+    element_rates(table, xdot, moving)
     # sigma_c = S e_s + D edot_s (S, D by compressed rows)
     sigma, e, edot = _f(table, slot.SIGMA), _f(table, slot.E), _f(table, slot.EDOT)
     stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
@@ -145,7 +145,7 @@ def evaluate(table, q, qdot):
     copy(r, _f(table, slot.CONST_FORCE))
     # the inputs' forces and moments, or the actuators' (`actuators.port_values`)
     add_input_forces(_i(table, slot.INPUT_PORTS), port_values(table), x, r)
-    _scatter_stress(table, sigma, r)
+    scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0
     rigid_h = _f(table, slot.RIGID_H)
@@ -246,77 +246,6 @@ def any_nonzero(v):
 
 
 @kernel
-def dof_deformation_accelerations(table, xddot, quad, moving, qddot):
-    """qddot of the DOF deformations: De_m xddot + h_m (the constraint rows of those DOFs)."""
-    dims = _i(table, slot.DIMS)
-    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
-    row_of_def = _i(table, slot.ROW_OF_DEF)
-    for g in range(dims[ed.NGROUPS]):
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for i in range(n):
-            for b in range(k):
-                rr = row_of_def[defs[i * k + b]]
-                if rr < n_rigid or rr >= n_rigid + n_edof:
-                    continue
-                s = quad[rr] if moving else 0.0
-                base = (i * k + b) * m
-                for a in range(m):
-                    s += De[base + a] * xddot[coords[i * m + a]]
-                qddot[n_xdof + rr - n_rigid] = s
-
-
-@kernel
-def _element_rates(table, xdot, moving):
-    """edot = De xdot (slot edot) and, if moving, xdot^T D2e_i xdot of the constraint rows
-    into slot g (n_free,: zero on the unit rows of the DOF coordinates)."""
-    dims = _i(table, slot.DIMS)
-    edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
-    row_of_def = _i(table, slot.ROW_OF_DEF)
-    v = _f(table, slot.LOCAL)  # the element's xdot, gathered once for its k rows
-    quad[:] = 0.0
-    for g in range(dims[ed.NGROUPS]):
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for i in range(n):
-            for a in range(m):
-                v[a] = xdot[coords[i * m + a]]
-            for b in range(k):
-                s = 0.0
-                base = (i * k + b) * m
-                for a in range(m):
-                    s += De[base + a] * v[a]
-                edot[defs[i * k + b]] = s
-                r = row_of_def[defs[i * k + b]]
-                if moving and r >= 0:
-                    h = 0.0
-                    base2 = (i * k + b) * m * m
-                    for a in range(m):
-                        va = v[a]
-                        if va == 0.0:
-                            continue
-                        t = 0.0
-                        for c in range(m):
-                            t += D2e[base2 + a * m + c] * v[c]
-                        h += va * t
-                    quad[r] = h
-
-
-@kernel
-def _scatter_stress(table, sigma, r):
-    """r -= De^T sigma, element by element."""
-    dims = _i(table, slot.DIMS)
-    for g in range(dims[ed.NGROUPS]):
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        for i in range(n):
-            for b in range(k):
-                s = sigma[defs[i * k + b]]
-                if s == 0.0:
-                    continue
-                base = (i * k + b) * m
-                for a in range(m):
-                    r[coords[i * m + a]] -= De[base + a] * s
-
-
-@kernel
 def _inertia_forces(table, x, xdot, moving, r, A, na):
     """The mass of the free coordinates M_ff = diag(lumped) + sum Dp^T Mp Dp into A's first
     n_free rows and columns (row length na); gravity on the element masses into r and, if
@@ -365,39 +294,26 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                                  position)
             else:
                 _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
-                               (i + 1) * P * P], pattern, P, m, Dp, point, w, moving, A, na)
+                               (i + 1) * P * P], pattern, P, m, Dp, moving, A, na)
             mass_entry += m * m
     if rigid:  # the spatial clusters' folded element masses, one rigid body each
         add_rigid_bodies(table, x, xdot, moving, A, na)
 
 
 @kernel
-def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, point, w, moving, A, na):
+def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, moving, A, na):
     """A touching element's mass on its z-coordinates, Me_z = Dp_z^T Mp Dp_z with Dp_z =
-    Dp T_e, onto A; if moving, -Dp^T Mp Dp c_e (the slaves' c) into slot rigid_force."""
+    Dp T_e, onto A; if moving, its points' forces from the slaves' c, -Dp_z^T Mp Dp c_e (N,
+    N m on the z-coordinates), into slot rigid_force (which `evaluate` condenses with T^T:
+    a z-coordinate is free, T^T passes it on as it is)."""
     dims = _i(table, slot.DIMS)
     columns = _i(table, slot.POINT_COLUMNS)
-    if moving:
-        c, rigid_force = _f(table, slot.RIGID_C), _f(table, slot.RIGID_FORCE)
-        counts = columns[P * m: P * m + P]  # Dp's non-zero columns (`point_columns`)
-        for pp in range(P):
-            s = 0.0
-            for u in range(counts[pp]):
-                a = columns[pp * m + u]
-                s += Dp[pp, a] * c[coords[a]]
-            point[pp] = s
-        point_forces(Mp, pattern, P, point, w)
-        # Dp^T w over Dp's non-zeros, each sum in the order of pp as over all of them
-        sums = _f(table, slot.RIGID_LOCAL)[:m]
-        sums[:] = 0.0
-        for pp in range(P):
-            for u in range(counts[pp]):
-                a = columns[pp * m + u]
-                sums[a] += Dp[pp, a] * w[pp]
-        for a in range(m):
-            rigid_force[coords[a]] -= sums[a]
     g, i, mz, z, _, mass_offset = touching(table, t)
-    Me = touching_mass(table, t, Mp, pattern, P, m, Dp, columns)
+    Me, force = touching_mass(table, t, Mp, pattern, P, m, Dp, columns, coords, moving)
+    if moving:
+        rigid_force = _f(table, slot.RIGID_FORCE)
+        for a in range(mz):
+            rigid_force[z[a]] -= force[a]
     position = columns[P * mz + P: P * mz + P + mz]
     entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
     add_element_mass(table, A, na, entry, z, mz, Me, position)

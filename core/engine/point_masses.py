@@ -55,7 +55,7 @@ def element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns):
 
 
 @kernel
-def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
+def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride, column):
     """Me = D^T Mp D (m * m, row by row) as D^T (Mp D), for a D (P, m) whose rows are mostly
     full (a touching element's Dp T_e: a slave's point moves with its master's translation
     and rotation), stored with the row length `stride` >= m (`padded_width`; D's entries past
@@ -63,7 +63,9 @@ def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
     for m * stride. The inner loops run along whole padded rows, which the compiler
     vectorises (a row of a length it cannot know runs in vectors only when long enough: 16),
     instead of over the few non-zeros `element_mass` visits. The same products summed in
-    another order: equal to round-off."""
+    another order: equal to round-off. `column` (m,; or empty) receives column m of D^T Mp D
+    computed over D's first m columns, D_m^T Mp d for a vector d that the caller put in
+    column m of D (stride > m): the product's padding lane, read before the packing."""
     mass_rows_product(Mp, pattern, P, D, stride, MD)
     for a in range(m * stride):
         Me[a] = 0.0
@@ -76,6 +78,9 @@ def dense_element_mass(Mp, pattern, P, m, D, MD, Me, stride):
             out = Me[a * stride: (a + 1) * stride]
             for b in range(stride):
                 out[b] += d * source[b]
+    if column.size > 0:
+        for a in range(m):
+            column[a] = Me[a * stride + m]
     for a in range(1, m):  # the rows packed to length m (each moves to a lower index)
         for b in range(m):
             Me[a * m + b] = Me[a * stride + b]

@@ -211,7 +211,8 @@ class RigidPacking:
     def floats(self, nx, n_free, max_p):
         """The float64 slots of the clusters, by name (constants and workspace)."""
         n_sc = self.layout.slave_coordinates.size
-        padded = padded_width.py_func(self.max_mz)  # the kernel's plain function: no compile
+        # the kernel's plain function: no compile; one more lane for the slaves' c
+        padded = padded_width.py_func(self.max_mz + 1)
         return {"rigid_data": self.layout.data.ravel(),
                 "rigid_body_tensors": self.bodies.tensors,
                 "rigid_weights": np.zeros(n_sc * DEPENDENCIES),
@@ -219,9 +220,11 @@ class RigidPacking:
                 "rigid_h": np.zeros(n_free if n_sc else 0),
                 "rigid_force": np.zeros(nx if n_sc else 0),
                 # a touching element's Dp_z and Mp Dp_z (max_p rows each), Me_z (max_mz)
-                # and T_e (its m), in rows of the padded width (`point_masses.padded_width`)
+                # and T_e (its m), in rows of the padded width (`point_masses.padded_width`),
+                # then the forces of the slaves' c (max_mz; `rigid_kernels.touching_mass`)
                 # (and a folded cluster's scratch: `rigid_inertia_kernels.add_rigid_bodies`)
-                "rigid_local": np.zeros(max((2 * max_p + self.max_mz + self.max_m) * padded,
+                "rigid_local": np.zeros(max((2 * max_p + self.max_mz + self.max_m) * padded
+                                            + self.max_mz,
                                             BODY_SCRATCH if self.bodies.folded else 0))}
 
     def pattern_coordinates(self, gp, group):

@@ -12,7 +12,8 @@ coordinates x (m, Euler parameters or rad) whose masters are current:
     condense            T^T v on the reduced free coordinates (a force (N, N m) on x)
     element_transform   D_z = D T_e for the rows of a touching element's De
     transform_rows      T_e itself, in rows of a padded length (for products along rows)
-    touching_mass       Me_z = Dp_z^T Mp Dp_z of a touching element, Dp_z = Dp T_e
+    touching_mass       Me_z = Dp_z^T Mp Dp_z of a touching element, Dp_z = Dp T_e, and
+                        the forces Dp_z^T Mp Dp c_e of the slaves' c
     rigid_de            every touching element's De_z into slot rigid_de
     rigid_rates         the slaves' second-order terms on the constraint rows (slot rigid_h)
     rigid_geometric     the slaves' geometric stiffness -DF^T (sum_s rho_s d2x_s) DF
@@ -219,20 +220,29 @@ def transform_rows(table, t, m, T, stride):
 
 
 @kernel
-def touching_mass(table, t, Mp, pattern, P, m, Dp, columns):
-    """Me_z = Dp_z^T Mp Dp_z (mz * mz, row by row; a view into slot rigid_local) of touching
-    element t with points Dp (P, m; the non-zero columns of its rows in `columns`,
-    `point_masses.point_columns`) and masses Mp on `pattern` (`point_masses`): Dp_z = Dp T_e
-    along T_e's rows, then the dense product, all in rows of the padded width."""
+def touching_mass(table, t, Mp, pattern, P, m, Dp, columns, coords, with_c):
+    """(Me_z, f_c) of touching element t with points Dp (P, m; the non-zero columns of its
+    rows in `columns`, `point_masses.point_columns`) and masses Mp on `pattern`
+    (`point_masses`): Me_z = Dp_z^T Mp Dp_z (mz * mz, row by row; kg, kg m, kg m^2 by the
+    coordinates) with Dp_z = Dp T_e along T_e's rows, then the dense product, all in rows of
+    the padded width; with `with_c`, f_c = Dp_z^T Mp Dp c_e (mz,; N per the slaves' c in
+    m/s^2, slot rigid_c at the element's coordinates `coords`), else zeros. c_e rides as
+    one more column of T_e, in the padding the products compute anyway (the padded width of
+    mz + 1), so f_c costs no products of its own. Both views into slot rigid_local."""
     mz = _i(table, slot.RIGID_ELEMENTS)[t * EW + rg.E_MZ]
-    local, stride = _f(table, slot.RIGID_LOCAL), padded_width(mz)
+    local, stride = _f(table, slot.RIGID_LOCAL), padded_width(mz + 1)
     Dz, MD = local[: P * stride], local[P * stride: 2 * P * stride]
     Me = local[2 * P * stride: (2 * P + mz) * stride]
     T = local[(2 * P + mz) * stride: (2 * P + mz + m) * stride]
+    force = local[(2 * P + mz + m) * stride: (2 * P + mz + m) * stride + mz]
     transform_rows(table, t, m, T, stride)
+    if with_c:
+        c = _f(table, slot.RIGID_C)
+        for a in range(m):
+            T[a * stride + mz] = c[coords[a]]
     sparse_rows_product(P, m, Dp, columns, T, stride, Dz)
-    dense_element_mass(Mp, pattern, P, mz, Dz, MD, Me, stride)
-    return Me[: mz * mz]
+    dense_element_mass(Mp, pattern, P, mz, Dz, MD, Me, stride, force)
+    return Me[: mz * mz], force
 
 
 @kernel

@@ -1,0 +1,102 @@
+"""The elements' deformation rates in the compiled engine, for the equations of motion
+(`motion`): for coordinate velocities xdot (m/s, 1/s) and accelerations xddot, with each
+element's De and D2e of the last kinematic solution (slots de, d2e):
+
+    element_rates                   edot = De xdot (1/s, m/s by the deformation) and the
+                                    constraint rows' h_i = xdot^T D2e_i xdot
+    scatter_stress                  r -= De^T sigma (N, N m)
+    dof_deformation_accelerations   the DOF deformations' De_m xddot + h_m
+
+element by element over the packed groups (`slots.group_deformations`).
+"""
+
+from ..numerics.jit import kernel
+from . import data as ed
+from . import rigid as rg
+from . import slots as slot
+from .slots import float_array as _f
+from .slots import group, group_deformations, rigid_element
+from .slots import int_array as _i
+
+
+@kernel
+def dof_deformation_accelerations(table, xddot, quad, moving, qddot):
+    """qddot of the DOF deformations: De_m xddot + h_m (the constraint rows of those DOFs)."""
+    dims = _i(table, slot.DIMS)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                rr = row_of_def[defs[i * k + b]]
+                if rr < n_rigid or rr >= n_rigid + n_edof:
+                    continue
+                s = quad[rr] if moving else 0.0
+                base = (i * k + b) * m
+                for a in range(m):
+                    s += De[base + a] * xddot[coords[i * m + a]]
+                qddot[n_xdof + rr - n_rigid] = s
+
+
+@kernel
+def element_rates(table, xdot, moving):
+    """edot = De xdot (slot edot) and, if moving, xdot^T D2e_i xdot of the constraint rows
+    into slot g (n_free,: zero on the unit rows of the DOF coordinates). The elements a rigid
+    cluster makes identically zero (`rigid`) get edot = 0 without a product: their De is not
+    evaluated (`kinematics.deformations`), their rows are out of the system and their
+    deformations carry no stress, so nothing reads their rates."""
+    dims = _i(table, slot.DIMS)
+    edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    v = _f(table, slot.LOCAL)  # the element's xdot, gathered once for its k rows
+    skipping = dims[ed.NSLAVES] > 0
+    touching = _i(table, slot.RIGID_ELEMENTS)
+    quad[:] = 0.0
+    for g in range(dims[ed.NGROUPS]):
+        row = group(table, g)
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            if skipping:
+                t = rigid_element(table, row, i)
+                if t >= 0 and touching[t * rg.ELEMENT_WIDTH + rg.E_INTERNAL] == 1:
+                    for b in range(k):
+                        edot[defs[i * k + b]] = 0.0
+                    continue
+            for a in range(m):
+                v[a] = xdot[coords[i * m + a]]
+            for b in range(k):
+                s = 0.0
+                base = (i * k + b) * m
+                for a in range(m):
+                    s += De[base + a] * v[a]
+                edot[defs[i * k + b]] = s
+                r = row_of_def[defs[i * k + b]]
+                if moving and r >= 0:
+                    h = 0.0
+                    base2 = (i * k + b) * m * m
+                    for a in range(m):
+                        va = v[a]
+                        if va == 0.0:
+                            continue
+                        t = 0.0
+                        for c in range(m):
+                            t += D2e[base2 + a * m + c] * v[c]
+                        h += va * t
+                    quad[r] = h
+
+
+@kernel
+def scatter_stress(table, sigma, r):
+    """r -= De^T sigma, element by element."""
+    dims = _i(table, slot.DIMS)
+    for g in range(dims[ed.NGROUPS]):
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+        for i in range(n):
+            for b in range(k):
+                s = sigma[defs[i * k + b]]
+                if s == 0.0:
+                    continue
+                base = (i * k + b) * m
+                for a in range(m):
+                    r[coords[i * m + a]] -= De[base + a] * s
