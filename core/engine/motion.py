@@ -31,6 +31,7 @@ count.
 
 from ..numerics.dense import copy, lu_factor, lu_solve
 from ..numerics.jit import kernel
+from ..numerics.native import call_engine
 from . import data as ed
 from . import slots as slot
 from .actuators import port_values
@@ -49,6 +50,7 @@ from .operations import (
     OP_CONFIGURATION,
     OP_DF,
     OP_MASS_OF,
+    OP_RIGID_BODIES,
     OP_RIGID_CONDENSE,
     OP_RIGID_CONVECTIVE,
     OP_RIGID_EXPAND,
@@ -64,7 +66,7 @@ from .point_masses import (
     point_forces,
 )
 from .ports import add_input_forces
-from .rigid_inertia_kernels import add_rigid_bodies, own_mass
+from .rigid_inertia_kernels import BODIES_AT_REST, BODIES_MOVING, own_mass
 from .rigid_kernels import touching, touching_mass
 from .slots import float_array as _f
 from .slots import (
@@ -296,8 +298,11 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
                 _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
                                (i + 1) * P * P], pattern, P, m, Dp, moving, A, na)
             mass_entry += m * m
-    if rigid:  # the spatial clusters' folded element masses, one rigid body each
-        add_rigid_bodies(table, x, xdot, moving, A, na)
+    if rigid and _i(table, slot.RIGID_BODIES).size:  # the spatial clusters' folded element
+        # masses, one rigid body each, through their operation (`rigid_inertia_kernels`): on
+        # slots x and xdot, which x and xdot are; A's length as its time argument
+        call_engine(dims[ed.ENGINE], OP_RIGID_BODIES, table, float(A.size), A.ctypes.data, 0, 0,
+                    BODIES_MOVING if moving else BODIES_AT_REST)
 
 
 @kernel

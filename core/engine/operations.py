@@ -64,12 +64,17 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     COILS                the coil currents' part of the forms (`coil_entries`): s = the
                          part; a = y, ydot, yp or J; b = IDA's residual; t = cj; compiled
                          only for models with voltage-driven actuators (dims[NEL] > 0)
+    RIGID_BODIES         the folded clusters' rigid bodies (`rigid_inertia_kernels`): s = the
+                         part; a = the augmented matrix's values (t: their count) or an (NX,)
+                         force; compiled only for models with a folded cluster (slot
+                         rigid_bodies not empty)
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
 tangent's product in a form that is faster on large models and longer to compile, so that a
 process with small models only never compiles it; COILS is apart so that a model without
-coils never compiles the coils' kernels.
+coils never compiles the coils' kernels, RIGID_BODIES so that a model without a folded cluster
+(a planar one) never compiles the rigid bodies'.
 """
 
 from ..numerics.jit import kernel
@@ -84,7 +89,7 @@ from .slots import DIMS, int_array
  OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
  OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
- OP_ROW_PRODUCTS, OP_COILS) = range(35)
+ OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES) = range(36)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)

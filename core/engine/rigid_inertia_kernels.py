@@ -9,9 +9,18 @@ elements. The tangent's dynamic balance (`tangent.balance_force`) reads the coor
 on x with each element's share where the element sits, as the stress resultants and the
 slaves' geometric stiffness need it: `add_folded_forces` puts the folded elements' forces
 there, element by element, once per tangent.
+
+Both are one operation, OP_RIGID_BODIES (`rigid_bodies_entry`), reached through the table of
+operations (`run`) and compiled only for a model with a folded cluster (slot rigid_bodies not
+empty: `engine.connect`): called directly, they were compiled into the evaluation's and the
+tangent's entries of every engine with rigid clusters, a planar one's (which has no folded
+cluster) included. A call by address costs a few nanoseconds per evaluation.
 """
 
-from ..numerics.jit import kernel
+import numpy as np
+
+from ..numerics.jit import entry, kernel
+from ..numerics.native import address_of, carray
 from . import data as ed
 from . import rigid as rg
 from . import rigid_inertia as ri
@@ -24,6 +33,12 @@ from .slots import group_inertia, inertia_scratch
 from .slots import int_array as _i
 
 EW, BW, TW = rg.ELEMENT_WIDTH, ri.BODY_WIDTH, ri.TENSOR_WIDTH
+# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
+ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
+# OP_RIGID_BODIES' parts (s; floats: the operations' number argument is a float64): the
+# rigid bodies onto the augmented matrix and slot rigid_force (`add_rigid_bodies`), or the
+# folded elements' forces onto an (NX,) array (`add_folded_forces`), at rest or moving
+BODIES_AT_REST, BODIES_MOVING, FOLDED_AT_REST, FOLDED_MOVING = (float(p) for p in range(4))
 
 
 @kernel
@@ -133,3 +148,20 @@ def add_folded_forces(table, x, xdot, moving, out):
             for pp in range(P):
                 s += Dp[pp, a] * w[pp]
             out[coords[i * m + a]] += s
+
+
+@entry(ENTRY)
+def rigid_bodies_entry(op, user_data, t, a, b, c, s):
+    """OP_RIGID_BODIES on slots x and xdot: s = BODIES_...: `add_rigid_bodies` onto the
+    augmented matrix's values at a (t of them: its dense (na, na) or its sparse values);
+    s = FOLDED_...: `add_folded_forces` onto a (NX,)."""
+    table = address_of(user_data)
+    dims = _i(table, slot.DIMS)
+    x, xdot = _f(table, slot.X), _f(table, slot.XDOT)
+    if s == BODIES_AT_REST or s == BODIES_MOVING:
+        add_rigid_bodies(table, x, xdot, s == BODIES_MOVING, carray(a, (int(t),), np.float64),
+                         dims[ed.NFREE] + dims[ed.NRIGID])
+    else:
+        add_folded_forces(table, x, xdot, s == FOLDED_MOVING,
+                          carray(a, (dims[ed.NX],), np.float64))
+    return ed.OK

@@ -21,6 +21,7 @@ from .factors import j_solve
 from .motion import any_nonzero
 from .operations import (
     OP_MASS,
+    OP_RIGID_BODIES,
     OP_RIGID_CONDENSE,
     OP_RIGID_GEOMETRIC,
     OP_ROW_PRODUCTS,
@@ -29,7 +30,7 @@ from .operations import (
 )
 from .point_masses import element_points, massless, point_forces
 from .ports import has_moment_inputs, subtract_input_stiffness
-from .rigid_inertia_kernels import add_folded_forces
+from .rigid_inertia_kernels import FOLDED_AT_REST, FOLDED_MOVING
 from .slots import float_array as _f
 from .slots import (
     group_deformations,
@@ -240,9 +241,11 @@ def balance_force(table, xddot, moving):
     dims = _i(table, slot.DIMS)
     r_full = _f(table, slot.X_TRIAL)
     copy(r_full, _f(table, slot.FORCE))
-    if dims[ed.REDUCED] == 0 and dims[ed.NSLAVES] > 0:  # the folded elements' forces
-        xdot = _f(table, slot.XDOT)
-        add_folded_forces(table, _f(table, slot.X), xdot, any_nonzero(xdot), r_full)
+    if dims[ed.REDUCED] == 0 and _i(table, slot.RIGID_BODIES).size:  # the folded elements'
+        # forces, on slots x and xdot (`rigid_inertia_kernels.add_folded_forces`)
+        moving_x = any_nonzero(_f(table, slot.XDOT))
+        run(table, OP_RIGID_BODIES, r_full.ctypes.data, 0,
+            FOLDED_MOVING if moving_x else FOLDED_AT_REST)
     if moving:
         _mass_times(table, _f(table, slot.X), xddot, r_full)
     return r_full
