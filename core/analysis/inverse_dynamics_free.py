@@ -35,7 +35,14 @@ engine's forces agree with the numpy path's within that path's own round-off spr
 dense against its sparse `Mechanics`), but along the manipulator's forward check
 (tests/test_manipulator_feedforward.py) they leave E 5.5 pm off the path at 0.625 ms where
 the numpy path's leave 2.5 pm, above the 0.75 of the 1.25 ms run's deviation that the check
-asks of the half step: the engine is not the default here until that floor is understood.
+asks of the half step. That floor is the forces' round-off, of both paths: a leaf's axial
+stiffness (about 1e8 N/m) times the coordinates' round-off (a few 1e-16 m) is 1e-8 to
+1e-7 N (at the rest, where the forces are zero, numpy's are 1e-8 N and the engine's differ
+from them by 2.7e-8 N with x by 2.8e-16 m), which the actuated directions (3.3e3 to
+3.8e3 N/m) turn into pm; Newton carried two iterations past the tolerance, in the positions
+and in the steps, leaves the two paths' forces as far apart (docs/benchmarks.md, 2026-11-30,
+session 28). The engine is therefore not the default here: which path's round-off passes the check
+is chance, not accuracy.
 
 Forces between the steps. Each step has four nodes, its start, its two inner stages
 t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through
