@@ -41,8 +41,9 @@ stiffness (about 1e8 N/m) times the coordinates' round-off (a few 1e-16 m) is 1e
 from them by 2.7e-8 N with x by 2.8e-16 m), which the actuated directions (3.3e3 to
 3.8e3 N/m) turn into pm; Newton carried two iterations past the tolerance, in the positions
 and in the steps, leaves the two paths' forces as far apart (docs/benchmarks.md, 2026-11-30,
-session 28). The engine is therefore not the default here: which path's round-off passes the check
-is chance, not accuracy.
+session 28); numpy's own forces with its sparse mass (M_bar by `Mechanics.mass_matrix`) leave
+3.2 pm at 0.625 ms against 3.6 pm at 1.25 ms (0.87). Which round-off passes that check is
+chance, not accuracy, and the engine is not made the default here on it.
 
 Forces between the steps. Each step has four nodes, its start, its two inner stages
 t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through
