@@ -35,7 +35,16 @@ engine's forces agree with the numpy path's within that path's own round-off spr
 dense against its sparse `Mechanics`), but along the manipulator's forward check
 (tests/test_manipulator_feedforward.py) they leave E 5.5 pm off the path at 0.625 ms where
 the numpy path's leave 2.5 pm, above the 0.75 of the 1.25 ms run's deviation that the check
-asks of the half step: the engine is not the default here until that floor is understood.
+asks of the half step. That floor is the forces' round-off, of both paths: a leaf's axial
+stiffness (about 1e8 N/m) times the coordinates' round-off (an ulp of a translation, 2e-17
+m, is 2e-9 N), summed over the chain's leaves, is 1e-8 to 1e-7 N (at the rest, where the
+forces are zero, numpy's are 2e-8 N and the engine's differ from them by 2.7e-8 N, the
+coordinates by an ulp or a few), which the actuated directions (3.3e3 to 3.8e3 N/m) turn
+into pm; Newton carried two iterations past the tolerance, in the positions
+and in the steps, leaves the two paths' forces as far apart (docs/benchmarks.md, 2026-11-30,
+session 28); numpy's own forces with its sparse mass (M_bar by `Mechanics.mass_matrix`) leave
+3.2 pm at 0.625 ms against 3.6 pm at 1.25 ms (0.87). Which round-off passes that check is
+chance, not accuracy, and the engine is not made the default here on it.
 
 Forces between the steps. Each step has four nodes, its start, its two inner stages
 t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through

@@ -22,7 +22,7 @@ an integer rule (no timing is compared at run time, so the choice cannot flip wi
 a tie, work equal to the threshold, takes the engine). The evaluations are counted as the
 caller makes them: `inverse_dynamics` one per time (with about three kinematics for the
 positions); `free_inverse_dynamics` takes the numpy path unless compiled=True (its module
-docstring: the engine's round-off in the manipulator's forward check). Measured
+docstring: the forces' round-off floor in the manipulator's forward check). Measured
 (docs/benchmarks.md, 2026-11-30; 2-core VM under a load of 5 to 7): once started, the engine
 is the faster on every model, per time 0.47 against 0.99 ms on truss_1dof_x (1 free
 coordinate), 0.51 against 1.6 ms on stage_planar_3dof (6), 1.5 against 6.9 ms on wire_tripod
@@ -121,11 +121,14 @@ class NumpyMotion:
         inertia = mech.inertia
         conv = mech.kinematics.convective_acceleration(config, qdot)
         xdot = config.DF @ qdot
-        M_x = inertia.mass_matrix(config.x)
+        # the mass as `Mechanics.mass_matrix` takes it (sparse on a sparse Mechanics), so that
+        # M conv and M_bar are the reference's own
+        M_x = (inertia.sparse_mass_matrix(config.x) if mech.sparse
+               else inertia.mass_matrix(config.x))
         sigma_c = mech.constitutive_stress(config, config.De @ xdot)
         r = (mech.external_force(config.x) - M_x @ conv
              - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
-        return conv, config.DF.T @ (M_x @ config.DF), config.DF.T @ r
+        return conv, mech.mass_matrix(config), config.DF.T @ r
 
     def stress_resultants(self, config: Configuration, qdot: np.ndarray, qddot: np.ndarray,
                           input_force: np.ndarray) -> np.ndarray:

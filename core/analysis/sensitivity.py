@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import SceneError
 from .sensitivity_analytic import analytic_derivatives, nonlinearity
+from .sensitivity_engine import statics_path, sweep_evaluations
 from .sensitivity_quantities import Request, evaluate, tracked_values
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -197,13 +198,15 @@ def difference_step(model: Model, key: Key, step: float = STEP) -> float:
 
 
 def central_difference(model: Model, key: Key, base, request: Request,
-                       step: float = STEP) -> tuple[np.ndarray, np.ndarray, float, float]:
+                       step: float = STEP, *, compiled: bool | None = None,
+                       ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """(derivatives, error estimates, h, the smallest MAC) of every quantity of `base` with
-    respect to `key` by Richardson-extrapolated central differences (module docstring)."""
+    respect to `key` by Richardson-extrapolated central differences (module docstring);
+    `compiled` the statics' path of the perturbed models' evaluations (`evaluate`)."""
     h = difference_step(model, key, step)
     values, worst = {}, 1.0
     for offset in (-h, -h / 2, h / 2, h):
-        other = evaluate(_build(model, key, key.value + offset), request)
+        other = evaluate(_build(model, key, key.value + offset), request, compiled=compiled)
         values[offset], mac = tracked_values(base, other)
         worst = min(worst, mac)
     coarse = (values[h] - values[-h]) / (2.0 * h)
@@ -216,7 +219,8 @@ def central_difference(model: Model, key: Key, base, request: Request,
 def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *,
                   modes: int = 6, buckling: int = 0, outputs: bool = True,
                   stress: bool = True, compliance_nodes: tuple[str, ...] = (),
-                  dc_gains: bool = True, step: float = STEP) -> Sensitivities:
+                  dc_gains: bool = True, step: float = STEP,
+                  compiled: bool | None = None) -> Sensitivities:
     """The derivatives of a model's quantities with respect to scene keys.
 
     Parameters
@@ -241,6 +245,10 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
         Whether to include the state space's DC gains (outputs per input).
     step : float
         The difference scheme's relative step h / |p| (module docstring).
+    compiled : bool, optional
+        The static solves (and after them the linearisations) through the compiled engine
+        (True), the numpy `Mechanics` (False), or by the sweep's rule (None, the default:
+        `sensitivity_engine.preferred`, else each analysis' own).
 
     Returns
     -------
@@ -262,7 +270,8 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
     resolved = [resolve_key(model, key) for key in keys]  # every key checked before a solve
     request = Request(modes=modes, buckling=buckling, outputs=outputs, stress=stress,
                       compliance_nodes=tuple(compliance_nodes), dc_gains=dc_gains)
-    base = evaluate(model, request)
+    compiled = statics_path(model, sweep_evaluations(len(resolved)), compiled)
+    base = evaluate(model, request, compiled=compiled)
     n, m = len(base.names), len(resolved)
     derivatives, errors = np.zeros((n, m)), np.zeros((n, m))
     methods = np.full((n, m), ANALYTIC, dtype=object)
@@ -277,7 +286,8 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
                                                                preloaded=preloaded)
         steps[j] = difference_step(model, key, step) if not analytic.all() else 0.0
         if not analytic.all():
-            slope, error, _, mac = central_difference(model, key, base, request, step)
+            slope, error, _, mac = central_difference(model, key, base, request, step,
+                                                      compiled=compiled)
             derivatives[~analytic, j] = slope[~analytic]
             errors[~analytic, j] = error[~analytic]
             methods[~analytic, j] = DIFFERENCE

@@ -93,19 +93,23 @@ class Evaluation:
         self.values.append(float(value))
 
 
-def evaluate(model: Model, request: Request) -> Evaluation:
+def evaluate(model: Model, request: Request, *, compiled: bool | None = None) -> Evaluation:
     """The quantities of `request` on `model` (module docstring), at the static equilibrium
     under the scene's loads. Quantities the model cannot have are left out: frequencies
     without DOFs, outputs without position outputs, the stress without sections that have
-    dimensions, DC gains without inputs and outputs."""
+    dimensions, DC gains without inputs and outputs.
+
+    `compiled` is the statics' path (`static_equilibrium`'s: None its own rule); where they
+    packed the engine (a loaded model) the linearisation takes it too, at the cost of two
+    operations on that packed model (`linear_engine`), and where it is False numpy."""
     from ..mechanics.ports import output_rows, output_value
     from .statespace import state_space_matrices
     from .stresses import beam_stresses
 
     found = Evaluation()
     mech = Mechanics(model)
-    solution = static_equilibrium(model, mechanics=mech)
-    lin = linearize(model, solution, mechanics=mech)
+    solution = static_equilibrium(model, mechanics=mech, compiled=compiled)
+    lin = linearize(model, solution, mechanics=mech, compiled=_linear_path(model, compiled))
     found.mechanics, found.solution, found.linear_model = mech, solution, lin
     n = lin.M0.shape[0]
     if request.modes and n:
@@ -118,7 +122,7 @@ def evaluate(model: Model, request: Request) -> Evaluation:
         for k in range(min(request.modes, n)):
             found.add(f"frequency {k + 1}", "Hz", "frequency", frequency_hz(eigenvalues[k]))
     if request.buckling:
-        factors, shapes, weight = buckling_modes(model)
+        factors, shapes, weight = buckling_modes(model, compiled=compiled)
         found.buckling_factors, found.buckling_shapes = factors, shapes
         found.buckling_weight = weight
         for k in range(min(request.buckling, factors.size)):
@@ -160,19 +164,30 @@ def evaluate(model: Model, request: Request) -> Evaluation:
     return found
 
 
+def _linear_path(model, compiled):
+    """The linearisation's `compiled` after statics on the path `compiled` (`evaluate`)."""
+    from . import linear_engine
+
+    if compiled is None:
+        return None
+    return bool(compiled) and linear_engine.packed(model)
+
+
 def frequency_hz(eigenvalue):
     """f = sign(lambda) sqrt(|lambda|) / (2 pi), Hz, as `natural_frequencies` gives it (a
     negative frequency marks a divergent mode)."""
     return np.sign(eigenvalue) * np.sqrt(np.abs(eigenvalue)) / (2.0 * np.pi)
 
 
-def buckling_modes(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def buckling_modes(model: Model, *, compiled: bool | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(factors, shapes (NDOF, k), K0) of `buckling_load_factors`'s problem: the positive
     load factors of eig(-K0, G0) under the reference load, ascending, with their shapes
-    (K0-normalised), solved as there as -G0 phi = (1 / lambda) K0 phi."""
+    (K0-normalised), solved as there as -G0 phi = (1 / lambda) K0 phi; `compiled` the
+    statics' path (`evaluate`)."""
     loads = model.buckling_loads if model.buckling_loads is not None else model.loads
     mech = Mechanics(model)
-    solution = static_equilibrium(model, loads=loads, mechanics=mech)
+    solution = static_equilibrium(model, loads=loads, mechanics=mech, compiled=compiled)
     K0 = held(model, mech.structural_stiffness(solution.config))  # kinematic inputs held
     G0 = held(model, mech.geometric_stiffness(solution.config, solution.stress_resultants))
     try:
