@@ -126,6 +126,12 @@ def test_a_second_process_waits_for_the_first_and_loads_what_it_compiled(tmp_pat
     assert second_did["compilations"] == 0
     assert first_did["result"] == first_did["expected"]
     assert second_did["result"] == first_did["result"]  # the same machine code, loaded
+    if what == "entry":  # in numba's cache and no object code: loaded by numba, no lock
+        for path in [*cache.rglob("*.fxo"), *cache.rglob("*.lock")]:
+            path.unlink()
+        third_did, _ = _report(_child(what, cache))
+        assert not third_did["compiled_here"] and third_did["result"] == first_did["result"]
+        assert not list(cache.rglob("*.lock"))
 
 
 def test_a_holder_killed_mid_compilation_leaves_the_waiter_to_compile(tmp_path):

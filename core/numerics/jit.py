@@ -27,6 +27,7 @@ declares one: importing it takes about 0.2 s of CPU, and the analyses (statics, 
 numpy and never call a kernel (`flexure analyze` does not import numba).
 """
 
+import contextlib
 import functools
 import hashlib
 import inspect
@@ -388,8 +389,10 @@ class CompiledEntry:
 
             address = object_code.load(self.function)
             if address is None:
-                with compile_lock.compiling_alone(self.function):
-                    # another process may have compiled it while this one waited
+                # a compilation ahead (one process at a time), unless numba's cache has it
+                alone = (contextlib.nullcontext() if is_cached(self.function)
+                         else compile_lock.compiling_alone(self.function))
+                with alone:  # the process waited for may have written it meanwhile
                     address = object_code.load(self.function)
                     if address is None:
                         address = self.compiled.address
