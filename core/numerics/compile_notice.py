@@ -10,7 +10,9 @@ process:
 - on a terminal, a progress line while it runs ("compiled 57 of ~200 functions"), redrawn in
   place with a carriage return and erased when the compilation ends;
 - within `CompileNotice.notices_to(write)` the line goes to `write` instead, followed by a
-  summary when the compilation is done (an FMU's slave hands it the host's FMI logger).
+  summary when the compilation is done (an FMU's slave hands it the host's FMI logger);
+- when another process compiles the same code into the cache and this one waits for it
+  (`compile_lock`), one line saying so (`CompileNotice.waiting`), there or on stderr.
 
 The estimate is measured on this machine: each compilation's CPU and wall seconds and the
 number of functions it compiled are kept in `compile-time.json` in the cache folder, and the
@@ -77,6 +79,7 @@ class CompileNotice:
         self._total = DEFAULT_FUNCTIONS  # the estimate's count of functions
         self._owns_record = False
         self._listener = None
+        self.waited = False  # whether the waiting notice was given
 
     # -- what is said ----------------------------------------------------------------------
 
@@ -137,6 +140,22 @@ class CompileNotice:
 
         self._listener = _listener(self)
         event.register("numba:compile", self._listener)
+
+    def waiting(self, holder=None):
+        """Say, once per process, that it waits for another process compiling the same code
+        into the cache (`compile_lock`): a host waiting in silence looks hung.
+
+        Parameters
+        ----------
+        holder : int, optional
+            That process's id, when known.
+        """
+        if self.waited:
+            return
+        self.waited = True
+        who = "another process" if holder is None else f"process {holder}"
+        self._say(f"flexure: waiting for {who}, which compiles the same code of the engine "
+                  f"into {self.folder}; this process loads it from there when it is done")
 
     def close(self):
         """Stop following numba's compilations (a notice made for a test)."""

@@ -18,13 +18,16 @@ there (an FMU carries its engine so).
 
 The first compilation. When an entry point is not in the cache, the engine is about to
 compile for tens of seconds: `announce_compilation` says so once per process, with an estimate
-measured on this machine and a progress line on a terminal (`compile_notice`).
+measured on this machine and a progress line on a terminal (`compile_notice`). Processes
+that share the cache compile each function once: the first takes its lock and compiles, the
+others wait (saying so) and load what it wrote (`compile_lock`).
 
 numba itself is imported when the first kernel is compiled or called, not when a module
 declares one: importing it takes about 0.2 s of CPU, and the analyses (statics, modes) run in
 numpy and never call a kernel (`flexure analyze` does not import numba).
 """
 
+import contextlib
 import functools
 import hashlib
 import inspect
@@ -32,7 +35,7 @@ import os
 import sys
 import tempfile
 
-from . import compile_flags, inline_copy, linked_code
+from . import compile_flags, compile_lock, inline_copy, linked_code
 from .compile_notice import CompileNotice
 
 _CORE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # core/, above numerics/
@@ -230,9 +233,12 @@ class Kernel:
                 # numba's own locators (a kernel outside flexure's core) would file it with
                 # the linking-only code: uncached there
                 cached = _cache_location(function, inspect.getfile(function)) is not None
-                self._python_dispatcher = numba.njit(
+                dispatcher = numba.njit(
                     **{**self._options, "cache": self._options.get("cache") and cached})(
                     function)
+                if cached:
+                    dispatcher.compile = compile_lock.compiled_alone(dispatcher.compile, function)
+                self._python_dispatcher = dispatcher
             else:
                 self._python_dispatcher = self.dispatcher
         return self._python_dispatcher
@@ -383,8 +389,14 @@ class CompiledEntry:
 
             address = object_code.load(self.function)
             if address is None:
-                address = self.compiled.address
-                object_code.save(self.function, self._compiled)
+                # a compilation ahead (one process at a time), unless numba's cache has it
+                alone = (contextlib.nullcontext() if is_cached(self.function)
+                         else compile_lock.compiling_alone(self.function))
+                with alone:  # the process waited for may have written it meanwhile
+                    address = object_code.load(self.function)
+                    if address is None:
+                        address = self.compiled.address
+                        object_code.save(self.function, self._compiled)
             self._address = address
         return self._address
 
