@@ -457,7 +457,7 @@ def test_the_first_compilation_is_announced_on_a_terminal_and_in_a_log_alike(tmp
     from flexure.core.numerics.compile_notice import CompileNotice
     from flexure.core.numerics.jit import is_cached
 
-    engine.connect(EngineData(truss_pendulum()))  # the entry compiled or loaded
+    engine.connect(EngineData(truss_pendulum()), engine.OP_RHS)  # the entry compiled or loaded
     assert is_cached(engine.ENTRIES[engine.OP_RHS].function)
     probe = ("from flexure.core.engine import engine; from flexure.core.numerics import jit; "
              "print(jit.is_cached(engine.ENTRIES[engine.OP_RHS].function))")
