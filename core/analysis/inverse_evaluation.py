@@ -121,14 +121,11 @@ class NumpyMotion:
         inertia = mech.inertia
         conv = mech.kinematics.convective_acceleration(config, qdot)
         xdot = config.DF @ qdot
-        # the mass as `Mechanics.mass_matrix` takes it (sparse on a sparse Mechanics), so that
-        # M conv and M_bar are the reference's own
-        M_x = (inertia.sparse_mass_matrix(config.x) if mech.sparse
-               else inertia.mass_matrix(config.x))
+        M_x = mech.coordinate_mass(config.x)  # formed once, for M conv and M_bar
         sigma_c = mech.constitutive_stress(config, config.De @ xdot)
         r = (mech.external_force(config.x) - M_x @ conv
              - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
-        return conv, mech.mass_matrix(config), config.DF.T @ r
+        return conv, mech.mass_matrix(config, M_x), config.DF.T @ r
 
     def stress_resultants(self, config: Configuration, qdot: np.ndarray, qddot: np.ndarray,
                           input_force: np.ndarray) -> np.ndarray:

@@ -376,19 +376,28 @@ class Mechanics:
             K += load_factor * (DF.T @ (input_stiffness(self.model, config.x, inputs) @ DF))
         return K
 
-    def mass_matrix(self, config: Configuration) -> np.ndarray:
+    def coordinate_mass(self, x: np.ndarray):
+        """The mass matrix M on the coordinates x (NX,): a scipy sparse matrix on a sparse
+        Mechanics, else a dense (NX, NX) array; kg (kg m, kg m^2 on rotation parameters)."""
+        if self.sparse:
+            return self.inertia.sparse_mass_matrix(x)
+        return self.inertia.mass_matrix(x)
+
+    def mass_matrix(self, config: Configuration, coordinate_mass=None) -> np.ndarray:
         """The reduced mass matrix M0 = DF^T M DF.
 
         Parameters
         ----------
         config : Configuration
+        coordinate_mass : optional
+            M at config.x as `coordinate_mass` gives it, where the caller has it already.
 
         Returns
         -------
         ndarray (NDOF, NDOF)
             kg (kg m, kg m^2 where an angle DOF is involved).
         """
+        M = self.coordinate_mass(config.x) if coordinate_mass is None else coordinate_mass
         if self.sparse:
-            return config.DF.T @ np.asarray(self.inertia.sparse_mass_matrix(config.x)
-                                            @ config.DF)
-        return config.DF.T @ self.inertia.mass_matrix(config.x) @ config.DF
+            return config.DF.T @ np.asarray(M @ config.DF)
+        return config.DF.T @ M @ config.DF
