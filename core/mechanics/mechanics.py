@@ -376,14 +376,26 @@ class Mechanics:
             K += load_factor * (DF.T @ (input_stiffness(self.model, config.x, inputs) @ DF))
         return K
 
-    def coordinate_mass(self, x: np.ndarray):
-        """The mass matrix M on the coordinates x (NX,): a scipy sparse matrix on a sparse
-        Mechanics, else a dense (NX, NX) array; kg (kg m, kg m^2 on rotation parameters)."""
+    def coordinate_mass(self, x: np.ndarray) -> np.ndarray | csr_matrix:
+        """The mass matrix M on the coordinates, as `mass_matrix` takes it.
+
+        Parameters
+        ----------
+        x : ndarray (NX,)
+            The coordinates, m (translations) and the rotation parameters.
+
+        Returns
+        -------
+        csr_matrix or ndarray (NX, NX)
+            Sparse on a sparse Mechanics, else dense; kg (kg m, kg m^2 on rotation
+            parameters).
+        """
         if self.sparse:
             return self.inertia.sparse_mass_matrix(x)
         return self.inertia.mass_matrix(x)
 
-    def mass_matrix(self, config: Configuration, coordinate_mass=None) -> np.ndarray:
+    def mass_matrix(self, config: Configuration,
+                    coordinate_mass: np.ndarray | csr_matrix | None = None) -> np.ndarray:
         """The reduced mass matrix M0 = DF^T M DF.
 
         Parameters
