@@ -213,22 +213,28 @@ def test_the_engine_is_preferred_from_the_stated_work_on():
     assert inverse_evaluation.preferred(load_scene("truss_1dof_x"), 200)
 
 
-def test_the_free_variant_takes_numpy_unless_asked(monkeypatch):
-    """`free_inverse_dynamics` keeps the numpy path by default (its module docstring: the
-    engine's round-off in the manipulator's forward check), here with a work of 2560 that the
-    rule would give the engine."""
-    from flexure.core.analysis import inverse_engine
+def test_the_free_variant_takes_the_rules_path(monkeypatch):
+    """`free_inverse_dynamics` counts EVALUATIONS_PER_STEP evaluations a step: on
+    wire_tripod (28 free coordinates) 8 steps are a work of 2560, the engine's; 2 steps, 640,
+    numpy's; compiled=False keeps numpy whatever the work."""
+    from flexure.core.analysis import inverse_dynamics_free, inverse_engine
 
-    def refused(model):
-        raise AssertionError("the engine was taken")
-
-    monkeypatch.setattr(inverse_engine, "engine_motion", refused)
-    result = free_inverse_dynamics(load_scene("wire_tripod"), np.linspace(0.0, 0.02, 9),
-                                   wave([0.0], [1e-4], 50.0), outputs=["x"], inputs=["F"])
-    assert result.forces.shape == (9, 1)
-    with pytest.raises(AssertionError, match="the engine was taken"):
-        free_inverse_dynamics(load_scene("wire_tripod"), [0.0, 0.01], wave([0.0], [1e-4], 50.0),
-                              outputs=["x"], inputs=["F"], compiled=True)
+    per_step = inverse_dynamics_free.EVALUATIONS_PER_STEP
+    model = load_scene("wire_tripod")
+    assert inverse_evaluation.preferred(model, 8 * per_step)
+    assert not inverse_evaluation.preferred(model, 2 * per_step)
+    taken = []
+    engine_motion = inverse_engine.engine_motion
+    monkeypatch.setattr(inverse_engine, "engine_motion",
+                        lambda model: taken.append(model.name) or engine_motion(model))
+    path = wave([0.0], [1e-4], 50.0)
+    for steps, keys, engine in ((8, {}, True), (2, {}, False),
+                                (8, {"compiled": False}, False)):
+        taken.clear()
+        result = free_inverse_dynamics(model, np.linspace(0.0, 0.0025 * steps, steps + 1),
+                                       path, outputs=["x"], inputs=["F"], **keys)
+        assert result.forces.shape == (steps + 1, 1)
+        assert bool(taken) == engine, (steps, keys)
 
 
 def test_compiled_is_refused_where_the_engine_does_not_take_the_model():

@@ -29,24 +29,20 @@ error O(h^5), the forces at the inner stages O(h^4) (measured in
 tests/test_inverse_dynamics_free.py).
 
 The evaluations (positions, the motion's terms, the stress resultants) come from the numpy
-`Mechanics` (the default) or, with compiled=True, from the compiled engine
-(`inverse_evaluation`; the linearisation at rest and the statics take their own paths). The
-engine's forces agree with the numpy path's within that path's own round-off spread (its
-dense against its sparse `Mechanics`), but along the manipulator's forward check
-(tests/test_manipulator_feedforward.py) they leave E 5.5 pm off the path at 0.625 ms where
-the numpy path's leave 2.5 pm, above the 0.75 of the 1.25 ms run's deviation that the check
-asks of the half step. That floor is the forces' round-off, of both paths: a leaf's axial
-stiffness (about 1e8 N/m) times the coordinates' round-off (an ulp of a translation, 2e-17
-m, is 2e-9 N), summed over the chain's leaves, is 1e-8 to 1e-7 N (at the rest, where the
-forces are zero, numpy's are 2e-8 N and the engine's differ from them by 2.7e-8 N, the
-coordinates by an ulp or a few), which the actuated directions (3.3e3 to 3.8e3 N/m) turn
-into pm; Newton carried two iterations past the tolerance, in the positions
-and in the steps, leaves the two paths' forces as far apart (docs/benchmarks.md, 2026-11-30,
-session 28); numpy's own forces with its sparse mass (M_bar by `Mechanics.mass_matrix`) leave
-3.2 pm at 0.625 ms against 3.6 pm at 1.25 ms (0.87). Which round-off passes a halving
-check at 1.25 ms is chance, not accuracy, so the test halves from 2.5 ms, where the
-discretisation's error dominates; numpy stays the default, the engine's rotation at 1.25 ms
-leaving that check less margin (0.62 against 0.32).
+`Mechanics` or the compiled engine (`inverse_evaluation`: the engine where the work,
+EVALUATIONS_PER_STEP per step, reaches its rule; compiled= forces a path; the linearisation
+at rest and the statics take their own paths). The two paths' forces differ by round-off:
+a leaf's axial stiffness (about 1e8 N/m) times the coordinates' round-off (an ulp of a
+translation, 2e-17 m, is 2e-9 N), summed over the chain's leaves, is 1e-8 to 1e-7 N on
+the manipulator (at the rest, where the forces are zero, numpy's are 2e-8 N and the
+engine's differ from them by 2.7e-8 N); Newton carried past its tolerance does not move
+it. That is the floor of the manipulator's forward check
+(tests/test_manipulator_feedforward.py): numpy's forces at 1.25 ms with white noise of the
+two paths' rms difference (3.5e-8 N) added leave E 6.6 to 15 pm and 0.12 to 0.22 nrad off
+the path, where numpy's own leave 3.65 pm and 0.068 nrad and the engine's 4.7 pm and 0.11
+nrad (docs/benchmarks.md, session 29).
+So the check halves from 5 ms, where the discretisation's error (56 to 60 pm, 0.64 to 0.80
+nrad) is at least four times that floor in position and three in rotation.
 
 Forces between the steps. Each step has four nodes, its start, its two inner stages
 t_n + c_j h (c = (4 -+ sqrt 6) / 10) and its end, and the forces at them; the cubic through
@@ -326,8 +322,9 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         The model's mechanics to reuse.
     compiled : bool, optional
         Evaluate the model through the compiled engine (True: 0.12 of the numpy path's CPU
-        per step on manipulator_control) or the numpy `Mechanics` (False, the default:
-        module docstring).
+        per step on manipulator_control) or the numpy `Mechanics` (False); None (the
+        default) takes the engine where `inverse_evaluation.preferred` does for
+        EVALUATIONS_PER_STEP evaluations a step.
 
     Returns
     -------
@@ -360,8 +357,7 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         raise SceneError(f"{model.source}: inverse dynamics with free DOFs needs at least two "
                          "finite, increasing times (the steps' ends), got "
                          f"{np.array2string(times, threshold=8)}")
-    # the engine only when asked (module docstring: its round-off in the forward check)
-    evaluator = motion_evaluator(model, mech, bool(compiled),
+    evaluator = motion_evaluator(model, mech, compiled,
                                  EVALUATIONS_PER_STEP * spacing.size)
     rest, config = _start(model, mech, evaluator, path, out_ports, times)
     part = Partitioned(model, evaluator, path, out_ports, in_ports, config, tolerance,

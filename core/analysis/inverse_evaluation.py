@@ -21,8 +21,7 @@ and the work is large enough that it is the faster in a process, its start-up in
 an integer rule (no timing is compared at run time, so the choice cannot flip with the CPU;
 a tie, work equal to the threshold, takes the engine). The evaluations are counted as the
 caller makes them: `inverse_dynamics` one per time (with about three kinematics for the
-positions); `free_inverse_dynamics` takes the numpy path unless compiled=True (its module
-docstring: the forces' round-off floor in the manipulator's forward check). Measured
+positions), `free_inverse_dynamics` EVALUATIONS_PER_STEP per step. Measured
 (docs/benchmarks.md, 2026-11-30; 2-core VM under a load of 5 to 7): once started, the engine
 is the faster on every model, per time 0.47 against 0.99 ms on truss_1dof_x (1 free
 coordinate), 0.51 against 1.6 ms on stage_planar_3dof (6), 1.5 against 6.9 ms on wire_tripod
