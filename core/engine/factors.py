@@ -40,7 +40,6 @@ from .rigid_kernels import touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
-from .sparse_refinement import REFINED_AUGMENTED
 
 
 @kernel
@@ -306,15 +305,10 @@ def add_rigid_rows(table, A, na):
 @kernel
 def augmented_solve(table, A, na, rhs):
     """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
-    then the rigid rows); False when A is singular. A sparse A is first solved with its kept
-    factors refined against it (`sparse_refinement`: an earlier evaluation's factors, to
-    round-off), and refactored only when that does not converge fast."""
+    then the rigid rows); False when A is singular."""
     dims = _i(table, slot.DIMS)
     dense = _f(table, slot.AUG)
     if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in dense for the banded LU
-        if _refined(table, rhs):  # the kept factors, refined to round-off
-            dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
-            return True
         ratio = _sparse_factor(table, SPARSE_AUGMENTED)
         if ratio >= 0.0:
             run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
@@ -331,32 +325,13 @@ def augmented_solve(table, A, na, rhs):
 
 
 @kernel
-def _refined(table, rhs):
-    """Whether rhs (slot augmented_rhs) was solved in place with the augmented system's kept
-    sparse factors refined to round-off against its current values (`sparse_refinement`);
-    False (rhs as it was) when the caller should refactor."""
-    if rhs.ctypes.data != _f(table, slot.AUG_RHS).ctypes.data:
-        return False
-    omega = _sparse_factor(table, REFINED_AUGMENTED)
-    return omega >= 0.0
-
-
-@kernel
 def augmented_resolve(table, na, rhs):
     """Solve A z = rhs in place (rhs (na,) as `augmented_solve`'s) with the factors the last
-    successful `augmented_solve` left (dims[A_FACTORS] says which; not NO_FACTORS); sparse
-    ones refined against A's current values, as `augmented_solve` does, or refactored."""
+    successful `augmented_solve` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
     dims = _i(table, slot.DIMS)
-    if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:  # refined: they may be an earlier A's
-        if _refined(table, rhs):
-            return
-        if _sparse_factor(table, SPARSE_AUGMENTED) >= 0.0:  # A's values are current
-            run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
-            return
-        # they are in the dense storage now, for the banded LU (as in `augmented_solve`)
-        banded.factor(_f(table, slot.AUG), na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
-                      dims[ed.A_KU])
-        dims[ed.A_FACTORS] = ed.BANDED_FACTORS
+    if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:
+        run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
+        return
     apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
     for u in range(na):
         t[apos[u]] = rhs[u]

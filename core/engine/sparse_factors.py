@@ -7,8 +7,7 @@ through two operations of the engine, `factor` and `solve`, each the body of its
 (`engine.ENTRIES`); `factors` calls them through their addresses (`run`), so a model that
 factors banded, as the stages do, never compiles the sparse LU. `engine.connect` adds them for
 the models that need them. Which factors: SPARSE_J, SPARSE_J_TRANSPOSED (solves only) and
-SPARSE_AUGMENTED (`operations`); `factor` also takes REFINED_AUGMENTED: the augmented system
-solved with its kept factors refined against its current values (`sparse_refinement`).
+SPARSE_AUGMENTED (`operations`).
 """
 
 from ..mechanics.rigid_bodies import DEPENDENCIES
@@ -20,7 +19,6 @@ from .factors import _scatter_de
 from .operations import SPARSE_AUGMENTED, SPARSE_J_TRANSPOSED
 from .slots import float_array as _f
 from .slots import int_array as _i
-from .sparse_refinement import REFINED_AUGMENTED, refined_solve
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -28,14 +26,8 @@ def factor(table, which, out):
     """Factor the sparse LU of J (which = SPARSE_J, from the elements' De) or of the augmented
     system (SPARSE_AUGMENTED, assembled by `motion`): out[0] = the pivot ratio, negative when
     the sparse LU cannot serve, and then the values are in the dense storage (slot lu, slot
-    augmented) for the banded LU. With which = REFINED_AUGMENTED no factorisation: slot
-    augmented_rhs solved in place with the kept factors, refined (`_refined_augmented`);
-    out[0] = the backward error reached, or negative (the rhs as it was) when the caller
-    should refactor."""
+    augmented) for the banded LU."""
     dims = _i(table, slot.DIMS)
-    if which == REFINED_AUGMENTED:
-        out[0] = _refined_augmented(table)
-        return
     if which == SPARSE_AUGMENTED:
         ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
         dense, rows = _f(table, slot.AUG), _i(table, slot.AUG_POS)
@@ -63,28 +55,6 @@ def solve(table, which, b):
     else:
         sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
                         which == SPARSE_J_TRANSPOSED)
-
-
-@kernel
-def _refined_augmented(table):
-    """Slot augmented_rhs <- A^-1 of it with the augmented system's kept sparse factors
-    refined against its current values (`sparse_refinement.refined_solve`); the backward
-    error reached, or NOT_CONVERGED with the rhs left as it was. Its five vectors of scratch
-    lie in the dense storage of the augmented system (n^2 >= 5 n for n >= 5), which the
-    sparse path reads only after a fallback, and that clears it first (`factor`)."""
-    dims = _i(table, slot.DIMS)
-    n = dims[ed.NFREE] + dims[ed.NRIGID]
-    rhs, dense = _f(table, slot.AUG_RHS), _f(table, slot.AUG)
-    if n < 5:
-        return -1.0
-    b, x, r = dense[:n], dense[n: 2 * n], dense[2 * n: 3 * n]
-    scale, row_max = dense[3 * n: 4 * n], dense[4 * n: 5 * n]
-    b[:] = rhs[:n]
-    omega = refined_solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), b, x,
-                          r, scale, row_max)
-    if omega >= 0.0:
-        rhs[:n] = x
-    return omega
 
 
 @kernel
