@@ -36,9 +36,10 @@ currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tang
 from `actuators` through an operation of their own (`coil_entries`). Every operation is a
 C function of its own (`ENTRIES`), compiled the first time a model needs it (`connect`: the
 sparse factorisations, the rigid clusters' kernels, the folded clusters' rigid bodies
-(`rigid_inertia_kernels`) and the coils' only for models that use them); compiled code (a
-SUNDIALS callback, the sampled loop, the engine's own functions) reaches it through the
-process's table of their addresses, Python through `call`.
+(`rigid_inertia_kernels`), the moment inputs' load stiffness (`port_entries`) and the coils'
+only for models that use them); compiled code (a SUNDIALS callback, the sampled loop, the
+engine's own functions) reaches it through the process's table of their addresses, Python
+through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
