@@ -6,7 +6,11 @@ inputs', the large models' tangent product or the folded clusters' rigid bodies;
 voltage-driven actuator's model after it runs on the coils' operation and follows the exact
 solution of its linear ODE, and a spatial model with a folded cluster (stage_spatial_1dof
 under gravity, augmented form) runs on the rigid bodies' operation and its accelerations and
-tangent match the numpy reference (`test_engine`'s plain formulas and tolerances).
+tangent match the numpy reference (`test_engine`'s plain formulas and tolerances); a model
+with a moment input (wire_tripod) runs on the moment inputs' load stiffness operation and its
+tangent matches the plain one; and the demo's closed loop (`flexure loop`, its output a DOF)
+does not compile the sampled loop's measuring entry, which a loop on an output that is not a
+DOF (truss_1dof_e's x) then gets, giving the Python loop's positions and forces to the bit.
 
 In a fresh interpreter (the process's table of operations is shared by every model of a
 process: another test's model would have connected them), on the session's cache."""
@@ -34,10 +38,14 @@ from test_engine import MODELS, evaluate, random_states
 def compiled():
     return {{op: engine.ENTRIES[op].is_compiled for op in range(len(engine.ENTRIES))}}
 
+from flexure.core.cli import main
+from flexure.core.simulation.sampled_measure import measure_entry
 demo = load_scene("stage_planar_1dof")
 for method in ("esdirk", "cvode-bdf", "ida"):
     simulate(demo, 2e-3, inputs={{"F": 1.0}}, method=method, rtol=1e-8)
+main(["loop", "--no-plot"])  # README command 1, the demo's closed loop
 after_demo = compiled()
+measuring_after_demo = measure_entry.is_compiled
 times = np.linspace(0.0, 0.2, 41)
 result = simulate(build_model(truss()), 0.2, inputs={{"F": 1.0}}, method="esdirk",
                   rtol=1e-8, output_times=times)
@@ -48,6 +56,7 @@ after_coils = compiled()
 model = MODELS["stage_spatial_1dof_gravity"]()
 data = EngineData(model, augmented=True)
 q0 = Mechanics(model).kinematics.dofs_of(model.initial_coordinates)
+data_folded_bodies = data.rigid.bodies.per_cluster
 folded = []
 for q, qdot, u in random_states(model, q0, seed=2):
     qddot = evaluate(data, q, qdot, u)
@@ -57,29 +66,68 @@ for q, qdot, u in random_states(model, q0, seed=2):
         tangents.append([data.float_array(name).tolist() for name in ("stiffness", "damping")])
     folded.append({{"q": q.tolist(), "qdot": qdot.tolist(), "u": u.tolist(),
                     "qddot": qddot.tolist(), "tangents": tangents}})
+after_folded = compiled()
+# a moment input's model: the tangent at two states, with their moments not zero
+model = MODELS["wire_tripod"]()
+data = EngineData(model)
+q0 = Mechanics(model).kinematics.dofs_of(model.initial_coordinates)
+moments = []
+for q, qdot, u in random_states(model, q0, seed=3):
+    qddot = evaluate(data, q, qdot, u)
+    assert engine.call(data, engine.OP_TANGENT, np.array(qddot)) == 0
+    moments.append({{"q": q.tolist(), "qdot": qdot.tolist(), "u": u.tolist(),
+                     "qddot": qddot.tolist(),
+                     "stiffness": data.float_array("stiffness").tolist()}})
+after_moments = compiled()
+# a loop whose output is not a DOF (truss_1dof_e's x; its DOF the elongation): the compiled
+# loop (ESDIRK, as the demo's) against the Python loop of Simulator calls
+from flexure.controllers import build_loop
+from flexure.controllers.plants import InProcessPlant
+from flexure.controllers.runner import simulate_loop
+from flexure.core import Simulator
+from tests.compiled_loops import run_compiled_loop
+model = load_scene("truss_1dof_e")
+controller, design = build_loop(model, stroke=1e-4, duration=0.02, settle=0.005, fs=4000.0)
+t, _, position, force = simulate_loop(InProcessPlant(model, method="esdirk", rtol=1e-7),
+                                      controller, design)
+sim = Simulator(model, method="esdirk", rtol=1e-7)
+t_c, position_c, force_c = run_compiled_loop(sim, controller, design)
+config = Mechanics(model).kinematics.solve(sim.absolute(sim.state)[:sim.ndof],
+                                           model.initial_coordinates.copy())
+output = model.outputs[design.pairs[0].output_index].coordinate
+loop = {{"same": bool(np.array_equal(t_c, t) and np.array_equal(position_c, position)
+                      and np.array_equal(force_c, force)),
+        "moved": float(np.ptp(position)), "last": float(position_c[-1, 0]),
+        "plain": float(config.x[output]), "compiled": measure_entry.is_compiled}}
 print(json.dumps({{"after_demo": after_demo, "after_coils": after_coils, "error": error,
-                  "bodies": len(data.rigid.bodies.per_cluster), "after_folded": compiled(),
-                  "folded": folded}}))
+                  "bodies": len(data_folded_bodies), "after_folded": after_folded,
+                  "folded": folded, "after_moments": after_moments, "moments": moments,
+                  "measuring_after_demo": measuring_after_demo, "loop": loop}}))
 """
 
 
-def test_the_demo_compiles_no_unused_operation_and_a_coil_model_gets_its_own_after_it():
-    from flexure.core.engine import engine, operations, sparse_factors  # noqa: F401
-
+def _probe():
+    """The probe's findings, from a fresh interpreter."""
     tests = str(Path(__file__).resolve().parent)
     # the tests' folder for their modules, the repository's for `tests.compiled_loops`
     done = subprocess.run([sys.executable, "-c", PROBE.format(tests=tests)],
                           capture_output=True, text=True, check=False,
                           cwd=str(Path(tests).parent))
     assert done.returncode == 0, done.stderr[-3000:]
-    found = json.loads(done.stdout.splitlines()[-1])
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def test_the_demo_compiles_no_unused_operation_and_a_model_that_uses_one_gets_it_after_it():
+    from flexure.core.engine import engine, operations, sparse_factors  # noqa: F401
+
+    found = _probe()
     after_demo = {int(op): flag for op, flag in found["after_demo"].items()}
     after_coils = {int(op): flag for op, flag in found["after_coils"].items()}
     unused = [engine.OP_COILS, operations.OP_SPARSE_FACTOR, operations.OP_SPARSE_SOLVE,
               *operations.NEWTON_OPERATIONS, operations.OP_PRESCRIBED_RHS,
               operations.OP_PRESCRIBED_JACOBIAN, operations.OP_PRESCRIBED_RESIDUAL,
               operations.OP_PRESCRIBED_RESIDUAL_JACOBIAN, operations.OP_ROW_PRODUCTS,
-              operations.OP_RIGID_BODIES]
+              operations.OP_RIGID_BODIES, operations.OP_INPUT_STIFFNESS]
     assert not any(after_demo[op] for op in unused), {op: after_demo[op] for op in unused}
     # what the demo does use: its forms, and its rigid clusters' kernels
     for op in (engine.OP_RHS, engine.OP_JACOBIAN, engine.OP_RESIDUAL,
@@ -110,3 +158,31 @@ def test_the_demo_compiles_no_unused_operation_and_a_coil_model_gets_its_own_aft
             K, C = plain_tangent(mechanics, plain, acc)
             close(np.reshape(stiffness, (n, n)), K, 1e-10)
             close(np.reshape(damping, (n, n)), C, 1e-12, scale=max(np.max(np.abs(C)), 1e-300))
+    # the moment input's model: its load stiffness compiled on first use, after the others';
+    # K as test_engine's test_tangent_matches_the_plain_stiffness_and_damping (1e-10)
+    assert not found["after_folded"][str(operations.OP_INPUT_STIFFNESS)]
+    assert found["after_moments"][str(operations.OP_INPUT_STIFFNESS)]
+    model = MODELS["wire_tripod"]()
+    mechanics = Mechanics(model)
+    n = mechanics.kinematics.dofs_of(model.initial_coordinates).size
+    for state in found["moments"]:
+        q, qdot, u, qddot = (np.array(state[key]) for key in ("q", "qdot", "u", "qddot"))
+        assert u[2] != 0.0  # the moment M
+        plain = plain_dynamics(model, mechanics, q, qdot, u)
+        K, _ = plain_tangent(mechanics, plain, qddot)
+        close(np.reshape(state["stiffness"], (n, n)), K, 1e-10)
+    _check_the_measuring_loop(found)
+
+
+def _check_the_measuring_loop(found):
+    """The demo's loop reads its output from the state; a loop on an output that is not a
+    DOF gets the measuring entry in the same process and cache after it: its positions and
+    forces are the Python loop's (Simulator.outputs by Newton) to the bit, it moved by the
+    stroke, and its last position is the plain kinematics' x at the last DOFs within 1e-12 m
+    (the truss is 0.1 m long; measured 0)."""
+    assert not found["measuring_after_demo"]
+    loop = found["loop"]
+    assert loop["compiled"]
+    assert loop["same"]
+    assert loop["moved"] > 0.9e-4
+    assert abs(loop["last"] - loop["plain"]) <= 1e-12

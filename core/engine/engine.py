@@ -36,9 +36,10 @@ currents i (A) to the state, y = [q - q_ref, qdot, i], with their rates and tang
 from `actuators` through an operation of their own (`coil_entries`). Every operation is a
 C function of its own (`ENTRIES`), compiled the first time a model needs it (`connect`: the
 sparse factorisations, the rigid clusters' kernels, the folded clusters' rigid bodies
-(`rigid_inertia_kernels`) and the coils' only for models that use them); compiled code (a
-SUNDIALS callback, the sampled loop, the engine's own functions) reaches it through the
-process's table of their addresses, Python through `call`.
+(`rigid_inertia_kernels`), the moment inputs' load stiffness (`port_entries`) and the coils'
+only for models that use them); compiled code (a SUNDIALS callback, the sampled loop, the
+engine's own functions) reaches it through the process's table of their addresses, Python
+through `call`.
 
 Everything works element by element on the packed arrays of `data.EngineData` (no
 dense (NX, NX) matrix is formed), and no evaluation allocates. The plain-numpy twin of every
@@ -98,6 +99,8 @@ from .operations import (
     run,
 )
 from .part_entries import df_entry, mass_of_entry, row_products_entry
+from .port_entries import input_stiffness_entry
+from .ports import PORT_WIDTH, ROTATION
 from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
 from .prescribed_residual import prescribed_residual_entry, prescribed_residual_jacobian_entry
 from .reactions import stress_resultants_entry
@@ -419,7 +422,8 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            df_entry, mass_of_entry, prescribed_rhs_entry, prescribed_jacobian_entry,
            prescribed_residual_entry, prescribed_residual_jacobian_entry,
            newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
-           stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry)
+           stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry,
+           input_stiffness_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -462,6 +466,8 @@ def connect(data, *ops):
         wanted.append(OP_COILS)
     if ops and data.int_array("rigid_bodies").size:  # the folded clusters' rigid bodies
         wanted.append(operations.OP_RIGID_BODIES)
+    if ops and np.any(data.int_array("input_ports")[::PORT_WIDTH] == ROTATION):  # moments'
+        wanted.append(operations.OP_INPUT_STIFFNESS)
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

@@ -51,15 +51,15 @@ from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
 from .methods import COMPILED_LOOP_METHODS
 from .sampled_control import FORCE, POSITION, controller_arrays, controller_step
-from .sampled_loop_kernels import (
+from .sampled_loop_kernels import END_MEASURE, MEASURE_FAILED, loop_runner
+from .sampled_measure import (
     ADDRESSES,
     ADVANCE,
-    END_MEASURE,
     ENGINE,
-    MEASURE_FAILED,
+    MEASURE,
     OUTPUT,
     PLANT,
-    loop_runner,
+    measure_entry,
 )
 from .status import STATUS_MESSAGES
 from .sundials_restart import L_JACOBIAN
@@ -140,10 +140,11 @@ def run_sampled_loop(sim: Simulator, *, fs: float, samples: int, reference: Arra
         solver, loop_state = drive.stepper, drive.loop_state
         addresses = np.zeros(ADDRESSES, dtype=np.int64)
         # `measure`'s, on the outputs' packed model: only where an output is not a DOF (a DOF
-        # is read from the state; a first loop then compiles the positions' entry only where
-        # it is used)
+        # is read from the state; a first loop then compiles the measuring entry and the
+        # positions' only where they are used)
         if np.any(coordinates[coordinates.size - n_loops:] < 0):
             engine.connect(drive.outputs, engine.OP_POSITIONS)
+            addresses[MEASURE] = measure_entry.address
         addresses[[PLANT, OUTPUT, ENGINE]] = (drive.plant.address, drive.outputs.address,
                                               drive.plant.int_array("dims")[ed.ENGINE])
         run = DRIVERS[solver.method.module](sim, solver, addresses, loop_state, drive.held, loop)

@@ -5,9 +5,8 @@ on CVODE and on the one-step ESDIRK, each with a C entry through which Python ru
 numba).
 """
 
-from ..engine import access, engine
+from ..engine import access
 from ..engine import data as ed
-from ..engine.ports import position_value
 from ..numerics.array_tables import array_table, floats, floats2d, ints
 from ..numerics.jit import entry, kernel
 from ..numerics.native import (
@@ -21,8 +20,8 @@ from ..numerics.native import (
     carray,
 )
 from . import esdirk_kernels
-from .measuring import start_from_plant
 from .sampled_control import CONTROLLER_KINDS, control_sample, controller_table
+from .sampled_measure import ADVANCE, COORDINATES, MEASURE, N_COORDINATES, PLANT
 from .stepper import restart_plant
 from .sundials_restart import (
     A_ACTUAL_INIT_STEP,
@@ -37,9 +36,8 @@ from .sundials_restart import (
     cvode_restart,
 )
 
-# the addresses handed to the compiled loop, in this order (CVODE's own are in its
-# `address_table`, sundials_restart.A_...)
-(PLANT, OUTPUT, ENGINE, ADVANCE, ADDRESSES) = range(5)
+# the addresses handed to the compiled loop are in `sampled_measure`'s order (ADDRESSES;
+# CVODE's own are in its `address_table`, sundials_restart.A_...)
 MEASURE_FAILED = -1000
 # a failed measurement of y_N after the last sample: END_MEASURE - its status (data.OK ..)
 END_MEASURE = -2000
@@ -59,28 +57,23 @@ def _all_dofs(dofs):
 def measure(addresses, y, scratch, coordinates, out):
     """The loop outputs (positions, m; angles, rad) at the integrator state y into out; a
     status. As `Simulator.outputs`: q_ref + y at the DOFs when every output is a coordinate
-    DOF, else Newton from the plant's last coordinates moved to y (`measuring`).
-    coordinates: the outputs' packed rows (`engine.ports.port_specs`, flat), then the DOF of
-    each output or -1 (`mechanics.ports.output_dofs`)."""
+    DOF, else Newton from the plant's last coordinates moved to y (`measuring`), in the
+    entry at addresses[MEASURE] (`sampled_measure`: compiled only for a loop that has such an
+    output; NOT_CONNECTED where none was given). coordinates: the outputs' packed rows
+    (`engine.ports.port_specs`, flat), then the DOF of each output or -1
+    (`mechanics.ports.output_dofs`)."""
     q_ref = access.reference_dofs(addresses[PLANT])
     dofs = coordinates[coordinates.size - out.size:]
     if _all_dofs(dofs):
         for j in range(out.size):
             out[j] = q_ref[dofs[j]] + y[dofs[j]]
         return ed.OK
-    ndof = access.dims(addresses[PLANT])[ed.NDOF]  # y: [.., coil currents]
-    access.restart_kinematics(addresses[OUTPUT], access.coordinates(addresses[PLANT]))
-    for j in range(ndof):
-        scratch[j] = q_ref[j] + y[j]
-    start_from_plant(addresses[PLANT], addresses[OUTPUT], scratch)
-    status = call_engine(addresses[ENGINE], engine.OP_POSITIONS, addresses[OUTPUT], 0.0,
-                         scratch.ctypes.data, 0, 0, 0.0)
-    if status != ed.OK:
-        return status
-    x = access.coordinates(addresses[OUTPUT])
-    for j in range(out.size):
-        out[j] = position_value(coordinates, j, x)
-    return ed.OK
+    if addresses[MEASURE] == 0:
+        return ed.NOT_CONNECTED
+    addresses[COORDINATES], addresses[N_COORDINATES] = coordinates.ctypes.data, coordinates.size
+    # the addresses array as the table of "operations", MEASURE as the operation's index
+    return call_engine(addresses.ctypes.data, MEASURE, addresses.ctypes.data, 0.0,
+                       y.ctypes.data, scratch.ctypes.data, out.ctypes.data, float(out.size))
 
 
 @kernel(inline="always")  # into the loop of the integrator in use, its one caller
