@@ -13,17 +13,23 @@ from flexure.core.cli import main
 
 
 def warm_command_modules(arguments, selected, cwd):
-    """(exit code, stdout, the modules `selected` picks) of `flexure ARGUMENTS` run twice in a
-    child process, the second run's: the first may compile, or load the compiled code through
-    numba (which writes the object code), and either imports what the second run must not.
+    """(exit code, stdout, the modules `selected` picks) of a warm run of `flexure ARGUMENTS`
+    in a child process: a run that did not import numba (so compiled nothing and loaded
+    nothing through it: every entry came as object code). A run that imported numba may have
+    compiled, or loaded the compiled code through numba (which writes the object code), and
+    either imports what a warm run must not: the command then runs again, and that second run
+    is reported. (A warm first run is not run twice: it leaves the cache as it found it.)
     `selected` is a Python expression of a module's name `m` (True: report it)."""
     probe = ("import json, sys\nfrom flexure.core.cli import main\n"
              f"code = main({[str(a) for a in arguments]!r})\n"
-             f"print(json.dumps([code, sorted(m for m in sys.modules if {selected})]))")
+             f"print(json.dumps([code, sorted(m for m in sys.modules if {selected}), "
+             "'numba' in sys.modules]))")
     for _ in range(2):
         completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
                                    text=True, check=True, cwd=cwd)
-    code, loaded = json.loads(completed.stdout.splitlines()[-1])
+        code, loaded, numba_imported = json.loads(completed.stdout.splitlines()[-1])
+        if not numba_imported:
+            break
     return code, completed.stdout, loaded
 
 

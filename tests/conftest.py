@@ -13,6 +13,13 @@ import pytest
 # the first build, seconds for each later one). tests/test_fmu_engine.py builds with it.
 os.environ.setdefault("FLEXURE_FMU_ENGINE", "0")
 
+# One OpenBLAS thread in each test process and the processes it starts (set before numpy is
+# imported: OpenBLAS reads it when it loads). pytest -n auto already runs a worker per core;
+# OpenBLAS's own threads (two on the 2-core machine) then only wait for a core, spinning: the
+# numpy reference's 16-BEAM kinematics test took 15 to 18 s of CPU with two threads beside
+# the other worker, 1.7 to 2.2 s with one. tests/test_blas.py sets its host's threads itself.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 
 @pytest.fixture(scope="session")
 def scene_fmus(tmp_path_factory):
