@@ -141,12 +141,8 @@ def test_the_demo_compiles_no_unused_operation_and_a_model_that_uses_one_gets_it
     assert found["bodies"] == 1
     assert not found["after_coils"][str(operations.OP_RIGID_BODIES)]
     assert found["after_folded"][str(operations.OP_RIGID_BODIES)]
-    model = MODELS["stage_spatial_1dof_gravity"]()
-    mechanics = Mechanics(model)
-    n = mechanics.kinematics.dofs_of(model.initial_coordinates).size
-    for state in found["folded"]:
-        q, qdot, u, qddot = (np.array(state[key]) for key in ("q", "qdot", "u", "qddot"))
-        plain = plain_dynamics(model, mechanics, q, qdot, u)
+    for state, mechanics, plain, n in _with_plain("stage_spatial_1dof_gravity", found["folded"]):
+        qddot = np.array(state["qddot"])
         DF, mass = plain["config"].DF, plain["mass"]
         size = np.max(plain["size"])
         # as test_engine's test_accelerations_match_the_plain_equations_of_motion
@@ -162,16 +158,22 @@ def test_the_demo_compiles_no_unused_operation_and_a_model_that_uses_one_gets_it
     # K as test_engine's test_tangent_matches_the_plain_stiffness_and_damping (1e-10)
     assert not found["after_folded"][str(operations.OP_INPUT_STIFFNESS)]
     assert found["after_moments"][str(operations.OP_INPUT_STIFFNESS)]
-    model = MODELS["wire_tripod"]()
-    mechanics = Mechanics(model)
-    n = mechanics.kinematics.dofs_of(model.initial_coordinates).size
-    for state in found["moments"]:
-        q, qdot, u, qddot = (np.array(state[key]) for key in ("q", "qdot", "u", "qddot"))
-        assert u[2] != 0.0  # the moment M
-        plain = plain_dynamics(model, mechanics, q, qdot, u)
-        K, _ = plain_tangent(mechanics, plain, qddot)
+    for state, mechanics, plain, n in _with_plain("wire_tripod", found["moments"]):
+        assert state["u"][2] != 0.0  # the moment M
+        K, _ = plain_tangent(mechanics, plain, np.array(state["qddot"]))
         close(np.reshape(state["stiffness"], (n, n)), K, 1e-10)
     _check_the_measuring_loop(found)
+
+
+def _with_plain(name, states):
+    """Each of the probe's `states` of model `name` (MODELS) with the plain equations of
+    motion there (`test_engine.plain_dynamics`): (state, mechanics, plain, NDOF)."""
+    model = MODELS[name]()
+    mechanics = Mechanics(model)
+    n = mechanics.kinematics.dofs_of(model.initial_coordinates).size
+    for state in states:
+        q, qdot, u = (np.array(state[key]) for key in ("q", "qdot", "u"))
+        yield state, mechanics, plain_dynamics(model, mechanics, q, qdot, u), n
 
 
 def _check_the_measuring_loop(found):
