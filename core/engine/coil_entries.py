@@ -27,10 +27,9 @@ from .actuators import (
     implicit_blocks,
     set_currents,
 )
+from .operations import ENTRY
 from .slots import int_array as _i
 
-# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 # the parts (s): the currents from y; di/dt into ydot; the rows of IDA's residual; the
 # first-order Jacobian's blocks, row-major or column-major; the implicit Jacobian's. Floats:
 # the operations' number argument is a float64

@@ -257,10 +257,8 @@ def implicit_jacobian(table, y, yp, cj, J):
 
 
 # -- the operations: one compiled C function each, compiled when a model first needs it ------
-# (op, user data, t, a, b, c, s) -> status: a, b, c the operation's arrays, s its number; every
-# operation's entry has this signature, and compiled code calls it through the table of their
-# addresses (`native.call_engine`)
-ENGINE_ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
+# (`operations.ENTRY`: their one signature)
+ENGINE_ENTRY = operations.ENTRY
 _F8 = np.float64
 
 

@@ -44,7 +44,7 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import _scatter_de
 from .kinematics import dof_rows
-from .operations import NEWTON_OPERATIONS, OP_NEWTON_JACOBIAN, OP_RHS, run
+from .operations import ENTRY, NEWTON_OPERATIONS, OP_NEWTON_JACOBIAN, OP_RHS, run
 from .point_masses import element_mass, element_points, massless
 from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
@@ -52,7 +52,6 @@ from .slots import group_deformations, group_inertia, inertia_scratch
 from .slots import int_array as _i
 from .tangent import balance_force, balance_multipliers
 
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"  # engine's
 OPERATIONS = NEWTON_OPERATIONS  # this module's entries' operations, in `engine.ENTRIES`
 CALLS = {OP_NEWTON_JACOBIAN: (OP_RHS,)}  # the operations they call (`engine.CALLS`)
 EULER_PAIRS = 16  # `newton_packing.EULER_PAIRS`

@@ -86,6 +86,11 @@ from ..numerics.native import call_engine
 from . import data as ed
 from .slots import DIMS, int_array
 
+# every operation's C entry: (op, user data, t, a, b, c, s) -> status, a, b, c the operation's
+# arrays, s its number; compiled code calls it through the table of their addresses
+# (`native.call_engine`), so every module that defines an entry takes this one signature
+ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
+
 (OP_RHS, OP_JACOBIAN, OP_RESIDUAL, OP_RESIDUAL_JACOBIAN, OP_KINEMATICS, OP_DEFORMATIONS,
  OP_EVALUATE, OP_TANGENT, OP_POSITIONS, OP_ACCELERATIONS, OP_CONFIGURATION, OP_MASS,
  OP_INPUT_RESPONSE, OP_SPARSE_FACTOR, OP_SPARSE_SOLVE, OP_RIGID_FILL, OP_RIGID_EXPAND,

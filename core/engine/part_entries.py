@@ -19,11 +19,9 @@ from . import data as ed
 from . import slots as slot
 from .kinematics import compute_DF
 from .motion import reduced_mass_of
+from .operations import ENTRY
 from .slots import float_array as _f
 from .slots import int_array as _i
-
-# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 
 
 @entry(ENTRY)

@@ -14,12 +14,10 @@ from ..numerics.native import address_of
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
+from .operations import ENTRY
 from .ports import subtract_input_stiffness
 from .slots import float_array as _f
 from .slots import int_array as _i
-
-# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 
 
 @entry(ENTRY)

@@ -46,11 +46,10 @@ from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
 from .layout import PATH_WIDTH  # a path's record: t_start, t_end (s), c_0 .. c_5
-from .operations import OP_ACCELERATIONS, OP_MASS, OP_PRESCRIBED_RHS, OP_TANGENT, run
+from .operations import ENTRY, OP_ACCELERATIONS, OP_MASS, OP_PRESCRIBED_RHS, OP_TANGENT, run
 from .slots import float_array as _f
 from .slots import int_array as _i
 
-ENGINE_ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 _F8 = np.float64
 
 
@@ -204,7 +203,7 @@ def prescribed_jacobian(table, t, y, J, column_major):
     return ed.OK
 
 
-@entry(ENGINE_ENTRY)
+@entry(ENTRY)
 def prescribed_rhs_entry(op, user_data, t, a, b, c, s):
     """OP_PRESCRIBED_RHS: y (a), ydot (b; null: the evaluation only); s = the time t (s)."""
     table = address_of(user_data)
@@ -213,7 +212,7 @@ def prescribed_rhs_entry(op, user_data, t, a, b, c, s):
                           carray(b, (n if address_of(b) else 0,), _F8))
 
 
-@entry(ENGINE_ENTRY)
+@entry(ENTRY)
 def prescribed_jacobian_entry(op, user_data, t, a, b, c, s):
     """OP_PRESCRIBED_JACOBIAN: y (a), J (b); t the time (s); s = 1 for column-major."""
     table = address_of(user_data)

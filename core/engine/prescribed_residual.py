@@ -34,12 +34,11 @@ from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
-from .operations import OP_PRESCRIBED_RHS, OP_TANGENT, run
+from .operations import ENTRY, OP_PRESCRIBED_RHS, OP_TANGENT, run
 from .prescribed import is_prescribed
 from .slots import float_array as _f
 from .slots import int_array as _i
 
-ENGINE_ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 _F8 = np.float64
 
 
@@ -102,7 +101,7 @@ def prescribed_residual_jacobian(table, t, y, yp, cj, J):
     return ed.OK
 
 
-@entry(ENGINE_ENTRY)
+@entry(ENTRY)
 def prescribed_residual_entry(op, user_data, t, a, b, c, s):
     """OP_PRESCRIBED_RESIDUAL: y (a), yp (b), res (c); t the time (s)."""
     table = address_of(user_data)
@@ -111,7 +110,7 @@ def prescribed_residual_entry(op, user_data, t, a, b, c, s):
                                carray(c, (n,), _F8))
 
 
-@entry(ENGINE_ENTRY)
+@entry(ENTRY)
 def prescribed_residual_jacobian_entry(op, user_data, t, a, b, c, s):
     """OP_PRESCRIBED_RESIDUAL_JACOBIAN: y (a), yp (b), J (c); t the time (s); s = cj."""
     table = address_of(user_data)

@@ -46,13 +46,10 @@ from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
-from .operations import OP_DF, run
+from .operations import ENTRY, OP_DF, run
 from .slots import float_array as _f
 from .slots import int_array as _i
 from .tangent import balance_force_at, balance_multipliers
-
-# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller

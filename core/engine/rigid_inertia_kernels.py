@@ -26,6 +26,7 @@ from . import rigid as rg
 from . import rigid_inertia as ri
 from . import slots as slot
 from .factors import add_element_mass
+from .operations import ENTRY
 from .point_masses import element_points, point_forces
 from .rigid_kernels import touching
 from .slots import float_array as _f
@@ -33,8 +34,6 @@ from .slots import group_inertia, inertia_scratch
 from .slots import int_array as _i
 
 EW, BW, TW = rg.ELEMENT_WIDTH, ri.BODY_WIDTH, ri.TENSOR_WIDTH
-# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 # OP_RIGID_BODIES' parts (s; floats: the operations' number argument is a float64): the
 # rigid bodies onto the augmented matrix and slot rigid_force (`add_rigid_bodies`), or the
 # folded elements' forces onto an (NX,) array (`add_folded_forces`), at rest or moving

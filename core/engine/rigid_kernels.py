@@ -37,6 +37,7 @@ from . import data as ed
 from . import rigid as rg
 from . import slots as slot
 from .operations import (
+    ENTRY,
     OP_RIGID_CONDENSE,
     OP_RIGID_CONVECTIVE,
     OP_RIGID_DE,
@@ -52,8 +53,6 @@ from .slots import group_deformations
 from .slots import int_array as _i
 
 SW, DW, EW = rg.SLAVE_WIDTH, 48, rg.ELEMENT_WIDTH
-# the engine's entry signature (engine.ENGINE_ENTRY, which imports this module)
-ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
 _F8 = np.float64
 
 

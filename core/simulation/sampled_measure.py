@@ -23,9 +23,9 @@ from .measuring import start_from_plant
 # entry, this module's entry (0 until a loop needs it), the measured outputs' packed rows and
 # their number of entries (`sampled_loop_kernels.measure`)
 (PLANT, OUTPUT, ENGINE, ADVANCE, MEASURE, COORDINATES, N_COORDINATES, ADDRESSES) = range(8)
-# engine.ENGINE_ENTRY's signature: the compiled loops call the entry with `call_engine`, the
+# the engine's entry signature: the compiled loops call the entry with `call_engine`, the
 # addresses array taking the place of the table of operations and MEASURE of the operation
-MEASURE_ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
+MEASURE_ENTRY = engine.ENGINE_ENTRY
 
 
 @entry(MEASURE_ENTRY)
