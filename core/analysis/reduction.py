@@ -93,9 +93,10 @@ def energy_shares(model, data, keep):
     lowest `keep` modes that it carries} for the released and DOF deformations of `model`,
     built from scene `data` (whose segmented elements' segments are summed)."""
     modes, solution = lowest_frequencies(model, keep)
-    _, De = assembly.deformation_jacobian(model, solution.x)
+    De = solution.config.De  # de/dx at the equilibrium (the kinematics' first order)
     S, _ = assembly.stiffness_and_damping(model)
-    moved = De @ modes.linear_model.DF @ modes.shapes  # (NE, keep)
+    # the keep shapes on the coordinates first: (De DF) would be an (NE, NDOF) product
+    moved = De @ (modes.linear_model.DF @ modes.shapes)  # (NE, keep)
     energy = np.abs(moved * (S @ moved))
     total = energy.sum(axis=0)
     share = energy / np.where(total > 0.0, total, 1.0)
