@@ -128,18 +128,25 @@ def _qr_clear(block):
     (0.05 against 0.10 s on manipulator_e1's 810 x 1042 block)."""
     import scipy.linalg
     from scipy.linalg.lapack import dormqr, dtrcon
+    from threadpoolctl import threadpool_limits
 
-    r, c = block.shape
-    (reflectors, tau), t = scipy.linalg.qr(block.T, mode="raw")
-    rcond, info = dtrcon(t[:r], norm="1", uplo="U", diag="N")
-    row_norm = float(np.linalg.norm(block, axis=1).max())
-    if info != 0 or not rcond > 0.0:
-        return None
-    trailing = np.zeros((c, c - r), order="F")
-    trailing[r:] = np.eye(c - r)
-    # LAPACK's optimal workspace for dormqr (block size at most 64, its triangle 65 x 64)
-    null, _, info = dormqr("L", "N", reflectors, tau, trailing, max(1, c - r) * 64 + 65 * 64,
-                           overwrite_c=1)
+    from ..numerics.blas import default_threads
+
+    # scipy's own OpenBLAS may load just now, inside the caller's `blas_threads`, which
+    # limits the libraries loaded when it opened (`numerics.blas`): unlimited, its two
+    # threads cost manipulator_control's load 0.3 to 1 s of CPU on the loaded 2-core machine
+    with threadpool_limits(limits=default_threads(), user_api="blas"):
+        r, c = block.shape
+        (reflectors, tau), t = scipy.linalg.qr(block.T, mode="raw")
+        rcond, info = dtrcon(t[:r], norm="1", uplo="U", diag="N")
+        row_norm = float(np.linalg.norm(block, axis=1).max())
+        if info != 0 or not rcond > 0.0:
+            return None
+        trailing = np.zeros((c, c - r), order="F")
+        trailing[r:] = np.eye(c - r)
+        # LAPACK's optimal workspace for dormqr (block size at most 64, its triangle 65 x 64)
+        null, _, info = dormqr("L", "N", reflectors, tau, trailing,
+                               max(1, c - r) * 64 + 65 * 64, overwrite_c=1)
     if info != 0:
         raise RuntimeError(f"dormqr failed (info {info})")
     sigma_min = row_norm * rcond / (ESTIMATE_SLACK * r)
