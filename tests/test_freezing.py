@@ -1,5 +1,5 @@
-"""`freezing.freezable` (the complement of the taken rows' span, shrunk by Householder
-reflections) against the plain incremental test it replaces: an orthonormal basis of the
+"""`freezing.freezable` (the complement of the taken rows' span, shrunk by blocked
+Householder reflections) against the plain incremental test it replaces: an orthonormal basis of the
 span, grown by each group's rows after two Gram-Schmidt passes against it, the same
 thresholds. The same groups are taken on the elongation-frozen manipulator's reduction
 candidates, on a guidance with every released deformation alone and in pairs, and on the
@@ -9,11 +9,13 @@ import copy
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 from examples import manipulator
 from flexure.core import load_scene
 from flexure.core.mechanics import freezing
 from flexure.core.mechanics.constraints import RANK_TOLERANCE, scaled_jacobian
+from flexure.core.mechanics.nullspace import rank_and_null_space
 from flexure.core.scene.building import build_model
 
 
@@ -83,13 +85,34 @@ def test_the_complement_is_orthonormal_and_orthogonal_to_what_is_taken():
     kin, scaled_De = scaled_jacobian(model, None)
     columns = kin.free
     prescribed = scaled_De[np.ix_(model.rigid_deformations, columns)]
-    top = np.abs(scaled_De[:, columns]).max()
-    complement = freezing._initial_complement(prescribed, RANK_TOLERANCE * top)
+    _, _, basis = rank_and_null_space(prescribed, RANK_TOLERANCE)  # N0
     rows = scaled_De[np.ix_(group, columns)]
-    reflectors, tau = np.linalg.qr(complement.T @ rows.T, mode="raw")
-    shrunk = freezing._without_leading(complement, reflectors, tau)
-    assert shrunk.shape == (columns.size, complement.shape[1] - 2)
-    assert np.abs(shrunk.T @ shrunk - np.eye(shrunk.shape[1])).max() < 1e-13
+    inside = basis.T @ rows.T
+    (reflectors, tau), _ = scipy.linalg.qr(inside, mode="raw")
+    shrunk = freezing._without_leading(np.eye(basis.shape[1], order="F"), reflectors, tau)
+    # W Q without its first two columns: Q formed explicitly from the same factorisation
+    q = scipy.linalg.qr(inside, mode="full")[0]
+    assert np.abs(shrunk - q[:, 2:]).max() < 1e-14
+    complement = basis @ shrunk
+    assert complement.shape == (columns.size, basis.shape[1] - 2)
+    assert np.abs(complement.T @ complement - np.eye(complement.shape[1])).max() < 1e-13
     scale = np.abs(np.vstack([prescribed, rows])).max()
-    assert np.abs(prescribed @ shrunk).max() < 1e-13 * scale
-    assert np.abs(rows @ shrunk).max() < 1e-13 * scale
+    assert np.abs(prescribed @ complement).max() < 1e-13 * scale
+    assert np.abs(rows @ complement).max() < 1e-13 * scale
+
+
+def test_the_blocked_reflections_equal_the_explicit_product():
+    """`_without_leading` (LAPACK's blocked dormqr) against W times Q formed explicitly: a
+    random orthonormal W (60, 40) and 30 reflections; the identity (100, 100) and 70 (more
+    than dormqr's block of 64)."""
+    rng = np.random.default_rng(7)
+    w = np.asfortranarray(np.linalg.qr(rng.standard_normal((60, 40)))[0])
+    parts = rng.standard_normal((40, 30))
+    (reflectors, tau), _ = scipy.linalg.qr(parts, mode="raw")
+    expected = w @ scipy.linalg.qr(parts, mode="full")[0][:, 30:]
+    assert np.abs(freezing._without_leading(w, reflectors, tau) - expected).max() < 1e-13
+    big = rng.standard_normal((100, 70))
+    (reflectors, tau), _ = scipy.linalg.qr(big, mode="raw")
+    shrunk = freezing._without_leading(np.eye(100, order="F"), reflectors, tau)
+    assert shrunk.shape == (100, 30)
+    assert np.abs(shrunk - scipy.linalg.qr(big, mode="full")[0][:, 70:]).max() < 1e-13

@@ -172,6 +172,15 @@ def describe_mode(model: Model, coordinate_shape: np.ndarray,
 
     shape = np.asarray(coordinate_shape, dtype=float)
     x = model.initial_coordinates if x is None else np.asarray(x, dtype=float)
+    # Euler parameters: the body-frame rotation 2 G(lambda) d lambda (rad), every such node
+    # at once (a node at a time cost 0.1 s of the 816-DOF manipulator's ten modes)
+    spatial = [node for node in model.nodes
+               if node.kind != "translational" and node.axes != ("phi",)]
+    rotation = {}
+    if spatial:
+        index = np.array([list(node.coordinates) for node in spatial], dtype=np.int64)
+        rotations = 2.0 * np.matmul(body_rates_matrix(x[index]), shape[index][..., None])
+        rotation = {node.name: r for node, r in zip(spatial, rotations[..., 0], strict=True)}
     moves, turns = [], []
     for node in model.nodes:
         index = list(node.coordinates)
@@ -181,10 +190,9 @@ def describe_mode(model: Model, coordinate_shape: np.ndarray,
                           node.axes[int(np.argmax(np.abs(vector)))]))
         elif node.axes == ("phi",):
             turns.append((abs(float(shape[index[0]])), node.name, "z"))
-        else:  # Euler parameters: the body-frame rotation 2 G(lambda) d lambda (rad)
-            rotation = 2.0 * body_rates_matrix(x[index]) @ shape[index]
-            turns.append((float(np.linalg.norm(rotation)), node.name,
-                          "xyz"[int(np.argmax(np.abs(rotation)))] + "'"))
+        else:
+            turns.append((float(np.linalg.norm(rotation[node.name])), node.name,
+                          "xyz"[int(np.argmax(np.abs(rotation[node.name])))] + "'"))
     scale = length_scale(model)
     largest_move = max((m[0] for m in moves), default=0.0)
     largest_turn = max((t[0] for t in turns), default=0.0) * scale

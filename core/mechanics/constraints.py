@@ -212,9 +212,10 @@ def choose_dofs(model: Model, x: np.ndarray | None = None,
     wanted = ndof - prescribed.shape[0]
     chosen_coordinates = pick(coordinate_rows, remaining, wanted)
     if chosen_coordinates:  # the motions the chosen coordinates leave free
+        # `taken` falls apart into blocks as the motions do (each motion lives on one
+        # block of the prescribed rows): its null space block by block, as one SVD's
         taken = coordinate_rows[chosen_coordinates] @ remaining
-        remaining = remaining @ np.array(_null_space(taken)).reshape(
-            -1, remaining.shape[1]).T
+        remaining = remaining @ rank_and_null_space(taken, RANK_TOLERANCE)[2]
     chosen_deformations = pick(deformation_rows, remaining, wanted - len(chosen_coordinates))
     if len(chosen_coordinates) + len(chosen_deformations) < wanted:
         return None  # the check names the motion no DOF can take

@@ -84,10 +84,10 @@ def _by_blocks(matrix, rtol, svd_up_to):
             bound = _qr_clear(block)
             if bound is None:
                 return None
-            q, sigma_min, row_norm, frobenius = bound
+            null, sigma_min, row_norm, frobenius = bound
             low, high = max(low, row_norm), max(high, frobenius)
             cleared.append((rows.size, sigma_min))
-            parts.append((columns, None, q[:, rows.size:].T))
+            parts.append((columns, None, null.T))
             continue
         _, s, vt = np.linalg.svd(block)
         parts.append((columns, s, vt))
@@ -119,16 +119,35 @@ def _by_blocks(matrix, rtol, svd_up_to):
 
 
 def _qr_clear(block):
-    """(Q of B^T = Q [T; 0], a lower bound of sigma_min(B), B's largest row norm, its
-    Frobenius norm) for a block B (r, c), r <= c, whose T is regular; None when T is
-    not clearly so (`rank_and_null_space`)."""
-    from scipy.linalg.lapack import dtrcon
+    """(the last c - r columns of Q of B^T = Q [T; 0], a lower bound of sigma_min(B), B's
+    largest row norm, its Frobenius norm) for a block B (r, c), r <= c, whose T is regular;
+    None when T is not clearly so (`rank_and_null_space`).
 
-    r = block.shape[0]
-    q, t = np.linalg.qr(block.T, mode="complete")
-    rcond, info = dtrcon(t[:r], norm="1", uplo="U", diag="N")
-    row_norm = float(np.linalg.norm(block, axis=1).max())
-    if info != 0 or not rcond > 0.0:
-        return None
+    Q's last columns are its reflections applied to [0; I] (LAPACK's dormqr): about half
+    the work of forming the complete Q (dorgqr) whose first r columns would go unused
+    (0.05 against 0.10 s on manipulator_e1's 810 x 1042 block)."""
+    import scipy.linalg
+    from scipy.linalg.lapack import dormqr, dtrcon
+    from threadpoolctl import threadpool_limits
+
+    from ..numerics.blas import default_threads
+
+    # scipy's own OpenBLAS may load just now, inside the caller's `blas_threads`, which
+    # limits the libraries loaded when it opened (`numerics.blas`): unlimited, its two
+    # threads cost manipulator_control's load 0.3 to 1 s of CPU on the loaded 2-core machine
+    with threadpool_limits(limits=default_threads(), user_api="blas"):
+        r, c = block.shape
+        (reflectors, tau), t = scipy.linalg.qr(block.T, mode="raw")
+        rcond, info = dtrcon(t[:r], norm="1", uplo="U", diag="N")
+        row_norm = float(np.linalg.norm(block, axis=1).max())
+        if info != 0 or not rcond > 0.0:
+            return None
+        trailing = np.zeros((c, c - r), order="F")
+        trailing[r:] = np.eye(c - r)
+        # LAPACK's optimal workspace for dormqr (block size at most 64, its triangle 65 x 64)
+        null, _, info = dormqr("L", "N", reflectors, tau, trailing,
+                               max(1, c - r) * 64 + 65 * 64, overwrite_c=1)
+    if info != 0:
+        raise RuntimeError(f"dormqr failed (info {info})")
     sigma_min = row_norm * rcond / (ESTIMATE_SLACK * r)
-    return q, sigma_min, row_norm, float(np.linalg.norm(block))
+    return null, sigma_min, row_norm, float(np.linalg.norm(block))
