@@ -9,8 +9,10 @@ under gravity, augmented form) runs on the rigid bodies' operation and its accel
 tangent match the numpy reference (`test_engine`'s plain formulas and tolerances); a model
 with a moment input (wire_tripod) runs on the moment inputs' load stiffness operation and its
 tangent matches the plain one; and the demo's closed loop (`flexure loop`, its output a DOF)
-does not compile the sampled loop's measuring entry, which a loop on an output that is not a
-DOF (truss_1dof_e's x) then gets, giving the Python loop's positions and forces to the bit.
+compiles neither the sampled loop's measuring entry nor the deformations' operation (its DOF
+is a coordinate), which a loop on an output that is not a DOF (truss_1dof_e's x, its DOF the
+elongation) then gets, giving the Python loop's positions and forces to the bit and the
+plain kinematics' DOFs at the scene's configuration.
 
 In a fresh interpreter (the process's table of operations is shared by every model of a
 process: another test's model would have connected them), on the session's cache."""
@@ -98,7 +100,12 @@ output = model.outputs[design.pairs[0].output_index].coordinate
 loop = {{"same": bool(np.array_equal(t_c, t) and np.array_equal(position_c, position)
                       and np.array_equal(force_c, force)),
         "moved": float(np.ptp(position)), "last": float(position_c[-1, 0]),
-        "plain": float(config.x[output]), "compiled": measure_entry.is_compiled}}
+        "plain": float(config.x[output]), "compiled": measure_entry.is_compiled,
+        "deformations": engine.ENTRIES[engine.OP_DEFORMATIONS].is_compiled}}
+# its DOF is a deformation (the elongation): the scene's DOFs through the engine and plain
+from flexure.core.simulation.start import scene_dofs
+loop["start"] = scene_dofs(model, EngineData(model)).tolist()
+loop["start_plain"] = Mechanics(model).kinematics.dofs_of(model.initial_coordinates).tolist()
 print(json.dumps({{"after_demo": after_demo, "after_coils": after_coils, "error": error,
                   "bodies": len(data_folded_bodies), "after_folded": after_folded,
                   "folded": folded, "after_moments": after_moments, "moments": moments,
@@ -127,7 +134,8 @@ def test_the_demo_compiles_no_unused_operation_and_a_model_that_uses_one_gets_it
               *operations.NEWTON_OPERATIONS, operations.OP_PRESCRIBED_RHS,
               operations.OP_PRESCRIBED_JACOBIAN, operations.OP_PRESCRIBED_RESIDUAL,
               operations.OP_PRESCRIBED_RESIDUAL_JACOBIAN, operations.OP_ROW_PRODUCTS,
-              operations.OP_RIGID_BODIES, operations.OP_INPUT_STIFFNESS]
+              operations.OP_RIGID_BODIES, operations.OP_INPUT_STIFFNESS,
+              engine.OP_DEFORMATIONS]  # the demo's DOF is a coordinate: no deformation needed
     assert not any(after_demo[op] for op in unused), {op: after_demo[op] for op in unused}
     # what the demo does use: its forms, and its rigid clusters' kernels
     for op in (engine.OP_RHS, engine.OP_JACOBIAN, engine.OP_RESIDUAL,
@@ -188,3 +196,9 @@ def _check_the_measuring_loop(found):
     assert loop["same"]
     assert loop["moved"] > 0.9e-4
     assert abs(loop["last"] - loop["plain"]) <= 1e-12
+    # its DOF is the truss's elongation: the scene's DOFs need the deformations, whose
+    # operation it got after the demo; they are the plain kinematics' within 1e-15 m (the
+    # truss is 0.1 m long)
+    assert loop["deformations"]
+    assert len(loop["start"]) == len(loop["start_plain"]) == 1
+    assert np.max(np.abs(np.subtract(loop["start"], loop["start_plain"]))) <= 1e-15

@@ -10,8 +10,11 @@ from ..engine import engine
 def scene_dofs(model, data):
     """The DOFs (NDOF,: m, rad) of the scene's configuration: its coordinates that are DOFs
     and the deformations that are, computed by the engine (`data`, an `EngineData` of
-    `model`)."""
+    `model`; its DEFORMATIONS operation is compiled and run only for a model with a
+    deformation among its DOFs)."""
     x0 = model.initial_coordinates
+    if model.dof_deformations.size == 0:  # the deformations are not needed: not computed
+        return np.concatenate([x0[model.dof_coordinates], np.zeros(0)])
     engine.call(data, engine.OP_DEFORMATIONS, np.ascontiguousarray(x0, float), s=0)
     e0 = data.float_array("e")
     return np.concatenate([x0[model.dof_coordinates], e0[model.dof_deformations]])
