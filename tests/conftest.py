@@ -21,6 +21,15 @@ os.environ.setdefault("FLEXURE_FMU_ENGINE", "0")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 
+def pytest_sessionstart(session):
+    """Each pytest-xdist worker compiles its share of the engine's first entries before its
+    first test, so that on an empty cache the workers compile side by side instead of one
+    waiting for the other (tests/shared_compilation.py)."""
+    from shared_compilation import compile_this_workers_share
+
+    compile_this_workers_share()
+
+
 @pytest.fixture(scope="session")
 def scene_fmus(tmp_path_factory):
     """get(scene name, binary="auto"): its FMU's path, each built once, on first use; binary
