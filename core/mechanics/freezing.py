@@ -30,7 +30,7 @@ import scipy.linalg
 
 from ..numerics.blas import blas_threads
 from .constraints import RANK_TOLERANCE, scaled_jacobian
-from .nullspace import rank_and_null_space
+from .nullspace import apply_reflections, rank_and_null_space
 
 if TYPE_CHECKING:
     from ..model import Model
@@ -85,17 +85,9 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
 def _without_leading(complement, reflectors, tau):
     """W Q without its first k columns, Q = H_1 ... H_k the reflections of a raw QR
     (`scipy.linalg.qr(..., mode="raw")`: Fortran-ordered, v_i below the diagonal of column
-    i), applied by LAPACK's dormqr (blocked: matrix products, not k rank-one updates)."""
-    from scipy.linalg.lapack import dormqr
-
-    rows, k = complement.shape[0], tau.size
-    # LAPACK's optimal workspace (its block size at most 64 and the block's triangle T of
-    # 65 x 64); less makes dormqr fall back to its unblocked rank-one updates
-    lwork = max(1, rows) * 64 + 65 * 64
-    product, _, info = dormqr("R", "N", reflectors, tau, complement, lwork, overwrite_c=1)
-    if info != 0:
-        raise RuntimeError(f"dormqr failed (info {info})")
-    return np.asfortranarray(product[:, k:])
+    i), applied by LAPACK's dormqr (`nullspace.apply_reflections`)."""
+    product = apply_reflections("R", reflectors, tau, complement)
+    return np.asfortranarray(product[:, tau.size:])
 
 
 __all__ = ["GROUP_TOLERANCE", "freezable"]

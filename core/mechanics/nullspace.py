@@ -127,7 +127,7 @@ def _qr_clear(block):
     the work of forming the complete Q (dorgqr) whose first r columns would go unused
     (0.05 against 0.10 s on manipulator_e1's 810 x 1042 block)."""
     import scipy.linalg
-    from scipy.linalg.lapack import dormqr, dtrcon
+    from scipy.linalg.lapack import dtrcon
     from threadpoolctl import threadpool_limits
 
     from ..numerics.blas import default_threads
@@ -144,10 +144,23 @@ def _qr_clear(block):
             return None
         trailing = np.zeros((c, c - r), order="F")
         trailing[r:] = np.eye(c - r)
-        # LAPACK's optimal workspace for dormqr (block size at most 64, its triangle 65 x 64)
-        null, _, info = dormqr("L", "N", reflectors, tau, trailing,
-                               max(1, c - r) * 64 + 65 * 64, overwrite_c=1)
-    if info != 0:
-        raise RuntimeError(f"dormqr failed (info {info})")
+        null = apply_reflections("L", reflectors, tau, trailing)
     sigma_min = row_norm * rcond / (ESTIMATE_SLACK * r)
     return null, sigma_min, row_norm, float(np.linalg.norm(block))
+
+
+def apply_reflections(side, reflectors, tau, matrix):
+    """Q C (side "L") or C Q (side "R"), C = `matrix` (Fortran-ordered float64, overwritten)
+    and Q = H_1 ... H_k the reflections of a raw QR (`scipy.linalg.qr(..., mode="raw")`:
+    v_i below the diagonal of column i of `reflectors`), by LAPACK's dormqr: blocked, matrix
+    products where k rank-one updates would each pass over the whole of C."""
+    from scipy.linalg.lapack import dormqr
+
+    # LAPACK's optimal workspace (its block size at most 64 and the block's triangle T of
+    # 65 x 64); less makes dormqr fall back to its unblocked rank-one updates
+    width = matrix.shape[1] if side == "L" else matrix.shape[0]
+    product, _, info = dormqr(side, "N", reflectors, tau, matrix, max(1, width) * 64 + 65 * 64,
+                              overwrite_c=1)
+    if info != 0:
+        raise RuntimeError(f"dormqr failed (info {info})")
+    return product
