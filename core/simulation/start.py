@@ -14,7 +14,7 @@ def scene_dofs(model, data):
     deformation among its DOFs)."""
     x0 = model.initial_coordinates
     if model.dof_deformations.size == 0:  # the deformations are not needed: not computed
-        return np.concatenate([x0[model.dof_coordinates], np.zeros(0)])
+        return np.asarray(x0[model.dof_coordinates], dtype=float)
     engine.call(data, engine.OP_DEFORMATIONS, np.ascontiguousarray(x0, float), s=0)
     e0 = data.float_array("e")
     return np.concatenate([x0[model.dof_coordinates], e0[model.dof_deformations]])
