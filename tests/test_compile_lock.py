@@ -110,7 +110,7 @@ def _report(process, timeout_s=300):
     return json.loads(out.strip().splitlines()[-1]), err
 
 
-@pytest.mark.parametrize("what", ["entry", "kernel"])
+@pytest.mark.parametrize("what", ["entry", pytest.param("kernel", marks=pytest.mark.slow)])
 def test_a_second_process_waits_for_the_first_and_loads_what_it_compiled(tmp_path, what):
     cache, gate, start = tmp_path / "cache", tmp_path / "go", tmp_path / "start"
     first, second = _child(what, cache, gate), _child(what, cache, start=start)

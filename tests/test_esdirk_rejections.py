@@ -77,6 +77,7 @@ def tip_history(model, rtol, samples):
     return np.array(z), sim.integrator.statistics()
 
 
+@pytest.mark.slow
 def test_the_384_dof_cantilevers_sudden_load_starts_at_a_tight_tolerance():
     model = spatial_cantilever(64, output=True)
     samples = np.linspace(1e-3, 5e-3, 5)

@@ -167,6 +167,7 @@ def test_simulate_fmu_with_input_and_parameters(scene_fmus):
     assert 0 < heavy["x"][12] - base["x"][0] < base["x"][12] - base["x"][0]
 
 
+@pytest.mark.slow
 def test_fmu_benchmark_example_runs():
     """examples/fmu_benchmark.py on 50 ms: every part timed, the parts adding up to the whole
     doStep, the FMU equal to in-process. (The pythonfmu layer is a difference of two runs'

@@ -163,6 +163,7 @@ def test_a_carried_engine_that_does_not_fit_is_left_out_with_a_warning(scene_fmu
     assert seen[1]["message"].startswith(f"host: {NOTICE}")
 
 
+@pytest.mark.slow
 def test_where_this_flexure_stands_in_the_carried_engine_is_not_used(scene_fmus, tmp_path):
     """The host's flexure runs in place of the FMU's copy, with its own cache (this session's,
     compiled), so the carried engine is left alone: a note at status OK says so (logged with

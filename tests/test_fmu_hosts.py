@@ -103,6 +103,7 @@ def fmi4j_classpath(tmp_path_factory):
     return output.read_text().strip()
 
 
+@pytest.mark.slow
 def test_jvm_host_fmi4j_steps_and_replays_state(stage_fmu, fmi4j_classpath, tmp_path):
     md = read_model_description(str(stage_fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}

@@ -138,6 +138,7 @@ def test_the_one_step_methods_agree_with_cvode_and_ida(form, run):
         assert np.all(difference <= [1e-9, 1e-9, 2e-8, 2e-8, 5e-7]), (method, difference)
 
 
+@pytest.mark.slow
 def test_a_stage_on_the_augmented_form_agrees_with_cvode_and_ida():
     """stage_spatial_19dof (the augmented form by its costs) with 3.x moved 1 mm in 10 ms and
     a force G on node 11's x stepped through -0.5, 0 and 0.5 N every ms to 15 ms, at rtol

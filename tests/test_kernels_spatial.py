@@ -1,6 +1,11 @@
 """The compiled one-element kernels of the spatial BEAM and of the rigid-body node inertia
 against the numpy functions of the same modules (the reference implementation): equal to
 round-off, every entry of the arrays they fill overwritten, nothing touched beyond the order.
+
+The compiled BEAM kernels' tests are in the slow tier: called from Python they compile the
+kernels once more (about 11 s of CPU on an empty cache), and the default tier checks the same
+kernels through the engine (tests/test_engine.py: accelerations and tangent of the spatial
+stages against the plain formulas).
 """
 
 from types import SimpleNamespace
@@ -75,6 +80,7 @@ def test_pack_reference_layout(beams, nodes):
         assert packed.dtype == np.float64 and packed.flags.c_contiguous
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("order", [0, 1, 2])
 def test_beam_deformations_kernel(beams, order):
     x, _, ref, packed = beams
@@ -98,6 +104,7 @@ def check_inertia_kernel(module, case, order, points, coordinates):
         filled_to_order(order, (p, Dp, acc), (expected[0][n], expected[1][n], acc_expected[n]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("order", [0, 1, 2])
 def test_beam_inertia_kernel(beams, order):
     check_inertia_kernel(beam, beams, order, 24, 14)
@@ -136,6 +143,7 @@ def _all_beams(x, v, ref, order, e, De, D2e, p, Dp, acc):
         beam.inertia_kernel(x[n], v[n], ref[n], order, p[n], Dp[n], acc[n])
 
 
+@pytest.mark.slow
 def test_kernels_called_from_compiled_code(beams):
     """As the engine calls them: from a compiled loop over the rows of stacked buffers."""
     x, v, ref, packed = beams
@@ -170,6 +178,7 @@ def test_closed_forms_of_the_rotation_against_its_tensors():
         assert_allclose(K, np.einsum("k,kij->ij", w, C), rtol=0, atol=1e-14 * np.abs(w).max())
 
 
+@pytest.mark.slow
 def test_beam_hessian_exactly_symmetric(beams):
     """D2e_k is formed on one triangle and mirrored: symmetric to the bit."""
     x, _, _, packed = beams

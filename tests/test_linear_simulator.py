@@ -85,7 +85,7 @@ def test_it_starts_at_the_scenes_initial_coordinates_at_rest():
     ("stage_planar_1dof", 1e-6 * 1e-5), ("stage_planar_3dof", 1e-6 * 1e-5),
     # linearised at its loaded equilibrium 1.06 mm from where the loop holds it: measured
     # 8.2 nm apart whatever the stroke, the stiffness's change over that 1.06 mm
-    ("stage_spatial_19dof", 1e-8)])
+    pytest.param("stage_spatial_19dof", 1e-8, marks=pytest.mark.slow)])
 def test_the_linear_loop_is_the_nonlinear_loop_for_a_small_move(scene, tolerance):
     """A 10 um move: the loops' positions (m) on the linear plant and on the nonlinear plant
     (at rtol 1e-9) agree (measured on the planar stages: 2.5e-8 of the stroke or better), and

@@ -26,6 +26,10 @@ from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Simulator
 from flexure.core.simulation import esdirk_kernels
 
+# The slow tier: the replica is a benchmark's tool (5.6 s of CPU); the compiled step it
+# replays is checked in the default tier by tests/test_sparse_newton.py.
+pytestmark = pytest.mark.slow
+
 END = 2e-3  # s after the load
 
 

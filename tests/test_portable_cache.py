@@ -96,6 +96,7 @@ def export(tmp_path_factory):
     return folder, result
 
 
+@pytest.mark.slow
 def test_installed_code_is_loaded_without_compiling(export, tmp_path):
     folder, exported = export
     manifest = json.loads((folder / MANIFEST).read_text())

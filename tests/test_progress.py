@@ -64,6 +64,7 @@ def test_simulate_reports_the_fraction_of_t_end_at_every_step():
         assert np.all(np.diff(fractions) > 0) and fractions[-1] == 1.0
 
 
+@pytest.mark.slow
 def test_chunked_libcosim_run_with_progress_equals_the_plain_run():
     """Reporting progress advances libcosim in chunks; the loop must not change."""
     options = dict(duration=0.04, settle=0.01, fs=2000.0, plant="libcosim")

@@ -156,10 +156,17 @@ def test_the_setup_lines_are_there_unchanged():
     assert sum(line.endswith("# the tests") for line in lines) == 1  # .ci/run's grep
 
 
+# Blocks with one of these run in the slow tier: the 507-DOF manipulator (7 s), and the tour
+# that builds an FMU and benchmarks the methods (13 s of CPU; each of its analyses is also run
+# by tests/test_cli_analyze.py in the default tier).
+SLOW_COMMANDS = ("manipulator_reduced", "flexure fmu build", "flexure bench")
+
+
 def _tiered(blocks):
-    """The README's blocks, those on the 507-DOF manipulator in the slow tier (7 s)."""
+    """The README's blocks, those with one of SLOW_COMMANDS in the slow tier."""
     return [pytest.param(block, marks=pytest.mark.slow)
-            if any("manipulator_reduced" in command for command in block[1]) else block
+            if any(slow in command for command in block[1] for slow in SLOW_COMMANDS)
+            else block
             for block in blocks]
 
 

@@ -37,8 +37,11 @@ from flexure.core.engine.data import EngineData
 from flexure.core.mechanics.mechanics import Mechanics
 from flexure.core.mechanics.scales import coordinate_units, dof_tolerances, length_scale
 
-# hundreds of DOFs: their numpy statics take seconds each
-LARGE = {"manipulator", "manipulator_e1", "manipulator_reduced"}
+# In the slow tier: hundreds of DOFs, whose numpy statics take seconds each; and two variants
+# of manipulator_control (its voice-coil drive, the MEMS scaling: 1.4 to 1.7 s a test each),
+# which the default tier checks as manipulator_control itself.
+LARGE = {"manipulator", "manipulator_e1", "manipulator_reduced", "manipulator_control_vcm",
+         "manipulator_mems"}
 # a part of the manipulator, refused by design on its own (tests/test_manipulator.py)
 PARTS = {"manipulator_guidance"}
 

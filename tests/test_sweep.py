@@ -136,6 +136,7 @@ ARGV = ["sweep", SCENE, "--param", "sections.leaf.height=0:0.8e-3:5", "--param",
         "static,modes,buckling", "--modes", "2"]
 
 
+@pytest.mark.slow
 def test_dask_gives_the_serial_table_bit_for_bit(tmp_path, capsys):
     serial, dask = tmp_path / "serial.csv", tmp_path / "dask.csv"
     assert main([*ARGV, "--serial", "--out", str(serial), "--no-plot"]) == 0

@@ -51,6 +51,7 @@ def test_the_lowest_few_match_lapack_sygvd(n, count):
     _check(*_random_problem(n, n + count), count)
 
 
+@pytest.mark.slow
 def test_the_lowest_modes_of_the_reduced_manipulator_match_lapack_sygvd():
     """507 DOFs, the seven suspension modes the report's workspace takes: the eigenvalues
     within 1e-10 of the largest, and the lowest (omega^2 = 5.4e3 1/s^2, the largest 9.7e12)
