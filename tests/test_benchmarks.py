@@ -89,12 +89,13 @@ def test_the_manipulator_rows_run_the_chapters_move_on_both_models():
 @pytest.mark.slow  # 20 s: two manipulator_control costs and two cantilever runs
 def test_the_spatial_rows_measure_the_issues_targets():
     """The spatial group (issue 35, item 4): four targets, each with a ratio to its limit and
-    a verdict that agrees with it; the cantilever rows count the steps they divide by."""
+    a verdict that agrees with it; the cantilever rows count the steps they divide by, and
+    the esdirk2 row beside them (information: no ratio) its steps at each size."""
     from examples.benchmarks.spatial import spatial
 
     rows = spatial(repeat=1, quick=True)
     targets = [r for r in rows if r.met is not None]
-    assert len(rows) == 7 and len(targets) == 4
+    assert len(rows) == 8 and len(targets) == 4
     for row in targets:
         assert row.ratio > 0.0 and row.met == (row.ratio <= 1.0), row
     assert "x the planar stage's" in rows[0].flexure
@@ -102,7 +103,10 @@ def test_the_spatial_rows_measure_the_issues_targets():
     for row in rows[2:4]:
         steps = int(row.flexure.split(" for ")[1].split()[0])
         assert steps > 0, row.flexure
-    for row in rows[5:]:  # at equal error: flexure's CPU, and Exudyn's where installed
+    assert "esdirk2" in rows[4].target and rows[4].ratio is None and rows[4].met is None
+    steps = [int(part.split("(")[1].split()[0]) for part in rows[4].flexure.split(", ")[::2]]
+    assert len(steps) == 2 and min(steps) > 0, rows[4].flexure
+    for row in rows[6:]:  # at equal error: flexure's CPU, and Exudyn's where installed
         assert "ms CPU per simulated ms" in row.flexure, row
         assert row.ratio is None or row.ratio > 0.0, row
 

@@ -55,8 +55,8 @@ import numpy as np
 from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, call_engine, carray, float_address
+from . import beam_mass_entry, newton, operations, rigid_kernels, sparse_factors
 from . import data as ed
-from . import newton, operations, rigid_kernels, sparse_factors
 from . import slots as slot
 from .coil_entries import (
     COILS_COLUMNS_BLOCKS,
@@ -421,7 +421,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            prescribed_residual_entry, prescribed_residual_jacobian_entry,
            newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
            stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry,
-           input_stiffness_entry)
+           input_stiffness_entry, beam_mass_entry.beam_masses_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -466,6 +466,8 @@ def connect(data, *ops):
         wanted.append(operations.OP_RIGID_BODIES)
     if ops and np.any(data.int_array("input_ports")[::PORT_WIDTH] == ROTATION):  # moments'
         wanted.append(operations.OP_INPUT_STIFFNESS)
+    if ops and beam_mass_entry.uses(data):  # the BEAMs' element masses in closed form
+        wanted.append(operations.OP_BEAM_MASSES)
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

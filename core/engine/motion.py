@@ -47,6 +47,7 @@ from .factors import (
 )
 from .kinematics import dof_rows
 from .operations import (
+    OP_BEAM_MASSES,
     OP_CONFIGURATION,
     OP_DF,
     OP_MASS_OF,
@@ -267,6 +268,13 @@ def _inertia_forces(table, x, xdot, moving, r, A, na):
         row = group(table, g)
         inertia = group_inertia(table, g)
         n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
+        # a group of BEAMs in their closed form, through its operation where the model has it
+        # (`beam_mass_entry`: not with rigid clusters; on slots x, xdot and force, which x,
+        # xdot and r are); NOT_AVAILABLE for another group, NOT_CONNECTED without it
+        if n > 0 and not rigid and run(table, OP_BEAM_MASSES, g, mass_entry,
+                                       1.0 if moving else 0.0) == ed.OK:
+            mass_entry += n * m * m
+            continue
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
         scratch = inertia_scratch(table, 0, P, m)
         _, _, point, acc, w, Dp, o = scratch

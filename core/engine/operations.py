@@ -71,6 +71,11 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     INPUT_STIFFNESS      slot stiffness -= the moment inputs' load stiffness at slot DF
                          (`port_entries`; the tangent runs it when a moment is not zero):
                          compiled only for models with an input port on a rotation
+    BEAM_MASSES          a = an inertia group's index, b = its first augmented-map entry (as
+                         integers); s = 1 moving: the group's element masses and point forces
+                         in the BEAM's closed form (`beam_mass_entry`), NOT_AVAILABLE for a
+                         group that is not of BEAMs; compiled only for models with BEAMs and
+                         no rigid clusters
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
@@ -78,7 +83,8 @@ tangent's product in a form that is faster on large models and longer to compile
 process with small models only never compiles it; COILS is apart so that a model without
 coils never compiles the coils' kernels, RIGID_BODIES so that a model without a folded cluster
 (a planar one) never compiles the rigid bodies', INPUT_STIFFNESS so that a model without
-moment inputs never compiles their load stiffness.
+moment inputs never compiles their load stiffness, BEAM_MASSES so that a model without BEAMs
+never compiles their closed form.
 """
 
 from ..numerics.jit import kernel
@@ -98,7 +104,7 @@ ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
  OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
  OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
- OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS) = range(37)
+ OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS, OP_BEAM_MASSES) = range(38)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)

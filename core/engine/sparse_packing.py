@@ -34,10 +34,12 @@ from ..numerics.sparse_lu import StaticLU
 from .rigid import E_DE_OFFSET, E_MASS_OFFSET
 
 # banded multiplications (the LU of J plus that of the augmented system) from which the
-# sparse LU is analysed and weighed against the banded one: below it the banded LU costs a
-# few hundred microseconds at most, and the stages and tutorials (at most 1e5) keep it, with
-# their numbers, without paying for the analysis at packing
-SPARSE_FROM = 1e6
+# sparse LU is analysed and weighed against the banded one: the built-in stages and
+# tutorials (at most 2.6e4) keep the banded LU, with their numbers. Above it the weighing
+# decides: the spatial cantilevers of 16 to 64 BEAMs (8.6e4 to 3.4e5) factor J sparse,
+# measured faster at each size (J's factorisation 12 -> 7 us at 96 DOFs, 52 -> 28 us at
+# 384); the analysis costs under 1 ms of packing at 384 DOFs
+SPARSE_FROM = 5e4
 # the time of one multiplication of the sparse LU in those of the banded LU (indirect
 # addressing against contiguous rows the compiler vectorises): measured on the manipulator's
 # J, 1.7 ns per multiplication for the sparse factor and 0.35 ns for the banded one
