@@ -64,7 +64,7 @@ def test_small_scenes_on_the_sparse_lu_match_the_plain_twin(name, form):
 
 def test_the_stages_and_tutorials_keep_the_banded_lu():
     """Every built-in scene but the manipulator's, and the refined 93-DOF stage: banded, so
-    their numbers are those of before the sparse LU (their banded LUs cost at most 1e5
+    their numbers are those of before the sparse LU (their banded LUs cost at most 2.6e4
     multiplications, under sparse_packing.SPARSE_FROM)."""
     from examples.benchmarks.stage_models import refined_stage
 
