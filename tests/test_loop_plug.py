@@ -281,6 +281,7 @@ def test_the_inverse_feedforward_takes_a_sampled_reference(stage):
     assert result.summary()["error_ratio"] < 1e-5
 
 
+@pytest.mark.slow  # 2.9 s; the same controllers on the in-process plant stay in the default tier
 def test_ones_own_controllers_and_a_given_design_run_on_the_linear_plant(stage, designed):
     """On plant "linear" the designed loop, the same design given back, the controller as a
     system and as a callable compute the same samples (to round-off), and their positions are

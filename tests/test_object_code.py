@@ -140,7 +140,11 @@ print("LOADED", all(e._compiled is None for e in used), len(used))
 """
 
 
-@pytest.mark.parametrize("method", ["cvode-bdf", "ida", "esdirk"])
+# CVODE's and IDA's runs in the slow tier (1.2 s of CPU each): in the default tier the esdirk
+# run checks the loaded entries against numba's bit for bit, and tests/test_startup.py that a
+# warm CVODE or IDA simulation runs on loaded code without importing numba
+@pytest.mark.parametrize("method", [pytest.param("cvode-bdf", marks=pytest.mark.slow),
+                                    pytest.param("ida", marks=pytest.mark.slow), "esdirk"])
 def test_a_simulation_through_loaded_code_is_numbas_bit_for_bit(tmp_path, method):
     def run(name, **env):
         out = tmp_path / f"{name}.csv"

@@ -100,7 +100,7 @@ def tangent_and_differences(model, values, size, sparse):
 
 @pytest.mark.parametrize(("name", "sparse"), [
     *((name, sparse) for name in DENSE_TOO for sparse in (False, True)),
-    ("manipulator", None)])
+    pytest.param("manipulator", None, marks=pytest.mark.slow)])  # 816 DOFs: 1.6 s
 def test_the_statics_tangent_is_the_jacobian_of_the_residual(name, sparse):
     model, values, size = SCENES[name]()
     K, differences, K0, Q = tangent_and_differences(model, values, size, sparse)
