@@ -1,6 +1,6 @@
 """The element masses of a group of BEAMs in closed form: the engine's OP_BEAM_MASSES.
 
-`motion._inertia_forces` assembles M_ff = diag(lumped) + sum Dp^T Mp Dp element by element
+`motion.inertia_forces` assembles M_ff = diag(lumped) + sum Dp^T Mp Dp element by element
 with the generic `point_masses.element_mass`, which walks Dp's non-zeros with indices read
 from memory (about 1.4 us a BEAM). For a group whose mass pattern is the BEAM's
 (`elements.beam_mass.beam_pattern`) this operation does the same group's work with the

@@ -4,6 +4,7 @@ element's De and D2e of the last kinematic solution (slots de, d2e):
 
     element_rates                   edot = De xdot (1/s, m/s by the deformation) and the
                                     constraint rows' h_i = xdot^T D2e_i xdot
+    stress_resultants               sigma_c = S e_s + D edot_s (N, N m by the deformation)
     scatter_stress                  r -= De^T sigma (N, N m)
     dof_deformation_accelerations   the DOF deformations' De_m xddot + h_m
 
@@ -84,6 +85,27 @@ def element_rates(table, xdot, moving):
                             t += D2e[base2 + a * m + c] * v[c]
                         h += va * t
                     quad[r] = h
+
+
+@kernel
+def stress_resultants(table):
+    """slot sigma = S e + D edot on the stressed deformations (S, D by compressed rows; D
+    only where the model has damping), zero on the others; returns sigma."""
+    dims = _i(table, slot.DIMS)
+    sigma, e, edot = _f(table, slot.SIGMA), _f(table, slot.E), _f(table, slot.EDOT)
+    stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
+    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
+    sigma[:] = 0.0
+    damped = dims[ed.HAS_DAMPING] == 1
+    for a in range(stressed.size):
+        s = 0.0
+        for p in range(pointers[a], pointers[a + 1]):
+            b = stressed[columns[p]]
+            s += S[p] * e[b]
+            if damped:
+                s += D[p] * edot[b]
+        sigma[stressed[a]] = s
+    return sigma
 
 
 @kernel

@@ -35,7 +35,12 @@ from ..numerics.native import call_engine
 from . import data as ed
 from . import slots as slot
 from .actuators import port_values
-from .deformation_rates import dof_deformation_accelerations, element_rates, scatter_stress
+from .deformation_rates import (
+    dof_deformation_accelerations,
+    element_rates,
+    scatter_stress,
+    stress_resultants,
+)
 from .factors import (
     add_element_mass,
     add_lumped,
@@ -129,20 +134,7 @@ def evaluate(table, q, qdot):
         run(table, OP_RIGID_CONVECTIVE, x.ctypes.data, xdot.ctypes.data, 0.0)
     # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
     element_rates(table, xdot, moving)
-    # sigma_c = S e_s + D edot_s (S, D by compressed rows)
-    sigma, e, edot = _f(table, slot.SIGMA), _f(table, slot.E), _f(table, slot.EDOT)
-    stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
-    pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
-    sigma[:] = 0.0
-    damped = dims[ed.HAS_DAMPING] == 1
-    for a in range(stressed.size):
-        s = 0.0
-        for p in range(pointers[a], pointers[a + 1]):
-            b = stressed[columns[p]]
-            s += S[p] * e[b]
-            if damped:
-                s += D[p] * edot[b]
-        sigma[stressed[a]] = s
+    sigma = stress_resultants(table)  # sigma_c = S e_s + D edot_s
     # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
     copy(r, _f(table, slot.CONST_FORCE))
@@ -194,7 +186,7 @@ def evaluate(table, q, qdot):
     dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
     na = nf + n_rigid
     A, rhs = augmented_matrix(table), _f(table, slot.AUG_RHS)
-    _inertia_forces(table, x, xdot, moving, r, A, na)
+    inertia_forces(table, x, xdot, moving, r, A, na)
     add_rigid_rows(table, A, na)
     if rigid:  # T^T (r - M c): the slaves' forces on their masters
         total = _f(table, slot.X_TRIAL)
@@ -249,7 +241,7 @@ def any_nonzero(v):
 
 
 @kernel
-def _inertia_forces(table, x, xdot, moving, r, A, na):
+def inertia_forces(table, x, xdot, moving, r, A, na):
     """The mass of the free coordinates M_ff = diag(lumped) + sum Dp^T Mp Dp into A's first
     n_free rows and columns (row length na); gravity on the element masses into r and, if
     moving, r -= g_conv = Dp^T Mp (D2p xdot) xdot. Element by element through the inertia
@@ -382,7 +374,7 @@ def reduced_mass_of(table, x, xdot, conv, moving, r, with_forces, with_mass):
         inertia = group_inertia(table, g)
         n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), room for the Me of
-        # `_inertia_forces` (max_p max_m >= m m), B = Dp DF_e and Mp B (P, ndof)
+        # `inertia_forces` (max_p max_m >= m m), B = Dp DF_e and Mp B (P, ndof)
         scratch = inertia_scratch(table, 0, P, m)
         _, _, point, acc, w, Dp, o = scratch
         o += max_p * max_m

@@ -124,7 +124,7 @@ def add_rigid_bodies(table, x, xdot, moving, A, na):
 def add_folded_forces(table, x, xdot, moving, out):
     """out (NX,; N) += Dp^T Mp (g_p - (D2p v) v) of every folded element, on its own
     coordinates x (NX,) and, if moving, velocities xdot (NX,; the slaves' filled): the share
-    that `motion._inertia_forces` leaves to `add_rigid_bodies`."""
+    that `motion.inertia_forces` leaves to `add_rigid_bodies`."""
     dims = _i(table, slot.DIMS)
     elements = _i(table, slot.RIGID_ELEMENTS)
     # scratch past what `tangent` keeps in slot local (as `tangent._mass_times`)

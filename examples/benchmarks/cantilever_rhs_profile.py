@@ -26,7 +26,11 @@ def _loops():
     """The compiled loops (numba), built on first use."""
     from flexure.core.engine import data as ed
     from flexure.core.engine import slots as slot
-    from flexure.core.engine.deformation_rates import element_rates, scatter_stress
+    from flexure.core.engine.deformation_rates import (
+        element_rates,
+        scatter_stress,
+        stress_resultants,
+    )
     from flexure.core.engine.factors import (
         add_rigid_rows,
         augmented_matrix,
@@ -35,7 +39,7 @@ def _loops():
         j_solve,
     )
     from flexure.core.engine.kinematics import deformations
-    from flexure.core.engine.motion import _inertia_forces, qddot_of_solution
+    from flexure.core.engine.motion import inertia_forces, qddot_of_solution
     from flexure.core.engine.operations import OP_CONFIGURATION, OP_RHS, run
     from flexure.core.engine.slots import float_array as _f
     from flexure.core.engine.slots import int_array as _i
@@ -79,22 +83,9 @@ def _loops():
 
     @kernel
     def stresses(table, count):
-        dims = _i(table, slot.DIMS)
-        sigma, e, edot = _f(table, slot.SIGMA), _f(table, slot.E), _f(table, slot.EDOT)
-        stressed, S, D = _i(table, slot.STRESSED), _f(table, slot.S), _f(table, slot.D)
-        pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
         r = _f(table, slot.X_TRIAL)
-        damped = dims[ed.HAS_DAMPING] == 1
         for _ in range(count):
-            sigma[:] = 0.0
-            for a in range(stressed.size):
-                s = 0.0
-                for p in range(pointers[a], pointers[a + 1]):
-                    b = stressed[columns[p]]
-                    s += S[p] * e[b]
-                    if damped:
-                        s += D[p] * edot[b]
-                sigma[stressed[a]] = s
+            sigma = stress_resultants(table)
             r[:] = 0.0
             scatter_stress(table, sigma, r)
 
@@ -106,7 +97,7 @@ def _loops():
         r = _f(table, slot.X_TRIAL)
         for _ in range(count):
             A = augmented_matrix(table)
-            _inertia_forces(table, x, xdot, True, r, A, na)
+            inertia_forces(table, x, xdot, True, r, A, na)
             add_rigid_rows(table, A, na)
             if factor:
                 banded.factor(A, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL], dims[ed.A_KU])
