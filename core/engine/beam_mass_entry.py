@@ -27,7 +27,13 @@ from . import data as ed
 from . import slots as slot
 from .factors import add_element_mass
 from .operations import ENTRY
-from .point_masses import element_mass, element_points, point_columns, point_forces
+from .point_masses import (
+    add_point_forces,
+    element_mass,
+    element_points,
+    point_columns,
+    point_forces,
+)
 from .slots import float_array as _f
 from .slots import group_inertia, inertia_scratch
 from .slots import int_array as _i
@@ -69,7 +75,7 @@ def group_masses(table, g, mass_entry, moving):
     scratch = inertia_scratch(table, 0, P, m)
     _, _, point, acc, w, Dp, o = scratch
     Me = _f(table, slot.LOCAL)[o: o + m * m]
-    counts, position = columns[P * m: P * m + P], columns[P * m + P: P * m + P + m]
+    position = columns[P * m + P: P * m + P + m]
     for i in range(n):
         element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
         for pp in range(P):
@@ -81,10 +87,7 @@ def group_masses(table, g, mass_entry, moving):
             beam_element_mass(Mp, Dp, Me)
         else:
             element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns)  # the same w
-        for pp in range(P):  # r += Dp^T w
-            for u in range(counts[pp]):
-                a = columns[pp * m + u]
-                r[coords[i * m + a]] += Dp[pp, a] * w[pp]
+        add_point_forces(r, coords[i * m: (i + 1) * m], P, m, Dp, w, columns)
         add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me, position)
         mass_entry += m * m
     return ed.OK

@@ -64,6 +64,7 @@ from .operations import (
     run,
 )
 from .point_masses import (
+    add_point_forces,
     element_mass,
     element_points,
     mass_rows_product,
@@ -286,12 +287,9 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
             else:  # w alone: its mass goes on its z-coordinates (`_touching_mass`)
                 point_columns(P, m, Dp, columns)
                 point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, point, w)
-            counts, position = columns[P * m: P * m + P], columns[P * m + P: P * m + P + m]
-            for pp in range(P):  # r += Dp^T w
-                for u in range(counts[pp]):
-                    a = columns[pp * m + u]
-                    r[coords[i * m + a]] += Dp[pp, a] * w[pp]
+            add_point_forces(r, coords[i * m: (i + 1) * m], P, m, Dp, w, columns)
             if t < 0:  # M_ff += Me on the free coordinates
+                position = columns[P * m + P: P * m + P + m]
                 add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
                                  position)
             else:

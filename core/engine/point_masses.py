@@ -161,6 +161,17 @@ def point_forces(Mp, pattern, P, point, w):
         w[pp] += mpq * point[qq]
 
 
+@kernel(inline="always")  # into its two callers' element loops
+def add_point_forces(r, coords, P, m, Dp, w, columns):
+    """r[coords] += Dp^T w (N, N m) over Dp's non-zeros, as `point_columns` lists them:
+    one element's point forces w (P,) on its m coordinates `coords`."""
+    counts = columns[P * m: P * m + P]
+    for pp in range(P):
+        for u in range(counts[pp]):
+            a = columns[pp * m + u]
+            r[coords[a]] += Dp[pp, a] * w[pp]
+
+
 @kernel
 def massless(Mp, pattern):
     """Whether every entry of Mp in `pattern` (flat p P + q) is zero: an element without mass
