@@ -11,7 +11,7 @@ from flexure.core import Mechanics, load_scene
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine, factors
 from flexure.core.engine.data import EngineData
-from flexure.core.numerics import sparse_lu
+from flexure.core.numerics import banded, sparse_lu
 from tests.test_engine import (
     MODELS,
     close,
@@ -56,7 +56,9 @@ def test_small_scenes_on_the_sparse_lu_match_the_plain_twin(name, form):
     data = EngineData(model, augmented=form == "augmented", sparse=True)
     dims = data.int_array("dims")
     assert dims[ed.J_SPARSE] == dims[ed.A_SPARSE] == 1
-    assert data.float_array("lu").size == dims[ed.NFREE] ** 2  # there, untouched: fallback
+    # J's band storage is there, untouched, for the fallback
+    assert data.float_array("lu").size == banded.storage_size(dims[ed.NFREE], dims[ed.J_KL],
+                                                              dims[ed.J_KU])
     q0 = mechanics.kinematics.dofs_of(model.initial_coordinates)
     check_against_the_twin(model, mechanics, data, random_states(model, q0, seed=11))
     assert data.int_array("counters")[ed.SPARSE_FALLBACKS] == 0

@@ -5,15 +5,17 @@ coordinates) and the augmented system of the accelerations [M_ff J_o^T; J_o 0] (
 n_rigid) are each factored one of two ways, chosen per model at packing
 (`data.evaluation_cost`, dims J_SPARSE and A_SPARSE):
 
-- banded (`numerics.banded`): the matrix assembled dense (n, n) in the bandwidth-reducing
-  order (slots j_row_position, j_column_position, augmented_position) and factored with
-  partial pivoting in the band: the small models (the stages, the tutorials);
+- banded (`numerics.banded`): the matrix assembled in the band storage of `banded.layout`
+  (compact rows of 2 kl + ku + 1, or dense (n, n) where the band is wider than a third of n)
+  in the bandwidth-reducing order (slots j_row_position, j_column_position,
+  augmented_position) and factored with partial pivoting in the band: the small models (the
+  stages, the tutorials), the cantilevers' augmented system;
 - sparse (`numerics.sparse_lu`): the elements' entries scattered straight into the sparse
   values through the maps of `sparse_packing` and refactored with the kept pivots; no dense
-  (n, n) storage is touched. When a kept pivot fails its threshold test the sparse LU
+  band storage is touched. When a kept pivot fails its threshold test the sparse LU
   pivots afresh (counted in counters[SPARSE_PIVOTING]) and keeps the new pivots; when that
   fails too (a singular matrix, or more fill than the room packed for it) the values go into
-  the dense storage and that one factorisation is banded (counters[SPARSE_FALLBACKS]).
+  the band storage and that one factorisation is banded (counters[SPARSE_FALLBACKS]).
   dims[J_FACTORS] says which factors of J are current.
 
 Both solve in the model's order: `j_solve` takes vectors on J's rows (or, transposed, on the
@@ -46,7 +48,7 @@ from .slots import int_array as _i
 def _sparse_factor(table, which):
     """The sparse LU of J (which = SPARSE_J) or of the augmented system (SPARSE_AUGMENTED)
     through its operation (`sparse_factors.factor`, compiled only for models that use it);
-    the pivot ratio, negative when it cannot serve (the values are then in the dense
+    the pivot ratio, negative when it cannot serve (the values are then in the band
     storage for the banded LU), nan when `engine.connect` did not give its operation (the
     callers stop as on a singular matrix). The ratio comes back in the first entry of slot
     band_scratch, which the banded solves use only after a factorisation."""
@@ -59,12 +61,13 @@ def _sparse_factor(table, which):
 # -- J ---------------------------------------------------------------------------------------------
 @kernel
 def _constraint_jacobian(table, J):
-    """J (n_free, n_free) row-major into J from the elements' De in slot de, its rows and
-    columns in their banded order (slots j_row_position, j_column_position); zero only in its
-    band (`clear_band`)."""
+    """J (n_free, n_free) into its band storage J (`banded.layout`) from the elements' De in
+    slot de, its rows and columns in their banded order (slots j_row_position,
+    j_column_position); zero only in its band (`clear_band`)."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     clear_band(J, nf, dims[ed.J_KL], dims[ed.J_KU])
+    step, shift = banded.layout(J.size, nf, dims[ed.J_KL], dims[ed.J_KU])
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
     row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
     rigid = dims[ed.NSLAVES] > 0
@@ -81,7 +84,7 @@ def _constraint_jacobian(table, J):
                 for a in range(m):
                     c = col_of_coord[coords[i * m + a]]
                     if c >= 0:
-                        J[rpos[r] * nf + cpos[c]] = De[(i * k + b) * m + a]
+                        J[rpos[r] * step + shift + cpos[c]] = De[(i * k + b) * m + a]
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
     positions = _i(table, slot.DOF_POS)
     units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
@@ -92,9 +95,9 @@ def _constraint_jacobian(table, J):
                 u = units[j] * DEPENDENCIES + d
                 c = col_of_coord[deps[u]] if deps[u] >= 0 else -1
                 if c >= 0:
-                    J[rpos[n_def + j] * nf + cpos[c]] += W[u]
+                    J[rpos[n_def + j] * step + shift + cpos[c]] += W[u]
         else:
-            J[rpos[n_def + j] * nf + cpos[positions[j]]] = 1.0
+            J[rpos[n_def + j] * step + shift + cpos[positions[j]]] = 1.0
     if not rigid:
         return
     rde = _f(table, slot.RIGID_DE)
@@ -103,7 +106,7 @@ def _constraint_jacobian(table, J):
         for a in range(z.size):
             c = col_of_coord[z[a]]
             if c >= 0:
-                J[rpos[r] * nf + cpos[c]] += rde[at + a]
+                J[rpos[r] * step + shift + cpos[c]] += rde[at + a]
 
 
 @kernel
@@ -135,7 +138,7 @@ def j_factor(table):
     lu, nf = _f(table, slot.LU), dims[ed.NFREE]
     if dims[ed.NSLAVES] > 0:
         run(table, OP_RIGID_DE, 0, 0, 0.0)
-    if dims[ed.J_SPARSE] == 1:  # else (or when it cannot serve) in lu for the banded LU
+    if dims[ed.J_SPARSE] == 1:  # else (or when it cannot serve) in lu, J's band storage
         ratio = _sparse_factor(table, SPARSE_J)
         if not ratio < 0.0:  # its factors, or nan (not connected)
             dims[ed.J_FACTORS] = ed.SPARSE_FACTORS
@@ -175,8 +178,8 @@ def j_solve(table, b, transposed):
 @kernel
 def augmented_matrix(table):
     """The array the augmented system is assembled into, cleared: its sparse values when it
-    is factored sparse, else the dense (na, na) slot augmented (row length na), in its band
-    (`clear_band`)."""
+    is factored sparse, else slot augmented, the band storage of the (na, na) matrix
+    (`banded.layout`), in its band (`clear_band`)."""
     dims = _i(table, slot.DIMS)
     dims[ed.A_FACTORS] = ed.NO_FACTORS
     if dims[ed.A_SPARSE] == 1:
@@ -184,16 +187,22 @@ def augmented_matrix(table):
         A[:] = 0.0
         return A
     na = dims[ed.NFREE] + dims[ed.NRIGID]
-    A = _f(table, slot.AUG)[: na * na]
+    A = _f(table, slot.AUG)
     clear_band(A, na, dims[ed.A_KL], dims[ed.A_KU])
     return A
 
 
 @kernel
 def clear_band(a, n, kl, ku):
-    """a (n * n, row-major) = 0 on every entry the banded LU reads or fills: row i, columns
-    i - kl to i + kl + ku (`banded.factor`). The rest of the dense storage is never read, and
-    clearing all of it cost O(n^2) per evaluation: 3.7 MB on a 384-DOF cantilever."""
+    """a (the band storage of an (n, n) matrix, `banded.layout`) = 0 on every entry the
+    banded LU reads or fills: row i, columns i - kl to i + kl + ku (`banded.factor`). The
+    compact storage holds only those (and a few at its edges never read): one fill. Of the
+    dense storage only the band is cleared; the rest is never read, and clearing all of it
+    would cost O(n^2) per evaluation."""
+    step, shift = banded.layout(a.size, n, kl, ku)
+    if step != n:  # compact
+        a[:] = 0.0
+        return
     for i in range(n):
         for j in range(max(0, i - kl), min(n - 1, i + kl + ku) + 1):
             a[i * n + j] = 0.0
@@ -206,20 +215,22 @@ def add_lumped(table, A, na):
     lumped, col_of_coord = _f(table, slot.LUMPED), _i(table, slot.COL_OF_COORD)
     sparse = dims[ed.A_SPARSE] == 1
     amap, apos = _i(table, slot.AUG_MAP), _i(table, slot.AUG_POS)
+    step, shift = banded.layout(A.size, na, dims[ed.A_KL], dims[ed.A_KU])
     for a in range(dims[ed.NX]):
         c = col_of_coord[a]
         if c >= 0:
             if sparse:
                 A[amap[c]] += lumped[a]
             else:
-                A[apos[c] * na + apos[c]] += lumped[a]
+                A[apos[c] * step + shift + apos[c]] += lumped[a]
 
 
 @kernel
 def add_element_mass(table, A, na, mass_entry, coords, m, Me, position):
     """One element's mass Me (m * m, row by row) onto the free coordinates' block of A: through
     the augmented map from its entry `mass_entry` on (sparse), else at the banded positions of
-    the element's coordinates (dense; `position` (m,) scratch)."""
+    the element's coordinates (A the band storage, `banded.layout`; `position` (m,)
+    scratch)."""
     dims = _i(table, slot.DIMS)
     if dims[ed.A_SPARSE] == 1:
         amap = _i(table, slot.AUG_MAP)
@@ -229,6 +240,7 @@ def add_element_mass(table, A, na, mass_entry, coords, m, Me, position):
                 A[s] += Me[e]
         return
     col_of_coord, apos = _i(table, slot.COL_OF_COORD), _i(table, slot.AUG_POS)
+    step, shift = banded.layout(A.size, na, dims[ed.A_KL], dims[ed.A_KU])
     for a in range(m):
         c = col_of_coord[coords[a]]
         position[a] = apos[c] if c >= 0 else -1
@@ -239,7 +251,7 @@ def add_element_mass(table, A, na, mass_entry, coords, m, Me, position):
         for b in range(m):
             cb = position[b]
             if cb >= 0:
-                A[ca * na + cb] += Me[a * m + b]
+                A[ca * step + shift + cb] += Me[a * m + b]
 
 
 @kernel
@@ -272,6 +284,7 @@ def add_rigid_rows(table, A, na):
     row_of_def, col_of_coord = _i(table, slot.ROW_OF_DEF), _i(table, slot.COL_OF_COORD)
     n_rigid = dims[ed.NRIGID]
     apos = _i(table, slot.AUG_POS)
+    step, shift = banded.layout(A.size, na, dims[ed.A_KL], dims[ed.A_KU])
     for j in range(_i(table, slot.TOUCHING_ROWS).size // 3):  # empty without clusters
         o, coords, de, z, at = touching_row(table, j)
         if o >= n_rigid:
@@ -281,8 +294,8 @@ def add_rigid_rows(table, A, na):
             c = col_of_coord[z[a]]
             if c >= 0:
                 v = rde[at + a]
-                A[po * na + apos[c]] += v
-                A[apos[c] * na + po] += v
+                A[po * step + shift + apos[c]] += v
+                A[apos[c] * step + shift + po] += v
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         row = group(table, g)
@@ -298,8 +311,8 @@ def add_rigid_rows(table, A, na):
                     c = col_of_coord[coords[i * m + a]]
                     if c >= 0:
                         v = De[(i * k + b) * m + a]
-                        A[po * na + apos[c]] = v
-                        A[apos[c] * na + po] = v
+                        A[po * step + shift + apos[c]] = v
+                        A[apos[c] * step + shift + po] = v
 
 
 @kernel
@@ -307,8 +320,8 @@ def augmented_solve(table, A, na, rhs):
     """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
     then the rigid rows); False when A is singular."""
     dims = _i(table, slot.DIMS)
-    dense = _f(table, slot.AUG)
-    if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in dense for the banded LU
+    band = _f(table, slot.AUG)
+    if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in its band storage
         ratio = _sparse_factor(table, SPARSE_AUGMENTED)
         if ratio >= 0.0:
             run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
@@ -316,7 +329,7 @@ def augmented_solve(table, A, na, rhs):
             return True
         if np.isnan(ratio):  # its operation not connected
             return False
-    if not banded.factor(dense, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
+    if not banded.factor(band, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
                          dims[ed.A_KU]) > 0.0:
         return False
     dims[ed.A_FACTORS] = ed.BANDED_FACTORS

@@ -20,7 +20,8 @@ fields carry their own roles.
 
 Sizes are expressions over the model's counts (`packing.counts`: nx coordinates, ne
 deformations, ndof DOFs, nfree free coordinates after the rigid clusters' slaves leave,
-naug = nfree + nrigid the augmented system, ...); "-" where the packing computes it
+naug = nfree + nrigid the augmented system, j_band and a_band the entries of J's and the
+augmented system's band storage, ...); "-" where the packing computes it
 from what it packs (the slot's meaning says how), and `check` then checks only the dtype.
 """
 
@@ -226,10 +227,10 @@ SLOTS = (
         ("aug_map", "AUG_MAP", "-", CONFIG, "-", "where each mass and De entry lands in it"),
     )),
     *_slots(FLOAT, "factors", (
-        ("lu", "LU", "nfree * nfree", STATE, "1, m", "J's banded LU (or J, dense, for the "
-         "sparse one's fallback)"),
-        ("augmented", "AUG", "naug * naug", STATE, "kg, 1", "the augmented system's banded "
-         "LU"),
+        ("lu", "LU", "j_band", STATE, "1, m", "J's banded LU in its band storage "
+         "(`numerics.banded.layout`; also the sparse one's fallback)"),
+        ("augmented", "AUG", "a_band", STATE, "kg, 1", "the augmented system's banded LU "
+         "in its band storage"),
         ("augmented_rhs", "AUG_RHS", "naug", STATE, "N, m/s^2", "its right-hand side and "
          "solution"),
         ("band_scratch", "BAND_SCRATCH", "naug", SCRATCH, "-", "a banded solve's vector; "

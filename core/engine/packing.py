@@ -14,6 +14,7 @@ import numpy as np
 from ..mechanics import assembly
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..mechanics.scales import kinematic_tolerances
+from ..numerics.banded import storage_size
 from . import layout, newton_packing
 from .orders import FactorPlan
 from .ports import PORT_WIDTH, port_specs
@@ -153,9 +154,12 @@ def counts(c):
     nsc = c.rigid.layout.slave_coordinates.size
     max_m, max_k, max_p = max(groups.max_m, c.rigid.max_mz), groups.max_k, groups.max_p
     nx, ne = model.nx, len(model.deformation_names)
+    nfree, naug = topology.free.size, topology.free.size + topology.n_rigid
+    j_kl, j_ku, a_kl, a_ku = c.plan.bands
     return {
-        "nx": nx, "ne": ne, "ndof": ndof, "nfree": topology.free.size,
-        "nrigid": topology.n_rigid, "naug": topology.free.size + topology.n_rigid,
+        "nx": nx, "ne": ne, "ndof": ndof, "nfree": nfree, "nrigid": topology.n_rigid,
+        "naug": naug, "j_band": storage_size(nfree, j_kl, j_ku),
+        "a_band": storage_size(naug, a_kl, a_ku),
         "nrows": topology.rows.size, "nxdof": model.dof_coordinates.size,
         "nedof": model.dof_deformations.size, "nin": nin, "ns": c.stressed.size,
         "ngroups": len(groups.rows), "nel": nel, "nstate": 2 * ndof + nel,
@@ -334,7 +338,7 @@ def factors(c):
         "j_map": empty if j_lu is None else plan.factors.constraint_map,
         "aug_sparse": empty if a_lu is None else a_lu.ints.copy(),
         "aug_map": empty if a_lu is None else plan.factors.augmented_map,
-        "lu": np.zeros(nfree * nfree), "augmented": np.zeros(naug * naug),
+        "lu": np.zeros(n["j_band"]), "augmented": np.zeros(n["a_band"]),
         "augmented_rhs": np.zeros(naug), "band_scratch": np.zeros(naug),
         "j_sparse_values": np.zeros(0) if j_lu is None else j_lu.floats.copy(),
         "aug_sparse_values": np.zeros(0) if a_lu is None else a_lu.floats.copy(),

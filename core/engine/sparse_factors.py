@@ -11,7 +11,7 @@ SPARSE_AUGMENTED (`operations`).
 """
 
 from ..mechanics.rigid_bodies import DEPENDENCIES
-from ..numerics import sparse_lu
+from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
@@ -25,24 +25,25 @@ from .slots import int_array as _i
 def factor(table, which, out):
     """Factor the sparse LU of J (which = SPARSE_J, from the elements' De) or of the augmented
     system (SPARSE_AUGMENTED, assembled by `motion`): out[0] = the pivot ratio, negative when
-    the sparse LU cannot serve, and then the values are in the dense storage (slot lu, slot
+    the sparse LU cannot serve, and then the values are in the band storage (slot lu, slot
     augmented) for the banded LU."""
     dims = _i(table, slot.DIMS)
     if which == SPARSE_AUGMENTED:
         ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
-        dense, rows = _f(table, slot.AUG), _i(table, slot.AUG_POS)
+        band, rows = _f(table, slot.AUG), _i(table, slot.AUG_POS)
         columns = rows
-        n = dims[ed.NFREE] + dims[ed.NRIGID]
+        n, kl, ku = dims[ed.NFREE] + dims[ed.NRIGID], dims[ed.A_KL], dims[ed.A_KU]
     else:
         ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
         _constraint_values(table, sparse_lu.matrix_values(ints, floats))
-        dense, rows = _f(table, slot.LU), _i(table, slot.J_ROW_POS)
+        band, rows = _f(table, slot.LU), _i(table, slot.J_ROW_POS)
         columns = _i(table, slot.J_COL_POS)
-        n = dims[ed.NFREE]
+        n, kl, ku = dims[ed.NFREE], dims[ed.J_KL], dims[ed.J_KU]
     out[0] = _factor(table, ints, floats)
-    if out[0] < 0.0:
-        dense[: n * n] = 0.0
-        sparse_lu.scatter_dense(ints, floats, dense, rows, columns)
+    if out[0] < 0.0:  # the values into the banded LU's storage (`banded.layout`)
+        band[:] = 0.0
+        step, shift = banded.layout(band.size, n, kl, ku)
+        sparse_lu.scatter_rows(ints, floats, band, rows, columns, step, shift)
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller

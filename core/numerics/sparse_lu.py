@@ -441,11 +441,19 @@ def scatter_dense(ints, floats, dense, row_position, column_position):
     """dense[row_position[r] n + column_position[c]] = A[r, c] for every entry of the pattern
     (dense (n * n,), row-major, zero elsewhere beforehand): the matrix for another
     factorisation when this one cannot serve."""
+    scatter_rows(ints, floats, dense, row_position, column_position, _parts(ints, floats)[0], 0)
+
+
+@kernel
+def scatter_rows(ints, floats, out, row_position, column_position, step, shift):
+    """out[row_position[r] step + shift + column_position[c]] = A[r, c] for every entry of
+    the pattern (zero elsewhere beforehand): A into a row storage of row step `step` (n for
+    the dense one; the banded LU's compact one, `banded.layout`)."""
     n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, Ax, _, _, _ = _parts(ints, floats)
     for j in range(n):
-        column = column_position[pcol[j]]
+        column = shift + column_position[pcol[j]]
         for p in range(Ap[j], Ap[j + 1]):
-            dense[row_position[Ai[p]] * n + column] = Ax[p]
+            out[row_position[Ai[p]] * step + column] = Ax[p]
 
 
 @kernel
