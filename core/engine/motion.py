@@ -52,6 +52,10 @@ from .factors import (
 )
 from .kinematics import dof_rows
 from .operations import (
+    BEAM_GROUP_AT_REST,
+    BEAM_GROUP_MOVING,
+    BEAM_TOUCHING_AT_REST,
+    BEAM_TOUCHING_MOVING,
     OP_BEAM_MASSES,
     OP_CONFIGURATION,
     OP_DF,
@@ -264,8 +268,8 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
         # a group of BEAMs in their closed form, through its operation where the model has it
         # (`beam_mass_entry`: not with rigid clusters; on slots x, xdot and force, which x,
         # xdot and r are); NOT_AVAILABLE for another group, NOT_CONNECTED without it
-        if n > 0 and not rigid and run(table, OP_BEAM_MASSES, g, mass_entry,
-                                       1.0 if moving else 0.0) == ed.OK:
+        if n > 0 and not rigid and run(table, OP_BEAM_MASSES, g, mass_entry, BEAM_GROUP_MOVING
+                                       if moving else BEAM_GROUP_AT_REST) == ed.OK:
             mass_entry += n * m * m
             continue
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
@@ -292,7 +296,10 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
                 position = columns[P * m + P: P * m + P + m]
                 add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
                                  position)
-            else:
+            # a touching BEAM's through the BEAM's closed form where the model has it
+            # (`beam_mass_entry.touching_masses`), else the generic product
+            elif run(table, OP_BEAM_MASSES, t, 0, BEAM_TOUCHING_MOVING if moving
+                     else BEAM_TOUCHING_AT_REST) != ed.OK:
                 _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
                                (i + 1) * P * P], pattern, P, m, Dp, moving, A, na)
             mass_entry += m * m
