@@ -296,10 +296,7 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
                 position = columns[P * m + P: P * m + P + m]
                 add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
                                  position)
-            # a touching BEAM's through the BEAM's closed form where the model has it
-            # (`beam_mass_entry.touching_masses`), else the generic product
-            elif run(table, OP_BEAM_MASSES, t, 0, BEAM_TOUCHING_MOVING if moving
-                     else BEAM_TOUCHING_AT_REST) != ed.OK:
+            else:
                 _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
                                (i + 1) * P * P], pattern, P, m, Dp, moving, A, na)
             mass_entry += m * m
@@ -315,7 +312,12 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, moving, A, na):
     """A touching element's mass on its z-coordinates, Me_z = Dp_z^T Mp Dp_z with Dp_z =
     Dp T_e, onto A; if moving, its points' forces from the slaves' c, -Dp_z^T Mp Dp c_e (N,
     N m on the z-coordinates), into slot rigid_force (which `evaluate` condenses with T^T:
-    a z-coordinate is free, T^T passes it on as it is)."""
+    a z-coordinate is free, T^T passes it on as it is). A touching BEAM's through the BEAM's
+    closed form where the model has it (`beam_mass_entry.touching_masses`, which reads Dp
+    and its columns where the caller left them), else by the generic product."""
+    if run(table, OP_BEAM_MASSES, t, 0, BEAM_TOUCHING_MOVING if moving
+           else BEAM_TOUCHING_AT_REST) == ed.OK:
+        return
     dims = _i(table, slot.DIMS)
     columns = _i(table, slot.POINT_COLUMNS)
     g, i, mz, z, _, mass_offset = touching(table, t)

@@ -6,9 +6,10 @@ parts are timed after one evaluation there (the slots hold its x, xdot, c and T'
 Each part is a loop over what `motion.inertia_forces` visits, cut after a stage, so a
 stage's cost is the difference of two loops: for the touching elements with a mass of their
 own (the BEAMs joining the rigid clusters), their inertia points (Dp and (D2p v) v), their
-point forces onto r, their mass on the z-coordinates with the slaves' c forces
-(`rigid_kernels.touching_mass`), and its assembly into the augmented matrix; for every
-other massive element its element mass and assembly; the lumped masses; the folded
+point forces onto r, their mass on the z-coordinates with the slaves' c forces and its
+assembly into the augmented matrix (`motion._touching_mass`: the BEAM's closed form where
+the engine has it; the generic product `rigid_kernels.touching_mass` alone beside it); for
+every other massive element its element mass and assembly; the lumped masses; the folded
 clusters' rigid bodies. The whole of `inertia_forces` is timed as well, A cleared before
 each call (`augmented_matrix`, timed alone and subtracted); the parts' loops clear it once.
 
@@ -20,10 +21,6 @@ import sys
 import time
 
 import numpy as np
-
-# s of OP_BEAM_MASSES for a touching BEAM, moving (`operations.BEAM_TOUCHING_MOVING`; on code
-# without it the operation is not connected for the manipulator, and the generic path runs)
-TOUCHING_MOVING = 3.0
 
 
 def _loops():
@@ -37,7 +34,7 @@ def _loops():
         mass_entries_start,
     )
     from flexure.core.engine.motion import _touching_mass, inertia_forces
-    from flexure.core.engine.operations import OP_BEAM_MASSES, OP_RIGID_BODIES, run
+    from flexure.core.engine.operations import OP_RIGID_BODIES
     from flexure.core.engine.point_masses import (
         add_point_forces,
         element_mass,
@@ -46,11 +43,25 @@ def _loops():
         point_forces,
     )
     from flexure.core.engine.rigid_inertia_kernels import BODIES_MOVING, own_mass
+    from flexure.core.engine.rigid_kernels import touching, touching_mass
     from flexure.core.engine.slots import float_array as _f
     from flexure.core.engine.slots import group, group_inertia, inertia_scratch, rigid_element
     from flexure.core.engine.slots import int_array as _i
     from flexure.core.numerics.jit import kernel
     from flexure.core.numerics.native import call_engine
+
+    @kernel
+    def generic(table, t, coords, Mp, pattern, P, m, Dp, A, na):
+        """`motion._touching_mass` by the generic product, moving."""
+        dims = _i(table, slot.DIMS)
+        columns = _i(table, slot.POINT_COLUMNS)
+        g, i, mz, z, _, mass_offset = touching(table, t)
+        Me, force = touching_mass(table, t, Mp, pattern, P, m, Dp, columns, coords, True)
+        rigid_force = _f(table, slot.RIGID_FORCE)
+        for a in range(mz):
+            rigid_force[z[a]] -= force[a]
+        entry = dims[ed.A_RIGID] + 2 * _f(table, slot.RIGID_DE).size + mass_offset
+        add_element_mass(table, A, na, entry, z, mz, Me, columns[P * mz + P: P * mz + P + mz])
 
     @kernel
     def clear(table, count):
@@ -101,11 +112,13 @@ def _loops():
                             element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns)
                         add_point_forces(r, coords[i * m: (i + 1) * m], P, m, Dp, w, columns)
                     # stage 3: as `inertia_forces` (the closed form where connected), 5:
-                    # the generic `_touching_mass` alone
-                    if stage >= 3 and touching and (stage == 5 or run(
-                            table, OP_BEAM_MASSES, t, 0, TOUCHING_MOVING) != ed.OK):
+                    # the generic product alone
+                    if stage == 3 and touching:
                         _touching_mass(table, t, coords[i * m: (i + 1) * m], Mp, pattern, P,
                                        m, Dp, True, A, na)
+                    if stage == 5:
+                        generic(table, t, coords[i * m: (i + 1) * m], Mp, pattern, P, m, Dp, A,
+                                na)
                     if stage == 4 and not touching:
                         position = columns[P * m + P: P * m + P + m]
                         add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m],
