@@ -5,7 +5,7 @@ numpy and the generic kernel.
 Me = Dp^T Mp Dp with Dp and Mp from the numpy reference (`beam.inertia_points`,
 `beam.inertia_matrix`) at random coordinates, section masses and y' axes; the structure checks
 that guard the closed form (the mass pattern, Dp's non-zeros in their blocks); which models
-run the operation (BEAMs; with rigid clusters, touching BEAMs), that a planar model's process never
+run the operation (BEAMs without rigid clusters), that a planar model's process never
 compiles it, and the cantilever's accelerations through it against the plain twin.
 """
 
@@ -88,12 +88,12 @@ def test_structure_checks():
 
 
 def test_which_models_run_the_operation():
-    """The cantilever (BEAMs, no clusters) does; the planar demo stage (PLBEAMs) does not;
-    the manipulator (BEAMs on rigid clusters) does, for its touching BEAMs' masses on their
-    z-coordinates (tests/test_touching_beam_mass.py)."""
+    """The cantilever (BEAMs, no clusters) does; the planar demo stage (PLBEAMs) and the
+    manipulator (BEAMs on rigid clusters: their touching masses go on the z-coordinates) do
+    not."""
     assert beam_mass_entry.uses(EngineData(spatial_cantilever(4)))
     assert not beam_mass_entry.uses(EngineData(load_scene("stage_planar_1dof")))
-    assert beam_mass_entry.uses(EngineData(load_scene("manipulator_control")))
+    assert not beam_mass_entry.uses(EngineData(load_scene("manipulator_control")))
 
 
 PROBE = """

@@ -52,10 +52,6 @@ from .factors import (
 )
 from .kinematics import dof_rows
 from .operations import (
-    BEAM_GROUP_AT_REST,
-    BEAM_GROUP_MOVING,
-    BEAM_TOUCHING_AT_REST,
-    BEAM_TOUCHING_MOVING,
     OP_BEAM_MASSES,
     OP_CONFIGURATION,
     OP_DF,
@@ -268,8 +264,8 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
         # a group of BEAMs in their closed form, through its operation where the model has it
         # (`beam_mass_entry`: not with rigid clusters; on slots x, xdot and force, which x,
         # xdot and r are); NOT_AVAILABLE for another group, NOT_CONNECTED without it
-        if n > 0 and not rigid and run(table, OP_BEAM_MASSES, g, mass_entry, BEAM_GROUP_MOVING
-                                       if moving else BEAM_GROUP_AT_REST) == ed.OK:
+        if n > 0 and not rigid and run(table, OP_BEAM_MASSES, g, mass_entry,
+                                       1.0 if moving else 0.0) == ed.OK:
             mass_entry += n * m * m
             continue
         # scratch: x, v (m), the point forces, acc, w (P), Dp (P, m), Me (m, m)
@@ -312,12 +308,7 @@ def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, moving, A, na):
     """A touching element's mass on its z-coordinates, Me_z = Dp_z^T Mp Dp_z with Dp_z =
     Dp T_e, onto A; if moving, its points' forces from the slaves' c, -Dp_z^T Mp Dp c_e (N,
     N m on the z-coordinates), into slot rigid_force (which `evaluate` condenses with T^T:
-    a z-coordinate is free, T^T passes it on as it is). A touching BEAM's through the BEAM's
-    closed form where the model has it (`beam_mass_entry.touching_masses`, which reads Dp
-    and its columns where the caller left them), else by the generic product."""
-    if run(table, OP_BEAM_MASSES, t, 0, BEAM_TOUCHING_MOVING if moving
-           else BEAM_TOUCHING_AT_REST) == ed.OK:
-        return
+    a z-coordinate is free, T^T passes it on as it is)."""
     dims = _i(table, slot.DIMS)
     columns = _i(table, slot.POINT_COLUMNS)
     g, i, mz, z, _, mass_offset = touching(table, t)

@@ -71,14 +71,11 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     INPUT_STIFFNESS      slot stiffness -= the moment inputs' load stiffness at slot DF
                          (`port_entries`; the tangent runs it when a moment is not zero):
                          compiled only for models with an input port on a rotation
-    BEAM_MASSES          s = BEAM_GROUP_...: a = an inertia group's index, b = its first
-                         augmented-map entry (as integers): the group's element masses and
-                         point forces in the BEAM's closed form (`beam_mass_entry`),
-                         NOT_AVAILABLE for a group that is not of BEAMs; s = BEAM_TOUCHING_...:
-                         a = a touching element's index: its mass on its z-coordinates and
-                         the forces of the slaves' c, NOT_AVAILABLE for one that is not a
-                         BEAM; compiled only for models with BEAMs (with rigid clusters: a
-                         touching BEAM with a mass of its own)
+    BEAM_MASSES          a = an inertia group's index, b = its first augmented-map entry (as
+                         integers); s = 1 moving: the group's element masses and point forces
+                         in the BEAM's closed form (`beam_mass_entry`), NOT_AVAILABLE for a
+                         group that is not of BEAMs; compiled only for models with BEAMs and
+                         no rigid clusters
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
@@ -112,11 +109,6 @@ NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)
 ROW_GROUPS_FROM = 150
-# what OP_BEAM_MASSES does (s): a group's element masses, or a touching element's on its
-# z-coordinates, at rest or moving
-# (floats: s is the entry's number)
-BEAM_GROUP_AT_REST, BEAM_GROUP_MOVING, BEAM_TOUCHING_AT_REST, BEAM_TOUCHING_MOVING = (
-    0.0, 1.0, 2.0, 3.0)
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 

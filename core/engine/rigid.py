@@ -53,7 +53,6 @@ import numpy as np
 from ..mechanics.rigid_bodies import DEPENDENCIES, RigidLayout, find_clusters
 from .point_masses import padded_width
 from .rigid_inertia import BODY_SCRATCH, ClusterInertia
-from .touching_beam_mass import SCRATCH as TOUCHING_BEAM_SCRATCH
 
 SLAVE_WIDTH = 12
 (E_INTERNAL, E_MZ, E_Z_OFFSET, E_TERM_OFFSET, E_DE_OFFSET, E_MASS_OFFSET, E_GROUP,
@@ -223,12 +222,10 @@ class RigidPacking:
                 # a touching element's Dp_z and Mp Dp_z (max_p rows each), Me_z (max_mz)
                 # and T_e (its m), in rows of the padded width (`point_masses.padded_width`),
                 # then the forces of the slaves' c (max_mz; `rigid_kernels.touching_mass`)
-                # (and a folded cluster's scratch: `rigid_inertia_kernels.add_rigid_bodies`,
-                # a touching BEAM's: `touching_beam_mass`)
+                # (and a folded cluster's scratch: `rigid_inertia_kernels.add_rigid_bodies`)
                 "rigid_local": np.zeros(max((2 * max_p + self.max_mz + self.max_m) * padded
                                             + self.max_mz,
-                                            BODY_SCRATCH if self.bodies.folded else 0,
-                                            TOUCHING_BEAM_SCRATCH if self.touching else 0))}
+                                            BODY_SCRATCH if self.bodies.folded else 0))}
 
     def pattern_coordinates(self, gp, group):
         """Per element of packed group gp, the coordinates its entries land on in the

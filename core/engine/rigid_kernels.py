@@ -13,8 +13,7 @@ coordinates x (m, Euler parameters or rad) whose masters are current:
     element_transform   D_z = D T_e for the rows of a touching element's De
     transform_rows      T_e itself, in rows of a padded length (for products along rows)
     touching_mass       Me_z = Dp_z^T Mp Dp_z of a touching element, Dp_z = Dp T_e, and
-                        the forces Dp_z^T Mp Dp c_e of the slaves' c (a touching BEAM's by
-                        its closed form where the engine has it: `touching_beam_mass`)
+                        the forces Dp_z^T Mp Dp c_e of the slaves' c
     rigid_de            every touching element's De_z into slot rigid_de
     rigid_rates         the slaves' second-order terms on the constraint rows (slot rigid_h)
     rigid_geometric     the slaves' geometric stiffness -DF^T (sum_s rho_s d2x_s) DF

@@ -7,11 +7,12 @@ Each part is a loop over what `motion.inertia_forces` visits, cut after a stage,
 stage's cost is the difference of two loops: for the touching elements with a mass of their
 own (the BEAMs joining the rigid clusters), their inertia points (Dp and (D2p v) v), their
 point forces onto r, their mass on the z-coordinates with the slaves' c forces and its
-assembly into the augmented matrix (`motion._touching_mass`: the BEAM's closed form where
-the engine has it; the generic product `rigid_kernels.touching_mass` alone beside it); for
-every other massive element its element mass and assembly; the lumped masses; the folded
-clusters' rigid bodies. The whole of `inertia_forces` is timed as well, A cleared before
-each call (`augmented_matrix`, timed alone and subtracted); the parts' loops clear it once.
+assembly into the augmented matrix (`motion._touching_mass`, and beside it, to compare
+another form of that product with, the generic `rigid_kernels.touching_mass` alone:
+docs/benchmarks.md, session 32); for every other massive element its element mass and
+assembly; the lumped masses; the folded clusters' rigid bodies. The whole of
+`inertia_forces` is timed as well, A cleared before each call (`augmented_matrix`, timed
+alone and subtracted); the parts' loops clear it once.
 
 python -m examples.benchmarks.manipulator_inertia_profile
 """
@@ -111,8 +112,7 @@ def _loops():
                         else:
                             element_mass(Mp, pattern, P, m, Dp, point, w, Me, columns)
                         add_point_forces(r, coords[i * m: (i + 1) * m], P, m, Dp, w, columns)
-                    # stage 3: as `inertia_forces` (the closed form where connected), 5:
-                    # the generic product alone
+                    # stage 3: as `inertia_forces`, 5: the generic product alone
                     if stage == 3 and touching:
                         _touching_mass(table, t, coords[i * m: (i + 1) * m], Mp, pattern, P,
                                        m, Dp, True, A, na)
