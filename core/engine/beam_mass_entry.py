@@ -69,7 +69,7 @@ def group_masses(table, g, mass_entry, moving):
     if dims[ed.A_SPARSE] == 1:
         A = sparse_lu.matrix_values(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES))
     else:
-        A = _f(table, slot.AUG)[: na * na]
+        A = _f(table, slot.AUG)  # the band storage (`banded.layout`)
     x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
     columns = _i(table, slot.POINT_COLUMNS)
     scratch = inertia_scratch(table, 0, P, m)
