@@ -284,7 +284,7 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
             if t < 0:
                 element_mass(masses[i * P * P: (i + 1) * P * P], pattern, P, m, Dp, point, w,
                               Me, columns)
-            else:  # w alone: its mass goes on its z-coordinates (`_touching_mass`)
+            else:  # w alone: its mass goes on its z-coordinates (`touching_element_mass`)
                 point_columns(P, m, Dp, columns)
                 point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, point, w)
             add_point_forces(r, coords[i * m: (i + 1) * m], P, m, Dp, w, columns)
@@ -293,7 +293,7 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
                 add_element_mass(table, A, na, mass_entry, coords[i * m: (i + 1) * m], m, Me,
                                  position)
             else:
-                _touching_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
+                touching_element_mass(table, t, coords[i * m: (i + 1) * m], masses[i * P * P:
                                (i + 1) * P * P], pattern, P, m, Dp, moving, A, na)
             mass_entry += m * m
     if rigid and _i(table, slot.RIGID_BODIES).size:  # the spatial clusters' folded element
@@ -304,7 +304,7 @@ def inertia_forces(table, x, xdot, moving, r, A, na):
 
 
 @kernel
-def _touching_mass(table, t, coords, Mp, pattern, P, m, Dp, moving, A, na):
+def touching_element_mass(table, t, coords, Mp, pattern, P, m, Dp, moving, A, na):
     """A touching element's mass on its z-coordinates, Me_z = Dp_z^T Mp Dp_z with Dp_z =
     Dp T_e, onto A; if moving, its points' forces from the slaves' c, -Dp_z^T Mp Dp c_e (N,
     N m on the z-coordinates), into slot rigid_force (which `evaluate` condenses with T^T:

@@ -23,7 +23,7 @@ on their points, N/kg),
 the mass block M_z = [[M_tt, sum_b lambda_b F_b], [., sum_bc lambda_b lambda_c K_bc]], the
 gravity force [g_t; sum_b lambda_b g_b] and the convective force [sum_c lambdadot_c F_c
 lambdadot; sum_bc lambda_b lambdadot_c K_bc lambdadot]: what the elements' points give
-through Dp T_e, (D2p v) v and Dp c (`motion._touching_mass`), summed in another order, so
+through Dp T_e, (D2p v) v and Dp c (`motion.touching_element_mass`), summed in another order, so
 equal to round-off, at a cost independent of the cluster's element count
 (`rigid_inertia_kernels`).
 

@@ -7,7 +7,7 @@ Each part is a loop over what `motion.inertia_forces` visits, cut after a stage,
 stage's cost is the difference of two loops: for the touching elements with a mass of their
 own (the BEAMs joining the rigid clusters), their inertia points (Dp and (D2p v) v), their
 point forces onto r, their mass on the z-coordinates with the slaves' c forces and its
-assembly into the augmented matrix (`motion._touching_mass`, and beside it, to compare
+assembly into the augmented matrix (`motion.touching_element_mass`, and beside it, to compare
 another form of that product with, the generic `rigid_kernels.touching_mass` alone:
 docs/benchmarks.md, session 32); for every other massive element its element mass and
 assembly; the lumped masses; the folded clusters' rigid bodies. The whole of
@@ -34,7 +34,7 @@ def _loops():
         augmented_matrix,
         mass_entries_start,
     )
-    from flexure.core.engine.motion import _touching_mass, inertia_forces
+    from flexure.core.engine.motion import inertia_forces, touching_element_mass
     from flexure.core.engine.operations import OP_RIGID_BODIES
     from flexure.core.engine.point_masses import (
         add_point_forces,
@@ -53,7 +53,7 @@ def _loops():
 
     @kernel
     def generic(table, t, coords, Mp, pattern, P, m, Dp, A, na):
-        """`motion._touching_mass` by the generic product, moving."""
+        """`motion.touching_element_mass` by the generic product, moving."""
         dims = _i(table, slot.DIMS)
         columns = _i(table, slot.POINT_COLUMNS)
         g, i, mz, z, _, mass_offset = touching(table, t)
@@ -114,7 +114,7 @@ def _loops():
                         add_point_forces(r, coords[i * m: (i + 1) * m], P, m, Dp, w, columns)
                     # stage 3: as `inertia_forces`, 5: the generic product alone
                     if stage == 3 and touching:
-                        _touching_mass(table, t, coords[i * m: (i + 1) * m], Mp, pattern, P,
+                        touching_element_mass(table, t, coords[i * m: (i + 1) * m], Mp, pattern, P,
                                        m, Dp, True, A, na)
                     if stage == 5:
                         generic(table, t, coords[i * m: (i + 1) * m], Mp, pattern, P, m, Dp, A,
