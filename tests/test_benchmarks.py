@@ -129,3 +129,28 @@ def test_the_cantilevers_cpu_at_equal_error_interpolates_in_log_log():
     reference = np.array([1.0, -4.0, 2.0])
     assert math.isclose(relative_error(reference + np.array([0.0, 0.2, -0.1]), reference),
                         0.2 / 4.0, rel_tol=1e-12)
+
+
+@pytest.mark.slow  # 30 to 60 s: the profile's compiled loops
+def test_the_cantilevers_rhs_profile_times_every_part_of_one_rhs():
+    """`cantilever_rhs_profile` on the 16-BEAM cantilever: every part of an rhs timed (a
+    positive, finite CPU per call) and the packed sizes it names are the model's: 6 rows a
+    BEAM and one Euler row a node in J, a rigid row a node in the augmented system."""
+    from examples.benchmarks.cantilever_rhs_profile import profile
+
+    parts, sizes = profile(16, count=2)
+    assert {"rhs at one state", "element rates (edot, h)", "a solve with A"} <= set(parts)
+    assert all(np.isfinite(s) and s > 0.0 for s in parts.values()), parts
+    assert sizes["n_free"] == 16 * 7 and sizes["n_rigid"] == 16, sizes
+
+
+@pytest.mark.slow  # 30 to 60 s: the profile's compiled loops
+def test_the_manipulators_inertia_profile_times_every_part():
+    """`manipulator_inertia_profile` on manipulator_control: each part of the inertia timed;
+    the whole is a positive CPU per call and the parts are finite (a part is a difference of
+    two loops, so a small one may come out below zero on a loaded machine)."""
+    from examples.benchmarks.manipulator_inertia_profile import profile
+
+    parts = profile("manipulator_control", count=2)
+    assert len(parts) == 11 and parts["inertia_forces, all of it"] > 0.0, parts
+    assert all(np.isfinite(s) for s in parts.values()), parts
