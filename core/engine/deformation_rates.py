@@ -49,44 +49,31 @@ def dof_deformation_accelerations(table, xddot, quad, moving, qddot):
 def element_rates(table, xdot, moving):
     """edot = De xdot (slot edot) and, if moving, xdot^T D2e_i xdot of the constraint rows
     into slot g (n_free,: zero on the unit rows of the DOF coordinates): contracting D2e, or
-    from the element's directional kernel at the solution (slot x) where it has one. The
-    elements a rigid cluster makes identically zero (`rigid`) get edot = 0 without a product:
-    their De is not evaluated (`kinematics.deformations`), their rows are out of the system
-    and their deformations carry no stress, so nothing reads their rates."""
+    from the element's directional kernel where it has one (`formed_rates`). The elements a
+    rigid cluster makes identically zero (`rigid`) get edot = 0 without a product: their De
+    is not evaluated (`kinematics.deformations`), their rows are out of the system and their
+    deformations carry no stress, so nothing reads their rates."""
     dims = _i(table, slot.DIMS)
     edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
     row_of_def = _i(table, slot.ROW_OF_DEF)
-    x, local = _f(table, slot.X), _f(table, slot.LOCAL)
-    max_m = dims[ed.MAX_M]
-    v = local[:max_m]  # the element's xdot, gathered once for its k rows
-    xl = local[max_m: 2 * max_m]  # and its x, for a directional kernel
-    formed = local[2 * max_m: 2 * max_m + dims[ed.MAX_K]]  # which gives its h here
+    v = _f(table, slot.LOCAL)  # the element's xdot, gathered once for its k rows
     skipping = dims[ed.NSLAVES] > 0
     touching = _i(table, slot.RIGID_ELEMENTS)
     quad[:] = 0.0
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
-        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        if k == 0:
+        if moving and row[ed.G_K] > 0 and forms_quadratic_forms(
+                row[ed.G_DEFORMATIONS_ENTRY], v, row[ed.G_M], row[ed.G_K], row[ed.G_REF_WIDTH]):
+            formed_rates(table, g, xdot)
             continue
-        function, width = row[ed.G_DEFORMATIONS_ENTRY], row[ed.G_REF_WIDTH]
-        refs = _f(table, slot.GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
-        directional = moving and forms_quadratic_forms(function, formed, m, k, width)
+        n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         for i in range(n):
-            if skipping:
-                t = rigid_element(table, row, i)
-                if t >= 0 and touching[t * rg.ELEMENT_WIDTH + rg.E_INTERNAL] == 1:
-                    for b in range(k):
-                        edot[defs[i * k + b]] = 0.0
-                    continue
+            if skipping and internal(table, row, i, touching):
+                for b in range(k):
+                    edot[defs[i * k + b]] = 0.0
+                continue
             for a in range(m):
                 v[a] = xdot[coords[i * m + a]]
-            if directional and has_rows(row_of_def, defs, i, k):
-                for a in range(m):
-                    xl[a] = x[coords[i * m + a]]
-                call_deformations(function, xl.ctypes.data, refs + 8 * i * width,
-                                  ORDER_DIRECTIONAL, formed.ctypes.data, v.ctypes.data, 0, m, k,
-                                  width)
             for b in range(k):
                 s = 0.0
                 base = (i * k + b) * m
@@ -94,9 +81,7 @@ def element_rates(table, xdot, moving):
                     s += De[base + a] * v[a]
                 edot[defs[i * k + b]] = s
                 r = row_of_def[defs[i * k + b]]
-                if directional and r >= 0:
-                    quad[r] = formed[b]
-                elif moving and r >= 0:
+                if moving and r >= 0:
                     h = 0.0
                     base2 = (i * k + b) * m * m
                     for a in range(m):
@@ -108,6 +93,56 @@ def element_rates(table, xdot, moving):
                             t += D2e[base2 + a * m + c] * v[c]
                         h += va * t
                     quad[r] = h
+
+
+@kernel(inline="always")
+def internal(table, row, i, touching):
+    """Whether element i of the group `row` is internal to a rigid cluster (`rigid`)."""
+    t = rigid_element(table, row, i)
+    return t >= 0 and touching[t * rg.ELEMENT_WIDTH + rg.E_INTERNAL] == 1
+
+
+@kernel
+def formed_rates(table, g, xdot):
+    """`element_rates` of group g, whose element forms h = v^T D2e v itself: edot = De xdot
+    and its directional kernel's h at the solution (slot x) on the constraint rows, for the
+    elements with any (slot g)."""
+    dims = _i(table, slot.DIMS)
+    edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
+    row_of_def = _i(table, slot.ROW_OF_DEF)
+    x, local = _f(table, slot.X), _f(table, slot.LOCAL)
+    max_m = dims[ed.MAX_M]
+    v = local[:max_m]  # the element's xdot
+    xl = local[max_m: 2 * max_m]  # its x
+    formed = local[2 * max_m: 2 * max_m + dims[ed.MAX_K]]  # its h
+    skipping = dims[ed.NSLAVES] > 0
+    touching = _i(table, slot.RIGID_ELEMENTS)
+    row = group(table, g)
+    n, m, k, coords, defs, De, D2e = group_deformations(table, g)
+    function, width = row[ed.G_DEFORMATIONS_ENTRY], row[ed.G_REF_WIDTH]
+    refs = _f(table, slot.GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+    for i in range(n):
+        if skipping and internal(table, row, i, touching):
+            for b in range(k):
+                edot[defs[i * k + b]] = 0.0
+            continue
+        for a in range(m):
+            v[a] = xdot[coords[i * m + a]]
+        if has_rows(row_of_def, defs, i, k):
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+            call_deformations(function, xl.ctypes.data, refs + 8 * i * width,
+                              ORDER_DIRECTIONAL, formed.ctypes.data, v.ctypes.data, 0, m, k,
+                              width)
+        for b in range(k):
+            s = 0.0
+            base = (i * k + b) * m
+            for a in range(m):
+                s += De[base + a] * v[a]
+            edot[defs[i * k + b]] = s
+            r = row_of_def[defs[i * k + b]]
+            if r >= 0:
+                quad[r] = formed[b]
 
 
 @kernel(inline="always")
