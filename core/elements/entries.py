@@ -54,8 +54,8 @@ carray = None
 
 def _deformations_template(x, ref, order, e, De, D2e, m, k, width):
     if order < 0:  # ORDER_ASK (ORDER_DIRECTIONAL is never asked of it: NaN if it were)
-        carray(e, (k,))[:] = 0.0 if order == ORDER_ASK else _NAN
-        return
+        carray(e, (k,))[0] = 0.0 if order == ORDER_ASK else _NAN  # a scalar store: no
+        return  # slice assignment to compile into every element's entry
     kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
            carray(De, (k, m)), carray(D2e, (k, m, m)))
 
