@@ -71,15 +71,20 @@ consistent torsional inertia rho Ip l0 / 6 [[2, 1], [1, 2]]).
 Every function works on all elements of this type at once: arrays shaped (n_elements, ...).
 The compiled kernels, which evaluate the same formulas for one element from its row of
 `pack_reference` for the compiled evaluation engine, are in `beam_kernels` (`deformations_kernel`,
-`inertia_kernel`); this module hands on what the element registry reads of them.
+`inertia_kernel`) and `beam_directional` (`directional_kernel`: v^T D2e v without D2e, and
+the deformations' entry with it); this module hands on what the element registry reads of
+them.
 """
 
 import numpy as np
 
 from ..numerics.rotations import from_rotation_vector, rotation_matrix, vector_tensor
+from .beam_directional import (  # noqa: F401 (the element's compiled interface, read here)
+    deformations_entry,
+    directional_kernel,
+)
 from .beam_kernels import (  # noqa: F401 (the element's compiled interface, read from here)
     REFERENCE_WIDTH,
-    deformations_entry,
     deformations_kernel,
     inertia_entry,
     inertia_kernel,

@@ -5,7 +5,8 @@ compiled evaluation engine (`flexure.core.engine`), with scalar loops and no all
 compute what `beam.deformations` and `beam.inertia_points` compute, and
 tests/test_kernels_spatial.py checks them against those to round-off. The element registry
 reads `pack_reference`, `REFERENCE_WIDTH`, `deformations_entry` and `inertia_entry` from
-`beam`, which takes them from here.
+`beam`, which takes them from here (`deformations_entry` from `beam_directional`, whose
+kernel gives the equations of motion v^T D2e v without D2e).
 
 Where numpy contracts the constant tensors C of `rotations.vector_tensor` (48 floats per
 node vector, R(lambda) a = C lambda lambda), these kernels use the closed forms of
@@ -349,5 +350,4 @@ def _inertia_vector(v, ref, order, p, Dp, acc, row, col, scale, start, m0, m1, m
             acc[row + k] = scale * (2.0 * w[k])
 
 
-deformations_entry = entries.deformations_entry(deformations_kernel)
 inertia_entry = entries.inertia_entry(inertia_kernel)

@@ -8,6 +8,18 @@ An element module writes its maths as two numba kernels on one element's arrays,
 An inertia kernel reads the velocities v only at order 2, for acc = (D2p v) v: at order 1 the
 engine does not fill v.
 
+An element may also write its directional second derivative,
+
+    directional_kernel(x, v, ref, h)                   v (m,), h (k,) = v^T D2e_b v
+
+which the equations of motion need in place of D2e (the constraint rows' h = xdot^T D2e
+xdot): then its entry is `entries.deformations_entry(deformations_kernel,
+directional_kernel)`, and the engine evaluates its D2e only where a tangent reads it
+(`kinematics.deformations`). The entry takes two more orders, below zero:
+
+    ORDER_DIRECTIONAL   h into e (k,), v (m,) read at De's address; De and D2e untouched
+    ORDER_ASK           e[0] = 1.0 if the element has a directional kernel, else 0.0
+
 and gets the engine's entry points from them here:
 
     deformations_entry = entries.deformations_entry(deformations_kernel)
@@ -30,12 +42,31 @@ import types
 from ..numerics.jit import DEFORMATIONS_ENTRY, INERTIA_ENTRY, CompiledEntry
 from ..numerics.native import carray as _carray
 
-# the templates' globals, bound in each entry's copy: the element's kernel and numba.carray
+ORDER_DIRECTIONAL = -1  # h = v^T D2e v into e, v at De (elements with a directional kernel)
+ORDER_ASK = -2  # e[0] = 1.0 if the element has a directional kernel, else 0.0
+_NAN = float("nan")
+
+# the templates' globals, bound in each entry's copy: the element's kernels and numba.carray
 kernel = None
+directional = None
 carray = None
 
 
 def _deformations_template(x, ref, order, e, De, D2e, m, k, width):
+    if order < 0:  # ORDER_ASK (ORDER_DIRECTIONAL is never asked of it: NaN if it were)
+        carray(e, (k,))[0] = 0.0 if order == ORDER_ASK else _NAN  # a scalar store: no
+        return  # slice assignment to compile into every element's entry
+    kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
+           carray(De, (k, m)), carray(D2e, (k, m, m)))
+
+
+def _directional_template(x, ref, order, e, De, D2e, m, k, width):
+    if order == ORDER_ASK:
+        carray(e, (k,))[0] = 1.0
+        return
+    if order == ORDER_DIRECTIONAL:
+        directional(carray(x, (m,)), carray(De, (m,)), carray(ref, (width,)), carray(e, (k,)))
+        return
     kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
            carray(De, (k, m)), carray(D2e, (k, m, m)))
 
@@ -45,16 +76,20 @@ def _inertia_template(x, v, ref, order, p, Dp, acc, m, P, width):
            carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
 
 
-def _bound(template, element_kernel, signature):
-    """The template as a function of its own whose global `kernel` is `element_kernel`, named
-    after it, as a lazily compiled C entry."""
+def _bound(template, element_kernel, signature, directional_kernel=None):
+    """The template as a function of its own whose global `kernel` is `element_kernel` (and
+    `directional` the element's directional kernel, if given), named after it, as a lazily
+    compiled C entry."""
     module = element_kernel.__module__.rsplit(".", 1)[-1]
     name = f"{module}_{element_kernel.__name__}_entry"
+    if directional_kernel is not None:  # another template: an entry of its own in the cache
+        name = f"{module}_{element_kernel.__name__}_and_{directional_kernel.__name__}_entry"
     doc = (f"C entry of {element_kernel.__module__}.{element_kernel.__name__} for the engine "
            "(pointers to one element's arrays).")
 
     def make():
-        bound = {"kernel": element_kernel, "carray": _carray}
+        bound = {"kernel": element_kernel, "directional": directional_kernel,
+                 "carray": _carray}
         function = types.FunctionType(template.__code__, {**template.__globals__, **bound},
                                       name)
         function.__qualname__, function.__doc__ = name, doc
@@ -65,10 +100,14 @@ def _bound(template, element_kernel, signature):
     return made
 
 
-def deformations_entry(deformations_kernel):
-    """The engine's C entry of an element's `deformations_kernel(x, ref, order, e, De, D2e)`:
-    (x, ref, order, e, De, D2e, m, k, width) with pointers to one element's arrays."""
-    return _bound(_deformations_template, deformations_kernel, DEFORMATIONS_ENTRY)
+def deformations_entry(deformations_kernel, directional_kernel=None):
+    """The engine's C entry of an element's `deformations_kernel(x, ref, order, e, De, D2e)`
+    and, if given, of its `directional_kernel(x, v, ref, h)` (ORDER_DIRECTIONAL): (x, ref,
+    order, e, De, D2e, m, k, width) with pointers to one element's arrays."""
+    if directional_kernel is None:
+        return _bound(_deformations_template, deformations_kernel, DEFORMATIONS_ENTRY)
+    return _bound(_directional_template, deformations_kernel, DEFORMATIONS_ENTRY,
+                  directional_kernel)
 
 
 def inertia_entry(inertia_kernel):

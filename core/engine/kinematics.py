@@ -22,6 +22,14 @@ chord iterates are checked on e alone (a BEAM's e costs an eighth of e, De, D2e)
 D2e are evaluated once, at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it
 is needed (the reduced form, the tangent, the kinematics operation).
 
+D2e is read by the equations of motion only as the constraint rows' h = xdot^T D2e xdot, and
+an element that forms h itself (`entries.ORDER_DIRECTIONAL`: the BEAM) gives it from xdot
+for about a tenth of its Hessians' cost. So the solution evaluates such an element's e and
+De alone (order AT_SOLUTION), and the readers of D2e, the tangent and the ESDIRK's Newton
+matrix, evaluate its Hessians at the solution when they need them (order HESSIANS,
+`hessians_at_solution`); the statics' packed model (dims.static) evaluates them at the
+solution, as its every evaluation is a tangent's.
+
 J is factored banded or sparse as the model was packed (`factors`: `j_factor`, and `j_solve`
 (J^-1 or J^-T), which takes and gives vectors in the model's order). The element
 deformations e, De = de/dx and D2e come from each element module's compiled entry point.
@@ -29,6 +37,7 @@ deformations e, De = de/dx and D2e come from each element module's compiled entr
 
 import numpy as np
 
+from ..elements.entries import ORDER_ASK
 from ..mechanics.scales import ROUND_OFF
 from ..numerics.dense import all_finite, copy
 from ..numerics.jit import kernel
@@ -42,13 +51,28 @@ from .slots import float_array as _f
 from .slots import group, group_coordinates, rigid_element
 from .slots import int_array as _i
 
-
 # -- deformations of every element ---------------------------------------------------------------
+# the orders of `deformations` beside 0, 1 and 2, which differ by the element group: whether
+# its element forms h = v^T D2e v itself (`forms_quadratic_forms`)
+AT_SOLUTION = 3  # e and De, and D2e where the element does not form h (the motion's needs)
+HESSIANS = 4  # De and D2e where AT_SOLUTION left D2e out, slot e untouched; nothing elsewhere
+
+
+@kernel(inline="always")
+def forms_quadratic_forms(function, scratch, m, k, width):
+    """Whether the element of the deformations entry `function` forms its quadratic forms
+    h = v^T D2e v itself (`entries.ORDER_ASK`); scratch (k,) is overwritten."""
+    scratch[0] = 0.0
+    call_deformations(function, 0, 0, ORDER_ASK, scratch.ctypes.data, 0, 0, m, k, width)
+    return scratch[0] == 1.0
+
+
 @kernel
 def deformations(table, x, order, skip_internal):
-    """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e;
-    with skip_internal, not those of the elements a rigid cluster makes identically zero
-    (`rigid`: their rows are out of the system, their stresses zero)."""
+    """e (NE,) into slot e and, by order, each element's De, D2e into slot de, slot d2e (the
+    orders 0, 1, 2, and AT_SOLUTION and HESSIANS by the element group); with skip_internal,
+    not those of the elements a rigid cluster makes identically zero (`rigid`: their rows are
+    out of the system, their stresses zero)."""
     dims = _i(table, slot.DIMS)
     skipping = skip_internal and dims[ed.NSLAVES] > 0
     touching = _i(table, slot.RIGID_ELEMENTS)
@@ -68,6 +92,12 @@ def deformations(table, x, order, skip_internal):
         D2e = _f(table, slot.D2E).ctypes.data + 8 * row[ed.G_D2E_OFFSET]
         xl = local[:m]
         el = local[max_m: max_m + k]
+        group_order = order
+        if order >= AT_SOLUTION:
+            forms_h = forms_quadratic_forms(function, el, m, k, width)
+            if order == HESSIANS and not forms_h:
+                continue
+            group_order = 1 if order == AT_SOLUTION and forms_h else 2
         for i in range(n):
             if skipping:
                 t = rigid_element(table, row, i)
@@ -75,11 +105,28 @@ def deformations(table, x, order, skip_internal):
                     continue
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
-            call_deformations(function, xl.ctypes.data, refs + 8 * i * width, order,
+            call_deformations(function, xl.ctypes.data, refs + 8 * i * width, group_order,
                               el.ctypes.data, De + 8 * i * k * m, D2e + 8 * i * k * m * m,
                               m, k, width)
+            if order == HESSIANS:  # e is the solution's already
+                continue
             for b in range(k):
                 e[defs[i * k + b]] = el[b]
+
+
+@kernel
+def solution_order(table):
+    """The order of the deformations at a kinematic solution: AT_SOLUTION, or 2 on the
+    statics' packed model (every evaluation of it is a tangent's)."""
+    return 2 if _i(table, slot.DIMS)[ed.STATIC] == 1 else AT_SOLUTION
+
+
+@kernel
+def hessians_at_solution(table):
+    """D2e at the last kinematic solution (slot x) where the solution left it out (`HESSIANS`):
+    for the readers of D2e, the tangent and the ESDIRK's Newton matrix."""
+    if solution_order(table) != 2:
+        deformations(table, _f(table, slot.X), HESSIANS, True)
 
 
 @kernel
@@ -118,9 +165,9 @@ def _residual(table, x, q, g):
 
 @kernel
 def _store(table, q, x):
-    """Factor J at the solved x (deformations of order 2 evaluated there) and keep both as the
-    next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the configuration is
-    singular."""
+    """Factor J at the solved x (deformations of `solution_order` evaluated there) and keep
+    both as the next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the
+    configuration is singular."""
     dims = _i(table, slot.DIMS)
     nx = dims[ed.NX]
     ratio = j_factor(table)
@@ -245,7 +292,8 @@ def solve_positions(table, q):
 
 @kernel(inline="always")  # into its operation's entry, its one caller
 def solve_kinematics(table, q):
-    """x = F(q) into slot x, with e, De, D2e and the LU of J there; a status code."""
+    """x = F(q) into slot x, with e, De, D2e (of the elements that need it for h: `AT_SOLUTION`)
+    and the LU of J there; a status code."""
     dims = _i(table, slot.DIMS)
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
     dims[ed.A_FACTORS] = ed.NO_FACTORS  # and so are the augmented system's factors
@@ -271,7 +319,7 @@ def solve_kinematics(table, q):
         # the residual needs e alone; the chord steps use the kept factors
         _elements(table, x, 0)
         if _residual(table, x, q, g) <= 1.0:
-            deformations(table, x, 2, True)  # the slaves are filled at this x
+            deformations(table, x, solution_order(table), True)  # the slaves are filled
             return _store(table, q, x)
         previous = 0.0  # no rate before the second step
         for _ in range(dims[ed.CHORD_ITERATIONS]):
@@ -286,7 +334,7 @@ def solve_kinematics(table, q):
             previous = step
             if _residual(table, x, q, g) <= 1.0 or step == 0.0 or (
                     rate < 1.0 and step * rate <= 1.0 - rate):
-                deformations(table, x, 2, True)
+                deformations(table, x, solution_order(table), True)
                 return _store(table, q, x)
     else:
         copy(x, _f(table, slot.X_START))
@@ -295,7 +343,7 @@ def solve_kinematics(table, q):
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does
         _elements(table, x, 1)
         if _residual(table, x, q, g) <= 1.0:
-            _elements(table, x, 2)
+            _elements(table, x, solution_order(table))
             return _store(table, q, x)
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
@@ -303,7 +351,7 @@ def solve_kinematics(table, q):
         if not np.isfinite(step):
             return ed.NOT_CONVERGED
         if step <= 1.0:
-            _elements(table, x, 2)
+            _elements(table, x, solution_order(table))
             return _store(table, q, x)
     return ed.NOT_CONVERGED
 

@@ -43,7 +43,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import _scatter_de
-from .kinematics import dof_rows
+from .kinematics import dof_rows, hessians_at_solution
 from .operations import ENTRY, NEWTON_OPERATIONS, OP_NEWTON_JACOBIAN, OP_RHS, run
 from .point_masses import element_mass, element_points, massless
 from .ports import PORT_WIDTH, ROTATION
@@ -168,6 +168,7 @@ def jacobian(table, y):
     status = run(table, OP_RHS, y.ctypes.data, 0, 0.0)  # the evaluation only
     if status != ed.OK:
         return status
+    hessians_at_solution(table)  # D2e where the evaluation formed h without it
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     sigma = _full_stresses(table)

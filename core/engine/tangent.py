@@ -18,6 +18,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
+from .kinematics import hessians_at_solution
 from .motion import any_nonzero
 from .operations import (
     OP_INPUT_STIFFNESS,
@@ -58,6 +59,7 @@ def tangent(table, qddot):
     status = run(table, OP_MASS, 0, 0, 0.0)  # motion.reduced_mass
     if status != ed.OK:
         return status
+    hessians_at_solution(table)  # D2e where the solution formed h without it
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF = _f(table, slot.DF)
