@@ -2,11 +2,12 @@
 uses one gets it on first use in the same process and cache: the demo stage of `flexure
 loop` (planar, rigid clusters, no coils, no kinematic inputs, dense, small) connects neither
 the coils' operation nor the sparse factors', the sparse Newton matrix's, the kinematic
-inputs', the large models' tangent product or the folded clusters' rigid bodies; a
+inputs', the large models' tangent product, the folded clusters' rigid bodies or the BEAMs'
+directional rates; a
 voltage-driven actuator's model after it runs on the coils' operation and follows the exact
 solution of its linear ODE, and a spatial model with a folded cluster (stage_spatial_1dof
-under gravity, augmented form) runs on the rigid bodies' operation and its accelerations and
-tangent match the numpy reference (`test_engine`'s plain formulas and tolerances); a model
+under gravity, augmented form) runs on the rigid bodies' operation (and its BEAMs on their
+directional rates') and its accelerations and tangent match the numpy reference (`test_engine`'s plain formulas and tolerances); a model
 with a moment input (wire_tripod) runs on the moment inputs' load stiffness operation and its
 tangent matches the plain one; and the demo's closed loop (`flexure loop`, its output a DOF)
 compiles neither the sampled loop's measuring entry nor the deformations' operation (its DOF
@@ -135,6 +136,7 @@ def test_the_demo_compiles_no_unused_operation_and_a_model_that_uses_one_gets_it
               operations.OP_PRESCRIBED_JACOBIAN, operations.OP_PRESCRIBED_RESIDUAL,
               operations.OP_PRESCRIBED_RESIDUAL_JACOBIAN, operations.OP_ROW_PRODUCTS,
               operations.OP_RIGID_BODIES, operations.OP_INPUT_STIFFNESS,
+              operations.OP_FORMED_RATES,
               engine.OP_DEFORMATIONS]  # the demo's DOF is a coordinate: no deformation needed
     assert not any(after_demo[op] for op in unused), {op: after_demo[op] for op in unused}
     # what the demo does use: its forms, and its rigid clusters' kernels
@@ -149,6 +151,9 @@ def test_the_demo_compiles_no_unused_operation_and_a_model_that_uses_one_gets_it
     assert found["bodies"] == 1
     assert not found["after_coils"][str(operations.OP_RIGID_BODIES)]
     assert found["after_folded"][str(operations.OP_RIGID_BODIES)]
+    # its BEAMs form their quadratic forms (`formed_rates`): that operation too, after the demo
+    assert not found["after_coils"][str(operations.OP_FORMED_RATES)]
+    assert found["after_folded"][str(operations.OP_FORMED_RATES)]
     for state, mechanics, plain, n in _with_plain("stage_spatial_1dof_gravity", found["folded"]):
         qddot = np.array(state["qddot"])
         DF, mass = plain["config"].DF, plain["mass"]

@@ -13,13 +13,12 @@ element's De and D2e of the last kinematic solution (slots de, d2e):
 element by element over the packed groups (`slots.group_deformations`).
 """
 
-from ..elements.entries import ORDER_DIRECTIONAL
 from ..numerics.jit import kernel
-from ..numerics.native import call_deformations
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
 from .kinematics import forms_quadratic_forms
+from .operations import OP_FORMED_RATES, RATES, run
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
@@ -49,10 +48,11 @@ def dof_deformation_accelerations(table, xddot, quad, moving, qddot):
 def element_rates(table, xdot, moving):
     """edot = De xdot (slot edot) and, if moving, xdot^T D2e_i xdot of the constraint rows
     into slot g (n_free,: zero on the unit rows of the DOF coordinates): contracting D2e, or
-    from the element's directional kernel where it has one (`formed_rates`). The elements a
-    rigid cluster makes identically zero (`rigid`) get edot = 0 without a product: their De
-    is not evaluated (`kinematics.deformations`), their rows are out of the system and their
-    deformations carry no stress, so nothing reads their rates."""
+    from the element's directional kernel where it has one (OP_FORMED_RATES,
+    `formed_rates`). The elements a rigid cluster makes identically zero (`rigid`) get
+    edot = 0 without a product: their De is not evaluated (`kinematics.deformations`), their
+    rows are out of the system and their deformations carry no stress, so nothing reads
+    their rates."""
     dims = _i(table, slot.DIMS)
     edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
     row_of_def = _i(table, slot.ROW_OF_DEF)
@@ -64,7 +64,9 @@ def element_rates(table, xdot, moving):
         row = group(table, g)
         if moving and row[ed.G_K] > 0 and forms_quadratic_forms(
                 row[ed.G_DEFORMATIONS_ENTRY], v, row[ed.G_M], row[ed.G_K], row[ed.G_REF_WIDTH]):
-            formed_rates(table, g, xdot)
+            # through its operation (`formed_rates`), compiled only for models with such an
+            # element; `engine.connect` gives it to every model that has one
+            run(table, OP_FORMED_RATES, g, xdot.ctypes.data, RATES)
             continue
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         for i in range(n):
@@ -100,58 +102,6 @@ def internal(table, row, i, touching):
     """Whether element i of the group `row` is internal to a rigid cluster (`rigid`)."""
     t = rigid_element(table, row, i)
     return t >= 0 and touching[t * rg.ELEMENT_WIDTH + rg.E_INTERNAL] == 1
-
-
-@kernel
-def formed_rates(table, g, xdot):
-    """`element_rates` of group g, whose element forms h = v^T D2e v itself: edot = De xdot
-    and its directional kernel's h at the solution (slot x) on the constraint rows, for the
-    elements with any (slot g)."""
-    dims = _i(table, slot.DIMS)
-    edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
-    row_of_def = _i(table, slot.ROW_OF_DEF)
-    x, local = _f(table, slot.X), _f(table, slot.LOCAL)
-    max_m = dims[ed.MAX_M]
-    v = local[:max_m]  # the element's xdot
-    xl = local[max_m: 2 * max_m]  # its x
-    formed = local[2 * max_m: 2 * max_m + dims[ed.MAX_K]]  # its h
-    skipping = dims[ed.NSLAVES] > 0
-    touching = _i(table, slot.RIGID_ELEMENTS)
-    row = group(table, g)
-    n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-    function, width = row[ed.G_DEFORMATIONS_ENTRY], row[ed.G_REF_WIDTH]
-    refs = _f(table, slot.GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
-    for i in range(n):
-        if skipping and internal(table, row, i, touching):
-            for b in range(k):
-                edot[defs[i * k + b]] = 0.0
-            continue
-        for a in range(m):
-            v[a] = xdot[coords[i * m + a]]
-        if has_rows(row_of_def, defs, i, k):
-            for a in range(m):
-                xl[a] = x[coords[i * m + a]]
-            call_deformations(function, xl.ctypes.data, refs + 8 * i * width,
-                              ORDER_DIRECTIONAL, formed.ctypes.data, v.ctypes.data, 0, m, k,
-                              width)
-        for b in range(k):
-            s = 0.0
-            base = (i * k + b) * m
-            for a in range(m):
-                s += De[base + a] * v[a]
-            edot[defs[i * k + b]] = s
-            r = row_of_def[defs[i * k + b]]
-            if r >= 0:
-                quad[r] = formed[b]
-
-
-@kernel(inline="always")
-def has_rows(row_of_def, defs, i, k):
-    """Whether any of element i's k deformations is a row of J (`row_of_def` >= 0)."""
-    for b in range(k):
-        if row_of_def[defs[i * k + b]] >= 0:
-            return True
-    return False
 
 
 @kernel

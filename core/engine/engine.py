@@ -55,7 +55,7 @@ import numpy as np
 from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, call_engine, carray, float_address
-from . import beam_mass_entry, newton, operations, rigid_kernels, sparse_factors
+from . import beam_mass_entry, formed_rates, newton, operations, rigid_kernels, sparse_factors
 from . import data as ed
 from . import slots as slot
 from .coil_entries import (
@@ -421,7 +421,8 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            prescribed_residual_entry, prescribed_residual_jacobian_entry,
            newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
            stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry,
-           input_stiffness_entry, beam_mass_entry.beam_masses_entry)
+           input_stiffness_entry, beam_mass_entry.beam_masses_entry,
+           formed_rates.formed_rates_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),
@@ -468,6 +469,8 @@ def connect(data, *ops):
         wanted.append(operations.OP_INPUT_STIFFNESS)
     if ops and beam_mass_entry.uses(data):  # the BEAMs' element masses in closed form
         wanted.append(operations.OP_BEAM_MASSES)
+    if ops and formed_rates.uses(data):  # the rates of the elements that form h themselves
+        wanted.append(operations.OP_FORMED_RATES)
     while wanted:
         op = wanted.pop()
         if _TABLE[op] == missing_entry.address:

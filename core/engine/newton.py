@@ -43,8 +43,16 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import _scatter_de
-from .kinematics import dof_rows, hessians_at_solution
-from .operations import ENTRY, NEWTON_OPERATIONS, OP_NEWTON_JACOBIAN, OP_RHS, run
+from .kinematics import dof_rows
+from .operations import (
+    ENTRY,
+    HESSIANS,
+    NEWTON_OPERATIONS,
+    OP_FORMED_RATES,
+    OP_NEWTON_JACOBIAN,
+    OP_RHS,
+    run,
+)
 from .point_masses import element_mass, element_points, massless
 from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
@@ -168,7 +176,7 @@ def jacobian(table, y):
     status = run(table, OP_RHS, y.ctypes.data, 0, 0.0)  # the evaluation only
     if status != ed.OK:
         return status
-    hessians_at_solution(table)  # D2e where the evaluation formed h without it
+    run(table, OP_FORMED_RATES, 0, 0, HESSIANS)  # D2e where the evaluation formed h without it
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     sigma = _full_stresses(table)

@@ -76,6 +76,11 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          in the BEAM's closed form (`beam_mass_entry`), NOT_AVAILABLE for a
                          group that is not of BEAMs; compiled only for models with BEAMs and
                          no rigid clusters
+    FORMED_RATES         s = RATES: a = a group's index (as an integer), b = xdot (NX,): the
+                         rates of a group whose element forms h = xdot^T D2e xdot itself;
+                         s = HESSIANS: their D2e at the last kinematic solution, for the
+                         tangent and the Newton matrix (`formed_rates`); compiled only for
+                         models with such an element (the BEAM)
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
@@ -84,7 +89,8 @@ process with small models only never compiles it; COILS is apart so that a model
 coils never compiles the coils' kernels, RIGID_BODIES so that a model without a folded cluster
 (a planar one) never compiles the rigid bodies', INPUT_STIFFNESS so that a model without
 moment inputs never compiles their load stiffness, BEAM_MASSES so that a model without BEAMs
-never compiles their closed form.
+never compiles their closed form, FORMED_RATES so that a model without BEAMs never compiles
+their directional rates.
 """
 
 from ..numerics.jit import kernel
@@ -104,11 +110,14 @@ ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
  OP_RIGID_GEOMETRIC, OP_RIGID_DE, OP_DF, OP_MASS_OF, OP_PRESCRIBED_RHS,
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
  OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
- OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS, OP_BEAM_MASSES) = range(38)
+ OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS, OP_BEAM_MASSES,
+ OP_FORMED_RATES) = range(39)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)
 ROW_GROUPS_FROM = 150
+# OP_FORMED_RATES's two jobs (s)
+RATES, HESSIANS = 0.0, 1.0
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 

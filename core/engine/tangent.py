@@ -18,9 +18,10 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
-from .kinematics import hessians_at_solution
 from .motion import any_nonzero
 from .operations import (
+    HESSIANS,
+    OP_FORMED_RATES,
     OP_INPUT_STIFFNESS,
     OP_MASS,
     OP_RIGID_BODIES,
@@ -59,7 +60,7 @@ def tangent(table, qddot):
     status = run(table, OP_MASS, 0, 0, 0.0)  # motion.reduced_mass
     if status != ed.OK:
         return status
-    hessians_at_solution(table)  # D2e where the solution formed h without it
+    run(table, OP_FORMED_RATES, 0, 0, HESSIANS)  # D2e where the solution formed h without it
     dims = _i(table, slot.DIMS)
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF = _f(table, slot.DF)
