@@ -87,7 +87,6 @@ from .esdirk_kernels import (
     M_ETA,
     M_EXPONENT,
     M_H,
-    M_H_BEFORE,
     M_H_LU,
     M_H_MAX,
     M_RTOL,
@@ -117,29 +116,14 @@ class Esdirk(Stepper):
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):
-        from .esdirk_entry import advance_entry
-
-        tableau = TABLEAUS[self._registered(method).variant]
-        self.tableau = tableau
-        self._allocate(data, rtol=rtol, atol=atol, max_step=max_step, label=tableau.name,
-                       exponent=1.0 / (min(tableau.order, tableau.embedded_order) + 1),
-                       tables=tableau.arrays(), entry=advance_entry)
-        self.flags[I_HISTORY] = int(tableau.history)
-
-    def _registered(self, method):
         from .methods import REGISTRY
 
         self.method = REGISTRY[method]
-        return self.method
-
-    def _allocate(self, data, *, rtol, atol, max_step, label, exponent, tables, entry):
-        """The arrays of the compiled kernels, in the layout of `esdirk_kernels` (which the BDF2
-        shares: `bdf2_kernels`), and `entry`, the C entry of the method's advance on them;
-        exponent: the step control's 1 / (order + 1) (the lower of the tableau's two)."""
         self.data = engine.connect(data, *(getattr(engine, op)
                                            for op in self.method.operations))
-        self.label = label
-        self.tables = tables
+        self.tableau = tableau = TABLEAUS[self.method.variant]
+        self.label = self.tableau.name
+        self.tables = self.tableau.arrays()
         dims = data.int_array("dims")
         self.n = n = 2 * int(dims[ed.NDOF]) + int(dims[ed.NEL])  # with the coil currents
         self.sparse_newton = bool(dims[ed.NEWTON_SPARSE])  # `newton_matrix`: J not in self.J
@@ -147,8 +131,9 @@ class Esdirk(Stepper):
         self.memory[M_RTOL] = float(rtol)
         self.memory[M_H_MAX] = float(max_step or 0.0)
         self.memory[M_ETA] = 1.0
-        self.memory[M_EXPONENT] = exponent
+        self.memory[M_EXPONENT] = 1.0 / (min(tableau.order, tableau.embedded_order) + 1)
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
+        self.flags[I_HISTORY] = int(tableau.history)
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)
         self.LU = np.zeros(n * n)
@@ -158,9 +143,9 @@ class Esdirk(Stepper):
         self.counters = data.int_array("counters")
         # advance's arguments by address, for its C entry (`esdirk_entry`, which imports
         # this module), which Python and the compiled sampled loop call
-        from .esdirk_entry import arguments, restart_now
+        from .esdirk_entry import advance_entry, arguments, restart_now
 
-        self.advance_entry, self._restart_now = entry, restart_now
+        self.advance_entry, self._restart_now = advance_entry, restart_now
         self.arguments = arguments(data.address, self.memory, self.flags, self.vectors, self.J,
                                    self.LU, self.pivots, self.atol, self.tables)
 
@@ -184,7 +169,6 @@ class Esdirk(Stepper):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
         self.memory[M_H] = 0.0
         self.memory[M_ETA] = 1.0
-        self.memory[M_H_BEFORE] = 0.0
         self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA]] = 0  # FSAL_NONE
 
     def advance(self, t_stop, *, one_step=False, max_steps=None):

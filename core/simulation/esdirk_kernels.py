@@ -16,9 +16,8 @@ from . import newton_matrix
 from .esdirk_method import MAX_STAGES
 from .newton_matrix import newton_solve
 
-# float64 memory slots; M_H_BEFORE, the last accepted step (s; 0: none), is the BDF2's history
-# (`bdf2_kernels`), which shares this layout so that the sampled loop drives both alike
-(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_H_BEFORE, M_SIZE) = range(9)
+# float64 memory slots
+(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
 # int64 flags and counters; flags[I_FSAL]: F_1 to evaluate, F_1 current, F_1 = F_s of the inputs
 # of the engine's last evaluation (counters[EVALUATIONS] = flags[I_EVALUATION]): add the response
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)

@@ -13,8 +13,7 @@ the same contract over every method registered here. Adding a method: docs/exten
 
 SUNDIALS_METHODS run SUNDIALS' multistep integrators (`flexure.core.simulation.sundials`) and
 take a largest order; ONE_STEP_METHODS are the compiled one-step ESDIRKs
-(`flexure.core.simulation.esdirk`) and the BDF2 (`flexure.core.simulation.bdf2`), which take
-a held input's change without a restart.
+(`flexure.core.simulation.esdirk`), which take a held input's change without a restart.
 
 Every method integrates kinematic inputs (prescribed motion): the engine's operations run
 their prescribed forms on a model that has them (`flexure.core.engine.prescribed` for the
@@ -53,8 +52,7 @@ class Method:
         Whether it is meant for stiff problems (A- or L-stable at its low orders).
     one_step : bool
         Whether it takes a held input's change without a restart (keeping its step size,
-        Newton matrix and the kinematics' warm start): a one-step method, or the BDF2, which
-        carries its history across the change.
+        Newton matrix and the kinematics' warm start): a one-step method.
     operations : tuple of str
         The engine operations its stepper calls (`flexure.core.engine.engine` OP_ names,
         connected by `engine.connect`).
@@ -121,11 +119,6 @@ METHOD_TABLE = (
            implicit=True, stiff=True, one_step=True, operations=_ESDIRK_OPERATIONS,
            compiled_loop=True, options=(),
            summary="TR-BDF2, order 2, 3 stages, L-stable (one-step; the loop's default)"),
-    Method("bdf2", "bdf2", "Bdf2", "bdf2", order=2, variable_order=False, implicit=True,
-           stiff=True, one_step=True, operations=_ESDIRK_OPERATIONS, compiled_loop=True,
-           options=(),
-           summary="BDF2, variable step, order 2, A-stable (keeps its history across a held "
-                   "input's change: one evaluation a sample in a loop)"),
 )
 REGISTRY = {method.name: method for method in METHOD_TABLE}
 

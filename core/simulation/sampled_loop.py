@@ -204,9 +204,8 @@ def _cvode_samples(sim, solver, addresses, loop_state, held, loop):
 
 
 # The compiled drivers by the module of the stepper they drive (`Method.module`); each
-# makes run(start, stop) -> flag for samples start .. stop - 1. The BDF2 shares the ESDIRK's
-# arrays and restart, and its driver calls the stepper's own advance entry
-DRIVERS = {"esdirk": _esdirk_samples, "bdf2": _esdirk_samples, "sundials": _cvode_samples}
+# makes run(start, stop) -> flag for samples start .. stop - 1
+DRIVERS = {"esdirk": _esdirk_samples, "sundials": _cvode_samples}
 
 
 def _failure(sim, solver, flag, t):
