@@ -3,15 +3,15 @@ uses one gets it on first use in the same process and cache: the demo stage of `
 loop` (planar, rigid clusters, no coils, no kinematic inputs, dense, small) connects neither
 the coils' operation nor the sparse factors', the sparse Newton matrix's, the kinematic
 inputs', the large models' tangent product, the folded clusters' rigid bodies or the BEAMs'
-directional rates; a
-voltage-driven actuator's model after it runs on the coils' operation and follows the exact
-solution of its linear ODE, and a spatial model with a folded cluster (stage_spatial_1dof
-under gravity, augmented form) runs on the rigid bodies' operation (and its BEAMs on their
-directional rates') and its accelerations and tangent match the numpy reference (`test_engine`'s plain formulas and tolerances); a model
-with a moment input (wire_tripod) runs on the moment inputs' load stiffness operation and its
-tangent matches the plain one; and the demo's closed loop (`flexure loop`, its output a DOF)
-compiles neither the sampled loop's measuring entry nor the deformations' operation (its DOF
-is a coordinate), which a loop on an output that is not a DOF (truss_1dof_e's x, its DOF the
+directional rates; a voltage-driven actuator's model after it runs on the coils' operation
+and follows the exact solution of its linear ODE, and a spatial model with a folded cluster
+(stage_spatial_1dof under gravity, augmented form) runs on the rigid bodies' operation (and
+its BEAMs on their directional rates') and its accelerations and tangent match the numpy
+reference (`test_engine`'s plain formulas and tolerances); a model with a moment input
+(wire_tripod) runs on the moment inputs' load stiffness operation and its tangent matches
+the plain one; and the demo's closed loop (`flexure loop`, its output a DOF) compiles
+neither the sampled loop's measuring entry nor the deformations' operation (its DOF is a
+coordinate), which a loop on an output that is not a DOF (truss_1dof_e's x, its DOF the
 elongation) then gets, giving the Python loop's positions and forces to the bit and the
 plain kinematics' DOFs at the scene's configuration.
 
