@@ -13,11 +13,11 @@ factorisation) are timed with what must precede them, and the difference is repo
 python -m examples.benchmarks.cantilever_rhs_profile 16 64
 """
 
-import statistics
 import sys
-import time
 
 import numpy as np
+
+from .measure import cpu_per_call as _time
 
 CANTILEVER_AT = 2e-3  # s: the state's time in the 5 ms run after the tip load
 
@@ -129,17 +129,6 @@ def _loops():
     return dict(rhs=rhs, configuration=configuration, elements=elements, factor_j=factor_j,
                 solve_j=solve_j, rates=rates, stresses=stresses, assembly=assembly, clear=clear,
                 resolve=resolve, solution=solution)
-
-
-def _time(function, args, count, batches=5):
-    """CPU s per call of function(*args, count): the median of `batches` batches."""
-    function(*args, 1)
-    results = []
-    for _ in range(batches):
-        start = time.process_time()
-        function(*args, count)
-        results.append((time.process_time() - start) / count)
-    return statistics.median(results)
 
 
 def profile(n, *, at=CANTILEVER_AT, count=300):

@@ -17,11 +17,11 @@ alone and subtracted); the parts' loops clear it once.
 python -m examples.benchmarks.manipulator_inertia_profile
 """
 
-import statistics
 import sys
-import time
 
 import numpy as np
+
+from .measure import cpu_per_call
 
 
 def _loops():
@@ -144,15 +144,9 @@ def _loops():
     return dict(clear=clear, whole=whole, elements=elements, lumped=lumped, bodies=bodies)
 
 
-def _time(function, args, count, batches=7):
-    """CPU s per call of function(*args, count): the median of `batches` batches."""
-    function(*args, 1)
-    results = []
-    for _ in range(batches):
-        start = time.process_time()
-        function(*args, count)
-        results.append((time.process_time() - start) / count)
-    return statistics.median(results)
+def _time(function, args, count):
+    """`measure.cpu_per_call` over 7 batches: the inertia's parts are differences of loops."""
+    return cpu_per_call(function, args, count, batches=7)
 
 
 def state(model, at=0.01):

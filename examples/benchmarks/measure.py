@@ -1,6 +1,6 @@
 """How the benchmark measures: the progress log, timed runs alternating between the cases
-(`alternate`, `Timing`), a whole process's CPU and wall time, and the peer side when it is
-installed."""
+(`alternate`, `Timing`), a whole process's CPU and wall time, a compiled loop's CPU per call
+(`cpu_per_call`, the profiles'), and the peer side when it is installed."""
 
 import resource
 import statistics
@@ -36,6 +36,18 @@ class Timing:
         if unit == "ms":
             return f"{1e3 * self.median:.1f} ms (min {1e3 * self.best:.1f})"
         return f"{self.median:.3f} s (min {self.best:.3f})"
+
+
+def cpu_per_call(function, args, count, batches=5):
+    """CPU s per call of function(*args, count), a compiled loop that makes `count` calls: the
+    median of `batches` batches, after one call that compiles or loads it."""
+    function(*args, 1)
+    results = []
+    for _ in range(batches):
+        start = time.process_time()
+        function(*args, count)
+        results.append((time.process_time() - start) / count)
+    return statistics.median(results)
 
 
 def alternate(cases, repeat, label="", *, budget=120.0):
