@@ -56,6 +56,7 @@ def test_directional_equals_the_reference_hessians_contracted(beams):
     assert np.all(np.abs(h - expected) <= 1e-12 * magnitude)
 
 
+@pytest.mark.slow  # the BEAM's kernel compiled for Python (5 s cold); the reference's is above
 def test_directional_equals_the_kernels_hessians_contracted(beams):
     x, v, ref, packed = beams
     n = x.shape[0]

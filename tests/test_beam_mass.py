@@ -14,6 +14,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Mechanics, load_scene
@@ -45,6 +46,7 @@ def beam_elements(n, seed):
     return x, np.ascontiguousarray(Dp), beam.inertia_matrix(ref, props)
 
 
+@pytest.mark.slow  # the kernel compiled for Python (13 s cold); the operation's test is below
 def test_beam_element_mass():
     """Me = Dp^T Mp Dp to round-off (1e-13 of its largest entry), as the generic kernel
     gives it; the reference's Mp has the pattern and its Dp the structure the checks pass."""

@@ -29,6 +29,7 @@ def test_compare_prints_the_startup_and_loop_rows(tmp_path):
     assert "| yes |" in row, row
 
 
+@pytest.mark.slow  # 4 s: a benchmark's tool; fmpy's own stepping is in the default tier
 def test_the_compiled_master_steps_an_fmu_as_fmpy_does(stage_fmu):
     """The benchmark's compiled master (numba calling the FMU's C functions) makes the same
     calls as fmpy's FMU2Slave: the same position after 200 steps, to the bit; an FMU that

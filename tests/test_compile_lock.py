@@ -134,6 +134,7 @@ def test_a_second_process_waits_for_the_first_and_loads_what_it_compiled(tmp_pat
         assert not list(cache.rglob("*.lock"))
 
 
+@pytest.mark.slow  # 4 s, two processes; the lock's release by a killed holder stays below
 def test_a_holder_killed_mid_compilation_leaves_the_waiter_to_compile(tmp_path):
     cache, never, start = tmp_path / "cache", tmp_path / "never", tmp_path / "start"
     holder, waiter = _child("entry", cache, never), _child("entry", cache, start=start)

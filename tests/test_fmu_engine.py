@@ -147,7 +147,8 @@ def test_a_host_that_must_compile_sees_the_notice_in_its_log(scene_fmus, tmp_pat
     (json.dumps({"format": 1, "numba": "0.0.1", "python": "{}.{}".format(*sys.version_info),
                  "implementation": "cpython", "abiflags": ""}),
      "it was compiled for numba 0.0.1; this Python has numba "),
-    ("{not json", "its manifest.json cannot be read (JSONDecodeError: "),
+    pytest.param("{not json", "its manifest.json cannot be read (JSONDecodeError: ",
+                 marks=pytest.mark.slow),  # 2 s: the same path as the manifest above
 ])
 def test_a_carried_engine_that_does_not_fit_is_left_out_with_a_warning(scene_fmus, tmp_path,
                                                                       manifest, says):

@@ -142,9 +142,12 @@ def test_no_module_keeps_a_list_of_method_names_of_its_own():
     found = []
     for path in (p for part in ("core", "controllers", "fmu")
                  for p in (PACKAGE / part).rglob("*.py")):
-        if path.name == "methods.py":
+        text = path.read_text()
+        # a literal naming two methods has two of them quoted; parse only such files
+        quoted = sum(text.count(f'"{name}"') + text.count(f"'{name}'") for name in REGISTRY)
+        if path.name == "methods.py" or quoted < 2:
             continue
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        for node in ast.walk(ast.parse(text, str(path))):
             if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
                 names = [e.value for e in node.elts
                          if isinstance(e, ast.Constant) and e.value in REGISTRY]

@@ -181,15 +181,21 @@ def test_reset_keeps_the_inputs_as_simulator_does(stage3):
 
 
 def test_long_runs_keep_one_set_of_factors(stage3):
-    """k / fs - (k - 1) / fs wobbles by a rounding unit of t: 60 s at 4 kHz must not compute
-    the step's factors again at every wobble (one set for the whole run)."""
+    """k / fs - (k - 1) / fs wobbles by a rounding unit of t, more the longer the run (at 4
+    kHz: 11 step lengths in the first second; in the 60th, 2.4e-11 of the step): neither
+    second computes the step's factors again at a wobble (one set for each step length)."""
     sim = LinearSimulator(stage3)
     sim.set_inputs(np.zeros(len(sim.u0)))
-    for k in range(1, 240_001):
+    for k in range(1, 4_001):
         sim.advance_to(k / FS)
     assert sim.factor_updates == 1
-    sim.advance_to(60.01)
+    sim.advance_to(236_000 / FS)  # one step of 58 s, with factors of its own
     assert sim.factor_updates == 2
+    for k in range(236_001, 240_001):
+        sim.advance_to(k / FS)
+    assert sim.factor_updates == 3
+    sim.advance_to(60.01)
+    assert sim.factor_updates == 4
 
 
 def test_ill_conditioned_eigenvectors_take_the_matrix_exponential(stage3, monkeypatch):

@@ -161,6 +161,7 @@ _CACHED_KERNEL_SCRIPT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow  # 4 s, a second process; the caches' separation stays in the default tier
 def test_a_kernel_compiled_for_linking_is_cached_and_loaded_as_such(tmp_path):
     script = tmp_path / "cached_kernel.py"
     script.write_text(_CACHED_KERNEL_SCRIPT)

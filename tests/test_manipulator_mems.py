@@ -68,6 +68,7 @@ def frequencies():
     return out
 
 
+@pytest.mark.slow  # a variant of manipulator_control (docs/verification.md, the tiers)
 def test_exactly_scaled_frequencies_follow_sqrt_e_over_rho_over_s(frequencies):
     """Lengths by s = 1/100, E 210 -> 169 GPa, every density by 2330 / 7850: every
     frequency times sqrt((169 / 210) / (2330 / 7850)) / 0.01 = 164.66. To 2e-9: the design
@@ -85,6 +86,7 @@ def _step(frequencies, k):
     return frequencies[before], frequencies[what[k]]
 
 
+@pytest.mark.slow  # a variant of manipulator_control (docs/verification.md, the tiers)
 def test_each_process_choice_moves_the_frequencies_within_its_bounds(frequencies):
     """K <= K' <= a K and M <= M' <= b M give f / sqrt(b) <= f' <= f sqrt(a) mode by mode
     (Courant-Fischer). Poisson's ratio 0.3 -> 0.28 raises only G, by 1.3 / 1.28; silicon
@@ -112,6 +114,7 @@ def test_each_process_choice_moves_the_frequencies_within_its_bounds(frequencies
                                .frequencies_hz, after, rtol=1e-12)
 
 
+@pytest.mark.slow  # a variant of manipulator_control (docs/verification.md, the tiers)
 def test_the_exact_constraint_check_says_what_it_says_of_the_macro_design(tmp_path, capsys):
     """At 1/100 of the size the rank decisions are the macro design's, word for word: the
     dynamic model has NDOF = 816 - 144 - 597 = 75 and flexure chooses the same 75 DOFs, the

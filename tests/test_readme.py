@@ -156,10 +156,12 @@ def test_the_setup_lines_are_there_unchanged():
     assert sum(line.endswith("# the tests") for line in lines) == 1  # .ci/run's grep
 
 
-# Blocks with one of these run in the slow tier: the 507-DOF manipulator (7 s), and the tour
+# Blocks with one of these run in the slow tier: the 507-DOF manipulator (7 s), the tour
 # that builds an FMU and benchmarks the methods (13 s of CPU; each of its analyses is also run
-# by tests/test_cli_analyze.py in the default tier).
-SLOW_COMMANDS = ("manipulator_reduced", "flexure fmu build", "flexure bench")
+# by tests/test_cli_analyze.py in the default tier), and the design study on a local Dask
+# cluster (5 s; tests/test_sweep.py and tests/test_overrides.py run the sweep on Dask and
+# `--set` in the default tier).
+SLOW_COMMANDS = ("manipulator_reduced", "flexure fmu build", "flexure bench", "flexure sweep")
 
 
 def _tiered(blocks):

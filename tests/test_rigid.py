@@ -124,6 +124,7 @@ def test_plain_derivatives_match_finite_differences(scene):
     assert np.max(np.abs(H @ v - fd_H)) <= 1e-6 * max(np.max(np.abs(fd_H)), 1e-300)
 
 
+@pytest.mark.slow  # the kernels compiled for Python (11 s cold); the engine's tests run them
 def test_compiled_maps_match_the_plain_ones(scene):
     """fill_slaves (x_s and T's weights), expand, convective, condense and a touching
     element's transform against RigidLayout and RigidPacking to 1e-14; its points' mass on

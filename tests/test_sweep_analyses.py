@@ -144,6 +144,7 @@ def read(path):
         return list(csv.reader(handle))
 
 
+@pytest.mark.slow  # 5 s on a Dask cluster: test_sweep.py runs Dask, the tests above these analyses
 def test_dask_gives_the_serial_table_with_simulate_and_loop(tmp_path, capsys):
     serial, dask = tmp_path / "serial.csv", tmp_path / "dask.csv"
     assert run(capsys, *ARGV, "--serial", "--out", serial)[0] == 0
