@@ -23,7 +23,9 @@ from .newton_matrix import newton_solve
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_SIZE) = range(18)
+ I_HISTORY, I_EXTRA, I_MASS_FORM, I_SIZE) = range(19)
+# flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
+# their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
 # flags[I_REDUCED]: the Newton matrix's factors are the full matrix's (0), its Schur
 # complement's (1) or the engine's sparse ones (SPARSE_FACTORS, `newton_matrix`)
 SPARSE_FACTORS = 2
@@ -178,11 +180,11 @@ def _mass_form_residual(table, z, base, hg, delta, flags, t):
 @kernel
 def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     """Solve stage i: z = base + h g f(z) by simplified Newton; F_i from the stage equation.
-    True when it converged. On the sparse Newton matrix (flags[I_REDUCED] = SPARSE_FACTORS)
-    the residual's velocity half is taken in mass form (`_mass_form_residual`), which needs
-    no factorisation of the augmented system per iteration: the same root, iterates that
-    differ by (M_bar(z) - M_bar at the Jacobian's state) r2, second order in the
-    residual."""
+    True when it converged. On the sparse Newton matrix (flags[I_REDUCED] = SPARSE_FACTORS,
+    flags[I_MASS_FORM] = 1) the residual's velocity half is taken in mass form
+    (`_mass_form_residual`), which needs no factorisation of the augmented system per
+    iteration: the same root, iterates that differ by (M_bar(z) - M_bar at the Jacobian's
+    state) r2, second order in the residual."""
     n = piv.size
     base, z, delta, weight = vectors[V_BASE], vectors[V_Z], vectors[V_DELTA], vectors[V_WEIGHT]
     y, F = vectors[V_Y], vectors[V_F:]
@@ -217,7 +219,7 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     if i == 1:
         eta = eta ** 0.8
     previous = 0.0
-    mass_form = flags[I_REDUCED] == SPARSE_FACTORS
+    mass_form = flags[I_REDUCED] == SPARSE_FACTORS and flags[I_MASS_FORM] == 1
     for iteration in range(MAX_NEWTON):
         if mass_form:
             if _mass_form_residual(table, z, base, hg, delta, flags, t_stage) != ed.OK:
