@@ -21,15 +21,21 @@ BEAMs touching rigid clusters, lumped masses on the masters), the same with mass
 beams (22 folded clusters), stage_planar_3dof under gravity (planar clusters),
 stage_spatial_1dof (a folded cluster, rigid rows), truss_1dof_x (lumped masses only) and
 wire_tripod (lumped masses, clusters, rigid rows); the banded and the sparse storage of A.
+The kernels it is made of against numpy: the BEAM's closed form
+(`beam_mass.beam_point_product`, its structure check `beam_blocks_only`) and the generic
+`element_product`, on random elements.
 """
 
 import numpy as np
 import pytest
+from test_beam_mass import beam_elements
 from test_engine import scene_with_gravity
+from test_point_masses import element
 from test_rigid_inertia import massive_manipulator
 
 from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Mechanics, load_scene
+from flexure.core.elements.beam_mass import PATTERN, beam_blocks_only, beam_point_product
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine import slots as slot
@@ -37,7 +43,7 @@ from flexure.core.engine.actuators import port_values
 from flexure.core.engine.data import EngineData
 from flexure.core.engine.deformation_rates import scatter_stress, stress_resultants
 from flexure.core.engine.factors import add_rigid_rows, augmented_matrix
-from flexure.core.engine.inertia_product import force_minus_mass
+from flexure.core.engine.inertia_product import element_product, force_minus_mass
 from flexure.core.engine.motion import inertia_forces
 from flexure.core.engine.operations import OP_RIGID_CONDENSE, run
 from flexure.core.engine.ports import add_input_forces
@@ -170,3 +176,54 @@ def test_force_minus_mass_refuses_a_nonfinite_acceleration():
     status = force_minus_mass(data.address, data.float_array("x"), data.float_array("xdot"),
                               False, np.zeros(nx), w_f, np.zeros(nx), np.zeros(nx), np.zeros(nf))
     assert status == ed.NONFINITE_RESULT
+
+
+def test_beam_point_product():
+    """The BEAM's closed form: point - Dp a, w = Mp (point - Dp a) and Dp^T w against numpy
+    to round-off (1e-13 of each one's largest entry) for random BEAMs (poses, y' axes,
+    section masses), and the same through the generic `element_product`."""
+    _, Dps, Mps = beam_elements(20, seed=3)
+    rng = np.random.default_rng(4)
+    for Dp, Mp in zip(Dps, Mps, strict=True):
+        assert beam_blocks_only(Dp)
+        a_e, f = rng.standard_normal(14), rng.standard_normal(24)
+        points = f - Dp @ a_e
+        forces = Mp @ points
+        expected = Dp.T @ forces
+        for product in ("beam", "generic"):
+            point, w, out = f.copy(), np.full(24, np.nan), np.full(14, np.nan)
+            if product == "beam":
+                beam_point_product(Mp.ravel(), Dp, a_e, point, w, out)
+            else:
+                element_product(Mp.ravel(), PATTERN, 24, 14, Dp, a_e, point, w, out)
+            for got, want in ((point, points), (w, forces), (out, expected)):
+                assert np.max(np.abs(got - want)) <= 1e-13 * np.max(np.abs(want)), product
+
+
+def test_beam_blocks_only_refuses_a_nonzero_outside_its_block():
+    """A non-zero outside its point's block (r^p on lambda_p, n_y'^q on x_q, l0 n_x'^p on
+    lambda_q, n_z'^q on x_p) fails the check; a zero inside a block passes."""
+    _, Dps, _ = beam_elements(1, seed=5)
+    for row, column in ((0, 4), (19, 8), (4, 11), (23, 0)):
+        Dp = Dps[0].copy()
+        Dp[row, column] = 1e-300
+        assert not beam_blocks_only(Dp)
+    Dp = Dps[0].copy()
+    Dp[0, 0] = 0.0
+    assert beam_blocks_only(Dp)
+
+
+@pytest.mark.parametrize("P, m", [(24, 14), (9, 4), (5, 17)])
+def test_element_product(P, m):
+    """Any element: point - Dp a, Mp over its pattern and Dp^T w against numpy, to 1e-13 of
+    each one's largest entry, for a random symmetric Mp on a pattern and a Dp with zeros."""
+    Mp, pattern, Dp = element(P, m, seed=P * m)
+    rng = np.random.default_rng(6)
+    a_e, f = rng.standard_normal(m), rng.standard_normal(P)
+    a_e[1] = 0.0  # a fixed coordinate's
+    point, w, out = f.copy(), np.full(P, np.nan), np.full(m, np.nan)
+    element_product(Mp, pattern, P, m, Dp, a_e, point, w, out)
+    M = Mp.reshape(P, P)
+    points = f - Dp @ a_e
+    for got, want in ((point, points), (w, M @ points), (out, Dp.T @ M @ points)):
+        assert np.max(np.abs(got - want)) <= 1e-13 * np.max(np.abs(want))

@@ -12,14 +12,18 @@ parameters). Since M_ff = T^T M T on z and the slaves' accelerations are T w + c
                        + the folded clusters' forces - M_z a_z,     a = [w_f; T w_f + c]
 
 on x: every element's points once (Dp, (D2p v) v), one product Dp a_e, Mp and Dp^T per
-element (a BEAM: about 300 multiplications against about 7000 to form T_e^T Dp^T Mp Dp T_e
-and its assembly), and T^T once for the whole model (`rigid_kernels.condense`). The same
-sums as the assembled path in another order: equal to round-off
-(tests/test_inertia_product.py). Units as the coordinates: N, N m; kg, kg m, kg m^2.
+element (a BEAM in closed form, `beam_mass.beam_point_product`: about 250 multiplications
+against about 7000 to form a touching BEAM's T_e^T Dp^T Mp Dp T_e and its assembly), and T^T
+once for the whole model (`rigid_kernels.condense`). The same sums as the assembled path in
+another order: equal to round-off (tests/test_inertia_product.py). The rigid clusters' maps
+and the folded clusters' rigid bodies are reached through their operations, so a model
+without them compiles none of theirs here. Units as the coordinates: N, N m; kg, kg m, kg m^2.
 """
 
 import numpy as np
 
+from ..elements.beam_mass import M as BEAM_M
+from ..elements.beam_mass import beam_blocks_only, beam_pattern, beam_point_product
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
@@ -81,31 +85,53 @@ def force_minus_mass(table, x, xdot, moving, r, w_f, a, total, out_f):
 def element_products(table, x, xdot, moving, a, total):
     """total (NX,; N, N m) += Dp^T Mp (g_p - (D2p v) v - Dp a_e) of every element that
     `motion.inertia_forces` visits (all with inertia points but the touching elements whose
-    mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving."""
+    mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving.
+    A BEAM (its group's mass pattern the BEAM's, its Dp of the BEAM's blocks) in closed form
+    (`beam_mass.beam_point_product`), any other element through Dp's full rows."""
     dims = _i(table, slot.DIMS)
     rigid = dims[ed.NSLAVES] > 0
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         inertia = group_inertia(table, g)
         n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
+        beams = m == BEAM_M and beam_pattern(pattern)
         scratch = inertia_scratch(table, 0, P, m)
-        xl, _, point, acc, w, Dp, _ = scratch
+        xl, vl, point, acc, w, Dp, _ = scratch
         for i in range(n):
             if rigid:
                 t = rigid_element(table, row, i)
                 if t >= 0 and not own_mass(table, t):
                     continue
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
-            for b in range(m):  # a_e, in the x of the scratch (read by the points only)
-                xl[b] = a[coords[i * m + b]]
             for pp in range(P):
-                s = gravity[pp] - acc[pp] if moving else gravity[pp]
-                for b in range(m):
-                    s -= Dp[pp, b] * xl[b]
-                point[pp] = s
-            point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, point, w)
+                point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
+            Mp = masses[i * P * P: (i + 1) * P * P]
+            # a_e into the scratch's x, Dp^T w into its v: the points read them, and are done
             for b in range(m):
-                s = 0.0
-                for pp in range(P):
-                    s += Dp[pp, b] * w[pp]
-                total[coords[i * m + b]] += s
+                xl[b] = a[coords[i * m + b]]
+            if beams and beam_blocks_only(Dp):
+                beam_point_product(Mp, Dp, xl, point, w, vl)
+            else:
+                element_product(Mp, pattern, P, m, Dp, xl, point, w, vl)
+            for b in range(m):
+                total[coords[i * m + b]] += vl[b]
+
+
+@kernel
+def element_product(Mp, pattern, P, m, Dp, a_e, point, w, out_e):
+    """point (P,) -= Dp a_e, w = Mp point over `pattern` (flat p P + q), out_e (m,) = Dp^T w,
+    for any element (Dp (P, m), a_e (m,)): column by column and row by row, so that the sums
+    are P and m independent ones rather than chains of m and P."""
+    for b in range(m):
+        ab = a_e[b]
+        if ab != 0.0:
+            for pp in range(P):
+                point[pp] -= Dp[pp, b] * ab
+    point_forces(Mp, pattern, P, point, w)
+    for b in range(m):
+        out_e[b] = 0.0
+    for pp in range(P):
+        wp = w[pp]
+        if wp != 0.0:
+            for b in range(m):
+                out_e[b] += Dp[pp, b] * wp
