@@ -50,7 +50,10 @@ def force_minus_mass(table, x, xdot, moving, r, w_f, a, total, out_f):
     inertia (read only); w_f (n_free,): the accelerations of the free coordinates in their
     order (slot free). a and total (NX,) are scratch: on return a holds the accelerations
     on x (w_f, the slaves' T w_f + c, zero on the fixed coordinates) and total the force on
-    x before T^T."""
+    x before T^T. With folded clusters x and xdot must be slots x and xdot (their operation
+    reads those); T's weights are those of the last kinematic solution. Works in slot
+    local's inertia scratch (as `inertia_forces`) and, with folded clusters, slot
+    rigid_local."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
