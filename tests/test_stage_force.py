@@ -35,6 +35,7 @@ from flexure.core.engine.operations import (
     OP_NEWTON_SOLVE,
     OP_STAGE_FORCE,
 )
+from flexure.core.engine.stage_force import A_AT_STAGE
 from flexure.core.simulation.esdirk_kernels import I_MASS_FORM
 from tests.compiled_loops import run_compiled_loop
 from tests.test_engine import close, random_states
@@ -133,7 +134,7 @@ def test_the_force_solve_is_the_solve_at_the_newton_matrix_state(name, monkeypat
 
 @pytest.mark.parametrize("name", ["manipulator_control", "rod_body"])  # the ones with inputs
 def test_the_input_response_after_a_stage_force_is_the_change_of_the_rhs(name, monkeypatch):
-    """After a stage force (A assembled, not factored) the input response factors A and
+    """After a stage force (A neither assembled nor factored) the input response has A made and
     equals qddot(u1) - qddot(u0) of two full rhs at that state to 1e-12 of qddot's size
     (tests/test_input_response.py's bound); a second response reuses those factors."""
     model, data = packed(name, monkeypatch)
@@ -141,7 +142,7 @@ def test_the_input_response_after_a_stage_force_is_the_change_of_the_rhs(name, m
                                 strict=True):
         n = y.size // 2
         stage_force(data, y, u0, np.zeros(n))
-        assert data.int_array("dims")[ed.A_FACTORS] == 2  # `stage_force.A_ASSEMBLED`
+        assert data.int_array("dims")[ed.A_FACTORS] == A_AT_STAGE
         data.float_array("inputs")[:] = u1
         change = np.full(n, np.nan)
         assert engine.call(data, engine.OP_INPUT_RESPONSE, change) == ed.OK

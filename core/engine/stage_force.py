@@ -17,10 +17,11 @@ them) and DF^T w = [0 I] J^-T w. Since M_bar a(z) = DF^T (r - M conv), g = M_bar
 exactly, and hg g = M_bar r2: the stage equation's root is the same, the iterates differ
 from the accelerations' form by (M_bar(z) - M_bar_J) r2 only (M_bar_J the Newton matrix's).
 
-Cost: the evaluation's front half (`motion.coordinate_forces`), the element masses into A
-(the same calls as `evaluate`: A stays assembled, dims[A_FACTORS] = A_ASSEMBLED, so that
-`input_response` can factor it if it is asked for), two solves with J's factors and one
-product with M_ff (`force_minus_mass`) in place of A's factorisation and solve. Only for
+Cost: the evaluation's front half (`motion.coordinate_forces`), two solves with J's factors
+and r - M xddot_c element by element without forming M (`inertia_product.force_minus_mass`),
+in place of A's assembly, factorisation and solve. dims[A_FACTORS] = A_AT_STAGE then says
+that A is of no state: `input_response`, asked for the first stage after the inputs changed,
+has the operation assemble and factor it at the stage's (FACTOR_A). Only for
 models with the sparse Newton matrix (dims[NEWTON_SPARSE] = 1: no rigid clusters, no coil
 currents, no kinematic inputs), whose entry `engine.connect` gives with the Newton
 matrix's.
@@ -28,50 +29,25 @@ matrix's.
 
 import numpy as np
 
-from ..numerics import banded
 from ..numerics.dense import copy
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
-from .factors import add_rigid_rows, augmented_matrix, j_solve
+from .factors import add_rigid_rows, augmented_matrix, augmented_solve, j_solve
+from .inertia_product import force_minus_mass
 from .kinematics import dof_rows
-from .motion import coordinate_forces, inertia_forces
+from .motion import any_nonzero, coordinate_forces, inertia_forces
 from .operations import ENTRY
 from .slots import float_array as _f
 from .slots import int_array as _i
-from .sparse_products import pattern_product
 
-# dims[A_FACTORS] after a stage force: A assembled at its state, not factored (the packing's
-# NO_FACTORS, BANDED_FACTORS, SPARSE_FACTORS are -1, 0, 1)
-A_ASSEMBLED = 2
-
-
-@kernel
-def force_minus_mass(table, A, na, xddot_f, out):
-    """out (n_free,) -= M_ff xddot_f: on entry the coordinate force on the free coordinates
-    (N, N m, what `evaluate` puts on the augmented system's first n_free rows), xddot_f (n_free,)
-    accelerations of the free coordinates (m/s^2, 1/s^2); M_ff the free coordinates' block of
-    the assembled A (na rows; its sparse values or its band storage, as the model was packed,
-    before any factorisation). The one place the stage force multiplies by the mass."""
-    dims = _i(table, slot.DIMS)
-    nf = dims[ed.NFREE]
-    if dims[ed.A_SPARSE] == 1:  # the pattern's rows and columns below nf: M_ff
-        pattern_product(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), A,
-                        xddot_f, out, nf, -1.0)
-        return
-    kl, ku = dims[ed.A_KL], dims[ed.A_KU]
-    step, shift = banded.layout(A.size, na, kl, ku)
-    apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)
-    t[:na] = 0.0  # xddot at the banded positions, zero on the rigid rows' (J_o^T drops out)
-    for c in range(nf):
-        t[apos[c]] = xddot_f[c]
-    for c in range(nf):
-        i = apos[c]
-        s = 0.0
-        for j in range(max(0, i - kl), min(na - 1, i + ku) + 1):
-            s += A[i * step + shift + j] * t[j]
-        out[c] -= s
+# dims[A_FACTORS] after a stage force: its state in the slots, A neither assembled nor
+# factored there (the packing's NO_FACTORS, BANDED_FACTORS, SPARSE_FACTORS are -1, 0, 1)
+A_AT_STAGE = 2
+# the operation's jobs (s): the stage force, or A assembled and factored at the last one's
+# state for `input_response`
+FORCE, FACTOR_A = 0.0, 1.0
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -98,12 +74,8 @@ def stage_force(table, y, acc, out):
     if status != ed.OK:
         return status
     dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
-    na = nf + dims[ed.NRIGID]
     x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
-    A = augmented_matrix(table)
-    inertia_forces(table, x, xdot, moving, r, A, na)
-    add_rigid_rows(table, A, na)  # only for `input_response`, should it factor A
-    dims[ed.A_FACTORS] = A_ASSEMBLED
+    dims[ed.A_FACTORS] = A_AT_STAGE  # for `input_response`, should it need A (`factor_a`)
     inputs = _f(table, slot.INPUTS)  # the inputs A's force is of, for `input_response`
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     xddot = _f(table, slot.DX)  # xddot_c = J^-1 ([0; acc] - h) on the free coordinates
@@ -113,10 +85,13 @@ def stage_force(table, y, acc, out):
         for a in range(nf):
             xddot[a] -= quad[a]
     j_solve(table, xddot, False)
-    w, free = _f(table, slot.AUG_RHS), _i(table, slot.FREE)
-    for a in range(nf):
-        w[a] = r[free[a]]
-    force_minus_mass(table, A, na, xddot, w)
+    # w = rhs_f - M_ff xddot_c without assembling M (`inertia_product`); slot xddot gets the
+    # coordinates' accelerations at acc, slot x_trial the force before T^T
+    w = _f(table, slot.AUG_RHS)
+    status = force_minus_mass(table, x, xdot, moving, r, xddot[:nf], _f(table, slot.XDDOT),
+                              _f(table, slot.X_TRIAL), w[:nf])
+    if status != ed.OK:
+        return status
     j_solve(table, w[:nf], True)  # J^-T w on J's rows: its DOF rows are DF^T w
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
     for j in range(n_xdof):
@@ -129,10 +104,29 @@ def stage_force(table, y, acc, out):
     return ed.OK
 
 
+@kernel(inline="always")  # into its operation's entry, its one caller
+def factor_a(table):
+    """The augmented system A assembled and factored at the state the last stage force left
+    in the slots (x, xdot, the force r before the element masses), as `evaluate` would have
+    at that state, for `input_response`; a status (SINGULAR_MASS when A is singular)."""
+    dims = _i(table, slot.DIMS)
+    na = dims[ed.NFREE] + dims[ed.NRIGID]
+    x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
+    A = augmented_matrix(table)
+    inertia_forces(table, x, xdot, any_nonzero(xdot), r, A, na)
+    add_rigid_rows(table, A, na)
+    rhs = _f(table, slot.AUG_RHS)  # a zero right-hand side: the factors are the point
+    rhs[:na] = 0.0
+    return ed.OK if augmented_solve(table, A, na, rhs) else ed.SINGULAR_MASS
+
+
 @entry(ENTRY)
 def stage_force_entry(op, user_data, t, a, b, c, s):
-    """OP_STAGE_FORCE: y (a), the candidate accelerations (b), g (c; may be b)."""
+    """OP_STAGE_FORCE: s = FORCE: y (a), the candidate accelerations (b), g (c; may be b);
+    s = FACTOR_A: A at the last stage force's state (`factor_a`)."""
     table = address_of(user_data)
+    if s == FACTOR_A:
+        return factor_a(table)
     n = _i(table, slot.DIMS)[ed.NDOF]
     return stage_force(table, carray(a, (2 * n,), np.float64), carray(b, (n,), np.float64),
                        carray(c, (n,), np.float64))
