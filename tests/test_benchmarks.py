@@ -148,10 +148,13 @@ def test_the_cantilevers_rhs_profile_times_every_part_of_one_rhs():
 @pytest.mark.slow  # 30 to 60 s: the profile's compiled loops
 def test_the_manipulators_inertia_profile_times_every_part():
     """`manipulator_inertia_profile` on manipulator_control: each part of the inertia timed;
-    the whole is a positive CPU per call and the parts are finite (a part is a difference of
-    two loops, so a small one may come out below zero on a loaded machine)."""
+    the whole, what a residual in mass form replaces and its product are positive CPU per
+    call and the parts are finite (a part is a difference of two loops, so a small one may
+    come out below zero on a loaded machine)."""
     from examples.benchmarks.manipulator_inertia_profile import profile
 
     parts = profile("manipulator_control", count=2)
-    assert len(parts) == 11 and parts["inertia_forces, all of it"] > 0.0, parts
+    assert len(parts) == 13 and parts["inertia_forces, all of it"] > 0.0, parts
+    assert parts["inertia, rigid rows into A, rhs_f (replaced)"] > 0.0, parts
+    assert parts["force_minus_mass (inertia_product)"] > 0.0, parts
     assert all(np.isfinite(s) for s in parts.values()), parts

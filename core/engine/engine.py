@@ -106,6 +106,7 @@ from .prescribed_residual import prescribed_residual_entry, prescribed_residual_
 from .reactions import stress_resultants_entry
 from .rigid_inertia_kernels import rigid_bodies_entry
 from .slots import float_array, int_array
+from .stage_force import stage_force_entry
 from .tangent import tangent
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
@@ -422,7 +423,8 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            newton.jacobian_entry, newton.factor_entry, newton.solve_entry,
            stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry,
            input_stiffness_entry, beam_mass_entry.beam_masses_entry,
-           formed_rates.formed_rates_entry)
+           formed_rates.formed_rates_entry, stage_force_entry,
+           newton.force_solve_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),

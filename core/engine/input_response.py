@@ -10,9 +10,11 @@ evaluation
 with the factors that evaluation left: one solve instead of an evaluation (the kinematics, the
 element masses and the factorisation). d qddot is then d xddot on the DOF coordinates and
 De_m d xddot on the DOF deformations. A one-step integrator uses it for the first stage after
-a change of the held inputs (`simulation.esdirk`). Exact but for round-off at the evaluation's
-state; only the augmented form keeps those factors, and only without actuators (whose forces
-depend on the coil currents, a state) and without kinematic inputs: otherwise NOT_AVAILABLE.
+a change of the held inputs (`simulation.esdirk`). After the ESDIRK's stage residual in mass
+form (`stage_force`), which neither assembles nor factors A, the first response has that
+operation do both at the stage's state. Exact but for round-off at the evaluation's state;
+only the augmented form keeps those factors, and only without actuators (whose forces depend
+on the coil currents, a state) and without kinematic inputs: otherwise NOT_AVAILABLE.
 With kinematic inputs (`prescribed`) the evaluation's qddot is the constrained one, qddot_0 +
 W F, whose change is d qddot_0 projected by I - W S^-1 E^T and zero on the inputs' rows, with
 the efforts changed too: the solve above is not it.
@@ -23,10 +25,11 @@ from . import data as ed
 from . import slots as slot
 from .factors import augmented_resolve
 from .motion import qddot_of_solution
-from .operations import OP_RIGID_CONDENSE, run
+from .operations import OP_RIGID_CONDENSE, OP_STAGE_FORCE, run
 from .ports import add_input_forces
 from .slots import float_array as _f
 from .slots import int_array as _i
+from .stage_force import A_AT_STAGE, FACTOR_A
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -34,7 +37,8 @@ def input_response(table, out):
     """out (NDOF,) = d qddot (m/s^2, rad/s^2) for the change of the inputs in slot inputs since
     the last evaluation, at that evaluation's state and with its factors; a status (OK, or
     NOT_AVAILABLE when no evaluation's factors are current, in the reduced form, with
-    actuators or with kinematic inputs)."""
+    actuators or with kinematic inputs; SINGULAR_MASS when a stage force's A, factored here,
+    is singular)."""
     dims = _i(table, slot.DIMS)
     if (dims[ed.A_FACTORS] == ed.NO_FACTORS or dims[ed.AUGMENTED] == 0
             or _f(table, slot.PORT_VALUES).size != 0 or dims[ed.NKI] != 0):
@@ -50,6 +54,11 @@ def input_response(table, out):
         changed = changed or du[j] != 0.0
     if not changed:
         return ed.OK
+    if dims[ed.A_FACTORS] == A_AT_STAGE:  # A at a stage force's state, made once, by its
+        # operation (compiled only where stage forces are)
+        status = run(table, OP_STAGE_FORCE, 0, 0, FACTOR_A)
+        if status != ed.OK:
+            return status
     nf, n_rigid = dims[ed.NFREE], dims[ed.NRIGID]
     rigid = dims[ed.NSLAVES] > 0
     free = _i(table, slot.FREE)

@@ -102,8 +102,7 @@ def evaluate(table, q, qdot):
     qdot (slot conv) and xddot (slot xddot); the augmented system's factors and the inputs
     (`input_response`); a status. `reduced_mass` adds DF and M_bar. Counted in
     counters[EVALUATIONS]."""
-    _i(table, slot.COUNTERS)[ed.EVALUATIONS] += 1
-    status = run(table, OP_CONFIGURATION, q.ctypes.data, 0, 0.0)  # solve_kinematics
+    status, moving = coordinate_forces(table, q, qdot)
     if status != ed.OK:
         return status
     dims = _i(table, slot.DIMS)
@@ -111,37 +110,9 @@ def evaluate(table, q, qdot):
     n_rigid = dims[ed.NRIGID]
     x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
     dx = _f(table, slot.DX)
-    moving = any_nonzero(qdot)
     reduced = dims[ed.AUGMENTED] == 0
     rigid = dims[ed.NSLAVES] > 0
-    if reduced:  # xdot = DF qdot (zero at rest: the statics)
-        run(table, OP_DF, 0, 0, 0.0)  # kinematics.compute_DF
-        DF = _f(table, slot.DF)
-        for a in range(nx):
-            s = 0.0
-            if moving:
-                for j in range(ndof):
-                    s += DF[a * ndof + j] * qdot[j]
-            xdot[a] = s
-    else:  # xdot = J^-1 [0; qdot]
-        dof_rows(table, qdot, dx)
-        j_solve(table, dx, False)
-        xdot[:] = 0.0
-        for a in range(nf):
-            xdot[free[a]] = dx[a]
-        if rigid:  # the slaves': T zdot
-            run(table, OP_RIGID_EXPAND, xdot.ctypes.data, 0, 0.0)
-    if rigid:  # the slaves' second-order accelerations c (zero at rest)
-        run(table, OP_RIGID_CONVECTIVE, x.ctypes.data, xdot.ctypes.data, 0.0)
-    # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
-    element_rates(table, xdot, moving)
-    sigma = stress_resultants(table)  # sigma_c = S e_s + D edot_s
-    # coordinate force r = f - De^T sigma_c, then gravity and g_conv of the element masses
     r = _f(table, slot.FORCE)
-    copy(r, _f(table, slot.CONST_FORCE))
-    # the inputs' forces and moments, or the actuators' (`actuators.port_values`)
-    add_input_forces(_i(table, slot.INPUT_PORTS), port_values(table), x, r)
-    scatter_stress(table, sigma, r)
     quad, conv = _f(table, slot.G), _f(table, slot.CONV)
     conv[:] = 0.0
     rigid_h = _f(table, slot.RIGID_H)
@@ -209,6 +180,57 @@ def evaluate(table, q, qdot):
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     qddot_of_solution(table, rhs, _f(table, slot.XDDOT), True, quad, moving, qddot)
     return ed.OK
+
+
+@kernel(inline="always")  # into the entries of `evaluate` and `stage_force`, its callers
+def coordinate_forces(table, q, qdot):
+    """The front half of an evaluation at DOFs q and velocities qdot, shared by `evaluate`
+    and the ESDIRK's stage residual (`stage_force`): the kinematics with J's LU (slot x),
+    xdot (slot xdot), the slaves' c, the element rates (edot, and h into slot g if moving),
+    the stress resultants (slot sigma) and the coordinate force r = f + B u - De^T sigma_c
+    (slot force; N, N m) without the element masses' part. Counted in
+    counters[EVALUATIONS]. Returns (status, moving: whether any qdot is nonzero)."""
+    _i(table, slot.COUNTERS)[ed.EVALUATIONS] += 1
+    status = run(table, OP_CONFIGURATION, q.ctypes.data, 0, 0.0)  # solve_kinematics
+    if status != ed.OK:
+        return status, False
+    dims = _i(table, slot.DIMS)
+    nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
+    x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
+    dx = _f(table, slot.DX)
+    moving = any_nonzero(qdot)
+    reduced = dims[ed.AUGMENTED] == 0
+    rigid = dims[ed.NSLAVES] > 0
+    if reduced:  # xdot = DF qdot (zero at rest: the statics)
+        run(table, OP_DF, 0, 0, 0.0)  # kinematics.compute_DF
+        DF = _f(table, slot.DF)
+        for a in range(nx):
+            s = 0.0
+            if moving:
+                for j in range(ndof):
+                    s += DF[a * ndof + j] * qdot[j]
+            xdot[a] = s
+    else:  # xdot = J^-1 [0; qdot]
+        dof_rows(table, qdot, dx)
+        j_solve(table, dx, False)
+        xdot[:] = 0.0
+        for a in range(nf):
+            xdot[free[a]] = dx[a]
+        if rigid:  # the slaves': T zdot
+            run(table, OP_RIGID_EXPAND, xdot.ctypes.data, 0, 0.0)
+    if rigid:  # the slaves' second-order accelerations c (zero at rest)
+        run(table, OP_RIGID_CONVECTIVE, x.ctypes.data, xdot.ctypes.data, 0.0)
+    # edot and, if moving, the quadratic forms h of the constraint rows (slot g)
+    element_rates(table, xdot, moving)
+    sigma = stress_resultants(table)  # sigma_c = S e_s + D edot_s
+    # coordinate force r = f - De^T sigma_c; the caller adds gravity and g_conv of the element
+    # masses
+    r = _f(table, slot.FORCE)
+    copy(r, _f(table, slot.CONST_FORCE))
+    # the inputs' forces and moments, or the actuators' (`actuators.port_values`)
+    add_input_forces(_i(table, slot.INPUT_PORTS), port_values(table), x, r)
+    scatter_stress(table, sigma, r)
+    return ed.OK, moving
 
 
 @kernel

@@ -19,7 +19,7 @@ pattern of the augmented system's mass block (each element couples its own coord
 C_x and K_x alike; `newton_packing` checks it), so its sparse LU (`numerics.sparse_lu`) costs
 in proportion to the elements, as do J's solves and the products with M and K_x.
 
-Three operations (each the body of its C entry, compiled only for the models that take this
+Four operations (each the body of its C entry, compiled only for the models that take this
 path, dims[NEWTON_SPARSE] = 1):
 
     NEWTON_JACOBIAN  y: one evaluation at y, then M (with J_o beside and below it), C_x and
@@ -27,6 +27,8 @@ path, dims[NEWTON_SPARSE] = 1):
                      the ESDIRK's "new Jacobian"
     NEWTON_FACTOR    s = hg: H from them, factored (kept pivots, else pivoting afresh)
     NEWTON_SOLVE     v (2 NDOF,) <- (I - hg J)^-1 v; s = hg of the last NEWTON_FACTOR
+    NEWTON_FORCE_SOLVE  the same for v = [r1; hg g], the velocity half as a force
+                     (`stage_force`, whose OP_STAGE_FORCE comes with these)
 
 Everything is at the Jacobian's state (its own copies of J's LU and values), so the solve is
 (I - hg J)^-1 of the dense path's J to round-off (tests/test_sparse_newton.py). Units: M kg,
@@ -48,9 +50,11 @@ from .operations import (
     ENTRY,
     HESSIANS,
     NEWTON_OPERATIONS,
+    OP_ACCELERATIONS,
     OP_FORMED_RATES,
     OP_NEWTON_JACOBIAN,
     OP_RHS,
+    OP_STAGE_FORCE,
     run,
 )
 from .point_masses import element_mass, element_points, massless
@@ -58,10 +62,16 @@ from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
 from .slots import group_deformations, group_inertia, inertia_scratch
 from .slots import int_array as _i
+from .sparse_products import (
+    pattern_product,
+    pattern_product_pair,
+    pattern_product_transposed,
+)
 from .tangent import balance_force, balance_multipliers
 
 OPERATIONS = NEWTON_OPERATIONS  # this module's entries' operations, in `engine.ENTRIES`
-CALLS = {OP_NEWTON_JACOBIAN: (OP_RHS,)}  # the operations they call (`engine.CALLS`)
+# the operations they call (`engine.CALLS`): the stage force runs the evaluation's parts
+CALLS = {OP_NEWTON_JACOBIAN: (OP_RHS,), OP_STAGE_FORCE: (OP_ACCELERATIONS,)}
 EULER_PAIRS = 16  # `newton_packing.EULER_PAIRS`
 
 
@@ -81,38 +91,6 @@ def _factor(table, ints, floats):
         return True
     _i(table, slot.COUNTERS)[ed.SPARSE_PIVOTING] += 1
     return sparse_lu.factor(ints, floats, sparse_lu.THRESHOLD) >= 0.0
-
-
-@kernel
-def _product(ints, floats, values, v, out, limit, scale):
-    """out[r] += scale A[r, c] v[c] over the entries of the pattern packed in ints (floats:
-    its packed floats, for the views) with values `values`, rows and columns below limit."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
-    for j in range(n):
-        c = pcol[j]
-        if c >= limit or v[c] == 0.0:
-            continue
-        vc = scale * v[c]
-        for p in range(Ap[j], Ap[j + 1]):
-            if Ai[p] < limit:
-                out[Ai[p]] += values[p] * vc
-
-
-@kernel
-def _product_pair(ints, floats, first, v, second, w, out, limit, scale):
-    """out[r] += A1[r, c] v[c] + scale A2[r, c] w[c] over the entries of the pattern packed in
-    ints (floats: its packed floats, for the views), A1 and A2 with values `first` and
-    `second` on it, rows and columns below limit: `_product` of both in one pass over the
-    pattern."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
-    for j in range(n):
-        c = pcol[j]
-        if c >= limit or (v[c] == 0.0 and w[c] == 0.0):
-            continue
-        vc, wc = v[c], scale * w[c]
-        for p in range(Ap[j], Ap[j + 1]):
-            if Ai[p] < limit:
-                out[Ai[p]] += first[p] * vc + second[p] * wc
 
 
 @kernel
@@ -266,10 +244,13 @@ def factor(table, hg):
     return ed.OK if _factor(table, ints, floats) else ed.SINGULAR_MASS
 
 
-@kernel(inline="always")  # into its operation's entry, its one caller
-def solve(table, v, hg):
+@kernel(inline="always")  # into its operations' entries, its callers
+def solve(table, v, hg, force):
     """NEWTON_SOLVE: v (2 NDOF,) <- (I - hg J)^-1 v with the factors of the last `factor`
-    (made with this hg, s) and the Jacobian's J."""
+    (made with this hg, s) and the Jacobian's J. With `force` (NEWTON_FORCE_SOLVE) v's
+    second half is not r2 but hg g, the stage residual's velocity half as a force on the
+    DOFs (`stage_force`: hg g = M_bar(z) r2), taken as DF_J^T p = hg g by p = J_J^T [0; hg g]
+    in place of M a (DF_J = J_J^-1 [0; I], so DF_J^T J_J^T [0; w] = w)."""
     dims = _i(table, slot.DIMS)
     ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
@@ -278,15 +259,22 @@ def solve(table, v, hg):
     scratch = _f(table, slot.NEWTON_SCRATCH)
     na = scratch.size // 3
     a, b, rhs = scratch[:nf], scratch[na: na + nf], scratch[2 * na: 3 * na]
-    dof_rows(table, v[ndof: 2 * ndof], a)  # a = J^-1 [0; r2], b = J^-1 [0; r1]
-    dof_rows(table, v[:ndof], b)
-    sparse_lu.solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled below
     Mv, _, Kv = _parts(table)
-    rhs[:] = 0.0  # [M a - hg K_x b; 0]
-    _product_pair(h_ints, h_floats, Mv, a, Kv, b, rhs, nf, -hg)
+    dof_rows(table, v[ndof: 2 * ndof], a)  # [0; r2] (or [0; hg g]) on J's rows
+    dof_rows(table, v[:ndof], b)
+    if force:  # [J_J^T [0; hg g] - hg K_x b; 0], b = J^-1 [0; r1]
+        sparse_lu.solve(j_ints, j_floats, b, False)
+        rhs[:] = 0.0
+        pattern_product_transposed(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats),
+                                   a, rhs)
+        pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
+    else:  # a = J^-1 [0; r2], b = J^-1 [0; r1]; [M a - hg K_x b; 0]
+        sparse_lu.solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled
+        rhs[:] = 0.0
+        pattern_product_pair(h_ints, h_floats, Mv, a, Kv, b, rhs, nf, -hg)
     sparse_lu.solve(h_ints, h_floats, rhs, False)
     a[:] = 0.0  # J dx on J's rows: the DOF rows are dv
-    _product(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats), rhs, a, nf, 1.0)
+    pattern_product(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats), rhs, a, nf, 1.0)
     for j in range(n_xdof):
         dv = a[n_rigid + n_edof + j]
         v[ndof + j] = dv
@@ -314,5 +302,13 @@ def factor_entry(op, user_data, t, a, b, c, s):
 def solve_entry(op, user_data, t, a, b, c, s):
     """OP_NEWTON_SOLVE: v (a); s = hg (s)."""
     table = address_of(user_data)
-    solve(table, carray(a, (2 * _i(table, slot.DIMS)[ed.NDOF],), np.float64), s)
+    solve(table, carray(a, (2 * _i(table, slot.DIMS)[ed.NDOF],), np.float64), s, False)
+    return ed.OK
+
+
+@entry(ENTRY)
+def force_solve_entry(op, user_data, t, a, b, c, s):
+    """OP_NEWTON_FORCE_SOLVE: v = [r1; hg g] (a); s = hg (s)."""
+    table = address_of(user_data)
+    solve(table, carray(a, (2 * _i(table, slot.DIMS)[ed.NDOF],), np.float64), s, True)
     return ed.OK

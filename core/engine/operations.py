@@ -81,6 +81,10 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          s = HESSIANS: their D2e at the last kinematic solution, for the
                          tangent and the Newton matrix (`formed_rates`); compiled only for
                          models with such an element (the BEAM)
+    STAGE_FORCE          y, acc, g (may be acc): the ESDIRK's stage residual in mass form,
+                         g = M_bar (qddot(y) - acc) without factoring the augmented system
+                         (`stage_force`); with the Newton operations only
+    NEWTON_FORCE_SOLVE   v = [r1; hg g]; s = hg: NEWTON_SOLVE with the velocity half a force
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
@@ -111,8 +115,9 @@ ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
  OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
  OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS, OP_BEAM_MASSES,
- OP_FORMED_RATES) = range(39)
-NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE)
+ OP_FORMED_RATES, OP_STAGE_FORCE, OP_NEWTON_FORCE_SOLVE) = range(41)
+NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STAGE_FORCE,
+                     OP_NEWTON_FORCE_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)
 ROW_GROUPS_FROM = 150

@@ -37,7 +37,10 @@ Jacobian), kept across steps and samples; it is recomputed when a stage's Newton
 stage that converges slowly but converges only counts its iterations, below), and I - h g J
 is refactored only when J is new or h has moved more than 20 % from the h of the factors (on
 the sparse Newton matrix at every new h: `esdirk_kernels.SPARSE_LU_SLACK`); for large models
-through its Schur complement (`newton_matrix`).
+through its Schur complement (`newton_matrix`). On the sparse Newton matrix a stage's residual
+takes its velocity half in mass form, M_bar (f_v(z) - a_c) with a_c = (v - base_v) / (h g)
+(`engine.stage_force`): no factorisation of the augmented system per iteration, the same
+root, iterates that differ by the change of M_bar from the Newton matrix's state.
 Iterations stop when the estimated remaining error eta |dz| (eta =
 theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm above, as in
 Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
@@ -76,6 +79,7 @@ from .esdirk_kernels import (
     I_JACOBIAN,
     I_JACOBIANS,
     I_LU,
+    I_MASS_FORM,
     I_MAX_STEPS,
     I_NEWTON_FAILURES,
     I_ONE_STEP,
@@ -134,6 +138,7 @@ class Esdirk(Stepper):
         self.memory[M_EXPONENT] = 1.0 / (min(tableau.order, tableau.embedded_order) + 1)
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
         self.flags[I_HISTORY] = int(tableau.history)
+        self.flags[I_MASS_FORM] = 1  # the stages' residual in mass form on the sparse path
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)
         self.LU = np.zeros(n * n)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..engine import access, engine
 from ..engine import data as ed
-from ..engine.operations import OP_NEWTON_JACOBIAN
+from ..engine.operations import OP_NEWTON_JACOBIAN, OP_STAGE_FORCE
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
 from . import newton_matrix
@@ -23,7 +23,9 @@ from .newton_matrix import newton_solve
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_SIZE) = range(18)
+ I_HISTORY, I_EXTRA, I_MASS_FORM, I_SIZE) = range(19)
+# flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
+# their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
 # flags[I_REDUCED]: the Newton matrix's factors are the full matrix's (0), its Schur
 # complement's (1) or the engine's sparse ones (SPARSE_FACTORS, `newton_matrix`)
 SPARSE_FACTORS = 2
@@ -150,9 +152,39 @@ def _initial_step(table, memory, flags, vectors, atol, t_stop):
 
 
 @kernel
+def _mass_form_residual(table, z, base, hg, delta, flags, t):
+    """delta (2 NDOF,) = [base_q + hg v - q; hg g], the stage residual with its velocity half
+    in mass form, for z = [q, v]: g = M_bar (qddot(z) - a_c) (N, N m; `engine.stage_force`)
+    for the candidate accelerations a_c = (v - base_v) / hg, so that hg g = M_bar r2 where
+    r2 = base_v + hg qddot(z) - v is the velocity half of the accelerations' residual. Counted
+    as an evaluation of f (flags[I_RHS], counters[RHS_COUNT]; the engine counts it in
+    counters[EVALUATIONS]); its status."""
+    m = z.size // 2
+    acc = delta[m:]
+    for k in range(m):
+        acc[k] = (z[m + k] - base[m + k]) / hg
+    flags[I_RHS] += 1
+    counters = access.counters(table)
+    counters[ed.RHS_COUNT] += 1
+    status = call_engine(access.dims(table)[ed.ENGINE], OP_STAGE_FORCE, table, t, z.ctypes.data,
+                         acc.ctypes.data, acc.ctypes.data, 0.0)
+    if status != ed.OK:
+        counters[ed.FAILED_STATUS] = status
+        return status
+    for k in range(m):
+        delta[k] = base[k] + hg * z[m + k] - z[k]
+        delta[m + k] = hg * acc[k]
+    return ed.OK
+
+
+@kernel
 def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     """Solve stage i: z = base + h g f(z) by simplified Newton; F_i from the stage equation.
-    True when it converged."""
+    True when it converged. On the sparse Newton matrix (flags[I_REDUCED] = SPARSE_FACTORS,
+    flags[I_MASS_FORM] = 1) the residual's velocity half is taken in mass form
+    (`_mass_form_residual`), which needs no factorisation of the augmented system per
+    iteration: the same root, iterates that differ by (M_bar(z) - M_bar at the Jacobian's
+    state) r2, second order in the residual."""
     n = piv.size
     base, z, delta, weight = vectors[V_BASE], vectors[V_Z], vectors[V_DELTA], vectors[V_WEIGHT]
     y, F = vectors[V_Y], vectors[V_F:]
@@ -187,12 +219,18 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     if i == 1:
         eta = eta ** 0.8
     previous = 0.0
+    mass_form = flags[I_REDUCED] == SPARSE_FACTORS and flags[I_MASS_FORM] == 1
     for iteration in range(MAX_NEWTON):
-        if _f(table, z, F[i], flags, engine.OP_RHS, t_stage) != ed.OK:
-            return False
-        for k in range(n):
-            delta[k] = base[k] + hg * F[i, k] - z[k]
-        solve(table, J, LU, piv, memory, flags, delta)
+        if mass_form:
+            if _mass_form_residual(table, z, base, hg, delta, flags, t_stage) != ed.OK:
+                return False
+            newton_matrix.sparse_force_solve(table, memory[M_H_LU], delta)
+        else:
+            if _f(table, z, F[i], flags, engine.OP_RHS, t_stage) != ed.OK:
+                return False
+            for k in range(n):
+                delta[k] = base[k] + hg * F[i, k] - z[k]
+            solve(table, J, LU, piv, memory, flags, delta)
         for k in range(n):
             z[k] += delta[k]
         norm = _norm(delta, weight)

@@ -37,7 +37,7 @@ dense path's. Costs grow with the element count.
 
 from ..engine import access, engine
 from ..engine import data as ed
-from ..engine.operations import OP_NEWTON_FACTOR, OP_NEWTON_SOLVE
+from ..engine.operations import OP_NEWTON_FACTOR, OP_NEWTON_FORCE_SOLVE, OP_NEWTON_SOLVE
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
 
@@ -115,3 +115,14 @@ def sparse_solve(table, hg, v):
     this hg, s)."""
     call_engine(access.dims(table)[ed.ENGINE], OP_NEWTON_SOLVE, table, 0.0, v.ctypes.data, 0,
                 0, hg)
+
+
+@kernel
+def sparse_force_solve(table, hg, v):
+    """v (2 NDOF,) <- (I - hg J)^-1 [r1; r2] given v = [r1; hg g], the velocity half as the
+    force hg g = M_bar r2 (N s, N m s; the ESDIRK's stage residual in mass form,
+    `engine.stage_force`), with the factors of the last `sparse_factor` (made with this hg,
+    s): the same as `sparse_solve` of [r1; r2] but for M_bar at the iterate against M_bar at
+    the Jacobian's state."""
+    call_engine(access.dims(table)[ed.ENGINE], OP_NEWTON_FORCE_SOLVE, table, 0.0,
+                v.ctypes.data, 0, 0, hg)

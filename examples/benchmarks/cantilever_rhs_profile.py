@@ -8,7 +8,9 @@ The whole rhs is timed two ways: at that one state (the kinematics' warm start l
 chord step) and alternating it with the state one step later (the chord steps a run sees).
 Each part is a kernel of `core/engine` called `count` times in a compiled loop; the loop's
 own overhead is a few ns a call. Parts that leave their result in the slots (a
-factorisation) are timed with what must precede them, and the difference is reported.
+factorisation) are timed with what must precede them, and the difference is reported. The
+last row is what a residual in mass form takes instead of the inertia and the rigid rows
+into A: `inertia_product.force_minus_mass` (rhs_f - M_ff w_f, no mass assembled).
 
 python -m examples.benchmarks.cantilever_rhs_profile 16 64
 """
@@ -38,6 +40,7 @@ def _loops():
         j_factor,
         j_solve,
     )
+    from flexure.core.engine.inertia_product import force_minus_mass
     from flexure.core.engine.kinematics import deformations
     from flexure.core.engine.motion import inertia_forces, qddot_of_solution
     from flexure.core.engine.operations import OP_CONFIGURATION, OP_RHS, run
@@ -126,9 +129,15 @@ def _loops():
                               True, _f(table, slot.QDDOT))
         return dims[0]
 
+    @kernel
+    def product(table, r, w_f, a, total, out_f, count):
+        x, xdot = _f(table, slot.X), _f(table, slot.XDOT)
+        for _ in range(count):
+            force_minus_mass(table, x, xdot, True, r, w_f, a, total, out_f)
+
     return dict(rhs=rhs, configuration=configuration, elements=elements, factor_j=factor_j,
                 solve_j=solve_j, rates=rates, stresses=stresses, assembly=assembly, clear=clear,
-                resolve=resolve, solution=solution)
+                resolve=resolve, solution=solution, product=product)
 
 
 def profile(n, *, at=CANTILEVER_AT, count=300):
@@ -183,6 +192,11 @@ def profile(n, *, at=CANTILEVER_AT, count=300):
     parts["a solve with A"] = _time(loops["resolve"], (table,), count)
     loops["rhs"](table, one, ydot, 1)
     parts["qddot from the solution"] = _time(loops["solution"], (table,), count)
+    nx, nf = int(dims[ed.NX]), int(dims[ed.NFREE])
+    w_f = data.float_array("augmented_rhs")[:nf].copy()  # any accelerations: the same cost
+    parts["force_minus_mass (inertia_product)"] = _time(
+        loops["product"], (table, data.float_array("force").copy(), w_f, np.zeros(nx),
+                           np.zeros(nx), np.zeros(nf)), count)
     sizes = {"n_free": int(dims[ed.NFREE]), "n_rigid": int(dims[ed.NRIGID]),
              "J kl, ku": (int(dims[ed.J_KL]), int(dims[ed.J_KU])),
              "A kl, ku": (int(dims[ed.A_KL]), int(dims[ed.A_KU])),

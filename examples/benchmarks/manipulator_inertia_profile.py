@@ -12,7 +12,10 @@ another form of that product with, the generic `rigid_kernels.touching_mass` alo
 docs/benchmarks.md, session 32); for every other massive element its element mass and
 assembly; the lumped masses; the folded clusters' rigid bodies. The whole of
 `inertia_forces` is timed as well, A cleared before each call (`augmented_matrix`, timed
-alone and subtracted); the parts' loops clear it once.
+alone and subtracted); the parts' loops clear it once. Last, what a residual in mass form
+takes instead: `inertia_product.force_minus_mass` (rhs_f - M_ff w_f, no mass assembled)
+against what it replaces, `inertia_forces` with the rigid rows into A and rhs_f condensed
+(T^T (r - M c)), A's clearing included in both rows of that pair.
 
 python -m examples.benchmarks.manipulator_inertia_profile
 """
@@ -31,11 +34,13 @@ def _loops():
     from flexure.core.engine.factors import (
         add_element_mass,
         add_lumped,
+        add_rigid_rows,
         augmented_matrix,
         mass_entries_start,
     )
+    from flexure.core.engine.inertia_product import force_minus_mass
     from flexure.core.engine.motion import inertia_forces, touching_element_mass
-    from flexure.core.engine.operations import OP_RIGID_BODIES
+    from flexure.core.engine.operations import OP_RIGID_BODIES, OP_RIGID_CONDENSE, run
     from flexure.core.engine.point_masses import (
         add_point_forces,
         element_mass,
@@ -141,7 +146,33 @@ def _loops():
             call_engine(dims[ed.ENGINE], OP_RIGID_BODIES, table, float(A.size), A.ctypes.data,
                         0, 0, BODIES_MOVING)
 
-    return dict(clear=clear, whole=whole, elements=elements, lumped=lumped, bodies=bodies)
+    @kernel
+    def replaced(table, total, count):
+        """What `force_minus_mass` replaces in `motion.evaluate`: A cleared, the inertia and
+        the rigid rows into it, rhs_f condensed (total (NX,) scratch)."""
+        dims = _i(table, slot.DIMS)
+        nf = dims[ed.NFREE]
+        na = nf + dims[ed.NRIGID]
+        x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.X_TRIAL)
+        rhs = _f(table, slot.AUG_RHS)
+        rigid_force = _f(table, slot.RIGID_FORCE)
+        for _ in range(count):
+            A = augmented_matrix(table)
+            inertia_forces(table, x, xdot, True, r, A, na)
+            add_rigid_rows(table, A, na)
+            for a in range(dims[ed.NX]):
+                total[a] = r[a] + rigid_force[a]
+            run(table, OP_RIGID_CONDENSE, total.ctypes.data, rhs.ctypes.data, 0.0)
+
+    @kernel
+    def product(table, r, w_f, a, total, out_f, count):
+        """`force_minus_mass` moving, at the slots' x and xdot."""
+        x, xdot = _f(table, slot.X), _f(table, slot.XDOT)
+        for _ in range(count):
+            force_minus_mass(table, x, xdot, True, r, w_f, a, total, out_f)
+
+    return dict(clear=clear, whole=whole, elements=elements, lumped=lumped, bodies=bodies,
+                replaced=replaced, product=product)
 
 
 def _time(function, args, count):
@@ -189,6 +220,15 @@ def profile(name="manipulator_control", *, count=300):
     parts["others: assembly into A"] = stages[2] - stages[1]
     parts["lumped masses"] = _time(loops["lumped"], (table,), count)
     parts["folded clusters' rigid bodies"] = _time(loops["bodies"], (table,), count)
+    dims = data.int_array("dims")
+    nx, nf = int(dims[ed.NX]), int(dims[ed.NFREE])
+    parts["inertia, rigid rows into A, rhs_f (replaced)"] = _time(
+        loops["replaced"], (table, np.zeros(nx)), count)
+    w_f = data.float_array("augmented_rhs")[:nf].copy()  # any accelerations: the cost is
+    # the same; these are the last evaluation's
+    scratch = (np.zeros(nx), np.zeros(nx), np.zeros(nf))
+    parts["force_minus_mass (inertia_product)"] = _time(
+        loops["product"], (table, data.float_array("force").copy(), w_f) + scratch, count)
     return parts
 
 

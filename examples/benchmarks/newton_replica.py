@@ -4,7 +4,9 @@ stage's Newton can converge.
 
 - `replay`: the compiled step (order-4 "esdirk" tableau, no inputs, no history predictor:
   the spatial cantilever's case) retraced in Python with the engine's RHS, NEWTON_JACOBIAN,
-  NEWTON_FACTOR and NEWTON_SOLVE, recording per attempt t, h, hg, the error estimate and per
+  NEWTON_FACTOR and NEWTON_SOLVE, and the stages' residual in mass form as the compiled
+  stage takes it on this path (STAGE_FORCE and NEWTON_FORCE_SOLVE, `engine.stage_force`),
+  recording per attempt t, h, hg, the error estimate and per
   stage the Newton iterations, the contractions theta and the last |dz| (the weighted RMS
   norm of the step's error test: 1 = the error a step may make), and the hg (s) of the
   Newton matrix it used. Its counts (steps,
@@ -26,7 +28,13 @@ import numpy as np
 from flexure.core import Simulator
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
-from flexure.core.engine.operations import OP_NEWTON_FACTOR, OP_NEWTON_JACOBIAN, OP_NEWTON_SOLVE
+from flexure.core.engine.operations import (
+    OP_NEWTON_FACTOR,
+    OP_NEWTON_FORCE_SOLVE,
+    OP_NEWTON_JACOBIAN,
+    OP_NEWTON_SOLVE,
+    OP_STAGE_FORCE,
+)
 from flexure.core.simulation import esdirk_kernels as K
 
 
@@ -63,6 +71,16 @@ class Replay:
         """v <- (I - hg J)^-1 v in place with the last factors."""
         engine.call(self.data, OP_NEWTON_SOLVE, v, s=self.hg_lu)
 
+    def mass_form_residual(self, z, base, hg, t):
+        """(status, [base_q + hg v - q; hg g]) at z = [q, v], g = M_bar (qddot(z) - a_c) for
+        a_c = (v - base_v) / hg (`esdirk_kernels._mass_form_residual`), counted as an rhs."""
+        n = z.size // 2
+        acc = (z[n:] - base[n:]) / hg
+        g = np.zeros(n)
+        self.rhs += 1
+        status = engine.call(self.data, OP_STAGE_FORCE, np.ascontiguousarray(z), acc, g, t=t)
+        return status, np.concatenate([base[:n] + hg * z[n:] - z[:n], hg * g])
+
     def stage(self, i, t, h, y, F, eta):
         """Stage i's simplified Newton (`esdirk_kernels._stage`): (converged, eta, record,
         z)."""
@@ -74,11 +92,10 @@ class Replay:
         eta = max(eta, 1e-16) ** (0.8 if i == 1 else 1.0)
         previous, thetas = 0.0, []
         for iteration in range(K.MAX_NEWTON):
-            status, Fi = self.f(z, t + A[i, : i + 1].sum() * h)
+            status, delta = self.mass_form_residual(z, base, hg, t + A[i, : i + 1].sum() * h)
             if status != ed.OK:
                 break
-            delta = base + hg * Fi - z
-            self.solve(delta)
+            engine.call(self.data, OP_NEWTON_FORCE_SOLVE, delta, s=self.hg_lu)
             z = z + delta
             norm = weighted_norm(delta, weight)
             if iteration > 0:

@@ -1,0 +1,140 @@
+"""The force less the inertia of given accelerations, rhs_f - M_ff w_f, without assembling M.
+
+`motion.evaluate` solves the augmented system [M_ff J_o^T; J_o 0] whose first rows carry
+rhs_f, the coordinate force r = f - De^T sigma_c with the element masses' point forces
+(gravity, -g_conv) on the free coordinates (with rigid clusters: on z, T^T (r - M c)), and
+the mass block M_ff (`motion.inertia_forces`: lumped masses, element masses Dp^T Mp Dp, the
+touching elements' Dp_z^T Mp Dp_z, the folded clusters' rigid bodies). A residual in mass
+form needs only rhs_f - M_ff w_f for an acceleration w_f (m/s^2, 1/s^2 on the Euler
+parameters). Since M_ff = T^T M T on z and the slaves' accelerations are T w + c,
+
+    rhs_f - M_ff w_f = T^T (r + sum_p Dp^T Mp (g_p - (D2p v) v - Dp a) - diag(lumped) a)
+                       + the folded clusters' forces - M_z a_z,     a = [w_f; T w_f + c]
+
+on x: every element's points once (Dp, (D2p v) v), one product Dp a_e, Mp and Dp^T per
+element (a BEAM in closed form, `beam_mass.beam_point_product`: about 250 multiplications
+against about 7000 to form a touching BEAM's T_e^T Dp^T Mp Dp T_e and its assembly), and T^T
+once for the whole model (`rigid_kernels.condense`). The same sums as the assembled path in
+another order: equal to round-off (tests/test_inertia_product.py). The rigid clusters' maps
+and the folded clusters' rigid bodies are reached through their operations, so a model
+without them compiles none of theirs here. Units as the coordinates: N, N m; kg, kg m, kg m^2.
+"""
+
+import numpy as np
+
+from ..elements.beam_mass import M as BEAM_M
+from ..elements.beam_mass import beam_blocks_only, beam_pattern, beam_point_product
+from ..numerics.dense import copy
+from ..numerics.jit import kernel
+from ..numerics.native import call_engine
+from . import data as ed
+from . import slots as slot
+from .operations import OP_RIGID_BODIES, OP_RIGID_CONDENSE, OP_RIGID_EXPAND, run
+from .point_masses import element_points, point_forces
+from .rigid_inertia_kernels import PRODUCT_AT_REST, PRODUCT_MOVING, own_mass
+from .slots import float_array as _f
+from .slots import group, group_inertia, inertia_scratch, rigid_element
+from .slots import int_array as _i
+
+
+@kernel
+def force_minus_mass(table, x, xdot, moving, r, w_f, a, total, out_f):
+    """out_f (n_free,; N, N m) = rhs_f - M_ff w_f, the augmented system's first n_free rows
+    of `motion.evaluate` less its mass block times w_f, without forming that block; a status
+    (ed.NONFINITE_RESULT when out_f is not finite, else ed.OK).
+
+    x, xdot (NX,; m, Euler parameters, and their rates): the coordinates and velocities with
+    the slaves' filled and, with rigid clusters, their c in slot rigid_c (as `evaluate`
+    leaves them before its inertia); moving: whether xdot is not zero (at rest neither
+    (D2p v) v nor c is formed); r (NX,; N, N m): f - De^T sigma_c, the force before the
+    inertia (read only); w_f (n_free,): the accelerations of the free coordinates in their
+    order (slot free). a and total (NX,) are scratch: on return a holds the accelerations
+    on x (w_f, the slaves' T w_f + c, zero on the fixed coordinates) and total the force on
+    x before T^T. With folded clusters x and xdot must be slots x and xdot (their operation
+    reads those); T's weights are those of the last kinematic solution. Works in slot
+    local's inertia scratch (as `inertia_forces`) and, with folded clusters, slot
+    rigid_local."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    rigid = dims[ed.NSLAVES] > 0
+    a[:] = 0.0
+    for k in range(nf):
+        a[free[k]] = w_f[k]
+    if rigid:  # the slaves' T w + c
+        run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 1.0 if moving else 0.0)
+    copy(total, r)
+    lumped = _f(table, slot.LUMPED)
+    for c in range(dims[ed.NX]):  # where A has them: on the free coordinates
+        if col_of_coord[c] >= 0:
+            total[c] -= lumped[c] * a[c]
+    element_products(table, x, xdot, moving, a, total)
+    if rigid and _i(table, slot.RIGID_BODIES).size:  # through their operation, which only
+        # a model with a folded cluster compiles (`rigid_inertia_kernels`)
+        call_engine(dims[ed.ENGINE], OP_RIGID_BODIES, table, 0.0, a.ctypes.data,
+                    total.ctypes.data, 0, PRODUCT_MOVING if moving else PRODUCT_AT_REST)
+    if rigid:  # T^T total on z
+        run(table, OP_RIGID_CONDENSE, total.ctypes.data, out_f.ctypes.data, 0.0)
+    else:
+        for k in range(nf):
+            out_f[k] = total[free[k]]
+    for k in range(nf):
+        if not np.isfinite(out_f[k]):
+            return ed.NONFINITE_RESULT
+    return ed.OK
+
+
+@kernel
+def element_products(table, x, xdot, moving, a, total):
+    """total (NX,; N, N m) += Dp^T Mp (g_p - (D2p v) v - Dp a_e) of every element that
+    `motion.inertia_forces` visits (all with inertia points but the touching elements whose
+    mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving.
+    A BEAM (its group's mass pattern the BEAM's, its Dp of the BEAM's blocks) in closed form
+    (`beam_mass.beam_point_product`), any other element through Dp's full rows."""
+    dims = _i(table, slot.DIMS)
+    rigid = dims[ed.NSLAVES] > 0
+    for g in range(dims[ed.NGROUPS]):
+        row = group(table, g)
+        inertia = group_inertia(table, g)
+        n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
+        beams = m == BEAM_M and beam_pattern(pattern)
+        scratch = inertia_scratch(table, 0, P, m)
+        xl, vl, point, acc, w, Dp, _ = scratch
+        for i in range(n):
+            if rigid:
+                t = rigid_element(table, row, i)
+                if t >= 0 and not own_mass(table, t):
+                    continue
+            element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
+            for pp in range(P):
+                point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
+            Mp = masses[i * P * P: (i + 1) * P * P]
+            # a_e into the scratch's x, Dp^T w into its v: the points read them, and are done
+            for b in range(m):
+                xl[b] = a[coords[i * m + b]]
+            if beams and beam_blocks_only(Dp):
+                beam_point_product(Mp, Dp, xl, point, w, vl)
+            else:
+                element_product(Mp, pattern, P, m, Dp, xl, point, w, vl)
+            for b in range(m):
+                total[coords[i * m + b]] += vl[b]
+
+
+@kernel
+def element_product(Mp, pattern, P, m, Dp, a_e, point, w, out_e):
+    """point (P,) -= Dp a_e, w = Mp point over `pattern` (flat p P + q), out_e (m,) = Dp^T w,
+    for any element (Dp (P, m), a_e (m,)): column by column and row by row, so that the sums
+    are P and m independent ones rather than chains of m and P."""
+    for b in range(m):
+        ab = a_e[b]
+        if ab != 0.0:
+            for pp in range(P):
+                point[pp] -= Dp[pp, b] * ab
+    point_forces(Mp, pattern, P, point, w)
+    for b in range(m):
+        out_e[b] = 0.0
+    for pp in range(P):
+        wp = w[pp]
+        if wp != 0.0:
+            for b in range(m):
+                out_e[b] += Dp[pp, b] * wp
