@@ -81,9 +81,11 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          s = HESSIANS: their D2e at the last kinematic solution, for the
                          tangent and the Newton matrix (`formed_rates`); compiled only for
                          models with such an element (the BEAM)
-    STAGE_FORCE          y, acc, g (may be acc): the ESDIRK's stage residual in mass form,
-                         g = M_bar (qddot(y) - acc) without factoring the augmented system
-                         (`stage_force`); with the Newton operations only
+    STAGE_FORCE          s = FORCE: y, acc, g (may be acc): the ESDIRK's stage residual in
+                         mass form, g = M_bar (qddot(y) - acc) without forming the augmented
+                         system; s = FACTOR_A: that system assembled and factored at the
+                         last stage force's state, for `input_response` (`stage_force`);
+                         with the Newton operations only
     NEWTON_FORCE_SOLVE   v = [r1; hg g]; s = hg: NEWTON_SOLVE with the velocity half a force
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
