@@ -35,7 +35,6 @@ from flexure.core.engine.operations import (
     OP_NEWTON_SOLVE,
     OP_STAGE_FORCE,
 )
-from flexure.core.engine.stage_force import A_AT_STAGE
 from flexure.core.simulation.esdirk_kernels import I_MASS_FORM
 from tests.compiled_loops import run_compiled_loop
 from tests.test_engine import close, random_states
@@ -142,7 +141,7 @@ def test_the_input_response_after_a_stage_force_is_the_change_of_the_rhs(name, m
                                 strict=True):
         n = y.size // 2
         stage_force(data, y, u0, np.zeros(n))
-        assert data.int_array("dims")[ed.A_FACTORS] == A_AT_STAGE
+        assert data.int_array("dims")[ed.A_FACTORS] == ed.A_AT_STAGE
         data.float_array("inputs")[:] = u1
         change = np.full(n, np.nan)
         assert engine.call(data, engine.OP_INPUT_RESPONSE, change) == ed.OK

@@ -22,6 +22,7 @@ import numpy as np
 
 from . import layout, packing, packing_check, sparse_packing
 from .packing import (
+    A_AT_STAGE,
     A_GAIN,
     A_KM,
     A_L,
@@ -200,7 +201,8 @@ def evaluation_cost(n_free, n_rigid, ndof, groups, bands=None, sparse=None):
     return {"reduced": reduced, "augmented": augmented, **lu_kinds}
 
 
-__all__ = ["A_GAIN", "A_KM", "A_L", "A_R", "A_SATURATION", "A_WIDTH", "BANDED_FACTORS",
+__all__ = ["A_AT_STAGE", "A_GAIN", "A_KM", "A_L", "A_R", "A_SATURATION", "A_WIDTH",
+           "BANDED_FACTORS",
            "CURRENT_DRIVE", "FLOAT_SLOTS", "FORCE_INPUT", "INT_SLOTS", "NO_FACTORS",
            "SPARSE_FACTORS", "VOLTAGE_DRIVE", "EngineData", "banded_multiplications",
            "evaluation_cost"]

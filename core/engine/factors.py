@@ -316,23 +316,30 @@ def add_rigid_rows(table, A, na):
 
 
 @kernel
-def augmented_solve(table, A, na, rhs):
-    """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
-    then the rigid rows); False when A is singular."""
+def augmented_factor(table, A, na):
+    """Factor the assembled A, sparse or in its band storage as the model was packed
+    (dims[A_FACTORS] then says which); False when A is singular."""
     dims = _i(table, slot.DIMS)
-    band = _f(table, slot.AUG)
     if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in its band storage
         ratio = _sparse_factor(table, SPARSE_AUGMENTED)
         if ratio >= 0.0:
-            run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
             dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
             return True
         if np.isnan(ratio):  # its operation not connected
             return False
-    if not banded.factor(band, na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
+    if not banded.factor(_f(table, slot.AUG), na, _i(table, slot.AUG_PIVOTS), dims[ed.A_KL],
                          dims[ed.A_KU]) > 0.0:
         return False
     dims[ed.A_FACTORS] = ed.BANDED_FACTORS
+    return True
+
+
+@kernel
+def augmented_solve(table, A, na, rhs):
+    """Factor the assembled A and solve A z = rhs in place (rhs (na,): the free coordinates,
+    then the rigid rows); False when A is singular."""
+    if not augmented_factor(table, A, na):
+        return False
     augmented_resolve(table, na, rhs)
     return True
 
@@ -340,7 +347,7 @@ def augmented_solve(table, A, na, rhs):
 @kernel
 def augmented_resolve(table, na, rhs):
     """Solve A z = rhs in place (rhs (na,) as `augmented_solve`'s) with the factors the last
-    successful `augmented_solve` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
+    successful `augmented_factor` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
     dims = _i(table, slot.DIMS)
     if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:
         run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))

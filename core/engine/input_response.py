@@ -25,11 +25,10 @@ from . import data as ed
 from . import slots as slot
 from .factors import augmented_resolve
 from .motion import qddot_of_solution
-from .operations import OP_RIGID_CONDENSE, OP_STAGE_FORCE, run
+from .operations import FACTOR_A, OP_RIGID_CONDENSE, OP_STAGE_FORCE, run
 from .ports import add_input_forces
 from .slots import float_array as _f
 from .slots import int_array as _i
-from .stage_force import A_AT_STAGE, FACTOR_A
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -54,7 +53,7 @@ def input_response(table, out):
         changed = changed or du[j] != 0.0
     if not changed:
         return ed.OK
-    if dims[ed.A_FACTORS] == A_AT_STAGE:  # A at a stage force's state, made once, by its
+    if dims[ed.A_FACTORS] == ed.A_AT_STAGE:  # A at a stage force's state, made once, by its
         # operation (compiled only where stage forces are)
         status = run(table, OP_STAGE_FORCE, 0, 0, FACTOR_A)
         if status != ed.OK:

@@ -193,6 +193,18 @@ def dof_rows(table, v, out):
 
 
 @kernel
+def dof_values(table, rows, out):
+    """out (NDOF,) = the DOF rows of `rows` (n_free,, a vector on J's rows), coordinate DOFs
+    first: `dof_rows` undone; of J^-T w they are DF^T w."""
+    dims = _i(table, slot.DIMS)
+    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
+    for j in range(n_xdof):
+        out[j] = rows[n_rigid + n_edof + j]
+    for j in range(n_edof):
+        out[n_xdof + j] = rows[n_rigid + j]
+
+
+@kernel
 def compute_DF(table):
     """DF (NX, NDOF) into slot DF from the LU of J of the last kinematic solution: J DF =
     [0; I] column by column (NDOF solves)."""

@@ -125,6 +125,8 @@ RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 ROW_GROUPS_FROM = 150
 # OP_FORMED_RATES's two jobs (s)
 RATES, HESSIANS = 0.0, 1.0
+# OP_STAGE_FORCE's two jobs (s): the stage force, or the augmented system at its state
+FORCE, FACTOR_A = 0.0, 1.0
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 

@@ -26,6 +26,9 @@ FORCE_INPUT, CURRENT_DRIVE, VOLTAGE_DRIVE = range(3)
 (A_KM, A_R, A_L, A_GAIN, A_SATURATION, A_WIDTH) = range(6)
 # dims[J_FACTORS], dims[A_FACTORS]: which factors of J and of the augmented system are current
 NO_FACTORS, BANDED_FACTORS, SPARSE_FACTORS = range(-1, 2)
+# dims[A_FACTORS] only: a stage force's state in the slots, the augmented system neither
+# assembled nor factored there (`stage_force`; `input_response` has it made)
+A_AT_STAGE = 2
 RIGID_DATA_WIDTH = 48  # constants per slave node (`mechanics.rigid_bodies.RigidLayout.data`)
 
 

@@ -34,20 +34,13 @@ from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
-from .factors import add_rigid_rows, augmented_matrix, augmented_solve, j_solve
+from .factors import add_rigid_rows, augmented_factor, augmented_matrix, j_solve
 from .inertia_product import force_minus_mass
-from .kinematics import dof_rows
+from .kinematics import dof_rows, dof_values
 from .motion import any_nonzero, coordinate_forces, inertia_forces
-from .operations import ENTRY
+from .operations import ENTRY, FACTOR_A
 from .slots import float_array as _f
 from .slots import int_array as _i
-
-# dims[A_FACTORS] after a stage force: its state in the slots, A neither assembled nor
-# factored there (the packing's NO_FACTORS, BANDED_FACTORS, SPARSE_FACTORS are -1, 0, 1)
-A_AT_STAGE = 2
-# the operation's jobs (s): the stage force, or A assembled and factored at the last one's
-# state for `input_response`
-FORCE, FACTOR_A = 0.0, 1.0
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -75,7 +68,7 @@ def stage_force(table, y, acc, out):
         return status
     dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
     x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
-    dims[ed.A_FACTORS] = A_AT_STAGE  # for `input_response`, should it need A (`factor_a`)
+    dims[ed.A_FACTORS] = ed.A_AT_STAGE  # for `input_response`, should it need A (`factor_a`)
     inputs = _f(table, slot.INPUTS)  # the inputs A's force is of, for `input_response`
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     xddot = _f(table, slot.DX)  # xddot_c = J^-1 ([0; acc] - h) on the free coordinates
@@ -92,12 +85,8 @@ def stage_force(table, y, acc, out):
                               _f(table, slot.X_TRIAL), w[:nf])
     if status != ed.OK:
         return status
-    j_solve(table, w[:nf], True)  # J^-T w on J's rows: its DOF rows are DF^T w
-    n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
-    for j in range(n_xdof):
-        out[j] = w[n_rigid + n_edof + j]
-    for e in range(n_edof):
-        out[n_xdof + e] = w[n_rigid + e]
+    j_solve(table, w[:nf], True)  # J^-T w on J's rows
+    dof_values(table, w, out)  # DF^T w
     for j in range(n):
         if not np.isfinite(out[j]):
             return ed.NONFINITE_RESULT
@@ -115,9 +104,7 @@ def factor_a(table):
     A = augmented_matrix(table)
     inertia_forces(table, x, xdot, any_nonzero(xdot), r, A, na)
     add_rigid_rows(table, A, na)
-    rhs = _f(table, slot.AUG_RHS)  # a zero right-hand side: the factors are the point
-    rhs[:na] = 0.0
-    return ed.OK if augmented_solve(table, A, na, rhs) else ed.SINGULAR_MASS
+    return ed.OK if augmented_factor(table, A, na) else ed.SINGULAR_MASS
 
 
 @entry(ENTRY)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..engine import access, engine
 from ..engine import data as ed
-from ..engine.operations import OP_NEWTON_JACOBIAN, OP_STAGE_FORCE
+from ..engine.operations import FORCE, OP_NEWTON_JACOBIAN, OP_STAGE_FORCE
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
 from . import newton_matrix
@@ -167,7 +167,7 @@ def _mass_form_residual(table, z, base, hg, delta, flags, t):
     counters = access.counters(table)
     counters[ed.RHS_COUNT] += 1
     status = call_engine(access.dims(table)[ed.ENGINE], OP_STAGE_FORCE, table, t, z.ctypes.data,
-                         acc.ctypes.data, acc.ctypes.data, 0.0)
+                         acc.ctypes.data, acc.ctypes.data, FORCE)
     if status != ed.OK:
         counters[ed.FAILED_STATUS] = status
         return status
