@@ -38,7 +38,7 @@ from .factors import add_rigid_rows, augmented_factor, augmented_matrix, j_solve
 from .inertia_product import force_minus_mass
 from .kinematics import dof_rows, dof_values
 from .motion import any_nonzero, coordinate_forces, inertia_forces
-from .operations import ENTRY, FACTOR_A
+from .operations import ENTRY, FACTOR_A, OP_RIGID_RATES, run
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -73,10 +73,15 @@ def stage_force(table, y, acc, out):
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     xddot = _f(table, slot.DX)  # xddot_c = J^-1 ([0; acc] - h) on the free coordinates
     dof_rows(table, acc, xddot)
-    if moving:
+    if moving:  # h on J's rows; with rigid clusters also the slaves' c (as `evaluate`)
         quad = _f(table, slot.G)
         for a in range(nf):
             xddot[a] -= quad[a]
+        if dims[ed.NSLAVES] > 0:
+            run(table, OP_RIGID_RATES, 0, 0, 0.0)
+            rigid_h = _f(table, slot.RIGID_H)
+            for a in range(nf):
+                xddot[a] -= rigid_h[a]
     j_solve(table, xddot, False)
     # w = rhs_f - M_ff xddot_c without assembling M (`inertia_product`); slot xddot gets the
     # coordinates' accelerations at acc, slot x_trial the force before T^T
