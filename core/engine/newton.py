@@ -17,7 +17,9 @@ DF = J^-1 [0; I], that is the saddle-point system on the free coordinates
 and dv = (J's DOF rows) dx: DF^T J_o^T = 0, and J_o dx = 0 makes dx = DF dv. H has the
 pattern of the augmented system's mass block (each element couples its own coordinates in M,
 C_x and K_x alike; `newton_packing` checks it), so its sparse LU (`numerics.sparse_lu`) costs
-in proportion to the elements, as do J's solves and the products with M and K_x.
+in proportion to the elements, as do J's solves and the products with M and K_x. With rigid
+clusters all of it is on the reduced free coordinates z, J the reduced one (`rigid`), and H's
+terms of the clusters are `newton_rigid`'s.
 
 Four operations (each the body of its C entry, compiled only for the models that take this
 path, dims[NEWTON_SPARSE] = 1):

@@ -22,9 +22,10 @@ and r - M xddot_c element by element without forming M (`inertia_product.force_m
 in place of A's assembly, factorisation and solve. dims[A_FACTORS] = A_AT_STAGE then says
 that A is of no state: `input_response`, asked for the first stage after the inputs changed,
 has the operation assemble and factor it at the stage's (FACTOR_A). Only for
-models with the sparse Newton matrix (dims[NEWTON_SPARSE] = 1: no rigid clusters, no coil
-currents, no kinematic inputs), whose entry `engine.connect` gives with the Newton
-matrix's.
+models with the sparse Newton matrix (dims[NEWTON_SPARSE] = 1: no coil currents, no
+kinematic inputs), whose entry `engine.connect` gives with the Newton matrix's. With rigid
+clusters everything is on the reduced coordinates z as in `evaluate`: h on J's rows with the
+slaves' c (rigid_h), and the force on z (`force_minus_mass`: T^T, the folded clusters).
 """
 
 import numpy as np
