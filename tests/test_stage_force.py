@@ -190,14 +190,16 @@ def test_the_cantilever_run_in_mass_form_is_the_run_in_accelerations():
 
 
 @pytest.mark.slow
-def test_the_manipulator_loop_in_mass_form_tracks_as_in_accelerations():
+@pytest.mark.parametrize("rigid", [False, True])
+def test_the_manipulator_loop_in_mass_form_tracks_as_in_accelerations(rigid):
     """A 10 ms move of manipulator_control at 4 kHz (esdirk, rtol 1e-6, the compiled loop,
     whose first stage after each input change takes the input response from a stage force's
-    A; without slave elimination, so that it takes the sparse Newton path) with the mass form
-    against the accelerations' form: the positions within 0.05 rtol of the stroke (the
-    Newton tolerance, as above; measured 3.5e-10 of the stroke, 3.5e-4 rtol), the forces
-    within 1e-5 of the largest (measured 2.4e-7: the feedback's gain from the loops'
-    outputs, the held loops' with them, to the forces)."""
+    A; without slave elimination and with it, both on the sparse Newton path) with the mass
+    form against the accelerations' form: the positions within 0.05 rtol of the stroke (the
+    Newton tolerance, as above; measured 3.5e-10 of the stroke, 3.5e-4 rtol, with and
+    without elimination), the forces within 1e-5 of the largest (measured 2.4e-7 on both:
+    the feedback's gain from the loops' outputs, the held loops' with them, to the
+    forces)."""
     from flexure.controllers import build_loop
 
     model = load_scene("manipulator_control")
@@ -205,8 +207,9 @@ def test_the_manipulator_loop_in_mass_form_tracks_as_in_accelerations():
                                     fs=4000.0)
     runs = []
     for mass_form in (True, False):
-        sim = Simulator(model, method="esdirk", rtol=1e-6, rigid=False)
+        sim = Simulator(model, method="esdirk", rtol=1e-6, rigid=rigid)
         assert sim.data.int_array("dims")[ed.NEWTON_SPARSE] == 1
+        assert (sim.data.int_array("dims")[ed.NSLAVES] > 0) == rigid
         sim.integrator.flags[I_MASS_FORM] = int(mass_form)
         runs.append(run_compiled_loop(sim, controller, design))
     (_, position, force), (_, position_a, force_a) = runs
