@@ -118,8 +118,9 @@ def test_the_cantilever_moves_alike_on_either_newton_matrix(monkeypatch):
 
 def test_which_models_take_the_sparse_newton_matrix(monkeypatch):
     """The rule of `newton_packing`: the 384-DOF cantilever by default; not the 48-DOF one
-    (below SPARSE_NEWTON_FROM), nor, forced, a model with rigid clusters
-    (stage_planar_3dof) or in the reduced form."""
+    (below SPARSE_NEWTON_FROM), nor, forced, a model with rigid clusters whose augmented
+    system is banded (stage_planar_3dof; with clusters: tests/test_rigid_sparse_newton.py)
+    or one in the reduced form."""
     assert EngineData(spatial_cantilever(64)).int_array("dims")[ed.NEWTON_SPARSE] == 1
     assert EngineData(spatial_cantilever(8)).int_array("dims")[ed.NEWTON_SPARSE] == 0
     monkeypatch.setattr(newton_packing, "SPARSE_NEWTON_FROM", 0)

@@ -4,10 +4,10 @@ On the sparse Newton path a stage iteration evaluates g = DF^T (r - M xddot_c) f
 candidate accelerations a_c = (v - base_v) / hg instead of the accelerations qddot, and the
 Newton solve lifts hg g by J^T (NEWTON_FORCE_SOLVE). Checked here, on the 16-BEAM spatial
 cantilever (96 DOFs, A banded) and manipulator_control (75 DOFs, A sparse), both on that path
-by default (the manipulator packed without eliminating its rigid clusters' slaves,
-rigid=False: with them, its default, it keeps the dense Newton matrix, and the accelerations'
-stages), and a rod with a body under a moment input (the moment's force depends on x;
-tests/test_rotation_ports.py) with the path forced:
+by default, the manipulator packed both without eliminating its rigid clusters' slaves
+(rigid=False) and with them ("manipulator_clusters", its default: the kinematics, the force
+and the solves on the reduced coordinates z), and a rod with a body under a moment input (the
+moment's force depends on x; tests/test_rotation_ports.py) with the path forced:
 
 - g against M_bar (qddot - a_c), qddot from the full rhs (OP_RHS) and M_bar from OP_MASS
   (DF^T M DF) at the same state, at random states;
@@ -42,6 +42,7 @@ from tests.test_rotation_ports import build_model, rod_body
 
 MODELS = {"cantilever_16": lambda: spatial_cantilever(16),
           "manipulator_control": lambda: load_scene("manipulator_control"),
+          "manipulator_clusters": lambda: load_scene("manipulator_control"),
           "rod_body": lambda: build_model(rod_body())}
 
 
@@ -72,7 +73,7 @@ def stage_force(data, y, u, acc):
 
 def packed(name, monkeypatch):
     """(model, data) on the sparse Newton path: the rod's forced (below SPARSE_NEWTON_FROM
-    DOFs), the manipulator's without slave elimination."""
+    DOFs), "manipulator_control" without slave elimination, "manipulator_clusters" with it."""
     model = MODELS[name]()
     if name == "rod_body":
         monkeypatch.setattr(newton_packing, "SPARSE_NEWTON_FROM", 0)
@@ -86,7 +87,8 @@ def test_the_stage_force_is_the_mass_times_the_acceleration_defect(name, monkeyp
     """g = M_bar (qddot - a_c) at random states (moving and at rest) for candidate
     accelerations a_c = qddot + a random defect of qddot's size, to 1e-12 of the size of
     its terms, max_i sum_j |M_bar_ij| (|qddot_j| + |a_c_j|) (measured: 1.5e-16 on the
-    cantilever, 7e-16 on the manipulator, 1.4e-15 on the rod), and g = 0 at a_c = qddot.
+    cantilever, 7e-16 on the manipulator with and without its clusters, 1.4e-15 on the
+    rod), and g = 0 at a_c = qddot.
     An evaluation, counted in counters[EVALUATIONS]."""
     model, data = packed(name, monkeypatch)
     n = data.int_array("dims")[ed.NDOF]
@@ -111,7 +113,8 @@ def test_the_force_solve_is_the_solve_at_the_newton_matrix_state(name, monkeypat
     """At the Newton matrix's own state, M_bar there lifts r2 (hg g = M_bar r2):
     NEWTON_FORCE_SOLVE of [r1; M_bar r2] equals NEWTON_SOLVE of [r1; r2] to 1e-9 of the
     solution's size (the solves' round-off: tests/test_sparse_newton.py's bound; measured
-    1.1e-11 on the cantilever, 4e-14 on the manipulator, 3e-16 on the rod), for hg near and
+    1.1e-11 on the cantilever, 4e-14 on the manipulator, 2.3e-14 with its clusters,
+    3e-16 on the rod), for hg near and
     far from zero (s)."""
     model, data = packed(name, monkeypatch)
     n = data.int_array("dims")[ed.NDOF]
@@ -131,7 +134,7 @@ def test_the_force_solve_is_the_solve_at_the_newton_matrix_state(name, monkeypat
         close(v, expected, 1e-9)
 
 
-@pytest.mark.parametrize("name", ["manipulator_control", "rod_body"])  # the ones with inputs
+@pytest.mark.parametrize("name", ["manipulator_clusters", "manipulator_control", "rod_body"])
 def test_the_input_response_after_a_stage_force_is_the_change_of_the_rhs(name, monkeypatch):
     """After a stage force (A neither assembled nor factored) the input response has A made and
     equals qddot(u1) - qddot(u0) of two full rhs at that state to 1e-12 of qddot's size
@@ -187,14 +190,16 @@ def test_the_cantilever_run_in_mass_form_is_the_run_in_accelerations():
 
 
 @pytest.mark.slow
-def test_the_manipulator_loop_in_mass_form_tracks_as_in_accelerations():
+@pytest.mark.parametrize("rigid", [False, True])
+def test_the_manipulator_loop_in_mass_form_tracks_as_in_accelerations(rigid):
     """A 10 ms move of manipulator_control at 4 kHz (esdirk, rtol 1e-6, the compiled loop,
     whose first stage after each input change takes the input response from a stage force's
-    A; without slave elimination, so that it takes the sparse Newton path) with the mass form
-    against the accelerations' form: the positions within 0.05 rtol of the stroke (the
-    Newton tolerance, as above; measured 3.5e-10 of the stroke, 3.5e-4 rtol), the forces
-    within 1e-5 of the largest (measured 2.4e-7: the feedback's gain from the loops'
-    outputs, the held loops' with them, to the forces)."""
+    A; without slave elimination and with it, both on the sparse Newton path) with the mass
+    form against the accelerations' form: the positions within 0.05 rtol of the stroke (the
+    Newton tolerance, as above; measured 3.5e-10 of the stroke, 3.5e-4 rtol, with and
+    without elimination), the forces within 1e-5 of the largest (measured 2.4e-7 on both:
+    the feedback's gain from the loops' outputs, the held loops' with them, to the
+    forces)."""
     from flexure.controllers import build_loop
 
     model = load_scene("manipulator_control")
@@ -202,8 +207,9 @@ def test_the_manipulator_loop_in_mass_form_tracks_as_in_accelerations():
                                     fs=4000.0)
     runs = []
     for mass_form in (True, False):
-        sim = Simulator(model, method="esdirk", rtol=1e-6, rigid=False)
+        sim = Simulator(model, method="esdirk", rtol=1e-6, rigid=rigid)
         assert sim.data.int_array("dims")[ed.NEWTON_SPARSE] == 1
+        assert (sim.data.int_array("dims")[ed.NSLAVES] > 0) == rigid
         sim.integrator.flags[I_MASS_FORM] = int(mass_form)
         runs.append(run_compiled_loop(sim, controller, design))
     (_, position, force), (_, position_a, force_a) = runs

@@ -314,7 +314,7 @@ SLOTS = (
         ("newton_parts", "NEWTON_PARTS", "-", STATE, "kg, N s/m, N/m", "M (with J_o), C_x, "
          "K_x on H's pattern, one after the other"),
         ("newton_scratch", "NEWTON_SCRATCH", "-", SCRATCH, "-", "three vectors on the "
-         "augmented system's unknowns"),
+         "augmented system's unknowns, then a touching element's T_e, K_e T_e, C_e T_e"),
     )),
 )
 

@@ -17,7 +17,9 @@ DF = J^-1 [0; I], that is the saddle-point system on the free coordinates
 and dv = (J's DOF rows) dx: DF^T J_o^T = 0, and J_o dx = 0 makes dx = DF dv. H has the
 pattern of the augmented system's mass block (each element couples its own coordinates in M,
 C_x and K_x alike; `newton_packing` checks it), so its sparse LU (`numerics.sparse_lu`) costs
-in proportion to the elements, as do J's solves and the products with M and K_x.
+in proportion to the elements, as do J's solves and the products with M and K_x. With rigid
+clusters all of it is on the reduced free coordinates z, J the reduced one (`rigid`), and H's
+terms of the clusters are `newton_rigid`'s.
 
 Four operations (each the body of its C entry, compiled only for the models that take this
 path, dims[NEWTON_SPARSE] = 1):
@@ -46,6 +48,7 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import _scatter_de
 from .kinematics import dof_rows
+from .newton_rigid import mass_block, own_tangent, slave_curvature, touching_tangent
 from .operations import (
     ENTRY,
     HESSIANS,
@@ -60,8 +63,9 @@ from .operations import (
 from .point_masses import element_mass, element_points, massless
 from .ports import PORT_WIDTH, ROTATION
 from .slots import float_array as _f
-from .slots import group_deformations, group_inertia, inertia_scratch
+from .slots import group, group_deformations, group_inertia, inertia_scratch, rigid_element
 from .slots import int_array as _i
+from .sparse_factors import constraint_values
 from .sparse_products import (
     pattern_product,
     pattern_product_pair,
@@ -157,20 +161,29 @@ def jacobian(table, y):
     run(table, OP_FORMED_RATES, 0, 0, HESSIANS)  # D2e where the evaluation formed h without it
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
-    sigma = _full_stresses(table)
+    rigid = dims[ed.NSLAVES] > 0
     Mv, Cv, Kv = _parts(table)
-    Mv[:] = 0.0
+    if rigid:  # M_z with J_o as the evaluation assembles them (before slot x_trial's r_full)
+        mass_block(table, Mv)
+    sigma = _full_stresses(table)
+    if not rigid:
+        Mv[:] = 0.0
     Cv[:] = 0.0
     Kv[:] = 0.0
     hmap, De, x = _i(table, slot.NEWTON_H_MAP), _f(table, slot.DE), _f(table, slot.X)
     lumped, col_of_coord = _f(table, slot.LUMPED), _i(table, slot.COL_OF_COORD)
-    for a in range(dims[ed.NX]):
-        c = col_of_coord[a]
-        if c >= 0:
-            Mv[hmap[c]] += lumped[a]
-    _scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
+    if not rigid:
+        for a in range(dims[ed.NX]):
+            c = col_of_coord[a]
+            if c >= 0:
+                Mv[hmap[c]] += lumped[a]
+        _scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
     local, columns = _f(table, slot.LOCAL), _i(table, slot.POINT_COLUMNS)
+    work = _f(table, slot.NEWTON_SCRATCH)[3 * (nf + dims[ed.NRIGID]):]  # past the solve's
     base = nf + 2 * De.size  # the element pairs' part of the map
+    rigid_base = base  # then the rigid clusters' parts (`newton_packing._rigid_pairs`)
+    for g in range(dims[ed.NGROUPS]):
+        rigid_base += group(table, g)[ed.G_COUNT] * group(table, g)[ed.G_M] ** 2
     for g in range(dims[ed.NGROUPS]):
         n, m, k, _, _, _, _ = group_deformations(table, g)
         inertia = group_inertia(table, g)
@@ -181,10 +194,17 @@ def jacobian(table, y):
             local[o + 2 * m * m: o + 3 * m * m]
         row, crow = local[o + 3 * m * m: o + 3 * m * m + m], \
             local[o + 3 * m * m + m: o + 3 * m * m + 2 * m]
+        group_row = group(table, g)
         for i in range(n):
+            t = rigid_element(table, group_row, i) if rigid else -1
+            if t >= 0:  # on its z-coordinates; its mass is in M_z already
+                if own_tangent(table, t):
+                    _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+                    touching_tangent(table, t, m, Ke, Ce, Kv, Cv, hmap, rigid_base, work)
+                continue
             _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
             Mp = masses[i * P * P: (i + 1) * P * P]
-            heavy = i < n_inertia and not massless(Mp, pattern)
+            heavy = not rigid and i < n_inertia and not massless(Mp, pattern)
             if heavy:  # Me = Dp^T Mp Dp (the point values unused)
                 element_points(inertia, scratch, i, x, x, 1)
                 point[:P] = 0.0
@@ -197,6 +217,9 @@ def jacobian(table, y):
                     if heavy:
                         Mv[s] += Me[e]
         base += n * m * m
+    if rigid:  # the slaves' curvature, with r_full (slot x_trial) and lam (slot dx)
+        slave_curvature(table, _f(table, slot.X_TRIAL), _f(table, slot.DX), Kv, hmap,
+                        rigid_base)
     _input_stiffness(table, Kv)
     return _constraint_factors(table)
 
@@ -220,15 +243,11 @@ def _input_stiffness(table, Kv):
 
 @kernel
 def _constraint_factors(table):
-    """J's values from slot de and the DOF coordinates' unit rows, factored into slot
-    newton_j_values; a status."""
+    """J's values (`sparse_factors.constraint_values`: slot de, the DOF coordinates' unit
+    rows, with rigid clusters De_z and T's rows) factored into slot newton_j_values; a
+    status."""
     ints, floats = _i(table, slot.NEWTON_J), _f(table, slot.NEWTON_J_VALUES)
-    jmap, De = _i(table, slot.NEWTON_J_MAP), _f(table, slot.DE)
-    values = sparse_lu.matrix_values(ints, floats)
-    values[:] = 0.0
-    _scatter_de(table, De, jmap, 0, -1, values)
-    for j in range(_i(table, slot.DIMS)[ed.NXDOF]):
-        values[jmap[De.size + j]] = 1.0
+    constraint_values(table, _i(table, slot.NEWTON_J_MAP), sparse_lu.matrix_values(ints, floats))
     return ed.OK if _factor(table, ints, floats) else ed.SINGULAR_CONSTRAINTS
 
 
@@ -257,7 +276,7 @@ def solve(table, v, hg, force):
     j_ints, j_floats = _i(table, slot.NEWTON_J), _f(table, slot.NEWTON_J_VALUES)
     h_ints, h_floats = _i(table, slot.NEWTON_H), _f(table, slot.NEWTON_H_VALUES)
     scratch = _f(table, slot.NEWTON_SCRATCH)
-    na = scratch.size // 3
+    na = nf + n_rigid
     a, b, rhs = scratch[:nf], scratch[na: na + nf], scratch[2 * na: 3 * na]
     Mv, _, Kv = _parts(table)
     dof_rows(table, v[ndof: 2 * ndof], a)  # [0; r2] (or [0; hg g]) on J's rows

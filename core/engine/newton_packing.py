@@ -9,8 +9,12 @@ that path (`NewtonPacking.analyse`) when all of these hold:
   `simulation.newton_matrix` costs under a millisecond and the small models keep their
   numbers);
 - the accelerations come from the augmented form (`orders.FactorPlan.augmented`);
-- no rigid clusters, no coil currents, no kinematic inputs (their first-order Jacobians have
-  blocks this path does not form: they keep the dense one);
+- no coil currents, no kinematic inputs (their first-order Jacobians have blocks this path
+  does not form: they keep the dense one);
+- with rigid clusters: the augmented system factored sparse (H's mass block is then
+  assembled by the evaluation's own functions, `newton_rigid`), no moment input on a
+  slave, and each touching element's z-pairs and each master's rotation pairs in H's
+  pattern;
 - S and D couple the deformations of one element only, and every pair of the free
   coordinates of one element (and of a moment input's Euler parameters) is an entry of the
   augmented system's pattern (true where every element has mass: a massless element's
@@ -26,7 +30,9 @@ may lower it before it packs a model.
 
 import numpy as np
 
+from ..mechanics.rigid_bodies import PLANAR_TRANSLATION, SPATIAL_TRANSLATION
 from . import sparse_packing
+from .rigid import E_INTERNAL
 
 SPARSE_NEWTON_FROM = 50  # DOFs (the dense path's Schur complement starts there too)
 EULER_PAIRS = 16  # a moment input's Euler parameters, 4 x 4
@@ -45,7 +51,8 @@ class NewtonPacking:
         [free coordinate -> its diagonal slot (n_free), De entry -> slot of (rigid row,
         coordinate) (de_size), De entry -> slot of (coordinate, rigid row) (de_size), per
         element group in the engine's order, per element, pair (a, b) of its m coordinates ->
-        slot (n m m)], -1 where a coordinate is fixed.
+        slot (n m m)], -1 where a coordinate is fixed (and for a touching element); with
+        rigid clusters then their parts (`_rigid_pairs`).
     stress_row : ndarray of int (ne,)
     port_map : ndarray of int (n_inputs EULER_PAIRS,)
     """
@@ -64,9 +71,12 @@ class NewtonPacking:
         """The `NewtonPacking` of packing context c (`packing.Context`), or None when the
         model keeps the dense Newton matrix (the module's rule)."""
         model, n, topology, plan = c.model, c.counts, c.topology, c.plan
-        if (n["ndof"] < SPARSE_NEWTON_FROM or not plan.augmented or c.rigid.active
-                or n["nel"] or n["nki"] or not _element_local(c)
-                or _scratch_needed(n) > n["scratch"]):
+        rigid = c.rigid.active
+        if (n["ndof"] < SPARSE_NEWTON_FROM or not plan.augmented or n["nel"] or n["nki"]
+                or not _element_local(c) or _scratch_needed(n) > n["scratch"]):
+            return None
+        if rigid and (plan.factors is None or not plan.a_sparse
+                      or _moment_on_slaves(model.inputs, c.rigid.slave_index)):
             return None
         factors = plan.factors
         if factors is None:
@@ -83,8 +93,11 @@ class NewtonPacking:
         col = topology.col_of_coord
         pairs = []
         try:
-            for group in c.groups.all:
-                cols = col[group.coordinate_index]  # (n, m)
+            for gp, group in enumerate(c.groups.all):
+                cols = col[group.coordinate_index].copy()  # (n, m)
+                if rigid:  # a touching element's entries are on its z-coordinates (below)
+                    of = c.rigid.element_of[c.rigid.element_offsets[gp]:][:cols.shape[0]]
+                    cols[of >= 0] = -1
                 rows_, columns = (np.broadcast_to(cols[:, :, None], cols.shape + cols.shape[1:]),
                                   np.broadcast_to(cols[:, None, :], cols.shape + cols.shape[1:]))
                 place = np.full(rows_.shape, -1, dtype=np.int64)
@@ -92,6 +105,8 @@ class NewtonPacking:
                 place[inside] = slot(rows_[inside], columns[inside])
                 pairs.append(place.ravel())
             port_map = _port_map(model.inputs, col, slot)
+            if rigid:
+                pairs += _rigid_pairs(c.rigid, col, slot)
         except ValueError:  # an element pair outside the pattern: a massless element
             return None
         amap = factors.augmented_map
@@ -122,6 +137,43 @@ def _scratch_needed(n):
     return 2 * m + 3 * p + p * m + 3 * m * m + 2 * m
 
 
+def _moment_on_slaves(inputs, slave_index):
+    """Whether a moment input acts on a slave's Euler parameters (its load stiffness would
+    need T: such a model keeps the dense Newton matrix)."""
+    return any(port.about_axis and np.any(slave_index[np.asarray(port.euler)] >= 0)
+               for port in inputs)
+
+
+def _rigid_pairs(rigid, col, slot):
+    """The rigid clusters' parts of h_map (`newton_rigid`): per touching element t the
+    offset of its z-pairs (n_touching + 1, the last the total), its z-pairs (mz mz; -1 for
+    an element inside a cluster, whose K_e and C_e vanish), then per slave node the 16
+    pairs of its master's rotation coordinates (4 x 4; a planar one's one pair first).
+    Raises ValueError where a pair is outside H's pattern."""
+    offsets, places = [0], []
+    for gp, i, z in rigid.touching:
+        zc = col[z]
+        place = np.full((z.size, z.size), -1, dtype=np.int64)
+        if not rigid.element_row(gp, i)[E_INTERNAL]:
+            inside = (zc[:, None] >= 0) & (zc[None, :] >= 0)
+            rows_, columns = np.broadcast_to(zc[:, None], place.shape), \
+                np.broadcast_to(zc[None, :], place.shape)
+            place[inside] = slot(rows_[inside], columns[inside])
+        places.append(place.ravel())
+        offsets.append(offsets[-1] + place.size)
+    masters = np.full((rigid.slaves.shape[0], EULER_PAIRS), -1, dtype=np.int64)
+    for j, row in enumerate(rigid.slaves):
+        if row[0] not in (SPATIAL_TRANSLATION, PLANAR_TRANSLATION):
+            continue
+        mr = col[row[8:12][row[8:12] >= 0]]  # a fixed master coordinate: -1, no entry
+        size = mr.size
+        for a in range(size):
+            for b in range(size):
+                if mr[a] >= 0 and mr[b] >= 0:
+                    masters[j, a * size + b] = slot([mr[a]], [mr[b]])[0]
+    return [np.array(offsets, dtype=np.int64), *places, masters.ravel()]
+
+
 def _port_map(inputs, col, slot):
     """Per input the slots of its Euler parameters' pairs (a moment input), else -1."""
     out = np.full(len(inputs) * EULER_PAIRS, -1, dtype=np.int64)
@@ -149,4 +201,8 @@ def pack(c):
             "newton_h": p.h_ints.copy(), "newton_h_map": p.h_map,
             "newton_stress_row": p.stress_row, "newton_port_map": p.port_map,
             "newton_j_values": p.j_floats.copy(), "newton_h_values": p.h_floats.copy(),
-            "newton_parts": np.zeros(3 * p.nnz), "newton_scratch": np.zeros(3 * c.counts["naug"])}
+            "newton_parts": np.zeros(3 * p.nnz),
+            # the solve's three vectors (naug each), then a touching element's T_e, K_e T_e
+            # and C_e T_e (`newton_rigid.touching_tangent`; none without clusters)
+            "newton_scratch": np.zeros(3 * c.counts["naug"]
+                                       + 3 * c.rigid.max_m * c.rigid.max_mz)}

@@ -16,6 +16,7 @@ coordinates x (m, Euler parameters or rad) whose masters are current:
                         the forces Dp_z^T Mp Dp c_e of the slaves' c
     rigid_de            every touching element's De_z into slot rigid_de
     rigid_rates         the slaves' second-order terms on the constraint rows (slot rigid_h)
+    slave_forces        the forces rho the eliminated rigid rows carried, on the slaves
     rigid_geometric     the slaves' geometric stiffness -DF^T (sum_s rho_s d2x_s) DF
 
 Every function leaves the model without clusters untouched (its tables are empty).
@@ -303,12 +304,11 @@ def rigid_rates(table):
 
 
 @kernel
-def rigid_geometric(table, r_full, lam, K):
-    """K -= DF_m^T (sum_s rho_s d2 x_s / d lambda_m2) DF_m over the slave translations: the
-    forces rho (N) the eliminated rigid rows carried (r_full on x less the other rows' J^T
-    lam), acting through the curvature of the slaves' positions in their master's rotation."""
+def slave_forces(table, r_full, lam):
+    """rho (slot rigid_force, NX; N, N m): the forces the eliminated rigid rows carried, r_full
+    on x less the other rows' J^T lam (the touching elements' rows and the DOF coordinate rows
+    of slaves); read on the slave coordinates."""
     dims = _i(table, slot.DIMS)
-    ndof = dims[ed.NDOF]
     rho = _f(table, slot.RIGID_FORCE)
     copy(rho, r_full)
     for j in range(_i(table, slot.TOUCHING_ROWS).size // 3):
@@ -320,6 +320,16 @@ def rigid_geometric(table, r_full, lam, K):
     for j in range(units.size):
         if units[j] >= 0:
             rho[dof_coords[j]] -= lam[n_def + j]
+    return rho
+
+
+@kernel
+def rigid_geometric(table, r_full, lam, K):
+    """K -= DF_m^T (sum_s rho_s d2 x_s / d lambda_m2) DF_m over the slave translations: the
+    forces rho (N) the eliminated rigid rows carried (r_full on x less the other rows' J^T
+    lam), acting through the curvature of the slaves' positions in their master's rotation."""
+    ndof = _i(table, slot.DIMS)[ed.NDOF]
+    rho = slave_forces(table, r_full, lam)
     slaves, data = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA)
     DF, x = _f(table, slot.DF), _f(table, slot.X)
     H = _f(table, slot.RIGID_LOCAL)[:16]

@@ -35,7 +35,7 @@ def factor(table, which, out):
         n, kl, ku = dims[ed.NFREE] + dims[ed.NRIGID], dims[ed.A_KL], dims[ed.A_KU]
     else:
         ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
-        _constraint_values(table, sparse_lu.matrix_values(ints, floats))
+        constraint_values(table, _i(table, slot.J_MAP), sparse_lu.matrix_values(ints, floats))
         band, rows = _f(table, slot.LU), _i(table, slot.J_ROW_POS)
         columns = _i(table, slot.J_COL_POS)
         n, kl, ku = dims[ed.NFREE], dims[ed.J_KL], dims[ed.J_KU]
@@ -73,12 +73,13 @@ def _factor(table, ints, floats):
     return ratio
 
 
-
-
 @kernel
-def _constraint_values(table, values):
-    """J's sparse values from the elements' De in slot de through the J map."""
-    De, jmap = _f(table, slot.DE), _i(table, slot.J_MAP)
+def constraint_values(table, jmap, values):
+    """J's sparse values from the elements' De in slot de (with rigid clusters: the touching
+    elements' De_z in slot rigid_de and T's rows on the DOF coordinates of slaves) through
+    jmap, a J map (`sparse_packing.SparseFactors.constraint_map`: slot j_map, or the Newton
+    matrix's copy)."""
+    De = _f(table, slot.DE)
     dims = _i(table, slot.DIMS)
     values[:] = 0.0
     n_de, n_xdof = De.size, dims[ed.NXDOF]

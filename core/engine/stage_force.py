@@ -22,9 +22,10 @@ and r - M xddot_c element by element without forming M (`inertia_product.force_m
 in place of A's assembly, factorisation and solve. dims[A_FACTORS] = A_AT_STAGE then says
 that A is of no state: `input_response`, asked for the first stage after the inputs changed,
 has the operation assemble and factor it at the stage's (FACTOR_A). Only for
-models with the sparse Newton matrix (dims[NEWTON_SPARSE] = 1: no rigid clusters, no coil
-currents, no kinematic inputs), whose entry `engine.connect` gives with the Newton
-matrix's.
+models with the sparse Newton matrix (dims[NEWTON_SPARSE] = 1: no coil currents, no
+kinematic inputs), whose entry `engine.connect` gives with the Newton matrix's. With rigid
+clusters everything is on the reduced coordinates z as in `evaluate`: h on J's rows with the
+slaves' c (rigid_h), and the force on z (`force_minus_mass`: T^T, the folded clusters).
 """
 
 import numpy as np
@@ -38,7 +39,7 @@ from .factors import add_rigid_rows, augmented_factor, augmented_matrix, j_solve
 from .inertia_product import force_minus_mass
 from .kinematics import dof_rows, dof_values
 from .motion import any_nonzero, coordinate_forces, inertia_forces
-from .operations import ENTRY, FACTOR_A
+from .operations import ENTRY, FACTOR_A, OP_RIGID_RATES, run
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -73,10 +74,15 @@ def stage_force(table, y, acc, out):
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     xddot = _f(table, slot.DX)  # xddot_c = J^-1 ([0; acc] - h) on the free coordinates
     dof_rows(table, acc, xddot)
-    if moving:
+    if moving:  # h on J's rows; with rigid clusters also the slaves' c (as `evaluate`)
         quad = _f(table, slot.G)
         for a in range(nf):
             xddot[a] -= quad[a]
+        if dims[ed.NSLAVES] > 0:
+            run(table, OP_RIGID_RATES, 0, 0, 0.0)
+            rigid_h = _f(table, slot.RIGID_H)
+            for a in range(nf):
+                xddot[a] -= rigid_h[a]
     j_solve(table, xddot, False)
     # w = rhs_f - M_ff xddot_c without assembling M (`inertia_product`); slot xddot gets the
     # coordinates' accelerations at acc, slot x_trial the force before T^T

@@ -17,8 +17,9 @@ Sparse (SPARSE). M_bar, K_bar, C_bar and hence J are dense in DOF space when eve
 coordinate depends on the DOFs (a spatial cantilever whose DOFs are all its deformations):
 forming J costs O(NDOF^3) (M_bar^-1 [K C]) and the Schur complement's LU NDOF^3 / 3. A model
 that the engine packs with dims[NEWTON_SPARSE] = 1 (`engine.newton_packing`: the augmented
-form, at least SPARSE_NEWTON_FROM = 50 DOFs, no rigid clusters, coil currents or kinematic
-inputs, element-local S and D, every element with mass) takes instead the same Schur
+form, at least SPARSE_NEWTON_FROM = 50 DOFs, no coil currents or kinematic inputs,
+element-local S and D, every element with mass; rigid clusters with their augmented system
+factored sparse, on the reduced coordinates z: `engine.newton_rigid`) takes instead the same Schur
 equation in coordinate space,
 
     (M_bar + hg C_bar + hg^2 K_bar) dv = M_bar r2 - hg K_bar r1,   dq = r1 + hg dv,
