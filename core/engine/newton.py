@@ -46,6 +46,7 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import _scatter_de
 from .kinematics import dof_rows
+from .motion import any_nonzero
 from .operations import (
     ENTRY,
     HESSIANS,
@@ -263,11 +264,12 @@ def solve(table, v, hg, force):
     dof_rows(table, v[ndof: 2 * ndof], a)  # [0; r2] (or [0; hg g]) on J's rows
     dof_rows(table, v[:ndof], b)
     if force:  # [J_J^T [0; hg g] - hg K_x b; 0], b = J^-1 [0; r1]
-        sparse_lu.solve(j_ints, j_floats, b, False)
         rhs[:] = 0.0
         pattern_product_transposed(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats),
                                    a, rhs)
-        pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
+        if any_nonzero(v[:ndof]):  # r1 = 0 exactly: b = 0 (`esdirk_kernels._stage`)
+            sparse_lu.solve(j_ints, j_floats, b, False)
+            pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
     else:  # a = J^-1 [0; r2], b = J^-1 [0; r1]; [M a - hg K_x b; 0]
         sparse_lu.solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled
         rhs[:] = 0.0
