@@ -263,19 +263,19 @@ def refactor(ints, floats, threshold):
         pivot = x[j]
         x[j] = 0.0
         Ux[last] = pivot
-        big = 0.0
-        for q in range(Lp[j], Lp[j + 1]):
-            big = max(big, abs(x[Li[q]]))
-        magnitude = abs(pivot)
-        if not (magnitude > 0.0 and magnitude >= threshold * big and magnitude < np.inf):
-            for q in range(Lp[j], Lp[j + 1]):
-                x[Li[q]] = 0.0
-            return REJECTED
-        inverse = 1.0 / pivot
+        # L[:, j] scaled and x cleared in the one pass that finds the column's largest entry
+        # below the pivot: a rejected column's values are left in L, never read (the
+        # caller factors afresh)
+        big, inverse = 0.0, 1.0 / pivot
         for q in range(Lp[j], Lp[j + 1]):
             i = Li[q]
-            Lx[q] = x[i] * inverse
+            xi = x[i]
+            big = max(big, abs(xi))
+            Lx[q] = xi * inverse
             x[i] = 0.0
+        magnitude = abs(pivot)
+        if not (magnitude > 0.0 and magnitude >= threshold * big and magnitude < np.inf):
+            return REJECTED
         smallest, largest = min(smallest, magnitude), max(largest, magnitude)
     return smallest / largest if largest > 0.0 else 1.0
 
