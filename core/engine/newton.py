@@ -251,7 +251,8 @@ def solve(table, v, hg, force):
     (made with this hg, s) and the Jacobian's J. With `force` (NEWTON_FORCE_SOLVE) v's
     second half is not r2 but hg g, the stage residual's velocity half as a force on the
     DOFs (`stage_force`: hg g = M_bar(z) r2), taken as DF_J^T p = hg g by p = J_J^T [0; hg g]
-    in place of M a (DF_J = J_J^-1 [0; I], so DF_J^T J_J^T [0; w] = w)."""
+    in place of M a (DF_J = J_J^-1 [0; I], so DF_J^T J_J^T [0; w] = w), and J's solve and
+    K_x's product of r1 are left out when r1 is zero."""
     dims = _i(table, slot.DIMS)
     ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
@@ -267,7 +268,9 @@ def solve(table, v, hg, force):
         rhs[:] = 0.0
         pattern_product_transposed(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats),
                                    a, rhs)
-        if any_nonzero(v[:ndof]):  # r1 = 0 exactly: b = 0 (`esdirk_kernels._stage`)
+        # with r1 zero to the bit (the stages keep it so on this path:
+        # `esdirk_kernels.consistent_positions`) b = 0 and its term adds nothing
+        if any_nonzero(v[:ndof]):
             sparse_lu.solve(j_ints, j_floats, b, False)
             pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
     else:  # a = J^-1 [0; r2], b = J^-1 [0; r1]; [M a - hg K_x b; 0]
