@@ -48,6 +48,7 @@ from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import _scatter_de
 from .kinematics import dof_rows
+from .motion import any_nonzero
 from .newton_rigid import mass_block, own_tangent, slave_curvature, touching_tangent
 from .operations import (
     ENTRY,
@@ -269,7 +270,8 @@ def solve(table, v, hg, force):
     (made with this hg, s) and the Jacobian's J. With `force` (NEWTON_FORCE_SOLVE) v's
     second half is not r2 but hg g, the stage residual's velocity half as a force on the
     DOFs (`stage_force`: hg g = M_bar(z) r2), taken as DF_J^T p = hg g by p = J_J^T [0; hg g]
-    in place of M a (DF_J = J_J^-1 [0; I], so DF_J^T J_J^T [0; w] = w)."""
+    in place of M a (DF_J = J_J^-1 [0; I], so DF_J^T J_J^T [0; w] = w), and J's solve and
+    K_x's product of r1 are left out when r1 is zero."""
     dims = _i(table, slot.DIMS)
     ndof, nf = dims[ed.NDOF], dims[ed.NFREE]
     n_rigid, n_xdof, n_edof = dims[ed.NRIGID], dims[ed.NXDOF], dims[ed.NEDOF]
@@ -282,11 +284,14 @@ def solve(table, v, hg, force):
     dof_rows(table, v[ndof: 2 * ndof], a)  # [0; r2] (or [0; hg g]) on J's rows
     dof_rows(table, v[:ndof], b)
     if force:  # [J_J^T [0; hg g] - hg K_x b; 0], b = J^-1 [0; r1]
-        sparse_lu.solve(j_ints, j_floats, b, False)
         rhs[:] = 0.0
         pattern_product_transposed(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats),
                                    a, rhs)
-        pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
+        # with r1 zero to the bit (the stages keep it so on this path:
+        # `esdirk_kernels.consistent_positions`) b = 0 and its term adds nothing
+        if any_nonzero(v[:ndof]):
+            sparse_lu.solve(j_ints, j_floats, b, False)
+            pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
     else:  # a = J^-1 [0; r2], b = J^-1 [0; r1]; [M a - hg K_x b; 0]
         sparse_lu.solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled
         rhs[:] = 0.0

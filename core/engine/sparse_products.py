@@ -6,6 +6,7 @@ matrix's own. Used by the sparse Newton matrix (`newton`) and the stage force
 
 from ..numerics import sparse_lu
 from ..numerics.jit import kernel
+from ..numerics.sparse_lu import unsigned_index as _u  # no wraparound test (its docstring)
 
 
 @kernel
@@ -20,7 +21,7 @@ def pattern_product(ints, floats, values, v, out, limit, scale):
         vc = scale * v[c]
         for p in range(Ap[j], Ap[j + 1]):
             if Ai[p] < limit:
-                out[Ai[p]] += values[p] * vc
+                out[_u(Ai[p])] += values[p] * vc
 
 
 @kernel
@@ -37,7 +38,7 @@ def pattern_product_pair(ints, floats, first, v, second, w, out, limit, scale):
         vc, wc = v[c], scale * w[c]
         for p in range(Ap[j], Ap[j + 1]):
             if Ai[p] < limit:
-                out[Ai[p]] += first[p] * vc + second[p] * wc
+                out[_u(Ai[p])] += first[p] * vc + second[p] * wc
 
 
 @kernel
@@ -48,5 +49,5 @@ def pattern_product_transposed(ints, floats, values, v, out):
     for j in range(n):
         s = 0.0
         for p in range(Ap[j], Ap[j + 1]):
-            s += values[p] * v[Ai[p]]
-        out[pcol[j]] += s
+            s += values[p] * v[_u(Ai[p])]
+        out[_u(pcol[j])] += s

@@ -177,6 +177,23 @@ def _mass_form_residual(table, z, base, hg, delta, flags, t):
     return ed.OK
 
 
+@kernel(inline="always")
+def consistent_positions(z, base, hg):
+    """z's position half = base_q + hg v for z = [q, v] (2 NDOF,; hg in s): the stage
+    equation's linear half q = base_q + hg v solved exactly, so that its residual r1 is zero
+    to the bit (`_mass_form_residual` forms it by the same expression) and the sparse Newton
+    force solve skips J's solve and K_x's product of r1 (`engine.newton.solve`). Why it
+    changes nothing but the iterates: a Newton correction satisfies the linear half exactly
+    (dq = r1 + hg dv), so every iterate after a stage's first is on it anyway, to round-off;
+    the first moves from base_q + hg (extrapolated velocity) to base_q + hg (predicted v),
+    of the same first-order accuracy, and the root is the same. On the sparse path in either
+    residual form (the accelerations' is for comparison: the same iterates but for the
+    residual's form); the dense path keeps its iterates."""
+    m = z.size // 2
+    for k in range(m):
+        z[k] = base[k] + hg * z[m + k]
+
+
 @kernel
 def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     """Solve stage i: z = base + h g f(z) by simplified Newton; F_i from the stage equation.
@@ -184,7 +201,8 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     flags[I_MASS_FORM] = 1) the residual's velocity half is taken in mass form
     (`_mass_form_residual`), which needs no factorisation of the augmented system per
     iteration: the same root, iterates that differ by (M_bar(z) - M_bar at the Jacobian's
-    state) r2, second order in the residual."""
+    state) r2, second order in the residual; and on that matrix the iterates keep their
+    positions on the stage equation's linear half (`consistent_positions`)."""
     n = piv.size
     base, z, delta, weight = vectors[V_BASE], vectors[V_Z], vectors[V_DELTA], vectors[V_WEIGHT]
     y, F = vectors[V_Y], vectors[V_F:]
@@ -209,6 +227,10 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
         for j in range(i):
             p += P[i, j] * F[j, k]
         z[k] = s + hg * p  # f(z_i) predicted by extrapolating the stages before
+    sparse = flags[I_REDUCED] == SPARSE_FACTORS
+    mass_form = sparse and flags[I_MASS_FORM] == 1
+    if sparse:
+        consistent_positions(z, base, hg)
     c_i = 0.0  # the stage's time is t + c_i h
     for j in range(i + 1):
         c_i += A[i, j]
@@ -219,7 +241,6 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
     if i == 1:
         eta = eta ** 0.8
     previous = 0.0
-    mass_form = flags[I_REDUCED] == SPARSE_FACTORS and flags[I_MASS_FORM] == 1
     for iteration in range(MAX_NEWTON):
         if mass_form:
             if _mass_form_residual(table, z, base, hg, delta, flags, t_stage) != ed.OK:
@@ -233,6 +254,8 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
             solve(table, J, LU, piv, memory, flags, delta)
         for k in range(n):
             z[k] += delta[k]
+        if sparse:
+            consistent_positions(z, base, hg)
         norm = _norm(delta, weight)
         if not np.isfinite(norm):
             return False

@@ -88,6 +88,8 @@ class Replay:
         hg = h * A[1, 1]
         base = y + h * (A[i, :i] @ F[:i])
         z = base + hg * (P[i, :i] @ F[:i])
+        m = z.size // 2
+        z[:m] = base[:m] + hg * z[m:]  # on the linear half (`consistent_positions`)
         weight = 1.0 / (self.rtol * np.abs(y) + self.atol)
         eta = max(eta, 1e-16) ** (0.8 if i == 1 else 1.0)
         previous, thetas = 0.0, []
@@ -97,6 +99,7 @@ class Replay:
                 break
             engine.call(self.data, OP_NEWTON_FORCE_SOLVE, delta, s=self.hg_lu)
             z = z + delta
+            z[:m] = base[:m] + hg * z[m:]
             norm = weighted_norm(delta, weight)
             if iteration > 0:
                 theta = norm / previous
