@@ -373,7 +373,7 @@ def test_method_names_of_the_command_line_are_the_solvers():
     from flexure.core.simulation.simulator import METHODS as ALL_METHODS
     from flexure.fmu.scene_slave import METHODS as FMU_METHODS
 
-    assert COMMAND_METHODS == ALL_METHODS == METHODS + ("esdirk", "esdirk3", "esdirk2")
+    assert COMMAND_METHODS == ALL_METHODS == METHODS + ("esdirk", "esdirk3", "esdirk2", "sdirk2")
     assert sorted(FMU_METHODS) == sorted(ALL_METHODS)
 
 

@@ -11,9 +11,9 @@ from test_engine import check_compiled_loop_against_python_loop
 from flexure.core import Simulator, load_scene, simulate
 from flexure.core.errors import SimulationError
 from flexure.core.simulation.esdirk import Esdirk
-from flexure.core.simulation.esdirk_method import ESDIRK3, ESDIRK4, TRBDF2
+from flexure.core.simulation.esdirk_method import ESDIRK3, ESDIRK4, SDIRK2, TRBDF2
 
-TABLEAUS = [ESDIRK3, ESDIRK4, TRBDF2]
+TABLEAUS = [ESDIRK3, ESDIRK4, TRBDF2, SDIRK2]
 
 
 # -- the tableaus --------------------------------------------------------------------------------

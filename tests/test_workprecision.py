@@ -31,7 +31,7 @@ def test_work_precision_example_writes_table_and_plot(tmp_path):
                                  "--out", str(tmp_path)])
     from flexure.core.simulation.workprecision import DEFAULT_METHODS
 
-    assert len(study.rows) == len(DEFAULT_METHODS) == 11
+    assert len(study.rows) == len(DEFAULT_METHODS) == 12
     assert all(r["status"] == "ok" for r in study.rows)
     for name in ("work_precision.csv", "work_precision.md", "work_precision.png"):
         assert (tmp_path / name).stat().st_size > 100

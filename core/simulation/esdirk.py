@@ -10,8 +10,11 @@ engine through its C entry point: no Python per step.
 Methods (tableaus in `esdirk_method`): ESDIRK4(3)6L[2]SA ("esdirk", s = 6 stages, g = 1/4,
 order 4, embedded order 3) and ESDIRK3(2)4L[2]SA ("esdirk3", s = 4, order 3, embedded 2) of
 Kennedy & Carpenter 2003, and TR-BDF2 ("esdirk2", s = 3, g = 1 - 1/sqrt(2), order 2, embedded
-3), all L-stable and stiffly accurate. One step from (t, y) with size h, f
-the engine's right-hand side at the held inputs (y = [q - q_ref, qdot], m, rad, m/s, rad/s):
+3), all L-stable and stiffly accurate; and Alexander's two-stage SDIRK ("sdirk2", order 2,
+embedded 1) as an ESDIRK whose first stage nothing reads (its column zero: F_1 below is then
+only the predictor's start, and an input change costs no input response). One step from
+(t, y) with size h, f the engine's right-hand side at the held inputs (y = [q - q_ref,
+qdot], m, rad, m/s, rad/s):
 
     F_1 = f(y)                                (F_s of the step before while inputs are held;
                                               after an input change see below)
@@ -58,7 +61,7 @@ After an input change du, F_1 = F_s + [0; M^-1 B du]: the inputs enter qddot lin
 the engine solves for their change with the factors of its last evaluation (`engine.
 input_response`): one solve, not an evaluation, and F_s is what FSAL takes while inputs are
 held (within the Newton tolerance of f(y)). Where it cannot (reduced form, actuators,
-kinematic inputs): f(y).
+kinematic inputs): f(y). sdirk2 needs neither: F_s of the old inputs starts its predictor.
 
 Status (the kernel's return): OK = 0 or one of the negative codes below; the state is always
 the last accepted one.
@@ -115,8 +118,9 @@ class Esdirk(Stepper):
     data, rtol, atol, max_step
         As in `sundials.Cvode`.
     method : str
-        "esdirk" (order 4, 6 stages), "esdirk3" (order 3, 4 stages) or "esdirk2" (TR-BDF2,
-        order 2, 3 stages): the tableau of `esdirk_method.TABLEAUS`.
+        "esdirk" (order 4, 6 stages), "esdirk3" (order 3, 4 stages), "esdirk2" (TR-BDF2,
+        order 2, 3 stages) or "sdirk2" (Alexander's SDIRK, order 2, 2 implicit stages): the
+        tableau of `esdirk_method.TABLEAUS`.
     """
 
     def __init__(self, data, *, rtol, atol, max_step=None, method="esdirk"):

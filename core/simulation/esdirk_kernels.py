@@ -23,7 +23,8 @@ from .newton_matrix import newton_solve
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_MASS_FORM, I_SIZE) = range(19)
+ I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_SIZE) = range(20)
+# flags[I_RESPONSES]: the engine's input responses the first stage asked for (`advance`)
 # flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
 # their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
 # flags[I_REDUCED]: the Newton matrix's factors are the full matrix's (0), its Schur
@@ -310,6 +311,17 @@ def keep_history(vectors, A, h):
         curvature[k] = bend / (h * h)
 
 
+@kernel(inline="always")
+def first_stage_unread(A, EW):
+    """Whether no stage and no estimate reads F_1 (A's first column, b_1 and b_hat_1 zero: an
+    SDIRK written as an ESDIRK): then F_1 = f(y_n) is needed only as the predictor's start,
+    where the last step's F_s serves, also after an input change (no input response)."""
+    for i in range(A.shape[0]):
+        if A[i, 0] != 0.0:
+            return False
+    return EW[0] == 0.0
+
+
 @kernel(inline="always")  # into its C entry (esdirk_entry), its one caller: one unit
 def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     """Integrate from memory[M_T] towards t_stop (s): to t_stop exactly, or one accepted step
@@ -330,7 +342,10 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     h_rejected, error_rejected = 0.0, 0.0  # the last error-test failure at this t
     while memory[M_T] < t_stop:
         t = memory[M_T]
+        if flags[I_FSAL] == FSAL_INPUTS and first_stage_unread(A, EW):
+            flags[I_FSAL] = FSAL_CURRENT  # F_s of the old inputs: a predictor's start only
         if flags[I_FSAL] == FSAL_INPUTS:  # valid while the engine evaluated nothing since
+            flags[I_RESPONSES] += 1
             delta = vectors[V_DELTA]  # d qddot (NDOF,) of the inputs' change
             ok = counters[ed.EVALUATIONS] == flags[I_EVALUATION] and call_engine(
                 dims[ed.ENGINE], engine.OP_INPUT_RESPONSE, table, 0.0, delta.ctypes.data, 0, 0,

@@ -128,6 +128,24 @@ TRBDF2 = Tableau(
     b_hat=((1 - _R2 / 4) / 3, (3 * _R2 / 4 + 1) / 3, _G2 / 3),
     order=2, embedded_order=3, history=True)
 
+# The two-stage SDIRK of Alexander, R. (1977), "Diagonally implicit Runge-Kutta methods for
+# stiff O.D.E.'s", SIAM J. Numer. Anal. 14, 1006-1021 (Hairer & Wanner, Solving ODEs II,
+# IV.6, with gamma = 1 - sqrt(2)/2): order 2, L-stable, stiffly accurate, both stages
+# implicit. Written as an ESDIRK with a first stage nobody reads (its column of A, b_1 and
+# b_hat_1 zero): `esdirk_kernels.first_stage_unread` then skips F_1 = f(y_n), so an input
+# changed at y_n costs no input response. Its embedded solution y_hat = y_n + h f(z_1) (the
+# first implicit stage's slope over the whole step) is of order 1 (b_hat c =
+# gamma, not 1/2): the estimate h gamma (F_3 - F_2) is the first-order solution's local error,
+# O(h^2). Stages at c = gamma and 1, so the predictor's line through F_1 (the last step's
+# last stage) and F_2 extrapolates to c = 1.
+SDIRK2 = Tableau(
+    name="SDIRK2 (Alexander)",
+    A=((0, 0, 0),
+       (0, _G2, 0),
+       (0, 1 - _G2, _G2)),
+    b_hat=(0, 1, 0),
+    order=2, embedded_order=1)
+
 # by method name (core/simulation/methods.py)
-TABLEAUS = {"esdirk": ESDIRK4, "esdirk3": ESDIRK3, "esdirk2": TRBDF2}
+TABLEAUS = {"esdirk": ESDIRK4, "esdirk3": ESDIRK3, "esdirk2": TRBDF2, "sdirk2": SDIRK2}
 MAX_STAGES = max(t.stages for t in TABLEAUS.values())

@@ -119,6 +119,11 @@ METHOD_TABLE = (
            implicit=True, stiff=True, one_step=True, operations=_ESDIRK_OPERATIONS,
            compiled_loop=True, options=(),
            summary="TR-BDF2, order 2, 3 stages, L-stable (one-step; the loop's default)"),
+    Method("sdirk2", "esdirk", "Esdirk", "sdirk2", order=2, variable_order=False,
+           implicit=True, stiff=True, one_step=True, operations=_ESDIRK_OPERATIONS,
+           compiled_loop=True, options=(),
+           summary="Alexander's SDIRK, order 2, 2 implicit stages, L-stable (one-step; an "
+                   "input change costs no input response)"),
 )
 REGISTRY = {method.name: method for method in METHOD_TABLE}
 
