@@ -27,9 +27,10 @@ from flexure.core import Mechanics, Simulator, load_scene
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine, newton_packing
 from flexure.core.engine.data import EngineData
-from flexure.core.engine.operations import OP_NEWTON_FACTOR, OP_NEWTON_JACOBIAN, OP_NEWTON_SOLVE
+from flexure.core.engine.operations import OP_NEWTON_JACOBIAN
 from tests.compiled_loops import run_compiled_loop
 from tests.test_engine import close
+from tests.test_sparse_newton import newton_solve_beside_dense
 
 # the scene, whether the path is forced (threshold lowered, both matrices sparse), the bound
 # of the solve's error relative to the solution's size
@@ -73,10 +74,7 @@ def check_solve(name, forced, bound, monkeypatch):
     moved = False
     for hg in STEPS:
         r = rng.standard_normal(2 * n)
-        expected = np.linalg.solve(np.eye(2 * n) - hg * J, r)
-        assert engine.call(data, OP_NEWTON_FACTOR, s=hg) == ed.OK
-        v = r.copy()
-        assert engine.call(data, OP_NEWTON_SOLVE, v, s=hg) == ed.OK
+        v, expected = newton_solve_beside_dense(data, J, hg, r)
         size = np.max(np.abs(expected))
         close(v, expected, bound, scale=size)
         at_rest = np.linalg.solve(np.eye(2 * n) - hg * rest, r)

@@ -43,6 +43,16 @@ def sparse_data(model, monkeypatch):
     return data
 
 
+def newton_solve_beside_dense(data, J, hg, r):
+    """(v, expected): r through the engine's NEWTON_FACTOR and NEWTON_SOLVE at hg (s), and
+    (I - hg J)^-1 r by numpy's dense solve with the first-order Jacobian J."""
+    expected = np.linalg.solve(np.eye(J.shape[0]) - hg * J, r)
+    assert engine.call(data, OP_NEWTON_FACTOR, s=hg) == ed.OK
+    v = r.copy()
+    assert engine.call(data, OP_NEWTON_SOLVE, v, s=hg) == ed.OK
+    return v, expected
+
+
 @pytest.mark.parametrize("name", sorted(MODELS))
 def test_the_sparse_newton_solve_is_the_dense_one(name, monkeypatch):
     """(I - hg J)^-1 r by the sparse path against numpy's solve with the engine's dense J
@@ -78,10 +88,7 @@ def test_the_sparse_newton_solve_is_the_dense_one(name, monkeypatch):
     assert engine.call(data, OP_NEWTON_JACOBIAN, y, np.zeros(1)) == ed.OK
     for hg in STEPS:
         r = rng.standard_normal(2 * n)
-        expected = np.linalg.solve(np.eye(2 * n) - hg * J, r)
-        assert engine.call(data, OP_NEWTON_FACTOR, s=hg) == ed.OK
-        v = r.copy()
-        assert engine.call(data, OP_NEWTON_SOLVE, v, s=hg) == ed.OK
+        v, expected = newton_solve_beside_dense(data, J, hg, r)
         size = np.max(np.abs(expected))
         assert np.max(np.abs(v - expected)) <= 1e-9 * size
         plain_solution = np.linalg.solve(np.eye(2 * n) - hg * reference, r)
