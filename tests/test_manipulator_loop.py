@@ -102,7 +102,7 @@ def test_the_six_mm_xy_move_stays_within_the_target_with_encoders_and_mains_hum(
     """The chapter's experiment (section 3.4): noisy but below 0.1 %. With 50 nm encoders
     and 30 mN at 50 Hz on every actuator, every actuator stays within 0.1 % of its stroke
     (measured 3.3e-4 to 4.4e-4) and the disturbance shows (1.4 to 1.8 um against the clean
-    run's 34 nm at most). Its 50 Hz part follows the linear loop: a (sum over the actuators
+    run's 33 nm at most). Its 50 Hz part follows the linear loop: a (sum over the actuators
     of) PS(z) at 50 Hz, the sampled process sensitivity of the low-frequency model at rest,
     within 3 % and 3 degrees early in the move (measured 2.1 % and 2.6 degrees) and within
     10 % and 10 degrees at its end (7 % and 9 degrees: at 4 mm strokes the mechanism's
