@@ -25,20 +25,17 @@ Maps: the rigid parts of h_map (`newton_packing._rigid_pairs`), from `base`. Uni
 `newton`: kg, N s/m, N/m and their rotational counterparts.
 """
 
-import numpy as np
-
-from ..mechanics.rigid_bodies import PLANAR_TRANSLATION, SPATIAL_TRANSLATION
 from ..numerics.jit import kernel
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
 from .factors import add_rigid_rows
 from .motion import any_nonzero, inertia_forces
-from .rigid_kernels import slave_forces, transform_rows
+from .rigid_kernels import add_curvature, slave_forces, transform_rows
 from .slots import float_array as _f
 from .slots import int_array as _i
 
-EW, SW, DW = rg.ELEMENT_WIDTH, rg.SLAVE_WIDTH, 48
+EW, SW = rg.ELEMENT_WIDTH, rg.SLAVE_WIDTH
 EULER_PAIRS = 16  # `newton_packing.EULER_PAIRS`
 
 
@@ -104,28 +101,18 @@ def touching_tangent(table, t, m, Ke, Ce, Kv, Cv, hmap, base, work):
 @kernel
 def slave_curvature(table, r_full, lam, Kv, hmap, base):
     """Kv -= sum_s rho_s d2 x_s / dz2 on the pairs of each slave translation's master
-    rotation coordinates, rho the eliminated rigid rows' forces (`rigid_kernels.
-    slave_forces`, for the full balance's r_full (NX,) and multipliers lam (n_free,)); h_map
-    from base (`newton_packing._rigid_pairs`)."""
+    rotation coordinates (`rigid_kernels.add_curvature`), rho the eliminated rigid rows'
+    forces (`rigid_kernels.slave_forces`, for the full balance's r_full (NX,) and
+    multipliers lam (n_free,)); h_map from base (`newton_packing._rigid_pairs`)."""
     rho = slave_forces(table, r_full, lam)
-    slaves, data, x = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA), \
-        _f(table, slot.X)
+    n_slaves = _i(table, slot.RIGID_SLAVES).size // SW
+    H = _f(table, slot.RIGID_LOCAL)[:EULER_PAIRS]  # one slave's terms (scratch)
     n_touching = _i(table, slot.RIGID_ELEMENTS).size // EW
     start = base + n_touching + 1 + hmap[base + n_touching]
-    for j in range(slaves.size // SW):
-        kind = slaves[j * SW]
-        own, mr = slaves[j * SW + 1: j * SW + 5], slaves[j * SW + 8: j * SW + 12]
-        d = data[j * DW: (j + 1) * DW]
+    for j in range(n_slaves):
         places = hmap[start + j * EULER_PAIRS: start + (j + 1) * EULER_PAIRS]
-        if kind == SPATIAL_TRANSLATION:  # x_s = x_m + C_r lambda lambda / 2: d2 = C_r
-            for a in range(16):
-                if places[a] < 0:
-                    continue
-                h = 0.0
-                for k in range(3):
-                    h += rho[own[k]] * d[k * 16 + a]
-                Kv[places[a]] -= h
-        elif kind == PLANAR_TRANSLATION and places[0] >= 0:  # x_m + R(phi) r
-            co, si = np.cos(x[mr[0]]), np.sin(x[mr[0]])
-            Kv[places[0]] += (rho[own[0]] * (co * d[0] - si * d[1])
-                              + rho[own[1]] * (si * d[0] + co * d[1]))
+        H[:] = 0.0
+        add_curvature(table, j, rho, H)
+        for a in range(EULER_PAIRS):
+            if places[a] >= 0:
+                Kv[places[a]] -= H[a]

@@ -324,30 +324,41 @@ def slave_forces(table, r_full, lam):
 
 
 @kernel
+def add_curvature(table, j, rho, H):
+    """H (16,: 4 x 4 on the master's rotation coordinates; a planar master's angle in H[0])
+    += sum_k rho_k d2 x_k / d(rotation)2 over slave j's translation coordinates k, for the
+    forces rho (NX; N) on them: C_r for the Euler parameters (x_s = x_m + C_r lambda lambda /
+    2), -R(phi) r for a planar angle (x_s = x_m + R(phi) r). A slave that is not a
+    translation adds nothing."""
+    slaves, data, x = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA), _f(table, slot.X)
+    kind = slaves[j * SW]
+    own, mr = slaves[j * SW + 1: j * SW + 5], slaves[j * SW + 8: j * SW + 12]
+    d = data[j * DW: (j + 1) * DW]
+    if kind == SPATIAL_TRANSLATION:
+        for k in range(3):
+            f = rho[own[k]]
+            for a in range(16):
+                H[a] += f * d[k * 16 + a]
+    elif kind == PLANAR_TRANSLATION:
+        co, si = np.cos(x[mr[0]]), np.sin(x[mr[0]])
+        H[0] -= (rho[own[0]] * (co * d[0] - si * d[1])
+                 + rho[own[1]] * (si * d[0] + co * d[1]))
+
+
+@kernel
 def rigid_geometric(table, r_full, lam, K):
     """K -= DF_m^T (sum_s rho_s d2 x_s / d lambda_m2) DF_m over the slave translations: the
     forces rho (N) the eliminated rigid rows carried (r_full on x less the other rows' J^T
     lam), acting through the curvature of the slaves' positions in their master's rotation."""
     ndof = _i(table, slot.DIMS)[ed.NDOF]
     rho = slave_forces(table, r_full, lam)
-    slaves, data = _i(table, slot.RIGID_SLAVES), _f(table, slot.RIGID_DATA)
-    DF, x = _f(table, slot.DF), _f(table, slot.X)
+    slaves, DF = _i(table, slot.RIGID_SLAVES), _f(table, slot.DF)
     H = _f(table, slot.RIGID_LOCAL)[:16]
     H[:] = 0.0
     n_slaves = slaves.size // SW
     for j in range(n_slaves):
-        kind = slaves[j * SW]
-        own, mr = slaves[j * SW + 1: j * SW + 5], slaves[j * SW + 8: j * SW + 12]
-        d = data[j * DW: (j + 1) * DW]
-        if kind == SPATIAL_TRANSLATION:
-            for k in range(3):
-                f = rho[own[k]]
-                for a in range(16):
-                    H[a] += f * d[k * 16 + a]
-        elif kind == PLANAR_TRANSLATION:
-            co, si = np.cos(x[mr[0]]), np.sin(x[mr[0]])
-            H[0] -= (rho[own[0]] * (co * d[0] - si * d[1])
-                     + rho[own[1]] * (si * d[0] + co * d[1]))
+        kind, mr = slaves[j * SW], slaves[j * SW + 8: j * SW + 12]
+        add_curvature(table, j, rho, H)
         # the slaves of one master follow each other: one product per master
         last = j == n_slaves - 1 or slaves[(j + 1) * SW + 8] != mr[0]
         if not last:
