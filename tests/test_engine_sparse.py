@@ -78,6 +78,24 @@ def test_the_stages_and_tutorials_keep_the_banded_lu():
         assert data.costs["constraint_lu"] == data.costs["augmented_lu"] == "banded"
 
 
+def test_forcing_the_sparse_lu_does_not_depend_on_an_earlier_packing_of_the_model():
+    """The orders and the sparse analysis are kept per live model: a packing that chose the
+    banded LU (below SPARSE_FROM, no analysis) must not leave a forced packing of the same
+    model banded, nor a forced one make a later chosen packing sparse."""
+    model = MODELS["stage_spatial_19dof"]()
+    chosen = EngineData(model)
+    forced = EngineData(model, sparse=True)
+    chosen_again = EngineData(model)
+    fresh = EngineData(MODELS["stage_spatial_19dof"](), sparse=True)
+    for data, expected in ((chosen, 0), (forced, 1), (chosen_again, 0), (fresh, 1)):
+        dims = data.int_array("dims")
+        assert (dims[ed.J_SPARSE], dims[ed.A_SPARSE]) == (expected, expected)
+    q = np.zeros(model.declared_dof_count)
+    for data in (forced, fresh):
+        assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK
+    close(forced.float_array("x"), fresh.float_array("x"), 0.0)
+
+
 def test_a_singular_configuration_falls_back_to_the_banded_lu_and_is_counted():
     """The truss pendulum hanging vertically (node 2 at (0, -0.5) m): J is exactly singular.
     The kept pivots fail, pivoting afresh fails (both counted), and the banded LU says what

@@ -114,15 +114,19 @@ class FactorPlan:
         (self.j_rows, self.j_columns, j_kl, j_ku), (self.aug_position, a_kl, a_ku) = \
             found["orders"]
         self.bands = bands = (int(j_kl), int(j_ku), int(a_kl), int(a_ku))
-        if sparse is not False and "sparse" not in found:
+        # a forced analysis (sparse=True) is kept apart from the chosen one (sparse=None):
+        # below SPARSE_FROM the chosen one is None, and a later packing of the same model
+        # must get the same factors as a fresh model would, whichever packed it first
+        key = "sparse forced" if sparse else "sparse"
+        if sparse is not False and key not in found:
             banded_lu = (data.banded_multiplications(free.size, *bands[:2])
                          + data.banded_multiplications(free.size + n_rigid, *bands[2:]))
-            found["sparse"] = sparse_packing.analyse(
+            found[key] = sparse_packing.analyse(
                 model, groups.de_groups, [group for group in groups.all
                                           if id(group) in groups.inertia],
                 free, rows, topology.row_of_def, topology.col_of_coord, groups.de_size,
                 np.inf if sparse else banded_lu, rigid)
-        factors = self.factors = found.get("sparse") if sparse is not False else None
+        factors = self.factors = found.get(key) if sparse is not False else None
         costs = data.evaluation_cost(free.size, n_rigid, model.declared_dof_count,
                                 groups.cost_shapes(), bands,
                                 None if factors is None else factors.multiplications())
@@ -144,7 +148,8 @@ class FactorPlan:
 def _found(model, groups, topology, rigid):
     """{"orders": ((J's row and column positions, kl, ku), (the augmented system's
     positions, kl, ku))} of the model, and later its "sparse" analysis: computed once per
-    live model and packing of its rigid clusters."""
+    live model and packing of its rigid clusters ("sparse forced" for a packing that forces
+    the sparse LUs)."""
     known = _ORDERS.get(model, rigid.enabled)  # a Simulator packs its model twice
     if known is not None:
         return known
