@@ -239,13 +239,13 @@ class LoopResult:
         axes[1].set_ylabel(f"error (u{length})")
         axes[1].legend(loc="upper right")
         axes[2].step(self.t, self.force[:, axis], where="post",
-                     label="total moment" if force_unit == "N m" else "total force")
+                     label=f"total {effort_name(force_unit)}")
         axes[2].step(self.t, self.feedforward[:, axis], where="post", ls="--",
                      label="feedforward")
         if self.disturbance is not None:
             axes[2].step(self.t, self.disturbance[:, axis], where="post", ls=":", lw=0.8,
                          label="disturbance")
-        axes[2].set_ylabel(f"{'moment' if force_unit == 'N m' else 'force'} ({force_unit})")
+        axes[2].set_ylabel(f"{effort_name(force_unit)} ({force_unit})")
         axes[2].set_xlabel("time (s)")
         axes[2].legend(loc="upper right")
         s = self.summary()
@@ -278,7 +278,8 @@ class LoopResult:
         axes[1].axhline(1.0, color="r", lw=0.8, ls=":")
         axes[1].axhline(-1.0, color="r", lw=0.8, ls=":", label="target")
         axes[1].set_ylabel("error / (0.1 % of the stroke)")
-        axes[2].set_ylabel(f"force ({', '.join(forces)})")
+        names = ", ".join(dict.fromkeys(effort_name(unit) for unit in forces))
+        axes[2].set_ylabel(f"{names} ({', '.join(forces)})")
         axes[2].set_xlabel("time (s)")
         worst = max(self.per_loop(), key=lambda row: row["error_ratio"])
         return _save(fig, path, title or (
@@ -322,3 +323,8 @@ def _save(fig, path, title):
     fig.savefig(path, dpi=110)
     return path
 
+
+def effort_name(unit: str) -> str:
+    """What a loop's input is, by its unit: a force (N), a moment (N m) or a voice coil's
+    drive signal (V)."""
+    return {"N m": "moment", "V": "drive signal"}.get(unit, "force")
