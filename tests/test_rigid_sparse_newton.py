@@ -14,7 +14,8 @@ here:
   slow);
 - a 10 ms loop of manipulator_control on the sparse path (mass-form stages, the input
   response from a stage force's A) against the dense path's (slow);
-- which models with clusters take the path.
+- which models with clusters take the path, and that a moment input on a slave keeps a
+  model off it.
 
 The stage force, the force solve and the input response after a stage force with clusters:
 tests/test_stage_force.py ("manipulator_clusters").
