@@ -23,7 +23,9 @@ in d_{k+1} is about rho / (1 - rho) |c_k|, rho estimated as |c_k| / |c_{k-1}| (m
 the free coordinates' accelerations d_f, which the response returns; the multipliers only
 feed the next residual). The solve is accepted when that estimate is at most TOLERANCE =
 1e-12 of max |d_f|, from the second product on: the first ratio, |c_1| / |d_1|, measures how
-far d_1 is, not the contraction (which it underestimates 15-fold on the manipulator). The
+far d_1 is, not the contraction (which it underestimates 15-fold on the manipulator); or at
+once when a correction is itself within the tolerance (the error left is then at most rho /
+(1 - rho) of it, and near round-off the ratio of two corrections is noise). The
 response enters the ESDIRK's first stage as F_1 = F(y_n) + [0; d qddot]; an error of 1e-12
 of d qddot is ten times the round-off of the direct sparse solve it replaces (1e-13 of d_f
 against numpy's dense solve on the manipulator, whose A has the condition 8e4), and below
@@ -85,22 +87,28 @@ def refined_solve(table, na, rhs):
     for k in range(MAX_PRODUCTS):
         counters[ed.REFINEMENT_PRODUCTS] += 1
         minus_mass_product(table, d[:nf], a, total, c[:nf])  # c = b - A d
-        for k in range(nf):
-            c[k] += b[k]
-        for o in range(nf, na):
-            c[o] = b[o]
+        for i in range(nf):
+            c[i] += b[i]
+        for i in range(nf, na):
+            c[i] = b[i]
         constraint_products(table, d, c)
         kept_resolve(table, sparse, na, c)
         size = largest(c, nf)
-        for k in range(na):
-            d[k] += c[k]
+        for i in range(na):
+            d[i] += c[i]
+        scale = TOLERANCE * largest(d, nf)
         rate = size / previous
-        if not rate <= RATE_LIMIT:  # also not finite
-            return False
-        if k > 0 and rate * size <= (1.0 - rate) * TOLERANCE * largest(d, nf):
+        # a correction within the tolerance leaves at most rate / (1 - rate) of it, however
+        # rate is estimated (near round-off the ratio of two corrections is noise); else
+        # the rate of two refinement corrections, from the second product on, says what is
+        # left
+        if size <= scale or (k > 0 and rate <= RATE_LIMIT
+                             and rate * size <= (1.0 - rate) * scale):
             copy(rhs[:na], d)
             counters[ed.REFINED_RESPONSES] += 1
             return True
+        if not rate <= RATE_LIMIT:  # also not finite
+            return False
         previous = size
     return False
 
