@@ -113,11 +113,12 @@ def counted(data):
 def test_factors_several_states_back_refine_to_numpys_solve(name):
     """The first response after a stage force factors A there (no factors kept yet); five
     states further along a straight path (1e-7 m or rad a state on every DOF, about the
-    6 mm move's motion in 0.1 ms), the response refines with those factors, takes no
-    factorisation, and its accelerations equal numpy's dense solve at the new state to 1e-11
-    of their largest (the tolerance 1e-13, and the dense LU's round-off: A's condition is
-    8e4 on the manipulator; measured 1e-14), and qddot(u1) - qddot(u0) of two full rhs
-    there to 1e-12 of qddot (tests/test_input_response.py's bound)."""
+    6 mm move's motion in 0.1 ms), the response refines with those factors in two or three
+    products, takes no factorisation, and its accelerations equal numpy's dense solve at the
+    new state to 1e-11 of their largest (the refinement's tolerance 1e-12 and the dense
+    LU's round-off, A's condition being 8e4 on the manipulator; measured 7.5e-13 on the
+    manipulator, 2.2e-15 on the cantilever), and qddot(u1) - qddot(u0) of two full rhs there
+    to 1e-12 of qddot (tests/test_input_response.py's bound; measured 1.3e-15, 7e-14)."""
     model, data, y0, u0 = packed(name)
     dims = data.int_array("dims")
     assert dims[ed.A_KEPT] == KEPT_NONE

@@ -13,7 +13,7 @@ De_m d xddot on the DOF deformations. A one-step integrator uses it for the firs
 a change of the held inputs (`simulation.esdirk`). After the ESDIRK's stage residual in mass
 form (`stage_force`), which neither assembles nor factors A, the response solves A at the
 stage's state by iterative refinement with the factors of an earlier state that the storage
-still holds (`refinement`: to 1e-13 of d xddot), and only when there are none, or they no
+still holds (`refinement`: to 1e-12 of d xddot), and only when there are none, or they no
 longer contract fast, has that operation assemble and factor A at the stage's state
 (FACTOR_A), whose factors the next responses then refine with. Exact but for round-off
 (with refinement: its tolerance) at the evaluation's state;
