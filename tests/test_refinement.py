@@ -177,8 +177,8 @@ MASS_MODELS = {
 def test_the_mass_product_is_the_assembled_mass_block(name):
     """minus_mass_product(w) = -A_ff w for the mass block A_ff assembled at the state of an
     evaluation (moving, random inputs), for random w, to 1e-13 of max |A_ff| |w| (the same
-    products in another order; with folded clusters their gravity added and taken off, the
-    massive manipulator's is zero), with gravity on the element masses and at rest alike."""
+    products in another order; with folded clusters their operation's gravity added and taken
+    off), with and without gravity on the element masses."""
     model = MASS_MODELS[name]()
     data = EngineData(model, augmented=True)
     dims = data.int_array("dims")

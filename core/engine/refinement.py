@@ -25,13 +25,16 @@ feed the next residual). The solve is accepted when that estimate is at most TOL
 1e-12 of max |d_f|, from the second product on: the first ratio, |c_1| / |d_1|, measures how
 far d_1 is, not the contraction (which it underestimates 15-fold on the manipulator); or at
 once when a correction is itself within the tolerance (the error left is then at most rho /
-(1 - rho) of it, and near round-off the ratio of two corrections is noise). The
-response enters the ESDIRK's first stage as F_1 = F(y_n) + [0; d qddot]; an error of 1e-12
-of d qddot is ten times the round-off of the direct sparse solve it replaces (1e-13 of d_f
-against numpy's dense solve on the manipulator, whose A has the condition 8e4), and below
-the stage Newton's tolerance (0.05 of rtol |y| + atol, rtol >= 1e-11) by more than the factor
-h |d qddot| / |v| by which it enters the velocities, so neither the Newton nor the step's
-error estimate, which is built from the converged stages, can tell it from the exact one.
+(1 - rho) of it, and near round-off the ratio of two corrections is noise). Why 1e-12: it
+is ten times the round-off of the direct sparse solve it replaces (1e-13 of d_f against
+numpy's dense solve on the manipulator, whose A has the condition 8e4). The response enters
+the ESDIRK's first stage as F_1 = F(y_n) + [0; d qddot], so its error moves the step's
+velocities by at most h b_1 1e-12 |d qddot| (b_1 <= 1/2): 1e-12 of the change the input
+step itself makes in one step. The stage Newton stops at 0.05 of rtol |v| + atol, and the
+error estimate is formed from the converged stages, so neither can tell the refined response
+from the exact one while one step's input change moves the velocities by less than 1e11
+rtol of themselves (at the loop's rtol 1e-5: a million times; at rtol 1e-11, the tightest
+the tests run, by their own size).
 
 The solve gives up, and the caller factors A at the current state (then the kept factors),
 when no factors are kept, when an estimated rate exceeds RATE_LIMIT = 0.1 (the states are
@@ -80,10 +83,11 @@ def refined_solve(table, na, rhs):
     previous = largest(d, nf)
     if not np.isfinite(previous):
         return False
+    counters = _i(table, slot.COUNTERS)
     if previous == 0.0:  # b is zero on what the response reads: so is d_f, exactly
         copy(rhs[:na], d)
+        counters[ed.REFINED_RESPONSES] += 1
         return True
-    counters = _i(table, slot.COUNTERS)
     for k in range(MAX_PRODUCTS):
         counters[ed.REFINEMENT_PRODUCTS] += 1
         minus_mass_product(table, d[:nf], a, total, c[:nf])  # c = b - A d
@@ -94,6 +98,8 @@ def refined_solve(table, na, rhs):
         constraint_products(table, d, c)
         kept_resolve(table, sparse, na, c)
         size = largest(c, nf)
+        if not np.isfinite(size):
+            return False
         for i in range(na):
             d[i] += c[i]
         scale = TOLERANCE * largest(d, nf)
@@ -107,7 +113,7 @@ def refined_solve(table, na, rhs):
             copy(rhs[:na], d)
             counters[ed.REFINED_RESPONSES] += 1
             return True
-        if not rate <= RATE_LIMIT:  # also not finite
+        if rate > RATE_LIMIT:
             return False
         previous = size
     return False
