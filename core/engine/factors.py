@@ -20,6 +20,13 @@ n_rigid) are each factored one of two ways, chosen per model at packing
 
 Both solve in the model's order: `j_solve` takes vectors on J's rows (or, transposed, on the
 free coordinates), `augmented_solve` on the free coordinates then the rigid rows.
+
+The augmented system's factors outlive its state: dims[A_FACTORS] says whether they are of
+the last evaluation's state, dims[A_KEPT] whether the storage holds the factors of some
+earlier one (KEPT_SPARSE, KEPT_BANDED), which `refinement` solves the current state's
+system with. A new factorisation overwrites them (KEPT_NONE until it succeeds), and so
+does a banded assembly, which clears slot augmented; a sparse assembly writes only the
+matrix's values, not its LU.
 """
 
 import numpy as np
@@ -42,6 +49,10 @@ from .rigid_kernels import touching_row
 from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
+
+# dims[A_KEPT]: which factors of the augmented system at some earlier state are held
+# (`refinement`); KEPT_NONE is 0, the value packing leaves
+KEPT_NONE, KEPT_BANDED, KEPT_SPARSE = range(3)
 
 
 @kernel
@@ -188,6 +199,7 @@ def augmented_matrix(table):
         return A
     na = dims[ed.NFREE] + dims[ed.NRIGID]
     A = _f(table, slot.AUG)
+    dims[ed.A_KEPT] = KEPT_NONE  # the banded factors are in A
     clear_band(A, na, dims[ed.A_KL], dims[ed.A_KU])
     return A
 
@@ -320,10 +332,12 @@ def augmented_factor(table, A, na):
     """Factor the assembled A, sparse or in its band storage as the model was packed
     (dims[A_FACTORS] then says which); False when A is singular."""
     dims = _i(table, slot.DIMS)
+    dims[ed.A_KEPT] = KEPT_NONE  # overwritten from here on
     if dims[ed.A_SPARSE] == 1:  # else (or when it cannot serve) in its band storage
         ratio = _sparse_factor(table, SPARSE_AUGMENTED)
         if ratio >= 0.0:
             dims[ed.A_FACTORS] = ed.SPARSE_FACTORS
+            dims[ed.A_KEPT] = KEPT_SPARSE
             return True
         if np.isnan(ratio):  # its operation not connected
             return False
@@ -331,6 +345,7 @@ def augmented_factor(table, A, na):
                          dims[ed.A_KU]) > 0.0:
         return False
     dims[ed.A_FACTORS] = ed.BANDED_FACTORS
+    dims[ed.A_KEPT] = KEPT_BANDED
     return True
 
 
@@ -348,8 +363,15 @@ def augmented_solve(table, A, na, rhs):
 def augmented_resolve(table, na, rhs):
     """Solve A z = rhs in place (rhs (na,) as `augmented_solve`'s) with the factors the last
     successful `augmented_factor` left (dims[A_FACTORS] says which; not NO_FACTORS)."""
+    kept_resolve(table, _i(table, slot.DIMS)[ed.A_FACTORS] == ed.SPARSE_FACTORS, na, rhs)
+
+
+@kernel
+def kept_resolve(table, sparse, na, rhs):
+    """Solve A z = rhs in place (rhs (na,) as `augmented_solve`'s) with the sparse factors
+    in the storage (sparse), else the banded ones, of whatever state they were made at."""
     dims = _i(table, slot.DIMS)
-    if dims[ed.A_FACTORS] == ed.SPARSE_FACTORS:
+    if sparse:
         run(table, OP_SPARSE_SOLVE, rhs.ctypes.data, 0, float(SPARSE_AUGMENTED))
         return
     apos, t = _i(table, slot.AUG_POS), _f(table, slot.BAND_SCRATCH)

@@ -68,7 +68,7 @@ def force_minus_mass(table, x, xdot, moving, r, w_f, a, total, out_f):
     for c in range(dims[ed.NX]):  # where A has them: on the free coordinates
         if col_of_coord[c] >= 0:
             total[c] -= lumped[c] * a[c]
-    element_products(table, x, xdot, moving, a, total)
+    element_products(table, x, xdot, moving, True, a, total)
     if rigid and _i(table, slot.RIGID_BODIES).size:  # through their operation, which only
         # a model with a folded cluster compiles (`rigid_inertia_kernels`)
         call_engine(dims[ed.ENGINE], OP_RIGID_BODIES, table, 0.0, a.ctypes.data,
@@ -85,10 +85,62 @@ def force_minus_mass(table, x, xdot, moving, r, w_f, a, total, out_f):
 
 
 @kernel
-def element_products(table, x, xdot, moving, a, total):
+def minus_mass_product(table, w_f, a, total, out_f):
+    """out_f (n_free,; N, N m) = -M_ff w_f, the augmented system's mass block (kg, kg m,
+    kg m^2 on z with rigid clusters: T^T M T) times the accelerations w_f (n_free,; m/s^2,
+    1/s^2 on the Euler parameters), negated, at the coordinates in slot x and T's weights of
+    the last kinematic solution, without forming the block: `force_minus_mass` without r,
+    gravity and the convective terms. a and total (NX,) are scratch as there. The folded
+    clusters' operation adds gravity with its product; it is called at w_f / 2 and at
+    -w_f / 2 and the two differenced (halving and negating are exact), so their gravity
+    cancels to its round-off."""
+    dims = _i(table, slot.DIMS)
+    nf = dims[ed.NFREE]
+    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    rigid = dims[ed.NSLAVES] > 0
+    a[:] = 0.0
+    for k in range(nf):
+        a[free[k]] = w_f[k]
+    if rigid:  # the slaves' T w, without c
+        run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 0.0)
+    total[:] = 0.0
+    lumped = _f(table, slot.LUMPED)
+    for c in range(dims[ed.NX]):
+        if col_of_coord[c] >= 0:
+            total[c] -= lumped[c] * a[c]
+    x, xdot = _f(table, slot.X), _f(table, slot.XDOT)
+    element_products(table, x, xdot, False, False, a, total)
+    if rigid and _i(table, slot.RIGID_BODIES).size:  # -(-(total + G - M a/2) + G + M a/2)
+        for c in range(a.size):
+            a[c] *= 0.5
+        _folded_product(table, a, total)
+        for c in range(a.size):
+            a[c] = -a[c]
+            total[c] = -total[c]
+        _folded_product(table, a, total)
+        for c in range(a.size):
+            total[c] = -total[c]
+    if rigid:  # T^T total on z
+        run(table, OP_RIGID_CONDENSE, total.ctypes.data, out_f.ctypes.data, 0.0)
+    else:
+        for k in range(nf):
+            out_f[k] = total[free[k]]
+
+
+@kernel
+def _folded_product(table, a, total):
+    """total (NX,) += the folded clusters' gravity less their rigid bodies' mass times a, at
+    rest, through their operation (`rigid_inertia_kernels`, on slot x)."""
+    call_engine(_i(table, slot.DIMS)[ed.ENGINE], OP_RIGID_BODIES, table, 0.0, a.ctypes.data,
+                total.ctypes.data, 0, PRODUCT_AT_REST)
+
+
+@kernel
+def element_products(table, x, xdot, moving, with_gravity, a, total):
     """total (NX,; N, N m) += Dp^T Mp (g_p - (D2p v) v - Dp a_e) of every element that
     `motion.inertia_forces` visits (all with inertia points but the touching elements whose
-    mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving.
+    mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving,
+    g_p only with_gravity.
     A BEAM (its group's mass pattern the BEAM's, its Dp of the BEAM's blocks) in closed form
     (`beam_mass.beam_point_product`), any other element through Dp's full rows."""
     dims = _i(table, slot.DIMS)
@@ -107,7 +159,8 @@ def element_products(table, x, xdot, moving, a, total):
                     continue
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
             for pp in range(P):
-                point[pp] = gravity[pp] - acc[pp] if moving else gravity[pp]
+                g_p = gravity[pp] if with_gravity else 0.0
+                point[pp] = g_p - acc[pp] if moving else g_p
             Mp = masses[i * P * P: (i + 1) * P * P]
             # a_e into the scratch's x, Dp^T w into its v: the points read them, and are done
             for b in range(m):

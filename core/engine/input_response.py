@@ -11,8 +11,12 @@ with the factors that evaluation left: one solve instead of an evaluation (the k
 element masses and the factorisation). d qddot is then d xddot on the DOF coordinates and
 De_m d xddot on the DOF deformations. A one-step integrator uses it for the first stage after
 a change of the held inputs (`simulation.esdirk`). After the ESDIRK's stage residual in mass
-form (`stage_force`), which neither assembles nor factors A, the first response has that
-operation do both at the stage's state. Exact but for round-off at the evaluation's state;
+form (`stage_force`), which neither assembles nor factors A, the response solves A at the
+stage's state by iterative refinement with the factors of an earlier state that the storage
+still holds (`refinement`: to 1e-12 of d xddot), and only when there are none, or they no
+longer contract fast, has that operation assemble and factor A at the stage's state
+(FACTOR_A), whose factors the next responses then refine with. Exact but for round-off
+(with refinement: its tolerance) at the evaluation's state;
 only the augmented form keeps those factors, and only without actuators (whose forces depend
 on the coil currents, a state) and without kinematic inputs: otherwise NOT_AVAILABLE.
 With kinematic inputs (`prescribed`) the evaluation's qddot is the constrained one, qddot_0 +
@@ -27,6 +31,7 @@ from .factors import augmented_resolve
 from .motion import qddot_of_solution
 from .operations import FACTOR_A, OP_RIGID_CONDENSE, OP_STAGE_FORCE, run
 from .ports import add_input_forces
+from .refinement import refined_solve
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -53,11 +58,6 @@ def input_response(table, out):
         changed = changed or du[j] != 0.0
     if not changed:
         return ed.OK
-    if dims[ed.A_FACTORS] == ed.A_AT_STAGE:  # A at a stage force's state, made once, by its
-        # operation (compiled only where stage forces are)
-        status = run(table, OP_STAGE_FORCE, 0, 0, FACTOR_A)
-        if status != ed.OK:
-            return status
     nf, n_rigid = dims[ed.NFREE], dims[ed.NRIGID]
     rigid = dims[ed.NSLAVES] > 0
     free = _i(table, slot.FREE)
@@ -71,7 +71,16 @@ def input_response(table, out):
         for a in range(nf):
             rhs[a] = force[free[a]]
     rhs[nf: nf + n_rigid] = 0.0
-    augmented_resolve(table, nf + n_rigid, rhs)
+    if dims[ed.A_FACTORS] == ed.A_AT_STAGE:  # A at a stage force's state: refined with kept
+        # factors, else made by its operation (compiled only where stage forces are)
+        if not refined_solve(table, nf + n_rigid, rhs):
+            _i(table, slot.COUNTERS)[ed.RESPONSE_FACTORS] += 1
+            status = run(table, OP_STAGE_FORCE, 0, 0, FACTOR_A)
+            if status != ed.OK:
+                return status
+            augmented_resolve(table, nf + n_rigid, rhs)
+    else:
+        augmented_resolve(table, nf + n_rigid, rhs)
     # d xddot in `force`'s room; the slaves' T d zddot without c, which the inputs leave as
     # it is, and no h (the DOF deformations' De_m d xddot)
     qddot_of_solution(table, rhs, force, False, rhs, False, out)

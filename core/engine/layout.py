@@ -235,6 +235,9 @@ SLOTS = (
          "solution"),
         ("band_scratch", "BAND_SCRATCH", "naug", SCRATCH, "-", "a banded solve's vector; "
          "the pivot ratios"),
+        ("refinement", "REFINEMENT", "2 * nx + 3 * naug", SCRATCH, "-", "the augmented "
+         "solve refined with kept factors (`refinement`): its right-hand side, iterate and "
+         "correction, then the accelerations and force on x of a mass product"),
         ("j_sparse_values", "J_SPARSE_VALUES", "-", STATE, "1, m", "J's sparse LU's values"),
         ("aug_sparse_values", "AUG_SPARSE_VALUES", "-", STATE, "kg, 1", "the augmented "
          "system's sparse LU's values"),
@@ -359,6 +362,8 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
     ("a_rigid", "A_RIGID", CONFIG, "where the touching elements' entries begin in the "
      "augmented map, or -1"),
     ("a_factors", "A_FACTORS", STATE, "which of the augmented system's factors are current"),
+    ("a_kept", "A_KEPT", STATE, "which factors of the augmented system at some earlier state "
+     "the storage holds for refinement (`refinement`: KEPT_NONE = 0, ...)"),
     ("nki", "NKI", CONFIG, "kinematic inputs (prescribed DOFs: `prescribed`)"),
     ("newton_sparse", "NEWTON_SPARSE", CONFIG, "1: the ESDIRK's Newton matrix in coordinate "
      "space, sparse (`newton`)"),
@@ -397,6 +402,11 @@ COUNTER_FIELDS = tuple(Field(*row) for row in (
      "kept pivot failed its test"),
     ("sparse_fallbacks", "SPARSE_FALLBACKS", STATE, "those that could not, and were banded"),
     ("evaluations", "EVALUATIONS", STATE, "evaluations of the accelerations"),
+    ("refined_responses", "REFINED_RESPONSES", STATE, "input responses solved by refinement "
+     "with kept factors (`refinement`)"),
+    ("refinement_products", "REFINEMENT_PRODUCTS", STATE, "their products A d"),
+    ("response_factors", "RESPONSE_FACTORS", STATE, "input responses that had A factored at "
+     "a stage force's state (FACTOR_A)"),
 ))
 SETTINGS_FIELDS = (
     Field("singular_ratio", "SINGULAR_RATIO", CONFIG, "the smallest ratio of J's LU pivots "

@@ -343,6 +343,7 @@ def factors(c):
         "aug_map": empty if a_lu is None else plan.factors.augmented_map,
         "lu": np.zeros(n["j_band"]), "augmented": np.zeros(n["a_band"]),
         "augmented_rhs": np.zeros(naug), "band_scratch": np.zeros(naug),
+        "refinement": np.zeros(2 * n["nx"] + 3 * naug),
         "j_sparse_values": np.zeros(0) if j_lu is None else j_lu.floats.copy(),
         "aug_sparse_values": np.zeros(0) if a_lu is None else a_lu.floats.copy(),
     }
