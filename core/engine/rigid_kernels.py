@@ -10,11 +10,10 @@ coordinates x (m, Euler parameters or rad) whose masters are current:
     convective          c (slot rigid_c): xddot_s - T xddot_master, quadratic in the
                         masters' velocities (zero but on slave translations)
     condense            T^T v on the reduced free coordinates (a force (N, N m) on x)
-    element_transform   D_z = D T_e for the rows of a touching element's De
     transform_rows      T_e itself, in rows of a padded length (for products along rows)
     touching_mass       Me_z = Dp_z^T Mp Dp_z of a touching element, Dp_z = Dp T_e, and
                         the forces Dp_z^T Mp Dp c_e of the slaves' c
-    rigid_de            every touching element's De_z into slot rigid_de
+    rigid_de            the touching elements' De_z on J's rows into slot rigid_de
     rigid_rates         the slaves' second-order terms on the constraint rows (slot rigid_h)
     slave_forces        the forces rho the eliminated rigid rows carried, on the slaves
     rigid_geometric     the slaves' geometric stiffness -DF^T (sum_s rho_s d2x_s) DF
@@ -179,29 +178,6 @@ def condense(table, v, out):
 
 
 @kernel
-def element_transform(table, t, Dx, rows, m, Dz):
-    """Dz (rows, mz; flat) = Dx (rows, m; flat) T_e for touching element t."""
-    element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
-    mz, start = element[rg.E_MZ], element[rg.E_TERM_OFFSET]
-    terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
-    for r in range(rows * mz):
-        Dz[r] = 0.0
-    # row by row, skipping the zeros of Dx (most of a BEAM's Dp and De): each Dz entry sums
-    # the same products in the same order as the dense product would
-    for r in range(rows):
-        for a in range(m):
-            d = Dx[r * m + a]
-            if d == 0.0:
-                continue
-            for u in range(DEPENDENCIES):
-                p = start + 2 * (a * DEPENDENCIES + u)
-                zl, w = terms[p], terms[p + 1]
-                if w == -2:
-                    continue
-                Dz[r * mz + zl] += d * (1.0 if w == -1 else W[w])
-
-
-@kernel
 def transform_rows(table, t, m, T, stride):
     """T_e (m, mz) of touching element t into T (m rows of length `stride` >= mz, zero past
     mz; flat)."""
@@ -271,15 +247,34 @@ def touching_row(table, j):
 
 @kernel
 def rigid_de(table):
-    """Every touching element's De_z = De T_e (k, mz) into slot rigid_de."""
-    out = _f(table, slot.RIGID_DE)
-    for t in range(_i(table, slot.RIGID_ELEMENTS).size // EW):
-        g, i, mz, z, offset, _ = touching(table, t)
-        if offset < 0:
-            continue
+    """The touching elements' De_z = De T_e (k, mz) into slot rigid_de on the rows of J
+    (slot touching_rows) alone: J and the augmented system's rigid rows read no other (a
+    touching element's stressed deformations are not rows of J; on manipulator_control 57
+    of its 342 rows), the others are left as they were. Row by row, skipping the zeros of
+    De: each entry sums the same products in the same order as the dense product would."""
+    out, rows = _f(table, slot.RIGID_DE), _i(table, slot.TOUCHING_ROWS)
+    elements = _i(table, slot.RIGID_ELEMENTS)
+    terms, W = _i(table, slot.RIGID_TERMS), _f(table, slot.RIGID_WEIGHTS)
+    for g in range(_i(table, slot.DIMS)[ed.NGROUPS]):  # the group's views once
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
-        element_transform(table, t, De[i * k * m: (i + 1) * k * m], k, m,
-                          out[offset: offset + k * mz])
+        for j in range(rows.size // 3):
+            element = elements[rows[3 * j + 1] * EW: (rows[3 * j + 1] + 1) * EW]
+            if element[rg.E_GROUP] != g:
+                continue
+            b, mz, start = rows[3 * j + 2], element[rg.E_MZ], element[rg.E_TERM_OFFSET]
+            at, de = element[rg.E_DE_OFFSET] + b * mz, (element[rg.E_ELEMENT] * k + b) * m
+            for c in range(mz):
+                out[at + c] = 0.0
+            for a in range(m):
+                d = De[de + a]
+                if d == 0.0:
+                    continue
+                for u in range(DEPENDENCIES):  # a coordinate's terms first, then -2
+                    p = start + 2 * (a * DEPENDENCIES + u)
+                    zl, w = terms[p], terms[p + 1]
+                    if w == -2:
+                        break
+                    out[at + zl] += d * (1.0 if w == -1 else W[w])
 
 
 @kernel
