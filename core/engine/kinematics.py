@@ -338,7 +338,10 @@ def solve_kinematics(table, q):
             step = _newton_step(table, x, g, dx)
             if not np.isfinite(step):
                 break
-            _elements(table, x, 0)
+            # the iterate's e with De (the solution's order): a chord step from the first-order
+            # prediction mostly converges (its rate is of order |dq| / L), and then its De is
+            # the solution's, the e-only evaluation before it saved
+            _elements(table, x, solution_order(table))
             # chord steps contract linearly, at the rate of two successive steps: the error
             # left after a step is step rate / (1 - rate), not the step itself (a small step
             # of a slow contraction is no convergence)
@@ -346,7 +349,6 @@ def solve_kinematics(table, q):
             previous = step
             if _residual(table, x, q, g) <= 1.0 or step == 0.0 or (
                     rate < 1.0 and step * rate <= 1.0 - rate):
-                deformations(table, x, solution_order(table), True)
                 return _store(table, q, x)
     else:
         copy(x, _f(table, slot.X_START))
