@@ -35,7 +35,9 @@ def group_rows(data, gp):
         n, k, m)
 
 
-@pytest.mark.parametrize("name", ["manipulator_control", "stage_planar_1dof"])
+@pytest.mark.parametrize("name", [
+    pytest.param("manipulator_control", marks=pytest.mark.slow),  # 2.5 s: its packing
+    "stage_planar_1dof"])
 def test_deformations_at_a_chord_solution_are_of_its_coordinates(name):
     model = load_scene(name)
     data = EngineData(model, augmented=True)
