@@ -15,8 +15,10 @@ The steps (`stage_force`, `motion.coordinate_forces`, `kinematics.solve_kinemati
 
     predict        x_prev + J_prev^-1 [0; q - q_prev] (one solve with the kept factors)
     residual       the slaves filled, every element's e alone, the constraint residual
-    chord          the chord iterations with the kept factors (each: a solve, e, residual)
-    De at solution e and De of every element (D2e of the non-BEAMs)
+    chord          the chord iterations with the kept factors (each: a solve, the slaves
+                   filled, e and De, the residual: `kinematics.solve_kinematics`)
+    De at solution e and De of every element (D2e of the non-BEAMs) where no chord step
+                   was taken (after one, its iterate's evaluation is the solution's)
     J factor       J_z's entries (the touching elements' De T_e) and its sparse LU
     xdot           J^-1 [0; qdot], the slaves' T zdot
     slaves' c      the slaves' second-order accelerations
