@@ -322,3 +322,32 @@ def test_full_newton_stops_on_the_residual():
         q0 = Mechanics(model).kinematics.dofs_of(x0)
         assert engine.call(data, engine.OP_KINEMATICS, q0) == ed.OK
         assert np.array_equal(data.float_array("x"), x0)
+
+
+def test_the_maps_read_rigid_de_on_js_rows_alone():
+    """`rigid_kernels.rigid_de` forms the touching elements' De T_e on J's rows alone (slot
+    touching_rows): the sparse maps that read slot rigid_de (J's, the Newton matrix's copy of
+    it, the augmented system's rigid rows and their mirror) point at no other entry, on
+    manipulator_control (the small scenes' J is banded: no map)."""
+    model = load_scene("manipulator_control")
+    data = EngineData(model, augmented=True)
+    dims = data.int_array("dims")
+    n_rde = data.float_array("rigid_de").size
+    elements = data.int_array("rigid_elements").reshape(-1, packed_rigid.ELEMENT_WIDTH)
+    on_rows = np.zeros(n_rde, dtype=bool)
+    for _, t, b in data.int_array("touching_rows").reshape(-1, 3):
+        mz = elements[t, packed_rigid.E_MZ]
+        at = elements[t, packed_rigid.E_DE_OFFSET] + b * mz
+        on_rows[at: at + mz] = True
+    start = data.float_array("De").size + int(dims[ed.NXDOF])  # `constraint_values`' layout
+    reads = {"j_map": [start], "newton_j_map": [start],
+             "aug_map": [int(dims[ed.A_RIGID]), int(dims[ed.A_RIGID]) + n_rde]}
+    checked = 0
+    for name, starts in reads.items():
+        entries = data.int_array(name)
+        assert entries.size, name  # manipulator_control factors J and A sparse
+        for first in starts:
+            read = entries[first: first + n_rde] >= 0
+            assert read.any() and not np.any(read & ~on_rows), name
+            checked += 1
+    assert checked == 4 and not on_rows.all()
