@@ -158,3 +158,47 @@ def test_the_manipulators_inertia_profile_times_every_part():
     assert parts["inertia, rigid rows into A, rhs_f (replaced)"] > 0.0, parts
     assert parts["force_minus_mass (inertia_product)"] > 0.0, parts
     assert all(np.isfinite(s) for s in parts.values()), parts
+
+
+@pytest.mark.slow  # 30 to 60 s: the profile's compiled replica
+def test_the_manipulators_stage_profile_replicates_the_stage_force():
+    """`manipulator_stage_profile`'s replica run through its last step gives OP_STAGE_FORCE's
+    g at a state one ESDIRK step from the warm start both take, a cold solution (the same
+    kernels in the same order: within 1e-12 of the forces' scale, DF^T (r - M conv)); each
+    prefix leaves a warm start the next call can take."""
+    from examples.benchmarks.manipulator_stage_profile import STEPS, _replica
+    from flexure.core import Simulator, load_scene
+    from flexure.core.engine import data as ed
+    from flexure.core.engine import engine
+    from flexure.core.engine.operations import OP_STAGE_FORCE
+
+    sim = Simulator(load_scene("manipulator_control"), method="esdirk2", rtol=1e-5)
+    sim.set_inputs(np.ones(sim.data.float_array("inputs").size))
+    sim.advance_to(2e-3)
+    first, steps = np.array(sim.state, dtype=float), sim.statistics["steps"]
+    while sim.statistics["steps"] == steps:
+        sim.advance_to(sim.time + 1e-6)
+    second = np.array(sim.state, dtype=float)
+    n = first.size // 2
+    acc = np.ascontiguousarray((second[n:] - first[n:]) / 2.5e-4)
+
+    def force(y, a):
+        g = np.zeros(n)
+        assert engine.call(sim.data, OP_STAGE_FORCE, y, a.copy(), g) == ed.OK
+        return g
+
+    def cold_at_first():  # the same solution at first, the warm start of what follows
+        sim.data.int_array("dims")[ed.WARM] = 0
+        force(first, acc)
+
+    replica, table = _replica(), sim.data.address
+    out = np.full(2 * n, np.nan)
+    cold_at_first()
+    replica(table, np.ascontiguousarray(second[None, :]), acc, out, len(STEPS) - 1, 1)
+    cold_at_first()
+    g = force(second, acc)
+    scale = np.max(np.abs(force(second, np.zeros(n))))
+    assert np.max(np.abs(out[:n] - g)) <= 1e-12 * scale, (np.max(np.abs(out[:n] - g)), scale)
+    for upto in range(len(STEPS)):  # each prefix, from the last one's warm start
+        replica(table, np.ascontiguousarray(np.stack([first, second])), acc, out, upto, 2)
+    assert np.all(np.isfinite(force(first, acc)))

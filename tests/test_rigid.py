@@ -13,6 +13,7 @@ import pytest
 from flexure.core import Mechanics, Simulator, load_scene
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine, rigid_kernels
+from flexure.core.engine import rigid as packed_rigid
 from flexure.core.engine.data import EngineData
 from flexure.core.engine.point_masses import point_columns
 from flexure.core.mechanics.rigid_bodies import RigidLayout, find_clusters
@@ -126,10 +127,10 @@ def test_plain_derivatives_match_finite_differences(scene):
 
 @pytest.mark.slow  # the kernels compiled for Python (11 s cold); the engine's tests run them
 def test_compiled_maps_match_the_plain_ones(scene):
-    """fill_slaves (x_s and T's weights), expand, convective, condense and a touching
-    element's transform against RigidLayout and RigidPacking to 1e-14; its points' mass on
-    its z-coordinates and the forces of the slaves' c there (`touching_mass`) against the
-    dense products to 1e-13."""
+    """fill_slaves (x_s and T's weights), expand, convective, condense and the touching
+    elements' De T_e on J's rows (`rigid_de`) against RigidLayout and RigidPacking to 1e-14;
+    a touching element's points' mass on its z-coordinates and the forces of the slaves' c
+    there (`touching_mass`) against the dense products to 1e-13."""
     name, model, layout = scene
     data = EngineData(model)
     table, nx = data.address, model.nx
@@ -158,15 +159,33 @@ def test_compiled_maps_match_the_plain_ones(scene):
     expected = (T.T @ v)[free]
     assert np.max(np.abs(out - expected)) <= 1e-14 * np.max(np.abs(expected))
     packing = data.rigid
+    # the touching elements' De_z = De T_e on J's rows (slot touching_rows) for a random De
+    # (zeros as a BEAM's), the other rows of slot rigid_de left as they were
+    De = data.float_array("De")
+    De[:] = rng.standard_normal(De.size)
+    De[rng.random(De.size) < 0.3] = 0.0
+    rigid_de = data.float_array("rigid_de")
+    rigid_de[:] = np.nan
+    rigid_kernels.rigid_de(table)
+    written = np.zeros(rigid_de.size, dtype=bool)
+    elements = data.int_array("rigid_elements").reshape(-1, packed_rigid.ELEMENT_WIDTH)
+    groups = data.int_array("groups").reshape(data.int_array("dims")[ed.NGROUPS], -1)
+    for _, t, b in data.int_array("touching_rows").reshape(-1, 3):
+        gp, i, z = packing.touching[t]
+        coords = model.groups[gp].coordinate_index[i]
+        k = model.groups[gp].deformation_index.shape[1]
+        offset = groups[gp, ed.G_DE_OFFSET] + i * k * coords.size  # the element's De rows
+        row = De[offset + b * coords.size: offset + (b + 1) * coords.size]
+        expected = row @ packing.element_transform(gp, i, coords, x)
+        at = elements[t, packed_rigid.E_DE_OFFSET] + b * z.size
+        assert np.max(np.abs(rigid_de[at: at + z.size] - expected)) <= 1e-14 * max(
+            np.max(np.abs(expected)), 1e-300)
+        written[at: at + z.size] = True
+    assert np.all(np.isnan(rigid_de[~written]))
     for t, (gp, i, z) in enumerate(packing.touching):
         if gp >= len(model.groups):  # a node inertia's group
             continue
         coords = model.groups[gp].coordinate_index[i]
-        Dx = rng.standard_normal((3, coords.size))
-        Dz = np.zeros(3 * z.size)
-        rigid_kernels.element_transform(table, t, Dx.ravel(), 3, coords.size, Dz)
-        expected = Dx @ packing.element_transform(gp, i, coords, x)
-        assert np.max(np.abs(Dz - expected.ravel())) <= 1e-14 * np.max(np.abs(expected))
         # T_e itself in rows of a padded length, zero past mz
         stride = z.size + 5
         Te = np.full(coords.size * stride, np.nan)
@@ -303,3 +322,32 @@ def test_full_newton_stops_on_the_residual():
         q0 = Mechanics(model).kinematics.dofs_of(x0)
         assert engine.call(data, engine.OP_KINEMATICS, q0) == ed.OK
         assert np.array_equal(data.float_array("x"), x0)
+
+
+def test_the_maps_read_rigid_de_on_js_rows_alone():
+    """`rigid_kernels.rigid_de` forms the touching elements' De T_e on J's rows alone (slot
+    touching_rows): the sparse maps that read slot rigid_de (J's, the Newton matrix's copy of
+    it, the augmented system's rigid rows and their mirror) point at no other entry, on
+    manipulator_control (the small scenes' J is banded: no map)."""
+    model = load_scene("manipulator_control")
+    data = EngineData(model, augmented=True)
+    dims = data.int_array("dims")
+    n_rde = data.float_array("rigid_de").size
+    elements = data.int_array("rigid_elements").reshape(-1, packed_rigid.ELEMENT_WIDTH)
+    on_rows = np.zeros(n_rde, dtype=bool)
+    for _, t, b in data.int_array("touching_rows").reshape(-1, 3):
+        mz = elements[t, packed_rigid.E_MZ]
+        at = elements[t, packed_rigid.E_DE_OFFSET] + b * mz
+        on_rows[at: at + mz] = True
+    start = data.float_array("De").size + int(dims[ed.NXDOF])  # `constraint_values`' layout
+    reads = {"j_map": [start], "newton_j_map": [start],
+             "aug_map": [int(dims[ed.A_RIGID]), int(dims[ed.A_RIGID]) + n_rde]}
+    checked = 0
+    for name, starts in reads.items():
+        entries = data.int_array(name)
+        assert entries.size, name  # manipulator_control factors J and A sparse
+        for first in starts:
+            read = entries[first: first + n_rde] >= 0
+            assert read.any() and not np.any(read & ~on_rows), name
+            checked += 1
+    assert checked == 4 and not on_rows.all()

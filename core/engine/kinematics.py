@@ -17,10 +17,14 @@ J = dg/dx_free (converging at a rate of order |dq| / L; stopping on the residual
 error that rate leaves after a step), and full Newton from there if they stall, stopping on
 the residual or on the step, each row and each unknown within its own tolerance (slots
 row_tolerance, step_tolerance: `mechanics.scales`, lengths through the length scale, Euler
-parameters and angles through 1, a floor 8 eps of the magnitude). The prediction and the
-chord iterates are checked on e alone (a BEAM's e costs an eighth of e, De, D2e); De and
-D2e are evaluated once, at the solution. J DF = [0; I] gives DF = dx/dq (NX, NDOF) where it
-is needed (the reduced form, the tangent, the kinematics operation).
+parameters and angles through 1, a floor 8 eps of the magnitude). The prediction is checked
+on e alone (a BEAM's e costs an eighth of e, De, D2e); a chord iterate is evaluated with De
+(the motion's order at a solution, `AT_SOLUTION`), since one chord step mostly converges and
+the iterate it stops at then needs no evaluation of its own (on manipulator_control's stage
+iterations 2.3 us of about 70: docs/benchmarks.md, session 35); the statics' packed model
+checks its chord iterates on e alone and evaluates D2e once, at the solution. J DF = [0; I]
+gives DF = dx/dq (NX, NDOF) where it is needed (the reduced form, the tangent, the
+kinematics operation).
 
 D2e is read by the equations of motion only as the constraint rows' h = xdot^T D2e xdot, and
 an element that forms h itself (`entries.ORDER_DIRECTIONAL`: the BEAM) gives it from xdot
@@ -334,11 +338,17 @@ def solve_kinematics(table, q):
             deformations(table, x, solution_order(table), True)  # the slaves are filled
             return _store(table, q, x)
         previous = 0.0  # no rate before the second step
+        # a chord iterate's e with De, the motion's solution order: a chord step from the
+        # first-order prediction mostly converges (its rate is of order |dq| / L), and then
+        # its De is the solution's, the e-only evaluation before it saved; the statics'
+        # solution order (D2e, some ten times e) stays for the iterate it stops at
+        order = solution_order(table)
+        chord_order = order if order == AT_SOLUTION else 0
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             step = _newton_step(table, x, g, dx)
             if not np.isfinite(step):
                 break
-            _elements(table, x, 0)
+            _elements(table, x, chord_order)
             # chord steps contract linearly, at the rate of two successive steps: the error
             # left after a step is step rate / (1 - rate), not the step itself (a small step
             # of a slow contraction is no convergence)
@@ -346,7 +356,8 @@ def solve_kinematics(table, q):
             previous = step
             if _residual(table, x, q, g) <= 1.0 or step == 0.0 or (
                     rate < 1.0 and step * rate <= 1.0 - rate):
-                deformations(table, x, solution_order(table), True)
+                if chord_order != order:
+                    deformations(table, x, order, True)
                 return _store(table, q, x)
     else:
         copy(x, _f(table, slot.X_START))
