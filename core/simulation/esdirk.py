@@ -94,6 +94,7 @@ from .esdirk_kernels import (
     M_ETA,
     M_EXPONENT,
     M_H,
+    M_H_INPUT,
     M_H_LU,
     M_H_MAX,
     M_RTOL,
@@ -176,7 +177,7 @@ class Esdirk(Stepper):
 
     def forget(self):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
-        self.memory[M_H] = 0.0
+        self.memory[M_H] = self.memory[M_H_INPUT] = 0.0
         self.memory[M_ETA] = 1.0
         self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA]] = 0  # FSAL_NONE
 
@@ -227,7 +228,8 @@ class Esdirk(Stepper):
         """What the integrator has learnt, as plain numbers: {"initial_step" (s, the next
         step), "jacobian" (n * n,) or empty, "lu_step" (s, h g of the Newton matrix),
         "newton_rate", "refresh" (1: a new Jacobian at the next step), "extra_iterations"
-        (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`)}."""
+        (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`), "input_step"
+        (s, the largest first step after the next input change, 0: none; `restart`)}."""
         # a sparse Newton matrix's Jacobian lives in the packed model (`newton_matrix`): a
         # restart from this memory evaluates a new one
         valid = self.flags[I_JACOBIAN] == 1 and not self.sparse_newton
@@ -236,14 +238,15 @@ class Esdirk(Stepper):
                 "lu_step": float(self.memory[M_H_LU]) if self.flags[I_LU] else 0.0,
                 "newton_rate": float(self.memory[M_ETA]),
                 "refresh": int(self.flags[I_REFRESH]),
-                "extra_iterations": int(self.flags[I_EXTRA])}
+                "extra_iterations": int(self.flags[I_EXTRA]),
+                "input_step": float(self.memory[M_H_INPUT])}
 
     @restart_memory.setter
     def restart_memory(self, memory):
         self.forget()
         numbers = {key: float(memory.get(key, default)) for key, default in (
             ("initial_step", 0.0), ("lu_step", 0.0), ("newton_rate", 1.0), ("refresh", 0.0),
-            ("extra_iterations", 0.0))}
+            ("extra_iterations", 0.0), ("input_step", 0.0))}
         jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
         for key, value in numbers.items():
             if not (np.isfinite(value) and value >= 0.0):
@@ -258,6 +261,7 @@ class Esdirk(Stepper):
                                   f"extra_iterations = {extra!r}: expected 0 or 1 and a whole "
                                   "number")
         self.memory[M_H], self.memory[M_ETA] = numbers["initial_step"], numbers["newton_rate"]
+        self.memory[M_H_INPUT] = numbers["input_step"]
         lu_step = numbers["lu_step"]
         if jacobian.size == self.n * self.n and not self.sparse_newton:
             self.J[:] = jacobian

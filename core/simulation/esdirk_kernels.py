@@ -17,13 +17,16 @@ from .esdirk_method import MAX_STAGES
 from .newton_matrix import newton_solve
 
 # float64 memory slots
-(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
+(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_H_INPUT, M_SIZE) = range(9)
+# memory[M_H_INPUT]: the step (s) the controller proposed after the last accepted first step
+# after an input change (0: none yet); the next input change starts no larger (`restart`)
 # int64 flags and counters; flags[I_FSAL]: F_1 to evaluate, F_1 current, F_1 = F_s of the inputs
 # of the engine's last evaluation (counters[EVALUATIONS] = flags[I_EVALUATION]): add the response
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_SIZE) = range(20)
+ I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_AFTER_INPUT, I_SIZE) = range(21)
+# flags[I_AFTER_INPUT] = 1 from an input change (`restart`) to the next accepted step
 # flags[I_RESPONSES]: the engine's input responses the first stage asked for (`advance`)
 # flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
 # their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
@@ -435,6 +438,9 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
         memory[M_T] = t_stop if h == remaining else t + h
         memory[M_H] = (h * min(GROW, SAFETY * error ** -memory[M_EXPONENT]) if error > 0.0
                        else h * GROW)
+        if flags[I_AFTER_INPUT] == 1:  # the first step after an input change: its own sequence
+            memory[M_H_INPUT] = memory[M_H]
+            flags[I_AFTER_INPUT] = 0
         flags[I_STEPS] += 1
         flags[I_FRESH] = 0
         failures = 0
@@ -451,7 +457,16 @@ def restart(table, memory, flags, t, inputs_only):
     packed model at address `table`: the first stage's derivative is recomputed, or with
     inputs_only (nothing but the inputs changed since the step that ended at t) it is the last
     stage's plus the engine's input response; the step size, Jacobian and Newton matrix are
-    kept. `Esdirk.reset` and the compiled sampled loop both restart through it."""
+    kept, except that after an input change the first step is at most the one the controller
+    proposed after the last input change's first step (memory[M_H_INPUT]). Why: a held
+    input's jump excites the model's faster modes at every sample, so the first step of a
+    sample wants about the size the last sample's first step had, not the size the last
+    sample's smooth end grew to; on manipulator_reduced's 4 kHz loop that size was rejected
+    three times a sample (373 of 374 rejections in 120 samples at the first step, half of the
+    evaluations: docs/benchmarks.md, session 35). The sequence of first steps has its own
+    controller (the proposal after each accepted one, growing at most GROW a sample), so a
+    single large jump costs a few smaller first steps in the samples after it. `Esdirk.reset`
+    and the compiled sampled loop both restart through it."""
     # not with kinematic inputs: the input response is that of the unconstrained
     # accelerations (the engine declines it too), and a host's move_to changes the path,
     # which changes f where no input response can tell
@@ -459,4 +474,7 @@ def restart(table, memory, flags, t, inputs_only):
         access.dims(table)[ed.NKI] == 0
     memory[M_T] = t
     flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
+    flags[I_AFTER_INPUT] = 1 if keep else 0
+    if keep and memory[M_H_INPUT] > 0.0:
+        memory[M_H] = min(memory[M_H], memory[M_H_INPUT])
     access.counters(table)[ed.FAILED_STATUS] = 0
