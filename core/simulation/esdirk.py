@@ -73,7 +73,10 @@ from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError, StepBudgetSpent
 from .esdirk_kernels import (
+    ETA_HOLD,
     FLAG_NAMES,
+    I_ETA_AGE,
+    I_ETA_HOLD,
     I_EXTRA,
     I_FACTORIZATIONS,
     I_FRESH,
@@ -144,6 +147,7 @@ class Esdirk(Stepper):
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
         self.flags[I_HISTORY] = int(tableau.history)
         self.flags[I_MASS_FORM] = 1  # the stages' residual in mass form on the sparse path
+        self.flags[I_ETA_HOLD] = ETA_HOLD if self.sparse_newton else 0
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)
         self.LU = np.zeros(n * n)
@@ -179,7 +183,7 @@ class Esdirk(Stepper):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
         self.memory[M_H] = self.memory[M_H_INPUT] = 0.0
         self.memory[M_ETA] = 1.0
-        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA]] = 0  # FSAL_NONE
+        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA, I_ETA_AGE]] = 0
 
     def advance(self, t_stop, *, one_step=False, max_steps=None):
         """Integrate to t_stop (s), landing on it exactly (one accepted step only with
@@ -229,7 +233,8 @@ class Esdirk(Stepper):
         step), "jacobian" (n * n,) or empty, "lu_step" (s, h g of the Newton matrix),
         "newton_rate", "refresh" (1: a new Jacobian at the next step), "extra_iterations"
         (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`), "input_step"
-        (s, the largest first step after the next input change, 0: none; `restart`)}."""
+        (s, the largest first step after the next input change, 0: none; `restart`),
+        "newton_age" (accepted steps since the contraction was last measured, `ETA_HOLD`)}."""
         # a sparse Newton matrix's Jacobian lives in the packed model (`newton_matrix`): a
         # restart from this memory evaluates a new one
         valid = self.flags[I_JACOBIAN] == 1 and not self.sparse_newton
@@ -239,14 +244,15 @@ class Esdirk(Stepper):
                 "newton_rate": float(self.memory[M_ETA]),
                 "refresh": int(self.flags[I_REFRESH]),
                 "extra_iterations": int(self.flags[I_EXTRA]),
-                "input_step": float(self.memory[M_H_INPUT])}
+                "input_step": float(self.memory[M_H_INPUT]),
+                "newton_age": int(self.flags[I_ETA_AGE])}
 
     @restart_memory.setter
     def restart_memory(self, memory):
         self.forget()
         numbers = {key: float(memory.get(key, default)) for key, default in (
             ("initial_step", 0.0), ("lu_step", 0.0), ("newton_rate", 1.0), ("refresh", 0.0),
-            ("extra_iterations", 0.0), ("input_step", 0.0))}
+            ("extra_iterations", 0.0), ("input_step", 0.0), ("newton_age", 0.0))}
         jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
         for key, value in numbers.items():
             if not (np.isfinite(value) and value >= 0.0):
@@ -256,12 +262,14 @@ class Esdirk(Stepper):
             raise SimulationError("the integrator memory holds negative or non-finite "
                                   "numbers: in its jacobian")
         refresh, extra = numbers["refresh"], numbers["extra_iterations"]
-        if refresh not in (0.0, 1.0) or extra != int(extra):
-            raise SimulationError(f"the integrator memory's refresh = {refresh!r} and "
-                                  f"extra_iterations = {extra!r}: expected 0 or 1 and a whole "
-                                  "number")
+        age = numbers["newton_age"]
+        if refresh not in (0.0, 1.0) or extra != int(extra) or age != int(age):
+            raise SimulationError(f"the integrator memory's refresh = {refresh!r}, "
+                                  f"extra_iterations = {extra!r} and newton_age = {age!r}: "
+                                  "expected 0 or 1 and a whole number for each count")
         self.memory[M_H], self.memory[M_ETA] = numbers["initial_step"], numbers["newton_rate"]
         self.memory[M_H_INPUT] = numbers["input_step"]
+        self.flags[I_ETA_AGE] = min(int(age), int(self.flags[I_ETA_HOLD]))
         lu_step = numbers["lu_step"]
         if jacobian.size == self.n * self.n and not self.sparse_newton:
             self.J[:] = jacobian

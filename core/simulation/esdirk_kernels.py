@@ -25,8 +25,11 @@ from .newton_matrix import newton_solve
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_AFTER_INPUT, I_SIZE) = range(21)
+ I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_AFTER_INPUT, I_ETA_AGE, I_ETA_HOLD,
+ I_SIZE) = range(23)
 # flags[I_AFTER_INPUT] = 1 from an input change (`restart`) to the next accepted step
+# flags[I_ETA_AGE]: accepted steps since a stage last measured its contraction; the estimate
+# grows at a step's first implicit stage once the age reaches flags[I_ETA_HOLD] (`_stage`)
 # flags[I_RESPONSES]: the engine's input responses the first stage asked for (`advance`)
 # flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
 # their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
@@ -66,6 +69,17 @@ SPARSE_LU_SLACK = 1e-9
 JACOBIAN_COST = 0.25      # evaluations per state
 THETA_STALE = 0.01
 SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
+# Accepted steps the Newton contraction estimate eta is trusted unmeasured before it grows
+# again at a step's first implicit stage (flags[I_ETA_HOLD], set by `Esdirk`: on the sparse
+# Newton matrix; 0 elsewhere, growth at every step). Why on the sparse path: its Jacobian is
+# current for long (one for the 384-DOF cantilever's whole run), stage 2 converges in one
+# iteration, and a growth at every step asked it for a second one only to re-measure; held
+# for 10 steps: 0.90 to 0.98 of the evaluations over rtol 1e-4 to 1e-8 on the cantilever, at
+# its errors. A Newton failure resets eta to 1, and an eta unmeasured for 10 steps grows as
+# before, so a Jacobian grown stale is still found (its slow contraction measured, counted
+# against JACOBIAN_COST). Not on the dense path: on stage_planar_3dof (whose J is renewed
+# often) the hold cost accuracy at loose tolerances (docs/benchmarks.md, session 35).
+ETA_HOLD = 10
 # After two error-test failures at the same t the error's observed order in h replaces the
 # assumed one (`observed_shrink`): at least ORDER_FLOOR, the step cut by at most SHRINK_FLOOR.
 ORDER_FLOOR, SHRINK_FLOOR = 0.5, 0.01
@@ -240,9 +254,10 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
         c_i += A[i, j]
     t_stage = memory[M_T] + c_i * h
     # the last contraction estimate, let grow once per step (its first implicit stage), as
-    # RADAU5 does once per step for its one Newton over all stages
+    # RADAU5 does once per step for its one Newton over all stages, once it has gone
+    # unmeasured for flags[I_ETA_HOLD] accepted steps (`ETA_HOLD`)
     eta = max(memory[M_ETA], 1e-16)
-    if i == 1:
+    if i == 1 and flags[I_ETA_AGE] >= flags[I_ETA_HOLD]:
         eta = eta ** 0.8
     previous = 0.0
     for iteration in range(MAX_NEWTON):
@@ -273,6 +288,7 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
             # count in flags[I_EXTRA] against the cost of one (JACOBIAN_COST); on
             # manipulator_reduced a J costs about 110 evaluations (docs/benchmarks.md)
             eta = theta / (1.0 - theta)
+            flags[I_ETA_AGE] = 0
         if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:
             memory[M_ETA] = eta
             for k in range(n):
@@ -397,6 +413,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
         failures += 1
         if not converged:
             flags[I_NEWTON_FAILURES] += 1
+            flags[I_ETA_AGE] = flags[I_ETA_HOLD]
             if failures > MAX_FAILURES:
                 return CONVERGENCE_FAILURES
             if flags[I_FRESH] == 0:
@@ -442,6 +459,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             memory[M_H_INPUT] = memory[M_H]
             flags[I_AFTER_INPUT] = 0
         flags[I_STEPS] += 1
+        flags[I_ETA_AGE] = min(flags[I_ETA_AGE] + 1, flags[I_ETA_HOLD])
         flags[I_FRESH] = 0
         failures = 0
         h_rejected = 0.0
