@@ -32,8 +32,10 @@ error-test failure at the same t, where the error fell from the first failure's 
 than h^(p + 1), the observed order q (at least 0.5) replaces p + 1: h max(0.01, 0.9
 |err|^(-1/q)) (`esdirk_kernels.observed_shrink`: a sudden load's first step). The last step
 before t_stop is stretched or split so the integration lands on t_stop exactly, never past it
-(the held input changes there). With a step budget (max_steps) the kernel stops at the last
-accepted step once it is spent (TOO_MUCH_WORK).
+(the held input changes there). After an input change the first step is at most the one
+proposed after the last input change's first step (`esdirk_kernels.restart`). With a step
+budget (max_steps) the kernel stops at the last accepted step once it is spent
+(TOO_MUCH_WORK).
 
 Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
 Jacobian), kept across steps and samples; it is recomputed when a stage's Newton fails (a
@@ -46,8 +48,10 @@ takes its velocity half in mass form, M_bar (f_v(z) - a_c) with a_c = (v - base_
 root, iterates that differ by the change of M_bar from the Newton matrix's state.
 Iterations stop when the estimated remaining error eta |dz| (eta =
 theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm above, as in
-Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
-(kinematics not converged) recomputes J or, with J fresh, quarters h and retries. J is also
+Hairer's RADAU5; at most 7 iterations. eta grows (eta^0.8) at a step's first implicit
+stage, on the sparse Newton matrix only once it has gone unmeasured for `ETA_HOLD` steps. A
+failed Newton or an engine failure at a trial stage (kinematics not converged) recomputes J
+or, with J fresh, quarters h and retries. J is also
 renewed once the iterations its age cost add up to what a new one costs (`JACOBIAN_COST`):
 on the manipulator's loop 8 Jacobians instead of 1, 9 % fewer evaluations, 0.93 of the time
 and a plant 2.7 times closer to a tight run (docs/decisions.md).
