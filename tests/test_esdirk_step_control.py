@@ -62,6 +62,25 @@ def test_the_first_step_after_an_input_change_is_at_most_the_last_first_steps_pr
     assert integrator.restart_memory["input_step"] == 0.0
 
 
+def test_after_a_stretch_without_input_changes_the_first_step_is_not_capped():
+    """The last input change's first step says nothing about a change after a stretch with
+    none (a host that changes its inputs now and then): the step is the controller's."""
+    model = load_scene("stage_planar_1dof")
+    sim = Simulator(model, method="esdirk2", rtol=1e-6)
+    integrator = sim.integrator
+    sim.set_inputs([1.0])
+    sim.advance_to(SAMPLE)
+    sim.set_inputs([-1.0])
+    sim.advance_to(2 * SAMPLE)
+    sim.advance_to(3 * SAMPLE)  # no change over this sample
+    proposal = integrator.restart_memory["input_step"]
+    assert proposal > 0.0
+    y, t = integrator.y_array.copy(), float(integrator.memory[K.M_T])
+    integrator.memory[K.M_H] = 10.0 * proposal
+    integrator.reset(t, y, inputs_changed=True)
+    assert integrator.memory[K.M_H] == 10.0 * proposal
+
+
 def test_first_steps_sized_from_the_last_ones_are_rarely_rejected_at_the_same_error():
     """A force drawn anew at every sample of a 4 kHz loop on the 19-DOF spatial stage: the
     step the smooth end of a sample grew to is rejected at the next sample's first step (53

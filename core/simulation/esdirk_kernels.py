@@ -26,8 +26,10 @@ FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
  I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_AFTER_INPUT, I_ETA_AGE, I_ETA_HOLD,
- I_SIZE) = range(23)
-# flags[I_AFTER_INPUT] = 1 from an input change (`restart`) to the next accepted step
+ I_LANDED, I_QUIET, I_SIZE) = range(25)
+# flags[I_AFTER_INPUT] = 1 from an input change (`restart`) to the next accepted step;
+# I_LANDED = 1 once a step lands on t_stop, and no restart since; I_QUIET = 1 once an advance
+# started from a landing (a stretch with no input change: memory[M_H_INPUT] is stale)
 # flags[I_ETA_AGE]: accepted steps since a stage last measured its contraction; the estimate
 # grows at a step's first implicit stage once the age reaches flags[I_ETA_HOLD] (`_stage`)
 # flags[I_RESPONSES]: the engine's input responses the first stage asked for (`advance`)
@@ -70,15 +72,11 @@ JACOBIAN_COST = 0.25      # evaluations per state
 THETA_STALE = 0.01
 SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
 # Accepted steps the Newton contraction estimate eta is trusted unmeasured before it grows
-# again at a step's first implicit stage (flags[I_ETA_HOLD], set by `Esdirk`: on the sparse
-# Newton matrix; 0 elsewhere, growth at every step). Why on the sparse path: its Jacobian is
-# current for long (one for the 384-DOF cantilever's whole run), stage 2 converges in one
-# iteration, and a growth at every step asked it for a second one only to re-measure; held
-# for 10 steps: 0.90 to 0.98 of the evaluations over rtol 1e-4 to 1e-8 on the cantilever, at
-# its errors. A Newton failure resets eta to 1, and an eta unmeasured for 10 steps grows as
-# before, so a Jacobian grown stale is still found (its slow contraction measured, counted
-# against JACOBIAN_COST). Not on the dense path: on stage_planar_3dof (whose J is renewed
-# often) the hold cost accuracy at loose tolerances (docs/benchmarks.md, session 35).
+# at a step's first implicit stage (flags[I_ETA_HOLD], set by `Esdirk`: on the sparse Newton
+# matrix, whose J stays current for long; 0, growth at every step, on the dense path, where
+# it cost accuracy on stage_planar_3dof). On the cantilevers 0.90 to 0.99 of the evaluations
+# at their errors; an eta unmeasured for 10 steps grows again, so a stale J is still found
+# (docs/benchmarks.md, session 35)
 ETA_HOLD = 10
 # After two error-test failures at the same t the error's observed order in h replaces the
 # assumed one (`observed_shrink`): at least ORDER_FLOOR, the step cut by at most SHRINK_FLOOR.
@@ -358,6 +356,8 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     one_step, max_steps = flags[I_ONE_STEP] != 0, flags[I_MAX_STEPS]
     steps = 0
     failures = 0
+    if flags[I_LANDED] == 1:
+        flags[I_QUIET] = 1
     h_rejected, error_rejected = 0.0, 0.0  # the last error-test failure at this t
     while memory[M_T] < t_stop:
         t = memory[M_T]
@@ -453,6 +453,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             F[0, k] = F[stages - 1, k]
         flags[I_EVALUATION] = counters[ed.EVALUATIONS]  # its last stage's
         memory[M_T] = t_stop if h == remaining else t + h
+        flags[I_LANDED] = 1 if h == remaining else 0
         memory[M_H] = (h * min(GROW, SAFETY * error ** -memory[M_EXPONENT]) if error > 0.0
                        else h * GROW)
         if flags[I_AFTER_INPUT] == 1:  # the first step after an input change: its own sequence
@@ -479,12 +480,10 @@ def restart(table, memory, flags, t, inputs_only):
     proposed after the last input change's first step (memory[M_H_INPUT]). Why: a held
     input's jump excites the model's faster modes at every sample, so the first step of a
     sample wants about the size the last sample's first step had, not the size the last
-    sample's smooth end grew to; on manipulator_reduced's 4 kHz loop that size was rejected
-    three times a sample (373 of 374 rejections in 120 samples at the first step, half of the
-    evaluations: docs/benchmarks.md, session 35). The sequence of first steps has its own
-    controller (the proposal after each accepted one, growing at most GROW a sample), so a
-    single large jump costs a few smaller first steps in the samples after it. `Esdirk.reset`
-    and the compiled sampled loop both restart through it."""
+    sample's smooth end grew to (on manipulator_reduced's 4 kHz loop that size was rejected
+    three times a sample: docs/benchmarks.md, session 35). Not after a stretch of integration
+    with no input change (flags[I_QUIET]): the last change's first step says nothing then.
+    `Esdirk.reset` and the compiled sampled loop both restart through it."""
     # not with kinematic inputs: the input response is that of the unconstrained
     # accelerations (the engine declines it too), and a host's move_to changes the path,
     # which changes f where no input response can tell
@@ -493,6 +492,7 @@ def restart(table, memory, flags, t, inputs_only):
     memory[M_T] = t
     flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
     flags[I_AFTER_INPUT] = 1 if keep else 0
-    if keep and memory[M_H_INPUT] > 0.0:
+    if keep and memory[M_H_INPUT] > 0.0 and flags[I_QUIET] == 0:
         memory[M_H] = min(memory[M_H], memory[M_H_INPUT])
+    flags[I_LANDED], flags[I_QUIET] = 0, 0
     access.counters(table)[ed.FAILED_STATUS] = 0
