@@ -32,8 +32,10 @@ error-test failure at the same t, where the error fell from the first failure's 
 than h^(p + 1), the observed order q (at least 0.5) replaces p + 1: h max(0.01, 0.9
 |err|^(-1/q)) (`esdirk_kernels.observed_shrink`: a sudden load's first step). The last step
 before t_stop is stretched or split so the integration lands on t_stop exactly, never past it
-(the held input changes there). With a step budget (max_steps) the kernel stops at the last
-accepted step once it is spent (TOO_MUCH_WORK).
+(the held input changes there). After an input change the first step is at most the one
+proposed after the last input change's first step (`esdirk_kernels.restart`). With a step
+budget (max_steps) the kernel stops at the last accepted step once it is spent
+(TOO_MUCH_WORK).
 
 Newton: matrix I - h g J with J the model's analytic tangent (the engine's first-order
 Jacobian), kept across steps and samples; it is recomputed when a stage's Newton fails (a
@@ -46,8 +48,10 @@ takes its velocity half in mass form, M_bar (f_v(z) - a_c) with a_c = (v - base_
 root, iterates that differ by the change of M_bar from the Newton matrix's state.
 Iterations stop when the estimated remaining error eta |dz| (eta =
 theta / (1 - theta), theta the observed contraction) is at most 0.05 in the norm above, as in
-Hairer's RADAU5; at most 7 iterations. A failed Newton or an engine failure at a trial stage
-(kinematics not converged) recomputes J or, with J fresh, quarters h and retries. J is also
+Hairer's RADAU5; at most 7 iterations. eta grows (eta^0.8) at a step's first implicit
+stage, on the sparse Newton matrix only once it has gone unmeasured for `ETA_HOLD` steps. A
+failed Newton or an engine failure at a trial stage (kinematics not converged) recomputes J
+or, with J fresh, quarters h and retries. J is also
 renewed once the iterations its age cost add up to what a new one costs (`JACOBIAN_COST`):
 on the manipulator's loop 8 Jacobians instead of 1, 9 % fewer evaluations, 0.93 of the time
 and a plant 2.7 times closer to a tight run (docs/decisions.md).
@@ -73,7 +77,10 @@ from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError, StepBudgetSpent
 from .esdirk_kernels import (
+    ETA_HOLD,
     FLAG_NAMES,
+    I_ETA_AGE,
+    I_ETA_HOLD,
     I_EXTRA,
     I_FACTORIZATIONS,
     I_FRESH,
@@ -94,6 +101,7 @@ from .esdirk_kernels import (
     M_ETA,
     M_EXPONENT,
     M_H,
+    M_H_INPUT,
     M_H_LU,
     M_H_MAX,
     M_RTOL,
@@ -143,6 +151,7 @@ class Esdirk(Stepper):
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
         self.flags[I_HISTORY] = int(tableau.history)
         self.flags[I_MASS_FORM] = 1  # the stages' residual in mass form on the sparse path
+        self.flags[I_ETA_HOLD] = ETA_HOLD if self.sparse_newton else 0
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)
         self.LU = np.zeros(n * n)
@@ -176,9 +185,9 @@ class Esdirk(Stepper):
 
     def forget(self):
         """Start the next step from nothing: an estimated first step, a new Jacobian."""
-        self.memory[M_H] = 0.0
+        self.memory[M_H] = self.memory[M_H_INPUT] = 0.0
         self.memory[M_ETA] = 1.0
-        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA]] = 0  # FSAL_NONE
+        self.flags[[I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_FSAL, I_EXTRA, I_ETA_AGE]] = 0
 
     def advance(self, t_stop, *, one_step=False, max_steps=None):
         """Integrate to t_stop (s), landing on it exactly (one accepted step only with
@@ -227,7 +236,9 @@ class Esdirk(Stepper):
         """What the integrator has learnt, as plain numbers: {"initial_step" (s, the next
         step), "jacobian" (n * n,) or empty, "lu_step" (s, h g of the Newton matrix),
         "newton_rate", "refresh" (1: a new Jacobian at the next step), "extra_iterations"
-        (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`)}."""
+        (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`), "input_step"
+        (s, the largest first step after the next input change, 0: none; `restart`),
+        "newton_age" (accepted steps since the contraction was last measured, `ETA_HOLD`)}."""
         # a sparse Newton matrix's Jacobian lives in the packed model (`newton_matrix`): a
         # restart from this memory evaluates a new one
         valid = self.flags[I_JACOBIAN] == 1 and not self.sparse_newton
@@ -236,14 +247,16 @@ class Esdirk(Stepper):
                 "lu_step": float(self.memory[M_H_LU]) if self.flags[I_LU] else 0.0,
                 "newton_rate": float(self.memory[M_ETA]),
                 "refresh": int(self.flags[I_REFRESH]),
-                "extra_iterations": int(self.flags[I_EXTRA])}
+                "extra_iterations": int(self.flags[I_EXTRA]),
+                "input_step": float(self.memory[M_H_INPUT]),
+                "newton_age": int(self.flags[I_ETA_AGE])}
 
     @restart_memory.setter
     def restart_memory(self, memory):
         self.forget()
         numbers = {key: float(memory.get(key, default)) for key, default in (
             ("initial_step", 0.0), ("lu_step", 0.0), ("newton_rate", 1.0), ("refresh", 0.0),
-            ("extra_iterations", 0.0))}
+            ("extra_iterations", 0.0), ("input_step", 0.0), ("newton_age", 0.0))}
         jacobian = np.asarray(memory.get("jacobian", ()), dtype=float).reshape(-1)
         for key, value in numbers.items():
             if not (np.isfinite(value) and value >= 0.0):
@@ -253,11 +266,14 @@ class Esdirk(Stepper):
             raise SimulationError("the integrator memory holds negative or non-finite "
                                   "numbers: in its jacobian")
         refresh, extra = numbers["refresh"], numbers["extra_iterations"]
-        if refresh not in (0.0, 1.0) or extra != int(extra):
-            raise SimulationError(f"the integrator memory's refresh = {refresh!r} and "
-                                  f"extra_iterations = {extra!r}: expected 0 or 1 and a whole "
-                                  "number")
+        age = numbers["newton_age"]
+        if refresh not in (0.0, 1.0) or extra != int(extra) or age != int(age):
+            raise SimulationError(f"the integrator memory's refresh = {refresh!r}, "
+                                  f"extra_iterations = {extra!r} and newton_age = {age!r}: "
+                                  "expected 0 or 1 and a whole number for each count")
         self.memory[M_H], self.memory[M_ETA] = numbers["initial_step"], numbers["newton_rate"]
+        self.memory[M_H_INPUT] = numbers["input_step"]
+        self.flags[I_ETA_AGE] = min(int(age), int(self.flags[I_ETA_HOLD]))
         lu_step = numbers["lu_step"]
         if jacobian.size == self.n * self.n and not self.sparse_newton:
             self.J[:] = jacobian

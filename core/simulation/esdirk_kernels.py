@@ -17,13 +17,21 @@ from .esdirk_method import MAX_STAGES
 from .newton_matrix import newton_solve
 
 # float64 memory slots
-(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_SIZE) = range(8)
+(M_T, M_H, M_RTOL, M_H_MAX, M_H_LU, M_ETA, M_EXPONENT, M_H_INPUT, M_SIZE) = range(9)
+# memory[M_H_INPUT]: the step (s) the controller proposed after the last accepted first step
+# after an input change (0: none yet); the next input change starts no larger (`restart`)
 # int64 flags and counters; flags[I_FSAL]: F_1 to evaluate, F_1 current, F_1 = F_s of the inputs
 # of the engine's last evaluation (counters[EVALUATIONS] = flags[I_EVALUATION]): add the response
 FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
- I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_SIZE) = range(20)
+ I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_AFTER_INPUT, I_ETA_AGE, I_ETA_HOLD,
+ I_LANDED, I_QUIET, I_SIZE) = range(25)
+# flags[I_AFTER_INPUT] = 1 from an input change (`restart`) to the next accepted step;
+# I_LANDED = 1 once a step lands on t_stop, and no restart since; I_QUIET = 1 once an advance
+# started from a landing (a stretch with no input change: memory[M_H_INPUT] is stale)
+# flags[I_ETA_AGE]: accepted steps since a stage last measured its contraction; the estimate
+# grows at a step's first implicit stage once the age reaches flags[I_ETA_HOLD] (`_stage`)
 # flags[I_RESPONSES]: the engine's input responses the first stage asked for (`advance`)
 # flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
 # their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
@@ -63,6 +71,13 @@ SPARSE_LU_SLACK = 1e-9
 JACOBIAN_COST = 0.25      # evaluations per state
 THETA_STALE = 0.01
 SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
+# Accepted steps the Newton contraction estimate eta is trusted unmeasured before it grows
+# at a step's first implicit stage (flags[I_ETA_HOLD], set by `Esdirk`: on the sparse Newton
+# matrix, whose J stays current for long; 0, growth at every step, on the dense path, where
+# it cost accuracy on stage_planar_3dof). On the cantilevers 0.90 to 0.99 of the evaluations
+# at their errors; an eta unmeasured for 10 steps grows again, so a stale J is still found
+# (docs/benchmarks.md, session 35)
+ETA_HOLD = 10
 # After two error-test failures at the same t the error's observed order in h replaces the
 # assumed one (`observed_shrink`): at least ORDER_FLOOR, the step cut by at most SHRINK_FLOOR.
 ORDER_FLOOR, SHRINK_FLOOR = 0.5, 0.01
@@ -237,9 +252,10 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
         c_i += A[i, j]
     t_stage = memory[M_T] + c_i * h
     # the last contraction estimate, let grow once per step (its first implicit stage), as
-    # RADAU5 does once per step for its one Newton over all stages
+    # RADAU5 does once per step for its one Newton over all stages, once it has gone
+    # unmeasured for flags[I_ETA_HOLD] accepted steps (`ETA_HOLD`)
     eta = max(memory[M_ETA], 1e-16)
-    if i == 1:
+    if i == 1 and flags[I_ETA_AGE] >= flags[I_ETA_HOLD]:
         eta = eta ** 0.8
     previous = 0.0
     for iteration in range(MAX_NEWTON):
@@ -270,6 +286,7 @@ def _stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
             # count in flags[I_EXTRA] against the cost of one (JACOBIAN_COST); on
             # manipulator_reduced a J costs about 110 evaluations (docs/benchmarks.md)
             eta = theta / (1.0 - theta)
+            flags[I_ETA_AGE] = 0
         if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:
             memory[M_ETA] = eta
             for k in range(n):
@@ -339,6 +356,8 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     one_step, max_steps = flags[I_ONE_STEP] != 0, flags[I_MAX_STEPS]
     steps = 0
     failures = 0
+    if flags[I_LANDED] == 1:
+        flags[I_QUIET] = 1
     h_rejected, error_rejected = 0.0, 0.0  # the last error-test failure at this t
     while memory[M_T] < t_stop:
         t = memory[M_T]
@@ -394,6 +413,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
         failures += 1
         if not converged:
             flags[I_NEWTON_FAILURES] += 1
+            flags[I_ETA_AGE] = flags[I_ETA_HOLD]
             if failures > MAX_FAILURES:
                 return CONVERGENCE_FAILURES
             if flags[I_FRESH] == 0:
@@ -433,9 +453,14 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             F[0, k] = F[stages - 1, k]
         flags[I_EVALUATION] = counters[ed.EVALUATIONS]  # its last stage's
         memory[M_T] = t_stop if h == remaining else t + h
+        flags[I_LANDED] = 1 if h == remaining else 0
         memory[M_H] = (h * min(GROW, SAFETY * error ** -memory[M_EXPONENT]) if error > 0.0
                        else h * GROW)
+        if flags[I_AFTER_INPUT] == 1:  # the first step after an input change: its own sequence
+            memory[M_H_INPUT] = memory[M_H]
+            flags[I_AFTER_INPUT] = 0
         flags[I_STEPS] += 1
+        flags[I_ETA_AGE] = min(flags[I_ETA_AGE] + 1, flags[I_ETA_HOLD])
         flags[I_FRESH] = 0
         failures = 0
         h_rejected = 0.0
@@ -451,7 +476,14 @@ def restart(table, memory, flags, t, inputs_only):
     packed model at address `table`: the first stage's derivative is recomputed, or with
     inputs_only (nothing but the inputs changed since the step that ended at t) it is the last
     stage's plus the engine's input response; the step size, Jacobian and Newton matrix are
-    kept. `Esdirk.reset` and the compiled sampled loop both restart through it."""
+    kept, except that after an input change the first step is at most the one the controller
+    proposed after the last input change's first step (memory[M_H_INPUT]). Why: a held
+    input's jump excites the model's faster modes at every sample, so the first step of a
+    sample wants about the size the last sample's first step had, not the size the last
+    sample's smooth end grew to (on manipulator_reduced's 4 kHz loop that size was rejected
+    three times a sample: docs/benchmarks.md, session 35). Not after a stretch of integration
+    with no input change (flags[I_QUIET]): the last change's first step says nothing then.
+    `Esdirk.reset` and the compiled sampled loop both restart through it."""
     # not with kinematic inputs: the input response is that of the unconstrained
     # accelerations (the engine declines it too), and a host's move_to changes the path,
     # which changes f where no input response can tell
@@ -459,4 +491,8 @@ def restart(table, memory, flags, t, inputs_only):
         access.dims(table)[ed.NKI] == 0
     memory[M_T] = t
     flags[I_FSAL] = FSAL_INPUTS if keep else FSAL_NONE
+    flags[I_AFTER_INPUT] = 1 if keep else 0
+    if keep and memory[M_H_INPUT] > 0.0 and flags[I_QUIET] == 0:
+        memory[M_H] = min(memory[M_H], memory[M_H_INPUT])
+    flags[I_LANDED], flags[I_QUIET] = 0, 0
     access.counters(table)[ed.FAILED_STATUS] = 0

@@ -18,7 +18,8 @@ from ..errors import SimulationError
 
 STATE_VERSION = 2
 # what a one-step integrator learns besides its step and Jacobian (esdirk.Esdirk.restart_memory)
-MEMORY_KEYS = ("lu_step", "newton_rate", "refresh", "extra_iterations")
+MEMORY_KEYS = ("lu_step", "newton_rate", "refresh", "extra_iterations", "input_step",
+               "newton_age")
 
 
 class SimulatorState:
