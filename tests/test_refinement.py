@@ -33,22 +33,12 @@ from flexure.core.engine.refinement import MAX_PRODUCTS
 def loaded_cantilever(n=16, length=0.2):
     """`spatial_cantilever(n)` (a steel strip of n BEAMs, every deformation a DOF) with a
     force input along z and a moment input about x at its tip instead of the 1 N load."""
-    nodes = {"0": {"position": [0.0, 0.0, 0.0], "fixed": ["x", "y", "z"]},
-             "0r": {"rotation": [0.0, 0.0, 0.0], "fixed": True}}
-    elements = {}
-    for j in range(1, n + 1):
-        nodes[str(j)] = {"position": [length * j / n, 0.0, 0.0]}
-        nodes[f"{j}r"] = {"rotation": [0.0, 0.0, 0.0]}
-        elements[f"b{j}"] = {"type": "BEAM", "section": "strip", "y_axis": [0.0, 1.0, 0.0],
-                             "dof": ["e1", "e2", "e3", "e4", "e5", "e6"],
-                             "nodes": [str(j - 1), f"{j - 1}r", str(j), f"{j}r"]}
-    return build_model({
-        "scene": {"name": f"loaded_cantilever_{n}", "dimension": 3},
-        "sections": {"strip": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 5e-5,
-                               "width": 0.01, "height": 0.001}},
-        "nodes": nodes, "elements": elements,
-        "inputs": {"F": {"node": str(n), "coordinate": "z"},
-                   "M": {"node": f"{n}r", "coordinate": "rx"}}})
+    from examples.benchmarks.spatial import cantilever_spec
+
+    spec = cantilever_spec(n, length=length, name=f"loaded_cantilever_{n}")
+    spec["inputs"] = {"F": {"node": str(n), "coordinate": "z"},
+                      "M": {"node": f"{n}r", "coordinate": "rx"}}
+    return build_model(spec)
 
 
 NEWTON_MODELS = {"manipulator_control": (lambda: load_scene("manipulator_control"), KEPT_SPARSE),

@@ -53,6 +53,15 @@ def spatial_cantilever(n, *, length=0.2, output=False):
     the tip's z (m) its one output, "tip"."""
     from flexure.core import build_model
 
+    spec = cantilever_spec(n, length=length, name=f"spatial_cantilever_{n}")
+    spec["nodes"][str(n)]["force"] = [0.0, 0.0, -1.0]
+    spec["outputs"] = {"tip": {"node": str(n), "coordinate": "z"}} if output else {}
+    return build_model(spec)
+
+
+def cantilever_spec(n, *, length=0.2, name="cantilever"):
+    """The scene (a dict for `build_model`) of `spatial_cantilever`'s strip, unloaded: n
+    BEAMs over `length` m, nodes "0" ... str(n) and their rotations "0r" ... f"{n}r"."""
     nodes = {"0": {"position": [0.0, 0.0, 0.0], "fixed": ["x", "y", "z"]},
              "0r": {"rotation": [0.0, 0.0, 0.0], "fixed": True}}
     elements = {}
@@ -62,13 +71,10 @@ def spatial_cantilever(n, *, length=0.2, output=False):
         elements[f"b{j}"] = {"type": "BEAM", "section": "strip", "y_axis": [0.0, 1.0, 0.0],
                              "dof": ["e1", "e2", "e3", "e4", "e5", "e6"],
                              "nodes": [str(j - 1), f"{j - 1}r", str(j), f"{j}r"]}
-    nodes[str(n)]["force"] = [0.0, 0.0, -1.0]
-    outputs = {"tip": {"node": str(n), "coordinate": "z"}} if output else {}
-    return build_model({
-        "scene": {"name": f"spatial_cantilever_{n}", "dimension": 3},
-        "sections": {"strip": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 5e-5,
-                               "width": 0.01, "height": 0.001}},
-        "nodes": nodes, "elements": elements, "outputs": outputs})
+    return {"scene": {"name": name, "dimension": 3},
+            "sections": {"strip": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 5e-5,
+                                   "width": 0.01, "height": 0.001}},
+            "nodes": nodes, "elements": elements}
 
 
 def jacobian_cost(model, *, repeat=5):
