@@ -56,6 +56,17 @@ SW, DW, EW = rg.SLAVE_WIDTH, 48, rg.ELEMENT_WIDTH
 _F8 = np.float64
 
 
+@kernel(inline="always")  # into fill_slaves and convective, in their loops
+def times_4x4(data, e, v0, v1, v2, v3):
+    """(C v) of the 4 x 4 matrix C stored row by row at data[e: e + 16] and v = (v0 ... v3):
+    a slave translation's C_r times its master's Euler parameters or their rates, each row
+    summed left to right."""
+    return (data[e] * v0 + data[e + 1] * v1 + data[e + 2] * v2 + data[e + 3] * v3,
+            data[e + 4] * v0 + data[e + 5] * v1 + data[e + 6] * v2 + data[e + 7] * v3,
+            data[e + 8] * v0 + data[e + 9] * v1 + data[e + 10] * v2 + data[e + 11] * v3,
+            data[e + 12] * v0 + data[e + 13] * v1 + data[e + 14] * v2 + data[e + 15] * v3)
+
+
 @kernel
 def fill_slaves(table, x):
     """x_s = S(x_master) on every slave coordinate of x (NX,), and T's weights at x. The
@@ -72,14 +83,9 @@ def fill_slaves(table, x):
             l0, l1, l2, l3 = x[slaves[o + 8]], x[slaves[o + 9]], x[slaves[o + 10]], \
                 x[slaves[o + 11]]
             for k in range(3):
-                w, c = (row + k) * DEPENDENCIES, d + 16 * k
+                w = (row + k) * DEPENDENCIES
                 W[w] = 1.0
-                t0 = data[c] * l0 + data[c + 1] * l1 + data[c + 2] * l2 + data[c + 3] * l3
-                t1 = data[c + 4] * l0 + data[c + 5] * l1 + data[c + 6] * l2 + data[c + 7] * l3
-                t2 = data[c + 8] * l0 + data[c + 9] * l1 + data[c + 10] * l2 \
-                    + data[c + 11] * l3
-                t3 = data[c + 12] * l0 + data[c + 13] * l1 + data[c + 14] * l2 \
-                    + data[c + 15] * l3
+                t0, t1, t2, t3 = times_4x4(data, d + 16 * k, l0, l1, l2, l3)
                 W[w + 1], W[w + 2], W[w + 3], W[w + 4] = t0, t1, t2, t3
                 x[slaves[o + 1 + k]] = x[slaves[o + 5 + k]] + 0.5 * (
                     t0 * l0 + t1 * l1 + t2 * l2 + t3 * l3)
@@ -156,13 +162,7 @@ def convective(table, x, xdot):
             m0, m1, m2, m3 = xdot[slaves[o + 8]], xdot[slaves[o + 9]], xdot[slaves[o + 10]], \
                 xdot[slaves[o + 11]]
             for k in range(3):
-                e = d + 16 * k
-                t0 = data[e] * m0 + data[e + 1] * m1 + data[e + 2] * m2 + data[e + 3] * m3
-                t1 = data[e + 4] * m0 + data[e + 5] * m1 + data[e + 6] * m2 + data[e + 7] * m3
-                t2 = data[e + 8] * m0 + data[e + 9] * m1 + data[e + 10] * m2 \
-                    + data[e + 11] * m3
-                t3 = data[e + 12] * m0 + data[e + 13] * m1 + data[e + 14] * m2 \
-                    + data[e + 15] * m3
+                t0, t1, t2, t3 = times_4x4(data, d + 16 * k, m0, m1, m2, m3)
                 c[slaves[o + 1 + k]] = t0 * m0 + t1 * m1 + t2 * m2 + t3 * m3
         elif kind == PLANAR_TRANSLATION:
             phi = x[slaves[o + 8]]
