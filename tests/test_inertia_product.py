@@ -23,7 +23,9 @@ stage_spatial_1dof (a folded cluster, rigid rows), truss_1dof_x (lumped masses o
 wire_tripod (lumped masses, clusters, rigid rows); the banded and the sparse storage of A.
 The kernels it is made of against numpy: the BEAM's closed form
 (`beam_mass.beam_point_product`, its structure check `beam_blocks_only`) and the generic
-`element_product`, on random elements.
+`element_product`, on random elements; the group field point_blocks, which takes the closed
+form without that check, against the groups' types and masses, and the BEAM's inertia
+kernel's Dp against the check at random states.
 """
 
 import numpy as np
@@ -35,6 +37,7 @@ from test_rigid_inertia import massive_manipulator
 
 from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Mechanics, load_scene
+from flexure.core.elements import beam, beam_kernels
 from flexure.core.elements.beam_mass import PATTERN, beam_blocks_only, beam_point_product
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
@@ -47,6 +50,7 @@ from flexure.core.engine.inertia_product import element_product, force_minus_mas
 from flexure.core.engine.motion import inertia_forces
 from flexure.core.engine.operations import OP_RIGID_CONDENSE, run
 from flexure.core.engine.ports import add_input_forces
+from flexure.core.mechanics import assembly
 from flexure.core.numerics import sparse_lu
 from flexure.core.numerics.dense import copy
 from flexure.core.numerics.jit import kernel
@@ -227,3 +231,41 @@ def test_element_product(P, m):
     points = f - Dp @ a_e
     for got, want in ((point, points), (w, M @ points), (out, Dp.T @ M @ points)):
         assert np.max(np.abs(got - want)) <= 1e-13 * np.max(np.abs(want))
+
+
+def test_beam_kernel_points_have_the_blocks_at_every_state():
+    """What group field point_blocks promises for a group of BEAMs: the BEAM's inertia kernel
+    (run as plain Python) writes zero on every entry of Dp outside its point's block,
+    whatever the state and order (Dp filled with NaN first: an entry left unwritten fails
+    the check), so `beam_blocks_only` holds without being asked element by element."""
+    rng = np.random.default_rng(6)
+    x0, x = beam.random_coordinates(rng, 8)
+    packed = beam.pack_reference(beam.reference(x0, rng.standard_normal((8, 3))))
+    kernel_py = getattr(beam_kernels.inertia_kernel, "py_func", beam_kernels.inertia_kernel)
+    for n in range(8):
+        for order in (1, 2):
+            p, Dp, acc = np.full(24, np.nan), np.full((24, 14), np.nan), np.full(24, np.nan)
+            kernel_py(x[n], rng.standard_normal(14), packed[n], order, p, Dp, acc)
+            assert beam_blocks_only(Dp)
+            assert np.count_nonzero(Dp) > 24  # the blocks are filled: not a Dp of zeros
+
+
+@pytest.mark.parametrize("name", ["manipulator_control", "manipulator_massive",
+                                  "spatial_cantilever_16", "wire_tripod"])
+def test_point_blocks_marks_the_groups_of_beams(name):
+    """Packing sets point_blocks on exactly the inertia groups whose elements are BEAMs
+    (type name) with the BEAM's full mass pattern (Mp's non-zeros, from the model's own
+    element masses): the groups `element_products` takes through the closed form."""
+    model = MODELS[name]()
+    data = EngineData(model, augmented=True)
+    dims = data.int_array("dims")
+    groups = data.int_array("groups").reshape(-1, ed.G_WIDTH)[: dims[ed.NGROUPS]]
+    flags = groups[:, ed.G_POINT_BLOCKS]
+    assert set(flags.tolist()) <= {0, 1}
+    inertia = {id(group): Mp for group, Mp in assembly.Inertia(model).groups}
+    for g, group in enumerate(model.groups):  # the model's groups come first
+        Mp = inertia.get(id(group))
+        full = Mp is not None and np.array_equal(
+            np.flatnonzero(np.any(np.asarray(Mp) != 0.0, axis=0).ravel()), PATTERN)
+        assert flags[g] == int(group.kind.type_name == "BEAM" and full), group.kind.type_name
+    assert flags[len(model.groups):].sum() == 0  # the node inertias' groups

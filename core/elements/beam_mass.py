@@ -20,12 +20,14 @@ kg m, kg m^2.
 Where only the mass times an acceleration is needed (a residual in mass form,
 `engine.inertia_product`), `beam_point_product` gives Dp^T Mp (f - Dp a) through the same
 blocks without forming Me (about 250 multiplications), guarded by `beam_blocks_only`, the
-block check read off Dp itself.
+block check read off Dp itself, or decided once for a group whose points are the BEAM's own
+(`blocks_by_construction`: its kernel zeroes Dp and fills the blocks alone).
 """
 
 import numpy as np
 
 from ..numerics.jit import kernel
+from . import beam_kernels
 
 M, P = 14, 24  # coordinates, inertia points
 _STARTS = (0, 3, 7, 10, 3, 3, 10, 10)  # each vector's block of coordinates: its first ...
@@ -40,6 +42,15 @@ PATTERN = np.array(sorted((3 * u + c) * P + 3 * v + c for u, v in _PAIRS for c i
 # per inertia point: the first and the last + 1 of the coordinates it may move with
 _POINT_LOW = np.repeat(np.array(_STARTS, dtype=np.int64), 3)
 _POINT_HIGH = _POINT_LOW + np.repeat(np.array(_WIDTHS, dtype=np.int64), 3)
+
+
+def blocks_by_construction(kind):
+    """Whether every Dp that the element module `kind`'s inertia entry forms has the BEAM's
+    block structure, whatever the state: its entry is the BEAM's (`beam_kernels.inertia_kernel`
+    sets all of Dp to zero and then writes each point's block of coordinates alone), so
+    `beam_blocks_only` holds for each of its elements and the engine may decide it once per
+    group when it packs the model (`engine.packing`, group field point_blocks)."""
+    return getattr(kind, "inertia_entry", None) is beam_kernels.inertia_entry
 
 
 @kernel

@@ -22,8 +22,7 @@ without them compiles none of theirs here. Units as the coordinates: N, N m; kg,
 
 import numpy as np
 
-from ..elements.beam_mass import M as BEAM_M
-from ..elements.beam_mass import beam_blocks_only, beam_pattern, beam_point_product
+from ..elements.beam_mass import beam_point_product
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
@@ -141,15 +140,18 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
     `motion.inertia_forces` visits (all with inertia points but the touching elements whose
     mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving,
     g_p only with_gravity.
-    A BEAM (its group's mass pattern the BEAM's, its Dp of the BEAM's blocks) in closed form
-    (`beam_mass.beam_point_product`), any other element through Dp's full rows."""
+    A BEAM in closed form (`beam_mass.beam_point_product`) where its group's points are the
+    BEAM's (group field point_blocks: the BEAM's mass pattern and every Dp of the BEAM's
+    blocks, decided once at packing rather than by `beam_blocks_only` element by element,
+    which cost about 4 us a call on manipulator_control's 57 BEAMs), any other element
+    through Dp's full rows."""
     dims = _i(table, slot.DIMS)
     rigid = dims[ed.NSLAVES] > 0
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         inertia = group_inertia(table, g)
         n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
-        beams = m == BEAM_M and beam_pattern(pattern)
+        beams = row[ed.G_POINT_BLOCKS] == 1
         scratch = inertia_scratch(table, 0, P, m)
         xl, vl, point, acc, w, Dp, _ = scratch
         for i in range(n):
@@ -165,7 +167,7 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
             # a_e into the scratch's x, Dp^T w into its v: the points read them, and are done
             for b in range(m):
                 xl[b] = a[coords[i * m + b]]
-            if beams and beam_blocks_only(Dp):
+            if beams:
                 beam_point_product(Mp, Dp, xl, point, w, vl)
             else:
                 element_product(Mp, pattern, P, m, Dp, xl, point, w, vl)

@@ -391,6 +391,7 @@ GROUP_FIELDS = tuple(Field(*row) for row in (
     ("pattern_offset", "G_PATTERN_OFFSET", CONFIG, "its first entry in mass_pattern"),
     ("pattern_count", "G_PATTERN_COUNT", CONFIG, "its entries there"),
     ("element_offset", "G_ELEMENT_OFFSET", CONFIG, "its first element in rigid_element_of"),
+    ("point_blocks", "G_POINT_BLOCKS", CONFIG, "1: BEAM points, Dp in blocks (`beam_mass`)"),
 ))
 
 # -- slot counters and slot settings ----------------------------------------------------------

@@ -11,6 +11,8 @@ Records (`dims`, a row of `groups`, `counters`, `settings`) are filled by field 
 
 import numpy as np
 
+from ..elements.beam_mass import PATTERN as BEAM_PATTERN
+from ..elements.beam_mass import blocks_by_construction
 from ..mechanics import assembly
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..mechanics.scales import kinematic_tolerances
@@ -83,6 +85,9 @@ class ElementGroups:
             # over them visit these alone
             pattern = np.flatnonzero(np.any(np.asarray(Mp) != 0.0, axis=0).ravel())
             fields.update(pattern_offset=offsets["pattern"], pattern_count=pattern.size)
+            # the BEAM's closed-form product then needs no check of Dp element by element
+            fields["point_blocks"] = int(blocks_by_construction(kind)
+                                         and np.array_equal(pattern, BEAM_PATTERN))
             self.patterns.append(pattern.astype(np.int64))
             offsets["pattern"] += pattern.size
         self.de_groups.append((group, self.de_size))

@@ -14,6 +14,7 @@ from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
+from . import rigid as rg
 from . import slots as slot
 from .factors import _scatter_de
 from .operations import SPARSE_AUGMENTED, SPARSE_J_TRANSPOSED
@@ -78,7 +79,9 @@ def constraint_values(table, jmap, values):
     """J's sparse values from the elements' De in slot de (with rigid clusters: the touching
     elements' De_z in slot rigid_de and T's rows on the DOF coordinates of slaves) through
     jmap, a J map (`sparse_packing.SparseFactors.constraint_map`: slot j_map, or the Newton
-    matrix's copy)."""
+    matrix's copy). Of rigid_de it visits the rows of J (slot touching_rows), the only rows
+    `rigid_kernels.rigid_de` forms and a J map points into (on manipulator_control 630 of
+    its 4788 entries)."""
     De = _f(table, slot.DE)
     dims = _i(table, slot.DIMS)
     values[:] = 0.0
@@ -91,10 +94,15 @@ def constraint_values(table, jmap, values):
     if dims[ed.NSLAVES] == 0:
         return
     rde, base = _f(table, slot.RIGID_DE), n_de + n_xdof
-    for e in range(rde.size):
-        s = jmap[base + e]
-        if s >= 0:
-            values[s] += rde[e]
+    rows, elements = _i(table, slot.TOUCHING_ROWS), _i(table, slot.RIGID_ELEMENTS)
+    for j in range(rows.size // 3):  # each row's mz entries, read by index
+        e = rows[3 * j + 1] * rg.ELEMENT_WIDTH
+        mz = elements[e + rg.E_MZ]
+        at = elements[e + rg.E_DE_OFFSET] + rows[3 * j + 2] * mz
+        for c in range(at, at + mz):
+            s = jmap[base + c]
+            if s >= 0:
+                values[s] += rde[c]
     base += rde.size
     units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
     for j in range(n_xdof):
