@@ -20,6 +20,7 @@ from ..numerics.banded import storage_size
 from . import layout, newton_packing
 from .orders import FactorPlan
 from .ports import PORT_WIDTH, port_specs
+from .refinement import TOLERANCE as RESPONSE_TOLERANCE
 from .rigid import SLAVE_WIDTH, RigidPacking, positions_among
 
 # per input: its kind in slot actuators (with the index of its coil current), and its
@@ -206,7 +207,8 @@ def dimensions(c):
     # integrators that make such callbacks (`engine.connect`): the engine imports this
     # module, not the other way round
     return {"dims": dims,
-            "settings": layout.record("settings", singular_ratio=c.singular_ratio)}
+            "settings": layout.record("settings", singular_ratio=c.singular_ratio,
+                                      response_tolerance=RESPONSE_TOLERANCE)}
 
 
 def kinematics(c):
