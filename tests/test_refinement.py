@@ -132,39 +132,6 @@ def test_factors_several_states_back_refine_to_numpys_solve(name):
     close(change, after_qddot - before_qddot, 1e-12, scale=size)
 
 
-def test_an_integrators_tolerance_accepts_two_products_where_the_packings_takes_three():
-    """An ESDIRK at rtol 1e-5 (the loop's) sets the response tolerance to 1e-3 rtol = 1e-8
-    (`refinement.tolerance_for`; at rtol 1e-10 the packing's 1e-12 stays). On the
-    manipulator, factors 20 states back (1e-7 a state, the 6 mm move's motion in 0.5 ms)
-    take three products at 1e-12 and two at 1e-8; both responses equal numpy's dense solve
-    within 10 x their tolerance of the largest acceleration (measured 9e-14 and 1.4e-10)."""
-    from flexure.core import Simulator
-    from flexure.core.engine.refinement import TOLERANCE, tolerance_for
-
-    model = load_scene("manipulator_control")
-    assert tolerance_for(1e-10) == TOLERANCE and tolerance_for(1e-5) == pytest.approx(1e-8)
-    settings = Simulator(model, method="esdirk2", rtol=1e-5).data.float_array("settings")
-    assert settings[ed.RESPONSE_TOLERANCE] == pytest.approx(1e-8)
-    products = {}
-    for tolerance in (TOLERANCE, tolerance_for(1e-5)):
-        _, data, y0, u0 = packed("manipulator_control")
-        data.float_array("settings")[ed.RESPONSE_TOLERANCE] = tolerance
-        stage_force(data, y0, u0)
-        response(data, u0 + 1.0)
-        n = y0.size // 2
-        direction = np.concatenate([np.random.default_rng(46).standard_normal(n),
-                                    np.zeros(n)])
-        stage_force(data, y0 + 20 * 1e-7 * direction, u0)
-        before = counted(data)
-        response(data, u0 + np.random.default_rng(47).standard_normal(u0.size))
-        refined, products[tolerance], factored = (
-            a - b for a, b in zip(counted(data), before, strict=True))
-        assert (refined, factored) == (1, 0)
-        d, expected = numpy_solution(data)
-        close(d, expected, 10 * tolerance)
-    assert products == {TOLERANCE: 3, tolerance_for(1e-5): 2}
-
-
 @pytest.mark.parametrize("name", sorted(NEWTON_MODELS))
 def test_factors_of_a_far_state_are_refactored(name):
     """Kept factors from a state 1e-3 (m or rad on every DOF, random) away contract too

@@ -113,9 +113,5 @@ COUNTER_FIELDS = tuple(Field(*row) for row in (
 SETTINGS_FIELDS = (
     Field("singular_ratio", "SINGULAR_RATIO", CONFIG, "the smallest ratio of J's LU pivots "
           "before a configuration counts as singular"),
-    Field("response_tolerance", "RESPONSE_TOLERANCE", CONFIG, "the input response's "
-          "refinement: the estimated error accepted, relative to the response's largest "
-          "acceleration (`refinement`); the packing's, tightened or loosened by an integrator "
-          "to its rtol"),
 )
 # fmt: on

@@ -20,7 +20,6 @@ from ..numerics.banded import storage_size
 from . import layout, newton_packing
 from .orders import FactorPlan
 from .ports import PORT_WIDTH, port_specs
-from .refinement import TOLERANCE as RESPONSE_TOLERANCE
 from .rigid import SLAVE_WIDTH, RigidPacking, positions_among
 
 # per input: its kind in slot actuators (with the index of its coil current), and its
@@ -207,8 +206,7 @@ def dimensions(c):
     # integrators that make such callbacks (`engine.connect`): the engine imports this
     # module, not the other way round
     return {"dims": dims,
-            "settings": layout.record("settings", singular_ratio=c.singular_ratio,
-                                      response_tolerance=RESPONSE_TOLERANCE)}
+            "settings": layout.record("settings", singular_ratio=c.singular_ratio)}
 
 
 def kinematics(c):

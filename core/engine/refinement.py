@@ -21,27 +21,20 @@ assembly and factorisation (docs/benchmarks.md, session 35).
 Convergence. The corrections c_k = d_{k+1} - d_k shrink by about rho each, so the error left
 in d_{k+1} is about rho / (1 - rho) |c_k|, rho estimated as |c_k| / |c_{k-1}| (max norms over
 the free coordinates' accelerations d_f, which the response returns; the multipliers only
-feed the next residual). The solve is accepted when that estimate is at most the packed
-model's settings[RESPONSE_TOLERANCE] of max |d_f| (`tolerance_for`), from the second product
-on: the first ratio, |c_1| / |d_1|, measures how
+feed the next residual). The solve is accepted when that estimate is at most TOLERANCE =
+1e-12 of max |d_f|, from the second product on: the first ratio, |c_1| / |d_1|, measures how
 far d_1 is, not the contraction (which it underestimates 15-fold on the manipulator); or at
 once when a correction is itself within the tolerance (the error left is then at most rho /
-(1 - rho) of it, and near round-off the ratio of two corrections is noise).
-
-The tolerance. The packing's is TOLERANCE = 1e-12: ten times the round-off of the direct
-sparse solve it replaces (1e-13 of d_f against numpy's dense solve on the manipulator, whose
-A has the condition 8e4), so that a response asked of the engine alone is the direct one's
-within its round-off. An integrator sets RTOL_FRACTION rtol instead, where that is looser
-(`tolerance_for`), as CVODE solves an iterative linear system inside Newton to a fraction
-(0.05) of the Newton tolerance rather than to round-off: the response enters the ESDIRK's
-first stage as F_1 = F(y_n) + [0; d qddot], so its error moves the step's velocities by at
-most h b_1 tol |d qddot| (b_1 <= 1/2), tol of the change the input step itself makes in one
-step, while the stage Newton stops at 0.05 (rtol |v| + atol): at 1e-3 rtol the response's
-share is 1/50 of the Newton's wherever one step's input change moves the velocities by less
-than their own size plus atol / rtol. On the 6 mm move of manipulator_control (rtol 1e-5:
-a tolerance of 1e-8) the kept factors then serve about 50 samples at two products where
-1e-12 took three from the third sample on, and the tracking error moves by 1.7e-9 of itself
-(docs/benchmarks.md, session 35); at rtol 1e-9 and tighter the packing's 1e-12 holds.
+(1 - rho) of it, and near round-off the ratio of two corrections is noise). Why 1e-12: it
+is ten times the round-off of the direct sparse solve it replaces (1e-13 of d_f against
+numpy's dense solve on the manipulator, whose A has the condition 8e4). The response enters
+the ESDIRK's first stage as F_1 = F(y_n) + [0; d qddot], so its error moves the step's
+velocities by at most h b_1 1e-12 |d qddot| (b_1 <= 1/2): 1e-12 of the change the input
+step itself makes in one step. The stage Newton stops at 0.05 of rtol |v| + atol, and the
+error estimate is formed from the converged stages, so neither can tell the refined response
+from the exact one while one step's input change moves the velocities by less than 1e11
+rtol of themselves (at the loop's rtol 1e-5: a million times; at rtol 1e-11, the tightest
+the tests run, by their own size).
 
 The solve gives up, and the caller factors A at the current state (then the kept factors),
 when no factors are kept, when an estimated rate exceeds RATE_LIMIT = 0.1 (the states are
@@ -65,16 +58,9 @@ from .slots import float_array as _f
 from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
 
-TOLERANCE = 1e-12  # the packing's: the estimated error of d_f accepted, relative to max |d_f|
-RTOL_FRACTION = 1e-3  # an integrator's, relative to its rtol, where that is looser
+TOLERANCE = 1e-12  # the estimated error of d_f accepted, relative to max |d_f|
 RATE_LIMIT = 0.1  # a larger estimated contraction rate: factor A at the current state
 MAX_PRODUCTS = 3  # products A d_k before that
-
-
-def tolerance_for(rtol):
-    """The response tolerance (relative) for an integrator of relative tolerance rtol:
-    RTOL_FRACTION rtol, at least the packing's TOLERANCE (the module's docstring)."""
-    return max(TOLERANCE, RTOL_FRACTION * float(rtol))
 
 
 @kernel
@@ -88,7 +74,6 @@ def refined_solve(table, na, rhs):
         return False
     sparse = kept == KEPT_SPARSE
     nf, nx = dims[ed.NFREE], dims[ed.NX]
-    tolerance = _f(table, slot.SETTINGS)[ed.RESPONSE_TOLERANCE]
     work = _f(table, slot.REFINEMENT)
     b, d, c = work[:na], work[na: 2 * na], work[2 * na: 3 * na]
     a, total = work[3 * na: 3 * na + nx], work[3 * na + nx: 3 * na + 2 * nx]
@@ -117,7 +102,7 @@ def refined_solve(table, na, rhs):
             return False
         for i in range(na):
             d[i] += c[i]
-        scale = tolerance * largest(d, nf)
+        scale = TOLERANCE * largest(d, nf)
         rate = size / previous
         # a correction within the tolerance leaves at most rate / (1 - rate) of it, however
         # rate is estimated (near round-off the ratio of two corrections is noise); else

@@ -75,7 +75,6 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine import engine
-from ..engine.refinement import tolerance_for
 from ..errors import SimulationError, StepBudgetSpent
 from .esdirk_kernels import (
     ETA_HOLD,
@@ -146,8 +145,6 @@ class Esdirk(Stepper):
         self.sparse_newton = bool(dims[ed.NEWTON_SPARSE])  # `newton_matrix`: J not in self.J
         self.memory = np.zeros(M_SIZE)
         self.memory[M_RTOL] = float(rtol)
-        # the input response's refinement to a fraction of this rtol, not to round-off
-        data.float_array("settings")[ed.RESPONSE_TOLERANCE] = tolerance_for(rtol)
         self.memory[M_H_MAX] = float(max_step or 0.0)
         self.memory[M_ETA] = 1.0
         self.memory[M_EXPONENT] = 1.0 / (min(tableau.order, tableau.embedded_order) + 1)
