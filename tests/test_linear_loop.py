@@ -146,15 +146,17 @@ def test_the_compiled_linear_loop_is_the_python_loop(scene, options):
 
 @pytest.mark.slow  # 40 s: the 507-DOF model's linearisation, eigenvectors and design
 def test_the_manipulators_compiled_linear_loop_is_its_python_loop():
-    """`flexure loop manipulator_reduced --plant linear`: the compiled loop's max |error|
-    (1.66e-9 m) and final positions are the Python loop's within 1e-12 relative (measured:
-    the same max |error| to the bit, positions within 3e-17 m)."""
+    """`flexure loop manipulator_reduced --plant linear`: the compiled loop's positions are
+    the Python loop's within 1e-12 of the 1 mm stroke at every sample (measured within 3e-17
+    m), and so are its max |error| (1.66e-9 m; the same to the bit on one CPU, 2.8e-17 m
+    apart on another: a difference of positions carries their round-off, not its own) and
+    its final positions (1e-12 relative)."""
     (python, *_), (compiled, *_) = python_and_compiled(
         load_scene("manipulator_reduced"), stroke=1e-3, duration=1.0, settle=0.25)
     (_, r, y, _), (_, _, y_c, _) = python, compiled
     error, error_c = np.max(np.abs(r - y)), np.max(np.abs(r - y_c))
     assert 1.6e-9 < error < 1.7e-9
-    assert abs(error_c - error) < 1e-12 * error
+    assert abs(error_c - error) < 1e-12 * 1e-3
     assert np.max(np.abs(y_c[-1] - y[-1])) < 1e-12 * np.max(np.abs(y[-1]))
     assert np.max(np.abs(y_c - y)) < 1e-12 * 1e-3
 
