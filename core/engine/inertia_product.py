@@ -55,18 +55,10 @@ def force_minus_mass(table, x, xdot, moving, r, w_f, a, total, out_f):
     rigid_local."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
-    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    free = _i(table, slot.FREE)
     rigid = dims[ed.NSLAVES] > 0
-    a[:] = 0.0
-    for k in range(nf):
-        a[free[k]] = w_f[k]
-    if rigid:  # the slaves' T w + c
-        run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 1.0 if moving else 0.0)
     copy(total, r)
-    lumped = _f(table, slot.LUMPED)
-    for c in range(dims[ed.NX]):  # where A has them: on the free coordinates
-        if col_of_coord[c] >= 0:
-            total[c] -= lumped[c] * a[c]
+    spread_accelerations(table, w_f, moving, a, total)  # the slaves' T w + c
     element_products(table, x, xdot, moving, True, a, total)
     if rigid and _i(table, slot.RIGID_BODIES).size:  # through their operation, which only
         # a model with a folded cluster compiles (`rigid_inertia_kernels`)
@@ -95,18 +87,10 @@ def minus_mass_product(table, w_f, a, total, out_f):
     cancels to its round-off."""
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
-    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    free = _i(table, slot.FREE)
     rigid = dims[ed.NSLAVES] > 0
-    a[:] = 0.0
-    for k in range(nf):
-        a[free[k]] = w_f[k]
-    if rigid:  # the slaves' T w, without c
-        run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 0.0)
     total[:] = 0.0
-    lumped = _f(table, slot.LUMPED)
-    for c in range(dims[ed.NX]):
-        if col_of_coord[c] >= 0:
-            total[c] -= lumped[c] * a[c]
+    spread_accelerations(table, w_f, False, a, total)  # the slaves' T w, without c
     x, xdot = _f(table, slot.X), _f(table, slot.XDOT)
     element_products(table, x, xdot, False, False, a, total)
     if rigid and _i(table, slot.RIGID_BODIES).size:  # -(-(total + G - M a/2) + G + M a/2)
@@ -124,6 +108,25 @@ def minus_mass_product(table, w_f, a, total, out_f):
     else:
         for k in range(nf):
             out_f[k] = total[free[k]]
+
+
+@kernel(inline="always")  # into the two products above
+def spread_accelerations(table, w_f, convective, a, total):
+    """a (NX,; m/s^2, 1/s^2) = the free coordinates' accelerations w_f (n_free,) on x: w_f
+    on the free coordinates, the slaves' T w_f (plus their c in slot rigid_c where
+    `convective`), zero on the fixed ones; then total (NX,; N, N m) -= the lumped masses
+    times a where the augmented system has them, on the free coordinates."""
+    dims = _i(table, slot.DIMS)
+    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    a[:] = 0.0
+    for k in range(dims[ed.NFREE]):
+        a[free[k]] = w_f[k]
+    if dims[ed.NSLAVES] > 0:
+        run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 1.0 if convective else 0.0)
+    lumped = _f(table, slot.LUMPED)
+    for c in range(dims[ed.NX]):
+        if col_of_coord[c] >= 0:
+            total[c] -= lumped[c] * a[c]
 
 
 @kernel
