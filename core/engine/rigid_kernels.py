@@ -243,6 +243,16 @@ def touching(table, t):
             element[rg.E_MASS_OFFSET])
 
 
+@kernel(inline="always")  # into the loops over J's rows (here and `sparse_factors`)
+def row_de_z(rows, elements, j):
+    """(the element's record offset in slot rigid_elements, b, mz, at) of entry j of slot
+    touching_rows (`rows`, with `elements` that slot): row b of the touching element's De_z,
+    whose mz entries start at `at` in slot rigid_de. Read by index, not through views."""
+    e = rows[3 * j + 1] * EW
+    b, mz = rows[3 * j + 2], elements[e + rg.E_MZ]
+    return e, b, mz, elements[e + rg.E_DE_OFFSET] + b * mz
+
+
 @kernel
 def touching_row(table, j):
     """(r, coords, de, z, at) of entry j of slot touching_rows: row r of J is a deformation of
@@ -270,11 +280,10 @@ def rigid_de(table):
     for g in range(_i(table, slot.DIMS)[ed.NGROUPS]):  # the group's views once
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         for j in range(rows.size // 3):
-            e = rows[3 * j + 1] * EW  # the element's record, read by index
+            e, b, mz, at = row_de_z(rows, elements, j)
             if elements[e + rg.E_GROUP] != g:
                 continue
-            b, mz, start = rows[3 * j + 2], elements[e + rg.E_MZ], elements[e + rg.E_TERM_OFFSET]
-            at = elements[e + rg.E_DE_OFFSET] + b * mz
+            start = elements[e + rg.E_TERM_OFFSET]
             de = (elements[e + rg.E_ELEMENT] * k + b) * m
             for c in range(mz):
                 out[at + c] = 0.0

@@ -14,10 +14,10 @@ from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
-from . import rigid as rg
 from . import slots as slot
 from .factors import _scatter_de
 from .operations import SPARSE_AUGMENTED, SPARSE_J_TRANSPOSED
+from .rigid_kernels import row_de_z
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -95,10 +95,8 @@ def constraint_values(table, jmap, values):
         return
     rde, base = _f(table, slot.RIGID_DE), n_de + n_xdof
     rows, elements = _i(table, slot.TOUCHING_ROWS), _i(table, slot.RIGID_ELEMENTS)
-    for j in range(rows.size // 3):  # each row's mz entries, read by index
-        e = rows[3 * j + 1] * rg.ELEMENT_WIDTH
-        mz = elements[e + rg.E_MZ]
-        at = elements[e + rg.E_DE_OFFSET] + rows[3 * j + 2] * mz
+    for j in range(rows.size // 3):  # each row's mz entries
+        _, _, mz, at = row_de_z(rows, elements, j)
         for c in range(at, at + mz):
             s = jmap[base + c]
             if s >= 0:
