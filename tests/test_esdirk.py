@@ -85,15 +85,15 @@ def test_predictor_reproduces_polynomials_of_the_stage_time():
 def last_step_history(tableau, h, a, b, k):
     """`keep_history` (compiled) after a step of size h whose stage derivatives are F(t) = a +
     b t + k t^2 at the stage times: (mean slope, curvature)."""
-    from flexure.core.simulation import esdirk_kernels
+    from flexure.core.simulation import esdirk_kernels, esdirk_layout
 
     A = tableau.arrays()[0]
-    vectors = np.zeros((esdirk_kernels.V_ROWS, a.size))
+    vectors = np.zeros((esdirk_layout.V_ROWS, a.size))
     for j, c in enumerate(tableau.c):
         t = float(c) * h
-        vectors[esdirk_kernels.V_F + j] = a + b * t + k * t * t
+        vectors[esdirk_layout.V_F + j] = a + b * t + k * t * t
     esdirk_kernels.keep_history(vectors, A, h)
-    return vectors[esdirk_kernels.V_SLOPE], vectors[esdirk_kernels.V_CURVATURE]
+    return vectors[esdirk_layout.V_SLOPE], vectors[esdirk_layout.V_CURVATURE]
 
 
 @pytest.mark.parametrize("tableau", TABLEAUS, ids=lambda t: t.name)
@@ -275,14 +275,14 @@ def check_newton_solve(J, hg, rng, *, reduced):
     """ESDIRK's factors of I - hg J (through the Schur complement if `reduced`, else the full
     matrix), and its solution of (I - hg J) v = r for a random r against numpy's, to 10 times
     the round-off that the matrix's condition number allows."""
-    from flexure.core.simulation import esdirk_kernels, newton_matrix
+    from flexure.core.simulation import esdirk_layout, esdirk_newton, newton_matrix
 
     n = J.shape[0]
     LU, piv = np.zeros(n * n), np.zeros(n, dtype=np.int64)
-    flags = np.zeros(esdirk_kernels.I_SIZE, dtype=np.int64)
-    assert esdirk_kernels.factor(J.ravel(), LU, piv, hg, flags)
-    assert flags[esdirk_kernels.I_REDUCED] == int(reduced)
-    assert flags[esdirk_kernels.I_FACTORIZATIONS] == 1
+    flags = np.zeros(esdirk_layout.I_SIZE, dtype=np.int64)
+    assert esdirk_newton.factor(J.ravel(), LU, piv, hg, flags)
+    assert flags[esdirk_layout.I_REDUCED] == int(reduced)
+    assert flags[esdirk_layout.I_FACTORIZATIONS] == 1
     r = rng.standard_normal(n)
     v = r.copy()
     newton_matrix.newton_solve(J.ravel(), LU, piv, hg, bool(reduced), v)
@@ -298,7 +298,7 @@ def test_a_jacobian_grown_stale_is_renewed_and_a_current_one_kept():
     a new one. A 1 N step rings the 3-DOF stage's bar: new Jacobians along the way, the count
     never a step's iterations past the threshold. Where every extra iteration converges
     fast (the input changes of the 1-DOF test above), none is taken."""
-    from flexure.core.simulation.esdirk_kernels import JACOBIAN_COST, MAX_NEWTON
+    from flexure.core.simulation.esdirk_newton import JACOBIAN_COST, MAX_NEWTON
 
     model = load_scene("stage_planar_3dof")
     sim = Simulator(model, method="esdirk", rtol=1e-6)

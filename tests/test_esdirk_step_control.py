@@ -1,13 +1,14 @@
 """The ESDIRK's step control across held inputs: the first step after an input change
 (`esdirk_kernels.restart`, memory[M_H_INPUT]) and the Newton contraction estimate's hold on
-the sparse Newton matrix (`esdirk_kernels.ETA_HOLD`)."""
+the sparse Newton matrix (`esdirk_newton.ETA_HOLD`)."""
 
 import numpy as np
 import pytest
 
 from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Simulator, load_scene
-from flexure.core.simulation import esdirk_kernels as K
+from flexure.core.simulation import esdirk_layout as L
+from flexure.core.simulation import esdirk_newton as N
 
 SAMPLE = 2.5e-4  # s: a 4 kHz loop
 
@@ -28,7 +29,7 @@ def sampled_run(model, forces, *, method, rtol, first_step_rule=True):
     for k, force in enumerate(forces):
         sim.set_inputs(force)
         if not first_step_rule:
-            sim.integrator.memory[K.M_H_INPUT] = 0.0
+            sim.integrator.memory[L.M_H_INPUT] = 0.0
         sim.advance_to((k + 1) * SAMPLE)
         states.append(sim.state.copy())
     return np.array(states), sim.integrator.statistics()
@@ -41,7 +42,7 @@ def test_the_first_step_after_an_input_change_is_at_most_the_last_first_steps_pr
     proposals = []
 
     def after_step(t, y):
-        proposals.append(integrator.memory[K.M_H])
+        proposals.append(integrator.memory[L.M_H])
 
     for k, force in enumerate((1.0, -1.0, 0.5)):
         sim.set_inputs([force])
@@ -49,16 +50,16 @@ def test_the_first_step_after_an_input_change_is_at_most_the_last_first_steps_pr
         sim.advance_to((k + 1) * SAMPLE, _record=after_step)
     # the proposal after the last sample's first accepted step is what the next one starts at
     assert integrator.restart_memory["input_step"] == proposals[0] > 0.0
-    y, t = integrator.y_array.copy(), float(integrator.memory[K.M_T])
-    integrator.memory[K.M_H] = 10.0 * proposals[0]
+    y, t = integrator.y_array.copy(), float(integrator.memory[L.M_T])
+    integrator.memory[L.M_H] = 10.0 * proposals[0]
     integrator.reset(t, y, inputs_changed=True)
-    assert integrator.memory[K.M_H] == proposals[0]
-    integrator.memory[K.M_H] = 0.1 * proposals[0]  # a smaller proposal stays
+    assert integrator.memory[L.M_H] == proposals[0]
+    integrator.memory[L.M_H] = 0.1 * proposals[0]  # a smaller proposal stays
     integrator.reset(t, y, inputs_changed=True)
-    assert integrator.memory[K.M_H] == 0.1 * proposals[0]
-    integrator.memory[K.M_H] = 10.0 * proposals[0]  # a state set is not an input change
+    assert integrator.memory[L.M_H] == 0.1 * proposals[0]
+    integrator.memory[L.M_H] = 10.0 * proposals[0]  # a state set is not an input change
     integrator.reset(t, y, inputs_changed=False)
-    assert integrator.memory[K.M_H] == 10.0 * proposals[0]
+    assert integrator.memory[L.M_H] == 10.0 * proposals[0]
     integrator.forget()
     assert integrator.restart_memory["input_step"] == 0.0
 
@@ -76,10 +77,10 @@ def test_after_a_stretch_without_input_changes_the_first_step_is_not_capped():
     sim.advance_to(3 * SAMPLE)  # no change over this sample
     proposal = integrator.restart_memory["input_step"]
     assert proposal > 0.0
-    y, t = integrator.y_array.copy(), float(integrator.memory[K.M_T])
-    integrator.memory[K.M_H] = 10.0 * proposal
+    y, t = integrator.y_array.copy(), float(integrator.memory[L.M_T])
+    integrator.memory[L.M_H] = 10.0 * proposal
     integrator.reset(t, y, inputs_changed=True)
-    assert integrator.memory[K.M_H] == 10.0 * proposal
+    assert integrator.memory[L.M_H] == 10.0 * proposal
 
 
 
@@ -138,7 +139,7 @@ def cantilever_run(model, *, rtol, hold=None):
     sim = Simulator(model, method="esdirk", rtol=rtol)
     assert sim.integrator.sparse_newton  # the path the hold is for
     if hold is not None:
-        sim.integrator.flags[K.I_ETA_HOLD] = hold
+        sim.integrator.flags[L.I_ETA_HOLD] = hold
     q = []
     for t in np.linspace(0.5e-3, 5e-3, 10):
         sim.advance_to(float(t))
@@ -158,7 +159,7 @@ def test_the_held_contraction_estimate_saves_iterations_at_the_same_error():
     held, held_statistics = cantilever_run(model, rtol=1e-6)
     grown, grown_statistics = cantilever_run(model, rtol=1e-6, hold=0)
     errors = [np.max(np.abs(q - reference)) / motion for q in (held, grown)]
-    assert K.ETA_HOLD > 0
+    assert N.ETA_HOLD > 0
     assert held_statistics["steps"] == grown_statistics["steps"]
     assert held_statistics["solver_rhs_evaluations"] < grown_statistics["solver_rhs_evaluations"]
     assert max(errors) <= 1e-4, errors

@@ -24,7 +24,7 @@ import pytest
 from examples.benchmarks.newton_replica import Replay, newton_floor
 from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Simulator
-from flexure.core.simulation import esdirk_kernels
+from flexure.core.simulation import esdirk_layout, esdirk_newton
 
 # The slow tier: the replica is a benchmark's tool (5.6 s of CPU); the compiled step it
 # replays is checked in the default tier by tests/test_sparse_newton.py.
@@ -42,7 +42,7 @@ def runs():
     replay = Replay(Simulator(spatial_cantilever(16), method="esdirk", rtol=1e-6))
     replay.run(END)
     compiled = Simulator(spatial_cantilever(16), method="esdirk", rtol=1e-6)
-    compiled.integrator.flags[esdirk_kernels.I_ETA_HOLD] = 0
+    compiled.integrator.flags[esdirk_layout.I_ETA_HOLD] = 0
     compiled.advance_to(END)
     return replay, compiled
 
@@ -62,8 +62,8 @@ def test_the_replica_counts_what_the_compiled_step_counts(runs):
     iterations = sum(record[1] for *_, stages, _ in replay.attempts for record in stages)
     assert iterations + 2 == replay.rhs
     # on the sparse Newton matrix every attempt's factors are at its own hg
-    # (esdirk_kernels.SPARSE_LU_SLACK), so the factorisations are the attempts at a new hg
-    slack = esdirk_kernels.SPARSE_LU_SLACK
+    # (esdirk_newton.SPARSE_LU_SLACK), so the factorisations are the attempts at a new hg
+    slack = esdirk_newton.SPARSE_LU_SLACK
     assert all(abs(hg_lu / hg - 1.0) <= slack for _, _, hg, *_, hg_lu in replay.attempts)
     pairs = zip(replay.attempts[:-1], replay.attempts[1:], strict=True)
     new_hg = sum(abs(b[2] / a[2] - 1.0) > slack for a, b in pairs)
@@ -77,5 +77,5 @@ def test_the_rhs_history_floor_is_far_below_newtons_tolerance(runs):
     assert warm[0] > 1.0  # the stage's first correction: far from converged
     assert warm[-1] <= 1e-6
     floor = np.median(from_start[-5:])
-    assert 1e-7 <= floor <= 1e-2 * esdirk_kernels.NEWTON_TOLERANCE
+    assert 1e-7 <= floor <= 1e-2 * esdirk_newton.NEWTON_TOLERANCE
     assert np.min(from_start[-5:]) >= 10.0 * warm[-1]  # a floor, not convergence

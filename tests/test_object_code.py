@@ -186,7 +186,7 @@ MIXED = """
 import sys
 import numpy as np
 from flexure.core import Simulator, load_scene
-from flexure.core.simulation import esdirk_kernels
+from flexure.core.simulation import esdirk_layout, esdirk_newton
 
 def final(method):
     sim = Simulator(load_scene("stage_planar_3dof"), method=method, rtol=1e-8)
@@ -196,8 +196,8 @@ def final(method):
 
 first = final("cvode-bdf")
 if sys.argv[1] == "mixed":  # numba now imported and loading a kernel beside the object code
-    flags = np.zeros(esdirk_kernels.I_SIZE, dtype=np.int64)
-    assert esdirk_kernels.factor(2.0 * np.eye(2).ravel(), np.zeros(4),
+    flags = np.zeros(esdirk_layout.I_SIZE, dtype=np.int64)
+    assert esdirk_newton.factor(2.0 * np.eye(2).ravel(), np.zeros(4),
                                  np.zeros(2, dtype=np.int64), 0.1, flags)
     assert "numba" in sys.modules
 print(repr(first), repr(final("ida")))

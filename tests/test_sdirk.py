@@ -8,7 +8,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from flexure.core import Simulator, load_scene
-from flexure.core.simulation import esdirk_kernels
+from flexure.core.simulation import esdirk_kernels, esdirk_layout
 from flexure.core.simulation.esdirk import Esdirk
 from flexure.core.simulation.esdirk_method import TABLEAUS
 from tests.compiled_loops import run_compiled_loop
@@ -66,7 +66,7 @@ def test_a_changed_input_costs_no_input_response_in_the_compiled_loop():
         sim = Simulator(model, method=method, rtol=1e-5)
         _, position, force = run_compiled_loop(sim, controller, design)
         assert np.count_nonzero(np.diff(force[:, 0])) > 50  # the input changed
-        responses[method] = int(sim.integrator.flags[esdirk_kernels.I_RESPONSES])
+        responses[method] = int(sim.integrator.flags[esdirk_layout.I_RESPONSES])
         moved[method] = position[-1, 0] - position[0, 0]
     assert responses["esdirk2"] > 50 and responses["sdirk2"] == 0, responses
     np.testing.assert_allclose(moved["sdirk2"], moved["esdirk2"], rtol=1e-3)

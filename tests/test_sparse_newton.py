@@ -111,7 +111,7 @@ def test_the_cantilever_moves_alike_on_either_newton_matrix(monkeypatch):
     path's converged run (rtol 1e-10): within 1e-3 of the largest displacement, the global
     error such a run makes (measured: 2.6e-4 sparse, 7.0e-5 dense). Their steps differ: the
     sparse Newton matrix is factored at every new step size, the dense one within a slack
-    (`esdirk_kernels.SPARSE_LU_SLACK`), so the two are two integrations of the same
+    (`esdirk_newton.SPARSE_LU_SLACK`), so the two are two integrations of the same
     equations, not one to round-off (the solves agree to round-off: above)."""
     sparse, on = tip_run(monkeypatch, 0)
     dense, off = tip_run(monkeypatch, 10**9)

@@ -35,7 +35,7 @@ from flexure.core.engine.operations import (
     OP_NEWTON_SOLVE,
     OP_STAGE_FORCE,
 )
-from flexure.core.simulation.esdirk_kernels import I_ETA_HOLD, I_MASS_FORM
+from flexure.core.simulation.esdirk_layout import I_ETA_HOLD, I_MASS_FORM
 from tests.compiled_loops import run_compiled_loop
 from tests.test_engine import close, random_states
 from tests.test_rotation_ports import build_model, rod_body
@@ -162,7 +162,7 @@ def cantilever_run(mass_form, rtol=1e-6):
     """The 16-BEAM cantilever's coordinates (m, 1) 5 ms after its 1 N tip load (ESDIRK at
     rtol) and its statistics, with the stages' mass form on or off; the Newton contraction
     estimate grown at every step (flags[I_ETA_HOLD] = 0), as when the figures below were
-    measured: held (the sparse path's default, `esdirk_kernels.ETA_HOLD`) the accelerations'
+    measured: held (the sparse path's default, `esdirk_newton.ETA_HOLD`) the accelerations'
     form, whose contraction is faster, re-measures less often (437 against 483 rhs),
     which compares the forms' Newton controls rather than their iterates."""
     sim = Simulator(spatial_cantilever(16), method="esdirk", rtol=rtol)

@@ -1,7 +1,7 @@
 """The ESDIRK's stage positions kept on the stage equation's linear half (mass form).
 
 On the sparse Newton path a stage's iterates z = [q, v] keep q = base_q + hg v
-(`esdirk_kernels.consistent_positions`), so the residual's position half r1 is zero to the
+(`esdirk_newton.consistent_positions`), so the residual's position half r1 is zero to the
 bit and the Newton solve skips J's solve and K_x's product of it (`engine.newton.solve`).
 Checked here on the 16-BEAM spatial cantilever (96 DOFs):
 
@@ -28,7 +28,7 @@ from flexure.core.engine.operations import (
     OP_NEWTON_SOLVE,
     OP_STAGE_FORCE,
 )
-from flexure.core.simulation.esdirk_kernels import _mass_form_residual, consistent_positions
+from flexure.core.simulation.esdirk_newton import consistent_positions, mass_form_residual
 from tests.test_engine import close
 
 
@@ -54,7 +54,7 @@ def test_consistent_stage_positions_have_no_position_residual():
         z = y + 1e-4 * np.abs(y).max() * rng.standard_normal(y.size)
         consistent_positions(z, base, hg)
         delta = np.full(y.size, np.nan)
-        assert _mass_form_residual(data.address, z, base, hg, delta, flags, 0.0) == ed.OK
+        assert mass_form_residual(data.address, z, base, hg, delta, flags, 0.0) == ed.OK
         assert np.all(delta[:n] == 0.0)
         g = (z[n:] - base[n:]) / hg
         assert engine.call(data, OP_STAGE_FORCE, z, g.copy(), g) == ed.OK

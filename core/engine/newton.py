@@ -288,7 +288,7 @@ def solve(table, v, hg, force):
         pattern_product_transposed(j_ints, j_floats, sparse_lu.matrix_values(j_ints, j_floats),
                                    a, rhs)
         # with r1 zero to the bit (the stages keep it so on this path:
-        # `esdirk_kernels.consistent_positions`) b = 0 and its term adds nothing
+        # `esdirk_newton.consistent_positions`) b = 0 and its term adds nothing
         if any_nonzero(v[:ndof]):
             sparse_lu.solve(j_ints, j_floats, b, False)
             pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)

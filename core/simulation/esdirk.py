@@ -41,7 +41,7 @@ Newton: matrix I - h g J with J the model's analytic tangent (the engine's first
 Jacobian), kept across steps and samples; it is recomputed when a stage's Newton fails (a
 stage that converges slowly but converges only counts its iterations, below), and I - h g J
 is refactored only when J is new or h has moved more than 20 % from the h of the factors (on
-the sparse Newton matrix at every new h: `esdirk_kernels.SPARSE_LU_SLACK`); for large models
+the sparse Newton matrix at every new h: `esdirk_newton.SPARSE_LU_SLACK`); for large models
 through its Schur complement (`newton_matrix`). On the sparse Newton matrix a stage's residual
 takes its velocity half in mass form, M_bar (f_v(z) - a_c) with a_c = (v - base_v) / (h g)
 (`engine.stage_force`): no factorisation of the augmented system per iteration, the same
@@ -76,8 +76,7 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..errors import SimulationError, StepBudgetSpent
-from .esdirk_kernels import (
-    ETA_HOLD,
+from .esdirk_layout import (
     FLAG_NAMES,
     I_ETA_AGE,
     I_ETA_HOLD,
@@ -111,9 +110,9 @@ from .esdirk_kernels import (
     TOO_MUCH_WORK,
     V_ROWS,
     V_Y,
-    factor,
 )
 from .esdirk_method import TABLEAUS
+from .esdirk_newton import ETA_HOLD, factor
 from .stepper import Stepper
 
 

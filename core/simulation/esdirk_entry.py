@@ -10,7 +10,7 @@ costs nanoseconds per sample.
 
 The entry takes one int64 array of the addresses and sizes of advance's arguments
 (`arguments`, in the order of the A_... constants) and t_stop (s); it returns advance's
-status (`esdirk_kernels.OK` or a negative code).
+status (`esdirk_layout.OK` or a negative code).
 """
 
 import numpy as np
@@ -24,7 +24,7 @@ from ..numerics.native import (
     float_address,
     int_address,
 )
-from . import esdirk_kernels
+from . import esdirk_kernels, esdirk_layout
 
 # the entries of the arguments array: the addresses of advance's arrays, then their sizes
 (A_TABLE, A_MEMORY, A_FLAGS, A_VECTORS, A_J, A_LU, A_PIVOTS, A_ATOL, A_TABLEAU, A_EW,
@@ -40,9 +40,9 @@ def advance_entry(arguments, t_stop):
     a = carray(as_int_pointer(address_of(arguments)), (A_SIZE,))
     n, s = a[A_N], a[A_STAGES]
     return esdirk_kernels.advance(
-        a[A_TABLE], carray(as_float_pointer(a[A_MEMORY]), (esdirk_kernels.M_SIZE,)),
-        carray(as_int_pointer(a[A_FLAGS]), (esdirk_kernels.I_SIZE,)),
-        carray(as_float_pointer(a[A_VECTORS]), (esdirk_kernels.V_ROWS, n)),
+        a[A_TABLE], carray(as_float_pointer(a[A_MEMORY]), (esdirk_layout.M_SIZE,)),
+        carray(as_int_pointer(a[A_FLAGS]), (esdirk_layout.I_SIZE,)),
+        carray(as_float_pointer(a[A_VECTORS]), (esdirk_layout.V_ROWS, n)),
         carray(as_float_pointer(a[A_J]), (n * n,)),
         carray(as_float_pointer(a[A_LU]), (n * n,)),
         carray(as_int_pointer(a[A_PIVOTS]), (n,)),
@@ -71,15 +71,15 @@ def arguments(address, memory, flags, vectors, J, LU, pivots, atol, tables):
 @entry("void(int64, voidptr, voidptr, float64, int64)")
 def _restart_entry(table, memory, flags, t, inputs_only):
     """`esdirk_kernels.restart` as a C entry, the arrays by address."""
-    esdirk_kernels.restart(table, carray(as_float_pointer(memory), (esdirk_kernels.M_SIZE,)),
-                   carray(as_int_pointer(flags), (esdirk_kernels.I_SIZE,)), t, inputs_only != 0)
+    esdirk_kernels.restart(table, carray(as_float_pointer(memory), (esdirk_layout.M_SIZE,)),
+                   carray(as_int_pointer(flags), (esdirk_layout.I_SIZE,)), t, inputs_only != 0)
 
 
 def restart_now(table, memory, flags, t, inputs_only):
     """`esdirk_kernels.restart` from Python (through its C entry: a process that loads compiled code
     from the cache calls it without numba); memory (M_SIZE,) float64, flags (I_SIZE,) int64."""
-    if memory.size != esdirk_kernels.M_SIZE or flags.size != esdirk_kernels.I_SIZE:
+    if memory.size != esdirk_layout.M_SIZE or flags.size != esdirk_layout.I_SIZE:
         raise ValueError(f"esdirk restart: memory of {memory.size} and flags of {flags.size} "
-                         f"entries, not {esdirk_kernels.M_SIZE} and {esdirk_kernels.I_SIZE}")
+                         f"entries, not {esdirk_layout.M_SIZE} and {esdirk_layout.I_SIZE}")
     _restart_entry.ctypes(table, float_address(memory), int_address(flags), float(t),
                           int(bool(inputs_only)))

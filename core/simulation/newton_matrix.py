@@ -31,7 +31,7 @@ K_x and J's LU at the Jacobian's state, kept in the packed model (the J array of
 integrator is not used); `sparse_factor` and `sparse_solve` reach them through the engine's
 operations. The rule of when to renew J is the ESDIRK's, unchanged; the factors are made
 again at every new hg (a sparse factorisation costs a fifth of an evaluation, so the slack the
-dense path keeps, an iteration more per stage, does not pay: `esdirk_kernels.SPARSE_LU_SLACK`);
+dense path keeps, an iteration more per stage, does not pay: `esdirk_newton.SPARSE_LU_SLACK`);
 the solve is the dense path's (I - hg J)^-1 to round-off, so the step's error control is the
 dense path's. Costs grow with the element count.
 """

@@ -18,7 +18,7 @@ drive signal (V), held likewise; its coil current is part of the integrator's st
 the last sample of the reference and feedforward arrays their last entries hold. A kinematic
 input follows the simulator's path (slot motion_path: `Simulator(..., motion_duration=T)` or
 `set_motion`, the scene's quintic; held where `stepwise_motion` put it): every evaluation of
-the integrator reads it at its own time (`esdirk_kernels._f`, CVODE's right-hand side), as in
+the integrator reads it at its own time (`esdirk_newton.evaluate`, CVODE's right-hand side), as in
 `Simulator.advance_to`; the motion is a known disturbance of the loop, its effort not a loop
 input. After a run `Simulator.efforts` gives the efforts at t_N.
 

@@ -19,7 +19,7 @@ from ..numerics.native import (
     call_with_time,
     carray,
 )
-from . import esdirk_kernels
+from . import esdirk_kernels, esdirk_layout
 from .sampled_control import CONTROLLER_KINDS, control_sample, controller_table
 from .sampled_measure import ADVANCE, COORDINATES, MEASURE, N_COORDINATES, PLANT
 from .stepper import restart_plant
@@ -142,7 +142,7 @@ def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, 
     `arguments`), not a linked copy of `esdirk_kernels.advance`."""
     plant = addresses[PLANT]
     x_plant = access.coordinates(plant)
-    y = vectors[esdirk_kernels.V_Y]
+    y = vectors[esdirk_layout.V_Y]
     t = loop_state[0]
     for k in range(start, stop):
         changed = _sample(addresses, y, scratch, k, controller, held)
@@ -158,10 +158,10 @@ def loop_esdirk(addresses, loop_state, held, memory, flags, vectors, arguments, 
             loop_state[1] = loop_state[2] = 0.0
         t_next = (k + 1) / fs
         # to t_next, no step budget
-        flags[esdirk_kernels.I_ONE_STEP] = flags[esdirk_kernels.I_MAX_STEPS] = 0
+        flags[esdirk_layout.I_ONE_STEP] = flags[esdirk_layout.I_MAX_STEPS] = 0
         status = call_stepper(addresses[ADVANCE], arguments.ctypes.data, t_next)
-        if status != esdirk_kernels.OK:
-            loop_state[0] = memory[esdirk_kernels.M_T]
+        if status != esdirk_layout.OK:
+            loop_state[0] = memory[esdirk_layout.M_T]
             loop_state[1] = loop_state[2] = 1.0
             return status
         t = t_next
@@ -200,7 +200,7 @@ def _esdirk_entry(address, start, stop, fs):
                        ints(table, _N + 6), scratch, start, stop, fs, controller)
     if flag != 0:
         return flag
-    return _measure_end(addresses, vectors[esdirk_kernels.V_Y], scratch, controller, stop)
+    return _measure_end(addresses, vectors[esdirk_layout.V_Y], scratch, controller, stop)
 
 
 @entry("int32(voidptr, int64, int64, float64)")

@@ -10,7 +10,7 @@ new hg a factorisation of the Newton matrix (OP_NEWTON_FACTOR), per attempt the 
 estimate's solve (OP_NEWTON_SOLVE), per new Jacobian OP_NEWTON_JACOBIAN. Each is timed in a
 loop of `count` calls: the stage force alternating two states a step apart 2 ms into the run
 (its kinematics then take the chord steps a run sees), the solves with the position half of
-the residual zero (as the stages keep it, `esdirk_kernels.consistent_positions`) and not.
+the residual zero (as the stages keep it, `esdirk_newton.consistent_positions`) and not.
 The sum of counts times costs is set against the run's CPU per step: what is left is the
 step outside the engine (error estimate, step control, the compiled loop's own work).
 

@@ -36,6 +36,8 @@ from flexure.core.engine.operations import (
     OP_STAGE_FORCE,
 )
 from flexure.core.simulation import esdirk_kernels as K
+from flexure.core.simulation import esdirk_layout as L
+from flexure.core.simulation import esdirk_newton as N
 
 
 def weighted_norm(v, weight):
@@ -54,7 +56,7 @@ class Replay:
             raise ValueError("the replica retraces the esdirk method on the sparse Newton "
                              "matrix only")
         self.sim, self.data = sim, sim.data
-        self.atol, self.rtol = sim.integrator.atol.copy(), float(sim.integrator.memory[K.M_RTOL])
+        self.atol, self.rtol = sim.integrator.atol.copy(), float(sim.integrator.memory[L.M_RTOL])
         self.A, self.EW, self.P = sim.integrator.tableau.arrays()
         self.y = np.array(sim.state, dtype=float)
         self.rhs = self.jacobians = self.factorizations = self.steps = self.rejected = 0
@@ -73,7 +75,7 @@ class Replay:
 
     def mass_form_residual(self, z, base, hg, t):
         """(status, [base_q + hg v - q; hg g]) at z = [q, v], g = M_bar (qddot(z) - a_c) for
-        a_c = (v - base_v) / hg (`esdirk_kernels._mass_form_residual`), counted as an rhs."""
+        a_c = (v - base_v) / hg (`esdirk_newton.mass_form_residual`), counted as an rhs."""
         n = z.size // 2
         acc = (z[n:] - base[n:]) / hg
         g = np.zeros(n)
@@ -82,7 +84,7 @@ class Replay:
         return status, np.concatenate([base[:n] + hg * z[n:] - z[:n], hg * g])
 
     def stage(self, i, t, h, y, F, eta):
-        """Stage i's simplified Newton (`esdirk_kernels._stage`): (converged, eta, record,
+        """Stage i's simplified Newton (`esdirk_newton.solve_stage`): (converged, eta, record,
         z)."""
         A, P = self.A, self.P
         hg = h * A[1, 1]
@@ -93,7 +95,7 @@ class Replay:
         weight = 1.0 / (self.rtol * np.abs(y) + self.atol)
         eta = max(eta, 1e-16) ** (0.8 if i == 1 else 1.0)
         previous, thetas = 0.0, []
-        for iteration in range(K.MAX_NEWTON):
+        for iteration in range(N.MAX_NEWTON):
             status, delta = self.mass_form_residual(z, base, hg, t + A[i, : i + 1].sum() * h)
             if status != ed.OK:
                 break
@@ -107,7 +109,7 @@ class Replay:
                 if theta >= 0.99:
                     break
                 eta = theta / (1.0 - theta)
-            if eta * norm <= K.NEWTON_TOLERANCE or norm == 0.0:
+            if eta * norm <= N.NEWTON_TOLERANCE or norm == 0.0:
                 F[i] = (z - base) / hg
                 return True, eta, (i, iteration + 1, thetas, norm), z
             previous = norm
@@ -122,7 +124,7 @@ class Replay:
         F[0] = self.f(y, t)[1]
         have_jacobian = fresh = refresh = factored = False
         extra, failures, h_rejected, error_rejected = 0, 0, 0.0, 0.0
-        exponent = float(self.sim.integrator.memory[K.M_EXPONENT])
+        exponent = float(self.sim.integrator.memory[L.M_EXPONENT])
         while t < t_end:
             if h <= 0.0:
                 h = self.initial_step(t, y, F[0], t_end)
@@ -131,21 +133,21 @@ class Replay:
                 step = remaining
             elif 2.0 * step > remaining:
                 step = 0.5 * remaining
-            if extra >= max(1.0, K.JACOBIAN_COST * n):
+            if extra >= max(1.0, N.JACOBIAN_COST * n):
                 refresh = True
             if refresh or not have_jacobian:
                 engine.call(self.data, OP_NEWTON_JACOBIAN, y, np.zeros(1))
                 self.jacobians += 1
                 have_jacobian, fresh, refresh, factored, extra = True, True, False, False, 0
             hg = step * A[1, 1]
-            if not factored or abs(hg / self.hg_lu - 1.0) > K.SPARSE_LU_SLACK:
+            if not factored or abs(hg / self.hg_lu - 1.0) > N.SPARSE_LU_SLACK:
                 engine.call(self.data, OP_NEWTON_FACTOR, s=hg)
                 self.factorizations, factored, self.hg_lu = self.factorizations + 1, True, hg
             record, converged = [], True
             for i in range(1, stages):  # z: the last stage's, the new state (stiffly accurate)
                 converged, eta, stage_record, z = self.stage(i, t, step, y, F, eta)
                 record.append(stage_record)
-                extra += sum(theta >= K.THETA_STALE for theta in stage_record[2])
+                extra += sum(theta >= N.THETA_STALE for theta in stage_record[2])
                 if not converged:
                     break
             failures += 1
