@@ -50,37 +50,56 @@ def _models(quick):
               "cantilever, 16 BEAMs": lambda: cantilever(16),
               "cantilever, 32 BEAMs": lambda: cantilever(32)}
     if not quick:
-        models["cantilever, 48 BEAMs"] = lambda: cantilever(48)
-        models["cantilever, 64 BEAMs"] = lambda: cantilever(64)
+        for n in (24, 40, 48, 56, 64):
+            models[f"cantilever, {n} BEAMs"] = lambda n=n: cantilever(n)
         models["manipulator_reduced"] = lambda: manipulator("manipulator_reduced")
         models["manipulator"] = lambda: manipulator("manipulator")
-    return models
+    return dict(sorted(models.items(), key=lambda item: "manip" in item[0]))
 
 
 def statics(*, repeat=5, quick=False):
-    """Rows: per model, the engine's static solve over the numpy one's (CPU s)."""
+    """Rows: per model, the engine's static solve over the numpy one's (CPU s), the
+    engine's step sparse (`engine.static_step`) and dense (`engine.tangent`); a table of
+    the three on the log."""
     from flexure.core import static_equilibrium
-    from flexure.core.analysis.static_engine import preferred
+    from flexure.core.analysis.static_engine import engine_balance, preferred, sparse_step
 
-    rows = []
+    rows, lines = [], []
     for label, make in _models(quick).items():
         model, loads = make()
-        static_equilibrium(model, loads=0.01 * loads, load_steps=1, compiled=True)  # packs
+        # one model per path: each keeps its own packed balance, packed before the runs
+        dense_model, _ = make()
+        for each, sparse in ((model, True), (dense_model, False)):
+            engine_balance(each, sparse=sparse)
+            static_equilibrium(each, loads=0.01 * loads, load_steps=1, compiled=True)
 
-        def solve(compiled, model=model, loads=loads):
+        def solve(each, compiled, loads=loads):
             start = time.process_time()
-            solution = static_equilibrium(model, loads=loads, load_steps=2, compiled=compiled)
+            solution = static_equilibrium(each, loads=loads, load_steps=2, compiled=compiled)
             return time.process_time() - start, solution.iterations
 
-        t = alternate({"engine": lambda: solve(True), "numpy": lambda: solve(False)},
+        t = alternate({"sparse": lambda m=model: solve(m, True),
+                       "dense": lambda m=dense_model: solve(m, True),
+                       "numpy": lambda m=model: solve(m, False)},
                       repeat, f"statics {label} (CPU s)")
-        ratio = t["engine"].median / t["numpy"].median
+        numpy = t["numpy"].median
+        ratios = {name: t[name].median / numpy for name in ("sparse", "dense")}
+        chosen = "sparse" if sparse_step(model) else "dense"
+        ratio = ratios[chosen]
         default = preferred(model)
-        log(f"statics {label}: {model.ndof} DOFs, engine/numpy {ratio:.3g}")
-        rows.append(Row(f"static solve, {label} ({model.ndof} DOFs), engine"
+        lines.append(f"{label:24s} {model.ndof:4d} {1e3 * numpy:9.1f} "
+                     f"{1e3 * t['dense'].median:9.1f} {1e3 * t['sparse'].median:9.1f} "
+                     f"{ratios['dense']:6.3f} {ratios['sparse']:6.3f} "
+                     f"{t['sparse'].median / t['dense'].median:6.3f}  "
+                     f"{t['numpy'].info}/{t['dense'].info}/{t['sparse'].info}")
+        log(f"statics {label}: {model.ndof} DOFs, engine/numpy dense {ratios['dense']:.3g}, "
+            f"sparse {ratios['sparse']:.3g}")
+        rows.append(Row(f"static solve, {label} ({model.ndof} DOFs), engine ({chosen} step)"
                         + (" (the default): <= numpy" if default else " (not the default)"),
-                        t["engine"].text(), f"numpy {t['numpy'].text()}", ratio,
+                        t[chosen].text(), f"numpy {t['numpy'].text()}", ratio,
                         ratio <= 1.0 if default else None))
+    log("model                    DOFs  numpy ms  dense ms sparse ms  dense/np sparse/np "
+        "sparse/dense  iterations numpy/dense/sparse\n" + "\n".join(lines))
     return rows
 
 
