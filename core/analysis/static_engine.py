@@ -85,9 +85,10 @@ class EnginePoint:
 # - From SPARSE_STEP_FROM DOFs the engine steps on the sparse saddle-point system
 #   (`engine.static_step`, `sparse_step`), in proportion to the elements: 0.27 to 0.31 of
 #   numpy's CPU on BEAM cantilevers of 288 to 384 DOFs, 0.35 on manipulator_reduced (507
-#   DOFs), 0.38 on the 816-DOF manipulator, where the dense step (each iteration forms DF,
-#   NDOF solves of J, and the dense tangent DF^T (K_x DF)) cost 0.54 to 0.77, 1.38 and 0.99.
-# - Below it the dense step: the sparse one is the faster there too (0.6 to 0.74 of the
+#   DOFs), 0.35 to 0.38 on the 816-DOF manipulator, where the dense step (each iteration
+#   forms DF, NDOF solves of J, and the dense tangent DF^T (K_x DF)) cost 0.54 to 0.81, 1.4
+#   to 1.6 and 0.98 to 0.99 (two runs, 5 and 7 rounds).
+# - Below it the dense step: the sparse one is the faster there too (0.57 to 0.82 of the
 #   dense step's CPU, 75 to 240 DOFs), but the engine's linearisation reads the reduced
 #   form that the dense step packs (`linear_engine`: one packing per live model), and a
 #   static solve and a linearisation together cost less through it up to about 200 DOFs
