@@ -46,8 +46,9 @@ one the sparse Newton matrix is packed for), with the same conventions (load per
 factor, no damping, actuators as force inputs, dims.static). It is the dense step to
 round-off (tests/test_static_step.py: within 1e-9 of the step's largest entry, measured
 2e-13 on manipulator_control to 1.3e-10 on a 384-DOF BEAM cantilever, where numpy's
-augmented step differs from the dense one by 5.6e-10). The reduced form, which the dense tangent and the linearisation read, is
-then packed only when asked for (`EngineBalance.data`).
+augmented step differs from the dense one by 5.6e-10). The reduced form, which the dense
+tangent and the linearisation read, is then packed only when asked for
+(`EngineBalance.data`).
 """
 
 from __future__ import annotations

@@ -45,12 +45,13 @@ at rest) or from the numpy `Mechanics`, the reference the tests compare it with 
 within 1e-10 of each DOF's unit, tests/test_static_engine.py); `compiled` chooses, by default
 the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates; from
 240 DOFs its Newton step is the sparse saddle-point system's, `static_engine.sparse_step`,
-without DF and the dense K). Either way the solution's configuration (De, DF and J's factors, which the
-linear analyses take) and stress resultants are the numpy kinematics' at the equilibrium's
-coordinates. On the numpy path of a large model (`Mechanics.sparse`) Newton's step comes, by
-default, from the sparse augmented system on the coordinates instead of K and Q on the DOFs
-(`static_augmented`: the same step to round-off, without DF and the dense tangent in the
-iterations, and without projecting the iterates onto the constraints; `augmented` chooses).
+without DF and the dense K). Either way the solution's configuration (De, DF and J's
+factors, which the linear analyses take) and stress resultants are the numpy kinematics' at
+the equilibrium's coordinates. On the numpy path of a large model (`Mechanics.sparse`)
+Newton's step comes, by default, from the sparse augmented system on the coordinates instead
+of K and Q on the DOFs (`static_augmented`: the same step to round-off, without DF and the
+dense tangent in the iterations, and without projecting the iterates onto the constraints;
+`augmented` chooses).
 """
 
 from __future__ import annotations
@@ -360,8 +361,9 @@ def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
 def _newton(balance, config, load_factor, loads, values, prescribed_values, step_tolerance,
             max_iterations, *, curvature=None):
     """Newton's method at one load factor from config (a solved configuration: its q and
-    x); balance: the engine's (`static_engine.EngineBalance`), the numpy `_PlainBalance` or
-    the augmented `static_augmented.AugmentedBalance` (its own step on the free DOFs);
+    x); balance: the engine's (`static_engine.EngineBalance`; its own step on the free DOFs
+    where it steps sparse), the numpy `_PlainBalance` or the augmented
+    `static_augmented.AugmentedBalance` (its own step on the free DOFs);
     values: the inputs' port values (N, N m); prescribed_values (n_kinematic,) the kinematic
     inputs' (m, rad), reached in the first step; step_tolerance (NDOF,) the largest
     converged |dq_j| (m or rad); curvature, if given, (q0 (NDOF,), h2 / h1): the equilibrium

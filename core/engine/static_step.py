@@ -75,8 +75,8 @@ def _coordinate_tangent(table, sigma, r_full, lam, Kv):
         group_row = group(table, g)
         for i in range(n):
             t = rigid_element(table, group_row, i) if rigid else -1
-            if t >= 0:  # on its z-coordinates
-                if own_tangent(table, t):
+            if t >= 0:  # on its z-coordinates (the statics' packing has no damping, so
+                if own_tangent(table, t):  # C_z, the second Kv, is not written)
                     _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Kv, hmap, rigid_base, work)
                 continue
