@@ -103,8 +103,8 @@ class EnginePoint:
 # Packing is not in these figures: a balance is packed once per live model (0.2 s of CPU on
 # manipulator_control, 0.75 s on manipulator_reduced), so a process that solves one
 # equilibrium of a new model pays more than the numpy path, as it did in the old window
-# (a new model and one solve: manipulator_control 1.8 times numpy's CPU, the 288-DOF
-# cantilever 1.2, manipulator_reduced 2.0).
+# (a new model and one solve, in a process with the engine started: manipulator_control
+# 1.8 times numpy's CPU, the 288-DOF cantilever 1.2, manipulator_reduced 2.0).
 ENGINE_MIN_FREE = SPARSE_FROM
 SPARSE_STEP_FROM = 240  # DOFs
 
