@@ -65,9 +65,10 @@ def test_the_rule_takes_the_engine_from_its_work_on_models_it_fits():
     truss = load_scene("truss_1dof_x")  # 1 DOF: work 2 per evaluation
     assert sensitivity_engine.preferred(truss, 125)
     assert not sensitivity_engine.preferred(truss, 124)
-    large = spatial_cantilever(51)  # 306 DOFs, above the statics' window
-    assert large.ndof > static_engine.ENGINE_MAX_DOFS
+    large = spatial_cantilever(51)  # 306 DOFs, above what a sweep packs the engine for
+    assert large.ndof > sensitivity_engine.SWEEP_MAX_DOFS
     assert not sensitivity_engine.preferred(large, 1000)
+    assert sensitivity_engine.statics_path(large, 1000, None) is False
 
 
 def test_an_explicit_path_is_kept_and_none_leaves_the_statics_their_own_rule():

@@ -204,12 +204,11 @@ def test_balance_and_tangent_match_away_from_equilibrium(name):
 
 
 def test_which_path_and_what_the_engine_refuses():
-    """The default path: the engine from ENGINE_MIN_FREE free coordinates up to
-    ENGINE_MAX_DOFS DOFs; a model with kinematic inputs and actuators (which the engine's
-    packing refuses) takes the numpy path, also when the engine is asked for, with the
-    same answer."""
+    """The default path: the engine from ENGINE_MIN_FREE free coordinates up; a model with
+    kinematic inputs and actuators (which the engine's packing refuses) takes the numpy
+    path, also when the engine is asked for, with the same answer."""
     assert static_engine.preferred(load_scene("manipulator_control"))  # 75 DOFs, 784 free
-    assert not static_engine.preferred(load_scene("manipulator_reduced"))  # 507 DOFs
+    assert static_engine.preferred(load_scene("manipulator_reduced"))  # 507 DOFs: no bound
     assert not static_engine.preferred(load_scene("stage_spatial_19dof"))  # 35 free
     data = chain()
     data["inputs"]["F"] = {"node": "2", "coordinate": "x"}

@@ -7,16 +7,20 @@ the difference scheme, four perturbed models (p +- h, p +- h/2), each a new mode
 static solve, linearisation, modes, the rest (`sensitivity_quantities.evaluate`). The engine
 pays for itself per evaluation only where the statics iterate (a loaded model: without loads
 and gravity `static_equilibrium` takes one numpy step either way) and the model is small
-enough that its dense DF and tangent cost less than the numpy path's steps
-(`static_engine.ENGINE_MAX_DOFS`); its start-up in a process (numba, llvmlite, the cached
-entries: about 0.12 s of CPU) is paid once and must be paid back by the evaluations:
+enough that packing it, once per perturbed model, costs less than what its steps save
+(SWEEP_MAX_DOFS = 300: above it a new model's packing, 0.75 s of CPU on the 507-DOF
+manipulator_reduced, is more than the numpy statics of it, 0.18 s); its start-up in a
+process (numba, llvmlite, the cached entries: about 0.12 s of CPU) is paid once and must be
+paid back by the evaluations:
 
-    engine  <=>  the statics take it, NDOF <= ENGINE_MAX_DOFS and
+    engine  <=>  the statics take it, NDOF <= SWEEP_MAX_DOFS and
                  evaluations x (NDOF + OVERHEAD_DOFS) >= ENGINE_MIN_WORK,
 
 an integer rule (no timing at run time, so the choice cannot flip with the CPU; a tie takes
 the engine). Where it says no, every analysis keeps its own rule (`compiled=None`): the
-statics' window (from 300 free coordinates) takes the engine on its own.
+statics' (from 300 free coordinates) takes the engine on its own; but above SWEEP_MAX_DOFS,
+where the statics' rule takes the engine for a model solved more than once, a sweep's
+models are each solved once, so the sweep asks for the numpy path (`statics_path`).
 
 Measured (docs/benchmarks.md, 2026-11-30; 2-core VM under a load of 6 to 11), CPU of one
 evaluation of a loaded model in a process with the engine started, each new model packed,
@@ -44,6 +48,8 @@ if TYPE_CHECKING:  # names for the annotations only
 # the numpy path's own cost per evaluation that does not grow with the model
 ENGINE_MIN_WORK = 250
 OVERHEAD_DOFS = 1
+# the largest model a sweep takes the engine for (module docstring)
+SWEEP_MAX_DOFS = 300
 # the evaluations of a sweep: the base model, and four per key differenced
 EVALUATIONS_PER_KEY = 4
 
@@ -59,17 +65,22 @@ def preferred(model: Model, evaluations: int) -> bool:
     statics (module docstring: the rule and its threshold)."""
     ndof = int(model.ndof)
     work = int(evaluations) * (ndof + OVERHEAD_DOFS)
-    return (static_engine.supports(model) and ndof <= static_engine.ENGINE_MAX_DOFS
+    return (static_engine.supports(model) and ndof <= SWEEP_MAX_DOFS
             and work >= ENGINE_MIN_WORK)
 
 
 def statics_path(model: Model, evaluations: int, compiled: bool | None) -> bool | None:
     """The `compiled` to give each evaluation's statics: True where asked or where the rule
-    prefers the engine, False where asked, else None (the statics' own rule)."""
+    prefers the engine, False where asked or where the model is above SWEEP_MAX_DOFS (each
+    perturbed model packed for one solve: module docstring), else None (the statics' own
+    rule)."""
     if compiled is not None:
         return bool(compiled)
-    return True if preferred(model, evaluations) else None
+    if preferred(model, evaluations):
+        return True
+    return False if model.ndof > SWEEP_MAX_DOFS else None
 
 
-__all__ = ["ENGINE_MIN_WORK", "EVALUATIONS_PER_KEY", "OVERHEAD_DOFS", "preferred",
+__all__ = ["ENGINE_MIN_WORK", "EVALUATIONS_PER_KEY", "OVERHEAD_DOFS", "SWEEP_MAX_DOFS",
+           "preferred",
            "statics_path", "sweep_evaluations"]

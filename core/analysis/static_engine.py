@@ -36,6 +36,19 @@ engine's other forms return for them, is no failure here either).
 The kinematics are solved to the engine's tolerance (1e-15 of each row's unit); a
 configuration counts as singular only at a zero pivot of J, as in the numpy kinematics
 (`singular_ratio=0`), so both paths reach the same configurations.
+
+On a large model (`sparse_step`: from SPARSE_STEP_FROM DOFs) Newton's step dq = K^-1 Q
+comes instead from the sparse saddle-point system [K_x s J_o^T; s J_o 0] on the free
+coordinates (OP_STATIC_STEP, `engine.static_step`: the ESDIRK's sparse Newton matrix with
+the inertia and damping terms absent), without DF and the dense K, in proportion to the
+elements: `EngineBalance.free_step`, on a packing of its own in the augmented form (the
+one the sparse Newton matrix is packed for), with the same conventions (load per load
+factor, no damping, actuators as force inputs, dims.static). It is the dense step to
+round-off (tests/test_static_step.py: within 1e-9 of the step's largest entry, measured
+2e-13 on manipulator_control to 1.3e-10 on a 384-DOF BEAM cantilever, where numpy's
+augmented step differs from the dense one by 5.6e-10). The reduced form, which the dense
+tangent and the linearisation read, is then packed only when asked for
+(`EngineBalance.data`).
 """
 
 from __future__ import annotations
@@ -66,21 +79,34 @@ class EnginePoint:
     x: np.ndarray | None = None
 
 
-# Where the engine is the statics' default: a window of model sizes, from measurements of
-# one static solve's CPU, engine over numpy (examples/benchmarks/statics.py, 2026-11-29).
-# - Above ENGINE_MAX_DOFS DOFs the engine may cost more: each iteration forms DF (NDOF
-#   solves of J) and the dense tangent DF^T (K_x DF) (`engine.tangent`), about (DF's
-#   entries) NDOF products, where the numpy path's step on a model from 300 free
-#   coordinates is the sparse augmented system's (`static_augmented`), in proportion to
-#   the elements. BEAM cantilevers: 0.37 at 192 and 240 DOFs, 0.86 at 288, 1.05 at 336,
-#   1.3 to 1.4 at 384; manipulator_reduced (507 DOFs) 1.1; the 816-DOF manipulator (its DF
-#   is 1 % full) 0.89 to 1.0, left to numpy by this rule.
-# - Below SPARSE_FROM free coordinates (where the numpy kinematics go sparse) a numpy solve
-#   takes milliseconds (20 ms on stage_spatial_19dof), less than what touching the compiled
-#   engine costs a process (0.08 s of CPU: numba, llvmlite, the cached entries; warm
-#   `flexure analyze truss_1dof_x` 0.38 -> 0.46 s).
-ENGINE_MAX_DOFS = 300
+# Where the engine is the statics' default: every model from ENGINE_MIN_FREE free
+# coordinates up (measured: one static solve's CPU, engine over numpy, in one process, the
+# balance packed, alternating, medians; examples/benchmarks/statics.py, docs/benchmarks.md,
+# session 36).
+# - From SPARSE_STEP_FROM DOFs the engine steps on the sparse saddle-point system
+#   (`engine.static_step`, `sparse_step`), in proportion to the elements: 0.27 to 0.31 of
+#   numpy's CPU on BEAM cantilevers of 288 to 384 DOFs, 0.35 on manipulator_reduced (507
+#   DOFs), 0.35 to 0.38 on the 816-DOF manipulator, where the dense step (each iteration
+#   forms DF, NDOF solves of J, and the dense tangent DF^T (K_x DF)) cost 0.54 to 0.81, 1.4
+#   to 1.6 and 0.98 to 0.99 (two runs, 5 and 7 rounds).
+# - Below it the dense step: the sparse one is the faster there too (0.57 to 0.82 of the
+#   dense step's CPU, 75 to 240 DOFs), but the engine's linearisation reads the reduced
+#   form that the dense step packs (`linear_engine`: one packing per live model), and a
+#   static solve and a linearisation together cost less through it up to about 200 DOFs
+#   (manipulator_control 28 against 43 ms, cantilevers of 144 and 192 DOFs 0.92 and 0.97
+#   of the sparse path's; 1.03 at 240 DOFs, 1.23 at 288). SPARSE_STEP_FROM = 240 takes the
+#   sparse step from the first size measured where the pair costs no more through it.
+# - Below ENGINE_MIN_FREE free coordinates (where the numpy kinematics go sparse) a numpy
+#   solve takes milliseconds (20 ms on stage_spatial_19dof), less than what touching the
+#   compiled engine costs a process (0.08 s of CPU: numba, llvmlite, the cached entries;
+#   warm `flexure analyze truss_1dof_x` 0.38 -> 0.46 s).
+# Packing is not in these figures: a balance is packed once per live model (0.2 s of CPU on
+# manipulator_control, 0.75 s on manipulator_reduced), so a process that solves one
+# equilibrium of a new model pays more than the numpy path, as it did in the old window
+# (a new model and one solve, in a process with the engine started: manipulator_control
+# 1.8 times numpy's CPU, the 288-DOF cantilever 1.2, manipulator_reduced 2.0).
 ENGINE_MIN_FREE = SPARSE_FROM
+SPARSE_STEP_FROM = 240  # DOFs
 
 
 def supports(model: Model) -> bool:
@@ -91,23 +117,41 @@ def supports(model: Model) -> bool:
 
 def preferred(model: Model) -> bool:
     """Whether the engine is the default path of the statics of `model`: it takes the model,
-    which has at least ENGINE_MIN_FREE free coordinates and at most ENGINE_MAX_DOFS DOFs
-    (where the engine is the faster, its start-up included)."""
-    return (supports(model) and model.ndof <= ENGINE_MAX_DOFS
-            and model.free_coordinates.size >= ENGINE_MIN_FREE)
+    which has at least ENGINE_MIN_FREE free coordinates (where the engine is the faster, its
+    start-up included; no upper bound: the comment above ENGINE_MIN_FREE)."""
+    return supports(model) and model.free_coordinates.size >= ENGINE_MIN_FREE
+
+
+def sparse_step(model: Model) -> bool:
+    """Whether the engine's statics of `model` ask for the sparse saddle-point system's step
+    (`engine.static_step`): at least SPARSE_STEP_FROM DOFs (the comment above it), no
+    kinematic inputs and no coil currents, which the sparse Newton matrix's packing
+    refuses before it looks further. That packing decides the rest (S and D element by
+    element, every element with mass, static pivots: `engine.newton_packing`), and a model
+    it refuses steps dense (`EngineBalance`). A rule on the model alone, so the path does
+    not depend on the CPU; read when a balance is packed, so a test may change
+    SPARSE_STEP_FROM before it packs a model."""
+    return (model.ndof >= SPARSE_STEP_FROM and not model.kinematic_inputs
+            and not model.coil_actuators)
 
 
 def live_balance(model: Model) -> EngineBalance | None:
-    """The `EngineBalance` of `model` if the statics have packed it already, else None
-    (nothing is packed: what the linearisation asks before it takes the engine)."""
-    return _BALANCES.get(model)
+    """The `EngineBalance` of `model` if the statics have packed its reduced form already,
+    else None (nothing is packed that the linearisation reads: what it asks before it takes
+    the engine; a balance that steps sparse packs the reduced form only when asked)."""
+    balance = _BALANCES.get(model)
+    return balance if balance is not None and balance.packed_dense else None
 
 
-def engine_balance(model: Model) -> EngineBalance:
+def engine_balance(model: Model, *, sparse: bool | None = None) -> EngineBalance:
     """The `EngineBalance` of `model`, packed once per live model and reused (its packing
     takes 0.3 to 1 s on the 507-DOF manipulator; a model is not changed once built: a
-    parameter study builds a model per parameter set)."""
-    return _BALANCES.get(model) or _BALANCES.put(model, EngineBalance(model))
+    parameter study builds a model per parameter set). sparse: the step wanted (default
+    `sparse_step`'s rule); a live balance that steps otherwise is packed again."""
+    balance = _BALANCES.get(model)
+    if balance is None or (sparse is not None and balance.asked != sparse):
+        balance = _BALANCES.put(model, EngineBalance(model, sparse=sparse))
+    return balance
 
 
 class EngineBalance:
@@ -117,37 +161,56 @@ class EngineBalance:
     ----------
     model : Model
         A model the engine takes (`supports`).
+    sparse : bool, optional
+        Step on the sparse saddle-point system (True, where the sparse Newton matrix's
+        packing takes the model; else dense) or on the dense tangent (False); default
+        `sparse_step`'s rule.
     """
 
-    def __init__(self, model: Model):
+    def __init__(self, model: Model, *, sparse: bool | None = None):
         # the engine (and numba) imported on first use: a command that never solves a loaded
         # model through it does not pay for that import
         from ..engine import data as ed
-        from ..engine.data import EngineData
 
         self.model = model
         self._ed = ed
-        data = EngineData(model, augmented=False, singular_ratio=0.0)
-        self.data = data
-        data.int_array("actuators")[0::2] = ed.FORCE_INPUT  # their force at rest is given
-        data.int_array("dims")[ed.HAS_DAMPING] = 0
-        data.int_array("dims")[ed.STATIC] = 1  # DF^T r without M_bar and its LU
-        self._constant = data.float_array("constant_force")
-        self._lumped_gravity = self._constant - model.loads  # what packing added to the loads
-        group_data = data.float_array("group_data")
-        points = [slice(row[ed.G_GRAVITY_OFFSET], row[ed.G_GRAVITY_OFFSET] + row[ed.G_P])
-                  for row in data.int_array("groups").reshape(-1, ed.G_WIDTH)
-                  if row[ed.G_GRAVITY_OFFSET] >= 0]
-        # (the packed gravity on a group's inertia points (a view), its full value)
-        self._gravity = [(group_data[p], group_data[p].copy()) for p in points]
-        self._inputs = data.float_array("inputs")
-        self._current: EnginePoint | None = None  # whose kinematics the engine holds
-        n = model.ndof
-        self._rest = np.zeros(n)  # qdot = 0 and qddot = 0
+        self._load = (1.0, None, None)
+        self._dense: _Packing | None = None
+        self._sparse: _Packing | None = None
+        self._rest = np.zeros(model.ndof)  # qdot = 0 and qddot = 0
+        # the step asked for; a model the sparse Newton matrix refuses steps dense
+        self.asked = sparse_step(model) if sparse is None else bool(sparse)
+        if self.asked:
+            packing = _Packing(model, augmented=True)
+            if packing.data.int_array("dims")[ed.NEWTON_SPARSE] == 1:
+                self._sparse = packing
+                self._out = np.zeros(2 * model.ndof)
+        if self._sparse is None:
+            self._dense = _Packing(model, augmented=False)
+
+    @property
+    def sparse(self) -> bool:
+        """Whether Newton's step is the sparse saddle-point system's (`free_step`) rather
+        than the dense tangent's (`residual_and_tangent`)."""
+        return self._sparse is not None
+
+    @property
+    def data(self):
+        """The packed model in the reduced form (`EngineData`), which the dense tangent and
+        the linearisation read; packed on first use where the statics step sparse."""
+        if self._dense is None:
+            self._dense = _Packing(self.model, augmented=False)
+            self._dense.load(*self._load)
+        return self._dense.data
+
+    @property
+    def packed_dense(self) -> bool:
+        """Whether the reduced form's packing exists (the linearisation's rule, `live_balance`)."""
+        return self._dense is not None
 
     def set_load(self, load_factor: float, loads: np.ndarray | None = None,
                  values: np.ndarray | None = None) -> None:
-        """Put s times the load into the packed model.
+        """Put s times the load into the packed model(s).
 
         Parameters
         ----------
@@ -158,11 +221,10 @@ class EngineBalance:
         values : ndarray (n_inputs,), optional
             The inputs' port values, N or N m; default none.
         """
-        loads = self.model.loads if loads is None else loads
-        self._constant[:] = load_factor * (loads + self._lumped_gravity)
-        for packed, full in self._gravity:
-            packed[:] = load_factor * full
-        self._inputs[:] = 0.0 if values is None else load_factor * np.asarray(values, float)
+        self._load = (load_factor, loads, values)
+        for packing in (self._dense, self._sparse):
+            if packing is not None:
+                packing.load(load_factor, loads, values)
 
     def moved(self, point: EnginePoint | Configuration, q: np.ndarray, *,
               as_stepped: bool = False) -> EnginePoint:
@@ -198,18 +260,60 @@ class EngineBalance:
         from ..engine import engine
 
         ed, data = self._ed, self.data
-        self._start(point)
+        packing = self._dense
+        self._start(packing, point)
         q = np.ascontiguousarray(point.q, dtype=float)
         status = engine.call(data, engine.OP_ACCELERATIONS, q, self._rest)
         if status not in (ed.OK, ed.SINGULAR_MASS):  # see the module docstring on massless
-            self._fail(status, q)
-        self._current = point
+            self._fail(packing, status, q)
+        packing.current = point
         Q = data.float_array("reduced_force").copy()
         status = engine.call(data, engine.OP_TANGENT, self._rest)
         if status != ed.OK:
-            self._fail(status, q)
+            self._fail(packing, status, q)
         n = q.size
         return Q, data.float_array("stiffness").reshape(n, n).copy()
+
+    def free_step(self, point: EnginePoint | Configuration, dq: np.ndarray) -> np.ndarray:
+        """Newton's step at `point` from the sparse saddle-point system (OP_STATIC_STEP,
+        `engine.static_step`): the reduced step K^-1 Q without DF, for a balance that steps
+        sparse (`sparse`; its models have no kinematic inputs, so every DOF is free).
+
+        Parameters
+        ----------
+        point : EnginePoint or Configuration
+            As `residual_and_tangent`'s.
+        dq : ndarray (NDOF,)
+            Not read: the prescribed DOFs' move, which these models do not have.
+
+        Returns
+        -------
+        ndarray (n_free_dofs,)
+            The free DOFs' step (here every DOF's), m or rad.
+
+        Raises
+        ------
+        ConvergenceError
+            The engine could not solve the kinematics at q, or the tangent stiffness is
+            singular.
+        """
+        from ..engine import engine
+
+        packing = self._sparse
+        self._start(packing, point)
+        q = np.ascontiguousarray(point.q, dtype=float)
+        status = engine.call(packing.data, engine.OP_STATIC_STEP, q, self._rest, self._out)
+        if status == self._ed.SINGULAR_MASS:  # the saddle-point system's LU (engine.static_step)
+            packing.current = None
+            raise ConvergenceError("the tangent stiffness is singular")
+        if status != self._ed.OK:
+            self._fail(packing, status, q)
+        packing.current = point
+        return self._out[: q.size][self.model.free_dofs]
+
+    def step_balance(self) -> np.ndarray:
+        """Q = DF^T r (NDOF,), N or N m, at the point of the last `free_step`."""
+        return self._out[self.model.ndof:].copy()
 
     def solved(self, point: EnginePoint) -> EnginePoint:
         """`point` with its coordinates x solved (OP_CONFIGURATION, from the engine's last
@@ -224,28 +328,64 @@ class EngineBalance:
 
         if point.x is not None:
             return point
-        self._start(point)
+        packing = self._sparse or self._dense
+        self._start(packing, point)
         q = np.ascontiguousarray(point.q, dtype=float)
-        status = engine.call(self.data, engine.OP_CONFIGURATION, q)
+        status = engine.call(packing.data, engine.OP_CONFIGURATION, q)
         if status != self._ed.OK:
-            self._fail(status, q)
-        solved = EnginePoint(q, self.data.float_array("x").copy())
-        self._current = solved
+            self._fail(packing, status, q)
+        solved = EnginePoint(q, packing.data.float_array("x").copy())
+        packing.current = solved
         return solved
 
-    def _start(self, point):
-        """Where the engine's kinematics start for `point`: its own x, unless the engine
-        holds it or it is an unsolved iterate (whose start is the engine's last solution)."""
+    def _start(self, packing, point):
+        """Where `packing`'s kinematics start for `point`: its own x, unless the packing
+        holds it or it is an unsolved iterate (whose start is the packing's last solution)."""
         x = getattr(point, "x", None)
-        if x is None or point is self._current:
+        if x is None or point is packing.current:
             return
-        self.data.float_array("x_start")[:] = x
-        self.data.int_array("dims")[self._ed.WARM] = 0
+        packing.data.float_array("x_start")[:] = x
+        packing.data.int_array("dims")[self._ed.WARM] = 0
 
-    def _fail(self, status, q):
+    def _fail(self, packing, status, q):
         from ..simulation.status import STATUS_MESSAGES
 
-        self._current = None
+        packing.current = None
         reason = STATUS_MESSAGES.get(int(status), f"engine status {int(status)}")
         raise ConvergenceError(f"static balance of {self.model.name!r} at q = "
                                f"{np.array2string(q, precision=6)}: {reason}")
+
+
+class _Packing:
+    """One packed model of the statics (`EngineData`, in the reduced or the augmented
+    form) with what the statics holds fixed written into it (module docstring), the views
+    the load goes into, and the iterate whose kinematics it holds (`current`)."""
+
+    def __init__(self, model, *, augmented):
+        from ..engine import data as ed
+        from ..engine.data import EngineData
+
+        self.model = model
+        data = EngineData(model, augmented=augmented, singular_ratio=0.0)
+        self.data = data
+        data.int_array("actuators")[0::2] = ed.FORCE_INPUT  # their force at rest is given
+        data.int_array("dims")[ed.HAS_DAMPING] = 0
+        data.int_array("dims")[ed.STATIC] = 1  # DF^T r without M_bar and its LU
+        self._constant = data.float_array("constant_force")
+        self._lumped_gravity = self._constant - model.loads  # what packing added to the loads
+        group_data = data.float_array("group_data")
+        points = [slice(row[ed.G_GRAVITY_OFFSET], row[ed.G_GRAVITY_OFFSET] + row[ed.G_P])
+                  for row in data.int_array("groups").reshape(-1, ed.G_WIDTH)
+                  if row[ed.G_GRAVITY_OFFSET] >= 0]
+        # (the packed gravity on a group's inertia points (a view), its full value)
+        self._gravity = [(group_data[p], group_data[p].copy()) for p in points]
+        self._inputs = data.float_array("inputs")
+        self.current: EnginePoint | None = None
+
+    def load(self, load_factor, loads=None, values=None):
+        """s times the load into the packed model (`EngineBalance.set_load`)."""
+        loads = self.model.loads if loads is None else loads
+        self._constant[:] = load_factor * (loads + self._lumped_gravity)
+        for packed, full in self._gravity:
+            packed[:] = load_factor * full
+        self._inputs[:] = 0.0 if values is None else load_factor * np.asarray(values, float)

@@ -43,13 +43,15 @@ that realises each input, F = -Q_k (`StaticSolution.input_efforts`).
 Q and K come from the compiled engine (`static_engine`: its kinematics, forces and tangent
 at rest) or from the numpy `Mechanics`, the reference the tests compare it with (equilibria
 within 1e-10 of each DOF's unit, tests/test_static_engine.py); `compiled` chooses, by default
-the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates, up
-to 300 DOFs). Either way the solution's configuration (De, DF and J's factors, which the
-linear analyses take) and stress resultants are the numpy kinematics' at the equilibrium's
-coordinates. On the numpy path of a large model (`Mechanics.sparse`) Newton's step comes, by
-default, from the sparse augmented system on the coordinates instead of K and Q on the DOFs
-(`static_augmented`: the same step to round-off, without DF and the dense tangent in the
-iterations, and without projecting the iterates onto the constraints; `augmented` chooses).
+the engine where it is the faster (`static_engine.preferred`: from 300 free coordinates; from
+240 DOFs its Newton step is the sparse saddle-point system's, `static_engine.sparse_step`,
+without DF and the dense K). Either way the solution's configuration (De, DF and J's
+factors, which the linear analyses take) and stress resultants are the numpy kinematics' at
+the equilibrium's coordinates. On the numpy path of a large model (`Mechanics.sparse`)
+Newton's step comes, by default, from the sparse augmented system on the coordinates instead
+of K and Q on the DOFs (`static_augmented`: the same step to round-off, without DF and the
+dense tangent in the iterations, and without projecting the iterates onto the constraints;
+`augmented` chooses).
 """
 
 from __future__ import annotations
@@ -205,7 +207,7 @@ def static_equilibrium(model: Model, *, loads: np.ndarray | None = None, load_st
         Evaluate the balance and its tangent through the compiled engine (True:
         `static_engine`) or through the numpy `Mechanics`, the plain reference (False).
         Default: the engine where it is the faster (`static_engine.preferred`: from 300
-        free coordinates, up to 300 DOFs). A model the engine does not take
+        free coordinates). A model the engine does not take
         (`static_engine.supports`), and an unloaded one (one Newton step, module
         docstring), take the numpy path either way.
     augmented : bool, optional
@@ -359,8 +361,9 @@ def curvature_step(before: np.ndarray, q: np.ndarray, step: np.ndarray,
 def _newton(balance, config, load_factor, loads, values, prescribed_values, step_tolerance,
             max_iterations, *, curvature=None):
     """Newton's method at one load factor from config (a solved configuration: its q and
-    x); balance: the engine's (`static_engine.EngineBalance`), the numpy `_PlainBalance` or
-    the augmented `static_augmented.AugmentedBalance` (its own step on the free DOFs);
+    x); balance: the engine's (`static_engine.EngineBalance`; its own step on the free DOFs
+    where it steps sparse), the numpy `_PlainBalance` or the augmented
+    `static_augmented.AugmentedBalance` (its own step on the free DOFs);
     values: the inputs' port values (N, N m); prescribed_values (n_kinematic,) the kinematic
     inputs' (m, rad), reached in the first step; step_tolerance (NDOF,) the largest
     converged |dq_j| (m or rad); curvature, if given, (q0 (NDOF,), h2 / h1): the equilibrium
@@ -374,7 +377,7 @@ def _newton(balance, config, load_factor, loads, values, prescribed_values, step
         # Q - K dq = 0 on the DOFs proper, dq_k the move of the prescribed values
         dq = np.zeros(model.ndof)
         dq[prescribed] = prescribed_values - config.q[prescribed]
-        if isinstance(balance, AugmentedBalance):
+        if isinstance(balance, AugmentedBalance) or getattr(balance, "sparse", False):
             dq[free] = balance.free_step(config, dq)
         else:
             Q, K = balance.residual_and_tangent(config)

@@ -87,6 +87,9 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          last stage force's state, for `input_response` (`stage_force`);
                          with the Newton operations only
     NEWTON_FORCE_SOLVE   v = [r1; hg g]; s = hg: NEWTON_SOLVE with the velocity half a force
+    STATIC_STEP          q, qdot (zeros), out (2 NDOF,): the statics' Newton step [dq; Q] on
+                         the sparse Newton matrix's saddle-point system (`static_step`;
+                         the statics' augmented packing with dims[NEWTON_SPARSE] = 1)
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
@@ -117,7 +120,7 @@ ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
  OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
  OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS, OP_BEAM_MASSES,
- OP_FORMED_RATES, OP_STAGE_FORCE, OP_NEWTON_FORCE_SOLVE) = range(41)
+ OP_FORMED_RATES, OP_STAGE_FORCE, OP_NEWTON_FORCE_SOLVE, OP_STATIC_STEP) = range(42)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STAGE_FORCE,
                      OP_NEWTON_FORCE_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
