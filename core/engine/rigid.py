@@ -99,6 +99,8 @@ class RigidPacking:
         self.touching = []  # (packed group index, element index, z-coordinates)
         self.groups_m = [group.coordinate_index.shape[1] for group in groups]
         self.element_offsets = []
+        # as lists: the loop below walks them entry by entry
+        slave_of, dependencies = self.slave_index.tolist(), layout.dependencies.tolist()
         de_size = mass_size = z_size = term_size = offset = 0
         for gp, group in enumerate(groups):
             n, m = group.coordinate_index.shape
@@ -108,14 +110,13 @@ class RigidPacking:
             of = np.full(n, -1, dtype=np.int64)
             element_of.append(of)
             for i in np.flatnonzero(np.any(is_slave[group.coordinate_index], axis=1)).tolist():
-                coords = group.coordinate_index[i]
                 z = []
                 pairs = np.full((m, DEPENDENCIES, 2), -2, dtype=np.int64)
-                for a, c in enumerate(coords):
-                    s = self.slave_index[c]
+                for a, c in enumerate(group.coordinate_index[i].tolist()):
+                    s = slave_of[c]
                     sources = ([(c, -1)] if s < 0 else
                                [(d, s * DEPENDENCIES + j)
-                                for j, d in enumerate(layout.dependencies[s]) if d >= 0])
+                                for j, d in enumerate(dependencies[s]) if d >= 0])
                     for u, (d, w) in enumerate(sources):
                         if d not in z:
                             z.append(d)
@@ -180,14 +181,13 @@ class RigidPacking:
         m, mz = len(coords), row[E_MZ]
         W = (self.layout.weights(x) if weights is None else weights).ravel()
         pairs = self.terms[row[E_TERM_OFFSET]: row[E_TERM_OFFSET] + m * DEPENDENCIES * 2]
+        column, w = pairs[0::2], pairs[1::2]  # per (a, u): T_e[a, column] += 1 or W[w]
+        a = np.repeat(np.arange(m), DEPENDENCIES)
+        used = w >= -1
         T = np.zeros((m, mz))
-        for a in range(m):
-            for u in range(DEPENDENCIES):
-                zl, w = pairs[(a * DEPENDENCIES + u) * 2: (a * DEPENDENCIES + u) * 2 + 2]
-                if w == -1:
-                    T[a, zl] += 1.0
-                elif w >= 0:
-                    T[a, zl] += W[w]
+        # the sums in (a, u) order, one entry after the other, as the kernels add them
+        np.add.at(T, (a[used], column[used]),
+                  np.where(w[used] == -1, 1.0, W[np.maximum(w[used], 0)]))
         return T
 
     def ints(self):

@@ -81,12 +81,14 @@ class SparseFactors:
             x0 = packing.layout.fill(x0)
         position = {id(group): gp for gp, (group, _) in enumerate(groups)}
         de_rows, de_cols, de_index, de_values = [], [], [], []
+        jacobians = {}  # id(group): its elements' De (n, k, m) at x0
         for group, offset in groups:
             n, m = group.coordinate_index.shape
             k = group.deformation_index.shape[1]
             if not (n and k):
                 continue
             _, local = group.kind.deformations(group.local(x0), group.reference, order=1)
+            jacobians[id(group)] = local
             r = np.broadcast_to(row_of_def[group.deformation_index][:, :, None], (n, k, m))
             c = np.broadcast_to(col_of_coord[group.coordinate_index][:, None, :], (n, k, m))
             if rigid:  # a touching element's entries come from its De_z (below)
@@ -105,9 +107,8 @@ class SparseFactors:
             if element[E_DE_OFFSET] < 0:  # no rows
                 continue
             coords = group.coordinate_index[i]
-            _, local = group.kind.deformations(x0[coords][None], _one(group.reference, i),
-                                               order=1)
-            De_z = local[0] @ packing.element_transform(gp, i, coords, x0, weights=W0)
+            De_z = jacobians[id(group)][i] @ packing.element_transform(gp, i, coords, x0,
+                                                                       weights=W0)
             de_rows.append(np.repeat(row_of_def[group.deformation_index[i]], z.size))
             de_cols.append(np.tile(col_of_coord[z], k))
             de_index.append(rde_base + element[E_DE_OFFSET] + np.arange(k * z.size))
@@ -272,8 +273,3 @@ def _transform(layout, x, nx):
 def _touching(packing, gp, n):
     """Per element of packed group gp (n of them): whether it touches a slave."""
     return packing.element_of[packing.element_offsets[gp]:][:n] >= 0
-
-
-def _one(reference, i):
-    """The reference of element i of a group, as a group of one."""
-    return {key: np.asarray(value)[i: i + 1] for key, value in reference.items()}
