@@ -1,5 +1,5 @@
 """The packing's vectorised constructions against plain ones (core/engine/packing.py, rigid.py,
-orders.py, sparse_packing.py, core/mechanics/rigid_bodies.py, core/numerics/sparse_lu.py).
+orders.py, sparse_packing.py, core/mechanics/rigid_bodies.py, core/numerics/pattern_slots.py).
 
 Packing a model builds its rigid clusters' tables, J's and the augmented system's banded
 orders, the stressed S and D and the sparse LUs' reference values with array operations. Each

@@ -44,11 +44,10 @@ its banded LU, `banded.py`) and the next `refactor` returns REJECTED until a `fa
 manipulator's J and augmented system, the transposed solve, the re-pivoting and the capacity.
 """
 
-from bisect import bisect_left
-
 import numpy as np
 
 from .jit import kernel
+from .pattern_slots import PatternSlots
 
 THRESHOLD = 0.1  # smallest |pivot| / max |column below it| a kept pivot may have
 REJECTED = -1.0  # a kept pivot failed (`refactor`), or the matrix is singular (`factor`)
@@ -147,38 +146,14 @@ class StaticLU:
         position_column = np.argsort(pcol)
         Ap = self.ints[H_SIZE: H_SIZE + n + 1]
         Ai = self.ints[H_SIZE + n + 1: H_SIZE + n + 1 + self.ints[H_NNZ_A]]
-        self._keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(Ap)) * n + Ai
-        self._position_column, self._pcol, self._Ai, self._Ap = position_column, pcol, Ai, Ap
-        self._key_list = self._column_list = None  # `_one_slot`'s lists, made when asked
+        self._slots = PatternSlots(np.repeat(np.arange(n, dtype=np.int64), np.diff(Ap)) * n
+                                   + Ai, position_column)
+        self._pcol, self._Ai, self._Ap = pcol, Ai, Ap
 
     def slot(self, rows, columns):
         """The positions in `floats` (A's values) of A's entries (rows, columns) (arrays of
-        int, any shape); ValueError if an entry is not in the pattern."""
-        rows, columns = np.asarray(rows, dtype=np.int64), np.asarray(columns, dtype=np.int64)
-        if rows.size == 1:  # one entry (the packings ask for many one by one): no array work
-            return np.full(rows.shape, self._one_slot(int(rows.flat[0]),
-                                                      int(columns.flat[0])), dtype=np.int64)
-        keys = self._position_column[columns] * self.n + rows
-        slots = np.searchsorted(self._keys, keys)
-        missing = (slots >= self._keys.size) | (
-            self._keys[np.minimum(slots, self._keys.size - 1)] != keys)
-        if np.any(missing):
-            first = np.flatnonzero(missing.reshape(-1))[0]
-            raise ValueError(f"entry ({rows.reshape(-1)[first]}, {columns.reshape(-1)[first]})"
-                             " is not in the pattern")
-        return slots
-
-    def _one_slot(self, row, column):
-        """`slot` of one entry, by bisection of the keys as a list (made at the first call)."""
-        if self._key_list is None:
-            self._key_list = self._keys.tolist()
-            self._column_list = self._position_column.tolist()
-        key = self._column_list[column] * self.n + row if 0 <= column < self.n else -1
-        at = bisect_left(self._key_list, key)
-        if key < 0 or row < 0 or row >= self.n or at == len(self._key_list) \
-                or self._key_list[at] != key:
-            raise ValueError(f"entry ({row}, {column}) is not in the pattern")
-        return at
+        int, any shape); ValueError if an entry is not in the pattern (`PatternSlots`)."""
+        return self._slots(rows, columns)
 
     def set_matrix(self, dense, floats=None):
         """Put the values of a dense (n, n) A on the pattern into `floats` (default: this
