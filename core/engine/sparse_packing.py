@@ -226,7 +226,7 @@ def mass_entries_at(model, x, rows, columns, layout=None):
     for group, Mp in inertia.groups:
         n, m = group.coordinate_index.shape
         # the massive elements: a massless one adds zeros, which leave every sum as it is
-        massive = np.flatnonzero(np.any(Mp.reshape(n, -1), axis=1))
+        massive = np.flatnonzero(np.any(Mp, axis=(1, 2)))  # Mp (n, P, P)
         _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
         Dp, Mp = Dp[massive], Mp[massive]
         pairs = assembly.pair_index(group, nx).reshape(n, m * m)[massive]
