@@ -70,9 +70,11 @@ def preferred(model: Model, mechanics: Mechanics) -> bool:
     statics prefer it (`static_engine.preferred`) and have packed it (`packed`: a loaded
     equilibrium, which they solved through the engine). The linearisation then costs two
     operations on that packed model (0.006 s against the numpy path's 0.029 s on
-    manipulator_control); packing the engine for one linearisation would cost more than it
-    saves (0.3 s with the engine loaded, 0.7 s with its import and first calls:
-    docs/benchmarks.md, 2026-11-29), so an unloaded model, whose statics took the numpy
+    manipulator_control). Packing the engine for one linearisation costs more than it
+    saves on every model of the statics' window: the engine with its packing (the engine
+    imported) took 1.9 to 2.0 times numpy's CPU on the three 75-DOF manipulators (42
+    against 21 ms) and 2.7 times on the spatial BEAM cantilevers of 258 and 300 DOFs
+    (docs/benchmarks.md, 2026-12-01), so an unloaded model, whose statics took the numpy
     path, is linearised there too."""
     return static_engine.preferred(model) and packed(model) and supports(model, mechanics)
 

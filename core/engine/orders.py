@@ -28,24 +28,27 @@ def constraint_order(model, free, rows, row_of_def, col_of_coord, packing):
     from ..numerics.graph_orders import matching
 
     nf = free.size
-    entries = []
+    r, c = [], []
     for gp, group in enumerate(model.groups):
-        for coords, defs in zip(packing.pattern_coordinates(gp, group),
-                                group.deformation_index, strict=True):
-            cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
-            for d in defs:
-                if row_of_def[d] >= 0:
-                    entries.extend((row_of_def[d], c) for c in cols)
+        cols = pattern_columns(packing, gp, group, col_of_coord)
+        of_row = row_of_def[group.deformation_index]
+        rr = np.broadcast_to(of_row[:, :, None], of_row.shape + cols.shape[1:])
+        cc = np.broadcast_to(cols[:, None, :], rr.shape)
+        inside = (rr >= 0) & (cc >= 0)
+        r.append(rr[inside])
+        c.append(cc[inside])
     n_def = rows.size
-    for j, c in enumerate(model.dof_coordinates):
+    for j, coordinate in enumerate(model.dof_coordinates):
         s = packing.units[j]
-        sources = [c] if s < 0 else packing.layout.dependencies[s]
-        entries.extend((n_def + j, col_of_coord[d]) for d in sources
-                       if d >= 0 and col_of_coord[d] >= 0)
+        sources = np.array([coordinate]) if s < 0 else packing.layout.dependencies[s]
+        sources = col_of_coord[sources[sources >= 0]]
+        sources = sources[sources >= 0]
+        r.append(np.full(sources.size, n_def + j, dtype=np.int64))
+        c.append(sources)
     identity = np.arange(nf, dtype=np.int64)
-    if nf == 0 or not entries:
+    r, c = _unique_entries(r, c, nf)
+    if nf == 0 or not r.size:
         return identity, identity.copy(), max(nf - 1, 0), max(nf - 1, 0)
-    r, c = np.array(entries, dtype=np.int64).T
     column_of_row = matching(r, c, nf)
     if np.any(column_of_row < 0):
         return identity, identity.copy(), nf - 1, nf - 1
@@ -64,29 +67,59 @@ def augmented_order(model, nf, n_rigid, row_of_def, col_of_coord, groups, inerti
     from ..numerics.banded import bandwidth_order
 
     na = nf + n_rigid
-    entries = [(a, a) for a in range(nf)]
+    r, c = [np.arange(nf, dtype=np.int64)], [np.arange(nf, dtype=np.int64)]
     for gp, group in enumerate(groups):
         if id(group) not in inertia:
             continue
-        for coords in packing.pattern_coordinates(gp, group):
-            cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
-            entries.extend((a, b) for a in cols for b in cols)
+        cols = pattern_columns(packing, gp, group, col_of_coord)
+        a = np.broadcast_to(cols[:, :, None], cols.shape + cols.shape[1:])
+        b = np.broadcast_to(cols[:, None, :], a.shape)
+        inside = (a >= 0) & (b >= 0)
+        r.append(a[inside])
+        c.append(b[inside])
     for gp, group in enumerate(model.groups):
-        for coords, defs in zip(packing.pattern_coordinates(gp, group),
-                                group.deformation_index, strict=True):
-            cols = [col_of_coord[c] for c in coords if col_of_coord[c] >= 0]
-            for d in defs:
-                o = row_of_def[d]
-                if 0 <= o < n_rigid:
-                    entries.extend((nf + o, c) for c in cols)
-                    entries.extend((c, nf + o) for c in cols)
+        cols = pattern_columns(packing, gp, group, col_of_coord)
+        of_row = row_of_def[group.deformation_index]
+        o = np.broadcast_to(of_row[:, :, None], of_row.shape + cols.shape[1:])
+        cc = np.broadcast_to(cols[:, None, :], o.shape)
+        inside = (o >= 0) & (o < n_rigid) & (cc >= 0)
+        r += [nf + o[inside], cc[inside]]
+        c += [cc[inside], nf + o[inside]]
     if na == 0:
         return np.zeros(0, dtype=np.int64), 0, 0
-    r, c = np.array(entries, dtype=np.int64).T
+    r, c = _unique_entries(r, c, na)
     order, kl, ku = bandwidth_order(r, c, na)
     position = np.empty(na, dtype=np.int64)
     position[order] = np.arange(na)
     return position, kl, ku
+
+
+def pattern_columns(packing, gp, group, col_of_coord):
+    """Per element of packed group gp, the columns (free-coordinate positions) its entries
+    land on, -1 padded (n, width): its own coordinates', or a touching element's
+    z-coordinates' (`RigidPacking.pattern_coordinates`, as one array)."""
+    cols = col_of_coord[group.coordinate_index]
+    n, m = cols.shape
+    of = packing.element_of[packing.element_offsets[gp]:][:n]
+    touching = np.flatnonzero(of >= 0)
+    zs = [col_of_coord[packing.touching[of[i]][2]] for i in touching]
+    out = np.full((n, max([m] + [z.size for z in zs])), -1, dtype=np.int64)
+    out[:, :m] = cols
+    for i, z in zip(touching, zs, strict=True):
+        out[i] = -1
+        out[i, :z.size] = z
+    return out
+
+
+def _unique_entries(rows, columns, n):
+    """The distinct entries (row, column) of the parts `rows`, `columns` (lists of int
+    arrays) of an (n, n) pattern, row by row: the orders see each node's neighbours as a set,
+    so duplicates change nothing but their cost."""
+    rows = np.concatenate(rows).astype(np.int64) if rows else np.zeros(0, dtype=np.int64)
+    columns = (np.concatenate(columns).astype(np.int64) if columns
+               else np.zeros(0, dtype=np.int64))
+    keys = np.unique(rows * max(n, 1) + columns)
+    return keys // max(n, 1), keys % max(n, 1)
 
 
 class FactorPlan:

@@ -147,11 +147,26 @@ class Context:
         self.plan = FactorPlan(model, self.groups, self.topology, self.rigid,
                                augmented=augmented, sparse=sparse)
         self.stressed = model.stressed_deformations
-        S, D = assembly.stiffness_and_damping(model)
-        self.S = S[np.ix_(self.stressed, self.stressed)]
-        self.D = D[np.ix_(self.stressed, self.stressed)]
+        self.S, self.D = stressed_stiffness_and_damping(model, self.stressed)
         self.counts = counts(self)
         self.newton = newton_packing.NewtonPacking.analyse(self)  # or None: the dense one
+
+
+def stressed_stiffness_and_damping(model, stressed):
+    """S and D (ns, ns) on the stressed deformations, N/m and N s/m: the rows and columns
+    `stressed` of `assembly.stiffness_and_damping`'s (NE, NE) ones, without forming those."""
+    position = np.full(len(model.deformation_names), -1, dtype=np.int64)
+    position[stressed] = np.arange(stressed.size)
+    S, D = np.zeros((stressed.size, stressed.size)), np.zeros((stressed.size, stressed.size))
+    for group in model.groups:
+        at = position[group.deformation_index]
+        rows = np.broadcast_to(at[:, :, None], at.shape + at.shape[1:])
+        cols = np.broadcast_to(at[:, None, :], rows.shape)
+        inside = (rows >= 0) & (cols >= 0)
+        for matrix, block in ((S, group.kind.stiffness(group.reference, group.properties)),
+                              (D, group.kind.damping(group.reference, group.properties))):
+            matrix[rows[inside], cols[inside]] = np.broadcast_to(block, rows.shape)[inside]
+    return S, D
 
 
 def counts(c):

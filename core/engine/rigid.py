@@ -99,23 +99,24 @@ class RigidPacking:
         self.touching = []  # (packed group index, element index, z-coordinates)
         self.groups_m = [group.coordinate_index.shape[1] for group in groups]
         self.element_offsets = []
-        de_size = mass_size = z_size = term_size = 0
+        # as lists: the loop below walks them entry by entry
+        slave_of, dependencies = self.slave_index.tolist(), layout.dependencies.tolist()
+        de_size = mass_size = z_size = term_size = offset = 0
         for gp, group in enumerate(groups):
             n, m = group.coordinate_index.shape
             k = group.deformation_index.shape[1]
-            self.element_offsets.append(len(element_of))
-            for i in range(n):
-                coords = group.coordinate_index[i]
-                if not np.any(is_slave[coords]):
-                    element_of.append(-1)
-                    continue
+            self.element_offsets.append(offset)
+            offset += n
+            of = np.full(n, -1, dtype=np.int64)
+            element_of.append(of)
+            for i in np.flatnonzero(np.any(is_slave[group.coordinate_index], axis=1)).tolist():
                 z = []
                 pairs = np.full((m, DEPENDENCIES, 2), -2, dtype=np.int64)
-                for a, c in enumerate(coords):
-                    s = self.slave_index[c]
+                for a, c in enumerate(group.coordinate_index[i].tolist()):
+                    s = slave_of[c]
                     sources = ([(c, -1)] if s < 0 else
                                [(d, s * DEPENDENCIES + j)
-                                for j, d in enumerate(layout.dependencies[s]) if d >= 0])
+                                for j, d in enumerate(dependencies[s]) if d >= 0])
                     for u, (d, w) in enumerate(sources):
                         if d not in z:
                             z.append(d)
@@ -132,14 +133,15 @@ class RigidPacking:
                 if id(group) in inertia and np.any(inertia[id(group)][i]):  # massless: none
                     row[E_MASS_OFFSET] = mass_size
                     mass_size += mz * mz
-                element_of.append(len(elements))
+                of[i] = len(elements)
                 elements.append(row)
                 self.touching.append((gp, i, np.array(z, dtype=np.int64)))
                 zs.append(np.array(z, dtype=np.int64))
                 terms.append(pairs.ravel())
                 z_size += mz
                 term_size += pairs.size
-        self.element_of = np.array(element_of, dtype=np.int64)
+        self.element_of = (np.concatenate(element_of) if element_of
+                           else np.zeros(0, dtype=np.int64))
         self.elements = (np.array(elements, dtype=np.int64).ravel() if elements
                          else np.zeros(0, dtype=np.int64))
         self.z = np.concatenate(zs) if zs else np.zeros(0, dtype=np.int64)
@@ -179,14 +181,13 @@ class RigidPacking:
         m, mz = len(coords), row[E_MZ]
         W = (self.layout.weights(x) if weights is None else weights).ravel()
         pairs = self.terms[row[E_TERM_OFFSET]: row[E_TERM_OFFSET] + m * DEPENDENCIES * 2]
+        column, w = pairs[0::2], pairs[1::2]  # per (a, u): T_e[a, column] += 1 or W[w]
+        a = np.repeat(np.arange(m), DEPENDENCIES)
+        used = w >= -1
         T = np.zeros((m, mz))
-        for a in range(m):
-            for u in range(DEPENDENCIES):
-                zl, w = pairs[(a * DEPENDENCIES + u) * 2: (a * DEPENDENCIES + u) * 2 + 2]
-                if w == -1:
-                    T[a, zl] += 1.0
-                elif w >= 0:
-                    T[a, zl] += W[w]
+        # the sums in (a, u) order, one entry after the other, as the kernels add them
+        np.add.at(T, (a[used], column[used]),
+                  np.where(w[used] == -1, 1.0, W[np.maximum(w[used], 0)]))
         return T
 
     def ints(self):
@@ -226,15 +227,6 @@ class RigidPacking:
                 "rigid_local": np.zeros(max((2 * max_p + self.max_mz + self.max_m) * padded
                                             + self.max_mz,
                                             BODY_SCRATCH if self.bodies.folded else 0))}
-
-    def pattern_coordinates(self, gp, group):
-        """Per element of packed group gp, the coordinates its entries land on in the
-        systems: its own, or a touching element's z-coordinates."""
-        out = []
-        for i, coords in enumerate(group.coordinate_index):
-            t = self.element_of[self.element_offsets[gp] + i]
-            out.append(coords if t < 0 else self.touching[t][2])
-        return out
 
 
 def positions_among(free, coordinates):

@@ -31,7 +31,7 @@ import numpy as np
 from ..mechanics import assembly
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics.sparse_lu import StaticLU
-from .rigid import E_DE_OFFSET, E_MASS_OFFSET
+from .rigid import E_DE_OFFSET, E_MASS_OFFSET, ELEMENT_WIDTH
 
 # banded multiplications (the LU of J plus that of the augmented system) from which the
 # sparse LU is analysed and weighed against the banded one: the built-in stages and
@@ -81,25 +81,25 @@ class SparseFactors:
             x0 = packing.layout.fill(x0)
         position = {id(group): gp for gp, (group, _) in enumerate(groups)}
         de_rows, de_cols, de_index, de_values = [], [], [], []
+        jacobians = {}  # id(group): its elements' De (n, k, m) at x0
         for group, offset in groups:
             n, m = group.coordinate_index.shape
             k = group.deformation_index.shape[1]
             if not (n and k):
                 continue
             _, local = group.kind.deformations(group.local(x0), group.reference, order=1)
+            jacobians[id(group)] = local
             r = np.broadcast_to(row_of_def[group.deformation_index][:, :, None], (n, k, m))
             c = np.broadcast_to(col_of_coord[group.coordinate_index][:, None, :], (n, k, m))
             if rigid:  # a touching element's entries come from its De_z (below)
-                gp = position[id(group)]
-                touching = np.array([packing.element_row(gp, i) is not None
-                                     for i in range(n)])
-                r = np.where(touching[:, None, None], -1, r)
+                r = np.where(_touching(packing, position[id(group)], n)[:, None, None], -1, r)
             de_rows.append(r.ravel())
             de_cols.append(c.ravel())
             de_index.append(offset + np.arange(n * k * m))
             de_values.append(np.asarray(local, dtype=float).ravel())
         # the touching elements' De_z, indexed after the De slot and the unit entries
         rde_base = de_size + n_xdof
+        W0 = packing.layout.weights(x0) if rigid else None  # T's weights at x0
         for gp, i, z in (packing.touching if rigid else ()):
             group = groups[gp][0]
             element = packing.element_row(gp, i)
@@ -107,9 +107,8 @@ class SparseFactors:
             if element[E_DE_OFFSET] < 0:  # no rows
                 continue
             coords = group.coordinate_index[i]
-            _, local = group.kind.deformations(x0[coords][None], _one(group.reference, i),
-                                               order=1)
-            De_z = local[0] @ packing.element_transform(gp, i, coords, x0)
+            De_z = jacobians[id(group)][i] @ packing.element_transform(gp, i, coords, x0,
+                                                                       weights=W0)
             de_rows.append(np.repeat(row_of_def[group.deformation_index[i]], z.size))
             de_cols.append(np.tile(col_of_coord[z], k))
             de_index.append(rde_base + element[E_DE_OFFSET] + np.arange(k * z.size))
@@ -121,7 +120,6 @@ class SparseFactors:
         # the unit rows of the DOF coordinates: T's row on a slave's
         unit_rows, unit_cols, unit_values, unit_index = [], [], [], []
         slave_base = rde_base + (packing.de_size if rigid else 0)
-        W0 = packing.layout.weights(x0) if rigid else None
         for j, coordinate in enumerate(model.dof_coordinates):
             s = packing.units[j] if rigid else -1
             if s < 0:
@@ -148,11 +146,6 @@ class SparseFactors:
         self.constraint_map[unit_index] = self.constraints.slot(unit_rows, unit_cols)
         # the augmented system: M_ff, J_o beside it and below it
         rigid_rows = inside & (r < n_rigid)
-        mass = assembly.Inertia(model).mass_matrix(x0)
-        if rigid:
-            T = packing.layout.transform(x0, model.nx)
-            mass = T.T @ mass @ T
-        mass = mass[np.ix_(free, free)]
         mass_entries = [(np.arange(nf), np.arange(nf))]
         rigid_mass = []
         for group in inertia_groups:
@@ -160,13 +153,11 @@ class SparseFactors:
             n, m = cols.shape
             if rigid:
                 gp = position[id(group)]
-                for i in range(n):
-                    element = packing.element_row(gp, i)
-                    if element is not None:
-                        cols[i] = -1
-                    if element is not None and element[E_MASS_OFFSET] >= 0:
-                        z = col_of_coord[packing.touching[packing.element_of[
-                            packing.element_offsets[gp] + i]][2]]
+                cols[_touching(packing, gp, n)] = -1
+                of = packing.element_of[packing.element_offsets[gp]:][:n]
+                for t in of[of >= 0]:
+                    if packing.elements[t * ELEMENT_WIDTH + E_MASS_OFFSET] >= 0:
+                        z = col_of_coord[packing.touching[t][2]]
                         rigid_mass.append((np.repeat(z, z.size), np.tile(z, z.size)))
             mass_entries.append((np.broadcast_to(cols[:, :, None], (n, m, m)).ravel(),
                                  np.broadcast_to(cols[:, None, :], (n, m, m)).ravel()))
@@ -176,8 +167,9 @@ class SparseFactors:
         in_mass = (mr >= 0) & (mc >= 0)
         ar = np.concatenate([mr[in_mass], nf + r[rigid_rows], c[rigid_rows]])
         ac = np.concatenate([mc[in_mass], c[rigid_rows], nf + r[rigid_rows]])
-        dense_values = np.concatenate([mass[mr[in_mass], mc[in_mass]], values[rigid_rows],
-                                       values[rigid_rows]])
+        mass = mass_entries_at(model, x0, free[mr[in_mass]], free[mc[in_mass]],
+                               packing.layout if rigid else None)
+        dense_values = np.concatenate([mass, values[rigid_rows], values[rigid_rows]])
         # unique entries: the mass blocks of neighbouring elements overlap, and the values
         # are those of the assembled matrix
         _, first = np.unique(ar * (nf + n_rigid) + ac, return_index=True)
@@ -217,6 +209,67 @@ def analyse(model, groups, inertia_groups, free, rows, row_of_def, col_of_coord,
         return None
 
 
-def _one(reference, i):
-    """The reference of element i of a group, as a group of one."""
-    return {key: np.asarray(value)[i: i + 1] for key, value in reference.items()}
+def mass_entries_at(model, x, rows, columns, layout=None):
+    """Entries (rows[i], columns[i]) of the mass matrix M(x) (`assembly.Inertia.mass_matrix`),
+    or, with the rigid clusters' `layout`, of T^T M T (T = `RigidLayout.transform`): kg (kg m,
+    kg m^2 on rotations), without forming an (NX, NX) matrix.
+
+    M's entries are summed as `mass_matrix` sums them (the lumped mass, then each group's
+    elements in their order), so they are M's to the bit; T^T M T is a sparse product whose
+    entries with several terms differ from a dense (BLAS) product's by round-off (1e-16 of
+    the entry)."""
+    from scipy.sparse import csr_matrix
+
+    nx = model.nx
+    inertia = assembly.Inertia(model)
+    keys, parts = [np.arange(nx, dtype=np.int64) * (nx + 1)], []
+    for group, Mp in inertia.groups:
+        n, m = group.coordinate_index.shape
+        # the massive elements: a massless one adds zeros, which leave every sum as it is
+        massive = np.flatnonzero(np.any(Mp, axis=(1, 2)))  # Mp (n, P, P)
+        _, Dp = group.kind.inertia_points(group.local(x), group.reference, order=1)
+        Dp, Mp = Dp[massive], Mp[massive]
+        pairs = assembly.pair_index(group, nx).reshape(n, m * m)[massive]
+        unique, at = np.unique(pairs, return_inverse=True)
+        # each pair's sum in the elements' order, as `scatter_matrix`'s bincount sums it
+        sums = np.bincount(at.ravel(), weights=np.einsum("npi,npr,nrj->nij", Dp, Mp,
+                                                          Dp).ravel(), minlength=unique.size)
+        keys.append(unique)
+        parts.append((unique, sums))
+    keys = np.unique(np.concatenate(keys))
+    values = np.zeros(keys.size)
+    values[np.searchsorted(keys, np.arange(nx, dtype=np.int64) * (nx + 1))] = inertia.lumped
+    for unique, sums in parts:  # M += each group's sums (zero elsewhere), as mass_matrix
+        added = np.zeros(keys.size)
+        added[np.searchsorted(keys, unique)] = sums
+        values += added
+    rows, columns = np.asarray(rows, dtype=np.int64), np.asarray(columns, dtype=np.int64)
+    if layout is None:  # M's entries; zero where no element and no lumped mass is
+        wanted = rows * nx + columns
+        at = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
+        return np.where(keys[at] == wanted, values[at], 0.0)
+    M = csr_matrix((values, (keys // nx, keys % nx)), shape=(nx, nx))
+    T = _transform(layout, x, nx)
+    TMT = (T.T @ M @ T).tocsr()
+    return np.asarray(TMT[rows, columns]).ravel()
+
+
+def _transform(layout, x, nx):
+    """`RigidLayout.transform` as a CSR matrix: the identity on the coordinates but the
+    slaves', whose rows hold T's weights on their masters."""
+    from scipy.sparse import csr_matrix
+
+    slave = np.zeros(nx, dtype=bool)
+    slave[layout.slave_coordinates] = True
+    kept = np.flatnonzero(~slave)
+    W = layout.weights(x)
+    s, d = np.nonzero(layout.dependencies >= 0)
+    rows = np.concatenate([kept, layout.slave_coordinates[s]])
+    columns = np.concatenate([kept, layout.dependencies[s, d]])
+    return csr_matrix((np.concatenate([np.ones(kept.size), W[s, d]]), (rows, columns)),
+                      shape=(nx, nx))
+
+
+def _touching(packing, gp, n):
+    """Per element of packed group gp (n of them): whether it touches a slave."""
+    return packing.element_of[packing.element_offsets[gp]:][:n] >= 0

@@ -69,20 +69,26 @@ def find_clusters(model):
             name = parent[name]
         return name
 
-    edges = []
+    edges, others = [], []  # others: the non-rigid elements whose rows are all zero
     for g, group in enumerate(model.groups):
-        if group.kind.type_name not in RIGID_KINDS:
+        defs = group.deformation_index
+        rigid_kind = group.kind.type_name in RIGID_KINDS
+        if not (rigid_kind or defs.shape[1]):
             continue
-        for i, (coords, defs) in enumerate(zip(group.coordinate_index,
-                                               group.deformation_index, strict=True)):
-            if np.all(model.deformation_status[defs] == ZERO):
-                names = _element_nodes(model, coords)
-                edges.append((g, i, names))
-                for name in names[1:]:
-                    parent[root(name)] = root(names[0])
-    members = {}
-    for _, _, names in edges:
-        members.setdefault(root(names[0]), set()).update(names)
+        zero = np.all(model.deformation_status[defs] == ZERO, axis=1)
+        for i in np.flatnonzero(zero).tolist():
+            names = _element_nodes(model, group.coordinate_index[i])
+            if not rigid_kind:
+                others.append((g, i, set(names)))
+                continue
+            edges.append((g, i, names))
+            for name in names[1:]:
+                parent[root(name)] = root(names[0])
+    members, edges_of = {}, {}
+    for g, i, names in edges:
+        key = root(names[0])
+        members.setdefault(key, set()).update(names)
+        edges_of.setdefault(key, []).append((g, i))
     inertia_nodes = {model.coordinate_node[index[0]] for index, _ in model.node_inertias}
     status, lumped = model.coordinate_status, model.lumped_mass
     clusters = []
@@ -103,16 +109,8 @@ def find_clusters(model):
             continue
         slaves = tuple(name for name in ordered if name not in masters)
         slave_set = set(slaves)
-        internal = [(g, i) for g, i, names in edges if root(names[0]) == key]
-        for g, group in enumerate(model.groups):  # the slaves' normalisations and the like
-            if group.kind.type_name in RIGID_KINDS:
-                continue
-            for i, (coords, defs) in enumerate(zip(group.coordinate_index,
-                                                   group.deformation_index, strict=True)):
-                names = _element_nodes(model, coords)
-                if (defs.size and np.all(model.deformation_status[defs] == ZERO)
-                        and set(names) <= slave_set):
-                    internal.append((g, i))
+        # the slaves' normalisations and the like
+        internal = edges_of[key] + [(g, i) for g, i, names in others if names <= slave_set]
         removed_coordinates = sum(len(nodes[name].coordinates) for name in slaves)
         removed_rows = sum(model.groups[g].deformation_index.shape[1] for g, _ in internal)
         if removed_coordinates != removed_rows:
@@ -145,26 +143,28 @@ class RigidLayout:
         nodes = {node.name: node for node in model.nodes}
         x0 = model.initial_coordinates.astype(float)
         kinds, own, trans, rot, data = [], [], [], [], []
+        rotations = []  # per spatial rotation slave: its row, its master's conjugate, coords
         for cluster in clusters:
             mt = np.array(nodes[cluster.master_translation].coordinates)
             mr = np.array(nodes[cluster.master_rotation].coordinates)
+            R0 = conjugate = None  # the master's, once per cluster
             for name in cluster.slaves:
                 node = nodes[name]
                 coords = np.array(node.coordinates)
                 row = np.zeros(48)
                 if model.dimension == 3 and node.kind == "translational":
                     kind = SPATIAL_TRANSLATION
-                    lam0 = x0[mr]
-                    R0 = np.einsum("kmij,i,j->km", ROTATION_TENSOR, lam0, lam0)
+                    if R0 is None:
+                        lam0 = x0[mr]
+                        R0 = np.einsum("kmij,i,j->km", ROTATION_TENSOR, lam0, lam0)
                     r = R0.T @ (x0[coords] - x0[mt])
                     row[:] = (2.0 * np.einsum("kmij,m->kij", ROTATION_TENSOR, r)).ravel()
                 elif model.dimension == 3:
                     kind = SPATIAL_ROTATION
-                    lam0 = x0[mr]
-                    conjugate = lam0 * np.array([1.0, -1.0, -1.0, -1.0]) / (lam0 @ lam0)
-                    relative = compose(conjugate, x0[coords])
-                    row[:16] = np.stack([compose(e, relative) for e in np.eye(4)],
-                                        axis=1).ravel()
+                    if conjugate is None:
+                        lam0 = x0[mr]
+                        conjugate = lam0 * np.array([1.0, -1.0, -1.0, -1.0]) / (lam0 @ lam0)
+                    rotations.append((len(data), conjugate, coords))  # Q below
                 elif node.kind == "translational":
                     kind = PLANAR_TRANSLATION
                     row[:2] = _planar(x0[mr[0]]).T @ (x0[coords] - x0[mt])
@@ -181,6 +181,11 @@ class RigidLayout:
         self.translation = np.array(trans, dtype=np.int64).reshape(-1, 3)
         self.rotation = np.array(rot, dtype=np.int64).reshape(-1, 4)
         self.data = np.array(data, dtype=float).reshape(-1, 48)
+        if rotations:  # Q's column k: e_k * relative, every slave's at once
+            rows, conjugates, coords = zip(*rotations, strict=True)
+            relative = compose(np.array(conjugates), x0[np.array(coords)])
+            Q = compose(np.eye(4)[None], relative[:, None, :])  # [s, k]: e_k * relative_s
+            self.data[list(rows), :16] = np.swapaxes(Q, 1, 2).reshape(-1, 16)
         slave_coordinates, dependencies = [], []
         for j, kind in enumerate(self.kinds):
             for a, c in enumerate(self.own[j]):

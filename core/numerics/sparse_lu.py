@@ -47,6 +47,7 @@ manipulator's J and augmented system, the transposed solve, the re-pivoting and 
 import numpy as np
 
 from .jit import kernel
+from .pattern_slots import PatternSlots
 
 THRESHOLD = 0.1  # smallest |pivot| / max |column below it| a kept pivot may have
 REJECTED = -1.0  # a kept pivot failed (`refactor`), or the matrix is singular (`factor`)
@@ -145,22 +146,14 @@ class StaticLU:
         position_column = np.argsort(pcol)
         Ap = self.ints[H_SIZE: H_SIZE + n + 1]
         Ai = self.ints[H_SIZE + n + 1: H_SIZE + n + 1 + self.ints[H_NNZ_A]]
-        self._keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(Ap)) * n + Ai
-        self._position_column, self._pcol, self._Ai, self._Ap = position_column, pcol, Ai, Ap
+        self._slots = PatternSlots(np.repeat(np.arange(n, dtype=np.int64), np.diff(Ap)) * n
+                                   + Ai, position_column)
+        self._pcol, self._Ai, self._Ap = pcol, Ai, Ap
 
     def slot(self, rows, columns):
         """The positions in `floats` (A's values) of A's entries (rows, columns) (arrays of
-        int, any shape); ValueError if an entry is not in the pattern."""
-        rows, columns = np.asarray(rows, dtype=np.int64), np.asarray(columns, dtype=np.int64)
-        keys = self._position_column[columns] * self.n + rows
-        slots = np.searchsorted(self._keys, keys)
-        missing = (slots >= self._keys.size) | (
-            self._keys[np.minimum(slots, self._keys.size - 1)] != keys)
-        if np.any(missing):
-            first = np.flatnonzero(missing.reshape(-1))[0]
-            raise ValueError(f"entry ({rows.reshape(-1)[first]}, {columns.reshape(-1)[first]})"
-                             " is not in the pattern")
-        return slots
+        int, any shape); ValueError if an entry is not in the pattern (`PatternSlots`)."""
+        return self._slots(rows, columns)
 
     def set_matrix(self, dense, floats=None):
         """Put the values of a dense (n, n) A on the pattern into `floats` (default: this
