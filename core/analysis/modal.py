@@ -12,9 +12,9 @@ problem -G0 phi = (1 / lambda) K0 phi so that a singular G0 (DOFs the load does 
 causes no trouble. Positive factors only, smallest first.
 
 K0 and G0 come from the compiled engine where the statics solved the equilibrium through it
-(`linear_engine.preferred`: a model in the statics' window, `static_engine.preferred`, from
-300 free coordinates up to 300 DOFs): K0 = DeF_s^T S DeF_s with DeF = De DF (the solution's
-De, the engine's DF), G0 = (K0 + G0 of OP_TANGENT at the equilibrium, qddot = 0) - K0,
+with the dense step, which packs its reduced form (`linear_engine.preferred`: from 300 free
+coordinates up to 240 DOFs, `static_engine`): K0 = DeF_s^T S DeF_s with DeF = De DF (the
+solution's De, the engine's DF), G0 = (K0 + G0 of OP_TANGENT at the equilibrium, qddot = 0) - K0,
 with the stress resultants of the reference load (`linear_engine.engine_matrices`, which
 holds the solution by its own De^T sigma). Elsewhere (smaller and larger models, kinematic
 inputs with actuators, gravity on element masses that hang on rotations) they come from the

@@ -144,8 +144,8 @@ def live_balance(model: Model) -> EngineBalance | None:
 
 
 def engine_balance(model: Model, *, sparse: bool | None = None) -> EngineBalance:
-    """The `EngineBalance` of `model`, packed once per live model and reused (its packing
-    takes 0.3 to 1 s on the 507-DOF manipulator; a model is not changed once built: a
+    """The `EngineBalance` of `model`, packed once per live model and reused (a packing
+    takes about 0.16 s of CPU on the 507-DOF manipulator; a model is not changed once built: a
     parameter study builds a model per parameter set). sparse: the step wanted (default
     `sparse_step`'s rule); a live balance that steps otherwise is packed again."""
     balance = _BALANCES.get(model)
