@@ -36,6 +36,20 @@ from the exact one while one step's input change moves the velocities by less th
 rtol of themselves (at the loop's rtol 1e-5: a million times; at rtol 1e-11, the tightest
 the tests run, by their own size).
 
+A caller that knows what error it can carry gives a bound instead (`refined_solve_within`):
+error weights w (NDOF,) on the response's accelerations d qddot, the solve accepted also when
+the same two estimates, taken on the correction's d qddot in sqrt(mean((w_j e_j)^2)), are at
+most 1 (`weighted_size`). The ESDIRK gives w from its next step and its velocity weights
+(`esdirk_kernels.response_weights`), so that the response's error moves a step by at most a
+small share of the stage Newton's own tolerance whatever the response's size: at the loop's
+rtol 1e-5 one product a response most samples, two the rest, and A factored once in the
+6 mm move instead of 338 times (docs/benchmarks.md, session 36). The fixed TOLERANCE still
+accepts too: the bound never costs a product more. The rule "1e-3 of rtol" relative to
+max |d_f| was measured and not kept (session 35): where the forces jump far beyond the
+velocities' scale every sample (manipulator_reduced's 5 ms move) the response's error, which
+a retried step shrinks only as h, failed the error test; a bound in the step's own norm
+scales with h and the velocities, not with |d|.
+
 The solve gives up, and the caller factors A at the current state (then the kept factors),
 when no factors are kept, when an estimated rate exceeds RATE_LIMIT = 0.1 (the states are
 too far apart: a product would buy less than a digit), when a correction is not finite, or

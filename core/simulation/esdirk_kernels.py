@@ -20,6 +20,7 @@ from .esdirk_layout import (
     FSAL_INPUTS,
     FSAL_NONE,
     I_AFTER_INPUT,
+    I_BOUNDED_RESPONSE,
     I_ETA_AGE,
     I_ETA_HOLD,
     I_EVALUATION,
@@ -205,8 +206,9 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             flags[I_RESPONSES] += 1
             delta = vectors[V_DELTA]  # d qddot (NDOF,) of the inputs' change
             # the weights' address, or null (an address's type: an int 0 would unify to float)
-            bounds = weight.ctypes.data if response_weights(
-                memory, y, atol, t_stop, dims[ed.NDOF], weight) else np.uint64(0)
+            bounds = weight.ctypes.data if flags[I_BOUNDED_RESPONSE] == 1 and \
+                response_weights(memory, y, atol, t_stop, dims[ed.NDOF], weight) else \
+                np.uint64(0)
             ok = counters[ed.EVALUATIONS] == flags[I_EVALUATION] and call_engine(
                 dims[ed.ENGINE], engine.OP_INPUT_RESPONSE, table, 0.0, delta.ctypes.data,
                 bounds, 0, 0.0) == ed.OK
