@@ -42,8 +42,8 @@ the same two estimates, taken on the correction's d qddot in sqrt(mean((w_j e_j)
 most 1 (`weighted_size`). The ESDIRK gives w from its next step and its velocity weights
 (`esdirk_kernels.response_weights`), so that the response's error moves a step by at most a
 small share of the stage Newton's own tolerance whatever the response's size: at the loop's
-rtol 1e-5 one product a response most samples, two the rest, and A factored once in the
-6 mm move instead of 338 times (docs/benchmarks.md, session 36). The fixed TOLERANCE still
+rtol 1e-5 1.75 products a response instead of 2.9, and no factorisation of A in the 6 mm
+move instead of 338 (docs/benchmarks.md, session 36). The fixed TOLERANCE still
 accepts too: the bound never costs a product more. The rule "1e-3 of rtol" relative to
 max |d_f| was measured and not kept (session 35): where the forces jump far beyond the
 velocities' scale every sample (manipulator_reduced's 5 ms move) the response's error, which
