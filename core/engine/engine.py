@@ -394,9 +394,12 @@ def mass_entry(op, user_data, t, a, b, c, s):
 
 @entry(ENGINE_ENTRY)
 def input_response_entry(op, user_data, t, a, b, c, s):
-    """OP_INPUT_RESPONSE: out (a)."""
+    """OP_INPUT_RESPONSE: out (a); the error weights of a refined response (b, (NDOF,);
+    null: the refinement's fixed tolerance)."""
     table = address_of(user_data)
-    return input_response(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
+    n = _i(table, slot.DIMS)[ed.NDOF]
+    return input_response(table, carray(a, (n,), _F8),
+                          carray(b, (n if address_of(b) else 0,), _F8))
 
 
 @entry(ENGINE_ENTRY)

@@ -13,7 +13,8 @@ De_m d xddot on the DOF deformations. A one-step integrator uses it for the firs
 a change of the held inputs (`simulation.esdirk`). After the ESDIRK's stage residual in mass
 form (`stage_force`), which neither assembles nor factors A, the response solves A at the
 stage's state by iterative refinement with the factors of an earlier state that the storage
-still holds (`refinement`: to 1e-12 of d xddot), and only when there are none, or they no
+still holds (`refinement`: to 1e-12 of d xddot, or to the caller's weighted bound on d qddot:
+the ESDIRK's, from its step and error weights), and only when there are none, or they no
 longer contract fast, has that operation assemble and factor A at the stage's state
 (FACTOR_A), whose factors the next responses then refine with. Exact but for round-off
 (with refinement: its tolerance) at the evaluation's state;
@@ -31,15 +32,18 @@ from .factors import augmented_resolve
 from .motion import qddot_of_solution
 from .operations import FACTOR_A, OP_RIGID_CONDENSE, OP_STAGE_FORCE, run
 from .ports import add_input_forces
-from .refinement import refined_solve
+from .refinement import refined_solve_within
 from .slots import float_array as _f
 from .slots import int_array as _i
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
-def input_response(table, out):
+def input_response(table, out, weights):
     """out (NDOF,) = d qddot (m/s^2, rad/s^2) for the change of the inputs in slot inputs since
-    the last evaluation, at that evaluation's state and with its factors; a status (OK, or
+    the last evaluation, at that evaluation's state and with its factors. weights (NDOF, or
+    empty; s^2/m, s^2/rad): where the response is refined, an error e of it with
+    sqrt(mean((weights_j e_j)^2)) <= 1 is accepted too (`refinement.refined_solve_within`;
+    empty: its fixed relative tolerance alone). A status (OK, or
     NOT_AVAILABLE when no evaluation's factors are current, in the reduced form, with
     actuators or with kinematic inputs; SINGULAR_MASS when a stage force's A, factored here,
     is singular)."""
@@ -73,7 +77,7 @@ def input_response(table, out):
     rhs[nf: nf + n_rigid] = 0.0
     if dims[ed.A_FACTORS] == ed.A_AT_STAGE:  # A at a stage force's state: refined with kept
         # factors, else made by its operation (compiled only where stage forces are)
-        if not refined_solve(table, nf + n_rigid, rhs):
+        if not refined_solve_within(table, nf + n_rigid, rhs, weights, force, out):
             _i(table, slot.COUNTERS)[ed.RESPONSE_FACTORS] += 1
             status = run(table, OP_STAGE_FORCE, 0, 0, FACTOR_A)
             if status != ed.OK:
@@ -81,7 +85,7 @@ def input_response(table, out):
             augmented_resolve(table, nf + n_rigid, rhs)
     else:
         augmented_resolve(table, nf + n_rigid, rhs)
-    # d xddot in `force`'s room; the slaves' T d zddot without c, which the inputs leave as
-    # it is, and no h (the DOF deformations' De_m d xddot)
+    # d xddot in `force`'s room (the refinement's scratch before); the slaves' T d zddot
+    # without c, which the inputs leave as it is, and no h (the DOF deformations' De_m d xddot)
     qddot_of_solution(table, rhs, force, False, rhs, False, out)
     return ed.OK

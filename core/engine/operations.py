@@ -27,7 +27,9 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     CONFIGURATION        q; x = F(q) and J's factors (`kinematics.solve_kinematics`: no DF)
     MASS                 DF, M_bar and its LU at the last evaluation (`motion.reduced_mass`)
     INPUT_RESPONSE       out (NDOF,); the change of qddot that the change of the inputs since
-                         the last evaluation makes at its state (`input_response`)
+                         the last evaluation makes at its state (`input_response`); b = the
+                         error weights (NDOF,) a refined response may stop at (0: its fixed
+                         relative tolerance)
     SPARSE_FACTOR        out (1,): the pivot ratio; s = SPARSE_J or SPARSE_AUGMENTED: factor
                          that matrix's sparse LU (`sparse_factors.factor`)
     SPARSE_SOLVE         b; s = SPARSE_J, SPARSE_J_TRANSPOSED or SPARSE_AUGMENTED: solve in

@@ -78,6 +78,7 @@ from ..engine import engine
 from ..errors import SimulationError, StepBudgetSpent
 from .esdirk_layout import (
     FLAG_NAMES,
+    I_BOUNDED_RESPONSE,
     I_ETA_AGE,
     I_ETA_HOLD,
     I_EXTRA,
@@ -150,6 +151,7 @@ class Esdirk(Stepper):
         self.flags = np.zeros(I_SIZE, dtype=np.int64)
         self.flags[I_HISTORY] = int(tableau.history)
         self.flags[I_MASS_FORM] = 1  # the stages' residual in mass form on the sparse path
+        self.flags[I_BOUNDED_RESPONSE] = 1  # the input response to the step's weighted bound
         self.flags[I_ETA_HOLD] = ETA_HOLD if self.sparse_newton else 0
         self.vectors = np.zeros((V_ROWS, n))
         self.J = np.zeros(n * n)

@@ -20,6 +20,7 @@ from .esdirk_layout import (
     FSAL_INPUTS,
     FSAL_NONE,
     I_AFTER_INPUT,
+    I_BOUNDED_RESPONSE,
     I_ETA_AGE,
     I_ETA_HOLD,
     I_EVALUATION,
@@ -63,6 +64,7 @@ from .esdirk_layout import (
 from .esdirk_newton import (
     JACOBIAN_COST,
     LU_SLACK,
+    NEWTON_TOLERANCE,
     SPARSE_LU_SLACK,
     evaluate,
     factor_model,
@@ -76,6 +78,10 @@ SAFETY, GROW, SHRINK = 0.9, 5.0, 0.2
 # After two error-test failures at the same t the error's observed order in h replaces the
 # assumed one (`observed_shrink`): at least ORDER_FLOOR, the step cut by at most SHRINK_FLOOR.
 ORDER_FLOOR, SHRINK_FLOOR = 0.5, 0.01
+# The share of the stage Newton's tolerance that the input response's error may take of a
+# step (`response_weights`): a tenth, so that the response's error stays a tenth of the
+# Newton's own leftover and far below the error test's 1 (NEWTON_TOLERANCE = 0.05 of it)
+RESPONSE_SHARE = 0.1
 
 
 @kernel
@@ -145,6 +151,33 @@ def first_stage_unread(A, EW):
     return EW[0] == 0.0
 
 
+@kernel(inline="always")
+def response_weights(memory, y, atol, t_stop, m, out):
+    """out[:m] = the error weights (s^2/m, s^2/rad) to which the engine may refine the input
+    response d (m/s^2, rad/s^2) of the m DOFs, when the next step's size is known (True;
+    False: none, the engine's fixed relative tolerance). Why: d is added to F_1's velocity
+    half, so its error e moves each stage's state by h a_i1 e and the error estimate by
+    h (b_1 - b_hat_1) e, each below h |e| in every tableau (TR-BDF2: a_21 0.29, b_1 0.35,
+    b_1 - b_hat_1 0.14; the order-3 table: 0.44 at most). The weights are h_next w_v /
+    (RESPONSE_SHARE NEWTON_TOLERANCE), w_v = 1 / (rtol |v| + atol_v) the velocity weights at
+    y, which bound the ones the step's Newton and error test take (those use max(|y|, |z|)):
+    an accepted e then moves the step, in the weighted RMS norm over its 2m states, by at
+    most RESPONSE_SHARE / sqrt(2) of what the stage Newton may leave. h_next is an upper
+    bound of the next step (memory[M_H], after `restart` already cut to memory[M_H_INPUT];
+    capped by memory[M_H_MAX] and t_stop); a retried step is smaller, and the error it
+    carries shrinks with its h, as the bound would."""
+    h = memory[M_H]
+    if memory[M_H_MAX] > 0.0:
+        h = min(h, memory[M_H_MAX])
+    h = min(h, t_stop - memory[M_T])
+    if not h > 0.0:
+        return False
+    rtol, scale = memory[M_RTOL], h / (RESPONSE_SHARE * NEWTON_TOLERANCE)
+    for j in range(m):
+        out[j] = scale / (rtol * abs(y[m + j]) + atol[m + j])
+    return True
+
+
 @kernel(inline="always")  # into its C entry (esdirk_entry), its one caller: one unit
 def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
     """Integrate from memory[M_T] towards t_stop (s): to t_stop exactly, or one accepted step
@@ -172,9 +205,13 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
         if flags[I_FSAL] == FSAL_INPUTS:  # valid while the engine evaluated nothing since
             flags[I_RESPONSES] += 1
             delta = vectors[V_DELTA]  # d qddot (NDOF,) of the inputs' change
+            # the weights' address, or null (an address's type: an int 0 would unify to float)
+            bounds = weight.ctypes.data if flags[I_BOUNDED_RESPONSE] == 1 and \
+                response_weights(memory, y, atol, t_stop, dims[ed.NDOF], weight) else \
+                np.uint64(0)
             ok = counters[ed.EVALUATIONS] == flags[I_EVALUATION] and call_engine(
-                dims[ed.ENGINE], engine.OP_INPUT_RESPONSE, table, 0.0, delta.ctypes.data, 0, 0,
-                0.0) == ed.OK
+                dims[ed.ENGINE], engine.OP_INPUT_RESPONSE, table, 0.0, delta.ctypes.data,
+                bounds, 0, 0.0) == ed.OK
             for j in range(dims[ed.NDOF] if ok else 0):
                 F[0, dims[ed.NDOF] + j] += delta[j]
             flags[I_FSAL] = FSAL_CURRENT if ok else FSAL_NONE

@@ -16,12 +16,15 @@ FSAL_NONE, FSAL_CURRENT, FSAL_INPUTS = range(3)
 (I_FSAL, I_JACOBIAN, I_FRESH, I_REFRESH, I_LU, I_STEPS, I_REJECTED, I_NEWTON_FAILURES,
  I_RHS, I_JACOBIANS, I_FACTORIZATIONS, I_REDUCED, I_ONE_STEP, I_MAX_STEPS, I_EVALUATION,
  I_HISTORY, I_EXTRA, I_MASS_FORM, I_RESPONSES, I_AFTER_INPUT, I_ETA_AGE, I_ETA_HOLD,
- I_LANDED, I_QUIET, I_SIZE) = range(25)
+ I_LANDED, I_QUIET, I_BOUNDED_RESPONSE, I_SIZE) = range(26)
 # flags[I_AFTER_INPUT] = 1 from an input change (`restart`) to the next accepted step;
 # I_LANDED = 1 once a step lands on t_stop, and no restart since; I_QUIET = 1 once an advance
 # started from a landing (a stretch with no input change: memory[M_H_INPUT] is stale)
 # flags[I_ETA_AGE]: accepted steps since a stage last measured its contraction; the estimate
 # grows at a step's first implicit stage once the age reaches flags[I_ETA_HOLD] (`_stage`)
+# flags[I_BOUNDED_RESPONSE] = 1 (`Esdirk`'s default): the input response may stop refining at
+# the step's weighted bound (`esdirk_kernels.response_weights`); 0 its fixed relative
+# tolerance (for comparison)
 # flags[I_RESPONSES]: the engine's input responses the first stage asked for (`advance`)
 # flags[I_MASS_FORM] = 1 (`Esdirk`'s default): on the sparse Newton matrix the stages take
 # their residual in mass form (`_mass_form_residual`); 0 the accelerations' (for comparison)
