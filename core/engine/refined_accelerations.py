@@ -21,6 +21,15 @@ slot force for the tangent); the rigid rows -h_o - J_o d_f (`refinement.constrai
 b itself is the residual at d = 0. One product costs an element pass, the rigid rows and a
 solve with the kept factors (about 22 us on manipulator_control).
 
+Warm start. When slot augmented_rhs still holds the last evaluation's solution (its first
+n_free entries equal the free coordinates' accelerations that evaluation left in slot xddot,
+bit for bit: a stage force or an input response in between leaves other vectors there), the
+refinement starts from it, d_0 = that solution, instead of from d_1 = A_kept^-1 b: b is not
+formed (one element pass and a solve fewer) and an rhs asked again at a state, or at one a
+Newton correction away, is done in one product. The first correction from a warm start says
+how far d_0 was, not how fast A_kept contracts, so it neither gives up on its rate nor is
+accepted on its size; only the round-off floor below accepts it.
+
 Convergence as `refinement`'s: the corrections c_k shrink by about rho, the spectral radius
 of I - A_kept^-1 A, so the error left after c_k is about rho / (1 - rho) |c_k| (max norms
 over d_f, the accelerations on z, m/s^2 and 1/s^2 on the Euler parameters, which the
@@ -32,11 +41,14 @@ the forces that A balances, that solve's own round-off exceeds 1e-12 of d_f (2e-
 against max |d_f| = 0.12 at the 6 mm move's state of fastest motion, whose b_f is 10 N):
 the residual b - A d_k is then at its round-off before the corrections shrink to the
 tolerance, and d_k + c_k is accepted when both blocks of that residual are at most
-RESIDUAL_FLOOR = 1e-14 of b's (45 ulps; measured 6e-16 and 9e-16 there), the error left
-being that of a solve whose backward error is that residual. Given up, the evaluation then assembles
-and factors A at its state (whose factors are kept for the next), when a rate exceeds
-RATE_LIMIT = 0.1, when a correction is not finite, or after MAX_PRODUCTS = 3 products (three
-products and the residual at 0 cost about as much as the assembly they replace).
+RESIDUAL_FLOOR = 1e-14 (45 ulps) of the scales of b, max |T^T r| on z and max |h| on the
+rigid rows (measured 4e-16 and 5e-16 of them there), the error left being that of a solve
+whose backward error is that residual. At rest (h = 0) the floor does not apply.
+
+Given up, the evaluation then assembles and factors A at its state (whose factors are kept
+for the next), when a rate exceeds RATE_LIMIT = 0.1, when a correction is not finite, or
+after MAX_PRODUCTS = 3 products (three products and the residual at 0 cost about as much as
+the assembly they replace).
 
 Only for models with rigid clusters and the sparse Newton matrix (dims NSLAVES > 0 and
 NEWTON_SPARSE = 1: the augmented form, no coil currents, no kinematic inputs), where the
@@ -64,7 +76,7 @@ from .slots import int_array as _i
 TOLERANCE = 1e-12  # the estimated error of d_f accepted, relative to max |d_f|
 RATE_LIMIT = 0.1  # a larger estimated contraction rate: factor A at the current state
 MAX_PRODUCTS = 3  # products A d_k after the first solve, before that
-RESIDUAL_FLOOR = 1e-14  # |b - A d| at most this of |b| (each block): d + c is final
+RESIDUAL_FLOOR = 1e-14  # |b - A d| at most this of b's scale (each block): d + c is final
 
 
 @kernel
@@ -75,7 +87,8 @@ def refined_accelerations(table, moving, rhs):
     with the element masses' gravity and -g_conv, as `motion.inertia_forces` leaves it.
     Returns ed.OK when converged; ed.NOT_AVAILABLE, with b in rhs, when the caller has to
     assemble and factor A at this state (no factors kept, too slow a contraction, a
-    correction not finite). Works in slot refinement."""
+    correction not finite). rhs holds on entry the last evaluation's solution when it still
+    does (`warm_start`), the first iterate then. Works in slot refinement."""
     dims = _i(table, slot.DIMS)
     nf, nx = dims[ed.NFREE], dims[ed.NX]
     na = nf + dims[ed.NRIGID]
@@ -85,44 +98,93 @@ def refined_accelerations(table, moving, rhs):
     x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
     a[:] = 0.0  # r += the element masses' gravity and -g_conv (a = 0: no inertia)
     element_products(table, x, xdot, moving, True, a, r)
-    d[:] = 0.0
-    residual(table, moving, d, a, total, b)  # b = b - A 0
-    copy(rhs[:na], b)
     kept = dims[ed.A_KEPT]
-    if kept == KEPT_NONE:
-        return ed.NOT_AVAILABLE
+    warm = kept != KEPT_NONE and warm_start(table, rhs)
+    if warm:
+        copy(d, rhs[:na])
+    else:
+        d[:] = 0.0
+        residual(table, moving, d, a, total, b)  # b = b - A 0
+        copy(rhs[:na], b)
+        if kept == KEPT_NONE:
+            return ed.NOT_AVAILABLE
     sparse = kept == KEPT_SPARSE
-    copy(d, b)
-    kept_resolve(table, sparse, na, d)  # d_1
+    # the scales of the residual's round-off: T^T r on z, h on the rigid rows
+    run(table, OP_RIGID_CONDENSE, r.ctypes.data, c.ctypes.data, 0.0)
+    force_scale, h_scale = largest(c, nf), 0.0
+    if moving:
+        quad, rigid_h = _f(table, slot.G), _f(table, slot.RIGID_H)
+        for o in range(na - nf):
+            h_scale = max(h_scale, abs(quad[o] + rigid_h[o]))
+    if not warm:
+        copy(d, b)
+        kept_resolve(table, sparse, na, d)  # d_1
     previous = largest(d, nf)
     if not np.isfinite(previous):
-        return ed.NOT_AVAILABLE
-    if previous == 0.0:  # b is zero on z: so is d_f, exactly
+        return give_up(table, moving, warm, rhs)
+    if previous == 0.0 and not warm:  # b is zero on z: so is d_f, exactly
         copy(rhs[:na], d)
         return ed.OK
-    b_f, b_o = largest(b, nf), largest(b[nf:], na - nf)
     for k in range(MAX_PRODUCTS):
         residual(table, moving, d, a, total, c)  # c = b - A d
         # the residual at the round-off of b: d + c is as close as the direct solve gets
-        floor = (largest(c, nf) <= RESIDUAL_FLOOR * b_f
-                 and largest(c[nf:], na - nf) <= RESIDUAL_FLOOR * b_o)
+        floor = (largest(c, nf) <= RESIDUAL_FLOOR * force_scale
+                 and largest(c[nf:], na - nf) <= RESIDUAL_FLOOR * h_scale)
         kept_resolve(table, sparse, na, c)
         size = largest(c, nf)
         if not np.isfinite(size):
-            return ed.NOT_AVAILABLE
+            return give_up(table, moving, warm, rhs)
         for i in range(na):
             d[i] += c[i]
         scale = TOLERANCE * largest(d, nf)
         rate = size / previous
+        previous = size
+        if floor:
+            copy(rhs[:na], d)
+            return ed.OK
+        if warm and k == 0:  # rate: how far the warm start was, not the contraction
+            continue
         # as `refinement.refined_solve`: a correction within the tolerance, or from the
-        # second product on the rate of two refinement corrections; or the round-off floor
-        if floor or size <= scale or (k > 0 and rate <= RATE_LIMIT
-                                      and rate * size <= (1.0 - rate) * scale):
+        # second on the rate of two corrections
+        if size <= scale or (k > 0 and rate <= RATE_LIMIT
+                             and rate * size <= (1.0 - rate) * scale):
             copy(rhs[:na], d)
             return ed.OK
         if rate > RATE_LIMIT:
-            return ed.NOT_AVAILABLE
-        previous = size
+            return give_up(table, moving, warm, rhs)
+    return give_up(table, moving, warm, rhs)
+
+
+@kernel
+def warm_start(table, rhs):
+    """Whether rhs (slot augmented_rhs) still holds the last evaluation's solution, which
+    `motion.qddot_of_solution` copied onto the free coordinates of slot xddot: equal there
+    bit for bit and finite (a stage force and an input response leave other vectors in it,
+    a stage force other accelerations in slot xddot)."""
+    dims = _i(table, slot.DIMS)
+    free, xddot = _i(table, slot.FREE), _f(table, slot.XDDOT)
+    for k in range(dims[ed.NFREE]):
+        if rhs[k] != xddot[free[k]]:
+            return False
+    for k in range(dims[ed.NFREE] + dims[ed.NRIGID]):
+        if not np.isfinite(rhs[k]):
+            return False
+    return True
+
+
+@kernel
+def give_up(table, moving, warm, rhs):
+    """ed.NOT_AVAILABLE with b in rhs (formed now after a warm start, which did not)."""
+    dims = _i(table, slot.DIMS)
+    nf, nx = dims[ed.NFREE], dims[ed.NX]
+    na = nf + dims[ed.NRIGID]
+    work = _f(table, slot.REFINEMENT)
+    if warm:
+        d = work[na: 2 * na]
+        d[:] = 0.0
+        residual(table, moving, d, work[3 * na: 3 * na + nx], work[3 * na + nx: 3 * na + 2 * nx],
+                 work[:na])
+    copy(rhs[:na], work[:na])
     return ed.NOT_AVAILABLE
 
 
