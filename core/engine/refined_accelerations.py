@@ -28,7 +28,12 @@ refinement starts from it, d_0 = that solution, instead of from d_1 = A_kept^-1 
 formed (one element pass and a solve fewer) and an rhs asked again at a state, or at one a
 Newton correction away, is done in one product. The first correction from a warm start says
 how far d_0 was, not how fast A_kept contracts, so it neither gives up on its rate nor is
-accepted on its size; only the round-off floor below accepts it.
+accepted on its size; only the round-off floor below accepts it. It leaves the error
+rho |d_0 - d| where A_kept^-1 b leaves rho |d|, and a warm start may take one product more
+than MAX_PRODUCTS (the one that b and d_1 would have cost): along a CVODE run of
+manipulator_control under 1 N on every input (steps of 80 us) the solution moves by about
+0.1 of itself a step (0.03 to 0.2), rho is 1e-4 to 4e-4, and three products from d_0 fell short of
+1e-12 every second to fourth state, each time paying the products and the factorisation.
 
 Convergence as `refinement`'s: the corrections c_k shrink by about rho, the spectral radius
 of I - A_kept^-1 A, so the error left after c_k is about rho / (1 - rho) |c_k| (max norms
@@ -125,7 +130,7 @@ def refined_accelerations(table, moving, rhs):
     if previous == 0.0 and not warm:  # b is zero on z: so is d_f, exactly
         copy(rhs[:na], d)
         return ed.OK
-    for k in range(MAX_PRODUCTS):
+    for k in range(MAX_PRODUCTS + 1 if warm else MAX_PRODUCTS):  # warm: b's pass saved
         residual(table, moving, d, a, total, c)  # c = b - A d
         # the residual at the round-off of b: d + c is as close as the direct solve gets
         floor = (largest(c, nf) <= RESIDUAL_FLOOR * force_scale
