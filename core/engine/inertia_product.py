@@ -142,9 +142,7 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
     """total (NX,; N, N m) += Dp^T Mp (g_p - (D2p v) v - Dp a_e) of every element that
     `motion.inertia_forces` visits (all with inertia points but the touching elements whose
     mass is folded or zero), for the accelerations a (NX,) on x; (D2p v) v only if moving,
-    g_p only with_gravity. Neither moving nor with_gravity: an element whose a_e is zero adds
-    nothing and is skipped (`refined_accelerations`' residual at d = 0, where only the
-    elements on the slaves see their c).
+    g_p only with_gravity.
     A BEAM in closed form (`beam_mass.beam_point_product`) where its group's points are the
     BEAM's (group field point_blocks: the BEAM's mass pattern and every Dp of the BEAM's
     blocks, decided once at packing rather than by `beam_blocks_only` element by element,
@@ -152,7 +150,6 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
     through Dp's full rows."""
     dims = _i(table, slot.DIMS)
     rigid = dims[ed.NSLAVES] > 0
-    product_only = not moving and not with_gravity
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         inertia = group_inertia(table, g)
@@ -165,8 +162,6 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
                 t = rigid_element(table, row, i)
                 if t >= 0 and not own_mass(table, t):
                     continue
-            if product_only and not any_on(a, coords[i * m: (i + 1) * m]):
-                continue  # Dp^T Mp Dp 0 = 0: its points are not needed
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
             for pp in range(P):
                 g_p = gravity[pp] if with_gravity else 0.0
@@ -181,15 +176,6 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
                 element_product(Mp, pattern, P, m, Dp, xl, point, w, vl)
             for b in range(m):
                 total[coords[i * m + b]] += vl[b]
-
-
-@kernel(inline="always")  # into `element_products`, its one caller
-def any_on(a, coords):
-    """Whether a (NX,) is nonzero on any of the coordinates `coords`."""
-    for c in coords:
-        if a[c] != 0.0:
-            return True
-    return False
 
 
 @kernel

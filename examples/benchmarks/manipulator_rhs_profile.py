@@ -18,6 +18,19 @@ duration) and two states a Newton correction apart (`CORRECTION` of that step). 
     solve          one solve with it
     qddot          xddot filled on x and qddot on the DOFs (`motion.qddot_of_solution`)
 
+and the same for the path OP_RHS takes on this model since session 36, A's solution refined
+with kept factors (`refined_accelerations`), its steps replicated with two products always
+(the operation takes as many as it needs: one at the same state, two or three a step apart):
+
+    element forces the element masses' gravity and -g_conv into r (one element pass)
+    b              the residual at d = 0 (an element pass over the elements the slaves' c
+                   moves, T^T, the rigid rows)
+    d_1            a solve with the kept factors
+    product k      the residual at d_k (an element pass, T^T, the rigid rows) and a solve
+
+(the operation itself starts from the last solution when it still holds it, skipping b and
+d_1). The OP_RHS row is the operation as it is.
+
 python -m examples.benchmarks.manipulator_rhs_profile [COUNT]
 """
 
