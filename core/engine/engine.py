@@ -100,6 +100,7 @@ from .operations import (
     OP_RHS,
     OP_SPARSE_FACTOR,
     OP_SPARSE_SOLVE,
+    OP_STAGE_FORCE,
     OP_STATIC_STEP,
     OP_STRESS_RESULTANTS,
     OP_TANGENT,
@@ -471,6 +472,8 @@ def connect(data, *ops):
         wanted += newton.OPERATIONS
     if ops and dims[ed.NSLAVES] > 0:  # the rigid clusters'
         wanted += RIGID_OPERATIONS
+        if dims[ed.NEWTON_SPARSE]:  # their evaluation's refined accelerations, whatever asks
+            wanted.append(OP_STAGE_FORCE)  # (`refined_accelerations`)
     if ops and dims[ed.NKI] > 0:  # the kinematic inputs' forms (`prescribed`)
         wanted += [OP_PRESCRIBED_RHS, OP_PRESCRIBED_JACOBIAN]
         if OP_RESIDUAL in ops or OP_RESIDUAL_JACOBIAN in ops:  # and IDA's

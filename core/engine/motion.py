@@ -61,6 +61,8 @@ from .operations import (
     OP_RIGID_CONVECTIVE,
     OP_RIGID_EXPAND,
     OP_RIGID_RATES,
+    OP_STAGE_FORCE,
+    REFINED_ACCELERATIONS,
     run,
 )
 from .point_masses import (
@@ -99,9 +101,12 @@ def evaluate(table, q, qdot):
     h_m]. This is the reduced equation M_bar qddot = DF^T (r - M conv) (DF spans the null space
     of J_o). Leaves in the packed arrays what the tangent needs: the kinematics with J's LU,
     the constitutive stress resultants (slot sigma), r (slot force), xdot, conv = (D2F qdot)
-    qdot (slot conv) and xddot (slot xddot); the augmented system's factors and the inputs
-    (`input_response`); a status. `reduced_mass` adds DF and M_bar. Counted in
-    counters[EVALUATIONS]."""
+    qdot (slot conv) and xddot (slot xddot); the augmented system's factors (or, solved by
+    refinement, dims[A_FACTORS] = A_AT_STAGE) and the inputs (`input_response`); a status.
+    With rigid clusters and the sparse Newton matrix the system is solved by refinement with
+    the factors of an earlier state to 1e-12 of xddot on z (`refined_accelerations`), A
+    assembled and factored only when none are kept or they no longer contract fast.
+    `reduced_mass` adds DF and M_bar. Counted in counters[EVALUATIONS]."""
     status, moving = coordinate_forces(table, q, qdot)
     if status != ed.OK:
         return status
@@ -157,7 +162,26 @@ def evaluate(table, q, qdot):
         return ed.OK
     dims[ed.REDUCED] = dims[ed.MASS_CURRENT] = 0
     na = nf + n_rigid
-    A, rhs = augmented_matrix(table), _f(table, slot.AUG_RHS)
+    inputs = _f(table, slot.INPUTS)  # for `input_response`
+    rhs = _f(table, slot.AUG_RHS)
+    # with rigid clusters and the sparse Newton matrix, A's solution refined with kept factors
+    # (`refined_accelerations`), else made here; NOT_CONNECTED: not given its operation
+    status = ed.NOT_CONNECTED
+    if rigid and dims[ed.NEWTON_SPARSE] == 1:
+        status = run(table, OP_STAGE_FORCE, rhs.ctypes.data, 0, REFINED_ACCELERATIONS)
+    if status != ed.NOT_CONNECTED:
+        if status == ed.OK:  # A of no state: the response refines, or has A made, at it
+            dims[ed.A_FACTORS] = ed.A_AT_STAGE
+        else:  # b in rhs and the element masses' forces in r: A at this state, r untouched
+            A = augmented_matrix(table)
+            inertia_forces(table, x, xdot, moving, _f(table, slot.X_TRIAL), A, na)
+            add_rigid_rows(table, A, na)
+            if not augmented_solve(table, A, na, rhs):
+                return ed.SINGULAR_MASS
+        copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
+        qddot_of_solution(table, rhs, _f(table, slot.XDDOT), True, quad, moving, qddot)
+        return ed.OK
+    A = augmented_matrix(table)
     inertia_forces(table, x, xdot, moving, r, A, na)
     add_rigid_rows(table, A, na)
     if rigid:  # T^T (r - M c): the slaves' forces on their masters
@@ -176,7 +200,6 @@ def evaluate(table, q, qdot):
             rhs[nf + o] = -(quad[o] + rigid_h[o]) if rigid else -quad[o]
     if not augmented_solve(table, A, na, rhs):
         return ed.SINGULAR_MASS
-    inputs = _f(table, slot.INPUTS)  # for `input_response`, with the factors just made
     copy(_f(table, slot.EVALUATED_INPUTS)[: inputs.size], inputs)
     qddot_of_solution(table, rhs, _f(table, slot.XDDOT), True, quad, moving, qddot)
     return ed.OK

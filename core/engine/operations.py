@@ -87,7 +87,10 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          mass form, g = M_bar (qddot(y) - acc) without forming the augmented
                          system; s = FACTOR_A: that system assembled and factored at the
                          last stage force's state, for `input_response` (`stage_force`);
-                         with the Newton operations only
+                         s = REFINED_ACCELERATIONS: a = the augmented system's solution (na,), an
+                         evaluation's accelerations refined with the kept factors
+                         (`refined_accelerations`); with the Newton operations, and for
+                         every model with rigid clusters and the sparse Newton matrix
     NEWTON_FORCE_SOLVE   v = [r1; hg g]; s = hg: NEWTON_SOLVE with the velocity half a force
     STATIC_STEP          q, qdot (zeros), out (2 NDOF,): the statics' Newton step [dq; Q] on
                          the sparse Newton matrix's saddle-point system (`static_step`;
@@ -130,8 +133,9 @@ RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 ROW_GROUPS_FROM = 150
 # OP_FORMED_RATES's two jobs (s)
 RATES, HESSIANS = 0.0, 1.0
-# OP_STAGE_FORCE's two jobs (s): the stage force, or the augmented system at its state
-FORCE, FACTOR_A = 0.0, 1.0
+# OP_STAGE_FORCE's three jobs (s): the stage force, the augmented system at its state, or an
+# evaluation's accelerations refined with the kept factors
+FORCE, FACTOR_A, REFINED_ACCELERATIONS = 0.0, 1.0, 2.0
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
 SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 

@@ -39,7 +39,8 @@ from .factors import add_rigid_rows, augmented_factor, augmented_matrix, j_solve
 from .inertia_product import force_minus_mass
 from .kinematics import dof_rows, dof_values
 from .motion import any_nonzero, coordinate_forces, inertia_forces
-from .operations import ENTRY, FACTOR_A, OP_RIGID_RATES, run
+from .operations import ENTRY, FACTOR_A, OP_RIGID_RATES, REFINED_ACCELERATIONS, run
+from .refined_accelerations import refined_accelerations
 from .slots import float_array as _f
 from .slots import int_array as _i
 
@@ -101,12 +102,17 @@ def stage_force(table, y, acc, out):
 
 @kernel(inline="always")  # into its operation's entry, its one caller
 def factor_a(table):
-    """The augmented system A assembled and factored at the state the last stage force left
-    in the slots (x, xdot, the force r before the element masses), as `evaluate` would have
-    at that state, for `input_response`; a status (SINGULAR_MASS when A is singular)."""
+    """The augmented system A assembled and factored at the state the last stage force (or
+    refined evaluation, `refined_accelerations`) left in the slots (x, xdot), as `evaluate`
+    would have at that state, for `input_response`; a status (SINGULAR_MASS when A is
+    singular). The element masses' forces that the assembly adds go to a copy of slot force
+    (in slot refinement, free when this is called), which a refined evaluation has already
+    completed with them."""
     dims = _i(table, slot.DIMS)
-    na = dims[ed.NFREE] + dims[ed.NRIGID]
-    x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
+    na, nx = dims[ed.NFREE] + dims[ed.NRIGID], dims[ed.NX]
+    x, xdot = _f(table, slot.X), _f(table, slot.XDOT)
+    r = _f(table, slot.REFINEMENT)[3 * na: 3 * na + nx]
+    copy(r, _f(table, slot.FORCE))
     A = augmented_matrix(table)
     inertia_forces(table, x, xdot, any_nonzero(xdot), r, A, na)
     add_rigid_rows(table, A, na)
@@ -116,10 +122,17 @@ def factor_a(table):
 @entry(ENTRY)
 def stage_force_entry(op, user_data, t, a, b, c, s):
     """OP_STAGE_FORCE: s = FORCE: y (a), the candidate accelerations (b), g (c; may be b);
-    s = FACTOR_A: A at the last stage force's state (`factor_a`)."""
+    s = FACTOR_A: A at the last stage force's state (`factor_a`); s = REFINED_ACCELERATIONS:
+    the augmented system's solution (a, (na,)) at the evaluation's state by refinement with
+    the kept factors (`refined_accelerations`)."""
     table = address_of(user_data)
     if s == FACTOR_A:
         return factor_a(table)
+    if s == REFINED_ACCELERATIONS:
+        dims = _i(table, slot.DIMS)
+        na = dims[ed.NFREE] + dims[ed.NRIGID]
+        return refined_accelerations(table, any_nonzero(_f(table, slot.XDOT)),
+                                     carray(a, (na,), np.float64))
     n = _i(table, slot.DIMS)[ed.NDOF]
     return stage_force(table, carray(a, (2 * n,), np.float64), carray(b, (n,), np.float64),
                        carray(c, (n,), np.float64))
