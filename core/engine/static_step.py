@@ -16,7 +16,7 @@ annihilates (J DF = [0; I] has zero rigid rows), so DF^T K_x DF dq = DF^T r = Q
 (`analysis.static_augmented` says it for the numpy reference). The constraint rows are scaled
 by s = max |K_x| (N/m, or N m over the rotation parameters' units), so that the LU's pivots
 compare numbers of one size; s changes mu only, which is not used. K_x is assembled on H's
-pattern by the Newton matrix's own element kernels (`newton._element_tangent`,
+pattern by the Newton matrix's own element kernels (`newton.element_tangent`,
 `newton_rigid`) and factored by its sparse LU, in proportion to the elements, where the
 dense step forms DF (NDOF solves of J) and DF^T (K_x DF).
 
@@ -41,7 +41,7 @@ from . import data as ed
 from . import slots as slot
 from .factors import _scatter_de, add_rigid_rows, augmented_matrix
 from .motion import coordinate_forces, inertia_forces
-from .newton import _element_tangent, _factor, _input_stiffness, _parts
+from .newton import element_tangent, factor_kept, input_load_stiffness, newton_parts
 from .newton_rigid import own_tangent, slave_curvature, touching_tangent
 from .operations import ENTRY, HESSIANS, OP_FORMED_RATES, OP_RIGID_CONDENSE, run
 from .slots import float_array as _f
@@ -77,10 +77,10 @@ def _coordinate_tangent(table, sigma, r_full, lam, Kv):
             t = rigid_element(table, group_row, i) if rigid else -1
             if t >= 0:  # on its z-coordinates (the statics' packing has no damping, so
                 if own_tangent(table, t):  # C_z, the second Kv, is not written)
-                    _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+                    element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Kv, hmap, rigid_base, work)
                 continue
-            _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+            element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
             for e in range(m * m):
                 s = hmap[base + i * m * m + e]
                 if s >= 0:
@@ -88,7 +88,7 @@ def _coordinate_tangent(table, sigma, r_full, lam, Kv):
         base += n * m * m
     if rigid:
         slave_curvature(table, r_full, lam, Kv, hmap, rigid_base)
-    _input_stiffness(table, Kv)
+    input_load_stiffness(table, Kv)
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -125,7 +125,7 @@ def static_step(table, q, rest, out):
         out[ndof + j] = lam[n_rigid + n_edof + j]
     for e in range(n_edof):
         out[ndof + n_xdof + e] = lam[n_rigid + e]
-    _, _, Kv = _parts(table)
+    _, _, Kv = newton_parts(table)
     _coordinate_tangent(table, sigma, r_full, lam, Kv)
     h_ints, h_floats = _i(table, slot.NEWTON_H), _f(table, slot.NEWTON_H_VALUES)
     H = sparse_lu.matrix_values(h_ints, h_floats)
@@ -142,7 +142,7 @@ def static_step(table, q, rest, out):
         scale = 1.0
     for p in range(H.size):
         H[p] = scale * H[p] + Kv[p]
-    if not _factor(table, h_ints, h_floats):
+    if not factor_kept(table, h_ints, h_floats):
         return ed.SINGULAR_MASS
     sparse_lu.solve(h_ints, h_floats, rhs, False)
     j_ints, j_floats = _i(table, slot.NEWTON_J), _f(table, slot.NEWTON_J_VALUES)
