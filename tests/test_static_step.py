@@ -227,3 +227,33 @@ def test_a_model_the_newton_packing_refuses_steps_dense_and_solves():
     assert dense is not first and not dense.sparse
     assert static_engine.engine_balance(strip) is dense  # the default keeps what is live
     assert static_engine.live_balance(strip) is dense
+
+
+def test_the_linearisation_after_a_sparse_solve():
+    """A sparse balance packs no reduced form, so the default linearisation after it is
+    numpy's; compiled=True packs that form on the live balance and gives numpy's matrices;
+    the statics' packings are left as they were (no damping, dims.static, actuators as
+    force inputs): the next solve is the same."""
+    from flexure.core.analysis import linear_engine
+    from flexure.core.analysis.linearization import linearize
+    from flexure.core.engine import data as ed
+
+    model = loaded_strip(40, gravity=False)  # moments: their load stiffness in G0
+    inputs = dict(zip(("Mx", "My", "Mz"), MOMENTS, strict=True))
+    mech = Mechanics(model)
+    solution = static_equilibrium(model, load_steps=2, inputs=inputs, mechanics=mech)
+    balance = static_engine.engine_balance(model)
+    assert balance.sparse and not linear_engine.preferred(model, mech)
+    reference = linearize(model, solution, mechanics=mech, compiled=False)
+    default = linearize(model, solution, mechanics=mech)
+    assert np.array_equal(default.K, reference.K)
+    engine_path = linearize(model, solution, mechanics=mech, compiled=True)
+    assert static_engine.engine_balance(model) is balance and balance.packed_dense
+    for field in ("M0", "K0", "G0", "K"):
+        scale = largest(reference.K if field == "G0" else getattr(reference, field))
+        assert largest(getattr(engine_path, field) - getattr(reference, field)) <= 1e-10 * scale
+    dims = balance.data.int_array("dims")
+    assert dims[ed.HAS_DAMPING] == 0 and dims[ed.STATIC] == 1
+    again = static_equilibrium(model, load_steps=2, inputs=inputs, compiled=True)
+    assert static_engine.engine_balance(model) is balance and balance.sparse
+    assert largest((again.q - solution.q) / dof_tolerances(model, 1.0)) <= 1e-10
