@@ -46,7 +46,7 @@ from ..numerics.rotation_kernels import rates_coefficient
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
-from .factors import _scatter_de
+from .factors import scatter_de
 from .kinematics import dof_rows
 from .motion import any_nonzero
 from .newton_rigid import mass_block, own_tangent, slave_curvature, touching_tangent
@@ -178,7 +178,7 @@ def jacobian(table, y):
             c = col_of_coord[a]
             if c >= 0:
                 Mv[hmap[c]] += lumped[a]
-        _scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
+        scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
     local, columns = _f(table, slot.LOCAL), _i(table, slot.POINT_COLUMNS)
     work = _f(table, slot.NEWTON_SCRATCH)[3 * (nf + dims[ed.NRIGID]):]  # past the solve's
     base = nf + 2 * De.size  # the element pairs' part of the map
