@@ -100,10 +100,11 @@ def test_the_rule_and_what_keeps_the_dense_step(monkeypatch):
     below, _ = cantilever(39)
     assert at.ndof == static_engine.SPARSE_STEP_FROM == below.ndof + 6
     assert static_engine.sparse_step(at) and not static_engine.sparse_step(below)
-    balance = EngineBalance(at)
+    balance = static_engine.engine_balance(at)  # the live one, which live_balance sees
     assert balance.sparse and not balance.packed_dense
     assert static_engine.live_balance(at) is None  # nothing packed for the linearisation
     assert balance.data.int_array("dims").size and balance.packed_dense  # packed when read
+    assert static_engine.live_balance(at) is balance
     moved = build_model(chain())  # a kinematic input
     monkeypatch.setattr(static_engine, "SPARSE_STEP_FROM", 0)
     assert moved.kinematic_inputs and not static_engine.sparse_step(moved)
