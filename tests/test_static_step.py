@@ -163,19 +163,37 @@ def loaded_strip(n, *, gravity=True, moments=True, rho=7850.0):
 MOMENTS = np.array([0.3, -0.2, 0.5])  # N m about x, y, z
 
 
-@pytest.mark.parametrize("gravity, moments", [(True, False), (False, True), (True, True)])
+def manipulator_under_gravity():
+    """manipulator_control under gravity (its folded rigid bodies' weight through
+    `balance_force`), 3 N on each x input."""
+    from test_engine import scene_with_gravity
+
+    model = scene_with_gravity("manipulator_control", [0.0, -3.0, -9.81])
+    loads = np.zeros(model.nx)
+    loads[[port.coordinate for port in model.inputs]] = [3.0, 0.0] * 3
+    return model, loads
+
+
+@pytest.mark.parametrize("gravity, moments", [(True, False), (False, True), (True, True),
+                                              ("manipulator", False)])
 def test_the_sparse_step_under_gravity_on_element_masses_and_moment_inputs(gravity, moments):
     """The load stiffness of moment inputs (`newton`'s port map) and the element masses'
-    gravity in r: the sparse step is the dense engine step to round-off (measured 2e-12 to
-    6e-12 of the largest). numpy's tangent also has the load stiffness of gravity on the
-    BEAMs' tangent points, which the engine's (dense and sparse) leaves out
-    (`static_engine`'s docstring): its step differs by 5.6e-7 to 6.7e-7 of the largest
-    here, moments alone 1.4e-12, which checks the moments' load stiffness."""
-    model = loaded_strip(16, gravity=gravity, moments=moments)
+    gravity in r (with rigid clusters their bodies' weight): the sparse step is the dense
+    engine step to round-off (measured 7e-13 to 6e-12 of the largest). numpy's tangent also
+    has the load stiffness of gravity on the BEAMs' tangent points, which the engine's
+    (dense and sparse) leaves out (`static_engine`'s docstring): its step differs by 5.6e-7
+    to 6.7e-7 of the largest here (5.8e-7 on the manipulator), moments alone 1.4e-12, which
+    checks the moments' load stiffness."""
+    if gravity == "manipulator":
+        model, loads = manipulator_under_gravity()
+        size = 1e-3
+    else:
+        model = loaded_strip(16, gravity=gravity, moments=moments)
+        loads, size = model.loads, 1e-2
     values = MOMENTS if moments else None
     mech = Mechanics(model, sparse=True)
-    config, units = away_from_equilibrium(model, mech, 5, 1e-2)
-    load = (0.6, model.loads + 0.5, values)
+    config, units = away_from_equilibrium(model, mech, 5, size)
+    load = (0.6, loads + 0.5, values)
     sparse, dense = EngineBalance(model, sparse=True), EngineBalance(model, sparse=False)
     assert sparse.sparse
     for balance in (sparse, dense):
