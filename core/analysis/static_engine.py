@@ -117,8 +117,10 @@ def supports(model: Model) -> bool:
 
 def preferred(model: Model) -> bool:
     """Whether the engine is the default path of the statics of `model`: it takes the model,
-    which has at least ENGINE_MIN_FREE free coordinates (where the engine is the faster, its
-    start-up included; no upper bound: the comment above ENGINE_MIN_FREE)."""
+    which has at least ENGINE_MIN_FREE free coordinates (where a solve through the engine is
+    the faster, with the packing amortised over the solves of a live model: a process that
+    solves a new large model once pays more, the comment above ENGINE_MIN_FREE; no upper
+    bound)."""
     return supports(model) and model.free_coordinates.size >= ENGINE_MIN_FREE
 
 

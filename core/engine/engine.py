@@ -55,15 +55,7 @@ import numpy as np
 from ..numerics.dense import lu_factor, lu_solve, lu_solve_rows, put
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, call_engine, carray, float_address
-from . import (
-    beam_mass_entry,
-    formed_rates,
-    newton,
-    operations,
-    rigid_kernels,
-    sparse_factors,
-    static_step,
-)
+from . import beam_mass_entry, formed_rates, newton, operations, rigid_kernels, sparse_factors
 from . import data as ed
 from . import slots as slot
 from .coil_entries import (
@@ -117,14 +109,15 @@ from .reactions import stress_resultants_entry
 from .rigid_inertia_kernels import rigid_bodies_entry
 from .slots import float_array, int_array
 from .stage_force import stage_force_entry
+from .static_step import static_step_entry
 from .tangent import tangent
 
 # what other modules take from here (the accessors and the dense LU are the engine's too)
 __all__ = ["ENGINE_ENTRY", "ENTRIES", "OP_ACCELERATIONS", "OP_CONFIGURATION", "OP_DEFORMATIONS",
            "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
            "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_STATIC_STEP",
-           "OP_STRESS_RESULTANTS",
-           "OP_TANGENT", "call", "connect", "first_order_jacobian", "first_order_rhs",
+           "OP_STRESS_RESULTANTS", "OP_TANGENT", "call", "connect", "first_order_jacobian",
+           "first_order_rhs",
            "float_array", "implicit_jacobian", "implicit_residual", "int_array", "lu_factor",
            "lu_solve"]
 
@@ -438,7 +431,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry,
            input_stiffness_entry, beam_mass_entry.beam_masses_entry,
            formed_rates.formed_rates_entry, stage_force_entry,
-           newton.force_solve_entry, static_step.static_step_entry)
+           newton.force_solve_entry, static_step_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),

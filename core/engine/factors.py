@@ -121,7 +121,7 @@ def _constraint_jacobian(table, J):
 
 
 @kernel
-def _scatter_de(table, De, emap, shift, mirror, out):
+def scatter_de(table, De, emap, shift, mirror, out):
     """out[emap[shift + e]] = De[e] for the entries e of slot de (and, with mirror >= 0, the
     same at emap[mirror + e]: J_o^T beside J_o) where the map has a place (>= 0), skipping
     the elements that touch a rigid cluster: their entries come from their De_z."""
@@ -284,7 +284,7 @@ def add_rigid_rows(table, A, na):
     rde = _f(table, slot.RIGID_DE)
     if dims[ed.A_SPARSE] == 1:
         De, amap = _f(table, slot.DE), _i(table, slot.AUG_MAP)
-        _scatter_de(table, De, amap, nf, nf + De.size, A)  # a touching element's below
+        scatter_de(table, De, amap, nf, nf + De.size, A)  # a touching element's below
         if rigid:
             base, n_rde = dims[ed.A_RIGID], rde.size
             for e in range(n_rde):

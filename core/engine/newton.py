@@ -46,7 +46,7 @@ from ..numerics.rotation_kernels import rates_coefficient
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
-from .factors import _scatter_de
+from .factors import scatter_de
 from .kinematics import dof_rows
 from .motion import any_nonzero
 from .newton_rigid import mass_block, own_tangent, slave_curvature, touching_tangent
@@ -81,7 +81,7 @@ EULER_PAIRS = 16  # `newton_packing.EULER_PAIRS`
 
 
 @kernel
-def _parts(table):
+def newton_parts(table):
     """(M, C_x, K_x) on H's pattern: views of slot newton_parts."""
     parts = _f(table, slot.NEWTON_PARTS)
     nnz = parts.size // 3
@@ -89,7 +89,7 @@ def _parts(table):
 
 
 @kernel
-def _factor(table, ints, floats):
+def factor_kept(table, ints, floats):
     """The sparse LU of the values in `floats` with the kept pivots, else pivoting afresh
     (counted in counters[SPARSE_PIVOTING]); whether it could be factored."""
     if sparse_lu.refactor(ints, floats, sparse_lu.THRESHOLD) >= 0.0:
@@ -110,7 +110,7 @@ def _full_stresses(table):
 
 
 @kernel
-def _element_tangent(table, g, i, sigma, Ke, Ce, row, crow):
+def element_tangent(table, g, i, sigma, Ke, Ce, row, crow):
     """K_e = De^T S_e De + sum_b sigma_b D2e_b and C_e = De^T D_e De (m * m each, row by row)
     of element i of group g, S_e and D_e its block of S and D (compressed rows)."""
     n, m, k, coords, defs, De, D2e = group_deformations(table, g)
@@ -163,7 +163,7 @@ def jacobian(table, y):
     dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     rigid = dims[ed.NSLAVES] > 0
-    Mv, Cv, Kv = _parts(table)
+    Mv, Cv, Kv = newton_parts(table)
     if rigid:  # M_z with J_o as the evaluation assembles them (before slot x_trial's r_full)
         mass_block(table, Mv)
     sigma = _full_stresses(table)
@@ -178,7 +178,7 @@ def jacobian(table, y):
             c = col_of_coord[a]
             if c >= 0:
                 Mv[hmap[c]] += lumped[a]
-        _scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
+        scatter_de(table, De, hmap, nf, nf + De.size, Mv)  # J_o below and beside
     local, columns = _f(table, slot.LOCAL), _i(table, slot.POINT_COLUMNS)
     work = _f(table, slot.NEWTON_SCRATCH)[3 * (nf + dims[ed.NRIGID]):]  # past the solve's
     base = nf + 2 * De.size  # the element pairs' part of the map
@@ -200,10 +200,10 @@ def jacobian(table, y):
             t = rigid_element(table, group_row, i) if rigid else -1
             if t >= 0:  # on its z-coordinates; its mass is in M_z already
                 if own_tangent(table, t):
-                    _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+                    element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Cv, hmap, rigid_base, work)
                 continue
-            _element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+            element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
             Mp = masses[i * P * P: (i + 1) * P * P]
             heavy = not rigid and i < n_inertia and not massless(Mp, pattern)
             if heavy:  # Me = Dp^T Mp Dp (the point values unused)
@@ -221,12 +221,12 @@ def jacobian(table, y):
     if rigid:  # the slaves' curvature, with r_full (slot x_trial) and lam (slot dx)
         slave_curvature(table, _f(table, slot.X_TRIAL), _f(table, slot.DX), Kv, hmap,
                         rigid_base)
-    _input_stiffness(table, Kv)
+    input_load_stiffness(table, Kv)
     return _constraint_factors(table)
 
 
 @kernel
-def _input_stiffness(table, Kv):
+def input_load_stiffness(table, Kv):
     """K_x -= 2 u P_k on the Euler parameters of every moment input u about axis k (the load
     stiffness of `ports.subtract_input_stiffness`, in coordinate space)."""
     specs, inputs = _i(table, slot.INPUT_PORTS), evaluated_port_values(table)
@@ -249,7 +249,7 @@ def _constraint_factors(table):
     status."""
     ints, floats = _i(table, slot.NEWTON_J), _f(table, slot.NEWTON_J_VALUES)
     constraint_values(table, _i(table, slot.NEWTON_J_MAP), sparse_lu.matrix_values(ints, floats))
-    return ed.OK if _factor(table, ints, floats) else ed.SINGULAR_CONSTRAINTS
+    return ed.OK if factor_kept(table, ints, floats) else ed.SINGULAR_CONSTRAINTS
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -257,11 +257,11 @@ def factor(table, hg):
     """NEWTON_FACTOR: H = M + hg C_x + hg^2 K_x (with J_o) factored; a status."""
     ints, floats = _i(table, slot.NEWTON_H), _f(table, slot.NEWTON_H_VALUES)
     H = sparse_lu.matrix_values(ints, floats)
-    Mv, Cv, Kv = _parts(table)
+    Mv, Cv, Kv = newton_parts(table)
     h2 = hg * hg
     for p in range(H.size):
         H[p] = Mv[p] + hg * Cv[p] + h2 * Kv[p]
-    return ed.OK if _factor(table, ints, floats) else ed.SINGULAR_MASS
+    return ed.OK if factor_kept(table, ints, floats) else ed.SINGULAR_MASS
 
 
 @kernel(inline="always")  # into its operations' entries, its callers
@@ -280,7 +280,7 @@ def solve(table, v, hg, force):
     scratch = _f(table, slot.NEWTON_SCRATCH)
     na = nf + n_rigid
     a, b, rhs = scratch[:nf], scratch[na: na + nf], scratch[2 * na: 3 * na]
-    Mv, _, Kv = _parts(table)
+    Mv, _, Kv = newton_parts(table)
     dof_rows(table, v[ndof: 2 * ndof], a)  # [0; r2] (or [0; hg g]) on J's rows
     dof_rows(table, v[:ndof], b)
     if force:  # [J_J^T [0; hg g] - hg K_x b; 0], b = J^-1 [0; r1]

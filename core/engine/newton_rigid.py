@@ -10,7 +10,7 @@ DF_z^T (.) DF_z of
 
 the dense tangent's terms (`tangent`: K = DF^T K_x DF with DF's slave rows T DF_z, and
 `rigid_kernels.rigid_geometric`) in coordinate space: K_e, C_e the element's blocks on its
-coordinates x (`newton._element_tangent`), T_e its block of T, rho the forces the eliminated
+coordinates x (`newton.element_tangent`), T_e its block of T, rho the forces the eliminated
 rigid rows carried (`rigid_kernels.slave_forces`), acting through the curvature of a slave
 translation in its master's rotation (C_r on the Euler parameters, -R(phi) r on a planar
 angle). As in the dense tangent, the velocity terms of c(zdot) are not in C_z.

@@ -15,7 +15,7 @@ from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
-from .factors import _scatter_de
+from .factors import scatter_de
 from .operations import SPARSE_AUGMENTED, SPARSE_J_TRANSPOSED
 from .rigid_kernels import row_de_z
 from .slots import float_array as _f
@@ -86,7 +86,7 @@ def constraint_values(table, jmap, values):
     dims = _i(table, slot.DIMS)
     values[:] = 0.0
     n_de, n_xdof = De.size, dims[ed.NXDOF]
-    _scatter_de(table, De, jmap, 0, -1, values)
+    scatter_de(table, De, jmap, 0, -1, values)
     for j in range(n_xdof):
         s = jmap[n_de + j]
         if s >= 0:
