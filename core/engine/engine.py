@@ -12,6 +12,10 @@ has its module; this one holds the forms the integrators call and the operations
     motion           qddot from M_bar qddot = DF^T r (or the augmented system), M_bar
     input_response   the change of qddot that a change of the inputs makes, from the factors
                      of the last evaluation
+    refinement       a solve of the augmented system with an earlier state's factors, refined
+                     (the input response's; `refined_accelerations`: the evaluation's)
+    stage_force      the ESDIRK's stage residual in mass form, r - M xddot, without a solve
+    static_step      the statics' Newton step on the sparse saddle-point system
     point_masses     an element's point forces and mass Dp^T Mp Dp through its inertia points
     tangent          stiffness K0 + G0 and damping C0 of the dynamic balance
     rigid            the rigid clusters packed: the slaves' coordinates and the rigid beams'
@@ -68,7 +72,12 @@ from .coil_entries import (
     coils_entry,
 )
 from .input_response import input_response
-from .kinematics import deformations, solve_kinematics, solve_positions
+from .kinematic_entries import (
+    configuration_entry,
+    deformations_entry,
+    kinematics_entry,
+    positions_entry,
+)
 from .motion import evaluate, reduced_mass
 from .operations import (
     OP_ACCELERATIONS,
@@ -117,9 +126,8 @@ __all__ = ["ENGINE_ENTRY", "ENTRIES", "OP_ACCELERATIONS", "OP_CONFIGURATION", "O
            "OP_EVALUATE", "OP_INPUT_RESPONSE", "OP_JACOBIAN", "OP_KINEMATICS", "OP_MASS",
            "OP_POSITIONS", "OP_RESIDUAL", "OP_RESIDUAL_JACOBIAN", "OP_RHS", "OP_STATIC_STEP",
            "OP_STRESS_RESULTANTS", "OP_TANGENT", "call", "connect", "first_order_jacobian",
-           "first_order_rhs",
-           "float_array", "implicit_jacobian", "implicit_residual", "int_array", "lu_factor",
-           "lu_solve"]
+           "first_order_rhs", "float_array", "implicit_jacobian", "implicit_residual", "int_array",
+           "lu_factor", "lu_solve"]
 
 _i, _f = int_array, float_array  # the short names of the many uses below
 
@@ -325,22 +333,6 @@ def residual_jacobian_entry(op, user_data, t, a, b, c, s):
                              carray(c, (n * n,), _F8))
 
 
-@entry(ENGINE_ENTRY)
-def kinematics_entry(op, user_data, t, a, b, c, s):
-    """OP_KINEMATICS: q (a); x = F(q) and DF."""
-    table = address_of(user_data)
-    status = run(table, OP_CONFIGURATION, address_of(a), 0, 0.0)
-    if status == ed.OK:
-        status = run(table, OP_DF, 0, 0, 0.0)
-    return status
-
-
-@entry(ENGINE_ENTRY)
-def deformations_entry(op, user_data, t, a, b, c, s):
-    """OP_DEFORMATIONS: x (a); s = the order of the derivatives."""
-    table = address_of(user_data)
-    deformations(table, carray(a, (_i(table, slot.DIMS)[ed.NX],), _F8), int(s), False)
-    return ed.OK
 
 
 @entry(ENGINE_ENTRY)
@@ -358,12 +350,6 @@ def tangent_entry(op, user_data, t, a, b, c, s):
     return tangent(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
 
 
-@entry(ENGINE_ENTRY)
-def positions_entry(op, user_data, t, a, b, c, s):
-    """OP_POSITIONS: q (a)."""
-    table = address_of(user_data)
-    return solve_positions(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
-
 
 @entry(ENGINE_ENTRY)
 def accelerations_entry(op, user_data, t, a, b, c, s):
@@ -372,12 +358,6 @@ def accelerations_entry(op, user_data, t, a, b, c, s):
     ndof = _i(table, slot.DIMS)[ed.NDOF]
     return evaluate(table, carray(a, (ndof,), _F8), carray(b, (ndof,), _F8))
 
-
-@entry(ENGINE_ENTRY)
-def configuration_entry(op, user_data, t, a, b, c, s):
-    """OP_CONFIGURATION: q (a)."""
-    table = address_of(user_data)
-    return solve_kinematics(table, carray(a, (_i(table, slot.DIMS)[ed.NDOF],), _F8))
 
 
 @entry(ENGINE_ENTRY)
