@@ -411,6 +411,7 @@ def main(argv=None):
         parser.error("--plant compares the closed loop: give --loop too")
     if args.moves and (not args.loop or args.plant != "inprocess" or args.coils):
         parser.error("--moves runs every move in closed loop in process: give --loop alone")
+    args.figures.mkdir(parents=True, exist_ok=True)  # written after minutes of work
     if args.coils:
         coils_study(args.loop, args.figures, args.plant)
         return 0
