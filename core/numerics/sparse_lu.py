@@ -107,6 +107,8 @@ class StaticLU:
         from scipy.sparse import csc_matrix
         from scipy.sparse.linalg import splu
 
+        from .sparse_lu_entry import factor_now  # without numba where the cache has it
+
         rows, columns = np.asarray(rows, dtype=np.int64), np.asarray(columns, dtype=np.int64)
         self.n = n = int(n)
         matrix = csc_matrix((np.asarray(values, dtype=float), (rows, columns)), shape=(n, n))
@@ -131,7 +133,7 @@ class StaticLU:
             room = int(slack * (lu.L.nnz + lu.U.nnz)) + n
             while True:
                 packed = _pack(n, coo, reference, pcol, prow, room)
-                ratio = factor(*packed, THRESHOLD)
+                ratio = factor_now(*packed, THRESHOLD)
                 if ratio != CAPACITY:
                     break
                 room *= 2
@@ -183,9 +185,11 @@ def _pack(n, coo, reference, pcol, prow, room):
 
 
 def _multiplications(ints, n):
-    """Multiplications of one `refactor` and one `solve` on the packed patterns."""
-    parts = _parts(ints, np.zeros(int(ints[H_NNZ_A]) + 2 * int(ints[H_ROOM_L]) + n))
-    Lp, Up, Ui = parts[3], parts[5], parts[6]
+    """Multiplications of one `refactor` and one `solve` on the packed patterns (read at
+    `_parts`' offsets in Python: a kernel called from here would import numba)."""
+    lp = H_SIZE + n + 1 + int(ints[H_NNZ_A])
+    up = lp + n + 1 + int(ints[H_ROOM_L])
+    Lp, Up, Ui = ints[lp: lp + n + 1], ints[up: up + n + 1], ints[up + n + 1:]
     l_count = np.diff(Lp)
     # each entry (k, j) of U off the diagonal costs nnz(L[:, k]) multiplications in column j
     ends = Up[1:] - 1
