@@ -86,11 +86,20 @@ class LinearModel:
         return self.solution.config.DF
 
     def port_rows(self) -> tuple[np.ndarray, np.ndarray]:
-        """The inputs' rows b_j^T DF (n_inputs, NDOF): the generalised force on the DOFs of a
-        unit input (N per N, N m per N m), and its port's velocity per DOF velocity; and the
-        outputs' rows d y / d q (n_outputs, NDOF; a rate output's per that rate of q): the
-        engine's where it linearised, else the numpy ports' (`input_columns`,
-        `output_rows`) at the configuration. On the DOFs proper (kinematic inputs held)."""
+        """The state space's input columns and output rows on the DOFs at the configuration:
+        the engine's where it linearised (OP_PORT_ROWS at its tangent's evaluation), else the
+        numpy ports' (`input_columns`, `output_rows`).
+
+        Returns
+        -------
+        inputs : ndarray (n_inputs, NDOF)
+            b_j^T DF: the generalised force on the DOFs of a unit input (N per N, N m per
+            N m), and its port's velocity per DOF velocity (a coil's back-EMF row).
+        outputs : ndarray (n_outputs, NDOF)
+            d y / d q (a rate output's per that rate of q: m/m, rad/m, rad/rad, ...).
+
+        On the DOFs proper (kinematic inputs held: their columns dropped).
+        """
         if self.input_rows is not None:
             return self.input_rows, self.output_rows
         x, DF = self.solution.config.x, self.DF
