@@ -36,6 +36,11 @@ evaluation leaves out (`dims.static`, `static_engine`), so that the statics' lat
 their packed model as they left it; the load is the statics' to set anew (`set_load`) at
 its next solve.
 
+The input and output columns of the state space come from the same evaluation
+(`engine_port_rows`, OP_PORT_ROWS: `engine.port_entries`): per input b_j^T DF on the DOFs, an
+actuator's too (its force column and its coil's back-EMF row), and per output d y / d q, at
+the tangent's x and DF.
+
 Where the engine does not take a model: what `static_engine.supports` refuses, and gravity on
 element masses that hang on rotations (a BEAM's consistent mass), whose load stiffness the
 engine's tangent leaves out (8e-9 of K's largest entry on a spatial cantilever, which moves
@@ -153,6 +158,20 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
         dims[ed.STATIC] = 1
     K0 = _structural(data, config.De, DF)
     return M0, C0, K0, K - K0
+
+
+def engine_port_rows(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """The inputs' rows b_j^T DF (n_inputs, NDOF; N per unit input on each DOF, the port's
+    velocity per DOF velocity) and the outputs' rows d y / d q (n_outputs, NDOF; m/m, rad/rad
+    and so on, a rate output's per rate of q) of `model` at the last evaluation of its
+    statics' packed model, through OP_PORT_ROWS (module docstring): call it right after
+    `engine_matrices`, whose tangent is that evaluation. With kinematic inputs on every DOF
+    (the caller drops the prescribed ones)."""
+    from ..engine.port_entries import port_rows
+    from ..mechanics.output_quantities import output_order
+
+    data = static_engine.engine_balance(model).data
+    return port_rows(data, model.outputs, [output_order(port) for port in model.outputs])
 
 
 def _structural(data, De, DF):

@@ -34,8 +34,10 @@ prescribed positions: `flexure.core.analysis.motion_statespace`.
 
 M0, C0, K0 and G0 come from the compiled engine where the statics have packed it for the
 model (`linear_engine`: its tangent at the equilibrium, within 1e-10 of the largest entry of
-the numpy path's, tests/test_linear_engine.py), else from the numpy `Mechanics`; the input
-and output columns from the numpy ports either way.
+the numpy path's, tests/test_linear_engine.py), else from the numpy `Mechanics`; so do the
+input columns DF^T b and the output rows d y / d q (`LinearModel.port_rows`: the engine's
+OP_PORT_ROWS at the same evaluation, within round-off of the numpy ports', tests/
+test_port_rows.py).
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ import numpy as np
 
 from ..mechanics.actuators import amplifier_slope
 from ..mechanics.mechanics import Mechanics
-from ..mechanics.ports import input_columns
+from ..mechanics.ports import input_columns, output_rows
 from ..numerics.blas import blas_threads
 from . import linear_engine
 from .statics import StaticSolution, static_equilibrium
@@ -66,6 +68,9 @@ class LinearModel:
     C0: np.ndarray
     K0: np.ndarray
     G0: np.ndarray
+    # the engine's rows at the configuration where it linearised (`port_rows`), else None
+    input_rows: np.ndarray | None = None
+    output_rows: np.ndarray | None = None
 
     @property
     def K(self) -> np.ndarray:
@@ -80,6 +85,26 @@ class LinearModel:
             return self.solution.config.DF[:, self.model.free_dofs]
         return self.solution.config.DF
 
+    def port_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The state space's input columns and output rows on the DOFs at the configuration:
+        the engine's where it linearised (OP_PORT_ROWS at its tangent's evaluation), else the
+        numpy ports' (`input_columns`, `output_rows`).
+
+        Returns
+        -------
+        inputs : ndarray (n_inputs, NDOF)
+            b_j^T DF: the generalised force on the DOFs of a unit input (N per N, N m per
+            N m), and its port's velocity per DOF velocity (a coil's back-EMF row).
+        outputs : ndarray (n_outputs, NDOF)
+            d y / d q (a rate output's per that rate of q: m/m, rad/m, rad/rad, ...).
+
+        On the DOFs proper (kinematic inputs held: their columns dropped).
+        """
+        if self.input_rows is not None:
+            return self.input_rows, self.output_rows
+        x, DF = self.solution.config.x, self.DF
+        return (input_columns(self.model, x).T @ DF, output_rows(self.model, x, DF))
+
     def state_matrices(self) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """The first-order linear system dz/dt = A z + B du (module docstring).
 
@@ -93,7 +118,7 @@ class LinearModel:
         names : list of str
             The states: the DOF names, then "<dof>_dot", then "<actuator>.current".
         """
-        model, DF = self.model, self.DF
+        model = self.model
         n, coils = self.M0.shape[0], model.coil_actuators
         N = 2 * n + len(coils)
         u0 = (np.zeros(len(model.inputs)) if self.solution.inputs is None
@@ -102,11 +127,12 @@ class LinearModel:
         A[:n, n: 2 * n] = np.eye(n)
         A[n: 2 * n, :n] = -np.linalg.solve(self.M0, self.K)
         A[n: 2 * n, n: 2 * n] = -np.linalg.solve(self.M0, self.C0)
-        # d force / d u: the ports' unit generalised forces at the configuration
-        forces = input_columns(model, self.solution.config.x)
+        # d force / d u on the DOFs: the ports' unit generalised forces at the configuration
+        rows = self.port_rows()[0]
+        forces = rows.T.copy()
         for actuator in model.actuators:
             j = actuator.input
-            column = forces[:, j].copy()
+            column = rows[j]  # b_j^T DF: the force per unit input, and the back-EMF's row
             slope = amplifier_slope(actuator, u0[j])
             if actuator.drive == "current":
                 forces[:, j] = actuator.force_constant * slope * column
@@ -114,11 +140,11 @@ class LinearModel:
             k = 2 * n + coils.index(actuator)
             forces[:, j] = 0.0
             km, inductance = actuator.force_constant, actuator.inductance
-            A[n: 2 * n, k] = np.linalg.solve(self.M0, km * (DF.T @ column))
-            A[k, n: 2 * n] = -km / inductance * (column @ DF)
+            A[n: 2 * n, k] = np.linalg.solve(self.M0, km * column)
+            A[k, n: 2 * n] = -km / inductance * column
             A[k, k] = -actuator.resistance / inductance
             B[k, j] = slope / inductance
-        B[n: 2 * n] = np.linalg.solve(self.M0, DF.T @ forces)
+        B[n: 2 * n] = np.linalg.solve(self.M0, forces)
         dofs = model.free_dof_names
         names = ([f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
                  + [f"{a.name}.current" for a in coils])
@@ -161,8 +187,10 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
     config = solution.config
     engine = (linear_engine.preferred(model, mech) if compiled is None
               else compiled and linear_engine.supports(model, mech))
+    rows = (None, None)
     if engine and solution.load_factor == 1.0:
         matrices = linear_engine.engine_matrices(model, solution, mech)
+        rows = linear_engine.engine_port_rows(model)  # at that tangent's evaluation
     else:
         matrices = (mech.mass_matrix(config), mech.damping_matrix(config),
                     mech.structural_stiffness(config),
@@ -172,5 +200,8 @@ def linearize(model: Model, solution: StaticSolution | None = None, *,
     if model.kinematic_inputs:  # held: the DOFs proper alone (module docstring)
         free = np.ix_(model.free_dofs, model.free_dofs)
         matrices = tuple(matrix[free] for matrix in matrices)
+        if rows[0] is not None:
+            rows = tuple(row[:, model.free_dofs] for row in rows)
     M0, C0, K0, G0 = matrices
-    return LinearModel(model=model, solution=solution, M0=M0, C0=C0, K0=K0, G0=G0)
+    return LinearModel(model=model, solution=solution, M0=M0, C0=C0, K0=K0, G0=G0,
+                       input_rows=rows[0], output_rows=rows[1])

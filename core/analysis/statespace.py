@@ -17,7 +17,9 @@ the rotation-vector component's gradient for an angle, 2 E_k for an angular velo
 term (quadratic in dq') has no linear part. An acceleration output's row is DF_y times the
 lower rows of A and B: an accelerometer has a feedthrough D. Units: inputs N (N m), outputs
 m, m/s, m/s2 (rad, rad/s, rad/s2); each output's quantity and order are
-`flexure.core.mechanics.output_quantities`'.
+`flexure.core.mechanics.output_quantities`'. The columns DF^T b and the rows DF_y are the
+linear model's (`LinearModel.port_rows`: the compiled engine's where it linearised the model,
+else the numpy ports').
 An input a voice-coil actuator drives is its drive signal (V), and a voltage-driven coil adds
 its current (A) to the state, [dq, dq', di] (`LinearModel.state_matrices`, with the same b
 columns of the ports): the transfer from the drive signal to a position then shows the
@@ -32,7 +34,6 @@ import numpy as np
 
 from ..errors import SceneError
 from ..mechanics.output_quantities import output_order
-from ..mechanics.ports import input_columns, output_rows
 from ..numerics.blas import blas_threads
 from ..numerics.ties import TIE_RTOL
 from .linearization import linearize
@@ -148,12 +149,10 @@ def static_gain(model: Model, *, linear_model: LinearModel | None = None) -> np.
         A, B, C, D, _ = _matrices(model, linear_model)  # or its SceneError
         return D - C @ np.linalg.solve(A, B)
     lin = linear_model or linearize(model)
-    x = lin.solution.config.x
-    DF = lin.DF
-    rows = output_rows(model, x, DF)
+    forces, rows = lin.port_rows()
     positions = np.array([output_order(port) == 0 for port in model.outputs])
     gain = np.zeros((len(model.outputs), len(model.inputs)))
-    gain[positions] = rows[positions] @ np.linalg.solve(lin.K, DF.T @ input_columns(model, x))
+    gain[positions] = rows[positions] @ np.linalg.solve(lin.K, forces.T)
     return gain
 
 
@@ -166,21 +165,18 @@ def _matrices(model, linear_model):
         )
     lin = linear_model or linearize(model)
     n = lin.M0.shape[0]
-    DF = lin.DF
-    x = lin.solution.config.x
+    forces, rows = lin.port_rows()  # the engine's where it linearised, else numpy's
     if model.actuators:
         A, B, states = lin.state_matrices()
     else:  # the force and moment inputs alone: the same numbers, as they have been computed
-        b = input_columns(model, x)
         M_inv_K = np.linalg.solve(lin.M0, lin.K)
         M_inv_C = np.linalg.solve(lin.M0, lin.C0)
         A = np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv_K, -M_inv_C]])
-        B = np.vstack([np.zeros((n, b.shape[1])), np.linalg.solve(lin.M0, DF.T @ b)])
+        B = np.vstack([np.zeros((n, forces.shape[0])), np.linalg.solve(lin.M0, forces.T)])
         dofs = model.free_dof_names  # the DOFs proper: kinematic inputs are held
         states = [f"{d}" for d in dofs] + [f"{d}_dot" for d in dofs]
     C = np.zeros((len(model.outputs), A.shape[0]))
     D = np.zeros((len(model.outputs), len(model.inputs)))
-    rows = output_rows(model, x, DF)
     for row, port in enumerate(model.outputs):
         order = output_order(port)
         if order < 2:  # dq or dq', a block of the state

@@ -110,7 +110,7 @@ from .operations import (
     run,
 )
 from .part_entries import df_entry, mass_of_entry, row_products_entry
-from .port_entries import input_stiffness_entry
+from .port_entries import input_stiffness_entry, port_rows_entry
 from .ports import PORT_WIDTH, ROTATION
 from .prescribed import prescribed_jacobian_entry, prescribed_rhs_entry
 from .prescribed_residual import prescribed_residual_entry, prescribed_residual_jacobian_entry
@@ -411,7 +411,7 @@ ENTRIES = (rhs_entry, jacobian_entry, residual_entry, residual_jacobian_entry, k
            stress_resultants_entry, row_products_entry, coils_entry, rigid_bodies_entry,
            input_stiffness_entry, beam_mass_entry.beam_masses_entry,
            formed_rates.formed_rates_entry, stage_force_entry,
-           newton.force_solve_entry, static_step_entry)
+           newton.force_solve_entry, static_step_entry, port_rows_entry)
 CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_RESIDUAL: (OP_RHS, OP_MASS), OP_RESIDUAL_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_KINEMATICS: (OP_CONFIGURATION, OP_DF), OP_EVALUATE: (OP_ACCELERATIONS, OP_MASS),

@@ -95,6 +95,10 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
     STATIC_STEP          q, qdot (zeros), out (2 NDOF,): the statics' Newton step [dq; Q] on
                          the sparse Newton matrix's saddle-point system (`static_step`;
                          the statics' augmented packing with dims[NEWTON_SPARSE] = 1)
+    PORT_ROWS            a = the outputs' packed rows (int64), b = out (nin + s, NDOF), c =
+                         their orders (int64); s = their count: the inputs' columns of B and
+                         the outputs' rows of C on the DOFs at the last evaluation
+                         (`port_entries`; the linearisation's)
 
 DF and MASS_OF are parts of the evaluation that several operations use: as operations of their
 own (`part_entries`) they are compiled once, not again inside each caller; ROW_PRODUCTS is the
@@ -125,7 +129,8 @@ ENTRY = "int32(int64, voidptr, float64, voidptr, voidptr, voidptr, float64)"
  OP_PRESCRIBED_JACOBIAN, OP_PRESCRIBED_RESIDUAL, OP_PRESCRIBED_RESIDUAL_JACOBIAN,
  OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STRESS_RESULTANTS,
  OP_ROW_PRODUCTS, OP_COILS, OP_RIGID_BODIES, OP_INPUT_STIFFNESS, OP_BEAM_MASSES,
- OP_FORMED_RATES, OP_STAGE_FORCE, OP_NEWTON_FORCE_SOLVE, OP_STATIC_STEP) = range(42)
+ OP_FORMED_RATES, OP_STAGE_FORCE, OP_NEWTON_FORCE_SOLVE, OP_STATIC_STEP,
+ OP_PORT_ROWS) = range(43)
 NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_STAGE_FORCE,
                      OP_NEWTON_FORCE_SOLVE)
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))

@@ -8,14 +8,21 @@ Each port is packed as one int64 row of PORT_WIDTH entries (`port_specs`):
 
 and the kernels below are the compiled twins of `flexure.core.mechanics.ports` (the maths is
 in its docstring): the generalised force of the inputs, its load stiffness, the value of an
-output, and a port's velocity (the power conjugate of its force or moment, which a voice
-coil's back-EMF takes: `actuators`). Units: N, N m, m, rad, as the model's.
+output, a port's velocity (the power conjugate of its force or moment, which a voice coil's
+back-EMF takes: `actuators`), and a port's row on the DOFs (`port_row`, `angle_row`: an
+input's column of the state space's B and an output's row of its C, `port_entries`). Units:
+N, N m, m, rad, as the model's.
 """
 
 import numpy as np
 
 from ..numerics.jit import kernel
-from ..numerics.rotation_kernels import rates_coefficient, rates_row, rotation_vector_value
+from ..numerics.rotation_kernels import (
+    rates_coefficient,
+    rates_row,
+    rotation_vector_component,
+    rotation_vector_value,
+)
 
 COORDINATE, ROTATION = 0, 1
 PORT_WIDTH = 6
@@ -125,3 +132,25 @@ def port_row(specs, j, x, DF, ndof, out):
     for i in range(ndof):
         out[i] = 2.0 * (e0 * DF[i0 * ndof + i] + e1 * DF[i1 * ndof + i]
                         + e2 * DF[i2 * ndof + i] + e3 * DF[i3 * ndof + i])
+
+
+@kernel
+def angle_row(specs, j, x, DF, ndof, out):
+    """out (ndof,) = d y_j / d q of a position output j (packed rows, flat): the row DF_c of a
+    coordinate c (m/m, m/rad), or (d phi_k / d lambda) DF_l of the angle phi_k (rad) about
+    axis k of a node with Euler parameters lambda (rad/m, rad/rad), the rotation vector's
+    gradient (`rotation_kernels.rotation_vector_component`). DF (NX NDOF) flat, row by row."""
+    base = j * PORT_WIDTH
+    if specs[base] == COORDINATE:
+        port_row(specs, j, x, DF, ndof, out)
+        return
+    lam = np.empty(4)
+    for a in range(4):
+        lam[a] = x[specs[base + 1 + a]]
+    D = np.zeros(4)
+    rotation_vector_component(lam, specs[base + 5], 1, D, np.empty((4, 4)))
+    for i in range(ndof):
+        value = 0.0
+        for a in range(4):
+            value += D[a] * DF[specs[base + 1 + a] * ndof + i]
+        out[i] = value
