@@ -272,7 +272,10 @@ def qddot_of_solution(table, rhs, xddot, with_c, quad, moving, qddot):
     positions, dof_coords = _i(table, slot.DOF_POS), _i(table, slot.DOF_COORDS)
     for j in range(dims[ed.NXDOF]):
         qddot[j] = rhs[positions[j]] if positions[j] >= 0 else xddot[dof_coords[j]]
-    dof_deformation_accelerations(table, xddot, quad, moving, qddot)
+    # the walk over every element's deformations finds rows only where a DOF is a
+    # deformation: skipped where none is (it writes nothing then)
+    if dims[ed.NEDOF] > 0:
+        dof_deformation_accelerations(table, xddot, quad, moving, qddot)
 
 
 @kernel(inline="always")
