@@ -26,14 +26,20 @@ Tolerances:
 import numpy as np
 import pytest
 from test_engine import scene_with_gravity
+from test_sparse_newton import newton_solve_beside_dense, sparse_data
 from test_static_step import loaded_strip
 from test_static_tangent import away_from_equilibrium, cantilever_with_gravity
 
+from examples.benchmarks.spatial import cantilever_spec
+from flexure.core import build_model
 from flexure.core.analysis import linear_engine
 from flexure.core.analysis.linearization import linearize
 from flexure.core.analysis.modal import natural_frequencies
 from flexure.core.analysis.static_engine import EngineBalance, EnginePoint
 from flexure.core.analysis.statics import static_equilibrium
+from flexure.core.engine import data as ed
+from flexure.core.engine import engine
+from flexure.core.engine.operations import OP_NEWTON_JACOBIAN
 from flexure.core.mechanics.mechanics import Mechanics
 
 
@@ -115,3 +121,38 @@ def test_the_engine_tangent_is_the_jacobian_of_its_static_balance():
     assert error <= TOLERANCE * scale
     assert without > 1e2 * TOLERANCE * scale  # the check sees the term
 
+
+
+def test_the_sparse_newton_matrix_has_it_as_the_dense_jacobian(monkeypatch):
+    """The ESDIRK's sparse Newton solve (`newton`) against numpy's (I - hg J)^-1 r with the
+    engine's dense first-order Jacobian J (OP_TANGENT's K) on an 8-BEAM cantilever under
+    gravity (a density 1e3 times steel's), DOFs 1e-4 from the initial ones: within 1e-9 of
+    the solution's size (tests/test_sparse_newton.py's bound); without gravity's load
+    stiffness in J's K the solve moves by more than 1e-6 of it at hg = 1e-3 s."""
+    spec = cantilever_spec(8)
+    spec["sections"]["strip"]["rho"] = 7850.0e3
+    spec["scene"]["gravity"] = [0.0, -9.81, -3.0]
+    model = build_model(spec)
+    data = sparse_data(model, monkeypatch)
+    mech = Mechanics(model)
+    q0 = mech.kinematics.dofs_of(model.initial_coordinates)
+    n = q0.size
+    q = q0 + 1e-4 * np.random.default_rng(7).standard_normal(n)
+    y = np.concatenate([q - data.float_array("q_ref"), np.zeros(n)])
+    J = np.zeros(4 * n * n)
+    assert engine.call(data, engine.OP_JACOBIAN, y, J) == ed.OK
+    J = J.reshape(2 * n, 2 * n)
+    assert engine.call(data, OP_NEWTON_JACOBIAN, y, np.zeros(1)) == ed.OK
+    config = mech.kinematics.solve(q, model.initial_coordinates)
+    term = config.DF.T @ mech.inertia.gravity_stiffness(config.x) @ config.DF
+    without = J.copy()  # J's lower left is -M_bar^-1 K; K less the term is K + term
+    without[n:, :n] -= np.linalg.solve(config.DF.T @ mech.inertia.mass_matrix(config.x)
+                                       @ config.DF, term)
+    r = np.random.default_rng(8).standard_normal(2 * n)
+    for hg in (1e-5, 1e-3):
+        v, expected = newton_solve_beside_dense(data, J, hg, r)
+        size = largest(expected)
+        assert largest(v - expected) <= 1e-9 * size
+    moved = np.linalg.solve(np.eye(2 * n) - 1e-3 * without, r)
+    print(f"without the term {largest(moved - expected) / size:.2e}")
+    assert largest(moved - expected) > 1e-6 * size

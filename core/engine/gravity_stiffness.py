@@ -32,7 +32,8 @@ from .slots import int_array as _i
 @kernel
 def scratch_base(table):
     """The first entry of slot local past what the tangent's callers keep there (an
-    element's K_e, C_e and two rows: 2 max_m^2 + 2 max_m)."""
+    element's K_e, C_e and two rows: 2 max_m^2 + 2 max_m), the scratch of
+    `subtract_gravity_stiffness` from there (2 max_m + 3 max_p + max_p max_m + max_m)."""
     max_m = _i(table, slot.DIMS)[ed.MAX_M]
     return 2 * max_m * max_m + 2 * max_m
 
@@ -48,15 +49,15 @@ def has_gravity(table, g):
 
 
 @kernel
-def subtract_gravity_stiffness(table, g, i, x, H):
+def subtract_gravity_stiffness(table, g, i, x, H, base):
     """H (m * m, row by row) -= sum_p w_p D2p_p of element i of group g at the coordinates x
-    (NX,; m, rad): -df/dx of its gravity force (module docstring; N/m, N, N m/rad). Whether
-    anything was subtracted (False for a massless element or one without gravity)."""
+    (NX,; m, rad): -df/dx of its gravity force (module docstring; N/m, N, N m/rad), with
+    slot local from entry `base` as scratch (`scratch_base`'s size). Whether anything was
+    subtracted (False for a massless element or one without gravity)."""
     inertia = group_inertia(table, g)
     n, m, P, width, function, coords, refs, masses, gravity, pattern = inertia
     if n == 0:
         return False
-    base = scratch_base(table)
     xl, vl, point, acc, w, Dp, o = inertia_scratch(table, base, P, m)
     diagonal = _f(table, slot.LOCAL)[o: o + m]
     point_forces(masses[i * P * P: (i + 1) * P * P], pattern, P, gravity, w)

@@ -19,7 +19,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
-from .gravity_stiffness import has_gravity, subtract_gravity_stiffness
+from .gravity_stiffness import has_gravity, scratch_base, subtract_gravity_stiffness
 from .motion import any_nonzero
 from .operations import (
     HESSIANS,
@@ -137,10 +137,11 @@ def coordinate_rows(table, sigma, values, hessians, W, ranges):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         H = local[: m * m]
         weighed = hessians and has_gravity(table, g)  # gravity's load stiffness there
+        past = scratch_base(table)
         for i in range(n):
             H[:] = 0.0
             empty = True
-            if weighed and subtract_gravity_stiffness(table, g, i, x, H):
+            if weighed and subtract_gravity_stiffness(table, g, i, x, H, past):
                 empty = False
             if hessians:  # sum_i sigma_i D2e_i
                 for b in range(k):
