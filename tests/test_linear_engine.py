@@ -30,7 +30,6 @@ import numpy as np
 import pytest
 from kinematic_scenes import chain
 from test_static_engine import LARGE, SCENES
-from test_static_tangent import cantilever_with_gravity
 
 from flexure.core import build_model, load_scene
 from flexure.core.analysis import linear_engine, static_engine
@@ -156,24 +155,9 @@ def test_the_default_path_and_the_statics_left_as_they_were():
 
 
 def test_the_refused_models():
-    """Gravity on a BEAM's consistent mass (its load stiffness, which the engine's tangent
-    leaves out, moves the cantilever's frequencies by 3.5e-6 relative) and kinematic inputs
-    with actuators (which the engine's packing refuses) take the numpy path, also when the
-    engine is asked for, with the same answer."""
-    model, inputs = cantilever_with_gravity()[:2]
-    mech = Mechanics(model)
-    assert linear_engine.gravity_on_rotations(model, mech)
-    assert not linear_engine.supports(model, mech)
-    solution = static_equilibrium(model, inputs=inputs, mechanics=mech)
-    asked = linearize(model, solution, mechanics=mech, compiled=True)
-    reference = linearize(model, solution, mechanics=mech, compiled=False)
-    assert np.array_equal(asked.K, reference.K)  # the same numpy computation
-    # what the engine would leave out, against the reference's own term
-    M0, C0, K0, G0 = linear_engine.engine_matrices(model, solution, mech)
-    left_out = solution.config.DF.T @ mech.inertia.gravity_stiffness(solution.x) @ \
-        solution.config.DF
-    assert largest(left_out) > 1e-9 * largest(reference.K)
-    assert largest(K0 + G0 - reference.K - left_out) <= 1e-10 * largest(reference.K)
+    """Kinematic inputs with actuators (which the engine's packing refuses) take the numpy
+    path, also when the engine is asked for, with the same answer. Gravity on a BEAM's
+    consistent mass is in the engine's tangent (tests/test_gravity_stiffness.py)."""
     data = chain()
     data["inputs"]["F"] = {"node": "2", "coordinate": "x"}
     data["actuators"] = {"VCM": {"input": "F", "force_constant": 2.0, "drive": "current"}}

@@ -41,11 +41,11 @@ The input and output columns of the state space come from the same evaluation
 actuator's too (its force column and its coil's back-EMF row), and per output d y / d q, at
 the tangent's x and DF.
 
-Where the engine does not take a model: what `static_engine.supports` refuses, and gravity on
-element masses that hang on rotations (a BEAM's consistent mass), whose load stiffness the
-engine's tangent leaves out (8e-9 of K's largest entry on a spatial cantilever, which moves
-its frequencies by 3.5e-6 relative; 3e-11 and 6e-9 on the planar stage under gravity):
-those take the numpy path.
+Where the engine does not take a model: what `static_engine.supports` refuses; those take
+the numpy path. Gravity on element masses that hang on rotations (a BEAM's consistent mass,
+whose tangent points couple to its position points) is in the engine's tangent
+(`engine.gravity_stiffness`: its load stiffness, which the numpy reference has as
+`Inertia.gravity_stiffness`).
 """
 
 from __future__ import annotations
@@ -54,7 +54,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..mechanics.assembly import point_gravity
 from . import static_engine
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -65,9 +64,9 @@ if TYPE_CHECKING:  # names for the annotations only
 
 def supports(model: Model, mechanics: Mechanics) -> bool:
     """Whether the engine linearises `model`: its statics' engine takes it
-    (`static_engine.supports`) and no gravity acts on element masses that hang on
-    rotations (the load stiffness the engine's tangent leaves out: module docstring)."""
-    return static_engine.supports(model) and not gravity_on_rotations(model, mechanics)
+    (`static_engine.supports`). `mechanics` is `preferred`'s, which the callers pass to
+    both; the engine's answer does not depend on it."""
+    return static_engine.supports(model)
 
 
 def preferred(model: Model, mechanics: Mechanics) -> bool:
@@ -88,23 +87,6 @@ def packed(model: Model) -> bool:
     """Whether the statics' packed engine model of `model` is live
     (`static_engine.engine_balance` has made it and the model lives)."""
     return static_engine.live_balance(model) is not None
-
-
-def gravity_on_rotations(model: Model, mechanics: Mechanics) -> bool:
-    """Whether gravity acts on element masses through points that hang on rotations (the
-    tangent points of a consistent mass, coupled to its position points): then its force
-    depends on the orientation, and its load stiffness is not zero."""
-    if not np.any(model.gravity):
-        return False
-    for group, Mp in mechanics.inertia.groups:
-        kinds = group.kind.inertia_point_kinds
-        g = point_gravity(group, model.gravity)
-        if not kinds or not np.any(g):
-            continue
-        tangent = np.repeat([kind == "tangent" for kind in kinds], g.size // len(kinds))
-        if np.any((Mp @ g)[..., tangent]):
-            return True
-    return False
 
 
 def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics,

@@ -11,11 +11,10 @@ inputs' port values), from the engine's existing operations at rest: OP_ACCELERA
 reduced_force); OP_TANGENT at qddot = 0 forms K0 + G0 with the multipliers of the static
 balance J^-T r. These are `Mechanics.static_balance` and `Mechanics.tangent_stiffness` of
 the numpy reference to round-off (tests/test_static_engine.py: K within 1e-10 of its
-largest entry), but for one term the engine's tangent leaves out: the load stiffness of
-gravity on element masses that hang on rotations (a BEAM's consistent mass couples its
-position points, where gravity acts, to its tangent points), 5e-9 of K's largest entry on a
-spatial cantilever under gravity. Q is exact, so the equilibrium is the same; only Newton's
-convergence there is short of quadratic by that much. On every built-in scene the
+largest entry), the load stiffness of gravity on element masses that hang on rotations
+included (a BEAM's consistent mass couples its position points, where gravity acts, to its
+tangent points; `engine.gravity_stiffness`: 5e-9 of K's largest entry on a spatial
+cantilever under gravity). On every built-in scene the
 equilibria of the two paths agree within 1e-10 of each DOF's unit (m through the model's
 length scale, rad through 1; measured 5e-15 and below).
 

@@ -7,7 +7,8 @@ system (I - hg J) [dq; dv] = [r1; r2] (hg in s) is dq = r1 + hg dv with
 
 With M_bar = DF^T M DF, C_bar = DF^T C_x DF, K_bar = DF^T K_x DF (the coordinate-space
 damping C_x = De_s^T D De_s and tangent K_x = De_s^T S De_s + sum_e sum_i sigma_i D2e_i - the
-moment inputs' load stiffness, sigma the stress resultants of the full dynamic balance as
+load stiffness of gravity on element masses that hang on rotations (`gravity_stiffness`) and
+of the moment inputs, sigma the stress resultants of the full dynamic balance as
 `tangent` has them: sigma_c plus the multipliers J^-T (r - M xddot) on every row of J) and
 DF = J^-1 [0; I], that is the saddle-point system on the free coordinates
 
@@ -47,6 +48,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import scatter_de
+from .gravity_stiffness import has_gravity, subtract_gravity_stiffness
 from .kinematics import dof_rows
 from .motion import any_nonzero
 from .newton_rigid import mass_block, own_tangent, slave_curvature, touching_tangent
@@ -196,14 +198,20 @@ def jacobian(table, y):
         row, crow = local[o + 3 * m * m: o + 3 * m * m + m], \
             local[o + 3 * m * m + m: o + 3 * m * m + 2 * m]
         group_row = group(table, g)
+        # gravity's load stiffness, its scratch past the rows (`gravity_stiffness`)
+        weighed, past = has_gravity(table, g), o + 3 * m * m + 2 * m
         for i in range(n):
             t = rigid_element(table, group_row, i) if rigid else -1
             if t >= 0:  # on its z-coordinates; its mass is in M_z already
                 if own_tangent(table, t):
                     element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+                    if weighed:
+                        subtract_gravity_stiffness(table, g, i, x, Ke, past)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Cv, hmap, rigid_base, work)
                 continue
             element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+            if weighed:  # - df/dx of the element mass's gravity, as OP_TANGENT's K_x
+                subtract_gravity_stiffness(table, g, i, x, Ke, past)
             Mp = masses[i * P * P: (i + 1) * P * P]
             heavy = not rigid and i < n_inertia and not massless(Mp, pattern)
             if heavy:  # Me = Dp^T Mp Dp (the point values unused)

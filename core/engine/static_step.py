@@ -3,14 +3,12 @@
 The statics' reduced Newton step solves K dq = Q on the DOFs, Q = DF^T r and K = -dQ/dq =
 DF^T K_x DF, with K_x = De_s^T S De_s + sum_i sigma_i D2e_i - df/dx the coordinate-space
 tangent at rest (sigma the static balance's stress resultants: sigma_c plus the multipliers
-J^-T r on J's rows; `tangent` at qddot = 0). Of -df/dx it has what the dense tangent has,
-the moment inputs' load stiffness, and leaves out with it that of gravity on element masses
-that hang on rotations (`static_engine`): the numpy step, which has it, differs by 5.6e-7 to
-6.7e-7 of its largest entry on a 16-BEAM strip under gravity, 5.8e-7 on manipulator_control
-(the sparse step from the dense one 2e-12 to 6e-12: tests/test_static_step.py); Q is exact,
-and Newton took no more iterations than numpy's on 40- and 64-BEAM strips under gravity. On
-the free coordinates (with rigid clusters the reduced ones z, r then T^T r) the same step
-solves
+J^-T r on J's rows; `tangent` at qddot = 0). Its -df/dx is the dense tangent's: the load
+stiffness of gravity on element masses that hang on rotations (`gravity_stiffness`) and of
+the moment inputs; the numpy step differs by 3e-12 to 3e-11 of its largest entry on a
+16-BEAM strip under gravity, 1e-12 on manipulator_control (the sparse step from the dense
+one 2e-12 to 6e-12: tests/test_static_step.py). On the free coordinates (with rigid
+clusters the reduced ones z, r then T^T r) the same step solves
 
     [K_x        s J_o^T] [dx]   [r]
     [s J_o      0      ] [mu] = [0],        dq = (J's DOF rows) dx,
@@ -46,6 +44,7 @@ from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
 from .factors import add_rigid_rows, augmented_matrix, scatter_de
+from .gravity_stiffness import has_gravity, scratch_base, subtract_gravity_stiffness
 from .motion import coordinate_forces, inertia_forces
 from .newton import element_tangent, factor_kept, input_load_stiffness, newton_parts
 from .newton_rigid import own_tangent, slave_curvature, touching_tangent
@@ -61,12 +60,13 @@ from .tangent import balance_force, balance_multipliers
 @kernel
 def _coordinate_tangent(table, sigma, r_full, lam, Kv):
     """K_x at rest onto Kv (H's pattern, zeroed here): each element's De^T S De + sum_b
-    sigma_b D2e_b (a touching element's carried by its T_e), the slaves' curvature under
-    the eliminated rows' forces (r_full, lam) and the moment inputs' load stiffness."""
+    sigma_b D2e_b - df/dx of its mass's gravity (a touching element's carried by its T_e),
+    the slaves' curvature under the eliminated rows' forces (r_full, lam) and the moment
+    inputs' load stiffness."""
     dims = _i(table, slot.DIMS)
     rigid = dims[ed.NSLAVES] > 0
     hmap, De = _i(table, slot.NEWTON_H_MAP), _f(table, slot.DE)
-    local = _f(table, slot.LOCAL)
+    local, x = _f(table, slot.LOCAL), _f(table, slot.X)
     work = _f(table, slot.NEWTON_SCRATCH)[3 * (dims[ed.NFREE] + dims[ed.NRIGID]):]
     Kv[:] = 0.0
     base = dims[ed.NFREE] + 2 * De.size  # the element pairs' part of the map
@@ -79,14 +79,19 @@ def _coordinate_tangent(table, sigma, r_full, lam, Kv):
         Ke, Ce = local[: m * m], local[m * m: 2 * m * m]
         row, crow = local[2 * m * m: 2 * m * m + m], local[2 * m * m + m: 2 * m * m + 2 * m]
         group_row = group(table, g)
+        weighed, past = has_gravity(table, g), scratch_base(table)
         for i in range(n):
             t = rigid_element(table, group_row, i) if rigid else -1
             if t >= 0:  # on its z-coordinates (the statics' packing has no damping, so
                 if own_tangent(table, t):  # C_z, the second Kv, is not written)
                     element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+                    if weighed:
+                        subtract_gravity_stiffness(table, g, i, x, Ke, past)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Kv, hmap, rigid_base, work)
                 continue
             element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
+            if weighed:  # - df/dx of the element mass's gravity (`gravity_stiffness`)
+                subtract_gravity_stiffness(table, g, i, x, Ke, past)
             for e in range(m * m):
                 s = hmap[base + i * m * m + e]
                 if s >= 0:

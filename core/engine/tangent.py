@@ -5,8 +5,9 @@ At the state of the last `motion.evaluate` and accelerations qddot: mass M_bar,
 damping C0 = DeF_s^T D DeF_s (N s/m, N m s/rad) and stiffness K0 + G0 (N/m, N m/rad),
 
     K0 = DeF_s^T S DeF_s,   G0 = sum_e DF_e^T (sum_i sigma_i D2e_i) DF_e - DF^T (df/dx) DF,
-    DeF = De DF, df/dx the load stiffness of the moment inputs (`ports`; zero without them;
-    an actuator's moment at its value of that evaluation, `actuators`),
+    DeF = De DF, df/dx the load stiffness of gravity on element masses that hang on
+    rotations (`gravity_stiffness`; zero without gravity) and of the moment inputs (`ports`;
+    zero without them; an actuator's moment at its value of that evaluation, `actuators`),
 
 with sigma the stress resultants of the full dynamic balance: sigma_c plus the multipliers
 J^-T (r - M DF qddot) on the constraint rows (the subscript s: the stressed deformations).
@@ -18,6 +19,7 @@ from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
 from .factors import j_solve
+from .gravity_stiffness import has_gravity, scratch_base, subtract_gravity_stiffness
 from .motion import any_nonzero
 from .operations import (
     HESSIANS,
@@ -52,7 +54,8 @@ def tangent(table, qddot):
 
     Both on the coordinates first, element by element, then carried to the DOFs once:
     K = DF^T W with W = K_x DF (slot tangent_rows, on the rows of the stressed elements'
-    coordinates), K_x = sum_e (De_e^T S_e De_e + sum_i sigma_i D2e_i) (`coordinate_rows`);
+    coordinates), K_x = sum_e (De_e^T S_e De_e + sum_i sigma_i D2e_i - df_e/dx) (`coordinate_rows`;
+    df_e/dx gravity's, `gravity_stiffness`);
     C likewise with C_x = sum_e De_e^T D_e De_e. A row of K_x is the few elements at one
     coordinate, so the product DF^T W costs (the touched coordinates) NDOF^2, where adding
     each element's DF_e^T H DF_e and each stressed deformation's DeF^T S DeF cost (the
@@ -113,7 +116,8 @@ def row_ranges(DF, nx, ndof, ranges):
 @kernel
 def coordinate_rows(table, sigma, values, hessians, W, ranges):
     """W = X DF (slot tangent_rows' layout, (nx, ndof)) on the rows it has, for the
-    coordinate-space X = sum_e De_e^T V_e De_e (+ sum_i sigma_i D2e_i with `hessians`), V
+    coordinate-space X = sum_e De_e^T V_e De_e (+ sum_i sigma_i D2e_i - df_e/dx with
+    `hessians`, df_e/dx the load stiffness of gravity on the element's mass), V
     the packed S or D (`values`, by compressed rows on the stressed deformations; an
     element's V couples its own deformations only); element by element: H (m, m) of the
     element, then W's rows of its coordinates += H DF_e over DF's column ranges
@@ -128,13 +132,17 @@ def coordinate_rows(table, sigma, values, hessians, W, ranges):
         w_first[a], w_end[a] = ndof, 0
     stressed, position = _i(table, slot.STRESSED), _i(table, slot.STRESSED_POSITION)
     pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
-    local = _f(table, slot.LOCAL)
+    local, x = _f(table, slot.LOCAL), _f(table, slot.X)
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         H = local[: m * m]
+        weighed = hessians and has_gravity(table, g)  # gravity's load stiffness there
+        past = scratch_base(table)
         for i in range(n):
             H[:] = 0.0
             empty = True
+            if weighed and subtract_gravity_stiffness(table, g, i, x, H, past):
+                empty = False
             if hessians:  # sum_i sigma_i D2e_i
                 for b in range(k):
                     s = sigma[defs[i * k + b]]
