@@ -112,9 +112,12 @@ def _full_stresses(table):
 
 
 @kernel
-def element_tangent(table, g, i, sigma, Ke, Ce, row, crow):
-    """K_e = De^T S_e De + sum_b sigma_b D2e_b and C_e = De^T D_e De (m * m each, row by row)
-    of element i of group g, S_e and D_e its block of S and D (compressed rows)."""
+def element_tangent(table, g, i, sigma, Ke, Ce, row, crow, x, gravity_scratch):
+    """K_e = De^T S_e De + sum_b sigma_b D2e_b - d f_g / dx and C_e = De^T D_e De (m * m
+    each, row by row) of element i of group g at the coordinates x, S_e and D_e its block of
+    S and D (compressed rows), f_g the gravity on its masses where they hang on rotations
+    (`gravity_stiffness`; gravity_scratch: where its scratch in slot local starts, -1 for a
+    group without gravity, `has_gravity`)."""
     n, m, k, coords, defs, De, D2e = group_deformations(table, g)
     stress_row, stressed = _i(table, slot.NEWTON_STRESS_ROW), _i(table, slot.STRESSED)
     S, D = _f(table, slot.S), _f(table, slot.D)
@@ -152,6 +155,8 @@ def element_tangent(table, g, i, sigma, Ke, Ce, row, crow):
                 Ke[a * m + c] += da * row[c]
                 if damped:
                     Ce[a * m + c] += da * crow[c]
+    if gravity_scratch >= 0:
+        subtract_gravity_stiffness(table, g, i, x, Ke, gravity_scratch)
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -198,20 +203,16 @@ def jacobian(table, y):
         row, crow = local[o + 3 * m * m: o + 3 * m * m + m], \
             local[o + 3 * m * m + m: o + 3 * m * m + 2 * m]
         group_row = group(table, g)
-        # gravity's load stiffness, its scratch past the rows (`gravity_stiffness`)
-        weighed, past = has_gravity(table, g), o + 3 * m * m + 2 * m
+        # gravity's load stiffness, as OP_TANGENT's K_x, its scratch past the rows
+        past = o + 3 * m * m + 2 * m if has_gravity(table, g) else -1
         for i in range(n):
             t = rigid_element(table, group_row, i) if rigid else -1
             if t >= 0:  # on its z-coordinates; its mass is in M_z already
                 if own_tangent(table, t):
-                    element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
-                    if weighed:
-                        subtract_gravity_stiffness(table, g, i, x, Ke, past)
+                    element_tangent(table, g, i, sigma, Ke, Ce, row, crow, x, past)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Cv, hmap, rigid_base, work)
                 continue
-            element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
-            if weighed:  # - df/dx of the element mass's gravity, as OP_TANGENT's K_x
-                subtract_gravity_stiffness(table, g, i, x, Ke, past)
+            element_tangent(table, g, i, sigma, Ke, Ce, row, crow, x, past)
             Mp = masses[i * P * P: (i + 1) * P * P]
             heavy = not rigid and i < n_inertia and not massless(Mp, pattern)
             if heavy:  # Me = Dp^T Mp Dp (the point values unused)

@@ -44,7 +44,7 @@ from ..numerics.native import address_of, carray
 from . import data as ed
 from . import slots as slot
 from .factors import add_rigid_rows, augmented_matrix, scatter_de
-from .gravity_stiffness import has_gravity, scratch_base, subtract_gravity_stiffness
+from .gravity_stiffness import has_gravity, scratch_base
 from .motion import coordinate_forces, inertia_forces
 from .newton import element_tangent, factor_kept, input_load_stiffness, newton_parts
 from .newton_rigid import own_tangent, slave_curvature, touching_tangent
@@ -79,19 +79,16 @@ def _coordinate_tangent(table, sigma, r_full, lam, Kv):
         Ke, Ce = local[: m * m], local[m * m: 2 * m * m]
         row, crow = local[2 * m * m: 2 * m * m + m], local[2 * m * m + m: 2 * m * m + 2 * m]
         group_row = group(table, g)
-        weighed, past = has_gravity(table, g), scratch_base(table)
+        # gravity's load stiffness (`gravity_stiffness`), its scratch past the rows
+        past = scratch_base(table) if has_gravity(table, g) else -1
         for i in range(n):
             t = rigid_element(table, group_row, i) if rigid else -1
             if t >= 0:  # on its z-coordinates (the statics' packing has no damping, so
                 if own_tangent(table, t):  # C_z, the second Kv, is not written)
-                    element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
-                    if weighed:
-                        subtract_gravity_stiffness(table, g, i, x, Ke, past)
+                    element_tangent(table, g, i, sigma, Ke, Ce, row, crow, x, past)
                     touching_tangent(table, t, m, Ke, Ce, Kv, Kv, hmap, rigid_base, work)
                 continue
-            element_tangent(table, g, i, sigma, Ke, Ce, row, crow)
-            if weighed:  # - df/dx of the element mass's gravity (`gravity_stiffness`)
-                subtract_gravity_stiffness(table, g, i, x, Ke, past)
+            element_tangent(table, g, i, sigma, Ke, Ce, row, crow, x, past)
             for e in range(m * m):
                 s = hmap[base + i * m * m + e]
                 if s >= 0:
