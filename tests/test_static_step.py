@@ -66,6 +66,23 @@ def largest(a):
     return np.max(np.abs(a))
 
 
+def three_steps(model, mech, config, load):
+    """(sparse step, dense step, numpy's augmented step, Q of the sparse balance's step,
+    Q of the dense one) of `model` at `config` under `load` (load factor, nodal loads,
+    input values): the engine's sparse and dense balances and numpy's."""
+    sparse, dense = EngineBalance(model, sparse=True), EngineBalance(model, sparse=False)
+    assert sparse.sparse and not dense.sparse
+    for balance in (sparse, dense):
+        balance.set_load(*load)
+    step = sparse.free_step(EnginePoint(config.q, config.x), np.zeros(model.ndof))
+    Q, K = dense.residual_and_tangent(EnginePoint(config.q, config.x))
+    numpy_balance = AugmentedBalance(mech)
+    numpy_balance.set_load(*load)
+    lean = mech.kinematics.configuration(config.q, config.x, first_order=False)
+    numpy_step = numpy_balance.free_step(lean, np.zeros(model.ndof))
+    return step, tangent_step(K, Q), numpy_step, sparse.step_balance(), Q
+
+
 @pytest.mark.parametrize("name", STEPS)
 def test_the_sparse_step_is_the_dense_and_the_numpy_step(name):
     """At 0.6 of the loads plus 0.5 N on every coordinate, away from equilibrium."""
@@ -73,22 +90,12 @@ def test_the_sparse_step_is_the_dense_and_the_numpy_step(name):
     mech = Mechanics(model, sparse=True)
     size = 1e-3 if name.startswith("manipulator") else 1e-2
     config, units = away_from_equilibrium(model, mech, 5, size)
-    load = (0.6, loads + 0.5, None)
-    sparse, dense = EngineBalance(model, sparse=True), EngineBalance(model, sparse=False)
-    assert sparse.sparse and not dense.sparse
-    for balance in (sparse, dense):
-        balance.set_load(*load)
-    step = sparse.free_step(EnginePoint(config.q, config.x), np.zeros(model.ndof))
-    Q, K = dense.residual_and_tangent(EnginePoint(config.q, config.x))
-    expected = tangent_step(K, Q)
-    numpy_balance = AugmentedBalance(mech)
-    numpy_balance.set_load(*load)
-    lean = mech.kinematics.configuration(config.q, config.x, first_order=False)
-    numpy_step = numpy_balance.free_step(lean, np.zeros(model.ndof))
+    step, expected, numpy_step, step_Q, Q = three_steps(model, mech, config,
+                                                        (0.6, loads + 0.5, None))
     bound = 1e-9 * largest(expected / units)
     assert largest((step - expected) / units) <= bound, name
     assert largest((numpy_step - expected) / units) <= bound, name
-    assert largest(sparse.step_balance() - Q) <= 1e-10 * largest(Q), name
+    assert largest(step_Q - Q) <= 1e-10 * largest(Q), name
     assert largest(expected / units) > 1e-6  # a step of some size: away from equilibrium
 
 
@@ -192,21 +199,11 @@ def test_the_sparse_step_under_gravity_on_element_masses_and_moment_inputs(gravi
     values = MOMENTS if moments else None
     mech = Mechanics(model, sparse=True)
     config, units = away_from_equilibrium(model, mech, 5, size)
-    load = (0.6, loads + 0.5, values)
-    sparse, dense = EngineBalance(model, sparse=True), EngineBalance(model, sparse=False)
-    assert sparse.sparse
-    for balance in (sparse, dense):
-        balance.set_load(*load)
-    step = sparse.free_step(EnginePoint(config.q, config.x), np.zeros(model.ndof))
-    Q, K = dense.residual_and_tangent(EnginePoint(config.q, config.x))
-    expected = tangent_step(K, Q)
-    numpy_balance = AugmentedBalance(mech)
-    numpy_balance.set_load(*load)
-    lean = mech.kinematics.configuration(config.q, config.x, first_order=False)
-    numpy_step = numpy_balance.free_step(lean, np.zeros(model.ndof))
+    step, expected, numpy_step, step_Q, Q = three_steps(model, mech, config,
+                                                        (0.6, loads + 0.5, values))
     scale = largest(expected / units)
     assert largest((step - expected) / units) <= 1e-9 * scale
-    assert largest(sparse.step_balance() - Q) <= 1e-10 * largest(Q)
+    assert largest(step_Q - Q) <= 1e-10 * largest(Q)
     assert largest((numpy_step - expected) / units) <= 1e-9 * scale
 
 
