@@ -333,3 +333,18 @@ def test_an_unreachable_scheduler_is_given_up_after_the_timeout(monkeypatch, cap
     assert capsys.readouterr().err == ("flexure sweep: error: --scheduler tcp://127.0.0.1:1: "
                                        "cannot connect: Timed out trying to connect to "
                                        "tcp://127.0.0.1:1 after 0.5 s\n")
+
+
+def test_a_client_that_failed_to_connect_is_closed_before_the_error(tmp_path, capsys):
+    """A failed Client left as cyclic garbage stops its IO loop under distributed's
+    class-wide LoopRunner lock whenever the collector happens to run; if that is while the
+    next Client starts (holding the lock), the process hangs. None may be left over."""
+    import gc
+
+    from distributed import Client
+
+    gc.collect()
+    assert main(["sweep", SCENE, "--param", "nodes.3.mass=0,1", "--scheduler", "foo://x:1",
+                 "--out", str(tmp_path / "s.csv")]) == 2
+    assert "cannot connect" in capsys.readouterr().err
+    assert [o for o in gc.get_objects() if isinstance(o, Client)] == []

@@ -33,6 +33,7 @@ The quantities (columns after the parameters, SI units):
 A row keeps what was computed before a failure. Dask is imported only when a sweep runs on it.
 """
 
+import gc
 import math
 import os
 from dataclasses import replace
@@ -285,6 +286,21 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
+def _connect(Client, scheduler):
+    """A Client of the scheduler at `scheduler`, or a UsageError saying why there is none."""
+    try:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError, TypeError) as error:
+        failure = (f"--scheduler {scheduler}: cannot connect: "
+                   f"{_one_line(str(error)) or type(error).__name__}")
+    # The Client that failed to start is left in a reference cycle, and its __del__ stops
+    # its IO loop under distributed's one class-wide LoopRunner lock. Collected by chance
+    # later, say while the next Client's start holds that lock, it deadlocks the process;
+    # collected here, with the traceback that held it gone, it closes while nothing does.
+    gc.collect()
+    raise UsageError(failure)
+
+
 def _run_on_dask(scene, tasks, options, workers, scheduler, done):
     """Run the tasks on a dask.distributed cluster, calling done(index, row) as each ends."""
     import logging
@@ -292,11 +308,7 @@ def _run_on_dask(scene, tasks, options, workers, scheduler, done):
     from distributed import Client, LocalCluster, as_completed
 
     if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
-        except (OSError, TimeoutError, ValueError, TypeError) as error:
-            raise UsageError(f"--scheduler {scheduler}: cannot connect: "
-                             f"{_one_line(str(error)) or type(error).__name__}") from None
+        client = _connect(Client, scheduler)
         cluster = None
     else:
         # processes, not threads: an analysis of a small model spends most of its time in
