@@ -231,6 +231,45 @@ def test_a_failed_compilation_of_the_engine_fails_the_build(tmp_path):
     assert broken.read_bytes() == b"not a zip file"
 
 
+@pytest.mark.timeout(60)  # without the limit the build waits for the hung child for ever
+def test_a_hung_compilation_of_the_engine_is_killed_after_the_limit(tmp_path, monkeypatch):
+    """The child that compiles the engine hangs (here: a Python that sleeps): after
+    CHILD_TIMEOUT it is killed, with what it started, and the build raises FMUBuildError
+    saying so, with the child's last lines; the FMU is left as it was."""
+    import time
+
+    from flexure.fmu import FMUBuildError, portable_engine
+
+    pids = tmp_path / "pids"
+    hung = tmp_path / "python"
+    # the child starts a grandchild that holds its stderr too; both must go
+    hung.write_text(f"#!/bin/sh\necho starting >&2\nsleep 300 &\necho $$ $! > {pids}\n"
+                    "wait\n")
+    hung.chmod(0o755)
+    monkeypatch.setattr(sys, "executable", str(hung))
+    monkeypatch.setattr(portable_engine, "CHILD_TIMEOUT", 2.0)
+    fmu = tmp_path / "a.fmu"
+    fmu.write_bytes(b"left as it was")
+    start = time.monotonic()
+    with pytest.raises(FMUBuildError) as error:
+        portable_engine.add_compiled_engine(fmu)
+    assert time.monotonic() - start < 30
+    assert str(error.value) == (f"{fmu}: compiling its engine for a portable CPU target took "
+                                "over 2 s; the child was killed:\nstarting\n")
+    assert fmu.read_bytes() == b"left as it was"
+    def running(pid):  # neither gone nor dead and not yet reaped
+        try:
+            return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+        except FileNotFoundError:
+            return False
+
+    for pid in map(int, pids.read_text().split()):
+        deadline = time.monotonic() + 10  # SIGKILL was sent; it ends when next scheduled
+        while running(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not running(pid)
+
+
 @pytest.mark.slow  # ~3 minutes: a portable compilation, a venv with pip, the host
 def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(tmp_path):
     from fmpy import __version__ as fmpy_version
