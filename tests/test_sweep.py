@@ -359,3 +359,28 @@ def test_a_client_that_failed_to_connect_is_closed_before_the_error(tmp_path, ca
     assert "cannot connect" in capsys.readouterr().err
     assert [o for o in gc.get_objects() if issubclass(type(o), Client)] == []
     assert type(dead_proxy) is weakref.ProxyType
+
+
+def test_the_local_cluster_is_closed_when_its_client_cannot_start(tmp_path, monkeypatch):
+    """A Client that fails on the sweep's own LocalCluster: the cluster (worker processes) is
+    closed before the error goes on, not left to its finalizer."""
+    import distributed
+
+    closed = []
+
+    class Cluster:
+        def __init__(self, **options):
+            pass
+
+        def close(self):
+            closed.append(self)
+
+    def failing_client(cluster):
+        raise OSError("no client here")
+
+    monkeypatch.setattr(distributed, "LocalCluster", Cluster)
+    monkeypatch.setattr(distributed, "Client", failing_client)
+    points = grid([("sections.leaf.height", [0.3e-3, 0.5e-3])])
+    with pytest.raises(OSError, match="no client here"):
+        run_sweep(DATA, points, overrides=MASSLESS, workers=2)
+    assert len(closed) == 1
