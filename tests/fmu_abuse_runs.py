@@ -4,9 +4,10 @@ the exit code, the status of each FMI call, the FMU's log and the values the cas
 
 import os
 import re
-import subprocess
 import sys
 from pathlib import Path
+
+import children
 
 CASES = Path(__file__).with_name("fmu_abuse_cases.py")
 
@@ -42,9 +43,9 @@ class Run:
 
 def run(case, fmus, *, env=None, timeout=600):
     stage, truss = fmus
-    done = subprocess.run([sys.executable, str(CASES), case, str(stage), str(truss)],
-                          capture_output=True, text=True, timeout=timeout,
-                          env=dict(os.environ, **(env or {})))
+    done = children.run([sys.executable, str(CASES), case, str(stage), str(truss)],
+                        capture_output=True, text=True, timeout=timeout,
+                        env=dict(os.environ, **(env or {})))
     return Run(done)
 
 

@@ -25,6 +25,7 @@ import venv
 import zipfile
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -173,19 +174,19 @@ def test_where_this_flexure_stands_in_the_carried_engine_is_not_used(scene_fmus,
 
     # the same code path compiled first, by a host of the same CPU target as the one below
     warm_up = start_host(scene_fmus("stage_planar_1dof"), cache_root())
-    warm_up.communicate(timeout=600)
+    children.finish(warm_up, 600)
     assert warm_up.returncode == 0
     fmu = with_engine_folder(scene_fmus("stage_planar_1dof"), tmp_path, "{}")
     host = start_host(fmu, cache_root())
-    out, err = host.communicate(timeout=600)
+    out, err = children.finish(host, 600)
     assert host.returncode == 0, err[-3000:]
     result = json.loads(out.strip().splitlines()[-1])
     assert result["compiled"] == 0 and len(result["y"]) == 3
     assert out.strip().splitlines()[:-1] == []  # debug logging off: the OK note not passed
-    loud = subprocess.run([sys.executable, "-c", HOST.replace("loggingOn=False",
-                                                              "loggingOn=True"),
-                           str(fmu), "1.0", "1"], capture_output=True, text=True,
-                          env={**os.environ, "FLEXURE_CACHE_DIR": str(cache_root())})
+    loud = children.run([sys.executable, "-c", HOST.replace("loggingOn=False",
+                                                            "loggingOn=True"),
+                         str(fmu), "1.0", "1"], capture_output=True, text=True,
+                        env={**os.environ, "FLEXURE_CACHE_DIR": str(cache_root())})
     notes = [json.loads(line) for line in loud.stdout.strip().splitlines()[:-1]]
     assert [(n["status"], n["message"]) for n in notes] == [(0, (
         "host: this Python's flexure has the FMU's sources and runs in place of its copy, "
@@ -294,10 +295,10 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
     venv.create(home, with_pip=True)
     python = home / "bin" / "python"
     (tmp_path / "requirements.txt").write_text(requirements)
-    subprocess.run([str(python), "-m", "pip", "install", "-q", "-r",
-                    str(tmp_path / "requirements.txt"), f"fmpy=={fmpy_version}"],
-                   check=True, capture_output=True, timeout=1200)
-    missing = subprocess.run([str(python), "-c", "import flexure"], capture_output=True)
+    children.run([str(python), "-m", "pip", "install", "-q", "-r",
+                  str(tmp_path / "requirements.txt"), f"fmpy=={fmpy_version}"],
+                 check=True, capture_output=True, timeout=1200)
+    missing = children.run([str(python), "-c", "import flexure"], capture_output=True)
     assert missing.returncode != 0  # the FMU's own copy runs there
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
@@ -305,7 +306,7 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
     cache = tmp_path / "empty-cache"
     steps = 50  # with the default method (esdirk), then with each other method
     host = start_host(copy, cache, python=python, steps=steps, methods=METHODS)
-    out, err = host.communicate(timeout=900)
+    out, err = children.finish(host, 900)
     assert host.returncode == 0, err[-3000:]
     lines = out.strip().splitlines()
     result = json.loads(lines[-1])
