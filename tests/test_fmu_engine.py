@@ -96,6 +96,7 @@ def start_host(fmu, cache, python=sys.executable, own_copy=False, steps=3, force
     env = {key: value for key, value in os.environ.items()
            if key not in ("FLEXURE_FMU_OWN_COPY", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES")}
     env["FLEXURE_CACHE_DIR"] = str(cache)
+    env["TMPDIR"] = str(Path(fmu).parent)  # where fmpy unzips it: the test's own folder
     if own_copy:
         env["FLEXURE_FMU_OWN_COPY"] = "1"
     extra = [",".join(methods)] if methods else []
@@ -186,7 +187,8 @@ def test_where_this_flexure_stands_in_the_carried_engine_is_not_used(scene_fmus,
     loud = children.run([sys.executable, "-c", HOST.replace("loggingOn=False",
                                                             "loggingOn=True"),
                          str(fmu), "1.0", "1"], capture_output=True, text=True,
-                        env={**os.environ, "FLEXURE_CACHE_DIR": str(cache_root())})
+                        env={**os.environ, "FLEXURE_CACHE_DIR": str(cache_root()),
+                             "TMPDIR": str(tmp_path)})
     notes = [json.loads(line) for line in loud.stdout.strip().splitlines()[:-1]]
     assert [(n["status"], n["message"]) for n in notes] == [(0, (
         "host: this Python's flexure has the FMU's sources and runs in place of its copy, "

@@ -275,7 +275,7 @@ BLOCK_THREADPOOLCTL = textwrap.dedent("""
 
 def without_threadpoolctl(tmp_path):
     (tmp_path / "sitecustomize.py").write_text(BLOCK_THREADPOOLCTL)
-    return {**os.environ, "PYTHONPATH": str(tmp_path)}
+    return {**os.environ, "PYTHONPATH": str(tmp_path), "TMPDIR": str(tmp_path)}  # fmpy unzips
 
 
 def test_a_host_without_a_requirement_logs_one_line_naming_it(stage_fmu, tmp_path):
@@ -322,7 +322,8 @@ def test_a_slave_script_that_fails_in_the_host_is_named_and_its_binary_guarded(t
     script.write_text(FAILS_IN_HOST)
     path = build_slave_fmu(script, tmp_path / "FailsInHost.fmu")
     host = children.run([sys.executable, "-c", HOST, str(path)], capture_output=True,
-                        text=True, timeout=300, env={**os.environ, "BREAK_SLAVE": "1"})
+                        text=True, timeout=300,
+                        env={**os.environ, "BREAK_SLAVE": "1", "TMPDIR": str(tmp_path)})
     assert host.returncode == 0, host.stderr[-2000:]
     printed = json.loads(host.stdout.splitlines()[-1])
     assert sorted(printed["guarded"]) == sorted(printed["binaries"])
