@@ -69,6 +69,9 @@ class InProcessPlant(SimulatorPlant):
     def statistics(self):
         return self.simulator.statistics
 
+    def close(self):
+        self.simulator.close()  # its solver's memory now, not when the collector finds it
+
 
 class LinearPlant(SimulatorPlant):
     """The scene's linearisation stepped exactly by flexure.core.LinearSimulator: it starts

@@ -120,16 +120,17 @@ def compiled_loop(model, controller: LoopController, design, *, method: str, rto
                 said.add(kind)
                 warn(message)
 
-    t, position, force = run_sampled_loop(
-        sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
-        feedforward=controller.open_loop_forces,  # u_ff (+ the disturbance d)
-        controller=(feedback.A, feedback.B, feedback.C, feedback.D),
-        loop_inputs=[pair.input_index for pair in design.pairs],
-        loop_outputs=[pair.output_index for pair in design.pairs],
-        quantum=controller.quantum,
-        progress=report if progress is not None or warn is not None else None)
-    if ended is not None:
-        ended(sim)
+    with sim:  # closed at the end: its solver's memory now, not when the collector runs
+        t, position, force = run_sampled_loop(
+            sim, fs=controller.fs, samples=controller.samples, reference=controller.reference,
+            feedforward=controller.open_loop_forces,  # u_ff (+ the disturbance d)
+            controller=(feedback.A, feedback.B, feedback.C, feedback.D),
+            loop_inputs=[pair.input_index for pair in design.pairs],
+            loop_outputs=[pair.output_index for pair in design.pairs],
+            quantum=controller.quantum,
+            progress=report if progress is not None or warn is not None else None)
+        if ended is not None:
+            ended(sim)
     return t, controller.reference[: len(t)].copy(), position, force
 
 

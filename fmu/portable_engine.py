@@ -24,9 +24,11 @@ the FMU installs into its host's cache at instantiation (`flexure.fmu.compiled_e
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import zipfile
 from collections import deque
 from pathlib import Path
@@ -38,6 +40,9 @@ from .compiled_engine import FOLDER
 # the environment of the child: numba's portable target (numba sets no CPU features for it)
 PORTABLE_TARGET = {"NUMBA_CPU_NAME": "generic", "NUMBA_CPU_FEATURES": ""}
 STEPS, STEP = 3, 1e-3  # doSteps per method, communication step (s)
+# s of wall time a child may take: a first compilation takes about a minute of CPU, several
+# on a loaded machine; a child still running after this is hung, and is killed
+CHILD_TIMEOUT = 1800.0
 
 
 def staging_folder() -> Path | None:
@@ -70,7 +75,8 @@ def add_compiled_engine(fmu: str | Path) -> dict:
     Raises
     ------
     FMUBuildError
-        The child failed (its last lines of stderr are in the message).
+        The child failed, or took over CHILD_TIMEOUT s and was killed (its last lines of
+        stderr are in the message).
     """
     from .builder import FMUBuildError
 
@@ -87,9 +93,13 @@ def add_compiled_engine(fmu: str | Path) -> dict:
         # exported with their callers, which hold their code already): a second one loads
         # it all and exports what a host loads, the same whatever the cache held before
         for _ in range(2):
-            code, tail = _run_child(command, env)
+            code, tail = _run_child(command, env, CHILD_TIMEOUT)
             if code != 0 or manifest_path.is_file():
                 break
+        if code is None:
+            raise FMUBuildError(f"{fmu}: compiling its engine for a portable CPU target took "
+                                f"over {CHILD_TIMEOUT:g} s; the child was killed:\n"
+                                f"{''.join(tail)}")
         if code != 0 or not manifest_path.is_file():
             raise FMUBuildError(f"{fmu}: compiling its engine for a portable CPU target "
                                 f"failed (exit code {code}):\n{''.join(tail)}")
@@ -103,17 +113,37 @@ def add_compiled_engine(fmu: str | Path) -> dict:
     return manifest
 
 
-def _run_child(command, env):
+def _run_child(command, env, timeout):
     """(exit code, its last lines of stderr) of the child, whose stderr is passed on to this
-    process's as it comes (the compilation notice)."""
-    with subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
-                          stderr=subprocess.PIPE, text=True) as child:
-        tail = deque(maxlen=30)
-        for line in child.stderr:
-            sys.stderr.write(line)
-            sys.stderr.flush()
-            tail.append(line)
-    return child.returncode, tail
+    process's as it comes (the compilation notice); the exit code is None if the child took
+    over `timeout` s and was killed."""
+    with subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                          text=True, start_new_session=True) as child:
+        # the lines are read as they come, so the limit is kept by a timer, which kills the
+        # child's whole process group: anything it started would hold the pipe open too
+        killed = threading.Event()
+
+        def kill():
+            killed.set()
+            try:
+                os.killpg(child.pid, signal.SIGKILL)
+            except ProcessLookupError:  # it ended as the timer fired
+                pass
+
+        timer = threading.Timer(timeout, kill)
+        timer.start()
+        try:
+            tail = deque(maxlen=30)
+            for line in child.stderr:
+                sys.stderr.write(line)
+                sys.stderr.flush()
+                tail.append(line)
+        finally:
+            timer.cancel()
+            if child.poll() is None and not killed.is_set():  # interrupted: not left running
+                os.killpg(child.pid, signal.SIGKILL)
+    timed_out = killed.is_set() and child.returncode == -signal.SIGKILL
+    return (None if timed_out else child.returncode), tail
 
 
 def _exercise(fmu, out):
@@ -150,7 +180,9 @@ def _exercise(fmu, out):
     callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
     description = read_model_description(fmu)
     variables = {v.name: v for v in description.modelVariables}
-    folder = extract(fmu)
+    # unzipped into the parent's temporary folder (out's), which the parent removes: fmpy's
+    # extract() would make one of its own in the system's, which nothing removes
+    folder = extract(fmu, unzipdir=tempfile.mkdtemp(prefix="fmu_", dir=Path(out).parent))
     package = next(p.name for p in Path(folder, "resources").iterdir()
                    if p.name.startswith("_flexure_") and p.is_dir())
     held = [v for v in variables.values() if v.causality == "input" and v.type == "Real"]

@@ -3,10 +3,10 @@ the results it reports."""
 
 import json
 import math
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import numpy as np
 
 from flexure.core.cli import main
@@ -25,8 +25,8 @@ def warm_command_modules(arguments, selected, cwd):
              f"print(json.dumps([code, sorted(m for m in sys.modules if {selected}), "
              "'numba' in sys.modules]))")
     for _ in range(2):
-        completed = subprocess.run([sys.executable, "-c", probe], capture_output=True,
-                                   text=True, check=True, cwd=cwd)
+        completed = children.run([sys.executable, "-c", probe], capture_output=True,
+                                 text=True, check=True, cwd=cwd)
         code, loaded, numba_imported = json.loads(completed.stdout.splitlines()[-1])
         if not numba_imported:
             break

@@ -4,9 +4,11 @@ the exit code, the status of each FMI call, the FMU's log and the values the cas
 
 import os
 import re
-import subprocess
 import sys
+import tempfile
 from pathlib import Path
+
+import children
 
 CASES = Path(__file__).with_name("fmu_abuse_cases.py")
 
@@ -42,9 +44,11 @@ class Run:
 
 def run(case, fmus, *, env=None, timeout=600):
     stage, truss = fmus
-    done = subprocess.run([sys.executable, str(CASES), case, str(stage), str(truss)],
-                          capture_output=True, text=True, timeout=timeout,
-                          env=dict(os.environ, **(env or {})))
+    # the folders fmpy unzips the FMUs into, removed whether or not the case crashed
+    with tempfile.TemporaryDirectory(prefix="fmu_abuse_") as unzipped:
+        done = children.run([sys.executable, str(CASES), case, str(stage), str(truss)],
+                            capture_output=True, text=True, timeout=timeout,
+                            env=dict(os.environ, TMPDIR=unzipped, **(env or {})))
     return Run(done)
 
 

@@ -10,9 +10,9 @@ compiles it, and the cantilever's accelerations through it against the plain twi
 """
 
 import json
-import subprocess
 import sys
 
+import children
 import numpy as np
 import pytest
 
@@ -110,8 +110,8 @@ print(json.dumps(engine.ENTRIES[operations.OP_BEAM_MASSES].is_compiled))
 def test_a_planar_models_process_does_not_compile_it():
     """In a fresh interpreter (the table of operations is the process's), the planar demo
     stage's simulation leaves OP_BEAM_MASSES uncompiled."""
-    done = subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True,
-                          check=False)
+    done = children.run([sys.executable, "-c", PROBE], capture_output=True, text=True,
+                        check=False)
     assert done.returncode == 0, done.stderr[-3000:]
     assert json.loads(done.stdout.strip().splitlines()[-1]) is False
 

@@ -1,10 +1,10 @@
 """The benchmark script runs: its start-up and loop rows, flexure's side (Exudyn, the peer,
 is an optional extra that the default test run does not install)."""
 
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -14,7 +14,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 @pytest.mark.slow  # 45 s: the slow tier, which .ci/run runs after the default one
 def test_compare_prints_the_startup_and_loop_rows(tmp_path):
     table = tmp_path / "table.md"
-    done = subprocess.run(
+    done = children.run(
         [sys.executable, str(EXAMPLES / "benchmarks" / "compare.py"), "--only", "startup,loop",
          "--repeat", "1", "--quick", "--markdown", str(table)],
         capture_output=True, text=True, timeout=300, cwd=tmp_path)

@@ -6,9 +6,9 @@ and taken away again.
 
 import json
 import os
-import subprocess
 import sys
 
+import children
 import numpy as np
 import pytest
 import scipy.linalg
@@ -59,8 +59,8 @@ def test_import_changes_no_environment_and_no_thread_pool():
             "print(json.dumps([before, state()]))")
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     env["OPENBLAS_NUM_THREADS"] = str(HOST_THREADS)
-    completed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                               check=True, env=env)
+    completed = children.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             check=True, env=env)
     before, after = json.loads(completed.stdout.splitlines()[-1])
     assert before[0] == {"OPENBLAS_NUM_THREADS": str(HOST_THREADS)}
     assert before == after

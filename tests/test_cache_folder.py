@@ -3,8 +3,9 @@ FLEXURE_CACHE_DIR names one folder for this process and every child it starts, w
 child's working folder."""
 
 import os
-import subprocess
 import sys
+
+import children
 
 CHILD = "from flexure.core.numerics.jit import cache_root; print(cache_root())"
 
@@ -13,7 +14,7 @@ def test_a_relative_cache_folder_is_the_same_folder_for_a_child_in_another_folde
     work, elsewhere = tmp_path / "work", tmp_path / "elsewhere"
     work.mkdir()
     elsewhere.mkdir()
-    parent = subprocess.run(
+    parent = children.run(
         [sys.executable, "-c",
          "import os, subprocess, sys\n"
          f"{CHILD}\n"

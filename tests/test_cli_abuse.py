@@ -9,12 +9,12 @@ output paths are checked before a run, and results are written atomically.
 import errno
 import json
 import os
-import subprocess
 import sys
 import tomllib
 import zipfile
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -446,7 +446,7 @@ def test_fmu_check_update_checks_the_reference_path_first(capsys, fmu_files):
     (["analyze", "truss_1dof_x", "--modes", "0"], "expected an integer >= 1"),
 ])
 def test_console_script_answers_in_one_line(argv, says):
-    completed = subprocess.run([FLEXURE, *argv], capture_output=True, text=True)
+    completed = children.run([FLEXURE, *argv], capture_output=True, text=True)
     assert completed.returncode == 2
     assert says in completed.stderr and "Traceback" not in completed.stderr
     errors = [line for line in completed.stderr.splitlines() if "error:" in line]

@@ -1,10 +1,10 @@
 """`flexure analyze` end to end: the installed console script, its JSON keys and tables."""
 
 import json
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -15,8 +15,8 @@ SCENES = Path(__file__).resolve().parents[1] / "examples" / "scenes"
 
 
 def run_json(*args):
-    completed = subprocess.run([FLEXURE, "analyze", *args, "--json"], capture_output=True,
-                               text=True, check=True)
+    completed = children.run([FLEXURE, "analyze", *args, "--json"], capture_output=True,
+                             text=True, check=True)
     return json.loads(completed.stdout)
 
 

@@ -15,6 +15,7 @@ import sys
 import threading
 import time
 
+import children
 import pytest
 
 from flexure.core.numerics import compile_lock
@@ -105,7 +106,7 @@ def _read_line_with(stream, text, timeout_s=300):
 
 
 def _report(process, timeout_s=300):
-    out, err = process.communicate(timeout=timeout_s)
+    out, err = children.finish(process, timeout_s)
     assert process.returncode == 0, err[-3000:]
     return json.loads(out.strip().splitlines()[-1]), err
 

@@ -84,7 +84,7 @@ def test_the_controller_fmu_puts_out_the_in_process_references_and_feedforward(s
     path = build_controller_fmu(controller, design, model, tmp_path / "controller.fmu")
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)),
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path), unzipdir=str(tmp_path / "six")),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="six")
     fmu.instantiate()
     fmu.setupExperiment(startTime=0.0)

@@ -20,13 +20,13 @@ import io
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import textwrap
 import tomllib
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -438,9 +438,9 @@ def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_pat
     def run(root):
         env = {**os.environ, "FLEXURE_CACHE_DIR": str(tmp_path / "cache"),
                "PYTHONPATH": str(root)}
-        done = subprocess.run([sys.executable, "-c",
-                               PROBE.format(package="flexure_cache_probe")],
-                              capture_output=True, text=True, env=env, cwd=root, check=True)
+        done = children.run([sys.executable, "-c",
+                             PROBE.format(package="flexure_cache_probe")],
+                            capture_output=True, text=True, env=env, cwd=root, check=True)
         return json.loads(done.stdout.strip().splitlines()[-1])
 
     first = run(copy("first"))
@@ -462,8 +462,8 @@ def test_the_first_compilation_is_announced_on_a_terminal_and_in_a_log_alike(tmp
     probe = ("from flexure.core.engine import engine; from flexure.core.numerics import jit; "
              "print(jit.is_cached(engine.ENTRIES[engine.OP_RHS].function))")
     with tempfile.TemporaryDirectory() as empty:
-        done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                              env={**os.environ, "FLEXURE_CACHE_DIR": empty}, check=True)
+        done = children.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                            env={**os.environ, "FLEXURE_CACHE_DIR": empty}, check=True)
     assert done.stdout.split() == ["False"]
 
     class Terminal(io.StringIO):
@@ -519,8 +519,8 @@ def test_connect_compiles_only_the_operations_a_model_uses():
                        engine.OP_POSITIONS)
         compiled()
         """)
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          check=True)
+    done = children.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                        check=True)
     first, second = (json.loads(line) for line in done.stdout.split("\n")[:2])
     forms = {engine.OP_RHS, engine.OP_JACOBIAN, engine.OP_ACCELERATIONS,
              engine.OP_CONFIGURATION, engine.OP_TANGENT, engine.OP_MASS, engine.OP_DF,

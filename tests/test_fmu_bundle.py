@@ -9,11 +9,11 @@ numbers from both.
 
 import json
 import os
-import subprocess
 import sys
 import textwrap
 import zipfile
 
+import children
 import pytest
 
 from flexure.fmu import build_scene_fmu, bundle_name
@@ -38,8 +38,8 @@ def which_copy(folder, package, own_copy=False):
     env.pop("FLEXURE_FMU_OWN_COPY", None)
     if own_copy:
         env["FLEXURE_FMU_OWN_COPY"] = "1"
-    run = subprocess.run([sys.executable, "-c", WHICH_COPY, str(folder), package],
-                         capture_output=True, text=True, timeout=120, env=env)
+    run = children.run([sys.executable, "-c", WHICH_COPY, str(folder), package],
+                       capture_output=True, text=True, timeout=120, env=env)
     assert run.returncode == 0, run.stderr[-2000:]
     return json.loads(run.stdout.splitlines()[-1])
 
@@ -103,8 +103,8 @@ def test_the_own_copy_and_the_stand_in_give_the_same_numbers(tmp_path):
     results = []
     for own_copy in ("", "1"):
         env = {**os.environ, "FLEXURE_FMU_OWN_COPY": own_copy}
-        run = subprocess.run([sys.executable, "-c", STEP_FMU, str(fmu)], capture_output=True,
-                             text=True, timeout=600, env=env)
+        run = children.run([sys.executable, "-c", STEP_FMU, str(fmu)], capture_output=True,
+                           text=True, timeout=600, env=env)
         assert run.returncode == 0, run.stderr[-2000:]
         results.append(json.loads(run.stdout.splitlines()[-1]))
     assert len(results[0]) == 51 and results[0] == results[1]

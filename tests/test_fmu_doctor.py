@@ -3,10 +3,10 @@ requirement is missing or too old, a binary is not there, or the file is not an 
 
 import json
 import re
-import subprocess
 import sys
 import zipfile
 
+import children
 import pytest
 from cli_runs import run
 from test_fmu_requirements import SCENE, requirements_of, without_threadpoolctl
@@ -30,9 +30,9 @@ def test_doctor_passes_in_this_python(stage_fmu, capsys):
 
 
 def test_doctor_fails_in_a_python_without_threadpoolctl(stage_fmu, tmp_path):
-    doctor = subprocess.run(
+    doctor = children.run(
         [sys.executable, "-c", "import sys; from flexure.core.cli import main; "
-                               "sys.exit(main(sys.argv[1:]))", "fmu", "doctor", str(stage_fmu)],
+                             "sys.exit(main(sys.argv[1:]))", "fmu", "doctor", str(stage_fmu)],
         capture_output=True, text=True, timeout=300, env=without_threadpoolctl(tmp_path))
     assert doctor.returncode == 1, doctor.stderr
     pin = next(i.pin() for i in requirements_of(stage_fmu).items

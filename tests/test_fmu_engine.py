@@ -25,6 +25,7 @@ import venv
 import zipfile
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -95,6 +96,7 @@ def start_host(fmu, cache, python=sys.executable, own_copy=False, steps=3, force
     env = {key: value for key, value in os.environ.items()
            if key not in ("FLEXURE_FMU_OWN_COPY", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES")}
     env["FLEXURE_CACHE_DIR"] = str(cache)
+    env["TMPDIR"] = str(Path(fmu).parent)  # where fmpy unzips it: the test's own folder
     if own_copy:
         env["FLEXURE_FMU_OWN_COPY"] = "1"
     extra = [",".join(methods)] if methods else []
@@ -173,19 +175,20 @@ def test_where_this_flexure_stands_in_the_carried_engine_is_not_used(scene_fmus,
 
     # the same code path compiled first, by a host of the same CPU target as the one below
     warm_up = start_host(scene_fmus("stage_planar_1dof"), cache_root())
-    warm_up.communicate(timeout=600)
+    children.finish(warm_up, 600)
     assert warm_up.returncode == 0
     fmu = with_engine_folder(scene_fmus("stage_planar_1dof"), tmp_path, "{}")
     host = start_host(fmu, cache_root())
-    out, err = host.communicate(timeout=600)
+    out, err = children.finish(host, 600)
     assert host.returncode == 0, err[-3000:]
     result = json.loads(out.strip().splitlines()[-1])
     assert result["compiled"] == 0 and len(result["y"]) == 3
     assert out.strip().splitlines()[:-1] == []  # debug logging off: the OK note not passed
-    loud = subprocess.run([sys.executable, "-c", HOST.replace("loggingOn=False",
-                                                              "loggingOn=True"),
-                           str(fmu), "1.0", "1"], capture_output=True, text=True,
-                          env={**os.environ, "FLEXURE_CACHE_DIR": str(cache_root())})
+    loud = children.run([sys.executable, "-c", HOST.replace("loggingOn=False",
+                                                            "loggingOn=True"),
+                         str(fmu), "1.0", "1"], capture_output=True, text=True,
+                        env={**os.environ, "FLEXURE_CACHE_DIR": str(cache_root()),
+                             "TMPDIR": str(tmp_path)})
     notes = [json.loads(line) for line in loud.stdout.strip().splitlines()[:-1]]
     assert [(n["status"], n["message"]) for n in notes] == [(0, (
         "host: this Python's flexure has the FMU's sources and runs in place of its copy, "
@@ -231,6 +234,45 @@ def test_a_failed_compilation_of_the_engine_fails_the_build(tmp_path):
     assert broken.read_bytes() == b"not a zip file"
 
 
+@pytest.mark.timeout(60)  # without the limit the build waits for the hung child for ever
+def test_a_hung_compilation_of_the_engine_is_killed_after_the_limit(tmp_path, monkeypatch):
+    """The child that compiles the engine hangs (here: a Python that sleeps): after
+    CHILD_TIMEOUT it is killed, with what it started, and the build raises FMUBuildError
+    saying so, with the child's last lines; the FMU is left as it was."""
+    import time
+
+    from flexure.fmu import FMUBuildError, portable_engine
+
+    pids = tmp_path / "pids"
+    hung = tmp_path / "python"
+    # the child starts a grandchild that holds its stderr too; both must go
+    hung.write_text(f"#!/bin/sh\necho starting >&2\nsleep 300 &\necho $$ $! > {pids}\n"
+                    "wait\n")
+    hung.chmod(0o755)
+    monkeypatch.setattr(sys, "executable", str(hung))
+    monkeypatch.setattr(portable_engine, "CHILD_TIMEOUT", 2.0)
+    fmu = tmp_path / "a.fmu"
+    fmu.write_bytes(b"left as it was")
+    start = time.monotonic()
+    with pytest.raises(FMUBuildError) as error:
+        portable_engine.add_compiled_engine(fmu)
+    assert time.monotonic() - start < 30
+    assert str(error.value) == (f"{fmu}: compiling its engine for a portable CPU target took "
+                                "over 2 s; the child was killed:\nstarting\n")
+    assert fmu.read_bytes() == b"left as it was"
+    def running(pid):  # neither gone nor dead and not yet reaped
+        try:
+            return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+        except FileNotFoundError:
+            return False
+
+    for pid in map(int, pids.read_text().split()):
+        deadline = time.monotonic() + 10  # SIGKILL was sent; it ends when next scheduled
+        while running(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not running(pid)
+
+
 @pytest.mark.slow  # ~3 minutes: a portable compilation, a venv with pip, the host
 def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(tmp_path):
     from fmpy import __version__ as fmpy_version
@@ -255,10 +297,10 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
     venv.create(home, with_pip=True)
     python = home / "bin" / "python"
     (tmp_path / "requirements.txt").write_text(requirements)
-    subprocess.run([str(python), "-m", "pip", "install", "-q", "-r",
-                    str(tmp_path / "requirements.txt"), f"fmpy=={fmpy_version}"],
-                   check=True, capture_output=True, timeout=1200)
-    missing = subprocess.run([str(python), "-c", "import flexure"], capture_output=True)
+    children.run([str(python), "-m", "pip", "install", "-q", "-r",
+                  str(tmp_path / "requirements.txt"), f"fmpy=={fmpy_version}"],
+                 check=True, capture_output=True, timeout=1200)
+    missing = children.run([str(python), "-c", "import flexure"], capture_output=True)
     assert missing.returncode != 0  # the FMU's own copy runs there
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
@@ -266,7 +308,7 @@ def test_an_fmu_with_its_engine_instantiates_in_a_fresh_venv_without_compiling(t
     cache = tmp_path / "empty-cache"
     steps = 50  # with the default method (esdirk), then with each other method
     host = start_host(copy, cache, python=python, steps=steps, methods=METHODS)
-    out, err = host.communicate(timeout=900)
+    out, err = children.finish(host, 900)
     assert host.returncode == 0, err[-3000:]
     lines = out.strip().splitlines()
     result = json.loads(lines[-1])

@@ -7,11 +7,11 @@ with the environment `flexure fmu env` prints: libpython preloaded, the venv's s
 
 import os
 import shutil
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 from fmpy import read_model_description
@@ -97,9 +97,9 @@ def fmi4j_classpath(tmp_path_factory):
     mvn, java = shutil.which("mvn"), shutil.which("java")
     assert mvn and java, "the JVM host test needs java (>= 11) and mvn on PATH"
     output = tmp_path_factory.mktemp("fmi4j") / "classpath.txt"
-    subprocess.run([mvn, "-q", "-B", "-f", str(HOSTS / "fmi4j" / "pom.xml"),
-                    "dependency:build-classpath", f"-Dmdep.outputFile={output}"],
-                   check=True, capture_output=True, timeout=300)
+    children.run([mvn, "-q", "-B", "-f", str(HOSTS / "fmi4j" / "pom.xml"),
+                  "dependency:build-classpath", f"-Dmdep.outputFile={output}"],
+                 check=True, capture_output=True)
     return output.read_text().strip()
 
 
@@ -111,7 +111,7 @@ def test_jvm_host_fmi4j_steps_and_replays_state(stage_fmu, fmi4j_classpath, tmp_
     env = dict(os.environ, **fmu_environment())
     # a run takes a few seconds (more when the bundle's engine compiles first); a JVM that
     # crashes exits at once without writing an error report (which could hang)
-    done = subprocess.run(
+    done = children.run(
         ["java", "-XX:+SuppressFatalErrorMessage", "-XX:-CreateCoredumpOnCrash", "-cp",
          fmi4j_classpath, str(HOSTS / "fmi4j" / "Host.java"), str(stage_fmu),
          str(steps * h), str(h), str(vr["F"]), str(force), f"{vr['x']},{vr['y']}"],
@@ -227,8 +227,8 @@ def test_generic_slave_failures_are_discards_with_escaped_messages(tmp_path):
     assert [u.name for u in md.unitDefinitions] == ["m"]
     host = tmp_path / "host.py"
     host.write_text(GENERIC_HOST)
-    done = subprocess.run([sys.executable, str(host), str(path)], capture_output=True,
-                          text=True, timeout=120)
+    done = children.run([sys.executable, str(host), str(path)], capture_output=True,
+                        text=True, timeout=120)
     assert done.returncode == 0, done.stdout + done.stderr
     out = done.stdout
     assert out.count("status fmi2DoStep failed with status 2 (discard)") == 5, out

@@ -9,10 +9,10 @@ import hashlib
 import json
 import os
 import re
-import subprocess
 import zipfile
 from pathlib import Path
 
+import children
 import pytest
 from fmu_abuse_runs import run
 
@@ -33,8 +33,8 @@ def stock_library():
 
 
 def dynamic(path, *arguments):
-    return subprocess.run(arguments + (str(path),), capture_output=True, text=True,
-                          check=True).stdout
+    return children.run(arguments + (str(path),), capture_output=True, text=True,
+                        check=True).stdout
 
 
 # -- the committed library ---------------------------------------------------------------------
@@ -352,9 +352,9 @@ def test_the_build_script_refuses_what_it_cannot_build(tmp_path, python, uname, 
             "esac\n")
     for fake in tmp_path.iterdir():
         fake.chmod(0o755)
-    done = subprocess.run(["sh", str(BUILD_SCRIPT),
-                           str(tmp_path / "FAKE") if python == "FAKE" else python],
-                          capture_output=True, text=True,
-                          env=dict(os.environ, PATH=f"{tmp_path}:{os.environ['PATH']}"))
+    done = children.run(["sh", str(BUILD_SCRIPT),
+                         str(tmp_path / "FAKE") if python == "FAKE" else python],
+                        capture_output=True, text=True,
+                        env=dict(os.environ, PATH=f"{tmp_path}:{os.environ['PATH']}"))
     assert done.returncode == 1 and done.stderr.strip() == message, done.stderr
     assert not (tmp_path / "linux64").exists()

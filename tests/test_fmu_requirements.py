@@ -9,12 +9,12 @@ host: fmpy in a child Python whose `import threadpoolctl` fails (a sitecustomize
 
 import json
 import os
-import subprocess
 import sys
 import textwrap
 import zipfile
 from xml.etree import ElementTree as ET
 
+import children
 import pytest
 from cli_runs import run
 from fmpy import read_model_description
@@ -110,9 +110,9 @@ def test_the_requirements_are_what_the_slave_imports(stage_fmu):
     """Every module the bundled flexure and the slave script import while a scene FMU is
     instantiated and stepped with each integrator method, outside the standard library, the
     FMU's own package and pythonfmu (shipped inside): exactly the requirements' modules."""
-    probe = subprocess.run([sys.executable, "-c", IMPORT_PROBE, str(stage_fmu),
-                            json.dumps(list(METHODS))], capture_output=True, text=True,
-                           timeout=300)
+    probe = children.run([sys.executable, "-c", IMPORT_PROBE, str(stage_fmu),
+                          json.dumps(list(METHODS))], capture_output=True, text=True,
+                         timeout=300)
     assert probe.returncode == 0, probe.stderr[-2000:]
     imported, loaded_by_esdirk = json.loads(probe.stdout.splitlines()[-1])
     # the check before the slave finds each requirement without running it: an FMU stepped
@@ -160,9 +160,9 @@ def test_pip_reads_the_requirements_file(stage_fmu, tmp_path):
     """`pip install -r requirements.txt` (dry run, offline: everything is installed here)."""
     with zipfile.ZipFile(stage_fmu) as archive:
         (tmp_path / "requirements.txt").write_bytes(archive.read("resources/requirements.txt"))
-    pip = subprocess.run([sys.executable, "-m", "pip", "install", "--dry-run", "--no-index",
-                          "-r", str(tmp_path / "requirements.txt")], capture_output=True,
-                         text=True, timeout=120)
+    pip = children.run([sys.executable, "-m", "pip", "install", "--dry-run", "--no-index",
+                        "-r", str(tmp_path / "requirements.txt")], capture_output=True,
+                       text=True, timeout=120)
     assert pip.returncode == 0, pip.stderr
     for item in requirements_of(stage_fmu).items:
         assert f"Requirement already satisfied: {item.pin()}" in pip.stdout
@@ -275,15 +275,15 @@ BLOCK_THREADPOOLCTL = textwrap.dedent("""
 
 def without_threadpoolctl(tmp_path):
     (tmp_path / "sitecustomize.py").write_text(BLOCK_THREADPOOLCTL)
-    return {**os.environ, "PYTHONPATH": str(tmp_path)}
+    return {**os.environ, "PYTHONPATH": str(tmp_path), "TMPDIR": str(tmp_path)}  # fmpy unzips
 
 
 def test_a_host_without_a_requirement_logs_one_line_naming_it(stage_fmu, tmp_path):
     """fmpy in a child Python without threadpoolctl instantiates the FMU with debug logging off,
     then on (each from a folder of its own), and exits cleanly. (With every requirement, the
     same FMU instantiates: test_fmu.py, and test_fmu_doctor.py.)"""
-    host = subprocess.run([sys.executable, "-c", HOST, str(stage_fmu)], capture_output=True,
-                          text=True, timeout=300, env=without_threadpoolctl(tmp_path))
+    host = children.run([sys.executable, "-c", HOST, str(stage_fmu)], capture_output=True,
+                        text=True, timeout=300, env=without_threadpoolctl(tmp_path))
     assert host.returncode == 0, host.stderr[-2000:]
     printed = json.loads(host.stdout.splitlines()[-1])
     results = printed["runs"]
@@ -321,8 +321,9 @@ def test_a_slave_script_that_fails_in_the_host_is_named_and_its_binary_guarded(t
     script = tmp_path / "FailsInHost.py"
     script.write_text(FAILS_IN_HOST)
     path = build_slave_fmu(script, tmp_path / "FailsInHost.fmu")
-    host = subprocess.run([sys.executable, "-c", HOST, str(path)], capture_output=True,
-                          text=True, timeout=300, env={**os.environ, "BREAK_SLAVE": "1"})
+    host = children.run([sys.executable, "-c", HOST, str(path)], capture_output=True,
+                        text=True, timeout=300,
+                        env={**os.environ, "BREAK_SLAVE": "1", "TMPDIR": str(tmp_path)})
     assert host.returncode == 0, host.stderr[-2000:]
     printed = json.loads(host.stdout.splitlines()[-1])
     assert sorted(printed["guarded"]) == sorted(printed["binaries"])

@@ -18,7 +18,7 @@ H = 1e-3  # s
 def controller(tmp_path_factory):
     fmu = build_slave_fmu(SCRIPT, tmp_path_factory.mktemp("slave") / "pi_controller.fmu")
     description = read_model_description(str(fmu))
-    folder = extract(str(fmu))
+    folder = extract(str(fmu), unzipdir=str(fmu.parent / "unzipped"))
     instance = FMU2Slave(guid=description.guid, unzipDirectory=folder,
                          modelIdentifier=description.coSimulation.modelIdentifier,
                          instanceName="pi")

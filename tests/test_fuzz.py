@@ -292,15 +292,16 @@ def test_random_command_lines(cli_folder, case):
 
 def test_a_few_command_lines_through_the_console_script(cli_folder):
     """The installed script, end to end, on misuses that stop before any run."""
-    import subprocess
     import sys
+
+    import children
 
     flexure = str(Path(sys.executable).with_name("flexure"))
     for argv in (["simulate", "bad.toml", "--t-end", "1"],
                  ["simulate", "truss_1dof_x", "--t-end", "1", "--plot", "folder"],
                  ["bench", "truss_1dof_x", "--rtols", "1e300"],
                  ["fmu", "check", "notzip.fmu", "in.csv", "ref.csv"]):
-        completed = subprocess.run([flexure, *argv], capture_output=True, text=True,
-                                   cwd=cli_folder)
+        completed = children.run([flexure, *argv], capture_output=True, text=True,
+                                 cwd=cli_folder)
         assert completed.returncode == 2, (argv, completed.stderr)
         assert "error:" in completed.stderr and "Traceback" not in completed.stderr

@@ -6,10 +6,10 @@ and numba code that is not flexure's, have it inlined."""
 
 import ctypes
 import os
-import subprocess
 import sys
 import textwrap
 
+import children
 import numba
 import numpy as np
 import pytest
@@ -166,8 +166,8 @@ def test_a_kernel_compiled_for_linking_is_cached_and_loaded_as_such(tmp_path):
     script = tmp_path / "cached_kernel.py"
     script.write_text(_CACHED_KERNEL_SCRIPT)
     cache = tmp_path / "cache"
-    runs = [subprocess.run([sys.executable, str(script), str(cache), mode], capture_output=True,
-                           text=True, timeout=300) for mode in ("compile", "load")]
+    runs = [children.run([sys.executable, str(script), str(cache), mode], capture_output=True,
+                         text=True) for mode in ("compile", "load")]
     for run in runs:
         assert run.returncode == 0, run.stderr
         assert [float(v) for v in run.stdout.split()] == pytest.approx([7.0, 6.0], rel=1e-15)

@@ -273,12 +273,13 @@ def test_the_report_prints_the_figures_the_docs_show(tmp_path):
     (displacements, rotations, the lowest seven frequencies and the gains), every cell the
     same to one unit of its last printed digit, every row in the docs' order; and it draws
     the two figures the docs show."""
-    import subprocess
     import sys
 
+    import children
+
     script = Path(manipulator.__file__).with_name("manipulator_report.py")
-    done = subprocess.run([sys.executable, str(script), "--figures", str(tmp_path)],
-                          capture_output=True, text=True, timeout=900)
+    done = children.run([sys.executable, str(script), "--figures", str(tmp_path)],
+                        capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]
     printed = table_rows(done.stdout)
     docs = (Path(__file__).resolve().parents[1] / "docs" / "manipulator.md").read_text()

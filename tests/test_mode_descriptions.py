@@ -36,3 +36,21 @@ def test_no_motion_and_the_json(capsys):
     assert main(["analyze", "stage_planar_1dof", "--modes", "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["modes"]["descriptions"] == ["3 and 5 along x"]
+
+
+def test_a_node_moving_at_45_degrees_is_named_the_same_whatever_the_round_off():
+    """Components equal to within round-off (what another CPU's eigensolver may give) are a
+    tie, named by the first axis (x), whichever is larger in the last bits; a difference
+    beyond AXIS_TIE (1e-9, relative) names the larger."""
+    model = load_scene("stage_planar_3dof")
+    x, y = model.nodes[2].coordinates  # node 3, translational
+
+    def words(along_x, along_y):
+        shape = np.zeros(model.nx)
+        shape[[x, y]] = along_x, along_y
+        return describe_mode(model, shape)
+
+    ulp = np.spacing(1.0)
+    assert words(1.0, 1.0 + ulp) == words(1.0, 1.0 - ulp) == words(1.0, 1.0) == "3 along x"
+    assert words(-1.0, 1.0 + 4 * ulp) == "3 along x"
+    assert words(1.0, 1.0 + 1e-6) == "3 along y"

@@ -6,9 +6,9 @@ tables through which Python hands a C entry its arrays (core/numerics/array_tabl
 import ctypes
 import json
 import os
-import subprocess
 import sys
 
+import children
 import numpy as np
 import pytest
 
@@ -122,9 +122,9 @@ def test_the_code_target_is_numbas_own(cpu):
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_CPU")}
     if cpu:
         env["NUMBA_CPU_NAME"] = cpu
-    ours, numbas = json.loads(subprocess.run([sys.executable, "-c", TARGETS], env=env,
-                                             capture_output=True, text=True,
-                                             check=True).stdout)
+    ours, numbas = json.loads(children.run([sys.executable, "-c", TARGETS], env=env,
+                                           capture_output=True, text=True,
+                                           check=True).stdout)
     assert ours == numbas
 
 
@@ -148,9 +148,9 @@ print("LOADED", all(e._compiled is None for e in used), len(used))
 def test_a_simulation_through_loaded_code_is_numbas_bit_for_bit(tmp_path, method):
     def run(name, **env):
         out = tmp_path / f"{name}.csv"
-        result = subprocess.run([sys.executable, "-c", RUN, method, str(out)],
-                                env={**os.environ, **env}, capture_output=True, text=True,
-                                check=True)
+        result = children.run([sys.executable, "-c", RUN, method, str(out)],
+                              env={**os.environ, **env}, capture_output=True, text=True,
+                              check=True)
         return out.read_bytes(), result.stdout.split("LOADED ")[1].split()
 
     # The first run loads through numba where no file is there yet, and writes them; where
@@ -209,8 +209,8 @@ def test_numba_imported_after_loaded_object_code_runs_beside_it():
     from Python) keeps one runtime: later simulations there give the numbers of a process
     that loaded everything through numba."""
     def run(mode, **env):
-        return subprocess.run([sys.executable, "-c", MIXED, mode], env={**os.environ, **env},
-                              capture_output=True, text=True, check=True).stdout.split()
+        return children.run([sys.executable, "-c", MIXED, mode], env={**os.environ, **env},
+                            capture_output=True, text=True, check=True).stdout.split()
 
     run("plain")  # the object code written
     assert run("mixed") == run("plain", FLEXURE_OBJECT_CODE="0")

@@ -19,10 +19,10 @@ In a fresh interpreter (the process's table of operations is shared by every mod
 process: another test's model would have connected them), on the session's cache."""
 
 import json
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import numpy as np
 from test_engine import MODELS, close, plain_dynamics, plain_tangent
 
@@ -118,9 +118,9 @@ def _probe():
     """The probe's findings, from a fresh interpreter."""
     tests = str(Path(__file__).resolve().parent)
     # the tests' folder for their modules, the repository's for `tests.compiled_loops`
-    done = subprocess.run([sys.executable, "-c", PROBE.format(tests=tests)],
-                          capture_output=True, text=True, check=False,
-                          cwd=str(Path(tests).parent))
+    done = children.run([sys.executable, "-c", PROBE.format(tests=tests)],
+                        capture_output=True, text=True, check=False,
+                        cwd=str(Path(tests).parent))
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.splitlines()[-1])
 

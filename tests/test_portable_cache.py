@@ -13,6 +13,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import children
 import pytest
 from numba.core.serialize import dumps
 
@@ -57,9 +58,9 @@ SIMULATE = textwrap.dedent("""
 
 
 def child(action, folder, cache):
-    done = subprocess.run([sys.executable, "-c", SIMULATE, action, str(folder)],
-                          capture_output=True, text=True, check=False,
-                          env={**os.environ, "FLEXURE_CACHE_DIR": str(cache)})
+    done = children.run([sys.executable, "-c", SIMULATE, action, str(folder)],
+                        capture_output=True, text=True, check=False,
+                        env={**os.environ, "FLEXURE_CACHE_DIR": str(cache)})
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
 

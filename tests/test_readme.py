@@ -22,10 +22,10 @@ import math
 import os
 import re
 import shlex
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import pytest
 
 from flexure.core.cli import main as flexure_main
@@ -117,8 +117,8 @@ def run_command(command, capsys):
         assert code == 0, f"`{command}` exited with {code}:\n{err[-2000:]}"
         return out
     if argv[0] in PYTHON:
-        done = subprocess.run([sys.executable, *argv[1:]], capture_output=True, text=True,
-                              timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
+        done = children.run([sys.executable, *argv[1:]], capture_output=True, text=True,
+                            timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
         assert done.returncode == 0, \
             f"`{command}` exited with {done.returncode}:\n{done.stderr[-2000:]}"
         return done.stdout

@@ -6,9 +6,9 @@ first use (PEP 562). These are structural checks in a fresh interpreter, not tim
 """
 
 import json
-import subprocess
 import sys
 
+import children
 import pytest
 from cli_runs import warm_command_modules
 
@@ -20,8 +20,8 @@ def loaded_after(code):
     probe = (f"{code}\nimport json, sys\n"
              f"print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & "
              f"{set(HEAVY) | {'numpy', 'scipy'}!r})))")
-    completed = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                               check=True)
+    completed = children.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                             check=True)
     return set(json.loads(completed.stdout.splitlines()[-1]))
 
 
@@ -104,8 +104,8 @@ def test_a_command_imports_only_its_own_subcommand():
              "build_parser(['analyze', 'truss_1dof_x'])\n"
              "print(json.dumps(sorted(m for m in sys.modules if m.startswith("
              "('flexure.controllers', 'flexure.fmu')))))")
-    completed = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                               check=True)
+    completed = children.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                             check=True)
     assert json.loads(completed.stdout.splitlines()[-1]) == []
 
 

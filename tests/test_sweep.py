@@ -338,15 +338,49 @@ def test_an_unreachable_scheduler_is_given_up_after_the_timeout(monkeypatch, cap
 def test_a_client_that_failed_to_connect_is_closed_before_the_error(tmp_path, capsys):
     """A failed Client left as cyclic garbage stops its IO loop under distributed's
     class-wide LoopRunner lock whenever the collector happens to run; if that is while the
-    next Client starts (holding the lock), the process hangs. None may be left over."""
+    next Client starts (holding the lock), the process hangs. None may be left over.
+
+    The objects are told apart by their type, not isinstance: isinstance asks a weak proxy
+    its referent's class, and raises ReferenceError for one whose referent is gone, as other
+    tests in the same process leave (one is made here, so that the check holds whatever ran
+    before)."""
     import gc
+    import weakref
 
     from distributed import Client
 
+    class Referent:
+        pass
+
+    dead_proxy = weakref.proxy(Referent())  # its referent is gone at once (CPython)
     gc.collect()
     assert main(["sweep", SCENE, "--param", "nodes.3.mass=0,1", "--scheduler", "foo://x:1",
                  "--out", str(tmp_path / "s.csv")]) == 2
     assert "cannot connect" in capsys.readouterr().err
-    # type(), not isinstance(): the collector's lists hold weak proxies, and isinstance() of
-    # one whose referent is gone raises ReferenceError
-    assert [o for o in gc.get_objects() if type(o) is Client] == []
+    assert [o for o in gc.get_objects() if issubclass(type(o), Client)] == []
+    assert type(dead_proxy) is weakref.ProxyType
+
+
+def test_the_local_cluster_is_closed_when_its_client_cannot_start(tmp_path, monkeypatch):
+    """A Client that fails on the sweep's own LocalCluster: the cluster (worker processes) is
+    closed before the error goes on, not left to its finalizer."""
+    import distributed
+
+    closed = []
+
+    class Cluster:
+        def __init__(self, **options):
+            pass
+
+        def close(self):
+            closed.append(self)
+
+    def failing_client(cluster):
+        raise OSError("no client here")
+
+    monkeypatch.setattr(distributed, "LocalCluster", Cluster)
+    monkeypatch.setattr(distributed, "Client", failing_client)
+    points = grid([("sections.leaf.height", [0.3e-3, 0.5e-3])])
+    with pytest.raises(OSError, match="no client here"):
+        run_sweep(DATA, points, overrides=MASSLESS, workers=2)
+    assert len(closed) == 1

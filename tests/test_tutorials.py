@@ -1,18 +1,18 @@
 """Each tutorial in examples/tutorials runs as a user would run it, and its results agree with
 the hand calculations it prints beside them."""
 
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import pytest
 
 TUTORIALS = Path(__file__).resolve().parents[1] / "examples" / "tutorials"
 
 
 def run(name):
-    done = subprocess.run([sys.executable, str(TUTORIALS / name)], capture_output=True,
-                          text=True, timeout=300)
+    done = children.run([sys.executable, str(TUTORIALS / name)], capture_output=True,
+                        text=True)
     assert done.returncode == 0, done.stderr[-3000:]
     return done.stdout
 

@@ -1,9 +1,9 @@
 """The work-precision study, the simulate/bench commands and the example scripts, run small."""
 
-import subprocess
 import sys
 from pathlib import Path
 
+import children
 import numpy as np
 import pytest
 
@@ -93,9 +93,9 @@ def test_simulate_command_writes_csv_with_units_and_plot(tmp_path):
     samples = tmp_path / "force.csv"
     samples.write_text("time,F\n0.0,0.0\n0.01,2.0\n")
     out, png = tmp_path / "r.csv", tmp_path / "r.png"
-    run = subprocess.run([FLEXURE, "simulate", "stage_planar_1dof", "--t-end", "0.03",
-                          "--input", f"F={samples}", "--samples", "30", "--out", str(out),
-                          "--plot", str(png)], capture_output=True, text=True, check=True)
+    run = children.run([FLEXURE, "simulate", "stage_planar_1dof", "--t-end", "0.03",
+                        "--input", f"F={samples}", "--samples", "30", "--out", str(out),
+                        "--plot", str(png)], capture_output=True, text=True, check=True)
     assert "steps" in run.stdout
     lines = out.read_text().splitlines()
     assert lines[0] == "time [s],x [m],y [m]"
@@ -105,18 +105,18 @@ def test_simulate_command_writes_csv_with_units_and_plot(tmp_path):
 
 
 def test_simulate_command_reports_a_bad_input_without_traceback():
-    run = subprocess.run([FLEXURE, "simulate", "stage_planar_1dof", "--t-end", "0.1",
-                          "--input", "F=inf"], capture_output=True, text=True)
+    run = children.run([FLEXURE, "simulate", "stage_planar_1dof", "--t-end", "0.1",
+                        "--input", "F=inf"], capture_output=True, text=True)
     assert run.returncode == 2
     assert "input 'F' is not finite" in run.stderr and "Traceback" not in run.stderr
 
 
 def test_bench_command_prints_the_table(tmp_path):
     md = tmp_path / "wp.md"
-    run = subprocess.run([FLEXURE, "bench", "stage_planar_1dof", "--t-end", "0.02",
-                          "--methods", "cvode-bdf,scipy-dop853", "--rtols", "1e-5",
-                          "--reference-rtol", "1e-9", "--markdown", str(md)],
-                         capture_output=True, text=True, check=True)
+    run = children.run([FLEXURE, "bench", "stage_planar_1dof", "--t-end", "0.02",
+                        "--methods", "cvode-bdf,scipy-dop853", "--rtols", "1e-5",
+                        "--reference-rtol", "1e-9", "--markdown", str(md)],
+                       capture_output=True, text=True, check=True)
     assert "cvode-bdf" in run.stdout and "scipy-dop853" in run.stdout
     assert md.read_text().count("\n") == 4
 
@@ -142,6 +142,6 @@ def test_order_limits_in_the_study_and_the_commands():
              "max_order: expected an integer from 1 to 5 for cvode-bdf, got 9"),
             (["bench", "truss_1dof_x", "--t-end", "0.01", "--methods", "scipy-bdf:2"],
              "unknown method 'scipy-bdf:2'")):
-        run = subprocess.run([FLEXURE, *argv], capture_output=True, text=True)
+        run = children.run([FLEXURE, *argv], capture_output=True, text=True)
         assert run.returncode == 2
         assert message in run.stderr and "Traceback" not in run.stderr

@@ -158,6 +158,19 @@ def buckling_load_factors(model: Model, count: int | None = None, *,
     return factors if count is None else factors[:count]
 
 
+# components of a mode's vector within this fraction of the largest are a tie (a node moving
+# at 45 degrees): the eigensolver's round-off, which differs between CPUs (its BLAS kernels,
+# FMA), must not pick the axis named
+AXIS_TIE = 1e-9
+
+
+def _dominant(vector):
+    """The index of the largest |component| of `vector`; of ties (within AXIS_TIE of it,
+    relatively), the first: x before y before z."""
+    size = np.abs(np.asarray(vector, dtype=float))
+    return int(np.flatnonzero(size >= (1.0 - AXIS_TIE) * size.max())[0])
+
+
 def describe_mode(model: Model, coordinate_shape: np.ndarray,
                   x: np.ndarray | None = None) -> str:
     """Which nodes move how in a mode (the coordinate shape (NX,) of `Modes`), in words: the
@@ -187,12 +200,12 @@ def describe_mode(model: Model, coordinate_shape: np.ndarray,
         if node.kind == "translational":
             vector = shape[index]
             moves.append((float(np.linalg.norm(vector)), node.name,
-                          node.axes[int(np.argmax(np.abs(vector)))]))
+                          node.axes[_dominant(vector)]))
         elif node.axes == ("phi",):
             turns.append((abs(float(shape[index[0]])), node.name, "z"))
         else:
             turns.append((float(np.linalg.norm(rotation[node.name])), node.name,
-                          "xyz"[int(np.argmax(np.abs(rotation[node.name])))] + "'"))
+                          "xyz"[_dominant(rotation[node.name])] + "'"))
     scale = length_scale(model)
     largest_move = max((m[0] for m in moves), default=0.0)
     largest_turn = max((t[0] for t in turns), default=0.0) * scale

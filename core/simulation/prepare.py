@@ -46,11 +46,11 @@ def prepare(model: Model, *, loop_method: str | None = None) -> float:
         zero = np.zeros((1, 1))
         # kinematic inputs held where they start: the compiled code does not depend on
         # their path
-        sim = Simulator(model, method=loop_method,
-                        stepwise_motion=bool(model.kinematic_inputs))
-        run_sampled_loop(sim, fs=1e4, samples=1,
-                         reference=zero, feedforward=zero, controller=(zero, zero, zero, zero),
-                         loop_inputs=[0], loop_outputs=[output])
+        with Simulator(model, method=loop_method,
+                       stepwise_motion=bool(model.kinematic_inputs)) as sim:
+            run_sampled_loop(sim, fs=1e4, samples=1, reference=zero, feedforward=zero,
+                             controller=(zero, zero, zero, zero), loop_inputs=[0],
+                             loop_outputs=[output])
     return time.perf_counter() - start
 
 

@@ -162,74 +162,76 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
     constants, functions, samples = split_inputs(model, inputs or {})
     if model.kinematic_inputs and motion_duration is None:
         motion_duration = t_end  # the move takes the run
-    sim = Simulator(model, method=method, rtol=rtol, atol=atol, max_step=max_step,
-                    jacobian=jacobian, max_order=max_order, input_functions=functions,
-                    motion_duration=motion_duration)
-    sim.reset(q0=q0, qdot0=qdot0, i0=i0)
-    sim.deadline = deadline
-    u0 = np.zeros(len(sim.input_names))
-    for i, value in constants.items():
-        u0[i] = value
-    for i, (_, values) in samples.items():
-        u0[i] = values[0]
-    sim.set_inputs(u0)
-    breaks = sorted({float(t) for times, _ in samples.values() for t in times
-                     if 0.0 < t < t_end})
-    if output_times is None:
-        grid = None
-    else:
-        grid = np.asarray(output_times, dtype=float)
-        if grid.ndim != 1 or np.any(np.diff(grid) <= 0) or grid[0] < 0 or grid[-1] > t_end:
-            raise SimulationError("output_times must increase strictly within [0, t_end]")
-    times, states, held = [0.0], [sim.absolute(sim.state)], [_held(sim, functions, 0.0)]
-
-    def record(t, y):
-        times.append(t)
-        states.append(sim.absolute(y))
-        held.append(_held(sim, functions, t))
-
-    def report(t):
-        progress(t / t_end)
-
-    stops = sorted(set(breaks) | {float(t_end)} | (set(grid.tolist()) if grid is not None
-                                                    else set()))
-    for stop in stops:
-        if stop <= sim.time:
-            continue
-        sim.advance_to(stop, _record=record if grid is None else None,
-                    _progress=report if progress is not None else None)
-        if grid is not None and np.any(grid == stop):
-            record(stop, sim.state)
-        if stop in breaks:
-            u = sim.inputs
-            for i, (t_samples, values) in samples.items():
-                u[i] = values[np.searchsorted(t_samples, stop, side="right") - 1]
-            sim.set_inputs(u)
-    times = np.array(times)
-    states = np.array(states)
-    if grid is not None:  # keep exactly the requested times
-        keep = np.isin(times, grid)
-        if grid[0] == 0.0:
-            keep[0] = True
+    with Simulator(model, method=method, rtol=rtol, atol=atol, max_step=max_step,
+                   jacobian=jacobian, max_order=max_order, input_functions=functions,
+                   motion_duration=motion_duration) as sim:
+        # closed when the run ends or fails: the solver's memory freed now, not by the
+        # collector at some later time
+        sim.reset(q0=q0, qdot0=qdot0, i0=i0)
+        sim.deadline = deadline
+        u0 = np.zeros(len(sim.input_names))
+        for i, value in constants.items():
+            u0[i] = value
+        for i, (_, values) in samples.items():
+            u0[i] = values[0]
+        sim.set_inputs(u0)
+        breaks = sorted({float(t) for times, _ in samples.values() for t in times
+                         if 0.0 < t < t_end})
+        if output_times is None:
+            grid = None
         else:
-            keep[0] = False
-        times, states, held = times[keep], states[keep], np.array(held)[keep]
-    states = sim.on_path(times, states)  # the kinematic inputs' entries exactly the path's
-    held = np.array(held, dtype=float).reshape(len(times), len(sim.input_names))
-    outputs, warnings = sim.outputs_and_warnings(states, times=times, inputs=held)
-    names, units = sim.output_names, sim.output_units
-    if model.kinematic_inputs:  # their efforts as outputs after the scene's
-        outputs = np.column_stack([outputs, sim.efforts_along(times, states, inputs=held)])
-        names = names + [f"{port.name}.effort" for port in model.kinematic_inputs]
-        units = units + [effort_unit(port) for port in model.kinematic_inputs]
-    n = sim.ndof
-    return SimulationResult(model_name=model.name, method=method, rtol=rtol, times=times,
-                            q=states[:, :n], qdot=states[:, n: 2 * n],
-                            currents=states[:, 2 * n:], dof_names=sim.dof_names,
-                            output_names=names, output_units=units,
-                            output_array=outputs, statistics=sim.statistics,
-                            inputs=held, input_names=sim.input_names,
-                            warnings=warnings)
+            grid = np.asarray(output_times, dtype=float)
+            if grid.ndim != 1 or np.any(np.diff(grid) <= 0) or grid[0] < 0 or grid[-1] > t_end:
+                raise SimulationError("output_times must increase strictly within [0, t_end]")
+        times, states, held = [0.0], [sim.absolute(sim.state)], [_held(sim, functions, 0.0)]
+
+        def record(t, y):
+            times.append(t)
+            states.append(sim.absolute(y))
+            held.append(_held(sim, functions, t))
+
+        def report(t):
+            progress(t / t_end)
+
+        stops = sorted(set(breaks) | {float(t_end)} | (set(grid.tolist()) if grid is not None
+                                                        else set()))
+        for stop in stops:
+            if stop <= sim.time:
+                continue
+            sim.advance_to(stop, _record=record if grid is None else None,
+                        _progress=report if progress is not None else None)
+            if grid is not None and np.any(grid == stop):
+                record(stop, sim.state)
+            if stop in breaks:
+                u = sim.inputs
+                for i, (t_samples, values) in samples.items():
+                    u[i] = values[np.searchsorted(t_samples, stop, side="right") - 1]
+                sim.set_inputs(u)
+        times = np.array(times)
+        states = np.array(states)
+        if grid is not None:  # keep exactly the requested times
+            keep = np.isin(times, grid)
+            if grid[0] == 0.0:
+                keep[0] = True
+            else:
+                keep[0] = False
+            times, states, held = times[keep], states[keep], np.array(held)[keep]
+        states = sim.on_path(times, states)  # the kinematic inputs' entries exactly the path's
+        held = np.array(held, dtype=float).reshape(len(times), len(sim.input_names))
+        outputs, warnings = sim.outputs_and_warnings(states, times=times, inputs=held)
+        names, units = sim.output_names, sim.output_units
+        if model.kinematic_inputs:  # their efforts as outputs after the scene's
+            outputs = np.column_stack([outputs, sim.efforts_along(times, states, inputs=held)])
+            names = names + [f"{port.name}.effort" for port in model.kinematic_inputs]
+            units = units + [effort_unit(port) for port in model.kinematic_inputs]
+        n = sim.ndof
+        return SimulationResult(model_name=model.name, method=method, rtol=rtol, times=times,
+                                q=states[:, :n], qdot=states[:, n: 2 * n],
+                                currents=states[:, 2 * n:], dof_names=sim.dof_names,
+                                output_names=names, output_units=units,
+                                output_array=outputs, statistics=sim.statistics,
+                                inputs=held, input_names=sim.input_names,
+                                warnings=warnings)
 
 
 def effort_unit(port):

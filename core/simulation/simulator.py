@@ -299,6 +299,18 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
             # input's reaction) are measured again
             self._outputs_cache = None
 
+    def close(self) -> None:
+        """Free what the integrator holds outside Python (SUNDIALS' memory), now rather than
+        when the collector finds it (idempotent); the simulator cannot advance after it.
+        `with Simulator(...) as sim:` closes it at the end of the block."""
+        self.integrator.close()
+
+    def __enter__(self) -> Simulator:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     @property
     def statistics(self) -> dict[str, float]:
         """Solver statistics since `reset`: steps, rhs and Jacobian evaluations, wall time (s)."""

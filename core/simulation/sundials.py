@@ -224,12 +224,15 @@ class _Solver(Stepper):
         return SimulationError(f"t = {t:.9g} s: {self.label} failed with {name}{detail}")
 
     def close(self):
-        """Free the SUNDIALS objects (idempotent)."""
+        """Free the SUNDIALS objects (idempotent), and drop the input callbacks, whose
+        closures refer to this solver: with them it is freed when its last reference goes,
+        not when the collector finds the cycle."""
         if getattr(self, "memory", None):
             self._function("Free")(ctypes.byref(_VP(self.memory)))
             self.memory = None
         if getattr(self, "linear_solver", None):
             self._free_common()
+        self._callbacks = self.input_function = None
 
     def __del__(self):
         if not sys.is_finalizing():  # at exit SUNDIALS may be unloaded already; the OS frees

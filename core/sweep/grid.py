@@ -320,7 +320,11 @@ def _run_on_dask(scene, tasks, options, workers, scheduler, done):
                                processes=True, dashboard_address=None,
                                scheduler_kwargs={"dashboard_address": ":0"},
                                silence_logs=logging.ERROR)
-        client = Client(cluster)
+        try:
+            client = Client(cluster)
+        except BaseException:  # its worker processes would outlive the sweep
+            cluster.close()
+            raise
     try:
         [shared] = client.scatter([scene], broadcast=True)  # sent once, not with every task
         futures = client.map(evaluate_point, [shared] * len(tasks), tasks, pure=False,
