@@ -111,11 +111,11 @@ def per_index(rows, period):
         print(f"| {i} | {m.sum()} | {1e6 * np.median(h[m]):.2f} | {np.median(rows[m, 2]):.2f} "
               f"| {np.median(rows[m, 3]):.4f} | {np.median(rows[m, 4]):.2f} "
               f"| {counts['rhs'][m].mean():.2f} | {counts['LUs'][m].mean():.2f} "
-              f"| {counts['rejected'][m].sum()} |")
+              f"| {int(counts['rejected'][m].sum())} |")
     samples = len(np.unique(sample[late]))
     print(f"steps a sample {late.sum() / samples:.2f}, rhs a step {counts['rhs'][late].mean():.2f}"
           f", LUs a step {counts['LUs'][late].mean():.3f}, rejections "
-          f"{counts['rejected'].sum()}, Jacobians {int(rows[-1, 9])}")
+          f"{int(counts['rejected'].sum())}, Jacobians {int(rows[-1, 9])}")
     return index, h
 
 
