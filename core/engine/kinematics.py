@@ -18,9 +18,7 @@ error that rate leaves after a step), and full Newton from there if they stall, 
 the residual or on the step, each row and each unknown within its own tolerance (slots
 row_tolerance, step_tolerance: `mechanics.scales`, lengths through the length scale, Euler
 parameters and angles through 1, a floor 8 eps of the magnitude). The prediction is checked
-on e alone (a BEAM's e costs an eighth of e, De, D2e), or, when the last prediction was
-accepted as it was (dims field predicted), on e with De at once, which the solution then
-keeps (the same state asked again, or Newton corrections); a chord iterate is evaluated with De
+on e alone (a BEAM's e costs an eighth of e, De, D2e); a chord iterate is evaluated with De
 (the motion's order at a solution, `AT_SOLUTION`), since one chord step mostly converges and
 the iterate it stops at then needs no evaluation of its own (on manipulator_control's stage
 iterations 2.3 us of about 70: docs/benchmarks.md, session 35); the statics' packed model
@@ -334,25 +332,18 @@ def solve_kinematics(table, q):
                 x[a] = s
         else:
             predicted_coordinates(table, q, x, dq, dx)
-        # the residual needs e alone and the chord steps use the kept factors, so the
-        # prediction is evaluated for e alone, unless the last one was accepted as it was:
-        # then this one is likely to be too (an rhs asked again at a state, or a Newton
-        # correction away), and e with De at once saves the e-only pass
-        order = solution_order(table)
-        chord_order = order if order == AT_SOLUTION else 0
-        eager = dims[ed.PREDICTED] == 1 and chord_order == order
-        _elements(table, x, order if eager else 0)
+        # the residual needs e alone; the chord steps use the kept factors
+        _elements(table, x, 0)
         if _residual(table, x, q, g) <= 1.0:
-            if not eager:
-                deformations(table, x, order, True)  # the slaves are filled
-            dims[ed.PREDICTED] = 1
+            deformations(table, x, solution_order(table), True)  # the slaves are filled
             return _store(table, q, x)
-        dims[ed.PREDICTED] = 0
         previous = 0.0  # no rate before the second step
         # a chord iterate's e with De, the motion's solution order: a chord step from the
         # first-order prediction mostly converges (its rate is of order |dq| / L), and then
         # its De is the solution's, the e-only evaluation before it saved; the statics'
         # solution order (D2e, some ten times e) stays for the iterate it stops at
+        order = solution_order(table)
+        chord_order = order if order == AT_SOLUTION else 0
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             step = _newton_step(table, x, g, dx)
             if not np.isfinite(step):
@@ -370,7 +361,6 @@ def solve_kinematics(table, q):
                 return _store(table, q, x)
     else:
         copy(x, _f(table, slot.X_START))
-        dims[ed.PREDICTED] = 0
     if not all_finite(x):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does

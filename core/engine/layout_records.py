@@ -40,9 +40,6 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
     ("max_newton", "MAX_NEWTON", CONFIG, "the kinematics' full Newton iterations"),
     ("warm", "WARM", STATE, "1: x holds a solution with J's factors (the next kinematics "
      "starts from it), 0: from x_start"),
-    ("predicted", "PREDICTED", STATE, "1: the last kinematic solution was its first-order "
-     "prediction, accepted without a chord step: the next prediction is evaluated with De "
-     "at once (`kinematics.solve_kinematics`)"),
     ("jacobian_reuse", "JACOBIAN_REUSE", STATE, "1: the next Jacobian call returns the kept "
      "one (`sundials`)"),
     ("engine", "ENGINE", STATE, "the address of the engine's table of entries "
