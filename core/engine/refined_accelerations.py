@@ -19,9 +19,9 @@ pass is `inertia_product.element_products` over the points' Dp alone; the rigid 
 -h_o - J_o d_f (`refinement.constraint_products`). b itself is the residual at d = 0. The
 element masses' gravity and -g_conv are added into r once, as `motion.inertia_forces` leaves
 them in slot force for the tangent, in the same element pass as the first residual
-(`inertia_product.forces_and_products`: each element's points evaluated once for both: 4 to 7 % off an rhs on
-manipulator_control). One product costs an element pass, the rigid rows and
-a solve with the kept factors (about 22 us on manipulator_control).
+(`inertia_product.forces_and_products`: each element's points evaluated once for both, 4 to
+7 % off an rhs on manipulator_control). One product costs an element pass, the rigid rows
+and a solve with the kept factors (about 22 us on manipulator_control).
 
 Warm start. When slot augmented_rhs still holds the last evaluation's solution (its first
 n_free entries equal the free coordinates' accelerations that evaluation left in slot xddot,
