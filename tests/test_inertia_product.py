@@ -46,7 +46,12 @@ from flexure.core.engine.actuators import port_values
 from flexure.core.engine.data import EngineData
 from flexure.core.engine.deformation_rates import scatter_stress, stress_resultants
 from flexure.core.engine.factors import add_rigid_rows, augmented_matrix
-from flexure.core.engine.inertia_product import element_product, force_minus_mass
+from flexure.core.engine.inertia_product import (
+    element_product,
+    element_products,
+    force_minus_mass,
+    forces_and_products,
+)
 from flexure.core.engine.motion import inertia_forces
 from flexure.core.engine.operations import OP_RIGID_CONDENSE, run
 from flexure.core.engine.ports import add_input_forces
@@ -166,6 +171,28 @@ def test_force_minus_mass_matches_the_assembled_system(case, moving):
             assert np.max(np.abs(out - expected)) <= 1e-14 * scale
             # the accelerations on x: w_f on the free coordinates, zero on the fixed
             assert np.array_equal(a[data.int_array("free")], w_f)
+
+
+@pytest.mark.parametrize("moving", [True, False], ids=["moving", "at-rest"])
+def test_forces_and_products_is_two_element_passes_in_one(case, moving):
+    """The one pass's two sums, the element masses' forces at a = 0 and the forces less the
+    inertia at a, are each `element_products`' (checked above against the assembled system)
+    bit for bit: the same products in the same order, the points evaluated once."""
+    model, data, q0 = case
+    nx = data.int_array("dims")[ed.NX]
+    rng = np.random.default_rng(11)
+    q = q0 + 1e-4 * rng.standard_normal(q0.size)
+    qdot = 0.05 * rng.standard_normal(q0.size) if moving else np.zeros(q0.size)
+    assert engine.call(data, engine.OP_ACCELERATIONS, q, qdot) == ed.OK
+    table, x, xdot = data.address, data.float_array("x"), data.float_array("xdot")
+    a = rng.standard_normal(nx)
+    forces, total = rng.standard_normal(nx), rng.standard_normal(nx)
+    forces_ref, total_ref = forces.copy(), total.copy()
+    forces_and_products(table, x, xdot, moving, a, forces, total)
+    element_products(table, x, xdot, moving, True, np.zeros(nx), forces_ref)
+    element_products(table, x, xdot, moving, True, a, total_ref)
+    assert np.array_equal(forces, forces_ref)
+    assert np.array_equal(total, total_ref)
 
 
 def test_force_minus_mass_refuses_a_nonfinite_acceleration():

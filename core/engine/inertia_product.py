@@ -148,8 +148,26 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
     blocks, decided once at packing rather than by `beam_blocks_only` element by element,
     which cost about 4 us a call on manipulator_control's 57 BEAMs), any other element
     through Dp's full rows."""
+    _element_pass(table, x, xdot, moving, with_gravity, a, total, total[:0])
+
+
+@kernel
+def forces_and_products(table, x, xdot, moving, a, forces, total):
+    """forces (NX,; N, N m) += Dp^T Mp (g_p - (D2p v) v) and total += Dp^T Mp (g_p - (D2p v) v
+    - Dp a_e), (D2p v) v only if moving: `element_products` with gravity at a = 0 into forces
+    and at a into total in one element pass, each element's points (Dp, (D2p v) v) evaluated
+    once for both. Each gets the same products in the same order as from its own
+    `element_products` call (with gravity; at a = 0 and at a): the same bits."""
+    _element_pass(table, x, xdot, moving, True, a, total, forces)
+
+
+@kernel
+def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
+    """`element_products` into total, and where forces is not empty (NX,) also the same
+    products at a = 0 into forces (`forces_and_products`)."""
     dims = _i(table, slot.DIMS)
     rigid = dims[ed.NSLAVES] > 0
+    split = forces.size > 0
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         inertia = group_inertia(table, g)
@@ -166,16 +184,29 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
             for pp in range(P):
                 g_p = gravity[pp] if with_gravity else 0.0
                 point[pp] = g_p - acc[pp] if moving else g_p
+                acc[pp] = point[pp]  # kept for the product at a = 0 (acc is read: done)
             Mp = masses[i * P * P: (i + 1) * P * P]
             # a_e into the scratch's x, Dp^T w into its v: the points read them, and are done
             for b in range(m):
                 xl[b] = a[coords[i * m + b]]
-            if beams:
-                beam_point_product(Mp, Dp, xl, point, w, vl)
-            else:
-                element_product(Mp, pattern, P, m, Dp, xl, point, w, vl)
+            _product(beams, Mp, pattern, P, m, Dp, xl, point, w, vl)
             for b in range(m):
                 total[coords[i * m + b]] += vl[b]
+            if split:  # the same at a = 0, from the points' values kept in acc
+                for b in range(m):
+                    xl[b] = 0.0
+                _product(beams, Mp, pattern, P, m, Dp, xl, acc, w, vl)
+                for b in range(m):
+                    forces[coords[i * m + b]] += vl[b]
+
+
+@kernel(inline="always")
+def _product(beams, Mp, pattern, P, m, Dp, a_e, point, w, out_e):
+    """point -= Dp a_e, w = Mp point, out_e = Dp^T w: a BEAM's closed form or any element's."""
+    if beams:
+        beam_point_product(Mp, Dp, a_e, point, w, out_e)
+    else:
+        element_product(Mp, pattern, P, m, Dp, a_e, point, w, out_e)
 
 
 @kernel

@@ -22,9 +22,8 @@ and the same for the path OP_RHS takes on this model since session 36, A's solut
 with kept factors (`refined_accelerations`), its steps replicated with two products always
 (the operation takes as many as it needs: one at the same state, two or three a step apart):
 
-    element forces the element masses' gravity and -g_conv into r (one element pass)
-    b              the residual at d = 0 (an element pass over the elements the slaves' c
-                   moves, T^T, the rigid rows)
+    forces and b   the element masses' gravity and -g_conv into r and the residual at d = 0
+                   (T^T, the rigid rows) in one element pass (`residual` with its forces)
     d_1            a solve with the kept factors
     product k      the residual at d_k (an element pass, T^T, the rigid rows) and a solve
 
@@ -43,8 +42,7 @@ import numpy as np
 from .manipulator_stage_profile import CORRECTION, states
 
 STEPS = ("front half", "conv", "inertia", "rigid rows", "factor", "solve", "qddot")
-REFINED_STEPS = ("front half", "conv", "element forces", "b", "d_1", "product 1", "product 2",
-                 "qddot")
+REFINED_STEPS = ("front half", "conv", "forces and b", "d_1", "product 1", "product 2", "qddot")
 
 
 def _replica():
@@ -61,7 +59,6 @@ def _replica():
         j_solve,
         kept_resolve,
     )
-    from flexure.core.engine.inertia_product import element_products
     from flexure.core.engine.motion import coordinate_forces, inertia_forces, qddot_of_solution
     from flexure.core.engine.operations import (
         OP_RIGID_CONDENSE,
@@ -147,7 +144,6 @@ def _replica():
             status, moving = coordinate_forces(table, q, y[n: 2 * n])
             if upto == 0:
                 continue
-            x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
             dx, quad, conv = _f(table, slot.DX), _f(table, slot.G), _f(table, slot.CONV)
             rigid_h = _f(table, slot.RIGID_H)
             conv[:] = 0.0
@@ -161,24 +157,20 @@ def _replica():
                 run(table, OP_RIGID_EXPAND, conv.ctypes.data, 0, 1.0)
             if upto == 1:
                 continue
-            a[:] = 0.0
-            element_products(table, x, xdot, moving, True, a, r)
-            if upto == 2:
-                continue
             d[:] = 0.0
-            residual(table, moving, d, a, total, b)
-            if upto == 3:
+            residual(table, moving, d, a, total, b, True)
+            if upto == 2:
                 continue
             copy(d, b)
             kept_resolve(table, True, na, d)
             for product in range(2):
-                if upto == 4 + product:
+                if upto == 3 + product:
                     break
-                residual(table, moving, d, a, total, c)
+                residual(table, moving, d, a, total, c, False)
                 kept_resolve(table, True, na, c)
                 for k in range(na):
                     d[k] += c[k]
-            if upto < 7:
+            if upto < 6:
                 continue
             qddot_of_solution(table, d, _f(table, slot.XDDOT), True, quad, moving,
                               _f(table, slot.QDDOT))
