@@ -79,13 +79,14 @@ def preferred(model: Model, mechanics: Mechanics) -> bool:
     equilibrium, which they solved through the engine). The linearisation then costs two
     operations on that packed model (0.006 s against the numpy path's 0.029 s on
     manipulator_control), or, where the statics step sparse (from 240 DOFs), the sparse
-    Newton matrix's M, C_x and K_x reduced by T (`linear_sparse`: 0.60 of numpy's CPU on
-    the 816-DOF manipulator, 1.1 to 1.3 on manipulator_reduced, docs/benchmarks.md, session
-    37). Packing the engine for one linearisation costs more than it saves on every model
-    of the statics' window: the engine with its packing (the engine imported) took 1.9 to
-    2.0 times numpy's CPU on the three 75-DOF manipulators (42 against 21 ms) and 2.7 times
-    on the spatial BEAM cantilevers of 258 and 300 DOFs (docs/benchmarks.md, 2026-12-01),
-    so an unloaded model, whose statics took the numpy path, is linearised there too."""
+    Newton matrix's M, C_x and K_x reduced by T (`linear_sparse`: 0.19 of numpy's CPU on
+    the 816-DOF manipulator, 0.43 on manipulator_reduced, 0.67 and 0.77 on the cantilevers of
+    288 and 384 DOFs; docs/benchmarks.md, session 37). Packing the engine for one
+    linearisation costs more than it saves on every model of the statics' window: the
+    engine with its packing (the engine imported) took 1.9 to 2.0 times numpy's CPU on the
+    three 75-DOF manipulators (42 against 21 ms) and 2.7 times on the spatial BEAM
+    cantilevers of 258 and 300 DOFs (docs/benchmarks.md, 2026-12-01), so an unloaded model,
+    whose statics took the numpy path, is linearised there too."""
     return static_engine.preferred(model) and packed(model) and supports(model, mechanics)
 
 
