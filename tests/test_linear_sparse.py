@@ -10,10 +10,9 @@ Tolerances (as tests/test_linear_engine.py's, whose module docstring derives the
   whose DOFs are deformations (measured 1.6e-10 there);
 - the natural frequencies within 1e-9 + delta (f_max / f_i)^2 relative, delta the matrices'
   measured round-off relative to their largest entries: where the frequencies span decades
-  the lowest carry delta amplified so (the 288-DOF cantilever's 1.6 Hz to 3e5 Hz; the 816-DOF
-  manipulator's first mode 6e-8, its seventh to tenth within 2.5e-10); 1e-9 flat on every
-  mode above a tenth of the highest frequency's square root share, where delta (f_max /
-  f)^2 < 1e-10.
+  the lowest carry delta amplified so (the 816-DOF manipulator's first mode 6e-8, f_max / f_1
+  = 4.2e4); 1e-9 flat on the modes where delta (f_max / f_i)^2 < 1e-10 (its seventh to
+  tenth within 2.5e-10).
 """
 
 import dataclasses
