@@ -193,3 +193,18 @@ def test_slots_name_the_entries_of_the_pattern():
     outside = np.argwhere(a == 0.0)[0]
     with pytest.raises(ValueError, match=rf"entry \({outside[0]}, {outside[1]}\) is not in"):
         lu.slot([outside[0]], [outside[1]])
+
+
+@pytest.mark.parametrize("n, density", [(12, 0.3), (60, 0.05)])
+def test_the_pattern_read_in_python_rebuilds_the_matrix(n, density):
+    """`pattern` (the packed ints read without numba) with the values in their packed order
+    gives A back, after a factorisation too (the factors do not overwrite A's values)."""
+    from scipy.sparse import csc_matrix
+
+    _, a, lu = random_case(7, n, density)
+    for _ in range(2):
+        size, rows, columns = sparse_lu.pattern(lu.ints)
+        values = lu.floats[: rows.size]
+        rebuilt = csc_matrix((values, (rows, columns)), shape=(size, size)).toarray()
+        assert size == n and np.array_equal(rebuilt, a)
+        assert factor(lu) > 0.0

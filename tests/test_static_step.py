@@ -244,10 +244,12 @@ def test_a_model_the_newton_packing_refuses_steps_dense_and_solves():
 
 
 def test_the_linearisation_after_a_sparse_solve():
-    """A sparse balance packs no reduced form, so the default linearisation after it is
-    numpy's; compiled=True packs that form on the live balance and gives numpy's matrices;
-    the statics' packings are left as they were (no damping, dims.static, actuators as
-    force inputs): the next solve is the same."""
+    """A sparse balance packs no reduced form, and compiled=True reads the sparse step's
+    packing (`linear_sparse`) without packing that form: numpy's matrices, the moments' load
+    stiffness in G0 included (the default here is numpy's: 280 free coordinates are below
+    the statics' window, `static_engine.preferred`; `engine_balance` packs the balance); the
+    statics' packing is left as it was (no damping, dims.static, actuators as force inputs):
+    the next solve is the same."""
     from flexure.core.analysis import linear_engine
     from flexure.core.analysis.linearization import linearize
     from flexure.core.engine import data as ed
@@ -262,12 +264,13 @@ def test_the_linearisation_after_a_sparse_solve():
     default = linearize(model, solution, mechanics=mech)
     assert np.array_equal(default.K, reference.K)
     engine_path = linearize(model, solution, mechanics=mech, compiled=True)
-    assert static_engine.engine_balance(model) is balance and balance.packed_dense
+    assert static_engine.engine_balance(model) is balance and not balance.packed_dense
     for field in ("M0", "K0", "G0", "K"):
         scale = largest(reference.K if field == "G0" else getattr(reference, field))
         assert largest(getattr(engine_path, field) - getattr(reference, field)) <= 1e-10 * scale
-    dims = balance.data.int_array("dims")
+    dims = balance.step_data.int_array("dims")
     assert dims[ed.HAS_DAMPING] == 0 and dims[ed.STATIC] == 1
+    assert np.all(balance.step_data.int_array("actuators")[0::2] == ed.FORCE_INPUT)
     again = static_equilibrium(model, load_steps=2, inputs=inputs, compiled=True)
     assert static_engine.engine_balance(model) is balance and balance.sparse
     assert largest((again.q - solution.q) / dof_tolerances(model, 1.0)) <= 1e-10

@@ -41,6 +41,10 @@ The input and output columns of the state space come from the same evaluation
 actuator's too (its force column and its coil's back-EMF row), and per output d y / d q, at
 the tangent's x and DF.
 
+A model whose statics step sparse (from 240 DOFs, `static_engine.sparse_step`) has no reduced
+form packed; it is not packed for the linearisation, which reads the sparse step's packing
+instead (`linear_sparse`: the sparse Newton matrix's M, C_x and K_x reduced by DF).
+
 Where the engine does not take a model: what `static_engine.supports` refuses; those take
 the numpy path. Gravity on element masses that hang on rotations (a BEAM's consistent mass,
 whose tangent points couple to its position points) is in the engine's tangent
@@ -54,7 +58,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import static_engine
+from . import linear_sparse, static_engine
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..mechanics.mechanics import Mechanics
@@ -74,19 +78,30 @@ def preferred(model: Model, mechanics: Mechanics) -> bool:
     statics prefer it (`static_engine.preferred`) and have packed it (`packed`: a loaded
     equilibrium, which they solved through the engine). The linearisation then costs two
     operations on that packed model (0.006 s against the numpy path's 0.029 s on
-    manipulator_control). Packing the engine for one linearisation costs more than it
-    saves on every model of the statics' window: the engine with its packing (the engine
-    imported) took 1.9 to 2.0 times numpy's CPU on the three 75-DOF manipulators (42
-    against 21 ms) and 2.7 times on the spatial BEAM cantilevers of 258 and 300 DOFs
-    (docs/benchmarks.md, 2026-12-01), so an unloaded model, whose statics took the numpy
-    path, is linearised there too."""
+    manipulator_control), or, where the statics step sparse (from 240 DOFs), the sparse
+    Newton matrix's M, C_x and K_x reduced by T (`linear_sparse`: 0.19 of numpy's CPU on
+    the 816-DOF manipulator, 0.43 on manipulator_reduced, 0.67 and 0.77 on the cantilevers of
+    288 and 384 DOFs; docs/benchmarks.md, session 37). Packing the engine for one
+    linearisation costs more than it saves on every model of the statics' window: the
+    engine with its packing (the engine imported) took 1.9 to 2.0 times numpy's CPU on the
+    three 75-DOF manipulators (42 against 21 ms) and 2.7 times on the spatial BEAM
+    cantilevers of 258 and 300 DOFs (docs/benchmarks.md, 2026-12-01), so an unloaded model,
+    whose statics took the numpy path, is linearised there too."""
     return static_engine.preferred(model) and packed(model) and supports(model, mechanics)
 
 
 def packed(model: Model) -> bool:
-    """Whether the statics' packed engine model of `model` is live
-    (`static_engine.engine_balance` has made it and the model lives)."""
-    return static_engine.live_balance(model) is not None
+    """Whether the statics' packed engine model of `model` is live and the linearisation
+    reads it: the reduced form (`static_engine.live_balance`), or the sparse step's
+    augmented one (`static_engine.live_step`)."""
+    return (static_engine.live_balance(model) is not None
+            or static_engine.live_step(model) is not None)
+
+
+def _sparse_route(balance) -> bool:
+    """Whether the linearisation reads `balance`'s sparse step packing (`linear_sparse`):
+    it steps sparse and its reduced form is not packed (which is then not packed for it)."""
+    return balance.sparse and not balance.packed_dense
 
 
 def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics,
@@ -116,7 +131,6 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
     from ..engine import data as ed
 
     balance = static_engine.engine_balance(model)
-    data = balance.data
     config, values = solution.config, solution.port_values
     # the free coordinates' nodal loads that hold the solution (module docstring)
     held = np.asarray(config.De.T @ solution.stress_resultants).ravel()
@@ -124,6 +138,9 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
     loads = np.zeros(model.nx)
     free = model.free_coordinates
     loads[free] = held[free]
+    if _sparse_route(balance):
+        return linear_sparse.matrices(model, solution, balance, loads)
+    data = balance.data
     balance.set_load(1.0, loads, values)
     dims = data.int_array("dims")
     D = data.float_array("D")
@@ -138,7 +155,7 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
     finally:
         dims[ed.HAS_DAMPING] = 0
         dims[ed.STATIC] = 1
-    K0 = _structural(data, config.De, DF)
+    K0 = linear_sparse.structural(data, config.De, DF)
     return M0, C0, K0, K - K0
 
 
@@ -152,18 +169,8 @@ def engine_port_rows(model: Model) -> tuple[np.ndarray, np.ndarray]:
     from ..engine.port_entries import port_rows
     from ..mechanics.output_quantities import output_order
 
-    data = static_engine.engine_balance(model).data
+    balance = static_engine.engine_balance(model)
+    if _sparse_route(balance):
+        return linear_sparse.port_rows(model, balance)
+    data = balance.data
     return port_rows(data, model.outputs, [output_order(port) for port in model.outputs])
-
-
-def _structural(data, De, DF):
-    """K0 = DeF_s^T S DeF_s (NDOF, NDOF), DeF = De DF, from the solution's De (sparse, (NE,
-    NX)), the engine's DF (NX, NDOF) of its last tangent and its packed S (compressed rows
-    on the stressed deformations)."""
-    from scipy.sparse import csr_matrix
-
-    stressed = data.int_array("stressed")
-    S = csr_matrix((data.float_array("S"), data.int_array("stress_columns"),
-                    data.int_array("stress_pointers")), shape=(stressed.size, stressed.size))
-    DeF = np.asarray(De[stressed] @ DF)
-    return DeF.T @ np.asarray(S @ DeF)

@@ -144,6 +144,14 @@ def live_balance(model: Model) -> EngineBalance | None:
     return balance if balance is not None and balance.packed_dense else None
 
 
+def live_step(model: Model) -> EngineBalance | None:
+    """The `EngineBalance` of `model` if the statics have packed it and it steps on the sparse
+    saddle-point system (`EngineBalance.sparse`), else None: the linearisation then reads the
+    sparse Newton matrix's packing (`linear_sparse`) rather than packing the reduced form."""
+    balance = _BALANCES.get(model)
+    return balance if balance is not None and balance.sparse else None
+
+
 def engine_balance(model: Model, *, sparse: bool | None = None) -> EngineBalance:
     """The `EngineBalance` of `model`, packed once per live model and reused (a packing
     takes about 0.16 s of CPU on the 507-DOF manipulator; a model is not changed once built: a
@@ -203,6 +211,12 @@ class EngineBalance:
             self._dense = _Packing(self.model, augmented=False)
             self._dense.load(*self._load)
         return self._dense.data
+
+    @property
+    def step_data(self):
+        """The packed model in the augmented form that the sparse step runs on (`EngineData`,
+        with the sparse Newton matrix's slots), or None where the balance steps dense."""
+        return None if self._sparse is None else self._sparse.data
 
     @property
     def packed_dense(self) -> bool:
