@@ -68,7 +68,7 @@ def matrices(model: Model, solution: StaticSolution, balance: EngineBalance,
     from ..engine import engine
     from ..engine.operations import OP_NEWTON_JACOBIAN
     from ..errors import ConvergenceError
-    from ..numerics.sparse_lu import pattern
+    from ..numerics.sparse_lu_pattern import pattern
 
     data = balance.step_data
     config = solution.config
