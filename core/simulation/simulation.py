@@ -211,10 +211,7 @@ def simulate(model: Model, t_end: float, *, inputs: Mapping[str, object] | None 
         states = np.array(states)
         if grid is not None:  # keep exactly the requested times
             keep = np.isin(times, grid)
-            if grid[0] == 0.0:
-                keep[0] = True
-            else:
-                keep[0] = False
+            keep[0] = grid[0] == 0.0  # the start only where the grid asks for it
             times, states, held = times[keep], states[keep], np.array(held)[keep]
         states = sim.on_path(times, states)  # the kinematic inputs' entries exactly the path's
         held = np.array(held, dtype=float).reshape(len(times), len(sim.input_names))
