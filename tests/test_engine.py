@@ -43,8 +43,9 @@ from flexure.core import (
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
+from flexure.core.engine.status import STATUS_MESSAGES, status_message
 from flexure.core.mechanics.ports import input_forces, input_stiffness
-from flexure.core.simulation.sundials import METHODS, STATUS_MESSAGES
+from flexure.core.simulation.sundials import METHODS
 from tests.compiled_loops import run_compiled_loop
 
 CORE = Path(__file__).resolve().parents[1] / "core"
@@ -145,7 +146,7 @@ def evaluate(data, q, qdot, u):
     """The engine's qddot (a copy) at (q, qdot) with inputs u."""
     data.float_array("inputs")[:] = u
     status = engine.call(data, engine.OP_EVALUATE, np.array(q, float), np.array(qdot, float))
-    assert status == ed.OK, STATUS_MESSAGES[status]
+    assert status == ed.OK, status_message(status)
     return data.float_array("qddot").copy()
 
 
@@ -322,9 +323,6 @@ def test_the_cheaper_form_is_chosen_per_model():
 def test_statuses_and_their_messages():
     """Each failure comes back as its status code (nothing raises in compiled code), and
     Simulator turns it into a SimulationError with the time and the documented message."""
-    assert set(STATUS_MESSAGES) == {ed.NOT_CONVERGED, ed.SINGULAR_CONSTRAINTS,
-                                    ed.SINGULAR_MASS, ed.NONFINITE_STATE, ed.NONFINITE_RESULT,
-                                    ed.NOT_CONNECTED}
     model = truss_pendulum()
     data = EngineData(model)
     # the forms run the evaluation through the table of the operations' addresses, which

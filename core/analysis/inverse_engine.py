@@ -181,10 +181,10 @@ class EngineMotion:
         """ConvergenceError unless `status` is OK."""
         if status == self._ed.OK:
             return
-        from ..simulation.status import STATUS_MESSAGES
+        from ..engine.status import status_message
 
         self._current = self._evaluated = None
-        reason = STATUS_MESSAGES.get(int(status), f"engine status {int(status)}")
+        reason = status_message(status)
         raise ConvergenceError(f"kinematics of {self.model.name!r} at q = "
                                f"{np.array2string(q, precision=6)}: {reason}")
 

@@ -81,10 +81,10 @@ def matrices(model: Model, solution: StaticSolution, balance: EngineBalance,
     finally:
         dims[ed.HAS_DAMPING] = 0
     if status != ed.OK:
-        from ..simulation.status import STATUS_MESSAGES
+        from ..engine.status import status_message
 
         raise ConvergenceError(f"linearisation of {model.name!r}: "
-                               f"{STATUS_MESSAGES.get(int(status), f'status {int(status)}')}")
+                               f"{status_message(status)}")
     parts = data.float_array("newton_parts")
     nnz = parts.size // 3
     _, rows, columns = pattern(data.int_array("newton_h"))

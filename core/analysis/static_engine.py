@@ -363,10 +363,10 @@ class EngineBalance:
         packing.data.int_array("dims")[self._ed.WARM] = 0
 
     def _fail(self, packing, status, q):
-        from ..simulation.status import STATUS_MESSAGES
+        from ..engine.status import status_message
 
         packing.current = None
-        reason = STATUS_MESSAGES.get(int(status), f"engine status {int(status)}")
+        reason = status_message(status)
         raise ConvergenceError(f"static balance of {self.model.name!r} at q = "
                                f"{np.array2string(q, precision=6)}: {reason}")
 

@@ -123,9 +123,9 @@ class EngineStresses:
             status = engine.call(data, engine.OP_STRESS_RESULTANTS,
                                  data.float_array("qddot").copy(), self._sigma)
         if status != ed.OK:
-            from ..simulation.status import STATUS_MESSAGES
+            from ..engine.status import status_message
 
             raise ConvergenceError(f"the stress resultants of {self.model.name!r} at q = "
                                    f"{np.array2string(state[:n], precision=6)}: "
-                                   f"{STATUS_MESSAGES.get(int(status), status)}")
+                                   f"{status_message(status)}")
         return data.float_array("x").copy(), self._sigma.copy()

@@ -44,7 +44,7 @@ _FLOAT_INDEX = {name: i for i, name in enumerate(FLOAT_SLOTS)}
 # ...) and settings (SINGULAR_RATIO), and each record's width (DIMS_SIZE, G_WIDTH,
 # COUNTERS_SIZE, SETTINGS_SIZE): module-level ints generated from the layout's tables
 globals().update(layout.field_indices())
-# status codes returned by the engine's functions (messages: sundials.STATUS_MESSAGES)
+# status codes returned by the engine's functions (their words: status.status_message)
 (OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT,
  NOT_CONNECTED, NOT_AVAILABLE) = range(8)
 

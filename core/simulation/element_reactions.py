@@ -31,8 +31,8 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine import engine
+from ..engine.status import status_message
 from ..errors import SimulationError
-from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..engine.data import EngineData
@@ -88,7 +88,7 @@ class RigidReactions:
                                   "multipliers (a singular configuration)")
         if status != ed.OK:
             raise SimulationError(f"the reactions of the rigid deformations: "
-                                  f"{STATUS_MESSAGES[status]}")
+                                  f"{status_message(status)}")
         return out
 
     def _evaluated_without_clusters(self, data, y, inputs, t):
@@ -103,7 +103,7 @@ class RigidReactions:
         status = engine.call(own, engine.OP_RHS, np.array(y, dtype=float), t=t)
         if status != ed.OK:
             raise SimulationError(f"the reactions of the rigid deformations: "
-                                  f"{STATUS_MESSAGES[status]}")
+                                  f"{status_message(status)}")
         return own
 
 

@@ -36,9 +36,9 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine import engine
+from ..engine.status import status_message
 from ..errors import SimulationError
 from .element_reactions import RigidReactions
-from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from ..engine.data import EngineData
@@ -125,7 +125,7 @@ class ElementReadings:
         t = 0.0 if t is None else float(t)
         status = engine.call(data, engine.OP_RHS, y, t=t)
         if status != ed.OK:
-            raise SimulationError(f"the stress outputs: {STATUS_MESSAGES[status]}")
+            raise SimulationError(f"the stress outputs: {status_message(status)}")
         sigma, efforts = data.float_array("sigma"), data.float_array("efforts")
         reactions = (None if self.reactions is None
                      else self.reactions.stress_resultants(data, y, inputs, t))

@@ -208,10 +208,10 @@ class Esdirk(Stepper):
     def failure(self, status, t):
         """A SimulationError naming the time and the cause; `last_good` is (t, y) of the last
         accepted step."""
-        from .status import STATUS_MESSAGES
+        from ..engine.status import status_message
 
-        cause = STATUS_MESSAGES.get(int(self.counters[ed.FAILED_STATUS]))
-        detail = f" ({cause})" if cause else ""
+        cause = int(self.counters[ed.FAILED_STATUS])  # the engine's, where it failed
+        detail = f" ({status_message(cause)})" if cause != ed.OK else ""
         error = SimulationError(f"t = {t:.9g} s: {self.label} failed with "
                                 f"{FLAG_NAMES.get(status, status)}{detail}")
         error.last_good = (float(t), self.y_array.copy())

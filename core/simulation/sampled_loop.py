@@ -47,6 +47,7 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..engine.ports import port_specs
+from ..engine.status import status_message
 from ..errors import SimulationError
 from ..mechanics.ports import output_dofs
 from .methods import COMPILED_LOOP_METHODS
@@ -61,7 +62,6 @@ from .sampled_measure import (
     PLANT,
     measure_entry,
 )
-from .status import STATUS_MESSAGES
 from .sundials_restart import L_JACOBIAN
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -210,7 +210,7 @@ DRIVERS = {"esdirk": _esdirk_samples, "sundials": _cvode_samples}
 
 def _failure(sim, solver, flag, t):
     if flag <= END_MEASURE:
-        return SimulationError(f"t = {t:.9g} s: outputs: {STATUS_MESSAGES[END_MEASURE - flag]}")
+        return SimulationError(f"t = {t:.9g} s: outputs: {status_message(END_MEASURE - flag)}")
     if flag == MEASURE_FAILED:
         return SimulationError(f"t = {t:.9g} s: outputs: the kinematics of the measured "
                                "positions could not be solved")

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine.data import EngineData
+from ..engine.status import status_message
 from ..errors import SimulationError, StepBudgetSpent
 from ..mechanics.ports import output_dofs
 from .element_readings import ElementReadings
@@ -49,7 +50,6 @@ from .simulator_outputs import SimulatorOutputs, measured_orders
 from .simulator_state import STATE_VERSION, SimulatorState
 from .simulator_system import SimulatorSystem
 from .start import scene_dofs, solve_start, start_kinematics
-from .status import STATUS_MESSAGES
 from .stepper import Stepper, restart_plant_now
 from .stepwise_motion import held_path
 from .tolerances import atol_vector
@@ -204,7 +204,7 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
         status = solve_start(self.model, self.data, q)
         if status != ed.OK:
             raise SimulationError(f"t = {t0:.9g} s: the initial DOFs q0 cannot be assembled: "
-                                  f"{STATUS_MESSAGES[status]} (q0 = {np.array2string(q)})")
+                                  f"{status_message(status)} (q0 = {np.array2string(q)})")
         self._t = float(t0)
         self._q_ref = q.copy()
         self._y = np.concatenate([np.zeros(self.ndof), qdot, i])

@@ -24,8 +24,8 @@ import numpy as np
 from ..engine import data as ed
 from ..engine import engine
 from ..engine.prescribed import PATH_WIDTH, quintic_path
+from ..engine.status import status_message
 from ..errors import SimulationError
-from .status import STATUS_MESSAGES
 from .stepwise_motion import SAMPLES, held_path, next_piece
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -357,7 +357,7 @@ class SimulatorMotion:
             status = engine.call(data, engine.OP_RHS, y, t=float(t))
             if status != ed.OK:
                 raise SimulationError(f"t = {t:.9g} s: the efforts of the kinematic inputs: "
-                                      f"{STATUS_MESSAGES[status]}")
+                                      f"{status_message(status)}")
             efforts[row] = data.float_array("efforts")
         return efforts
 

@@ -11,12 +11,12 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine import engine
+from ..engine.status import status_message
 from ..errors import SimulationError
 from ..mechanics.output_quantities import output_order
 from ..mechanics.ports import output_value
 from .measuring import start_from_plant
 from .plausibility import RangeCheck
-from .status import STATUS_MESSAGES
 
 if TYPE_CHECKING:  # names for the annotations only
     from numpy.typing import ArrayLike
@@ -124,7 +124,7 @@ class SimulatorOutputs:
             start_from_plant(self.data.address, data.address, q)
         status = engine.call(data, engine.OP_POSITIONS, q)
         if status != ed.OK:
-            raise SimulationError(f"t = {self._t:.9g} s: outputs: {STATUS_MESSAGES[status]}")
+            raise SimulationError(f"t = {self._t:.9g} s: outputs: {status_message(status)}")
         x = data.float_array("x")
         if self._about_axis:
             return np.array([output_value(self.model, port, x) for port in self.model.outputs])
@@ -237,7 +237,7 @@ class SimulatorOutputs:
             status = engine.call(data, engine.OP_KINEMATICS, np.ascontiguousarray(y[:n]))
             if status != ed.OK:  # name the state that failed, not the simulator's time
                 raise SimulationError(f"{where} (state {k + 1} of {len(states)} along the "
-                                      f"path): outputs: {STATUS_MESSAGES[status]}")
+                                      f"path): outputs: {status_message(status)}")
             rates = self._rates(data, y, held[k], where)  # x, then xdot, xddot as needed
             for j, p in enumerate(ports):
                 result[k, j] = (output_value(self.model, p, *rates) if p.about_axis
@@ -275,6 +275,6 @@ class SimulatorOutputs:
             status = engine.call(data, engine.OP_RHS, y)
             if status != ed.OK:
                 raise SimulationError(f"{where}: the acceleration outputs: "
-                                      f"{STATUS_MESSAGES[status]}")
+                                      f"{status_message(status)}")
             rates.append(DF @ data.float_array("qddot") + data.float_array("conv"))
         return rates

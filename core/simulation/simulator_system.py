@@ -14,8 +14,8 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine import engine
+from ..engine.status import status_message
 from ..errors import SimulationError
-from .status import STATUS_MESSAGES
 from .stepper import HeldInputDrive
 
 if TYPE_CHECKING:  # names for the annotations only
@@ -101,7 +101,7 @@ class SimulatorSystem:
         status = engine.call(self.data, engine.OP_RHS, np.ascontiguousarray(y, dtype=float),
                              ydot, t=float(t))
         if status != ed.OK:
-            raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
+            raise SimulationError(f"t = {t:.9g} s: {status_message(status)}")
         return ydot
 
     def jacobian_matrix(self, t: float, y: ArrayLike) -> np.ndarray:
@@ -129,7 +129,7 @@ class SimulatorSystem:
         status = engine.call(self.data, engine.OP_JACOBIAN, np.ascontiguousarray(y, dtype=float),
                              J, s=0.0, t=float(t))
         if status != ed.OK:
-            raise SimulationError(f"t = {t:.9g} s: {STATUS_MESSAGES[status]}")
+            raise SimulationError(f"t = {t:.9g} s: {status_message(status)}")
         return J.reshape(self.nstate, self.nstate)
 
     def _prepare(self, t):

@@ -25,9 +25,9 @@ import numpy as np
 
 from ..engine import data as ed
 from ..engine import engine
+from ..engine.status import status_message
 from ..errors import SimulationError, StepBudgetSpent
 from .methods import REGISTRY, SUNDIALS_METHODS
-from .status import STATUS_MESSAGES
 from .stepper import Stepper
 from .sundials_callbacks import cvode_jacobian, cvode_rhs, ida_jacobian, ida_residual
 from .sundials_libraries import function_address, libraries
@@ -218,9 +218,9 @@ class _Solver(Stepper):
         if self.input_error is not None:
             error, self.input_error = self.input_error, None
             return error
-        cause = STATUS_MESSAGES.get(int(self.counters[ed.FAILED_STATUS]))
+        cause = int(self.counters[ed.FAILED_STATUS])  # the engine's, where it failed
         name = self.flag_name(flag)
-        detail = f" ({cause})" if cause else ""
+        detail = f" ({status_message(cause)})" if cause != ed.OK else ""
         return SimulationError(f"t = {t:.9g} s: {self.label} failed with {name}{detail}")
 
     def close(self):
@@ -408,7 +408,7 @@ class Ida(_Solver):
                              self._ydot, t=float(t))
         if status != ed.OK:
             raise SimulationError(f"t = {t:.9g} s: IDA could not start: "
-                                  f"{STATUS_MESSAGES.get(status, status)}")
+                                  f"{status_message(status)}")
         self._accumulate()
         self.y_array[:] = y
         self.yp_array[:] = self._ydot

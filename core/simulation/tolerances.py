@@ -75,8 +75,8 @@ def _initial_matrices(model, data):
     from ..engine import data as ed
     from ..engine import engine
     from ..engine.data import EngineData
+    from ..engine.status import status_message
     from .start import scene_dofs, solve_start
-    from .status import STATUS_MESSAGES
 
     data = EngineData(model) if data is None else data
     n, size = model.declared_dof_count, 2 * model.declared_dof_count + len(model.coil_actuators)
@@ -95,7 +95,7 @@ def _initial_matrices(model, data):
                     "each moves needs a mass of its own (nodes.NAME.mass, or an element's)")
         raise SimulationError(f"{model.source}: the start configuration could not be "
                               "evaluated for the default tolerances: "
-                              f"{STATUS_MESSAGES.get(status, status)}{hint}")
+                              f"{status_message(status)}{hint}")
     nx = data.int_array("dims")[ed.NX]
     M0 = data.float_array("mass")[:n * n].reshape(n, n).copy()
     K0 = -M0 @ jacobian.reshape(size, size)[n:2 * n, :n]
