@@ -130,3 +130,32 @@ def test_evaluations_leave_the_configuration_alone(scene):
     for name, before in config.items():
         assert np.array_equal(before, sim.data.slots()[name]), name
     assert np.array_equal(dims_before, dims[fixed])
+
+
+def test_an_evaluation_mode_is_undone_after_its_block_even_after_a_failure():
+    """`EngineData.evaluating` sets dims.has_damping and dims.static for its block and puts
+    back what was there, also when the block raises; `restart_kinematics` starts the next
+    solution from the given coordinates (x_start, warm = 0), and the solution it gives is the
+    one a fresh packing gives from there."""
+    data = EngineData(load_scene("stage_planar_1dof"))
+    dims = data.int_array("dims")
+    dims[ed.HAS_DAMPING], dims[ed.STATIC] = 0, 1
+    with data.evaluating(damping=True, static=False):
+        assert (dims[ed.HAS_DAMPING], dims[ed.STATIC]) == (1, 0)
+    assert (dims[ed.HAS_DAMPING], dims[ed.STATIC]) == (0, 1)
+    with pytest.raises(RuntimeError, match="inside"), data.evaluating(damping=True):
+        assert (dims[ed.HAS_DAMPING], dims[ed.STATIC]) == (1, 1)
+        raise RuntimeError("inside")
+    assert (dims[ed.HAS_DAMPING], dims[ed.STATIC]) == (0, 1)
+
+    x0 = data.model.initial_coordinates
+    q = np.array([1e-3])
+    assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK
+    assert dims[ed.WARM] == 1  # the next solve would start from this solution
+    data.restart_kinematics(x0)
+    assert dims[ed.WARM] == 0 and np.array_equal(data.float_array("x_start"), x0)
+    assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK
+    fresh = EngineData(load_scene("stage_planar_1dof"))
+    assert engine.call(fresh, engine.OP_KINEMATICS, q) == ed.OK
+    np.testing.assert_allclose(data.float_array("x"), fresh.float_array("x"), rtol=0,
+                               atol=1e-15)

@@ -174,8 +174,7 @@ class EngineMotion:
         """Start the next kinematics from `start`'s x, unless the engine holds it."""
         if start is None or start is self._current:
             return
-        self.data.float_array("x_start")[:] = start.x
-        self.data.int_array("dims")[self._ed.WARM] = 0
+        self.data.restart_kinematics(start.x)
 
     def _check(self, status, q):
         """ConvergenceError unless `status` is OK."""

@@ -128,7 +128,6 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
     ConvergenceError
         The engine could not solve the kinematics at the solution's DOFs.
     """
-    from ..engine import data as ed
 
     balance = static_engine.engine_balance(model)
     config, values = solution.config, solution.port_values
@@ -142,19 +141,13 @@ def engine_matrices(model: Model, solution: StaticSolution, mechanics: Mechanics
         return linear_sparse.matrices(model, solution, balance, loads)
     data = balance.data
     balance.set_load(1.0, loads, values)
-    dims = data.int_array("dims")
-    D = data.float_array("D")
-    dims[ed.HAS_DAMPING] = int(np.any(D))
-    dims[ed.STATIC] = 0  # the evaluation forms M_bar, which M0 is
-    try:
+    # the evaluation forms M_bar, which M0 is, and C0 where the model has damping
+    with data.evaluating(damping=np.any(data.float_array("D")), static=False):
         _, K = balance.residual_and_tangent(config)
         n = model.ndof
         M0 = data.float_array("mass").reshape(n, n).copy()
         C0 = data.float_array("damping").reshape(n, n).copy()
         DF = data.float_array("DF").reshape(-1, n).copy()
-    finally:
-        dims[ed.HAS_DAMPING] = 0
-        dims[ed.STATIC] = 1
     K0 = linear_sparse.structural(data, config.De, DF)
     return M0, C0, K0, K - K0
 

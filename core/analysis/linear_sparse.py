@@ -73,13 +73,9 @@ def matrices(model: Model, solution: StaticSolution, balance: EngineBalance,
     data = balance.step_data
     config = solution.config
     balance.set_load(1.0, loads, solution.port_values)
-    dims = data.int_array("dims")
-    dims[ed.HAS_DAMPING] = int(np.any(data.float_array("D")))
     y = np.concatenate([np.asarray(config.q, float), np.zeros(model.ndof)])
-    try:
+    with data.evaluating(damping=np.any(data.float_array("D"))):
         status = engine.call(data, OP_NEWTON_JACOBIAN, y)
-    finally:
-        dims[ed.HAS_DAMPING] = 0
     if status != ed.OK:
         from ..engine.status import status_message
 
@@ -88,7 +84,7 @@ def matrices(model: Model, solution: StaticSolution, balance: EngineBalance,
     parts = data.float_array("newton_parts")
     nnz = parts.size // 3
     _, rows, columns = pattern(data.int_array("newton_h"))
-    nf = int(dims[ed.NFREE])
+    nf = int(data.int_array("dims")[ed.NFREE])
     block = (rows < nf) & (columns < nf)  # M, C_x, K_x; the rest is J_o beside and below
     rows, columns = rows[block], columns[block]
     DF = config.DF

@@ -359,8 +359,7 @@ class EngineBalance:
         x = getattr(point, "x", None)
         if x is None or point is packing.current:
             return
-        packing.data.float_array("x_start")[:] = x
-        packing.data.int_array("dims")[self._ed.WARM] = 0
+        packing.data.restart_kinematics(x)
 
     def _fail(self, packing, status, q):
         from ..engine.status import status_message

@@ -83,8 +83,7 @@ class EngineStresses:
 
     def restart(self) -> None:
         """Start the next state's kinematics from the model's initial coordinates."""
-        self.data.float_array("x_start")[:] = self.model.initial_coordinates
-        self.data.int_array("dims")[self._ed.WARM] = 0
+        self.data.restart_kinematics(self.model.initial_coordinates)
 
     def stress_resultants(self, state: np.ndarray, held: np.ndarray | None,
                           ) -> tuple[np.ndarray, np.ndarray]:

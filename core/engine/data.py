@@ -18,6 +18,8 @@ fields of the records `dims`, a row of `groups`, `counters` and `settings` are n
 Units: SI throughout (m, rad, kg, N, s), as the model's.
 """
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from . import layout, packing, packing_check, sparse_packing
@@ -43,7 +45,8 @@ _FLOAT_INDEX = {name: i for i, name in enumerate(FLOAT_SLOTS)}
 # the fields of dims (NX, NE, ...), of a row of groups (G_COUNT, ...), counters (RHS_COUNT,
 # ...) and settings (SINGULAR_RATIO), and each record's width (DIMS_SIZE, G_WIDTH,
 # COUNTERS_SIZE, SETTINGS_SIZE): module-level ints generated from the layout's tables
-globals().update(layout.field_indices())
+_FIELDS = layout.field_indices()
+globals().update(_FIELDS)
 # status codes returned by the engine's functions (their words: status.status_message)
 (OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT,
  NOT_CONNECTED, NOT_AVAILABLE) = range(8)
@@ -127,6 +130,30 @@ class EngineData:
     def int_array(self, name):
         """The int64 array of slot `name` (a view)."""
         return self.ints[_index(_INT_INDEX, name, "int64")]
+
+    def restart_kinematics(self, x):
+        """The next kinematic solution starts with full Newton from the coordinates x (NX,:
+        m, rad, Euler parameters) rather than from the last solution and its factors (slot
+        x_start, dims.warm = 0), as `access.restart_kinematics` does in compiled code."""
+        self.float_array("x_start")[:] = x
+        self.int_array("dims")[_FIELDS["WARM"]] = 0
+
+    @contextmanager
+    def evaluating(self, *, damping, static=None):
+        """Within the block, an evaluation forms the damping forces and matrix if `damping`
+        (dims.has_damping) and, if `static`, leaves out M_bar and its LU (dims.static: a
+        balance needs DF^T r only; None leaves it as it is); after the block both settings
+        are what they were, whatever happened inside."""
+        dims, damped, static_only = self.int_array("dims"), _FIELDS["HAS_DAMPING"], \
+            _FIELDS["STATIC"]
+        before = dims[damped], dims[static_only]
+        dims[damped] = int(damping)
+        if static is not None:
+            dims[static_only] = int(static)
+        try:
+            yield self
+        finally:
+            dims[damped], dims[static_only] = before
 
     def slots(self, role=None):
         """{name: array (a view)} of every slot of `role` (layout.CONFIG, STATE, SCRATCH or

@@ -3,7 +3,6 @@ kinematics solved there."""
 
 import numpy as np
 
-from ..engine import data as ed
 from ..engine import engine
 
 
@@ -22,8 +21,7 @@ def scene_dofs(model, data):
 
 def start_kinematics(data, x):
     """The next kinematic solution of `data` starts with full Newton from x (NX,)."""
-    data.float_array("x_start")[:] = x
-    data.int_array("dims")[ed.WARM] = 0
+    data.restart_kinematics(x)
 
 
 def solve_start(model, data, q):
