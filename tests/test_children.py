@@ -1,6 +1,7 @@
 """The tests' child processes (children.py): a hung child is killed at its time limit with
 what it started, and the test fails then instead of hanging."""
 
+import json
 import subprocess
 import sys
 import time
@@ -50,3 +51,32 @@ def test_a_child_runs_as_subprocess_run_would():
     assert (done.returncode, done.stdout, done.stderr) == (3, "cba\n", "")
     with pytest.raises(subprocess.CalledProcessError):
         children.run([sys.executable, "-c", "raise SystemExit(1)"], check=True)
+
+
+def test_what_a_child_says_is_read_up_to_the_line_waited_for():
+    child = subprocess.Popen([sys.executable, "-uc", "print('a'); print('b'); print('c'); "
+                              "import time; time.sleep(300)"],
+                             stdout=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert children.lines_until(child, child.stdout, lambda line: "b" in line, 60) == \
+            ["a\n", "b\n"]
+        assert child.poll() is None  # it goes on
+    finally:
+        children.kill_group(child)
+        child.wait()
+
+
+@pytest.mark.parametrize("script, limit", [
+    ("print('starting', flush=True); import time; time.sleep(300)", 1.0),  # hangs
+    ("print('starting'); print('not json')", 60.0),  # ends without it, or unreadable
+])
+def test_a_child_that_never_says_it_fails_the_test_at_the_limit_and_is_killed(script, limit):
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                             start_new_session=True)
+    start = time.monotonic()
+    with pytest.raises(AssertionError, match=r"did not write the line waited for within "
+                                             r"[0-9.]+ s; it wrote:\nstarting\n"):
+        children.lines_until(child, child.stdout,
+                             lambda line: json.loads(line)["ready"], limit)
+    assert time.monotonic() - start < 30
+    assert child.returncode is not None and not running(child.pid)

@@ -87,22 +87,10 @@ def _child(what, cache, gate="", start=""):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def _read_line_with(stream, text, timeout_s=300):
-    """The first line of `stream` that contains `text` (read in a thread: a child that never
-    says it fails the test after `timeout_s` instead of hanging it)."""
-    found = []
-
-    def read():
-        for line in stream:
-            if text in line:
-                found.append(line)
-                return
-
-    reader = threading.Thread(target=read, daemon=True)
-    reader.start()
-    reader.join(timeout_s)
-    assert found, f"no line with {text!r} within {timeout_s} s"
-    return found[0]
+def _line_with(child, stream, text, timeout_s=300):
+    """The first line of `child`'s `stream` that contains `text` (`children.lines_until`: a
+    child that never says it fails the test after `timeout_s`)."""
+    return children.lines_until(child, stream, lambda line: text in line, timeout_s)[-1]
 
 
 def _report(process, timeout_s=300):
@@ -115,9 +103,9 @@ def _report(process, timeout_s=300):
 def test_a_second_process_waits_for_the_first_and_loads_what_it_compiled(tmp_path, what):
     cache, gate, start = tmp_path / "cache", tmp_path / "go", tmp_path / "start"
     first, second = _child(what, cache, gate), _child(what, cache, start=start)
-    _read_line_with(first.stdout, "compiling")  # the first holds the lock, inside numba
+    _line_with(first, first.stdout, "compiling")  # the first holds the lock, inside numba
     start.touch()
-    waiting = _read_line_with(second.stderr, "flexure: waiting for")
+    waiting = _line_with(second, second.stderr, "flexure: waiting for")
     assert f"waiting for process {first.pid}, which compiles" in waiting
     gate.touch()
     first_did, first_said = _report(first)
@@ -139,9 +127,9 @@ def test_a_second_process_waits_for_the_first_and_loads_what_it_compiled(tmp_pat
 def test_a_holder_killed_mid_compilation_leaves_the_waiter_to_compile(tmp_path):
     cache, never, start = tmp_path / "cache", tmp_path / "never", tmp_path / "start"
     holder, waiter = _child("entry", cache, never), _child("entry", cache, start=start)
-    _read_line_with(holder.stdout, "compiling")
+    _line_with(holder, holder.stdout, "compiling")
     start.touch()
-    _read_line_with(waiter.stderr, "flexure: waiting for")
+    _line_with(waiter, waiter.stderr, "flexure: waiting for")
     holder.send_signal(signal.SIGKILL)
     holder.wait(timeout=60)
     did, err = _report(waiter)
@@ -165,7 +153,7 @@ with compile_lock.held(sys.argv[1]) as state:
 def _holder(path, release):
     holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(path), str(release)],
                               stdout=subprocess.PIPE, text=True)
-    assert _read_line_with(holder.stdout, "held", 60).split() == ["held", str(holder.pid)]
+    assert _line_with(holder, holder.stdout, "held", 60).split() == ["held", str(holder.pid)]
     return holder
 
 

@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+import children
 import numba
 import pytest
 
@@ -151,7 +152,7 @@ def test_the_cli_announces_its_first_compilation_on_a_piped_stderr(tmp_path):
     with subprocess.Popen(command, env=env, cwd=tmp_path, stdout=subprocess.DEVNULL,
                           stderr=subprocess.PIPE, text=True) as child:
         try:
-            first = child.stderr.readline()
+            first = children.lines_until(child, child.stderr, lambda line: True, 120)[0]
         finally:
             child.kill()
     assert first.startswith("flexure: compiling its engine for "), first

@@ -108,18 +108,16 @@ def start_host(fmu, cache, python=sys.executable, own_copy=False, steps=3, force
 def messages_until(host, words):
     """The host's logged messages up to the first that contains `words`; the host is then
     stopped (it would go on compiling)."""
-    seen = []
     try:
-        for line in host.stdout:
-            entry = json.loads(line)
-            seen.append(entry)
-            if words in entry.get("message", ""):
-                return seen
+        lines = children.lines_until(
+            host, host.stdout, lambda line: words in json.loads(line).get("message", ""))
+    except AssertionError as error:
+        raise AssertionError(f"the host did not log {words!r}: {error}\n"
+                             f"its stderr: {host.stderr.read()[-3000:]}") from None
     finally:
         host.kill()
         host.wait()
-    raise AssertionError(f"the host ended without logging {words!r}: {seen}\n"
-                         f"{host.stderr.read()[-3000:]}")
+    return [json.loads(line) for line in lines]
 
 
 def with_engine_folder(fmu, folder, manifest_text):

@@ -142,7 +142,7 @@ def test_the_same_files_unfiled_for_this_cpu_compile(export, tmp_path):
                           env={**os.environ, "FLEXURE_CACHE_DIR": str(tmp_path)},
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True) as run:
         try:
-            first = run.stderr.readline()
+            first = children.lines_until(run, run.stderr, lambda line: True, 120)[0]
         finally:
             run.kill()
     assert first.startswith("flexure: compiling its engine for "), first
