@@ -63,9 +63,9 @@ def lines_until(child, stream, found, timeout=DEFAULT_TIMEOUT):
     and with the first for which found(line) is true; the child goes on running.
 
     The lines are read in a thread of their own, so that a child that never writes such a
-    line (it hangs, or ends; a line on which `found` raises is not that line) fails the test after at most
-    `timeout` s: the child is then killed, with its process group if it leads one, and an
-    AssertionError quotes the last 3000 characters it wrote there."""
+    line (it hangs, or ends; a line on which `found` raises is not that line) fails the
+    test after at most `timeout` s: the child is then killed, with its process group if it
+    leads one, and an AssertionError quotes the last 3000 characters it wrote there."""
     lines, done = [], threading.Event()
 
     def read():
