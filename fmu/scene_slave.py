@@ -308,8 +308,12 @@ class SceneSlave(SafeSlave):
             try:
                 # the inputs the state was reached with: those the simulator holds
                 state = np.concatenate([self.simulator.q, self.simulator.qdot, self.currents])
+                # a kinematic input's acceleration, which the state does not hold: its path's
+                moved = ([self.simulator.prescribed_values()[2]]
+                         if self._model.kinematic_inputs else None)
                 _, stresses = stresses_along(self._model, [state],
                                              inputs=[self.simulator.inputs],
+                                             prescribed_accelerations=moved,
                                              mechanics=self._mechanics)
                 self._stress = float(np.nanmax(stresses))
             except Exception as error:  # noqa: BLE001

@@ -17,8 +17,11 @@ FMU reads the stresses once per step). It keeps its rigid clusters unless a beam
 section has a rigid deformation, whose reaction the engine gives only without clusters
 (`engine.reactions`): then it is packed without them. Each call starts the kinematics from
 the model's initial coordinates and each state from the last one's, as the numpy path does.
-A model with kinematic inputs is not taken: the engine puts their path at a time into q,
-which a state alone does not give.
+A model with kinematic inputs is evaluated in the engine's prescribed form, which puts each
+input's path at the evaluation's time into q and qdot and solves the DOFs proper with the
+input's acceleration u'' given: the state gives u and u', the caller u'' (a state alone
+does not), and the evaluation runs at t = 0 on a path whose record there is the quadratic
+u + u' t + u'' t^2 / 2.
 """
 
 from __future__ import annotations
@@ -38,8 +41,9 @@ _PACKED = PerLiveModel()  # model -> EngineStresses
 
 def supports(model: Model) -> bool:
     """Whether the engine gives the stress resultants of `model`'s states: not with kinematic
-    inputs (module docstring)."""
-    return not model.kinematic_inputs
+    inputs and actuators together, which its packing refuses (the prescribed form has no
+    coils)."""
+    return not (model.kinematic_inputs and model.actuators)
 
 
 def engine_stresses(model: Model) -> EngineStresses:
@@ -86,6 +90,7 @@ class EngineStresses:
         self.data.restart_kinematics(self.model.initial_coordinates)
 
     def stress_resultants(self, state: np.ndarray, held: np.ndarray | None,
+                          prescribed_accelerations: np.ndarray | None = None,
                           ) -> tuple[np.ndarray, np.ndarray]:
         """The coordinates and the stress resultants at `state`.
 
@@ -95,6 +100,10 @@ class EngineStresses:
             [q, qdot(, i)]: m, rad; m/s, rad/s; A (coil currents left out are zero).
         held : ndarray (n_inputs,) or None
             The inputs held: N, N m, V (None: zero).
+        prescribed_accelerations : ndarray (n_kinematic,), optional
+            The kinematic inputs' accelerations u'' (m/s^2, rad/s^2), in the order of
+            `Model.kinematic_inputs`; their u and u' are the state's entries. Needed for a
+            model with kinematic inputs (`stresses.stresses_along` checks it).
 
         Returns
         -------
@@ -117,7 +126,9 @@ class EngineStresses:
         y = np.zeros(self.nstate)
         rates = state[n: self.nstate]
         y[n: n + rates.size] = rates
-        status = engine.call(data, engine.OP_RHS, y)
+        if self.model.kinematic_inputs:
+            self._hold_path(state, prescribed_accelerations)
+        status = engine.call(data, engine.OP_RHS, y, t=0.0)
         if status == ed.OK:
             status = engine.call(data, engine.OP_STRESS_RESULTANTS,
                                  data.float_array("qddot").copy(), self._sigma)
@@ -128,3 +139,15 @@ class EngineStresses:
                                    f"{np.array2string(state[:n], precision=6)}: "
                                    f"{status_message(status)}")
         return data.float_array("x").copy(), self._sigma.copy()
+
+    def _hold_path(self, state, accelerations):
+        """Slot motion_path: each kinematic input on the quadratic through its u, u' (the
+        state's) and u'' at t = 0, for an evaluation at t = 0 (module docstring)."""
+        from ..engine.layout import PATH_WIDTH
+
+        k, n = self.model.prescribed_dofs, self.ndof
+        path = self.data.float_array("motion_path").reshape(-1, PATH_WIDTH)
+        path[:] = 0.0
+        path[:, 1] = 1.0  # s: t = 0 is inside [t_start, t_end), where u' and u'' count
+        path[:, 2], path[:, 3] = state[k], state[n + k]
+        path[:, 4] = 0.5 * np.asarray(accelerations, dtype=float)

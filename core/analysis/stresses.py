@@ -21,8 +21,10 @@ The stress resultants sigma (NE,) are those of every deformation: the constituti
 released and DOF deformations plus the multipliers of the rigid ones (reaction forces), as
 `StaticSolution.stress_resultants` holds them; `dynamic_stress_resultants` gives them along a
 motion from the numpy `Mechanics` (the plain reference), `stress_engine` from the compiled
-engine's evaluation of each state, which `stresses_along` takes by default (not with
-kinematic inputs, whose path a state alone does not give).
+engine's evaluation of each state, which `stresses_along` takes by default. With kinematic
+inputs both solve the accelerations of the DOFs proper with the inputs' own accelerations
+given (which the caller passes: a state holds their positions and rates only), so that what
+moves an input is a reaction of the structure, not a free motion of it.
 """
 
 from __future__ import annotations
@@ -175,13 +177,17 @@ def beam_stresses(model: Model, x: np.ndarray, sigma: np.ndarray) -> BeamStresse
                         np.array(yields, dtype=float))
 
 
-def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=None):
+def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=None,
+                              prescribed=None):
     """sigma (NE,) of every deformation in motion: constitutive plus the multipliers of
 
     r = f - M xddot - h(x, xdot) - De^T sigma_c,   xddot = DF qddot + (D2F qdot) qdot,
 
     with f the loads and gravity plus `input_force` ((NX,) N) and h the convective inertia
-    force. qddot (NDOF,) defaults to the accelerations of the equations of motion.
+    force. qddot (NDOF,) defaults to the accelerations of the equations of motion,
+    M_bar qddot = DF^T r; with `prescribed` = (k, u'') (positions in q of the kinematic
+    inputs, their accelerations in m/s^2 or rad/s^2), those of the DOFs proper f with
+    qddot_k = u'' given: M_bar_ff qddot_f = (DF^T r)_f - M_bar_fk u''.
     """
     xdot = config.DF @ qdot
     sigma_c = mechanics.constitutive_stress(config, config.De @ xdot)
@@ -193,13 +199,22 @@ def dynamic_stress_resultants(mechanics, config, qdot, qddot=None, input_force=N
     r = (f - M @ mechanics.kinematics.convective_acceleration(config, qdot)
          - inertia.convective_force(config.x, xdot) - config.De.T @ sigma_c)
     if qddot is None:
-        qddot = np.linalg.solve(config.DF.T @ M @ config.DF, config.DF.T @ r)
+        M_bar, Q = config.DF.T @ M @ config.DF, config.DF.T @ r
+        if prescribed is None:
+            qddot = np.linalg.solve(M_bar, Q)
+        else:
+            k, given = np.asarray(prescribed[0], dtype=int), np.asarray(prescribed[1], float)
+            f = np.setdiff1d(np.arange(Q.size), k)
+            qddot = np.zeros(Q.size)
+            qddot[k] = given
+            qddot[f] = np.linalg.solve(M_bar[np.ix_(f, f)], Q[f] - M_bar[np.ix_(f, k)] @ given)
     r = r - M @ (config.DF @ qddot)
     return mechanics.stress_resultants(config, r, sigma_c)
 
 
 @blas_threads()
 def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None = None,
+                   prescribed_accelerations: ArrayLike | None = None,
                    mechanics: Mechanics | None = None,
                    compiled: bool | None = None) -> tuple[list[str], np.ndarray]:
     """Von Mises stresses along a trajectory; the accelerations follow from the equations of
@@ -214,6 +229,11 @@ def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None 
     inputs : array_like (n_times, n_inputs), optional
         The held inputs: N, N m for the scene's forces and moments, V for an actuator's
         drive signal (default zero).
+    prescribed_accelerations : array_like (n_times, n_kinematic), optional
+        A model with kinematic inputs: their accelerations u'' at each state, m/s^2 or
+        rad/s^2, in the order of `Model.kinematic_inputs` (a `Simulator`'s
+        `prescribed_values(t)[2]`); the states hold their positions and rates (on the path:
+        `Simulator.on_path`). Required there, not taken otherwise.
     mechanics : Mechanics, optional
         The model's mechanics to reuse on the numpy path (default: a new one).
     compiled : bool, optional
@@ -232,24 +252,54 @@ def stresses_along(model: Model, states: ArrayLike, *, inputs: ArrayLike | None 
     ------
     ConvergenceError
         The kinematics of a state do not converge.
+    UsageError
+        `prescribed_accelerations` missing for a model with kinematic inputs, given for
+        one without, or not one row of n_kinematic per state.
     """
     states = np.asarray(states, float)
+    uddot = _prescribed_accelerations(model, len(states), prescribed_accelerations)
     names, result = [], []
-    for x, sigma in _states_resultants(model, states, inputs, mechanics, compiled):
+    for x, sigma in _states_resultants(model, states, inputs, uddot, mechanics, compiled):
         stresses = beam_stresses(model, x, sigma)
         names = stresses.names
         result.append(stresses.von_mises)
     return names, np.array(result)
 
 
-def _states_resultants(model, states, inputs, mechanics, compiled):
-    """(x (NX,), sigma (NE,)) of each state, through the engine or numpy (`stresses_along`)."""
+def _prescribed_accelerations(model, count, given):
+    """(count, n_kinematic) u'' of `stresses_along`, or None without kinematic inputs."""
+    from ..errors import UsageError
+
+    names = [port.name for port in model.kinematic_inputs]
+    if not names:
+        if given is not None:
+            raise UsageError(f"stresses_along: {model.name!r} has no kinematic inputs; "
+                             "prescribed_accelerations is for those")
+        return None
+    if given is None:
+        raise UsageError(f"stresses_along: {model.name!r} has kinematic inputs "
+                         f"({', '.join(names)}): give their accelerations at each state, "
+                         "prescribed_accelerations (n_times, n_kinematic), m/s^2 or rad/s^2 "
+                         "(a Simulator's prescribed_values(t)[2]); a state holds only their "
+                         "positions and rates")
+    uddot = np.asarray(given, dtype=float)
+    if uddot.shape != (count, len(names)) or not np.all(np.isfinite(uddot)):
+        raise UsageError(f"stresses_along: prescribed_accelerations of {model.name!r} must "
+                         f"be {count} rows (one per state) of {len(names)} finite values "
+                         f"({', '.join(names)}); got shape {uddot.shape}")
+    return uddot
+
+
+def _states_resultants(model, states, inputs, uddot, mechanics, compiled):
+    """(x (NX,), sigma (NE,)) of each state, through the engine or numpy (`stresses_along`);
+    uddot (n_times, n_kinematic) the kinematic inputs' accelerations, or None."""
     if compiled is not False and stress_engine.supports(model):
         evaluator = stress_engine.engine_stresses(model)
         evaluator.restart()
         for k, state in enumerate(states):
-            yield evaluator.stress_resultants(state, None if inputs is None
-                                              else np.asarray(inputs[k], float))
+            yield evaluator.stress_resultants(
+                state, None if inputs is None else np.asarray(inputs[k], float),
+                None if uddot is None else uddot[k])
         return
     from ..mechanics.mechanics import Mechanics
 
@@ -266,8 +316,9 @@ def _states_resultants(model, states, inputs, mechanics, compiled):
             values = port_values(model, held, currents) if model.actuators else held
             # forces on their coordinates, moments by their orientation
             force = input_forces(model, x, values)
+        prescribed = None if uddot is None else (model.prescribed_dofs, uddot[k])
         yield x, dynamic_stress_resultants(mech, config, state[ndof: 2 * ndof],
-                                           input_force=force)
+                                           input_force=force, prescribed=prescribed)
 
 
 def _chains(stresses, fixed_nodes):
