@@ -11,17 +11,14 @@ the static analyses use (Kinematics, assembly.Inertia, Mechanics), written out i
 on every built-in scene, on two with gravity (element masses under gravity) and on two with
 shear-deformable leaves (Timoshenko bending stiffness and damping), at random
 states near the initial configuration; the tangent also against finite differences of qddot,
-and the CVODE Jacobian against finite differences of Simulator.derivative. Then the status
-codes, the compiled sampled loop against a Python loop of Simulator calls (bit for bit), and
-the on-disk cache of compiled code found again by a copy of the package elsewhere.
+and the CVODE Jacobian against finite differences of Simulator.derivative. Then the
+forms' choice, the method names and the compiled sampled loop against a Python loop of
+Simulator calls (bit for bit). The status codes: tests/test_engine_status.py; the cache of
+compiled code: tests/test_engine_cache.py.
 """
 
-import io
 import json
-import os
-import shutil
 import sys
-import tempfile
 import textwrap
 import tomllib
 from pathlib import Path
@@ -32,7 +29,6 @@ import pytest
 
 from flexure.core import (
     Mechanics,
-    SimulationError,
     Simulator,
     build_model,
     builtin_scenes,
@@ -43,7 +39,7 @@ from flexure.core import (
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
-from flexure.core.engine.status import STATUS_MESSAGES, status_message
+from flexure.core.engine.status import status_message
 from flexure.core.mechanics.ports import input_forces, input_stiffness
 from flexure.core.simulation.sundials import METHODS
 from tests.compiled_loops import run_compiled_loop
@@ -293,22 +289,7 @@ def test_first_order_and_implicit_forms(case):
         close(JR[n:, n:], C + cj * mass, 1e-10)
 
 
-# -- status codes --------------------------------------------------------------------------------
-def truss_pendulum(length=0.5, mass=1.0):
-    """A truss with its elongation prescribed zero and the mass's y as the DOF: singular where
-    it hangs vertically (y = -length)."""
-    node = {"position": [length, 0.0], "dof": ["y"]}
-    if mass:
-        node["mass"] = mass
-    return build_model({
-        "scene": {"name": "truss_pendulum", "gravity": [0.0, -9.81]},
-        "sections": {"rod": {"EA": 1.0}},
-        "nodes": {"1": {"position": [0.0, 0.0], "fixed": ["x", "y"]}, "2": node},
-        "elements": {"rod": {"type": "PLTRUSS", "nodes": ["1", "2"], "section": "rod"}},
-        "outputs": {"y": {"node": "2", "coordinate": "y"}},
-    })
-
-
+# -- the forms ------------------------------------------------------------------------------------
 def test_the_cheaper_form_is_chosen_per_model():
     """The 1-DOF stage (M_bar 1 x 1) takes the reduced form, the 93-DOF refined stage (M_bar
     costs NDOF^2 per element) the augmented one."""
@@ -318,52 +299,6 @@ def test_the_cheaper_form_is_chosen_per_model():
     small = evaluation_cost(11, 10, 1, [(3, 6, 8)])
     large = evaluation_cost(99, 6, 93, [(33, 6, 8)])
     assert small["reduced"] < small["augmented"] and large["augmented"] < large["reduced"]
-
-
-def test_statuses_and_their_messages():
-    """Each failure comes back as its status code (nothing raises in compiled code), and
-    Simulator turns it into a SimulationError with the time and the documented message."""
-    model = truss_pendulum()
-    data = EngineData(model)
-    # the forms run the evaluation through the table of the operations' addresses, which
-    # `connect` gives (and `call` with it): without it the entry answers with a status
-    # instead of jumping to 0
-    y, ydot = np.zeros(2), np.empty(2)
-    rhs = engine.ENTRIES[engine.OP_RHS]
-    assert rhs.ctypes(engine.OP_RHS, data.address, 0.0, y.ctypes.data, ydot.ctypes.data, None,
-                      0.0) == ed.NOT_CONNECTED
-
-    def kinematics(y):
-        data.int_array("dims")[ed.WARM] = 0  # full Newton from the scene's coordinates
-        return engine.call(data, engine.OP_KINEMATICS, np.array([y]))
-
-    assert kinematics(-0.3) == ed.OK
-    assert kinematics(-0.5 * (1 - 1e-13)) == ed.SINGULAR_CONSTRAINTS  # x = 3.5e-7 m
-    assert kinematics(-0.6) == ed.NOT_CONVERGED  # beyond its reach
-    # the first-order form checks the state first, then its result
-    ydot = np.empty(2)
-    assert engine.call(data, engine.OP_RHS, np.array([np.inf, 0.0]), ydot) == ed.NONFINITE_STATE
-    nonfinite = truss_pendulum()
-    nonfinite.loads[nonfinite.dof_coordinates[0]] = np.inf
-    assert engine.call(EngineData(nonfinite), engine.OP_RHS, np.zeros(2), ydot) == \
-        ed.NONFINITE_RESULT
-    massless = EngineData(truss_pendulum(mass=0.0))
-    assert engine.call(massless, engine.OP_RHS, np.zeros(2), ydot) == ed.SINGULAR_MASS
-
-    sim = Simulator(model)  # q_ref = 0 (y = 0: the truss horizontal)
-    checks = [([-0.5 * (1 - 1e-13), 0.0], ed.SINGULAR_CONSTRAINTS),
-              ([0.0, np.nan], ed.NONFINITE_STATE)]
-    for y, status in checks:
-        with pytest.raises(SimulationError) as error:
-            sim.derivative(0.25, np.array(y))
-        assert str(error.value) == f"t = 0.25 s: {STATUS_MESSAGES[status]}"
-    with pytest.raises(SimulationError, match="singular configuration"):
-        sim.jacobian_matrix(0.0, np.array([-0.5 * (1 - 1e-13), 0.0]))
-    with pytest.raises(SimulationError, match="initial DOFs q0 cannot be assembled: a singular"):
-        sim.reset(q0=[-0.5 * (1 - 1e-13)])
-    with pytest.raises(SimulationError, match=r"M_bar is singular"):
-        Simulator(truss_pendulum(mass=0.0)).derivative(0.0, np.zeros(2))
-    assert np.all(np.isfinite(sim.derivative(0.0, np.array([-0.3, 0.1]))))  # still usable
 
 
 def test_method_names_of_the_command_line_are_the_solvers():
@@ -400,83 +335,6 @@ def check_compiled_loop_against_python_loop(method):
     assert np.array_equal(position_c, position)
     assert np.array_equal(force_c, force)
     assert sim.time == t[-1]
-
-
-# -- the on-disk cache of compiled code -------------------------------------------------------
-PROBE = textwrap.dedent("""
-    import json, sys
-    import numpy as np
-    from {package}.core.simulation.sampled_loop import controller_step
-    out = np.zeros(1)
-    controller_step(np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)),
-                    np.zeros(1), np.ones(1), out, np.empty(1))
-    stats = controller_step.python_dispatcher.stats  # Python called it: that code's cache
-    print(json.dumps({{"hits": sum(stats.cache_hits.values()),
-                      "misses": sum(stats.cache_misses.values())}}))
-""")
-
-
-@pytest.mark.slow  # 10 s: it compiles a copy of the package twice
-def test_compiled_code_is_found_again_by_a_copy_of_the_package_elsewhere(tmp_path):
-    """The cache is keyed by the package's name and a hash of its sources, not by the folder
-    (an FMU unpacks its copy of flexure into a new folder every time): a copy of core/ under
-    another folder loads the compiled kernel the first copy wrote; a changed source compiles
-    afresh."""
-
-    def copy(folder, change=False):
-        package = tmp_path / folder / "flexure_cache_probe"
-        shutil.copytree(CORE, package / "core",
-                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
-        (package / "__init__.py").write_text("")
-        if change:
-            with open(package / "core" / "reporting" / "tables.py", "a") as handle:
-                handle.write("\n# a change\n")
-        return tmp_path / folder
-
-    def run(root):
-        env = {**os.environ, "FLEXURE_CACHE_DIR": str(tmp_path / "cache"),
-               "PYTHONPATH": str(root)}
-        done = children.run([sys.executable, "-c",
-                             PROBE.format(package="flexure_cache_probe")],
-                            capture_output=True, text=True, env=env, cwd=root, check=True)
-        return json.loads(done.stdout.strip().splitlines()[-1])
-
-    first = run(copy("first"))
-    assert first == {"hits": 0, "misses": 1}
-    assert run(copy("second")) == {"hits": 1, "misses": 0}
-    assert run(copy("changed", change=True)) == {"hits": 0, "misses": 1}
-
-
-def test_the_first_compilation_is_announced_on_a_terminal_and_in_a_log_alike(tmp_path):
-    """A first run waits about a minute for the compiler: `is_cached` tells a compiled entry
-    from one that is not (an empty cache folder, in a fresh process), and the notice is
-    written once per process, to a log (a pipe, CI, an FMU host's stderr) as to a terminal
-    (tests/test_compile_notice.py: its estimate, progress line and writers)."""
-    from flexure.core.numerics.compile_notice import CompileNotice
-    from flexure.core.numerics.jit import is_cached
-
-    engine.connect(EngineData(truss_pendulum()), engine.OP_RHS)  # the entry compiled or loaded
-    assert is_cached(engine.ENTRIES[engine.OP_RHS].function)
-    probe = ("from flexure.core.engine import engine; from flexure.core.numerics import jit; "
-             "print(jit.is_cached(engine.ENTRIES[engine.OP_RHS].function))")
-    with tempfile.TemporaryDirectory() as empty:
-        done = children.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                            env={**os.environ, "FLEXURE_CACHE_DIR": empty}, check=True)
-    assert done.stdout.split() == ["False"]
-
-    class Terminal(io.StringIO):
-        def isatty(self):
-            return True
-
-    for stream in (Terminal(), io.StringIO()):
-        notice = CompileNotice(str(tmp_path), "sources")
-        notice.announce(stream)
-        notice.announce(stream)
-        notice.close()
-        lines = stream.getvalue().splitlines()
-        assert len(lines) == 1, lines
-        assert lines[0].startswith("flexure: compiling its engine for ")
-        assert lines[0].endswith(f"kept in {tmp_path}")
 
 
 def test_positions_operation_matches_the_full_kinematics(case):

@@ -19,8 +19,8 @@ from tests.test_engine import (
     plain_dynamics,
     plain_tangent,
     random_states,
-    truss_pendulum,
 )
+from tests.test_engine_status import truss_pendulum
 
 
 def check_against_the_twin(model, mechanics, data, states, *, tangent_rtol=1e-10):
