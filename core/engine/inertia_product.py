@@ -117,16 +117,16 @@ def spread_accelerations(table, w_f, convective, a, total):
     `convective`), zero on the fixed ones; then total (NX,; N, N m) -= the lumped masses
     times a where the augmented system has them, on the free coordinates."""
     dims = _i(table, slot.DIMS)
-    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    free, lumped = _i(table, slot.FREE), _f(table, slot.LUMPED)
     a[:] = 0.0
+    # the lumped masses on the free coordinates alone (those with a column of A), in the
+    # same pass: the slaves' T w below writes neither a's free entries nor total
     for k in range(dims[ed.NFREE]):
-        a[free[k]] = w_f[k]
+        c = free[k]
+        a[c] = w_f[k]
+        total[c] -= lumped[c] * a[c]
     if dims[ed.NSLAVES] > 0:
         run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 1.0 if convective else 0.0)
-    lumped = _f(table, slot.LUMPED)
-    for c in range(dims[ed.NX]):
-        if col_of_coord[c] >= 0:
-            total[c] -= lumped[c] * a[c]
 
 
 @kernel
