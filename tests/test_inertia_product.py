@@ -38,7 +38,12 @@ from test_rigid_inertia import massive_manipulator
 from examples.benchmarks.spatial import spatial_cantilever
 from flexure.core import Mechanics, load_scene
 from flexure.core.elements import beam, beam_kernels
-from flexure.core.elements.beam_mass import PATTERN, beam_blocks_only, beam_point_product
+from flexure.core.elements.beam_mass import (
+    PATTERN,
+    beam_blocks_only,
+    beam_point_product,
+    beam_point_products,
+)
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine import slots as slot
@@ -229,6 +234,28 @@ def test_beam_point_product():
                 element_product(Mp.ravel(), PATTERN, 24, 14, Dp, a_e, point, w, out)
             for got, want in ((point, points), (w, forces), (out, expected)):
                 assert np.max(np.abs(got - want)) <= 1e-13 * np.max(np.abs(want)), product
+
+
+def test_beam_point_products_are_two_calls_in_one():
+    """The fused kernel (`forces_and_products`' BEAMs) against two `beam_point_product`
+    calls, at a and at a = 0 from the same points, bit for bit (array_equal: a zero's sign
+    aside) for random BEAMs; a is overwritten with the product at a = 0."""
+    _, Dps, Mps = beam_elements(20, seed=8)
+    rng = np.random.default_rng(9)
+    for Dp, Mp in zip(Dps, Mps, strict=True):
+        a_e, f = rng.standard_normal(14), rng.standard_normal(24)
+        point, w, out = f.copy(), np.full(24, np.nan), np.full(14, np.nan)
+        beam_point_product(Mp.ravel(), Dp, a_e, point, w, out)
+        point0, w0, out0 = f.copy(), np.full(24, np.nan), np.full(14, np.nan)
+        beam_point_product(Mp.ravel(), Dp, np.zeros(14), point0, w0, out0)
+        fused = (f.copy(), np.full(24, np.nan), np.full(14, np.nan), f.copy(),
+                 np.full(24, np.nan))
+        a = a_e.copy()
+        beam_point_products(Mp.ravel(), Dp, a, *fused)
+        for got, want in zip((fused[0], fused[1], fused[2], fused[3], fused[4], a),
+                             (point, w, out, point0, w0, out0), strict=True):
+            assert np.all(np.isfinite(got)) and np.array_equal(got, want)
+        assert not np.array_equal(out, out0)  # a is not zero: two different products
 
 
 def test_beam_blocks_only_refuses_a_nonzero_outside_its_block():

@@ -208,3 +208,57 @@ def beam_point_product(Mp, Dp, a, point, w, out):
     _add_block_transposed(Dp, w, out, 5, 3, 4)
     _add_block_transposed(Dp, w, out, 6, 10, 4)
     _add_block_transposed(Dp, w, out, 7, 10, 4)
+
+
+@kernel(inline="always")
+def _add_blocks_transposed(Dp, w, out, w0, out0, u, su, wu):
+    """`_add_block_transposed` of w into out and of w0 into out0, each Dp entry read once."""
+    for c in range(3):
+        p = 3 * u + c
+        for j in range(wu):
+            d = Dp[p, su + j]
+            out[su + j] += d * w[p]
+            out0[su + j] += d * w0[p]
+
+
+@kernel
+def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
+    """`beam_point_product` at the accelerations a (14,) and at a = 0 in one pass over Mp and
+    Dp, for point0 (24,) = point on entry: point -= Dp a, w = Mp point, out (14,) = Dp^T w,
+    and w0 = Mp point0, a (14,) = Dp^T w0 (a is read first, then overwritten). Each result
+    is summed as its own `beam_point_product` call sums it, so the same bits, but for a
+    zero's sign (a = 0's Dp a, which the call subtracts, is not formed). Units as there."""
+    _less_block_product(Dp, a, point, 0, 0, 3)
+    _less_block_product(Dp, a, point, 1, 3, 4)
+    _less_block_product(Dp, a, point, 2, 7, 3)
+    _less_block_product(Dp, a, point, 3, 10, 4)
+    _less_block_product(Dp, a, point, 4, 3, 4)
+    _less_block_product(Dp, a, point, 5, 3, 4)
+    _less_block_product(Dp, a, point, 6, 10, 4)
+    _less_block_product(Dp, a, point, 7, 10, 4)
+    for c in range(3):  # as in `beam_point_product`, each Mp entry read once for both
+        for u in range(4):
+            p = 3 * u + c
+            s = s0 = 0.0
+            for v in range(4):
+                mass = Mp[p * P + 3 * v + c]
+                s += mass * point[3 * v + c]
+                s0 += mass * point0[3 * v + c]
+            w[p] = s
+            w0[p] = s0
+        for u in range(4, 8):
+            p, first = 3 * u + c, 4 + u % 2
+            m1, m2 = Mp[p * P + 3 * first + c], Mp[p * P + 3 * (first + 2) + c]
+            w[p] = m1 * point[3 * first + c] + m2 * point[3 * (first + 2) + c]
+            w0[p] = m1 * point0[3 * first + c] + m2 * point0[3 * (first + 2) + c]
+    for j in range(M):
+        out[j] = 0.0
+        a[j] = 0.0
+    _add_blocks_transposed(Dp, w, out, w0, a, 0, 0, 3)
+    _add_blocks_transposed(Dp, w, out, w0, a, 1, 3, 4)
+    _add_blocks_transposed(Dp, w, out, w0, a, 2, 7, 3)
+    _add_blocks_transposed(Dp, w, out, w0, a, 3, 10, 4)
+    _add_blocks_transposed(Dp, w, out, w0, a, 4, 3, 4)
+    _add_blocks_transposed(Dp, w, out, w0, a, 5, 3, 4)
+    _add_blocks_transposed(Dp, w, out, w0, a, 6, 10, 4)
+    _add_blocks_transposed(Dp, w, out, w0, a, 7, 10, 4)

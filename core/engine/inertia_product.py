@@ -22,7 +22,7 @@ without them compiles none of theirs here. Units as the coordinates: N, N m; kg,
 
 import numpy as np
 
-from ..elements.beam_mass import beam_point_product
+from ..elements.beam_mass import beam_point_product, beam_point_products
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
@@ -117,16 +117,16 @@ def spread_accelerations(table, w_f, convective, a, total):
     `convective`), zero on the fixed ones; then total (NX,; N, N m) -= the lumped masses
     times a where the augmented system has them, on the free coordinates."""
     dims = _i(table, slot.DIMS)
-    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    free, lumped = _i(table, slot.FREE), _f(table, slot.LUMPED)
     a[:] = 0.0
+    # the lumped masses on the free coordinates alone (those with a column of A), in the
+    # same pass: the slaves' T w below writes neither a's free entries nor total
     for k in range(dims[ed.NFREE]):
-        a[free[k]] = w_f[k]
+        c = free[k]
+        a[c] = w_f[k]
+        total[c] -= lumped[c] * a[c]
     if dims[ed.NSLAVES] > 0:
         run(table, OP_RIGID_EXPAND, a.ctypes.data, 0, 1.0 if convective else 0.0)
-    lumped = _f(table, slot.LUMPED)
-    for c in range(dims[ed.NX]):
-        if col_of_coord[c] >= 0:
-            total[c] -= lumped[c] * a[c]
 
 
 @kernel
@@ -156,8 +156,10 @@ def forces_and_products(table, x, xdot, moving, a, forces, total):
     """forces (NX,; N, N m) += Dp^T Mp (g_p - (D2p v) v) and total += Dp^T Mp (g_p - (D2p v) v
     - Dp a_e), (D2p v) v only if moving: `element_products` with gravity at a = 0 into forces
     and at a into total in one element pass, each element's points (Dp, (D2p v) v) evaluated
-    once for both. Each gets the same products in the same order as from its own
-    `element_products` call (with gravity; at a = 0 and at a): the same bits."""
+    once for both, a BEAM's two closed-form products in one pass over its Mp and Dp
+    (`beam_mass.beam_point_products`). Each gets the same products in the same order as
+    from its own `element_products` call (with gravity; at a = 0 and at a): the same bits
+    (a zero's sign aside)."""
     _element_pass(table, x, xdot, moving, True, a, total, forces)
 
 
@@ -174,7 +176,8 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
         n, m, P, _, _, coords, _, masses, gravity, pattern = inertia
         beams = row[ed.G_POINT_BLOCKS] == 1
         scratch = inertia_scratch(table, 0, P, m)
-        xl, vl, point, acc, w, Dp, _ = scratch
+        xl, vl, point, acc, w, Dp, o = scratch
+        w0 = _f(table, slot.LOCAL)[o: o + P]  # a BEAM's Mp times its points at a = 0
         for i in range(n):
             if rigid:
                 t = rigid_element(table, row, i)
@@ -189,6 +192,13 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
             # a_e into the scratch's x, Dp^T w into its v: the points read them, and are done
             for b in range(m):
                 xl[b] = a[coords[i * m + b]]
+            if split and beams:  # both products in one pass over Mp and Dp, the one at
+                # a = 0 from the points' values kept in acc, into xl
+                beam_point_products(Mp, Dp, xl, point, w, vl, acc, w0)
+                for b in range(m):
+                    total[coords[i * m + b]] += vl[b]
+                    forces[coords[i * m + b]] += xl[b]
+                continue
             _product(beams, Mp, pattern, P, m, Dp, xl, point, w, vl)
             for b in range(m):
                 total[coords[i * m + b]] += vl[b]

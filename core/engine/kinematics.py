@@ -18,7 +18,10 @@ error that rate leaves after a step), and full Newton from there if they stall, 
 the residual or on the step, each row and each unknown within its own tolerance (slots
 row_tolerance, step_tolerance: `mechanics.scales`, lengths through the length scale, Euler
 parameters and angles through 1, a floor 8 eps of the magnitude). The prediction is checked
-on e alone (a BEAM's e costs an eighth of e, De, D2e); a chord iterate is evaluated with De
+on e alone (a BEAM's e costs an eighth of e, De, D2e) unless the last one held (dims
+prediction_held), when e and the solution's De are evaluated at it in one pass, the motion's
+solution order (an rhs asked again, or a state a step apart, mostly holds again: the second
+pass over the elements saved); a chord iterate is evaluated with De
 (the motion's order at a solution, `AT_SOLUTION`), since one chord step mostly converges and
 the iterate it stops at then needs no evaluation of its own (on manipulator_control's stage
 iterations 2.3 us of about 70: docs/benchmarks.md, session 35); the statics' packed model
@@ -286,7 +289,7 @@ def solve_positions(table, q):
     constraint residual is within the tolerance: the positions alone (no D2e, no factors or DF
     kept, no warm start set), for measuring outputs; a status code."""
     dims = _i(table, slot.DIMS)
-    dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = 0
+    dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = dims[ed.PREDICTION_HELD] = 0
     dims[ed.A_FACTORS] = ed.NO_FACTORS
     nx = dims[ed.NX]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
@@ -332,17 +335,25 @@ def solve_kinematics(table, q):
                 x[a] = s
         else:
             predicted_coordinates(table, q, x, dq, dx)
-        # the residual needs e alone; the chord steps use the kept factors
-        _elements(table, x, 0)
+        # the residual needs e alone; the chord steps use the kept factors. Where the last
+        # prediction held, this one mostly holds too (an integrator's states a step or a
+        # correction apart, an rhs asked again), so e comes with the solution's De in one
+        # pass rather than two; where it then fails, that De is overwritten by the chord
+        # iterate's (the chord steps read the kept factors, not De)
+        order = solution_order(table)
+        held = dims[ed.PREDICTION_HELD] == 1 and order == AT_SOLUTION
+        _elements(table, x, order if held else 0)
         if _residual(table, x, q, g) <= 1.0:
-            deformations(table, x, solution_order(table), True)  # the slaves are filled
+            if not held:
+                deformations(table, x, order, True)  # the slaves are filled
+            dims[ed.PREDICTION_HELD] = 1
             return _store(table, q, x)
+        dims[ed.PREDICTION_HELD] = 0
         previous = 0.0  # no rate before the second step
         # a chord iterate's e with De, the motion's solution order: a chord step from the
         # first-order prediction mostly converges (its rate is of order |dq| / L), and then
         # its De is the solution's, the e-only evaluation before it saved; the statics'
         # solution order (D2e, some ten times e) stays for the iterate it stops at
-        order = solution_order(table)
         chord_order = order if order == AT_SOLUTION else 0
         for _ in range(dims[ed.CHORD_ITERATIONS]):
             step = _newton_step(table, x, g, dx)
@@ -360,6 +371,7 @@ def solve_kinematics(table, q):
                     deformations(table, x, order, True)
                 return _store(table, q, x)
     else:
+        dims[ed.PREDICTION_HELD] = 0
         copy(x, _f(table, slot.X_START))
     if not all_finite(x):
         copy(x, _f(table, slot.X))

@@ -68,6 +68,8 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
      "space, sparse (`newton`)"),
     ("static", "STATIC", CONFIG, "1: the reduced evaluation forms DF^T r and no M_bar or "
      "qddot (the statics' own packed model, `static_engine`)"),
+    ("prediction_held", "PREDICTION_HELD", STATE, "1: the last warm kinematics' first-order "
+     "prediction held (the next evaluates e with De at its prediction, in one pass)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
