@@ -17,7 +17,8 @@ Natarajan, ACM TOMS 37, 2010):
 - `factor` (compiled, left-looking with partial pivoting, Gilbert & Peierls 1988): column j
   of A Q; the rows it reaches through the pattern of L found by depth-first search (in
   topological order); x = L^-1 A[:, j] on them; the pivot: the row that was pivot j before
-  if |x| there is at least KEEP = 0.5 of the largest, else the largest |x_i|; U[:, j] = x on
+  if |x| there is at least KEEP = 0.5 of the largest, else the largest |x_i| (or, packed with
+  sparsest_rows, the sparsest row within KEEP: `sparse_lu_pivots`; J's); U[:, j] = x on
   the rows already pivotal, L[:, j] = x / pivot on the others. Sets the row order P.
 - `refactor` (compiled, the hot path): the same column loop on the kept P, Q and patterns,
   with no search and no choice: for every k in the pattern of U[:, j] in its stored

@@ -6,10 +6,12 @@ T: 1 to 7 entries against a BEAM's 12 a row), that choice passes them over and t
 takes fill L and U. Threshold pivoting of Markowitz's kind (Duff, Erisman & Reid, Direct
 Methods for Sparse Matrices, 7.8) takes, of the rows with |x| >= KEEP max |x|, the one with
 the fewest entries in A (the largest |x| of those on a tie): the multipliers stay within
-1 / KEEP = 2, and on manipulator_control's J (154 unknowns) a refactorisation costs 2278 to
-2498 multiplications instead of 3802, a solve 1277 to 1297 instead of 1709
-(docs/benchmarks.md, session 39, branch rhs6). The counts are A's own rows, not the
-active submatrix's: a static estimate that needs no updates in the column loop.
+1 / KEEP = 2, and on manipulator_control's J (154 unknowns; its 12 unit rows now each the
+pivot of its column, 4 before) a refactorisation costs 2498 multiplications instead of 3802,
+a solve 1297 instead of 1709 (docs/benchmarks.md, session 39, branch rhs6). On its
+augmented system it saves under 2 %, so that keeps partial pivoting. The counts are A's own
+rows, not the active submatrix's: a static estimate that needs no updates in the column
+loop.
 """
 
 from .jit import kernel
