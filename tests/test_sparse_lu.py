@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.sparse import random as sparse_random
 
-from flexure.core.numerics import sparse_lu, sparse_lu_pattern
+from flexure.core.numerics import sparse_lu, sparse_lu_pair, sparse_lu_pattern, sparse_lu_pivots
 
 EPS = 2.2e-16
 
@@ -102,7 +102,7 @@ def test_a_pair_of_right_hand_sides_solves_as_each_alone(n, density):
     c[: n // 2] = 0.0
     for first, second in ((b, c), (c, b), (b, np.zeros(n))):
         x, y, work = first.copy(), second.copy(), np.full(n, np.nan)
-        sparse_lu.solve_pair(lu.ints, lu.floats, x, y, work)
+        sparse_lu_pair.solve_pair(lu.ints, lu.floats, x, y, work)
         for solved, vector in ((x, first), (y, second)):
             alone = vector.copy()
             sparse_lu.solve(lu.ints, lu.floats, alone, False)
@@ -208,3 +208,116 @@ def test_the_pattern_read_in_python_rebuilds_the_matrix(n, density):
         rebuilt = csc_matrix((values, (rows, columns)), shape=(size, size)).toarray()
         assert size == n and np.array_equal(rebuilt, a)
         assert factor(lu) > 0.0
+
+
+def test_the_sparsest_row_kernel_against_a_plain_choice():
+    """`sparse_lu_pivots.sparsest_row` against the rule written out: of the rows not yet
+    pivotal with |x| >= bound, the fewest entries in A, then the largest |x|."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n = int(rng.integers(1, 12))
+        x = rng.standard_normal(n) * rng.choice([0.0, 1.0], n, p=[0.2, 0.8])
+        counts = rng.integers(1, 4, n)  # ties of counts are common
+        pinv = np.where(rng.uniform(size=n) < 0.3, 0, -1)
+        top = int(rng.integers(0, n + 1))
+        stack = np.concatenate([np.zeros(top, dtype=np.int64), rng.permutation(n)[top:]])
+        bound = 0.5 * np.max(np.abs(x)) if rng.uniform() < 0.8 else 0.0
+        candidates = [i for i in stack[top:] if pinv[i] < 0 and abs(x[i]) >= bound]
+        expected = min(candidates, key=lambda i: (counts[i], -abs(x[i])), default=-1)
+        assert sparse_lu_pivots.sparsest_row(x, stack, top, n, pinv, counts, bound) == expected
+
+
+def unit_row_matrix(rng, m):
+    """[[B, C], [0, I]] (2 m, 2 m): B diagonally dominant (diagonal 2 to 3, off it up to
+    0.05: multipliers under 0.1 whatever the order), C two entries of 1.2 to 1.4 a column,
+    so a column of C has |x| < 2 at its turn; the unit rows below: partial pivoting takes a
+    row of B's (|x| > 1), the sparsest-row choice the unit row (1 >= KEEP 2)."""
+    b = 0.05 * sparse_random(m, m, density=0.1, random_state=rng).toarray()
+    b += np.diag(rng.uniform(2.0, 3.0, m))
+    c = np.zeros((m, m))
+    for k in range(m):
+        c[rng.choice(m, 2, replace=False), k] = rng.uniform(1.2, 1.4, 2) * rng.choice([-1, 1], 2)
+    return np.block([[b, c], [np.zeros((m, m)), np.eye(m)]])
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_sparsest_rows_pivot_on_unit_rows_and_solve_as_numpy(seed):
+    """With sparsest_rows every unit row is the pivot of its column, the factors solve as
+    numpy, at the reference and refactored at moved values, and take no more multiplications
+    than partial pivoting's."""
+    rng = np.random.default_rng(seed)
+    m = 20
+    n = 2 * m
+    a = unit_row_matrix(rng, m)
+    rows, cols = np.nonzero(a)
+    plain = sparse_lu.StaticLU(n, rows, cols, a[rows, cols])
+    lu = sparse_lu.StaticLU(n, rows, cols, a[rows, cols], sparsest_rows=True)
+    parts = sparse_lu._parts(lu.ints, lu.floats)
+    prow, pinv, pcol = parts[7], parts[8], parts[9]
+    for u in range(m, n):
+        assert prow[pinv[u]] == u and pcol[pinv[u]] == u
+    assert lu.multiplications["factor"] < plain.multiplications["factor"]
+    assert lu.multiplications["solve"] < plain.multiplications["solve"]
+    assert_solves(lu, a, rng)
+    moved = a.copy()
+    moved[rows, cols] *= 1.0 + 0.1 * rng.uniform(-1.0, 1.0, rows.size)
+    lu.set_matrix(moved)
+    assert refactor(lu) > 0.0
+    assert_solves(lu, moved, rng)
+
+
+def plain_pivots(a, pcol, old, threshold):
+    """The pivot rows (by position) of a dense left-looking LU of a[:, pcol] that chooses as
+    `factor` with sparsest_rows: the old pivot of the position while |x| >= max(threshold,
+    KEEP) max |x|, else of the rows with |x| >= KEEP max |x| the fewest entries in a, the
+    largest |x| on a tie; and how many of them are not the largest |x| of their column."""
+    n = a.shape[0]
+    counts = np.count_nonzero(a, axis=1)
+    bound_factor = max(threshold, sparse_lu.KEEP)
+    L = np.zeros((n, n))
+    pivots, pivotal, smaller = [], np.zeros(n, dtype=bool), 0
+    for j, column in enumerate(pcol):
+        x = a[:, column].astype(float)
+        for k, r in enumerate(pivots):  # in pivot order: a topological order of L
+            x -= L[:, k] * x[r]
+        free = np.flatnonzero(~pivotal & (x != 0.0))
+        big = np.max(np.abs(x[free]))
+        if old[j] >= 0 and not pivotal[old[j]] and abs(x[old[j]]) >= bound_factor * big:
+            chosen = old[j]
+        else:
+            eligible = free[np.abs(x[free]) >= bound_factor * big]
+            chosen = min(eligible, key=lambda i: (counts[i], -abs(x[i])))
+        smaller += abs(x[chosen]) < big
+        pivots.append(chosen)
+        pivotal[chosen] = True
+        L[:, j] = np.where(pivotal, 0.0, x / x[chosen])
+    return np.array(pivots), smaller
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_the_sparsest_rows_choice_against_a_plain_lu(seed):
+    """The pivots of StaticLU with sparsest_rows (at the reference: no seeds) and of a
+    re-pivoting `factor` (the kept pivots as seeds) against `plain_pivots`, on random
+    matrices with unit rows and zero diagonal entries, and the factors solve as numpy."""
+    rng = np.random.default_rng(seed)
+    n = 40
+    a = random_matrix(rng, n, 0.08, zero_diagonal=True)
+    units = np.arange(n - 5, n)
+    a[units, :] = 0.0
+    a[units, units] = 1.0  # unit rows, beside larger entries of other rows in their columns
+    a[rng.choice(n - 5, 5), units] = rng.uniform(1.2, 1.6, 5)
+    rows, cols = np.nonzero(a)
+    lu = sparse_lu.StaticLU(n, rows, cols, a[rows, cols], sparsest_rows=True)
+    prow, pcol = sparse_lu._parts(lu.ints, lu.floats)[7], sparse_lu._parts(lu.ints, lu.floats)[9]
+    expected, smaller = plain_pivots(a, pcol, np.full(n, -1), sparse_lu.THRESHOLD)
+    assert np.array_equal(prow, expected)
+    assert smaller > 0  # partial pivoting would have chosen otherwise
+    assert_solves(lu, a, rng)
+    moved = a.copy()
+    moved[rows, cols] *= rng.uniform(0.2, 5.0, rows.size)  # many kept pivots fail KEEP
+    lu.set_matrix(moved)
+    old = prow.copy()
+    assert factor(lu) > 0.0
+    assert np.array_equal(prow, plain_pivots(moved, pcol, old, sparse_lu.THRESHOLD)[0])
+    assert not np.array_equal(prow, old)  # some pivots were chosen afresh
+    assert_solves(lu, moved, rng)

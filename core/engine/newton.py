@@ -44,6 +44,7 @@ from ..numerics import sparse_lu
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
 from ..numerics.rotation_kernels import rates_coefficient
+from ..numerics.sparse_lu_pair import solve_pair
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
@@ -302,7 +303,7 @@ def solve(table, v, hg, force):
             sparse_lu.solve(j_ints, j_floats, b, False)
             pattern_product(h_ints, h_floats, Kv, b, rhs, nf, -hg)
     else:  # a = J^-1 [0; r2], b = J^-1 [0; r1]; [M a - hg K_x b; 0]
-        sparse_lu.solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled
+        solve_pair(j_ints, j_floats, a, b, rhs)  # rhs: its scratch until filled
         rhs[:] = 0.0
         pattern_product_pair(h_ints, h_floats, Mv, a, Kv, b, rhs, nf, -hg)
     sparse_lu.solve(h_ints, h_floats, rhs, False)

@@ -139,7 +139,8 @@ class SparseFactors:
         # J: the elements' entries, then the unit rows of the DOF coordinates
         self.constraints = StaticLU(nf, np.concatenate([r[inside], unit_rows]),
                                    np.concatenate([c[inside], unit_cols]),
-                                   np.concatenate([values[inside], unit_values]))
+                                   np.concatenate([values[inside], unit_values]),
+                                   sparsest_rows=True)
         self.constraint_map = np.full(
             slave_base + (DEPENDENCIES * n_xdof if rigid else 0), -1, dtype=np.int64)
         self.constraint_map[index[inside]] = self.constraints.slot(r[inside], c[inside])

@@ -17,7 +17,8 @@ Natarajan, ACM TOMS 37, 2010):
 - `factor` (compiled, left-looking with partial pivoting, Gilbert & Peierls 1988): column j
   of A Q; the rows it reaches through the pattern of L found by depth-first search (in
   topological order); x = L^-1 A[:, j] on them; the pivot: the row that was pivot j before
-  if |x| there is at least KEEP = 0.5 of the largest, else the largest |x_i|; U[:, j] = x on
+  if |x| there is at least KEEP = 0.5 of the largest, else the largest |x_i| (or, packed with
+  sparsest_rows, the sparsest row within KEEP: `sparse_lu_pivots`; J's); U[:, j] = x on
   the rows already pivotal, L[:, j] = x / pivot on the others. Sets the row order P.
 - `refactor` (compiled, the hot path): the same column loop on the kept P, Q and patterns,
   with no search and no choice: for every k in the pattern of U[:, j] in its stored
@@ -48,6 +49,7 @@ import numpy as np
 
 from .jit import kernel
 from .pattern_slots import PatternSlots
+from .sparse_lu_pivots import row_counts, sparsest_row
 
 THRESHOLD = 0.1  # smallest |pivot| / max |column below it| a kept pivot may have
 REJECTED = -1.0  # a kept pivot failed (`refactor`), or the matrix is singular (`factor`)
@@ -61,10 +63,11 @@ SLACK = 3  # room for L and U: SLACK times the first factorisation's fill, plus 
 KEEP = 0.5
 
 # the head of the packed int64 array: n, nnz of A, room for L (strictly lower) and for U
-# (with the diagonal), 1 while the patterns and P hold a factorisation; then Ap (n + 1), Ai,
-# Lp (n + 1), Li, Up (n + 1), Ui, prow (n), pinv (n), pcol (n), old (n), stack (2 n),
-# pstack (n), mark (n)
-H_N, H_NNZ_A, H_ROOM_L, H_ROOM_U, H_VALID, H_SIZE = range(6)
+# (with the diagonal), 1 while the patterns and P hold a factorisation, 1 where a fresh pivot
+# is the sparsest row that passes KEEP (`factor`); then Ap (n + 1), Ai, Lp (n + 1), Li,
+# Up (n + 1), Ui, prow (n), pinv (n), pcol (n), old (n), stack (2 n: the search and the
+# reach in its first n, A's row counts in its last), pstack (n), mark (n)
+H_N, H_NNZ_A, H_ROOM_L, H_ROOM_U, H_VALID, H_SPARSEST, H_SIZE = range(7)
 
 
 class StaticLU:
@@ -85,6 +88,9 @@ class StaticLU:
     slack : float
         Room for L and U in multiples of SuperLU's fill at the reference point (plus n);
         doubled until the first factorisation fits.
+    sparsest_rows : bool
+        Each pivot chosen afresh (here, and where `factor` re-pivots) the sparsest row that
+        passes KEEP, not the largest |x| (SuperLU's, kept otherwise): `sparse_lu_pivots`.
 
     Attributes
     ----------
@@ -103,7 +109,8 @@ class StaticLU:
         When A is singular at the reference point.
     """
 
-    def __init__(self, n, rows, columns, values, *, orderings=ORDERINGS, slack=SLACK):
+    def __init__(self, n, rows, columns, values, *, orderings=ORDERINGS, slack=SLACK,
+                 sparsest_rows=False):
         from scipy.sparse import csc_matrix
         from scipy.sparse.linalg import splu
 
@@ -128,11 +135,14 @@ class StaticLU:
                 raise ValueError(f"the matrix is singular at the reference point: {error}") \
                     from None
             # A Q: column j of it is A's column pcol[j]; SuperLU's pivot rows prow seed the
-            # pivot choice (ties of magnitude broken as SuperLU broke them: its fill)
+            # pivot choice (ties of magnitude broken as SuperLU broke them: its fill), or
+            # none where the sparsest rows are chosen
             pcol, prow = np.argsort(lu.perm_c), np.argsort(lu.perm_r)
+            if sparsest_rows:
+                prow = np.full(n, -1, dtype=np.int64)
             room = int(slack * (lu.L.nnz + lu.U.nnz)) + n
             while True:
-                packed = _pack(n, coo, reference, pcol, prow, room)
+                packed = _pack(n, coo, reference, pcol, prow, room, sparsest_rows)
                 ratio = factor_now(*packed, THRESHOLD)
                 if ratio != CAPACITY:
                     break
@@ -166,16 +176,16 @@ class StaticLU:
             np.repeat(np.arange(self.n), np.diff(self._Ap))]]
 
 
-def _pack(n, coo, reference, pcol, prow, room):
+def _pack(n, coo, reference, pcol, prow, room, sparsest_rows=False):
     """(ints, floats) for the column order pcol with A's reference values in place and prow
-    as the pivot rows to keep where they pass the threshold test."""
+    as the pivot rows to keep where they pass the threshold test (-1: none)."""
     from scipy.sparse import csc_matrix
 
     position_column = np.argsort(pcol)
     permuted = csc_matrix((reference + 0.0, (coo.row, position_column[coo.col])), shape=(n, n))
     permuted.sort_indices()
     nnz = permuted.nnz
-    head = np.array([n, nnz, room, room, 0], dtype=np.int64)
+    head = np.array([n, nnz, room, room, 0, int(sparsest_rows)], dtype=np.int64)
     zeros = np.zeros
     ints = np.concatenate([head, permuted.indptr, permuted.indices, zeros(n + 1), zeros(room),
                            zeros(n + 1), zeros(room), prow, np.full(n, -1), pcol,
@@ -290,8 +300,11 @@ def refactor(ints, floats, threshold):
 def factor(ints, floats, threshold):
     """Factor P A Q = L U with partial pivoting, A's values in `matrix_values`: new P and
     patterns of L and U, kept for `refactor`. A row that was pivot j before stays so while
-    |x| >= max(threshold, KEEP) max |x| in its column. Returns the pivot ratio as `refactor`,
-    REJECTED for a singular or non-finite matrix, CAPACITY when L or U outgrow their room."""
+    |x| >= max(threshold, KEEP) max |x| in its column; a pivot chosen afresh is the largest
+    |x|, or with the head's H_SPARSEST the row with the fewest entries in A among those with
+    |x| >= KEEP max |x| (the largest |x| of them on a tie). Returns the pivot ratio as
+    `refactor`, REJECTED for a singular or non-finite matrix, CAPACITY when L or U outgrow
+    their room."""
     n, Ap, Ai, Lp, Li, Up, Ui, prow, pinv, _, old, stack, pstack, mark, Ax, Lx, Ux, x = \
         _parts(ints, floats)
     room_l, room_u = ints[H_ROOM_L], ints[H_ROOM_U]
@@ -300,6 +313,10 @@ def factor(ints, floats, threshold):
         old[i] = prow[i]
         pinv[i] = -1
         mark[i] = -1
+    sparsest = ints[H_SPARSEST] == 1
+    counts = stack[n: 2 * n]  # A's row counts: the search and the reach use stack[:n]
+    if sparsest:
+        row_counts(Ap, Ai, n, counts)
     lnz = unz = 0
     smallest, largest = np.inf, 0.0
     for j in range(n):
@@ -360,6 +377,8 @@ def factor(ints, floats, threshold):
         if previous >= 0 and pinv[previous] < 0 and mark[previous] == j \
                 and abs(x[previous]) >= max(threshold, KEEP) * big:
             chosen = previous
+        elif sparsest and big > 0.0:
+            chosen = sparsest_row(x, stack, top, n, pinv, counts, max(threshold, KEEP) * big)
         if unz + (n - top) - count_l + 1 > room_u or lnz + count_l > room_l:
             _clear(x, stack, top, n)
             return CAPACITY
@@ -460,37 +479,3 @@ def scatter_rows(ints, floats, out, row_position, column_position, step, shift):
         column = shift + column_position[pcol[j]]
         for p in range(Ap[j], Ap[j + 1]):
             out[row_position[Ai[p]] * step + column] = Ax[p]
-
-
-@kernel
-def solve_pair(ints, floats, b, c, work):
-    """b <- A^-1 b and c <- A^-1 c in place, in A's own order, with the factors of the last
-    successful `factor` or `refactor`: `solve` of each, in one pass over L and U (their
-    patterns read once for both), the same operations on each vector in the same order as
-    `solve`'s, so the same values (where one vector's entry is zero and the other's not, it
-    subtracts a product with zero that `solve` skips: a zero's sign aside, nothing changes).
-    work: scratch of at least n entries."""
-    n, _, _, Lp, Li, Up, Ui, prow, _, pcol, _, _, _, _, _, Lx, Ux, x = _parts(ints, floats)
-    for i in range(n):
-        x[i] = b[unsigned_index(prow[i])]
-        work[i] = c[unsigned_index(prow[i])]
-    for j in range(n):  # L (unit lower)
-        xj, wj = x[j], work[j]
-        if xj != 0.0 or wj != 0.0:
-            for q in range(Lp[j], Lp[j + 1]):
-                i = unsigned_index(Li[q])
-                x[i] -= Lx[q] * xj
-                work[i] -= Lx[q] * wj
-    for j in range(n - 1, -1, -1):  # U, its diagonal last in each column
-        last = Up[j + 1] - 1
-        xj, wj = x[j] / Ux[last], work[j] / Ux[last]
-        x[j], work[j] = xj, wj
-        if xj != 0.0 or wj != 0.0:
-            for p in range(Up[j], last):
-                i = unsigned_index(Ui[p])
-                x[i] -= Ux[p] * xj
-                work[i] -= Ux[p] * wj
-    for j in range(n):
-        b[unsigned_index(pcol[j])] = x[j]
-        c[unsigned_index(pcol[j])] = work[j]
-        x[j] = 0.0
