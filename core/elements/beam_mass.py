@@ -172,13 +172,9 @@ def _add_block_transposed(Dp, w, out, u, su, wu):
             out[su + j] += Dp[p, su + j] * w[p]
 
 
-@kernel
-def beam_point_product(Mp, Dp, a, point, w, out):
-    """One BEAM's point forces less the inertia of the accelerations a (14,; m/s^2, 1/s^2):
-    point (24,) -= Dp a, w = Mp point (N per the points' unit), out (14,; N, N m) = Dp^T w,
-    for Mp (24 * 24, flat; kg, kg m^2) on the BEAM's pattern and Dp (24, 14) of the structure
-    `beam_blocks_only` checks: about 250 multiplications in loops of 3 and 4 that the
-    compiler unrolls, against about 970 to form Dp^T Mp Dp (`beam_element_mass`)."""
+@kernel(inline="always")
+def _less_points_product(Dp, a, point):
+    """point (24,) -= Dp a, block by block of Dp's structure (`beam_blocks_only`)."""
     _less_block_product(Dp, a, point, 0, 0, 3)
     _less_block_product(Dp, a, point, 1, 3, 4)
     _less_block_product(Dp, a, point, 2, 7, 3)
@@ -187,6 +183,16 @@ def beam_point_product(Mp, Dp, a, point, w, out):
     _less_block_product(Dp, a, point, 5, 3, 4)
     _less_block_product(Dp, a, point, 6, 10, 4)
     _less_block_product(Dp, a, point, 7, 10, 4)
+
+
+@kernel
+def beam_point_product(Mp, Dp, a, point, w, out):
+    """One BEAM's point forces less the inertia of the accelerations a (14,; m/s^2, 1/s^2):
+    point (24,) -= Dp a, w = Mp point (N per the points' unit), out (14,; N, N m) = Dp^T w,
+    for Mp (24 * 24, flat; kg, kg m^2) on the BEAM's pattern and Dp (24, 14) of the structure
+    `beam_blocks_only` checks: about 250 multiplications in loops of 3 and 4 that the
+    compiler unrolls, against about 970 to form Dp^T Mp Dp (`beam_element_mass`)."""
+    _less_points_product(Dp, a, point)
     for c in range(3):  # Mp couples component c of the vectors with component c only
         for u in range(4):  # the Hermite vectors with each other
             p = 3 * u + c
@@ -228,14 +234,7 @@ def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
     and w0 = Mp point0, a (14,) = Dp^T w0 (a is read first, then overwritten). Each result
     is summed as its own `beam_point_product` call sums it, so the same bits, but for a
     zero's sign (a = 0's Dp a, which the call subtracts, is not formed). Units as there."""
-    _less_block_product(Dp, a, point, 0, 0, 3)
-    _less_block_product(Dp, a, point, 1, 3, 4)
-    _less_block_product(Dp, a, point, 2, 7, 3)
-    _less_block_product(Dp, a, point, 3, 10, 4)
-    _less_block_product(Dp, a, point, 4, 3, 4)
-    _less_block_product(Dp, a, point, 5, 3, 4)
-    _less_block_product(Dp, a, point, 6, 10, 4)
-    _less_block_product(Dp, a, point, 7, 10, 4)
+    _less_points_product(Dp, a, point)
     for c in range(3):  # as in `beam_point_product`, each Mp entry read once for both
         for u in range(4):
             p = 3 * u + c
