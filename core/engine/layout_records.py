@@ -70,6 +70,10 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
      "qddot (the statics' own packed model, `static_engine`)"),
     ("prediction_held", "PREDICTION_HELD", STATE, "1: the last warm kinematics' first-order "
      "prediction held (the next evaluates e with De at its prediction, in one pass)"),
+    ("conv_pending", "CONV_PENDING", STATE, "1: slot conv holds J's right-hand side of the "
+     "last evaluation's convective accelerations, not yet solved (`convective`)"),
+    ("conv_wanted", "CONV_WANTED", STATE, "1: every evaluation forms slot conv at once (for "
+     "the Python readers of slot conv; `convective`)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
