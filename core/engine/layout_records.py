@@ -99,6 +99,8 @@ GROUP_FIELDS = tuple(Field(*row) for row in (
     ("point_blocks", "G_POINT_BLOCKS", CONFIG, "1: the group's inertia points are the BEAM's, "
      "whose Dp is in blocks by construction (`beam_mass.blocks_by_construction`): r - M "
      "xddot takes the closed-form product without testing each element's Dp"),
+    ("node_inertia", "G_NODE_INERTIA", CONFIG, "1: the group is the node inertias' with Mp "
+     "diagonal (`node_inertia_product`: their points and products in closed form)"),
 ))
 
 # -- slot counters and slot settings ----------------------------------------------------------
