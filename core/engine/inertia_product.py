@@ -147,7 +147,8 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
     A BEAM in closed form (`beam_mass.beam_point_product`) where its group's points are the
     BEAM's (group field point_blocks: the BEAM's mass pattern and every Dp of the BEAM's
     blocks, decided once at packing rather than by `beam_blocks_only` element by element,
-    which cost about 4 us a call on manipulator_control's 57 BEAMs), any other element
+    which cost about 4 us a call on manipulator_control's 57 BEAMs), a node inertia in
+    closed form (group field node_inertia: `node_inertia_product`), any other element
     through Dp's full rows."""
     _element_pass(table, x, xdot, moving, with_gravity, a, total, total[:0])
 
