@@ -28,6 +28,7 @@ from ..numerics.jit import kernel
 from ..numerics.native import call_engine
 from . import data as ed
 from . import slots as slot
+from .node_inertia_product import node_point_products
 from .operations import OP_RIGID_BODIES, OP_RIGID_CONDENSE, OP_RIGID_EXPAND, run
 from .point_masses import element_points, point_forces
 from .rigid_inertia_kernels import PRODUCT_AT_REST, PRODUCT_MOVING, own_mass
@@ -146,7 +147,8 @@ def element_products(table, x, xdot, moving, with_gravity, a, total):
     A BEAM in closed form (`beam_mass.beam_point_product`) where its group's points are the
     BEAM's (group field point_blocks: the BEAM's mass pattern and every Dp of the BEAM's
     blocks, decided once at packing rather than by `beam_blocks_only` element by element,
-    which cost about 4 us a call on manipulator_control's 57 BEAMs), any other element
+    which cost about 4 us a call on manipulator_control's 57 BEAMs), a node inertia in
+    closed form (group field node_inertia: `node_inertia_product`), any other element
     through Dp's full rows."""
     _element_pass(table, x, xdot, moving, with_gravity, a, total, total[:0])
 
@@ -178,11 +180,27 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
         scratch = inertia_scratch(table, 0, P, m)
         xl, vl, point, acc, w, Dp, o = scratch
         w0 = _f(table, slot.LOCAL)[o: o + P]  # a BEAM's Mp times its points at a = 0
+        nodes = row[ed.G_NODE_INERTIA] == 1
+        refs = _f(table, slot.GROUP_DATA)[row[ed.G_DATA_OFFSET]:]
+        width = row[ed.G_REF_WIDTH]
         for i in range(n):
             if rigid:
                 t = rigid_element(table, row, i)
                 if t >= 0 and not own_mass(table, t):
                     continue
+            if nodes:  # a node inertia's points and both products in closed form
+                for b in range(m):
+                    xl[b] = x[coords[i * m + b]]
+                    vl[b] = xdot[coords[i * m + b]] if moving else 0.0
+                    point[b] = a[coords[i * m + b]]
+                node_point_products(refs[i * width: i * width + 9], xl, vl, moving,
+                                    with_gravity, gravity, masses[i * P * P: (i + 1) * P * P],
+                                    point, w, acc, split)
+                for b in range(m):
+                    total[coords[i * m + b]] += w[b]
+                    if split:
+                        forces[coords[i * m + b]] += acc[b]
+                continue
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
             for pp in range(P):
                 g_p = gravity[pp] if with_gravity else 0.0

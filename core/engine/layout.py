@@ -194,7 +194,8 @@ SLOTS = (
         ("sigma", "SIGMA", "ne", STATE, "N, N m", "the stress resultants S e + D edot"),
         ("force", "FORCE", "nx", STATE, "N, N m", "the forces on the coordinates"),
         ("conv", "CONV", "nx", STATE, "m/s^2, 1/s^2", "the convective accelerations "
-         "(D2F qdot) qdot on the coordinates"),
+         "(D2F qdot) qdot on the coordinates (while dims conv_pending: J's right-hand side "
+         "of them, `convective`)"),
         ("xddot", "XDDOT", "nx", STATE, "m/s^2, 1/s^2", "the coordinates' accelerations"),
         ("mass", "MASS", "ndof * ndof", STATE, "kg, kg m^2", "M_bar = DF^T M DF"),
         ("mass_lu", "MASS_LU", "ndof * ndof", STATE, "kg, kg m^2", "M_bar's LU"),

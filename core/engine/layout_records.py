@@ -70,6 +70,10 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
      "qddot (the statics' own packed model, `static_engine`)"),
     ("prediction_held", "PREDICTION_HELD", STATE, "1: the last warm kinematics' first-order "
      "prediction held (the next evaluates e with De at its prediction, in one pass)"),
+    ("conv_pending", "CONV_PENDING", STATE, "1: slot conv holds J's right-hand side of the "
+     "last evaluation's convective accelerations, not yet solved (`convective`)"),
+    ("conv_wanted", "CONV_WANTED", STATE, "1: every evaluation forms slot conv at once (for "
+     "the Python readers of slot conv; `convective`)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
@@ -95,6 +99,8 @@ GROUP_FIELDS = tuple(Field(*row) for row in (
     ("point_blocks", "G_POINT_BLOCKS", CONFIG, "1: the group's inertia points are the BEAM's, "
      "whose Dp is in blocks by construction (`beam_mass.blocks_by_construction`): r - M "
      "xddot takes the closed-form product without testing each element's Dp"),
+    ("node_inertia", "G_NODE_INERTIA", CONFIG, "1: the group is the node inertias' with Mp "
+     "diagonal (`node_inertia_product`: their points and products in closed form)"),
 ))
 
 # -- slot counters and slot settings ----------------------------------------------------------

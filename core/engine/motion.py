@@ -35,6 +35,7 @@ from ..numerics.native import call_engine
 from . import data as ed
 from . import slots as slot
 from .actuators import port_values
+from .convective import keep_convective
 from .deformation_rates import (
     dof_deformation_accelerations,
     element_rates,
@@ -114,26 +115,16 @@ def evaluate(table, q, qdot):
     nx, ndof, nf = dims[ed.NX], dims[ed.NDOF], dims[ed.NFREE]
     n_rigid = dims[ed.NRIGID]
     x, xdot, free = _f(table, slot.X), _f(table, slot.XDOT), _i(table, slot.FREE)
-    dx = _f(table, slot.DX)
     reduced = dims[ed.AUGMENTED] == 0
     rigid = dims[ed.NSLAVES] > 0
     r = _f(table, slot.FORCE)
-    quad, conv = _f(table, slot.G), _f(table, slot.CONV)
-    conv[:] = 0.0
+    quad = _f(table, slot.G)
     rigid_h = _f(table, slot.RIGID_H)
-    if moving:  # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows], for the tangent
-        if rigid:  # h of the reduced coordinates: with the slaves' c
-            run(table, OP_RIGID_RATES, 0, 0, 0.0)
-            for a in range(nf):
-                dx[a] = quad[a] + rigid_h[a]
-        else:
-            for a in range(nf):
-                dx[a] = quad[a]
-        j_solve(table, dx, False)
-        for a in range(nf):
-            conv[free[a]] = -dx[a]
-        if rigid:
-            run(table, OP_RIGID_EXPAND, conv.ctypes.data, 0, 1.0)
+    if moving and rigid:  # h of the reduced coordinates: with the slaves' c
+        run(table, OP_RIGID_RATES, 0, 0, 0.0)
+    # conv = (D2F qdot) qdot = -J^-1 [h on the constraint rows]: the reduced form's r reads
+    # it here, the augmented form's tangent later (`convective`)
+    keep_convective(table, moving, rigid, not reduced)
     qddot = _f(table, slot.QDDOT)
     if reduced:  # the reduced form: M_bar, M_bar qddot = DF^T r
         # M_bar, and r -= M conv + g_conv (`reduced_mass_of`, on slots x, xdot, conv, force);

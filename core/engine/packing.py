@@ -88,6 +88,9 @@ class ElementGroups:
             # the BEAM's closed-form product then needs no check of Dp element by element
             fields["point_blocks"] = int(blocks_by_construction(kind)
                                          and np.array_equal(pattern, BEAM_PATTERN))
+            # a node inertia's closed form (`node_inertia_product`) reads Mp's diagonal
+            fields["node_inertia"] = int(getattr(kind, "type_name", "") == "NODE_INERTIA"
+                                         and np.array_equal(pattern, 10 * np.arange(9)))
             self.patterns.append(pattern.astype(np.int64))
             offsets["pattern"] += pattern.size
         self.de_groups.append((group, self.de_size))

@@ -18,6 +18,7 @@ from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
 from .actuators import evaluated_port_values
+from .convective import convective_accelerations
 from .factors import j_solve
 from .gravity_stiffness import has_gravity, scratch_base, subtract_gravity_stiffness
 from .motion import any_nonzero
@@ -230,6 +231,8 @@ def coordinate_accelerations(table, qddot):
     nx, ndof = dims[ed.NX], dims[ed.NDOF]
     DF, conv = _f(table, slot.DF), _f(table, slot.CONV)
     with_conv = dims[ed.REDUCED] == 0
+    if with_conv:
+        convective_accelerations(table)
     if not (any_nonzero(qddot) or (with_conv and any_nonzero(conv))):
         return False
     acc = _f(table, slot.XDDOT)
