@@ -16,6 +16,20 @@ from ..numerics.jit import kernel
 from ..numerics.rotation_kernels import rotated_half_jacobian, rotated_vector
 
 
+@kernel(inline="always")
+def _add_point(out, d0, d1, d2, d3, mass, point):
+    """out (4,) += (d0, d1, d2, d3) w, w = mass point: one point component's share of Dp^T w,
+    w summed from zero and skipped where it is zero, as the general point kernel does (the
+    same bits)."""
+    w = 0.0
+    w += mass * point
+    if w != 0.0:
+        out[0] += d0 * w
+        out[1] += d1 * w
+        out[2] += d2 * w
+        out[3] += d3 * w
+
+
 @kernel(inline="always")  # into `inertia_product._element_pass`, its one caller
 def node_point_products(ref, xl, vl, moving, with_gravity, gravity, Mp, a_e, out_a, out_0,
                         split):
@@ -49,18 +63,6 @@ def node_point_products(ref, xl, vl, moving, with_gravity, gravity, Mp, a_e, out
             if a3 != 0.0:
                 point -= d3 * a3
             mass = Mp[pp * 10]
-            wp = 0.0
-            wp += mass * point
-            if wp != 0.0:
-                out_a[0] += d0 * wp
-                out_a[1] += d1 * wp
-                out_a[2] += d2 * wp
-                out_a[3] += d3 * wp
+            _add_point(out_a, d0, d1, d2, d3, mass, point)
             if split:
-                w0 = 0.0
-                w0 += mass * at_rest
-                if w0 != 0.0:
-                    out_0[0] += d0 * w0
-                    out_0[1] += d1 * w0
-                    out_0[2] += d2 * w0
-                    out_0[3] += d3 * w0
+                _add_point(out_0, d0, d1, d2, d3, mass, at_rest)
