@@ -111,3 +111,30 @@ def test_the_acceleration_outputs_read_conv_formed_and_restore_the_flag():
     assert np.max(np.abs(read - expected)) <= 1e-9 * size
     assert engine.call(data, engine.OP_RHS, y) == ed.OK  # a plain evaluation: pending
     assert dims[ed.CONV_PENDING] == 1
+
+
+def test_the_inverse_dynamics_read_conv_formed_by_their_reduced_form():
+    """`inverse_engine.EngineMotion.motion` returns slot conv: its packing is the reduced
+    form, whose evaluation forms conv itself (nothing left pending), equal to the conv an
+    evaluation with conv_wanted forms on the augmented form at the same state, within 1e-9
+    of its largest entry."""
+    from flexure.core.analysis.inverse_engine import engine_motion
+
+    model = load_scene("stage_spatial_19dof")
+    motion = engine_motion(model)
+    dims = motion.data.int_array("dims")
+    assert dims[ed.AUGMENTED] == 0
+    n = model.declared_dof_count
+    rng = np.random.default_rng(7)
+    q, qdot = 1e-4 * rng.standard_normal(n), rng.standard_normal(n)
+    conv, _, _ = motion.motion(motion.solve(q, None), qdot)
+    assert dims[ed.CONV_PENDING] == 0
+    augmented = EngineData(model, augmented=True, rigid=False)
+    augmented.float_array("q_ref")[:] = q
+    with augmented.evaluating(convective=True):
+        status = engine.call(augmented, engine.OP_RHS, np.concatenate([np.zeros(n), qdot]))
+    assert status == ed.OK
+    expected = augmented.float_array("conv")
+    size = np.max(np.abs(expected))
+    assert size > 0.0 and np.max(np.abs(conv - expected)) <= 1e-9 * size
+

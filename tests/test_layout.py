@@ -133,8 +133,9 @@ def test_evaluations_leave_the_configuration_alone(scene):
 
 
 def test_an_evaluation_mode_is_undone_after_its_block_even_after_a_failure():
-    """`EngineData.evaluating` sets dims.has_damping and dims.static for its block and puts
-    back what was there, also when the block raises; `restart_kinematics` starts the next
+    """`EngineData.evaluating` sets dims.has_damping, dims.static and dims.conv_wanted for its
+    block, leaves a switch not given alone, and puts back what was there, also when the
+    block raises; `restart_kinematics` starts the next
     solution from the given coordinates (x_start, warm = 0), and the solution it gives is the
     one a fresh packing gives from there."""
     data = EngineData(load_scene("stage_planar_1dof"))
@@ -147,6 +148,9 @@ def test_an_evaluation_mode_is_undone_after_its_block_even_after_a_failure():
         assert (dims[ed.HAS_DAMPING], dims[ed.STATIC]) == (1, 1)
         raise RuntimeError("inside")
     assert (dims[ed.HAS_DAMPING], dims[ed.STATIC]) == (0, 1)
+    with data.evaluating(convective=True):
+        assert (dims[ed.HAS_DAMPING], dims[ed.STATIC], dims[ed.CONV_WANTED]) == (0, 1, 1)
+    assert (dims[ed.HAS_DAMPING], dims[ed.STATIC], dims[ed.CONV_WANTED]) == (0, 1, 0)
 
     x0 = data.model.initial_coordinates
     q = np.array([1e-3])

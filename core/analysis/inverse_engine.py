@@ -89,8 +89,8 @@ class EngineMotion:
         self.model, self._ed, self._engine = model, ed, engine
         self.data = EngineData(model, augmented=False, singular_ratio=0.0, rigid=False)
         self.data.float_array("inputs")[:] = 0.0
-        # `motion` returns slot conv: every evaluation forms it (the reduced form does anyway)
-        self.data.int_array("dims")[ed.CONV_WANTED] = 1
+        # `motion` returns slot conv, which the reduced form (augmented=False) forms in every
+        # evaluation, as its own r reads it (`convective.keep_convective`)
         self.ndof = int(self.data.int_array("dims")[ed.NDOF])
         self._sigma = np.empty(int(self.data.int_array("dims")[ed.NE]))
         self._current: EngineConfiguration | None = None  # whose kinematics the engine holds

@@ -139,21 +139,25 @@ class EngineData:
         self.int_array("dims")[_FIELDS["WARM"]] = 0
 
     @contextmanager
-    def evaluating(self, *, damping, static=None):
+    def evaluating(self, *, damping=None, static=None, convective=None):
         """Within the block, an evaluation forms the damping forces and matrix if `damping`
-        (dims.has_damping) and, if `static`, leaves out M_bar and its LU (dims.static: a
-        balance needs DF^T r only; None leaves it as it is); after the block both settings
-        are what they were, whatever happened inside."""
-        dims, damped, static_only = self.int_array("dims"), _FIELDS["HAS_DAMPING"], \
-            _FIELDS["STATIC"]
-        before = dims[damped], dims[static_only]
-        dims[damped] = int(damping)
-        if static is not None:
-            dims[static_only] = int(static)
+        (dims.has_damping), leaves out M_bar and its LU if `static` (dims.static: a balance
+        needs DF^T r only) and forms slot conv at once if `convective` (dims.conv_wanted:
+        for a reader of slot conv outside the compiled code, `convective`); a switch given
+        as None is left as it is. After the block each setting is what it was, whatever
+        happened inside."""
+        dims = self.int_array("dims")
+        given = ((_FIELDS["HAS_DAMPING"], damping), (_FIELDS["STATIC"], static),
+                 (_FIELDS["CONV_WANTED"], convective))
+        before = [(field, dims[field]) for field, value in given if value is not None]
+        for field, value in given:
+            if value is not None:
+                dims[field] = int(value)
         try:
             yield self
         finally:
-            dims[damped], dims[static_only] = before
+            for field, value in before:
+                dims[field] = value
 
     def slots(self, role=None):
         """{name: array (a view)} of every slot of `role` (layout.CONFIG, STATE, SCRATCH or

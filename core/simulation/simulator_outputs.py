@@ -272,12 +272,8 @@ class SimulatorOutputs:
             data.float_array("inputs")[:] = inputs
             y = np.zeros(self.nstate)
             y[n: min(state.size, self.nstate)] = state[n: self.nstate]
-            dims = data.int_array("dims")
-            dims[ed.CONV_WANTED] = 1  # slot conv formed by this evaluation (`convective`)
-            try:
+            with data.evaluating(convective=True):  # slot conv formed, not left pending
                 status = engine.call(data, engine.OP_RHS, y)
-            finally:
-                dims[ed.CONV_WANTED] = 0
             if status != ed.OK:
                 raise SimulationError(f"{where}: the acceleration outputs: "
                                       f"{status_message(status)}")
