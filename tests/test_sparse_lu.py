@@ -252,7 +252,7 @@ def test_the_sparsest_rows_pivot_on_unit_rows_and_solve_as_numpy(seed):
     rows, cols = np.nonzero(a)
     plain = sparse_lu.StaticLU(n, rows, cols, a[rows, cols])
     lu = sparse_lu.StaticLU(n, rows, cols, a[rows, cols], sparsest_rows=True)
-    parts = sparse_lu._parts(lu.ints, lu.floats)
+    parts = sparse_lu.packed_parts(lu.ints, lu.floats)
     prow, pinv, pcol = parts[7], parts[8], parts[9]
     for u in range(m, n):
         assert prow[pinv[u]] == u and pcol[pinv[u]] == u
@@ -308,7 +308,8 @@ def test_the_sparsest_rows_choice_against_a_plain_lu(seed):
     a[rng.choice(n - 5, 5), units] = rng.uniform(1.2, 1.6, 5)
     rows, cols = np.nonzero(a)
     lu = sparse_lu.StaticLU(n, rows, cols, a[rows, cols], sparsest_rows=True)
-    prow, pcol = sparse_lu._parts(lu.ints, lu.floats)[7], sparse_lu._parts(lu.ints, lu.floats)[9]
+    parts = sparse_lu.packed_parts(lu.ints, lu.floats)
+    prow, pcol = parts[7], parts[9]
     expected, smaller = plain_pivots(a, pcol, np.full(n, -1), sparse_lu.THRESHOLD)
     assert np.array_equal(prow, expected)
     assert smaller > 0  # partial pivoting would have chosen otherwise

@@ -196,7 +196,7 @@ def _pack(n, coo, reference, pcol, prow, room, sparsest_rows=False):
 
 def _multiplications(ints, n):
     """Multiplications of one `refactor` and one `solve` on the packed patterns (read at
-    `_parts`' offsets in Python: a kernel called from here would import numba)."""
+    `packed_parts`' offsets in Python: a kernel called from here would import numba)."""
     lp = H_SIZE + n + 1 + int(ints[H_NNZ_A])
     up = lp + n + 1 + int(ints[H_ROOM_L])
     Lp, Up, Ui = ints[lp: lp + n + 1], ints[up: up + n + 1], ints[up + n + 1:]
@@ -211,7 +211,7 @@ def _multiplications(ints, n):
 
 # -- compiled ------------------------------------------------------------------------------------
 @kernel
-def _parts(ints, floats):
+def packed_parts(ints, floats):
     """Views of the packed arrays: (n, Ap, Ai, Lp, Li, Up, Ui, prow, pinv, pcol, old, stack,
     pstack, mark, Ax, Lx, Ux, x)."""
     n, na, rl, ru = ints[H_N], ints[H_NNZ_A], ints[H_ROOM_L], ints[H_ROOM_U]
@@ -260,7 +260,7 @@ def refactor(ints, floats, threshold):
     Returns the ratio of the smallest to the largest pivot magnitude, or REJECTED when a
     pivot is zero, not finite or smaller than `threshold` times the largest entry below it
     in its column, or when no factorisation is kept (the work vector is left clean)."""
-    n, Ap, Ai, Lp, Li, Up, Ui, _, pinv, _, _, _, _, _, Ax, Lx, Ux, x = _parts(ints, floats)
+    n, Ap, Ai, Lp, Li, Up, Ui, _, pinv, _, _, _, _, _, Ax, Lx, Ux, x = packed_parts(ints, floats)
     if ints[H_VALID] != 1:
         return REJECTED
     smallest, largest = np.inf, 0.0
@@ -306,7 +306,7 @@ def factor(ints, floats, threshold):
     `refactor`, REJECTED for a singular or non-finite matrix, CAPACITY when L or U outgrow
     their room."""
     n, Ap, Ai, Lp, Li, Up, Ui, prow, pinv, _, old, stack, pstack, mark, Ax, Lx, Ux, x = \
-        _parts(ints, floats)
+        packed_parts(ints, floats)
     room_l, room_u = ints[H_ROOM_L], ints[H_ROOM_U]
     ints[H_VALID] = 0
     for i in range(n):
@@ -423,7 +423,7 @@ def _clear(x, stack, top, n):
 def solve(ints, floats, b, transposed):
     """b <- A^-1 b (or with transposed A^-T b), in place, both in A's own order, with the
     factors of the last successful `factor` or `refactor`."""
-    n, _, _, Lp, Li, Up, Ui, prow, _, pcol, _, _, _, _, _, Lx, Ux, x = _parts(ints, floats)
+    n, _, _, Lp, Li, Up, Ui, prow, _, pcol, _, _, _, _, _, Lx, Ux, x = packed_parts(ints, floats)
     if not transposed:  # L U (Q^T z) = P b
         for i in range(n):
             x[i] = b[unsigned_index(prow[i])]
@@ -466,7 +466,8 @@ def scatter_dense(ints, floats, dense, row_position, column_position):
     """dense[row_position[r] n + column_position[c]] = A[r, c] for every entry of the pattern
     (dense (n * n,), row-major, zero elsewhere beforehand): the matrix for another
     factorisation when this one cannot serve."""
-    scatter_rows(ints, floats, dense, row_position, column_position, _parts(ints, floats)[0], 0)
+    n = packed_parts(ints, floats)[0]
+    scatter_rows(ints, floats, dense, row_position, column_position, n, 0)
 
 
 @kernel
@@ -474,7 +475,7 @@ def scatter_rows(ints, floats, out, row_position, column_position, step, shift):
     """out[row_position[r] step + shift + column_position[c]] = A[r, c] for every entry of
     the pattern (zero elsewhere beforehand): A into a row storage of row step `step` (n for
     the dense one; the banded LU's compact one, `banded.layout`)."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, Ax, _, _, _ = _parts(ints, floats)
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, Ax, _, _, _ = packed_parts(ints, floats)
     for j in range(n):
         column = shift + column_position[pcol[j]]
         for p in range(Ap[j], Ap[j + 1]):

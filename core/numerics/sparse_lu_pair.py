@@ -5,7 +5,7 @@ two vectors at once, and reading L's and U's patterns once for both saves a pass
 """
 
 from .jit import kernel
-from .sparse_lu import _parts
+from .sparse_lu import packed_parts
 from .sparse_lu import unsigned_index as _u
 
 
@@ -17,7 +17,7 @@ def solve_pair(ints, floats, b, c, work):
     `solve`'s, so the same values (where one vector's entry is zero and the other's not, it
     subtracts a product with zero that `solve` skips: a zero's sign aside, nothing changes).
     work: scratch of at least n entries."""
-    n, _, _, Lp, Li, Up, Ui, prow, _, pcol, _, _, _, _, _, Lx, Ux, x = _parts(ints, floats)
+    n, _, _, Lp, Li, Up, Ui, prow, _, pcol, _, _, _, _, _, Lx, Ux, x = packed_parts(ints, floats)
     for i in range(n):
         x[i] = b[_u(prow[i])]
         work[i] = c[_u(prow[i])]
