@@ -13,7 +13,7 @@ from ..numerics.sparse_lu import unsigned_index as _u  # no wraparound test (its
 def pattern_product(ints, floats, values, v, out, limit, scale):
     """out[r] += scale A[r, c] v[c] over the entries of the pattern packed in ints (floats:
     its packed floats, for the views) with values `values`, rows and columns below limit."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu.packed_parts(ints, floats)
     for j in range(n):
         c = pcol[j]
         if c >= limit or v[c] == 0.0:
@@ -30,7 +30,7 @@ def pattern_product_pair(ints, floats, first, v, second, w, out, limit, scale):
     ints (floats: its packed floats, for the views), A1 and A2 with values `first` and
     `second` on it, rows and columns below limit: `pattern_product` of both in one pass over
     the pattern."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu.packed_parts(ints, floats)
     for j in range(n):
         c = pcol[j]
         if c >= limit or (v[c] == 0.0 and w[c] == 0.0):
@@ -45,7 +45,7 @@ def pattern_product_pair(ints, floats, first, v, second, w, out, limit, scale):
 def pattern_product_transposed(ints, floats, values, v, out):
     """out[c] += sum_r A[r, c] v[r] (out += A^T v) over all the entries of the pattern packed
     in ints (floats: its packed floats) with values `values`."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu._parts(ints, floats)
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, _, _, _, _ = sparse_lu.packed_parts(ints, floats)
     for j in range(n):
         s = 0.0
         for p in range(Ap[j], Ap[j + 1]):
