@@ -29,9 +29,11 @@ products' magnitude.
 import numpy as np
 
 from ..numerics.jit import kernel
-from ..numerics.rotation_kernels import rotated_vector
+from ..numerics.rotation_kernels import rotated_half_jacobian, rotated_vector
 from . import entries
 from .beam_kernels import (
+    _AX_P,
+    _AX_Q,
     _AY_P,
     _AY_Q,
     _AZ_P,
@@ -75,6 +77,14 @@ def directional_kernel(x, v, ref, h):
     """h (6,) = v^T D2e_b v (b = 1 ... 6, the units of e_b per s^2 for v in m/s and 1/s) of one
     element: x, v (14,), ref its packed reference row (`beam_kernels.pack_reference`).
     Overwrites h; no allocation."""
+    _directional(x, v, ref, h)
+
+
+@kernel(inline="always")
+def _directional(x, v, ref, h):
+    """`directional_kernel`'s h, returning the second derivatives n2 = 2 R(mu) a of the node
+    vectors n_z'^p, n_z'^q, n_y'^p, n_y'^q (three floats each, in that order): the section
+    axes' (D2p v) v of `beam_kernels.inertia_kernel`."""
     l0, c, c_t = ref[0], ref[1], ref[2]
     half = 0.5 * l0
     lx, ly, lz = x[_XQ] - x[_XP], x[_XQ + 1] - x[_XP + 1], x[_XQ + 2] - x[_XP + 2]
@@ -123,6 +133,69 @@ def directional_kernel(x, v, ref, h):
     h[3] = g4
     h[4] = g5
     h[5] = g6
+    return aq0, aq1, aq2, bq0, bq1, bq2, cq0, cq1, cq2, dq0, dq1, dq2
+
+
+# The inertia points that `points_kernel` keeps of one element, POINTS_WIDTH floats: Dp's
+# blocks of the six rotated vectors (rows 3 l0 n_x'^p, 9 l0 n_x'^q, 12 n_y'^p, 15 n_z'^p,
+# 18 n_y'^q, 21 n_z'^q of Dp, each three rows over its node's four Euler parameters, four
+# columns of three components), then acc = (D2p v) v (24,); Dp's other entries are
+# constants: 1 on the translations' rows 0 ... 2 and 6 ... 8 at their coordinates, else 0.
+_POINT_ROWS = (3, 9, 12, 15, 18, 21)
+_POINT_COLUMNS = (_XLP, _XLQ, _XLP, _XLP, _XLQ, _XLQ)
+ACC_AT = 72
+POINTS_WIDTH = 96
+
+
+@kernel
+def points_kernel(x, v, ref, h, points):
+    """`directional_kernel`'s h (6,) and `beam_kernels.inertia_kernel`'s Dp and acc at
+    order 2 in one call, sharing the section axes' rotations (n and R(mu) a of n_y', n_z'
+    at both nodes): points (POINTS_WIDTH,) the non-constant blocks of Dp and acc in the
+    layout above (`beam_mass.kept_point_products` reads them). Each float is computed as those two
+    kernels compute it, so the same bits. x, v (14,), ref the packed reference row; no
+    allocation."""
+    aq0, aq1, aq2, bq0, bq1, bq2, cq0, cq1, cq2, dq0, dq1, dq2 = _directional(x, v, ref, h)
+    l0 = ref[0]
+    for k in range(3):
+        points[ACC_AT + k] = 0.0
+        points[ACC_AT + 6 + k] = 0.0
+    # the section axes' acc, 1.0 (2 R(mu) a) in inertia_kernel: the jet's n2 (scale 1 exact)
+    points[ACC_AT + 12], points[ACC_AT + 13], points[ACC_AT + 14] = cq0, cq1, cq2
+    points[ACC_AT + 15], points[ACC_AT + 16], points[ACC_AT + 17] = aq0, aq1, aq2
+    points[ACC_AT + 18], points[ACC_AT + 19], points[ACC_AT + 20] = dq0, dq1, dq2
+    points[ACC_AT + 21], points[ACC_AT + 22], points[ACC_AT + 23] = bq0, bq1, bq2
+    # the tangents l0 n_x' at both nodes: acc l0 (2 R(mu) a), as inertia_kernel's
+    _tangent_acc(v, ref, points, 3, _XLP, l0, _AX_P)
+    _tangent_acc(v, ref, points, 9, _XLQ, l0, _AX_Q)
+    # Dp's blocks: scale 2 h with h = C lambda, as inertia_kernel's
+    _block(x, ref, points, 0, _XLP, l0, _AX_P)
+    _block(x, ref, points, 1, _XLQ, l0, _AX_Q)
+    _block(x, ref, points, 2, _XLP, 1.0, _AY_P)
+    _block(x, ref, points, 3, _XLP, 1.0, _AZ_P)
+    _block(x, ref, points, 4, _XLQ, 1.0, _AY_Q)
+    _block(x, ref, points, 5, _XLQ, 1.0, _AZ_Q)
+
+
+@kernel(inline="always")
+def _tangent_acc(v, ref, points, row, col, scale, start):
+    """acc's rows row ... row + 2 of the inertia point scale R(lambda) a (a = ref[start:
+    start + 3], lambda at x[col:col + 4]): scale (2 R(mu) a), mu = v[col:col + 4]."""
+    w = rotated_vector(ref[start], ref[start + 1], ref[start + 2], v[col], v[col + 1],
+                       v[col + 2], v[col + 3])
+    for k in range(3):
+        points[ACC_AT + row + k] = scale * (2.0 * w[k])
+
+
+@kernel(inline="always")
+def _block(x, ref, points, j, col, scale, start):
+    """Dp's block j (`_POINT_ROWS`) of the inertia point scale R(lambda) a: scale 2 h, h = C
+    lambda (lambda = x[col:col + 4], a = ref[start:start + 3]), its four columns."""
+    half = rotated_half_jacobian(ref[start], ref[start + 1], ref[start + 2], x[col],
+                                 x[col + 1], x[col + 2], x[col + 3])
+    for i in range(4):
+        for k in range(3):
+            points[12 * j + 3 * i + k] = scale * (2.0 * half[i][k])
 
 
 deformations_entry = entries.deformations_entry(deformations_kernel, directional_kernel)

@@ -185,14 +185,9 @@ def _less_points_product(Dp, a, point):
     _less_block_product(Dp, a, point, 7, 10, 4)
 
 
-@kernel
-def beam_point_product(Mp, Dp, a, point, w, out):
-    """One BEAM's point forces less the inertia of the accelerations a (14,; m/s^2, 1/s^2):
-    point (24,) -= Dp a, w = Mp point (N per the points' unit), out (14,; N, N m) = Dp^T w,
-    for Mp (24 * 24, flat; kg, kg m^2) on the BEAM's pattern and Dp (24, 14) of the structure
-    `beam_blocks_only` checks: about 250 multiplications in loops of 3 and 4 that the
-    compiler unrolls, against about 970 to form Dp^T Mp Dp (`beam_element_mass`)."""
-    _less_points_product(Dp, a, point)
+@kernel(inline="always")
+def _mass_product(Mp, point, w):
+    """w = Mp point (24,) on the BEAM's pattern."""
     for c in range(3):  # Mp couples component c of the vectors with component c only
         for u in range(4):  # the Hermite vectors with each other
             p = 3 * u + c
@@ -204,6 +199,17 @@ def beam_point_product(Mp, Dp, a, point, w, out):
             p, first = 3 * u + c, 4 + u % 2
             w[p] = Mp[p * P + 3 * first + c] * point[3 * first + c] \
                 + Mp[p * P + 3 * (first + 2) + c] * point[3 * (first + 2) + c]
+
+
+@kernel
+def beam_point_product(Mp, Dp, a, point, w, out):
+    """One BEAM's point forces less the inertia of the accelerations a (14,; m/s^2, 1/s^2):
+    point (24,) -= Dp a, w = Mp point (N per the points' unit), out (14,; N, N m) = Dp^T w,
+    for Mp (24 * 24, flat; kg, kg m^2) on the BEAM's pattern and Dp (24, 14) of the structure
+    `beam_blocks_only` checks: about 250 multiplications in loops of 3 and 4 that the
+    compiler unrolls, against about 970 to form Dp^T Mp Dp (`beam_element_mass`)."""
+    _less_points_product(Dp, a, point)
+    _mass_product(Mp, point, w)
     for j in range(M):
         out[j] = 0.0
     _add_block_transposed(Dp, w, out, 0, 0, 3)
@@ -227,15 +233,11 @@ def _add_blocks_transposed(Dp, w, out, w0, out0, u, su, wu):
             out0[su + j] += d * w0[p]
 
 
-@kernel
-def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
-    """`beam_point_product` at the accelerations a (14,) and at a = 0 in one pass over Mp and
-    Dp, for point0 (24,) = point on entry: point -= Dp a, w = Mp point, out (14,) = Dp^T w,
-    and w0 = Mp point0, a (14,) = Dp^T w0 (a is read first, then overwritten). Each result
-    is summed as its own `beam_point_product` call sums it, so the same bits, but for a
-    zero's sign (a = 0's Dp a, which the call subtracts, is not formed). Units as there."""
-    _less_points_product(Dp, a, point)
-    for c in range(3):  # as in `beam_point_product`, each Mp entry read once for both
+@kernel(inline="always")
+def _mass_products(Mp, point, w, point0, w0):
+    """w = Mp point and w0 = Mp point0 (24,) on the BEAM's pattern, each Mp entry read once
+    for both, each sum in `beam_point_product`'s order."""
+    for c in range(3):
         for u in range(4):
             p = 3 * u + c
             s = s0 = 0.0
@@ -250,6 +252,17 @@ def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
             m1, m2 = Mp[p * P + 3 * first + c], Mp[p * P + 3 * (first + 2) + c]
             w[p] = m1 * point[3 * first + c] + m2 * point[3 * (first + 2) + c]
             w0[p] = m1 * point0[3 * first + c] + m2 * point0[3 * (first + 2) + c]
+
+
+@kernel
+def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
+    """`beam_point_product` at the accelerations a (14,) and at a = 0 in one pass over Mp and
+    Dp, for point0 (24,) = point on entry: point -= Dp a, w = Mp point, out (14,) = Dp^T w,
+    and w0 = Mp point0, a (14,) = Dp^T w0 (a is read first, then overwritten). Each result
+    is summed as its own `beam_point_product` call sums it, so the same bits, but for a
+    zero's sign (a = 0's Dp a, which the call subtracts, is not formed). Units as there."""
+    _less_points_product(Dp, a, point)
+    _mass_products(Mp, point, w, point0, w0)
     for j in range(M):
         out[j] = 0.0
         a[j] = 0.0
@@ -261,3 +274,98 @@ def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
     _add_blocks_transposed(Dp, w, out, w0, a, 5, 3, 4)
     _add_blocks_transposed(Dp, w, out, w0, a, 6, 10, 4)
     _add_blocks_transposed(Dp, w, out, w0, a, 7, 10, 4)
+
+
+# -- the same from a BEAM's kept points (`beam_directional.points_kernel`'s layout) -------------
+# Dp's entry (3u + c, su + i) of a kept element: the translations' rows (vectors 0 and 2) are
+# the unit rows, the others the kept blocks (vector 1, 3, 4, 5, 6, 7 -> block 0, 1, 2, 3, 4, 5)
+@kernel(inline="always")
+def _kept(points, u, c, i):
+    """Dp[3u + c, su + i] from the kept points (u, c, i constants at each call)."""
+    if u == 0 or u == 2:
+        return 1.0 if i == c else 0.0
+    block = 0 if u == 1 else (1 if u == 3 else u - 2)
+    return points[12 * block + 3 * i + c]
+
+
+@kernel(inline="always")
+def _kept_less_block_product(points, a, point, u, su, wu):
+    """`_less_block_product` with Dp's entries from the kept points."""
+    for c in range(3):
+        p = 3 * u + c
+        s = 0.0
+        for j in range(wu):
+            s += _kept(points, u, c, j) * a[su + j]
+        point[p] -= s
+
+
+@kernel(inline="always")
+def _kept_add_blocks_transposed(points, w, out, w0, out0, u, su, wu):
+    """`_add_blocks_transposed` with Dp's entries from the kept points."""
+    for c in range(3):
+        p = 3 * u + c
+        for j in range(wu):
+            d = _kept(points, u, c, j)
+            out[su + j] += d * w[p]
+            out0[su + j] += d * w0[p]
+
+
+@kernel
+def kept_point_products(Mp, points, a, point, w, out, point0, w0):
+    """`beam_point_products` with Dp read from one element's kept points (POINTS_WIDTH,;
+    `beam_directional.points_kernel`'s layout) rather than from a (24, 14) array: the same
+    products in the same order, so the same bits. Units as there."""
+    _kept_less_block_product(points, a, point, 0, 0, 3)
+    _kept_less_block_product(points, a, point, 1, 3, 4)
+    _kept_less_block_product(points, a, point, 2, 7, 3)
+    _kept_less_block_product(points, a, point, 3, 10, 4)
+    _kept_less_block_product(points, a, point, 4, 3, 4)
+    _kept_less_block_product(points, a, point, 5, 3, 4)
+    _kept_less_block_product(points, a, point, 6, 10, 4)
+    _kept_less_block_product(points, a, point, 7, 10, 4)
+    _mass_products(Mp, point, w, point0, w0)
+    for j in range(M):
+        out[j] = 0.0
+        a[j] = 0.0
+    _kept_add_blocks_transposed(points, w, out, w0, a, 0, 0, 3)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 1, 3, 4)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 2, 7, 3)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 3, 10, 4)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 4, 3, 4)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 5, 3, 4)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 6, 10, 4)
+    _kept_add_blocks_transposed(points, w, out, w0, a, 7, 10, 4)
+
+
+@kernel
+def kept_point_product(Mp, points, a, point, w, out):
+    """`beam_point_product` with Dp read from one element's kept points (as
+    `kept_point_products`): the same bits. Units as there."""
+    _kept_less_block_product(points, a, point, 0, 0, 3)
+    _kept_less_block_product(points, a, point, 1, 3, 4)
+    _kept_less_block_product(points, a, point, 2, 7, 3)
+    _kept_less_block_product(points, a, point, 3, 10, 4)
+    _kept_less_block_product(points, a, point, 4, 3, 4)
+    _kept_less_block_product(points, a, point, 5, 3, 4)
+    _kept_less_block_product(points, a, point, 6, 10, 4)
+    _kept_less_block_product(points, a, point, 7, 10, 4)
+    _mass_product(Mp, point, w)
+    for j in range(M):
+        out[j] = 0.0
+    _kept_add_block_transposed(points, w, out, 0, 0, 3)
+    _kept_add_block_transposed(points, w, out, 1, 3, 4)
+    _kept_add_block_transposed(points, w, out, 2, 7, 3)
+    _kept_add_block_transposed(points, w, out, 3, 10, 4)
+    _kept_add_block_transposed(points, w, out, 4, 3, 4)
+    _kept_add_block_transposed(points, w, out, 5, 3, 4)
+    _kept_add_block_transposed(points, w, out, 6, 10, 4)
+    _kept_add_block_transposed(points, w, out, 7, 10, 4)
+
+
+@kernel(inline="always")
+def _kept_add_block_transposed(points, w, out, u, su, wu):
+    """`_add_block_transposed` with Dp's entries from the kept points."""
+    for c in range(3):
+        p = 3 * u + c
+        for j in range(wu):
+            out[su + j] += _kept(points, u, c, j) * w[p]

@@ -60,14 +60,18 @@ def element_rates(table, xdot, moving):
     skipping = dims[ed.NSLAVES] > 0
     touching = _i(table, slot.RIGID_ELEMENTS)
     quad[:] = 0.0
+    kept = moving  # whether every group with kept points (a BEAM's) has them of this state
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         if moving and row[ed.G_K] > 0 and forms_quadratic_forms(
                 row[ed.G_DEFORMATIONS_ENTRY], v, row[ed.G_M], row[ed.G_K], row[ed.G_REF_WIDTH]):
             # through its operation (`formed_rates`), compiled only for models with such an
-            # element; `engine.connect` gives it to every model that has one
+            # element; `engine.connect` gives it to every model that has one; it keeps a
+            # BEAM group's inertia points (slot beam_points)
             run(table, OP_FORMED_RATES, g, xdot.ctypes.data, RATES)
             continue
+        if row[ed.G_POINTS_OFFSET] >= 0:
+            kept = False
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         for i in range(n):
             if skipping and internal(table, row, i, touching):
@@ -95,6 +99,7 @@ def element_rates(table, xdot, moving):
                             t += D2e[base2 + a * m + c] * v[c]
                         h += va * t
                     quad[r] = h
+    dims[ed.POINTS_CURRENT] = 1 if kept else 0
 
 
 @kernel(inline="always")

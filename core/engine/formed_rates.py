@@ -16,6 +16,7 @@ the planar demo's first loop on an empty cache (docs/benchmarks.md, session 32).
 1/s or m/s by the deformation, h 1/s^2 or m/s^2.
 """
 
+from ..elements.beam_directional import POINTS_WIDTH, points_kernel
 from ..elements.entries import ORDER_DIRECTIONAL
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, as_float_pointer, call_deformations, carray
@@ -24,8 +25,9 @@ from . import slots as slot
 from .deformation_rates import internal
 from .kinematics import hessians_at_solution
 from .operations import ENTRY, HESSIANS
+from .rigid_inertia_kernels import own_mass
 from .slots import float_array as _f
-from .slots import group, group_deformations
+from .slots import group, group_deformations, rigid_element
 from .slots import int_array as _i
 
 
@@ -40,7 +42,9 @@ def uses(data):
 def formed_rates(table, g, xdot):
     """`element_rates` of group g, whose element forms h = v^T D2e v itself: edot = De xdot
     and its directional kernel's h at the solution (slot x) on the constraint rows, for the
-    elements with any (slot g)."""
+    elements with any (slot g). A BEAM group with kept points (group field points_offset)
+    gives each element that the element passes visit (`kept_points`) its inertia points in
+    the same call, into slot beam_points (`beam_directional.points_kernel`)."""
     dims = _i(table, slot.DIMS)
     edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
     row_of_def = _i(table, slot.ROW_OF_DEF)
@@ -55,19 +59,33 @@ def formed_rates(table, g, xdot):
     n, m, k, coords, defs, De, _ = group_deformations(table, g)
     function, width = row[ed.G_DEFORMATIONS_ENTRY], row[ed.G_REF_WIDTH]
     refs = _f(table, slot.GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
+    keeping = row[ed.G_POINTS_OFFSET] >= 0
+    beam_refs = _f(table, slot.GROUP_DATA)[row[ed.G_DATA_OFFSET]:]
+    points = _f(table, slot.BEAM_POINTS)[max(row[ed.G_POINTS_OFFSET], 0):]
     for i in range(n):
-        if skipping and internal(table, row, i, touching):
+        inner = skipping and internal(table, row, i, touching)
+        keep = keeping and kept_points(table, row, i)
+        if inner and not keep:
             for b in range(k):
                 edot[defs[i * k + b]] = 0.0
             continue
         for a in range(m):
             v[a] = xdot[coords[i * m + a]]
-        if has_rows(row_of_def, defs, i, k):
+        if keep:  # h and the points in one call; m = 14, k = 6 (the BEAM's)
+            for a in range(m):
+                xl[a] = x[coords[i * m + a]]
+            points_kernel(xl, v, beam_refs[i * width: (i + 1) * width], formed,
+                          points[i * POINTS_WIDTH: (i + 1) * POINTS_WIDTH])
+        elif has_rows(row_of_def, defs, i, k):
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
             call_deformations(function, xl.ctypes.data, refs + 8 * i * width,
                               ORDER_DIRECTIONAL, formed.ctypes.data, v.ctypes.data, 0, m, k,
                               width)
+        if inner:
+            for b in range(k):
+                edot[defs[i * k + b]] = 0.0
+            continue
         for b in range(k):
             s = 0.0
             base = (i * k + b) * m
@@ -77,6 +95,17 @@ def formed_rates(table, g, xdot):
             r = row_of_def[defs[i * k + b]]
             if r >= 0:
                 quad[r] = formed[b]
+
+
+@kernel(inline="always")
+def kept_points(table, row, i):
+    """Whether the element passes (`inertia_product`) visit element i of the group `row`,
+    and so read its kept points: every element but a touching one whose mass is folded
+    into its cluster's rigid body or zero (`rigid_inertia_kernels.own_mass`)."""
+    if _i(table, slot.DIMS)[ed.NSLAVES] == 0:
+        return True
+    t = rigid_element(table, row, i)
+    return t < 0 or own_mass(table, t)
 
 
 @kernel(inline="always")

@@ -22,7 +22,13 @@ without them compiles none of theirs here. Units as the coordinates: N, N m; kg,
 
 import numpy as np
 
-from ..elements.beam_mass import beam_point_product, beam_point_products
+from ..elements.beam_directional import ACC_AT, POINTS_WIDTH
+from ..elements.beam_mass import (
+    beam_point_product,
+    beam_point_products,
+    kept_point_product,
+    kept_point_products,
+)
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
 from ..numerics.native import call_engine
@@ -172,6 +178,10 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
     dims = _i(table, slot.DIMS)
     rigid = dims[ed.NSLAVES] > 0
     split = forces.size > 0
+    # the BEAMs' points as their rates kept them (`formed_rates`), where those are of x
+    # and xdot: slots x and xdot of this evaluation
+    current = (dims[ed.POINTS_CURRENT] == 1 and x.ctypes.data == _f(table, slot.X).ctypes.data
+               and xdot.ctypes.data == _f(table, slot.XDOT).ctypes.data)
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         inertia = group_inertia(table, g)
@@ -179,6 +189,8 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
         beams = row[ed.G_POINT_BLOCKS] == 1
         scratch = inertia_scratch(table, 0, P, m)
         xl, vl, point, acc, w, Dp, o = scratch
+        kept = current and n > 0 and row[ed.G_POINTS_OFFSET] >= 0  # a BEAM group
+        points = _f(table, slot.BEAM_POINTS)[max(row[ed.G_POINTS_OFFSET], 0):]
         w0 = _f(table, slot.LOCAL)[o: o + P]  # a BEAM's Mp times its points at a = 0
         nodes = row[ed.G_NODE_INERTIA] == 1
         refs = _f(table, slot.GROUP_DATA)[row[ed.G_DATA_OFFSET]:]
@@ -200,6 +212,11 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
                     total[coords[i * m + b]] += w[b]
                     if split:
                         forces[coords[i * m + b]] += acc[b]
+                continue
+            if kept:  # the BEAM's products with Dp and (D2p v) v read from its kept points
+                _kept_products(points[i * POINTS_WIDTH: (i + 1) * POINTS_WIDTH], moving,
+                               with_gravity, gravity, masses[i * P * P: (i + 1) * P * P],
+                               coords[i * m: (i + 1) * m], a, scratch, w0, total, forces)
                 continue
             element_points(inertia, scratch, i, x, xdot, 2 if moving else 1)
             for pp in range(P):
@@ -226,6 +243,30 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
                 _product(beams, Mp, pattern, P, m, Dp, xl, acc, w, vl)
                 for b in range(m):
                     forces[coords[i * m + b]] += vl[b]
+
+
+@kernel(inline="always")  # into the element pass
+def _kept_products(points, moving, with_gravity, gravity, Mp, coords, a, scratch, w0, total,
+                   forces):
+    """One BEAM's part of `_element_pass` from its kept points (`formed_rates`): the same
+    point values and products (`beam_mass.kept_point_products`, `kept_point_product`), so
+    the same bits as from its inertia kernel's Dp and acc. coords (14,) its coordinates."""
+    xl, vl, point, acc, w, _, _ = scratch
+    for pp in range(24):
+        g_p = gravity[pp] if with_gravity else 0.0
+        point[pp] = g_p - points[ACC_AT + pp] if moving else g_p
+        acc[pp] = point[pp]
+    for b in range(14):
+        xl[b] = a[coords[b]]
+    if forces.size > 0:
+        kept_point_products(Mp, points, xl, point, w, vl, acc, w0)
+        for b in range(14):
+            total[coords[b]] += vl[b]
+            forces[coords[b]] += xl[b]
+    else:
+        kept_point_product(Mp, points, xl, point, w, vl)
+        for b in range(14):
+            total[coords[b]] += vl[b]
 
 
 @kernel(inline="always")

@@ -290,6 +290,7 @@ def solve_positions(table, q):
     kept, no warm start set), for measuring outputs; a status code."""
     dims = _i(table, slot.DIMS)
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = dims[ed.WARM] = dims[ed.PREDICTION_HELD] = 0
+    dims[ed.POINTS_CURRENT] = 0
     dims[ed.A_FACTORS] = ed.NO_FACTORS
     nx = dims[ed.NX]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
@@ -316,6 +317,7 @@ def solve_kinematics(table, q):
     dims = _i(table, slot.DIMS)
     dims[ed.MASS_CURRENT] = dims[ed.REDUCED] = 0  # DF and M_bar are of another state now
     dims[ed.A_FACTORS] = ed.NO_FACTORS  # and so are the augmented system's factors
+    dims[ed.POINTS_CURRENT] = 0  # and the BEAMs' kept inertia points
     nx = dims[ed.NX]
     x, g, dx = _f(table, slot.X_TRIAL), _f(table, slot.G), _f(table, slot.DX)
     if dims[ed.WARM] == 1:

@@ -136,6 +136,10 @@ SLOTS = (
     *_slots(FLOAT, "groups", (
         ("group_data", "GROUP_DATA", "-", CONFIG, "m, kg, N", "per group: its packed "
          "reference rows, then (with inertia points) Mp (n P P) and gravity on the points (P)"),
+        ("beam_points", "BEAM_POINTS", "-", STATE, "1, m, 1/s^2, m/s^2", "per BEAM of a "
+         "group with point_blocks: its Dp's blocks and (D2p v) v at the last evaluation's x "
+         "and xdot, kept by its rates (`formed_rates`) for the element passes while dims "
+         "points_current is 1 (`beam_directional.points_kernel`'s layout)"),
     )),
     *_slots(INT, "stiffness", (
         ("stressed", "STRESSED", "ns", CONFIG, "-", "the stressed deformations"),

@@ -74,6 +74,9 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
      "last evaluation's convective accelerations, not yet solved (`convective`)"),
     ("conv_wanted", "CONV_WANTED", STATE, "1: every evaluation forms slot conv at once (for "
      "the Python readers of slot conv; `convective`)"),
+    ("points_current", "POINTS_CURRENT", STATE, "1: slot beam_points holds the BEAMs' "
+     "inertia points at slots x and xdot (set by the element rates when moving, cleared by "
+     "the kinematics)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
@@ -101,6 +104,8 @@ GROUP_FIELDS = tuple(Field(*row) for row in (
      "xddot takes the closed-form product without testing each element's Dp"),
     ("node_inertia", "G_NODE_INERTIA", CONFIG, "1: the group is the node inertias' with Mp "
      "diagonal (`node_inertia_product`: their points and products in closed form)"),
+    ("points_offset", "G_POINTS_OFFSET", CONFIG, "its first entry in beam_points (a group "
+     "with point_blocks), or -1"),
 ))
 
 # -- slot counters and slot settings ----------------------------------------------------------

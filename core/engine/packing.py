@@ -11,6 +11,7 @@ Records (`dims`, a row of `groups`, `counters`, `settings`) are filled by field 
 
 import numpy as np
 
+from ..elements.beam_directional import POINTS_WIDTH
 from ..elements.beam_mass import PATTERN as BEAM_PATTERN
 from ..elements.beam_mass import blocks_by_construction
 from ..mechanics import assembly
@@ -56,7 +57,9 @@ class ElementGroups:
         self.de_groups = []  # (group, offset of its De)
         self.de_size = self.d2e_size = 0
         self.max_m = self.max_k = self.max_p = 1
-        self._offsets = {"coord": 0, "def": 0, "data": 0, "pattern": 0, "element": 0}
+        self._offsets = {"coord": 0, "def": 0, "data": 0, "pattern": 0, "element": 0,
+                         "points": 0}
+        self.points_size = 0  # floats of slot beam_points
         for group in self.all:
             self._add(group, model.gravity)
 
@@ -73,7 +76,8 @@ class ElementGroups:
                   "mass_offset": -1, "gravity_offset": -1, "de_offset": self.de_size,
                   "d2e_offset": self.d2e_size,
                   "deformations_entry": kind.deformations_entry.address if k else 0,
-                  "inertia_entry": kind.inertia_entry.address if P else 0}
+                  "inertia_entry": kind.inertia_entry.address if P else 0,
+                  "points_offset": -1}
         pieces = [packed.ravel()]
         if Mp is not None:
             fields["mass_offset"] = offsets["data"] + packed.size
@@ -88,6 +92,9 @@ class ElementGroups:
             # the BEAM's closed-form product then needs no check of Dp element by element
             fields["point_blocks"] = int(blocks_by_construction(kind)
                                          and np.array_equal(pattern, BEAM_PATTERN))
+            if fields["point_blocks"]:  # its rates keep its points (`formed_rates`)
+                fields["points_offset"] = offsets["points"]
+                offsets["points"] += n * POINTS_WIDTH
             # a node inertia's closed form (`node_inertia_product`) reads Mp's diagonal
             fields["node_inertia"] = int(getattr(kind, "type_name", "") == "NODE_INERTIA"
                                          and np.array_equal(pattern, 10 * np.arange(9)))
@@ -104,6 +111,7 @@ class ElementGroups:
         offsets["def"] += n * k
         offsets["data"] += sum(piece.size for piece in pieces)
         offsets["element"] += n
+        self.points_size = offsets["points"]
         self.max_m, self.max_k = max(self.max_m, m), max(self.max_k, k)
         self.max_p = max(self.max_p, P)
 
@@ -257,6 +265,7 @@ def groups(c):
         "deformation_index": np.concatenate([*g.deformations, empty]),
         "mass_pattern": np.concatenate(g.patterns) if g.patterns else empty,
         "group_data": np.concatenate(g.data) if g.data else np.zeros(0),
+        "beam_points": np.zeros(g.points_size),
     }
 
 
