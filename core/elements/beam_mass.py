@@ -281,18 +281,24 @@ def beam_point_products(Mp, Dp, a, point, w, out, point0, w0):
 # the unit rows, the others the kept blocks (vector 1, 3, 4, 5, 6, 7 -> block 0, 1, 2, 3, 4, 5)
 @kernel(inline="always")
 def _kept(points, u, c, i):
-    """Dp[3u + c, su + i] from the kept points (u, c, i constants at each call)."""
-    if u == 0 or u == 2:
-        return 1.0 if i == c else 0.0
+    """Dp[3u + c, su + i] of a vector u but the translations' from the kept points (u, c, i
+    constants at each call)."""
     block = 0 if u == 1 else (1 if u == 3 else u - 2)
     return points[12 * block + 3 * i + c]
 
 
+# On the translations' unit rows the products by Dp's zeros are left out: a sum that starts
+# at +0.0 is never -0.0, so adding 0.0 * y (+-0 for a finite y) leaves it as it is, and the
+# unit entry's sum is 0.0 + y. The same bits as the dense kernels' for finite a and w (a
+# non-finite one makes those NaN where it meets a zero of Dp).
 @kernel(inline="always")
 def _kept_less_block_product(points, a, point, u, su, wu):
     """`_less_block_product` with Dp's entries from the kept points."""
     for c in range(3):
         p = 3 * u + c
+        if u == 0 or u == 2:
+            point[p] -= 0.0 + a[su + c]
+            continue
         s = 0.0
         for j in range(wu):
             s += _kept(points, u, c, j) * a[su + j]
@@ -301,9 +307,14 @@ def _kept_less_block_product(points, a, point, u, su, wu):
 
 @kernel(inline="always")
 def _kept_add_blocks_transposed(points, w, out, w0, out0, u, su, wu):
-    """`_add_blocks_transposed` with Dp's entries from the kept points."""
+    """`_add_blocks_transposed` with Dp's entries from the kept points (out, out0 zero on
+    the translations' columns before their block)."""
     for c in range(3):
         p = 3 * u + c
+        if u == 0 or u == 2:
+            out[su + c] += w[p]
+            out0[su + c] += w0[p]
+            continue
         for j in range(wu):
             d = _kept(points, u, c, j)
             out[su + j] += d * w[p]
@@ -314,7 +325,8 @@ def _kept_add_blocks_transposed(points, w, out, w0, out0, u, su, wu):
 def kept_point_products(Mp, points, a, point, w, out, point0, w0):
     """`beam_point_products` with Dp read from one element's kept points (POINTS_WIDTH,;
     `beam_directional.points_kernel`'s layout) rather than from a (24, 14) array: the same
-    products in the same order, so the same bits. Units as there."""
+    products in the same order but those by the zeros of the translations' rows, so the
+    same bits for finite a and w (above). Units as there."""
     _kept_less_block_product(points, a, point, 0, 0, 3)
     _kept_less_block_product(points, a, point, 1, 3, 4)
     _kept_less_block_product(points, a, point, 2, 7, 3)
@@ -340,7 +352,7 @@ def kept_point_products(Mp, points, a, point, w, out, point0, w0):
 @kernel
 def kept_point_product(Mp, points, a, point, w, out):
     """`beam_point_product` with Dp read from one element's kept points (as
-    `kept_point_products`): the same bits. Units as there."""
+    `kept_point_products`): the same bits for finite a and w. Units as there."""
     _kept_less_block_product(points, a, point, 0, 0, 3)
     _kept_less_block_product(points, a, point, 1, 3, 4)
     _kept_less_block_product(points, a, point, 2, 7, 3)
@@ -364,8 +376,12 @@ def kept_point_product(Mp, points, a, point, w, out):
 
 @kernel(inline="always")
 def _kept_add_block_transposed(points, w, out, u, su, wu):
-    """`_add_block_transposed` with Dp's entries from the kept points."""
+    """`_add_block_transposed` with Dp's entries from the kept points (as
+    `_kept_add_blocks_transposed`)."""
     for c in range(3):
         p = 3 * u + c
+        if u == 0 or u == 2:
+            out[su + c] += w[p]
+            continue
         for j in range(wu):
             out[su + j] += _kept(points, u, c, j) * w[p]
