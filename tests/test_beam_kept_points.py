@@ -185,3 +185,4 @@ def test_the_rhs_and_jacobian_are_those_without_kept_points(rigid):
     assert np.any(results[0][1] != 0.0)
     for got, expected in zip(results[0], results[1], strict=True):
         assert np.array_equal(got, expected)
+

@@ -40,7 +40,8 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
       EXPAND_COLUMNS     the slaves' rows of slot DF (`expand_columns`)
       CONVECTIVE         x, xdot (NX,) (`convective`)
       RATES              `rigid_rates`
-      CONDENSE           v (NX,), out (n_free,) (`condense`)
+      CONDENSE           v (NX,), out (n_free,) (`condense`); s = WITH_FORCE also slot
+                         force's T^T into slot dx, in the same pass (`condense_pair`)
       GEOMETRIC          r_full (NX,), lam (n_free,); into slot stiffness (`rigid_geometric`)
       DE                 `rigid_de`
     DF                   DF into slot DF from J's factors (`kinematics.compute_DF`)
@@ -136,6 +137,8 @@ NEWTON_OPERATIONS = (OP_NEWTON_JACOBIAN, OP_NEWTON_FACTOR, OP_NEWTON_SOLVE, OP_S
 RIGID_OPERATIONS = tuple(range(OP_RIGID_FILL, OP_RIGID_DE + 1))
 # from how many DOFs the tangent's product goes through OP_ROW_PRODUCTS (`tangent`)
 ROW_GROUPS_FROM = 150
+# OP_RIGID_CONDENSE's two jobs (s): T^T v, or with it T^T of slot force into slot dx
+ALONE, WITH_FORCE = 0.0, 1.0
 # OP_FORMED_RATES's two jobs (s)
 RATES, HESSIANS = 0.0, 1.0
 # OP_STAGE_FORCE's three jobs (s): the stage force, the augmented system at its state, or an

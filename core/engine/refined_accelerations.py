@@ -74,7 +74,7 @@ from . import data as ed
 from . import slots as slot
 from .factors import KEPT_NONE, KEPT_SPARSE, kept_resolve
 from .inertia_product import element_products, forces_and_products, spread_accelerations
-from .operations import OP_RIGID_BODIES, OP_RIGID_CONDENSE, run
+from .operations import ALONE, OP_RIGID_BODIES, OP_RIGID_CONDENSE, WITH_FORCE, run
 from .refinement import constraint_products, largest
 from .rigid_inertia_kernels import PRODUCT_AT_REST, PRODUCT_MOVING
 from .slots import float_array as _f
@@ -102,7 +102,6 @@ def refined_accelerations(table, moving, rhs):
     work = _f(table, slot.REFINEMENT)
     b, d, c = work[:na], work[na: 2 * na], work[2 * na: 3 * na]
     a, total = work[3 * na: 3 * na + nx], work[3 * na + nx: 3 * na + 2 * nx]
-    r = _f(table, slot.FORCE)
     kept = dims[ed.A_KEPT]
     warm = kept != KEPT_NONE and warm_start(table, rhs)
     if warm:
@@ -117,11 +116,9 @@ def refined_accelerations(table, moving, rhs):
         if kept == KEPT_NONE:
             return ed.NOT_AVAILABLE
     sparse = kept == KEPT_SPARSE
-    # the scales of the residual's round-off: T^T r on z (into whichever of b and c does
-    # not hold the first residual), h on the rigid rows
-    condensed = b if warm else c
-    run(table, OP_RIGID_CONDENSE, r.ctypes.data, condensed.ctypes.data, 0.0)
-    force_scale, h_scale = largest(condensed, nf), 0.0
+    # the scales of the residual's round-off: T^T r on z (slot dx, from the first
+    # residual's pass over T), h on the rigid rows
+    force_scale, h_scale = largest(_f(table, slot.DX), nf), 0.0
     if moving:
         quad, rigid_h = _f(table, slot.G), _f(table, slot.RIGID_H)
         for o in range(na - nf):
@@ -205,8 +202,8 @@ def residual(table, moving, d, a, total, out, with_forces):
     holding the element masses' gravity and -g_conv (with_forces: not yet; they are added to
     it here, in the same element pass as the product: `inertia_product.forces_and_products`):
     first rows T^T (r - M (T d_f + c)) with the folded clusters' forces, less J_o^T
-    d_lambda; rigid rows -h_o - J_o d_f. a, total (NX,) scratch
-    (`inertia_product.force_minus_mass`'s)."""
+    d_lambda; rigid rows -h_o - J_o d_f; with_forces also T^T r (r completed) into slot dx.
+    a, total (NX,) scratch (`inertia_product.force_minus_mass`'s)."""
     dims = _i(table, slot.DIMS)
     nf, n_rigid = dims[ed.NFREE], dims[ed.NRIGID]
     x, xdot, r = _f(table, slot.X), _f(table, slot.XDOT), _f(table, slot.FORCE)
@@ -219,7 +216,9 @@ def residual(table, moving, d, a, total, out, with_forces):
     if _i(table, slot.RIGID_BODIES).size:  # the folded clusters' gravity, -g_conv, -M a
         call_engine(dims[ed.ENGINE], OP_RIGID_BODIES, table, 0.0, a.ctypes.data,
                     total.ctypes.data, 0, PRODUCT_MOVING if moving else PRODUCT_AT_REST)
-    run(table, OP_RIGID_CONDENSE, total.ctypes.data, out.ctypes.data, 0.0)  # T^T
+    # T^T; with_forces also of the completed r into slot dx (`refined_accelerations`' scale)
+    run(table, OP_RIGID_CONDENSE, total.ctypes.data, out.ctypes.data,
+        WITH_FORCE if with_forces else ALONE)
     quad, rigid_h = _f(table, slot.G), _f(table, slot.RIGID_H)
     for o in range(n_rigid):
         out[nf + o] = -(quad[o] + rigid_h[o]) if moving else 0.0

@@ -46,6 +46,7 @@ from .operations import (
     OP_RIGID_FILL,
     OP_RIGID_GEOMETRIC,
     OP_RIGID_RATES,
+    WITH_FORCE,
 )
 from .point_masses import dense_element_mass, padded_width, sparse_rows_product
 from .slots import float_array as _f
@@ -187,6 +188,30 @@ def condense(table, v, out):
             dep = deps[s * DEPENDENCIES + d]
             if dep >= 0 and col_of_coord[dep] >= 0:
                 out[col_of_coord[dep]] += W[s * DEPENDENCIES + d] * vs
+
+
+@kernel
+def condense_pair(table, v, out, w, out_w):
+    """out = T^T v and out_w = T^T w (n_free,) for v, w (NX,) in one walk of T's terms, each
+    sum in `condense`'s order (the same bits as two calls)."""
+    free, col_of_coord = _i(table, slot.FREE), _i(table, slot.COL_OF_COORD)
+    coords, deps = _i(table, slot.RIGID_COORDS), _i(table, slot.RIGID_DEPS)
+    W = _f(table, slot.RIGID_WEIGHTS)
+    for a in range(free.size):
+        out[a] = v[free[a]]
+        out_w[a] = w[free[a]]
+    for s in range(coords.size):
+        vs, ws = v[coords[s]], w[coords[s]]
+        if vs == 0.0 and ws == 0.0:
+            continue
+        for d in range(DEPENDENCIES):
+            dep = deps[s * DEPENDENCIES + d]
+            if dep >= 0 and col_of_coord[dep] >= 0:
+                weight = W[s * DEPENDENCIES + d]
+                if vs != 0.0:
+                    out[col_of_coord[dep]] += weight * vs
+                if ws != 0.0:
+                    out_w[col_of_coord[dep]] += weight * ws
 
 
 @kernel
@@ -419,6 +444,9 @@ def rigid_entry(op, user_data, t, a, b, c, s):
         convective(table, carray(a, (nx,), _F8), carray(b, (nx,), _F8))
     elif op == OP_RIGID_RATES:
         rigid_rates(table)
+    elif op == OP_RIGID_CONDENSE and s == WITH_FORCE:
+        condense_pair(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8),
+                      _f(table, slot.FORCE), _f(table, slot.DX))
     elif op == OP_RIGID_CONDENSE:
         condense(table, carray(a, (nx,), _F8), carray(b, (nf,), _F8))
     elif op == OP_RIGID_GEOMETRIC:
