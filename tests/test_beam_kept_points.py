@@ -17,6 +17,7 @@ import pytest
 from flexure.core import Mechanics, load_scene
 from flexure.core.elements import beam, beam_directional, beam_kernels, beam_mass
 from flexure.core.elements.beam_directional import ACC_AT, POINTS_WIDTH
+from flexure.core.elements.beam_kernels import VECTORS_AT
 from flexure.core.engine import data as ed
 from flexure.core.engine import engine
 from flexure.core.engine.data import EngineData
@@ -68,9 +69,9 @@ def test_the_fused_kernel_is_the_two_kernels_bitwise(beams):
     x, v, _, packed, _ = beams
     h, points = kept(x, v, packed)
     h_ref, Dp, acc = separate(x, v, packed)
-    assert np.all(np.isfinite(points)) and np.any(points[:, ACC_AT:] != 0.0)
+    assert np.all(np.isfinite(points[:, :VECTORS_AT])) and np.any(points[:, ACC_AT:] != 0.0)
     assert np.array_equal(h, h_ref)
-    assert np.array_equal(points[:, ACC_AT:], acc)
+    assert np.array_equal(points[:, ACC_AT:VECTORS_AT], acc)
     constant = Dp.copy()
     for j, (row, col) in enumerate(zip(ROWS, COLUMNS, strict=True)):
         block = points[:, 12 * j: 12 * (j + 1)].reshape(-1, 4, 3).transpose(0, 2, 1)
@@ -81,6 +82,34 @@ def test_the_fused_kernel_is_the_two_kernels_bitwise(beams):
     assert np.array_equal(constant, np.broadcast_to(unit, constant.shape))
 
 
+def test_the_kept_rotations_are_the_kernels(beams):
+    """`kept_deformations_kernel` gives `deformations_kernel`'s e and De (order 1) bit for
+    bit and keeps Dp's blocks 2 ... 5 as `points_kernel` gives them; `kept_points_kernel`
+    then completes them to `points_kernel`'s h and points, bit for bit; the node vectors
+    it kept are the reference's section axes n_z'^p, n_z'^q, n_y'^p, n_y'^q (`beam.
+    inertia_points`, to 1e-14 of |lambda|^2)."""
+    x, v, ref, packed, _ = beams
+    h, points = kept(x, v, packed)
+    reference_points, _ = beam.inertia_points(x, ref, order=1)
+    for i in range(x.shape[0]):
+        e, De, D2e = np.full(6, np.nan), np.full((6, 14), np.nan), np.zeros((6, 14, 14))
+        plain(beam_kernels.deformations_kernel)(x[i], packed[i], 1, e, De, D2e)
+        e_kept, De_kept = np.full(6, np.nan), np.full((6, 14), np.nan)
+        rotations = np.full(POINTS_WIDTH, np.nan)
+        plain(beam_kernels.kept_deformations_kernel)(x[i], packed[i], e_kept, De_kept,
+                                                      rotations)
+        assert np.array_equal(e_kept, e) and np.array_equal(De_kept, De)
+        assert np.array_equal(rotations[24:72], points[i, 24:72])
+        assert np.all(np.isnan(rotations[:24])) and np.all(np.isnan(rotations[72:96]))
+        h_kept = np.full(6, np.nan)
+        plain(beam_directional.kept_points_kernel)(x[i], v[i], packed[i], h_kept, rotations)
+        assert np.array_equal(h_kept, h[i])
+        assert np.array_equal(rotations[:96], points[i, :96])
+        axes = reference_points[i].reshape(8, 3)[[5, 7, 4, 6]]  # n_z'^p, n_z'^q, ...
+        vectors = rotations[VECTORS_AT:].reshape(4, 3)
+        assert np.max(np.abs(vectors - axes)) <= 1e-14 * np.max(np.abs(x[i]) ** 2)
+
+
 def test_the_fused_kernel_is_the_reference_points(beams):
     """Dp and acc of the kept points against the numpy reference `beam.inertia_points`
     (Dp, and (D2p v) v from its constant D2p), to 1e-13 of their magnitudes."""
@@ -89,7 +118,7 @@ def test_the_fused_kernel_is_the_reference_points(beams):
     _, Dp, D2p = beam.inertia_points(x, ref, order=2)
     acc = np.einsum("npij,ni,nj->np", D2p, v, v)
     magnitude = np.einsum("npij,ni,nj->np", np.abs(D2p), np.abs(v), np.abs(v))
-    assert np.all(np.abs(points[:, ACC_AT:] - acc) <= 1e-13 * magnitude + 1e-300)
+    assert np.all(np.abs(points[:, ACC_AT:VECTORS_AT] - acc) <= 1e-13 * magnitude + 1e-300)
     for j, (row, col) in enumerate(zip(ROWS, COLUMNS, strict=True)):
         block = points[:, 12 * j: 12 * (j + 1)].reshape(-1, 4, 3).transpose(0, 2, 1)
         expected = Dp[:, row: row + 3, col: col + 4]
@@ -133,8 +162,8 @@ def test_the_kept_products_are_the_dense_ones_bitwise(beams):
 
 def test_packing_keeps_the_beams_points():
     """manipulator_control: points_offset on its BEAM group alone, slot beam_points of
-    POINTS_WIDTH per element of it; after a moving OP_RHS dims points_current is 1, after
-    the kinematics alone 0."""
+    POINTS_WIDTH per element of it; after a moving OP_RHS dims points_current and
+    rotations_kept are 1, after the kinematics alone points_current is 0."""
     model = load_scene("manipulator_control")
     data = EngineData(model, augmented=True)
     dims = data.int_array("dims")
@@ -144,7 +173,7 @@ def test_packing_keeps_the_beams_points():
     assert data.float_array("beam_points").size == POINTS_WIDTH * groups[marked[0], ed.G_COUNT]
     y = _state(model, data, np.random.default_rng(3))
     assert engine.call(data, engine.OP_RHS, y, np.zeros_like(y)) == ed.OK
-    assert dims[ed.POINTS_CURRENT] == 1
+    assert dims[ed.POINTS_CURRENT] == 1 and dims[ed.ROTATIONS_KEPT] == 1
     q = y[: y.size // 2] + data.float_array("q_ref")
     assert engine.call(data, engine.OP_CONFIGURATION, q) == ed.OK
     assert dims[ed.POINTS_CURRENT] == 0

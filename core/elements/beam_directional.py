@@ -42,7 +42,9 @@ from .beam_kernels import (
     _XLQ,
     _XP,
     _XQ,
+    VECTORS_AT,
     deformations_kernel,
+    kept_deformations_kernel,
 )
 
 
@@ -62,11 +64,10 @@ def _polar(ref, start, m0, m1, m2, m3, n0, n1, n2, n3):
 
 
 @kernel(inline="always")
-def _jet(ref, start, m0, m1, m2, m3, n0, n1, n2, n3):
-    """The node vector R(lambda) a and its first and second derivatives along mu: nine floats
-    (n, n1 = 2 C lambda mu, n2 = 2 R(mu) a)."""
+def _jet(ref, start, u0, u1, u2, m0, m1, m2, m3, n0, n1, n2, n3):
+    """The node vector u = R(lambda) a (given) and its first and second derivatives along
+    mu: nine floats (n, n1 = 2 C lambda mu, n2 = 2 R(mu) a)."""
     a0, a1, a2 = ref[start], ref[start + 1], ref[start + 2]
-    u0, u1, u2 = rotated_vector(a0, a1, a2, m0, m1, m2, m3)
     p0, p1, p2 = _polar(ref, start, m0, m1, m2, m3, n0, n1, n2, n3)
     q0, q1, q2 = rotated_vector(a0, a1, a2, n0, n1, n2, n3)
     return u0, u1, u2, 2.0 * p0, 2.0 * p1, 2.0 * p2, 2.0 * q0, 2.0 * q1, 2.0 * q2
@@ -85,6 +86,19 @@ def _directional(x, v, ref, h):
     """`directional_kernel`'s h, returning the second derivatives n2 = 2 R(mu) a of the node
     vectors n_z'^p, n_z'^q, n_y'^p, n_y'^q (three floats each, in that order): the section
     axes' (D2p v) v of `beam_kernels.inertia_kernel`."""
+    m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]  # lambda^p
+    k0, k1, k2, k3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]  # lambda^q
+    a0, a1, a2 = rotated_vector(ref[_AZ_P], ref[_AZ_P + 1], ref[_AZ_P + 2], m0, m1, m2, m3)
+    b0, b1, b2 = rotated_vector(ref[_AZ_Q], ref[_AZ_Q + 1], ref[_AZ_Q + 2], k0, k1, k2, k3)
+    c0, c1, c2 = rotated_vector(ref[_AY_P], ref[_AY_P + 1], ref[_AY_P + 2], m0, m1, m2, m3)
+    d0, d1, d2 = rotated_vector(ref[_AY_Q], ref[_AY_Q + 1], ref[_AY_Q + 2], k0, k1, k2, k3)
+    return _directional_from(x, v, ref, h, a0, a1, a2, b0, b1, b2, c0, c1, c2, d0, d1, d2)
+
+
+@kernel(inline="always")
+def _directional_from(x, v, ref, h, a0, a1, a2, b0, b1, b2, c0, c1, c2, d0, d1, d2):
+    """`_directional` from the node vectors n_z'^p (a), n_z'^q (b), n_y'^p (c), n_y'^q (d)
+    (`beam_kernels.deformations_kernel`'s, as it rotates them)."""
     l0, c, c_t = ref[0], ref[1], ref[2]
     half = 0.5 * l0
     lx, ly, lz = x[_XQ] - x[_XP], x[_XQ + 1] - x[_XP + 1], x[_XQ + 2] - x[_XP + 2]
@@ -94,10 +108,14 @@ def _directional(x, v, ref, h):
     n0, n1, n2, n3 = v[_XLP], v[_XLP + 1], v[_XLP + 2], v[_XLP + 3]  # mu^p
     j0, j1, j2, j3 = v[_XLQ], v[_XLQ + 1], v[_XLQ + 2], v[_XLQ + 3]  # mu^q
     # the node vectors n_z'^p (a), n_z'^q (b), n_y'^p (c), n_y'^q (d) with their jets
-    a0, a1, a2, ap0, ap1, ap2, aq0, aq1, aq2 = _jet(ref, _AZ_P, m0, m1, m2, m3, n0, n1, n2, n3)
-    b0, b1, b2, bp0, bp1, bp2, bq0, bq1, bq2 = _jet(ref, _AZ_Q, k0, k1, k2, k3, j0, j1, j2, j3)
-    c0, c1, c2, cp0, cp1, cp2, cq0, cq1, cq2 = _jet(ref, _AY_P, m0, m1, m2, m3, n0, n1, n2, n3)
-    d0, d1, d2, dp0, dp1, dp2, dq0, dq1, dq2 = _jet(ref, _AY_Q, k0, k1, k2, k3, j0, j1, j2, j3)
+    a0, a1, a2, ap0, ap1, ap2, aq0, aq1, aq2 = _jet(ref, _AZ_P, a0, a1, a2, m0, m1, m2, m3,
+                                                    n0, n1, n2, n3)
+    b0, b1, b2, bp0, bp1, bp2, bq0, bq1, bq2 = _jet(ref, _AZ_Q, b0, b1, b2, k0, k1, k2, k3,
+                                                    j0, j1, j2, j3)
+    c0, c1, c2, cp0, cp1, cp2, cq0, cq1, cq2 = _jet(ref, _AY_P, c0, c1, c2, m0, m1, m2, m3,
+                                                    n0, n1, n2, n3)
+    d0, d1, d2, dp0, dp1, dp2, dq0, dq1, dq2 = _jet(ref, _AY_Q, d0, d1, d2, k0, k1, k2, k3,
+                                                    j0, j1, j2, j3)
     # bending: e = sign n . l, e' = sign (n1 . l + n . l1), e'' = sign (n2 . l + 2 n1 . l1)
     e3 = -(a0 * lx + a1 * ly + a2 * lz)
     e4 = b0 * lx + b1 * ly + b2 * lz
@@ -139,12 +157,13 @@ def _directional(x, v, ref, h):
 # The inertia points that `points_kernel` keeps of one element, POINTS_WIDTH floats: Dp's
 # blocks of the six rotated vectors (rows 3 l0 n_x'^p, 9 l0 n_x'^q, 12 n_y'^p, 15 n_z'^p,
 # 18 n_y'^q, 21 n_z'^q of Dp, each three rows over its node's four Euler parameters, four
-# columns of three components), then acc = (D2p v) v (24,); Dp's other entries are
-# constants: 1 on the translations' rows 0 ... 2 and 6 ... 8 at their coordinates, else 0.
-_POINT_ROWS = (3, 9, 12, 15, 18, 21)
-_POINT_COLUMNS = (_XLP, _XLQ, _XLP, _XLP, _XLQ, _XLQ)
+# columns of three components), then acc = (D2p v) v (24,), then the node vectors n_z'^p,
+# n_z'^q, n_y'^p, n_y'^q (`beam_kernels.VECTORS_AT`); Dp's other entries are constants: 1 on
+# the translations' rows 0 ... 2 and 6 ... 8 at their coordinates, else 0. Blocks 2 ... 5
+# and the node vectors are the deformations' rotations: `beam_kernels.
+# kept_deformations_kernel` keeps them with e and De, and `kept_points_kernel` adds the rest.
 ACC_AT = 72
-POINTS_WIDTH = 96
+POINTS_WIDTH = VECTORS_AT + 12
 
 
 @kernel
@@ -152,10 +171,37 @@ def points_kernel(x, v, ref, h, points):
     """`directional_kernel`'s h (6,) and `beam_kernels.inertia_kernel`'s Dp and acc at
     order 2 in one call, sharing the section axes' rotations (n and R(mu) a of n_y', n_z'
     at both nodes): points (POINTS_WIDTH,) the non-constant blocks of Dp and acc in the
-    layout above (`beam_mass.kept_point_products` reads them). Each float is computed as those two
-    kernels compute it, so the same bits. x, v (14,), ref the packed reference row; no
-    allocation."""
-    aq0, aq1, aq2, bq0, bq1, bq2, cq0, cq1, cq2, dq0, dq1, dq2 = _directional(x, v, ref, h)
+    layout above (`beam_mass.kept_point_products` reads them; the node vectors are left
+    as they were). Each float is computed as those two kernels compute it, so the same
+    bits. x, v (14,), ref the packed reference row; no allocation."""
+    _points_acc(points, ref, v, _directional(x, v, ref, h))
+    _block(x, ref, points, 0, _XLP, ref[0], _AX_P)
+    _block(x, ref, points, 1, _XLQ, ref[0], _AX_Q)
+    _block(x, ref, points, 2, _XLP, 1.0, _AY_P)
+    _block(x, ref, points, 3, _XLP, 1.0, _AZ_P)
+    _block(x, ref, points, 4, _XLQ, 1.0, _AY_Q)
+    _block(x, ref, points, 5, _XLQ, 1.0, _AZ_Q)
+
+
+@kernel
+def kept_points_kernel(x, v, ref, h, points):
+    """`points_kernel` for points that `beam_kernels.kept_deformations_kernel` filled at x
+    (the node vectors, Dp's blocks 2 ... 5): h from those vectors, acc and the tangents'
+    blocks 0 and 1 into points. The same bits as `points_kernel`."""
+    o = VECTORS_AT
+    _points_acc(points, ref, v, _directional_from(
+        x, v, ref, h, points[o], points[o + 1], points[o + 2], points[o + 3], points[o + 4],
+        points[o + 5], points[o + 6], points[o + 7], points[o + 8], points[o + 9],
+        points[o + 10], points[o + 11]))
+    _block(x, ref, points, 0, _XLP, ref[0], _AX_P)
+    _block(x, ref, points, 1, _XLQ, ref[0], _AX_Q)
+
+
+@kernel(inline="always")
+def _points_acc(points, ref, v, n2):
+    """acc (24,) into points: zero on the translations, the section axes' 2 R(mu) a from the
+    jets' n2 (n2: `_directional`'s return), the tangents' l0 (2 R(mu) a)."""
+    aq0, aq1, aq2, bq0, bq1, bq2, cq0, cq1, cq2, dq0, dq1, dq2 = n2
     l0 = ref[0]
     for k in range(3):
         points[ACC_AT + k] = 0.0
@@ -168,13 +214,6 @@ def points_kernel(x, v, ref, h, points):
     # the tangents l0 n_x' at both nodes: acc l0 (2 R(mu) a), as inertia_kernel's
     _tangent_acc(v, ref, points, 3, _XLP, l0, _AX_P)
     _tangent_acc(v, ref, points, 9, _XLQ, l0, _AX_Q)
-    # Dp's blocks: scale 2 h with h = C lambda, as inertia_kernel's
-    _block(x, ref, points, 0, _XLP, l0, _AX_P)
-    _block(x, ref, points, 1, _XLQ, l0, _AX_Q)
-    _block(x, ref, points, 2, _XLP, 1.0, _AY_P)
-    _block(x, ref, points, 3, _XLP, 1.0, _AZ_P)
-    _block(x, ref, points, 4, _XLQ, 1.0, _AY_Q)
-    _block(x, ref, points, 5, _XLQ, 1.0, _AZ_Q)
 
 
 @kernel(inline="always")
@@ -189,7 +228,7 @@ def _tangent_acc(v, ref, points, row, col, scale, start):
 
 @kernel(inline="always")
 def _block(x, ref, points, j, col, scale, start):
-    """Dp's block j (`_POINT_ROWS`) of the inertia point scale R(lambda) a: scale 2 h, h = C
+    """Dp's block j (the layout above) of the inertia point scale R(lambda) a: scale 2 h, h = C
     lambda (lambda = x[col:col + 4], a = ref[start:start + 3]), its four columns."""
     half = rotated_half_jacobian(ref[start], ref[start + 1], ref[start + 2], x[col],
                                  x[col + 1], x[col + 2], x[col + 3])
@@ -198,4 +237,5 @@ def _block(x, ref, points, j, col, scale, start):
             points[12 * j + 3 * i + k] = scale * (2.0 * half[i][k])
 
 
-deformations_entry = entries.deformations_entry(deformations_kernel, directional_kernel)
+deformations_entry = entries.deformations_entry(deformations_kernel, directional_kernel,
+                                                kept_deformations_kernel, POINTS_WIDTH)

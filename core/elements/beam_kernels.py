@@ -129,6 +129,27 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     """e (6,), De (6, 14) if order >= 1, D2e (6, 14, 14) if order >= 2 of one element: x (14,),
     ref its packed reference row. Overwrites every entry of the arrays it fills; no allocation.
     """
+    _deformations(x, ref, order, e, De, D2e, e, False)
+
+
+@kernel
+def kept_deformations_kernel(x, ref, e, De, points):
+    """`deformations_kernel` at order 1, and the rotations its rates share
+    (`beam_directional.points_kernel` and `kept_points_kernel`) into one element's kept
+    points (`beam_directional.POINTS_WIDTH`,): the section axes' Dp blocks (2 h of
+    n_y'^p, n_z'^p, n_y'^q, n_z'^q: blocks 2 ... 5 of that layout) and the node vectors
+    n_z'^p, n_z'^q, n_y'^p, n_y'^q (at VECTORS_AT), each as the two kernels compute it.
+    e, De as `deformations_kernel`'s; no allocation."""
+    _deformations(x, ref, 1, e, De, points[:1].reshape((1, 1, 1)), points, True)
+
+
+VECTORS_AT = 96  # the node vectors' place in the kept points (after Dp's blocks and acc)
+
+
+@kernel(inline="always")
+def _deformations(x, ref, order, e, De, D2e, kept, keeping):
+    """`deformations_kernel`, with keeping also `kept_deformations_kernel`'s rotations into
+    kept (read only then)."""
     l0 = ref[0]
     c = ref[1]
     c_t = ref[2]
@@ -143,6 +164,11 @@ def deformations_kernel(x, ref, order, e, De, D2e):
     b0, b1, b2 = _rotated(ref, _AZ_Q, k0, k1, k2, k3)
     c0, c1, c2 = _rotated(ref, _AY_P, m0, m1, m2, m3)
     d0, d1, d2 = _rotated(ref, _AY_Q, k0, k1, k2, k3)
+    if keeping:
+        kept[VECTORS_AT], kept[VECTORS_AT + 1], kept[VECTORS_AT + 2] = a0, a1, a2
+        kept[VECTORS_AT + 3], kept[VECTORS_AT + 4], kept[VECTORS_AT + 5] = b0, b1, b2
+        kept[VECTORS_AT + 6], kept[VECTORS_AT + 7], kept[VECTORS_AT + 8] = c0, c1, c2
+        kept[VECTORS_AT + 9], kept[VECTORS_AT + 10], kept[VECTORS_AT + 11] = d0, d1, d2
     e3 = -(a0 * lx + a1 * ly + a2 * lz)
     e4 = b0 * lx + b1 * ly + b2 * lz
     e5 = c0 * lx + c1 * ly + c2 * lz
@@ -203,6 +229,11 @@ def deformations_kernel(x, ref, order, e, De, D2e):
         q0, q1, q2 = 2.0 * hb[i][0], 2.0 * hb[i][1], 2.0 * hb[i][2]  # D n_z'^q
         r0, r1, r2 = 2.0 * hc[i][0], 2.0 * hc[i][1], 2.0 * hc[i][2]  # D n_y'^p
         w0, w1, w2 = 2.0 * hd[i][0], 2.0 * hd[i][1], 2.0 * hd[i][2]  # D n_y'^q
+        if keeping:  # Dp's blocks 2 ... 5: rows 12 n_y'^p, 15 n_z'^p, 18 n_y'^q, 21 n_z'^q
+            kept[24 + 3 * i], kept[24 + 3 * i + 1], kept[24 + 3 * i + 2] = r0, r1, r2
+            kept[36 + 3 * i], kept[36 + 3 * i + 1], kept[36 + 3 * i + 2] = p0, p1, p2
+            kept[48 + 3 * i], kept[48 + 3 * i + 1], kept[48 + 3 * i + 2] = w0, w1, w2
+            kept[60 + 3 * i], kept[60 + 3 * i + 1], kept[60 + 3 * i + 2] = q0, q1, q2
         g3 = -(lx * p0 + ly * p1 + lz * p2)
         g5 = lx * r0 + ly * r1 + lz * r2
         g4 = lx * q0 + ly * q1 + lz * q2

@@ -19,6 +19,10 @@ directional_kernel)`, and the engine evaluates its D2e only where a tangent read
 
     ORDER_DIRECTIONAL   h into e (k,), v (m,) read at De's address; De and D2e untouched
     ORDER_ASK           e[0] = 1.0 if the element has a directional kernel, else 0.0
+    ORDER_KEPT          e and De, and at D2e's address the rotations that the element's
+                        rates share, where it has a `kept_kernel(x, ref, e, De, kept)`
+                        (the BEAM: `beam_kernels.kept_deformations_kernel`; the engine
+                        points D2e at the element's row of slot beam_points)
 
 and gets the engine's entry points from them here:
 
@@ -44,11 +48,14 @@ from ..numerics.native import carray as _carray
 
 ORDER_DIRECTIONAL = -1  # h = v^T D2e v into e, v at De (elements with a directional kernel)
 ORDER_ASK = -2  # e[0] = 1.0 if the element has a directional kernel, else 0.0
+ORDER_KEPT = -3  # e, De and the kept rotations at D2e (elements with a kept kernel)
 _NAN = float("nan")
 
 # the templates' globals, bound in each entry's copy: the element's kernels and numba.carray
 kernel = None
 directional = None
+kept = None
+kept_width = 0
 carray = None
 
 
@@ -67,6 +74,10 @@ def _directional_template(x, ref, order, e, De, D2e, m, k, width):
     if order == ORDER_DIRECTIONAL:
         directional(carray(x, (m,)), carray(De, (m,)), carray(ref, (width,)), carray(e, (k,)))
         return
+    if order == ORDER_KEPT:
+        kept(carray(x, (m,)), carray(ref, (width,)), carray(e, (k,)), carray(De, (k, m)),
+             carray(D2e, (kept_width,)))
+        return
     kernel(carray(x, (m,)), carray(ref, (width,)), order, carray(e, (k,)),
            carray(De, (k, m)), carray(D2e, (k, m, m)))
 
@@ -76,7 +87,8 @@ def _inertia_template(x, v, ref, order, p, Dp, acc, m, P, width):
            carray(p, (P,)), carray(Dp, (P, m)), carray(acc, (P,)))
 
 
-def _bound(template, element_kernel, signature, directional_kernel=None):
+def _bound(template, element_kernel, signature, directional_kernel=None, kept_kernel=None,
+           kept_width=0):
     """The template as a function of its own whose global `kernel` is `element_kernel` (and
     `directional` the element's directional kernel, if given), named after it, as a lazily
     compiled C entry."""
@@ -84,12 +96,14 @@ def _bound(template, element_kernel, signature, directional_kernel=None):
     name = f"{module}_{element_kernel.__name__}_entry"
     if directional_kernel is not None:  # another template: an entry of its own in the cache
         name = f"{module}_{element_kernel.__name__}_and_{directional_kernel.__name__}_entry"
+    if kept_kernel is not None:
+        name = f"{name[:-len('_entry')]}_and_{kept_kernel.__name__}_entry"
     doc = (f"C entry of {element_kernel.__module__}.{element_kernel.__name__} for the engine "
            "(pointers to one element's arrays).")
 
     def make():
         bound = {"kernel": element_kernel, "directional": directional_kernel,
-                 "carray": _carray}
+                 "kept": kept_kernel, "kept_width": kept_width, "carray": _carray}
         function = types.FunctionType(template.__code__, {**template.__globals__, **bound},
                                       name)
         function.__qualname__, function.__doc__ = name, doc
@@ -100,14 +114,17 @@ def _bound(template, element_kernel, signature, directional_kernel=None):
     return made
 
 
-def deformations_entry(deformations_kernel, directional_kernel=None):
+def deformations_entry(deformations_kernel, directional_kernel=None, kept_kernel=None,
+                       kept_width=0):
     """The engine's C entry of an element's `deformations_kernel(x, ref, order, e, De, D2e)`
-    and, if given, of its `directional_kernel(x, v, ref, h)` (ORDER_DIRECTIONAL): (x, ref,
-    order, e, De, D2e, m, k, width) with pointers to one element's arrays."""
+    and, if given, of its `directional_kernel(x, v, ref, h)` (ORDER_DIRECTIONAL) and of its
+    `kept_kernel(x, ref, e, De, kept)` with kept (kept_width,) (ORDER_KEPT; a directional
+    kernel comes with one): (x, ref, order, e, De, D2e, m, k, width) with pointers to one
+    element's arrays."""
     if directional_kernel is None:
         return _bound(_deformations_template, deformations_kernel, DEFORMATIONS_ENTRY)
     return _bound(_directional_template, deformations_kernel, DEFORMATIONS_ENTRY,
-                  directional_kernel)
+                  directional_kernel, kept_kernel, kept_width)
 
 
 def inertia_entry(inertia_kernel):

@@ -16,7 +16,7 @@ the planar demo's first loop on an empty cache (docs/benchmarks.md, session 32).
 1/s or m/s by the deformation, h 1/s^2 or m/s^2.
 """
 
-from ..elements.beam_directional import POINTS_WIDTH, points_kernel
+from ..elements.beam_directional import POINTS_WIDTH, kept_points_kernel, points_kernel
 from ..elements.entries import ORDER_DIRECTIONAL
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, as_float_pointer, call_deformations, carray
@@ -44,7 +44,9 @@ def formed_rates(table, g, xdot):
     and its directional kernel's h at the solution (slot x) on the constraint rows, for the
     elements with any (slot g). A BEAM group with kept points (group field points_offset)
     gives each element that the element passes visit (`kept_points`) its inertia points in
-    the same call, into slot beam_points (`beam_directional.points_kernel`)."""
+    the same call, into slot beam_points (`beam_directional.points_kernel`), from the
+    rotations that the kinematics kept there where it did (dims rotations_kept: the
+    elements a cluster does not make internal, `beam_directional.kept_points_kernel`)."""
     dims = _i(table, slot.DIMS)
     edot, quad = _f(table, slot.EDOT), _f(table, slot.G)
     row_of_def = _i(table, slot.ROW_OF_DEF)
@@ -60,6 +62,7 @@ def formed_rates(table, g, xdot):
     function, width = row[ed.G_DEFORMATIONS_ENTRY], row[ed.G_REF_WIDTH]
     refs = _f(table, slot.GROUP_DATA).ctypes.data + 8 * row[ed.G_DATA_OFFSET]
     keeping = row[ed.G_POINTS_OFFSET] >= 0
+    rotations = dims[ed.ROTATIONS_KEPT] == 1  # the kinematics' (`kinematics.deformations`)
     beam_refs = _f(table, slot.GROUP_DATA)[row[ed.G_DATA_OFFSET]:]
     points = _f(table, slot.BEAM_POINTS)[max(row[ed.G_POINTS_OFFSET], 0):]
     for i in range(n):
@@ -74,8 +77,11 @@ def formed_rates(table, g, xdot):
         if keep:  # h and the points in one call; m = 14, k = 6 (the BEAM's)
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
-            points_kernel(xl, v, beam_refs[i * width: (i + 1) * width], formed,
-                          points[i * POINTS_WIDTH: (i + 1) * POINTS_WIDTH])
+            ref, kept = beam_refs[i * width: (i + 1) * width], points[i * POINTS_WIDTH:]
+            if rotations and not inner:  # from the rotations the kinematics kept there
+                kept_points_kernel(xl, v, ref, formed, kept[:POINTS_WIDTH])
+            else:
+                points_kernel(xl, v, ref, formed, kept[:POINTS_WIDTH])
         elif has_rows(row_of_def, defs, i, k):
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]

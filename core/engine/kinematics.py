@@ -44,7 +44,8 @@ deformations e, De = de/dx and D2e come from each element module's compiled entr
 
 import numpy as np
 
-from ..elements.entries import ORDER_ASK
+from ..elements.beam_directional import POINTS_WIDTH
+from ..elements.entries import ORDER_ASK, ORDER_KEPT
 from ..mechanics.scales import ROUND_OFF
 from ..numerics.dense import all_finite, copy
 from ..numerics.jit import kernel
@@ -86,6 +87,9 @@ def deformations(table, x, order, skip_internal):
     e = _f(table, slot.E)
     local = _f(table, slot.LOCAL)
     max_m = dims[ed.MAX_M]
+    # the BEAMs' kept rotations (slot beam_points) are of this evaluation's x only where
+    # it evaluates them (ORDER_KEPT, at the solution's order)
+    kept = order == AT_SOLUTION
     for g in range(dims[ed.NGROUPS]):
         row = group(table, g)
         n, m, k = row[ed.G_COUNT], row[ed.G_M], row[ed.G_K]
@@ -105,6 +109,15 @@ def deformations(table, x, order, skip_internal):
             if order == HESSIANS and not forms_h:
                 continue
             group_order = 1 if order == AT_SOLUTION and forms_h else 2
+        keeping = row[ed.G_POINTS_OFFSET] >= 0 and group_order == 1 and order == AT_SOLUTION
+        stride = k * m * m  # D2e's per element, or the kept points'
+        if keeping:  # e, De and the rotations the rates share, into its kept points (the
+            # rates' points there, which this overwrites, are no longer of x and xdot)
+            group_order, stride = ORDER_KEPT, POINTS_WIDTH
+            D2e = _f(table, slot.BEAM_POINTS).ctypes.data + 8 * row[ed.G_POINTS_OFFSET]
+            dims[ed.POINTS_CURRENT] = 0
+        elif row[ed.G_POINTS_OFFSET] >= 0:
+            kept = False
         for i in range(n):
             if skipping:
                 t = rigid_element(table, row, i)
@@ -113,12 +126,13 @@ def deformations(table, x, order, skip_internal):
             for a in range(m):
                 xl[a] = x[coords[i * m + a]]
             call_deformations(function, xl.ctypes.data, refs + 8 * i * width, group_order,
-                              el.ctypes.data, De + 8 * i * k * m, D2e + 8 * i * k * m * m,
+                              el.ctypes.data, De + 8 * i * k * m, D2e + 8 * i * stride,
                               m, k, width)
             if order == HESSIANS:  # e is the solution's already
                 continue
             for b in range(k):
                 e[defs[i * k + b]] = el[b]
+    dims[ed.ROTATIONS_KEPT] = 1 if kept else 0
 
 
 @kernel

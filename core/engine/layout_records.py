@@ -77,6 +77,9 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
     ("points_current", "POINTS_CURRENT", STATE, "1: slot beam_points holds the BEAMs' "
      "inertia points at slots x and xdot (set by the element rates when moving, cleared by "
      "the kinematics)"),
+    ("rotations_kept", "ROTATIONS_KEPT", STATE, "1: slot beam_points holds the BEAMs' "
+     "rotations that the last deformations evaluation kept (`entries.ORDER_KEPT`), the "
+     "node vectors and the section axes' Dp blocks, for their rates"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
