@@ -24,6 +24,13 @@ with Q = 2 e3^2 + e3 e4 + 2 e4^2 + 2 e5^2 + e5 e6 + 2 e6^2. Exact in exact arith
 truncation: every intermediate is a polynomial in s but |l|); tests/test_beam_directional.py
 holds it against v^T D2e v of the kernel's and of `beam.deformations` at 1e-12 of the
 products' magnitude.
+
+The same jets give the section axes' (D2p v) v of `beam_kernels.inertia_kernel` (n2 of n_y'
+and n_z' at both nodes), so `points_kernel` forms h and the inertia points' Dp and (D2p v) v
+in one call, for the engine to keep through an evaluation's element passes (slot
+beam_points); `kept_points_kernel` does the same from the node vectors and the section axes'
+Dp blocks that `beam_kernels.kept_deformations_kernel` kept with e and De at the solution.
+Each float as the separate kernels compute it: the same bits (tests/test_beam_kept_points.py).
 """
 
 import numpy as np
