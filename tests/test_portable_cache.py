@@ -17,9 +17,11 @@ import children
 import pytest
 from numba.core.serialize import dumps
 
+from flexure.core.numerics import jit, portable_cache
 from flexure.core.numerics.jit import package_name, sources_hash
 from flexure.core.numerics.portable_cache import (
     MANIFEST,
+    export_compiled,
     install_compiled,
     mismatch,
     target_description,
@@ -159,6 +161,50 @@ def test_an_index_that_cannot_be_read_is_named_and_the_rest_installed(export, tm
     assert ok and f"of {functions - 1} functions" in message
     assert message.endswith(f"1 could not be read and will compile: "
                             f"{index.relative_to(broken)} (UnpicklingError)")
+
+
+def write_index(path, overloads):
+    """A numba cache index naming `overloads` ({key: data file name})."""
+    with open(path, "wb") as handle:
+        pickle.dump("0.0", handle, protocol=-1)
+        handle.write(dumps(((0.0, 0), overloads)))
+
+
+def test_an_index_rewritten_during_the_export_is_carried_as_it_was_read(tmp_path, monkeypatch):
+    """Another process compiling into the cache while an export copies it (as a test
+    worker or a second command may) adds an overload: numba writes its data file, then the
+    index. The export carries each index as it read it with the data files that one names,
+    so that every index it carries installs."""
+    cache, export = tmp_path / "cache", tmp_path / "export"
+    cache.mkdir()
+    index = cache / "module.function-1.py311.nbi"
+    first = {("(float64,)", ("triple", "cpu", ""), "hash"): "module.function-1.py311.1.nbc"}
+    write_index(index, first)
+    (cache / "module.function-1.py311.1.nbc").write_bytes(b"code")
+    monkeypatch.setattr(jit, "package_cache_folder", lambda: str(cache))
+    monkeypatch.setattr(jit, "cache_index_path", lambda function: str(index))
+    monkeypatch.setattr(portable_cache, "compiled_functions", lambda: [write_index])
+    copy, compiled_meanwhile = shutil.copyfile, []
+
+    def copy_while_another_process_compiles(source, target, **options):
+        if not compiled_meanwhile:
+            (cache / "module.function-1.py311.2.nbc").write_bytes(b"other code")
+            write_index(index, {**first, ("(int64,)", ("triple", "cpu", ""), "hash"):
+                                "module.function-1.py311.2.nbc"})
+            compiled_meanwhile.append(source)
+        return copy(source, target, **options)
+
+    monkeypatch.setattr(shutil, "copyfile", copy_while_another_process_compiles)
+    manifest = export_compiled(export)
+    assert compiled_meanwhile and manifest["functions"] == 1 and manifest["files"] == 2
+    with open(export / index.name, "rb") as handle:
+        pickle.load(handle)
+        _, overloads = pickle.loads(handle.read())
+    assert overloads == first
+    monkeypatch.setattr(shutil, "copyfile", copy)
+    ok, message = install_compiled(export, tmp_path / "installed")
+    assert ok and message.startswith("installed the compiled code of 1 functions"), message
+    assert "could not be read" not in message
 
 
 @pytest.mark.parametrize("change, says", [

@@ -23,6 +23,7 @@ installed and the reason is returned: the code then compiles as it would without
 """
 
 import glob
+import io
 import json
 import os
 import pickle
@@ -114,25 +115,38 @@ def export_compiled(dest) -> dict:
     folder = jit.package_cache_folder()
     if folder is None:
         raise RuntimeError("no writable cache folder: nothing compiled was kept to export")
-    files, functions, not_cached = [], 0, []
+    # Each index is read once and written as read, with the data files that reading names:
+    # another process compiling into the cache meanwhile rewrites an index (numba writes the
+    # new overload's data file, then the index), and a second read of it could name a data
+    # file this export did not copy. (numba replaces a named data file only with the code
+    # of the same overload.)
+    indexes, data_files, not_cached = {}, [], []
     for function in compiled_functions():
         index = jit.cache_index_path(function)
         if not os.path.isfile(index):
             not_cached.append(f"{function.__module__}.{function.__qualname__}")
             continue
-        functions += 1
-        _, _, overloads = _read_index(index)  # its data files (not stale ones beside them)
-        files += [index, *(os.path.join(os.path.dirname(index), name)
-                           for name in sorted(set(overloads.values())))]
+        with open(index, "rb") as handle:
+            indexes[index] = handle.read()
+        _, _, overloads = _parse_index(indexes[index])  # its data files, not stale ones
+        data_files += [os.path.join(os.path.dirname(index), name)
+                       for name in sorted(set(overloads.values()))]
     os.makedirs(dest, exist_ok=True)
     size = 0
-    for path in files:
+    for path in data_files:
         target = os.path.join(dest, os.path.relpath(path, folder))
         os.makedirs(os.path.dirname(target), exist_ok=True)
         shutil.copyfile(path, target)
         size += os.path.getsize(path)
+    for path, raw in indexes.items():  # after their data files, as numba writes them
+        target = os.path.join(dest, os.path.relpath(path, folder))
+        os.makedirs(os.path.dirname(target), exist_ok=True)
+        with open(target, "wb") as handle:
+            handle.write(raw)
+        size += len(raw)
+    functions, files = len(indexes), len(indexes) + len(data_files)
     manifest = {"format": FORMAT, **target_description(), "package": jit.package_name(),
-                "sources": jit.sources_hash(), "functions": functions, "files": len(files),
+                "sources": jit.sources_hash(), "functions": functions, "files": files,
                 "bytes": size, "not_cached": not_cached}
     with open(os.path.join(dest, MANIFEST), "w") as handle:
         json.dump(manifest, handle, indent=1)
@@ -243,8 +257,15 @@ def _read_index(path):
     """(numba version, source stamp, {(signature, target, hashes): data file name}) of a
     numba cache index; ValueError if it is not one."""
     with open(path, "rb") as handle:
-        version = pickle.load(handle)
-        stamp, overloads = pickle.loads(handle.read())
+        return _parse_index(handle.read())
+
+
+def _parse_index(raw):
+    """`_read_index` of an index's bytes: numba pickles its version, then the pickled
+    (stamp, overloads)."""
+    stream = io.BytesIO(raw)
+    version = pickle.load(stream)
+    stamp, overloads = pickle.loads(stream.read())
     if not isinstance(overloads, dict):
         raise ValueError("not a numba cache index")
     return version, stamp, overloads
