@@ -117,8 +117,11 @@ def w_step(tableau, y, h, f, solve):
 
 
 class WMethod:
-    """A Rosenbrock-W method on the engine's packed model `data` (a Simulator's), y = [q -
-    q_ref, qdot] in `y`; counts in `counts`."""
+    """A Rosenbrock-W method ("ros2", "ros34pw2") on the engine's packed model `data` (a
+    Simulator's, its inputs held there), from y = [q - q_ref, qdot] (m, rad, m/s, rad/s),
+    kept in `y`; atol (2 NDOF,) in those units; rtol, or None for `substeps` equal steps a
+    sample with no error test; jacobian the J policy ("sample", "step", "stale": the module's
+    docstring). Counts in `counts`, each operation's CPU (s) in `cpu`."""
 
     def __init__(self, data, y, atol, method, rtol, jacobian="stale", substeps=1):
         from flexure.core.engine import engine
