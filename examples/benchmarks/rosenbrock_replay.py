@@ -317,6 +317,32 @@ def operation_costs(model, reps=200):
     return costs
 
 
+def rhs_costs_along(model, force, reference, samples=range(100, 200)):
+    """{where: median CPU s} of one rhs from Python along the reference's states: at the next
+    sample's state and halfway to it after one at the last sample's (the state moved), and
+    at or 1e-9 from the last call's state."""
+    from flexure.core import Simulator
+    from flexure.core.engine import engine as e
+
+    sim = Simulator(model, method="esdirk", rtol=1e-4)
+    inputs = sim.data.float_array("inputs")
+    out = np.zeros(sim.nstate)
+
+    def cost(y):
+        start = time.process_time()
+        _ok(e.call(sim.data, e.OP_RHS, y, out), "the rhs")
+        return time.process_time() - start
+    found = {"same state": [], "1e-9 from it": [], "halfway to the next": [],
+             "the next sample's": []}
+    for k in samples:
+        inputs[:] = force[k]
+        found["same state"].append(cost(reference[k]))  # the last call's (from k - 1)
+        found["1e-9 from it"].append(cost(reference[k] + 1e-9))
+        found["halfway to the next"].append(cost(0.5 * (reference[k] + reference[k + 1])))
+        found["the next sample's"].append(cost(reference[k + 1]))
+    return {where: statistics.median(v) for where, v in found.items()}
+
+
 def main(argv=None):
     """Replay the loop's forces with each choice and print the tables; with --loops the
     closed loops instead."""
@@ -337,6 +363,9 @@ def main(argv=None):
     costs = operation_costs(model)
     print("operations at a state about the start:",
           {k: f"{1e6 * v:.0f} us" for k, v in costs.items()}, flush=True)
+    print("one rhs along the reference:",
+          {k: f"{1e6 * v:.0f} us" for k, v in rhs_costs_along(model, force, reference).items()},
+          flush=True)
     for method, rtol in ESDIRK_CHOICES:
         states, c, cpu = replay(model, t, force, method, rtol)
         print(f"{method} {rtol:g}: {c}, errors {errors(states, reference, n)}, {cpu:.2f} s")
