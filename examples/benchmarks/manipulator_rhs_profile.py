@@ -32,7 +32,7 @@ with kept factors (`refined_accelerations`), its steps replicated with two produ
 (the operation itself starts from the last solution when it still holds it, skipping b and
 d_1). The OP_RHS row is the operation as it is.
 
-python -m examples.benchmarks.manipulator_rhs_profile [COUNT]
+python -m examples.benchmarks.manipulator_rhs_profile [COUNT [SCENE]]
 """
 
 import statistics
@@ -41,7 +41,7 @@ import time
 
 import numpy as np
 
-from .manipulator_stage_profile import CORRECTION, states
+from .manipulator_stage_profile import CORRECTION, REPLAYS, states
 
 STEPS = ("front half", "conv", "inertia", "rigid rows", "factor", "solve", "qddot")
 REFINED_STEPS = ("front half", "conv", "forces and b", "d_1", "product 1", "product 2", "qddot")
@@ -181,9 +181,10 @@ def _replica():
     return replica, refined
 
 
-def profile(count=300, batches=5):
+def profile(count=300, batches=5, **replay):
     """{(pair, step): CPU s per call of that step} and the whole OP_RHS's CPU s per call by
-    pair (the module's docstring)."""
+    pair (the module's docstring); `replay`: `manipulator_stage_profile.states`' arguments
+    (the scene, the replay's method)."""
     from flexure.core.engine import access
     from flexure.core.engine import data as ed
     from flexure.core.engine.operations import OP_RHS
@@ -199,7 +200,7 @@ def profile(count=300, batches=5):
                                  y.ctypes.data, out.ctypes.data, 0, 0.0)
         return status
 
-    _, sim, first, second, _ = states()
+    _, sim, first, second, _ = states(**replay)
     table = sim.data.address
     pairs = {"the same state": np.stack([first, first]),
              "a step apart": np.stack([first, second]),
@@ -233,9 +234,10 @@ def profile(count=300, batches=5):
 
 def main(argv):
     count = int(argv[0]) if argv else 300
-    parts, whole = profile(count)
+    name = argv[1] if len(argv) > 1 else "manipulator_control"
+    parts, whole = profile(count, name=name, **REPLAYS.get(name, {}))
     pairs = list(whole)
-    print(f"manipulator_control, one rhs (us a call; medians of 5 batches of {count})")
+    print(f"{name}, one rhs (us a call; medians of 5 batches of {count})")
     print(f"| step | {' | '.join(pairs)} |")
     print("|---|" + "---|" * len(pairs))
     for path, steps in (("plain", STEPS), ("refined", REFINED_STEPS)):

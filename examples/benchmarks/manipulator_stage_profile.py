@@ -28,7 +28,7 @@ The steps (`stage_force`, `motion.coordinate_forces`, `kinematics.solve_kinemati
     force - mass   r - M xddot_c element by element, T^T (`inertia_product.force_minus_mass`)
     J^-T, DF^T     the last solve and the DOF rows
 
-python -m examples.benchmarks.manipulator_stage_profile [COUNT]
+python -m examples.benchmarks.manipulator_stage_profile [COUNT [SCENE]]
 """
 
 import statistics
@@ -39,6 +39,9 @@ import numpy as np
 
 STATE_AT = 0.5  # of the move's duration: the replay's last sample
 CORRECTION = 1e-3  # the later iterations' state change, of the step's
+# other scenes' replays: manipulator_reduced's loop as `reduced_methods` runs it, replayed
+# with the order-4 ESDIRK at 1e-4 (one step a sample: a step apart is a sample apart)
+REPLAYS = {"manipulator_reduced": {"method": "esdirk", "rtol": 1e-4, "move": (0.05, 0.0125)}}
 STEPS = ("predict", "residual", "chord", "De at solution", "J factor", "xdot", "slaves' c",
          "element rates", "stresses", "xddot_c", "force - mass", "J^-T, DF^T")
 
@@ -187,19 +190,23 @@ def _replica():
     return replica
 
 
-def states():
+def states(name="manipulator_control", method=None, rtol=None, move=None):
     """(model, simulator, the first state, one a step later, the step (s)) of the loop's
-    replay (the module's docstring)."""
+    replay (the module's docstring) on the scene `name`; the replay with `method` at `rtol`
+    (default the loop's own), the loop's move in `move` = (duration, settle) s (default
+    `run_loop`'s)."""
     from flexure.controllers.move_path import move_path
     from flexure.controllers.runner import run_loop
     from flexure.core import Simulator, load_scene
 
     from ..manipulator_loop import MOVES, targets
 
-    model = load_scene("manipulator_control")
+    model = load_scene(name)
     path = move_path(model, targets(*MOVES["6 mm xy"]), kind="nonlinear")
-    loop = run_loop(model, path=path, plant="inprocess")
-    sim = Simulator(model, method=loop.settings["method"], rtol=loop.settings["rtol"])
+    timing = {} if move is None else {"duration": move[0], "settle": move[1]}
+    loop = run_loop(model, path=path, plant="inprocess", **timing)
+    sim = Simulator(model, method=method or loop.settings["method"],
+                    rtol=rtol or loop.settings["rtol"])
     last = int(round(STATE_AT * loop.settings["move_end"] / (loop.t[1] - loop.t[0])))
     for k in range(last):
         sim.set_inputs(loop.force[k])
@@ -210,10 +217,10 @@ def states():
     return model, sim, first, np.array(sim.state, dtype=float), sim.time - start
 
 
-def profile(count=400, batches=5):
+def profile(count=400, batches=5, **replay):
     """{(pair, step): CPU s per call of that step}, chord iterations a call by pair, the
     full OP_STAGE_FORCE's and OP_RHS's CPU s per call by pair (pair: "a step apart", "a
-    correction apart")."""
+    correction apart"); `replay`: `states`' arguments (the scene, the replay's method)."""
     from flexure.core.engine import access
     from flexure.core.engine import data as ed
     from flexure.core.engine.operations import FORCE, OP_RHS, OP_STAGE_FORCE
@@ -232,7 +239,7 @@ def profile(count=400, batches=5):
                             out.ctypes.data, 0, 0.0)
         return 0
 
-    _, sim, first, second, h = states()
+    _, sim, first, second, h = states(**replay)
     n = first.size // 2
     table = sim.data.address
     acc = (second[n:] - first[n:]) / h
@@ -265,10 +272,10 @@ def profile(count=400, batches=5):
 
 def main(argv):
     count = int(argv[0]) if argv else 400
-    parts, chords, whole = profile(count)
+    name = argv[1] if len(argv) > 1 else "manipulator_control"
+    parts, chords, whole = profile(count, name=name, **REPLAYS.get(name, {}))
     pairs = list(chords)
-    print("manipulator_control, one stage iteration (us a call; medians of 5 batches of "
-          f"{count})")
+    print(f"{name}, one stage iteration (us a call; medians of 5 batches of {count})")
     print(f"| step | {' | '.join(pairs)} |")
     print("|---|" + "---|" * len(pairs))
     for name in STEPS:
