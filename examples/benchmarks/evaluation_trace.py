@@ -20,6 +20,9 @@ the move). Cycles are wall time (converted with the counter's rate measured agai
 perf_counter), so per-call figures are medians; the totals a sample are compared with the
 replay's CPU a sample.
 
+A second replay traced over `AGE_SAMPLES` counts the Newton iterations of each stage by the
+age of the Newton matrix's Jacobian (the samples since it was made).
+
 Then OP_RHS from Python at the replay's states (as `rosenbrock_replay.rhs_costs_along`): at a
 sample's end state after one at the previous sample's end (a state the sample moved), and again
 1e-9 from it (near the last call's), traced the same way: what a moved state's OP_RHS does
@@ -39,6 +42,7 @@ from flexure.core.engine import operations as ops
 
 SAMPLES = range(100, 140)  # the traced samples of the replay (of the 250 on the 6 mm move)
 RHS_SAMPLES = range(100, 140)
+AGE_SAMPLES = range(20, 240)  # traced for the iterations by the Jacobian's age
 LOG_ROWS = 400_000
 (L_OP, L_S, L_DEPTH, L_START, L_END, L_TOP, L_PARENT, L_TIME) = range(8)
 WIDTH = 8
@@ -248,6 +252,30 @@ def stage_iterations(rows, rate):
     return out
 
 
+def iterations_by_age(rows, iterations):
+    """{the Newton matrix's age in samples (inputs' changes since its Jacobian; 8 for 8 to
+    15, 16 for more): [iterations of each stage]} over the log; `iterations` as
+    `stage_iterations` gives them from the same log."""
+    tops = sorted((int(r[L_TOP]), call_label(r)) for r in rows if r[L_DEPTH] == 0)
+    age, stages, k = None, [], 0
+    for _, name in tops:
+        if name == "INPUT_RESPONSE" and age is not None:
+            age += 1
+        elif name == "NEWTON_JACOBIAN":
+            age = 0
+        elif name == "STAGE_FORCE":
+            if iterations[k][1] == 0:
+                stages.append([age, 1])
+            else:
+                stages[-1][1] += 1
+            k += 1
+    out = {}
+    for age, count in stages:
+        if age is not None:
+            out.setdefault(age if age < 8 else 8 if age < 16 else 16, []).append(count)
+    return out
+
+
 def print_iterations(iterations, per):
     """The Newton iterations by their index in the stage."""
     print("\n| iteration in its stage | a sample | stage force us (median) | kinematics' J solves "
@@ -383,7 +411,15 @@ def main(argv=None):
     print("sizes:", sizes(model, sim.data))
     print_summary("a sample of the replay (a call's figures per sample; us)",
                   summary(rows, rate, per), cpu_traced)
-    print_iterations(stage_iterations(rows, rate), per)
+    iterations = stage_iterations(rows, rate)
+    print_iterations(iterations, per)
+    aged_rows = replay_traced(model, t, force, method, rtol, AGE_SAMPLES)[0]
+    print("\niterations a stage by the Newton matrix's age (samples since its Jacobian), samples "
+          f"{AGE_SAMPLES.start} to {AGE_SAMPLES.stop - 1}:")
+    for age, counts in sorted(iterations_by_age(
+            aged_rows, stage_iterations(aged_rows, rate)).items()):
+        print(f"  {age}{'+' if age >= 8 else ''}: {len(counts)} stages, "
+              f"{statistics.mean(counts):.2f} iterations")
     for where, (logs, cpu) in rhs_traced(sim, tracer, force, states, RHS_SAMPLES).items():
         merged = np.concatenate(logs)
         print_summary(f"OP_RHS from Python, {where} (per call; us; CPU a call {1e6 * cpu:.1f})",
