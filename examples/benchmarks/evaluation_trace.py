@@ -26,7 +26,8 @@ age of the Newton matrix's Jacobian (the samples since it was made).
 Then OP_RHS from Python at the replay's states (as `rosenbrock_replay.rhs_costs_along`): at a
 sample's end state after one at the previous sample's end (a state the sample moved), and again
 1e-9 from it (near the last call's), traced the same way: what a moved state's OP_RHS does
-that a near one's does not.
+that a near one's does not; and at states moved by a fraction of a sample (`FRACTIONS`):
+from how far the augmented system's kept factors no longer serve.
 
     python -m examples.benchmarks.evaluation_trace [MODEL [METHOD RTOL]]
 """
@@ -43,6 +44,7 @@ from flexure.core.engine import operations as ops
 SAMPLES = range(100, 140)  # the traced samples of the replay (of the 250 on the 6 mm move)
 RHS_SAMPLES = range(100, 140)
 AGE_SAMPLES = range(20, 240)  # traced for the iterations by the Jacobian's age
+FRACTIONS = (1.0, 0.3, 0.1, 0.03, 0.01)  # of a sample's change: `rhs_by_distance`
 LOG_ROWS = 400_000
 (L_OP, L_S, L_DEPTH, L_START, L_END, L_TOP, L_PARENT, L_TIME) = range(8)
 WIDTH = 8
@@ -389,6 +391,36 @@ def rhs_traced(sim, tracer, force, states, samples):
     return {w: (logs[w], statistics.median(cpu[w])) for w in logs}
 
 
+def rhs_by_distance(sim, tracer, force, states, samples, fractions=FRACTIONS):
+    """{fraction: (CPU s a call (median), A's factorisations a call, A's solves a call in the
+    refinement)} of OP_RHS at the previous sample's end moved by that fraction of the sample's
+    change, after calls at that end and 1e-9 from it (A's kept factors then of that end or of
+    an earlier state)."""
+    from flexure.core.engine import engine as e
+
+    inputs = sim.data.float_array("inputs")
+    out = np.zeros(sim.nstate)
+    found = {}
+    for fraction in fractions:
+        cpu, factors, solves = [], [], []
+        for k in samples:
+            inputs[:] = force[k]
+            for y in (states[k - 1], states[k - 1] + 1e-9):
+                tracer.call(e.OP_RHS, y, out)
+            tracer.clear()
+            tracer.install()
+            start = time.process_time()
+            tracer.call(e.OP_RHS, states[k - 1] + fraction * (states[k] - states[k - 1]), out)
+            cpu.append(time.process_time() - start)
+            tracer.remove()
+            names = [call_label(r) for r in tracer.rows()]
+            factors.append(names.count("SPARSE_FACTOR (A) in ACCELERATIONS"))
+            solves.append(names.count("SPARSE_SOLVE (A) in STAGE_FORCE (REFINED_ACCELERATIONS)"))
+        found[fraction] = (statistics.median(cpu), statistics.mean(factors),
+                           statistics.mean(solves))
+    return found
+
+
 def main(argv=None):
     """Trace the replay and the rhs calls; print the tables."""
     from flexure.core import load_scene
@@ -424,6 +456,12 @@ def main(argv=None):
         merged = np.concatenate(logs)
         print_summary(f"OP_RHS from Python, {where} (per call; us; CPU a call {1e6 * cpu:.1f})",
                       summary(merged, rate, len(logs)))
+    print("\nOP_RHS moved by a fraction of a sample (CPU us a call, A's factorisations and its "
+          "refinement's solves a call):")
+    for fraction, (cpu, factors, solves) in rhs_by_distance(sim, tracer, force, states,
+                                                            RHS_SAMPLES).items():
+        print(f"  {fraction:g}: {1e6 * cpu:.1f} us, {factors:.2f} factorisations, "
+              f"{solves:.2f} refinement solves")
 
 
 if __name__ == "__main__":
