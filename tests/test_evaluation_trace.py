@@ -87,3 +87,23 @@ def test_stage_iterations_group_the_stage_forces_by_their_time():
     its = stage_iterations(rows, 1.0)
     assert [(t, i, s, j, f, g) for t, i, s, j, f, g in its] == [
         (7, 0, 10.0, 2, 1, 3.0), (7, 1, 7.0, 0, 0, 2.0), (9, 0, 8.0, 0, 0, 1.0)]
+
+
+def test_the_lu_counts_read_the_packed_header_and_pointers():
+    """`lu_counts` on manipulator_control's packed J and A: their orders are the free
+    coordinates and those with the rigid rows, the nonzeros those of the pattern read back by
+    `sparse_lu_pattern`, and L and U hold at least a diagonal each but no more than room."""
+    from examples.benchmarks.evaluation_trace import lu_counts
+    from flexure.core import load_scene
+    from flexure.core.engine import data as ed
+    from flexure.core.engine.data import EngineData
+    from flexure.core.numerics.sparse_lu_pattern import pattern
+
+    data = EngineData(load_scene("manipulator_control"))
+    dims = data.int_array("dims")
+    for key, order in (("j_sparse", dims[ed.NFREE]),
+                       ("aug_sparse", dims[ed.NFREE] + dims[ed.NRIGID])):
+        ints = data.int_array(key)
+        n, nnz, in_l, in_u = lu_counts(ints)
+        assert n == order and nnz == pattern(ints)[1].size
+        assert n <= in_l <= ints[2] and n <= in_u <= ints[3]

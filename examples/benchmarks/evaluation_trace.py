@@ -331,9 +331,21 @@ def sizes(model, data):
     out.update({f"  {k}": v for k, v in sorted(elements.items())})
     out["touching elements (De T_e)"] = int(np.sum(rigid[:, rg.E_INTERNAL] == 0))
     out["internal elements (out of J)"] = int(np.sum(rigid[:, rg.E_INTERNAL] == 1))
-    out["J's sparse LU values (L + U with room)"] = data.float_array("j_sparse_values").size
-    out["A's sparse LU values (L + U with room)"] = data.float_array("aug_sparse_values").size
+    for name, key in (("J", "j_sparse"), ("A", "aug_sparse")):
+        n, nnz, fill_l, fill_u = lu_counts(data.int_array(key))
+        out[f"{name}: order, nonzeros, L's and U's"] = (n, nnz, fill_l, fill_u)
     return out
+
+
+def lu_counts(ints):
+    """(order, nonzeros of the matrix, of L, of U) of a packed sparse LU (`sparse_lu`'s
+    header and column pointers: Ap, Ai, Lp, Li (room_l), Up, ...)."""
+    from flexure.core.numerics.sparse_lu import H_SIZE, H_VALID
+
+    n, nnz, room_l, _ = (int(v) for v in ints[:H_VALID])
+    lp = H_SIZE + n + 1 + nnz
+    up = lp + n + 1 + room_l
+    return n, nnz, int(ints[lp + n]), int(ints[up + n])
 
 
 def replay_traced(model, t, force, method, rtol, samples, trace=True):
