@@ -30,6 +30,8 @@ that a near one's does not; and at states moved by a fraction of a sample (`FRAC
 from how far the augmented system's kept factors no longer serve.
 
     python -m examples.benchmarks.evaluation_trace [MODEL [METHOD RTOL]]
+
+What the Jacobian's age costs, measured by forcing it younger: `jacobian_refresh`.
 """
 
 import ctypes
