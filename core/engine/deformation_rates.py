@@ -14,6 +14,7 @@ element by element over the packed groups (`slots.group_deformations`).
 """
 
 from ..numerics.jit import kernel
+from ..numerics.sparse_lu import unsigned_index as _u
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
@@ -142,5 +143,5 @@ def scatter_stress(table, sigma, r):
                 if s == 0.0:
                     continue
                 base = (i * k + b) * m
-                for a in range(m):
-                    r[coords[i * m + a]] -= De[base + a] * s
+                for a in range(m):  # unsigned: no test for an index from the end
+                    r[_u(coords[i * m + a])] -= De[_u(base + a)] * s
