@@ -82,38 +82,38 @@ def fill_slaves(table, x):
         o, d = j * SW, j * DW  # the slave's record: kind, own (4), mt (3), mr (4); its data
         kind = slaves[o]
         if kind == SPATIAL_TRANSLATION:  # x_m + C_r lambda lambda / 2
-            l0, l1, l2, l3 = x[slaves[o + 8]], x[slaves[o + 9]], x[slaves[o + 10]], \
-                x[slaves[o + 11]]
+            l0, l1, l2, l3 = x[_u(slaves[o + 8])], x[_u(slaves[o + 9])], x[_u(slaves[o + 10])], \
+                x[_u(slaves[o + 11])]
             for k in range(3):
                 w = (row + k) * DEPENDENCIES
                 W[w] = 1.0
                 t0, t1, t2, t3 = times_4x4(data, d + 16 * k, l0, l1, l2, l3)
                 W[w + 1], W[w + 2], W[w + 3], W[w + 4] = t0, t1, t2, t3
-                x[slaves[o + 1 + k]] = x[slaves[o + 5 + k]] + 0.5 * (
+                x[_u(slaves[o + 1 + k])] = x[_u(slaves[o + 5 + k])] + 0.5 * (
                     t0 * l0 + t1 * l1 + t2 * l2 + t3 * l3)
             row += 3
         elif kind == SPATIAL_ROTATION:  # Q lambda_m
-            l0, l1, l2, l3 = x[slaves[o + 8]], x[slaves[o + 9]], x[slaves[o + 10]], \
-                x[slaves[o + 11]]
+            l0, l1, l2, l3 = x[_u(slaves[o + 8])], x[_u(slaves[o + 9])], x[_u(slaves[o + 10])], \
+                x[_u(slaves[o + 11])]
             for k in range(4):
                 w, c = (row + k) * DEPENDENCIES, d + 4 * k
                 W[w], W[w + 1], W[w + 2], W[w + 3] = data[c], data[c + 1], data[c + 2], \
                     data[c + 3]
-                x[slaves[o + 1 + k]] = data[c] * l0 + data[c + 1] * l1 + data[c + 2] * l2 \
+                x[_u(slaves[o + 1 + k])] = data[c] * l0 + data[c + 1] * l1 + data[c + 2] * l2 \
                     + data[c + 3] * l3
             row += 4
         elif kind == PLANAR_TRANSLATION:  # x_m + R(phi) r
-            phi = x[slaves[o + 8]]
+            phi = x[_u(slaves[o + 8])]
             c, s = np.cos(phi), np.sin(phi)
-            x[slaves[o + 1]] = x[slaves[o + 5]] + c * data[d] - s * data[d + 1]
-            x[slaves[o + 2]] = x[slaves[o + 6]] + s * data[d] + c * data[d + 1]
+            x[_u(slaves[o + 1])] = x[_u(slaves[o + 5])] + c * data[d] - s * data[d + 1]
+            x[_u(slaves[o + 2])] = x[_u(slaves[o + 6])] + s * data[d] + c * data[d + 1]
             W[row * DEPENDENCIES] = 1.0
             W[row * DEPENDENCIES + 1] = -s * data[d] - c * data[d + 1]
             W[(row + 1) * DEPENDENCIES] = 1.0
             W[(row + 1) * DEPENDENCIES + 1] = c * data[d] - s * data[d + 1]
             row += 2
         elif kind == PLANAR_ROTATION:  # phi_m + phi_rel
-            x[slaves[o + 1]] = x[slaves[o + 8]] + data[d]
+            x[_u(slaves[o + 1])] = x[_u(slaves[o + 8])] + data[d]
             W[row * DEPENDENCIES] = 1.0
             row += 1
 
@@ -342,8 +342,8 @@ def rigid_rates(table):
                 continue
             i, b = elements[e + rg.E_ELEMENT], rows[3 * j + 2]
             s = 0.0
-            for a in range(m):
-                s += De[(i * k + b) * m + a] * c[coords[i * m + a]]
+            for a in range(m):  # unsigned indices: no test for one from the end
+                s += De[_u((i * k + b) * m + a)] * c[_u(coords[i * m + a])]
             h[rows[3 * j]] = s
     units, dof_coords = _i(table, slot.RIGID_UNITS), _i(table, slot.DOF_COORDS)
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]
