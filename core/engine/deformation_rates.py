@@ -120,14 +120,14 @@ def stress_resultants(table):
     pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
     sigma[:] = 0.0
     damped = dims[ed.HAS_DAMPING] == 1
-    for a in range(stressed.size):
+    for a in range(stressed.size):  # unsigned indices: no test for one from the end
         s = 0.0
         for p in range(pointers[a], pointers[a + 1]):
-            b = stressed[columns[p]]
+            b = _u(stressed[_u(columns[p])])
             s += S[p] * e[b]
             if damped:
                 s += D[p] * edot[b]
-        sigma[stressed[a]] = s
+        sigma[_u(stressed[a])] = s
     return sigma
 
 
