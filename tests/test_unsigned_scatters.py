@@ -23,7 +23,13 @@ from flexure.core.engine.data import EngineData
 from flexure.core.engine.deformation_rates import scatter_stress, stress_resultants
 from flexure.core.engine.refinement import constraint_products
 from flexure.core.engine.rigid_kernels import rigid_de
-from flexure.core.mechanics.rigid_bodies import DEPENDENCIES
+from flexure.core.mechanics.rigid_bodies import (
+    DEPENDENCIES,
+    PLANAR_ROTATION,
+    PLANAR_TRANSLATION,
+    SPATIAL_ROTATION,
+    SPATIAL_TRANSLATION,
+)
 
 MODELS = ("manipulator_control", "wire_tripod")
 EW = rg.ELEMENT_WIDTH
@@ -61,9 +67,9 @@ def _groups(data):
 @pytest.mark.parametrize("name", MODELS)
 def test_the_indices_read_unsigned_are_never_negative(name):
     """Every index the unsigned loops read is within its array: the elements' coordinates
-    and deformations, the stressed deformations and their columns, the slaves' coordinates
-    and the free coordinates, and the touching elements' terms where they are read (a
-    coordinate's terms before its -2)."""
+    and deformations, the stressed deformations and their columns, the slaves' records'
+    fields that their kind reads, the slaves' coordinates and the free coordinates, and the
+    touching elements' terms where they are read (a coordinate's terms before its -2)."""
     data = _evaluated(name)
     nx, ne = data.float_array("x").size, data.float_array("e").size
     for _, _, _, coords, defs, _, _ in _groups(data):
@@ -74,8 +80,26 @@ def test_the_indices_read_unsigned_are_never_negative(name):
     assert ((columns >= 0) & (columns < stressed.size)).all()
     for key in ("rigid_coordinates", "free"):
         assert ((data.int_array(key) >= 0) & (data.int_array(key) < nx)).all()
+    slaves, fields = data.int_array("rigid_slaves"), {  # the record fields each kind reads
+        SPATIAL_TRANSLATION: (1, 2, 3, 5, 6, 7, 8, 9, 10, 11),
+        SPATIAL_ROTATION: (1, 2, 3, 4, 8, 9, 10, 11), PLANAR_TRANSLATION: (1, 2, 5, 6, 8),
+        PLANAR_ROTATION: (1, 8)}
+    assert slaves.size > 0
+    for o in range(0, slaves.size, rg.SLAVE_WIDTH):
+        read = slaves[o + np.array(fields[slaves[o]])]
+        assert ((read >= 0) & (read < nx)).all()
     deps = data.int_array("rigid_dependencies")
     assert (deps < nx).all() and (deps >= -1).all()  # -1 tested before it is an index
+    terms, weights = data.int_array("rigid_terms"), data.float_array("rigid_weights").size
+    groups = _groups(data)
+    for _, g, _, _, mz, _, start in _touching_rows(data):
+        for a in range(groups[g][1]):
+            for u in range(DEPENDENCIES):
+                zl, w = terms[start + 2 * (a * DEPENDENCIES + u): start + 2 * (a * DEPENDENCIES
+                                                                                 + u) + 2]
+                if w == -2:
+                    break
+                assert 0 <= zl < mz and -1 <= w < weights
 
 
 @pytest.mark.parametrize("name", MODELS)

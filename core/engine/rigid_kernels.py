@@ -80,7 +80,7 @@ def fill_slaves(table, x):
     row = 0
     for j in range(slaves.size // SW):
         o, d = j * SW, j * DW  # the slave's record: kind, own (4), mt (3), mr (4); its data
-        kind = slaves[o]
+        kind = slaves[o]  # the indices its kind reads unsigned: no test for one from the end
         if kind == SPATIAL_TRANSLATION:  # x_m + C_r lambda lambda / 2
             l0, l1, l2, l3 = x[_u(slaves[o + 8])], x[_u(slaves[o + 9])], x[_u(slaves[o + 10])], \
                 x[_u(slaves[o + 11])]
