@@ -14,6 +14,7 @@ element by element over the packed groups (`slots.group_deformations`).
 """
 
 from ..numerics.jit import kernel
+from ..numerics.sparse_lu import unsigned_index as _u
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
@@ -119,14 +120,14 @@ def stress_resultants(table):
     pointers, columns = _i(table, slot.STRESS_POINTERS), _i(table, slot.STRESS_COLUMNS)
     sigma[:] = 0.0
     damped = dims[ed.HAS_DAMPING] == 1
-    for a in range(stressed.size):
+    for a in range(stressed.size):  # unsigned indices: no test for one from the end
         s = 0.0
         for p in range(pointers[a], pointers[a + 1]):
-            b = stressed[columns[p]]
+            b = _u(stressed[_u(columns[p])])
             s += S[p] * e[b]
             if damped:
                 s += D[p] * edot[b]
-        sigma[stressed[a]] = s
+        sigma[_u(stressed[a])] = s
     return sigma
 
 
@@ -142,5 +143,5 @@ def scatter_stress(table, sigma, r):
                 if s == 0.0:
                     continue
                 base = (i * k + b) * m
-                for a in range(m):
-                    r[coords[i * m + a]] -= De[base + a] * s
+                for a in range(m):  # unsigned: no test for an index from the end
+                    r[_u(coords[i * m + a])] -= De[_u(base + a)] * s

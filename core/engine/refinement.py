@@ -63,6 +63,7 @@ import numpy as np
 
 from ..numerics.dense import copy
 from ..numerics.jit import kernel
+from ..numerics.sparse_lu import unsigned_index as _u
 from . import data as ed
 from . import slots as slot
 from .factors import KEPT_NONE, KEPT_SPARSE, kept_resolve
@@ -188,12 +189,16 @@ def constraint_products(table, d, out):
         o, coords, de, z, at = touching_row(table, j)
         if o >= n_rigid:
             continue
+        # the rigid row's sum in a register (c < n_free: out[c] is never it), the same
+        # subtractions in the same order; unsigned indices: no test for one from the end
+        s, dl = out[nf + o], d[nf + o]
         for a in range(z.size):
-            c = col_of_coord[z[a]]
+            c = col_of_coord[_u(z[a])]
             if c >= 0:
-                v = rde[at + a]
-                out[nf + o] -= v * d[c]
-                out[c] -= v * d[nf + o]
+                v = rde[_u(at + a)]
+                s -= v * d[_u(c)]
+                out[_u(c)] -= v * dl
+        out[nf + o] = s
     for g in range(dims[ed.NGROUPS]):
         n, m, k, coords, defs, De, D2e = group_deformations(table, g)
         row = group(table, g)
@@ -204,9 +209,11 @@ def constraint_products(table, d, out):
                 o = row_of_def[defs[i * k + b]]
                 if o < 0 or o >= n_rigid:
                     continue
+                s, dl = out[nf + o], d[nf + o]  # as above
                 for a in range(m):
-                    c = col_of_coord[coords[i * m + a]]
+                    c = col_of_coord[_u(coords[i * m + a])]
                     if c >= 0:
-                        v = De[(i * k + b) * m + a]
-                        out[nf + o] -= v * d[c]
-                        out[c] -= v * d[nf + o]
+                        v = De[_u((i * k + b) * m + a)]
+                        s -= v * d[_u(c)]
+                        out[_u(c)] -= v * dl
+                out[nf + o] = s

@@ -33,6 +33,7 @@ from ..mechanics.rigid_bodies import (
 from ..numerics.dense import copy
 from ..numerics.jit import entry, kernel
 from ..numerics.native import address_of, carray
+from ..numerics.sparse_lu import unsigned_index as _u
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
@@ -79,40 +80,40 @@ def fill_slaves(table, x):
     row = 0
     for j in range(slaves.size // SW):
         o, d = j * SW, j * DW  # the slave's record: kind, own (4), mt (3), mr (4); its data
-        kind = slaves[o]
+        kind = slaves[o]  # the indices its kind reads unsigned: no test for one from the end
         if kind == SPATIAL_TRANSLATION:  # x_m + C_r lambda lambda / 2
-            l0, l1, l2, l3 = x[slaves[o + 8]], x[slaves[o + 9]], x[slaves[o + 10]], \
-                x[slaves[o + 11]]
+            l0, l1, l2, l3 = x[_u(slaves[o + 8])], x[_u(slaves[o + 9])], x[_u(slaves[o + 10])], \
+                x[_u(slaves[o + 11])]
             for k in range(3):
                 w = (row + k) * DEPENDENCIES
                 W[w] = 1.0
                 t0, t1, t2, t3 = times_4x4(data, d + 16 * k, l0, l1, l2, l3)
                 W[w + 1], W[w + 2], W[w + 3], W[w + 4] = t0, t1, t2, t3
-                x[slaves[o + 1 + k]] = x[slaves[o + 5 + k]] + 0.5 * (
+                x[_u(slaves[o + 1 + k])] = x[_u(slaves[o + 5 + k])] + 0.5 * (
                     t0 * l0 + t1 * l1 + t2 * l2 + t3 * l3)
             row += 3
         elif kind == SPATIAL_ROTATION:  # Q lambda_m
-            l0, l1, l2, l3 = x[slaves[o + 8]], x[slaves[o + 9]], x[slaves[o + 10]], \
-                x[slaves[o + 11]]
+            l0, l1, l2, l3 = x[_u(slaves[o + 8])], x[_u(slaves[o + 9])], x[_u(slaves[o + 10])], \
+                x[_u(slaves[o + 11])]
             for k in range(4):
                 w, c = (row + k) * DEPENDENCIES, d + 4 * k
                 W[w], W[w + 1], W[w + 2], W[w + 3] = data[c], data[c + 1], data[c + 2], \
                     data[c + 3]
-                x[slaves[o + 1 + k]] = data[c] * l0 + data[c + 1] * l1 + data[c + 2] * l2 \
+                x[_u(slaves[o + 1 + k])] = data[c] * l0 + data[c + 1] * l1 + data[c + 2] * l2 \
                     + data[c + 3] * l3
             row += 4
         elif kind == PLANAR_TRANSLATION:  # x_m + R(phi) r
-            phi = x[slaves[o + 8]]
+            phi = x[_u(slaves[o + 8])]
             c, s = np.cos(phi), np.sin(phi)
-            x[slaves[o + 1]] = x[slaves[o + 5]] + c * data[d] - s * data[d + 1]
-            x[slaves[o + 2]] = x[slaves[o + 6]] + s * data[d] + c * data[d + 1]
+            x[_u(slaves[o + 1])] = x[_u(slaves[o + 5])] + c * data[d] - s * data[d + 1]
+            x[_u(slaves[o + 2])] = x[_u(slaves[o + 6])] + s * data[d] + c * data[d + 1]
             W[row * DEPENDENCIES] = 1.0
             W[row * DEPENDENCIES + 1] = -s * data[d] - c * data[d + 1]
             W[(row + 1) * DEPENDENCIES] = 1.0
             W[(row + 1) * DEPENDENCIES + 1] = c * data[d] - s * data[d + 1]
             row += 2
         elif kind == PLANAR_ROTATION:  # phi_m + phi_rel
-            x[slaves[o + 1]] = x[slaves[o + 8]] + data[d]
+            x[_u(slaves[o + 1])] = x[_u(slaves[o + 8])] + data[d]
             W[row * DEPENDENCIES] = 1.0
             row += 1
 
@@ -122,13 +123,13 @@ def expand(table, v, with_c):
     """v_s = T v_master on the slave rows of v (NX,), plus c (slot rigid_c) if with_c."""
     coords, deps = _i(table, slot.RIGID_COORDS), _i(table, slot.RIGID_DEPS)
     W, c = _f(table, slot.RIGID_WEIGHTS), _f(table, slot.RIGID_C)
-    for s in range(coords.size):
-        t = c[coords[s]] if with_c else 0.0
+    for s in range(coords.size):  # unsigned indices where they are not negative
+        t = c[_u(coords[s])] if with_c else 0.0
         for d in range(DEPENDENCIES):
-            dep = deps[s * DEPENDENCIES + d]
+            dep = deps[_u(s * DEPENDENCIES + d)]
             if dep >= 0:
-                t += W[s * DEPENDENCIES + d] * v[dep]
-        v[coords[s]] = t
+                t += W[_u(s * DEPENDENCIES + d)] * v[_u(dep)]
+        v[_u(coords[s])] = t
 
 
 @kernel
@@ -180,14 +181,14 @@ def condense(table, v, out):
     W = _f(table, slot.RIGID_WEIGHTS)
     for a in range(free.size):
         out[a] = v[free[a]]
-    for s in range(coords.size):
-        vs = v[coords[s]]
+    for s in range(coords.size):  # unsigned indices where they are not negative
+        vs = v[_u(coords[s])]
         if vs == 0.0:
             continue
         for d in range(DEPENDENCIES):
-            dep = deps[s * DEPENDENCIES + d]
-            if dep >= 0 and col_of_coord[dep] >= 0:
-                out[col_of_coord[dep]] += W[s * DEPENDENCIES + d] * vs
+            dep = deps[_u(s * DEPENDENCIES + d)]
+            if dep >= 0 and col_of_coord[_u(dep)] >= 0:
+                out[_u(col_of_coord[_u(dep)])] += W[_u(s * DEPENDENCIES + d)] * vs
 
 
 @kernel
@@ -200,18 +201,18 @@ def condense_pair(table, v, out, w, out_w):
     for a in range(free.size):
         out[a] = v[free[a]]
         out_w[a] = w[free[a]]
-    for s in range(coords.size):
-        vs, ws = v[coords[s]], w[coords[s]]
+    for s in range(coords.size):  # unsigned indices where they are not negative
+        vs, ws = v[_u(coords[s])], w[_u(coords[s])]
         if vs == 0.0 and ws == 0.0:
             continue
         for d in range(DEPENDENCIES):
-            dep = deps[s * DEPENDENCIES + d]
-            if dep >= 0 and col_of_coord[dep] >= 0:
-                weight = W[s * DEPENDENCIES + d]
+            dep = deps[_u(s * DEPENDENCIES + d)]
+            if dep >= 0 and col_of_coord[_u(dep)] >= 0:
+                weight, column = W[_u(s * DEPENDENCIES + d)], _u(col_of_coord[_u(dep)])
                 if vs != 0.0:
-                    out[col_of_coord[dep]] += weight * vs
+                    out[column] += weight * vs
                 if ws != 0.0:
-                    out_w[col_of_coord[dep]] += weight * ws
+                    out_w[column] += weight * ws
 
 
 @kernel
@@ -312,16 +313,16 @@ def rigid_de(table):
             de = (elements[e + rg.E_ELEMENT] * k + b) * m
             for c in range(mz):
                 out[at + c] = 0.0
-            for a in range(m):
-                d = De[de + a]
+            for a in range(m):  # unsigned indices: no test for one from the end
+                d = De[_u(de + a)]
                 if d == 0.0:
                     continue
                 for u in range(DEPENDENCIES):  # a coordinate's terms first, then -2
-                    p = start + 2 * (a * DEPENDENCIES + u)
+                    p = _u(start + 2 * (a * DEPENDENCIES + u))
                     zl, w = terms[p], terms[p + 1]
                     if w == -2:
                         break
-                    out[at + zl] += d * (1.0 if w == -1 else W[w])
+                    out[_u(at + zl)] += d * (1.0 if w == -1 else W[_u(w)])
 
 
 @kernel
@@ -341,8 +342,8 @@ def rigid_rates(table):
                 continue
             i, b = elements[e + rg.E_ELEMENT], rows[3 * j + 2]
             s = 0.0
-            for a in range(m):
-                s += De[(i * k + b) * m + a] * c[coords[i * m + a]]
+            for a in range(m):  # unsigned indices: no test for one from the end
+                s += De[_u((i * k + b) * m + a)] * c[_u(coords[i * m + a])]
             h[rows[3 * j]] = s
     units, dof_coords = _i(table, slot.RIGID_UNITS), _i(table, slot.DOF_COORDS)
     n_def = dims[ed.NRIGID] + dims[ed.NEDOF]

@@ -13,6 +13,7 @@ SPARSE_AUGMENTED (`operations`).
 from ..mechanics.rigid_bodies import DEPENDENCIES
 from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
+from ..numerics.sparse_lu import unsigned_index as _u
 from . import data as ed
 from . import slots as slot
 from .factors import scatter_de
@@ -97,10 +98,10 @@ def constraint_values(table, jmap, values):
     rows, elements = _i(table, slot.TOUCHING_ROWS), _i(table, slot.RIGID_ELEMENTS)
     for j in range(rows.size // 3):  # each row's mz entries
         _, _, mz, at = row_de_z(rows, elements, j)
-        for c in range(at, at + mz):
-            s = jmap[base + c]
+        for c in range(at, at + mz):  # unsigned indices: no test for one from the end
+            s = jmap[_u(base + c)]
             if s >= 0:
-                values[s] += rde[c]
+                values[_u(s)] += rde[_u(c)]
     base += rde.size
     units, W = _i(table, slot.RIGID_UNITS), _f(table, slot.RIGID_WEIGHTS)
     for j in range(n_xdof):
