@@ -192,7 +192,7 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         The positions of a time cannot be solved (beyond the mechanism's reach).
     """
     mech = mechanics or Mechanics(model)
-    out_ports, in_ports = _ports(model, outputs, inputs)
+    out_ports, in_ports = solved_ports(model, outputs, inputs)
     times = np.asarray(times, dtype=float).reshape(-1)
     if times.size == 0 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
         raise SceneError(f"{model.source}: inverse dynamics needs finite, increasing times, "
@@ -217,7 +217,7 @@ def inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         qdot = scipy.linalg.lu_solve(lu, rates) if ndof else np.zeros(0)
         conv, M_bar, Q = evaluator.motion(config, qdot)
         right = accelerations.copy()
-        right[:n_out] -= _output_convective(model, out_ports, config, qdot, conv)
+        right[:n_out] -= output_convective(model, out_ports, config, qdot, conv)
         qddot = scipy.linalg.lu_solve(lu, right) if ndof else np.zeros(0)
         forces, efforts, sigma = _balance(model, evaluator, config, qdot, qddot, M_bar, Q,
                                           in_ports, prescribed, t)
@@ -253,7 +253,7 @@ def sampled_path(times: ArrayLike, values: ArrayLike) -> Path:
     return lambda t: (spline(t), first(t), second(t))
 
 
-def _ports(model, outputs, inputs):
+def solved_ports(model, outputs, inputs):
     """The prescribed position outputs and the force inputs solved for, by name, checked."""
     positions = {port.name: port for port in model.outputs if port.quantity == "position"}
     names = list(positions) if outputs is None else list(outputs)
@@ -303,7 +303,7 @@ def sample_path(model, path, t, size):
     return parts
 
 
-def _output_convective(model, out_ports, config, qdot, convective):
+def output_convective(model, out_ports, config, qdot, convective):
     """c_y (n_outputs,): each prescribed output's acceleration at qddot = 0 (module docstring),
     m/s^2 or rad/s^2."""
     xdot = config.DF @ qdot

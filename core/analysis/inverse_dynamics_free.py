@@ -80,7 +80,7 @@ from ..mechanics.mechanics import Mechanics
 from ..mechanics.ports import input_columns, output_value, position_port
 from ..mechanics.scales import dof_tolerances, within
 from ..numerics.blas import blas_threads
-from .inverse_dynamics import InverseDynamics, Path, _ports, input_ports, sample_path
+from .inverse_dynamics import InverseDynamics, Path, input_ports, sample_path, solved_ports
 from .inverse_dynamics_partition import (
     Partitioned,
     linear_derivatives,
@@ -196,7 +196,7 @@ class FreeInverseDynamics(InverseDynamics):
         return node_polynomial(self.times, self.node_forces)
 
 
-def _start(model, mech, evaluator, path, out_ports, times):
+def start_at_rest(model, mech, evaluator, path, out_ports, times):
     """(rest, config): the static equilibrium where the path must start (SceneError if not),
     and its configuration from `evaluator`."""
     from .statics import static_equilibrium
@@ -350,7 +350,7 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
                          f"({', '.join(p.name for p in model.kinematic_inputs)}): "
                          "inverse_dynamics prescribes them where nothing is left free")
     mech = mechanics or Mechanics(model)
-    out_ports, in_ports = _resolved_ports(model, outputs, inputs)
+    out_ports, in_ports = resolved_ports(model, outputs, inputs)
     times = np.asarray(times, dtype=float).reshape(-1)
     spacing = np.diff(times)
     if times.size < 2 or not np.all(np.isfinite(times)) or np.any(spacing <= 0):
@@ -359,7 +359,7 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
                          f"{np.array2string(times, threshold=8)}")
     evaluator = motion_evaluator(model, mech, compiled,
                                  EVALUATIONS_PER_STEP * spacing.size)
-    rest, config = _start(model, mech, evaluator, path, out_ports, times)
+    rest, config = start_at_rest(model, mech, evaluator, path, out_ports, times)
     part = Partitioned(model, evaluator, path, out_ports, in_ports, config, tolerance,
                        max_iterations)
     A_q, A_v = linear_derivatives(part, model, mech, rest, config, times[0])
@@ -395,12 +395,12 @@ def free_inverse_dynamics(model: Model, times: ArrayLike, path: Path, *,
         node_x=np.array(node_x))
 
 
-def _resolved_ports(model, outputs, inputs):
+def resolved_ports(model, outputs, inputs):
     """(output ports, input ports): `inverse_dynamics`'s, where an output is also a name
     "NODE.AXIS" that no output of the model has: a coordinate ("E.x"), or an angle about a
     global axis of a 3-D rotational node ("Pr.rz")."""
     if outputs is None:
-        return _ports(model, None, inputs)
+        return solved_ports(model, None, inputs)
     own = {port.name: port for port in model.outputs if port.quantity == "position"}
     ports = []
     for name in outputs:

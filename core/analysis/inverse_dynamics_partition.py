@@ -27,7 +27,7 @@ import scipy.linalg
 from ..errors import ConstraintError, ConvergenceError
 from ..mechanics.ports import input_columns, output_rows, output_value
 from ..mechanics.scales import dof_tolerances, within
-from .inverse_dynamics import _output_convective, sample_path
+from .inverse_dynamics import output_convective, sample_path
 
 CONDITION = 1e12  # the largest condition number of C_d and of the balance's matrix
 
@@ -85,7 +85,7 @@ class Partitioned:
         qdot[i] = qdot_i
         qdot[d] = scipy.linalg.lu_solve(C_d, rates - C[:, i] @ qdot_i)
         convective, M, Q = self.evaluator.motion(config, qdot)
-        wanted = accelerations - _output_convective(model, self.out_ports, config, qdot,
+        wanted = accelerations - output_convective(model, self.out_ports, config, qdot,
                                                     convective)
         B = config.DF.T @ input_columns(model, config.x, self.in_ports)
         system = np.hstack([M[:, i] - M[:, d] @ scipy.linalg.lu_solve(C_d, C[:, i]), -B])

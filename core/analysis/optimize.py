@@ -259,13 +259,13 @@ def optimize(model_or_scene: Model | Scene | str | Path,
     import scipy.optimize
 
     from ..scene.overrides import apply_overrides
-    from .sensitivity import _model
+    from .sensitivity import model_of
 
     if method not in METHODS:
         raise UsageError(f"--method {method!r}: expected one of {', '.join(METHODS)}")
     if not vary:
         raise UsageError("--vary: expected at least one KEY=LO:HI")
-    model = _model(model_or_scene)
+    model = model_of(model_or_scene)
     if yield_stress is None and any(isinstance(c, str) for c in constraints):
         yield_stress = scene_yield_stress(model.scene)
     goal = objective if isinstance(objective, Objective) else parse_objective(objective)

@@ -262,7 +262,7 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
     ConvergenceError
         An analysis of the model, or of a perturbed one, does not converge.
     """
-    model = _model(model_or_scene)
+    model = model_of(model_or_scene)
     if model.kinematic_inputs:  # its analytic slopes are on all of q, the analyses on q_f
         raise SceneError(f"{model.source}: design sensitivities of a model with kinematic "
                          f"inputs ({', '.join(p.name for p in model.kinematic_inputs)}) are "
@@ -298,7 +298,7 @@ def sensitivities(model_or_scene: Model | Scene | str | Path, keys: list[str], *
                          steps=steps, worst_mac=worst)
 
 
-def _model(model_or_scene):
+def model_of(model_or_scene):
     """A Model with its scene dictionary from what `sensitivities` accepts."""
     from ..model import Model
     from ..scene.api import Scene

@@ -39,17 +39,17 @@ from ..numerics.jit import kernel
 from ..numerics.rotation_kernels import rotated_half_jacobian, rotated_vector
 from . import entries
 from .beam_kernels import (
-    _AX_P,
-    _AX_Q,
-    _AY_P,
-    _AY_Q,
-    _AZ_P,
-    _AZ_Q,
-    _XLP,
-    _XLQ,
-    _XP,
-    _XQ,
+    AX_P,
+    AX_Q,
+    AY_P,
+    AY_Q,
+    AZ_P,
+    AZ_Q,
     VECTORS_AT,
+    XLP,
+    XLQ,
+    XP,
+    XQ,
     deformations_kernel,
     kept_deformations_kernel,
 )
@@ -93,12 +93,12 @@ def _directional(x, v, ref, h):
     """`directional_kernel`'s h, returning the second derivatives n2 = 2 R(mu) a of the node
     vectors n_z'^p, n_z'^q, n_y'^p, n_y'^q (three floats each, in that order): the section
     axes' (D2p v) v of `beam_kernels.inertia_kernel`."""
-    m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]  # lambda^p
-    k0, k1, k2, k3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]  # lambda^q
-    a0, a1, a2 = rotated_vector(ref[_AZ_P], ref[_AZ_P + 1], ref[_AZ_P + 2], m0, m1, m2, m3)
-    b0, b1, b2 = rotated_vector(ref[_AZ_Q], ref[_AZ_Q + 1], ref[_AZ_Q + 2], k0, k1, k2, k3)
-    c0, c1, c2 = rotated_vector(ref[_AY_P], ref[_AY_P + 1], ref[_AY_P + 2], m0, m1, m2, m3)
-    d0, d1, d2 = rotated_vector(ref[_AY_Q], ref[_AY_Q + 1], ref[_AY_Q + 2], k0, k1, k2, k3)
+    m0, m1, m2, m3 = x[XLP], x[XLP + 1], x[XLP + 2], x[XLP + 3]  # lambda^p
+    k0, k1, k2, k3 = x[XLQ], x[XLQ + 1], x[XLQ + 2], x[XLQ + 3]  # lambda^q
+    a0, a1, a2 = rotated_vector(ref[AZ_P], ref[AZ_P + 1], ref[AZ_P + 2], m0, m1, m2, m3)
+    b0, b1, b2 = rotated_vector(ref[AZ_Q], ref[AZ_Q + 1], ref[AZ_Q + 2], k0, k1, k2, k3)
+    c0, c1, c2 = rotated_vector(ref[AY_P], ref[AY_P + 1], ref[AY_P + 2], m0, m1, m2, m3)
+    d0, d1, d2 = rotated_vector(ref[AY_Q], ref[AY_Q + 1], ref[AY_Q + 2], k0, k1, k2, k3)
     return _directional_from(x, v, ref, h, a0, a1, a2, b0, b1, b2, c0, c1, c2, d0, d1, d2)
 
 
@@ -108,20 +108,20 @@ def _directional_from(x, v, ref, h, a0, a1, a2, b0, b1, b2, c0, c1, c2, d0, d1, 
     (`beam_kernels.deformations_kernel`'s, as it rotates them)."""
     l0, c, c_t = ref[0], ref[1], ref[2]
     half = 0.5 * l0
-    lx, ly, lz = x[_XQ] - x[_XP], x[_XQ + 1] - x[_XP + 1], x[_XQ + 2] - x[_XP + 2]
-    wx, wy, wz = v[_XQ] - v[_XP], v[_XQ + 1] - v[_XP + 1], v[_XQ + 2] - v[_XP + 2]  # l1
-    m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]  # lambda^p
-    k0, k1, k2, k3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]  # lambda^q
-    n0, n1, n2, n3 = v[_XLP], v[_XLP + 1], v[_XLP + 2], v[_XLP + 3]  # mu^p
-    j0, j1, j2, j3 = v[_XLQ], v[_XLQ + 1], v[_XLQ + 2], v[_XLQ + 3]  # mu^q
+    lx, ly, lz = x[XQ] - x[XP], x[XQ + 1] - x[XP + 1], x[XQ + 2] - x[XP + 2]
+    wx, wy, wz = v[XQ] - v[XP], v[XQ + 1] - v[XP + 1], v[XQ + 2] - v[XP + 2]  # l1
+    m0, m1, m2, m3 = x[XLP], x[XLP + 1], x[XLP + 2], x[XLP + 3]  # lambda^p
+    k0, k1, k2, k3 = x[XLQ], x[XLQ + 1], x[XLQ + 2], x[XLQ + 3]  # lambda^q
+    n0, n1, n2, n3 = v[XLP], v[XLP + 1], v[XLP + 2], v[XLP + 3]  # mu^p
+    j0, j1, j2, j3 = v[XLQ], v[XLQ + 1], v[XLQ + 2], v[XLQ + 3]  # mu^q
     # the node vectors n_z'^p (a), n_z'^q (b), n_y'^p (c), n_y'^q (d) with their jets
-    a0, a1, a2, ap0, ap1, ap2, aq0, aq1, aq2 = _jet(ref, _AZ_P, a0, a1, a2, m0, m1, m2, m3,
+    a0, a1, a2, ap0, ap1, ap2, aq0, aq1, aq2 = _jet(ref, AZ_P, a0, a1, a2, m0, m1, m2, m3,
                                                     n0, n1, n2, n3)
-    b0, b1, b2, bp0, bp1, bp2, bq0, bq1, bq2 = _jet(ref, _AZ_Q, b0, b1, b2, k0, k1, k2, k3,
+    b0, b1, b2, bp0, bp1, bp2, bq0, bq1, bq2 = _jet(ref, AZ_Q, b0, b1, b2, k0, k1, k2, k3,
                                                     j0, j1, j2, j3)
-    c0, c1, c2, cp0, cp1, cp2, cq0, cq1, cq2 = _jet(ref, _AY_P, c0, c1, c2, m0, m1, m2, m3,
+    c0, c1, c2, cp0, cp1, cp2, cq0, cq1, cq2 = _jet(ref, AY_P, c0, c1, c2, m0, m1, m2, m3,
                                                     n0, n1, n2, n3)
-    d0, d1, d2, dp0, dp1, dp2, dq0, dq1, dq2 = _jet(ref, _AY_Q, d0, d1, d2, k0, k1, k2, k3,
+    d0, d1, d2, dp0, dp1, dp2, dq0, dq1, dq2 = _jet(ref, AY_Q, d0, d1, d2, k0, k1, k2, k3,
                                                     j0, j1, j2, j3)
     # bending: e = sign n . l, e' = sign (n1 . l + n . l1), e'' = sign (n2 . l + 2 n1 . l1)
     e3 = -(a0 * lx + a1 * ly + a2 * lz)
@@ -182,12 +182,12 @@ def points_kernel(x, v, ref, h, points):
     as they were). Each float is computed as those two kernels compute it, so the same
     bits. x, v (14,), ref the packed reference row; no allocation."""
     _points_acc(points, ref, v, _directional(x, v, ref, h))
-    _block(x, ref, points, 0, _XLP, ref[0], _AX_P)
-    _block(x, ref, points, 1, _XLQ, ref[0], _AX_Q)
-    _block(x, ref, points, 2, _XLP, 1.0, _AY_P)
-    _block(x, ref, points, 3, _XLP, 1.0, _AZ_P)
-    _block(x, ref, points, 4, _XLQ, 1.0, _AY_Q)
-    _block(x, ref, points, 5, _XLQ, 1.0, _AZ_Q)
+    _block(x, ref, points, 0, XLP, ref[0], AX_P)
+    _block(x, ref, points, 1, XLQ, ref[0], AX_Q)
+    _block(x, ref, points, 2, XLP, 1.0, AY_P)
+    _block(x, ref, points, 3, XLP, 1.0, AZ_P)
+    _block(x, ref, points, 4, XLQ, 1.0, AY_Q)
+    _block(x, ref, points, 5, XLQ, 1.0, AZ_Q)
 
 
 @kernel
@@ -200,8 +200,8 @@ def kept_points_kernel(x, v, ref, h, points):
         x, v, ref, h, points[o], points[o + 1], points[o + 2], points[o + 3], points[o + 4],
         points[o + 5], points[o + 6], points[o + 7], points[o + 8], points[o + 9],
         points[o + 10], points[o + 11]))
-    _block(x, ref, points, 0, _XLP, ref[0], _AX_P)
-    _block(x, ref, points, 1, _XLQ, ref[0], _AX_Q)
+    _block(x, ref, points, 0, XLP, ref[0], AX_P)
+    _block(x, ref, points, 1, XLQ, ref[0], AX_Q)
 
 
 @kernel(inline="always")
@@ -219,8 +219,8 @@ def _points_acc(points, ref, v, n2):
     points[ACC_AT + 18], points[ACC_AT + 19], points[ACC_AT + 20] = dq0, dq1, dq2
     points[ACC_AT + 21], points[ACC_AT + 22], points[ACC_AT + 23] = bq0, bq1, bq2
     # the tangents l0 n_x' at both nodes: acc l0 (2 R(mu) a), as inertia_kernel's
-    _tangent_acc(v, ref, points, 3, _XLP, l0, _AX_P)
-    _tangent_acc(v, ref, points, 9, _XLQ, l0, _AX_Q)
+    _tangent_acc(v, ref, points, 3, XLP, l0, AX_P)
+    _tangent_acc(v, ref, points, 9, XLQ, l0, AX_Q)
 
 
 @kernel(inline="always")

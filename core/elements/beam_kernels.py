@@ -24,10 +24,10 @@ from . import entries
 
 # The packed reference row is [l0, c, c_t, az_p, az_q, ay_p, ay_q, ax_p, ax_q] (each vector
 # three floats, in its node's body frame): the bending vectors in `beam._BEND_AXES`' order.
-_AZ_P, _AZ_Q, _AY_P, _AY_Q, _AX_P, _AX_Q = 3, 6, 9, 12, 15, 18
+AZ_P, AZ_Q, AY_P, AY_Q, AX_P, AX_Q = 3, 6, 9, 12, 15, 18
 REFERENCE_WIDTH = 21  # floats, 168 B per element
 # x columns of the translations and Euler parameters of p and q
-_XP, _XLP, _XQ, _XLQ = 0, 3, 7, 10
+XP, XLP, XQ, XLQ = 0, 3, 7, 10
 
 
 def pack_reference(ref):
@@ -37,8 +37,8 @@ def pack_reference(ref):
     packed[:, 0] = ref["l0"]
     packed[:, 1] = ref["c"]
     packed[:, 2] = ref["c_t"]
-    for start, key in ((_AZ_P, "az_p"), (_AZ_Q, "az_q"), (_AY_P, "ay_p"), (_AY_Q, "ay_q"),
-                       (_AX_P, "ax_p"), (_AX_Q, "ax_q")):
+    for start, key in ((AZ_P, "az_p"), (AZ_Q, "az_q"), (AY_P, "ay_p"), (AY_Q, "ay_q"),
+                       (AX_P, "ax_p"), (AX_Q, "ax_q")):
         packed[:, start:start + 3] = ref[key]
     return packed
 
@@ -83,12 +83,12 @@ def _store_symmetric(D2e, row, col, f, K, g, L):
 @kernel
 def _store_mixed(D2e, row, col, v0, v1, v2):
     """D2e[row] between x column col and the translations: v (the l part) at r^q, -v at r^p."""
-    D2e[row, _XQ, col] = D2e[row, col, _XQ] = v0
-    D2e[row, _XQ + 1, col] = D2e[row, col, _XQ + 1] = v1
-    D2e[row, _XQ + 2, col] = D2e[row, col, _XQ + 2] = v2
-    D2e[row, _XP, col] = D2e[row, col, _XP] = -v0
-    D2e[row, _XP + 1, col] = D2e[row, col, _XP + 1] = -v1
-    D2e[row, _XP + 2, col] = D2e[row, col, _XP + 2] = -v2
+    D2e[row, XQ, col] = D2e[row, col, XQ] = v0
+    D2e[row, XQ + 1, col] = D2e[row, col, XQ + 1] = v1
+    D2e[row, XQ + 2, col] = D2e[row, col, XQ + 2] = v2
+    D2e[row, XP, col] = D2e[row, col, XP] = -v0
+    D2e[row, XP + 1, col] = D2e[row, col, XP + 1] = -v1
+    D2e[row, XP + 2, col] = D2e[row, col, XP + 2] = -v2
 
 
 @kernel
@@ -154,16 +154,16 @@ def _deformations(x, ref, order, e, De, D2e, kept, keeping):
     c = ref[1]
     c_t = ref[2]
     half = 0.5 * l0
-    lx = x[_XQ] - x[_XP]
-    ly = x[_XQ + 1] - x[_XP + 1]
-    lz = x[_XQ + 2] - x[_XP + 2]
-    m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]  # lambda^p
-    k0, k1, k2, k3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]  # lambda^q
+    lx = x[XQ] - x[XP]
+    ly = x[XQ + 1] - x[XP + 1]
+    lz = x[XQ + 2] - x[XP + 2]
+    m0, m1, m2, m3 = x[XLP], x[XLP + 1], x[XLP + 2], x[XLP + 3]  # lambda^p
+    k0, k1, k2, k3 = x[XLQ], x[XLQ + 1], x[XLQ + 2], x[XLQ + 3]  # lambda^q
     # the node vectors [n_z'^p, n_z'^q, n_y'^p, n_y'^q] (see beam._BEND_AXES)
-    a0, a1, a2 = _rotated(ref, _AZ_P, m0, m1, m2, m3)
-    b0, b1, b2 = _rotated(ref, _AZ_Q, k0, k1, k2, k3)
-    c0, c1, c2 = _rotated(ref, _AY_P, m0, m1, m2, m3)
-    d0, d1, d2 = _rotated(ref, _AY_Q, k0, k1, k2, k3)
+    a0, a1, a2 = _rotated(ref, AZ_P, m0, m1, m2, m3)
+    b0, b1, b2 = _rotated(ref, AZ_Q, k0, k1, k2, k3)
+    c0, c1, c2 = _rotated(ref, AY_P, m0, m1, m2, m3)
+    d0, d1, d2 = _rotated(ref, AY_Q, k0, k1, k2, k3)
     if keeping:
         kept[VECTORS_AT], kept[VECTORS_AT + 1], kept[VECTORS_AT + 2] = a0, a1, a2
         kept[VECTORS_AT + 3], kept[VECTORS_AT + 4], kept[VECTORS_AT + 5] = b0, b1, b2
@@ -204,26 +204,26 @@ def _deformations(x, ref, order, e, De, D2e, kept, keeping):
         g5 = nc
         g6 = -nd
         g1 = (ux, uy, uz)[k] + (((s3 * g3 + s4 * g4) + s5 * g5) + s6 * g6)
-        De[0, _XQ + k] = g1
-        De[1, _XQ + k] = 0.0
-        De[2, _XQ + k] = g3
-        De[3, _XQ + k] = g4
-        De[4, _XQ + k] = g5
-        De[5, _XQ + k] = g6
-        De[0, _XP + k] = -g1
-        De[1, _XP + k] = 0.0
-        De[2, _XP + k] = -g3
-        De[3, _XP + k] = -g4
-        De[4, _XP + k] = -g5
-        De[5, _XP + k] = -g6
+        De[0, XQ + k] = g1
+        De[1, XQ + k] = 0.0
+        De[2, XQ + k] = g3
+        De[3, XQ + k] = g4
+        De[4, XQ + k] = g5
+        De[5, XQ + k] = g6
+        De[0, XP + k] = -g1
+        De[1, XP + k] = 0.0
+        De[2, XP + k] = -g3
+        De[3, XP + k] = -g4
+        De[4, XP + k] = -g5
+        De[5, XP + k] = -g6
     if order >= 2:  # zero what is not written below (row 0 is written whole)
         _zero_structural(D2e)
     # Euler parameters: column i of Dn = 2 h_i for each vector; bending l^T Dn, torsion
     # n_(3-i)^T Dn
-    ha = _half_jacobian(ref, _AZ_P, m0, m1, m2, m3)  # D n_z'^p / 2
-    hb = _half_jacobian(ref, _AZ_Q, k0, k1, k2, k3)  # D n_z'^q / 2
-    hc = _half_jacobian(ref, _AY_P, m0, m1, m2, m3)  # D n_y'^p / 2
-    hd = _half_jacobian(ref, _AY_Q, k0, k1, k2, k3)  # D n_y'^q / 2
+    ha = _half_jacobian(ref, AZ_P, m0, m1, m2, m3)  # D n_z'^p / 2
+    hb = _half_jacobian(ref, AZ_Q, k0, k1, k2, k3)  # D n_z'^q / 2
+    hc = _half_jacobian(ref, AY_P, m0, m1, m2, m3)  # D n_y'^p / 2
+    hd = _half_jacobian(ref, AY_Q, k0, k1, k2, k3)  # D n_y'^q / 2
     for i in range(4):
         p0, p1, p2 = 2.0 * ha[i][0], 2.0 * ha[i][1], 2.0 * ha[i][2]  # D n_z'^p
         q0, q1, q2 = 2.0 * hb[i][0], 2.0 * hb[i][1], 2.0 * hb[i][2]  # D n_z'^q
@@ -240,47 +240,47 @@ def _deformations(x, ref, order, e, De, D2e, kept, keeping):
         g6 = -(lx * w0 + ly * w1 + lz * w2)
         g2p = half * ((d0 * p0 + d1 * p1 + d2 * p2) - (b0 * r0 + b1 * r1 + b2 * r2))
         g2q = half * ((a0 * w0 + a1 * w1 + a2 * w2) - (c0 * q0 + c1 * q1 + c2 * q2))
-        De[0, _XLP + i] = s3 * g3 + s5 * g5 + s2 * g2p
-        De[0, _XLQ + i] = s4 * g4 + s6 * g6 + s2 * g2q
-        De[1, _XLP + i] = g2p
-        De[1, _XLQ + i] = g2q
-        De[2, _XLP + i] = g3
-        De[2, _XLQ + i] = 0.0
-        De[3, _XLP + i] = 0.0
-        De[3, _XLQ + i] = g4
-        De[4, _XLP + i] = g5
-        De[4, _XLQ + i] = 0.0
-        De[5, _XLP + i] = 0.0
-        De[5, _XLQ + i] = g6
+        De[0, XLP + i] = s3 * g3 + s5 * g5 + s2 * g2p
+        De[0, XLQ + i] = s4 * g4 + s6 * g6 + s2 * g2q
+        De[1, XLP + i] = g2p
+        De[1, XLQ + i] = g2q
+        De[2, XLP + i] = g3
+        De[2, XLQ + i] = 0.0
+        De[3, XLP + i] = 0.0
+        De[3, XLQ + i] = g4
+        De[4, XLP + i] = g5
+        De[4, XLQ + i] = 0.0
+        De[5, XLP + i] = 0.0
+        De[5, XLQ + i] = g6
         if order >= 2:
             # bending: d2 e / dl dlambda = sign Dn
-            _store_mixed(D2e, 2, _XLP + i, -p0, -p1, -p2)
-            _store_mixed(D2e, 3, _XLQ + i, q0, q1, q2)
-            _store_mixed(D2e, 4, _XLP + i, r0, r1, r2)
-            _store_mixed(D2e, 5, _XLQ + i, -w0, -w1, -w2)
+            _store_mixed(D2e, 2, XLP + i, -p0, -p1, -p2)
+            _store_mixed(D2e, 3, XLQ + i, q0, q1, q2)
+            _store_mixed(D2e, 4, XLP + i, r0, r1, r2)
+            _store_mixed(D2e, 5, XLQ + i, -w0, -w1, -w2)
             # torsion between the nodes: l0 / 2 (Dn_0^T Dn_3 - Dn_2^T Dn_1)
             for j in range(4):
                 mixed = half * ((p0 * (2.0 * hd[j][0]) + p1 * (2.0 * hd[j][1])
                                  + p2 * (2.0 * hd[j][2]))
                                 - (r0 * (2.0 * hb[j][0]) + r1 * (2.0 * hb[j][1])
                                    + r2 * (2.0 * hb[j][2])))
-                D2e[1, _XLP + i, _XLQ + j] = mixed
-                D2e[1, _XLQ + j, _XLP + i] = mixed
+                D2e[1, XLP + i, XLQ + j] = mixed
+                D2e[1, XLQ + j, XLP + i] = mixed
     if order < 2:
         return
     # bending: d2 e / dlambda2 = 2 sign l . C; torsion within a node: l0 sign n_(3-i) . C_i
-    kl_a = _contraction(ref, _AZ_P, lx, ly, lz)
-    kl_b = _contraction(ref, _AZ_Q, lx, ly, lz)
-    kl_c = _contraction(ref, _AY_P, lx, ly, lz)
-    kl_d = _contraction(ref, _AY_Q, lx, ly, lz)
-    _store_symmetric(D2e, 2, _XLP, -2.0, kl_a, 0.0, kl_a)  # one tensor: its second term 0
-    _store_symmetric(D2e, 3, _XLQ, 2.0, kl_b, 0.0, kl_b)
-    _store_symmetric(D2e, 4, _XLP, 2.0, kl_c, 0.0, kl_c)
-    _store_symmetric(D2e, 5, _XLQ, -2.0, kl_d, 0.0, kl_d)
-    _store_symmetric(D2e, 1, _XLP, l0, _contraction(ref, _AZ_P, d0, d1, d2),
-                     -l0, _contraction(ref, _AY_P, b0, b1, b2))
-    _store_symmetric(D2e, 1, _XLQ, -l0, _contraction(ref, _AZ_Q, c0, c1, c2),
-                     l0, _contraction(ref, _AY_Q, a0, a1, a2))
+    kl_a = _contraction(ref, AZ_P, lx, ly, lz)
+    kl_b = _contraction(ref, AZ_Q, lx, ly, lz)
+    kl_c = _contraction(ref, AY_P, lx, ly, lz)
+    kl_d = _contraction(ref, AY_Q, lx, ly, lz)
+    _store_symmetric(D2e, 2, XLP, -2.0, kl_a, 0.0, kl_a)  # one tensor: its second term 0
+    _store_symmetric(D2e, 3, XLQ, 2.0, kl_b, 0.0, kl_b)
+    _store_symmetric(D2e, 4, XLP, 2.0, kl_c, 0.0, kl_c)
+    _store_symmetric(D2e, 5, XLQ, -2.0, kl_d, 0.0, kl_d)
+    _store_symmetric(D2e, 1, XLP, l0, _contraction(ref, AZ_P, d0, d1, d2),
+                     -l0, _contraction(ref, AY_P, b0, b1, b2))
+    _store_symmetric(D2e, 1, XLQ, -l0, _contraction(ref, AZ_Q, c0, c1, c2),
+                     l0, _contraction(ref, AY_Q, a0, a1, a2))
     # elongation: c Db^T W Db + 2 c_t De2^T De2 + sum_k slope_k D2e_k (k = 2 ... 6), and
     # (I - u u^T) / |l| on the translations: block by block of z = [l, lambda^p, lambda^q],
     # leaving out the terms that are zero by structure (e2 does not involve l, e3 and e5 not
@@ -288,11 +288,11 @@ def _deformations(x, ref, order, e, De, D2e, kept, keeping):
     # its r^q column
     ct2 = 2.0 * c_t
     for k in range(3):
-        i = _XQ + k
+        i = XQ + k
         g3i, g4i, g5i, g6i = De[2, i], De[3, i], De[4, i], De[5, i]
         uk = (ux, uy, uz)[k]
         for m in range(k, 3):
-            j = _XQ + m
+            j = XQ + m
             g3j, g4j, g5j, g6j = De[2, j], De[3, j], De[4, j], De[5, j]
             value = (c * (4.0 * ((g3i * g3j + g4i * g4j) + (g5i * g5j + g6i * g6j))
                           + ((g3i * g4j + g4i * g3j) + (g5i * g6j + g6i * g5j)))
@@ -301,24 +301,24 @@ def _deformations(x, ref, order, e, De, D2e, kept, keeping):
             D2e[0, i - 7, j - 7] = D2e[0, j - 7, i - 7] = value
             D2e[0, i - 7, j] = D2e[0, j, i - 7] = -value
             D2e[0, i, j - 7] = D2e[0, j - 7, i] = -value
-        for j in range(_XLP, _XLP + 4):
+        for j in range(XLP, XLP + 4):
             g3j, g5j = De[2, j], De[4, j]
             value = (c * (4.0 * (g3i * g3j + g5i * g5j) + (g4i * g3j + g6i * g5j))
                      + (s3 * D2e[2, i, j] + s5 * D2e[4, i, j]))
             D2e[0, i, j] = D2e[0, j, i] = value
             D2e[0, i - 7, j] = D2e[0, j, i - 7] = -value
-        for j in range(_XLQ, _XLQ + 4):
+        for j in range(XLQ, XLQ + 4):
             g4j, g6j = De[3, j], De[5, j]
             value = (c * (4.0 * (g4i * g4j + g6i * g6j) + (g3i * g4j + g5i * g6j))
                      + (s4 * D2e[3, i, j] + s6 * D2e[5, i, j]))
             D2e[0, i, j] = D2e[0, j, i] = value
             D2e[0, i - 7, j] = D2e[0, j, i - 7] = -value
     for i in range(4):
-        ip, iq = _XLP + i, _XLQ + i
+        ip, iq = XLP + i, XLQ + i
         g2p, g3i, g5i = De[1, ip], De[2, ip], De[4, ip]
         g2q, g4i, g6i = De[1, iq], De[3, iq], De[5, iq]
         for j in range(i, 4):
-            jp, jq = _XLP + j, _XLQ + j
+            jp, jq = XLP + j, XLQ + j
             value = (c * (4.0 * (g3i * De[2, jp] + g5i * De[4, jp])) + ct2 * (g2p * De[1, jp])
                      + (s2 * D2e[1, ip, jp] + s3 * D2e[2, ip, jp] + s5 * D2e[4, ip, jp]))
             D2e[0, ip, jp] = D2e[0, jp, ip] = value
@@ -326,7 +326,7 @@ def _deformations(x, ref, order, e, De, D2e, kept, keeping):
                      + (s2 * D2e[1, iq, jq] + s4 * D2e[3, iq, jq] + s6 * D2e[5, iq, jq]))
             D2e[0, iq, jq] = D2e[0, jq, iq] = value
         for j in range(4):
-            jq = _XLQ + j
+            jq = XLQ + j
             value = (c * (g3i * De[3, jq] + g5i * De[5, jq]) + ct2 * (g2p * De[1, jq])
                      + s2 * D2e[1, ip, jq])
             D2e[0, ip, jq] = D2e[0, jq, ip] = value
@@ -338,28 +338,28 @@ def inertia_kernel(x, v, ref, order, p, Dp, acc):
     x, v (14,), ref its packed reference row. Overwrites every entry it fills; no allocation."""
     l0 = ref[0]
     for k in range(3):
-        p[k] = x[_XP + k]
-        p[6 + k] = x[_XQ + k]
+        p[k] = x[XP + k]
+        p[6 + k] = x[XQ + k]
     if order >= 1:
         for r in range(24):
             for i in range(14):
                 Dp[r, i] = 0.0
         for k in range(3):
-            Dp[k, _XP + k] = 1.0
-            Dp[6 + k, _XQ + k] = 1.0
+            Dp[k, XP + k] = 1.0
+            Dp[6 + k, XQ + k] = 1.0
     if order >= 2:
         for k in range(3):
             acc[k] = 0.0
             acc[6 + k] = 0.0
     # the vectors [ax_p, ay_p, az_p, ax_q, ay_q, az_q] (see beam._INERTIA_AXES) at their rows
-    m0, m1, m2, m3 = x[_XLP], x[_XLP + 1], x[_XLP + 2], x[_XLP + 3]
-    _inertia_vector(v, ref, order, p, Dp, acc, 3, _XLP, l0, _AX_P, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 12, _XLP, 1.0, _AY_P, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 15, _XLP, 1.0, _AZ_P, m0, m1, m2, m3)
-    m0, m1, m2, m3 = x[_XLQ], x[_XLQ + 1], x[_XLQ + 2], x[_XLQ + 3]
-    _inertia_vector(v, ref, order, p, Dp, acc, 9, _XLQ, l0, _AX_Q, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 18, _XLQ, 1.0, _AY_Q, m0, m1, m2, m3)
-    _inertia_vector(v, ref, order, p, Dp, acc, 21, _XLQ, 1.0, _AZ_Q, m0, m1, m2, m3)
+    m0, m1, m2, m3 = x[XLP], x[XLP + 1], x[XLP + 2], x[XLP + 3]
+    _inertia_vector(v, ref, order, p, Dp, acc, 3, XLP, l0, AX_P, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 12, XLP, 1.0, AY_P, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 15, XLP, 1.0, AZ_P, m0, m1, m2, m3)
+    m0, m1, m2, m3 = x[XLQ], x[XLQ + 1], x[XLQ + 2], x[XLQ + 3]
+    _inertia_vector(v, ref, order, p, Dp, acc, 9, XLQ, l0, AX_Q, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 18, XLQ, 1.0, AY_Q, m0, m1, m2, m3)
+    _inertia_vector(v, ref, order, p, Dp, acc, 21, XLQ, 1.0, AZ_Q, m0, m1, m2, m3)
 
 
 @kernel(inline="always")

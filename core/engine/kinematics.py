@@ -151,7 +151,7 @@ def hessians_at_solution(table):
 
 
 @kernel
-def _elements(table, x, order):
+def evaluate_elements(table, x, order):
     """The slaves of the rigid clusters from their masters in x (`rigid_kernels`), then the
     deformations of order `order` at x."""
     if _i(table, slot.DIMS)[ed.NSLAVES] > 0:
@@ -161,7 +161,7 @@ def _elements(table, x, order):
 
 # -- kinematics -----------------------------------------------------------------------------------
 @kernel
-def _residual(table, x, q, g):
+def kinematic_residual(table, x, q, g):
     """g (n_free,) = [e_rigid; e_dof - q_e; x_dof - q_x] at x with the deformations in slot e;
     returns the largest |g_i| over its row's tolerance (slot row_tolerance): at most 1 when
     solved, NaN when g is not finite."""
@@ -185,7 +185,7 @@ def _residual(table, x, q, g):
 
 
 @kernel
-def _store(table, q, x):
+def store_solution(table, q, x):
     """Factor J at the solved x (deformations of `solution_order` evaluated there) and keep
     both as the next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the
     configuration is singular."""
@@ -246,7 +246,7 @@ def compute_DF(table):
 
 
 @kernel
-def _newton_step(table, x, g, dx):
+def newton_step(table, x, g, dx):
     """x -= J^-1 g on the free coordinates, with the factors in slot lu (the step into dx,
     n_free); the largest |dx_a| over its unknown's tolerance (slot step_tolerance, at least
     ROUND_OFF |x_a|: a step below a few ulps of x_a cannot refine it): at most 1 when
@@ -312,14 +312,14 @@ def solve_positions(table, q):
     if not all_finite(x):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):
-        _elements(table, x, 0)  # the residual needs e alone; De only for a step
-        if _residual(table, x, q, g) <= 1.0:
+        evaluate_elements(table, x, 0)  # the residual needs e alone; De only for a step
+        if kinematic_residual(table, x, q, g) <= 1.0:
             copy(_f(table, slot.X)[:nx], x[:nx])
             return ed.OK
         deformations(table, x, 1, True)
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
-        if not np.isfinite(_newton_step(table, x, g, dx)):
+        if not np.isfinite(newton_step(table, x, g, dx)):
             return ed.NOT_CONVERGED
     return ed.NOT_CONVERGED
 
@@ -358,12 +358,12 @@ def solve_kinematics(table, q):
         # iterate's (the chord steps read the kept factors, not De)
         order = solution_order(table)
         held = dims[ed.PREDICTION_HELD] == 1 and order == AT_SOLUTION
-        _elements(table, x, order if held else 0)
-        if _residual(table, x, q, g) <= 1.0:
+        evaluate_elements(table, x, order if held else 0)
+        if kinematic_residual(table, x, q, g) <= 1.0:
             if not held:
                 deformations(table, x, order, True)  # the slaves are filled
             dims[ed.PREDICTION_HELD] = 1
-            return _store(table, q, x)
+            return store_solution(table, q, x)
         dims[ed.PREDICTION_HELD] = 0
         previous = 0.0  # no rate before the second step
         # a chord iterate's e with De, the motion's solution order: a chord step from the
@@ -372,37 +372,37 @@ def solve_kinematics(table, q):
         # solution order (D2e, some ten times e) stays for the iterate it stops at
         chord_order = order if order == AT_SOLUTION else 0
         for _ in range(dims[ed.CHORD_ITERATIONS]):
-            step = _newton_step(table, x, g, dx)
+            step = newton_step(table, x, g, dx)
             if not np.isfinite(step):
                 break
-            _elements(table, x, chord_order)
+            evaluate_elements(table, x, chord_order)
             # chord steps contract linearly, at the rate of two successive steps: the error
             # left after a step is step rate / (1 - rate), not the step itself (a small step
             # of a slow contraction is no convergence)
             rate = step / previous if previous > 0.0 else 1.0
             previous = step
-            if _residual(table, x, q, g) <= 1.0 or step == 0.0 or (
+            if kinematic_residual(table, x, q, g) <= 1.0 or step == 0.0 or (
                     rate < 1.0 and step * rate <= 1.0 - rate):
                 if chord_order != order:
                     deformations(table, x, order, True)
-                return _store(table, q, x)
+                return store_solution(table, q, x)
     else:
         dims[ed.PREDICTION_HELD] = 0
         copy(x, _f(table, slot.X_START))
     if not all_finite(x):
         copy(x, _f(table, slot.X))
     for _ in range(dims[ed.MAX_NEWTON]):  # full Newton, stopping as solve_positions does
-        _elements(table, x, 1)
-        if _residual(table, x, q, g) <= 1.0:
-            _elements(table, x, solution_order(table))
-            return _store(table, q, x)
+        evaluate_elements(table, x, 1)
+        if kinematic_residual(table, x, q, g) <= 1.0:
+            evaluate_elements(table, x, solution_order(table))
+            return store_solution(table, q, x)
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
-        step = _newton_step(table, x, g, dx)
+        step = newton_step(table, x, g, dx)
         if not np.isfinite(step):
             return ed.NOT_CONVERGED
         if step <= 1.0:
-            _elements(table, x, solution_order(table))
-            return _store(table, q, x)
+            evaluate_elements(table, x, solution_order(table))
+            return store_solution(table, q, x)
     return ed.NOT_CONVERGED
 

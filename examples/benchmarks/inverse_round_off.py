@@ -50,7 +50,7 @@ def _parts(model, wanted):
     from flexure.controllers.move_path import move_targets, target_port
     from flexure.controllers.profiles import ThirdOrderProfile
     from flexure.core import output_value, static_equilibrium
-    from flexure.core.analysis.inverse_dynamics_free import _resolved_ports
+    from flexure.core.analysis.inverse_dynamics_free import resolved_ports
 
     pairs, names, delta = move_targets(model, wanted)
     rest = static_equilibrium(model)
@@ -63,7 +63,7 @@ def _parts(model, wanted):
         s, rate, acceleration, _ = profile.evaluate(t)
         return start + delta * s, delta * rate, delta * acceleration
 
-    return (path, *_resolved_ports(model, names, [pair.input_name for pair in pairs]))
+    return (path, *resolved_ports(model, names, [pair.input_name for pair in pairs]))
 
 
 def _balance_matrix(model, part, config):
@@ -81,7 +81,7 @@ def compare(end=1.0, times=TIMES):
     """Rows {t, w, dw, a, da, dx, dQ, walk_dx, walk_dQ, walk_dw, kappa, ratio} at the steps
     ends nearest `times` (module docstring; N, m/s^2, m)."""
     from flexure.controllers.dynamic_feedforward import move_inverse_dynamics
-    from flexure.core.analysis.inverse_dynamics_free import _start
+    from flexure.core.analysis.inverse_dynamics_free import start_at_rest
     from flexure.core.analysis.inverse_dynamics_partition import Partitioned
     from flexure.core.analysis.inverse_engine import engine_motion
     from flexure.core.analysis.inverse_evaluation import NumpyMotion
@@ -95,7 +95,7 @@ def compare(end=1.0, times=TIMES):
     mech = Mechanics(model)
     parts = {}
     for name, evaluator in (("engine", engine_motion(model)), ("numpy", NumpyMotion(mech))):
-        _, config = _start(model, mech, evaluator, path, out_ports, run.times)
+        _, config = start_at_rest(model, mech, evaluator, path, out_ports, run.times)
         parts[name] = Partitioned(model, evaluator, path, out_ports, in_ports, config,
                                   TOLERANCE, 30)
     rows = []

@@ -82,7 +82,7 @@ def startup(*, repeat=5, quick=False):
     (user + system: the shared machine's other load inflates walls far more), side by side
     with Exudyn's whole process for the same work where there is one, alternating, after one
     unmeasured round; and the cold first use."""
-    flexure = _flexure_command()
+    flexure = flexure_command()
     python = [sys.executable, "-c"]
     env = user_environment()
 
@@ -142,7 +142,7 @@ def startup(*, repeat=5, quick=False):
     return rows
 
 
-def _flexure_command():
+def flexure_command():
     """The `flexure` command of this Python (its script, or the module's main)."""
     script = Path(sys.executable).with_name("flexure")
     return ([str(script)] if script.exists() else

@@ -17,7 +17,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .latency import _flexure_command, user_environment
+from .latency import flexure_command, user_environment
 from .measure import alternate, command_cpu, log
 from .table import Row
 
@@ -27,7 +27,7 @@ LIMITS = {"modes": 3.0, "reduce": 5.0, "report": 20.0}  # CPU s
 
 def manipulator_analyses(*, repeat=3, quick=False):
     """Rows: each command's CPU seconds against its limit."""
-    flexure = _flexure_command()
+    flexure = flexure_command()
     env = user_environment()
     with tempfile.TemporaryDirectory(prefix="flexure_manipulator_") as folder:
         commands = {

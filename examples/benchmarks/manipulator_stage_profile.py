@@ -62,15 +62,15 @@ def _replica():
     from flexure.core.engine.factors import j_solve
     from flexure.core.engine.inertia_product import force_minus_mass
     from flexure.core.engine.kinematics import (
-        _elements,
-        _newton_step,
-        _residual,
-        _store,
         deformations,
         dof_rows,
         dof_values,
+        evaluate_elements,
+        kinematic_residual,
+        newton_step,
         predicted_coordinates,
         solution_order,
+        store_solution,
     )
     from flexure.core.engine.motion import any_nonzero
     from flexure.core.engine.operations import (
@@ -88,7 +88,7 @@ def _replica():
     @kernel
     def keep(table, q, x):
         """x and q kept as the next warm start, J's factors as they were (a prefix that
-        stops before `_store`: the next call predicts from this call's x as a run would)."""
+        stops before `store_solution`: the next call predicts from this call's x as a run would)."""
         copy(_f(table, slot.X)[: x.size], x)
         copy(_f(table, slot.Q), q)
 
@@ -102,20 +102,20 @@ def _replica():
         if upto == 0:
             keep(table, q, x)
             return 0
-        _elements(table, x, 0)
-        solved = _residual(table, x, q, g) <= 1.0
+        evaluate_elements(table, x, 0)
+        solved = kinematic_residual(table, x, q, g) <= 1.0
         if upto == 1:
             keep(table, q, x)
             return 0
         chords = 0
         previous = 0.0
         while not solved and chords < dims[ed.CHORD_ITERATIONS]:
-            step = _newton_step(table, x, g, dx)
+            step = newton_step(table, x, g, dx)
             chords += 1
-            _elements(table, x, solution_order(table))
+            evaluate_elements(table, x, solution_order(table))
             rate = step / previous if previous > 0.0 else 1.0
             previous = step
-            solved = _residual(table, x, q, g) <= 1.0 or step == 0.0 or (
+            solved = kinematic_residual(table, x, q, g) <= 1.0 or step == 0.0 or (
                 rate < 1.0 and step * rate <= 1.0 - rate)
         if upto == 2:
             keep(table, q, x)
@@ -125,7 +125,7 @@ def _replica():
         if upto == 3:
             keep(table, q, x)
             return chords
-        _store(table, q, x)
+        store_solution(table, q, x)
         return chords
 
     @kernel
