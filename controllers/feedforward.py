@@ -198,7 +198,7 @@ def low_frequency_model(model: Model, *, linear_model: LinearModel | None = None
     # would be that of whichever r modes the eigensolver returned
     if (np.linalg.cond(B_r) > 1e12 or np.linalg.cond(C_r) > 1e12
             or _degenerate(modes.frequencies_hz, r)):
-        raise ControlDesignError(_refusal(model, pairs, modes.frequencies_hz, r))
+        raise ControlDesignError(refusal_message(model, pairs, modes.frequencies_hz, r))
     left, right = np.linalg.inv(B_r), np.linalg.inv(C_r)
     return LowFrequencyModel(
         mass=left @ right,
@@ -219,7 +219,7 @@ def _degenerate(frequencies_hz, r):
             <= DEGENERATE_RTOL * abs(frequencies_hz[r - 1]))
 
 
-def _refusal(model, pairs, frequencies_hz, r):
+def refusal_message(model, pairs, frequencies_hz, r):
     """Why the modal feedforward has no inverse of the r lowest modes, and what to do: when
     mode r has the frequency of mode r + 1 (a symmetric mechanism), "the r lowest modes" are
     any r of a larger eigenspace, which the eigensolver picks at random; otherwise the

@@ -166,7 +166,7 @@ def test_the_manipulators_stage_profile_replicates_the_stage_force():
     g at a state one ESDIRK step from the warm start both take, a cold solution (the same
     kernels in the same order: within 1e-12 of the forces' scale, DF^T (r - M conv)); each
     prefix leaves a warm start the next call can take."""
-    from examples.benchmarks.manipulator_stage_profile import STEPS, _replica
+    from examples.benchmarks.manipulator_stage_profile import STEPS, make_replica
     from flexure.core import Simulator, load_scene
     from flexure.core.engine import data as ed
     from flexure.core.engine import engine
@@ -191,7 +191,7 @@ def test_the_manipulators_stage_profile_replicates_the_stage_force():
         sim.data.int_array("dims")[ed.WARM] = 0
         force(first, acc)
 
-    replica, table = _replica(), sim.data.address
+    replica, table = make_replica(), sim.data.address
     out = np.full(2 * n, np.nan)
     cold_at_first()
     replica(table, np.ascontiguousarray(second[None, :]), acc, out, len(STEPS) - 1, 1)

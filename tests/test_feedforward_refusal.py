@@ -8,7 +8,7 @@ import pytest
 
 from flexure.controllers import low_frequency_model
 from flexure.controllers.feedback import LoopPair
-from flexure.controllers.feedforward import _refusal
+from flexure.controllers.feedforward import refusal_message
 from flexure.core import build_model, natural_frequencies, scene_path
 from flexure.core.errors import FlexureError
 
@@ -32,8 +32,8 @@ def test_degenerate_lowest_modes_are_refused_with_what_to_do():
 
 def test_a_mode_the_loops_miss_names_the_modes_and_the_remedies():
     pairs = [LoopPair(0, 0, "F", "x")]
-    message = _refusal(build_model(tomllib.loads(scene_path("stage_planar_1dof").read_text())),
-                       pairs, np.array([10.6, 2128.9]), 1)
+    model = build_model(tomllib.loads(scene_path("stage_planar_1dof").read_text()))
+    message = refusal_message(model, pairs, np.array([10.6, 2128.9]), 1)
     assert "needs the 1 lowest mode(s) (10.6 Hz) driven and seen by the 1 loop(s) (F->x)" in (
         message)
     assert message.endswith("or use --feedforward inverse (the inverse of the model's own "

@@ -186,7 +186,7 @@ def test_one_evaluation_equals_the_numpy_formulas(t):
     `motion_response`'s numpy evaluation of M_ff qddot_f = Q_f - M_fk u'' and
     F = M_kf qddot_f + M_kk u'' - Q_k at the same (t, q_f, qdot_f), to round-off: 1e-12 of
     their largest (measured 1.0e-14; the efforts' scale at least 1 N)."""
-    from flexure.core.analysis.motion_response import _Balance
+    from flexure.core.analysis.motion_response import PrescribedBalance
     from flexure.core.mechanics.mechanics import Mechanics
 
     model = build_model(with_motion("stage_planar_3dof", "3", "x", value=0.001))
@@ -196,7 +196,7 @@ def test_one_evaluation_equals_the_numpy_formulas(t):
     y = np.concatenate([1e-5 * rng.standard_normal(n), 1e-3 * rng.standard_normal(n)])
     ydot = sim.derivative(t, y)
     q, qdot = sim.q_ref + y[:n], y[n:]
-    balance = _Balance(model, Mechanics(model), increment_path(model, 0.04), np.zeros(1))
+    balance = PrescribedBalance(model, Mechanics(model), increment_path(model, 0.04), np.zeros(1))
     _, _, qddot, efforts, _ = balance.evaluate(t, q[free], qdot[free])
     scale = np.max(np.abs(qddot))
     assert np.max(np.abs(ydot[n:] - qddot)) <= 1e-12 * scale

@@ -116,6 +116,6 @@ def test_a_slow_first_tenth_says_how_long_the_run_will_take(monkeypatch):
 @pytest.mark.parametrize(("seconds", "text"), [(42.0, "42 s"), (720.0, "12 min"),
                                                (12600.0, "3.5 h"), (181440.0, "2.1 days")])
 def test_durations_read_as_a_person_reads_them(seconds, text):
-    from flexure.core.reporting.progress import _duration
+    from flexure.core.reporting.progress import duration_words
 
-    assert _duration(seconds) == text
+    assert duration_words(seconds) == text

@@ -123,7 +123,7 @@ def test_reduce_command_refuses_bad_options_without_traceback(argv, message, tmp
 
 def test_the_projected_trials_give_the_built_models_frequencies():
     """At rest without load the bisection's trials project the full linearisation onto the
-    motions that keep the frozen deformations zero (`_projected_frequencies`, one QR for
+    motions that keep the frozen deformations zero (`projected_frequencies`, one QR for
     every prefix of the order): for the 19-DOF spatial stage with the first 2, 5 and 9 of
     its freezable deformations frozen, the lowest three frequencies of the built reduced
     scene to 1e-7 relative (measured 4e-9 on the lowest: round-off of the stiff elongations
@@ -132,10 +132,10 @@ def test_the_projected_trials_give_the_built_models_frequencies():
     (measured 3.8e-9 on the lowest, 7e-12 on the others); the loaded scene (1 N sideways) is
     not projected."""
     from flexure.core.analysis.reduction import (
-        _deformation_rows,
-        _projected_frequencies,
+        deformation_rows,
         frozen_scene,
         lowest_frequencies,
+        projected_frequencies,
     )
     from flexure.core.mechanics.freezing import freezable
 
@@ -145,11 +145,11 @@ def test_the_projected_trials_give_the_built_models_frequencies():
         node.pop("force", None)
     model = build_model(data)
     modes, _ = lowest_frequencies(model, 3)
-    rows = _deformation_rows(model, data)
+    rows = deformation_rows(model, data)
     keys = sorted(rows)
     order = [keys[k] for k in freezable(model, [rows[key] for key in keys])]
     lin = modes.linear_model
-    projected = _projected_frequencies(model, lin, rows, order, 3)
+    projected = projected_frequencies(model, lin, rows, order, 3)
     assert projected is not None
     for count in (2, 5, 9):
         scene, _ = frozen_scene(data, order[:count])
@@ -162,4 +162,4 @@ def test_the_projected_trials_give_the_built_models_frequencies():
         assert np.allclose(found, np.sqrt(values) / (2.0 * np.pi), rtol=1e-7, atol=0.0)
     model = build_model(loaded)
     modes, _ = lowest_frequencies(model, 3)
-    assert _projected_frequencies(model, modes.linear_model, rows, order, 3) is None
+    assert projected_frequencies(model, modes.linear_model, rows, order, 3) is None

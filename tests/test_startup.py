@@ -198,15 +198,15 @@ def test_the_subcommands_are_read_from_flexures_own_entry_points():
     importlib.metadata); the same as importlib.metadata lists, and only its section's."""
     import importlib.metadata
 
-    from flexure.core.cli import _entries, _section
+    from flexure.core.cli import entry_points_of, entry_points_section
 
     expected = {(e.name, e.value) for e in importlib.metadata.entry_points(
         group="flexure.commands")}
-    assert set(_entries("flexure.commands")) == expected
+    assert set(entry_points_of("flexure.commands")) == expected
     text = ("[console_scripts]\nflexure = flexure.core.cli:main\n\n[flexure.commands]\n"
             "# a comment\nanalyze = flexure.core.cli.analyze:register\n"
             "loop=flexure.controllers.cli:register\n[other]\nx = y:z\n")
-    assert _section(text, "flexure.commands") == [
+    assert entry_points_section(text, "flexure.commands") == [
         ("analyze", "flexure.core.cli.analyze:register"),
         ("loop", "flexure.controllers.cli:register")]
 

@@ -51,7 +51,7 @@ class MotionResponse:
     evaluations: int
 
 
-class _Balance:
+class PrescribedBalance:
     """The equations of motion with the inputs prescribed, evaluated at (t, q_f, qdot_f)."""
 
     def __init__(self, model, mech, motion, forces):
@@ -150,7 +150,7 @@ def motion_response(model: Model, times: ArrayLike, motion: Path, *,
         return sample_path(model, motion, t, n_kin)
 
     held = np.zeros(len(model.inputs)) if inputs is None else input_values(model, inputs)
-    balance = _Balance(model, mech, path, held)
+    balance = PrescribedBalance(model, mech, path, held)
     start = static_equilibrium(model, inputs=held, motions=path(times[0])[0], mechanics=mech)
     balance.x = start.x
     n = model.free_dofs.size

@@ -18,7 +18,7 @@ cost. SPACAR users freeze them by hand; `propose_reduction` does it by measureme
    largest count that does, by bisection over the count (each trial
    builds the reduced scene and computes its modes; for a model at rest without load, the
    trials project the full model's linearisation instead, exact to round-off, and the
-   chosen reduced scene is built once: `_projected_frequencies`). A deformation whose freezing would
+   chosen reduced scene is built once: `projected_frequencies`). A deformation whose freezing would
    over-constrain the model together with those before it (a release that removes an
    over-constraint, such as a leaf's local cut, or the second leaf of a parallel pair) is
    skipped: `freezing.freezable` tests the rank of the constraint rows incrementally, so
@@ -101,7 +101,7 @@ def energy_shares(model, data, keep):
     total = energy.sum(axis=0)
     share = energy / np.where(total > 0.0, total, 1.0)
     return {key: float(share[rows].sum(axis=0).max())
-            for key, rows in _deformation_rows(model, data).items()}, modes
+            for key, rows in deformation_rows(model, data).items()}, modes
 
 
 def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(),
@@ -137,17 +137,17 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
     rest = [key for key in in_scene if key not in set(forced)]
     rest = [rest[k] for k in ordered([shares[key] for key in rest])]
     candidates = forced + rest
-    rows = _deformation_rows(model, data)
+    rows = deformation_rows(model, data)
     taken = freezable(model, [rows[key] for key in candidates])
     order = [candidates[k] for k in taken]
     forced = [key for key in order if key in set(forced)]
 
-    projected = _projected_frequencies(model, modes.linear_model, rows, order, keep)
+    projected = projected_frequencies(model, modes.linear_model, rows, order, keep)
 
     def trial(count, *, build=False):
         """(reduced scene, its frequencies, whether the DOFs were chosen, NDOF, frozen), or
         None when the first `count` of `order` frozen give no valid model. Without `build`,
-        where the model is at rest (`_projected_frequencies`), the frequencies of the full
+        where the model is at rest (`projected_frequencies`), the frequencies of the full
         model's linearisation restricted to the motions that keep them zero (the scene and
         the rest unset: only the bisection's verdict)."""
         chosen_set = order[:count]
@@ -217,7 +217,7 @@ def propose_reduction(data: dict, keep: int, tolerance: float = 1.0, *, freeze=(
                      forced_hz=forced_hz, ndof_forced=ndof_forced)
 
 
-def _projected_frequencies(model, lin, rows, order, keep):
+def projected_frequencies(model, lin, rows, order, keep):
     """A function giving the lowest `keep` frequencies (Hz) of `model` with the first `count`
     deformations of `order` (keys of `rows`, whose values are index arrays) frozen, from its
     linearisation `lin`, or None where that is not exact.
@@ -302,7 +302,7 @@ def frozen_scene(data, frozen):
     return scene, True
 
 
-def _deformation_rows(model, data):
+def deformation_rows(model, data):
     """{(scene element, deformation): the model's deformation indices of it (one per
     segment)} for the released and DOF deformations of `model`."""
     owner = _scene_elements(data)

@@ -1,7 +1,7 @@
 """The `flexure` command: a dispatcher over subcommands.
 
 Subcommands register themselves through the entry-point group "flexure.commands" of
-flexure's own distribution (pyproject.toml; read from its entry_points.txt, `_entries`): each
+flexure's own distribution (pyproject.toml; read from its entry_points.txt, `entry_points_of`): each
 entry is a function `register(subparsers)` that adds one parser and sets
 `run=function(args) -> exit code`. That keeps `core` free of imports of `fmu` and
 `controllers`, whose commands live beside their code.
@@ -38,7 +38,7 @@ def build_parser(argv=None):
 
     parser.add_argument("--version", action="version", version=f"flexure {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    entries = _entries("flexure.commands")
+    entries = entry_points_of("flexure.commands")
     named = next((word for word in (argv or []) if not word.startswith("-")), None)
     chosen = [entry for entry in entries if entry[0] == named] or entries
     for _, value in sorted(chosen):
@@ -47,7 +47,7 @@ def build_parser(argv=None):
     return parser
 
 
-def _entries(group):
+def entry_points_of(group):
     """(name, "module:attribute") of the entry points of `group` that flexure's distribution
     declares: read from its metadata's entry_points.txt, the first copy on sys.path (as the
     import system finds the package), else through importlib.metadata (which imports email,
@@ -63,7 +63,7 @@ def _entries(group):
                                                  and lowered.endswith(".dist-info")):
                 try:
                     with open(os.path.join(folder or ".", name, "entry_points.txt")) as handle:
-                        return _section(handle.read(), group)
+                        return entry_points_section(handle.read(), group)
                 except OSError:
                     continue
     import importlib.metadata
@@ -71,7 +71,7 @@ def _entries(group):
     return [(entry.name, entry.value) for entry in importlib.metadata.entry_points(group=group)]
 
 
-def _section(text, group):
+def entry_points_section(text, group):
     """The (name, value) lines of the section [group] of an entry_points.txt (INI)."""
     found, inside = [], False
     for line in text.splitlines():

@@ -56,10 +56,11 @@ class Progress:
         """'12.0 s' and, before the end, the time to go at the rate so far."""
         if fraction <= 0.0 or fraction >= 1.0:
             return f"{elapsed:.1f} s"
-        return f"{elapsed:.1f} s, about {_duration(elapsed * (1.0 - fraction) / fraction)} to go"
+        left = elapsed * (1.0 - fraction) / fraction
+        return f"{elapsed:.1f} s, about {duration_words(left)} to go"
 
 
-def _duration(seconds):
+def duration_words(seconds):
     """A duration as a person reads it: '40 s', '12 min', '3.5 h', '2.1 days'."""
     if seconds < 100.0:
         return f"{seconds:.0f} s"

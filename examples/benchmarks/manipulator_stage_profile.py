@@ -46,7 +46,7 @@ STEPS = ("predict", "residual", "chord", "De at solution", "J factor", "xdot", "
          "element rates", "stresses", "xddot_c", "force - mass", "J^-T, DF^T")
 
 
-def _replica():
+def make_replica():
     """The compiled replica (numba), built on first use: replica(table, ys, acc, out, upto,
     count) makes `count` stage forces alternating the states ys, each stopped after step
     `upto` (an index of STEPS; len(STEPS) - 1: the whole force); returns the chord
@@ -245,7 +245,7 @@ def profile(count=400, batches=5, **replay):
     acc = (second[n:] - first[n:]) / h
     pairs = {"a step apart": np.stack([first, second]),
              "a correction apart": np.stack([first, first + CORRECTION * (second - first)])}
-    replica = _replica()
+    replica = make_replica()
     out = np.zeros(2 * n)
 
     def cpu(function, *args):
