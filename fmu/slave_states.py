@@ -69,10 +69,10 @@ FREED = RefusedState("the state was freed by fmi2FreeFMUstate")
 # even at interpreter exit, when releasing an over-freed handle would corrupt the heap).
 HOLDS = 16
 FREED_KEPT = 10_000
-_FREED = collections.deque()  # tuples of HOLDS references to a freed FMUState
-_OVER_FREED = []  # such tuples whose handle was freed more than once: never released
-hold_namespace(_FREED)
-hold_namespace(_OVER_FREED)
+FREED_HOLDS = collections.deque()  # tuples of HOLDS references to a freed FMUState
+OVER_FREED_HOLDS = []  # such tuples whose handle was freed more than once: never released
+hold_namespace(FREED_HOLDS)
+hold_namespace(OVER_FREED_HOLDS)
 
 
 class FMUState:
@@ -91,9 +91,9 @@ class FMUState:
         # the host freed it (its reference was the last): keep the object, drop the data
         try:
             self.data = FREED
-            if len(_FREED) >= FREED_KEPT:
-                _release(_FREED.popleft())
-            _FREED.append((self,) * HOLDS)
+            if len(FREED_HOLDS) >= FREED_KEPT:
+                _release(FREED_HOLDS.popleft())
+            FREED_HOLDS.append((self,) * HOLDS)
         except BaseException:  # noqa: BLE001, S110 -- nothing may raise out of a finalizer
             pass
 
@@ -103,12 +103,12 @@ def _release(holds):
     # held: the tuple's HOLDS, `handle` and getrefcount's argument; fewer after an extra free
     handle = holds[0]
     if sys.getrefcount(handle) != HOLDS + 2:
-        _OVER_FREED.append(holds)
+        OVER_FREED_HOLDS.append(holds)
 
 
 def freed_states():
     """(freed FMU states kept valid, of which freed more than once), for the tests."""
-    return len(_FREED), len(_OVER_FREED)
+    return len(FREED_HOLDS), len(OVER_FREED_HOLDS)
 
 
 class StateSnapshots:

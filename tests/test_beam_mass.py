@@ -128,7 +128,7 @@ def test_the_cantilever_through_the_operation_against_the_plain_twin():
     check_against_the_twin(model, mechanics, data, random_states(model, q0, seed=7),
                            tangent_rtol=1e-9)
     op = operations.OP_BEAM_MASSES  # connected: `run` reaches the closed form
-    assert engine._TABLE[op] == engine.ENTRIES[op].address
+    assert engine.ENGINE_TABLE[op] == engine.ENTRIES[op].address
     # and the BEAM group takes it; the others (the nodes' Euler parameters) are not BEAMs'
     dims = data.int_array("dims")
     statuses = [beam_mass_entry.group_masses(data.address, g, 0, False)

@@ -172,7 +172,7 @@ def test_a_controller_looked_up_again_leaves_no_cyclic_garbage(monkeypatch):
 
     with blas.blas_threads():
         pass
-    replaced = weakref.ref(blas._libraries())
+    replaced = weakref.ref(blas.blas_libraries())
     monkeypatch.setitem(sys.modules, "flexure_test_new_module", types.ModuleType("new"))
     gc.collect()
     gc.disable()

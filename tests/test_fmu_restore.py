@@ -251,12 +251,12 @@ def test_a_freed_state_is_kept_valid_and_released_in_turn(monkeypatch):
     from flexure.fmu.slave_states import FREED, HOLDS, FMUState
 
     monkeypatch.setattr(slave_states, "FREED_KEPT", 2)
-    monkeypatch.setattr(slave_states, "_FREED", collections.deque())
-    monkeypatch.setattr(slave_states, "_OVER_FREED", [])
+    monkeypatch.setattr(slave_states, "FREED_HOLDS", collections.deque())
+    monkeypatch.setattr(slave_states, "OVER_FREED_HOLDS", [])
     handle = FMUState(b"state")
     address = id(handle)
     del handle  # the host's free
-    kept = slave_states._FREED[0][0]
+    kept = slave_states.FREED_HOLDS[0][0]
     assert id(kept) == address and kept.data is FREED
     assert sys.getrefcount(kept) == HOLDS + 2  # the tuple's, `kept` and the argument
     ctypes.pythonapi.Py_DecRef(ctypes.py_object(kept))  # a second free by the host
@@ -264,7 +264,7 @@ def test_a_freed_state_is_kept_valid_and_released_in_turn(monkeypatch):
     for _ in range(2):
         FMUState(b"other")  # freed at once: the first of them evicts the over-freed one
     assert slave_states.freed_states() == (2, 1)
-    over = slave_states._OVER_FREED[0][0]
+    over = slave_states.OVER_FREED_HOLDS[0][0]
     assert id(over) == address
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(over))  # give back what the test took away
     FMUState(b"third")  # evicts one freed once: released, not kept

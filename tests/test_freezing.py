@@ -89,7 +89,7 @@ def test_the_complement_is_orthonormal_and_orthogonal_to_what_is_taken():
     rows = scaled_De[np.ix_(group, columns)]
     inside = basis.T @ rows.T
     (reflectors, tau), _ = scipy.linalg.qr(inside, mode="raw")
-    shrunk = freezing._without_leading(np.eye(basis.shape[1], order="F"), reflectors, tau)
+    shrunk = freezing.without_leading(np.eye(basis.shape[1], order="F"), reflectors, tau)
     # W Q without its first two columns: Q formed explicitly from the same factorisation
     q = scipy.linalg.qr(inside, mode="full")[0]
     assert np.abs(shrunk - q[:, 2:]).max() < 1e-14
@@ -102,7 +102,7 @@ def test_the_complement_is_orthonormal_and_orthogonal_to_what_is_taken():
 
 
 def test_the_blocked_reflections_equal_the_explicit_product():
-    """`_without_leading` (LAPACK's blocked dormqr) against W times Q formed explicitly: a
+    """`without_leading` (LAPACK's blocked dormqr) against W times Q formed explicitly: a
     random orthonormal W (60, 40) and 30 reflections; the identity (100, 100) and 70 (more
     than dormqr's block of 64)."""
     rng = np.random.default_rng(7)
@@ -110,9 +110,9 @@ def test_the_blocked_reflections_equal_the_explicit_product():
     parts = rng.standard_normal((40, 30))
     (reflectors, tau), _ = scipy.linalg.qr(parts, mode="raw")
     expected = w @ scipy.linalg.qr(parts, mode="full")[0][:, 30:]
-    assert np.abs(freezing._without_leading(w, reflectors, tau) - expected).max() < 1e-13
+    assert np.abs(freezing.without_leading(w, reflectors, tau) - expected).max() < 1e-13
     big = rng.standard_normal((100, 70))
     (reflectors, tau), _ = scipy.linalg.qr(big, mode="raw")
-    shrunk = freezing._without_leading(np.eye(100, order="F"), reflectors, tau)
+    shrunk = freezing.without_leading(np.eye(100, order="F"), reflectors, tau)
     assert shrunk.shape == (100, 30)
     assert np.abs(shrunk - scipy.linalg.qr(big, mode="full")[0][:, 70:]).max() < 1e-13

@@ -110,10 +110,10 @@ def test_a_kernels_untyped_ir_is_made_once_for_its_call_sites():
     a, b = np.linspace(0.0, 1.0, 11), np.linspace(2.0, 3.0, 11)
     table = array_tables.array_table([a, b], "ff")
     floats = array_tables.floats.py_func
-    for key in [key for key in inline_copy._IR_OF if key[0] is floats]:
-        del inline_copy._IR_OF[key]  # made by other tests' compilations in this process
+    for key in [key for key in inline_copy.IR_OF if key[0] is floats]:
+        del inline_copy.IR_OF[key]  # made by other tests' compilations in this process
     assert abs(_sum_of_two_table_reads(table) - a @ b) <= 1e-12 * abs(a @ b)
-    made = [key for key in inline_copy._IR_OF if key[0] is floats]
+    made = [key for key in inline_copy.IR_OF if key[0] is floats]
     assert len(made) == 1  # three call sites, one untyped pipeline
     # a function of anyone else's (here the tests') is made at each call site, as numba does
-    assert not [key for key in inline_copy._IR_OF if key[0] is _clipped.py_func]
+    assert not [key for key in inline_copy.IR_OF if key[0] is _clipped.py_func]

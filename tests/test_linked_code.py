@@ -85,13 +85,13 @@ def test_a_kernel_that_an_entry_calls_is_compiled_for_linking_only(tmp_path, mon
     (signature,) = dispatcher.signatures
     result = dispatcher.overloads[signature]
     library = result.library
-    assert getattr(library, linked_code._MARK)
-    assert not linked_code._has_function(library, result.fndesc.llvm_cpython_wrapper_name)
+    assert getattr(library, linked_code.MARK)
+    assert not linked_code.has_function(library, result.fndesc.llvm_cpython_wrapper_name)
     # no module pipeline: the kernel keeps its call, for the entry to inline
     assert _calls(library.get_llvm_str(), "_sum_of_twice_plus_one", "_twice_plus_one")
     with pytest.raises(TypeError, match="_sum_of_twice_plus_one: compiled for linking"):
         dispatcher(a)
-    assert not linked_code._COMPILING  # every compilation's frame is gone again
+    assert not linked_code.COMPILING  # every compilation's frame is gone again
 
 
 def test_python_calls_a_kernel_through_code_compiled_as_numba_compiles_it():
@@ -100,15 +100,15 @@ def test_python_calls_a_kernel_through_code_compiled_as_numba_compiles_it():
     python = _sum_of_twice_plus_one.python_dispatcher
     (signature,) = python.signatures
     library = python.overloads[signature].library
-    assert not getattr(library, linked_code._MARK, False)
+    assert not getattr(library, linked_code.MARK, False)
     # optimised as numba optimises: the callee inlined
     assert not _calls(library.get_llvm_str(), "_sum_of_twice_plus_one", "_twice_plus_one")
 
 
 def test_the_code_python_calls_is_cached_apart_from_the_linking_only_code():
     function = dense.lu_factor.py_func
-    linking, line = jit._cache_location(function, function.__code__.co_filename)
-    python, same_line = jit._cache_location(linked_code.python_callable(function),
+    linking, line = jit.cache_location(function, function.__code__.co_filename)
+    python, same_line = jit.cache_location(linked_code.python_callable(function),
                                             function.__code__.co_filename)
     assert line == same_line and linking != python
     assert os.path.relpath(python, jit.package_cache_folder()).startswith("python-calls")
@@ -119,7 +119,7 @@ def test_numba_code_that_is_not_flexures_is_optimised_as_numba_does_it():
     assert _host_sum(a) == pytest.approx(15.0, rel=1e-15)
     ir = _host_sum.inspect_llvm(_host_sum.signatures[0])
     assert not _calls(ir, "_host_sum", "_host_twice_plus_one")
-    assert not linked_code._COMPILING
+    assert not linked_code.COMPILING
 
 
 def test_an_entry_inlines_the_kernels_it_links(tmp_path, monkeypatch):
@@ -128,7 +128,7 @@ def test_an_entry_inlines_the_kernels_it_links(tmp_path, monkeypatch):
     function = ctypes.CFUNCTYPE(ctypes.c_double, ctypes.c_double)(entry.compiled.address)
     assert function(3.0) == pytest.approx(7.0, rel=1e-15)
     assert not _calls(entry.compiled.inspect_llvm(), "_entry_function", "_twice_plus_one")
-    assert not linked_code._COMPILING
+    assert not linked_code.COMPILING
 
 
 _CACHED_KERNEL_SCRIPT = textwrap.dedent("""
@@ -151,7 +151,7 @@ _CACHED_KERNEL_SCRIPT = textwrap.dedent("""
         (signature,) = triple.dispatcher.signatures
         hits = triple.dispatcher.stats.cache_hits[signature]
         assert hits == 1, hits
-        assert getattr(triple.dispatcher.overloads[signature].library, linked_code._MARK)
+        assert getattr(triple.dispatcher.overloads[signature].library, linked_code.MARK)
         with linked_code.compiling(False):
             address = numba.cfunc("float64(float64)", cache=False)(entry_function).address
     else:

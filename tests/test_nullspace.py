@@ -89,7 +89,7 @@ def test_a_large_block_by_qr_or_by_svd_where_the_qr_is_not_clear(deficient):
     matrix[:80, :120] = chain
     matrix[80:, 120:] = rng.normal(size=(10, 10))
     assert max(c.size for _, c in blocks(matrix)) > nullspace.SVD_UP_TO
-    assert (nullspace._by_blocks(matrix, RTOL, nullspace.SVD_UP_TO) is None) == deficient
+    assert (nullspace.by_blocks(matrix, RTOL, nullspace.SVD_UP_TO) is None) == deficient
     rank, _, basis = rank_and_null_space(matrix, RTOL)
     expected_rank, expected = reference(matrix)
     assert rank == expected_rank == 90 - deficient

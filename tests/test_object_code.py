@@ -32,7 +32,7 @@ define double @calls_missing(double %x) {
 
 def _object(ir_text):
     """An ELF object of the LLVM IR, compiled for this process's target."""
-    ll = object_code._llvm()
+    ll = object_code.llvm_binding()
     module = ll.parse_assembly(ir_text)
     triple, cpu, features = object_code.code_target()
     module.triple = triple

@@ -423,7 +423,7 @@ CALLS = {OP_RHS: (OP_ACCELERATIONS,), OP_JACOBIAN: (OP_RHS, OP_TANGENT),
          OP_STRESS_RESULTANTS: (OP_DF,), OP_STATIC_STEP: (OP_CONFIGURATION,),
          **newton.CALLS}
 # the addresses of the operations' entries in this process (missing_entry's until connected)
-_TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
+ENGINE_TABLE = np.zeros(len(ENTRIES), dtype=np.int64)
 
 
 def connect(data, *ops):
@@ -435,8 +435,8 @@ def connect(data, *ops):
     compiled: a model without coil currents or IDA never compiles the implicit form. The
     addresses belong to this process, so they are set at run time, never cached. Returns
     `data`."""
-    if not _TABLE.any():
-        _TABLE[:] = missing_entry.address
+    if not ENGINE_TABLE.any():
+        ENGINE_TABLE[:] = missing_entry.address
     dims = data.int_array("dims")
     wanted = list(ops) if ops else list(range(len(ENTRIES)))
     if ops and (dims[ed.J_SPARSE] or dims[ed.A_SPARSE]):  # the factors' own operations
@@ -465,10 +465,10 @@ def connect(data, *ops):
         wanted.append(operations.OP_FORMED_RATES)
     while wanted:
         op = wanted.pop()
-        if _TABLE[op] == missing_entry.address:
-            _TABLE[op] = ENTRIES[op].address
+        if ENGINE_TABLE[op] == missing_entry.address:
+            ENGINE_TABLE[op] = ENTRIES[op].address
             wanted.extend(CALLS.get(op, ()))
-    dims[ed.ENGINE] = _TABLE.ctypes.data
+    dims[ed.ENGINE] = ENGINE_TABLE.ctypes.data
     return data
 
 

@@ -77,12 +77,12 @@ def freezable(model: Model, groups: list, x: np.ndarray | None = None) -> list[i
         (reflectors, tau), r = scipy.linalg.qr(complement.T @ inside, mode="raw")
         diagonal = np.abs(np.diagonal(r)[:k])
         if np.all(diagonal > np.maximum(GROUP_TOLERANCE * norms, RANK_TOLERANCE * top)):
-            complement = _without_leading(complement, reflectors, tau)
+            complement = without_leading(complement, reflectors, tau)
             taken.append(position)
     return taken
 
 
-def _without_leading(complement, reflectors, tau):
+def without_leading(complement, reflectors, tau):
     """W Q without its first k columns, Q = H_1 ... H_k the reflections of a raw QR
     (`scipy.linalg.qr(..., mode="raw")`: Fortran-ordered, v_i below the diagonal of column
     i), applied by LAPACK's dormqr (`nullspace.apply_reflections`)."""

@@ -62,13 +62,13 @@ def rank_and_null_space(matrix: np.ndarray, rtol: float) -> tuple[int, float, np
         Orthonormal columns spanning the vectors the matrix maps to zero, rank counted
         with the threshold `rtol` times the largest singular value.
     """
-    found = _by_blocks(matrix, rtol, SVD_UP_TO)
+    found = by_blocks(matrix, rtol, SVD_UP_TO)
     if found is None:  # not clear from the QRs: the SVD of every block decides
-        found = _by_blocks(matrix, rtol, None)
+        found = by_blocks(matrix, rtol, None)
     return found
 
 
-def _by_blocks(matrix, rtol, svd_up_to):
+def by_blocks(matrix, rtol, svd_up_to):
     """`rank_and_null_space` with blocks above `svd_up_to` columns (None: none) tried by
     QR; None where that does not settle the verdicts."""
     m, n = matrix.shape

@@ -70,7 +70,7 @@ class _BlasThreads(ContextDecorator):
         with _lock:
             if _depth == 0:
                 threads = default_threads() if self.threads is None else self.threads
-                _limiter = _libraries().limit(limits=threads, user_api="blas")
+                _limiter = blas_libraries().limit(limits=threads, user_api="blas")
             _depth += 1
         return self
 
@@ -110,7 +110,7 @@ def blas_threads(threads: int | None = None) -> ContextDecorator:
     return _BlasThreads(threads)
 
 
-def _libraries():
+def blas_libraries():
     """threadpoolctl's controller of the loaded libraries, looked up again after imports."""
     global _controller, _modules_seen
     if _controller is None or len(sys.modules) != _modules_seen:

@@ -18,7 +18,7 @@ numba also makes the callee's IR afresh at every call site (`InlineWorker.inline
 runs the bytecode translation and the untyped pipeline each time: 77 times for 37 functions in
 the first loop, 1.5 s). The IR depends only on the function, the pipeline, the contexts, the
 declared locals and the flags, and `inline_ir` copies it before it changes anything, so
-`install` keeps it, keyed by all of these, for flexure's own kernels (`_IR_OF`); others are
+`install` keeps it, keyed by all of these, for flexure's own kernels (`IR_OF`); others are
 made as numba makes them. Where numba's module lacks what this relies on, nothing is changed
 (`install` returns False).
 """
@@ -51,7 +51,7 @@ class _BlockCopies:
 
 # the untyped IR of flexure's inlined kernels, by (function, SSA, flags, pipeline, contexts,
 # locals): made once per process
-_IR_OF = {}
+IR_OF = {}
 
 
 def _ir_made_once(run_untyped_passes, package):
@@ -69,9 +69,9 @@ def _ir_made_once(run_untyped_passes, package):
             hash(key)
         except TypeError:  # an unhashable local or flag: made as numba makes it
             return run_untyped_passes(self, func, enable_ssa)
-        if key not in _IR_OF:
-            _IR_OF[key] = run_untyped_passes(self, func, enable_ssa)
-        return _IR_OF[key]
+        if key not in IR_OF:
+            IR_OF[key] = run_untyped_passes(self, func, enable_ssa)
+        return IR_OF[key]
 
     return made_once
 

@@ -146,7 +146,7 @@ def _source_locator(base):
     class SourceHashLocator(base):
         def __init__(self, py_func, py_file):
             self._py_file = py_file  # numba's warning of an uncachable function names it
-            self._path, self._lineno = _cache_location(py_func, py_file)
+            self._path, self._lineno = cache_location(py_func, py_file)
 
         def get_cache_path(self):
             return self._path
@@ -159,14 +159,14 @@ def _source_locator(base):
 
         @classmethod
         def from_function(cls, py_func, py_file):
-            if _cache_location(py_func, py_file) is None:
+            if cache_location(py_func, py_file) is None:
                 return None
             return cls(py_func, py_file)
 
     return SourceHashLocator
 
 
-def _cache_location(py_func, py_file):
+def cache_location(py_func, py_file):
     """(folder, first line) of the cache entry of `py_func`, defined in `py_file`; None
     outside this copy's core or without a cache folder."""
     inside = os.path.abspath(py_file).startswith(_CORE + os.sep)
@@ -232,7 +232,7 @@ class Kernel:
                 function = linked_code.python_callable(self.py_func)
                 # numba's own locators (a kernel outside flexure's core) would file it with
                 # the linking-only code: uncached there
-                cached = _cache_location(function, inspect.getfile(function)) is not None
+                cached = cache_location(function, inspect.getfile(function)) is not None
                 dispatcher = numba.njit(
                     **{**self._options, "cache": self._options.get("cache") and cached})(
                     function)
@@ -442,7 +442,7 @@ def cache_index_path(function):
     of flexure's core) for this Python, whether it exists or not (numba's file name:
     module.qualname-line.pyXY.nbi, '<' and '>' left out), or None outside the cache."""
     path = inspect.getfile(function)
-    location = _cache_location(function, path)
+    location = cache_location(function, path)
     if location is None:
         return None
     folder, first_line = location

@@ -35,10 +35,10 @@ import types
 
 # the compilations under way, innermost last: a flexure kernel's Python function (or True),
 # False for an entry's (numba compiles a callee while it types its caller, so they nest)
-_COMPILING = []
+COMPILING = []
 
 LINKING_ONLY = "flexure-linking-only"  # the cache's serialisation kind of such a library
-_MARK = "_flexure_linking_only"  # the attribute that marks a library compiled so
+MARK = "_flexure_linking_only"  # the attribute that marks a library compiled so
 
 
 def compiling(kernel):
@@ -52,20 +52,20 @@ class _Compiling:
         self.kernel = kernel
 
     def __enter__(self):
-        _COMPILING.append(self.kernel)
+        COMPILING.append(self.kernel)
 
     def __exit__(self, *exc):
-        _COMPILING.pop()
+        COMPILING.pop()
 
 
 def _inside_kernel():
-    return bool(_COMPILING) and bool(_COMPILING[-1])
+    return bool(COMPILING) and bool(COMPILING[-1])
 
 
 def _is_the_kernel(fndesc):
     """Whether `fndesc` is the function of the kernel whose compilation is under way (not
     one of numba's own implementations that its typing compiles on the way)."""
-    kernel = _COMPILING[-1] if _COMPILING else None
+    kernel = COMPILING[-1] if COMPILING else None
     return (callable(kernel) and fndesc.qualname == kernel.__qualname__
             and fndesc.modname == kernel.__module__)
 
@@ -115,7 +115,7 @@ def _python_calls_refused(qualname):
     return refuse
 
 
-def _has_function(library, name):
+def has_function(library, name):
     try:
         library._final_module.get_function(name)
     except NameError:
@@ -145,28 +145,28 @@ def install():
     executable, set_env = context_class.get_executable, codegen.JITCPUCodegen.set_env
 
     def optimize_final_module(self):
-        if getattr(self, _MARK, False) or _inside_kernel():
+        if getattr(self, MARK, False) or _inside_kernel():
             return  # linked into an entry, and optimised there
         optimize(self)
 
     def finalize_final_module(self):
-        if not getattr(self, _MARK, False):
+        if not getattr(self, MARK, False):
             return finalize(self)
         self._finalize_dynamic_globals()  # numba's checks, without the execution engine
         self._verify_declare_only_symbols()
         self._finalized = True
 
     def get_executable(self, library, fndesc, env):
-        linking_only = getattr(library, _MARK, False) or (
+        linking_only = getattr(library, MARK, False) or (
             _is_the_kernel(fndesc)
-            and not _has_function(library, fndesc.llvm_cpython_wrapper_name))
+            and not has_function(library, fndesc.llvm_cpython_wrapper_name))
         if not linking_only:
             return executable(self, library, fndesc, env)
-        setattr(library, _MARK, True)
+        setattr(library, MARK, True)
         return _python_calls_refused(fndesc.qualname)
 
     def serialize_using_object_code(self):
-        if not getattr(self, _MARK, False):
+        if not getattr(self, MARK, False):
             return serialize(self)
         return (self.name, LINKING_ONLY, self._get_module_for_linking().as_bitcode())
 
@@ -175,7 +175,7 @@ def install():
         if kind != LINKING_ONLY:
             return unserialize(cls, codegen_, state)
         library = codegen_.create_library(name)
-        setattr(library, _MARK, True)
+        setattr(library, MARK, True)
         library._final_module = binding.parse_bitcode(data)
         library._finalize_final_module()
         return library

@@ -56,11 +56,11 @@ def enabled():
         return False
     if os.path.exists(".numba_config.yaml"):  # numba reads settings from the working folder
         return False
-    return sys.platform.startswith("linux") and _llvm() is not None
+    return sys.platform.startswith("linux") and llvm_binding() is not None
 
 
 @functools.cache
-def _llvm():
+def llvm_binding():
     """llvmlite's binding, its native target initialised (None without llvmlite)."""
     try:
         import llvmlite.binding as ll
@@ -77,7 +77,7 @@ def code_target():
     numba derives them (numba.core.config and codegen): NUMBA_CPU_NAME, else the host's CPU;
     NUMBA_CPU_FEATURES, else none for the generic CPU, else the host's features with AVX off
     on the CPUs numba turns it off for."""
-    ll = _llvm()
+    ll = llvm_binding()
     cpu = os.environ.get("NUMBA_CPU_NAME") or None
     features = os.environ.get("NUMBA_CPU_FEATURES") or None
     if features is None and str(cpu).lower() == "generic":
@@ -237,7 +237,7 @@ class _ObjectEngine:
     symbols registered, into which object files are added."""
 
     def __init__(self):
-        ll = _llvm()
+        ll = llvm_binding()
         _runtime_symbols(ll)
         triple, cpu, features = code_target()
         machine = ll.Target.from_triple(triple).create_target_machine(

@@ -59,14 +59,14 @@ def default_atol(model: Model, rtol: float, data: EngineData | None = None) -> n
     names = model.dof_names
     position = MOTION_FRACTION * np.array([rtol if name.endswith(".phi") else rtol * L
                                            for name in names])
-    x, DF, M0, K0 = _initial_matrices(model, data)
-    omega = _reference_frequency(model, M0, K0, L)
+    x, DF, M0, K0 = initial_matrices(model, data)
+    omega = reference_frequency(model, M0, K0, L)
     currents = [rtol * _current_scale(model, actuator, x, DF, M0, K0, omega, L)
                 for actuator in model.coil_actuators]
     return np.concatenate([position, position * omega, currents])
 
 
-def _initial_matrices(model, data):
+def initial_matrices(model, data):
     """(x (NX,), DF (NX, NDOF), M0 and K0 (NDOF, NDOF)) in the start configuration, at rest
     and with the inputs at zero, by the engine (`data`, or the model packed here) as the
     integrators evaluate it: M0 the reduced mass matrix, K0 = -M0 times the first-order
@@ -123,7 +123,7 @@ def _current_scale(model, actuator, x, DF, M0, K0, omega, L):
     return motion / (compliance * actuator.force_constant)
 
 
-def _reference_frequency(model, M0, K0, L):
+def reference_frequency(model, M0, K0, L):
     """The lowest positive natural frequency (rad/s) of K0 and M0: the eigenvalues of
     C^-1 K0 C^-T (C C^T = M0, Cholesky; K0 symmetrised); sqrt(g / L) under gravity or 1 rad/s
     where M0 is not positive definite or no frequency is positive."""

@@ -37,8 +37,8 @@ def per_dof_atol(model, rtol, data=None):
 
     atol = DEFAULT_ATOL(model, rtol, data).copy()
     n = model.declared_dof_count
-    _, _, M0, K0 = tolerances._initial_matrices(model, data)
-    omega_ref = tolerances._reference_frequency(model, M0, K0, length_scale(model))
+    _, _, M0, K0 = tolerances.initial_matrices(model, data)
+    omega_ref = tolerances.reference_frequency(model, M0, K0, length_scale(model))
     m, k = np.diag(M0), np.diag(K0)
     ok = (m > 0) & (k > 0)
     omega = np.full(n, omega_ref)
