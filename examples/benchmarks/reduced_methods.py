@@ -133,14 +133,21 @@ def closed_loops(model, move, settle):
               f"{error:.3e} | {last[choice].summary()['error_ratio']:.6e} |")
 
 
-def main(argv=None):
-    """Run the loop, the reference and the choices; print the table."""
-    from flexure.core import load_scene
-
+def arguments(argv=None):
+    """(loops, move s, settle s) of the command line `[--loops] [MOVE SETTLE]`; the move
+    default `REDUCED_MOVE`."""
     args = list(argv if argv is not None else sys.argv[1:])
     loops = "--loops" in args
     args = [a for a in args if a != "--loops"]
     move, settle = (float(args[0]), float(args[1])) if args else REDUCED_MOVE
+    return loops, move, settle
+
+
+def main(argv=None):
+    """Run the loop, the reference and the choices; print the table."""
+    from flexure.core import load_scene
+
+    loops, move, settle = arguments(argv)
     model = load_scene("manipulator_reduced")
     if loops:
         closed_loops(model, move, settle)

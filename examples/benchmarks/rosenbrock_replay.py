@@ -37,15 +37,13 @@ largest difference over the stroke, `reduced_methods.closed_loops`' measure).
 """
 
 import statistics
-import sys
 import time
 
 import numpy as np
 
 from flexure.core.engine import operations as ops
 
-from .manipulator import REDUCED_MOVE
-from .reduced_methods import REFERENCE_RTOL, errors, loop_run, replay
+from .reduced_methods import REFERENCE_RTOL, arguments, errors, loop_run, replay
 
 
 def transformed(alpha, Gamma, b, b_hat):
@@ -348,10 +346,7 @@ def main(argv=None):
     closed loops instead."""
     from flexure.core import load_scene
 
-    args = list(argv if argv is not None else sys.argv[1:])
-    loops = "--loops" in args
-    args = [a for a in args if a != "--loops"]
-    move, settle = (float(args[0]), float(args[1])) if args else REDUCED_MOVE
+    loops, move, settle = arguments(argv)
     model = load_scene("manipulator_reduced")
     if loops:
         closed_loop(model, move, settle, LOOP_CHOICES)
