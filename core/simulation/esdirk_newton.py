@@ -61,8 +61,10 @@ JACOBIAN_COST = 0.25      # evaluations per state
 # on manipulator_reduced (1014), 4.6 on the 384-DOF cantilever (768), where n / 4 says 37.5,
 # 253 and 192. Not 8: the iterations counted are not all the age's (a fresh J leaves 1.2 a
 # stage on manipulator_control, 1.9 on manipulator_reduced), and a J at 8 cost
-# manipulator_control's loop 1.09 to 1.24 of its CPU; 40, about five J's worth, keeps its n / 4
-# (37.5) and renews manipulator_reduced's every 8 samples instead of 12 (docs/benchmarks.md,
+# manipulator_control's loop 1.09 to 1.24 of its CPU. 40, about five J's worth, keeps its n / 4
+# (37.5, the same bits) and renews manipulator_reduced's J every 8 to 9 samples, not 12: its
+# closed loop at rtol 1e-4 in 0.86 to 0.90 of the CPU at 0.93 of the positions' error, its
+# replay at 5e-5 in 0.83 to 0.90 of 1e-4's CPU at 0.90 of its q error (docs/benchmarks.md,
 # session 40)
 SPARSE_JACOBIAN_COST = 40.0  # evaluations
 THETA_STALE = 0.01
