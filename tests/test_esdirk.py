@@ -314,6 +314,46 @@ def test_a_jacobian_grown_stale_is_renewed_and_a_current_one_kept():
     assert min(counts) == 0  # renewed, the count starts over
 
 
+def test_the_cost_of_a_jacobian_is_the_dense_paths_n_over_4_or_the_sparse_paths_constant():
+    """The iterations a Jacobian's age may cost before a new one, on made-up sizes: n / 4 on
+    the dense path (at least 1), SPARSE_JACOBIAN_COST on the sparse Newton matrix however
+    large n, the dense path's where that is smaller."""
+    from flexure.core.simulation.esdirk_newton import (
+        JACOBIAN_COST,
+        SPARSE_JACOBIAN_COST,
+        jacobian_cost,
+    )
+
+    assert (JACOBIAN_COST, SPARSE_JACOBIAN_COST) == (0.25, 40.0)
+    assert jacobian_cost(2, False) == 1.0
+    assert jacobian_cost(6, False) == 1.5
+    assert jacobian_cost(1014, False) == 253.5
+    assert jacobian_cost(1014, True) == 40.0
+    assert jacobian_cost(768, True) == 40.0
+    assert jacobian_cost(150, True) == 37.5
+    assert jacobian_cost(20, True) == 5.0
+    assert jacobian_cost(2, True) == 1.0
+
+
+def test_on_the_sparse_newton_matrix_a_jacobian_is_renewed_at_its_constant_cost():
+    """The 96-DOF spatial cantilever (sparse Newton matrix, 192 states) ringing under its tip
+    load: the Jacobian's age reaches SPARSE_JACOBIAN_COST iterations, not the dense path's
+    n / 4 = 48, and the next step takes a new one."""
+    from examples.benchmarks.spatial import spatial_cantilever
+    from flexure.core.simulation.esdirk_newton import MAX_NEWTON, SPARSE_JACOBIAN_COST
+
+    sim = Simulator(spatial_cantilever(16), method="esdirk", rtol=1e-6)
+    assert sim.integrator.sparse_newton
+    one_step = (MAX_NEWTON - 1) * 5
+    counts = []
+    for k in range(1, 161):
+        sim.advance_to(k * 5e-5)
+        counts.append(sim.integrator.restart_memory["extra_iterations"])
+    assert sim.statistics["jacobian_evaluations"] >= 2
+    assert SPARSE_JACOBIAN_COST <= max(counts) < SPARSE_JACOBIAN_COST + one_step
+    assert 0 in counts[counts.index(max(counts)):]  # renewed, the count starts over
+
+
 def test_a_state_saved_with_stale_iterations_counted_replays_bit_for_bit():
     """The count is part of the state: a restored simulator renews its Jacobian at the same
     step as the one it was saved from."""

@@ -52,9 +52,10 @@ Hairer's RADAU5; at most 7 iterations. eta grows (eta^0.8) at a step's first imp
 stage, on the sparse Newton matrix only once it has gone unmeasured for `ETA_HOLD` steps. A
 failed Newton or an engine failure at a trial stage (kinematics not converged) recomputes J
 or, with J fresh, quarters h and retries. J is also
-renewed once the iterations its age cost add up to what a new one costs (`JACOBIAN_COST`):
-on the manipulator's loop 8 Jacobians instead of 1, 9 % fewer evaluations, 0.93 of the time
-and a plant 2.7 times closer to a tight run (docs/decisions.md).
+renewed once the iterations its age cost add up to what a new one costs (`esdirk_newton.
+jacobian_cost`: n / 4 evaluations, on the sparse Newton matrix at most 40): on the
+manipulator's loop 8 Jacobians instead of 1, 9 % fewer evaluations, 0.93 of the time and a
+plant 2.7 times closer to a tight run (docs/decisions.md).
 
 Predictor: f(z_i) extrapolated from the F_j in c (through the last three stages); for
 TR-BDF2 also the last accepted step's stage derivatives at c = 0, c2, 1 as a quadratic in t:
@@ -237,8 +238,8 @@ class Esdirk(Stepper):
         """What the integrator has learnt, as plain numbers: {"initial_step" (s, the next
         step), "jacobian" (n * n,) or empty, "lu_step" (s, h g of the Newton matrix),
         "newton_rate", "refresh" (1: a new Jacobian at the next step), "extra_iterations"
-        (the Newton iterations the Jacobian's age has cost, `JACOBIAN_COST`), "input_step"
-        (s, the largest first step after the next input change, 0: none; `restart`),
+        (the Newton iterations the Jacobian's age has cost, `esdirk_newton.jacobian_cost`),
+        "input_step" (s, the largest first step after the next input change, 0: none; `restart`),
         "newton_age" (accepted steps since the contraction was last measured, `ETA_HOLD`)}."""
         # a sparse Newton matrix's Jacobian lives in the packed model (`newton_matrix`): a
         # restart from this memory evaluates a new one

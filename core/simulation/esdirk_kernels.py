@@ -62,12 +62,12 @@ from .esdirk_layout import (
     V_Z,
 )
 from .esdirk_newton import (
-    JACOBIAN_COST,
     LU_SLACK,
     NEWTON_TOLERANCE,
     SPARSE_LU_SLACK,
     evaluate,
     factor_model,
+    jacobian_cost,
     solve,
     solve_stage,
     weighted_norm,
@@ -232,7 +232,7 @@ def advance(table, memory, flags, vectors, J, LU, piv, atol, A, EW, P, t_stop):
             h = 0.5 * remaining
         if h <= 16.0 * 2.2e-16 * max(abs(t), abs(t_stop)):
             return STEP_TOO_SMALL
-        if flags[I_EXTRA] >= max(1.0, JACOBIAN_COST * n):
+        if flags[I_EXTRA] >= jacobian_cost(n, dims[ed.NEWTON_SPARSE] == 1):
             flags[I_REFRESH] = 1
         if flags[I_REFRESH] == 1 or flags[I_JACOBIAN] == 0:
             if evaluate(table, y, J, flags, engine.OP_JACOBIAN, t) != ed.OK:

@@ -55,6 +55,18 @@ SPARSE_LU_SLACK = 1e-9
 # new J, about n / 4 evaluations of f for n states or less (1.5 for stage_planar_3dof's 6, 4.0
 # for stage_spatial_19dof's 38, 22 for manipulator_control's 150: docs/decisions.md)
 JACOBIAN_COST = 0.25      # evaluations per state
+# On the sparse Newton matrix (`newton_matrix`) a J costs a number of iterations that does not
+# grow with n: a J and the Newton matrix's factors over one stage iteration (a stage force and
+# its force solve; CPU at states a sample apart) 8.2 on manipulator_control (150 states), 7.8
+# on manipulator_reduced (1014), 4.6 on the 384-DOF cantilever (768), where n / 4 says 37.5,
+# 253 and 192. Not 8: the iterations counted are not all the age's (a fresh J leaves 1.2 a
+# stage on manipulator_control, 1.9 on manipulator_reduced), and a J at 8 cost
+# manipulator_control's loop 1.09 to 1.24 of its CPU. 40, about five J's worth, keeps its n / 4
+# (37.5, the same bits) and renews manipulator_reduced's J every 8 to 9 samples, not 12: its
+# closed loop at rtol 1e-4 in 0.86 to 0.90 of the CPU at 0.93 of the positions' error, its
+# replay at 5e-5 in 0.83 to 0.90 of 1e-4's CPU at 0.90 of its q error (docs/benchmarks.md,
+# session 40)
+SPARSE_JACOBIAN_COST = 40.0  # evaluations
 THETA_STALE = 0.01
 # Accepted steps the Newton contraction estimate eta is trusted unmeasured before it grows
 # at a step's first implicit stage (flags[I_ETA_HOLD], set by `Esdirk`: on the sparse Newton
@@ -63,6 +75,18 @@ THETA_STALE = 0.01
 # at their errors; an eta unmeasured for 10 steps grows again, so a stale J is still found
 # (docs/benchmarks.md, session 35)
 ETA_HOLD = 10
+
+
+@kernel(inline="always")
+def jacobian_cost(n, sparse):
+    """The Newton iterations a Jacobian's age may cost (flags[I_EXTRA]) before the next step
+    takes a new one, for n states: the cost of a new J in evaluations of f, JACOBIAN_COST n on
+    the dense path, SPARSE_JACOBIAN_COST (at most the dense path's) on the sparse Newton
+    matrix (`sparse`); at least 1."""
+    cost = JACOBIAN_COST * n
+    if sparse:
+        cost = min(cost, SPARSE_JACOBIAN_COST)
+    return max(1.0, cost)
 
 
 @kernel
@@ -241,8 +265,7 @@ def solve_stage(table, i, h, memory, flags, vectors, J, LU, piv, A, P):
             if theta >= 0.99:
                 return False
             # a slow contraction that converges asks for no new J of its own: its iterations
-            # count in flags[I_EXTRA] against the cost of one (JACOBIAN_COST); on
-            # manipulator_reduced a J costs about 110 evaluations (docs/benchmarks.md)
+            # count in flags[I_EXTRA] against the cost of one (`jacobian_cost`)
             eta = theta / (1.0 - theta)
             flags[I_ETA_AGE] = 0
         if eta * norm <= NEWTON_TOLERANCE or norm == 0.0:

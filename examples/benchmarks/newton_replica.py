@@ -133,7 +133,7 @@ class Replay:
                 step = remaining
             elif 2.0 * step > remaining:
                 step = 0.5 * remaining
-            if extra >= max(1.0, N.JACOBIAN_COST * n):
+            if extra >= N.jacobian_cost(n, True):
                 refresh = True
             if refresh or not have_jacobian:
                 engine.call(self.data, OP_NEWTON_JACOBIAN, y, np.zeros(1))
