@@ -25,9 +25,9 @@ from . import slots as slot
 from .deformation_rates import internal
 from .kinematics import hessians_at_solution
 from .operations import ENTRY, HESSIANS
-from .rigid_inertia_kernels import own_mass
+from .rigid_inertia_kernels import visits_element
 from .slots import float_array as _f
-from .slots import group, group_deformations, rigid_element
+from .slots import group, group_deformations
 from .slots import int_array as _i
 
 
@@ -43,8 +43,9 @@ def formed_rates(table, g, xdot):
     """`element_rates` of group g, whose element forms h = v^T D2e v itself: edot = De xdot
     and its directional kernel's h at the solution (slot x) on the constraint rows, for the
     elements with any (slot g). A BEAM group with kept points (group field points_offset)
-    gives each element that the element passes visit (`kept_points`) its inertia points in
-    the same call, into slot beam_points (`beam_directional.points_kernel`), from the
+    gives each element that the element passes visit (`rigid_inertia_kernels.
+    visits_element`) its inertia points in the same call, into slot beam_points
+    (`beam_directional.points_kernel`), from the
     rotations that the kinematics kept there where it did (dims rotations_kept: the
     elements a cluster does not make internal, `beam_directional.kept_points_kernel`)."""
     dims = _i(table, slot.DIMS)
@@ -67,7 +68,7 @@ def formed_rates(table, g, xdot):
     points = _f(table, slot.BEAM_POINTS)[max(row[ed.G_POINTS_OFFSET], 0):]
     for i in range(n):
         inner = skipping and internal(table, row, i, touching)
-        keep = keeping and kept_points(table, row, i)
+        keep = keeping and visits_element(table, row, i, skipping)
         if inner and not keep:
             for b in range(k):
                 edot[defs[i * k + b]] = 0.0
@@ -101,17 +102,6 @@ def formed_rates(table, g, xdot):
             r = row_of_def[defs[i * k + b]]
             if r >= 0:
                 quad[r] = formed[b]
-
-
-@kernel(inline="always")
-def kept_points(table, row, i):
-    """Whether the element passes (`inertia_product`) visit element i of the group `row`,
-    and so read its kept points: every element but a touching one whose mass is folded
-    into its cluster's rigid body or zero (`rigid_inertia_kernels.own_mass`)."""
-    if _i(table, slot.DIMS)[ed.NSLAVES] == 0:
-        return True
-    t = rigid_element(table, row, i)
-    return t < 0 or own_mass(table, t)
 
 
 @kernel(inline="always")

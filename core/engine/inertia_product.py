@@ -37,9 +37,9 @@ from . import slots as slot
 from .node_inertia_product import node_point_products
 from .operations import OP_RIGID_BODIES, OP_RIGID_CONDENSE, OP_RIGID_EXPAND, run
 from .point_masses import element_points, point_forces
-from .rigid_inertia_kernels import PRODUCT_AT_REST, PRODUCT_MOVING, own_mass
+from .rigid_inertia_kernels import PRODUCT_AT_REST, PRODUCT_MOVING, visits_element
 from .slots import float_array as _f
-from .slots import group, group_inertia, inertia_scratch, rigid_element
+from .slots import group, group_inertia, inertia_scratch
 from .slots import int_array as _i
 
 
@@ -196,10 +196,8 @@ def _element_pass(table, x, xdot, moving, with_gravity, a, total, forces):
         refs = _f(table, slot.GROUP_DATA)[row[ed.G_DATA_OFFSET]:]
         width = row[ed.G_REF_WIDTH]
         for i in range(n):
-            if rigid:
-                t = rigid_element(table, row, i)
-                if t >= 0 and not own_mass(table, t):
-                    continue
+            if not visits_element(table, row, i, rigid):
+                continue
             if nodes:  # a node inertia's points and both products in closed form
                 for b in range(m):
                     xl[b] = x[coords[i * m + b]]

@@ -32,7 +32,7 @@ from .operations import ENTRY
 from .point_masses import element_points, point_forces
 from .rigid_kernels import touching
 from .slots import float_array as _f
-from .slots import group_inertia, inertia_scratch
+from .slots import group_inertia, inertia_scratch, rigid_element
 from .slots import int_array as _i
 
 EW, BW, TW = rg.ELEMENT_WIDTH, ri.BODY_WIDTH, ri.TENSOR_WIDTH
@@ -51,6 +51,18 @@ def own_mass(table, t):
     is not folded into its cluster's rigid body (`rigid_inertia`)."""
     element = _i(table, slot.RIGID_ELEMENTS)[t * EW: (t + 1) * EW]
     return element[rg.E_MASS_OFFSET] >= 0 and element[rg.E_FOLDED] == 0
+
+
+@kernel(inline="always")
+def visits_element(table, row, i, rigid):
+    """Whether the element passes (`inertia_product`) evaluate element i of the group `row`
+    on its own: every element but, in a model with clusters (`rigid`), a touching one whose
+    mass is zero or folded into its cluster's rigid body (`own_mass`). The BEAMs' rates keep
+    points for exactly these (`formed_rates`)."""
+    if not rigid:
+        return True
+    t = rigid_element(table, row, i)
+    return t < 0 or own_mass(table, t)
 
 
 @kernel
