@@ -470,6 +470,16 @@ def test_help_shows_percent_signs_as_typed(command, capsys):
     assert code == 0 and "%%" not in out + err
 
 
+def test_simulate_help_describes_every_method_from_the_registry(capsys):
+    from flexure.core.simulation.methods import METHOD_TABLE
+
+    code, out, err = run(capsys, "simulate", "--help")
+    text = " ".join(out.split())  # argparse wraps (and breaks at hyphens)
+    assert code == 0
+    for method in METHOD_TABLE:
+        assert " ".join(f"{method.name}, {method.summary}".split()) in text.replace("- ", "-")
+
+
 @pytest.mark.parametrize("rows, says", [
     ("-1,0\n0,1\n", "row 1 of the samples: time -1 s is before the simulation's start at 0 s"),
     ("0,0\n0.5,1\n0.5,2\n", "row 3 of the samples: expected a time after 0.5 s"),

@@ -16,7 +16,7 @@ from ..analysis.pictures import MAX_FRAMES
 from ..errors import SimulationError, UsageError
 from ..reporting.progress import Progress
 from ..reporting.tables import format_table
-from ..simulation.methods import METHODS
+from ..simulation.methods import METHOD_TABLE, METHODS
 from . import (
     PLOT_SUFFIXES,
     add_scene_arguments,
@@ -41,7 +41,8 @@ MAX_STEPS = 1e8
 def register(subparsers):
     """Add the `simulate` subcommand."""
     parser = subparsers.add_parser(
-        "simulate", help="nonlinear time-domain simulation (SUNDIALS CVODE or IDA)",
+        "simulate", help="nonlinear time-domain simulation (SUNDIALS CVODE and IDA, one-step "
+                               "ESDIRKs)",
         description="Simulate a scene from rest under its loads and the given inputs; print a "
                     "summary, and write the outputs to CSV (--out) and a plot (--plot).")
     add_scene_arguments(parser)
@@ -54,7 +55,9 @@ def register(subparsers):
                         help="a scene with kinematic inputs: the time (s) each takes to move "
                              "from its start to its value (a rest-to-rest quintic from t = 0; "
                              "default --t-end); their efforts become outputs NAME.effort")
-    parser.add_argument("--method", choices=METHODS, default="cvode-bdf")
+    parser.add_argument("--method", choices=METHODS, default="cvode-bdf",
+                        help="the integrator (default cvode-bdf): "
+                             + "; ".join(f"{m.name}, {m.summary}" for m in METHOD_TABLE))
     parser.add_argument("--max-order", type=count, default=None,
                         help="largest order of the multistep formulas (default SUNDIALS': 5 "
                              "for BDF and IDA)")
