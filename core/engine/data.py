@@ -22,6 +22,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ..live_models import PerLiveModel
 from . import layout, packing, packing_check, sparse_packing
 from .packing import (
     A_AT_STAGE,
@@ -47,6 +48,13 @@ _FLOAT_INDEX = {name: i for i, name in enumerate(FLOAT_SLOTS)}
 # COUNTERS_SIZE, SETTINGS_SIZE): module-level ints generated from the layout's tables
 _FIELDS = layout.field_indices()
 globals().update(_FIELDS)
+# model and packing options -> (the rigid packing, the costs, the packed arrays as packed:
+# copies of those not all zero, and (shape, dtype) of the others), kept while the model lives.
+# Why: every Simulator packs its model twice (its integrator's and its outputs'), 0.03 s each
+# on manipulator_reduced, most of it the analyses of the rigid clusters and the Newton matrix;
+# a packing is a function of the model and the options alone (docs/benchmarks.md, session 41,
+# loopcost)
+_PACKED = PerLiveModel()
 # status codes returned by the engine's functions (their words: status.status_message)
 (OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT,
  NOT_CONNECTED, NOT_AVAILABLE) = range(8)
@@ -106,19 +114,15 @@ class EngineData:
                 "actuators: a time simulation with prescribed motion takes force and moment "
                 "inputs only, not actuators' coils (docs/analyses.md)")
         _check_counted(model)
-        context = packing.Context(model, tolerance=tolerance, singular_ratio=singular_ratio,
-                                  augmented=augmented, sparse=sparse, rigid=rigid)
-        self.rigid, self.costs = context.rigid, context.plan.costs
-        packed = packing.pack(context)
-        problems = packing_check.check(packed, context.counts)
-        if problems:
-            raise layout.LayoutError(f"model {model.name!r}: the packing does not match the "
-                                     "layout: " + "; ".join(problems))
-        arrays = {name: array for slots in packed.values() for name, array in slots.items()}
-        self.ints = tuple(np.ascontiguousarray(arrays[name]) for name in INT_SLOTS)
-        self.floats = tuple(np.ascontiguousarray(arrays[name], dtype=float)
-                            for name in FLOAT_SLOTS)
-        arrays = self.ints + self.floats
+        options = (tolerance, singular_ratio, augmented, sparse, rigid)
+        known = _PACKED.get(model, options)
+        if known is None:
+            known = _PACKED.put(model, _packed(model, options), options)
+        self.rigid, self.costs, pristine = known
+        # every array a copy of its own: no two packings share one
+        arrays = tuple(np.zeros(*value) if isinstance(value, tuple) else value.copy()
+                       for value in pristine)
+        self.ints, self.floats = arrays[: len(INT_SLOTS)], arrays[len(INT_SLOTS):]
         self.table = np.array([value for a in arrays for value in (a.ctypes.data, a.size)],
                               dtype=np.int64)
         self._address = self.table.ctypes.data  # the table never moves: read it once
@@ -177,6 +181,25 @@ def _index(indices, name, dtype):
     except KeyError:
         raise ValueError(f"expected the name of a {dtype} slot of the layout "
                          f"({', '.join(indices)}), got {name!r}") from None
+
+
+def _packed(model, options):
+    """(the rigid packing, the costs, the arrays in the table's order: copies of those not all
+    zero, (shape, dtype) of the others) of `model` packed with `options` (tolerance,
+    singular_ratio, augmented, sparse, rigid: `EngineData`'s)."""
+    tolerance, singular_ratio, augmented, sparse, rigid = options
+    context = packing.Context(model, tolerance=tolerance, singular_ratio=singular_ratio,
+                              augmented=augmented, sparse=sparse, rigid=rigid)
+    packed = packing.pack(context)
+    problems = packing_check.check(packed, context.counts)
+    if problems:
+        raise layout.LayoutError(f"model {model.name!r}: the packing does not match the "
+                                 "layout: " + "; ".join(problems))
+    arrays = {name: array for slots in packed.values() for name, array in slots.items()}
+    arrays = (*(np.ascontiguousarray(arrays[name]) for name in INT_SLOTS),
+              *(np.ascontiguousarray(arrays[name], dtype=float) for name in FLOAT_SLOTS))
+    return context.rigid, context.plan.costs, tuple(
+        a.copy() if np.any(a) else (a.shape, a.dtype) for a in arrays)
 
 
 def _check_counted(model):

@@ -207,6 +207,9 @@ class Simulator(SimulatorOutputs, SimulatorState, SimulatorSystem, SimulatorMoti
                                   f"{status_message(status)} (q0 = {np.array2string(q)})")
         self._t = float(t0)
         self._q_ref = q.copy()
+        # the packed model's reference too (as `_restart` sets it): an engine call on
+        # `data` before the first step evaluates y about the start, not about q = 0
+        self._q_ref_array[:] = q
         self._y = np.concatenate([np.zeros(self.ndof), qdot, i])
         self._put_on_path()  # the kinematic inputs' entries (`simulator_motion`)
         self._restart_samples()

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SimulationError
+from ..live_models import PerLiveModel
 from ..mechanics.ports import input_direction
 from ..numerics.blas import blas_threads
 
@@ -16,6 +17,12 @@ if TYPE_CHECKING:  # names for the annotations only
 
 # the smallest motion, as a fraction of the model's length scale, that rtol controls
 MOTION_FRACTION = 1e-3
+# model (and whether its packing has rigid clusters) -> (L, omega, the coil currents' scales
+# before rtol): what `default_atol` derives from the model alone, kept while the model lives.
+# Why: a dense first-order Jacobian and an eigenproblem at the start, 0.08 s of CPU on
+# manipulator_reduced (507 DOFs) for every Simulator, a loop's timed one after `prepare`'s
+# throwaway one too (docs/benchmarks.md, session 41, loopcost)
+_SCALES = PerLiveModel()
 
 
 @blas_threads()
@@ -44,8 +51,9 @@ def default_atol(model: Model, rtol: float, data: EngineData | None = None) -> n
     rtol : float
         The integrator's relative tolerance.
     data : EngineData, optional
-        The model packed for the engine (a Simulator's), which evaluates the start
-        configuration; packed here when not given.
+        The model packed for the engine (a Simulator's): whether its packing has the rigid
+        clusters picks the packing that evaluates the start configuration (`model_scales`,
+        on a packing of its own; `data` is not evaluated). Default: with them.
 
     Returns
     -------
@@ -53,17 +61,42 @@ def default_atol(model: Model, rtol: float, data: EngineData | None = None) -> n
         atol per state: m or rad on the DOF deviations, m/s or rad/s on the velocities, A on
         the coil currents.
     """
-    from ..mechanics.kinematics import length_scale
-
-    L = length_scale(model)
+    L, omega, scales = model_scales(model, True if data is None else data.rigid.enabled)
     names = model.dof_names
     position = MOTION_FRACTION * np.array([rtol if name.endswith(".phi") else rtol * L
                                            for name in names])
-    x, DF, M0, K0 = initial_matrices(model, data)
-    omega = reference_frequency(model, M0, K0, L)
-    currents = [rtol * _current_scale(model, actuator, x, DF, M0, K0, omega, L)
-                for actuator in model.coil_actuators]
+    currents = [rtol * scale for scale in scales]
     return np.concatenate([position, position * omega, currents])
+
+
+def model_scales(model: Model, rigid: bool = True) -> tuple[float, float, list]:
+    """(L, omega, the coil currents' scales) of `default_atol` before rtol: the length scale
+    (m), the reference angular frequency (rad/s) and per coil actuator the current (A) whose
+    steady force moves its port by MOTION_FRACTION of its scale. Evaluated at the start
+    configuration on a packing of its own (with or without the rigid clusters, `rigid`: the
+    two evaluate M0 and K0 to round-off, not to the bit) once per live model, then kept
+    (`live_models`). Never on a Simulator's packed model: the evaluation leaves kept factors
+    there that its integration would start from (the sparse path refines with them), so a
+    Simulator's numbers would depend on whether the scales were kept before.
+
+    Parameters
+    ----------
+    model : Model
+    rigid : bool
+        Whether the packing evaluated has the rigid clusters (`EngineData(rigid=)`).
+    """
+    from ..engine.data import EngineData
+    from ..mechanics.kinematics import length_scale
+
+    known = _SCALES.get(model, bool(rigid))
+    if known is not None:
+        return known
+    L = length_scale(model)
+    x, DF, M0, K0 = initial_matrices(model, EngineData(model, rigid=rigid))
+    omega = reference_frequency(model, M0, K0, L)
+    scales = [_current_scale(model, actuator, x, DF, M0, K0, omega, L)
+              for actuator in model.coil_actuators]
+    return _SCALES.put(model, (L, omega, scales), bool(rigid))
 
 
 def initial_matrices(model, data):

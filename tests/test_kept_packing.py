@@ -1,0 +1,27 @@
+"""A model's packing kept while the model lives (`engine.data`): a second EngineData of a
+model is the packing of a fresh one, slot for slot and bit for bit, in arrays of its own."""
+
+import numpy as np
+import pytest
+
+from flexure.core import load_scene
+from flexure.core.engine.data import EngineData
+
+
+@pytest.mark.parametrize("scene", ["stage_planar_3dof", "wire_tripod", "manipulator_control"])
+@pytest.mark.parametrize("rigid", [True, False])
+def test_a_kept_packing_is_a_fresh_one_in_arrays_of_its_own(scene, rigid):
+    model = load_scene(scene)
+    first = EngineData(model, rigid=rigid)
+    first.float_array("x")[:] = np.nan  # what a packing's user writes stays in its arrays
+    first.int_array("dims")[0] += 1
+    kept = EngineData(model, rigid=rigid)
+    fresh = EngineData(load_scene(scene), rigid=rigid)  # a new model: packed again
+    assert kept.rigid.enabled == fresh.rigid.enabled and kept.costs == fresh.costs
+    kept_slots, fresh_slots = kept.slots(), fresh.slots()
+    assert kept_slots.keys() == fresh_slots.keys()
+    for name, array in kept_slots.items():
+        assert array.dtype == fresh_slots[name].dtype, name
+        np.testing.assert_array_equal(array, fresh_slots[name], err_msg=name)  # exact
+    assert not any(np.shares_memory(a, b) for a in first.ints + first.floats
+                   for b in kept.ints + kept.floats if a.size and b.size)
