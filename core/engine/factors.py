@@ -36,15 +36,12 @@ from ..numerics import banded, sparse_lu
 from ..numerics.jit import kernel
 from . import data as ed
 from . import slots as slot
-from .kept_factors import KEPT_NONE as J_KEPT_NONE
 from .operations import (
     OP_RIGID_DE,
     OP_SPARSE_FACTOR,
     OP_SPARSE_SOLVE,
     SPARSE_AUGMENTED,
     SPARSE_J,
-    SPARSE_J_KEPT,
-    SPARSE_J_KEPT_TRANSPOSED,
     SPARSE_J_TRANSPOSED,
     run,
 )
@@ -147,10 +144,8 @@ def scatter_de(table, De, emap, shift, mirror, out):
 @kernel
 def j_factor(table):
     """J at the deformations' De factored (sparse, or banded in slot lu); the ratio of the
-    smallest to the largest pivot magnitude. The factors are of no recorded kinematic
-    solution until `kept_factors.record_factors` says so."""
+    smallest to the largest pivot magnitude."""
     dims = _i(table, slot.DIMS)
-    dims[ed.J_KEPT] = J_KEPT_NONE
     lu, nf = _f(table, slot.LU), dims[ed.NFREE]
     if dims[ed.NSLAVES] > 0:
         run(table, OP_RIGID_DE, 0, 0, 0.0)
@@ -168,31 +163,13 @@ def j_factor(table):
 @kernel
 def j_solve(table, b, transposed):
     """b <- J^-1 b (b on J's rows in, on the free coordinates out), or with transposed
-    b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with J at the
-    last kinematic solution: its factors, or those of an earlier solution refined against
-    it (`kept_factors`)."""
-    if _i(table, slot.DIMS)[ed.J_FACTORS] == ed.SPARSE_FACTORS:
+    b <- J^-T b (on the free coordinates in, on J's rows out), both (n_free,), with the
+    factors of the last `j_factor`."""
+    dims = _i(table, slot.DIMS)
+    if dims[ed.J_FACTORS] == ed.SPARSE_FACTORS:
         run(table, OP_SPARSE_SOLVE, b.ctypes.data, 0,
             float(SPARSE_J_TRANSPOSED if transposed else SPARSE_J))
         return
-    banded_j_solve(table, b, transposed)
-
-
-@kernel
-def j_solve_kept(table, b, transposed):
-    """`j_solve` with the factors of the last `j_factor` as they are, of whatever state they
-    were made at (the kinematics' chord steps and first-order prediction: `kept_factors`)."""
-    if _i(table, slot.DIMS)[ed.J_FACTORS] == ed.SPARSE_FACTORS:
-        run(table, OP_SPARSE_SOLVE, b.ctypes.data, 0,
-            float(SPARSE_J_KEPT_TRANSPOSED if transposed else SPARSE_J_KEPT))
-        return
-    banded_j_solve(table, b, transposed)
-
-
-@kernel
-def banded_j_solve(table, b, transposed):
-    """`j_solve` with the banded factors in slot lu."""
-    dims = _i(table, slot.DIMS)
     nf = dims[ed.NFREE]
     rpos, cpos = _i(table, slot.J_ROW_POS), _i(table, slot.J_COL_POS)
     into, out = (cpos, rpos) if transposed else (rpos, cpos)

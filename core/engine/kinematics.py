@@ -53,16 +53,8 @@ from ..numerics.native import call_deformations
 from . import data as ed
 from . import rigid as rg
 from . import slots as slot
-from .factors import j_factor, j_solve, j_solve_kept
-from .kept_factors import KEPT_EARLIER, keeps_factors, record_factors
-from .operations import (
-    OP_RIGID_DE,
-    OP_RIGID_EXPAND_COLUMNS,
-    OP_RIGID_FILL,
-    OP_SPARSE_FACTOR,
-    SPARSE_J_VALUES,
-    run,
-)
+from .factors import j_factor, j_solve
+from .operations import OP_RIGID_EXPAND_COLUMNS, OP_RIGID_FILL, run
 from .slots import float_array as _f
 from .slots import group, group_coordinates, rigid_element
 from .slots import int_array as _i
@@ -193,28 +185,15 @@ def kinematic_residual(table, x, q, g):
 
 
 @kernel
-def store_solution(table, q, x, may_keep):
+def store_solution(table, q, x):
     """Factor J at the solved x (deformations of `solution_order` evaluated there) and keep
     both as the next warm start; status SINGULAR_CONSTRAINTS if J's pivots say the
-    configuration is singular. With may_keep (a warm start's solution) x may keep the
-    factors of an earlier solution instead (`kept_factors`: the solves with J then refined
-    against its values here, when settings[J_REFINEMENTS] asks for it)."""
+    configuration is singular."""
     dims = _i(table, slot.DIMS)
     nx = dims[ed.NX]
-    if may_keep and keeps_factors(table, x):
-        if dims[ed.NSLAVES] > 0:  # the touching elements' De T_e, which j_factor would
-            run(table, OP_RIGID_DE, 0, 0, 0.0)  # have formed, for its other readers
-        if _f(table, slot.SETTINGS)[ed.J_REFINEMENTS] > 0.0:
-            run(table, OP_SPARSE_FACTOR, _f(table, slot.BAND_SCRATCH).ctypes.data, 0,
-                float(SPARSE_J_VALUES))
-        dims[ed.J_KEPT] = KEPT_EARLIER
-        _i(table, slot.COUNTERS)[ed.SOLUTION_KEPT] += 1
-    else:
-        ratio = j_factor(table)
-        if not ratio > _f(table, slot.SETTINGS)[ed.SINGULAR_RATIO]:
-            return ed.SINGULAR_CONSTRAINTS
-        record_factors(table, x, ratio)
-        _i(table, slot.COUNTERS)[ed.SOLUTION_FACTORS] += 1
+    ratio = j_factor(table)
+    if not ratio > _f(table, slot.SETTINGS)[ed.SINGULAR_RATIO]:
+        return ed.SINGULAR_CONSTRAINTS
     copy(_f(table, slot.X)[:nx], x[:nx])
     copy(_f(table, slot.Q), q)
     dims[ed.WARM] = 1
@@ -275,7 +254,7 @@ def newton_step(table, x, g, dx):
     free = _i(table, slot.FREE)
     tolerance = _f(table, slot.STEP_TOLERANCE)
     copy(dx, g)
-    j_solve_kept(table, dx, False)
+    j_solve(table, dx, False)
     step = 0.0
     for a in range(_i(table, slot.DIMS)[ed.NFREE]):
         x[free[a]] -= dx[a]
@@ -295,7 +274,7 @@ def predicted_coordinates(table, q, x, dq, dx):
     for j in range(dims[ed.NDOF]):
         dq[j] = q[j] - q_prev[j]
     dof_rows(table, dq, dx)
-    j_solve_kept(table, dx, False)
+    j_solve(table, dx, False)
     nx = dims[ed.NX]
     copy(x[:nx], x_prev[:nx])
     free = _i(table, slot.FREE)
@@ -384,7 +363,7 @@ def solve_kinematics(table, q):
             if not held:
                 deformations(table, x, order, True)  # the slaves are filled
             dims[ed.PREDICTION_HELD] = 1
-            return store_solution(table, q, x, True)
+            return store_solution(table, q, x)
         dims[ed.PREDICTION_HELD] = 0
         previous = 0.0  # no rate before the second step
         # a chord iterate's e with De, the motion's solution order: a chord step from the
@@ -406,7 +385,7 @@ def solve_kinematics(table, q):
                     rate < 1.0 and step * rate <= 1.0 - rate):
                 if chord_order != order:
                     deformations(table, x, order, True)
-                return store_solution(table, q, x, True)
+                return store_solution(table, q, x)
     else:
         dims[ed.PREDICTION_HELD] = 0
         copy(x, _f(table, slot.X_START))
@@ -416,7 +395,7 @@ def solve_kinematics(table, q):
         evaluate_elements(table, x, 1)
         if kinematic_residual(table, x, q, g) <= 1.0:
             evaluate_elements(table, x, solution_order(table))
-            return store_solution(table, q, x, False)
+            return store_solution(table, q, x)
         if not j_factor(table) > 0.0:
             return ed.SINGULAR_CONSTRAINTS
         step = newton_step(table, x, g, dx)
@@ -424,6 +403,6 @@ def solve_kinematics(table, q):
             return ed.NOT_CONVERGED
         if step <= 1.0:
             evaluate_elements(table, x, solution_order(table))
-            return store_solution(table, q, x, False)
+            return store_solution(table, q, x)
     return ed.NOT_CONVERGED
 

@@ -122,10 +122,6 @@ SLOTS = (
         ("g", "G", "nfree", SCRATCH, "m, 1", "the kinematic residual; the quadratic velocity "
          "terms of the motion"),
         ("dx", "DX", "nfree", SCRATCH, "m, 1", "the Newton step; a solve's vector"),
-        ("j_factored", "J_FACTORED", "nfree + 1", STATE, "m, 1", "the free coordinates of "
-         "the solution J's factors are of, then their pivot ratio (`kept_factors`)"),
-        ("j_refinement", "J_REFINEMENT", "2 * nfree", SCRATCH, "-", "a refined solve with "
-         "J's kept factors: its right-hand side and residual (`kept_factors`)"),
     )),
     *_slots(INT, "groups", (
         ("groups", "GROUPS", "g_width * ngroups", CONFIG, "-", "per element group a row of "

@@ -80,9 +80,6 @@ DIMS_FIELDS = tuple(Field(*row) for row in (
     ("rotations_kept", "ROTATIONS_KEPT", STATE, "1: slot beam_points holds the BEAMs' "
      "rotations that the last deformations evaluation kept (`entries.ORDER_KEPT`), the "
      "node vectors and the section axes' Dp blocks, for their rates"),
-    ("j_kept", "J_KEPT", STATE, "which solution J's factors are of (`kept_factors`: "
-     "KEPT_NONE = 0: none recorded, KEPT_EXACT: slot x's, KEPT_EARLIER: an earlier one's, "
-     "slot j_factored)"),
 ))
 
 # -- the fields of a row of slot groups (one row per element group) -------------------------
@@ -128,17 +125,9 @@ COUNTER_FIELDS = tuple(Field(*row) for row in (
     ("refinement_products", "REFINEMENT_PRODUCTS", STATE, "their products A d"),
     ("response_factors", "RESPONSE_FACTORS", STATE, "input responses that had A factored at "
      "a stage force's state (FACTOR_A)"),
-    ("solution_factors", "SOLUTION_FACTORS", STATE, "kinematic solutions that factored J"),
-    ("solution_kept", "SOLUTION_KEPT", STATE, "those that kept an earlier one's factors "
-     "(`kept_factors`)"),
 ))
 SETTINGS_FIELDS = (
     Field("singular_ratio", "SINGULAR_RATIO", CONFIG, "the smallest ratio of J's LU pivots "
           "before a configuration counts as singular"),
-    Field("j_kept_move", "J_KEPT_MOVE", CONFIG, "the largest move of a free coordinate since "
-          "J's factors, in its step tolerances, for which a kinematic solution keeps them "
-          "(`kept_factors`; 0: J factored at every solution)"),
-    Field("j_refinements", "J_REFINEMENTS", CONFIG, "with kept factors, the refinements of "
-          "each solve with J against its values at the solution (`kept_factors`)"),
 )
 # fmt: on

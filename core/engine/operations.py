@@ -31,13 +31,9 @@ The operations and their arrays (a, b, c: addresses of float64 arrays; s: a numb
                          error weights (NDOF,) a refined response may stop at (0: its fixed
                          relative tolerance)
     SPARSE_FACTOR        out (1,): the pivot ratio; s = SPARSE_J or SPARSE_AUGMENTED: factor
-                         that matrix's sparse LU (`sparse_factors.factor`); SPARSE_J_VALUES:
-                         J's values alone, at the last kinematic solution (`kept_factors`)
+                         that matrix's sparse LU (`sparse_factors.factor`)
     SPARSE_SOLVE         b; s = SPARSE_J, SPARSE_J_TRANSPOSED or SPARSE_AUGMENTED: solve in
-                         place with its sparse factors, J at the last kinematic solution
-                         (refined where its factors are an earlier one's: `kept_factors`);
-                         SPARSE_J_KEPT, SPARSE_J_KEPT_TRANSPOSED: with J's factors as kept
-                         (`sparse_factors.solve`)
+                         place with its sparse factors (`sparse_factors.solve`)
     RIGID_...            the rigid clusters' kernels (`rigid_kernels`, one entry for all):
       FILL               x (NX,): the slaves' coordinates from their masters' (`fill_slaves`)
       EXPAND             v (NX,); s = 1 with the slaves' c (`expand`)
@@ -149,8 +145,7 @@ RATES, HESSIANS = 0.0, 1.0
 # evaluation's accelerations refined with the kept factors
 FORCE, FACTOR_A, REFINED_ACCELERATIONS = 0.0, 1.0, 2.0
 # which sparse factors OP_SPARSE_FACTOR and OP_SPARSE_SOLVE take (s)
-SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED, SPARSE_J_KEPT, SPARSE_J_KEPT_TRANSPOSED, \
-    SPARSE_J_VALUES = range(6)
+SPARSE_J, SPARSE_J_TRANSPOSED, SPARSE_AUGMENTED = range(3)
 
 
 @kernel

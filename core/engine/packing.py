@@ -253,7 +253,6 @@ def kinematics(c):
         "q_ref": np.zeros(n["ndof"]), "e": np.zeros(n["ne"]), "De": np.zeros(n["de_size"]),
         "D2e": np.zeros(n["d2e_size"]), "DF": np.zeros(n["nx"] * n["ndof"]),
         "x_trial": np.zeros(n["nx"]), "g": np.zeros(n["nfree"]), "dx": np.zeros(n["nfree"]),
-        "j_factored": np.zeros(n["nfree"] + 1), "j_refinement": np.zeros(2 * n["nfree"]),
     }
 
 

@@ -17,13 +17,7 @@ from ..numerics.sparse_lu import unsigned_index as _u
 from . import data as ed
 from . import slots as slot
 from .factors import scatter_de
-from .kept_factors import KEPT_EARLIER, refined_solve
-from .operations import (
-    SPARSE_AUGMENTED,
-    SPARSE_J_KEPT_TRANSPOSED,
-    SPARSE_J_TRANSPOSED,
-    SPARSE_J_VALUES,
-)
+from .operations import SPARSE_AUGMENTED, SPARSE_J_TRANSPOSED
 from .rigid_kernels import row_de_z
 from .slots import float_array as _f
 from .slots import int_array as _i
@@ -34,15 +28,8 @@ def factor(table, which, out):
     """Factor the sparse LU of J (which = SPARSE_J, from the elements' De) or of the augmented
     system (SPARSE_AUGMENTED, assembled by `motion`): out[0] = the pivot ratio, negative when
     the sparse LU cannot serve, and then the values are in the band storage (slot lu, slot
-    augmented) for the banded LU. SPARSE_J_VALUES: J's values alone (for the solves refined
-    against them, `kept_factors`), its factors untouched; out[0] = 1."""
+    augmented) for the banded LU."""
     dims = _i(table, slot.DIMS)
-    if which == SPARSE_J_VALUES:
-        constraint_values(table, _i(table, slot.J_MAP),
-                          sparse_lu.matrix_values(_i(table, slot.J_SPARSE),
-                                                  _f(table, slot.J_SPARSE_VALUES)))
-        out[0] = 1.0
-        return
     if which == SPARSE_AUGMENTED:
         ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
         band, rows = _f(table, slot.AUG), _i(table, slot.AUG_POS)
@@ -65,19 +52,12 @@ def factor(table, which, out):
 def solve(table, which, b):
     """b <- A^-1 b in place with the sparse factors of the last `factor` of A: J (which =
     SPARSE_J; b (n_free,) on J's rows in, on the free coordinates out), J^T
-    (SPARSE_J_TRANSPOSED) or the augmented system (SPARSE_AUGMENTED; b (n_free + n_rigid,)).
-    J's are J at the last kinematic solution, refined where its factors are an earlier
-    solution's (`kept_factors`); SPARSE_J_KEPT and SPARSE_J_KEPT_TRANSPOSED solve with the
-    factors as kept."""
+    (SPARSE_J_TRANSPOSED) or the augmented system (SPARSE_AUGMENTED; b (n_free + n_rigid,))."""
     if which == SPARSE_AUGMENTED:
         sparse_lu.solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), b, False)
-        return
-    ints, floats = _i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES)
-    transposed = which == SPARSE_J_TRANSPOSED or which == SPARSE_J_KEPT_TRANSPOSED
-    if which <= SPARSE_J_TRANSPOSED and _i(table, slot.DIMS)[ed.J_KEPT] == KEPT_EARLIER:
-        refined_solve(table, ints, floats, b, transposed)
     else:
-        sparse_lu.solve(ints, floats, b, transposed)
+        sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
+                        which == SPARSE_J_TRANSPOSED)
 
 
 @kernel
