@@ -10,9 +10,9 @@ the models that need them. Which factors: SPARSE_J, SPARSE_J_TRANSPOSED (solves 
 SPARSE_AUGMENTED (`operations`).
 
 J's LU is that of J^T (`sparse_packing.SparseFactors.kinematic`), and a solve with J is the
-transposed solve with it: on manipulator_reduced (order 952) the LU of J^T takes 21029
-multiplications against J's 30178, its refactor 34.5 against 48.6 us and a solve 10.6 to
-11.0 against 12.8 to 13.5 us (docs/benchmarks.md, session 41). The left-looking LU spends its
+transposed solve with it: on manipulator_reduced (order 952) the LU of J^T takes 20316
+multiplications against J's 33194, its refactor 33 to 35 us against 53 to 57 and a solve 10.2
+to 10.5 against 14.0 to 14.6 (docs/benchmarks.md, session 41). The left-looking LU spends its
 time per entry of U, each a pass over a column of L: J's U holds 2.8 times its L's entries
 (short columns of L, many passes), J^T's the reverse.
 """
