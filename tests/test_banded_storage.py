@@ -10,6 +10,7 @@ from scipy.linalg import solve_banded
 
 from flexure.core import load_scene
 from flexure.core.engine import data as ed
+from flexure.core.engine import sparse_factors
 from flexure.core.engine.data import EngineData
 from flexure.core.numerics import banded, sparse_lu
 
@@ -116,18 +117,19 @@ def test_the_engine_packs_the_cantilevers_band_compact():
     assert data.float_array("augmented").size == na * a_width < na * na / 2
 
 
-def scatter_both(ints, floats, rows, columns, n, kl, ku):
+def scatter_both(ints, floats, rows, columns, n, kl, ku, scatter=sparse_lu.scatter_rows):
     """The sparse matrix (its values made 1, 2, ... so that every entry is told apart) into
-    the dense storage (`sparse_lu.scatter_dense`) and into the compact one
-    (`sparse_lu.scatter_rows`): (dense (n, n), compact as read back by `band_of`)."""
+    the dense storage (row step n) and into the compact one (`sparse_lu.scatter_rows`, or
+    for J from the LU of J^T `sparse_factors.scatter_transposed`): (dense (n, n), compact as
+    read back by `band_of`)."""
     floats = floats.copy()
     values = sparse_lu.matrix_values(ints, floats)
     values[:] = np.arange(1, values.size + 1)
     dense = np.zeros(n * n)
-    sparse_lu.scatter_dense(ints, floats, dense, rows, columns)
+    scatter(ints, floats, dense, rows, columns, n, 0)
     step = 2 * kl + ku
     small = np.zeros(n * (step + 1))
-    sparse_lu.scatter_rows(ints, floats, small, rows, columns, step, kl)
+    scatter(ints, floats, small, rows, columns, step, kl)
     return dense.reshape(n, n), band_of(small, n, kl, ku, step, kl), values.size
 
 
@@ -148,14 +150,14 @@ def test_the_sparse_fallback_scatters_inside_the_band(scene):
     assert dims[ed.J_SPARSE] == dims[ed.A_SPARSE] == 1
     nf, na = dims[ed.NFREE], dims[ed.NFREE] + dims[ed.NRIGID]
     systems = [("j_sparse", "j_sparse_values", "j_row_position", "j_column_position", nf,
-                dims[ed.J_KL], dims[ed.J_KU]),
+                dims[ed.J_KL], dims[ed.J_KU], sparse_factors.scatter_transposed),
                ("aug_sparse", "aug_sparse_values", "augmented_position",
-                "augmented_position", na, dims[ed.A_KL], dims[ed.A_KU])]
+                "augmented_position", na, dims[ed.A_KL], dims[ed.A_KU], sparse_lu.scatter_rows)]
     compact_ones = 0
-    for ints, floats, rows, columns, n, kl, ku in systems:
+    for ints, floats, rows, columns, n, kl, ku, scatter in systems:
         dense, small, count = scatter_both(data.int_array(ints), data.float_array(floats),
                                            data.int_array(rows), data.int_array(columns), n,
-                                           kl, ku)
+                                           kl, ku, scatter)
         assert np.count_nonzero(dense) == count  # each entry in its own place
         assert np.array_equal(band_of(dense.ravel(), n, kl, ku, n, 0), dense)  # in the band
         if banded.storage_size(n, kl, ku) < n * n:

@@ -241,3 +241,40 @@ def test_the_manipulator_sparse_and_banded_engines_agree(manipulator):
         # beside constraint rows of 1)
         residual = np.max(np.abs(matrix @ z - b))
         assert residual <= 1e-13 * (np.max(np.abs(matrix) @ np.abs(z)) + np.max(np.abs(b)))
+
+
+@pytest.mark.parametrize("name", ["stage_spatial_19dof", "stage_planar_3dof_gravity"])
+def test_j_solves_with_the_lu_of_j_transposed(name):
+    """J's sparse LU is that of J^T (`sparse_factors`): put back from it
+    (`scatter_transposed`), it is the plain twin's J at a displaced configuration (to
+    round-off of its entries), and the engine's j_solve solves J z = b and J^T z = b to a
+    backward error of 1e-14."""
+    from flexure.core.engine import sparse_factors
+
+    model = MODELS[name]()
+    mechanics = Mechanics(model)
+    data = EngineData(model, sparse=True, rigid=False)  # J = [De on the free coordinates; I]
+    q0 = mechanics.kinematics.dofs_of(model.initial_coordinates)
+    q = q0 + 1e-3 * np.random.default_rng(3).standard_normal(q0.size)
+    assert engine.call(data, engine.OP_KINEMATICS, q) == ed.OK  # J factored at its solution
+    config = mechanics.kinematics.solve(q, model.initial_coordinates.copy())
+    De = config.De.toarray() if hasattr(config.De, "toarray") else config.De
+    # J in the engine's order: its rows of g, then the DOF coordinates' unit rows
+    rows, free = data.int_array("constraint_rows"), data.int_array("free")
+    n = free.size
+    expected = np.zeros((n, n))
+    expected[:rows.size] = De[np.ix_(rows, free)]
+    expected[rows.size + np.arange(q0.size - data.int_array("dof_deformations").size),
+             data.int_array("dof_positions")] = 1.0
+    dense = np.zeros(n * n)
+    sparse_factors.scatter_transposed(data.int_array("j_sparse"),
+                                      data.float_array("j_sparse_values"), dense,
+                                      np.arange(n), np.arange(n), n, 0)
+    J = dense.reshape(n, n)
+    close(J, expected, 1e-13)
+    b = np.random.default_rng(4).standard_normal(n)
+    for transposed, matrix in ((False, J), (True, J.T)):
+        z = b.copy()
+        factors.j_solve(data.address, z, transposed)
+        residual = np.max(np.abs(matrix @ z - b))
+        assert residual <= 1e-14 * (np.max(np.abs(matrix) @ np.abs(z)) + np.max(np.abs(b)))

@@ -222,8 +222,8 @@ SLOTS = (
         ("j_column_position", "J_COL_POS", "nfree", CONFIG, "-", "J's columns in it"),
         ("augmented_position", "AUG_POS", "naug", CONFIG, "-", "the augmented system's "
          "unknowns in its banded order"),
-        ("j_sparse", "J_SPARSE", "-", STATE, "-", "J's sparse LU: pattern and pivots "
-         "(`numerics.sparse_lu`; empty when banded)"),
+        ("j_sparse", "J_SPARSE", "-", STATE, "-", "J's sparse LU, that of J^T: pattern "
+         "and pivots (`numerics.sparse_lu`, `sparse_factors`; empty when banded)"),
         ("j_map", "J_MAP", "-", CONFIG, "-", "where each De entry lands in it "
          "(`sparse_packing`)"),
         ("aug_sparse", "AUG_SPARSE", "-", STATE, "-", "the augmented system's sparse LU"),

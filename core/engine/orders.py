@@ -174,7 +174,7 @@ class FactorPlan:
                           else bool(augmented))
         self.j_sparse = costs["constraint_lu"] == "sparse"
         self.a_sparse = costs["augmented_lu"] == "sparse"
-        self.j_lu = factors.constraints if self.j_sparse else None
+        self.j_lu = factors.kinematic if self.j_sparse else None
         self.a_lu = factors.augmented if self.a_sparse else None
 
 

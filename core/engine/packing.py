@@ -370,7 +370,7 @@ def factors(c):
         "j_row_position": plan.j_rows, "j_column_position": plan.j_columns,
         "augmented_position": plan.aug_position,
         "j_sparse": empty if j_lu is None else j_lu.ints.copy(),
-        "j_map": empty if j_lu is None else plan.factors.constraint_map,
+        "j_map": empty if j_lu is None else plan.factors.kinematic_map,
         "aug_sparse": empty if a_lu is None else a_lu.ints.copy(),
         "aug_map": empty if a_lu is None else plan.factors.augmented_map,
         "lu": np.zeros(n["j_band"]), "augmented": np.zeros(n["a_band"]),

@@ -8,6 +8,13 @@ through two operations of the engine, `factor` and `solve`, each the body of its
 factors banded, as the stages do, never compiles the sparse LU. `engine.connect` adds them for
 the models that need them. Which factors: SPARSE_J, SPARSE_J_TRANSPOSED (solves only) and
 SPARSE_AUGMENTED (`operations`).
+
+J's LU is that of J^T (`sparse_packing.SparseFactors.kinematic`), and a solve with J is the
+transposed solve with it: on manipulator_reduced (order 952) the LU of J^T takes 20316
+multiplications against J's 33194, its refactor 33 to 35 us against 53 to 57 and a solve 10.2
+to 10.5 against 14.0 to 14.6 (docs/benchmarks.md, session 41). The left-looking LU spends its
+time per entry of U, each a pass over a column of L: J's U holds 2.8 times its L's entries
+(short columns of L, many passes), J^T's the reverse.
 """
 
 from ..mechanics.rigid_bodies import DEPENDENCIES
@@ -25,10 +32,10 @@ from .slots import int_array as _i
 
 @kernel(inline="always")  # into its operation's entry, its one caller
 def factor(table, which, out):
-    """Factor the sparse LU of J (which = SPARSE_J, from the elements' De) or of the augmented
-    system (SPARSE_AUGMENTED, assembled by `motion`): out[0] = the pivot ratio, negative when
-    the sparse LU cannot serve, and then the values are in the band storage (slot lu, slot
-    augmented) for the banded LU."""
+    """Factor the sparse LU of J (which = SPARSE_J, from the elements' De: the LU of J^T) or of
+    the augmented system (SPARSE_AUGMENTED, assembled by `motion`): out[0] = the pivot ratio,
+    negative when the sparse LU cannot serve, and then the values are in the band storage
+    (slot lu, slot augmented) for the banded LU."""
     dims = _i(table, slot.DIMS)
     if which == SPARSE_AUGMENTED:
         ints, floats = _i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES)
@@ -45,7 +52,10 @@ def factor(table, which, out):
     if out[0] < 0.0:  # the values into the banded LU's storage (`banded.layout`)
         band[:] = 0.0
         step, shift = banded.layout(band.size, n, kl, ku)
-        sparse_lu.scatter_rows(ints, floats, band, rows, columns, step, shift)
+        if which == SPARSE_AUGMENTED:
+            sparse_lu.scatter_rows(ints, floats, band, rows, columns, step, shift)
+        else:  # J^T's values, J's entries
+            scatter_transposed(ints, floats, band, rows, columns, step, shift)
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -55,9 +65,22 @@ def solve(table, which, b):
     (SPARSE_J_TRANSPOSED) or the augmented system (SPARSE_AUGMENTED; b (n_free + n_rigid,))."""
     if which == SPARSE_AUGMENTED:
         sparse_lu.solve(_i(table, slot.AUG_SPARSE), _f(table, slot.AUG_SPARSE_VALUES), b, False)
-    else:
+    else:  # with the LU of J^T: J's solve is its transposed one
         sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
-                        which == SPARSE_J_TRANSPOSED)
+                        which != SPARSE_J_TRANSPOSED)
+
+
+@kernel
+def scatter_transposed(ints, floats, out, row_position, column_position, step, shift):
+    """out[row_position[c] step + shift + column_position[r]] = A[r, c] for every entry of
+    the sparse LU's pattern (zero elsewhere beforehand): A^T (J from the LU of J^T) into a
+    row storage of row step `step` (`sparse_lu.scatter_rows`, transposed)."""
+    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, Ax, _, _, _ = sparse_lu.packed_parts(
+        ints, floats)
+    for j in range(n):
+        row = row_position[pcol[j]] * step + shift
+        for p in range(Ap[j], Ap[j + 1]):
+            out[row + column_position[Ai[p]]] = Ax[p]
 
 
 @kernel
