@@ -16,6 +16,8 @@ from types import ModuleType
 
 import numpy as np
 
+from .live_models import DERIVED
+
 FIXED, DEPENDENT, DOF = "fixed", "dependent", "dof"
 ZERO, RELEASED = "zero", "released"
 
@@ -55,7 +57,8 @@ class ElementGroup:
     names: tuple[str, ...]
     coordinate_index: np.ndarray
     deformation_index: np.ndarray
-    reference: dict
+    # derived from the initial coordinates when built: digested by identity (`live_models`)
+    reference: dict = field(metadata={DERIVED: True})
     properties: dict
 
     def local(self, vector: np.ndarray) -> np.ndarray:

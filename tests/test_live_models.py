@@ -28,3 +28,21 @@ def test_a_new_model_at_a_collected_ones_address_finds_nothing():
     stranger = Model()
     store._known[(id(stranger), None)] = (reference, "packed")  # as if at the same address
     assert store.get(stranger) is None
+
+
+def test_a_value_kept_for_a_model_is_not_found_after_the_model_changed():
+    """A Model is a dataclass whose arrays can be written into: what was kept before a change
+    is stale, and a look-up finds nothing (then the caller derives it again)."""
+    from flexure.core import load_scene
+
+    store, model = PerLiveModel(), load_scene("stage_planar_3dof")
+    store.put(model, "packed")
+    assert store.get(model) == "packed"  # unchanged: found
+    for change in (lambda m: m.loads.__setitem__(0, 1.0),
+                   lambda m: m.gravity.__setitem__(1, -9.81),
+                   lambda m: m.groups[0].properties["EA"].__setitem__(0, 2.0),
+                   lambda m: m.inputs.pop(),
+                   lambda m: setattr(m, "lumped_mass", m.lumped_mass + 1.0)):
+        store.put(model, "packed")
+        change(model)
+        assert store.get(model) is None
