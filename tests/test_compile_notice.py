@@ -93,8 +93,12 @@ def test_the_estimate_is_the_largest_recent_compilation_recorded_on_this_machine
 
     (tmp_path / RECORD_NAME).write_text(json.dumps({**record, "cpu_s": 123.4, "wall_s": 130.2}))
     second = notices(tmp_path, "sources-1")
-    assert ("about 123 s of CPU (130 s of wall time when measured here on "
-            f"{record['date']})") in second.text()
+    # these sources compiled here before: what is missing now is a part, the record a bound
+    assert second.text().startswith("flexure: compiling its engine for ")
+    assert ("the parts this use needs that are not yet kept: at most about 123 s of CPU, the "
+            f"whole engine's (130 s of wall time when measured here on {record['date']})"
+            ) in second.text()
+    assert "about 123 s of CPU (130 s" in notices(tmp_path, "sources-3").text()  # another version
     second.announce(io.StringIO())
     with second.unit():  # a smaller compilation of the same sources: the record stays
         pass

@@ -113,8 +113,21 @@ class CompileNotice:
         cpu, _, source = self.estimate()
         target = ("this machine" if config.CPU_NAME is None
                   else f"the CPU target {config.CPU_NAME!r}")
+        if self.compiled_here_before():
+            # what is missing is the part this use needs beyond what an earlier use compiled
+            # (another scene's operations, an FMU's slave): often seconds, so the whole
+            # engine's time is a bound, not an estimate
+            return (f"flexure: compiling its engine for {target}, the parts this use needs "
+                    f"that are not yet kept: at most about {cpu:.0f} s of CPU, the whole "
+                    f"engine's ({source}); kept in {self.folder}")
         return (f"flexure: compiling its engine for {target}, once per version of flexure: "
                 f"about {cpu:.0f} s of CPU ({source}); kept in {self.folder}")
+
+    def compiled_here_before(self):
+        """Whether the record is of these sources: this version of flexure has compiled into
+        this cache before, so what compiles now is a part of its engine, not all of it."""
+        record = self.record()
+        return bool(self.sources) and record is not None and record.get("sources") == self.sources
 
     def summary(self):
         """What the compilation took, once done."""
