@@ -50,3 +50,20 @@ def test_a_model_changed_after_its_first_simulator_is_packed_again():
     expected = state_after(fresh)
     assert abs(expected[0]) > 1e-4  # it moves (m)
     np.testing.assert_array_equal(state_after(changed), expected)  # tolerance 0
+
+
+def test_a_packing_choice_changed_between_two_packings_of_one_model_is_taken(monkeypatch):
+    """The sparse Newton matrix's threshold and the forms' cost rule are read at packing
+    (`data.packing_key`): changed between two packings of one model, the second has the
+    changed choice, not the kept packing's."""
+    from flexure.core.engine import data as ed
+    from flexure.core.engine import newton_packing
+
+    model = load_scene("manipulator_control")  # 75 DOFs: the sparse Newton matrix from 50
+    assert EngineData(model).int_array("dims")[ed.NEWTON_SPARSE] == 1
+    monkeypatch.setattr(newton_packing, "SPARSE_NEWTON_FROM", 10**9)
+    assert EngineData(model).int_array("dims")[ed.NEWTON_SPARSE] == 0
+    cost = ed.evaluation_cost
+    monkeypatch.setattr(ed, "evaluation_cost",
+                        lambda *args, **kwargs: {**cost(*args, **kwargs), "reduced": 0.0})
+    assert not EngineData(model).int_array("dims")[ed.AUGMENTED]

@@ -23,7 +23,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..live_models import PerLiveModel
-from . import layout, packing, packing_check, sparse_packing
+from . import layout, newton_packing, packing, packing_check, sparse_packing
 from .packing import (
     A_AT_STAGE,
     A_GAIN,
@@ -52,8 +52,8 @@ globals().update(_FIELDS)
 # copies of those not all zero, and (shape, dtype) of the others), kept while the model lives.
 # Why: every Simulator packs its model twice (its integrator's and its outputs'), 0.03 s each
 # on manipulator_reduced, most of it the analyses of the rigid clusters and the Newton matrix;
-# a packing is a function of the model and the options alone (docs/benchmarks.md, session 41,
-# loopcost)
+# a packing is a function of the model, the options and the two choices it reads from modules
+# (`packing_key`) alone (docs/benchmarks.md, session 41, loopcost)
 _PACKED = PerLiveModel()
 # status codes returned by the engine's functions (their words: status.status_message)
 (OK, NOT_CONVERGED, SINGULAR_CONSTRAINTS, SINGULAR_MASS, NONFINITE_STATE, NONFINITE_RESULT,
@@ -115,9 +115,10 @@ class EngineData:
                 "inputs only, not actuators' coils (docs/analyses.md)")
         _check_counted(model)
         options = (tolerance, singular_ratio, augmented, sparse, rigid)
-        known = _PACKED.get(model, options)
+        key = packing_key(options)
+        known = _PACKED.get(model, key)
         if known is None:
-            known = _PACKED.put(model, _packed(model, options), options)
+            known = _PACKED.put(model, _packed(model, options), key)
         self.rigid, self.costs, pristine = known
         # every array a copy of its own: no two packings share one
         arrays = tuple(np.zeros(*value) if isinstance(value, tuple) else value.copy()
@@ -181,6 +182,16 @@ def _index(indices, name, dtype):
     except KeyError:
         raise ValueError(f"expected the name of a {dtype} slot of the layout "
                          f"({', '.join(indices)}), got {name!r}") from None
+
+
+def packing_key(options):
+    """What a kept packing is kept under besides its model: the options (`EngineData`'s) and
+    what the packing reads from modules, the sparse Newton matrix's size threshold
+    (`newton_packing.SPARSE_NEWTON_FROM`, "read at packing") and the cost rule that picks the
+    forms (`evaluation_cost`, the function itself: kept in the key, it cannot be collected and
+    its id reused). Why: a test (or a study of the paths) that changes either and packs the
+    same model again must get the packing they choose, not the one kept before."""
+    return (*options, newton_packing.SPARSE_NEWTON_FROM, evaluation_cost)
 
 
 def _packed(model, options):
