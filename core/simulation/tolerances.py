@@ -69,7 +69,7 @@ def default_atol(model: Model, rtol: float, data: EngineData | None = None) -> n
     return np.concatenate([position, position * omega, currents])
 
 
-def model_scales(model: Model, rigid: bool = True) -> tuple[float, float, list]:
+def model_scales(model: Model, rigid: bool = True) -> tuple[float, float, tuple]:
     """(L, omega, the coil currents' scales) of `default_atol` before rtol: the length scale
     (m), the reference angular frequency (rad/s) and per coil actuator the current (A) whose
     steady force moves its port by MOTION_FRACTION of its scale. Evaluated at the start
@@ -94,8 +94,9 @@ def model_scales(model: Model, rigid: bool = True) -> tuple[float, float, list]:
     L = length_scale(model)
     x, DF, M0, K0 = initial_matrices(model, EngineData(model, rigid=rigid))
     omega = reference_frequency(model, M0, K0, L)
-    scales = [_current_scale(model, actuator, x, DF, M0, K0, omega, L)
-              for actuator in model.coil_actuators]
+    # a tuple: the kept value is handed to every caller, and none may change it for the next
+    scales = tuple(_current_scale(model, actuator, x, DF, M0, K0, omega, L)
+                   for actuator in model.coil_actuators)
     return _SCALES.put(model, (L, omega, scales), bool(rigid))
 
 
