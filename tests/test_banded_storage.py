@@ -10,7 +10,6 @@ from scipy.linalg import solve_banded
 
 from flexure.core import load_scene
 from flexure.core.engine import data as ed
-from flexure.core.engine import sparse_factors
 from flexure.core.engine.data import EngineData
 from flexure.core.numerics import banded, sparse_lu
 
@@ -120,7 +119,7 @@ def test_the_engine_packs_the_cantilevers_band_compact():
 def scatter_both(ints, floats, rows, columns, n, kl, ku, scatter=sparse_lu.scatter_rows):
     """The sparse matrix (its values made 1, 2, ... so that every entry is told apart) into
     the dense storage (row step n) and into the compact one (`sparse_lu.scatter_rows`, or
-    for J from the LU of J^T `sparse_factors.scatter_transposed`): (dense (n, n), compact as
+    transposed for J from the LU of J^T): (dense (n, n), compact as
     read back by `band_of`)."""
     floats = floats.copy()
     values = sparse_lu.matrix_values(ints, floats)
@@ -150,7 +149,8 @@ def test_the_sparse_fallback_scatters_inside_the_band(scene):
     assert dims[ed.J_SPARSE] == dims[ed.A_SPARSE] == 1
     nf, na = dims[ed.NFREE], dims[ed.NFREE] + dims[ed.NRIGID]
     systems = [("j_sparse", "j_sparse_values", "j_row_position", "j_column_position", nf,
-                dims[ed.J_KL], dims[ed.J_KU], sparse_factors.scatter_transposed),
+                dims[ed.J_KL], dims[ed.J_KU],
+                lambda *scatter_args: sparse_lu.scatter_rows(*scatter_args, True)),
                ("aug_sparse", "aug_sparse_values", "augmented_position",
                 "augmented_position", na, dims[ed.A_KL], dims[ed.A_KU], sparse_lu.scatter_rows)]
     compact_ones = 0

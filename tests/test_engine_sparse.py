@@ -246,11 +246,9 @@ def test_the_manipulator_sparse_and_banded_engines_agree(manipulator):
 @pytest.mark.parametrize("name", ["stage_spatial_19dof", "stage_planar_3dof_gravity"])
 def test_j_solves_with_the_lu_of_j_transposed(name):
     """J's sparse LU is that of J^T (`sparse_factors`): put back from it
-    (`scatter_transposed`), it is the plain twin's J at a displaced configuration (to
-    round-off of its entries), and the engine's j_solve solves J z = b and J^T z = b to a
-    backward error of 1e-14."""
-    from flexure.core.engine import sparse_factors
-
+    (`sparse_lu.scatter_rows`, transposed), it is the plain twin's J at a displaced
+    configuration (to round-off of its entries), and the engine's j_solve solves J z = b and
+    J^T z = b to a backward error of 1e-14."""
     model = MODELS[name]()
     mechanics = Mechanics(model)
     data = EngineData(model, sparse=True, rigid=False)  # J = [De on the free coordinates; I]
@@ -267,9 +265,8 @@ def test_j_solves_with_the_lu_of_j_transposed(name):
     expected[rows.size + np.arange(q0.size - data.int_array("dof_deformations").size),
              data.int_array("dof_positions")] = 1.0
     dense = np.zeros(n * n)
-    sparse_factors.scatter_transposed(data.int_array("j_sparse"),
-                                      data.float_array("j_sparse_values"), dense,
-                                      np.arange(n), np.arange(n), n, 0)
+    sparse_lu.scatter_rows(data.int_array("j_sparse"), data.float_array("j_sparse_values"),
+                           dense, np.arange(n), np.arange(n), n, 0, True)
     J = dense.reshape(n, n)
     close(J, expected, 1e-13)
     b = np.random.default_rng(4).standard_normal(n)

@@ -52,10 +52,9 @@ def factor(table, which, out):
     if out[0] < 0.0:  # the values into the banded LU's storage (`banded.layout`)
         band[:] = 0.0
         step, shift = banded.layout(band.size, n, kl, ku)
-        if which == SPARSE_AUGMENTED:
-            sparse_lu.scatter_rows(ints, floats, band, rows, columns, step, shift)
-        else:  # J^T's values, J's entries
-            scatter_transposed(ints, floats, band, rows, columns, step, shift)
+        # J's LU is J^T's: its values scattered as J's entries
+        sparse_lu.scatter_rows(ints, floats, band, rows, columns, step, shift,
+                               which != SPARSE_AUGMENTED)
 
 
 @kernel(inline="always")  # into its operation's entry, its one caller
@@ -68,19 +67,6 @@ def solve(table, which, b):
     else:  # with the LU of J^T: J's solve is its transposed one
         sparse_lu.solve(_i(table, slot.J_SPARSE), _f(table, slot.J_SPARSE_VALUES), b,
                         which != SPARSE_J_TRANSPOSED)
-
-
-@kernel
-def scatter_transposed(ints, floats, out, row_position, column_position, step, shift):
-    """out[row_position[c] step + shift + column_position[r]] = A[r, c] for every entry of
-    the sparse LU's pattern (zero elsewhere beforehand): A^T (J from the LU of J^T) into a
-    row storage of row step `step` (`sparse_lu.scatter_rows`, transposed)."""
-    n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, Ax, _, _, _ = sparse_lu.packed_parts(
-        ints, floats)
-    for j in range(n):
-        row = row_position[pcol[j]] * step + shift
-        for p in range(Ap[j], Ap[j + 1]):
-            out[row + column_position[Ai[p]]] = Ax[p]
 
 
 @kernel

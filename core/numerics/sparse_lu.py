@@ -471,12 +471,14 @@ def scatter_dense(ints, floats, dense, row_position, column_position):
 
 
 @kernel
-def scatter_rows(ints, floats, out, row_position, column_position, step, shift):
+def scatter_rows(ints, floats, out, row_position, column_position, step, shift,
+                 transposed=False):
     """out[row_position[r] step + shift + column_position[c]] = A[r, c] for every entry of
     the pattern (zero elsewhere beforehand): A into a row storage of row step `step` (n for
-    the dense one; the banded LU's compact one, `banded.layout`)."""
+    the dense one; the banded LU's compact one, `banded.layout`); with `transposed`, A^T
+    (the matrix whose LU is that of its transpose, as the kinematics' J: `sparse_factors`)."""
     n, Ap, Ai, _, _, _, _, _, _, pcol, _, _, _, _, Ax, _, _, _ = packed_parts(ints, floats)
     for j in range(n):
-        column = shift + column_position[pcol[j]]
         for p in range(Ap[j], Ap[j + 1]):
-            out[row_position[Ai[p]] * step + column] = Ax[p]
+            r, c = (pcol[j], Ai[p]) if transposed else (Ai[p], pcol[j])
+            out[row_position[r] * step + shift + column_position[c]] = Ax[p]
