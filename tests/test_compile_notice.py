@@ -21,6 +21,7 @@ from flexure.core.numerics.compile_notice import (
     DEFAULT_CPU_S,
     DEFAULT_FUNCTIONS,
     RECORD_NAME,
+    SLOW_MACHINE_CPU_S,
     CompileNotice,
 )
 
@@ -83,6 +84,7 @@ def test_the_estimate_is_the_largest_recent_compilation_recorded_on_this_machine
     first = notices(tmp_path, "sources-1")
     assert f"about {DEFAULT_CPU_S:.0f} s of CPU" in first.text()
     assert "none here yet" in first.text()
+    assert f"up to {SLOW_MACHINE_CPU_S:.0f} s on a slower one" in first.text()
     first.announce(io.StringIO())
     for _ in range(3):
         with first.unit():
