@@ -33,8 +33,8 @@ import time
 # 2026-11-29, docs/benchmarks.md, "a kernel compiled for linking only"): 27.1 s of CPU (the
 # median of three whole processes; the commit before, alternating with them: 32.3 s). The
 # machine's speed moves by the hour, by up to a third. A new VM of the same kind took 87.3 s
-# (2026-12-02, docs/benchmarks.md, session 42; a pure-Python loop there 2 times slower): the
-# notice without a record quotes both, so that no one on a slow machine thinks it hung.
+# (2026-12-02, docs/benchmarks.md, session 42): the notice without a record quotes both, so
+# that no one on a slow machine thinks it hung.
 DEFAULT_CPU_S = 27.1
 SLOW_MACHINE_CPU_S = 87.3
 DEFAULT_FUNCTIONS = 129
