@@ -16,7 +16,8 @@ process:
 
 The estimate is measured on this machine: each compilation's CPU and wall seconds and the
 number of functions it compiled are kept in `compile-time.json` in the cache folder, and the
-next notice quotes them; without a record, DEFAULT_CPU_S (measured on the project's machine).
+next notice quotes them; without a record, DEFAULT_CPU_S (measured on the project's machine)
+and SLOW_MACHINE_CPU_S (on a slower one of its kind).
 A compiled function is a numba compilation event ("numba:compile", numba.core.event) or an
 entry point compiled by `jit`.
 """
